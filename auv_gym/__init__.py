@@ -1,0 +1,48 @@
+"""auv-gym: 3D path following of an underactuated AUV, for control and RL research.
+
+Importing the package registers `AUVPath3D-v0` with Gymnasium (idempotently).
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+from auv_gym.env import AUVPath3DEnv
+from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW, OBS_NAMES, OBS_UNITS
+from auv_gym.paths import Helix, Path, Spline, StraightLine, make_path
+from auv_gym.vehicle import AUVParams, remus100
+
+__all__ = [
+    "OBS_HIGH",
+    "OBS_INDEX",
+    "OBS_LOW",
+    "OBS_NAMES",
+    "OBS_UNITS",
+    "AUVParams",
+    "AUVPath3DEnv",
+    "Helix",
+    "Path",
+    "Spline",
+    "StraightLine",
+    "make_path",
+    "remus100",
+]
+
+__version__ = "0.1.0"
+
+ENV_ID = "AUVPath3D-v0"
+MAX_EPISODE_STEPS = 6000  # 300 s at the default control_dt = 0.05 s
+
+
+def _register() -> None:
+    if ENV_ID in registry:
+        return
+    register(
+        id=ENV_ID,
+        entry_point="auv_gym.env:AUVPath3DEnv",
+        vector_entry_point="auv_gym.vector_env:AUVPath3DVectorEnv",
+        max_episode_steps=MAX_EPISODE_STEPS,
+    )
+
+
+_register()

@@ -1,0 +1,113 @@
+"""Disturbances (MODEL.md §2.5): bounded white noise, ocean current, parameter uncertainty.
+
+Randomness inside the simulation is counter-based: every noise value is a pure function of an
+episode key (drawn once from the reset seed) and the index of the physics step it belongs to
+(SplitMix64, Steele, Lea & Flood, OOPSLA 2014). So the whole disturbance sequence of an episode
+depends on the seed only, never on the actions, and a batched simulation reproduces a single one
+without sharing generator state.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+__all__ = ["CurrentConfig", "NoiseConfig", "draw_keys", "gauss_markov_coefficients"]
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+_S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
+_TWO_M53 = 2.0**-53
+
+
+@njit(cache=True, inline="always")
+def uniform01(key, counter):
+    """A uniform number in [0, 1) from (key, counter): SplitMix64's output function."""
+    z = key + (np.uint64(counter) + np.uint64(1)) * _GOLDEN
+    z = (z ^ (z >> _S30)) * _MIX1
+    z = (z ^ (z >> _S27)) * _MIX2
+    z = z ^ (z >> _S31)
+    return float(z >> _S11) * _TWO_M53
+
+
+@njit(cache=True, inline="always")
+def standard_normal(key, counter):
+    """A standard normal number from (key, counter) by Box-Muller on two counter draws."""
+    u1 = 1.0 - uniform01(key, 2 * counter)  # (0, 1], safe for log
+    u2 = uniform01(key, 2 * counter + 1)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@dataclass(frozen=True)
+class NoiseConfig:
+    """Bounded white noise f_i = A_i·U(−1, 1) on (f_u, f_v, f_w, f_q, f_r), held `hold` seconds.
+
+    Amplitudes in [N, N, N, N·m, N·m]; the paper uses 35 on every channel. The equivalent
+    spectral density is A²·hold/3, so the hold time is part of the model (MODEL.md §2.5, §10.1).
+    """
+
+    amplitude: tuple[float, float, float, float, float] = (35.0,) * 5
+    hold: float = 0.01  # [s]
+
+    def __post_init__(self) -> None:
+        amp = tuple(float(a) for a in np.broadcast_to(np.asarray(self.amplitude, float), (5,)))
+        if not all(math.isfinite(a) and a >= 0.0 for a in amp):
+            raise ValueError(f"noise amplitude must be finite and >= 0, got {self.amplitude}")
+        if not (math.isfinite(self.hold) and self.hold > 0.0):
+            raise ValueError(f"noise hold must be a positive time in s, got {self.hold}")
+        object.__setattr__(self, "amplitude", amp)
+
+
+@dataclass(frozen=True)
+class CurrentConfig:
+    """Ocean current: constant earth-frame mean plus optional first-order Gauss–Markov part.
+
+    v_c(t) = mean + δ(t),  δ̇ = −δ/τ + w, with stationary standard deviation `std` per axis
+    (Fossen 2011, §8.3), discretised exactly at the physics step. The current enters through the
+    relative velocity: the vehicle's state is its velocity through the water and its kinematics
+    add v_c, which is exact for a current that is constant in the earth frame.
+    """
+
+    mean: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m/s] NED
+    std: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m/s] stationary std of δ per axis
+    time_constant: float = 60.0  # [s] τ of the Gauss–Markov process
+
+    def __post_init__(self) -> None:
+        for name in ("mean", "std"):
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != (3,) or not np.all(np.isfinite(value)):
+                raise ValueError(f"current {name} must be a finite 3-vector in m/s, got {value}")
+            object.__setattr__(self, name, tuple(float(x) for x in value))
+        if any(s < 0 for s in self.std):
+            raise ValueError(f"current std must be >= 0, got {self.std}")
+        if not (math.isfinite(self.time_constant) and self.time_constant > 0):
+            raise ValueError(f"current time_constant must be > 0 s, got {self.time_constant}")
+
+    @classmethod
+    def from_spec(cls, spec: CurrentConfig | Sequence[float] | dict | None) -> CurrentConfig:
+        """Build from None (no current), a 3-vector mean [m/s], a dict of fields, or itself."""
+        if spec is None:
+            return cls()
+        if isinstance(spec, CurrentConfig):
+            return spec
+        if isinstance(spec, dict):
+            return cls(**spec)
+        return cls(mean=tuple(spec))
+
+
+def gauss_markov_coefficients(config: CurrentConfig, dt: float) -> tuple[float, np.ndarray]:
+    """Exact discretisation δ_{k+1} = a δ_k + b ⊙ n_k of the Gauss–Markov current over dt [s]."""
+    a = math.exp(-dt / config.time_constant)
+    b = np.asarray(config.std) * math.sqrt(1.0 - a * a)
+    return a, b
+
+
+def draw_keys(rng: np.random.Generator) -> tuple[np.uint64, np.uint64]:
+    """Two independent 64-bit episode keys (white noise, current) from the episode generator."""
+    keys = rng.integers(0, 2**63, size=2, dtype=np.int64).astype(np.uint64)
+    return keys[0], keys[1]

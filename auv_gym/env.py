@@ -1,0 +1,201 @@
+"""`AUVPath3D-v0`: the Gymnasium environment (glue around `simulator.Simulator`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from auv_gym.disturbances import CurrentConfig, NoiseConfig
+from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
+from auv_gym.paths import Path
+from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS, RewardWeights
+from auv_gym.vehicle import AUVParams
+
+__all__ = ["AUVPath3DEnv", "validate_actions"]
+
+_G = {name: i for i, name in enumerate(GUIDANCE_FIELDS)}
+_REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
+
+
+def validate_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """float64 array of the given shape, or ValueError naming the problem (NaN/inf, shape)."""
+    a = np.asarray(action, dtype=np.float64)
+    if a.shape != shape:
+        raise ValueError(f"action must have shape {shape}, got {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"action must be finite, got {action!r}")
+    return a
+
+
+class AUVPath3DEnv(gym.Env):
+    r"""3D path following of an underactuated AUV (Liang et al. 2018, IJFS 20:640).
+
+    ## Description
+    A REMUS 100 vehicle, modelled in five degrees of freedom (surge, sway, heave, pitch, yaw;
+    MODEL.md §2), must follow a 3D path with a Serret–Frenet virtual point that moves with
+    u_p = u_D(1 + tanh(x_e/σ)) (MODEL.md §3.3). It has three inputs only — surge thrust X, pitch
+    moment M, yaw moment N — so sway and heave are unactuated. The defaults reproduce the paper's
+    simulation: the helix x = 20 cos(πs/20) + 10, y = 20 sin(πs/20), z = −8 − s, start at
+    (15, 5, 0) m at rest with ψ = θ = 0, and bounded white-noise disturbances of ±35 N / N·m.
+
+    ## Action Space
+    `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
+    (50 N, 10 N·m, 10 N·m); "fins" scale X by 50 N and M, N by the fin authority
+    6.15·u|u|·π/6 N·m (MODEL.md §2.3). Values beyond ±1 saturate (the only clipping);
+    NaN, inf or a wrong shape raise ValueError.
+
+    ## Observation Space
+    `Box(OBS_LOW, OBS_HIGH, (15,), float32)`, physical SI units, layout `auv_gym.OBS_NAMES`:
+
+    | idx | name        | unit  | idx | name        | unit  |
+    |-----|-------------|-------|-----|-------------|-------|
+    | 0   | x_e         | m     | 8   | w           | m/s   |
+    | 1   | y_e         | m     | 9   | q           | rad/s |
+    | 2   | z_e         | m     | 10  | r           | rad/s |
+    | 3   | psi_error   | rad   | 11  | u_D         | m/s   |
+    | 4   | theta       | rad   | 12  | u_p         | m/s   |
+    | 5   | theta_F     | rad   | 13  | psi_F_dot   | rad/s |
+    | 6   | u           | m/s   | 14  | theta_F_dot | rad/s |
+    | 7   | v           | m/s   |     |             |       |
+
+    (x_e, y_e, z_e) is vehicle minus virtual point in the body frame; psi_error = ψ − ψ_F
+    wrapped to (−π, π]; velocities are relative to the water.
+
+    ## Rewards
+    r = w_progress·min(u_p/u_D, 1) + w_tracking·exp(−d²/1 m²) − w_distance·d/corridor
+    − w_speed·min(((u − u_D)/u_D)², 1) − w_effort·|a|²/3 − w_termination·[failure], with
+    d the distance to the virtual point (`auv_gym.task`). Idling scores about −1.5 per step,
+    following about +2; every term is reported in `info` as `reward_<term>`.
+
+    ## Starting State
+    The path's default start (paper: (15, 5, 0) m, ψ = θ = 0, ν = 0, s = 0). With
+    `randomize_start=True`, half of the episodes start within ±2 m of it, the rest anywhere on
+    the first turn of the path with up to 8 m offset, ±60° heading error and 0–1.5 m/s surge.
+
+    ## Episode End
+    Terminated (`info["termination_reason"]`): "corridor" — distance to the virtual point above
+    `corridor` (30 m); "pitch" — |θ| above `max_pitch` (60°); "non_finite" — the state is no
+    longer finite (the last finite observation is returned); "envelope" — the observation left
+    its documented bounds; "path_end" — s reached the end of a finite path. Truncated at
+    `max_time` (300 s = 6000 steps of 0.05 s, the registered `max_episode_steps`).
+
+    ## Arguments
+    | argument | default | meaning |
+    |---|---|---|
+    | `path` | "helix" | "helix", "line", "waypoints" or a `auv_gym.paths.Path` |
+    | `disturbance` | "paper" | "paper" (±35 white noise), "none", an amplitude, a `NoiseConfig` |
+    | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
+    | `param_uncertainty` | 0.0 | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode |
+    | `actuator` | "paper" | "paper" or "fins" |
+    | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
+    | `physics_dt` | 0.01 | RK4 step [s] |
+    | `noise_hold` | 0.01 | zero-order hold of the white noise [s] |
+    | `max_time` | 300.0 | truncation time [s] |
+    | `randomize_start` | False | random initial offset (training) |
+    | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
+    | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
+    | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
+    | `params` | REMUS 100 | `AUVParams` of the true vehicle |
+    | `start_position`, `start_heading` | None | override the start [m], [rad] |
+    | `render_mode` | None | "rgb_array": 3D track with projections |
+
+    ## Vectorized environment
+    `gym.make_vec("AUVPath3D-v0", num_envs=n)` returns the native `AUVPath3DVectorEnv`, which
+    runs the same compiled kernel over all vehicles.
+
+    ## Version History
+    * v0: initial release (REMUS 100 in the paper's 5-DOF form, MODEL.md corrections).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+
+    def __init__(
+        self,
+        path: str | Path = "helix",
+        disturbance: str | float | NoiseConfig = "paper",
+        current: CurrentConfig | Sequence[float] | dict | None = None,
+        param_uncertainty: float = 0.0,
+        actuator: str = "paper",
+        control_dt: float = 0.05,
+        physics_dt: float = 0.01,
+        noise_hold: float = 0.01,
+        max_time: float = 300.0,
+        randomize_start: bool = False,
+        u_desired: float = 1.0,
+        sigma: float = 0.5,
+        corridor: float = 30.0,
+        max_pitch: float = math.radians(60.0),
+        reward_weights: RewardWeights | dict | None = None,
+        params: AUVParams | None = None,
+        start_position: Sequence[float] | None = None,
+        start_heading: float | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        self.config = SimConfig.from_kwargs(
+            path=path, disturbance=disturbance, current=current,
+            param_uncertainty=param_uncertainty, actuator=actuator, control_dt=control_dt,
+            physics_dt=physics_dt, noise_hold=noise_hold, max_time=max_time,
+            randomize_start=randomize_start, u_desired=u_desired, sigma=sigma,
+            corridor=corridor, max_pitch=max_pitch, params=params,
+            start_position=start_position, start_heading=start_heading,
+            reward_weights=reward_weights,
+        )  # fmt: skip
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self.metadata = {**self.metadata, "render_fps": max(1, round(1.0 / control_dt))}
+        self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
+        self.sim = Simulator(self.config, 1)
+        self._track: list[np.ndarray] = []
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        self.sim.reset_row(0, self.np_random)
+        if self.render_mode is not None:
+            self._track = [self.sim.state[0, 0:3].copy()]
+        return self.sim.obs[0].astype(np.float32), self._info(0, reset=True)
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        sim = self.sim
+        sim.step(validate_actions(action, (3,))[None])
+        code = int(sim.code[0])
+        truncated = code == 0 and sim.steps[0] >= self.config.max_steps
+        if self.render_mode is not None:
+            self._track.append(sim.state[0, 0:3].copy())
+        info = self._info(code)
+        return sim.obs[0].astype(np.float32), float(sim.reward[0]), code != 0, truncated, info
+
+    def _info(self, code: int, reset: bool = False) -> dict[str, Any]:
+        sim = self.sim
+        g = sim.guid[0]
+        info: dict[str, Any] = {
+            "x_e": g[0], "y_e": g[1], "z_e": g[2], "distance": g[3], "s": sim.state[0, 10],
+            "u_p": g[_G["u_p"]], "t": sim.step_index[0] * self.config.physics_dt,
+            "tau": sim.record[0, 0:3].copy(), "disturbance": sim.record[0, 3:8].copy(),
+        }  # fmt: skip
+        if not reset:
+            info.update(zip(_REWARD_KEYS, sim.terms[0].tolist(), strict=True))
+        if code:
+            info["termination_reason"] = TERMINATION_REASONS[code]
+        return info
+
+    @property
+    def state(self) -> np.ndarray:
+        """The simulator state (x, y, z, θ, ψ, u, v, w, q, r, s) [m, rad, m/s, rad/s, -]."""
+        return self.sim.state[0].copy()
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode != "rgb_array":
+            return None
+        from auv_gym.plotting import render_track
+
+        return render_track(self.config.path, np.asarray(self._track), self.sim.state[0, 10])
