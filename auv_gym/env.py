@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -113,7 +113,7 @@ class AUVPath3DEnv(gym.Env):
     * v0: initial release (REMUS 100 in the paper's 5-DOF form, MODEL.md corrections).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(
         self,
@@ -168,7 +168,7 @@ class AUVPath3DEnv(gym.Env):
         sim = self.sim
         sim.step(validate_actions(action, (3,))[None])
         code = int(sim.code[0])
-        truncated = code == 0 and sim.steps[0] >= self.config.max_steps
+        truncated = code == 0 and int(sim.steps[0]) >= self.config.max_steps
         if self.render_mode is not None:
             self._track.append(sim.state[0, 0:3].copy())
         info = self._info(code)

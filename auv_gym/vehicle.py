@@ -162,7 +162,9 @@ HYDRODYNAMIC_FIELDS: tuple[str, ...] = (
 PARAM_INDEX: dict[str, int] = {f.name: i for i, f in enumerate(fields(AUVParams))}
 N_PARAMS = len(PARAM_INDEX)
 # Kernel-side indices (numba needs plain integer globals).
-_m, _W, _B, _Iy, _Iz, _zg, _zb = (PARAM_INDEX[k] for k in ("m", "W", "B", "I_y", "I_z", "z_g", "z_b"))
+_m, _W, _B, _Iy, _Iz, _zg, _zb = (
+    PARAM_INDEX[k] for k in ("m", "W", "B", "I_y", "I_z", "z_g", "z_b")
+)
 _Xud, _Yvd, _Zwd, _Mqd, _Nrd = (
     PARAM_INDEX[k] for k in ("X_udot", "Y_vdot", "Z_wdot", "M_qdot", "N_rdot")
 )
