@@ -171,11 +171,17 @@ class SimConfig:
         return np.array([float(values[name]) for name in CFG])
 
 
-@njit(cache=True, parallel=True)
-def _step_all(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+def _step_rows(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
               obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
-    """Advance every vehicle one control step, then score it; rows are independent."""
+    """Advance every vehicle one control step, then score it; rows are independent.
+
+    Returns the first row with a non-finite action (nothing is advanced then), or −1.
+    """
     n_sub = int(cfg[0])
+    for i in range(actions.shape[0]):
+        for j in range(3):
+            if not math.isfinite(actions[i, j]):
+                return i
     for i in prange(state.shape[0]):
         a = actions[i]
         for j in range(3):  # documented actuator saturation: |a_j| <= 1
@@ -185,9 +191,11 @@ def _step_all(state, current, actions, params, keys, step_index, kind, pdata, cf
         step_index[i] += n_sub
         reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, task,
                                       terms[i])  # fmt: skip
+    return -1
 
 
-_step_one = njit(cache=True)(_step_all.py_func)
+_step_all = njit(cache=True, parallel=True)(_step_rows)
+_step_one = njit(cache=True)(_step_rows)
 
 
 @njit(cache=True)
@@ -278,10 +286,15 @@ class Simulator:
         return p + offset, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
 
     def step(self, actions: np.ndarray) -> None:
-        """Advance all vehicles one control step with actions in [−1, 1], shape (n, 3)."""
+        """Advance all vehicles one control step with actions in [−1, 1], shape (n, 3).
+
+        Actions beyond ±1 saturate; a non-finite action raises ValueError before any row moves.
+        """
         np.copyto(self._actions, actions)
-        self._kernel(self.state, self.current, self._actions, self.params, self.keys,
+        bad_row = self._kernel(self.state, self.current, self._actions, self.params, self.keys,
                      self.step_index, self._kind, self._pdata, self._cfg, self._task,
                      OBS_LOW, OBS_HIGH, self.guid, self.obs, self.record, self.terms,
                      self.reward, self.code)  # fmt: skip
+        if bad_row >= 0:
+            raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
         self.steps += 1
