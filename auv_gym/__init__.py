@@ -34,15 +34,25 @@ ENV_ID = "AUVPath3D-v0"
 MAX_EPISODE_STEPS = 6000  # 300 s at the default control_dt = 0.05 s
 
 
+# Variants are separate ids with fixed keyword arguments (DESIGN.md §3, Registration).
+VARIANTS: dict[str, dict] = {
+    ENV_ID: {},
+    "AUVPath3DNominal-v0": {"disturbance": "none"},
+    "AUVPath3DFins-v0": {"actuator": "fins"},
+}
+
+
 def _register() -> None:
-    if ENV_ID in registry:
-        return
-    register(
-        id=ENV_ID,
-        entry_point="auv_gym.env:AUVPath3DEnv",
-        vector_entry_point="auv_gym.vector_env:AUVPath3DVectorEnv",
-        max_episode_steps=MAX_EPISODE_STEPS,
-    )
+    for env_id, kwargs in VARIANTS.items():
+        if env_id in registry:
+            continue
+        register(
+            id=env_id,
+            entry_point="auv_gym.env:AUVPath3DEnv",
+            vector_entry_point="auv_gym.vector_env:AUVPath3DVectorEnv",
+            max_episode_steps=MAX_EPISODE_STEPS,
+            kwargs=kwargs,
+        )
 
 
 _register()

@@ -64,6 +64,8 @@ def test_registration_is_idempotent_and_make_works():
     assert env.spec.max_episode_steps == 6000
     assert isinstance(env.unwrapped, AUVPath3DEnv)
     assert env.metadata["render_fps"] == 20
+    assert gym.make("AUVPath3DNominal-v0").unwrapped.config.noise.amplitude == (0.0,) * 5
+    assert gym.make("AUVPath3DFins-v0").unwrapped.config.actuator == "fins"
     code = "import gymnasium as gym; e = gym.make('auv_gym:AUVPath3D-v0'); print(e.spec.id)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "AUVPath3D-v0"
