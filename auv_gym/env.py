@@ -100,6 +100,7 @@ class AUVPath3DEnv(gym.Env):
     | `max_time` | 300.0 | truncation time [s] |
     | `randomize_start` | False | random initial offset (training) |
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
+    | `virtual_point_law` | "corrected" | "printed" restores the paper's unstable 1 − tanh |
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
     | `params` | REMUS 100 | `AUVParams` of the true vehicle |
@@ -130,6 +131,7 @@ class AUVPath3DEnv(gym.Env):
         randomize_start: bool = False,
         u_desired: float = 1.0,
         sigma: float = 0.5,
+        virtual_point_law: str = "corrected",
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
         reward_weights: RewardWeights | dict | None = None,
@@ -143,6 +145,7 @@ class AUVPath3DEnv(gym.Env):
             param_uncertainty=param_uncertainty, actuator=actuator, control_dt=control_dt,
             physics_dt=physics_dt, noise_hold=noise_hold, max_time=max_time,
             randomize_start=randomize_start, u_desired=u_desired, sigma=sigma,
+            virtual_point_law=virtual_point_law,
             corridor=corridor, max_pitch=max_pitch, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights,

@@ -32,7 +32,7 @@ __all__ = ["ACTUATOR_LIMITS", "DISTURBANCE_PRESETS", "SimConfig", "Simulator"]
 # "paper" mode limits (MODEL.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
 ACTUATOR_LIMITS = (50.0, 10.0, 10.0)
 DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
-INVALID_ACTION = -1
+VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
 _SUBSTEP_TOL = 1e-9
 
 
@@ -52,6 +52,9 @@ class SimConfig:
     max_time: float = 300.0  # [s]
     u_desired: float = 1.0  # [m/s] u_D
     sigma: float = 0.5  # [m] virtual-point law width σ
+    # "corrected": u_p = u_D(1 + tanh(x_e/σ)) (MODEL.md §3.3); "printed": the paper's misprint
+    # u_D(1 − tanh(x_e/σ)), unstable, kept only for the sign-regression tests (MODEL.md §8.9).
+    virtual_point_law: str = "corrected"
     randomize_start: bool = False
     start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default
     start_heading: float | None = None  # [rad]
@@ -73,6 +76,7 @@ class SimConfig:
         randomize_start: bool = False,
         u_desired: float = 1.0,
         sigma: float = 0.5,
+        virtual_point_law: str = "corrected",
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
         params: AUVParams | None = None,
@@ -107,6 +111,7 @@ class SimConfig:
             max_time=float(max_time),
             u_desired=float(u_desired),
             sigma=float(sigma),
+            virtual_point_law=virtual_point_law,
             randomize_start=bool(randomize_start),
             start_position=None if start_position is None else tuple(map(float, start_position)),
             start_heading=start_heading,
@@ -117,6 +122,11 @@ class SimConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.params, AUVParams):
             raise ValueError(f"params must be an AUVParams, got {type(self.params).__name__}")
+        if self.virtual_point_law not in VIRTUAL_POINT_LAWS:
+            raise ValueError(
+                f"unknown virtual_point_law {self.virtual_point_law!r}; "
+                f"valid: {sorted(VIRTUAL_POINT_LAWS)}"
+            )
         if self.actuator not in ACTUATORS:
             raise ValueError(f"unknown actuator {self.actuator!r}; valid: {sorted(ACTUATORS)}")
         for name in ("control_dt", "physics_dt", "max_time", "u_desired", "sigma"):
@@ -140,6 +150,11 @@ class SimConfig:
             raise ValueError(f"start_position must be a finite 3-vector, got {self.start_position}")
 
     @property
+    def kernel_sigma(self) -> float:
+        """σ as the kernels use it: u_D(1 + tanh(x_e/σ)) with σ < 0 gives the printed law."""
+        return VIRTUAL_POINT_LAWS[self.virtual_point_law] * self.sigma
+
+    @property
     def substeps(self) -> int:
         """Physics steps per control step."""
         return round(self.control_dt / self.physics_dt)
@@ -157,7 +172,7 @@ class SimConfig:
             "physics_dt": self.physics_dt,
             "hold_steps": round(self.noise.hold / self.physics_dt),
             "u_d": self.u_desired,
-            "sigma": self.sigma,
+            "sigma": self.kernel_sigma,
             "actuator": ACTUATORS[self.actuator],
             "gm_a": gm_a,
         }
@@ -262,7 +277,7 @@ class Simulator:
         self.reward[i] = 0.0
         self.code[i] = 0
         _observe_rows(np.array([i]), self.state, self._kind, self._pdata, cfg.u_desired,
-                      cfg.sigma, self.guid, self.obs)  # fmt: skip
+                      cfg.kernel_sigma, self.guid, self.obs)  # fmt: skip
 
     def _start(self, rng: np.random.Generator) -> tuple[np.ndarray, float, float, float]:
         cfg = self.config

@@ -134,3 +134,10 @@ def test_virtual_point_sanity_along_an_episode(make_sim):
 )  # fmt: skip
 def test_wrap_angle_to_half_open_interval(angle, wrapped):
     assert wrap_angle(angle) == pytest.approx(wrapped, abs=1e-12)
+
+
+def test_printed_virtual_point_law_is_available_for_negative_tests(make_sim):
+    printed = make_sim(disturbance="none", virtual_point_law="printed")
+    assert printed.guid[0, 8] == pytest.approx(2.0, abs=1e-6)  # 1 − tanh(−15/0.5) = 2
+    with pytest.raises(ValueError, match="virtual_point_law"):
+        make_sim(virtual_point_law="typo")
