@@ -186,31 +186,51 @@ class SimConfig:
         return np.array([float(values[name]) for name in CFG])
 
 
-def _step_rows(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+@njit(cache=True)
+def _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
               obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
-    """Advance every vehicle one control step, then score it; rows are independent.
+    """Advance vehicle i one control step with its saturated action, then score it."""
+    a = actions[i]
+    for j in range(3):  # documented actuator saturation: |a_j| <= 1
+        a[j] = min(max(a[j], -1.0), 1.0)
+    advance_vehicle(state[i], current[i], a, params[i], keys[i, 0], keys[i, 1], step_index[i],
+                    kind, pdata, cfg, guid[i], obs[i], record[i])  # fmt: skip
+    step_index[i] += int(cfg[0])
+    reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, task, terms[i])
 
-    Returns the first row with a non-finite action (nothing is advanced then), or −1.
-    """
-    n_sub = int(cfg[0])
+
+@njit(cache=True, inline="always")
+def _first_non_finite_row(actions):
     for i in range(actions.shape[0]):
-        for j in range(3):
+        for j in range(actions.shape[1]):
             if not math.isfinite(actions[i, j]):
                 return i
-    for i in prange(state.shape[0]):
-        a = actions[i]
-        for j in range(3):  # documented actuator saturation: |a_j| <= 1
-            a[j] = min(max(a[j], -1.0), 1.0)
-        advance_vehicle(state[i], current[i], a, params[i], keys[i, 0], keys[i, 1],
-                        step_index[i], kind, pdata, cfg, guid[i], obs[i], record[i])  # fmt: skip
-        step_index[i] += n_sub
-        reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, task,
-                                      terms[i])  # fmt: skip
     return -1
 
 
-_step_all = njit(cache=True, parallel=True)(_step_rows)
-_step_one = njit(cache=True)(_step_rows)
+# Two entry points with the same arguments: numba keys its on-disk cache by function, so the
+# serial and the threaded kernels must be distinct functions. Each returns the first row with a
+# non-finite action (nothing is advanced then), or −1.
+@njit(cache=True)
+def _step_one(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+              obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
+    bad = _first_non_finite_row(actions)
+    if bad < 0:
+        for i in range(state.shape[0]):
+            _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg,
+                      task, obs_low, obs_high, guid, obs, record, terms, reward, code)  # fmt: skip
+    return bad
+
+
+@njit(cache=True, parallel=True)
+def _step_all(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+              obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
+    bad = _first_non_finite_row(actions)
+    if bad < 0:
+        for i in prange(state.shape[0]):
+            _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg,
+                      task, obs_low, obs_high, guid, obs, record, terms, reward, code)  # fmt: skip
+    return bad
 
 
 @njit(cache=True)
