@@ -157,6 +157,7 @@ class AUVPath3DEnv(gym.Env):
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.sim = Simulator(self.config, 1)
+        self._truncation_index = self.config.max_steps * self.config.substeps
         self._track: list[np.ndarray] = []
 
     def reset(
@@ -172,7 +173,7 @@ class AUVPath3DEnv(gym.Env):
         sim = self.sim
         sim.step(validate_actions(action, (3,))[None])
         code = int(sim.code[0])
-        truncated = code == 0 and int(sim.steps[0]) >= self.config.max_steps
+        truncated = code == 0 and int(sim.step_index[0]) >= self._truncation_index
         if self.render_mode is not None:
             self._track.append(sim.state[0, 0:3].copy())
         info = self._info(code)

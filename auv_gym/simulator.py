@@ -259,7 +259,6 @@ class Simulator:
         self.params = np.tile(self._nominal, (n, 1))
         self.keys = np.zeros((n, 2), dtype=np.uint64)
         self.step_index = np.zeros(n, dtype=np.int64)
-        self.steps = np.zeros(n, dtype=np.int64)  # control steps since reset
         self.guid = np.zeros((n, len(GUIDANCE_FIELDS)))
         self.obs = np.zeros((n, OBS_DIM))
         self.record = np.zeros((n, 8))
@@ -268,6 +267,11 @@ class Simulator:
         self.code = np.zeros(n, dtype=np.int64)
         self._actions = np.zeros((n, 3))
         assert self.params.shape[1] == N_PARAMS
+
+    @property
+    def steps(self) -> np.ndarray:
+        """Control steps of each vehicle since its reset."""
+        return self.step_index // self.config.substeps
 
     @property
     def time(self) -> np.ndarray:
@@ -291,7 +295,6 @@ class Simulator:
         # Start the Gauss–Markov deviation in its stationary distribution.
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
         self.step_index[i] = 0
-        self.steps[i] = 0
         self.record[i] = 0.0
         self.terms[i] = 0.0
         self.reward[i] = 0.0
@@ -332,4 +335,3 @@ class Simulator:
                      self.reward, self.code)  # fmt: skip
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
-        self.steps += 1
