@@ -79,6 +79,12 @@ class AUVPath3DEnv(gym.Env):
     `randomize_start=True`, half of the episodes start within ±2 m of it, the rest anywhere on
     the first turn of the path with up to 8 m offset, ±60° heading error and 0–1.5 m/s surge.
 
+    ## Info
+    `x_e`, `y_e`, `z_e`, `distance` [m], `s`, `u_p` [m/s], `t` [s]; `tau` — the applied
+    (X, M, N) after saturation [N, N·m] and `disturbance` — the white-noise (f_u, f_v, f_w, f_q,
+    f_r) [N, N·m], both averaged over the physics steps of the control period; `reward_<term>`
+    for each reward term; `termination_reason` when the episode terminates.
+
     ## Episode End
     Terminated (`info["termination_reason"]`): "corridor" — distance to the virtual point above
     `corridor` (30 m); "pitch" — |θ| above `max_pitch` (60°); "non_finite" — the state is no
