@@ -298,7 +298,7 @@ def _execute_ray(
     except ImportError as exc:
         raise ImportError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from exc
     if not ray.is_initialized():
-        ray.init(address=address, runtime_env={"working_dir": None}, log_to_driver=False)
+        ray.init(address=address, log_to_driver=False)
     remote = ray.remote(num_cpus=1)(run_job)
     pending = {remote.remote(job, out): index for index, job in zip(indices, jobs, strict=True)}
     while pending:

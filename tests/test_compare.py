@@ -163,3 +163,29 @@ def test_scenario_file_documents_every_scenario():
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
     assert select("all", list(scenarios), "scenario") == list(scenarios)
+
+
+def test_ray_backend_matches_local_processes(tmp_path, monkeypatch):
+    pytest.importorskip("ray")
+    monkeypatch.setenv("PYTHONPATH", ENV["PYTHONPATH"])  # Ray workers import the user policy
+    monkeypatch.syspath_prepend(str(ROOT / "tests"))
+    common = [
+        "--policies",
+        USER,
+        "--scenarios",
+        "paper",
+        "--seeds",
+        "2",
+        "--duration",
+        "20",
+        "--quiet",
+        "--no-figures",
+    ]
+    local = main([*common, "--workers", "1", "--out", str(tmp_path / "local")])
+    import ray
+
+    try:
+        remote = main([*common, "--backend", "ray", "--out", str(tmp_path / "ray")])
+    finally:
+        ray.shutdown()
+    assert [r["metrics"] for r in local] == [r["metrics"] for r in remote]
