@@ -1,0 +1,339 @@
+"""`AUVPath3DVectorEnv`: n vehicles of `AUVPath3D-v0` advanced natively by one compiled kernel.
+
+The vector env is the single env's glue applied to a `simulator.Simulator` of n rows: the physics,
+guidance, reward and termination are the same compiled functions, called for every vehicle in one
+parallel loop. Vehicle i keeps its own random generator, seeded like a single env reset with
+seed k + i, so it reproduces `AUVPath3DEnv` step for step, autoresets included.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from auv_gym.env import validate_actions
+from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
+from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS
+
+__all__ = ["AUVPath3DVectorEnv", "parse_autoreset_mode"]
+
+_UP = GUIDANCE_FIELDS.index("u_p")
+_REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
+_REASONS = np.array([None, *TERMINATION_REASONS[1:]], dtype=object)  # code 0: no reason
+_ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
+
+
+def parse_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
+    """An `AutoresetMode` from the enum, its value ("NextStep") or its name ("next_step")."""
+    if isinstance(mode, AutoresetMode):
+        return mode
+    if isinstance(mode, str):
+        for candidate in AutoresetMode:
+            if mode in (candidate.value, candidate.name) or mode.upper() == candidate.name:
+                return candidate
+    valid = [m.value for m in AutoresetMode]
+    raise ValueError(f"unknown autoreset_mode {mode!r}; valid: {valid} or an AutoresetMode")
+
+
+class AUVPath3DVectorEnv(VectorEnv):
+    r"""`num_envs` independent vehicles of `AUVPath3D-v0`, stepped by one batched kernel.
+
+    Every keyword argument of `AUVPath3DEnv` is accepted with the same meaning and default
+    (table in its docstring); the spaces are the single env's, batched with `batch_space`.
+    `gym.make_vec("AUVPath3D-v0", num_envs=n, **kwargs)` builds this class.
+
+    ## Arguments (in addition to the single env's)
+    | argument | default | meaning |
+    |---|---|---|
+    | `num_envs` | 1 | number of vehicles n ≥ 1 |
+    | `max_episode_steps` | None | `TimeLimit`-like step limit (`make_vec` passes 6000) |
+    | `autoreset_mode` | NEXT_STEP | `AutoresetMode` or its value: NEXT_STEP, SAME_STEP, DISABLED |
+    | `render_vehicle` | 0 | index of the vehicle `render()` draws |
+
+    Truncation happens where the single env under `gym.make` truncates: at `max_time` unless
+    the episode terminated, and at `max_episode_steps` control steps in any case.
+
+    ## Seeding and parity
+    `reset(seed=k)` seeds vehicle i with k + i (a list gives one seed per vehicle, None entries
+    keep that vehicle's generator). Vehicle i then reproduces ``AUVPath3DEnv(**kwargs)`` reset with
+    seed k + i bit for bit: observation, reward, terminated, truncated and info. An autoreset
+    draws the new episode from the vehicle's own generator, exactly like ``env.reset()`` without a
+    seed, so a vehicle's sequence of episodes is that of one single env.
+
+    ## Autoreset
+    - NEXT_STEP (default, `metadata["autoreset_mode"]`): the step after a vehicle's episode ended
+      resets it and returns its first observation with reward 0, terminated = truncated = False
+      and the reset info; its action is ignored.
+    - SAME_STEP: a finished vehicle is reset in the step that ended it; the returned observation
+      and info are the new episode's, the last ones are in ``info["final_obs"]`` (object array)
+      and ``info["final_info"]`` (dict of arrays), masked by ``info["_final_obs"]``.
+    - DISABLED: nothing resets by itself; call ``reset(options={"reset_mask": mask})``.
+
+    ``reset(options={"reset_mask": mask})`` (bool array of shape (n,)) resets only the masked
+    vehicles, in every mode; the returned infos describe those vehicles.
+
+    ## Info
+    Gymnasium's vector convention, identical to `SyncVectorEnv` over the single env: for every key
+    of the single env's info an array over vehicles (``tau`` (n, 3), ``disturbance`` (n, 5),
+    ``termination_reason`` an object array with None where no episode terminated) and a boolean
+    mask ``"_" + key`` marking the vehicles that report it.
+
+    ## Bad input
+    A wrong action batch shape, a NaN or inf in any row (no vehicle moves then) and
+    ``num_envs < 1`` raise ValueError. A vehicle whose state stops being finite terminates alone
+    with ``termination_reason == "non_finite"``; rows never share state.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "render_modes": ["rgb_array"],
+        "render_fps": 20,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        *,
+        max_episode_steps: int | None = None,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        render_mode: str | None = None,
+        render_vehicle: int = 0,
+        **env_kwargs: Any,
+    ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
+            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+        unknown = sorted(set(env_kwargs) - set(_ENV_KWARGS))
+        if unknown:
+            raise TypeError(
+                f"unexpected keyword argument(s) {unknown}; valid: {sorted(_ENV_KWARGS)}, "
+                "num_envs, max_episode_steps, autoreset_mode, render_mode, render_vehicle"
+            )
+        if max_episode_steps is not None and (
+            isinstance(max_episode_steps, bool)
+            or not isinstance(max_episode_steps, (int, np.integer))
+            or max_episode_steps < 1
+        ):
+            raise ValueError(f"max_episode_steps must be None or an integer >= 1, got "
+                             f"{max_episode_steps!r}")  # fmt: skip
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r}"
+            )
+        self.config = SimConfig.from_kwargs(**env_kwargs)
+        self.num_envs = int(num_envs)
+        self.autoreset_mode = parse_autoreset_mode(autoreset_mode)
+        self.metadata = {
+            **self.metadata,
+            "autoreset_mode": self.autoreset_mode,
+            "render_fps": max(1, round(1.0 / self.config.control_dt)),
+        }
+        self.render_mode = render_mode
+        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
+
+        self.single_observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
+        self.single_action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+
+        self.sim = Simulator(self.config, self.num_envs)
+        substeps = self.config.substeps
+        # The single env truncates at max_time unless terminated; TimeLimit (max_episode_steps)
+        # truncates whatever happened. Both are physics-step indices here.
+        self._own_limit = self.config.max_steps * substeps
+        self._time_limit = (
+            np.iinfo(np.int64).max
+            if self.max_episode_steps is None
+            else self.max_episode_steps * substeps
+        )
+        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._ever_reset = False
+        self._all = np.ones(self.num_envs, dtype=bool)
+        self._render_vehicle = 0
+        self.render_vehicle = render_vehicle
+        self._track: list[np.ndarray] = []
+
+    # ----------------------------------------------------------------------------------- reset
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset all vehicles, or those of ``options["reset_mask"]``; see the class docstring."""
+        n = self.num_envs
+        seeds = self._seed_list(seed)
+        mask = self._reset_mask(options)
+        if not (self._ever_reset or mask.all()):
+            raise ValueError("the first reset must reset every vehicle (no reset_mask)")
+        super().reset(seed=seed if isinstance(seed, int) else None)
+        rows = np.flatnonzero(mask)
+        for i in rows:
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i], _ = seeding.np_random(seeds[i])
+        self._reset_rows(rows)
+        self._autoreset[rows] = False
+        self._ever_reset = True
+        infos: dict[str, Any] = {}
+        self._add_infos(infos, mask, np.zeros(n, dtype=bool), fill=True)
+        return self.sim.obs.astype(np.float32), infos
+
+    def _seed_list(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
+        n = self.num_envs
+        if seed is None:
+            return [None] * n
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            return [int(seed) + i for i in range(n)]
+        seeds = list(seed)
+        if len(seeds) != n:
+            raise ValueError(f"a list of seeds must have num_envs = {n} entries, got {len(seeds)}")
+        return [None if s is None else int(s) for s in seeds]
+
+    def _reset_mask(self, options: dict[str, Any] | None) -> np.ndarray:
+        if not options or "reset_mask" not in options:
+            return self._all.copy()
+        mask = options["reset_mask"]
+        if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
+            raise ValueError(f"options['reset_mask'] must be a numpy bool array, got {mask!r}")
+        if mask.shape != (self.num_envs,):
+            raise ValueError(
+                f"options['reset_mask'] must have shape ({self.num_envs},), got {mask.shape}"
+            )
+        if not mask.any():
+            raise ValueError("options['reset_mask'] must select at least one vehicle")
+        return mask.copy()
+
+    def _reset_rows(self, rows: np.ndarray) -> None:
+        """New episodes for `rows`, each drawn from its vehicle's generator (single-env order)."""
+        for i in rows:
+            self.sim.reset_row(int(i), self._rngs[i])
+        if self.render_mode is not None and self._render_vehicle in rows:
+            self._track = [self.sim.state[self._render_vehicle, 0:3].copy()]
+
+    # ------------------------------------------------------------------------------------ step
+    def step(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Advance every vehicle one control period with actions of shape (num_envs, 3)."""
+        if not self._ever_reset:
+            raise RuntimeError("call reset() before step()")
+        sim = self.sim
+        sim.step(validate_actions(actions, (self.num_envs, 3)))
+        code = sim.code
+        terminated = code != 0
+        truncated = ((~terminated) & (sim.step_index >= self._own_limit)) | (
+            sim.step_index >= self._time_limit
+        )
+        if self.render_mode is not None:
+            self._track.append(sim.state[self._render_vehicle, 0:3].copy())
+
+        mode = self.autoreset_mode
+        infos: dict[str, Any] = {}
+        if mode is AutoresetMode.NEXT_STEP and self._autoreset.any():
+            stepped = ~self._autoreset
+            self._reset_rows(np.flatnonzero(self._autoreset))
+            terminated &= stepped
+            truncated &= stepped
+            self._add_infos(infos, self._all, stepped)
+        elif mode is AutoresetMode.SAME_STEP and (terminated.any() or truncated.any()):
+            done = terminated | truncated
+            final_obs = sim.obs.astype(np.float32)
+            final_rows = np.flatnonzero(done)
+            final_info: dict[str, Any] = {}
+            self._add_infos(final_info, done, done, fill=True)
+            rewards = sim.reward.copy()
+            self._reset_rows(final_rows)
+            self._add_infos(infos, self._all, ~done)
+            boxed = np.full(self.num_envs, None, dtype=object)
+            for i in final_rows:
+                boxed[i] = final_obs[i]
+            infos["final_obs"], infos["_final_obs"] = boxed, done.copy()
+            infos["final_info"], infos["_final_info"] = final_info, done.copy()
+            return sim.obs.astype(np.float32), rewards, terminated, truncated, infos
+        else:
+            self._add_infos(infos, self._all, self._all)
+        rewards = sim.reward.copy()  # 0 for the vehicles just reset
+        if mode is AutoresetMode.NEXT_STEP:
+            self._autoreset = terminated | truncated
+        return sim.obs.astype(np.float32), rewards, terminated, truncated, infos
+
+    def _add_infos(
+        self, infos: dict[str, Any], base: np.ndarray, stepped: np.ndarray, fill: bool = False
+    ) -> None:
+        """The single env's info keys as arrays with ``_key`` masks (SyncVectorEnv layout).
+
+        ``base`` marks vehicles reporting the keys every info has, ``stepped`` those that also
+        report the reward terms and, if terminated, the reason. With ``fill`` the values of
+        unmarked vehicles are zeroed as SyncVectorEnv leaves them.
+        """
+        sim = self.sim
+        g = sim.guid
+        columns: dict[str, np.ndarray] = {
+            "x_e": g[:, 0], "y_e": g[:, 1], "z_e": g[:, 2], "distance": g[:, 3],
+            "s": sim.state[:, 10], "u_p": g[:, _UP],
+            "t": sim.step_index * self.config.physics_dt,
+            "tau": sim.record[:, 0:3], "disturbance": sim.record[:, 3:8],
+        }  # fmt: skip
+        if stepped.any():
+            columns.update(zip(_REWARD_KEYS, sim.terms.T, strict=True))
+        for key, values in columns.items():
+            mask = stepped if key.startswith("reward_") else base
+            if fill and not mask.all():
+                values = np.where(mask.reshape(-1, *([1] * (values.ndim - 1))), values, 0.0)
+            infos[key] = np.array(values, dtype=np.float64)
+            infos[f"_{key}"] = mask.copy()
+        reason_mask = stepped & (sim.code != 0)
+        if reason_mask.any():
+            infos["termination_reason"] = np.where(reason_mask, _REASONS[sim.code], None)
+            infos["_termination_reason"] = reason_mask
+
+    # ---------------------------------------------------------------------------- properties
+    @property
+    def state(self) -> np.ndarray:
+        """States (n, 11): x, y, z, θ, ψ, u, v, w, q, r, s [m, rad, m/s, rad/s, -]."""
+        return self.sim.state.copy()
+
+    @property
+    def vehicle_np_random(self) -> list[np.random.Generator | None]:
+        """Each vehicle's generator (None before its first reset)."""
+        return list(self._rngs)
+
+    @property
+    def render_vehicle(self) -> int:
+        """Index of the vehicle `render` draws; setting it restarts the drawn track."""
+        return self._render_vehicle
+
+    @render_vehicle.setter
+    def render_vehicle(self, index: int) -> None:
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+            raise ValueError(f"render_vehicle must be an integer, got {index!r}")
+        if not 0 <= index < self.num_envs:
+            raise ValueError(f"render_vehicle must be in [0, {self.num_envs}), got {index}")
+        self._render_vehicle = int(index)
+        self._track = [self.sim.state[self._render_vehicle, 0:3].copy()]
+
+    def render(self) -> np.ndarray | None:
+        """RGB image (H, W, 3) of vehicle `render_vehicle`'s track since its last reset."""
+        if self.render_mode != "rgb_array":
+            return None
+        from auv_gym.plotting import render_track
+
+        v = self._render_vehicle
+        return render_track(self.config.path, np.asarray(self._track), self.sim.state[v, 10])
+
+    def __repr__(self) -> str:
+        return (
+            f"AUVPath3DVectorEnv(num_envs={self.num_envs}, "
+            f"autoreset_mode={self.autoreset_mode.name})"
+        )
