@@ -1,0 +1,185 @@
+"""The native vector env as a stable-baselines3 `VecEnv` (needs the ``rl`` extra).
+
+`import auv_gym` never imports stable-baselines3; importing this module does, and fails with an
+ImportError naming the extra when it is missing.
+
+    from auv_gym.sb3 import make_sb3_vec_env
+    venv = make_sb3_vec_env(64, randomize_start=True)      # an SB3 VecEnv of 64 vehicles
+    model = PPO("MlpPolicy", VecMonitor(venv)).learn(100_000)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium.vector import AutoresetMode
+
+try:
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+except ImportError as error:  # pragma: no cover - exercised in a subprocess by the tests
+    raise ImportError(
+        "auv_gym.sb3 needs stable-baselines3, which is not installed; "
+        "install the RL extra: pip install 'auv-gym[rl]'"
+    ) from error
+
+from auv_gym.vector_env import AUVPath3DVectorEnv
+
+__all__ = ["SB3VecEnv", "make_sb3_vec_env"]
+
+# Attributes that differ between vehicles; every other attribute is shared by all of them.
+_PER_VEHICLE = ("state", "np_random", "observation_space", "action_space")
+
+
+class SB3VecEnv(VecEnv):
+    """SB3's `VecEnv` interface over an `AUVPath3DVectorEnv` in SAME_STEP autoreset mode.
+
+    Semantics are those of SB3's `DummyVecEnv` over n single envs, bit for bit: `step_wait`
+    returns float32 rewards, bool dones and one info dict per vehicle (the single env's info plus
+    ``"TimeLimit.truncated"``, and ``"terminal_observation"`` when the episode ended, the
+    observation then being the next episode's first); `reset_infos` holds the reset infos;
+    `seed(k)` makes the next `reset` seed vehicle i with k + i.
+
+    The vehicles are rows of one simulator, so attributes are shared: `get_attr` returns the vector
+    env's attribute for each requested index, except the per-vehicle ``state`` (11-vector),
+    ``np_random`` (the vehicle's generator) and the single ``observation_space`` /
+    ``action_space``; `set_attr` changes the shared attribute and therefore needs all indices;
+    `env_method` calls the vector env's method once and returns its result for each index;
+    `env_is_wrapped` is False (no gymnasium wrappers; wrap the whole VecEnv with `VecMonitor`,
+    `VecNormalize`, ...). `render` draws the vector env's `render_vehicle`.
+    """
+
+    def __init__(self, venv: AUVPath3DVectorEnv) -> None:
+        if not isinstance(venv, AUVPath3DVectorEnv):
+            raise ValueError(f"SB3VecEnv wraps an AUVPath3DVectorEnv, got {type(venv).__name__}")
+        if venv.autoreset_mode is not AutoresetMode.SAME_STEP:
+            raise ValueError(
+                "SB3VecEnv needs the vector env's autoreset_mode=AutoresetMode.SAME_STEP "
+                f"(SB3 semantics), got {venv.autoreset_mode}"
+            )
+        self.venv = venv
+        super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
+        self.metadata = {**self.metadata, "render_fps": venv.metadata["render_fps"]}
+        self._actions: np.ndarray | None = None
+
+    # ------------------------------------------------------------------------------- stepping
+    def reset(self) -> np.ndarray:
+        seeds = self._seeds if any(s is not None for s in self._seeds) else None
+        obs, info = self.venv.reset(seed=seeds)
+        self.reset_infos = _info_dicts(info, self.num_envs)
+        self._reset_seeds()
+        self._reset_options()
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = actions
+
+    def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+        if self._actions is None:
+            raise RuntimeError("step_wait() without a pending step_async()")
+        actions, self._actions = self._actions, None
+        obs, reward, terminated, truncated, info = self.venv.step(actions)
+        dones = terminated | truncated
+        time_limit = (truncated & ~terminated).tolist()
+        if not dones.any():
+            infos = _info_dicts(info, self.num_envs)
+        else:
+            # Ended vehicles report their last step's info; the reset info goes to reset_infos.
+            infos = _info_dicts(info, self.num_envs)
+            final = _info_dicts(info["final_info"], self.num_envs)
+            for i in np.flatnonzero(dones):
+                self.reset_infos[i] = infos[i]
+                infos[i] = final[i]
+                infos[i]["terminal_observation"] = info["final_obs"][i]
+        for i, flag in enumerate(time_limit):
+            infos[i]["TimeLimit.truncated"] = flag
+        return obs, reward.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    # --------------------------------------------------------------------- attribute access
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        rows = self._rows(indices)
+        if attr_name in _PER_VEHICLE:
+            if attr_name == "state":
+                return [self.venv.sim.state[i].copy() for i in rows]
+            if attr_name == "np_random":
+                return [self.venv.vehicle_np_random[i] for i in rows]
+            return [getattr(self.venv, f"single_{attr_name}")] * len(rows)
+        value = getattr(self.venv, attr_name)
+        return [value] * len(rows)
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        if len(set(self._rows(indices))) != self.num_envs:
+            raise ValueError(
+                f"attribute {attr_name!r} is shared by all vehicles of the vector env; "
+                "set_attr needs every index (indices=None)"
+            )
+        setattr(self.venv, attr_name, value)
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
+    ) -> list[Any]:
+        rows = self._rows(indices)
+        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
+        return [result] * len(rows)
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        return [False] * len(self._rows(indices))
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        return [self.venv.render()]
+
+    def _rows(self, indices: Any) -> list[int]:
+        rows = list(self._get_indices(indices))
+        for i in rows:
+            if not 0 <= i < self.num_envs:
+                raise ValueError(f"env index {i} out of range [0, {self.num_envs})")
+        return rows
+
+
+def _info_dicts(info: dict[str, Any], n: int) -> list[dict[str, Any]]:
+    """Gymnasium's dict of arrays (with ``_key`` masks) → one dict per vehicle, as single envs."""
+    keys = [k for k in info if not k.startswith("_") and k not in ("final_obs", "final_info")]
+    out: list[dict[str, Any]] = [{} for _ in range(n)]
+    for key in keys:
+        values, mask = info[key], info[f"_{key}"]
+        if mask.all():
+            columns: Iterable[Any] = values.tolist() if values.ndim == 1 else list(values)
+            for row, value in zip(out, columns, strict=True):
+                row[key] = value
+        else:
+            scalar = values.ndim == 1 and values.dtype != object
+            for i in np.flatnonzero(mask):
+                out[i][key] = values[i].item() if scalar else values[i]
+    return out
+
+
+def make_sb3_vec_env(
+    num_envs: int,
+    *,
+    seed: int | None = None,
+    max_episode_steps: int | None = None,
+    render_mode: str | None = None,
+    render_vehicle: int = 0,
+    **env_kwargs: Any,
+) -> SB3VecEnv:
+    """An `SB3VecEnv` of ``num_envs`` vehicles; keyword arguments as `AUVPath3DEnv`.
+
+    ``seed`` seeds the first reset (vehicle i gets seed + i). ``max_episode_steps`` defaults to
+    none: the env truncates at its ``max_time`` like ``AUVPath3DEnv`` itself.
+    """
+    venv = AUVPath3DVectorEnv(
+        num_envs,
+        max_episode_steps=max_episode_steps,
+        autoreset_mode=AutoresetMode.SAME_STEP,
+        render_mode=render_mode,
+        render_vehicle=render_vehicle,
+        **env_kwargs,
+    )
+    env = SB3VecEnv(venv)
+    if seed is not None:
+        env.seed(seed)
+    return env
