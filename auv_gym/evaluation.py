@@ -29,9 +29,11 @@ Diagnostics hook (optional). A policy may define
 called with the ``state`` that `predict` just returned; each value has shape (n,) or (n, m) for
 the n rows of that call and belongs to the interval that starts at the current sample. The
 values are stored as ``extras[name]`` with shape (K,) or (K, m). Names the plots recognise:
-``theta_d``, ``psi_d`` [rad] (the desired pitch and heading) and any name starting with
-``norm_`` (an adaptive-parameter norm, e.g. ``norm_theta_f_surge``). `controllers` document
-which extras they provide. The hook must not change the state.
+``theta_d`` [rad] (desired pitch), ``psi_d_rel`` [rad] (desired heading relative to the path,
+ψ_d − ψ_F: the observation holds ψ − ψ_F but not ψ itself) or ``psi_d`` [rad] (absolute), and
+any name starting with ``norm_`` (an adaptive-parameter norm, e.g. ``norm_theta_f_surge``; a
+(K, m) value is reduced to its row norms). `controllers` document which extras they provide.
+The hook must not change the state.
 
 Metrics: see `compute_metrics`; `evaluate` = `rollouts` + `compute_metrics` per seed.
 """
@@ -43,10 +45,10 @@ import json
 import math
 import os
 import tempfile
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path as FilePath
-from typing import Any, Protocol, runtime_checkable
+from typing import IO, Any, Protocol, runtime_checkable
 
 import numpy as np
 from gymnasium.utils import seeding
@@ -67,6 +69,7 @@ __all__ = [
     "policy_name",
     "rollout",
     "rollouts",
+    "write_atomic",
 ]
 
 # Samples at t_0 … t_K: simulator state, guidance row, virtual-point position p(s).
@@ -283,14 +286,8 @@ class Trajectory:
         }
         arrays["metadata"] = np.array(json.dumps(meta, default=_json_default))
         saver = np.savez_compressed if compress else np.savez
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-        try:
-            with os.fdopen(fd, "wb") as fh:  # a file object: numpy adds no ".npz" suffix
-                saver(fh, **arrays)
-            os.replace(tmp, target)
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+        # Through a file object, so numpy appends no ".npz" to a name that lacks it.
+        write_atomic(target, lambda fh: saver(fh, **arrays))
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Trajectory:
@@ -313,6 +310,32 @@ class Trajectory:
                 actuator_limits=tuple(meta["actuator_limits"]),
                 metadata=meta["metadata"],
             )
+
+
+def write_atomic(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> FilePath:
+    """Call ``write(file)`` on a temporary file beside ``path``, then rename it over ``path``.
+
+    Readers see the old file or the complete new one, never a partial write; the temporary
+    file is removed if ``write`` fails. Permissions follow the umask, as for `open`.
+    """
+    target = FilePath(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def _json_default(obj: Any) -> Any:

@@ -1,21 +1,81 @@
-"""Matplotlib figures of paths and tracks (imported lazily; uses the Agg backend)."""
+"""Matplotlib figures of paths, tracks and recorded episodes, and markdown metric tables.
+
+matplotlib is imported lazily and only its object-oriented API is used (`Figure` with the Agg
+canvas), so nothing here touches pyplot's global state or needs a display.
+
+`paper_figures` draws the equivalents of Figs. 3–9 of Liang et al. (2018) for a set of
+`auv_gym.evaluation.Trajectory` objects (one per controller, same seed), plus the distance to
+the virtual point and the adaptive-parameter norms; `metrics_table` formats
+`auv_gym.evaluation.compute_metrics` results side by side. Every PNG is written atomically.
+"""
 
 from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path as FilePath
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from auv_gym.paths import Path
 
-__all__ = ["plot_track", "render_track"]
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from auv_gym.evaluation import Trajectory
+
+__all__ = [
+    "PAPER_FIGURES",
+    "TABLE_METRICS",
+    "metrics_table",
+    "paper_figures",
+    "plot_track",
+    "render_track",
+    "save_figure",
+]
+
+# Metrics of the markdown table: name → (label, unit, better: "min" / "max").
+TABLE_METRICS: dict[str, tuple[str, str, str]] = {
+    "rms_distance": ("RMS distance, t ≥ transient", "m", "min"),
+    "rms_x_e": ("RMS x_e, t ≥ transient", "m", "min"),
+    "rms_y_e": ("RMS y_e, t ≥ transient", "m", "min"),
+    "rms_z_e": ("RMS z_e, t ≥ transient", "m", "min"),
+    "max_distance_window": ("max distance, t ≥ transient", "m", "min"),
+    "iae_distance": ("IAE distance (whole episode)", "m·s", "min"),
+    "settling_time_0p5": ("settling time to 0.5 m", "s", "min"),
+    "settling_time_0p1": ("settling time to 0.1 m", "s", "min"),
+    "surge_overshoot": ("surge overshoot max(u − u_D)", "m/s", "min"),
+    "rms_speed_error": ("RMS(u − u_D), t ≥ transient", "m/s", "min"),
+    "control_effort": ("control effort ∫Σ(τ/τ_max)² dt", "s", "min"),
+    "chattering": ("chattering TV(τ/τ_max) per s", "1/s", "min"),
+    "saturation_fraction": ("saturated control steps", "-", "min"),
+    "final_distance": ("final distance", "m", "min"),
+    "success": ("success", "-", "max"),
+    "termination_reason": ("episode end", "-", ""),
+}
+
+_DEG = 180.0 / math.pi
+_WIDTH, _HEIGHT, _DPI = 7.0, 4.5, 150  # default figure size [in] and resolution
 
 
-def _figure(width_in: float, height_in: float, dpi: int):
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
+def _figure(width_in: float, height_in: float, dpi: int) -> Figure:
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width_in, height_in), dpi=dpi)
+
+
+def save_figure(fig: Figure, file: str | os.PathLike, dpi: int | None = None) -> FilePath:
+    """Write ``fig`` as PNG atomically (temporary file in the same folder, then `os.replace`)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from auv_gym.evaluation import write_atomic
+
+    FigureCanvasAgg(fig)
+    dots = dpi if dpi is not None else fig.dpi
+    return write_atomic(file, lambda fh: fig.savefig(fh, format="png", dpi=dots))
 
 
 def plot_track(fig, path: Path, tracks: dict[str, np.ndarray], s_max: float) -> None:
@@ -53,3 +113,342 @@ def render_track(path: Path, track: np.ndarray, s_now: float) -> np.ndarray:
     fig.tight_layout()
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures of recorded episodes (Trajectory objects), one line per controller.
+
+
+def _reference(trajectories: Mapping[str, Trajectory], path: Path | None) -> np.ndarray:
+    """(n, 3) points of the desired path over the s range the episodes reached [m].
+
+    Without ``path``, the locus of the virtual point p(s) of the episode that got furthest.
+    """
+    furthest = max(trajectories.values(), key=lambda tr: float(np.nanmax(tr["s"])))
+    if path is None:
+        return furthest.point
+    s_max = float(np.nanmax(furthest["s"]))
+    s_end = min(s_max, path.s_end) if math.isfinite(path.s_end) else s_max
+    return path.evaluate(np.linspace(0.0, max(s_end, 1e-6), 800))[0]
+
+
+def _styles(names: Sequence[str]) -> dict[str, dict[str, Any]]:
+    colors = ("C0", "C3", "C2", "C1", "C4", "C5", "C6")
+    return {name: {"color": colors[i % len(colors)], "lw": 1.2} for i, name in enumerate(names)}
+
+
+def _finish(fig: Figure, axes: Sequence[Axes], title: str) -> None:
+    for ax in axes:
+        if ax.name != "3d":
+            ax.grid(True, alpha=0.3)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+
+
+def figure_path_3d(trajectories: Mapping[str, Trajectory], path: Path | None = None) -> Figure:
+    """Fig. 3: the desired path and the vehicle tracks in 3D (height −z up) [m]."""
+    fig = _figure(_WIDTH, 5.5, _DPI)
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    ref = _reference(trajectories, path)
+    ax.plot(ref[:, 0], ref[:, 1], -ref[:, 2], "k--", lw=1.0, label="desired path")
+    for name, tr in trajectories.items():
+        pos, style = tr.position, _styles(list(trajectories))[name]
+        ax.plot(pos[:, 0], pos[:, 1], -pos[:, 2], label=name, **style)
+        ax.scatter(pos[0, 0], pos[0, 1], -pos[0, 2], color="k", marker="o", s=12)
+    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="−z (height) [m]")
+    ax.legend(loc="upper left", fontsize=8)
+    _finish(fig, [ax], "3D path following")
+    return fig
+
+
+def _projection(
+    trajectories: Mapping[str, Trajectory],
+    path: Path | None,
+    axes_index: tuple[int, int],
+    labels: tuple[str, str],
+    title: str,
+) -> Figure:
+    fig = _figure(_WIDTH, _HEIGHT + 1.0, _DPI)
+    ax = fig.add_subplot(1, 1, 1)
+    sign = np.array([1.0, 1.0, -1.0])  # plot height −z
+    ref = _reference(trajectories, path) * sign
+    i, j = axes_index
+    ax.plot(ref[:, i], ref[:, j], "k--", lw=1.0, label="desired path")
+    styles = _styles(list(trajectories))
+    for name, tr in trajectories.items():
+        pos = tr.position * sign
+        ax.plot(pos[:, i], pos[:, j], label=name, **styles[name])
+        ax.plot(pos[0, i], pos[0, j], "ko", ms=3)
+    ax.set(xlabel=labels[0], ylabel=labels[1])
+    if axes_index == (0, 1):
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(fontsize=8)
+    _finish(fig, [ax], title)
+    return fig
+
+
+def figure_horizontal(trajectories: Mapping[str, Trajectory], path: Path | None = None) -> Figure:
+    """Fig. 4: projection on the horizontal plane (x, y) [m]."""
+    return _projection(trajectories, path, (0, 1), ("x [m]", "y [m]"), "Horizontal projection")
+
+
+def figure_vertical(trajectories: Mapping[str, Trajectory], path: Path | None = None) -> Figure:
+    """Fig. 5: projection on the vertical plane (x, −z) [m]."""
+    return _projection(
+        trajectories, path, (0, 2), ("x [m]", "−z (height) [m]"), "Vertical projection"
+    )
+
+
+def _time_axes(fig: Figure, rows: int) -> list[Axes]:
+    axes = [fig.add_subplot(rows, 1, 1)]
+    for k in range(1, rows):
+        axes.append(fig.add_subplot(rows, 1, k + 1, sharex=axes[0]))
+    for ax in axes[:-1]:
+        ax.tick_params(labelbottom=False)
+    axes[-1].set_xlabel("t [s]")
+    return axes
+
+
+def figure_errors(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
+    """Fig. 6: path-following errors x_e, y_e, z_e (body frame, vehicle − virtual point) [m]."""
+    fig = _figure(_WIDTH, _HEIGHT + 1.5, _DPI)
+    axes = _time_axes(fig, 3)
+    styles = _styles(list(trajectories))
+    for ax, key in zip(axes, ("x_e", "y_e", "z_e"), strict=True):
+        for name, tr in trajectories.items():
+            ax.plot(tr.t, tr[key], label=name, **styles[name])
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_ylabel(f"{key} [m]")
+    axes[0].legend(fontsize=8)
+    _finish(fig, axes, "Path-following errors")
+    return fig
+
+
+def figure_distance(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
+    """Distance to the virtual point on a log scale, with the 0.5-m and 0.1-m settling bands."""
+    fig = _figure(_WIDTH, _HEIGHT, _DPI)
+    ax = fig.add_subplot(1, 1, 1)
+    styles = _styles(list(trajectories))
+    for name, tr in trajectories.items():
+        ax.semilogy(tr.t, np.maximum(tr["distance"], 1e-4), label=name, **styles[name])
+    for level in (0.5, 0.1):
+        ax.axhline(level, color="k", ls=":", lw=0.8)
+    ax.set(xlabel="t [s]", ylabel="distance to P [m]")
+    ax.legend(fontsize=8)
+    _finish(fig, [ax], "Distance to the virtual point")
+    return fig
+
+
+def figure_surge(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
+    """Fig. 7: surge speed u against the desired u_D [m/s]."""
+    fig = _figure(_WIDTH, _HEIGHT, _DPI)
+    ax = fig.add_subplot(1, 1, 1)
+    styles = _styles(list(trajectories))
+    u_d = None
+    for name, tr in trajectories.items():
+        ax.plot(tr.t, tr["u"], label=name, **styles[name])
+        u_d = tr.u_desired
+    if u_d is not None:
+        ax.axhline(u_d, color="k", ls="--", lw=1.0, label="u_D")
+    ax.set(xlabel="t [s]", ylabel="u [m/s]")
+    ax.legend(fontsize=8)
+    _finish(fig, [ax], "Surge speed")
+    return fig
+
+
+def _unwrapped_heading(angle: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """``angle`` made continuous by expressing it relative to the unwrapped ψ_F [rad]."""
+    return ref + np.angle(np.exp(1j * (angle - ref)))
+
+
+def figure_attitude(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
+    """Fig. 8: pitch θ and heading ψ [deg] against the desired angles.
+
+    θ_d and ψ_d come from the controllers' diagnostics (extras "theta_d", and "psi_d_rel" =
+    ψ_d − ψ_F or "psi_d") when they expose them; the path angles θ_F and ψ_F (dashed) always.
+    Headings are unwrapped along ψ_F.
+    """
+    fig = _figure(_WIDTH, _HEIGHT + 1.0, _DPI)
+    ax_th, ax_psi = _time_axes(fig, 2)
+    styles = _styles(list(trajectories))
+    for k, (name, tr) in enumerate(trajectories.items()):
+        style = styles[name]
+        psi_f = np.unwrap(tr["psi_F"])
+        ax_th.plot(tr.t, tr["theta"] * _DEG, label=f"θ {name}", **style)
+        ax_psi.plot(tr.t, _unwrapped_heading(tr["psi"], psi_f) * _DEG, label=f"ψ {name}", **style)
+        if "theta_d" in tr.extras:
+            ax_th.plot(
+                tr.t_interval,
+                tr.extras["theta_d"] * _DEG,
+                ls=":",
+                color=style["color"],
+                lw=1.0,
+                label=f"θ_d {name}",
+            )
+        psi_d = None
+        if "psi_d_rel" in tr.extras:
+            psi_d = psi_f[:-1] + tr.extras["psi_d_rel"]
+        elif "psi_d" in tr.extras:
+            psi_d = _unwrapped_heading(tr.extras["psi_d"], psi_f[:-1])
+        if psi_d is not None:
+            ax_psi.plot(
+                tr.t_interval,
+                psi_d * _DEG,
+                ls=":",
+                color=style["color"],
+                lw=1.0,
+                label=f"ψ_d {name}",
+            )
+        if k == 0:
+            ax_th.plot(tr.t, tr["theta_F"] * _DEG, "k--", lw=0.8, label="θ_F")
+            ax_psi.plot(tr.t, psi_f * _DEG, "k--", lw=0.8, label="ψ_F")
+    ax_th.set_ylabel("θ [deg]")
+    ax_psi.set_ylabel("ψ [deg]")
+    for ax in (ax_th, ax_psi):
+        ax.legend(fontsize=7, ncol=3)
+    _finish(fig, [ax_th, ax_psi], "Attitude")
+    return fig
+
+
+def figure_controls(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
+    """Fig. 9: applied control inputs X [N], M and N [N·m] (means over each control period)."""
+    fig = _figure(_WIDTH, _HEIGHT + 1.5, _DPI)
+    axes = _time_axes(fig, 3)
+    styles = _styles(list(trajectories))
+    limits = None
+    for name, tr in trajectories.items():
+        for ax, key in zip(axes, ("X", "M", "N"), strict=True):
+            ax.plot(tr.t_interval, tr[key], label=name, **{**styles[name], "lw": 0.8})
+        limits = tr.actuator_limits
+    for ax, key, unit, limit in zip(axes, "XMN", ("N", "N·m", "N·m"), limits or (), strict=False):
+        ax.axhline(limit, color="k", ls=":", lw=0.8)
+        ax.axhline(-limit, color="k", ls=":", lw=0.8)
+        ax.set_ylabel(f"{key} [{unit}]")
+    axes[0].legend(fontsize=8)
+    _finish(fig, axes, "Control inputs")
+    return fig
+
+
+def norm_series(tr: Trajectory) -> dict[str, np.ndarray]:
+    """The adaptive-parameter norms among the extras: names starting with "norm_"."""
+    out = {}
+    for key, values in tr.extras.items():
+        if key.startswith("norm_"):
+            out[key[5:]] = values if values.ndim == 1 else np.linalg.norm(values, axis=1)
+    return out
+
+
+def figure_adaptive(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure | None:
+    """Norms of the adaptive parameters (extras "norm_*"); None if no controller has any."""
+    series = {name: norm_series(tr) for name, tr in trajectories.items()}
+    keys = sorted({k for s in series.values() for k in s})
+    if not keys:
+        return None
+    fig = _figure(_WIDTH, 1.6 + 1.3 * len(keys), _DPI)
+    axes = _time_axes(fig, len(keys))
+    styles = _styles(list(trajectories))
+    for ax, key in zip(axes, keys, strict=True):
+        for name, tr in trajectories.items():
+            if key in series[name]:
+                ax.plot(tr.t_interval, series[name][key], label=name, **styles[name])
+        ax.set_ylabel(f"‖{key}‖", fontsize=8)
+    axes[0].legend(fontsize=8)
+    _finish(fig, axes, "Adaptive-parameter norms")
+    return fig
+
+
+# File stem → figure builder, in the paper's order (Figs. 3–9), then the extras.
+PAPER_FIGURES: dict[str, Callable[..., Figure | None]] = {
+    "fig3_path_3d": figure_path_3d,
+    "fig4_horizontal": figure_horizontal,
+    "fig5_vertical": figure_vertical,
+    "fig6_errors": figure_errors,
+    "fig7_surge": figure_surge,
+    "fig8_attitude": figure_attitude,
+    "fig9_controls": figure_controls,
+    "fig10_adaptive_norms": figure_adaptive,
+    "fig11_distance": figure_distance,
+}
+
+
+def paper_figures(
+    trajectories: Mapping[str, Trajectory],
+    out_dir: str | os.PathLike,
+    path: Path | None = None,
+    dpi: int = _DPI,
+) -> dict[str, FilePath]:
+    """Write the figures of `PAPER_FIGURES` as ``out_dir/<stem>.png``; return stem → file.
+
+    Args:
+        trajectories: label → episode, drawn in this order (e.g. {"FBSM": …, "backstepping": …});
+            for a comparison give every controller the same seed.
+        out_dir: folder, created if missing.
+        path: the desired path, for the reference curve (default: the virtual point's locus).
+        dpi: resolution; the figures are 7 in wide (1050 px at 150 dpi).
+
+    The adaptive-norm figure is skipped when no trajectory has "norm_*" extras.
+    """
+    if not trajectories:
+        raise ValueError("paper_figures needs at least one trajectory")
+    out = FilePath(out_dir)
+    written = {}
+    for stem, build in PAPER_FIGURES.items():
+        fig = build(trajectories, path=path)
+        if fig is not None:
+            written[stem] = save_figure(fig, out / f"{stem}.png", dpi=dpi)
+    return written
+
+
+def _format(value: Any) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "yes" if value else "no"
+    if isinstance(value, str):
+        return value or "–"
+    if value is None:
+        return "–"
+    value = float(value)
+    if math.isnan(value):
+        return "–"
+    if math.isinf(value):
+        return "never" if value > 0 else "−inf"
+    return f"{value:.4g}"
+
+
+def metrics_table(
+    results: Mapping[str, Mapping[str, Any]], metrics: Sequence[str] | None = None
+) -> str:
+    """Markdown table: one row per metric, one column per policy; the best value in bold.
+
+    ``results`` maps a policy label to its `compute_metrics` dict. "never" marks a settling
+    time that was not reached, "–" an undefined value (e.g. a window the episode did not reach).
+    """
+    names = list(results)
+    rows = list(metrics) if metrics is not None else list(TABLE_METRICS)
+    lines = [
+        "| metric | unit | " + " | ".join(names) + " |",
+        "|---|---|" + "---|" * len(names),
+    ]
+    for metric in rows:
+        label, unit, better = TABLE_METRICS.get(metric, (metric, "", ""))
+        values = [results[name].get(metric) for name in names]
+        texts = [_format(v) for v in values]
+        numeric = [
+            float(v)
+            for v in values
+            if isinstance(v, (int, float, np.number)) and not isinstance(v, (bool, np.bool_))
+        ]
+        if better and len(names) > 1 and numeric and all(not math.isnan(v) for v in numeric):
+            best = min(numeric) if better == "min" else max(numeric)
+            if math.isfinite(best) and numeric.count(best) < len(numeric):
+                texts = [
+                    f"**{t}**" if _is(v, best) else t for t, v in zip(texts, values, strict=True)
+                ]
+        lines.append(f"| {label} | {unit} | " + " | ".join(texts) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _is(value: Any, best: float) -> bool:
+    try:
+        return float(value) == best
+    except (TypeError, ValueError):
+        return False
