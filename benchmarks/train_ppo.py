@@ -1,0 +1,153 @@
+"""Train a PPO baseline on AUVPath3D-v0 from an RL-Zoo hyper-parameter file.
+
+The shipped agent `benchmarks/agents/ppo_helix` was produced by::
+
+    python -m benchmarks.train_ppo --config benchmarks/hyperparams/ppo.yml --seed 1 \\
+        --out runs/ppo_helix --export benchmarks/agents/ppo_helix
+
+An interrupted run continues from its newest checkpoint (step counter intact) with the same
+command plus ``--resume``. Watch it with ``tensorboard --logdir runs/ppo_helix/tb``. The learning
+curve of a run (evaluation rms distance against env steps and wall time) is plotted with::
+
+    python -m benchmarks.train_ppo --out runs/ppo_helix --plot-only \
+        --curve benchmarks/results/ppo_learning_curve
+
+The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
+
+    python -m rl_zoo3.train --algo ppo --env AUVPath3D-v0 --gym-packages auv_gym \\
+        -conf benchmarks/hyperparams/ppo.yml
+
+Outputs and file formats: see `controllers.ppo`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import shutil
+import sys
+import typing
+from collections.abc import Sequence
+from dataclasses import MISSING, fields
+from pathlib import Path
+
+from controllers.ppo import EVAL_FILE, TrainOptions, train
+
+# One-line help per option (the TrainOptions field comments, for the CLI).
+HELP = {
+    "config": "RL-Zoo hyper-parameter YAML (top-level key = env id)",
+    "env_id": "Gymnasium id and YAML key",
+    "out": "run directory (checkpoints, best/, final/, evaluations.csv, tb/)",
+    "seed": "seed of torch, numpy and the training environments",
+    "n_timesteps": "override the config's n_timesteps",
+    "resume": "continue from the newest checkpoint in --out (num_timesteps kept)",
+    "checkpoint_freq": "env steps between checkpoints (a kill loses at most this many)",
+    "keep_checkpoints": "number of newest checkpoints kept on disk",
+    "eval_freq": "env steps between paper-scenario evaluations (0: none)",
+    "eval_seeds": "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
+    "eval_duration": "evaluation episode length [s]",
+    "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
+    "threads": "torch intra-op threads (1 is fastest on small CPUs, DESIGN.md §4)",
+    "progress_bar": "show the progress bar (tqdm + rich)",
+    "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
+    "verbose": "SB3 verbosity; 1 also prints every evaluation",
+}
+
+
+def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argparse.Namespace]:
+    """TrainOptions (every dataclass field is an option) and the plotting options."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "--curve",
+        default=None,
+        help="write the learning curve to CURVE.csv and CURVE.png at the end",
+    )
+    parser.add_argument("--plot-only", action="store_true",
+                        help="only plot the learning curve of --out (needs --curve)")  # fmt: skip
+    hints = typing.get_type_hints(TrainOptions)
+    for f in fields(TrainOptions):
+        flag = "--" + f.name.replace("_", "-")
+        default = f.default if f.default is not MISSING else f.default_factory()  # type: ignore[misc]
+        if hints[f.name] is bool:
+            parser.add_argument(flag, action=argparse.BooleanOptionalAction, default=default,
+                                help=HELP[f.name])  # fmt: skip
+        elif f.name == "eval_seeds":
+            parser.add_argument(flag, default=",".join(map(str, default)), help=HELP[f.name])
+        elif f.name == "n_timesteps":
+            parser.add_argument(flag, type=lambda v: int(float(v)), default=None,
+                                help=HELP[f.name])  # fmt: skip
+        elif f.name == "export":
+            parser.add_argument(flag, default=None, help=HELP[f.name])
+        else:
+            parser.add_argument(flag, type=type(default), default=default, help=HELP[f.name])
+    ns = vars(parser.parse_args(argv))
+    extra = argparse.Namespace(curve=ns.pop("curve"), plot_only=ns.pop("plot_only"))
+    if extra.plot_only and not extra.curve:
+        parser.error("--plot-only needs --curve")
+    try:
+        ns["eval_seeds"] = tuple(int(s) for s in str(ns["eval_seeds"]).split(",") if s.strip())
+    except ValueError as exc:
+        parser.error(f"--eval-seeds must be comma-separated integers: {exc}")
+    return TrainOptions(**ns), extra
+
+
+def plot_learning_curve(run: Path, prefix: Path) -> None:
+    """Copy RUN/evaluations.csv to PREFIX.csv and plot it to PREFIX.png.
+
+    Two panels share the y axis (mean rms distance over t ≥ 100 s of the evaluation seeds,
+    log scale): against env steps and against training wall time. Evaluations in which an
+    episode terminated are drawn as crosses at their rms over the part that was flown (or at
+    the corridor width when no episode reached 100 s).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    source = Path(run) / EVAL_FILE
+    if not source.is_file():
+        raise FileNotFoundError(f"no learning curve {source}")
+    with source.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        raise ValueError(f"{source} has no evaluations")
+    steps = np.array([float(r["num_timesteps"]) for r in rows])
+    wall = np.array([float(r["wall_time_s"]) for r in rows])
+    rms = np.array([float(r["rms_distance_mean"]) for r in rows])
+    failed = np.array([int(r["n_terminated"]) > 0 for r in rows])
+    shown = np.where(np.isfinite(rms), rms, 30.0)
+    prefix = Path(prefix)
+    prefix.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(source, prefix.with_suffix(".csv"))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True, constrained_layout=True)
+    for ax, x, label in ((axes[0], steps / 1e6, "env steps [millions]"),
+                         (axes[1], wall / 60.0, "training wall time [min]")):  # fmt: skip
+        ax.plot(x, shown, "-", color="0.6", lw=1)
+        ax.plot(x[~failed], shown[~failed], "o", ms=4, label="all episodes ran 300 s")
+        ax.plot(x[failed], shown[failed], "x", ms=6, color="C3", label="some episode terminated")
+        ax.axhline(1.0, ls="--", color="k", lw=0.8, label="target 1 m")
+        ax.set_xlabel(label)
+        ax.set_yscale("log")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("eval mean rms distance, t ≥ 100 s [m]")
+    axes[0].legend(fontsize=8)
+    fig.suptitle("PPO on AUVPath3D-v0, paper scenario (white noise ±35), evaluation seeds")
+    tmp = prefix.with_name(prefix.name + ".tmp.png")
+    fig.savefig(tmp, dpi=120)
+    plt.close(fig)
+    tmp.replace(prefix.with_suffix(".png"))
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = list(sys.argv[1:] if argv is None else argv)
+    opts, extra = parse_args(args)
+    if not extra.plot_only:
+        out = train(opts, argv=["benchmarks/train_ppo.py", *args])
+        print(f"run directory: {out}")
+    if extra.curve:
+        plot_learning_curve(Path(opts.out), Path(extra.curve))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,284 @@
+"""PPO baselines: training CLI, checkpoints and resume, loading and its errors, the shipped agent.
+
+Training here is tiny (a few hundred env steps); real training belongs to benchmarks/train_ppo.py.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
+
+pytestmark = pytest.mark.rl
+
+ROOT = Path(__file__).resolve().parent.parent
+SHIPPED = ROOT / "benchmarks" / "agents" / "ppo_helix"
+
+TINY_YAML = """\
+AUVPath3D-v0:
+  n_envs: 2
+  n_timesteps: 256
+  policy: MlpPolicy
+  normalize: "dict(norm_obs=True, norm_reward=True)"
+  n_steps: 64
+  batch_size: 64
+  n_epochs: 1
+  gamma: 0.99
+  learning_rate: lin_3e-4
+  policy_kwargs: "dict(net_arch=[16, 16], log_std_init=-1.0)"
+  env_kwargs:
+    randomize_start: true
+    max_time: 5.0
+    reward_weights: {distance: 2.0}
+"""
+
+
+def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run(
+        [sys.executable, "-m", "benchmarks.train_ppo", *args],
+        cwd=cwd, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+
+
+TINY_ARGS = ("--n-timesteps", "256", "--checkpoint-freq", "128", "--eval-freq", "128",
+             "--eval-seeds", "100,101", "--eval-duration", "2", "--vec-env", "dummy",
+             "--no-progress-bar")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A 256-step run of the real CLI, then --resume to 512 steps (shared by the tests below)."""
+    work = tmp_path_factory.mktemp("ppo")
+    (work / "tiny.yml").write_text(TINY_YAML)
+    out = work / "run"
+    first = run_cli("--config", "tiny.yml", "--out", str(out), "--seed", "3", *TINY_ARGS, cwd=work)
+    assert first.returncode == 0, first.stderr
+    (work / "first_metadata.json").write_text((out / "metadata.json").read_text())
+    second = run_cli("--config", "tiny.yml", "--out", str(out), "--seed", "3", *TINY_ARGS[2:],
+                     "--n-timesteps", "512", "--resume", cwd=work)  # fmt: skip
+    assert second.returncode == 0, second.stderr
+    return out
+
+
+def test_cli_writes_complete_loadable_agents(tiny_run: Path) -> None:
+    from controllers.ppo import load_policy
+
+    first = json.loads((tiny_run.parent / "first_metadata.json").read_text())
+    assert first["num_timesteps"] == 256
+    assert first["seed"] == 3
+    assert first["obs_names"] == list(OBS_NAMES)
+    assert first["config"]["n_envs"] == 2
+    assert first["env_kwargs"]["reward_weights"] == {"distance": 2.0}
+    assert "--config tiny.yml" in first["command"]
+    assert set(first["versions"]) >= {"python", "torch", "stable-baselines3", "gymnasium"}
+    assert first["wall_time_s"] > 0
+    for folder in ("final", "best"):
+        for name in ("model.zip", "vecnormalize.npz", "vecnormalize.pkl", "metadata.json"):
+            assert (tiny_run / folder / name).is_file(), (folder, name)
+    # Evaluations at 0, 128 and 256 steps, then 384 and 512 after the resume.
+    rows = (tiny_run / "evaluations.csv").read_text().splitlines()
+    assert rows[0].startswith("num_timesteps,wall_time_s,rms_distance_mean")
+    assert [int(r.split(",")[0]) for r in rows[1:]] == [0, 128, 256, 384, 512]
+    assert (tiny_run / "tb").is_dir() and any((tiny_run / "tb").rglob("events.out.tfevents*"))
+    policy = load_policy(tiny_run / "final")
+    action, state = policy.predict(np.zeros(OBS_DIM, dtype=np.float32))
+    assert action.shape == (3,) and state is None
+    assert np.all(np.abs(action) <= 1.0)
+
+
+def test_resume_continues_step_counter(tiny_run: Path) -> None:
+    meta = json.loads((tiny_run / "metadata.json").read_text())
+    assert meta["num_timesteps"] == 512
+    sessions = meta["sessions"]
+    assert len(sessions) == 2
+    assert sessions[0]["start_timesteps"] == 0
+    assert sessions[1]["start_timesteps"] == 256
+    assert sessions[1]["resumed_from"].endswith("step_0000000256")
+    assert "--resume" in " ".join(sessions[1]["argv"])
+    # Only the newest `keep_checkpoints` (3) checkpoints stay: 256, 384, 512.
+    kept = sorted(p.name for p in (tiny_run / "checkpoints").iterdir())
+    assert kept == ["step_0000000256", "step_0000000384", "step_0000000512"]
+    ckpt = json.loads((tiny_run / "checkpoints" / "step_0000000512" / "metadata.json").read_text())
+    assert ckpt["num_timesteps"] == 512
+
+
+def test_cli_refuses_to_overwrite_and_to_resume_nothing(tiny_run: Path, tmp_path: Path) -> None:
+    (tmp_path / "tiny.yml").write_text(TINY_YAML)
+    again = run_cli("--config", "tiny.yml", "--out", str(tiny_run), *TINY_ARGS, cwd=tmp_path)
+    assert again.returncode != 0 and "is not empty" in again.stderr
+    empty = run_cli("--config", "tiny.yml", "--out", str(tmp_path / "new"), "--resume", *TINY_ARGS,
+                    cwd=tmp_path)  # fmt: skip
+    assert empty.returncode != 0 and "no complete checkpoint" in empty.stderr
+
+
+def _tiny_model(seed: int = 0):
+    """A small untrained PPO on the real env with VecNormalize statistics from a short rollout."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    kwargs = {"randomize_start": True, "max_time": 5.0}
+    venv = VecNormalize(make_vec_env("AUVPath3D-v0", n_envs=2, seed=seed, env_kwargs=kwargs))
+    model = PPO("MlpPolicy", venv, n_steps=32, batch_size=32, n_epochs=1, seed=seed,
+                policy_kwargs={"net_arch": [16, 16]}, device="cpu")  # fmt: skip
+    model.learn(64)
+    return model, venv
+
+
+def _random_obs(n: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    scale = np.minimum(np.abs(OBS_LOW), OBS_HIGH).clip(max=5.0)
+    return (rng.uniform(-1, 1, (n, OBS_DIM)) * scale).astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def saved_agent(tmp_path_factory: pytest.TempPathFactory):
+    from controllers.ppo import save_agent
+
+    model, venv = _tiny_model()
+    folder = tmp_path_factory.mktemp("agent") / "agent"
+    save_agent(model, venv, folder, {"obs_names": list(OBS_NAMES), "seed": 0})
+    return model, venv, folder
+
+
+def test_save_load_identical_deterministic_predictions(saved_agent) -> None:
+    from controllers.ppo import load_policy
+
+    model, venv, folder = saved_agent
+    obs = _random_obs(64)
+    expected, _ = model.predict(venv.normalize_obs(obs), deterministic=True)
+    policy = load_policy(folder)
+    actions, state = policy.predict(obs, None, np.ones(64, dtype=bool), True)
+    assert state is None
+    np.testing.assert_array_equal(actions, expected)
+    single, _ = policy.predict(obs[5])  # one row: same up to float32 matmul rounding
+    assert single.shape == (3,)
+    np.testing.assert_allclose(single, expected[5], rtol=1e-5, atol=1e-7)
+    # The pickled VecNormalize alone (RL Zoo's layout) gives the same agent.
+    (folder.parent / "zoo").mkdir()
+    shutil.copy2(folder / "model.zip", folder.parent / "zoo" / "model.zip")
+    shutil.copy2(folder / "vecnormalize.pkl", folder.parent / "zoo" / "vecnormalize.pkl")
+    from_pickle, _ = load_policy(folder.parent / "zoo" / "model.zip").predict(obs)
+    np.testing.assert_array_equal(from_pickle, expected)
+
+
+def test_policy_rejects_bad_observation_shape(saved_agent) -> None:
+    from controllers.ppo import load_policy
+
+    policy = load_policy(saved_agent[2])
+    with pytest.raises(ValueError, match="observation must have shape"):
+        policy.predict(np.zeros(OBS_DIM + 1, dtype=np.float32))
+
+
+def _copy_agent(src: Path, dst: Path, skip: tuple[str, ...] = ()) -> Path:
+    dst.mkdir(parents=True)
+    for p in src.iterdir():
+        if p.name not in skip:
+            shutil.copy2(p, dst / p.name)
+    return dst
+
+
+def test_missing_statistics_named(saved_agent, tmp_path: Path) -> None:
+    from controllers.ppo import load_policy
+
+    agent = _copy_agent(
+        saved_agent[2], tmp_path / "a", skip=("vecnormalize.npz", "vecnormalize.pkl")
+    )
+    with pytest.raises(FileNotFoundError, match=r"normalisation statistics missing") as err:
+        load_policy(agent)
+    assert str(agent / "model.zip") in str(err.value)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        load_policy(tmp_path / "nowhere")
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated"])
+def test_corrupt_zip_named(saved_agent, tmp_path: Path, damage: str) -> None:
+    from controllers.ppo import load_policy
+
+    agent = _copy_agent(saved_agent[2], tmp_path / "a")
+    data = (agent / "model.zip").read_bytes()
+    (agent / "model.zip").write_bytes(
+        b"not a zip" * 100 if damage == "garbage" else data[: len(data) // 2]
+    )
+    with pytest.raises(ValueError, match=r"model\.zip") as err:
+        load_policy(agent)
+    assert "not a valid zip" in str(err.value) or "cannot be loaded" in str(err.value)
+
+
+def test_other_observation_layout_named(saved_agent, tmp_path: Path) -> None:
+    from controllers.ppo import load_policy
+
+    agent = _copy_agent(saved_agent[2], tmp_path / "a")
+    meta = json.loads((agent / "metadata.json").read_text())
+    meta["obs_names"] = [*OBS_NAMES[:-1], "depth"]
+    (agent / "metadata.json").write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match="observation layout") as err:
+        load_policy(agent)
+    assert "metadata.json" in str(err.value)
+    # Statistics of another size.
+    agent2 = _copy_agent(saved_agent[2], tmp_path / "b", skip=("vecnormalize.pkl",))
+    with np.load(agent2 / "vecnormalize.npz") as d:
+        stats = dict(d)
+    stats["mean"], stats["var"] = np.zeros(OBS_DIM - 1), np.ones(OBS_DIM - 1)
+    stats.pop("obs_names")
+    np.savez(agent2 / "vecnormalize.npz", **stats)
+    with pytest.raises(ValueError, match=r"vecnormalize.npz: statistics of shape \(14,\)"):
+        load_policy(agent2)
+
+
+def test_other_observation_space_named(saved_agent, tmp_path: Path) -> None:
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    from controllers.ppo import load_policy
+
+    agent = _copy_agent(saved_agent[2], tmp_path / "a", skip=("metadata.json", "model.zip"))
+    PPO("MlpPolicy", gym.make("Pendulum-v1"), n_steps=32, batch_size=32, device="cpu").save(
+        agent / "model.zip"
+    )
+    with pytest.raises(ValueError, match=r"observation space shape \(3,\), expected \(15,\)"):
+        load_policy(agent)
+
+
+def test_zoo_config_errors(tmp_path: Path) -> None:
+    from controllers.ppo import read_zoo_config
+
+    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo.yml")
+    assert cfg.normalize["norm_obs"] is True
+    assert cfg.normalize["gamma"] == cfg.ppo_kwargs["gamma"]  # copied, as RL Zoo does
+    assert cfg.env_kwargs["randomize_start"] is True
+    bad = tmp_path / "bad.yml"
+    bad.write_text(TINY_YAML.replace("n_epochs: 1", "n_epochs: 1\n  frame_stack: 4"))
+    with pytest.raises(ValueError, match=r"unsupported keys .*frame_stack"):
+        read_zoo_config(bad)
+    bad.write_text(TINY_YAML.replace('"dict(norm_obs=True, norm_reward=True)"', "false"))
+    with pytest.raises(ValueError, match="normalize must be enabled"):
+        read_zoo_config(bad)
+    with pytest.raises(ValueError, match="no top-level key 'Other-v0'"):
+        read_zoo_config(bad, "Other-v0")
+    with pytest.raises(FileNotFoundError, match=r"missing\.yml"):
+        read_zoo_config(tmp_path / "missing.yml")
+
+
+def test_shipped_agent_follows_helix_briefly() -> None:
+    """The shipped agent on held-out seed 0 (paper scenario), 60 s: no termination, closes in."""
+    from auv_gym.evaluation import evaluate
+    from controllers.ppo import load_policy
+
+    policy = load_policy(SHIPPED)
+    assert policy.metadata["obs_names"] == list(OBS_NAMES)
+    size = sum(p.stat().st_size for p in SHIPPED.iterdir())
+    assert size < 5e6
+    (metrics,) = evaluate(policy, [0], transient=40.0, max_time=60.0)
+    assert metrics["termination_reason"] == "time_limit"
+    assert metrics["max_distance_window"] < 30.0  # inside the corridor over 40-60 s
+    assert metrics["rms_distance"] < 5.0  # and already close to the path (starts 17.7 m away)
