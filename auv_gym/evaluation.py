@@ -50,6 +50,7 @@ from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path as FilePath
 from typing import IO, Any, Protocol, runtime_checkable
 
+import numba
 import numpy as np
 from gymnasium.utils import seeding
 
@@ -395,6 +396,7 @@ def rollouts(
     *,
     batch_size: int = DEFAULT_BATCH,
     name: str | None = None,
+    threads: int | None = 1,
     **env_kwargs: Any,
 ) -> list[Trajectory]:
     """Run ``policy`` on the episodes of ``seeds`` (batched) and record one `Trajectory` each.
@@ -404,6 +406,11 @@ def rollouts(
         seeds: reset seeds; seed k reproduces ``AUVPath3DEnv(**env_kwargs).reset(seed=k)``.
         batch_size: rows simulated together (bounds memory; results do not depend on it).
         name: policy label for the metadata (default `policy_name`).
+        threads: numba threads for the simulator kernel during the call (None: leave numba's
+            setting). The default 1 is deliberate: a control step of a few dozen rows takes
+            microseconds, and on a loaded machine the threaded kernel's barrier made batches of
+            16–64 rows 10–20× slower than one thread (2-core machine, load ≈ 4). Results do not
+            depend on it.
         **env_kwargs: `AUVPath3DEnv` keyword arguments (not ``render_mode``).
 
     The policy is called once per control step with the float32 observations of all rows of a
@@ -414,13 +421,20 @@ def rollouts(
     seed_list = _check_seeds(seeds)
     if not (isinstance(batch_size, (int, np.integer)) and batch_size >= 1):
         raise ValueError(f"batch_size must be a positive integer, got {batch_size!r}")
+    if threads is not None and not (isinstance(threads, (int, np.integer)) and threads >= 1):
+        raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
     config = _config(env_kwargs)
     label = name if name is not None else policy_name(policy)
     out: list[Trajectory] = []
-    for start in range(0, len(seed_list), batch_size):
-        out.extend(
-            _run_batch(policy, seed_list[start : start + batch_size], config, label, env_kwargs)
-        )
+    previous = numba.get_num_threads()
+    if threads is not None:
+        numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
+    try:
+        for start in range(0, len(seed_list), batch_size):
+            seeds_batch = seed_list[start : start + batch_size]
+            out.extend(_run_batch(policy, seeds_batch, config, label, env_kwargs))
+    finally:
+        numba.set_num_threads(previous)
     return out
 
 
@@ -528,8 +542,6 @@ def _record_extras(
 
 
 def _versions() -> dict[str, str]:
-    import numba
-
     import auv_gym
 
     return {"auv_gym": auv_gym.__version__, "numpy": np.__version__, "numba": numba.__version__}
@@ -662,6 +674,7 @@ def evaluate(
     *,
     transient: float = DEFAULT_TRANSIENT,
     batch_size: int = DEFAULT_BATCH,
+    threads: int | None = 1,
     **env_kwargs: Any,
 ) -> list[dict[str, Any]]:
     """Metrics (`compute_metrics`) of ``policy`` on each seed, in the order of ``seeds``.
@@ -670,7 +683,7 @@ def evaluate(
     disturbances, parameters and start, so the dicts of two policies compare episode by episode.
     """
     results = []
-    for trajectory in rollouts(policy, seeds, batch_size=batch_size, **env_kwargs):
+    for trajectory in rollouts(policy, seeds, batch_size=batch_size, threads=threads, **env_kwargs):
         metrics = compute_metrics(trajectory, transient=transient)
         results.append(
             {

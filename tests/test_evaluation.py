@@ -222,7 +222,8 @@ def test_evaluate_is_deterministic_and_batch_independent():
     first = evaluate(ProportionalPolicy(), seeds, transient=5.0, max_time=10.0)
     again = evaluate(ProportionalPolicy(), seeds, transient=5.0, max_time=10.0)
     one_by_one = evaluate(ProportionalPolicy(), seeds, transient=5.0, batch_size=1, max_time=10.0)
-    assert first == again == one_by_one
+    threaded = evaluate(ProportionalPolicy(), seeds, transient=5.0, threads=2, max_time=10.0)
+    assert first == again == one_by_one == threaded
     assert [m["seed"] for m in first] == seeds
     # Different seeds meet different noise.
     assert first[0]["rms_distance"] != first[1]["rms_distance"]
@@ -333,6 +334,7 @@ class _WrongShape:
         (ProportionalPolicy(), [0.5], {}, "integers"),
         (ProportionalPolicy(), [0], {"render_mode": "rgb_array"}, "unknown env keyword"),
         (ProportionalPolicy(), [0], {"batch_size": 0}, "batch_size"),
+        (ProportionalPolicy(), [0], {"threads": 0}, "threads"),
     ],
 )
 def test_rollouts_reject_bad_input(policy, seeds, kwargs, message):
