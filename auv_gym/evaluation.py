@@ -137,6 +137,10 @@ _SAT_TOL = 1e-9
 _STATE_SLICE = slice(0, len(STATE_NAMES))
 _GUID_SLICE = slice(len(STATE_NAMES), len(STATE_NAMES) + len(GUIDANCE_FIELDS))
 _S_COLUMN = SAMPLE_FIELDS.index("s")
+_ACTION_SLICE = slice(0, 3)
+_RECORD_SLICE = slice(3, 3 + len(_TAU_FIELDS) + len(_DISTURBANCE_FIELDS))  # = Simulator.record
+_REWARD_COLUMN = INTERVAL_FIELDS.index("reward")
+_TERMS_SLICE = slice(_REWARD_COLUMN + 1, _REWARD_COLUMN + 1 + len(REWARD_TERMS))
 
 
 @runtime_checkable
@@ -451,7 +455,6 @@ def _run_batch(
     for i, seed in enumerate(seeds):
         sim.reset_row(i, seeding.np_random(seed)[0])
     max_steps = config.max_steps
-    n_state, n_guid = len(STATE_NAMES), len(GUIDANCE_FIELDS)
     # Pre-allocated records: samples (state | guidance | p(s), filled after the loop) and
     # intervals (action | τ, f | reward | reward terms).
     samples = np.empty((n, max_steps + 1, len(SAMPLE_FIELDS)))
@@ -471,17 +474,17 @@ def _run_batch(
             obs, state=state, episode_start=episode_start, deterministic=True
         )
         actions = _policy_actions(action, n)
-        intervals[:, k, 0:3] = actions
+        intervals[:, k, _ACTION_SLICE] = actions
         if diagnostics is not None:
             _record_extras(extras, diagnostics(state), k, n, max_steps)
         if not alive.all():
             actions = np.where(alive[:, None], actions, 0.0)
         sim.step(actions)
-        samples[:, k + 1, 0:n_state] = sim.state
-        samples[:, k + 1, n_state : n_state + n_guid] = sim.guid
-        intervals[:, k, 3:11] = sim.record
-        intervals[:, k, 11] = sim.reward
-        intervals[:, k, 12:] = sim.terms
+        samples[:, k + 1, _STATE_SLICE] = sim.state
+        samples[:, k + 1, _GUID_SLICE] = sim.guid
+        intervals[:, k, _RECORD_SLICE] = sim.record
+        intervals[:, k, _REWARD_COLUMN] = sim.reward
+        intervals[:, k, _TERMS_SLICE] = sim.terms
         ended = alive & (sim.code != 0)
         if ended.any():
             steps[ended] = k + 1
