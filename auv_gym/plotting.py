@@ -151,9 +151,10 @@ def figure_path_3d(trajectories: Mapping[str, Trajectory], path: Path | None = N
     ax = fig.add_subplot(1, 1, 1, projection="3d")
     ref = _reference(trajectories, path)
     ax.plot(ref[:, 0], ref[:, 1], -ref[:, 2], "k--", lw=1.0, label="desired path")
+    styles = _styles(list(trajectories))
     for name, tr in trajectories.items():
-        pos, style = tr.position, _styles(list(trajectories))[name]
-        ax.plot(pos[:, 0], pos[:, 1], -pos[:, 2], label=name, **style)
+        pos = tr.position
+        ax.plot(pos[:, 0], pos[:, 1], -pos[:, 2], label=name, **styles[name])
         ax.scatter(pos[0, 0], pos[0, 1], -pos[0, 2], color="k", marker="o", s=12)
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="−z (height) [m]")
     ax.legend(loc="upper left", fontsize=8)
