@@ -121,7 +121,10 @@ def advance_vehicle(st, cur, action, p, noise_key, current_key, step_index, kind
         rk4_step(st, X, M, N, f, cfg[15] + cur[0], cfg[16] + cur[1], cfg[17] + cur[2], p,
                  kind, pdata, u_d, sigma, dt, nxt)  # fmt: skip
         for c in range(3):  # Gauss–Markov current, exact discretisation
-            cur[c] = gm_a * cur[c] + cfg[18 + c] * standard_normal(current_key, 3 * n + c)
+            if cfg[18 + c] != 0.0:  # b = 0 (no random current): skip the ~25 ns normal draw
+                cur[c] = gm_a * cur[c] + cfg[18 + c] * standard_normal(current_key, 3 * n + c)
+            else:
+                cur[c] = gm_a * cur[c]
         rec[0] += X
         rec[1] += M
         rec[2] += N
