@@ -1,0 +1,222 @@
+"""Vector-env speed: vehicle-steps/s and real-time factor, peak memory, SB3 PPO data collection.
+
+1. `AUVPath3DVectorEnv` with default physics (RK4 at 0.01 s, 5 physics steps per 0.05 s control
+   step) and the paper's white noise, N ∈ {1, 64, 1024, 4096, 16384} vehicles, random actions and
+   a short `max_time` so that NEXT_STEP autoresets happen throughout the timed loop.
+   Physics vehicle-steps/s = control vehicle-steps/s × 5; aggregate real-time factor =
+   simulated seconds of all vehicles per wall-clock second.
+2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
+   growth of `ru_maxrss` over the same process after imports and compilation.
+3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
+   `auv_gym.sb3` adapter, against SB3's DummyVecEnv over single envs.
+
+    python -m benchmarks.speed_vector             # full run (about 2 minutes)
+    python -m benchmarks.speed_vector --quick     # smoke test
+
+Wall-clock numbers depend on the load of the machine; the load average is printed with them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+SIZES = (1, 64, 1024, 4096, 16384)
+MEMORY_N = 65_536
+
+
+def _actions(n: int, count: int, seed: int) -> np.ndarray:
+    """A bank of random action batches (count, n, 3), moderate like tests/test_env.py's."""
+    a = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(count, n, 3)).astype(np.float32)
+    a[..., 0] = 0.2 + 0.3 * np.abs(a[..., 0])
+    a[..., 1:] *= 0.3
+    return a
+
+
+def measure_vector(n: int, seconds: float, max_time: float, seed: int = 0) -> dict[str, float]:
+    """Time `AUVPath3DVectorEnv.step` for about `seconds` of wall clock (after compilation)."""
+    from auv_gym.vector_env import AUVPath3DVectorEnv
+
+    env = AUVPath3DVectorEnv(n, max_time=max_time)  # defaults: helix, ±35 white noise
+    bank = _actions(n, 16, seed)
+    env.reset(seed=seed)
+    env.step(bank[0])  # compile / load the kernel outside the timed loop
+    steps, resets, ended = 0, 0, np.zeros(n, dtype=bool)
+    start = time.perf_counter()
+    while True:
+        for a in bank:
+            _, _, terminated, truncated, _ = env.step(a)
+            resets += int(ended.sum())  # NEXT_STEP: rows that ended last step reset now
+            ended = terminated | truncated
+        steps += len(bank)
+        wall = time.perf_counter() - start
+        if wall >= seconds:
+            break
+    cfg = env.config
+    vehicle_steps = steps * n
+    return {
+        "n": n,
+        "batch_steps": steps,
+        "vehicle_steps_per_s": vehicle_steps / wall,
+        "physics_steps_per_s": vehicle_steps * cfg.substeps / wall,
+        "real_time_factor": vehicle_steps * cfg.control_dt / wall,
+        "ms_per_batch_step": 1e3 * wall / steps,
+        "autoresets": resets,
+    }
+
+
+def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
+    """Peak RSS of n vehicles: run in this process (call it in a fresh one, see `main`)."""
+    from auv_gym.vector_env import AUVPath3DVectorEnv
+
+    warm = AUVPath3DVectorEnv(2)
+    warm.reset(seed=0)
+    warm.step(np.zeros((2, 3)))  # imports and compiled kernels are part of the baseline
+    del warm
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux: KiB
+    start = time.perf_counter()
+    env = AUVPath3DVectorEnv(n, max_time=5.0)
+    env.reset(seed=0)
+    reset_s = time.perf_counter() - start
+    bank = _actions(n, 4, 1)
+    start = time.perf_counter()
+    for k in range(steps):
+        env.step(bank[k % len(bank)])
+    step_s = (time.perf_counter() - start) / steps
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    return {
+        "n": n,
+        "baseline_bytes": before,
+        "peak_bytes": peak,
+        "growth_bytes": peak - before,
+        "reset_s": reset_s,
+        "step_s": step_s,
+    }
+
+
+def _memory_subprocess(n: int) -> dict[str, float]:
+    code = (
+        "import json; from benchmarks.speed_vector import measure_memory; "
+        f"print(json.dumps(measure_memory({n})))"
+    )
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=root)  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def measure_ppo_collection(
+    n_envs: int, n_steps: int, repeats: int, backend: str, seed: int = 0
+) -> dict[str, float]:
+    """Timesteps/s of PPO's `collect_rollouts` (policy forward + env step + buffer)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from auv_gym import AUVPath3DEnv
+    from auv_gym.sb3 import make_sb3_vec_env
+
+    torch.set_num_threads(1)  # DESIGN.md §4: one thread is as fast for these small networks
+    kwargs = {"max_time": 30.0, "randomize_start": True}
+    if backend == "adapter":
+        env = make_sb3_vec_env(n_envs, seed=seed, **kwargs)
+    else:
+        env = DummyVecEnv([lambda: AUVPath3DEnv(**kwargs) for _ in range(n_envs)])
+        env.seed(seed)
+    model = PPO("MlpPolicy", env, n_steps=n_steps, batch_size=n_envs * n_steps, seed=seed,
+                device="cpu", verbose=0)  # fmt: skip
+    _, callback = model._setup_learn(n_envs * n_steps * (repeats + 1), None)
+    callback.on_training_start(locals(), globals())
+    model.collect_rollouts(env, callback, model.rollout_buffer, n_rollout_steps=n_steps)  # warm-up
+    start = time.perf_counter()
+    for _ in range(repeats):
+        model.collect_rollouts(env, callback, model.rollout_buffer, n_rollout_steps=n_steps)
+    wall = time.perf_counter() - start
+    return {"backend": backend, "n_envs": n_envs,
+            "timesteps_per_s": repeats * n_envs * n_steps / wall}  # fmt: skip
+
+
+def machine() -> dict[str, Any]:
+    import numba
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if "model name" in line)
+    except (OSError, StopIteration):
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "numba_threads": numba.get_num_threads(),
+        "python": platform.python_version(),
+        "numba": numba.__version__,
+        "load_average_1min": os.getloadavg()[0],
+    }
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    parser.add_argument("--seconds", type=float, default=4.0, help="timed wall clock per size")
+    parser.add_argument("--max-time", type=float, default=15.0,
+                        help="episode length [s]; short so that autoresets happen")  # fmt: skip
+    parser.add_argument("--memory-n", type=int, default=MEMORY_N)
+    parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64])
+    parser.add_argument("--ppo-steps", type=int, default=128, help="n_steps per rollout")
+    parser.add_argument("--ppo-repeats", type=int, default=3)
+    parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
+    parser.add_argument("--json", help="also write the results to this file")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.sizes, args.seconds, args.memory_n = [1, 64], 0.05, 1024
+        args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
+
+    info = machine()
+    print(f"{info['cpu']}, {info['cores']} cores, numba threads {info['numba_threads']}, "
+          f"load average {info['load_average_1min']:.2f} at start")  # fmt: skip
+    results: dict[str, Any] = {"machine": info, "vector": [], "ppo": []}
+
+    print(f"\nAUVPath3DVectorEnv, default physics, white noise ±35, NEXT_STEP autoreset "
+          f"(max_time {args.max_time:g} s)")  # fmt: skip
+    print(f"{'N':>7} {'physics steps/s':>16} {'control steps/s':>16} {'real-time ×':>12} "
+          f"{'ms/step':>9} {'resets':>7}")  # fmt: skip
+    for n in args.sizes:
+        r = measure_vector(n, args.seconds, args.max_time)
+        results["vector"].append(r)
+        print(f"{n:>7} {r['physics_steps_per_s']:>16,.0f} {r['vehicle_steps_per_s']:>16,.0f} "
+              f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
+              f"{r['autoresets']:>7}")  # fmt: skip
+
+    mem = _memory_subprocess(args.memory_n)
+    results["memory"] = mem
+    print(f"\nN = {mem['n']:,}: peak RSS {mem['peak_bytes'] / 2**20:,.0f} MiB, growth over the "
+          f"imported+compiled process {mem['growth_bytes'] / 2**20:,.0f} MiB (target < 1024); "
+          f"reset {mem['reset_s']:.2f} s, step {1e3 * mem['step_s']:.1f} ms")  # fmt: skip
+
+    if args.ppo_envs:
+        print(f"\nSB3 PPO collect_rollouts (MlpPolicy, torch 1 thread, n_steps {args.ppo_steps})")
+        print(f"{'backend':<12} {'n_envs':>7} {'timesteps/s':>12}")
+        for n_envs in args.ppo_envs:
+            for backend in ("adapter", "DummyVecEnv"):
+                r = measure_ppo_collection(n_envs, args.ppo_steps, args.ppo_repeats, backend)
+                results["ppo"].append(r)
+                print(f"{backend:<12} {n_envs:>7} {r['timesteps_per_s']:>12,.0f}")
+    results["machine"]["load_average_1min_end"] = os.getloadavg()[0]
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=2)
+    return results
+
+
+if __name__ == "__main__":
+    main()
