@@ -189,3 +189,22 @@ def test_missing_stable_baselines3_raises_import_error_naming_the_extra():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "pip install 'auv-gym[rl]'" in out.stdout
+
+
+def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
+    import json
+    from pathlib import Path
+
+    out = tmp_path / "speed.json"
+    root = Path(__file__).resolve().parents[1]
+    subprocess.run([sys.executable, "-m", "benchmarks.speed_vector", "--quick", "--json", str(out)],
+                   cwd=root, check=True, capture_output=True, text=True)  # fmt: skip
+    results = json.loads(out.read_text())
+    assert [r["n"] for r in results["vector"]] == [1, 64]
+    for r in results["vector"]:
+        assert r["physics_steps_per_s"] == pytest.approx(5 * r["vehicle_steps_per_s"])
+        assert r["real_time_factor"] == pytest.approx(0.05 * r["vehicle_steps_per_s"])
+        assert r["autoresets"] >= r["n"]  # every vehicle went through a NEXT_STEP autoreset
+    assert results["memory"]["n"] == 1024 and results["memory"]["peak_bytes"] > 0
+    assert {r["backend"] for r in results["ppo"]} == {"adapter", "DummyVecEnv"}
+    assert all(r["timesteps_per_s"] > 0 for r in results["ppo"])

@@ -356,3 +356,20 @@ def test_seeded_runs_are_reproducible_and_batch_size_independent():
         np.testing.assert_array_equal(out_a[0][9:], out_b[0])
         np.testing.assert_array_equal(out_a[1][9:], out_b[1])
     assert math.isfinite(float(a.sim.reward.sum()))
+
+
+def test_gymnasium_vector_wrappers_see_the_same_episodes():
+    """RecordEpisodeStatistics reads metadata["autoreset_mode"]; statistics match the reference."""
+    from gymnasium.wrappers.vector import RecordEpisodeStatistics
+
+    n = 4
+    native = RecordEpisodeStatistics(AUVPath3DVectorEnv(n, **SHORT))
+    ref = RecordEpisodeStatistics(reference(n, AutoresetMode.NEXT_STEP, **SHORT))
+    native.reset(seed=8)
+    ref.reset(seed=8)
+    for a in random_actions(9, 120, n):
+        native.step(a)
+        ref.step(a)
+    assert len(native.return_queue) == len(ref.return_queue) >= 2 * n
+    assert list(native.return_queue) == list(ref.return_queue)
+    assert list(native.length_queue) == list(ref.length_queue)
