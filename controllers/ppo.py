@@ -66,6 +66,7 @@ STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent
 VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
 METADATA_FILE = "metadata.json"
 EVAL_FILE = "evaluations.csv"
+HELD_OUT_FILE = "held_out_evaluation.json"  # written beside an exported agent
 # Seeds: the evaluation callback uses EVAL_SEEDS; reported results use HELD_OUT_SEEDS (the
 # seeds 0..9 of benchmarks/compare.py); training environments are seeded from
 # TRAIN_SEED_BASE + 1000·seed upwards, so none of them is ever a training seed.
@@ -714,11 +715,26 @@ def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
                     reset_num_timesteps=checkpoint is None, tb_log_name="PPO")  # fmt: skip
     final_meta = metadata({})
     _save_final(model, venv, out, final_meta)
+    venv.close()
     if opts.export:
         source = out / "best" if (out / "best" / MODEL_FILE).is_file() else out / "final"
         export_agent(source, Path(opts.export))
-    venv.close()
+        write_json_atomic(Path(opts.export) / HELD_OUT_FILE,
+                          held_out_evaluation(Path(opts.export), opts.eval_duration))  # fmt: skip
     return out
+
+
+def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> dict[str, Any]:
+    """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results."""
+    policy = load_policy(agent)
+    results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration))
+    return {
+        "scenario": "paper (helix, white noise ±35 N / N·m, defaults of AUVPath3D-v0)",
+        "seeds": list(HELD_OUT_SEEDS), "duration_s": float(duration), "transient_s": TRANSIENT,
+        "summary": summarize(results), "results": results,
+        "agent_num_timesteps": policy.metadata.get("num_timesteps"),
+        "agent_wall_time_s": policy.metadata.get("wall_time_s"),
+    }  # fmt: skip
 
 
 def _save_final(model: Any, venv: Any, out: Path, meta: dict[str, Any]) -> None:
