@@ -47,7 +47,7 @@ HELP = {
     "eval_seeds": "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
     "eval_duration": "evaluation episode length [s]",
     "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
-    "threads": "torch intra-op threads (1 is fastest on small CPUs, DESIGN.md §4)",
+    "threads": "torch and numba threads (1 is fastest on 2 shared cores, DESIGN.md §4)",
     "progress_bar": "show the progress bar (tqdm + rich)",
     "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
     "verbose": "SB3 verbosity; 1 also prints every evaluation",

@@ -426,7 +426,7 @@ class TrainOptions:
     eval_seeds: tuple[int, ...] = EVAL_SEEDS  # seeds of the evaluation episodes
     eval_duration: float = 300.0  # [s] evaluation episode length (paper scenario)
     vec_env: str = "auto"  # "auto" (native batched if available), "native" or "dummy"
-    threads: int = 1  # torch intra-op threads
+    threads: int = 1  # torch intra-op and numba threads
     progress_bar: bool = True
     export: str | None = None  # copy the best agent here at the end (e.g. benchmarks/agents/x)
     verbose: int = 0
@@ -643,13 +643,17 @@ def _truncate_eval_rows(path: Path, max_steps: int) -> None:
 
 def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
     """Train (or resume) PPO as configured; returns the run directory. See the module docstring."""
+    import numba
     import stable_baselines3
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
+    # One thread for torch and for the numba simulator kernel: on this 2-core machine shared
+    # with other jobs, two-threaded kernels stall at their barriers (DESIGN.md §4).
     torch.set_num_threads(int(opts.threads))
+    numba.set_num_threads(min(int(opts.threads), numba.config.NUMBA_NUM_THREADS))
     cfg = read_zoo_config(opts.config, opts.env_id)
     n_timesteps = int(opts.n_timesteps or cfg.n_timesteps)
     if opts.checkpoint_freq < 1:
