@@ -164,12 +164,14 @@ def make_sb3_vec_env(
     max_episode_steps: int | None = None,
     render_mode: str | None = None,
     render_vehicle: int = 0,
+    threads: int | None = None,
     **env_kwargs: Any,
 ) -> SB3VecEnv:
     """An `SB3VecEnv` of ``num_envs`` vehicles; keyword arguments as `AUVPath3DEnv`.
 
     ``seed`` seeds the first reset (vehicle i gets seed + i). ``max_episode_steps`` defaults to
-    none: the env truncates at its ``max_time`` like ``AUVPath3DEnv`` itself.
+    none: the env truncates at its ``max_time`` like ``AUVPath3DEnv`` itself. ``threads``: numba
+    threads of the kernel (None: all; 1 is faster for tens of vehicles on a loaded machine).
     """
     venv = AUVPath3DVectorEnv(
         num_envs,
@@ -177,6 +179,7 @@ def make_sb3_vec_env(
         autoreset_mode=AutoresetMode.SAME_STEP,
         render_mode=render_mode,
         render_vehicle=render_vehicle,
+        threads=threads,
         **env_kwargs,
     )
     env = SB3VecEnv(venv)

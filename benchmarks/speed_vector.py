@@ -43,7 +43,9 @@ def _actions(n: int, count: int, seed: int) -> np.ndarray:
     return a
 
 
-def measure_vector(n: int, seconds: float, max_time: float, seed: int = 0) -> dict[str, float]:
+def measure_vector(
+    n: int, seconds: float, max_time: float, threads: int | None = None, seed: int = 0
+) -> dict[str, float]:
     """Time `AUVPath3DVectorEnv.step` for `seconds` of wall clock, compilation excluded.
 
     The loop runs at least 1.25 episodes so that every vehicle goes through a NEXT_STEP
@@ -52,7 +54,8 @@ def measure_vector(n: int, seconds: float, max_time: float, seed: int = 0) -> di
     """
     from auv_gym.vector_env import AUVPath3DVectorEnv
 
-    env = AUVPath3DVectorEnv(n, max_time=max_time)  # defaults: helix, ±35 white noise
+    # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
+    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads)
     bank = _actions(n, 16, seed)
     env.reset(seed=seed)
     env.step(bank[0])  # compile / load the kernel outside the timed loop
@@ -80,6 +83,7 @@ def measure_vector(n: int, seconds: float, max_time: float, seed: int = 0) -> di
     vehicle_steps = steps * n
     return {
         "n": n,
+        "threads": env.threads,
         "batch_steps": steps,
         "vehicle_steps_per_s": vehicle_steps / wall,
         "physics_steps_per_s": vehicle_steps * cfg.substeps / wall,
@@ -190,31 +194,30 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64])
     parser.add_argument("--ppo-steps", type=int, default=128, help="n_steps per rollout")
     parser.add_argument("--ppo-repeats", type=int, default=3)
-    parser.add_argument("--threads", type=int, help="numba threads (default: all cores)")
+    parser.add_argument("--threads", type=int, nargs="+", default=[2, 1],
+                        help="numba thread counts of the throughput table")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write the results to this file")
     args = parser.parse_args(argv)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
+        args.threads = [2]
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
 
-    if args.threads is not None:
-        import numba
-
-        numba.set_num_threads(args.threads)
     info = machine()
-    print(f"{info['cpu']}, {info['cores']} cores, numba threads {info['numba_threads']}, "
+    print(f"{info['cpu']}, {info['cores']} cores, numba threads ≤ {info['numba_threads']}, "
           f"load average {info['load_average_1min']:.2f} at start")  # fmt: skip
     results: dict[str, Any] = {"machine": info, "vector": [], "ppo": []}
 
     print(f"\nAUVPath3DVectorEnv, default physics, white noise ±35, NEXT_STEP autoreset "
           f"(max_time {args.max_time:g} s)")  # fmt: skip
-    print(f"{'N':>7} {'physics steps/s':>16} {'control steps/s':>16} {'real-time ×':>12} "
-          f"{'ms/step':>9} {'glue':>6} {'resets':>7}")  # fmt: skip
-    for n in args.sizes:
-        r = measure_vector(n, args.seconds, args.max_time)
+    print(f"{'N':>7} {'threads':>7} {'physics steps/s':>16} {'control steps/s':>16} "
+          f"{'real-time ×':>12} {'ms/step':>9} {'glue':>6} {'resets':>7}")  # fmt: skip
+    for threads, n in ((t, n) for t in args.threads for n in args.sizes):
+        r = measure_vector(n, args.seconds, args.max_time, threads)
         results["vector"].append(r)
-        print(f"{n:>7} {r['physics_steps_per_s']:>16,.0f} {r['vehicle_steps_per_s']:>16,.0f} "
+        print(f"{n:>7} {r['threads']:>7} {r['physics_steps_per_s']:>16,.0f} "
+              f"{r['vehicle_steps_per_s']:>16,.0f} "
               f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
 

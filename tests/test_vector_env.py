@@ -320,6 +320,9 @@ def test_bad_input_raises_value_error():
         fresh.reset(options={"reset_mask": np.array([True, False])})
     with pytest.raises(ValueError, match="control_dt"):
         AUVPath3DVectorEnv(2, control_dt=0.033)
+    for threads in (0, 1.5, True):
+        with pytest.raises(ValueError, match="threads"):
+            AUVPath3DVectorEnv(2, threads=threads)
 
 
 def test_parse_autoreset_mode_accepts_enum_value_and_name():
@@ -373,3 +376,20 @@ def test_gymnasium_vector_wrappers_see_the_same_episodes():
     assert len(native.return_queue) == len(ref.return_queue) >= 2 * n
     assert list(native.return_queue) == list(ref.return_queue)
     assert list(native.length_queue) == list(ref.length_queue)
+
+
+def test_thread_count_changes_nothing_but_speed():
+    import numba
+
+    before = numba.get_num_threads()
+    outs = []
+    for threads in (1, 2, None):
+        env = AUVPath3DVectorEnv(6, threads=threads, **DISTURBED)
+        env.reset(seed=12)
+        outs.append([env.step(a)[:4] for a in random_actions(10, 40, 6)])
+        assert numba.get_num_threads() == before  # restored after every step
+    for other in outs[1:]:
+        for got, want in zip(other, outs[0], strict=True):
+            for g, w in zip(got, want, strict=True):
+                np.testing.assert_array_equal(g, w)
+    assert AUVPath3DVectorEnv(2, threads=10_000).threads == numba.config.NUMBA_NUM_THREADS
