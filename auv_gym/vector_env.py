@@ -176,8 +176,8 @@ class AUVPath3DVectorEnv(VectorEnv):
         self._ever_reset = False
         self._all = np.ones(self.num_envs, dtype=bool)
         self._render_vehicle = 0
+        self._track: list[np.ndarray] = []  # positions of `render_vehicle` since its reset [m]
         self.render_vehicle = render_vehicle
-        self._track: list[np.ndarray] = []
 
     # ----------------------------------------------------------------------------------- reset
     def reset(
