@@ -3,14 +3,20 @@
 The shipped agent `benchmarks/agents/ppo_helix` was produced by::
 
     python -m benchmarks.train_ppo --config benchmarks/hyperparams/ppo.yml --seed 1 \\
-        --out runs/ppo_helix --export benchmarks/agents/ppo_helix
+        --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
+        --curve benchmarks/results/ppo_learning_curve
 
 An interrupted run continues from its newest checkpoint (step counter intact) with the same
 command plus ``--resume``. Watch it with ``tensorboard --logdir runs/ppo_helix/tb``. The learning
 curve of a run (evaluation rms distance against env steps and wall time) is plotted with::
 
-    python -m benchmarks.train_ppo --out runs/ppo_helix --plot-only \
+    python -m benchmarks.train_ppo --out runs/ppo_helix --plot-only \\
         --curve benchmarks/results/ppo_learning_curve
+
+and an agent is evaluated on the paper scenario over the held-out seeds 0-9 (300 s; the result
+goes to AGENT/held_out_evaluation.json, which ``--export`` also writes) with::
+
+    python -m benchmarks.train_ppo --evaluate benchmarks/agents/ppo_helix
 
 The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
 
@@ -24,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import shutil
 import sys
 import typing
@@ -31,7 +38,14 @@ from collections.abc import Sequence
 from dataclasses import MISSING, fields
 from pathlib import Path
 
-from controllers.ppo import EVAL_FILE, TrainOptions, train
+from controllers.ppo import (
+    EVAL_FILE,
+    HELD_OUT_FILE,
+    TrainOptions,
+    held_out_evaluation,
+    train,
+    write_json_atomic,
+)
 
 # One-line help per option (the TrainOptions field comments, for the CLI).
 HELP = {
@@ -62,8 +76,14 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
         default=None,
         help="write the learning curve to CURVE.csv and CURVE.png at the end",
     )
-    parser.add_argument("--plot-only", action="store_true",
-                        help="only plot the learning curve of --out (needs --curve)")  # fmt: skip
+    parser.add_argument(
+        "--plot-only",
+        action="store_true",
+        help="only plot the learning curve of --out (needs --curve)",
+    )
+    parser.add_argument("--evaluate", default=None, metavar="AGENT",
+                        help="only evaluate AGENT on the held-out seeds 0-9 (paper scenario) "
+                             "and write AGENT/held_out_evaluation.json")  # fmt: skip
     hints = typing.get_type_hints(TrainOptions)
     for f in fields(TrainOptions):
         flag = "--" + f.name.replace("_", "-")
@@ -81,7 +101,8 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
         else:
             parser.add_argument(flag, type=type(default), default=default, help=HELP[f.name])
     ns = vars(parser.parse_args(argv))
-    extra = argparse.Namespace(curve=ns.pop("curve"), plot_only=ns.pop("plot_only"))
+    extra = argparse.Namespace(curve=ns.pop("curve"), plot_only=ns.pop("plot_only"),
+                               evaluate=ns.pop("evaluate"))  # fmt: skip
     if extra.plot_only and not extra.curve:
         parser.error("--plot-only needs --curve")
     try:
@@ -142,6 +163,11 @@ def plot_learning_curve(run: Path, prefix: Path) -> None:
 def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     opts, extra = parse_args(args)
+    if extra.evaluate:
+        report = held_out_evaluation(extra.evaluate, opts.eval_duration)
+        write_json_atomic(Path(extra.evaluate) / HELD_OUT_FILE, report)
+        print(json.dumps(report["summary"], indent=2))
+        return
     if not extra.plot_only:
         out = train(opts, argv=["benchmarks/train_ppo.py", *args])
         print(f"run directory: {out}")

@@ -369,15 +369,17 @@ def evaluate_policy_on_seeds(
 ) -> list[dict[str, Any]]:
     """Seeded episodes of `policy` through `auv_gym.evaluation.evaluate` (batched rows).
 
-    Returns one dict per seed with seed, rms_distance [m] over t ≥ transient (NaN if the
-    episode ended earlier), max_distance [m] over that window, duration [s] and
-    termination_reason ("" when the episode ran to max_time).
+    Returns one dict per seed with seed, rms_distance and rms_x_e, rms_y_e, rms_z_e [m] over
+    t ≥ transient (NaN if the episode ended earlier), max_distance [m] over that window,
+    duration [s] and termination_reason ("" when the episode ran to max_time).
     """
     from auv_gym import evaluation
 
     results = evaluation.evaluate(policy, list(seeds), transient=transient, **env_kwargs)
     return [
         {"seed": int(r["seed"]), "rms_distance": float(r["rms_distance"]),
+         "rms_x_e": float(r["rms_x_e"]), "rms_y_e": float(r["rms_y_e"]),
+         "rms_z_e": float(r["rms_z_e"]),
          "max_distance": float(r["max_distance_window"]), "duration": float(r["duration"]),
          "termination_reason": "" if r["termination_reason"] == "time_limit"
          else str(r["termination_reason"])}
@@ -390,7 +392,13 @@ def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
     rms = np.array([r["rms_distance"] for r in results], dtype=float)
     terminated = [r["termination_reason"] for r in results if r["termination_reason"]]
     finite = rms[np.isfinite(rms)]
+    per_axis = {}
+    for key in ("rms_x_e", "rms_y_e", "rms_z_e"):
+        values = np.array([r.get(key, math.nan) for r in results], dtype=float)
+        values = values[np.isfinite(values)]
+        per_axis[f"{key}_mean"] = float(values.mean()) if values.size else math.nan
     return {
+        **per_axis,
         "rms_distance_mean": float(finite.mean()) if finite.size else math.nan,
         "rms_distance_std": float(finite.std()) if finite.size else math.nan,
         "rms_distance_max": float(finite.max()) if finite.size else math.nan,

@@ -50,8 +50,7 @@ def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 
 
 TINY_ARGS = ("--n-timesteps", "256", "--checkpoint-freq", "128", "--eval-freq", "128",
-             "--eval-seeds", "100,101", "--eval-duration", "2", "--vec-env", "dummy",
-             "--no-progress-bar")  # fmt: skip
+             "--eval-seeds", "100,101", "--eval-duration", "2", "--no-progress-bar")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -81,6 +80,7 @@ def test_cli_writes_complete_loadable_agents(tiny_run: Path) -> None:
     assert "--config tiny.yml" in first["command"]
     assert set(first["versions"]) >= {"python", "torch", "stable-baselines3", "gymnasium"}
     assert first["wall_time_s"] > 0
+    assert first["vec_env"] == "VecNormalize<VecMonitor<SB3VecEnv<AUVPath3DVectorEnv>>>"
     for folder in ("final", "best"):
         for name in ("model.zip", "vecnormalize.npz", "vecnormalize.pkl", "metadata.json"):
             assert (tiny_run / folder / name).is_file(), (folder, name)
@@ -282,3 +282,18 @@ def test_shipped_agent_follows_helix_briefly() -> None:
     assert metrics["termination_reason"] == "time_limit"
     assert metrics["max_distance_window"] < 30.0  # inside the corridor over 40-60 s
     assert metrics["rms_distance"] < 5.0  # and already close to the path (starts 17.7 m away)
+
+
+@pytest.mark.slow
+def test_shipped_agent_meets_acceptance_on_held_out_seeds() -> None:
+    """Issue acceptance: paper scenario, seeds 0-9, 300 s: mean rms_distance (t ≥ 100 s) ≤ 1 m and
+    no episode leaves the corridor; the numbers recorded beside the agent are reproduced exactly."""
+    from controllers.ppo import HELD_OUT_FILE, held_out_evaluation
+
+    recorded = json.loads((SHIPPED / HELD_OUT_FILE).read_text())
+    fresh = held_out_evaluation(SHIPPED)
+    assert fresh["summary"]["n_terminated"] == 0
+    assert fresh["summary"]["rms_distance_mean"] <= 1.0
+    assert [r["rms_distance"] for r in fresh["results"]] == [
+        r["rms_distance"] for r in recorded["results"]
+    ]
