@@ -15,10 +15,16 @@ import numpy as np
 from numba import njit
 
 from auv_gym.disturbances import standard_normal, uniform01
-from auv_gym.guidance import body_errors, path_angles, virtual_point_speed, wrap_angle
+from auv_gym.guidance import (
+    body_errors,
+    body_errors_trig,
+    path_angles,
+    virtual_point_speed,
+    wrap_angle,
+)
 from auv_gym.observation import GUIDANCE_FIELDS, build_observation
 from auv_gym.paths import path_eval
-from auv_gym.vehicle import FIN_COEFF_INDEX, FIN_MAX_INDEX, eta_dot, nu_dot
+from auv_gym.vehicle import FIN_COEFF_INDEX, FIN_MAX_INDEX, eta_dot_trig, nu_dot_sin
 
 __all__ = [
     "ACTUATORS",
@@ -41,12 +47,14 @@ RECORD_DIM = 8
 @njit(cache=True, inline="always")
 def state_derivative(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma):
     """d/dt of the 11-state: MODEL.md §2.1 dynamics and kinematics plus ṡ of §3.3."""
-    theta, psi = st[3], st[4]
+    # The trigonometry of θ and ψ is shared by the dynamics, kinematics and guidance.
+    cth, sth = math.cos(st[3]), math.sin(st[3])
+    cps, sps = math.cos(st[4]), math.sin(st[4])
     u, v, w, q, r = st[5], st[6], st[7], st[8], st[9]
-    du, dv, dw, dq, dr = nu_dot(u, v, w, q, r, theta, X, M, N, f[0], f[1], f[2], f[3], f[4], p)
-    dx, dy, dz, dth, dps = eta_dot(u, v, w, q, r, theta, psi)
+    du, dv, dw, dq, dr = nu_dot_sin(u, v, w, q, r, sth, X, M, N, f[0], f[1], f[2], f[3], f[4], p)
+    dx, dy, dz, dth, dps = eta_dot_trig(u, v, w, q, r, cth, sth, cps, sps)
     px, py, pz, dpx, dpy, dpz, _, _, _ = path_eval(kind, pdata, st[10])
-    x_e, _, _ = body_errors(st[0], st[1], st[2], theta, psi, px, py, pz)
+    x_e, _, _ = body_errors_trig(st[0] - px, st[1] - py, st[2] - pz, cth, sth, cps, sps)
     s_dot = virtual_point_speed(x_e, u_d, sigma) / math.sqrt(dpx * dpx + dpy * dpy + dpz * dpz)
     return (dx + cx, dy + cy, dz + cz, dth, dps, du, dv, dw, dq, dr, s_dot)
 

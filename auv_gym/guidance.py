@@ -14,6 +14,7 @@ from numba import njit
 
 __all__ = [
     "body_errors",
+    "body_errors_trig",
     "error_rates",
     "path_angles",
     "virtual_point_speed",
@@ -49,13 +50,18 @@ def path_angles(dx, dy, dz, ddx, ddy, ddz):
 
 
 @njit(cache=True, inline="always")
-def body_errors(x, y, z, theta, psi, px, py, pz):
-    """ε = R_Bᵀ(η_pos − p) with R_B = Rz(ψ)Ry(θ) [m] (MODEL.md §3.2)."""
-    dx, dy, dz = x - px, y - py, z - pz
-    cps, sps = math.cos(psi), math.sin(psi)
-    cth, sth = math.cos(theta), math.sin(theta)
+def body_errors_trig(dx, dy, dz, cth, sth, cps, sps):
+    """R_Bᵀ(dx, dy, dz) given cos θ, sin θ, cos ψ, sin ψ [m]."""
     a = cps * dx + sps * dy
     return cth * a - sth * dz, -sps * dx + cps * dy, sth * a + cth * dz
+
+
+@njit(cache=True, inline="always")
+def body_errors(x, y, z, theta, psi, px, py, pz):
+    """ε = R_Bᵀ(η_pos − p) with R_B = Rz(ψ)Ry(θ) [m] (MODEL.md §3.2)."""
+    return body_errors_trig(
+        x - px, y - py, z - pz, math.cos(theta), math.sin(theta), math.cos(psi), math.sin(psi)
+    )
 
 
 @njit(cache=True, inline="always")

@@ -24,7 +24,9 @@ __all__ = [
     "PARAM_INDEX",
     "AUVParams",
     "eta_dot",
+    "eta_dot_trig",
     "nu_dot",
+    "nu_dot_sin",
     "remus100",
 ]
 
@@ -186,8 +188,8 @@ def remus100(**overrides: float) -> AUVParams:
 
 
 @njit(cache=True, inline="always")
-def nu_dot(u, v, w, q, r, theta, X, M, N, fu, fv, fw, fq, fr, p):
-    """Accelerations (u̇, v̇, ẇ, q̇, ṙ) of MODEL.md §2.1 (paper (1), corrected) [m/s², rad/s²]."""
+def nu_dot_sin(u, v, w, q, r, sin_theta, X, M, N, fu, fv, fw, fq, fr, p):
+    """`nu_dot` given sin θ instead of θ (the simulator computes the trigonometry once)."""
     m = p[_m]
     zgW = p[_zg] * p[_W] - p[_zb] * p[_B]
     surge = X + fu + p[_Xuu] * u * abs(u) + p[_Xvv] * v * v + p[_Xww] * w * w
@@ -197,7 +199,7 @@ def nu_dot(u, v, w, q, r, theta, X, M, N, fu, fv, fw, fq, fr, p):
     heave = fw + (m + p[_Zuq]) * u * q + p[_Zuw] * u * w + p[_Zww] * w * abs(w)
     heave += m * p[_zg] * q * q
     pitch = M + fq + p[_Mqq] * q * abs(q) + p[_Muq] * u * q + p[_Muw] * u * w
-    pitch += p[_Mww] * w * abs(w) - zgW * math.sin(theta) - m * p[_zg] * (w * q - v * r)
+    pitch += p[_Mww] * w * abs(w) - zgW * sin_theta - m * p[_zg] * (w * q - v * r)
     yaw = N + fr + p[_Nuv] * u * v + p[_Nvv] * v * abs(v) + p[_Nur] * u * r + p[_Nrr] * r * abs(r)
     return (
         surge / (m - p[_Xud]),
@@ -209,14 +211,26 @@ def nu_dot(u, v, w, q, r, theta, X, M, N, fu, fv, fw, fq, fr, p):
 
 
 @njit(cache=True, inline="always")
-def eta_dot(u, v, w, q, r, theta, psi):
-    """Kinematics of MODEL.md §2.1 (paper (2)): (ẋ, ẏ, ż, θ̇, ψ̇) for body velocity (u, v, w)."""
-    cth, sth = math.cos(theta), math.sin(theta)
-    cps, sps = math.cos(psi), math.sin(psi)
+def nu_dot(u, v, w, q, r, theta, X, M, N, fu, fv, fw, fq, fr, p):
+    """Accelerations (u̇, v̇, ẇ, q̇, ṙ) of MODEL.md §2.1 (paper (1), corrected) [m/s², rad/s²]."""
+    return nu_dot_sin(u, v, w, q, r, math.sin(theta), X, M, N, fu, fv, fw, fq, fr, p)
+
+
+@njit(cache=True, inline="always")
+def eta_dot_trig(u, v, w, q, r, cth, sth, cps, sps):
+    """`eta_dot` given cos θ, sin θ, cos ψ, sin ψ."""
     return (
         u * cps * cth - v * sps + w * cps * sth,
         u * sps * cth + v * cps + w * sps * sth,
         -u * sth + w * cth,
         q,
         r / cth,
+    )
+
+
+@njit(cache=True, inline="always")
+def eta_dot(u, v, w, q, r, theta, psi):
+    """Kinematics of MODEL.md §2.1 (paper (2)): (ẋ, ẏ, ż, θ̇, ψ̇) for body velocity (u, v, w)."""
+    return eta_dot_trig(
+        u, v, w, q, r, math.cos(theta), math.sin(theta), math.cos(psi), math.sin(psi)
     )
