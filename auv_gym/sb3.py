@@ -171,7 +171,7 @@ def make_sb3_vec_env(
 
     ``seed`` seeds the first reset (vehicle i gets seed + i). ``max_episode_steps`` defaults to
     none: the env truncates at its ``max_time`` like ``AUVPath3DEnv`` itself. ``threads``: numba
-    threads of the kernel (None: all; 1 is faster for tens of vehicles on a loaded machine).
+    threads of the kernel (None: one below 256 vehicles, else all; see `AUVPath3DVectorEnv`).
     """
     venv = AUVPath3DVectorEnv(
         num_envs,

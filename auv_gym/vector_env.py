@@ -24,12 +24,15 @@ from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
 from auv_gym.simulator import SimConfig, Simulator
 from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS
 
-__all__ = ["AUVPath3DVectorEnv", "parse_autoreset_mode"]
+__all__ = ["PARALLEL_MIN_VEHICLES", "AUVPath3DVectorEnv", "parse_autoreset_mode"]
 
 _UP = GUIDANCE_FIELDS.index("u_p")
 _REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
 _REASONS = np.array([None, *TERMINATION_REASONS[1:]], dtype=object)  # code 0: no reason
 _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
+# Below this many vehicles the kernel runs on one thread unless told otherwise: a step costs
+# < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
+PARALLEL_MIN_VEHICLES = 256
 
 
 def parse_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
@@ -58,14 +61,14 @@ class AUVPath3DVectorEnv(VectorEnv):
     | `max_episode_steps` | None | `TimeLimit`-like step limit (`make_vec` passes 6000) |
     | `autoreset_mode` | NEXT_STEP | `AutoresetMode` or its value: NEXT_STEP, SAME_STEP, DISABLED |
     | `render_vehicle` | 0 | index of the vehicle `render()` draws |
-    | `threads` | None | numba threads of the kernel during `step` (None: numba's setting) |
+    | `threads` | None | numba threads of the kernel; None: 1 below 256 vehicles, else all |
 
     Truncation happens where the single env under `gym.make` truncates: at `max_time` unless
     the episode terminated, and at `max_episode_steps` control steps in any case.
 
-    The kernel runs over all numba threads by default. On a machine loaded by other processes the
-    threads' barrier can make small batches 5–20× slower than `threads=1` (2 cores, load ≈ 3:
-    64 vehicles 1.4 ms vs 0.25 ms per step); results are identical for any thread count.
+    Results are identical for any thread count. On a machine whose cores are busy with other
+    processes, the threads' barrier can make a step several times slower than `threads=1`
+    (2 cores, one busy: 1,024 vehicles 7.8 ms vs 2.6 ms per step); pass `threads=1` there.
 
     ## Seeding and parity
     `reset(seed=k)` seeds vehicle i with k + i (a list gives one seed per vehicle, None entries
@@ -151,7 +154,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         }
         self.render_mode = render_mode
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
-        # numba refuses more threads than it started with
+        if threads is None and self.num_envs < PARALLEL_MIN_VEHICLES:
+            threads = 1
+        # numba refuses more threads than it started with; None: numba's current setting
         self.threads = (
             None if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
         )

@@ -14,7 +14,7 @@ from gymnasium.wrappers import TimeLimit
 import auv_gym  # noqa: F401  (registers the ids)
 from auv_gym import AUVPath3DEnv
 from auv_gym.simulator import SimConfig
-from auv_gym.vector_env import AUVPath3DVectorEnv, parse_autoreset_mode
+from auv_gym.vector_env import PARALLEL_MIN_VEHICLES, AUVPath3DVectorEnv, parse_autoreset_mode
 
 # Episodes that end within a few dozen steps: a corridor just above the initial 17.7 m distance,
 # a short horizon, and random actions (as tests/test_env.py bounds them).
@@ -383,7 +383,7 @@ def test_thread_count_changes_nothing_but_speed():
 
     before = numba.get_num_threads()
     outs = []
-    for threads in (1, 2, None):
+    for threads in (1, 2, 3):
         env = AUVPath3DVectorEnv(6, threads=threads, **DISTURBED)
         env.reset(seed=12)
         outs.append([env.step(a)[:4] for a in random_actions(10, 40, 6)])
@@ -393,3 +393,5 @@ def test_thread_count_changes_nothing_but_speed():
             for g, w in zip(got, want, strict=True):
                 np.testing.assert_array_equal(g, w)
     assert AUVPath3DVectorEnv(2, threads=10_000).threads == numba.config.NUMBA_NUM_THREADS
+    assert AUVPath3DVectorEnv(PARALLEL_MIN_VEHICLES - 1).threads == 1
+    assert AUVPath3DVectorEnv(PARALLEL_MIN_VEHICLES).threads is None  # numba's setting
