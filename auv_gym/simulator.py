@@ -241,9 +241,14 @@ def _observe_rows(rows, state, kind, pdata, u_d, sigma, guid, obs):
 
 
 class Simulator:
-    """n vehicles of one `SimConfig`, as arrays; rows reset independently."""
+    """n vehicles of one `SimConfig`, as arrays; rows reset independently.
 
-    def __init__(self, config: SimConfig, n: int = 1) -> None:
+    ``parallel`` picks the threaded kernel (default: when n > 1) or the serial one; both give
+    identical results. The serial kernel never starts numba's OpenMP pool, whose spinning
+    threads slowed torch in the same process 25× on a loaded 2-core machine.
+    """
+
+    def __init__(self, config: SimConfig, n: int = 1, parallel: bool | None = None) -> None:
         if not (isinstance(n, (int, np.integer)) and n >= 1):
             raise ValueError(f"number of vehicles must be an integer >= 1, got {n!r}")
         self.config = config
@@ -253,7 +258,7 @@ class Simulator:
         self._pdata = np.ascontiguousarray(config.path.data, dtype=np.float64)
         self._kind = int(config.path.kind)
         self._nominal = config.params.to_vector()
-        self._kernel = _step_all if n > 1 else _step_one
+        self._kernel = _step_all if (n > 1 if parallel is None else parallel) else _step_one
         self.state = np.zeros((n, STATE_DIM))
         self.current = np.zeros((n, 3))
         self.params = np.tile(self._nominal, (n, 1))

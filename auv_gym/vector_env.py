@@ -166,7 +166,8 @@ class AUVPath3DVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
 
-        self.sim = Simulator(self.config, self.num_envs)
+        # One thread: the serial kernel, which leaves numba's thread pool alone.
+        self.sim = Simulator(self.config, self.num_envs, parallel=self.threads != 1)
         substeps = self.config.substeps
         # The single env truncates at max_time unless terminated; TimeLimit (max_episode_steps)
         # truncates whatever happened. Both are physics-step indices here.
@@ -250,7 +251,7 @@ class AUVPath3DVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before step()")
         sim = self.sim
         actions = validate_actions(actions, (self.num_envs, 3))
-        if self.threads is None:
+        if self.threads is None or self.threads == 1:
             sim.step(actions)
         else:
             previous = numba.get_num_threads()
