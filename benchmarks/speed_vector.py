@@ -8,7 +8,7 @@
 2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
    growth of `ru_maxrss` over the same process after imports and compilation.
 3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
-   `auv_gym.sb3` adapter, against SB3's DummyVecEnv over single envs.
+   `auv_gym.sb3` adapter, against SB3's DummyVecEnv over single envs, each in a fresh process.
 
     python -m benchmarks.speed_vector             # full run (about 2 minutes)
     python -m benchmarks.speed_vector --quick     # smoke test
@@ -123,11 +123,13 @@ def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
     }
 
 
-def _memory_subprocess(n: int) -> dict[str, float]:
-    code = (
-        "import json; from benchmarks.speed_vector import measure_memory; "
-        f"print(json.dumps(measure_memory({n})))"
-    )
+def _fresh_process(call: str) -> Any:
+    """Evaluate ``call`` (an expression over this module) in a new interpreter; JSON result.
+
+    Memory needs its own process for `ru_maxrss`; PPO collection one where numba's OpenMP
+    pool was never started by the threaded throughput runs (its spinning slows torch).
+    """
+    code = f"import json; import benchmarks.speed_vector as m; print(json.dumps(m.{call}))"
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          cwd=root)  # fmt: skip
@@ -221,7 +223,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
 
-    mem = _memory_subprocess(args.memory_n)
+    mem = _fresh_process(f"measure_memory({args.memory_n})")
     results["memory"] = mem
     print(f"\nN = {mem['n']:,}: peak RSS {mem['peak_bytes'] / 2**20:,.0f} MiB, growth over the "
           f"imported+compiled process {mem['growth_bytes'] / 2**20:,.0f} MiB (target < 1024); "
@@ -232,7 +234,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         print(f"{'backend':<12} {'n_envs':>7} {'timesteps/s':>12}")
         for n_envs in args.ppo_envs:
             for backend in ("adapter", "DummyVecEnv"):
-                r = measure_ppo_collection(n_envs, args.ppo_steps, args.ppo_repeats, backend)
+                r = _fresh_process(
+                    f"measure_ppo_collection({n_envs}, {args.ppo_steps}, "
+                    f"{args.ppo_repeats}, {backend!r})"
+                )
                 results["ppo"].append(r)
                 print(f"{backend:<12} {n_envs:>7} {r['timesteps_per_s']:>12,.0f}")
     results["machine"]["load_average_1min_end"] = os.getloadavg()[0]
