@@ -203,7 +203,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
-        args.threads = [2]
+        args.threads = [1]
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
 
     info = machine()
