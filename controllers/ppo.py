@@ -703,6 +703,7 @@ def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
         "start_timesteps": int(model.num_timesteps),
     }]  # fmt: skip
     t0 = time.monotonic()
+    commit = _git_commit()  # the code this session started from
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:
         return {
@@ -715,7 +716,7 @@ def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
             "eval_seeds": list(opts.eval_seeds), "obs_names": list(OBS_NAMES),
             "observation_shape": [OBS_DIM], "action_shape": [3],
             "versions": package_versions(), "sb3_version": stable_baselines3.__version__,
-            "git_commit": _git_commit(), "vec_env": _describe(venv),
+            "git_commit": commit, "vec_env": _describe(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
             "best": best, "auv_gym_version": auv_gym.__version__, **extra,
         }  # fmt: skip

@@ -284,7 +284,6 @@ def test_shipped_agent_follows_helix_briefly() -> None:
     assert metrics["rms_distance"] < 5.0  # and already close to the path (starts 17.7 m away)
 
 
-@pytest.mark.slow
 def test_shipped_agent_meets_acceptance_on_held_out_seeds() -> None:
     """Issue acceptance: paper scenario, seeds 0-9, 300 s: mean rms_distance (t ≥ 100 s) ≤ 1 m and
     no episode leaves the corridor; the numbers recorded beside the agent are reproduced exactly."""
