@@ -305,7 +305,7 @@ def load_policy(
     Raises FileNotFoundError when the model or its normalisation statistics are missing, and
     ValueError naming the file when the zip is corrupt or the agent was trained for another
     observation layout (its `obs_names` differ from `auv_gym.OBS_NAMES`, or its observation
-    space is not ({OBS_DIM},)). `num_threads` sets torch's intra-op threads (1 is fastest for
+    space is not (15,)). `num_threads` sets torch's intra-op threads (1 is fastest for
     these small networks on this machine, DESIGN.md §4; None leaves torch alone).
     """
     import torch
