@@ -1,0 +1,111 @@
+"""The Policy protocol shared by every controller and agent, and the batched-controller base.
+
+A policy is exactly stable-baselines3's `PolicyPredictor`:
+
+    predict(observation, state=None, episode_start=None, deterministic=True) -> (action, state)
+
+batched over the first axis (a single 1-D observation works too and gives a 1-D action). Memory
+(adaptive weights, command filters) travels in ``state`` and is re-initialised for the rows where
+``episode_start`` is true, as SB3's recurrent policies do. Actions are in [−1, 1].
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from auv_gym.observation import OBS_DIM
+from auv_gym.simulator import ACTUATOR_LIMITS
+from auv_gym.vehicle import AUVParams, remus100
+
+__all__ = ["BatchedController", "Policy", "actuator_vector"]
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """SB3's `PolicyPredictor`."""
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]: ...
+
+
+def actuator_vector(actuator: str, params: AUVParams) -> tuple[float, float, float, float, float]:
+    """(fins flag, fin gain K·δ_max [kg], X_max [N], M_max [N·m], N_max [N·m]) of an actuator model.
+
+    "paper": constant limits (50 N, 10 N·m, 10 N·m); "fins": M, N limited by K·δ_max·u|u|
+    (MODEL.md §2.3), evaluated by the controller at the observed surge speed.
+    """
+    if actuator not in ("paper", "fins"):
+        raise ValueError(f"unknown actuator {actuator!r}; valid: ['fins', 'paper']")
+    fins = 1.0 if actuator == "fins" else 0.0
+    return (fins, params.fin_moment_coeff * params.fin_max, *ACTUATOR_LIMITS)
+
+
+class BatchedController:
+    """Base of the classical controllers: observation checks, state handling, `predict`.
+
+    Subclasses provide `init_state(n)` (a dict of arrays with a leading vehicle axis) and
+    `_control(obs, state, actions)` (fills actions (n, 3) in place, updates state in place).
+    """
+
+    name = "controller"
+
+    def __init__(self, params: AUVParams | None, control_dt: float, actuator: str) -> None:
+        if not (isinstance(control_dt, (int, float)) and math.isfinite(control_dt)):
+            raise ValueError(f"control_dt must be a positive time in s, got {control_dt!r}")
+        if control_dt <= 0:
+            raise ValueError(f"control_dt must be a positive time in s, got {control_dt!r}")
+        self.params = params if params is not None else remus100()
+        if not isinstance(self.params, AUVParams):
+            raise ValueError(f"params must be an AUVParams, got {type(self.params).__name__}")
+        self.control_dt = float(control_dt)
+        self.actuator = actuator
+        self._actuator = actuator_vector(actuator, self.params)
+
+    def init_state(self, n: int) -> dict[str, np.ndarray]:
+        raise NotImplementedError
+
+    def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: dict[str, np.ndarray] | None = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Actions in [−1, 1] for a batch (n, 15) or one (15,) observation; see module doc."""
+        obs = np.asarray(observation, dtype=np.float64)
+        single = obs.ndim == 1
+        obs = np.ascontiguousarray(obs[None] if single else obs)
+        if obs.ndim != 2 or obs.shape[1] != OBS_DIM:
+            raise ValueError(f"observation must have shape (n, {OBS_DIM}) or ({OBS_DIM},), "
+                             f"got {np.shape(observation)}")  # fmt: skip
+        if not np.isfinite(obs).all():
+            raise ValueError("observation must be finite")
+        n = obs.shape[0]
+        if state is None:
+            state = self.init_state(n)
+        elif state["started"].shape[0] != n:
+            raise ValueError(f"state is for {state['started'].shape[0]} vehicles, "
+                             f"observation for {n}")  # fmt: skip
+        if episode_start is not None:
+            reset = np.asarray(episode_start, dtype=bool).reshape(-1)
+            if reset.shape[0] != n:
+                raise ValueError(f"episode_start must have {n} entries, got {reset.shape[0]}")
+            if reset.any():
+                fresh = self.init_state(int(reset.sum()))
+                for key, value in state.items():
+                    value[reset] = fresh[key]
+        actions = np.empty((n, 3))
+        self._control(obs, state, actions)
+        out = actions.astype(np.float32)
+        return (out[0] if single else out), state

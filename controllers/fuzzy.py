@@ -1,0 +1,139 @@
+"""Adaptive fuzzy approximators of the FBSM (paper (27)–(30), MODEL.md §4.1, §4.5).
+
+f̂(v) = θ_fᵀξ(v) and b̂(v) = θ_bᵀξ(v) use 5 Gaussian membership functions on each of the five
+inputs v = (u, v, w, q, r): 5⁵ = 3125 rules, product inference and centre-average
+defuzzification. Because the Gaussians factorise, the normalised basis is the Kronecker product
+of the five per-input normalised 5-vectors, computed as a chain of outer products (never a loop
+over rules); subtracting each input's largest exponent makes it safe against underflow.
+d̂(S) = θ_dᵀξ_d(S) uses three Gaussians in the sliding variable S.
+
+Adaptive laws (30), Euler-integrated at the control period dt, with optional σ-modification
+leakage σ_l (MODEL.md §4.8) and projection of every θ_b entry into [0.5, 2]·b_n:
+
+    θ̇_f = α_f (S ξ − σ_l θ_f),   θ̇_b = α_b (S ξ τ − σ_l (θ_b − b_n)),   θ̇_d = α_d (S ξ_d − σ_l θ_d)
+
+Adaptation is frozen while the loop's command saturates (anti-windup).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from controllers.gains import ALPHA_B, ALPHA_D, ALPHA_F, DT, MF1, SEPARATE_B, SIGMA_LEAK
+
+__all__ = ["N_RULES", "adaptive_loop", "fuzzy_basis", "memberships"]
+
+N_INPUTS = 5
+N_SETS = 5
+N_RULES = N_SETS**N_INPUTS  # 3125
+
+
+@njit(cache=True, inline="always")
+def memberships(x, centre0, spacing, width, out):
+    """Normalised memberships of x in 5 Gaussians exp(−((x − c_j)/σ)²), c_j = c_0 + j·Δc."""
+    largest = -np.inf
+    for j in range(N_SETS):
+        d = (x - (centre0 + j * spacing)) / width
+        out[j] = -d * d
+        largest = max(largest, out[j])
+    total = 0.0
+    for j in range(N_SETS):
+        out[j] = math.exp(out[j] - largest)
+        total += out[j]
+    for j in range(N_SETS):
+        out[j] /= total
+
+
+@njit(cache=True, inline="always")
+def kronecker5(mu, xi):
+    """ξ = μ_1 ⊗ μ_2 ⊗ μ_3 ⊗ μ_4 ⊗ μ_5 (rule index j1·5⁴ + … + j5), by partial products."""
+    idx = 0
+    for a in range(N_SETS):
+        pa = mu[0, a]
+        for b in range(N_SETS):
+            pb = pa * mu[1, b]
+            for c in range(N_SETS):
+                pc = pb * mu[2, c]
+                for d in range(N_SETS):
+                    pd = pc * mu[3, d]
+                    for e in range(N_SETS):
+                        xi[idx] = pd * mu[4, e]
+                        idx += 1
+
+
+def fuzzy_basis(v: np.ndarray, p: float, q_mf: float, sigma: float) -> np.ndarray:
+    """Numpy reference of the normalised 3125-rule basis for a batch v (n, 5) → (n, 3125).
+
+    Centres −p + j·q_mf, j = 0..4; computed as an outer-product chain over the inputs.
+    """
+    v = np.atleast_2d(np.asarray(v, dtype=np.float64))
+    centres = -p + q_mf * np.arange(N_SETS)
+    expo = -(((v[:, :, None] - centres) / sigma) ** 2)
+    mu = np.exp(expo - expo.max(axis=2, keepdims=True))
+    mu /= mu.sum(axis=2, keepdims=True)
+    basis = mu[:, 0]
+    for i in range(1, N_INPUTS):
+        basis = (basis[:, :, None] * mu[:, i, None, :]).reshape(v.shape[0], -1)
+    return basis
+
+
+@njit(cache=True)
+def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta_d, g, xi,
+                  xi_b, mu, diag):  # fmt: skip
+    """One FBSM loop (29)–(30): τ = (−f̂ − d̂(S) + rest)/b̂, saturated; adapts; returns τ/limit.
+
+    ``rest`` is the model-free part of the law (e.g. −c1ż1 + α̇1 − (h + λ)S for pitch),
+    ``limit`` the actuator limit of this input (≤ 0 means no authority: full saturation).
+    ``diag`` receives (f̂, b̂, d̂).
+    """
+    base = MF1 + 5 * loop
+    centre0, spacing, sigma = g[base], g[base + 1], g[base + 2]
+    sigma_b, sigma_d = g[base + 3], g[base + 4]
+    for i in range(N_INPUTS):
+        memberships(v_in[i], centre0, spacing, sigma, mu[i])
+    kronecker5(mu, xi)
+    separate = g[SEPARATE_B] > 0.0
+    if separate:
+        for i in range(N_INPUTS):
+            memberships(v_in[i], centre0, spacing, sigma_b, mu[i])
+        kronecker5(mu, xi_b)
+    basis_b = xi_b if separate else xi
+    f_hat = 0.0
+    b_hat = 0.0
+    for rule in range(N_RULES):
+        f_hat += theta_f[rule] * xi[rule]
+        b_hat += theta_b[rule] * basis_b[rule]
+    e0 = -(((S + sigma_d) / sigma_d) ** 2)
+    e1 = -((S / sigma_d) ** 2)
+    e2 = -(((S - sigma_d) / sigma_d) ** 2)
+    top = max(e0, max(e1, e2))
+    e0, e1, e2 = math.exp(e0 - top), math.exp(e1 - top), math.exp(e2 - top)
+    total = e0 + e1 + e2
+    e0, e1, e2 = e0 / total, e1 / total, e2 / total
+    d_hat = theta_d[0] * e0 + theta_d[1] * e1 + theta_d[2] * e2
+    tau = (-f_hat - d_hat + rest) / b_hat
+    if limit > 0.0:
+        action = tau / limit
+    else:
+        action = math.copysign(np.inf, tau) if tau != 0.0 else 0.0
+    saturated = abs(action) > 1.0
+    action = min(max(action, -1.0), 1.0)
+    if not saturated:
+        dt, leak = g[DT], g[SIGMA_LEAK]
+        gain_f, gain_b, gain_d = dt * g[ALPHA_F], dt * g[ALPHA_B], dt * g[ALPHA_D]
+        tau_applied = action * limit if limit > 0.0 else 0.0
+        low, high = 0.5 * b_nominal, 2.0 * b_nominal
+        for rule in range(N_RULES):
+            theta_f[rule] += gain_f * (S * xi[rule] - leak * theta_f[rule])
+            updated = theta_b[rule] + gain_b * (
+                S * basis_b[rule] * tau_applied - leak * (theta_b[rule] - b_nominal)
+            )
+            theta_b[rule] = min(max(updated, low), high)  # projection
+        theta_d[0] += gain_d * (S * e0 - leak * theta_d[0])
+        theta_d[1] += gain_d * (S * e1 - leak * theta_d[1])
+        theta_d[2] += gain_d * (S * e2 - leak * theta_d[2])
+    diag[0], diag[1], diag[2] = f_hat, b_hat, d_hat
+    return action

@@ -1,0 +1,113 @@
+"""Gains of the paper's controllers (MODEL.md §3.4, §4.6) and their packed form for the kernels."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+__all__ = ["GAIN_LAYOUT", "ControllerGains", "MembershipSet"]
+
+
+@dataclass(frozen=True)
+class MembershipSet:
+    """Five Gaussian MFs per input: centres c_j = −p + (j − 1)·q_mf, widths σ (f̂), σ_b (b̂).
+
+    d̂(S) uses three Gaussians of width σ_d centred at −σ_d, 0, +σ_d (MODEL.md §4.5).
+    Units follow the fuzzy inputs (u, v, w [m/s], q, r [rad/s]) and S of the loop.
+    """
+
+    p: float
+    q_mf: float
+    sigma: float
+    sigma_b: float
+    sigma_d: float
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"MembershipSet.{f.name} must be positive, got {value}")
+
+
+@dataclass(frozen=True)
+class ControllerGains:
+    """Gains and widths; the defaults are the paper's Section 6 as read in MODEL.md §4.6.
+
+    Surge: Ṡ1 = −(h1 + λ1)S1. Pitch: z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, S2 = c1 z1 + z2.
+    Yaw: z3 = ψ − ψ_d, α2 = cosθ(−k2 z3 + ψ̇_d), S3 = c2 z3 + z4. LOS (MODEL.md §3.4):
+    ψ_d = ψ_F − arctan(k_y y_e) − β, θ_d = sat(θ_F + arctan(k_z z_e) + α, ±θ_max), with the
+    corrections command-filtered (2nd order, ω_n, ζ; MODEL.md §10.4).
+    """
+
+    h1: float = 1.0
+    lam1: float = 0.1
+    h2: float = 0.3
+    lam2: float = 0.1
+    h3: float = 0.2
+    lam3: float = 0.1
+    k1: float = 5.0  # [1/s] pitch
+    c1: float = 3.0  # [1/s]
+    k2: float = 0.3  # [1/s] yaw
+    c2: float = 2.0  # [1/s]
+    k_y: float = 0.1  # [1/m] calm-function gains
+    k_z: float = 0.5  # [1/m]
+    theta_max: float = math.radians(40.0)  # [rad] θ_d saturation
+    filter_wn: float = 2.0  # [rad/s]
+    filter_zeta: float = 1.0
+    u_guard: float = 0.1  # [m/s] α = β = 0 below this surge speed
+    sideslip_3d: bool = False  # divide β by cos θ_F (MODEL.md §10.5); paper: False
+    printed_pitch_los: bool = False  # the paper's misprinted θ_d = θ_F − arctan(k_z z_e) − α
+    alpha_f: float = 1.0  # adaptation gains (MODEL.md §4.6, chosen)
+    alpha_b: float = 0.1
+    alpha_d: float = 0.1
+    sigma_leak: float = 0.0  # σ-modification leakage (MODEL.md §4.8); 0 = paper-faithful
+    separate_b_basis: bool = False  # False: b̂ shares f̂'s basis (σ_b = σ), as the prototype
+    surge_mf: MembershipSet = MembershipSet(1.0, 0.5, 1.0, 0.1, 1.0)
+    pitch_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, math.pi / 6, math.pi / 24,
+                                            math.pi / 12)  # fmt: skip
+    yaw_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, 1 / 3, math.pi / 12, 1 / 6)
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, (bool, MembershipSet)):
+                continue
+            if not math.isfinite(value):
+                raise ValueError(f"ControllerGains.{f.name} must be finite, got {value}")
+            if f.name != "sigma_leak" and value <= 0:
+                raise ValueError(f"ControllerGains.{f.name} must be positive, got {value}")
+        if self.sigma_leak < 0:
+            raise ValueError(f"ControllerGains.sigma_leak must be >= 0, got {self.sigma_leak}")
+        if self.theta_max >= math.pi / 2:
+            raise ValueError("ControllerGains.theta_max must be below π/2")
+
+
+# Packed layout read by the numba kernels; extra entries are filled by the controller.
+GAIN_LAYOUT = (
+    "h1", "lam1", "h2", "lam2", "h3", "lam3", "k1", "c1", "k2", "c2", "k_y", "k_z", "theta_max",
+    "filter_wn", "filter_zeta", "u_guard", "sideslip_3d", "printed_pitch_los", "alpha_f",
+    "alpha_b", "alpha_d", "sigma_leak", "separate_b_basis",
+    "mf1_c0", "mf1_dc", "mf1_s", "mf1_sb", "mf1_sd",
+    "mf2_c0", "mf2_dc", "mf2_s", "mf2_sb", "mf2_sd",
+    "mf3_c0", "mf3_dc", "mf3_s", "mf3_sb", "mf3_sd",
+    "dt", "b1", "b5", "b6", "fins", "fin_gain", "X_max", "M_max", "N_max",
+)  # fmt: skip
+(H1, LAM1, H2, LAM2, H3, LAM3, K1, C1, K2, C2, KY, KZ, THETA_MAX, WN, ZETA, U_GUARD, BETA_3D,
+ PRINTED_PITCH, ALPHA_F, ALPHA_B, ALPHA_D, SIGMA_LEAK, SEPARATE_B, MF1, _m1b, _m1c, _m1d, _m1e,
+ MF2, _m2b, _m2c, _m2d, _m2e, MF3, _m3b, _m3c, _m3d, _m3e, DT, B1, B5, B6, FINS, FIN_GAIN,
+ X_MAX, M_MAX, N_MAX) = range(len(GAIN_LAYOUT))  # fmt: skip
+
+
+def pack_gains(gains: ControllerGains, dt: float, b: tuple[float, float, float],
+               actuator: tuple[float, float, float, float, float]) -> np.ndarray:  # fmt: skip
+    """The float64 vector of `GAIN_LAYOUT` for the kernels."""
+    values = {f.name: float(getattr(gains, f.name)) for f in fields(gains)
+              if not isinstance(getattr(gains, f.name), MembershipSet)}  # fmt: skip
+    for k, mf in enumerate((gains.surge_mf, gains.pitch_mf, gains.yaw_mf), start=1):
+        values.update({f"mf{k}_c0": -mf.p, f"mf{k}_dc": mf.q_mf, f"mf{k}_s": mf.sigma,
+                       f"mf{k}_sb": mf.sigma_b, f"mf{k}_sd": mf.sigma_d})  # fmt: skip
+    values.update(dt=dt, b1=b[0], b5=b[1], b6=b[2])
+    values.update(zip(("fins", "fin_gain", "X_max", "M_max", "N_max"), actuator, strict=True))
+    return np.array([values[name] for name in GAIN_LAYOUT])

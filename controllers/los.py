@@ -1,0 +1,102 @@
+"""LOS guidance with command-filtered corrections and the backstepping error variables.
+
+Shared by FBSM and backstepping (MODEL.md §3.4, §4.3, §4.4, §10.4). All functions are numba
+kernels on one vehicle; ``o`` is one observation row (layout `auv_gym.OBS_NAMES`), ``g`` the
+packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the 6-entry memory
+(x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from auv_gym.guidance import wrap_angle
+from auv_gym.observation import OBS_INDEX
+from controllers.gains import (
+    BETA_3D,
+    C1,
+    C2,
+    DT,
+    K1,
+    K2,
+    KY,
+    KZ,
+    PRINTED_PITCH,
+    THETA_MAX,
+    U_GUARD,
+    WN,
+    ZETA,
+)
+
+__all__ = ["FILTER_DIM", "LOOP_DIM", "loop_errors"]
+
+_YE, _ZE, _PSIE, _TH, _THF = (OBS_INDEX[k] for k in ("y_e", "z_e", "psi_error", "theta", "theta_F"))
+_U, _V, _W, _Q, _R = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r"))
+_DPSIF, _DTHF = OBS_INDEX["psi_F_dot"], OBS_INDEX["theta_F_dot"]
+FILTER_DIM = 6
+# loop_errors output: z1, z2, S2, ż1, α̇1, z3, z4, S3, ż3, α̇2, θ_d, ψ_d − ψ_F
+LOOP_DIM = 12
+
+
+@njit(cache=True)
+def loop_errors(o, g, filt, started, out):
+    """Desired angles (LOS) and the pitch/yaw backstepping errors; advances the filter by dt.
+
+    θ_d = θ_F + x_z, ψ_d = ψ_F + x_y, where x_z, x_y are the corrections
+    c_z = sat(θ_F + arctan(k_z z_e) + α, ±θ_max) − θ_F and c_y = −arctan(k_y y_e) − β
+    through ẍ = ω_n²(c − x) − 2ζω_n ẋ (initialised at c with zero rate). θ̇_d, θ̈_d add the
+    analytic θ̇_F and its finite difference over one control step (likewise for ψ).
+    Pitch (35)–(36): z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α1, S2 = c1 z1 + z2,
+    ż1 = q − θ̇_d, α̇1 = −k1 ż1 + θ̈_d. Yaw (40) with the 1/cosθ correction (MODEL.md §4.4):
+    z3 = wrap(ψ − ψ_d), α2 = cosθ(−k2 z3 + ψ̇_d), z4 = r − α2, S3 = c2 z3 + z4,
+    ż3 = r/cosθ − ψ̇_d, α̇2 = −q sinθ(−k2 z3 + ψ̇_d) + cosθ(−k2 ż3 + ψ̈_d).
+    """
+    dt = g[DT]
+    u, v, w, q, r, theta = o[_U], o[_V], o[_W], o[_Q], o[_R], o[_TH]
+    theta_f = o[_THF]
+    if u >= g[U_GUARD]:  # attack and sideslip angles (35), undefined at rest
+        alpha = math.atan(w / u)
+        beta = math.atan(v / math.sqrt(u * u + w * w))
+    else:
+        alpha = 0.0
+        beta = 0.0
+    if g[BETA_3D] > 0.0:
+        beta /= math.cos(theta_f)
+    c_y = -math.atan(g[KY] * o[_YE]) - beta
+    if g[PRINTED_PITCH] > 0.0:  # the paper's print: both signs flipped (fails, MODEL.md §8.9)
+        theta_d_raw = theta_f - math.atan(g[KZ] * o[_ZE]) - alpha
+    else:
+        theta_d_raw = theta_f + math.atan(g[KZ] * o[_ZE]) + alpha
+    c_z = min(max(theta_d_raw, -g[THETA_MAX]), g[THETA_MAX]) - theta_f
+    if not started:
+        filt[0], filt[1], filt[2], filt[3] = c_z, 0.0, c_y, 0.0
+        filt[4], filt[5] = o[_DPSIF], o[_DTHF]
+    wn, zeta = g[WN], g[ZETA]
+    x_z, v_z, x_y, v_y = filt[0], filt[1], filt[2], filt[3]
+    a_z = wn * wn * (c_z - x_z) - 2.0 * zeta * wn * v_z
+    a_y = wn * wn * (c_y - x_y) - 2.0 * zeta * wn * v_y
+    theta_d = theta_f + x_z
+    dtheta_d = o[_DTHF] + v_z
+    ddtheta_d = (o[_DTHF] - filt[5]) / dt + a_z
+    z3 = wrap_angle(o[_PSIE] - x_y)
+    dpsi_d = o[_DPSIF] + v_y
+    ddpsi_d = (o[_DPSIF] - filt[4]) / dt + a_y
+    filt[0], filt[1] = x_z + dt * v_z, v_z + dt * a_z
+    filt[2], filt[3] = x_y + dt * v_y, v_y + dt * a_y
+    filt[4], filt[5] = o[_DPSIF], o[_DTHF]
+
+    k1, c1, k2, c2 = g[K1], g[C1], g[K2], g[C2]
+    z1 = theta - theta_d
+    z2 = q + k1 * z1 - dtheta_d
+    dz1 = q - dtheta_d
+    cth, sth = math.cos(theta), math.sin(theta)
+    base = -k2 * z3 + dpsi_d
+    z4 = r - cth * base
+    dz3 = r / cth - dpsi_d
+    out[0], out[1], out[2], out[3] = z1, z2, c1 * z1 + z2, dz1
+    out[4] = -k1 * dz1 + ddtheta_d
+    out[5], out[6], out[7], out[8] = z3, z4, c2 * z3 + z4, dz3
+    out[9] = -q * sth * base + cth * (-k2 * dz3 + ddpsi_d)
+    out[10], out[11] = theta_d, x_y
