@@ -296,3 +296,13 @@ def test_shipped_agent_meets_acceptance_on_held_out_seeds() -> None:
     assert [r["rms_distance"] for r in fresh["results"]] == [
         r["rms_distance"] for r in recorded["results"]
     ]
+
+
+def test_controllers_make_dispatches_to_load_policy() -> None:
+    import controllers
+    from controllers.ppo import PPOPolicy, load_policy
+
+    policy = controllers.make("ppo", path=str(SHIPPED))
+    assert isinstance(policy, PPOPolicy)
+    obs = _random_obs(8, seed=1)
+    np.testing.assert_array_equal(policy.predict(obs)[0], load_policy(SHIPPED).predict(obs)[0])
