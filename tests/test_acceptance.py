@@ -1,0 +1,131 @@
+"""MODEL.md §8 acceptance checks 3, 4, 6, 7, 8, 9 (and 10 for the controllers).
+
+Run at the env's default control period (0.05 s) and at the physics step (0.01 s). Thresholds
+are MODEL.md's; the values measured here are quoted in the README and the issue notes.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+import pytest
+
+import controllers
+from auv_gym.evaluation import rollouts
+from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, remus100
+
+PERIODS = (0.05, 0.01)
+NOISE_SEEDS = (0, 1, 2)
+
+
+@cache
+def run(policy: str, control_dt: float, seeds: tuple[int, ...] = (0,), max_time: float = 300.0,
+        model_error: float = 0.0, **env_kwargs):  # fmt: skip
+    params = None
+    if model_error:
+        params = remus100().scaled({k: 1.0 + model_error for k in HYDRODYNAMIC_FIELDS})
+    policy_obj = controllers.make(policy, control_dt=control_dt, params=params)
+    return rollouts(policy_obj, list(seeds), control_dt=control_dt, max_time=max_time,
+                    **env_kwargs)  # fmt: skip
+
+
+def window(tr, name, start, end=math.inf):
+    t = tr.t if len(tr[name]) == len(tr.t) else tr.t[:-1]
+    return tr[name][(t >= start) & (t <= end)]
+
+
+def rms(values):
+    return float(np.sqrt(np.mean(np.square(values))))
+
+
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check3_surge_without_overshoot(dt):
+    (tr,) = run("fbsm", dt, disturbance="none")
+    assert tr["u"].max() - 1.0 <= 0.02
+    assert np.abs(window(tr, "u", 40.0) - 1.0).max() <= 0.02
+
+
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check4_convergence_to_the_helix(dt):
+    (tr,) = run("fbsm", dt, disturbance="none")
+    assert tr.termination_reason == "time_limit"
+    assert window(tr, "distance", 60.0).max() < 0.5
+    assert window(tr, "distance", 150.0).max() < 0.1
+    assert np.abs(window(tr, "y_e", 80.0)).max() < 0.2
+    assert np.abs(window(tr, "z_e", 80.0)).max() < 0.2
+    assert np.abs(window(tr, "x_e", 50.0)).max() < 0.2
+
+
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check6_robust_to_white_noise_and_better_than_backstepping(dt):
+    fbsm = run("fbsm", dt, NOISE_SEEDS, disturbance="paper")
+    bs = run("backstepping", dt, NOISE_SEEDS, disturbance="paper")
+    for f, b in zip(fbsm, bs, strict=True):
+        np.testing.assert_array_equal(f["f_u"], b["f_u"])  # identical noise realisation
+        assert rms(window(f, "y_e", 200, 300)) <= 0.15
+        assert rms(window(f, "z_e", 200, 300)) <= 0.15
+        assert rms(window(f, "u", 200, 300) - 1.0) <= 0.08
+        assert rms(window(f, "y_e", 200, 300)) < rms(window(b, "y_e", 200, 300))
+
+
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check7_model_error_hurts_backstepping_not_fbsm(dt):
+    (bs,) = run("backstepping", dt, model_error=0.3, disturbance="none")
+    (fbsm,) = run("fbsm", dt, model_error=0.3, disturbance="none")
+    assert rms(window(bs, "y_e", 200, 300)) >= 0.05
+    assert rms(window(fbsm, "y_e", 200, 300)) <= 0.05
+
+
+def test_check8_bounded_and_safe_over_1000_s():
+    """One 1000-s noisy run at the default period (the longest check; 0.01 s adds nothing new)."""
+    policy = controllers.make("fbsm")
+    obs_state = {}
+
+    class Recorder:
+        name = "fbsm"
+
+        def predict(self, observation, state=None, episode_start=None, deterministic=True):
+            action, state = policy.predict(observation, state, episode_start, deterministic)
+            obs_state["state"] = state
+            obs_state["max_theta_f"] = max(obs_state.get("max_theta_f", 0.0),
+                                           float(np.abs(state["theta_f"]).max()))  # fmt: skip
+            obs_state["max_theta_d"] = max(obs_state.get("max_theta_d", 0.0),
+                                           float(np.abs(state["theta_d"]).max()))  # fmt: skip
+            low = np.asarray(policy.b_nominal)[None, :, None] * 0.5
+            assert np.all(state["theta_b"] >= low - 1e-12)
+            assert np.all(state["theta_b"] <= 4 * low + 1e-12)
+            return action, state
+
+    (tr,) = rollouts(Recorder(), [7], max_time=1000.0, disturbance="paper")
+    assert tr.termination_reason == "time_limit" and tr.t[-1] == pytest.approx(1000.0)
+    assert all(np.isfinite(tr[k]).all() for k in ("x", "u", "theta", "X", "M", "N"))
+    assert np.degrees(np.abs(tr["theta"])).max() <= 40.0 + 5.0
+    assert np.abs(tr.actions).max() <= 1.0
+    assert np.all(np.abs(tr["X"]) <= 50.0 + 1e-9)
+    assert np.all(np.abs(tr["M"]) <= 10.0 + 1e-9) and np.all(np.abs(tr["N"]) <= 10.0 + 1e-9)
+    assert obs_state["max_theta_f"] <= 10.0
+    assert obs_state["max_theta_d"] <= 10.0
+    assert rms(window(tr, "y_e", 800, 1000)) <= 0.15  # still following at the end
+
+
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check9_printed_virtual_point_law_fails(dt):
+    (tr,) = run("fbsm", dt, disturbance="none", virtual_point_law="printed")
+    assert tr["distance"][-1] > 5.0 or tr.termination_reason == "corridor"
+
+
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check9_printed_pitch_los_fails(dt):
+    policy = controllers.make("fbsm", control_dt=dt, printed_pitch_los=True)
+    (tr,) = rollouts(policy, [0], control_dt=dt, disturbance="none", corridor=500.0)
+    assert tr["distance"][-1] > 5.0 or tr.termination_reason in ("pitch", "envelope")
+
+
+@pytest.mark.parametrize("name", ["fbsm", "backstepping"])
+def test_check10_same_seed_bit_identical(name):
+    first = run(name, 0.05, (3,), 60.0, disturbance="paper")[0]
+    second = rollouts(controllers.make(name), [3], max_time=60.0, disturbance="paper")[0]
+    for key in ("x", "y", "z", "u", "X", "M", "N", "distance"):
+        np.testing.assert_array_equal(first[key], second[key])
