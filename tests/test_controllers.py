@@ -1,0 +1,195 @@
+"""Controllers: the Policy protocol, batching, memory resets, fuzzy basis, the laws' structure."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import controllers
+from auv_gym import OBS_INDEX, OBS_NAMES
+from auv_gym.observation import OBS_DIM
+from controllers.base import Policy
+from controllers.fuzzy import N_RULES, fuzzy_basis
+from controllers.gains import ControllerGains, pack_gains
+from controllers.los import LOOP_DIM, loop_errors
+
+NAMES = ["fbsm", "backstepping"]
+
+
+def observations(n, seed=0):
+    rng = np.random.default_rng(seed)
+    obs = np.zeros((n, OBS_DIM), dtype=np.float32)
+    for name, (lo, hi) in {"x_e": (-5, 5), "y_e": (-5, 5), "z_e": (-5, 5),
+                           "psi_error": (-3, 3), "theta": (-0.4, 0.4), "theta_F": (0.2, 0.4),
+                           "u": (0.0, 1.5), "v": (-0.2, 0.2), "w": (-0.2, 0.2),
+                           "q": (-0.2, 0.2), "r": (-0.2, 0.2), "u_p": (0, 2),
+                           "psi_F_dot": (0.0, 0.2)}.items():  # fmt: skip
+        obs[:, OBS_INDEX[name]] = rng.uniform(lo, hi, n)
+    obs[:, OBS_INDEX["u_D"]] = 1.0
+    return obs
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_protocol_single_and_batched(name):
+    policy = controllers.make(name)
+    assert isinstance(policy, Policy)
+    action, state = policy.predict(observations(1)[0])
+    assert action.shape == (3,) and action.dtype == np.float32
+    actions, state = policy.predict(observations(5))
+    assert actions.shape == (5, 3)
+    assert np.all(np.abs(actions) <= 1.0)
+    assert state["started"].all()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_batched_equals_per_row(name):
+    policy = controllers.make(name)
+    batch_obs = [observations(4, seed=k) for k in range(20)]
+    batch_actions, state = [], None
+    for obs in batch_obs:
+        a, state = policy.predict(obs, state)
+        batch_actions.append(a)
+    for row in range(4):
+        row_state = None
+        for k, obs in enumerate(batch_obs):
+            a, row_state = policy.predict(obs[row : row + 1], row_state)
+            np.testing.assert_array_equal(a[0], batch_actions[k][row])
+    big = observations(100)  # the threaded kernel gives the same numbers
+    threaded, _ = policy.predict(big)
+    serial = np.vstack([policy.predict(big[i : i + 1])[0] for i in range(100)])
+    np.testing.assert_array_equal(threaded, serial)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_episode_start_resets_memory_of_those_rows_only(name):
+    policy = controllers.make(name)
+    obs = [observations(2, seed=k) for k in range(30)]
+    state = None
+    for o in obs:
+        _, state = policy.predict(o, state)
+    fresh_action, _ = policy.predict(obs[0][1:2])
+    action, state = policy.predict(obs[0], state, episode_start=np.array([False, True]))
+    np.testing.assert_array_equal(action[1], fresh_action[0])
+    continued, _ = policy.predict(obs[0][:1], None)
+    assert not np.array_equal(action[0], continued[0])  # row 0 kept its memory
+
+
+def test_fbsm_adapts_and_keeps_b_hat_within_projection_bounds():
+    policy = controllers.make("fbsm")
+    state = None
+    for k in range(200):
+        _, state = policy.predict(observations(3, seed=k), state)
+    assert np.abs(state["theta_f"]).max() > 0.0
+    b = np.asarray(policy.b_nominal)[None, :, None]
+    assert np.all(state["theta_b"] >= 0.5 * b - 1e-15)
+    assert np.all(state["theta_b"] <= 2.0 * b + 1e-15)
+    diag = policy.diagnostics(state)
+    assert {"theta_d", "psi_d_rel", "norm_theta_f_surge", "b_hat_yaw"} <= set(diag)
+    assert diag["norm_theta_f_pitch"].shape == (3,)
+
+
+def test_fuzzy_basis_is_a_normalised_product_of_memberships():
+    rng = np.random.default_rng(0)
+    v = rng.uniform(-1, 1, (7, 5))
+    xi = fuzzy_basis(v, p=1.0, q_mf=0.5, sigma=1.0)
+    assert xi.shape == (7, N_RULES)
+    np.testing.assert_allclose(xi.sum(axis=1), 1.0, rtol=1e-12)
+    centres = -1.0 + 0.5 * np.arange(5)
+    mu = np.exp(-(((v[:, :, None] - centres) / 1.0) ** 2))
+    rule = (2, 4, 0, 1, 3)
+    direct = np.prod([mu[:, i, j] for i, j in enumerate(rule)], axis=0)
+    all_rules = np.prod(mu.sum(axis=2), axis=1)
+    index = np.ravel_multi_index(rule, (5,) * 5)
+    np.testing.assert_allclose(xi[:, index], direct / all_rules, rtol=1e-12)
+    far = fuzzy_basis(np.full((1, 5), 1e3), p=1.0, q_mf=0.5, sigma=0.1)  # no underflow → NaN
+    assert np.isfinite(far).all() and far[0, -1] == pytest.approx(1.0)
+
+
+def test_yaw_error_decays_at_k2_plus_c2_over_cos_theta_on_the_surface():
+    """MODEL.md §10.6: with S3 = 0, ż3 = −(k2 + c2/cosθ) z3 (the 1/cosθ correction)."""
+    gains = ControllerGains()
+    g = pack_gains(gains, 0.05, (0.03, 0.12, 0.12), (0.0, 1.0, 50.0, 10.0, 10.0))
+    o = np.zeros(OBS_DIM)
+    theta, z3, psi_dot_f = 0.4, 0.3, 0.05
+    o[OBS_INDEX["theta"]] = theta
+    o[OBS_INDEX["u"]] = 0.05  # below the guard: β = 0, so ψ_d = ψ_F + x_y with x_y = 0
+    o[OBS_INDEX["psi_error"]] = z3
+    o[OBS_INDEX["psi_F_dot"]] = psi_dot_f
+    # r such that S3 = c2 z3 + r − cosθ(−k2 z3 + ψ̇_F) = 0
+    o[OBS_INDEX["r"]] = math.cos(theta) * (-gains.k2 * z3 + psi_dot_f) - gains.c2 * z3
+    out = np.empty(LOOP_DIM)
+    loop_errors(o, g, np.zeros(6), False, out)
+    assert out[5] == pytest.approx(z3)
+    assert out[7] == pytest.approx(0.0, abs=1e-12)
+    assert out[8] == pytest.approx(-(gains.k2 + gains.c2 / math.cos(theta)) * z3, rel=1e-12)
+
+
+def test_controllers_read_the_observation_by_name_only():
+    import inspect
+
+    import controllers.backstepping
+    import controllers.fbsm
+    import controllers.los
+
+    for module in (controllers.los, controllers.fbsm, controllers.backstepping):
+        source = inspect.getsource(module)
+        assert "OBS_INDEX[" in source
+        assert "o[6]" not in source and "obs[:, 6]" not in source
+    assert OBS_NAMES[OBS_INDEX["u"]] == "u"
+
+
+def test_controllers_run_inside_sb3_evaluate_policy():
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.evaluation import evaluate_policy
+    from stable_baselines3.common.monitor import Monitor
+
+    from auv_gym.evaluation import rollouts
+
+    for name in NAMES:
+        env = Monitor(gym.make("AUVPath3D-v0", max_time=20.0, disturbance="none"))
+        mean, std = evaluate_policy(controllers.make(name), env, n_eval_episodes=2)
+        assert std == 0.0  # noise-free: the two episodes are identical
+        (reference,) = rollouts(controllers.make(name), [0], max_time=20.0, disturbance="none")
+        assert mean == pytest.approx(reference["reward"].sum(), rel=1e-5)
+
+
+def test_fins_actuator_normalises_by_speed_dependent_authority():
+    fins = controllers.make("backstepping", actuator="fins")
+    paper = controllers.make("backstepping")
+    obs = observations(1)
+    obs[0, OBS_INDEX["u"]] = 1.0
+    a_fins, _ = fins.predict(obs)
+    a_paper, _ = paper.predict(obs)
+    authority = 6.15 * math.pi / 6
+    expected = np.clip(a_paper[0, 1:] * 10.0 / authority, -1, 1)
+    np.testing.assert_allclose(a_fins[0, 1:], expected, rtol=1e-5)
+    obs[0, OBS_INDEX["u"]] = 0.0
+    a_rest, _ = fins.predict(obs)
+    assert set(np.abs(a_rest[0, 1:])) <= {0.0, 1.0}  # no authority at rest: saturated or zero
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error"),
+    [({"control_dt": -0.05}, "control_dt"), ({"actuator": "jets"}, "actuator"),
+     ({"k1": -1.0}, "k1"), ({"bogus_gain": 1.0}, "unknown controller gains"),
+     ({"params": "remus"}, "AUVParams")],
+)  # fmt: skip
+def test_bad_configuration_raises(kwargs, error):
+    with pytest.raises(ValueError, match=error):
+        controllers.make("fbsm", **kwargs)
+
+
+def test_bad_observations_and_names_raise():
+    policy = controllers.make("fbsm")
+    with pytest.raises(ValueError, match="shape"):
+        policy.predict(np.zeros(14))
+    with pytest.raises(ValueError, match="finite"):
+        policy.predict(np.full(OBS_DIM, np.nan))
+    _, state = policy.predict(observations(2))
+    with pytest.raises(ValueError, match="vehicles"):
+        policy.predict(observations(3), state)
+    with pytest.raises(ValueError, match="unknown controller 'lqr'"):
+        controllers.make("lqr")
