@@ -80,6 +80,22 @@ def fuzzy_basis(v: np.ndarray, p: float, q_mf: float, sigma: float) -> np.ndarra
     return basis
 
 
+@njit(cache=True, inline="always")
+def _dot(a, b):
+    """Σ a_i b_i with four interleaved partial sums: a fixed summation order (bit-reproducible)
+    that the compiler can still map onto SIMD lanes."""
+    s0 = s1 = s2 = s3 = 0.0
+    n4 = a.shape[0] - a.shape[0] % 4
+    for i in range(0, n4, 4):
+        s0 += a[i] * b[i]
+        s1 += a[i + 1] * b[i + 1]
+        s2 += a[i + 2] * b[i + 2]
+        s3 += a[i + 3] * b[i + 3]
+    for i in range(n4, a.shape[0]):
+        s0 += a[i] * b[i]
+    return (s0 + s1) + (s2 + s3)
+
+
 @njit(cache=True)
 def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta_d, g, xi,
                   xi_b, mu, diag):  # fmt: skip
@@ -101,11 +117,8 @@ def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta
             memberships(v_in[i], centre0, spacing, sigma_b, mu[i])
         kronecker5(mu, xi_b)
     basis_b = xi_b if separate else xi
-    f_hat = 0.0
-    b_hat = 0.0
-    for rule in range(N_RULES):
-        f_hat += theta_f[rule] * xi[rule]
-        b_hat += theta_b[rule] * basis_b[rule]
+    f_hat = _dot(theta_f, xi)
+    b_hat = _dot(theta_b, basis_b)
     e0 = -(((S + sigma_d) / sigma_d) ** 2)
     e1 = -((S / sigma_d) ** 2)
     e2 = -(((S - sigma_d) / sigma_d) ** 2)
@@ -123,15 +136,23 @@ def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta
     action = min(max(action, -1.0), 1.0)
     if not saturated:
         dt, leak = g[DT], g[SIGMA_LEAK]
-        gain_f, gain_b, gain_d = dt * g[ALPHA_F], dt * g[ALPHA_B], dt * g[ALPHA_D]
         tau_applied = action * limit if limit > 0.0 else 0.0
+        step_f = dt * g[ALPHA_F] * S
+        step_b = dt * g[ALPHA_B] * S * tau_applied
+        gain_d = dt * g[ALPHA_D]
         low, high = 0.5 * b_nominal, 2.0 * b_nominal
-        for rule in range(N_RULES):
-            theta_f[rule] += gain_f * (S * xi[rule] - leak * theta_f[rule])
-            updated = theta_b[rule] + gain_b * (
-                S * basis_b[rule] * tau_applied - leak * (theta_b[rule] - b_nominal)
-            )
-            theta_b[rule] = min(max(updated, low), high)  # projection
+        if leak == 0.0:  # the paper's laws; simple loops that the compiler vectorises
+            for rule in range(N_RULES):
+                theta_f[rule] += step_f * xi[rule]
+            for rule in range(N_RULES):
+                theta_b[rule] = min(max(theta_b[rule] + step_b * basis_b[rule], low), high)
+        else:
+            leak_f, leak_b = dt * g[ALPHA_F] * leak, dt * g[ALPHA_B] * leak
+            for rule in range(N_RULES):
+                theta_f[rule] += step_f * xi[rule] - leak_f * theta_f[rule]
+                updated = theta_b[rule] + step_b * basis_b[rule]
+                updated -= leak_b * (theta_b[rule] - b_nominal)
+                theta_b[rule] = min(max(updated, low), high)  # projection
         theta_d[0] += gain_d * (S * e0 - leak * theta_d[0])
         theta_d[1] += gain_d * (S * e1 - leak * theta_d[1])
         theta_d[2] += gain_d * (S * e2 - leak * theta_d[2])
