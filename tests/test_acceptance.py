@@ -129,3 +129,24 @@ def test_check10_same_seed_bit_identical(name):
     second = rollouts(controllers.make(name), [3], max_time=60.0, disturbance="paper")[0]
     for key in ("x", "y", "z", "u", "X", "M", "N", "distance"):
         np.testing.assert_array_equal(first[key], second[key])
+
+
+def test_check8_sigma_leakage_keeps_the_disturbance_weights_stationary():
+    """With σ_l = 0.05: max |θ_d| over [500, 1000] s ≤ 1.5 × max over [0, 500] s (MODEL.md §8.8)."""
+    policy = controllers.make("fbsm", sigma_leak=0.05)
+    peaks = []
+
+    class Recorder:
+        name = "fbsm-leak"
+
+        def predict(self, observation, state=None, episode_start=None, deterministic=True):
+            action, state = policy.predict(observation, state, episode_start, deterministic)
+            peaks.append(float(np.abs(state["theta_d"]).max()))
+            return action, state
+
+    (tr,) = rollouts(Recorder(), [7], max_time=1000.0, disturbance="paper")
+    assert tr.termination_reason == "time_limit"
+    peaks = np.asarray(peaks)
+    half = len(peaks) // 2
+    assert peaks[half:].max() <= 1.5 * peaks[:half].max()
+    assert rms(window(tr, "y_e", 200, 1000)) <= 0.15
