@@ -22,7 +22,7 @@ from numba import njit, prange
 from auv_gym.observation import OBS_INDEX
 from auv_gym.vehicle import AUVParams, nu_dot
 from controllers.base import BatchedController
-from controllers.fbsm import _replace, moment_limits
+from controllers.fbsm import moment_limits
 from controllers.gains import (
     B1,
     B5,
@@ -99,9 +99,7 @@ class Backstepping(BatchedController):
     def __init__(self, gains: ControllerGains | None = None, params: AUVParams | None = None,
                  control_dt: float = 0.05, actuator: str = "paper", threads: str = "auto",
                  **gain_overrides: float) -> None:  # fmt: skip
-        super().__init__(params, control_dt, actuator)
-        base = gains if gains is not None else ControllerGains()
-        self.gains = base if not gain_overrides else _replace(base, gain_overrides)
+        super().__init__(gains, params, control_dt, actuator, gain_overrides)
         p = self.params
         self._p = p.to_vector()
         b = (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66)

@@ -11,29 +11,19 @@ batched over the first axis (a single 1-D observation works too and gives a 1-D 
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 import numpy as np
 
+from auv_gym.evaluation import Policy  # the one definition, shared with the evaluation
 from auv_gym.observation import OBS_DIM
 from auv_gym.simulator import ACTUATOR_LIMITS
 from auv_gym.vehicle import AUVParams, remus100
+from controllers.gains import ControllerGains
 
 __all__ = ["BatchedController", "Policy", "actuator_vector"]
-
-
-@runtime_checkable
-class Policy(Protocol):
-    """SB3's `PolicyPredictor`."""
-
-    def predict(
-        self,
-        observation: np.ndarray,
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]: ...
 
 
 def actuator_vector(actuator: str, params: AUVParams) -> tuple[float, float, float, float, float]:
@@ -57,7 +47,14 @@ class BatchedController:
 
     name = "controller"
 
-    def __init__(self, params: AUVParams | None, control_dt: float, actuator: str) -> None:
+    def __init__(
+        self,
+        gains: ControllerGains | None,
+        params: AUVParams | None,
+        control_dt: float,
+        actuator: str,
+        gain_overrides: dict[str, Any],
+    ) -> None:
         if not (isinstance(control_dt, (int, float)) and math.isfinite(control_dt)):
             raise ValueError(f"control_dt must be a positive time in s, got {control_dt!r}")
         if control_dt <= 0:
@@ -68,6 +65,11 @@ class BatchedController:
         self.control_dt = float(control_dt)
         self.actuator = actuator
         self._actuator = actuator_vector(actuator, self.params)
+        base = gains if gains is not None else ControllerGains()
+        unknown = set(gain_overrides) - {f.name for f in dataclasses.fields(base)}
+        if unknown:
+            raise ValueError(f"unknown controller gains {sorted(unknown)}")
+        self.gains = dataclasses.replace(base, **gain_overrides) if gain_overrides else base
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         raise NotImplementedError

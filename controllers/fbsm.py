@@ -127,9 +127,7 @@ class FBSM(BatchedController):
     def __init__(self, gains: ControllerGains | None = None, params: AUVParams | None = None,
                  control_dt: float = 0.05, actuator: str = "paper", threads: str = "auto",
                  **gain_overrides: float) -> None:  # fmt: skip
-        super().__init__(params, control_dt, actuator)
-        base = gains if gains is not None else ControllerGains()
-        self.gains = base if not gain_overrides else _replace(base, gain_overrides)
+        super().__init__(gains, params, control_dt, actuator, gain_overrides)
         p = self.params
         self.b_nominal = (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66)
         self._g = pack_gains(self.gains, self.control_dt, self.b_nominal, self._actuator)
@@ -160,12 +158,3 @@ class FBSM(BatchedController):
             out[f"norm_theta_d_{loop}"] = np.linalg.norm(state["theta_d"][:, k], axis=1)
             out[f"b_hat_{loop}"] = state["diag"][:, 3 * k + 1].copy()
         return out
-
-
-def _replace(gains: ControllerGains, overrides: dict[str, float]) -> ControllerGains:
-    import dataclasses
-
-    unknown = set(overrides) - {f.name for f in dataclasses.fields(gains)}
-    if unknown:
-        raise ValueError(f"unknown controller gains {sorted(unknown)}")
-    return dataclasses.replace(gains, **overrides)
