@@ -145,7 +145,9 @@ def _finish(fig: Figure, axes: Sequence[Axes], title: str) -> None:
     fig.tight_layout()
 
 
-def figure_path_3d(trajectories: Mapping[str, Trajectory], path: Path | None = None) -> Figure:
+def figure_path_3d(
+    trajectories: Mapping[str, Trajectory], path: Path | None = None, **_: Any
+) -> Figure:
     """Fig. 3: the desired path and the vehicle tracks in 3D (height −z up) [m]."""
     fig = _figure(_WIDTH, 5.5, _DPI)
     ax = fig.add_subplot(1, 1, 1, projection="3d")
@@ -188,12 +190,16 @@ def _projection(
     return fig
 
 
-def figure_horizontal(trajectories: Mapping[str, Trajectory], path: Path | None = None) -> Figure:
+def figure_horizontal(
+    trajectories: Mapping[str, Trajectory], path: Path | None = None, **_: Any
+) -> Figure:
     """Fig. 4: projection on the horizontal plane (x, y) [m]."""
     return _projection(trajectories, path, (0, 1), ("x [m]", "y [m]"), "Horizontal projection")
 
 
-def figure_vertical(trajectories: Mapping[str, Trajectory], path: Path | None = None) -> Figure:
+def figure_vertical(
+    trajectories: Mapping[str, Trajectory], path: Path | None = None, **_: Any
+) -> Figure:
     """Fig. 5: projection on the vertical plane (x, −z) [m]."""
     return _projection(
         trajectories, path, (0, 2), ("x [m]", "−z (height) [m]"), "Vertical projection"
@@ -210,17 +216,38 @@ def _time_axes(fig: Figure, rows: int) -> list[Axes]:
     return axes
 
 
-def figure_errors(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
-    """Fig. 6: path-following errors x_e, y_e, z_e (body frame, vehicle − virtual point) [m]."""
-    fig = _figure(_WIDTH, _HEIGHT + 1.5, _DPI)
-    axes = _time_axes(fig, 3)
+def figure_errors(
+    trajectories: Mapping[str, Trajectory], zoom_from: float | None = None, **_: Any
+) -> Figure:
+    """Fig. 6: path-following errors x_e, y_e, z_e (body frame, vehicle − virtual point) [m].
+
+    With ``zoom_from`` [s] inside the episodes, a right-hand column repeats the errors for
+    t ≥ zoom_from on their own scale, where the steady state would vanish under the transient.
+    """
+    t_end = max(float(tr.t[-1]) for tr in trajectories.values())
+    zoom = zoom_from is not None and zoom_from < t_end
+    fig = _figure(10.0 if zoom else _WIDTH, _HEIGHT + 1.5, _DPI)
     styles = _styles(list(trajectories))
-    for ax, key in zip(axes, ("x_e", "y_e", "z_e"), strict=True):
-        for name, tr in trajectories.items():
-            ax.plot(tr.t, tr[key], label=name, **styles[name])
-        ax.axhline(0.0, color="k", lw=0.6)
-        ax.set_ylabel(f"{key} [m]")
+    columns = 2 if zoom else 1
+    axes: list[Axes] = []
+    for row, key in enumerate(("x_e", "y_e", "z_e")):
+        for col in range(columns):
+            share = axes[col] if row else None
+            ax = fig.add_subplot(3, columns, row * columns + col + 1, sharex=share)
+            axes.append(ax)
+            for name, tr in trajectories.items():
+                mask = tr.t >= zoom_from if col == 1 else slice(None)
+                ax.plot(tr.t[mask], tr[key][mask], label=name, **styles[name])
+            ax.axhline(0.0, color="k", lw=0.6)
+            if col == 0:
+                ax.set_ylabel(f"{key} [m]")
+            if row < 2:
+                ax.tick_params(labelbottom=False)
+            else:
+                ax.set_xlabel("t [s]")
     axes[0].legend(fontsize=8)
+    if zoom:
+        axes[1].set_title(f"t ≥ {zoom_from:g} s", fontsize=9)
     _finish(fig, axes, "Path-following errors")
     return fig
 
@@ -377,6 +404,7 @@ def paper_figures(
     out_dir: str | os.PathLike,
     path: Path | None = None,
     dpi: int = _DPI,
+    zoom_from: float | None = None,
 ) -> dict[str, FilePath]:
     """Write the figures of `PAPER_FIGURES` as ``out_dir/<stem>.png``; return stem → file.
 
@@ -385,7 +413,10 @@ def paper_figures(
             for a comparison give every controller the same seed.
         out_dir: folder, created if missing.
         path: the desired path, for the reference curve (default: the virtual point's locus).
-        dpi: resolution; the figures are 7 in wide (1050 px at 150 dpi).
+        dpi: resolution; the figures are 7 in wide (1050 px at 150 dpi), the errors figure
+            10 in when zoomed.
+        zoom_from: start [s] of the zoomed steady-state column of the errors figure (None:
+            no zoom), e.g. the metrics' transient.
 
     The adaptive-norm figure is skipped when no trajectory has "norm_*" extras.
     """
@@ -394,7 +425,7 @@ def paper_figures(
     out = FilePath(out_dir)
     written = {}
     for stem, build in PAPER_FIGURES.items():
-        fig = build(trajectories, path=path)
+        fig = build(trajectories, path=path, zoom_from=zoom_from)
         if fig is not None:
             written[stem] = save_figure(fig, out / f"{stem}.png", dpi=dpi)
     return written

@@ -186,7 +186,7 @@ def make_figures(
         safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in label)
         tr.save(out / "trajectories" / f"{safe}.npz")
     path = make_path(env_kwargs.get("path", "helix"))
-    figures = paper_figures(trajectories, out, path=path, dpi=dpi)
+    figures = paper_figures(trajectories, out, path=path, dpi=dpi, zoom_from=window)
     noise = env_kwargs.get("disturbance", "paper")
     header = (
         f"# Paper scenario: {' vs '.join(policies)}\n\n"

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+import controllers
 from auv_gym import OBS_INDEX, AUVPath3DEnv
 from auv_gym.evaluation import (
     INTERVAL_FIELDS,
@@ -340,6 +341,15 @@ class _WrongShape:
 def test_rollouts_reject_bad_input(policy, seeds, kwargs, message):
     with pytest.raises(ValueError, match=message):
         rollouts(policy, seeds, max_time=0.1, **kwargs)
+
+
+@pytest.mark.parametrize("name", ["fbsm", "backstepping"])
+def test_paper_controllers_batched_equal_alone(name):
+    batched = rollouts(controllers.make(name), [0, 4, 7], max_time=10.0)
+    alone = rollout(controllers.make(name), 4, max_time=10.0)
+    for key in ("distance", "X", "M", "N", *alone.extras):
+        np.testing.assert_array_equal(batched[1][key], alone[key], err_msg=key)
+    assert not np.array_equal(batched[0]["distance"], batched[1]["distance"])
 
 
 @pytest.mark.rl

@@ -82,13 +82,13 @@ def episodes() -> dict[str, Trajectory]:
 
 
 def test_paper_figures_write_pngs_of_the_documented_size(episodes, tmp_path):
-    written = paper_figures(episodes, tmp_path, path=make_path("helix"), dpi=100)
+    written = paper_figures(episodes, tmp_path, path=make_path("helix"), dpi=100, zoom_from=10.0)
     assert list(written) == list(PAPER_FIGURES)
     expected_inches = {
         "fig3_path_3d": (7.0, 5.5),
         "fig4_horizontal": (7.0, 5.5),
         "fig5_vertical": (7.0, 5.5),
-        "fig6_errors": (7.0, 6.0),
+        "fig6_errors": (10.0, 6.0),  # with the zoomed column
         "fig7_surge": (7.0, 4.5),
         "fig8_attitude": (7.0, 5.5),
         "fig9_controls": (7.0, 6.0),
@@ -240,3 +240,35 @@ def test_cli_end_to_end(tmp_path):
         timeout=300,
     )
     assert bad.returncode != 0 and "--duration must be a positive" in bad.stderr
+
+
+def test_cli_with_the_paper_controllers(tmp_path):
+    out = tmp_path / "paper"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.paper_figures",
+            "--out",
+            str(out),
+            "--duration",
+            "8",
+            "--dpi",
+            "30",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "wrote 9 figures" in proc.stdout  # FBSM exposes its adaptive-parameter norms
+    assert "| metric | unit | FBSM | backstepping |" in (out / "metrics.md").read_text()
+    fbsm = Trajectory.load(out / "trajectories" / "FBSM.npz")
+    backstepping = Trajectory.load(out / "trajectories" / "backstepping.npz")
+    assert fbsm.steps == backstepping.steps == 160
+    assert {"theta_d", "psi_d_rel"} <= set(fbsm.extras) and any(
+        k.startswith("norm_") for k in fbsm.extras
+    )
+    np.testing.assert_array_equal(fbsm["f_u"], backstepping["f_u"])  # the same noise
+    assert np.abs(fbsm["f_u"]).max() <= 35.0 and np.abs(fbsm["f_u"]).max() > 5.0
