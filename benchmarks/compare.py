@@ -16,6 +16,7 @@ import argparse
 import csv
 import hashlib
 import importlib
+import io
 import json
 import math
 import os
@@ -23,7 +24,7 @@ import platform
 import sys
 import time
 import tomllib
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from multiprocessing import get_context
@@ -105,15 +106,9 @@ def check_policy_spec(spec: str) -> None:
             raise FileNotFoundError(f"policy {spec!r}: agent {agent} does not exist")
         return
     if ":" in spec:
-        module, _, attribute = spec.partition(":")
-        try:
-            obj = getattr(importlib.import_module(module), attribute)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(
-                f"policy {spec!r}: cannot import {attribute!r} from {module!r}: {exc}"
-            ) from exc
-        if not (hasattr(obj, "predict") or callable(obj)):
-            raise ValueError(f"policy {spec!r} is neither a Policy nor a factory of one")
+        from controllers import import_policy
+
+        import_policy(spec, instantiate=False)
         return
     raise ValueError(
         f"unknown policy {spec!r}; valid: {list(BUILTIN_POLICIES)}, "
@@ -130,9 +125,7 @@ def build_policy(spec: str, controller_kwargs: dict[str, Any], control_dt: float
     if spec == "ppo" or spec.startswith("ppo:"):
         agent = Path(spec[4:]) if spec.startswith("ppo:") else DEFAULT_AGENT
         return controllers.make("ppo", path=str(agent))
-    module, _, attribute = spec.partition(":")
-    obj = getattr(importlib.import_module(module), attribute)
-    return obj if hasattr(obj, "predict") else obj(**controller_kwargs)
+    return controllers.import_policy(spec, **controller_kwargs)
 
 
 @dataclass(frozen=True)
@@ -177,15 +170,11 @@ def _agent_digest(spec: str) -> str:
     return digest.hexdigest()[:16]
 
 
-def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
-    """Write through a temporary file in the same folder, then rename over the target."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+def write_text(path: Path, text: str) -> None:
+    """Write UTF-8 text atomically (`auv_gym.evaluation.write_atomic`)."""
+    from auv_gym.evaluation import write_atomic
+
+    write_atomic(path, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def finished(job: Job, out: Path) -> dict[str, Any] | None:
@@ -222,8 +211,8 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
         "trajectory": str(job.path(out).with_suffix(".npz").relative_to(out)),
     }
     base = job.path(out)
-    write_atomic(base.with_suffix(".npz"), lambda tmp: trajectory.save(tmp))
-    write_atomic(base.with_suffix(".json"), lambda tmp: tmp.write_text(json.dumps(record)))
+    trajectory.save(base.with_suffix(".npz"))  # atomic
+    write_text(base.with_suffix(".json"), json.dumps(record))
     return record
 
 
@@ -251,6 +240,8 @@ def run_jobs(
     """Run the jobs that are not finished yet; return the records of all jobs, in job order."""
     from tqdm.auto import tqdm
 
+    for stale in (out / "episodes").rglob(".*.tmp") if (out / "episodes").exists() else ():
+        stale.unlink(missing_ok=True)  # temporary files of a run killed mid-write
     records: dict[int, dict[str, Any]] = {}
     todo = []
     for index, job in enumerate(jobs):
@@ -323,25 +314,18 @@ def write_tables(records: list[dict[str, Any]], out: Path, config: dict[str, Any
     metric_names = sorted({k for r in records for k in r["metrics"]})
     header = ["scenario", "policy", "seed", *metric_names]
 
-    def write_csv(tmp: Path) -> None:
-        with open(tmp, "w", newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(header)
-            for r in records:
-                writer.writerow(
-                    [
-                        r["scenario"],
-                        r["policy"],
-                        r["seed"],
-                        *(r["metrics"].get(m) for m in metric_names),
-                    ]
-                )
-
-    write_atomic(out / "episodes.csv", write_csv)
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(header)
+    for r in records:
+        writer.writerow(
+            [r["scenario"], r["policy"], r["seed"], *(r["metrics"].get(m) for m in metric_names)]
+        )
+    write_text(out / "episodes.csv", buffer.getvalue())
     payload = {"config": config, "versions": versions(), "episodes": records}
-    write_atomic(out / "episodes.json", lambda tmp: tmp.write_text(json.dumps(payload, indent=1)))
+    write_text(out / "episodes.json", json.dumps(payload, indent=1))
     summary = summarise(records, config)
-    write_atomic(out / "summary.md", lambda tmp: tmp.write_text(summary))
+    write_text(out / "summary.md", summary)
     return summary
 
 

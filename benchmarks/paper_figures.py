@@ -22,7 +22,6 @@ metrics windows then start at min(100 s, duration/2).
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import os
@@ -121,14 +120,9 @@ def build_policies(names: Sequence[str], control_dt: float) -> dict[str, Any]:
     policies: dict[str, Any] = {}
     for spec in names:
         if ":" in spec:
-            module, _, attribute = spec.partition(":")
-            try:
-                obj = getattr(importlib.import_module(module), attribute)
-            except (ImportError, AttributeError) as exc:
-                raise ValueError(
-                    f"policy {spec!r}: cannot import {attribute!r} from {module!r}"
-                ) from exc
-            policy = obj() if isinstance(obj, type) or not hasattr(obj, "predict") else obj
+            from controllers import import_policy
+
+            policy = import_policy(spec)
             label = policy_name(policy)
         else:
             import controllers

@@ -6,6 +6,7 @@ evaluation code treats FBSM, backstepping, a PPO agent and a user's object alike
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 from controllers.backstepping import Backstepping
@@ -21,6 +22,7 @@ __all__ = [
     "ControllerGains",
     "MembershipSet",
     "Policy",
+    "import_policy",
     "make",
 ]
 
@@ -44,3 +46,25 @@ def make(name: str, **kwargs: Any) -> Any:
             raise ValueError("controllers.make('ppo') needs path=<saved agent directory>")
         return load_policy(kwargs.pop("path"), **kwargs)
     raise ValueError(f"unknown controller {name!r}; valid: {list(REGISTRY)}")
+
+
+def import_policy(spec: str, instantiate: bool = True, **factory_kwargs: Any) -> Any:
+    """The policy named ``"module:attribute"``: an object with ``predict`` is returned as is; a
+    class or factory is called with ``factory_kwargs``. ValueError names what cannot be imported.
+    With ``instantiate=False`` only the import and the kind of object are checked.
+    """
+    module, sep, attribute = spec.partition(":")
+    if not (sep and module and attribute):
+        raise ValueError(f"policy {spec!r} must have the form 'module:attribute'")
+    try:
+        obj = getattr(importlib.import_module(module), attribute)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(
+            f"policy {spec!r}: cannot import {attribute!r} from {module!r}: {exc}"
+        ) from exc
+    has_predict = hasattr(obj, "predict") and not isinstance(obj, type)
+    if not (has_predict or callable(obj)):
+        raise ValueError(f"policy {spec!r} is neither a Policy nor a factory of one")
+    if has_predict or not instantiate:
+        return obj
+    return obj(**factory_kwargs)
