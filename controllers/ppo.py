@@ -490,12 +490,7 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
         obs_names=np.array(OBS_NAMES),
     )  # fmt: skip
     write_json_atomic(tmp / METADATA_FILE, metadata)
-    old = folder.with_name(f".{folder.name}.old{os.getpid()}")
-    if folder.exists():
-        os.replace(folder, old)
-    os.replace(tmp, folder)
-    if old.exists():
-        shutil.rmtree(old)
+    _swap_folder(tmp, folder)
 
 
 def policy_from_model(model: Any, vec_normalize: Any) -> PPOPolicy:
@@ -768,6 +763,11 @@ def export_agent(source: Path, target: Path) -> None:
     tmp.mkdir()
     for name in (MODEL_FILE, STATS_FILE, METADATA_FILE):
         shutil.copy2(source / name, tmp / name)
+    _swap_folder(tmp, target)
+
+
+def _swap_folder(tmp: Path, target: Path) -> None:
+    """Put the complete folder ``tmp`` in place of ``target`` with renames only (atomic swap)."""
     old = target.with_name(f".{target.name}.old{os.getpid()}")
     if target.exists():
         os.replace(target, old)
