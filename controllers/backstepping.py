@@ -99,12 +99,11 @@ class Backstepping(BatchedController):
     def __init__(self, gains: ControllerGains | None = None, params: AUVParams | None = None,
                  control_dt: float = 0.05, actuator: str = "paper", threads: str = "auto",
                  **gain_overrides: float) -> None:  # fmt: skip
-        super().__init__(gains, params, control_dt, actuator, gain_overrides)
+        super().__init__(gains, params, control_dt, actuator, gain_overrides, threads)
         p = self.params
         self._p = p.to_vector()
         b = (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66)
         self._g = pack_gains(self.gains, self.control_dt, b, self._actuator)
-        self.threads = threads
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         return {"filter": np.zeros((n, FILTER_DIM)), "started": np.zeros(n, dtype=bool),

@@ -54,6 +54,7 @@ class BatchedController:
         control_dt: float,
         actuator: str,
         gain_overrides: dict[str, Any],
+        threads: str = "auto",
     ) -> None:
         if not (isinstance(control_dt, (int, float)) and math.isfinite(control_dt)):
             raise ValueError(f"control_dt must be a positive time in s, got {control_dt!r}")
@@ -62,6 +63,9 @@ class BatchedController:
         self.params = params if params is not None else remus100()
         if not isinstance(self.params, AUVParams):
             raise ValueError(f"params must be an AUVParams, got {type(self.params).__name__}")
+        if threads not in ("auto", "serial"):
+            raise ValueError(f"threads must be 'auto' or 'serial', got {threads!r}")
+        self.threads = threads
         self.control_dt = float(control_dt)
         self.actuator = actuator
         self._actuator = actuator_vector(actuator, self.params)

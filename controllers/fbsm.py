@@ -30,7 +30,7 @@ from numba import njit, prange
 from auv_gym.observation import OBS_INDEX
 from auv_gym.vehicle import AUVParams
 from controllers.base import BatchedController
-from controllers.fuzzy import N_RULES, adaptive_loop
+from controllers.fuzzy import N_RULES, WORK_DIM, adaptive_loop
 from controllers.gains import (
     B1,
     B5,
@@ -71,8 +71,7 @@ def moment_limits(u, g):
 
 
 @njit(cache=True)
-def _fbsm_row(o, g, theta_f, theta_b, theta_d, filt, started, action, diag, errors, xi, xi_b,
-              mu, v_in):  # fmt: skip
+def _fbsm_row(o, g, theta_f, theta_b, theta_d, filt, started, action, diag, errors, work, v_in):
     loop_errors(o, g, filt, started, errors)
     S2, dz1, da1, S3, dz3, da2 = errors[2], errors[3], errors[4], errors[7], errors[8], errors[9]
     u = o[_U]
@@ -81,25 +80,21 @@ def _fbsm_row(o, g, theta_f, theta_b, theta_d, filt, started, action, diag, erro
     S1 = u - o[_UD]
     h1, h2, h3 = g[H1] + g[LAM1], g[H2] + g[LAM2], g[H3] + g[LAM3]
     action[0] = adaptive_loop(0, v_in, S1, -h1 * S1, g[X_MAX], g[B1], theta_f[0], theta_b[0],
-                              theta_d[0], g, xi, xi_b, mu, diag[0:3])  # fmt: skip
-    action[1] = adaptive_loop(1, v_in, S2, -g[C1] * dz1 + da1 - h2 * S2,
-                              m_max, g[B5], theta_f[1], theta_b[1], theta_d[1], g, xi, xi_b, mu,
-                              diag[3:6])  # fmt: skip
-    action[2] = adaptive_loop(2, v_in, S3, -g[C2] * dz3 + da2 - h3 * S3,
-                              n_max, g[B6], theta_f[2], theta_b[2], theta_d[2], g, xi, xi_b, mu,
-                              diag[6:9])  # fmt: skip
+                              theta_d[0], g, work, diag[0:3])  # fmt: skip
+    action[1] = adaptive_loop(1, v_in, S2, -g[C1] * dz1 + da1 - h2 * S2, m_max, g[B5],
+                              theta_f[1], theta_b[1], theta_d[1], g, work, diag[3:6])  # fmt: skip
+    action[2] = adaptive_loop(2, v_in, S3, -g[C2] * dz3 + da2 - h3 * S3, n_max, g[B6],
+                              theta_f[2], theta_b[2], theta_d[2], g, work, diag[6:9])  # fmt: skip
     diag[9], diag[10] = errors[10], errors[11]
 
 
 def _fbsm_rows(obs, g, theta_f, theta_b, theta_d, filt, started, actions, diag):
     for i in prange(obs.shape[0]):
         errors = np.empty(LOOP_DIM)
-        xi = np.empty(N_RULES)
-        xi_b = np.empty(N_RULES)
-        mu = np.empty((5, 5))
+        work = np.empty(WORK_DIM)
         v_in = np.empty(5)
         _fbsm_row(obs[i], g, theta_f[i], theta_b[i], theta_d[i], filt[i], started[i], actions[i],
-                  diag[i], errors, xi, xi_b, mu, v_in)  # fmt: skip
+                  diag[i], errors, work, v_in)  # fmt: skip
         started[i] = True
 
 
@@ -116,7 +111,7 @@ class FBSM(BatchedController):
             initialise and bound b̂ (MODEL.md §4.6), never the true perturbed vehicle.
         control_dt: control period [s], the Euler step of the adaptive laws and filter.
         actuator: "paper" or "fins" — how τ is normalised into actions.
-        threads: "auto" runs batches of ≥ 64 vehicles on numba's threads.
+        threads: "auto" runs batches of ≥ 64 vehicles on numba's threads, "serial" never.
 
     State (dict of arrays, leading vehicle axis): theta_f, theta_b (n, 3, 3125), theta_d
     (n, 3, 3), filter (n, 6), started (n,), diag (n, 11).
@@ -127,11 +122,10 @@ class FBSM(BatchedController):
     def __init__(self, gains: ControllerGains | None = None, params: AUVParams | None = None,
                  control_dt: float = 0.05, actuator: str = "paper", threads: str = "auto",
                  **gain_overrides: float) -> None:  # fmt: skip
-        super().__init__(gains, params, control_dt, actuator, gain_overrides)
+        super().__init__(gains, params, control_dt, actuator, gain_overrides, threads)
         p = self.params
         self.b_nominal = (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66)
         self._g = pack_gains(self.gains, self.control_dt, self.b_nominal, self._actuator)
-        self.threads = threads
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         theta_b = np.empty((n, 3, N_RULES))

@@ -24,7 +24,7 @@ from numba import njit
 
 from controllers.gains import ALPHA_B, ALPHA_D, ALPHA_F, DT, MF1, SEPARATE_B, SIGMA_LEAK
 
-__all__ = ["N_RULES", "adaptive_loop", "fuzzy_basis", "memberships"]
+__all__ = ["N_RULES", "WORK_DIM", "adaptive_loop", "basis_factors", "fuzzy_basis", "memberships"]
 
 N_INPUTS = 5
 N_SETS = 5
@@ -48,20 +48,20 @@ def memberships(x, centre0, spacing, width, out):
 
 
 @njit(cache=True, inline="always")
-def kronecker5(mu, xi):
-    """ξ = μ_1 ⊗ μ_2 ⊗ μ_3 ⊗ μ_4 ⊗ μ_5 (rule index j1·5⁴ + … + j5), by partial products."""
-    idx = 0
+def basis_factors(mu, ab, cde):
+    """The two factors of ξ = ab ⊗ cde: ab = μ_1 ⊗ μ_2 (25), cde = μ_3 ⊗ μ_4 ⊗ μ_5 (125).
+
+    Rule l = (j1, …, j5) has index 5⁴j1 + 5³j2 + 5²j3 + 5j4 + j5 = 125·(5j1 + j2) + (25j3 + 5j4
+    + j5), so ξ_l = ab[5j1 + j2]·cde[25j3 + 5j4 + j5] — the order of `fuzzy_basis` and np.kron.
+    """
     for a in range(N_SETS):
-        pa = mu[0, a]
         for b in range(N_SETS):
-            pb = pa * mu[1, b]
-            for c in range(N_SETS):
-                pc = pb * mu[2, c]
-                for d in range(N_SETS):
-                    pd = pc * mu[3, d]
-                    for e in range(N_SETS):
-                        xi[idx] = pd * mu[4, e]
-                        idx += 1
+            ab[a * N_SETS + b] = mu[0, a] * mu[1, b]
+    for c in range(N_SETS):
+        for d in range(N_SETS):
+            cd = mu[2, c] * mu[3, d]
+            for e in range(N_SETS):
+                cde[(c * N_SETS + d) * N_SETS + e] = cd * mu[4, e]
 
 
 def fuzzy_basis(v: np.ndarray, p: float, q_mf: float, sigma: float) -> np.ndarray:
@@ -96,29 +96,54 @@ def _dot(a, b):
     return (s0 + s1) + (s2 + s3)
 
 
+# Scratch layout of one loop evaluation (`WORK_DIM` floats): μ (5×5), then per basis (f̂, b̂)
+# the factors ab (25) and cde (125) and the partial sums acc (125).
+_N_AB, _N_CDE = N_SETS**2, N_SETS**3
+_AB = N_SETS * N_SETS  # μ occupies work[:_AB]
+_CDE = _AB + 2 * _N_AB
+_ACC = _CDE + 2 * _N_CDE
+WORK_DIM = _ACC + 2 * _N_CDE
+
+
 @njit(cache=True)
-def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta_d, g, xi,
-                  xi_b, mu, diag):  # fmt: skip
+def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta_d, g, work,
+                  diag):  # fmt: skip
     """One FBSM loop (29)–(30): τ = (−f̂ − d̂(S) + rest)/b̂, saturated; adapts; returns τ/limit.
 
     ``rest`` is the model-free part of the law (e.g. −c1ż1 + α̇1 − (h + λ)S for pitch),
-    ``limit`` the actuator limit of this input (≤ 0 means no authority: full saturation).
-    ``diag`` receives (f̂, b̂, d̂).
+    ``limit`` the actuator limit of this input (≤ 0 means no authority: full saturation),
+    ``work`` a scratch vector of `WORK_DIM` floats. ``diag`` receives (f̂, b̂, d̂).
+
+    ξ = ab ⊗ cde is never materialised: with θ viewed as a 25 × 125 matrix,
+    f̂ = Σ_j cde_j Σ_i ab_i θ_ij (25 vectorised row passes, then one 125-term sum), and the
+    update θ_ij += (step·ab_i)·cde_j streams each row once. Every sum has a fixed order, so a
+    vehicle's result does not depend on the batch it is computed in.
     """
     base = MF1 + 5 * loop
     centre0, spacing, sigma = g[base], g[base + 1], g[base + 2]
     sigma_b, sigma_d = g[base + 3], g[base + 4]
+    mu = work[:_AB].reshape((N_SETS, N_SETS))
+    ab, ab_b = work[_AB : _AB + _N_AB], work[_AB + _N_AB : _CDE]
+    cde, cde_b = work[_CDE : _CDE + _N_CDE], work[_CDE + _N_CDE : _ACC]
+    acc_f, acc_b = work[_ACC : _ACC + _N_CDE], work[_ACC + _N_CDE : WORK_DIM]
     for i in range(N_INPUTS):
         memberships(v_in[i], centre0, spacing, sigma, mu[i])
-    kronecker5(mu, xi)
-    separate = g[SEPARATE_B] > 0.0
-    if separate:
+    basis_factors(mu, ab, cde)
+    if g[SEPARATE_B] > 0.0:
         for i in range(N_INPUTS):
             memberships(v_in[i], centre0, spacing, sigma_b, mu[i])
-        kronecker5(mu, xi_b)
-    basis_b = xi_b if separate else xi
-    f_hat = _dot(theta_f, xi)
-    b_hat = _dot(theta_b, basis_b)
+        basis_factors(mu, ab_b, cde_b)
+    else:  # b̂ shares f̂'s basis (σ_b = σ, MODEL.md §4.6)
+        ab_b, cde_b = ab, cde
+    acc_f[:] = 0.0
+    acc_b[:] = 0.0
+    for i in range(_N_AB):
+        w_f, w_b, row = ab[i], ab_b[i], i * _N_CDE
+        for j in range(_N_CDE):
+            acc_f[j] += w_f * theta_f[row + j]
+            acc_b[j] += w_b * theta_b[row + j]
+    f_hat = _dot(cde, acc_f)
+    b_hat = _dot(cde_b, acc_b)
     e0 = -(((S + sigma_d) / sigma_d) ** 2)
     e1 = -((S / sigma_d) ** 2)
     e2 = -(((S - sigma_d) / sigma_d) ** 2)
@@ -141,18 +166,20 @@ def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta
         step_b = dt * g[ALPHA_B] * S * tau_applied
         gain_d = dt * g[ALPHA_D]
         low, high = 0.5 * b_nominal, 2.0 * b_nominal
-        if leak == 0.0:  # the paper's laws; simple loops that the compiler vectorises
-            for rule in range(N_RULES):
-                theta_f[rule] += step_f * xi[rule]
-            for rule in range(N_RULES):
-                theta_b[rule] = min(max(theta_b[rule] + step_b * basis_b[rule], low), high)
-        else:
-            leak_f, leak_b = dt * g[ALPHA_F] * leak, dt * g[ALPHA_B] * leak
-            for rule in range(N_RULES):
-                theta_f[rule] += step_f * xi[rule] - leak_f * theta_f[rule]
-                updated = theta_b[rule] + step_b * basis_b[rule]
-                updated -= leak_b * (theta_b[rule] - b_nominal)
-                theta_b[rule] = min(max(updated, low), high)  # projection
+        leak_f, leak_b = dt * g[ALPHA_F] * leak, dt * g[ALPHA_B] * leak
+        for i in range(_N_AB):
+            s_f, s_b, row = step_f * ab[i], step_b * ab_b[i], i * _N_CDE
+            if leak == 0.0:  # the paper's laws; simple loops that the compiler vectorises
+                for j in range(_N_CDE):
+                    theta_f[row + j] += s_f * cde[j]
+                for j in range(_N_CDE):  # projection into [0.5, 2]·b_n
+                    theta_b[row + j] = min(max(theta_b[row + j] + s_b * cde_b[j], low), high)
+            else:
+                for j in range(_N_CDE):
+                    k = row + j
+                    theta_f[k] += s_f * cde[j] - leak_f * theta_f[k]
+                    updated = theta_b[k] + s_b * cde_b[j] - leak_b * (theta_b[k] - b_nominal)
+                    theta_b[k] = min(max(updated, low), high)
         theta_d[0] += gain_d * (S * e0 - leak * theta_d[0])
         theta_d[1] += gain_d * (S * e1 - leak * theta_d[1])
         theta_d[2] += gain_d * (S * e2 - leak * theta_d[2])

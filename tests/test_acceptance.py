@@ -1,7 +1,10 @@
 """MODEL.md §8 acceptance checks 3, 4, 6, 7, 8, 9 (and 10 for the controllers).
 
-Run at the env's default control period (0.05 s) and at the physics step (0.01 s). Thresholds
-are MODEL.md's; the values measured here are quoted in the README and the issue notes.
+Run at the env's default control period (0.05 s) and at the physics step (0.01 s), with the noise
+held for 0.01 s in both (MODEL.md §10.1). Thresholds are MODEL.md's. Measured at both periods
+(FBSM, 300 s): noise-free overshoot 0.004 m/s, distance < 0.5 m from 31 s, final 0.017 m;
+±35 noise RMS y_e 0.03–0.06 m against 0.22–0.43 m for backstepping; +30 % model error: backstepping
+0.12 m, FBSM 0.017 m; printed u_p law 17.7 m, printed pitch LOS 379 m at 300 s.
 """
 
 from __future__ import annotations
@@ -78,35 +81,36 @@ def test_check7_model_error_hurts_backstepping_not_fbsm(dt):
     assert rms(window(fbsm, "y_e", 200, 300)) <= 0.05
 
 
-def test_check8_bounded_and_safe_over_1000_s():
-    """One 1000-s noisy run at the default period (the longest check; 0.01 s adds nothing new)."""
-    policy = controllers.make("fbsm")
-    obs_state = {}
+@pytest.mark.parametrize("dt", PERIODS)
+def test_check8_bounded_and_safe_over_1000_s(dt):
+    """One 1000-s noisy run: finite, b̂ in its projection bounds, |θ| ≤ θ_max + 5°, commands
+    within their limits, every adaptive weight ≤ 10 (MODEL.md §8.8)."""
+    policy = controllers.make("fbsm", control_dt=dt)
+    b_nominal = np.asarray(policy.b_nominal)[None, :, None]
+    peaks = {"theta_f": 0.0, "theta_d": 0.0, "b_low": np.inf, "b_high": 0.0}
 
     class Recorder:
         name = "fbsm"
 
         def predict(self, observation, state=None, episode_start=None, deterministic=True):
             action, state = policy.predict(observation, state, episode_start, deterministic)
-            obs_state["state"] = state
-            obs_state["max_theta_f"] = max(obs_state.get("max_theta_f", 0.0),
-                                           float(np.abs(state["theta_f"]).max()))  # fmt: skip
-            obs_state["max_theta_d"] = max(obs_state.get("max_theta_d", 0.0),
-                                           float(np.abs(state["theta_d"]).max()))  # fmt: skip
-            low = np.asarray(policy.b_nominal)[None, :, None] * 0.5
-            assert np.all(state["theta_b"] >= low - 1e-12)
-            assert np.all(state["theta_b"] <= 4 * low + 1e-12)
+            for key in ("theta_f", "theta_d"):
+                peaks[key] = max(peaks[key], float(np.abs(state[key]).max()))
+            ratio = state["theta_b"] / b_nominal
+            peaks["b_low"] = min(peaks["b_low"], float(ratio.min()))
+            peaks["b_high"] = max(peaks["b_high"], float(ratio.max()))
             return action, state
 
-    (tr,) = rollouts(Recorder(), [7], max_time=1000.0, disturbance="paper")
+    (tr,) = rollouts(Recorder(), [7], control_dt=dt, max_time=1000.0, disturbance="paper")
     assert tr.termination_reason == "time_limit" and tr.t[-1] == pytest.approx(1000.0)
     assert all(np.isfinite(tr[k]).all() for k in ("x", "u", "theta", "X", "M", "N"))
+    assert peaks["b_low"] >= 0.5 - 1e-12 and peaks["b_high"] <= 2.0 + 1e-12
     assert np.degrees(np.abs(tr["theta"])).max() <= 40.0 + 5.0
     assert np.abs(tr.actions).max() <= 1.0
     assert np.all(np.abs(tr["X"]) <= 50.0 + 1e-9)
     assert np.all(np.abs(tr["M"]) <= 10.0 + 1e-9) and np.all(np.abs(tr["N"]) <= 10.0 + 1e-9)
-    assert obs_state["max_theta_f"] <= 10.0
-    assert obs_state["max_theta_d"] <= 10.0
+    assert peaks["theta_f"] <= 10.0
+    assert peaks["theta_d"] <= 10.0
     assert rms(window(tr, "y_e", 800, 1000)) <= 0.15  # still following at the end
 
 
@@ -127,8 +131,17 @@ def test_check9_printed_pitch_los_fails(dt):
 def test_check10_same_seed_bit_identical(name):
     first = run(name, 0.05, (3,), 60.0, disturbance="paper")[0]
     second = rollouts(controllers.make(name), [3], max_time=60.0, disturbance="paper")[0]
+    other = rollouts(controllers.make(name), [4], max_time=60.0, disturbance="paper")[0]
     for key in ("x", "y", "z", "u", "X", "M", "N", "distance"):
         np.testing.assert_array_equal(first[key], second[key])
+    assert not np.array_equal(first["y"], other["y"])  # the noise does depend on the seed
+
+
+@pytest.mark.parametrize("name", ["fbsm", "backstepping"])
+def test_check10_noise_free_runs_do_not_depend_on_the_seed(name):
+    runs = rollouts(controllers.make(name), [0, 11], max_time=60.0, disturbance="none")
+    for key in ("x", "y", "z", "u", "X", "M", "N", "distance"):
+        np.testing.assert_array_equal(runs[0][key], runs[1][key])
 
 
 def test_check8_sigma_leakage_keeps_the_disturbance_weights_stationary():

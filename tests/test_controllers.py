@@ -12,7 +12,7 @@ import controllers
 from auv_gym import OBS_INDEX, OBS_NAMES
 from auv_gym.observation import OBS_DIM
 from controllers.base import Policy
-from controllers.fuzzy import N_RULES, fuzzy_basis
+from controllers.fuzzy import N_RULES, WORK_DIM, adaptive_loop, fuzzy_basis
 from controllers.gains import ControllerGains, pack_gains
 from controllers.los import LOOP_DIM, loop_errors
 
@@ -108,6 +108,56 @@ def test_fuzzy_basis_is_a_normalised_product_of_memberships():
     assert np.isfinite(far).all() and far[0, -1] == pytest.approx(1.0)
 
 
+def d_basis(S, sigma_d):
+    """ξ_d(S): three normalised Gaussians of width σ_d centred at −σ_d, 0, σ_d (MODEL.md §4.5)."""
+    mu = np.exp(-(((S - sigma_d * np.array([-1.0, 0.0, 1.0])) / sigma_d) ** 2))
+    return mu / mu.sum()
+
+
+@pytest.mark.parametrize("leak", [0.0, 0.05])
+@pytest.mark.parametrize("separate", [False, True])
+def test_fuzzy_kernel_matches_the_reference_basis_and_adaptive_laws(leak, separate):
+    """The compiled loop: f̂ = θ_fᵀξ, b̂ = θ_bᵀξ_b, d̂ = θ_dᵀξ_d(S), τ = (−f̂ − d̂ + rest)/b̂, and
+    one Euler step of (30) with leakage and projection; frozen while saturated (anti-windup)."""
+    gains = ControllerGains(sigma_leak=leak, separate_b_basis=separate)
+    b_n, dt, limit = 0.12, 0.05, 10.0
+    g = pack_gains(gains, dt, (0.03, b_n, b_n), (0.0, 1.0, 50.0, limit, limit))
+    mf = gains.pitch_mf
+    rng = np.random.default_rng(3)
+    v_in = np.array([0.9, 0.05, -0.04, 0.1, -0.08])
+    theta_f = 0.1 * rng.standard_normal(N_RULES)
+    theta_b = b_n * rng.uniform(0.5, 2.0, N_RULES)
+    theta_b[:5], theta_b[5:10] = 0.5 * b_n, 2.0 * b_n  # entries on the projection bounds
+    theta_d = rng.standard_normal(3)
+    xi = fuzzy_basis(v_in, mf.p, mf.q_mf, mf.sigma)[0]
+    xi_b = fuzzy_basis(v_in, mf.p, mf.q_mf, mf.sigma_b)[0] if separate else xi
+    S, rest = 0.2, 0.3
+    xi_d = d_basis(S, mf.sigma_d)
+    f_hat, b_hat, d_hat = theta_f @ xi, theta_b @ xi_b, theta_d @ xi_d
+    tau = (-f_hat - d_hat + rest) / b_hat
+    assert abs(tau) < limit
+
+    new_f, new_b, new_d, diag = theta_f.copy(), theta_b.copy(), theta_d.copy(), np.empty(3)
+    action = adaptive_loop(1, v_in, S, rest, limit, b_n, new_f, new_b, new_d, g,
+                           np.empty(WORK_DIM), diag)  # fmt: skip
+    np.testing.assert_allclose(diag, [f_hat, b_hat, d_hat], rtol=1e-12)
+    assert action == pytest.approx(tau / limit, rel=1e-12)
+    a_f, a_b, a_d = gains.alpha_f, gains.alpha_b, gains.alpha_d
+    np.testing.assert_allclose(new_f, theta_f + dt * a_f * (S * xi - leak * theta_f),
+                               rtol=1e-12, atol=1e-15)  # fmt: skip
+    expected_b = theta_b + dt * a_b * (S * xi_b * tau - leak * (theta_b - b_n))
+    np.testing.assert_allclose(new_b, np.clip(expected_b, 0.5 * b_n, 2.0 * b_n), rtol=1e-12)
+    np.testing.assert_allclose(new_d, theta_d + dt * a_d * (S * xi_d - leak * theta_d), rtol=1e-12)
+
+    frozen_f, frozen_b, frozen_d = theta_f.copy(), theta_b.copy(), theta_d.copy()
+    action = adaptive_loop(1, v_in, S, 1e3, limit, b_n, frozen_f, frozen_b, frozen_d, g,
+                           np.empty(WORK_DIM), diag)  # fmt: skip
+    assert action == 1.0  # saturated: no adaptation
+    np.testing.assert_array_equal(frozen_f, theta_f)
+    np.testing.assert_array_equal(frozen_b, theta_b)
+    np.testing.assert_array_equal(frozen_d, theta_d)
+
+
 def test_yaw_error_decays_at_k2_plus_c2_over_cos_theta_on_the_surface():
     """MODEL.md §10.6: with S3 = 0, ż3 = −(k2 + c2/cosθ) z3 (the 1/cosθ correction)."""
     gains = ControllerGains()
@@ -175,7 +225,7 @@ def test_fins_actuator_normalises_by_speed_dependent_authority():
     ("kwargs", "error"),
     [({"control_dt": -0.05}, "control_dt"), ({"actuator": "jets"}, "actuator"),
      ({"k1": -1.0}, "k1"), ({"bogus_gain": 1.0}, "unknown controller gains"),
-     ({"params": "remus"}, "AUVParams")],
+     ({"params": "remus"}, "AUVParams"), ({"threads": 2}, "threads")],
 )  # fmt: skip
 def test_bad_configuration_raises(kwargs, error):
     with pytest.raises(ValueError, match=error):
