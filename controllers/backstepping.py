@@ -7,9 +7,13 @@ including the surge Coriolis terms when the model has them, MODEL.md §10.3):
     M = I55 (−f5 + α̇1 − z1 − k_q z2),              k_q = c1 + h2 + λ2
     N = I66 (−f6 + α̇2 − z3/cosθ − k_r z4),         k_r = c2 + h3 + λ3
 
-Notes: with V = ½(S1² + z1² + z2² + z3² + z4²) and an exact model, V̇ = −k_u S1² − k1 z1²
-− k_q z2² − k2 z3²/… − k_r z4² < 0. A mis-specified model (e.g. coefficients × 1.3) leaves
-the f_n error uncompensated: a steady offset, which is what MODEL.md §8 check 7 measures.
+(u̇_D = 0: the env's u_D is constant over an episode.)
+
+Notes: with an exact model the closed loop is ż1 = z2 − k1 z1, ż2 = −z1 − k_q z2,
+ż3 = z4/cosθ − k2 z3, ż4 = −z3/cosθ − k_r z4, so V = ½(S1² + z1² + z2² + z3² + z4²) has
+V̇ = −k_u S1² − k1 z1² − k_q z2² − k2 z3² − k_r z4² (the cross terms cancel).
+A mis-specified model (e.g. coefficients × 1.3) leaves the f_n error uncompensated: a steady
+offset, which is what MODEL.md §8 check 7 measures.
 """
 
 from __future__ import annotations

@@ -88,7 +88,12 @@ class BatchedController:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Actions in [−1, 1] for a batch (n, 15) or one (15,) observation; see module doc."""
+        """Actions in [−1, 1] for a batch (n, 15) or one (15,) observation; see module doc.
+
+        The returned ``state`` is the one passed in, updated in place (copying the FBSM's
+        150 kB of adaptive weights per vehicle every step would cost more than the control law);
+        ``state=None`` starts fresh memory for every row.
+        """
         obs = np.asarray(observation, dtype=np.float64)
         single = obs.ndim == 1
         obs = np.ascontiguousarray(obs[None] if single else obs)

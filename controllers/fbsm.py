@@ -2,7 +2,7 @@ r"""Fuzzy backstepping sliding-mode controller (FBSM) of Liang et al. (2018), MO
 
 Surge (31)–(34), first order, S1 = u − u_D:
 
-    X = (1/b̂1) [ −f̂1(v) − d̂1(S1) + u̇_D − (h1 + λ1) S1 ]
+    X = (1/b̂1) [ −f̂1(v) − d̂1(S1) + u̇_D − (h1 + λ1) S1 ]      (u̇_D = 0: u_D is constant)
 
 Pitch (35)–(39), with z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α1, S2 = c1 z1 + z2:
 

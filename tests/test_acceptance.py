@@ -114,6 +114,17 @@ def test_check8_bounded_and_safe_over_1000_s(dt):
     assert rms(window(tr, "y_e", 800, 1000)) <= 0.15  # still following at the end
 
 
+@pytest.mark.parametrize("name", ["fbsm", "backstepping"])
+def test_fin_limited_actuator_still_converges_without_noise(name):
+    """MODEL.md §2.3 "realistic mode": |M|, |N| ≤ 6.15·u²·π/6; prototype: < 0.5 m from 41 s."""
+    (tr,) = rollouts(controllers.make(name, actuator="fins"), [0], actuator="fins",
+                     disturbance="none")  # fmt: skip
+    assert tr.termination_reason == "time_limit"
+    assert window(tr, "distance", 80.0).max() < 0.5
+    assert window(tr, "distance", 150.0).max() < 0.1
+    assert tr["u"].max() - 1.0 <= 0.02
+
+
 @pytest.mark.parametrize("dt", PERIODS)
 def test_check9_printed_virtual_point_law_fails(dt):
     (tr,) = run("fbsm", dt, disturbance="none", virtual_point_law="printed")
