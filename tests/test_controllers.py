@@ -243,3 +243,11 @@ def test_bad_observations_and_names_raise():
         policy.predict(observations(3), state)
     with pytest.raises(ValueError, match="unknown controller 'lqr'"):
         controllers.make("lqr")
+
+
+def test_speed_benchmark_runs_in_closed_loop():
+    from benchmarks.speed_controllers import closed_loop, episode_wall_time
+
+    out = closed_loop("fbsm", n=3, steps=4, threads=1, warmup=2)
+    assert out["rate"] > 0.0 and 0.0 <= out["saturated"] <= 1.0
+    assert 0.0 < episode_wall_time("backstepping") < 60.0
