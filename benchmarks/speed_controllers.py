@@ -31,21 +31,25 @@ def closed_loop(name: str, n: int, steps: int, threads: int, warmup: int = 100) 
     Returns vehicle-control-steps/s of the controller alone and the fraction of saturated
     action entries in the timed steps (a saturated FBSM loop skips its adaptive update).
     """
-    numba.set_num_threads(threads)
     sim = Simulator(SimConfig.from_kwargs(disturbance="paper"), n, parallel=threads > 1)
     for i in range(n):
         sim.reset_row(i, np.random.default_rng(i))
     policy = controllers.make(name, threads="auto" if threads > 1 else "serial")
     state, start, elapsed, saturated = None, np.ones(n, dtype=bool), 0.0, 0
-    for k in range(warmup + steps):
-        obs = sim.obs.astype(np.float32)
-        tic = time.perf_counter()
-        actions, state = policy.predict(obs, state, start)
-        if k >= warmup:
-            elapsed += time.perf_counter() - tic
-            saturated += int((np.abs(actions) >= 1.0).sum())
-        start[:] = False
-        sim.step(actions)
+    previous = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        for k in range(warmup + steps):
+            obs = sim.obs.astype(np.float32)
+            tic = time.perf_counter()
+            actions, state = policy.predict(obs, state, start)
+            if k >= warmup:
+                elapsed += time.perf_counter() - tic
+                saturated += int((np.abs(actions) >= 1.0).sum())
+            start[:] = False
+            sim.step(actions)
+    finally:
+        numba.set_num_threads(previous)
     return {"rate": n * steps / elapsed, "saturated": saturated / (3 * n * steps)}
 
 
@@ -55,20 +59,24 @@ def episode_wall_time(name: str = "fbsm") -> float:
 
     import auv_gym  # noqa: F401
 
-    numba.set_num_threads(1)
     env = gym.make("AUVPath3D-v0")
     policy = controllers.make(name)
     obs, _ = env.reset(seed=0)
     policy.predict(obs)
-    start = time.perf_counter()
-    obs, _ = env.reset(seed=0)
-    state, done, start_flag = None, False, np.array([True])
-    while not done:
-        action, state = policy.predict(obs, state, start_flag)
-        start_flag = np.array([False])
-        obs, _, terminated, truncated, _ = env.step(action)
-        done = terminated or truncated
-    return time.perf_counter() - start
+    previous = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        start = time.perf_counter()
+        obs, _ = env.reset(seed=0)
+        state, done, start_flag = None, False, np.array([True])
+        while not done:
+            action, state = policy.predict(obs, state, start_flag)
+            start_flag = np.array([False])
+            obs, _, terminated, truncated, _ = env.step(action)
+            done = terminated or truncated
+        return time.perf_counter() - start
+    finally:
+        numba.set_num_threads(previous)
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
