@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import hashlib
 import importlib
 import io
@@ -143,7 +144,8 @@ class Job:
         return {**self.scenario.env, "max_time": self.duration}
 
     def fingerprint(self) -> str:
-        """Hash of everything that determines the episode (and the agent file, if any)."""
+        """Hash of everything that determines the episode: the job, the agent file if any, and
+        the source code of `auv_gym` and `controllers`."""
         payload = {
             "policy": self.policy,
             "scenario": asdict(self.scenario),
@@ -151,6 +153,7 @@ class Job:
             "duration": self.duration,
             "transient": self.transient,
             "agent": _agent_digest(self.policy),
+            "code": code_digest(),
         }
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
@@ -158,6 +161,21 @@ class Job:
         return (
             out / "episodes" / self.scenario.name / policy_label(self.policy) / f"seed_{self.seed}"
         )
+
+
+@functools.cache
+def code_digest() -> str:
+    """Hash of the simulator and controller sources: a code change invalidates cached episodes."""
+    import auv_gym
+    import controllers
+
+    digest = hashlib.sha256()
+    for package in (auv_gym, controllers):
+        root = Path(package.__file__).parent
+        for file in sorted(root.rglob("*.py")):
+            digest.update(file.relative_to(root.parent).as_posix().encode())
+            digest.update(file.read_bytes())
+    return digest.hexdigest()[:16]
 
 
 def _agent_digest(spec: str) -> str:
