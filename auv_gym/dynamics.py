@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from auv_gym.disturbances import standard_normal, uniform01
 from auv_gym.guidance import (
@@ -59,22 +59,51 @@ def state_derivative(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma):
     return (dx + cx, dy + cy, dz + cz, dth, dps, du, dv, dw, dq, dr, s_dot)
 
 
+@njit(cache=True, inline="always")
+def _stage(st, h, k):
+    """st + h·k for 11-tuples (stays in registers: no array per RK4 stage)."""
+    return (
+        st[0] + h * k[0], st[1] + h * k[1], st[2] + h * k[2], st[3] + h * k[3],
+        st[4] + h * k[4], st[5] + h * k[5], st[6] + h * k[6], st[7] + h * k[7],
+        st[8] + h * k[8], st[9] + h * k[9], st[10] + h * k[10],
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _rk4_combine(st, h, k1, k2, k3, k4):
+    """st + h·(k1 + 2 k2 + 2 k3 + k4) for 11-tuples, with h = dt/6."""
+    return _stage(st, h, (
+        k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0], k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1],
+        k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2], k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3],
+        k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4], k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5],
+        k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6], k1[7] + 2.0 * k2[7] + 2.0 * k3[7] + k4[7],
+        k1[8] + 2.0 * k2[8] + 2.0 * k3[8] + k4[8], k1[9] + 2.0 * k2[9] + 2.0 * k3[9] + k4[9],
+        k1[10] + 2.0 * k2[10] + 2.0 * k3[10] + k4[10],
+    ))  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def rk4_tuple(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma, dt):
+    """One classical RK4 step of `state_derivative` on an 11-tuple, τ, f and current held."""
+    k1 = state_derivative(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
+    k2 = state_derivative(_stage(st, 0.5 * dt, k1), X, M, N, f, cx, cy, cz, p, kind, pdata,
+                          u_d, sigma)  # fmt: skip
+    k3 = state_derivative(_stage(st, 0.5 * dt, k2), X, M, N, f, cx, cy, cz, p, kind, pdata,
+                          u_d, sigma)  # fmt: skip
+    k4 = state_derivative(_stage(st, dt, k3), X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
+    return _rk4_combine(st, dt / 6.0, k1, k2, k3, k4)
+
+
 @njit(cache=True)
 def rk4_step(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma, dt, out):
-    """One classical RK4 step of `state_derivative` with τ, f and current held over dt [s]."""
-    k1 = state_derivative(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
-    tmp = np.empty(STATE_DIM)
+    """One classical RK4 step of `state_derivative` with τ, f and current held over dt [s].
+
+    Array form of `rk4_tuple`: reads the 11-state ``st``, writes the new state into ``out``.
+    """
+    nxt = rk4_tuple(to_fixed_tuple(st, STATE_DIM), X, M, N, f, cx, cy, cz, p, kind, pdata,
+                    u_d, sigma, dt)  # fmt: skip
     for i in range(STATE_DIM):
-        tmp[i] = st[i] + 0.5 * dt * k1[i]
-    k2 = state_derivative(tmp, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
-    for i in range(STATE_DIM):
-        tmp[i] = st[i] + 0.5 * dt * k2[i]
-    k3 = state_derivative(tmp, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
-    for i in range(STATE_DIM):
-        tmp[i] = st[i] + dt * k3[i]
-    k4 = state_derivative(tmp, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
-    for i in range(STATE_DIM):
-        out[i] = st[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        out[i] = nxt[i]
 
 
 @njit(cache=True)
@@ -92,7 +121,13 @@ def guidance_row(st, kind, pdata, u_d, sigma, out):
     out[8], out[9] = u_p, s_dot
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _noise(amplitude, key, counter):
+    """Bounded white noise A·(2U − 1), U = uniform01(key, counter) [N or N·m]."""
+    return amplitude * (2.0 * uniform01(key, counter) - 1.0)
+
+
+@njit(cache=True, inline="always")
 def advance_vehicle(st, cur, action, p, noise_key, current_key, step_index, kind, pdata, cfg,
                     guid, obs, record):  # fmt: skip
     """Advance one vehicle by one control period, in place; returns False on a non-finite state.
@@ -108,45 +143,53 @@ def advance_vehicle(st, cur, action, p, noise_key, current_key, step_index, kind
     n_sub, dt, hold_steps = int(cfg[0]), cfg[1], int(cfg[2])
     u_d, sigma, actuator = cfg[3], cfg[4], int(cfg[5])
     gm_a = cfg[6]
-    nxt = np.empty(STATE_DIM)
-    f = np.empty(5)
-    rec = np.zeros(RECORD_DIM)
     fin_gain = p[FIN_COEFF_INDEX] * p[FIN_MAX_INDEX]
-    finite = True
+    # The state and the sums live in registers for the whole control period: no heap arrays.
+    x = to_fixed_tuple(st, STATE_DIM)
+    sum_X = sum_M = sum_N = 0.0
+    sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
     for k in range(n_sub):
         n = step_index + k
         block = (n // hold_steps) * 5
-        for c in range(5):
-            f[c] = cfg[7 + c] * (2.0 * uniform01(noise_key, block + c) - 1.0)
+        f = (
+            _noise(cfg[7], noise_key, block), _noise(cfg[8], noise_key, block + 1),
+            _noise(cfg[9], noise_key, block + 2), _noise(cfg[10], noise_key, block + 3),
+            _noise(cfg[11], noise_key, block + 4),
+        )  # fmt: skip
         X = action[0] * cfg[12]
         if actuator == 0:
             M = action[1] * cfg[13]
             N = action[2] * cfg[14]
         else:
-            authority = fin_gain * st[5] * abs(st[5])
+            authority = fin_gain * x[5] * abs(x[5])
             M = action[1] * authority
             N = action[2] * authority
-        rk4_step(st, X, M, N, f, cfg[15] + cur[0], cfg[16] + cur[1], cfg[17] + cur[2], p,
-                 kind, pdata, u_d, sigma, dt, nxt)  # fmt: skip
+        nxt = rk4_tuple(x, X, M, N, f, cfg[15] + cur[0], cfg[16] + cur[1], cfg[17] + cur[2], p,
+                        kind, pdata, u_d, sigma, dt)  # fmt: skip
         for c in range(3):  # Gauss–Markov current, exact discretisation
             if cfg[18 + c] != 0.0:  # b = 0 (no random current): skip the ~25 ns normal draw
                 cur[c] = gm_a * cur[c] + cfg[18 + c] * standard_normal(current_key, 3 * n + c)
             else:
                 cur[c] = gm_a * cur[c]
-        rec[0] += X
-        rec[1] += M
-        rec[2] += N
-        for c in range(5):
-            rec[3 + c] += f[c]
+        sum_X += X
+        sum_M += M
+        sum_N += N
+        sum_f = (sum_f[0] + f[0], sum_f[1] + f[1], sum_f[2] + f[2], sum_f[3] + f[3],
+                 sum_f[4] + f[4])  # fmt: skip
+        finite = True
         for j in range(STATE_DIM):
             if not math.isfinite(nxt[j]):
                 finite = False
-        st[:] = nxt
         if not finite:
+            for j in range(STATE_DIM):
+                st[j] = nxt[j]
             return False
-        st[4] = wrap_angle(st[4])
-    for c in range(RECORD_DIM):
-        record[c] = rec[c] / n_sub
+        x = (*nxt[:4], wrap_angle(nxt[4]), *nxt[5:])
+    for j in range(STATE_DIM):
+        st[j] = x[j]
+    record[0], record[1], record[2] = sum_X / n_sub, sum_M / n_sub, sum_N / n_sub
+    for c in range(5):
+        record[3 + c] = sum_f[c] / n_sub
     guidance_row(st, kind, pdata, u_d, sigma, guid)
     build_observation(st, guid, u_d, obs)
     return True

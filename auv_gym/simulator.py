@@ -186,7 +186,7 @@ class SimConfig:
         return np.array([float(values[name]) for name in CFG])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
               obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
     """Advance vehicle i one control step with its saturated action, then score it."""
