@@ -24,7 +24,7 @@ from auv_gym.guidance import (
 )
 from auv_gym.observation import GUIDANCE_FIELDS, build_observation
 from auv_gym.paths import path_eval
-from auv_gym.vehicle import FIN_COEFF_INDEX, FIN_MAX_INDEX, eta_dot_trig, nu_dot_sin
+from auv_gym.vehicle import FIN_COEFF_INDEX, FIN_MAX_INDEX, N_PARAMS, eta_dot_trig, nu_dot_sin
 
 __all__ = [
     "ACTUATORS",
@@ -128,8 +128,16 @@ def _noise(amplitude, key, counter):
 
 
 @njit(cache=True, inline="always")
-def advance_vehicle(st, cur, action, p, noise_key, current_key, step_index, kind, pdata, cfg,
-                    guid, obs, record):  # fmt: skip
+def _gauss_markov(deviation, a, b, key, counter):
+    """One exact step of the Gauss–Markov current deviation [m/s]: a·δ + b·N(0, 1)."""
+    if b == 0.0:  # no random current: skip the ~25 ns normal draw
+        return a * deviation
+    return a * deviation + b * standard_normal(key, counter)
+
+
+@njit(cache=True, inline="always")
+def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index, kind, pdata,
+                    cfg_array, guid, obs, record):  # fmt: skip
     """Advance one vehicle by one control period, in place; returns False on a non-finite state.
 
     ``st`` (11) and ``cur`` (3, Gauss–Markov current deviation [m/s]) are updated; ``guid``,
@@ -140,14 +148,20 @@ def advance_vehicle(st, cur, action, p, noise_key, current_key, step_index, kind
     Actuator "paper" gives τ = a ⊙ limits; "fins" keeps X = a_0·X_max and gives
     M, N = a·K·δ_max·u|u| from the fin-lift coefficient (MODEL.md §2.3), updated every step.
     """
+    # State, parameters, config and sums live in registers for the whole control period: no
+    # heap arrays, and no array references (each costs two atomic reference-count updates).
+    cfg = to_fixed_tuple(cfg_array, CFG_DIM)
+    p = to_fixed_tuple(p_array, N_PARAMS)
     n_sub, dt, hold_steps = int(cfg[0]), cfg[1], int(cfg[2])
     u_d, sigma, actuator = cfg[3], cfg[4], int(cfg[5])
     gm_a = cfg[6]
     fin_gain = p[FIN_COEFF_INDEX] * p[FIN_MAX_INDEX]
-    # The state and the sums live in registers for the whole control period: no heap arrays.
     x = to_fixed_tuple(st, STATE_DIM)
+    a_X, a_M, a_N = action[0], action[1], action[2]
+    dc = (cur[0], cur[1], cur[2])
     sum_X = sum_M = sum_N = 0.0
     sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
+    finite = True
     for k in range(n_sub):
         n = step_index + k
         block = (n // hold_steps) * 5
@@ -156,37 +170,42 @@ def advance_vehicle(st, cur, action, p, noise_key, current_key, step_index, kind
             _noise(cfg[9], noise_key, block + 2), _noise(cfg[10], noise_key, block + 3),
             _noise(cfg[11], noise_key, block + 4),
         )  # fmt: skip
-        X = action[0] * cfg[12]
+        X = a_X * cfg[12]
         if actuator == 0:
-            M = action[1] * cfg[13]
-            N = action[2] * cfg[14]
+            M = a_M * cfg[13]
+            N = a_N * cfg[14]
         else:
             authority = fin_gain * x[5] * abs(x[5])
-            M = action[1] * authority
-            N = action[2] * authority
-        nxt = rk4_tuple(x, X, M, N, f, cfg[15] + cur[0], cfg[16] + cur[1], cfg[17] + cur[2], p,
+            M = a_M * authority
+            N = a_N * authority
+        nxt = rk4_tuple(x, X, M, N, f, cfg[15] + dc[0], cfg[16] + dc[1], cfg[17] + dc[2], p,
                         kind, pdata, u_d, sigma, dt)  # fmt: skip
-        for c in range(3):  # Gauss–Markov current, exact discretisation
-            if cfg[18 + c] != 0.0:  # b = 0 (no random current): skip the ~25 ns normal draw
-                cur[c] = gm_a * cur[c] + cfg[18 + c] * standard_normal(current_key, 3 * n + c)
-            else:
-                cur[c] = gm_a * cur[c]
+        dc = (
+            _gauss_markov(dc[0], gm_a, cfg[18], current_key, 3 * n),
+            _gauss_markov(dc[1], gm_a, cfg[19], current_key, 3 * n + 1),
+            _gauss_markov(dc[2], gm_a, cfg[20], current_key, 3 * n + 2),
+        )
         sum_X += X
         sum_M += M
         sum_N += N
         sum_f = (sum_f[0] + f[0], sum_f[1] + f[1], sum_f[2] + f[2], sum_f[3] + f[3],
                  sum_f[4] + f[4])  # fmt: skip
-        finite = True
         for j in range(STATE_DIM):
             if not math.isfinite(nxt[j]):
                 finite = False
         if not finite:
-            for j in range(STATE_DIM):
-                st[j] = nxt[j]
-            return False
-        x = (*nxt[:4], wrap_angle(nxt[4]), *nxt[5:])
+            x = nxt
+            break
+        x = (
+            nxt[0], nxt[1], nxt[2], nxt[3], wrap_angle(nxt[4]), nxt[5], nxt[6], nxt[7], nxt[8],
+            nxt[9], nxt[10],
+        )  # fmt: skip
     for j in range(STATE_DIM):
         st[j] = x[j]
+    for c in range(3):
+        cur[c] = dc[c]
+    if not finite:
+        return False
     record[0], record[1], record[2] = sum_X / n_sub, sum_M / n_sub, sum_N / n_sub
     for c in range(5):
         record[3 + c] = sum_f[c] / n_sub
@@ -202,3 +221,4 @@ CFG = (
     "limit_X", "limit_M", "limit_N", "current_x", "current_y", "current_z",
     "gm_b_x", "gm_b_y", "gm_b_z",
 )  # fmt: skip
+CFG_DIM = len(CFG)

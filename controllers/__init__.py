@@ -7,12 +7,18 @@ evaluation code treats FBSM, backstepping, a PPO agent and a user's object alike
 from __future__ import annotations
 
 import importlib
+from pathlib import Path
 from typing import Any
 
+import auv_gym
+from auv_gym.numba_cache import refresh_numba_cache
 from controllers.backstepping import Backstepping
 from controllers.base import BatchedController, Policy
 from controllers.fbsm import FBSM
 from controllers.gains import ControllerGains, MembershipSet
+
+# The controllers' kernels inline auv_gym's guidance: a change there also makes them stale.
+refresh_numba_cache(Path(__file__).parent, Path(auv_gym.__file__).parent)
 
 __all__ = [
     "FBSM",
