@@ -287,12 +287,23 @@ class Simulator:
 
     def reset_row(self, i: int, rng: np.random.Generator) -> None:
         """Draw vehicle i's episode (keys, parameters, start, current) from rng, in fixed order."""
+        self.reset_rows([i], [rng])
+
+    def reset_rows(self, rows: Sequence[int], rngs: Sequence[np.random.Generator]) -> None:
+        """`reset_row` for each row with its own generator; the observations in one kernel call."""
+        for i, rng in zip(rows, rngs, strict=True):
+            self._draw_episode(int(i), rng)
+        cfg = self.config
+        _observe_rows(np.asarray(rows, dtype=np.int64), self.state, self._kind, self._pdata,
+                      cfg.u_desired, cfg.kernel_sigma, self.guid, self.obs)  # fmt: skip
+
+    def _draw_episode(self, i: int, rng: np.random.Generator) -> None:
         cfg = self.config
         self.keys[i] = draw_keys(rng)
-        params = cfg.params
         if cfg.param_uncertainty > 0.0:
-            params = params.perturbed(rng, cfg.param_uncertainty)
-        self.params[i] = params.to_vector()
+            self.params[i] = cfg.params.perturbed(rng, cfg.param_uncertainty).to_vector()
+        else:
+            self.params[i] = self._nominal
         position, heading, s0, u0 = self._start(rng)
         self.state[i] = 0.0
         self.state[i, 0:3] = position
@@ -306,8 +317,6 @@ class Simulator:
         self.terms[i] = 0.0
         self.reward[i] = 0.0
         self.code[i] = 0
-        _observe_rows(np.array([i]), self.state, self._kind, self._pdata, cfg.u_desired,
-                      cfg.kernel_sigma, self.guid, self.obs)  # fmt: skip
 
     def _start(self, rng: np.random.Generator) -> tuple[np.ndarray, float, float, float]:
         cfg = self.config

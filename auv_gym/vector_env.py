@@ -237,8 +237,7 @@ class AUVPath3DVectorEnv(VectorEnv):
 
     def _reset_rows(self, rows: np.ndarray) -> None:
         """New episodes for `rows`, each drawn from its vehicle's generator (single-env order)."""
-        for i in rows:
-            self.sim.reset_row(int(i), self._rngs[i])
+        self.sim.reset_rows(rows, [self._rngs[i] for i in rows])
         if self.render_mode is not None and self._render_vehicle in rows:
             self._track = [self.sim.state[self._render_vehicle, 0:3].copy()]
 
