@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from numba import njit, types
+from numba.core.errors import TypingError
+from numba.extending import overload
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from auv_gym.disturbances import standard_normal, uniform01
@@ -42,6 +44,26 @@ N_GUIDANCE = len(GUIDANCE_FIELDS)
 ACTUATORS = {"paper": 0, "fins": 1}
 # Per-vehicle record of a control step: mean applied τ (X, M, N) and mean disturbance f (5).
 RECORD_DIM = 8
+
+
+def fixed_tuple(array, length):
+    """``array[:length]`` as a tuple; compiled, a register copy (numba's `to_fixed_tuple`).
+
+    The plain-Python body keeps the kernels runnable with ``NUMBA_DISABLE_JIT=1`` (debugging).
+    """
+    return tuple(array[:length])
+
+
+@overload(fixed_tuple, prefer_literal=True)
+def _fixed_tuple_compiled(array, length):
+    if not isinstance(length, types.IntegerLiteral):
+        raise TypingError("fixed_tuple needs a compile-time constant length")
+    n = length.literal_value
+
+    def impl(array, length):
+        return to_fixed_tuple(array, n)
+
+    return impl
 
 
 @njit(cache=True, inline="always")
@@ -100,7 +122,7 @@ def rk4_step(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma, dt, out):
 
     Array form of `rk4_tuple`: reads the 11-state ``st``, writes the new state into ``out``.
     """
-    nxt = rk4_tuple(to_fixed_tuple(st, STATE_DIM), X, M, N, f, cx, cy, cz, p, kind, pdata,
+    nxt = rk4_tuple(fixed_tuple(st, STATE_DIM), X, M, N, f, cx, cy, cz, p, kind, pdata,
                     u_d, sigma, dt)  # fmt: skip
     for i in range(STATE_DIM):
         out[i] = nxt[i]
@@ -150,13 +172,13 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     """
     # State, parameters, config and sums live in registers for the whole control period: no
     # heap arrays, and no array references (each costs two atomic reference-count updates).
-    cfg = to_fixed_tuple(cfg_array, CFG_DIM)
-    p = to_fixed_tuple(p_array, N_PARAMS)
+    cfg = fixed_tuple(cfg_array, CFG_DIM)
+    p = fixed_tuple(p_array, N_PARAMS)
     n_sub, dt, hold_steps = int(cfg[0]), cfg[1], int(cfg[2])
     u_d, sigma, actuator = cfg[3], cfg[4], int(cfg[5])
     gm_a = cfg[6]
     fin_gain = p[FIN_COEFF_INDEX] * p[FIN_MAX_INDEX]
-    x = to_fixed_tuple(st, STATE_DIM)
+    x = fixed_tuple(st, STATE_DIM)
     a_X, a_M, a_N = action[0], action[1], action[2]
     dc = (cur[0], cur[1], cur[2])
     sum_X = sum_M = sum_N = 0.0

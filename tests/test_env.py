@@ -300,3 +300,37 @@ def test_render_returns_an_rgb_picture():
     assert frame.std() > 10  # not a blank canvas
     assert AUVPath3DEnv().render() is None
     assert AUVPath3DEnv(control_dt=0.1).metadata["render_fps"] == 10
+
+
+_JIT_PARITY_SCRIPT = """
+import json, warnings
+import numpy as np, gymnasium as gym
+import auv_gym
+warnings.simplefilter("ignore")
+env = gym.make("AUVPath3D-v0", path="waypoints", actuator="fins", param_uncertainty=0.2,
+               current={"mean": (0.1, 0.2, 0.0), "std": (0.05, 0.05, 0.0)})
+obs, _ = env.reset(seed=11)
+rng = np.random.default_rng(2)
+rows = []
+for _ in range(60):
+    a = rng.uniform(-1, 1, 3).astype(np.float32)
+    obs, r, *_ = env.step(a)
+    rows.append([*map(float, obs), float(r)])
+print(json.dumps(rows))
+"""
+
+
+def test_the_kernels_run_as_plain_python_with_the_jit_off_and_agree() -> None:
+    """NUMBA_DISABLE_JIT=1 (for debugging the physics) runs the same code to the same result."""
+    import json
+    import os
+
+    runs = []
+    for jit_off in ("0", "1"):
+        env = {**os.environ, "NUMBA_DISABLE_JIT": jit_off}
+        out = subprocess.run([sys.executable, "-c", _JIT_PARITY_SCRIPT], env=env,
+                             capture_output=True, text=True, check=True)  # fmt: skip
+        runs.append(np.array(json.loads(out.stdout.strip().splitlines()[-1])))
+    compiled, python = runs
+    assert compiled.shape == (60, len(OBS_NAMES) + 1)
+    np.testing.assert_allclose(python, compiled, rtol=1e-9, atol=1e-9)
