@@ -192,7 +192,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--seconds", type=float, default=4.0, help="timed wall clock per size")
     parser.add_argument("--max-time", type=float, default=10.0,
                         help="episode length [s]; short so that autoresets happen")  # fmt: skip
-    parser.add_argument("--memory-n", type=int, default=MEMORY_N)
+    parser.add_argument("--memory-n", type=int, default=MEMORY_N,
+                        help="vehicles of the peak-memory run; 0 skips it")  # fmt: skip
     parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64])
     parser.add_argument("--ppo-steps", type=int, default=128, help="n_steps per rollout")
     parser.add_argument("--ppo-repeats", type=int, default=3)
@@ -223,11 +224,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
 
-    mem = _fresh_process(f"measure_memory({args.memory_n})")
-    results["memory"] = mem
-    print(f"\nN = {mem['n']:,}: peak RSS {mem['peak_bytes'] / 2**20:,.0f} MiB, growth over the "
-          f"imported+compiled process {mem['growth_bytes'] / 2**20:,.0f} MiB (target < 1024); "
-          f"reset {mem['reset_s']:.2f} s, step {1e3 * mem['step_s']:.1f} ms")  # fmt: skip
+    if args.memory_n > 0:
+        mem = _fresh_process(f"measure_memory({args.memory_n})")
+        results["memory"] = mem
+        mib = 2.0**20
+        print(
+            f"\nN = {mem['n']:,}: peak RSS {mem['peak_bytes'] / mib:,.0f} MiB, growth over "
+            f"the imported+compiled process {mem['growth_bytes'] / mib:,.0f} MiB (target < "
+            f"1024); reset {mem['reset_s']:.2f} s, step {1e3 * mem['step_s']:.1f} ms"
+        )
 
     if args.ppo_envs:
         print(f"\nSB3 PPO collect_rollouts (MlpPolicy, torch 1 thread, n_steps {args.ppo_steps})")
