@@ -395,3 +395,20 @@ def test_thread_count_changes_nothing_but_speed():
     assert AUVPath3DVectorEnv(2, threads=10_000).threads == numba.config.NUMBA_NUM_THREADS
     assert AUVPath3DVectorEnv(PARALLEL_MIN_VEHICLES - 1).threads == 1
     assert AUVPath3DVectorEnv(PARALLEL_MIN_VEHICLES).threads is None  # numba's setting
+
+
+def test_batched_row_resets_equal_one_by_one_resets():
+    """`Simulator.reset_rows` (autoresets) draws exactly what `reset_row` draws, row by row."""
+    from auv_gym.simulator import Simulator
+
+    current = {"mean": (0.1, 0.0, 0.0), "std": (0.05, 0.05, 0.0)}
+    config = SimConfig.from_kwargs(param_uncertainty=0.3, randomize_start=True, current=current)
+    one, batch = Simulator(config, 6), Simulator(config, 6)
+    rows = [4, 1, 3]
+    for i in rows:
+        one.reset_row(i, np.random.default_rng(100 + i))
+    batch.reset_rows(rows, [np.random.default_rng(100 + i) for i in rows])
+    for name in ("state", "current", "params", "keys", "guid", "obs", "step_index"):
+        np.testing.assert_array_equal(getattr(batch, name), getattr(one, name), err_msg=name)
+    assert np.any(batch.params[4] != batch.params[1])  # perturbed per episode
+    assert np.all(batch.state[[0, 2, 5]] == 0.0)  # rows not reset are untouched
