@@ -410,7 +410,8 @@ def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
-        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     parser.add_argument(
         "--policies",
@@ -418,20 +419,24 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         help="comma-separated: fbsm, backstepping, ppo, ppo:PATH, module:attribute",
     )
     parser.add_argument("--scenarios", default="all", help="comma-separated names or 'all'")
-    parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE)
+    parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
+                        help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per scenario")
     parser.add_argument("--duration", type=float, default=300.0, help="episode length [s]")
     parser.add_argument(
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s] (default min(100, duration/2))",
+        help="metrics window start [s]; None: min(100, duration/2)",
     )
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    parser.add_argument("--backend", choices=("local", "ray"), default="local")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                        help="local worker processes (results do not depend on it)")  # fmt: skip
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="run the episodes in local processes or on a Ray cluster")  # fmt: skip
     parser.add_argument("--address", default=None, help="Ray cluster address to join")
-    parser.add_argument("--out", type=Path, default=Path("out/compare"))
-    parser.add_argument("--no-figures", action="store_true")
+    parser.add_argument("--out", type=Path, default=Path("out/compare"),
+                        help="output folder; a rerun with the same arguments resumes")  # fmt: skip
+    parser.add_argument("--no-figures", action="store_true", help="tables only")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser.parse_args(argv)
 
