@@ -34,10 +34,12 @@ from typing import Any
 
 import numpy as np
 
+from controllers import CLASSICAL, REGISTRY
+
 HERE = Path(__file__).resolve().parent
 SCENARIOS_FILE = HERE / "scenarios.toml"
 DEFAULT_AGENT = HERE / "agents" / "ppo_helix"
-BUILTIN_POLICIES = ("fbsm", "backstepping", "ppo")
+BUILTIN_POLICIES = REGISTRY
 # Metrics in the summary table, with the direction that is better.
 SUMMARY_METRICS = {
     "rms_distance": "min",
@@ -99,7 +101,7 @@ def policy_label(spec: str) -> str:
 
 def check_policy_spec(spec: str) -> None:
     """Fail early, with a clear message, on an unknown policy or a missing agent file."""
-    if spec in ("fbsm", "backstepping"):
+    if spec in CLASSICAL:
         return
     if spec == "ppo" or spec.startswith("ppo:"):
         agent = Path(spec[4:]) if spec.startswith("ppo:") else DEFAULT_AGENT
@@ -121,7 +123,7 @@ def build_policy(spec: str, controller_kwargs: dict[str, Any], control_dt: float
     """The Policy named by spec, configured for the scenario (see `check_policy_spec`)."""
     import controllers
 
-    if spec in ("fbsm", "backstepping"):
+    if spec in CLASSICAL:
         return controllers.make(spec, control_dt=control_dt, **controller_kwargs)
     if spec == "ppo" or spec.startswith("ppo:"):
         agent = Path(spec[4:]) if spec.startswith("ppo:") else DEFAULT_AGENT

@@ -21,7 +21,9 @@ from controllers.gains import ControllerGains, MembershipSet
 refresh_numba_cache(Path(__file__).parent, Path(auv_gym.__file__).parent)
 
 __all__ = [
+    "CLASSICAL",
     "FBSM",
+    "PRESETS",
     "REGISTRY",
     "Backstepping",
     "BatchedController",
@@ -32,15 +34,26 @@ __all__ = [
     "make",
 ]
 
-REGISTRY = ("fbsm", "backstepping", "ppo")
+# Named variants of the classical controllers (not in the paper): integral LOS in the horizontal
+# plane, σ_y = 3 — against ocean currents; see `ControllerGains` and README "Results".
+PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
+    "fbsm_ilos": ("fbsm", {"ilos_y": 3.0}),
+    "backstepping_ilos": ("backstepping", {"ilos_y": 3.0}),
+}
+CLASSICAL = ("fbsm", "backstepping", *PRESETS)
+REGISTRY = (*CLASSICAL, "ppo")
 
 
 def make(name: str, **kwargs: Any) -> Any:
     """A policy by name, configured for the default env; keyword arguments override.
 
-    "fbsm" and "backstepping" accept `gains`, `params` (the nominal model), `control_dt`,
-    `actuator` and individual gain names; "ppo" takes `path` (a saved agent directory).
+    "fbsm" and "backstepping" (and their `PRESETS`) accept `gains`, `params` (the nominal model),
+    `control_dt`, `actuator` and individual gain names; "ppo" takes `path` (a saved agent
+    directory).
     """
+    if name in PRESETS:
+        base, preset = PRESETS[name]
+        return make(base, **{**preset, **kwargs})
     if name == "fbsm":
         return FBSM(**kwargs)
     if name == "backstepping":

@@ -114,7 +114,7 @@ class FBSM(BatchedController):
         threads: "auto" runs batches of ≥ 64 vehicles on numba's threads, "serial" never.
 
     State (dict of arrays, leading vehicle axis): theta_f, theta_b (n, 3, 3125), theta_d
-    (n, 3, 3), filter (n, 6), started (n,), diag (n, 11).
+    (n, 3, 3), filter (n, 8), started (n,), diag (n, 11).
     """
 
     name = "fbsm"

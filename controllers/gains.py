@@ -31,6 +31,9 @@ class MembershipSet:
                 raise ValueError(f"MembershipSet.{f.name} must be positive, got {value}")
 
 
+NON_NEGATIVE = ("sigma_leak", "ilos_y", "ilos_z")  # gains where 0 switches a feature off
+
+
 @dataclass(frozen=True)
 class ControllerGains:
     """Gains and widths; the defaults are the paper's Section 6 as read in MODEL.md §4.6.
@@ -39,6 +42,11 @@ class ControllerGains:
     Yaw: z3 = ψ − ψ_d, α2 = cosθ(−k2 z3 + ψ̇_d), S3 = c2 z3 + z4. LOS (MODEL.md §3.4):
     ψ_d = ψ_F − arctan(k_y y_e) − β, θ_d = sat(θ_F + arctan(k_z z_e) + α, ±θ_max), with the
     corrections command-filtered (2nd order, ω_n, ζ; MODEL.md §10.4).
+
+    ``ilos_y``, ``ilos_z`` > 0 switch on integral LOS (Børhaug, Pavlov & Pettersen 2008;
+    Caharija et al. 2016), not in the paper: y_e is replaced by y_e + σ_y y_int with
+    ẏ_int = k_y y_e / (1 + k_y²(y_e + σ_y y_int)²) (likewise z), which removes the steady
+    cross-track offset a constant ocean current leaves on a straight path. 0 = the paper's LOS.
     """
 
     h1: float = 1.0
@@ -63,6 +71,8 @@ class ControllerGains:
     alpha_b: float = 0.1
     alpha_d: float = 0.1
     sigma_leak: float = 0.0  # σ-modification leakage (MODEL.md §4.8); 0 = paper-faithful
+    ilos_y: float = 0.0  # integral-LOS gain σ_y (horizontal); 0 = paper's LOS
+    ilos_z: float = 0.0  # integral-LOS gain σ_z (vertical); 0 = paper's LOS
     separate_b_basis: bool = False  # False: b̂ shares f̂'s basis (σ_b = σ), as the prototype
     surge_mf: MembershipSet = MembershipSet(1.0, 0.5, 1.0, 0.1, 1.0)
     pitch_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, math.pi / 6, math.pi / 24,
@@ -76,10 +86,11 @@ class ControllerGains:
                 continue
             if not math.isfinite(value):
                 raise ValueError(f"ControllerGains.{f.name} must be finite, got {value}")
-            if f.name != "sigma_leak" and value <= 0:
+            if f.name in NON_NEGATIVE:
+                if value < 0:
+                    raise ValueError(f"ControllerGains.{f.name} must be >= 0, got {value}")
+            elif value <= 0:
                 raise ValueError(f"ControllerGains.{f.name} must be positive, got {value}")
-        if self.sigma_leak < 0:
-            raise ValueError(f"ControllerGains.sigma_leak must be >= 0, got {self.sigma_leak}")
         if self.theta_max >= math.pi / 2:
             raise ValueError("ControllerGains.theta_max must be below π/2")
 
@@ -88,14 +99,15 @@ class ControllerGains:
 GAIN_LAYOUT = (
     "h1", "lam1", "h2", "lam2", "h3", "lam3", "k1", "c1", "k2", "c2", "k_y", "k_z", "theta_max",
     "filter_wn", "filter_zeta", "u_guard", "sideslip_3d", "printed_pitch_los", "alpha_f",
-    "alpha_b", "alpha_d", "sigma_leak", "separate_b_basis",
+    "alpha_b", "alpha_d", "sigma_leak", "separate_b_basis", "ilos_y", "ilos_z",
     "mf1_c0", "mf1_dc", "mf1_s", "mf1_sb", "mf1_sd",
     "mf2_c0", "mf2_dc", "mf2_s", "mf2_sb", "mf2_sd",
     "mf3_c0", "mf3_dc", "mf3_s", "mf3_sb", "mf3_sd",
     "dt", "b1", "b5", "b6", "fins", "fin_gain", "X_max", "M_max", "N_max",
 )  # fmt: skip
 (H1, LAM1, H2, LAM2, H3, LAM3, K1, C1, K2, C2, KY, KZ, THETA_MAX, WN, ZETA, U_GUARD, BETA_3D,
- PRINTED_PITCH, ALPHA_F, ALPHA_B, ALPHA_D, SIGMA_LEAK, SEPARATE_B, MF1, _m1b, _m1c, _m1d, _m1e,
+ PRINTED_PITCH, ALPHA_F, ALPHA_B, ALPHA_D, SIGMA_LEAK, SEPARATE_B, ILOS_Y, ILOS_Z,
+ MF1, _m1b, _m1c, _m1d, _m1e,
  MF2, _m2b, _m2c, _m2d, _m2e, MF3, _m3b, _m3c, _m3d, _m3e, DT, B1, B5, B6, FINS, FIN_GAIN,
  X_MAX, M_MAX, N_MAX) = range(len(GAIN_LAYOUT))  # fmt: skip
 

@@ -2,8 +2,8 @@
 
 Shared by FBSM and backstepping (MODEL.md §3.4, §4.3, §4.4, §10.4). All functions are numba
 kernels on one vehicle; ``o`` is one observation row (layout `auv_gym.OBS_NAMES`), ``g`` the
-packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the 6-entry memory
-(x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F).
+packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the 8-entry memory
+(x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F, integral-LOS states y_int, z_int [m]).
 """
 
 from __future__ import annotations
@@ -19,6 +19,8 @@ from controllers.gains import (
     C1,
     C2,
     DT,
+    ILOS_Y,
+    ILOS_Z,
     K1,
     K2,
     KY,
@@ -35,7 +37,7 @@ __all__ = ["FILTER_DIM", "LOOP_DIM", "loop_errors"]
 _YE, _ZE, _PSIE, _TH, _THF = (OBS_INDEX[k] for k in ("y_e", "z_e", "psi_error", "theta", "theta_F"))
 _U, _V, _W, _Q, _R = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r"))
 _DPSIF, _DTHF = OBS_INDEX["psi_F_dot"], OBS_INDEX["theta_F_dot"]
-FILTER_DIM = 6
+FILTER_DIM = 8
 # loop_errors output: z1, z2, S2, ż1, α̇1, z3, z4, S3, ż3, α̇2, θ_d, ψ_d − ψ_F
 LOOP_DIM = 12
 
@@ -46,6 +48,7 @@ def loop_errors(o, g, filt, started, out):
 
     θ_d = θ_F + x_z, ψ_d = ψ_F + x_y, where x_z, x_y are the corrections
     c_z = sat(θ_F + arctan(k_z z_e) + α, ±θ_max) − θ_F and c_y = −arctan(k_y y_e) − β
+    (with integral LOS, y_e + σ_y y_int and z_e + σ_z z_int in place of y_e and z_e)
     through ẍ = ω_n²(c − x) − 2ζω_n ẋ (initialised at c with zero rate). θ̇_d, θ̈_d add the
     analytic θ̇_F and its finite difference over one control step (likewise for ψ).
     Pitch (35)–(36): z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α1, S2 = c1 z1 + z2,
@@ -53,6 +56,8 @@ def loop_errors(o, g, filt, started, out):
     z3 = wrap(ψ − ψ_d), α2 = cosθ(−k2 z3 + ψ̇_d), z4 = r − α2, S3 = c2 z3 + z4,
     ż3 = r/cosθ − ψ̇_d, α̇2 = −q sinθ(−k2 z3 + ψ̇_d) + cosθ(−k2 ż3 + ψ̈_d).
     """
+    if filt.shape[0] != FILTER_DIM or out.shape[0] != LOOP_DIM:
+        raise ValueError("loop_errors: filter memory must have FILTER_DIM, out LOOP_DIM entries")
     dt = g[DT]
     u, v, w, q, r, theta = o[_U], o[_V], o[_W], o[_Q], o[_R], o[_TH]
     theta_f = o[_THF]
@@ -64,15 +69,24 @@ def loop_errors(o, g, filt, started, out):
         beta = 0.0
     if g[BETA_3D] > 0.0:
         beta /= math.cos(theta_f)
-    c_y = -math.atan(g[KY] * o[_YE]) - beta
+    if not started:
+        filt[6], filt[7] = 0.0, 0.0
+    k_y, k_z, y_e, z_e = g[KY], g[KZ], o[_YE], o[_ZE]
+    y_los = y_e + g[ILOS_Y] * filt[6]  # = y_e unless integral LOS is on
+    z_los = z_e + g[ILOS_Z] * filt[7]
+    c_y = -math.atan(k_y * y_los) - beta
     if g[PRINTED_PITCH] > 0.0:  # the paper's print: both signs flipped (fails, MODEL.md §8.9)
-        theta_d_raw = theta_f - math.atan(g[KZ] * o[_ZE]) - alpha
+        theta_d_raw = theta_f - math.atan(k_z * z_los) - alpha
     else:
-        theta_d_raw = theta_f + math.atan(g[KZ] * o[_ZE]) + alpha
+        theta_d_raw = theta_f + math.atan(k_z * z_los) + alpha
     c_z = min(max(theta_d_raw, -g[THETA_MAX]), g[THETA_MAX]) - theta_f
     if not started:
         filt[0], filt[1], filt[2], filt[3] = c_z, 0.0, c_y, 0.0
         filt[4], filt[5] = o[_DPSIF], o[_DTHF]
+    if g[ILOS_Y] > 0.0:  # ẏ_int = k_y y_e / (1 + (k_y y_los)²): slows down far from the path
+        filt[6] += dt * k_y * y_e / (1.0 + (k_y * y_los) ** 2)
+    if g[ILOS_Z] > 0.0:
+        filt[7] += dt * k_z * z_e / (1.0 + (k_z * z_los) ** 2)
     wn, zeta = g[WN], g[ZETA]
     x_z, v_z, x_y, v_y = filt[0], filt[1], filt[2], filt[3]
     a_z = wn * wn * (c_z - x_z) - 2.0 * zeta * wn * v_z

@@ -14,9 +14,9 @@ from auv_gym.observation import OBS_DIM
 from controllers.base import Policy
 from controllers.fuzzy import N_RULES, WORK_DIM, adaptive_loop, fuzzy_basis
 from controllers.gains import ControllerGains, pack_gains
-from controllers.los import LOOP_DIM, loop_errors
+from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
 
-NAMES = ["fbsm", "backstepping"]
+NAMES = ["fbsm", "backstepping", "fbsm_ilos", "backstepping_ilos"]
 
 
 def observations(n, seed=0):
@@ -171,7 +171,7 @@ def test_yaw_error_decays_at_k2_plus_c2_over_cos_theta_on_the_surface():
     # r such that S3 = c2 z3 + r − cosθ(−k2 z3 + ψ̇_F) = 0
     o[OBS_INDEX["r"]] = math.cos(theta) * (-gains.k2 * z3 + psi_dot_f) - gains.c2 * z3
     out = np.empty(LOOP_DIM)
-    loop_errors(o, g, np.zeros(6), False, out)
+    loop_errors(o, g, np.zeros(FILTER_DIM), False, out)
     assert out[5] == pytest.approx(z3)
     assert out[7] == pytest.approx(0.0, abs=1e-12)
     assert out[8] == pytest.approx(-(gains.k2 + gains.c2 / math.cos(theta)) * z3, rel=1e-12)
@@ -225,7 +225,8 @@ def test_fins_actuator_normalises_by_speed_dependent_authority():
     ("kwargs", "error"),
     [({"control_dt": -0.05}, "control_dt"), ({"actuator": "jets"}, "actuator"),
      ({"k1": -1.0}, "k1"), ({"bogus_gain": 1.0}, "unknown controller gains"),
-     ({"params": "remus"}, "AUVParams"), ({"threads": 2}, "threads")],
+     ({"params": "remus"}, "AUVParams"), ({"threads": 2}, "threads"),
+     ({"ilos_y": -1.0}, "ilos_y must be >= 0"), ({"ilos_z": math.nan}, "ilos_z")],
 )  # fmt: skip
 def test_bad_configuration_raises(kwargs, error):
     with pytest.raises(ValueError, match=error):
@@ -251,3 +252,28 @@ def test_speed_benchmark_runs_in_closed_loop():
     out = closed_loop("fbsm", n=3, steps=4, threads=1, warmup=2)
     assert out["rate"] > 0.0 and 0.0 <= out["saturated"] <= 1.0
     assert 0.0 < episode_wall_time("backstepping") < 60.0
+
+
+@pytest.mark.parametrize("control_dt", [0.05, 0.01])
+@pytest.mark.parametrize("name", ["fbsm", "backstepping"])
+def test_integral_los_removes_the_offset_a_constant_current_leaves(name, control_dt):
+    """A 0.3 m/s cross current on a straight line: the paper's LOS (no integral action) settles
+    at a constant cross-track offset; integral LOS (`<name>_ilos`, σ_y = 3) drives it to zero."""
+    from auv_gym.evaluation import rollouts
+
+    env = {"path": "line", "disturbance": "none", "current": {"mean": (0.0, 0.3, 0.0)},
+           "max_time": 300.0, "control_dt": control_dt}  # fmt: skip
+    (los,) = rollouts(controllers.make(name, control_dt=control_dt), [0], **env)
+    (ilos,) = rollouts(controllers.make(f"{name}_ilos", control_dt=control_dt), [0], **env)
+    late = los.t >= 200.0
+    assert np.all(np.abs(los["y_e"][late]) > 2.5)  # measured 2.84 m, constant
+    assert np.ptp(los["y_e"][late]) < 0.01
+    assert np.all(np.abs(ilos["y_e"][late]) < 0.02)  # measured < 0.007 m after 200 s
+    assert abs(ilos["y_e"][-1]) < 1e-3
+    assert ilos.termination_reason == los.termination_reason == "time_limit"
+
+
+def test_loop_errors_refuses_a_filter_memory_of_the_wrong_size():
+    g = pack_gains(ControllerGains(), 0.05, (1.0, 1.0, 1.0), (0.0, 1.0, 50.0, 10.0, 10.0))
+    with pytest.raises(ValueError, match="FILTER_DIM"):
+        loop_errors(observations(1)[0], g, np.zeros(6), False, np.zeros(LOOP_DIM))
