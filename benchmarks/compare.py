@@ -1,7 +1,7 @@
 """FBSM vs backstepping vs PPO (and any Policy) on the same seeded scenarios.
 
-    python -m benchmarks.compare --policies fbsm,backstepping,ppo --scenarios all --seeds 10 \\
-        --duration 300 --workers 2 --out benchmarks/results/full
+    python -m benchmarks.compare --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos \\
+        --scenarios all --seeds 10 --duration 300 --workers 2 --out benchmarks/results/full
 
 Jobs are (policy, scenario, seed) episodes. Each finished episode is written atomically to
 ``OUT/episodes/<scenario>/<policy>/seed_<k>.json`` (metrics) and ``.npz`` (time series) with a
