@@ -17,15 +17,17 @@ from pathlib import Path
 __all__ = ["refresh_numba_cache", "sources_digest"]
 
 STAMP_NAME = "numba_sources.sha256"
+NUMBA_MARKER = b"numba"  # files without it cannot hold a kernel
 
 
-def sources_digest(*source_dirs: str | Path) -> str:
-    """SHA-256 over the names and contents of the `.py` files that use numba in `source_dirs`."""
+def sources_digest(*source_dirs: str | Path, containing: bytes = b"") -> str:
+    """SHA-256 over the names and contents of the `.py` files in `source_dirs` (only those
+    whose text contains ``containing``, if given)."""
     digest = hashlib.sha256()
     for directory in source_dirs:
         for path in sorted(Path(directory).glob("*.py")):
             text = path.read_bytes()
-            if b"numba" in text:
+            if containing in text:
                 digest.update(f"{Path(directory).name}/{path.name}\0".encode())
                 digest.update(text)
     return digest.hexdigest()
@@ -39,7 +41,7 @@ def refresh_numba_cache(package_dir: str | Path, *inlined_from: str | Path) -> b
     """
     cache_dir = Path(package_dir) / "__pycache__"
     stamp = cache_dir / STAMP_NAME
-    digest = sources_digest(package_dir, *inlined_from)
+    digest = sources_digest(package_dir, *inlined_from, containing=NUMBA_MARKER)
     try:
         if stamp.read_text() == digest:
             return False

@@ -34,12 +34,14 @@ from typing import Any
 
 import numpy as np
 
+import auv_gym
+import controllers
+from auv_gym.numba_cache import sources_digest
 from controllers import CLASSICAL, REGISTRY
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS_FILE = HERE / "scenarios.toml"
 DEFAULT_AGENT = HERE / "agents" / "ppo_helix"
-BUILTIN_POLICIES = REGISTRY
 # Metrics in the summary table, with the direction that is better.
 SUMMARY_METRICS = {
     "rms_distance": "min",
@@ -99,12 +101,19 @@ def policy_label(spec: str) -> str:
     return safe.strip("_") or "policy"
 
 
+def agent_path(spec: str) -> Path | None:
+    """The saved agent a "ppo" or "ppo:PATH" spec names (the shipped one for "ppo"), else None."""
+    if spec == "ppo":
+        return DEFAULT_AGENT
+    return Path(spec[4:]) if spec.startswith("ppo:") else None
+
+
 def check_policy_spec(spec: str) -> None:
     """Fail early, with a clear message, on an unknown policy or a missing agent file."""
     if spec in CLASSICAL:
         return
-    if spec == "ppo" or spec.startswith("ppo:"):
-        agent = Path(spec[4:]) if spec.startswith("ppo:") else DEFAULT_AGENT
+    agent = agent_path(spec)
+    if agent is not None:
         if not agent.exists():
             raise FileNotFoundError(f"policy {spec!r}: agent {agent} does not exist")
         return
@@ -114,19 +123,16 @@ def check_policy_spec(spec: str) -> None:
         import_policy(spec, instantiate=False)
         return
     raise ValueError(
-        f"unknown policy {spec!r}; valid: {list(BUILTIN_POLICIES)}, "
-        "'ppo:PATH' or 'module:attribute'"
+        f"unknown policy {spec!r}; valid: {list(REGISTRY)}, 'ppo:PATH' or 'module:attribute'"
     )
 
 
 def build_policy(spec: str, controller_kwargs: dict[str, Any], control_dt: float) -> Any:
     """The Policy named by spec, configured for the scenario (see `check_policy_spec`)."""
-    import controllers
-
     if spec in CLASSICAL:
         return controllers.make(spec, control_dt=control_dt, **controller_kwargs)
-    if spec == "ppo" or spec.startswith("ppo:"):
-        agent = Path(spec[4:]) if spec.startswith("ppo:") else DEFAULT_AGENT
+    agent = agent_path(spec)
+    if agent is not None:
         return controllers.make("ppo", path=str(agent))
     return controllers.import_policy(spec, **controller_kwargs)
 
@@ -168,22 +174,14 @@ class Job:
 @functools.cache
 def code_digest() -> str:
     """Hash of the simulator and controller sources: a code change invalidates cached episodes."""
-    import auv_gym
-    import controllers
-
-    digest = hashlib.sha256()
-    for package in (auv_gym, controllers):
-        root = Path(package.__file__).parent
-        for file in sorted(root.rglob("*.py")):
-            digest.update(file.relative_to(root.parent).as_posix().encode())
-            digest.update(file.read_bytes())
-    return digest.hexdigest()[:16]
+    packages = (Path(auv_gym.__file__).parent, Path(controllers.__file__).parent)
+    return sources_digest(*packages)[:16]
 
 
 def _agent_digest(spec: str) -> str:
-    if not (spec == "ppo" or spec.startswith("ppo:")):
+    agent = agent_path(spec)
+    if agent is None:
         return ""
-    agent = Path(spec[4:]) if spec.startswith("ppo:") else DEFAULT_AGENT
     digest = hashlib.sha256()
     for file in sorted(p for p in agent.rglob("*") if p.is_file()) if agent.is_dir() else [agent]:
         digest.update(file.read_bytes())
@@ -418,7 +416,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--policies",
         default="fbsm,backstepping,ppo",
-        help="comma-separated: fbsm, backstepping, ppo, ppo:PATH, module:attribute",
+        help=f"comma-separated: {', '.join(REGISTRY)}, ppo:PATH, module:attribute",
     )
     parser.add_argument("--scenarios", default="all", help="comma-separated names or 'all'")
     parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,

@@ -69,11 +69,10 @@ def loop_errors(o, g, filt, started, out):
         beta = 0.0
     if g[BETA_3D] > 0.0:
         beta /= math.cos(theta_f)
-    if not started:
-        filt[6], filt[7] = 0.0, 0.0
     k_y, k_z, y_e, z_e = g[KY], g[KZ], o[_YE], o[_ZE]
-    y_los = y_e + g[ILOS_Y] * filt[6]  # = y_e unless integral LOS is on
-    z_los = z_e + g[ILOS_Z] * filt[7]
+    y_int, z_int = (filt[6], filt[7]) if started else (0.0, 0.0)
+    y_los = y_e + g[ILOS_Y] * y_int  # = y_e unless integral LOS is on
+    z_los = z_e + g[ILOS_Z] * z_int
     c_y = -math.atan(k_y * y_los) - beta
     if g[PRINTED_PITCH] > 0.0:  # the paper's print: both signs flipped (fails, MODEL.md §8.9)
         theta_d_raw = theta_f - math.atan(k_z * z_los) - alpha
@@ -83,10 +82,9 @@ def loop_errors(o, g, filt, started, out):
     if not started:
         filt[0], filt[1], filt[2], filt[3] = c_z, 0.0, c_y, 0.0
         filt[4], filt[5] = o[_DPSIF], o[_DTHF]
-    if g[ILOS_Y] > 0.0:  # ẏ_int = k_y y_e / (1 + (k_y y_los)²): slows down far from the path
-        filt[6] += dt * k_y * y_e / (1.0 + (k_y * y_los) ** 2)
-    if g[ILOS_Z] > 0.0:
-        filt[7] += dt * k_z * z_e / (1.0 + (k_z * z_los) ** 2)
+    # ẏ_int = k_y y_e / (1 + (k_y y_los)²): slows down far from the path; 0 with ILOS off
+    filt[6] = y_int + dt * k_y * y_e / (1.0 + (k_y * y_los) ** 2) if g[ILOS_Y] > 0.0 else 0.0
+    filt[7] = z_int + dt * k_z * z_e / (1.0 + (k_z * z_los) ** 2) if g[ILOS_Z] > 0.0 else 0.0
     wn, zeta = g[WN], g[ZETA]
     x_z, v_z, x_y, v_y = filt[0], filt[1], filt[2], filt[3]
     a_z = wn * wn * (c_z - x_z) - 2.0 * zeta * wn * v_z

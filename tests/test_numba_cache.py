@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from auv_gym.numba_cache import STAMP_NAME, refresh_numba_cache, sources_digest
+from auv_gym.numba_cache import NUMBA_MARKER, STAMP_NAME, refresh_numba_cache, sources_digest
 
 
 def _package(root: Path, name: str, body: str) -> Path:
@@ -29,7 +29,9 @@ def test_cache_survives_until_a_numba_source_changes(tmp_path: Path) -> None:
     _fake_cache(pkg)
     assert refresh_numba_cache(pkg) is True  # no stamp yet: the cache's sources are unknown
     assert _cached(pkg) == []
-    assert (pkg / "__pycache__" / STAMP_NAME).read_text() == sources_digest(pkg)
+    assert (pkg / "__pycache__" / STAMP_NAME).read_text() == sources_digest(
+        pkg, containing=NUMBA_MARKER
+    )
 
     _fake_cache(pkg)
     assert refresh_numba_cache(pkg) is False
@@ -60,8 +62,8 @@ def test_installed_package_cache_stamps_match_their_sources() -> None:
     auv_dir = Path(auv_gym.__file__).parent
     stamp = auv_dir / "__pycache__" / STAMP_NAME
     if stamp.exists():  # absent only on a read-only install
-        assert stamp.read_text() == sources_digest(auv_dir)
+        assert stamp.read_text() == sources_digest(auv_dir, containing=NUMBA_MARKER)
     ctl_dir = Path(controllers.__file__).parent
     ctl_stamp = ctl_dir / "__pycache__" / STAMP_NAME
     if ctl_stamp.exists():
-        assert ctl_stamp.read_text() == sources_digest(ctl_dir, auv_dir)
+        assert ctl_stamp.read_text() == sources_digest(ctl_dir, auv_dir, containing=NUMBA_MARKER)
