@@ -1,0 +1,149 @@
+"""Figures of `benchmarks.stats` results: interval plots, probability of improvement,
+performance profiles, learning curves with CI bands; atomic saving.
+
+Only matplotlib's object-oriented API (`matplotlib.figure.Figure` with the Agg canvas) is used:
+no pyplot state, no backend switching, so these are safe in workers and tests.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+from benchmarks.stats import AGGREGATE
+
+
+def _errorbars(ax, intervals: list, offset: float = 0.0, **style) -> None:
+    """Horizontal Interval(value, low, high) bars, one row per entry, first row on top."""
+    iv = np.array(intervals, dtype=float).reshape(-1, 3)
+    rows = np.arange(len(iv)) + offset
+    ax.errorbar(iv[:, 0], rows, xerr=np.abs(iv[:, 1:].T - iv[:, 0]), capsize=3, ls="", **style)
+
+
+def _scale(ax, which: str, values) -> None:
+    """Log scale when the values are positive and span > 3x; labels '0.02' at 1-2-5 steps
+    within 1.5 decades, at decades beyond (sci-notation minor labels overlap in narrow panels)."""
+    lo, hi = float(np.min(values)), float(np.max(values))
+    if lo <= 0 or hi < 3 * lo:
+        return
+    getattr(ax, f"set_{which}scale")("log")
+    axis = getattr(ax, f"{which}axis")
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0) if hi < 30 * lo else (1.0,)))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
+
+
+def _ci(summary: Mapping[str, Any]) -> str:
+    return f"{100 * summary['confidence']:g} %"
+
+
+def _panels(n: int, width_in: float, height_in: float, sharey: bool = False):
+    if n < 1:
+        raise ValueError("nothing to plot: no panels")
+    cols = min(n, 3)
+    rows = -(-n // cols)
+    fig = Figure(figsize=(width_in * cols, height_in * rows), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False, sharey=sharey).ravel()
+    for ax in axes[n:]:
+        ax.set_visible(False)
+    return fig, list(axes[:n])
+
+
+def interval_figure(summary: Mapping[str, Any], unit: str = "m") -> Figure:
+    """One panel per scope: IQM (dots) and mean (squares) with CIs per policy."""
+    scopes, policies = summary["scopes"], summary["policies"]
+    fig, axes = _panels(len(scopes), 3.6, 0.45 * len(policies) + 1.0)
+    for ax, scope in zip(axes, scopes, strict=True):
+        for k, (name, label, dy) in enumerate((("iqm", "IQM", -0.12), ("mean", "mean", 0.12))):
+            bars = [summary[name][scope][p] for p in policies]
+            _errorbars(ax, bars, dy, marker="os"[k], color=f"C{k}", label=label)
+        ax.set_yticks(range(len(policies)), policies)
+        ax.invert_yaxis()
+        _scale(ax, "x", [summary[m][scope][p][1:] for m in ("iqm", "mean") for p in policies])
+        ax.set(title=scope, xlabel=f"RMS distance [{unit}]")
+        ax.grid(True, axis="x", which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"IQM and mean with {_ci(summary)} confidence intervals (lower is better)")
+    return fig
+
+
+def improvement_figure(summary: Mapping[str, Any]) -> Figure:
+    """One panel per scope: P(policy beats the reference on an episode) with CIs."""
+    scopes = [s for s in summary["scopes"] if s in summary["improvement"]]
+    if not scopes:
+        reference = summary["reference"]
+        raise ValueError(
+            f"summary: no probability of improvement: {reference!r} not among the policies"
+        )
+    policies = list(summary["improvement"][scopes[0]])
+    fig, axes = _panels(len(scopes), 3.6, 0.45 * len(policies) + 1.0)
+    for ax, scope in zip(axes, scopes, strict=True):
+        _errorbars(ax, [summary["improvement"][scope][p] for p in policies], marker="o")
+        ax.axvline(0.5, color="k", ls="--", lw=0.8)
+        ax.set_yticks(range(len(policies)), policies)
+        ax.invert_yaxis()
+        ax.set(xlim=(-0.02, 1.02), title=scope, xlabel=f"P(better than {summary['reference']})")
+    fig.suptitle(
+        f"Probability of a smaller RMS distance than {summary['reference']} on an episode "
+        f"(ties ½), {_ci(summary)} confidence intervals"
+    )
+    return fig
+
+
+def profile_figure(summary: Mapping[str, Any], scope: str = AGGREGATE, unit: str = "m") -> Figure:
+    """Performance profiles of one scope: fraction of episodes below τ with CI bands."""
+    if scope not in summary["profiles"]:
+        raise ValueError(f"scope={scope!r}: not among {list(summary['profiles'])}")
+    fig = Figure(figsize=(6.0, 4.0), layout="constrained")
+    ax = fig.subplots()
+    for k, (policy, prof) in enumerate(summary["profiles"][scope].items()):
+        ax.plot(prof["tau_m"], prof["fraction"], color=f"C{k}", label=policy)
+        ax.fill_between(prof["tau_m"], prof["low"], prof["high"], color=f"C{k}", alpha=0.2)
+    _scale(ax, "x", np.concatenate([p["tau_m"] for p in summary["profiles"][scope].values()]))
+    title = f"{scope}: performance profiles, {_ci(summary)} bands"
+    ax.set(xlabel=f"threshold τ: RMS distance [{unit}]", ylabel="fraction of episodes < τ",
+           ylim=(-0.02, 1.02), title=title)  # fmt: skip
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def learning_curve_figure(
+    panels: Mapping[str, Mapping[str, Mapping[str, Any]]], ylabel: str = "IQM RMS distance [m]"
+) -> Figure:
+    """One panel per x label ({x label: {policy: `learning_curve` output}}), shared log y."""
+    fig, axes = _panels(len(panels), 4.5, 3.6, sharey=True)
+    for ax, (xlabel, curves) in zip(axes, panels.items(), strict=True):
+        for k, (policy, c) in enumerate(curves.items()):
+            ax.plot(c["x"], c["iqm"], color=f"C{k}", label=f"{policy} ({c['n_runs']} runs)")
+            ax.fill_between(c["x"], c["low"], c["high"], color=f"C{k}", alpha=0.2)
+        _scale(ax, "y", np.concatenate([np.r_[c["low"], c["high"]] for c in curves.values()]))
+        ax.set(xlabel=xlabel, ylabel=ylabel)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    return fig
+
+
+def save_figure(fig: Figure, path: str | os.PathLike, dpi: int = 150) -> Path:
+    """Write ``fig`` atomically (temporary file in the same folder, then os.replace)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    FigureCanvasAgg(fig)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            fig.savefig(f, format=path.suffix.lstrip(".") or "png", dpi=dpi)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+    return path
