@@ -5,19 +5,16 @@ Importing the package registers `AUVPath3D-v0` with Gymnasium (idempotently).
 
 from __future__ import annotations
 
-import os
+# First: the kernel cache locator must be in place before any kernel is defined.
+import auv_gym.numba_cache  # noqa: F401
 
+# isort: split
 from gymnasium.envs.registration import register, registry
 
 from auv_gym.env import AUVPath3DEnv
-from auv_gym.numba_cache import refresh_numba_cache
 from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW, OBS_NAMES, OBS_UNITS
 from auv_gym.paths import Helix, Path, Spline, StraightLine, make_path
 from auv_gym.vehicle import AUVParams, remus100
-
-# numba loads cached kernels at their first call, not at import: drop those compiled from older
-# sources now (see `auv_gym.numba_cache`).
-refresh_numba_cache(os.path.dirname(__file__))
 
 __all__ = [
     "OBS_HIGH",

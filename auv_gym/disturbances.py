@@ -16,7 +16,22 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-__all__ = ["CurrentConfig", "NoiseConfig", "draw_keys", "gauss_markov_coefficients"]
+from auv_gym.records import field_indices
+
+__all__ = [
+    "KEY",
+    "N_CHANNELS",
+    "CurrentConfig",
+    "NoiseConfig",
+    "draw_keys",
+    "gauss_markov_coefficients",
+    "gauss_markov_step",
+    "white_noise",
+]
+
+N_CHANNELS = 5  # white-noise channels f_u, f_v, f_w, f_q, f_r
+# The two 64-bit keys of an episode (`draw_keys`), one per random stream.
+KEY = field_indices("KeyIndex", ("noise", "current"), __name__)
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -41,6 +56,49 @@ def standard_normal(key, counter):
     u1 = 1.0 - uniform01(key, 2 * counter)  # (0, 1], safe for log
     u2 = uniform01(key, 2 * counter + 1)
     return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@njit(cache=True, inline="always")
+def _bounded_noise(amplitude, key, counter):
+    """A·(2U − 1), U = uniform01(key, counter) [N or N·m]."""
+    return amplitude * (2.0 * uniform01(key, counter) - 1.0)
+
+
+@njit(cache=True, inline="always")
+def white_noise(amplitude, key, step, hold_steps):
+    """The five channels f = A ⊙ (2U − 1) at physics step ``step`` [N, N, N, N·m, N·m].
+
+    Channel c draws U = uniform01(key, 5·(step // hold_steps) + c): each value is held for
+    ``hold_steps`` physics steps and depends on the key and the time only.
+    """
+    block = (step // hold_steps) * N_CHANNELS
+    return (
+        _bounded_noise(amplitude[0], key, block), _bounded_noise(amplitude[1], key, block + 1),
+        _bounded_noise(amplitude[2], key, block + 2), _bounded_noise(amplitude[3], key, block + 3),
+        _bounded_noise(amplitude[4], key, block + 4),
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _gauss_markov_axis(deviation, a, b, key, counter):
+    if b == 0.0:  # no random current: skip the ~25 ns normal draw
+        return a * deviation
+    return a * deviation + b * standard_normal(key, counter)
+
+
+@njit(cache=True, inline="always")
+def gauss_markov_step(deviation, a, b, key, step):
+    """One exact step δ ← a·δ + b ⊙ N(0, 1) of the current deviation (x, y, z) [m/s].
+
+    ``a``, ``b`` from `gauss_markov_coefficients`; axis j at physics step n draws its normal
+    number at counter 3n + j of ``key``.
+    """
+    counter = 3 * step
+    return (
+        _gauss_markov_axis(deviation[0], a, b[0], key, counter),
+        _gauss_markov_axis(deviation[1], a, b[1], key, counter + 1),
+        _gauss_markov_axis(deviation[2], a, b[2], key, counter + 2),
+    )
 
 
 @dataclass(frozen=True)

@@ -1,246 +1,153 @@
-"""The simulator core: path-following state derivative, RK4, and the batched control-step kernel.
+r"""Equations of motion of the simulated system: the AUV (paper Eq. (1)–(2)) and its virtual point.
 
-Simulator state per vehicle (`STATE_NAMES`): η = (x, y, z, θ, ψ) [m, rad], ν = (u, v, w, q, r)
-relative to the water [m/s, rad/s], and the virtual-point parameter s. The virtual point moves
-with ṡ = u_p/|p'(s)| (MODEL.md §3.3) and is integrated by the same RK4 as the vehicle, so the
-guidance is exact to the integrator's order. Everything that simulates calls `advance_vehicle`: the
-single env with one row, the vector env with thousands.
+Vehicle (docs/model.md §2.1, the paper's (1) with its OCR corrected; NED, z down, θ nose-up
+positive, roll held at zero). ν = (u, v, w, q, r) is the velocity through the water [m/s, rad/s],
+η = (x, y, z, θ, ψ) the earth-fixed pose [m, rad], τ = (X, M, N) the actuation [N, N·m] and
+f = (f_u, f_v, f_w, f_q, f_r) the disturbance [N, N·m]. In groups, M ν̇ = τ + f + c + d + g with
+
+    inertia          M = M_RB + M_A = diag(m − X_u̇, m − Y_v̇, m − Z_ẇ, I_y − M_q̇, I_z − N_ṙ)
+                       = diag(m11, m22, m33, I55, I66)             (diagonal: §2.1 e)
+    actuation        τ + f = (X + f_u, f_v, f_w, M + f_q, N + f_r)
+    Coriolis and     c: surge  X_qq q² + X_rr r² + [(X_vr + m) v r + (X_wq − m) w q]
+      centripetal       sway   −(m − Y_ur) u r
+                        heave  (m + Z_uq) u q + m z_g q²
+                        pitch  M_uq u q + M_uw u w − m z_g (w q − v r)
+                        yaw    N_uv u v + N_ur u r
+    damping          d: surge  X_u|u| u|u| + X_vv v² + X_ww w²
+      (drag, lift)      sway   Y_uv u v + Y_v|v| v|v|
+                        heave  Z_uw u w + Z_w|w| w|w|
+                        pitch  M_q|q| q|q| + M_w|w| w|w|
+                        yaw    N_v|v| v|v| + N_r|r| r|r|
+    restoring        g: pitch  −(z_g W − z_b B) sin θ   (no (W − B) force: B = W, §2.1 f)
+
+Every coefficient enters with its own (NED, Prestero) sign. The bracketed surge terms are switched
+by ``surge_coriolis`` (§2.1 c). Prestero's u-proportional coefficients Y_ur, Z_uq, M_uq, M_uw,
+N_uv and N_ur lump fin lift with added mass (and the Munk moment) and so sit under Coriolis;
+Y_uv and Z_uw are pure body and fin lift. Kinematics (paper (2)):
+
+    ẋ = u cosψ cosθ − v sinψ + w cosψ sinθ + v_c,x      θ̇ = q
+    ẏ = u sinψ cosθ + v cosψ + w sinψ sinθ + v_c,y      ψ̇ = r / cosθ
+    ż = −u sinθ + w cosθ + v_c,z
+
+with the earth-fixed ocean current v_c (docs/model.md §2.5). The virtual point moves along the
+path with ṡ = u_p/|p'(s)| (docs/model.md §3.3), so the simulator state is (η, ν, s):
+`STATE_NAMES`, read by name through `STATE`.
+
+The kernels read the parameters as a `vehicle.ParamsRecord` (``p.X_uu``) and are inlined into
+the integrator, so none of this costs a call. `generalized_forces` writes each row as
+docs/model.md §2.1 does, labelling the groups: the terms are added left to right in that order,
+the order of the committed results (regrouping them would change the last bits of every
+trajectory).
 """
 
 from __future__ import annotations
 
 import math
 
-from numba import njit, types
-from numba.core.errors import TypingError
-from numba.extending import overload
-from numba.np.unsafe.ndarray import to_fixed_tuple
+from numba import njit
 
-from auv_gym.disturbances import standard_normal, uniform01
-from auv_gym.guidance import (
-    body_errors,
-    body_errors_trig,
-    path_angles,
-    virtual_point_speed,
-    wrap_angle,
-)
-from auv_gym.observation import GUIDANCE_FIELDS, build_observation
+from auv_gym.guidance import body_errors_trig, virtual_point_speed
 from auv_gym.paths import path_eval
-from auv_gym.vehicle import FIN_COEFF_INDEX, FIN_MAX_INDEX, N_PARAMS, eta_dot_trig, nu_dot_sin
+from auv_gym.records import field_indices
 
 __all__ = [
-    "ACTUATORS",
-    "CFG",
+    "STATE",
+    "STATE_DIM",
     "STATE_NAMES",
-    "advance_vehicle",
-    "guidance_row",
-    "rk4_step",
+    "eta_dot",
+    "generalized_forces",
+    "nu_dot",
+    "nu_dot_sin",
     "state_derivative",
 ]
 
 STATE_NAMES = ("x", "y", "z", "theta", "psi", "u", "v", "w", "q", "r", "s")
 STATE_DIM = len(STATE_NAMES)
-N_GUIDANCE = len(GUIDANCE_FIELDS)
-ACTUATORS = {"paper": 0, "fins": 1}
-# Per-vehicle record of a control step: mean applied τ (X, M, N) and mean disturbance f (5).
-RECORD_DIM = 8
+STATE = field_indices("StateIndex", STATE_NAMES, __name__)
 
 
-def fixed_tuple(array, length):
-    """``array[:length]`` as a tuple; compiled, a register copy (numba's `to_fixed_tuple`).
+@njit(cache=True, inline="always")
+def generalized_forces(nu, sin_theta, tau, f, p):
+    """Right-hand sides of the five rows above, M ν̇ [N, N, N, N·m, N·m], given sin θ.
 
-    The plain-Python body keeps the kernels runnable with ``NUMBA_DISABLE_JIT=1`` (debugging).
+    ``nu`` = (u, v, w, q, r), ``tau`` = (X, M, N), ``f`` the 5 disturbance channels, ``p`` a
+    `vehicle.ParamsRecord`.
     """
-    return tuple(array[:length])
-
-
-@overload(fixed_tuple, prefer_literal=True)
-def _fixed_tuple_compiled(array, length):
-    if not isinstance(length, types.IntegerLiteral):
-        raise TypingError("fixed_tuple needs a compile-time constant length")
-    n = length.literal_value
-
-    def impl(array, length):
-        return to_fixed_tuple(array, n)
-
-    return impl
+    u, v, w, q, r = nu
+    X, M, N = tau
+    f_u, f_v, f_w, f_q, f_r = f
+    m = p.m
+    restoring = (p.z_g * p.W - p.z_b * p.B) * sin_theta  # g_q(θ), docs/model.md §2.1 f
+    # fmt: off
+    surge = (X + f_u
+             + p.X_uu * u * abs(u) + p.X_vv * v * v + p.X_ww * w * w        # damping
+             + (p.X_qq * q * q + p.X_rr * r * r)                              # centripetal
+             + p.surge_coriolis * ((p.X_vr + m) * v * r + (p.X_wq - m) * w * q))  # Coriolis
+    sway = (f_v
+            - (m - p.Y_ur) * u * r                                            # Coriolis
+            + p.Y_uv * u * v + p.Y_vv * v * abs(v))                           # lift, drag
+    heave = (f_w
+             + (m + p.Z_uq) * u * q                                           # Coriolis
+             + p.Z_uw * u * w + p.Z_ww * w * abs(w)                           # lift, drag
+             + m * p.z_g * q * q)                                             # Coriolis
+    # The last bracket of the pitch row is one partial sum (see the module docstring).
+    pitch = (M + f_q
+             + p.M_qq * q * abs(q)                                            # damping
+             + p.M_uq * u * q + p.M_uw * u * w                                # Coriolis
+             + (p.M_ww * w * abs(w) - restoring - m * p.z_g * (w * q - v * r)))
+    yaw = (N + f_r
+           + p.N_uv * u * v                                                   # Coriolis
+           + p.N_vv * v * abs(v)                                              # damping
+           + p.N_ur * u * r                                                   # Coriolis
+           + p.N_rr * r * abs(r))                                             # damping
+    # fmt: on
+    return surge, sway, heave, pitch, yaw
 
 
 @njit(cache=True, inline="always")
-def state_derivative(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma):
-    """d/dt of the 11-state: MODEL.md §2.1 dynamics and kinematics plus ṡ of §3.3."""
-    # The trigonometry of θ and ψ is shared by the dynamics, kinematics and guidance.
-    cth, sth = math.cos(st[3]), math.sin(st[3])
-    cps, sps = math.cos(st[4]), math.sin(st[4])
-    u, v, w, q, r = st[5], st[6], st[7], st[8], st[9]
-    du, dv, dw, dq, dr = nu_dot_sin(u, v, w, q, r, sth, X, M, N, f[0], f[1], f[2], f[3], f[4], p)
-    dx, dy, dz, dth, dps = eta_dot_trig(u, v, w, q, r, cth, sth, cps, sps)
-    px, py, pz, dpx, dpy, dpz, _, _, _ = path_eval(kind, pdata, st[10])
-    x_e, _, _ = body_errors_trig(st[0] - px, st[1] - py, st[2] - pz, cth, sth, cps, sps)
-    s_dot = virtual_point_speed(x_e, u_d, sigma) / math.sqrt(dpx * dpx + dpy * dpy + dpz * dpz)
-    return (dx + cx, dy + cy, dz + cz, dth, dps, du, dv, dw, dq, dr, s_dot)
+def nu_dot_sin(nu, sin_theta, tau, f, p):
+    """Accelerations ν̇ = M⁻¹ (right-hand sides) [m/s², rad/s²], given sin θ (the simulator
+    computes the trigonometry once per stage)."""
+    surge, sway, heave, pitch, yaw = generalized_forces(nu, sin_theta, tau, f, p)
+    return surge / p.m11, sway / p.m22, heave / p.m33, pitch / p.I55, yaw / p.I66
 
 
 @njit(cache=True, inline="always")
-def _stage(st, h, k):
-    """st + h·k for 11-tuples (stays in registers: no array per RK4 stage)."""
+def nu_dot(nu, theta, tau, f, p):
+    """Accelerations (u̇, v̇, ẇ, q̇, ṙ) of paper (1), docs/model.md §2.1 [m/s², rad/s²]."""
+    return nu_dot_sin(nu, math.sin(theta), tau, f, p)
+
+
+@njit(cache=True, inline="always")
+def eta_dot(nu, cos_theta, sin_theta, cos_psi, sin_psi):
+    """Kinematics of paper (2), docs/model.md §2.1: (ẋ, ẏ, ż, θ̇, ψ̇) through the water, given
+    the cosines and sines of θ and ψ [m/s, rad/s]."""
+    u, v, w, q, r = nu
     return (
-        st[0] + h * k[0], st[1] + h * k[1], st[2] + h * k[2], st[3] + h * k[3],
-        st[4] + h * k[4], st[5] + h * k[5], st[6] + h * k[6], st[7] + h * k[7],
-        st[8] + h * k[8], st[9] + h * k[9], st[10] + h * k[10],
-    )  # fmt: skip
+        u * cos_psi * cos_theta - v * sin_psi + w * cos_psi * sin_theta,
+        u * sin_psi * cos_theta + v * cos_psi + w * sin_psi * sin_theta,
+        -u * sin_theta + w * cos_theta,
+        q,
+        r / cos_theta,
+    )
 
 
 @njit(cache=True, inline="always")
-def _rk4_combine(st, h, k1, k2, k3, k4):
-    """st + h·(k1 + 2 k2 + 2 k3 + k4) for 11-tuples, with h = dt/6."""
-    return _stage(st, h, (
-        k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0], k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1],
-        k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2], k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3],
-        k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4], k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5],
-        k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6], k1[7] + 2.0 * k2[7] + 2.0 * k3[7] + k4[7],
-        k1[8] + 2.0 * k2[8] + 2.0 * k3[8] + k4[8], k1[9] + 2.0 * k2[9] + 2.0 * k3[9] + k4[9],
-        k1[10] + 2.0 * k2[10] + 2.0 * k3[10] + k4[10],
-    ))  # fmt: skip
+def state_derivative(st, tau, f, current, p, kind, pdata, u_d, sigma):
+    """d/dt of the simulator state (layout `STATE`): ν̇, η̇ plus the current, and ṡ.
 
-
-@njit(cache=True, inline="always")
-def rk4_tuple(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma, dt):
-    """One classical RK4 step of `state_derivative` on an 11-tuple, τ, f and current held."""
-    k1 = state_derivative(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
-    k2 = state_derivative(_stage(st, 0.5 * dt, k1), X, M, N, f, cx, cy, cz, p, kind, pdata,
-                          u_d, sigma)  # fmt: skip
-    k3 = state_derivative(_stage(st, 0.5 * dt, k2), X, M, N, f, cx, cy, cz, p, kind, pdata,
-                          u_d, sigma)  # fmt: skip
-    k4 = state_derivative(_stage(st, dt, k3), X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma)
-    return _rk4_combine(st, dt / 6.0, k1, k2, k3, k4)
-
-
-@njit(cache=True)
-def rk4_step(st, X, M, N, f, cx, cy, cz, p, kind, pdata, u_d, sigma, dt, out):
-    """One classical RK4 step of `state_derivative` with τ, f and current held over dt [s].
-
-    Array form of `rk4_tuple`: reads the 11-state ``st``, writes the new state into ``out``.
+    ``current`` is the earth-fixed current (v_c,x, v_c,y, v_c,z) [m/s]; ``kind``, ``pdata``
+    the path (`paths.path_eval`); ``u_d`` [m/s] and ``sigma`` [m] the virtual-point law.
     """
-    nxt = rk4_tuple(fixed_tuple(st, STATE_DIM), X, M, N, f, cx, cy, cz, p, kind, pdata,
-                    u_d, sigma, dt)  # fmt: skip
-    for i in range(STATE_DIM):
-        out[i] = nxt[i]
-
-
-@njit(cache=True)
-def guidance_row(st, kind, pdata, u_d, sigma, out):
-    """Fill one row of `GUIDANCE_FIELDS` (errors, distance, path angles and rates, u_p, ṡ)."""
-    px, py, pz, dpx, dpy, dpz, ddx, ddy, ddz = path_eval(kind, pdata, st[10])
-    x_e, y_e, z_e = body_errors(st[0], st[1], st[2], st[3], st[4], px, py, pz)
-    psi_f, theta_f, dpsi_ds, dtheta_ds, speed = path_angles(dpx, dpy, dpz, ddx, ddy, ddz)
-    u_p = virtual_point_speed(x_e, u_d, sigma)
-    s_dot = u_p / speed
-    out[0], out[1], out[2] = x_e, y_e, z_e
-    out[3] = math.sqrt(x_e * x_e + y_e * y_e + z_e * z_e)
-    out[4], out[5] = psi_f, theta_f
-    out[6], out[7] = dpsi_ds * s_dot, dtheta_ds * s_dot
-    out[8], out[9] = u_p, s_dot
-
-
-@njit(cache=True, inline="always")
-def _noise(amplitude, key, counter):
-    """Bounded white noise A·(2U − 1), U = uniform01(key, counter) [N or N·m]."""
-    return amplitude * (2.0 * uniform01(key, counter) - 1.0)
-
-
-@njit(cache=True, inline="always")
-def _gauss_markov(deviation, a, b, key, counter):
-    """One exact step of the Gauss–Markov current deviation [m/s]: a·δ + b·N(0, 1)."""
-    if b == 0.0:  # no random current: skip the ~25 ns normal draw
-        return a * deviation
-    return a * deviation + b * standard_normal(key, counter)
-
-
-@njit(cache=True, inline="always")
-def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index, kind, pdata,
-                    cfg_array, guid, obs, record):  # fmt: skip
-    """Advance one vehicle by one control period, in place; returns False on a non-finite state.
-
-    ``st`` (11) and ``cur`` (3, Gauss–Markov current deviation [m/s]) are updated; ``guid``,
-    ``obs`` and ``record`` (mean τ over the period, then mean f) are rewritten only while the
-    state is finite, so the caller keeps the last valid observation. ``cfg`` is `SimConfig`'s
-    packed vector (layout `CFG`). White noise channel c at physics step n is A_c·(2U − 1) with
-    U = uniform01(noise_key, 5·(n // hold_steps) + c): a function of the seed and time only.
-    Actuator "paper" gives τ = a ⊙ limits; "fins" keeps X = a_0·X_max and gives
-    M, N = a·K·δ_max·u|u| from the fin-lift coefficient (MODEL.md §2.3), updated every step.
-    """
-    # State, parameters, config and sums live in registers for the whole control period: no
-    # heap arrays, and no array references (each costs two atomic reference-count updates).
-    cfg = fixed_tuple(cfg_array, CFG_DIM)
-    p = fixed_tuple(p_array, N_PARAMS)
-    n_sub, dt, hold_steps = int(cfg[0]), cfg[1], int(cfg[2])
-    u_d, sigma, actuator = cfg[3], cfg[4], int(cfg[5])
-    gm_a = cfg[6]
-    fin_gain = p[FIN_COEFF_INDEX] * p[FIN_MAX_INDEX]
-    x = fixed_tuple(st, STATE_DIM)
-    a_X, a_M, a_N = action[0], action[1], action[2]
-    dc = (cur[0], cur[1], cur[2])
-    sum_X = sum_M = sum_N = 0.0
-    sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
-    finite = True
-    for k in range(n_sub):
-        n = step_index + k
-        block = (n // hold_steps) * 5
-        f = (
-            _noise(cfg[7], noise_key, block), _noise(cfg[8], noise_key, block + 1),
-            _noise(cfg[9], noise_key, block + 2), _noise(cfg[10], noise_key, block + 3),
-            _noise(cfg[11], noise_key, block + 4),
-        )  # fmt: skip
-        X = a_X * cfg[12]
-        if actuator == 0:
-            M = a_M * cfg[13]
-            N = a_N * cfg[14]
-        else:
-            authority = fin_gain * x[5] * abs(x[5])
-            M = a_M * authority
-            N = a_N * authority
-        nxt = rk4_tuple(x, X, M, N, f, cfg[15] + dc[0], cfg[16] + dc[1], cfg[17] + dc[2], p,
-                        kind, pdata, u_d, sigma, dt)  # fmt: skip
-        dc = (
-            _gauss_markov(dc[0], gm_a, cfg[18], current_key, 3 * n),
-            _gauss_markov(dc[1], gm_a, cfg[19], current_key, 3 * n + 1),
-            _gauss_markov(dc[2], gm_a, cfg[20], current_key, 3 * n + 2),
-        )
-        sum_X += X
-        sum_M += M
-        sum_N += N
-        sum_f = (sum_f[0] + f[0], sum_f[1] + f[1], sum_f[2] + f[2], sum_f[3] + f[3],
-                 sum_f[4] + f[4])  # fmt: skip
-        for j in range(STATE_DIM):
-            if not math.isfinite(nxt[j]):
-                finite = False
-        if not finite:
-            x = nxt
-            break
-        x = (
-            nxt[0], nxt[1], nxt[2], nxt[3], wrap_angle(nxt[4]), nxt[5], nxt[6], nxt[7], nxt[8],
-            nxt[9], nxt[10],
-        )  # fmt: skip
-    for j in range(STATE_DIM):
-        st[j] = x[j]
-    for c in range(3):
-        cur[c] = dc[c]
-    if not finite:
-        return False
-    record[0], record[1], record[2] = sum_X / n_sub, sum_M / n_sub, sum_N / n_sub
-    for c in range(5):
-        record[3 + c] = sum_f[c] / n_sub
-    guidance_row(st, kind, pdata, u_d, sigma, guid)
-    build_observation(st, guid, u_d, obs)
-    return True
-
-
-# Layout of the packed simulation config read by `advance_vehicle`.
-CFG = (
-    "n_sub", "physics_dt", "hold_steps", "u_d", "sigma", "actuator", "gm_a",
-    "noise_f_u", "noise_f_v", "noise_f_w", "noise_f_q", "noise_f_r",
-    "limit_X", "limit_M", "limit_N", "current_x", "current_y", "current_z",
-    "gm_b_x", "gm_b_y", "gm_b_z",
-)  # fmt: skip
-CFG_DIM = len(CFG)
+    # The trigonometry of θ and ψ is shared by the dynamics, kinematics and guidance.
+    cos_theta, sin_theta = math.cos(st[STATE.theta]), math.sin(st[STATE.theta])
+    cos_psi, sin_psi = math.cos(st[STATE.psi]), math.sin(st[STATE.psi])
+    nu = (st[STATE.u], st[STATE.v], st[STATE.w], st[STATE.q], st[STATE.r])
+    du, dv, dw, dq, dr = nu_dot_sin(nu, sin_theta, tau, f, p)
+    dx, dy, dz, dtheta, dpsi = eta_dot(nu, cos_theta, sin_theta, cos_psi, sin_psi)
+    px, py, pz, dpx, dpy, dpz, _, _, _ = path_eval(kind, pdata, st[STATE.s])
+    x_e, _, _ = body_errors_trig(st[STATE.x] - px, st[STATE.y] - py, st[STATE.z] - pz,
+                                 cos_theta, sin_theta, cos_psi, sin_psi)  # fmt: skip
+    s_dot = virtual_point_speed(x_e, u_d, sigma) / math.sqrt(dpx * dpx + dpy * dpy + dpz * dpz)
+    c_x, c_y, c_z = current
+    return (dx + c_x, dy + c_y, dz + c_z, dtheta, dpsi, du, dv, dw, dq, dr, s_dot)

@@ -1,23 +1,45 @@
-"""Keep numba's on-disk kernel cache in step with every source file a kernel compiles in.
+"""Where numba keeps this project's compiled kernels, and how it knows they are current.
 
-numba decides whether a cached kernel is stale from the modification time of the file that
-defines it, but the kernels here inline functions from other modules (`inline="always"`): after
-an edit of `dynamics.py` alone, `simulator.py`'s cached kernel would keep running the old physics,
-silently. So each package records a digest of all its numba sources (and of the packages it
-inlines from) beside numba's cache files, and deletes those files when the digest changes.
+numba judges a cached kernel by the file that defines it only, but the kernels here inline
+functions from other modules (``inline="always"``): after an edit of `dynamics.py` alone,
+`simulator.py`'s cached kernel would keep running the old physics, silently. So the files of a
+registered package get their own numba cache locator, whose source stamp is a digest of *all* the
+numba sources of the package and of the packages it inlines from. numba compares that stamp when
+it first loads a kernel and recompiles on a mismatch; nothing is ever deleted, so processes that
+share a cache never pull a file from under each other.
+
+Nothing happens at import beyond definitions: registering a package records its folders, and the
+digest is computed the first time numba loads or saves one of its kernels (once per process and
+package). numba itself probes the cache directory when a ``cache=True`` kernel is defined; the
+locator does that once per package instead of once per kernel.
+
+The cache lives in the package's ``__pycache__``; if that is not writable (a read-only install),
+in ``NUMBA_CACHE_DIR`` or numba's per-user cache directory; if none of those is writable either, in
+a private temporary directory removed at exit, with a `NumbaCacheWarning`: the kernels then
+compile in every new process (20–60 s) but nothing fails. ``NUMBA_CACHE_DIR``, when set, is used
+first, as numba does.
 """
 
 from __future__ import annotations
 
-import contextlib
+import atexit
 import hashlib
 import os
+import shutil
+import sys
+import tempfile
+import warnings
 from pathlib import Path
 
-__all__ = ["refresh_numba_cache", "sources_digest"]
+from numba.core import caching, config
 
-STAMP_NAME = "numba_sources.sha256"
+__all__ = ["NumbaCacheWarning", "cache_directory", "register_package", "sources_digest"]
+
 NUMBA_MARKER = b"numba"  # files without it cannot hold a kernel
+
+
+class NumbaCacheWarning(UserWarning):
+    """No writable directory for the on-disk kernel cache: kernels compile in every process."""
 
 
 def sources_digest(*source_dirs: str | Path, containing: bytes = b"") -> str:
@@ -33,28 +55,119 @@ def sources_digest(*source_dirs: str | Path, containing: bytes = b"") -> str:
     return digest.hexdigest()
 
 
-def refresh_numba_cache(package_dir: str | Path, *inlined_from: str | Path) -> bool:
-    """Delete `package_dir`'s numba cache files if its numba sources changed; True if deleted.
+# Registered packages: folder -> the folders whose sources its kernels may inline (itself first).
+_PACKAGES: dict[Path, tuple[Path, ...]] = {}
+_DIGESTS: dict[tuple[Path, ...], str] = {}  # computed lazily, once per process
+_DIRECTORIES: dict[Path, str] = {}  # package folder -> chosen cache directory
 
-    Only the in-tree cache (`__pycache__/*.nbi`, `*.nbc`) is managed: a read-only install falls
-    back to numba's user-wide cache, and reinstalling rewrites every file's time stamp anyway.
-    """
-    cache_dir = Path(package_dir) / "__pycache__"
-    stamp = cache_dir / STAMP_NAME
-    digest = sources_digest(package_dir, *inlined_from, containing=NUMBA_MARKER)
+
+def register_package(package_dir: str | Path, *inlined_from: str | Path) -> None:
+    """Cache the kernels defined in `package_dir` with a stamp over its numba sources and those
+    of `inlined_from`. Must run before the package's first kernel is defined (its ``__init__``)."""
+    package = Path(package_dir).resolve()
+    _PACKAGES[package] = (package, *(Path(d).resolve() for d in inlined_from))
+
+
+def cache_directory(package_dir: str | Path) -> str | None:
+    """The directory holding `package_dir`'s kernel cache, or None before its first kernel."""
+    return _DIRECTORIES.get(Path(package_dir).resolve())
+
+
+def _digest(folders: tuple[Path, ...]) -> str:
+    if folders not in _DIGESTS:
+        _DIGESTS[folders] = sources_digest(*folders, containing=NUMBA_MARKER)
+    return _DIGESTS[folders]
+
+
+class _PackageStamp:
+    """The package digest, computed when numba first compares or stores it (not at import)."""
+
+    def __init__(self, folders: tuple[Path, ...]) -> None:
+        self._folders = folders
+
+    def __str__(self) -> str:
+        return _digest(self._folders)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, str) and other == str(self)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __reduce__(self) -> tuple:
+        return (str, (str(self),))  # stored in the index as the plain digest
+
+
+def _writable(directory: str) -> bool:
+    """Whether files can be created in `directory` (made if missing): numba's own probe."""
     try:
-        if stamp.read_text() == digest:
-            return False
+        os.makedirs(directory, exist_ok=True)
+        tempfile.TemporaryFile(dir=directory).close()
     except OSError:
-        pass
-    deleted = False
-    with contextlib.suppress(OSError):  # read-only or concurrently cleaned: nothing to keep
-        for path in [*cache_dir.glob("*.nbi"), *cache_dir.glob("*.nbc")]:
-            with contextlib.suppress(FileNotFoundError):
-                path.unlink()
-                deleted = True
-        cache_dir.mkdir(exist_ok=True)
-        tmp = cache_dir / f"{STAMP_NAME}.{os.getpid()}.tmp"
-        tmp.write_text(digest)
-        os.replace(tmp, stamp)
-    return deleted
+        return False
+    return True
+
+
+def _choose_directory(package: Path) -> str:
+    if package in _DIRECTORIES:
+        return _DIRECTORIES[package]
+    subpath = caching._CacheLocator.get_suitable_cache_subpath(str(package / "__init__.py"))
+    candidates = [str(package / "__pycache__")]
+    if config.CACHE_DIR:
+        candidates.insert(0, os.path.join(config.CACHE_DIR, subpath))
+    user_dir = caching.AppDirs(appname="numba", appauthor=False).user_cache_dir
+    candidates.append(os.path.join(user_dir, subpath))
+    chosen = next((d for d in candidates if _writable(d)), None)
+    if chosen is None:
+        chosen = tempfile.mkdtemp(prefix=f"{package.name}-numba-cache-")
+        atexit.register(shutil.rmtree, chosen, ignore_errors=True)
+        warnings.warn(
+            f"{package.name}: no writable numba cache directory (tried {', '.join(candidates)}); "
+            f"compiled kernels are kept in {chosen} for this process only. Set NUMBA_CACHE_DIR "
+            "to a writable folder to keep them.",
+            NumbaCacheWarning,
+            stacklevel=2,
+        )
+    _DIRECTORIES[package] = chosen
+    return chosen
+
+
+class _PackageCacheLocator(caching._CacheLocator):
+    """numba cache locator for the files of a registered package (see the module docstring)."""
+
+    def __init__(self, py_func, py_file: str, package: Path) -> None:
+        self._lineno = py_func.__code__.co_firstlineno
+        self._stamp = _PackageStamp(_PACKAGES[package])
+        self._cache_path = _choose_directory(package)
+
+    def ensure_cache_path(self) -> None:
+        os.makedirs(self._cache_path, exist_ok=True)
+
+    def get_cache_path(self) -> str:
+        return self._cache_path
+
+    def get_source_stamp(self) -> _PackageStamp:
+        return self._stamp
+
+    def get_disambiguator(self) -> str:
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func, py_file: str):
+        package = Path(py_file).resolve().parent
+        if package not in _PACKAGES or getattr(sys, "frozen", False):
+            return None  # not ours: numba's own locators decide
+        return cls(py_func, py_file, package)
+
+
+def _install() -> None:
+    """Put the locator in front of numba's own (idempotent; affects registered packages only)."""
+    locators = caching.CacheImpl._locator_classes  # the same list in numba 0.59 … 0.68
+    if _PackageCacheLocator not in locators:
+        locators.insert(0, _PackageCacheLocator)
+
+
+_install()
+register_package(Path(__file__).parent)

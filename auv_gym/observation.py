@@ -1,4 +1,4 @@
-"""The one definition of the observation vector: names, units, bounds and the builder.
+"""The one definition of the observation (names, units, bounds, builder) and the guidance row.
 
 | index | name          | unit  | meaning                                                      |
 |-------|---------------|-------|--------------------------------------------------------------|
@@ -23,9 +23,24 @@ import math
 import numpy as np
 from numba import njit
 
-from auv_gym.guidance import wrap_angle
+from auv_gym.dynamics import STATE
+from auv_gym.guidance import body_errors, path_angles, virtual_point_speed, wrap_angle
+from auv_gym.paths import path_eval
+from auv_gym.records import field_indices
 
-__all__ = ["OBS_HIGH", "OBS_INDEX", "OBS_LOW", "OBS_NAMES", "OBS_UNITS", "build_observation"]
+__all__ = [
+    "GUIDANCE_DIM",
+    "GUIDANCE_FIELDS",
+    "GUIDE",
+    "OBS",
+    "OBS_HIGH",
+    "OBS_INDEX",
+    "OBS_LOW",
+    "OBS_NAMES",
+    "OBS_UNITS",
+    "build_observation",
+    "guidance_row",
+]
 
 ERROR_BOUND = 500.0  # [m] far beyond any corridor; a vehicle outside it is terminated
 SPEED_BOUND = 10.0  # [m/s] 4× REMUS's maximum speed
@@ -58,31 +73,48 @@ OBS_LOW = np.array([row[2] for row in _TABLE], dtype=np.float32)
 OBS_HIGH = np.array([row[3] for row in _TABLE], dtype=np.float32)
 OBS_DIM = len(OBS_NAMES)
 
-# Guidance quantities computed by the simulator kernel, one row per vehicle.
+# Guidance quantities computed by the simulator kernel, one row per vehicle [m, rad, rad/s, m/s].
 GUIDANCE_FIELDS = (
     "x_e", "y_e", "z_e", "distance", "psi_F", "theta_F", "psi_F_dot", "theta_F_dot", "u_p", "s_dot",
 )  # fmt: skip
-G = {name: i for i, name in enumerate(GUIDANCE_FIELDS)}
-_GX, _GY, _GZ, _GPSI, _GTH, _GDPSI, _GDTH, _GUP = (
-    G[k] for k in ("x_e", "y_e", "z_e", "psi_F", "theta_F", "psi_F_dot", "theta_F_dot", "u_p")
-)
+GUIDANCE_DIM = len(GUIDANCE_FIELDS)
+GUIDE = field_indices("GuidanceIndex", GUIDANCE_FIELDS, __name__)
+OBS = field_indices("ObservationIndex", OBS_NAMES, __name__)
+
+
+@njit(cache=True)
+def guidance_row(st, kind, pdata, u_d, sigma, out):
+    """Fill one guidance row ``out`` (layout `GUIDE`) from the simulator state ``st`` (layout
+    `dynamics.STATE`): errors, distance, path angles and their rates, u_p and ṡ (MODEL.md §3)."""
+    px, py, pz, dpx, dpy, dpz, ddx, ddy, ddz = path_eval(kind, pdata, st[STATE.s])
+    x_e, y_e, z_e = body_errors(st[STATE.x], st[STATE.y], st[STATE.z], st[STATE.theta],
+                                st[STATE.psi], px, py, pz)  # fmt: skip
+    psi_f, theta_f, dpsi_ds, dtheta_ds, speed = path_angles(dpx, dpy, dpz, ddx, ddy, ddz)
+    u_p = virtual_point_speed(x_e, u_d, sigma)
+    s_dot = u_p / speed
+    out[GUIDE.x_e], out[GUIDE.y_e], out[GUIDE.z_e] = x_e, y_e, z_e
+    out[GUIDE.distance] = math.sqrt(x_e * x_e + y_e * y_e + z_e * z_e)
+    out[GUIDE.psi_F], out[GUIDE.theta_F] = psi_f, theta_f
+    out[GUIDE.psi_F_dot], out[GUIDE.theta_F_dot] = dpsi_ds * s_dot, dtheta_ds * s_dot
+    out[GUIDE.u_p], out[GUIDE.s_dot] = u_p, s_dot
 
 
 @njit(cache=True, inline="always")
-def build_observation(state, guid, u_d, out):
-    """Write one observation (layout `OBS_NAMES`) from the simulator state and guidance row."""
-    out[0] = guid[_GX]
-    out[1] = guid[_GY]
-    out[2] = guid[_GZ]
-    out[3] = wrap_angle(state[4] - guid[_GPSI])
-    out[4] = state[3]
-    out[5] = guid[_GTH]
-    out[6] = state[5]
-    out[7] = state[6]
-    out[8] = state[7]
-    out[9] = state[8]
-    out[10] = state[9]
-    out[11] = u_d
-    out[12] = guid[_GUP]
-    out[13] = guid[_GDPSI]
-    out[14] = guid[_GDTH]
+def build_observation(st, guid, u_d, out):
+    """Write one observation ``out`` (layout `OBS`) from the simulator state ``st`` and its
+    guidance row ``guid``."""
+    out[OBS.x_e] = guid[GUIDE.x_e]
+    out[OBS.y_e] = guid[GUIDE.y_e]
+    out[OBS.z_e] = guid[GUIDE.z_e]
+    out[OBS.psi_error] = wrap_angle(st[STATE.psi] - guid[GUIDE.psi_F])
+    out[OBS.theta] = st[STATE.theta]
+    out[OBS.theta_F] = guid[GUIDE.theta_F]
+    out[OBS.u] = st[STATE.u]
+    out[OBS.v] = st[STATE.v]
+    out[OBS.w] = st[STATE.w]
+    out[OBS.q] = st[STATE.q]
+    out[OBS.r] = st[STATE.r]
+    out[OBS.u_D] = u_d
+    out[OBS.u_p] = guid[GUIDE.u_p]
+    out[OBS.psi_F_dot] = guid[GUIDE.psi_F_dot]
+    out[OBS.theta_F_dot] = guid[GUIDE.theta_F_dot]

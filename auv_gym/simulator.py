@@ -14,14 +14,28 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from auv_gym.disturbances import CurrentConfig, NoiseConfig, draw_keys, gauss_markov_coefficients
-from auv_gym.dynamics import ACTUATORS, CFG, STATE_DIM, advance_vehicle, guidance_row
+from auv_gym.disturbances import (
+    KEY,
+    CurrentConfig,
+    NoiseConfig,
+    draw_keys,
+    gauss_markov_coefficients,
+)
+from auv_gym.dynamics import STATE, STATE_DIM
+from auv_gym.integrator import (
+    ACTUATORS,
+    CONFIG_FIELDS,
+    RECORD_DIM,
+    advance_vehicle,
+    config_record,
+)
 from auv_gym.observation import (
-    GUIDANCE_FIELDS,
+    GUIDANCE_DIM,
     OBS_DIM,
     OBS_HIGH,
     OBS_LOW,
     build_observation,
+    guidance_row,
 )
 from auv_gym.paths import Path, make_path
 from auv_gym.task import REWARD_TERMS, RewardWeights, TaskLimits, task_row, task_vector
@@ -165,7 +179,7 @@ class SimConfig:
         return math.ceil(self.max_time / self.control_dt - _SUBSTEP_TOL)
 
     def packed(self) -> np.ndarray:
-        """The float64 vector `dynamics.advance_vehicle` reads (layout `dynamics.CFG`)."""
+        """The float64 row `integrator.advance_vehicle` reads (layout `CONFIG_FIELDS`)."""
         gm_a, gm_b = gauss_markov_coefficients(self.current, self.physics_dt)
         values = {
             "n_sub": self.substeps,
@@ -183,7 +197,7 @@ class SimConfig:
         for c, axis in enumerate("xyz"):
             values[f"current_{axis}"] = self.current.mean[c]
             values[f"gm_b_{axis}"] = gm_b[c]
-        return np.array([float(values[name]) for name in CFG])
+        return np.array([float(values[name]) for name in CONFIG_FIELDS])
 
 
 @njit(cache=True, inline="always")
@@ -193,9 +207,9 @@ def _step_row(i, state, current, actions, params, keys, step_index, kind, pdata,
     a = actions[i]
     for j in range(3):  # documented actuator saturation: |a_j| <= 1
         a[j] = min(max(a[j], -1.0), 1.0)
-    advance_vehicle(state[i], current[i], a, params[i], keys[i, 0], keys[i, 1], step_index[i],
-                    kind, pdata, cfg, guid[i], obs[i], record[i])  # fmt: skip
-    step_index[i] += int(cfg[0])
+    advance_vehicle(state[i], current[i], a, params[i], keys[i, KEY.noise], keys[i, KEY.current],
+                    step_index[i], kind, pdata, cfg, guid[i], obs[i], record[i])  # fmt: skip
+    step_index[i] += int(config_record(cfg).n_sub)
     reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, task, terms[i])
 
 
@@ -266,9 +280,9 @@ class Simulator:
         self.params = np.tile(self._nominal, (n, 1))
         self.keys = np.zeros((n, 2), dtype=np.uint64)
         self.step_index = np.zeros(n, dtype=np.int64)
-        self.guid = np.zeros((n, len(GUIDANCE_FIELDS)))
+        self.guid = np.zeros((n, GUIDANCE_DIM))
         self.obs = np.zeros((n, OBS_DIM))
-        self.record = np.zeros((n, 8))
+        self.record = np.zeros((n, RECORD_DIM))
         self.terms = np.zeros((n, len(REWARD_TERMS)))
         self.reward = np.zeros(n)
         self.code = np.zeros(n, dtype=np.int64)
@@ -306,10 +320,10 @@ class Simulator:
             self.params[i] = self._nominal
         position, heading, s0, u0 = self._start(rng)
         self.state[i] = 0.0
-        self.state[i, 0:3] = position
-        self.state[i, 4] = heading
-        self.state[i, 5] = u0
-        self.state[i, 10] = s0
+        self.state[i, [STATE.x, STATE.y, STATE.z]] = position
+        self.state[i, STATE.psi] = heading
+        self.state[i, STATE.u] = u0
+        self.state[i, STATE.s] = s0
         # Start the Gauss–Markov deviation in its stationary distribution.
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
         self.step_index[i] = 0

@@ -22,11 +22,28 @@ from dataclasses import astuple, dataclass
 import numpy as np
 from numba import njit
 
-from auv_gym.observation import OBS_DIM
+from auv_gym.dynamics import STATE
+from auv_gym.observation import GUIDE, OBS, OBS_DIM
+from auv_gym.records import field_indices, fixed_tuple, record_type
 
-__all__ = ["REWARD_TERMS", "TERMINATION_REASONS", "RewardWeights", "TaskLimits", "task_row"]
+__all__ = [
+    "REWARD_TERMS",
+    "TASK_FIELDS",
+    "TERM",
+    "TERMINATION_REASONS",
+    "RewardWeights",
+    "TaskLimits",
+    "task_row",
+    "task_vector",
+]
 
 REWARD_TERMS = ("progress", "tracking", "distance", "speed", "effort", "termination")
+N_TERMS = len(REWARD_TERMS)
+TERM = field_indices("RewardTermIndex", REWARD_TERMS, __name__)
+# Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -].
+TASK_FIELDS = (*(f"w_{name}" for name in REWARD_TERMS), "corridor", "max_pitch", "s_end")
+TASK_DIM = len(TASK_FIELDS)
+TaskRecord = record_type("TaskRecord", TASK_FIELDS, __name__)
 # Codes returned by `task_row`; 0 means "running".
 TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end")
 CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END = 1, 2, 3, 4, 5
@@ -66,44 +83,58 @@ class TaskLimits:
 
 
 def task_vector(weights: RewardWeights, limits: TaskLimits) -> np.ndarray:
-    """Pack weights and limits for `task_row`."""
+    """Pack weights and limits into the row `task_row` reads (layout `TASK_FIELDS`)."""
     return np.array([*astuple(weights), limits.corridor, limits.max_pitch, limits.s_end])
 
 
 @njit(cache=True, inline="always")
-def task_row(state, guid, obs, action, obs_low, obs_high, task, out_terms):
-    """Reward terms (into out_terms, layout `REWARD_TERMS`), total reward and termination code."""
-    distance = guid[3]
+def task_record(task):
+    """The packed task row as a `TaskRecord` held in registers."""
+    return TaskRecord(*fixed_tuple(task, TASK_DIM))
+
+
+@njit(cache=True, inline="always")
+def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
+    """Reward terms (into ``out_terms``, layout `TERM`), total reward and termination code.
+
+    ``st`` is the simulator state (layout `dynamics.STATE`), ``guid`` its guidance row and
+    ``obs`` its observation (`observation.GUIDE`, `observation.OBS`), ``action`` the saturated
+    action, ``task`` the row of `task_vector`.
+    """
+    t = task_record(task)
+    distance = guid[GUIDE.distance]
     code = 0
     finite = True
-    for j in range(state.shape[0]):
-        if not math.isfinite(state[j]):
+    for j in range(st.shape[0]):
+        if not math.isfinite(st[j]):
             finite = False
     if not finite:
         code = NON_FINITE
-    elif distance > task[6]:
+    elif distance > t.corridor:
         code = CORRIDOR
-    elif abs(state[3]) > task[7]:
+    elif abs(st[STATE.theta]) > t.max_pitch:
         code = PITCH
     else:
         for j in range(OBS_DIM):
             if obs[j] < obs_low[j] or obs[j] > obs_high[j]:
                 code = ENVELOPE
-        if code == 0 and state[10] >= task[8]:
+        if code == 0 and st[STATE.s] >= t.s_end:
             code = PATH_END
-    u_d = obs[11]
+    u_d, u = obs[OBS.u_D], obs[OBS.u]
     if not finite:
-        for j in range(5):
-            out_terms[j] = 0.0
+        out_terms[TERM.progress] = out_terms[TERM.tracking] = out_terms[TERM.distance] = 0.0
+        out_terms[TERM.speed] = out_terms[TERM.effort] = 0.0
     else:
-        out_terms[0] = task[0] * min(obs[12] / u_d, 1.0) if u_d > 0 else 0.0
-        out_terms[1] = task[1] * math.exp(-((distance / TRACKING_SCALE) ** 2))
-        out_terms[2] = -task[2] * distance / task[6]
-        speed_err = (obs[6] - u_d) / u_d if u_d > 0 else obs[6]
-        out_terms[3] = -task[3] * min(speed_err * speed_err, 1.0)
-        out_terms[4] = -task[4] * (action[0] ** 2 + action[1] ** 2 + action[2] ** 2) / 3.0
-    out_terms[5] = -task[5] if (code != 0 and code != PATH_END) else 0.0
+        out_terms[TERM.progress] = t.w_progress * min(obs[OBS.u_p] / u_d, 1.0) if u_d > 0 else 0.0
+        out_terms[TERM.tracking] = t.w_tracking * math.exp(-((distance / TRACKING_SCALE) ** 2))
+        out_terms[TERM.distance] = -t.w_distance * distance / t.corridor
+        speed_err = (u - u_d) / u_d if u_d > 0 else u
+        out_terms[TERM.speed] = -t.w_speed * min(speed_err * speed_err, 1.0)
+        effort = action[0] ** 2 + action[1] ** 2 + action[2] ** 2
+        out_terms[TERM.effort] = -t.w_effort * effort / 3.0
+    failed = code != 0 and code != PATH_END
+    out_terms[TERM.termination] = -t.w_termination if failed else 0.0
     total = 0.0
-    for j in range(6):
+    for j in range(N_TERMS):
         total += out_terms[j]
     return total, code

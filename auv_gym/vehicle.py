@@ -1,12 +1,9 @@
-"""5-DOF underactuated AUV model (MODEL.md §2): parameters and equations of motion.
+"""REMUS 100 parameters (docs/model.md §2.2) and their packed form for the numba kernels.
 
-State ν = (u, v, w, q, r) is the velocity relative to the water [m/s, rad/s]; pose
-η = (x, y, z, θ, ψ) is earth-fixed NED (z down, θ nose-up positive) [m, rad]. Inputs
-τ = (X, M, N) [N, N·m]; disturbances f = (f_u, f_v, f_w, f_q, f_r) [N, N·m].
-
-The numeric kernels here are `numba.njit` functions of a packed parameter vector (see
-`AUVParams.to_vector`), so that one copy of the equations serves the single env, the vector env,
-the controllers' nominal models and the tests.
+`AUVParams` holds the coefficients of the equations of motion in `auv_gym.dynamics`.
+`AUVParams.to_vector` packs them into the float64 row the kernels read (layout `PARAM_NAMES`: the
+fields, then the inertias m11 … I66 it derives), and `params_record` lets a kernel read that row
+by name, ``p.X_uu``, from registers.
 """
 
 from __future__ import annotations
@@ -18,15 +15,17 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numba import njit
 
+from auv_gym.records import fixed_tuple, record_type
+
 __all__ = [
+    "DERIVED_INERTIAS",
     "HYDRODYNAMIC_FIELDS",
     "N_PARAMS",
     "PARAM_INDEX",
+    "PARAM_NAMES",
     "AUVParams",
-    "eta_dot",
-    "eta_dot_trig",
-    "nu_dot",
-    "nu_dot_sin",
+    "ParamsRecord",
+    "params_record",
     "remus100",
 ]
 
@@ -148,11 +147,8 @@ class AUVParams:
         return self.scaled(dict(zip(HYDRODYNAMIC_FIELDS, 1.0 + delta, strict=True)))
 
     def to_vector(self) -> np.ndarray:
-        """Pack into the float64 vector the numba kernels read (layout: `PARAM_INDEX`)."""
-        vec = np.empty(N_PARAMS)
-        for name, i in PARAM_INDEX.items():
-            vec[i] = float(getattr(self, name))
-        return vec
+        """Pack into the float64 row the numba kernels read (layout `PARAM_NAMES`)."""
+        return np.array([float(getattr(self, name)) for name in PARAM_NAMES])
 
 
 HYDRODYNAMIC_FIELDS: tuple[str, ...] = (
@@ -161,25 +157,13 @@ HYDRODYNAMIC_FIELDS: tuple[str, ...] = (
     "M_uw", "M_ww", "N_uv", "N_vv", "N_ur", "N_rr",
 )  # fmt: skip
 
-PARAM_INDEX: dict[str, int] = {f.name: i for i, f in enumerate(fields(AUVParams))}
-N_PARAMS = len(PARAM_INDEX)
-# Kernel-side indices (numba needs plain integer globals).
-_m, _W, _B, _Iy, _Iz, _zg, _zb = (
-    PARAM_INDEX[k] for k in ("m", "W", "B", "I_y", "I_z", "z_g", "z_b")
-)
-_Xud, _Yvd, _Zwd, _Mqd, _Nrd = (
-    PARAM_INDEX[k] for k in ("X_udot", "Y_vdot", "Z_wdot", "M_qdot", "N_rdot")
-)
-_Xuu, _Xvv, _Xww, _Xqq, _Xrr, _Xvr, _Xwq = (
-    PARAM_INDEX[k] for k in ("X_uu", "X_vv", "X_ww", "X_qq", "X_rr", "X_vr", "X_wq")
-)
-_Yur, _Yuv, _Yvv = (PARAM_INDEX[k] for k in ("Y_ur", "Y_uv", "Y_vv"))
-_Zuq, _Zuw, _Zww = (PARAM_INDEX[k] for k in ("Z_uq", "Z_uw", "Z_ww"))
-_Mqq, _Muq, _Muw, _Mww = (PARAM_INDEX[k] for k in ("M_qq", "M_uq", "M_uw", "M_ww"))
-_Nuv, _Nvv, _Nur, _Nrr = (PARAM_INDEX[k] for k in ("N_uv", "N_vv", "N_ur", "N_rr"))
-_COR = PARAM_INDEX["surge_coriolis"]
-FIN_COEFF_INDEX = PARAM_INDEX["fin_moment_coeff"]
-FIN_MAX_INDEX = PARAM_INDEX["fin_max"]
+# The diagonal of M = M_RB + M_A, packed after the fields so that the kernels divide by the
+# values `AUVParams` derives instead of recomputing them.
+DERIVED_INERTIAS = ("m11", "m22", "m33", "I55", "I66")
+PARAM_NAMES: tuple[str, ...] = (*(f.name for f in fields(AUVParams)), *DERIVED_INERTIAS)
+PARAM_INDEX: dict[str, int] = {name: i for i, name in enumerate(PARAM_NAMES)}
+N_PARAMS = len(PARAM_NAMES)
+ParamsRecord = record_type("ParamsRecord", PARAM_NAMES, __name__)
 
 
 def remus100(**overrides: float) -> AUVParams:
@@ -188,49 +172,6 @@ def remus100(**overrides: float) -> AUVParams:
 
 
 @njit(cache=True, inline="always")
-def nu_dot_sin(u, v, w, q, r, sin_theta, X, M, N, fu, fv, fw, fq, fr, p):
-    """`nu_dot` given sin θ instead of θ (the simulator computes the trigonometry once)."""
-    m = p[_m]
-    zgW = p[_zg] * p[_W] - p[_zb] * p[_B]
-    surge = X + fu + p[_Xuu] * u * abs(u) + p[_Xvv] * v * v + p[_Xww] * w * w
-    surge += p[_Xqq] * q * q + p[_Xrr] * r * r
-    surge += p[_COR] * ((p[_Xvr] + m) * v * r + (p[_Xwq] - m) * w * q)
-    sway = fv - (m - p[_Yur]) * u * r + p[_Yuv] * u * v + p[_Yvv] * v * abs(v)
-    heave = fw + (m + p[_Zuq]) * u * q + p[_Zuw] * u * w + p[_Zww] * w * abs(w)
-    heave += m * p[_zg] * q * q
-    pitch = M + fq + p[_Mqq] * q * abs(q) + p[_Muq] * u * q + p[_Muw] * u * w
-    pitch += p[_Mww] * w * abs(w) - zgW * sin_theta - m * p[_zg] * (w * q - v * r)
-    yaw = N + fr + p[_Nuv] * u * v + p[_Nvv] * v * abs(v) + p[_Nur] * u * r + p[_Nrr] * r * abs(r)
-    return (
-        surge / (m - p[_Xud]),
-        sway / (m - p[_Yvd]),
-        heave / (m - p[_Zwd]),
-        pitch / (p[_Iy] - p[_Mqd]),
-        yaw / (p[_Iz] - p[_Nrd]),
-    )
-
-
-@njit(cache=True, inline="always")
-def nu_dot(u, v, w, q, r, theta, X, M, N, fu, fv, fw, fq, fr, p):
-    """Accelerations (u̇, v̇, ẇ, q̇, ṙ) of MODEL.md §2.1 (paper (1), corrected) [m/s², rad/s²]."""
-    return nu_dot_sin(u, v, w, q, r, math.sin(theta), X, M, N, fu, fv, fw, fq, fr, p)
-
-
-@njit(cache=True, inline="always")
-def eta_dot_trig(u, v, w, q, r, cth, sth, cps, sps):
-    """`eta_dot` given cos θ, sin θ, cos ψ, sin ψ."""
-    return (
-        u * cps * cth - v * sps + w * cps * sth,
-        u * sps * cth + v * cps + w * sps * sth,
-        -u * sth + w * cth,
-        q,
-        r / cth,
-    )
-
-
-@njit(cache=True, inline="always")
-def eta_dot(u, v, w, q, r, theta, psi):
-    """Kinematics of MODEL.md §2.1 (paper (2)): (ẋ, ẏ, ż, θ̇, ψ̇) for body velocity (u, v, w)."""
-    return eta_dot_trig(
-        u, v, w, q, r, math.cos(theta), math.sin(theta), math.cos(psi), math.sin(psi)
-    )
+def params_record(p):
+    """The packed row ``p`` (`AUVParams.to_vector`) as a `ParamsRecord` held in registers."""
+    return ParamsRecord(*fixed_tuple(p, N_PARAMS))

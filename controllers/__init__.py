@@ -11,14 +11,16 @@ from pathlib import Path
 from typing import Any
 
 import auv_gym
-from auv_gym.numba_cache import refresh_numba_cache
-from controllers.backstepping import Backstepping
-from controllers.base import BatchedController, Policy
-from controllers.fbsm import FBSM
-from controllers.gains import ControllerGains, MembershipSet
+from auv_gym.numba_cache import register_package
 
-# The controllers' kernels inline auv_gym's guidance: a change there also makes them stale.
-refresh_numba_cache(Path(__file__).parent, Path(auv_gym.__file__).parent)
+# Before the first kernel is defined: the controllers' kernels inline auv_gym's dynamics and
+# guidance, so an edit there must also recompile them (see `auv_gym.numba_cache`).
+register_package(Path(__file__).parent, Path(auv_gym.__file__).parent)
+
+from controllers.backstepping import Backstepping  # noqa: E402
+from controllers.base import BatchedController, Policy  # noqa: E402
+from controllers.fbsm import FBSM  # noqa: E402
+from controllers.gains import ControllerGains, MembershipSet  # noqa: E402
 
 __all__ = [
     "CLASSICAL",

@@ -1,6 +1,6 @@
 r"""Traditional backstepping comparator (MODEL.md §4.7): nominal-model inverse, same guidance.
 
-With the nominal model ν̇ = f_n(ν, θ) + b_n τ (f_n from `auv_gym.vehicle.nu_dot` with τ = 0,
+With the nominal model ν̇ = f_n(ν, θ) + b_n τ (f_n from `auv_gym.dynamics.nu_dot` with τ = 0,
 including the surge Coriolis terms when the model has them, MODEL.md §10.3):
 
     X = m11 (−f1 + u̇_D − k_u S1),                  k_u = h1 + λ1
@@ -23,8 +23,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from auv_gym.dynamics import nu_dot
 from auv_gym.observation import OBS_INDEX
-from auv_gym.vehicle import AUVParams, nu_dot
+from auv_gym.vehicle import AUVParams, params_record
 from controllers.base import BatchedController
 from controllers.fbsm import moment_limits
 from controllers.gains import (
@@ -62,8 +63,9 @@ def _backstepping_row(o, g, p, filt, started, action, diag, errors):
     loop_errors(o, g, filt, started, errors)
     z1, z2, _, _, da1, z3, z4, _, _, da2 = errors[:10]
     u, theta = o[_U], o[_TH]
-    f1, _, _, f5, f6 = nu_dot(u, o[_V], o[_W], o[_Q], o[_R], theta, 0.0, 0.0, 0.0, 0.0, 0.0,
-                              0.0, 0.0, 0.0, p)  # fmt: skip
+    nu = (u, o[_V], o[_W], o[_Q], o[_R])
+    f1, _, _, f5, f6 = nu_dot(nu, theta, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0),
+                              params_record(p))  # fmt: skip
     k_u = g[H1] + g[LAM1]
     k_q = g[C1] + g[H2] + g[LAM2]
     k_r = g[C2] + g[H3] + g[LAM3]

@@ -16,7 +16,7 @@ from auv_gym.guidance import (
     wrap_angle,
 )
 from auv_gym.paths import PATHS, Helix, Spline, StraightLine, make_path
-from auv_gym.vehicle import remus100
+from auv_gym.vehicle import params_record, remus100
 
 ALL_PATHS = [Helix(), StraightLine(), make_path("waypoints"), Helix(radius=5.0, climb=-0.5)]
 
@@ -77,13 +77,13 @@ def test_error_model_matches_finite_differences():
     """Check 1: d/dt of ε = R_Bᵀ(η − p(s)) equals the exact error dynamics within 1e−6."""
     rng = np.random.default_rng(0)
     path = Helix()
-    params = remus100().to_vector()
+    params = params_record(remus100().to_vector())
     zeros = np.zeros(5)
     for _ in range(50):
         st = np.r_[rng.uniform(-20, 20, 3), rng.uniform(-0.6, 0.6), rng.uniform(-3, 3),
                    rng.uniform(0, 1.5), rng.uniform(-0.3, 0.3, 2), rng.uniform(-0.3, 0.3, 2),
                    rng.uniform(0, 30)]  # fmt: skip
-        deriv = np.array(state_derivative(st, 10.0, 1.0, -1.0, zeros, 0.0, 0.0, 0.0, params,
+        deriv = np.array(state_derivative(st, (10.0, 1.0, -1.0), zeros, (0.0, 0.0, 0.0), params,
                                           path.kind, path.data, 1.0, 0.5))  # fmt: skip
 
         def eps_at(h, st=st, deriv=deriv):

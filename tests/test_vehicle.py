@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from auv_gym.dynamics import STATE_DIM, rk4_step
+from auv_gym.dynamics import STATE_DIM
+from auv_gym.integrator import rk4_step
 from auv_gym.paths import Helix
 from auv_gym.simulator import ACTUATOR_LIMITS
 from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, AUVParams, remus100
@@ -84,7 +85,8 @@ def _integrate(dt: float, t_end: float = 2.0) -> np.ndarray:
     out = np.empty(STATE_DIM)
     f = np.array([3.0, -2.0, 1.0, 0.5, -0.5])
     for _ in range(round(t_end / dt)):
-        rk4_step(st, 20.0, 2.0, -3.0, f, 0.1, -0.2, 0.0, p, path.kind, path.data, 1.0, 0.5, dt, out)
+        rk4_step(st, (20.0, 2.0, -3.0), f, (0.1, -0.2, 0.0), p, path.kind, path.data, 1.0, 0.5, dt,
+                 out)  # fmt: skip
         st = out.copy()
     return st
 
