@@ -4,9 +4,10 @@ matplotlib is imported lazily and only its object-oriented API is used (`Figure`
 canvas), so nothing here touches pyplot's global state or needs a display.
 
 `paper_figures` draws the equivalents of Figs. 3–9 of Liang et al. (2018) for a set of
-`auv_gym.evaluation.Trajectory` objects (one per controller, same seed), plus the distance to
+`auv_gym.trajectory.Trajectory` objects (one per controller, same seed), plus the distance to
 the virtual point and the adaptive-parameter norms; `metrics_table` formats
-`auv_gym.evaluation.compute_metrics` results side by side. Every PNG is written atomically.
+`auv_gym.metrics.compute_metrics` results side by side. `new_figure` and `save_figure` (every
+PNG written atomically) are the helpers other figure modules build on.
 """
 
 from __future__ import annotations
@@ -19,18 +20,20 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from auv_gym.files import write_atomic
 from auv_gym.paths import Path
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from auv_gym.evaluation import Trajectory
+    from auv_gym.trajectory import Trajectory
 
 __all__ = [
     "PAPER_FIGURES",
     "TABLE_METRICS",
     "metrics_table",
+    "new_figure",
     "paper_figures",
     "plot_track",
     "render_track",
@@ -61,17 +64,21 @@ _DEG = 180.0 / math.pi
 _WIDTH, _HEIGHT, _DPI = 7.0, 4.5, 150  # default figure size [in] and resolution
 
 
-def _figure(width_in: float, height_in: float, dpi: int) -> Figure:
+def new_figure(
+    width_in: float, height_in: float, dpi: int = _DPI, layout: str | None = None
+) -> Figure:
+    """A matplotlib `Figure` of ``width_in`` × ``height_in`` inches, outside pyplot's state.
+
+    ``layout``: matplotlib's layout engine ("constrained", "tight" or None).
+    """
     from matplotlib.figure import Figure
 
-    return Figure(figsize=(width_in, height_in), dpi=dpi)
+    return Figure(figsize=(width_in, height_in), dpi=dpi, layout=layout)
 
 
 def save_figure(fig: Figure, file: str | os.PathLike, dpi: int | None = None) -> FilePath:
     """Write ``fig`` as PNG atomically (temporary file in the same folder, then `os.replace`)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    from auv_gym.evaluation import write_atomic
 
     FigureCanvasAgg(fig)
     dots = dpi if dpi is not None else fig.dpi
@@ -107,7 +114,7 @@ def render_track(path: Path, track: np.ndarray, s_now: float) -> np.ndarray:
     """RGB picture (H, W, 3) uint8 of the path and one vehicle track."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    fig = _figure(9.6, 3.2, 100)
+    fig = new_figure(9.6, 3.2, 100)
     canvas = FigureCanvasAgg(fig)
     plot_track(fig, path, {"vehicle": track}, s_max=s_now + 10.0)
     fig.tight_layout()
@@ -149,7 +156,7 @@ def figure_path_3d(
     trajectories: Mapping[str, Trajectory], path: Path | None = None, **_: Any
 ) -> Figure:
     """Fig. 3: the desired path and the vehicle tracks in 3D (height −z up) [m]."""
-    fig = _figure(_WIDTH, 5.5, _DPI)
+    fig = new_figure(_WIDTH, 5.5, _DPI)
     ax = fig.add_subplot(1, 1, 1, projection="3d")
     ref = _reference(trajectories, path)
     ax.plot(ref[:, 0], ref[:, 1], -ref[:, 2], "k--", lw=1.0, label="desired path")
@@ -171,7 +178,7 @@ def _projection(
     labels: tuple[str, str],
     title: str,
 ) -> Figure:
-    fig = _figure(_WIDTH, _HEIGHT + 1.0, _DPI)
+    fig = new_figure(_WIDTH, _HEIGHT + 1.0, _DPI)
     ax = fig.add_subplot(1, 1, 1)
     sign = np.array([1.0, 1.0, -1.0])  # plot height −z
     ref = _reference(trajectories, path) * sign
@@ -226,7 +233,7 @@ def figure_errors(
     """
     t_end = max(float(tr.t[-1]) for tr in trajectories.values())
     zoom = zoom_from is not None and zoom_from < t_end
-    fig = _figure(10.0 if zoom else _WIDTH, _HEIGHT + 1.5, _DPI)
+    fig = new_figure(10.0 if zoom else _WIDTH, _HEIGHT + 1.5, _DPI)
     styles = _styles(list(trajectories))
     columns = 2 if zoom else 1
     axes: list[Axes] = []
@@ -254,7 +261,7 @@ def figure_errors(
 
 def figure_distance(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
     """Distance to the virtual point on a log scale, with the 0.5-m and 0.1-m settling bands."""
-    fig = _figure(_WIDTH, _HEIGHT, _DPI)
+    fig = new_figure(_WIDTH, _HEIGHT, _DPI)
     ax = fig.add_subplot(1, 1, 1)
     styles = _styles(list(trajectories))
     for name, tr in trajectories.items():
@@ -269,7 +276,7 @@ def figure_distance(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
 
 def figure_surge(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
     """Fig. 7: surge speed u against the desired u_D [m/s]."""
-    fig = _figure(_WIDTH, _HEIGHT, _DPI)
+    fig = new_figure(_WIDTH, _HEIGHT, _DPI)
     ax = fig.add_subplot(1, 1, 1)
     styles = _styles(list(trajectories))
     u_d = None
@@ -296,7 +303,7 @@ def figure_attitude(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
     ψ_d − ψ_F or "psi_d") when they expose them; the path angles θ_F and ψ_F (dashed) always.
     Headings are unwrapped along ψ_F.
     """
-    fig = _figure(_WIDTH, _HEIGHT + 1.0, _DPI)
+    fig = new_figure(_WIDTH, _HEIGHT + 1.0, _DPI)
     ax_th, ax_psi = _time_axes(fig, 2)
     styles = _styles(list(trajectories))
     for k, (name, tr) in enumerate(trajectories.items()):
@@ -340,7 +347,7 @@ def figure_attitude(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
 
 def figure_controls(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure:
     """Fig. 9: applied control inputs X [N], M and N [N·m] (means over each control period)."""
-    fig = _figure(_WIDTH, _HEIGHT + 1.5, _DPI)
+    fig = new_figure(_WIDTH, _HEIGHT + 1.5, _DPI)
     axes = _time_axes(fig, 3)
     styles = _styles(list(trajectories))
     limits = None
@@ -372,7 +379,7 @@ def figure_adaptive(trajectories: Mapping[str, Trajectory], **_: Any) -> Figure 
     keys = sorted({k for s in series.values() for k in s})
     if not keys:
         return None
-    fig = _figure(_WIDTH, 1.6 + 1.3 * len(keys), _DPI)
+    fig = new_figure(_WIDTH, 1.6 + 1.3 * len(keys), _DPI)
     axes = _time_axes(fig, len(keys))
     styles = _styles(list(trajectories))
     for ax, key in zip(axes, keys, strict=True):

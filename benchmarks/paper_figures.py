@@ -11,8 +11,8 @@ the script writes into ``--out``:
                                            x_e, y_e, z_e, surge speed, attitude, inputs X, M, N
     fig10_adaptive_norms.png               adaptive-parameter norms (if a controller has any)
     fig11_distance.png                     distance to the virtual point (log scale)
-    metrics.md                             `auv_gym.evaluation.compute_metrics` side by side
-    metrics.json                           the same numbers, with the settings
+    metrics.md                             `auv_gym.metrics.compute_metrics` side by side
+    metrics.json                           the same numbers, with the settings, versions, commit
     trajectories/<policy>.npz              the recorded time series (`Trajectory.load`)
 
 Every file is written atomically. ``--duration 60`` gives a quick run (about a minute on 2 cores);
@@ -22,7 +22,6 @@ metrics windows then start at min(100 s, duration/2).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -32,7 +31,9 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from auv_gym.evaluation import policy_name
+from auv_gym.files import environment, jsonable, write_json, write_text
+from auv_gym.rollout import policy_name
+from benchmarks.policies import build_policy, check_policy_spec, policy_label
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
 LABELS = {"fbsm": "FBSM", "backstepping": "backstepping"}
@@ -111,40 +112,21 @@ def validate(args: Args) -> None:
 
 
 def build_policies(names: Sequence[str], control_dt: float) -> dict[str, Any]:
-    """label → policy for each name.
+    """label → policy for each spec (`benchmarks.policies`: "fbsm", "backstepping", any other
+    `controllers.make` name, "ppo", "ppo:PATH" or "module:attribute"), built for ``control_dt``.
 
-    "fbsm", "backstepping" (or any other `controllers.make` name) are built for ``control_dt``;
-    "module:attribute" names an importable Policy object, or a class / factory called without
-    arguments. `controllers` is imported only when needed: the figures need no torch.
+    Classical controllers are labelled as in the paper ("FBSM"), an imported object by its
+    `policy_name`, an agent by its spec.
     """
     policies: dict[str, Any] = {}
     for spec in names:
-        if ":" in spec:
-            from controllers import import_policy
-
-            policy = import_policy(spec)
-            label = policy_name(policy)
-        else:
-            import controllers
-
-            policy = controllers.make(spec, control_dt=control_dt)
-            label = LABELS.get(spec, spec)
+        kind = check_policy_spec(spec).kind
+        policy = build_policy(spec, control_dt)
+        label = policy_name(policy) if kind == "import" else LABELS.get(spec, spec)
         if label in policies:
             raise ValueError(f"two policies share the label {label!r}")
         policies[label] = policy
     return policies
-
-
-def _write_text(file: Path, text: str) -> None:
-    from auv_gym.evaluation import write_atomic
-
-    write_atomic(file, lambda fh: fh.write(text.encode("utf-8")))
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    return value
 
 
 def make_figures(
@@ -161,9 +143,10 @@ def make_figures(
     Returns {"figures": stem → file, "metrics": label → metrics, "wall_time": label → s}.
     ``env_kwargs`` override the env defaults (the paper's scenario); ``max_time`` = duration.
     """
-    from auv_gym.evaluation import compute_metrics, rollout
+    from auv_gym.metrics import compute_metrics
     from auv_gym.paths import make_path
     from auv_gym.plotting import metrics_table, paper_figures
+    from auv_gym.rollout import rollout
 
     if not policies:
         raise ValueError("make_figures needs at least one policy")
@@ -177,8 +160,7 @@ def make_figures(
         wall[label] = time.perf_counter() - start
         trajectories[label] = tr
         metrics[label] = compute_metrics(tr, transient=window)
-        safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in label)
-        tr.save(out / "trajectories" / f"{safe}.npz")
+        tr.save(out / "trajectories" / f"{policy_label(label)}.npz")
     path = make_path(env_kwargs.get("path", "helix"))
     figures = paper_figures(trajectories, out, path=path, dpi=dpi, zoom_from=window)
     noise = env_kwargs.get("disturbance", "paper")
@@ -189,16 +171,17 @@ def make_figures(
         f"seed {seed}, {duration:g} s, windowed metrics over t ≥ {window:g} s. "
         f"Best value per row in bold.\n\n"
     )
-    _write_text(out / "metrics.md", header + metrics_table(metrics))
+    write_text(out / "metrics.md", header + metrics_table(metrics))
     payload = {
         "seed": seed,
         "duration": duration,
         "transient": window,
         "env_kwargs": trajectories[next(iter(trajectories))].metadata["env_kwargs"],
         "wall_time_s": wall,
-        "metrics": {k: {m: _jsonable(v) for m, v in d.items()} for k, d in metrics.items()},
+        "metrics": jsonable(metrics, non_finite="text"),
+        **environment(),
     }
-    _write_text(out / "metrics.json", json.dumps(payload, indent=1) + "\n")
+    write_json(out / "metrics.json", payload, indent=1)
     return {"figures": figures, "metrics": metrics, "wall_time": wall}
 
 

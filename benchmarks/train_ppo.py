@@ -23,30 +23,23 @@ The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
     python -m rl_zoo3.train --algo ppo --env AUVPath3D-v0 --gym-packages auv_gym \\
         -conf benchmarks/hyperparams/ppo.yml
 
-Outputs and file formats: see `controllers.ppo`.
+Outputs and file formats: see `benchmarks.training`; the agents load with `controllers.ppo`.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
-import shutil
 import sys
 import typing
 from collections.abc import Sequence
 from dataclasses import MISSING, fields
 from pathlib import Path
 
-from controllers.ppo import (
-    EVAL_FILE,
-    HELD_OUT_FILE,
-    TrainOptions,
-    held_out_evaluation,
-    train,
-    write_json_atomic,
-)
+from benchmarks.figures import plot_learning_curve
+from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 
+FIXED = {"algo": "ppo"}  # TrainOptions this CLI does not offer
 # One-line help per option (the TrainOptions field comments, for the CLI).
 HELP = {
     "config": "RL-Zoo hyper-parameter YAML (top-level key = env id)",
@@ -61,7 +54,8 @@ HELP = {
     "eval_seeds": "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
     "eval_duration": "evaluation episode length [s]",
     "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
-    "threads": "torch and numba threads (1 is fastest on 2 shared cores, DESIGN.md §4)",
+    "threads": "torch and numba threads during training, restored after (1 is fastest on 2 "
+    "shared cores, DESIGN.md §4)",
     "progress_bar": "show the progress bar (tqdm + rich)",
     "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
     "verbose": "SB3 verbosity; 1 also prints every evaluation",
@@ -86,6 +80,8 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
                              "and write AGENT/held_out_evaluation.json")  # fmt: skip
     hints = typing.get_type_hints(TrainOptions)
     for f in fields(TrainOptions):
+        if f.name in FIXED:
+            continue
         flag = "--" + f.name.replace("_", "-")
         default = f.default if f.default is not MISSING else f.default_factory()  # type: ignore[misc]
         if hints[f.name] is bool:
@@ -109,63 +105,14 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
         ns["eval_seeds"] = tuple(int(s) for s in str(ns["eval_seeds"]).split(",") if s.strip())
     except ValueError as exc:
         parser.error(f"--eval-seeds must be comma-separated integers: {exc}")
-    return TrainOptions(**ns), extra
-
-
-def plot_learning_curve(run: Path, prefix: Path) -> None:
-    """Copy RUN/evaluations.csv to PREFIX.csv and plot it to PREFIX.png.
-
-    Two panels share the y axis (mean rms distance over t ≥ 100 s of the evaluation seeds,
-    log scale): against env steps and against training wall time. Evaluations in which an
-    episode terminated are drawn as crosses at their rms over the part that was flown (or at
-    the corridor width when no episode reached 100 s).
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    source = Path(run) / EVAL_FILE
-    if not source.is_file():
-        raise FileNotFoundError(f"no learning curve {source}")
-    with source.open(newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        raise ValueError(f"{source} has no evaluations")
-    steps = np.array([float(r["num_timesteps"]) for r in rows])
-    wall = np.array([float(r["wall_time_s"]) for r in rows])
-    rms = np.array([float(r["rms_distance_mean"]) for r in rows])
-    failed = np.array([int(r["n_terminated"]) > 0 for r in rows])
-    shown = np.where(np.isfinite(rms), rms, 30.0)
-    prefix = Path(prefix)
-    prefix.parent.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(source, prefix.with_suffix(".csv"))
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True, constrained_layout=True)
-    for ax, x, label in ((axes[0], steps / 1e6, "env steps [millions]"),
-                         (axes[1], wall / 60.0, "training wall time [min]")):  # fmt: skip
-        ax.plot(x, shown, "-", color="0.6", lw=1)
-        ax.plot(x[~failed], shown[~failed], "o", ms=4, label="all episodes ran 300 s")
-        ax.plot(x[failed], shown[failed], "x", ms=6, color="C3", label="some episode terminated")
-        ax.axhline(1.0, ls="--", color="k", lw=0.8, label="target 1 m")
-        ax.set_xlabel(label)
-        ax.set_yscale("log")
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].set_ylabel("eval mean rms distance, t ≥ 100 s [m]")
-    axes[0].legend(fontsize=8)
-    fig.suptitle("PPO on AUVPath3D-v0, paper scenario (white noise ±35), evaluation seeds")
-    tmp = prefix.with_name(prefix.name + ".tmp.png")
-    fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    tmp.replace(prefix.with_suffix(".png"))
+    return TrainOptions(**ns, **FIXED), extra
 
 
 def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     opts, extra = parse_args(args)
     if extra.evaluate:
-        report = held_out_evaluation(extra.evaluate, opts.eval_duration)
-        write_json_atomic(Path(extra.evaluate) / HELD_OUT_FILE, report)
+        report = write_held_out_evaluation(extra.evaluate, opts.eval_duration)
         print(json.dumps(report["summary"], indent=2))
         return
     if not extra.plot_only:

@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 import controllers
-from auv_gym.evaluation import rollouts
+from auv_gym.rollout import rollouts
 from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, remus100
+
+pytestmark = pytest.mark.slow  # 300-s closed loops at two control periods
 
 PERIODS = (0.05, 0.01)
 NOISE_SEEDS = (0, 1, 2)

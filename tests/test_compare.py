@@ -12,7 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.compare import check_policy_spec, load_scenarios, main, select
+from benchmarks.compare import main
+from benchmarks.policies import check_policy_spec
+from benchmarks.scenarios import load_scenarios, select
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": f"{ROOT / 'tests'}{os.pathsep}{ROOT}"}

@@ -196,7 +196,7 @@ def test_controllers_run_inside_sb3_evaluate_policy():
     from stable_baselines3.common.evaluation import evaluate_policy
     from stable_baselines3.common.monitor import Monitor
 
-    from auv_gym.evaluation import rollouts
+    from auv_gym.rollout import rollouts
 
     for name in NAMES:
         env = Monitor(gym.make("AUVPath3D-v0", max_time=20.0, disturbance="none"))
@@ -259,7 +259,7 @@ def test_speed_benchmark_runs_in_closed_loop():
 def test_integral_los_removes_the_offset_a_constant_current_leaves(name, control_dt):
     """A 0.3 m/s cross current on a straight line: the paper's LOS (no integral action) settles
     at a constant cross-track offset; integral LOS (`<name>_ilos`, σ_y = 3) drives it to zero."""
-    from auv_gym.evaluation import rollouts
+    from auv_gym.rollout import rollouts
 
     env = {"path": "line", "disturbance": "none", "current": {"mean": (0.0, 0.3, 0.0)},
            "max_time": 300.0, "control_dt": control_dt}  # fmt: skip

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import re
 from pathlib import Path
 
@@ -28,4 +29,22 @@ def test_readme_example_runs(doc: str, index: int, code: str, monkeypatch, capsy
     monkeypatch.chdir(ROOT)  # the examples name files relative to the project root
     namespace: dict = {}
     exec(compile(code, f"{doc} example {index}", "exec"), namespace)
-    assert namespace, "the example defined nothing"
+    # Every name the example binds (but "_") holds a value: a documented call that returns
+    # nothing (None) where the example uses its result is a wrong example.
+    bound = _bound_names(code)
+    assert bound, "the example binds no name"
+    empty = sorted(n for n in bound if n != "_" and namespace.get(n) is None)
+    assert not empty, f"{doc} example {index}: {empty} are None after running it"
+
+
+def _bound_names(code: str) -> set[str]:
+    """Names bound by the example's top-level imports and assignments."""
+    names: set[str] = set()
+    for node in ast.parse(code).body:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {(a.asname or a.name).split(".")[0] for a in node.names}
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                names |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+    return names

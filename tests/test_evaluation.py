@@ -1,5 +1,5 @@
-"""auv_gym.evaluation: metrics against hand-computed values, .npz round trip, determinism, and
-batched rollouts against the single Gymnasium env."""
+"""auv_gym.rollout, .metrics and .trajectory: metrics against hand-computed values, .npz round
+trip, determinism, and batched rollouts against the single Gymnasium env."""
 
 from __future__ import annotations
 
@@ -10,15 +10,9 @@ import pytest
 
 import controllers
 from auv_gym import OBS_INDEX, AUVPath3DEnv
-from auv_gym.evaluation import (
-    INTERVAL_FIELDS,
-    SAMPLE_FIELDS,
-    Trajectory,
-    compute_metrics,
-    evaluate,
-    rollout,
-    rollouts,
-)
+from auv_gym.metrics import compute_metrics
+from auv_gym.rollout import evaluate, rollout, rollouts
+from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
 
 
 class ProportionalPolicy:

@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from auv_gym import OBS_INDEX, make_path
-from auv_gym.evaluation import Trajectory, rollouts
 from auv_gym.plotting import (
     PAPER_FIGURES,
     metrics_table,
@@ -22,6 +21,8 @@ from auv_gym.plotting import (
     render_track,
     save_figure,
 )
+from auv_gym.rollout import rollouts
+from auv_gym.trajectory import Trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

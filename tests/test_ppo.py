@@ -1,4 +1,5 @@
-"""PPO baselines: training CLI, checkpoints and resume, loading and its errors, the shipped agent.
+"""PPO baselines: training CLI (`benchmarks.training`), checkpoints and resume, loading
+(`controllers.ppo`) and its errors, the shipped agent.
 
 Training here is tiny (a few hundred env steps); real training belongs to benchmarks/train_ppo.py.
 """
@@ -142,7 +143,7 @@ def _random_obs(n: int, seed: int = 0) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def saved_agent(tmp_path_factory: pytest.TempPathFactory):
-    from controllers.ppo import save_agent
+    from benchmarks.training.checkpoints import save_agent
 
     model, venv = _tiny_model()
     folder = tmp_path_factory.mktemp("agent") / "agent"
@@ -250,11 +251,11 @@ def test_other_observation_space_named(saved_agent, tmp_path: Path) -> None:
 
 
 def test_zoo_config_errors(tmp_path: Path) -> None:
-    from controllers.ppo import read_zoo_config
+    from benchmarks.training.config import read_zoo_config
 
     cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo.yml")
     assert cfg.normalize["norm_obs"] is True
-    assert cfg.normalize["gamma"] == cfg.ppo_kwargs["gamma"]  # copied, as RL Zoo does
+    assert cfg.normalize["gamma"] == cfg.algo_kwargs["gamma"]  # copied, as RL Zoo does
     assert cfg.env_kwargs["randomize_start"] is True
     bad = tmp_path / "bad.yml"
     bad.write_text(TINY_YAML.replace("n_epochs: 1", "n_epochs: 1\n  frame_stack: 4"))
@@ -271,7 +272,7 @@ def test_zoo_config_errors(tmp_path: Path) -> None:
 
 def test_shipped_agent_follows_helix_briefly() -> None:
     """The shipped agent on held-out seed 0 (paper scenario), 60 s: no termination, closes in."""
-    from auv_gym.evaluation import evaluate
+    from auv_gym.rollout import evaluate
     from controllers.ppo import load_policy
 
     policy = load_policy(SHIPPED)
@@ -284,10 +285,11 @@ def test_shipped_agent_follows_helix_briefly() -> None:
     assert metrics["rms_distance"] < 0.5  # already on the path (starts 17.7 m away; 0.052 m)
 
 
+@pytest.mark.slow  # ten 300-s episodes
 def test_shipped_agent_meets_acceptance_on_held_out_seeds() -> None:
     """Issue acceptance: paper scenario, seeds 0-9, 300 s: mean rms_distance (t ≥ 100 s) ≤ 1 m and
     no episode leaves the corridor; the numbers recorded beside the agent are reproduced."""
-    from controllers.ppo import HELD_OUT_FILE, held_out_evaluation
+    from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
 
     recorded = json.loads((SHIPPED / HELD_OUT_FILE).read_text())
     fresh = held_out_evaluation(SHIPPED)

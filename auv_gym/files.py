@@ -1,0 +1,188 @@
+"""Writing results: atomic files and folders, JSON with non-finite numbers, the environment record.
+
+Every file the project writes (trajectories, figures, tables, agents, learning curves) goes
+through `write_atomic` or `write_folder_atomic`: readers, and a run restarted after a kill, see
+the previous complete file or folder or the new one, never a partial write. `environment` is the
+one record of what produced a result (package versions and the git commit of the code).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, is_dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import IO, Any, Literal
+
+import numpy as np
+
+__all__ = [
+    "environment",
+    "git_commit",
+    "json_default",
+    "jsonable",
+    "versions",
+    "write_atomic",
+    "write_folder_atomic",
+    "write_json",
+    "write_text",
+]
+
+# Distributions whose versions determine a result (Python is added).
+PACKAGES = ("auv-gym", "numpy", "numba", "gymnasium", "stable-baselines3", "torch")
+_ROOT = Path(__file__).resolve().parent.parent  # the checkout holding the auv_gym package
+
+
+def write_atomic(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> Path:
+    """Call ``write(file)`` on a temporary file beside ``path``, then rename it over ``path``.
+
+    Readers see the old file or the complete new one, never a partial write; the temporary
+    file is removed if ``write`` fails. Permissions follow the umask, as for `open`.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_text(path: str | os.PathLike, text: str) -> Path:
+    """Write UTF-8 text atomically (`write_atomic`)."""
+    return write_atomic(path, lambda fh: fh.write(text.encode("utf-8")))
+
+
+def write_folder_atomic(path: str | os.PathLike, fill: Callable[[Path], Any]) -> Path:
+    """Call ``fill(folder)`` on an empty temporary folder beside ``path``, then swap it in.
+
+    The swap is two renames (old folder aside, new folder in place) and the old folder is
+    deleted afterwards, so readers see the previous complete folder or the new one. The
+    temporary folder is removed if ``fill`` fails.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())  # as `mkdir` would (mkdtemp makes it private)
+        fill(tmp)
+        old = target.with_name(f".{target.name}.old{os.getpid()}")
+        if target.exists():
+            os.replace(target, old)
+        os.replace(tmp, target)
+        shutil.rmtree(old, ignore_errors=True)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return target
+
+
+def json_default(obj: Any) -> Any:
+    """``json.dumps(default=...)``: dataclasses as dicts, numpy as Python, paths by their data.
+
+    An `auv_gym.paths.Path` becomes {"type", "data"}, a file path its string; anything else its
+    repr, so a record of keyword arguments never fails to serialise.
+    """
+    if is_dataclass(obj) and not isinstance(obj, type):
+        return {"type": type(obj).__name__, **asdict(obj)}
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    if hasattr(obj, "data") and hasattr(obj, "kind"):  # an auv_gym.paths.Path
+        return {"type": type(obj).__name__, "data": np.asarray(obj.data).tolist()}
+    return repr(obj)
+
+
+def jsonable(value: Any, non_finite: Literal["null", "text"] = "null") -> Any:
+    """A copy of ``value`` that strict JSON can hold: numpy scalars as Python numbers, mappings
+    and sequences converted item by item, and non-finite floats (which JSON lacks) replaced.
+
+    ``non_finite="null"``: NaN and ±inf become null. ``"text"``: NaN becomes null and ±inf
+    "inf" / "-inf", which ``float()`` reads back.
+    """
+    if isinstance(value, Mapping):
+        return {k: jsonable(v, non_finite) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v, non_finite) for v in value]
+    if isinstance(value, (np.integer, np.bool_)):
+        return value.item()
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        if math.isfinite(value):
+            return value
+        if non_finite == "text" and math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return None
+    return value
+
+
+def write_json(
+    path: str | os.PathLike, data: Any, indent: int | None = 1, sort_keys: bool = False
+) -> Path:
+    """Write ``data`` as JSON (objects JSON lacks through `json_default`) atomically.
+
+    Non-finite floats are written as Python's json writes them (NaN, Infinity: read back by
+    `json.loads`); convert with `jsonable` first for strict JSON.
+    """
+    text = json.dumps(data, indent=indent, sort_keys=sort_keys, default=json_default)
+    return write_text(path, text + "\n")
+
+
+@functools.cache
+def versions() -> dict[str, str]:
+    """Python's version and those of the packages that determine a result (or "not installed")."""
+    found = {"python": platform.python_version()}
+    for name in PACKAGES:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            found[name] = "not installed"
+    return found
+
+
+@functools.cache
+def git_commit() -> str | None:
+    """The commit of the checkout this code runs from (None outside a git checkout).
+
+    Read once per process: the code a run started from, even if the checkout moves on.
+    """
+    if not (_ROOT / ".git").exists():  # e.g. an installed copy: not the checkout's code
+        return None
+    try:
+        done = subprocess.run(
+            ["git", "-C", str(_ROOT), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    commit = done.stdout.strip()
+    return commit if done.returncode == 0 and commit else None
+
+
+def environment() -> dict[str, Any]:
+    """The record stored with every result: {"versions": `versions()`, "git_commit": ...}."""
+    return {"versions": dict(versions()), "git_commit": git_commit()}

@@ -1,0 +1,140 @@
+"""Scalar metrics of a recorded episode (`compute_metrics`): errors, speed, actuation, outcome.
+
+Windowed metrics start at ``transient`` (default `DEFAULT_TRANSIENT` = 100 s, docs/model.md §8),
+after the approach from the start point.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from auv_gym.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
+
+__all__ = ["DEFAULT_TRANSIENT", "compute_metrics"]
+
+DEFAULT_TRANSIENT = 100.0  # [s] start of the metrics window
+_SAT_TOL = 1e-9
+
+
+def _window_rms(t: np.ndarray, values: np.ndarray, start: float) -> float:
+    mask = t >= start - 1e-9
+    if not mask.any():
+        return math.nan
+    return float(np.sqrt(np.mean(np.square(values[mask]))))
+
+
+def _trapezoid(values: np.ndarray, t: np.ndarray) -> float:
+    """∫ values dt by the trapezoid rule (0 for a single sample)."""
+    return float(0.5 * np.sum((values[1:] + values[:-1]) * np.diff(t)))
+
+
+def _settling_time(t: np.ndarray, distance: np.ndarray, threshold: float) -> float:
+    """First t_k with distance < threshold at every sample from k on; inf if none."""
+    outside = ~(distance < threshold)  # NaN counts as outside
+    if outside[-1]:
+        return math.inf
+    if not outside.any():
+        return float(t[0])
+    return float(t[np.flatnonzero(outside)[-1] + 1])
+
+
+def compute_metrics(
+    trajectory: Trajectory,
+    transient: float = DEFAULT_TRANSIENT,
+    success_distance: float = 1.0,
+    final_window: float = 10.0,
+) -> dict[str, Any]:
+    """Scalar metrics of one episode. Units: m, s, m/s; τ normalised by `actuator_limits`.
+
+    Windowed metrics use the samples (or intervals) with t ≥ ``transient`` [s] and are NaN when
+    the episode is shorter than that. With d the distance to the virtual point, e = (x_e, y_e,
+    z_e), τ̄_j = τ_j / τ_max,j and a_j the policy's action:
+
+    Distance and errors [m]:
+      rms_distance, rms_x_e, rms_y_e, rms_z_e — √mean(·²) over the window;
+      max_distance_window — max d over the window; final_distance — d at the last sample;
+      iae_distance — ∫ d dt over the whole episode (trapezoid) [m·s];
+      iae_distance_window — the same over the window [m·s];
+      settling_time_0p5, settling_time_0p1 — the first t_k with d < 0.5 (0.1) m at every
+      later sample [s]; inf if the last sample is not below the threshold (never settled) or
+      the episode ended in failure.
+    Speed [m/s]:
+      surge_overshoot — max_k (u − u_D) over the episode (negative if u never reaches u_D);
+      surge_overshoot_percent — 100·surge_overshoot/u_D;
+      rms_speed_error — √mean((u − u_D)²) over the window.
+    Actuation:
+      control_effort — Σ_k Σ_j τ̄_j² Δt over the episode, i.e. ∫ of the squared normalised τ [s];
+      chattering — Σ_k Σ_j abs(τ̄_j(t_{k+1}) − τ̄_j(t_k)) / window length, the total variation
+      of the normalised τ per second of window [1/s];
+      saturation_fraction — fraction of control steps with any abs(a_j) ≥ 1 (saturated
+      command); control_effort_X/_M/_N, chattering_X/_M/_N, saturation_fraction_X/_M/_N — per
+      channel.
+    Outcome:
+      success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
+      ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
+      episode_return — Σ reward; termination_reason — the episode end (`EPISODE_ENDS`);
+      duration [s], steps; transient — the window start used [s].
+    """
+    if not (math.isfinite(transient) and transient >= 0):
+        raise ValueError(f"transient must be a non-negative time in s, got {transient}")
+    if not (success_distance > 0 and final_window > 0):
+        raise ValueError("success_distance and final_window must be positive")
+    tr = trajectory
+    t, t_int, dt = tr.t, tr.t_interval, tr.control_dt
+    distance = tr["distance"]
+    failed = tr.termination_reason in FAILURE_REASONS
+    window = t >= transient - 1e-9
+    window_int = t_int >= transient - 1e-9
+    speed_error = tr["u"] - tr.u_desired
+    tau_norm = tr.tau / np.asarray(tr.actuator_limits)
+    actions = tr.actions
+    metrics: dict[str, Any] = {}
+    for name, values in (
+        ("distance", distance),
+        ("x_e", tr["x_e"]),
+        ("y_e", tr["y_e"]),
+        ("z_e", tr["z_e"]),
+    ):
+        metrics[f"rms_{name}"] = _window_rms(t, values, transient)
+    metrics["max_distance_window"] = float(distance[window].max()) if window.any() else math.nan
+    metrics["iae_distance"] = _trapezoid(distance, t)
+    metrics["iae_distance_window"] = (
+        _trapezoid(distance[window], t[window]) if window.sum() > 1 else math.nan
+    )
+    for label, threshold in (("0p5", 0.5), ("0p1", 0.1)):
+        settle = _settling_time(t, distance, threshold)
+        metrics[f"settling_time_{label}"] = math.inf if failed else settle
+    overshoot = float(speed_error.max())
+    metrics["surge_overshoot"] = overshoot
+    metrics["surge_overshoot_percent"] = 100.0 * overshoot / tr.u_desired
+    metrics["rms_speed_error"] = _window_rms(t, speed_error, transient)
+    per_channel_effort = (tau_norm**2).sum(axis=0) * dt
+    metrics["control_effort"] = float(per_channel_effort.sum())
+    # Chattering: total variation inside the window, per second of window.
+    tv_window = tau_norm[window_int]
+    span = tv_window.shape[0] * dt
+    if tv_window.shape[0] > 1:
+        variation = np.abs(np.diff(tv_window, axis=0)).sum(axis=0) / span
+    else:
+        variation = np.full(3, math.nan)
+    metrics["chattering"] = float(variation.sum())
+    saturated = np.abs(actions) >= 1.0 - _SAT_TOL
+    steps = tr.steps
+    metrics["saturation_fraction"] = float(saturated.any(axis=1).mean()) if steps else 0.0
+    for j, axis in enumerate(TAU_FIELDS):
+        metrics[f"control_effort_{axis}"] = float(per_channel_effort[j])
+        metrics[f"chattering_{axis}"] = float(variation[j])
+        metrics[f"saturation_fraction_{axis}"] = float(saturated[:, j].mean()) if steps else 0.0
+    metrics["final_distance"] = float(distance[-1])
+    final = t >= t[-1] - final_window + 1e-9
+    final_rms = float(np.sqrt(np.mean(np.square(distance[final]))))
+    metrics["success"] = bool(not failed and final_rms <= success_distance)
+    metrics["episode_return"] = float(tr["reward"].sum())
+    metrics["termination_reason"] = tr.termination_reason
+    metrics["duration"] = tr.duration
+    metrics["steps"] = steps
+    metrics["transient"] = float(transient)
+    return metrics

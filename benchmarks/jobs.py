@@ -1,0 +1,190 @@
+"""Benchmark episodes as jobs: (policy, scenario, seed, duration), fingerprinted, resumable.
+
+Each finished episode is written atomically to ``OUT/episodes/<scenario>/<policy>/seed_<k>.json``
+(metrics) and ``.npz`` (time series) with a fingerprint of everything that determines it, so a
+run restarted with the same arguments reuses finished episodes. Results do not depend on the
+number of workers or the backend: every episode is a pure function of the job.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import time
+from collections.abc import Iterable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import auv_gym
+import controllers
+from auv_gym.files import jsonable, write_json
+from auv_gym.metrics import compute_metrics
+from auv_gym.numba_cache import sources_digest
+from auv_gym.rollout import rollout
+from benchmarks.policies import PolicySpec, build_policy, policy_label
+from benchmarks.scenarios import Scenario
+
+__all__ = ["Job", "code_digest", "finished", "run_job", "run_jobs"]
+
+
+@dataclass(frozen=True)
+class Job:
+    """One episode: a policy on a scenario with a seed, for `duration` seconds."""
+
+    policy: str
+    scenario: Scenario
+    seed: int
+    duration: float
+    transient: float
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        return {**self.scenario.env, "max_time": self.duration}
+
+    def fingerprint(self) -> str:
+        """Hash of everything that determines the episode: the job, the agent file if any, and
+        the source code of `auv_gym` and `controllers`."""
+        payload = {
+            "policy": self.policy,
+            "scenario": asdict(self.scenario),
+            "seed": self.seed,
+            "duration": self.duration,
+            "transient": self.transient,
+            "agent": _agent_digest(PolicySpec.parse(self.policy).agent),
+            "code": code_digest(),
+        }
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+    def path(self, out: Path) -> Path:
+        return (
+            out / "episodes" / self.scenario.name / policy_label(self.policy) / f"seed_{self.seed}"
+        )
+
+
+@functools.cache
+def code_digest() -> str:
+    """Hash of the simulator and controller sources: a code change invalidates cached episodes."""
+    packages = (Path(auv_gym.__file__).parent, Path(controllers.__file__).parent)
+    return sources_digest(*packages)[:16]
+
+
+def _agent_digest(agent: Path | None) -> str:
+    if agent is None:
+        return ""
+    digest = hashlib.sha256()
+    for file in sorted(p for p in agent.rglob("*") if p.is_file()) if agent.is_dir() else [agent]:
+        digest.update(file.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def finished(job: Job, out: Path) -> dict[str, Any] | None:
+    """The stored record of a finished episode with a matching fingerprint, else None."""
+    file = job.path(out).with_suffix(".json")
+    if not file.exists() or not job.path(out).with_suffix(".npz").exists():
+        return None
+    try:
+        record = json.loads(file.read_text())
+    except json.JSONDecodeError:
+        return None
+    return record if record.get("fingerprint") == job.fingerprint() else None
+
+
+def run_job(job: Job, out: Path) -> dict[str, Any]:
+    """Run one episode, store its time series and metrics atomically, return the record.
+
+    Non-finite metrics (a settling time never reached, a window never entered) are stored as
+    null.
+    """
+    start = time.perf_counter()
+    control_dt = float(job.env_kwargs.get("control_dt", 0.05))
+    policy = build_policy(job.policy, control_dt, job.scenario.controller)
+    trajectory = rollout(policy, job.seed, **job.env_kwargs)
+    metrics = compute_metrics(trajectory, transient=job.transient)
+    record = {
+        "policy": job.policy,
+        "scenario": job.scenario.name,
+        "seed": job.seed,
+        "duration": job.duration,
+        "transient": job.transient,
+        "fingerprint": job.fingerprint(),
+        "wall_time_s": time.perf_counter() - start,
+        "metrics": jsonable(metrics),
+        "trajectory": str(job.path(out).with_suffix(".npz").relative_to(out)),
+    }
+    base = job.path(out)
+    trajectory.save(base.with_suffix(".npz"))  # atomic
+    write_json(base.with_suffix(".json"), record, indent=None)
+    return record
+
+
+def run_jobs(
+    jobs: list[Job],
+    out: Path,
+    workers: int,
+    backend: str,
+    address: str | None,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """Run the jobs that are not finished yet; return the records of all jobs, in job order."""
+    from tqdm.auto import tqdm
+
+    for stale in (out / "episodes").rglob(".*.tmp") if (out / "episodes").exists() else ():
+        stale.unlink(missing_ok=True)  # temporary files of a run killed mid-write
+    records: dict[int, dict[str, Any]] = {}
+    todo = []
+    for index, job in enumerate(jobs):
+        done = finished(job, out)
+        if done is not None:
+            records[index] = done
+        else:
+            todo.append(index)
+    bar = tqdm(
+        total=len(jobs), initial=len(records), desc="episodes", disable=not progress, unit="ep"
+    )
+    for index, record in _execute([jobs[i] for i in todo], todo, out, workers, backend, address):
+        records[index] = record
+        bar.update(1)
+    bar.close()
+    return [records[i] for i in range(len(jobs))]
+
+
+def _execute(
+    jobs: list[Job], indices: list[int], out: Path, workers: int, backend: str, address: str | None
+) -> Iterable[tuple[int, dict[str, Any]]]:
+    if not jobs:
+        return
+    if backend == "ray":
+        yield from _execute_ray(jobs, indices, out, address)
+    elif workers <= 1:
+        for index, job in zip(indices, jobs, strict=True):
+            yield index, run_job(job, out)
+    else:
+        # spawn: numba's threading layer is not fork-safe once its threads have started.
+        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+            futures = {
+                pool.submit(run_job, job, out): index
+                for index, job in zip(indices, jobs, strict=True)
+            }
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+
+
+def _execute_ray(
+    jobs: list[Job], indices: list[int], out: Path, address: str | None
+) -> Iterable[tuple[int, dict[str, Any]]]:
+    try:
+        import ray
+    except ImportError as exc:
+        raise ImportError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from exc
+    if not ray.is_initialized():
+        ray.init(address=address, log_to_driver=False)
+    remote = ray.remote(num_cpus=1)(run_job)
+    pending = {remote.remote(job, out): index for index, job in zip(indices, jobs, strict=True)}
+    while pending:
+        done, _ = ray.wait(list(pending), num_returns=1)
+        for ref in done:
+            yield pending.pop(ref), ray.get(ref)

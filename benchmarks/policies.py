@@ -1,0 +1,81 @@
+"""Policy specs of the benchmark CLIs: one parser for "fbsm", "ppo", "ppo:PATH", "module:attribute".
+
+* a name of `controllers.CLASSICAL` ("fbsm", "backstepping", their presets): built with
+  `controllers.make` for the scenario's control period and controller keyword arguments;
+* "ppo": the shipped agent `benchmarks/agents/ppo_helix`; "ppo:PATH": any saved agent directory
+  or model zip (`controllers.ppo.load_policy`);
+* "module:attribute": an importable Policy object, or a class / factory called with the
+  scenario's controller keyword arguments (`controllers.import_policy`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import controllers
+from controllers import CLASSICAL, REGISTRY
+
+__all__ = ["DEFAULT_AGENT", "PolicySpec", "build_policy", "check_policy_spec", "policy_label"]
+
+DEFAULT_AGENT = Path(__file__).resolve().parent / "agents" / "ppo_helix"
+AGENT_PREFIX = "ppo:"
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A parsed spec: its text, its kind and, for "ppo" / "ppo:PATH", the agent's path."""
+
+    text: str
+    kind: Literal["classical", "agent", "import"]
+    agent: Path | None = None
+
+    @classmethod
+    def parse(cls, spec: str) -> PolicySpec:
+        """Classify ``spec`` without touching files or importing; ValueError if it names nothing."""
+        if spec in CLASSICAL:
+            return cls(spec, "classical")
+        if spec == "ppo":
+            return cls(spec, "agent", DEFAULT_AGENT)
+        if spec.startswith(AGENT_PREFIX):
+            return cls(spec, "agent", Path(spec[len(AGENT_PREFIX) :]))
+        if ":" in spec:
+            return cls(spec, "import")
+        raise ValueError(
+            f"unknown policy {spec!r}; valid: {list(REGISTRY)}, 'ppo:PATH' or 'module:attribute'"
+        )
+
+
+def check_policy_spec(spec: str) -> PolicySpec:
+    """The parsed spec, after checking that its agent exists or its object imports.
+
+    Raises ValueError (unknown name, import failure) or FileNotFoundError (missing agent) with a
+    message naming the spec: call it on every spec before any episode runs.
+    """
+    parsed = PolicySpec.parse(spec)
+    if parsed.agent is not None and not parsed.agent.exists():
+        raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
+    if parsed.kind == "import":
+        controllers.import_policy(spec, instantiate=False)
+    return parsed
+
+
+def build_policy(
+    spec: str, control_dt: float, controller_kwargs: dict[str, Any] | None = None
+) -> Any:
+    """The Policy named by ``spec``, configured for a scenario (control period [s], controller
+    keyword arguments; an agent takes neither)."""
+    parsed = PolicySpec.parse(spec)
+    kwargs = dict(controller_kwargs or {})
+    if parsed.kind == "classical":
+        return controllers.make(spec, control_dt=control_dt, **kwargs)
+    if parsed.kind == "agent":
+        return controllers.make("ppo", path=str(parsed.agent))
+    return controllers.import_policy(spec, **kwargs)
+
+
+def policy_label(text: str) -> str:
+    """A file-system-safe label of a spec or policy name ("ppo:runs/x" → "ppo-runs_x")."""
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in text.replace(":", "-", 1))
+    return safe.strip("_") or "policy"

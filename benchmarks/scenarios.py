@@ -1,0 +1,50 @@
+"""Named benchmark scenarios (`benchmarks/scenarios.toml`): env and controller keyword arguments."""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+__all__ = ["SCENARIOS_FILE", "Scenario", "load_scenarios", "select"]
+
+SCENARIOS_FILE = Path(__file__).resolve().parent / "scenarios.toml"
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A named, documented set of env keyword arguments (and controller keyword arguments)."""
+
+    name: str
+    description: str
+    env: dict[str, Any] = field(default_factory=dict)
+    controller: dict[str, Any] = field(default_factory=dict)
+
+
+def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
+    """Scenarios from a TOML file: one table per scenario with description, env, controller."""
+    with open(path, "rb") as fh:
+        raw = tomllib.load(fh)
+    scenarios = {}
+    for name, table in raw.items():
+        unknown = set(table) - {"description", "env", "controller"}
+        if unknown:
+            raise ValueError(f"{path}: scenario {name!r} has unknown keys {sorted(unknown)}")
+        scenarios[name] = Scenario(
+            name,
+            table.get("description", ""),
+            dict(table.get("env", {})),
+            dict(table.get("controller", {})),
+        )
+    return scenarios
+
+
+def select(names: str, available: Sequence[str], what: str) -> list[str]:
+    """Comma-separated names ("all" for every one), validated against the available ones."""
+    chosen = list(available) if names == "all" else [n.strip() for n in names.split(",") if n]
+    unknown = [n for n in chosen if n not in available]
+    if unknown:
+        raise ValueError(f"unknown {what} {unknown}; valid: {list(available)}")
+    return chosen

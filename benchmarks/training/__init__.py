@@ -1,0 +1,53 @@
+"""The RL training harness: RL-Zoo configuration, training runs, checkpoints, evaluation.
+
+`train` (CLI `python -m benchmarks.train_ppo`) reads an RL-Zoo hyper-parameter file
+(`benchmarks/hyperparams/ppo.yml`, top-level key = the env id), normalises observations (and
+rewards) with `VecNormalize`, evaluates on the paper scenario (helix, white noise ±35 N / N·m)
+with fixed seeds, and writes, under the run directory::
+
+    final/      model.zip, vecnormalize.pkl, vecnormalize.npz, metadata.json: the final agent
+    best/       the same files for the best evaluation so far
+    metadata.json                                                    copy of final/metadata.json
+    checkpoints/step_<num_timesteps>/   the same files, every `checkpoint_freq` env steps
+    evaluations.csv                     the learning curve (env steps, wall time, rms distance)
+    tb/                                 TensorBoard logs
+
+Every agent directory is complete on its own (model, normalisation statistics, metadata with the
+command line, configuration, seed, package versions, git commit, wall time and the observation
+layout) and written atomically, so a killed run never leaves a half-written agent.
+`resume=True` restarts from the newest checkpoint with `reset_num_timesteps=False`, losing at
+most one checkpoint interval. The agents load with `controllers.ppo.load_policy`.
+
+Modules: `config` (YAML files, `ALGORITHMS`), `train` (`TrainOptions`, `train`: one algorithm,
+one seed, one run directory — a multi-seed run is a loop over seeds with one run directory
+each), `callbacks` (evaluation and checkpoints during training), `checkpoints` (agent
+directories), `evaluation` (seeds, scoring, held-out evaluation), `learning_curve`
+(evaluations.csv). SB3 and torch are imported only when training or evaluating.
+"""
+
+from benchmarks.training.config import ALGORITHMS, ZooConfig, read_zoo_config
+from benchmarks.training.evaluation import (
+    EVAL_SEEDS,
+    HELD_OUT_FILE,
+    HELD_OUT_SEEDS,
+    evaluate_policy_on_seeds,
+    held_out_evaluation,
+    summarize,
+    write_held_out_evaluation,
+)
+from benchmarks.training.train import TrainOptions, train
+
+__all__ = [
+    "ALGORITHMS",
+    "EVAL_SEEDS",
+    "HELD_OUT_FILE",
+    "HELD_OUT_SEEDS",
+    "TrainOptions",
+    "ZooConfig",
+    "evaluate_policy_on_seeds",
+    "held_out_evaluation",
+    "read_zoo_config",
+    "summarize",
+    "train",
+    "write_held_out_evaluation",
+]

@@ -1,0 +1,103 @@
+"""SB3 callbacks of the training harness: periodic evaluation (learning curve, best agent) and
+periodic checkpoints. Imports stable-baselines3 (the rl extra)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from stable_baselines3.common.callbacks import BaseCallback
+
+from benchmarks.training.checkpoints import checkpoint_folder, prune_checkpoints, save_agent
+from benchmarks.training.evaluation import evaluate_policy_on_seeds, score, summarize
+from benchmarks.training.learning_curve import EVAL_FILE, append_row
+from controllers.ppo import PPOPolicy
+
+__all__ = ["PeriodicCheckpoint", "PeriodicEvaluation", "policy_from_model"]
+
+# metadata(extra) → the agent metadata of the model's current state, updated with `extra`.
+MetadataFn = Callable[[dict[str, Any]], dict[str, Any]]
+
+
+def policy_from_model(model: Any, vec_normalize: Any) -> PPOPolicy:
+    """The Policy of a model in training, with a snapshot of the current statistics (torch's
+    thread setting is the training's)."""
+    rms = vec_normalize.obs_rms
+    return PPOPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
+                     vec_normalize.epsilon)  # fmt: skip
+
+
+def _next_multiple(n: int, every: int) -> int:
+    return (n // every + 1) * every
+
+
+class PeriodicEvaluation(BaseCallback):
+    """Every `every` env steps (and at step 0 of a fresh run): the policy on `seeds`, a row of
+    the learning curve, and the agent saved to OUT/best when its `score` improves.
+
+    `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
+    """
+
+    def __init__(self, out: Path, every: int, seeds: Sequence[int], eval_kwargs: dict[str, Any],
+                 metadata: MetadataFn, start_wall: float, best: dict[str, Any],
+                 verbose: int = 0) -> None:  # fmt: skip
+        super().__init__(verbose)
+        self.out, self.every, self.seeds = out, every, tuple(seeds)
+        self.eval_kwargs, self.metadata = eval_kwargs, metadata
+        self.start_wall, self.best = start_wall, best
+        self.t0 = time.monotonic()
+        self.next_eval = 0
+
+    def _on_training_start(self) -> None:
+        n = self.num_timesteps
+        self.next_eval = _next_multiple(n, self.every)
+        if n == 0:
+            self.evaluate()  # the untrained agent: the curve starts at step 0
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.next_eval:
+            self.next_eval += self.every
+            self.evaluate()
+        return True
+
+    def evaluate(self) -> None:
+        """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
+        vec_normalize = self.model.get_vec_normalize_env()
+        policy = policy_from_model(self.model, vec_normalize)
+        results = evaluate_policy_on_seeds(policy, self.seeds, **self.eval_kwargs)
+        summary = summarize(results)
+        self.model.policy.set_training_mode(False)
+        wall = self.start_wall + (time.monotonic() - self.t0)
+        self.logger.record("eval/rms_distance_mean", summary["rms_distance_mean"])
+        self.logger.record("eval/n_terminated", summary["n_terminated"])
+        append_row(self.out / EVAL_FILE, self.num_timesteps, wall, summary)
+        if self.best.get("score") is None or score(summary) < tuple(self.best["score"]):
+            self.best["score"] = list(score(summary))
+            self.best["num_timesteps"] = self.num_timesteps
+            self.best["summary"] = summary
+            meta = self.metadata({"evaluation": summary, "eval_results": results})
+            save_agent(self.model, vec_normalize, self.out / "best", meta)
+        if self.verbose:
+            print(f"[eval] steps={self.num_timesteps} wall={wall:.0f}s {summary}", flush=True)
+
+
+class PeriodicCheckpoint(BaseCallback):
+    """Every `every` env steps: the agent to OUT/checkpoints/step_<n>/; the newest `keep` stay."""
+
+    def __init__(self, out: Path, every: int, keep: int, metadata: MetadataFn) -> None:
+        super().__init__()
+        self.out, self.every, self.keep, self.metadata = out, every, keep, metadata
+        self.next_checkpoint = 0
+
+    def _on_training_start(self) -> None:
+        self.next_checkpoint = _next_multiple(self.num_timesteps, self.every)
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.next_checkpoint:
+            self.next_checkpoint += self.every
+            folder = checkpoint_folder(self.out, self.num_timesteps)
+            save_agent(self.model, self.model.get_vec_normalize_env(), folder, self.metadata({}))
+            prune_checkpoints(self.out, self.keep)
+        return True

@@ -1,0 +1,110 @@
+"""How an agent is scored, during training and afterwards: seeded paper-scenario episodes.
+
+Seeds: the evaluation during training uses `EVAL_SEEDS`; reported results use `HELD_OUT_SEEDS`
+(the seeds 0..9 of `benchmarks.compare`); training environments are seeded from
+`TRAIN_SEED_BASE` + 1000·seed upwards, so none of them is ever a training seed.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym.files import write_json
+from auv_gym.metrics import DEFAULT_TRANSIENT
+from auv_gym.rollout import evaluate
+from auv_gym.trajectory import env_termination_reason
+from controllers.ppo import load_policy
+
+__all__ = [
+    "EVAL_SEEDS",
+    "HELD_OUT_FILE",
+    "HELD_OUT_SEEDS",
+    "TRAIN_SEED_BASE",
+    "evaluate_policy_on_seeds",
+    "held_out_evaluation",
+    "score",
+    "summarize",
+    "write_held_out_evaluation",
+]
+
+EVAL_SEEDS = (100, 101, 102, 103, 104)
+HELD_OUT_SEEDS = tuple(range(10))
+TRAIN_SEED_BASE = 1_000_000
+HELD_OUT_FILE = "held_out_evaluation.json"  # written beside an exported agent
+
+
+def evaluate_policy_on_seeds(
+    policy: Any,
+    seeds: Sequence[int] = HELD_OUT_SEEDS,
+    transient: float = DEFAULT_TRANSIENT,
+    **env_kwargs: Any,
+) -> list[dict[str, Any]]:
+    """Seeded episodes of `policy` through `auv_gym.rollout.evaluate` (batched rows).
+
+    Returns one dict per seed with seed, rms_distance and rms_x_e, rms_y_e, rms_z_e [m] over
+    t ≥ transient (NaN if the episode ended earlier), max_distance [m] over that window,
+    duration [s] and termination_reason in the env's spelling ("" when the episode ran to
+    max_time, `auv_gym.trajectory.env_termination_reason`).
+    """
+    results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)
+    return [
+        {"seed": int(r["seed"]), "rms_distance": float(r["rms_distance"]),
+         "rms_x_e": float(r["rms_x_e"]), "rms_y_e": float(r["rms_y_e"]),
+         "rms_z_e": float(r["rms_z_e"]),
+         "max_distance": float(r["max_distance_window"]), "duration": float(r["duration"]),
+         "termination_reason": env_termination_reason(str(r["termination_reason"]))}
+        for r in results
+    ]  # fmt: skip
+
+
+def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Mean ± std of rms_distance over seeds and the number of terminated episodes."""
+    rms = np.array([r["rms_distance"] for r in results], dtype=float)
+    terminated = [r["termination_reason"] for r in results if r["termination_reason"]]
+    finite = rms[np.isfinite(rms)]
+    per_axis = {}
+    for key in ("rms_x_e", "rms_y_e", "rms_z_e"):
+        values = np.array([r.get(key, math.nan) for r in results], dtype=float)
+        values = values[np.isfinite(values)]
+        per_axis[f"{key}_mean"] = float(values.mean()) if values.size else math.nan
+    return {
+        **per_axis,
+        "rms_distance_mean": float(finite.mean()) if finite.size else math.nan,
+        "rms_distance_std": float(finite.std()) if finite.size else math.nan,
+        "rms_distance_max": float(finite.max()) if finite.size else math.nan,
+        "n_episodes": len(results),
+        "n_terminated": len(terminated),
+        "terminations": sorted(set(terminated)),
+    }
+
+
+def score(summary: dict[str, Any]) -> tuple[int, float]:
+    """Lower is better: first fewer terminated episodes, then lower mean rms distance."""
+    mean = summary["rms_distance_mean"]
+    return summary["n_terminated"], (mean if math.isfinite(mean) else math.inf)
+
+
+def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> dict[str, Any]:
+    """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results."""
+    policy = load_policy(agent)
+    results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration))
+    return {
+        "scenario": "paper (helix, white noise ±35 N / N·m, defaults of AUVPath3D-v0)",
+        "seeds": list(HELD_OUT_SEEDS), "duration_s": float(duration),
+        "transient_s": DEFAULT_TRANSIENT, "summary": summarize(results), "results": results,
+        "agent_num_timesteps": policy.metadata.get("num_timesteps"),
+        "agent_wall_time_s": policy.metadata.get("wall_time_s"),
+    }  # fmt: skip
+
+
+def write_held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> dict[str, Any]:
+    """`held_out_evaluation` of an agent directory, written to AGENT/held_out_evaluation.json."""
+    report = held_out_evaluation(agent, duration)
+    write_json(Path(agent) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
+    return report

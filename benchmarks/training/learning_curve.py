@@ -1,0 +1,56 @@
+"""The learning curve of a run: RUN/evaluations.csv, one row per evaluation during training.
+
+Columns: env steps, training wall time [s] (summed over resumed sessions), and the mean, std and
+max rms distance [m] and number of terminated episodes over the evaluation seeds. Rows are
+appended and flushed to disk one by one; a resumed run first drops the rows past the checkpoint
+it restarts from. `benchmarks.figures.plot_learning_curve` draws it.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import write_text
+
+__all__ = ["EVAL_FILE", "EVAL_HEADER", "append_row", "read_rows", "truncate_rows"]
+
+EVAL_FILE = "evaluations.csv"
+EVAL_HEADER = ["num_timesteps", "wall_time_s", "rms_distance_mean", "rms_distance_std",
+               "rms_distance_max", "n_terminated"]  # fmt: skip
+
+
+def append_row(path: Path, num_timesteps: int, wall_time: float, summary: dict[str, Any]) -> None:
+    """Append one evaluation (a `benchmarks.training.evaluation.summarize` dict) to the curve."""
+    row = [num_timesteps, f"{wall_time:.1f}", f"{summary['rms_distance_mean']:.6g}",
+           f"{summary['rms_distance_std']:.6g}", f"{summary['rms_distance_max']:.6g}",
+           summary["n_terminated"]]  # fmt: skip
+    new = not path.exists()
+    with path.open("a", newline="") as f:
+        writer = csv.writer(f)
+        if new:
+            writer.writerow(EVAL_HEADER)
+        writer.writerow(row)
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def read_rows(path: Path) -> list[dict[str, str]]:
+    """The rows of a learning curve as dicts (column → text)."""
+    with path.open(newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def truncate_rows(path: Path, max_steps: int) -> None:
+    """Drop the rows past ``max_steps`` env steps (a resumed run restarts from there)."""
+    if not path.exists():
+        return
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    kept = [rows[0]] + [r for r in rows[1:] if r and int(r[0]) <= max_steps]
+    buffer = io.StringIO()
+    csv.writer(buffer).writerows(kept)
+    write_text(path, buffer.getvalue())

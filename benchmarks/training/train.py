@@ -1,0 +1,202 @@
+"""Train (or resume) one agent, one seed: `TrainOptions` → a run directory (see the package doc)."""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import json
+import os
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import auv_gym
+from auv_gym import ENV_ID
+from auv_gym.files import git_commit, versions
+from auv_gym.observation import OBS_DIM, OBS_NAMES
+from benchmarks.training.checkpoints import (
+    export_agent,
+    latest_checkpoint,
+    save_agent,
+    write_metadata,
+)
+from benchmarks.training.config import ALGORITHMS, read_zoo_config
+from benchmarks.training.evaluation import EVAL_SEEDS, TRAIN_SEED_BASE, write_held_out_evaluation
+from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
+from controllers.ppo import METADATA_FILE, MODEL_FILE, VECNORM_FILE
+
+__all__ = ["TrainOptions", "make_training_env", "thread_limit", "train"]
+
+HERE = Path(__file__).resolve().parent.parent  # benchmarks/
+
+
+@dataclass
+class TrainOptions:
+    """Arguments of `train` (and of the CLI `benchmarks/train_ppo.py`)."""
+
+    algo: str = "ppo"  # a key of benchmarks.training.config.ALGORITHMS
+    config: str = str(HERE / "hyperparams" / "ppo.yml")  # RL-Zoo hyper-parameter file
+    env_id: str = ENV_ID  # top-level key of the config and Gymnasium id
+    out: str = "runs/ppo_helix"  # run directory
+    seed: int = 0  # seeds torch, numpy and the training environments
+    n_timesteps: int | None = None  # override the config's n_timesteps
+    resume: bool = False  # continue from the newest checkpoint in `out`
+    checkpoint_freq: int = 100_000  # [env steps] between checkpoints
+    keep_checkpoints: int = 3  # newest checkpoints kept on disk
+    eval_freq: int = 100_000  # [env steps] between evaluations; 0 disables
+    eval_seeds: tuple[int, ...] = EVAL_SEEDS  # seeds of the evaluation episodes
+    eval_duration: float = 300.0  # [s] evaluation episode length (paper scenario)
+    vec_env: str = "auto"  # "auto" (native batched if available), "native" or "dummy"
+    threads: int = 1  # torch intra-op and numba threads during training (restored after)
+    progress_bar: bool = True
+    export: str | None = None  # copy the best agent here at the end (e.g. benchmarks/agents/x)
+    verbose: int = 0
+
+
+@contextlib.contextmanager
+def thread_limit(threads: int) -> Iterator[None]:
+    """torch's intra-op and numba's threads set to ``threads`` inside the block, restored after.
+
+    One thread is fastest on this 2-core machine shared with other jobs: two-threaded kernels
+    stall at their barriers (DESIGN.md §4).
+    """
+    import numba
+    import torch
+
+    torch_before, numba_before = torch.get_num_threads(), numba.get_num_threads()
+    torch.set_num_threads(int(threads))
+    numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
+    try:
+        yield
+    finally:
+        torch.set_num_threads(torch_before)
+        numba.set_num_threads(numba_before)
+
+
+def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: str = "auto",
+                      env_id: str = ENV_ID) -> Any:  # fmt: skip
+    """An SB3 VecEnv of `n_envs` training environments.
+
+    "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
+    "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available.
+    """
+    if kind not in ("auto", "native", "dummy"):
+        raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
+    env_seed = TRAIN_SEED_BASE + 1000 * int(seed)
+    if kind in ("auto", "native") and env_id == ENV_ID:
+        from stable_baselines3.common.vec_env import VecMonitor
+
+        from auv_gym.sb3 import make_sb3_vec_env
+
+        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, **env_kwargs))
+    if kind == "native":
+        raise ValueError(f"the native vector env simulates {ENV_ID} only, not {env_id}")
+    from stable_baselines3.common.env_util import make_vec_env
+
+    return make_vec_env(env_id, n_envs=n_envs, seed=env_seed, env_kwargs=env_kwargs)
+
+
+def _describe(venv: Any) -> str:
+    """The chain of VecEnv wrappers, outermost first ("VecNormalize<VecMonitor<SB3VecEnv>>")."""
+    names = []
+    while venv is not None:
+        names.append(type(venv).__name__)
+        venv = getattr(venv, "venv", None)
+    return "<".join(names) + ">" * (len(names) - 1)
+
+
+def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
+    """Train (or resume) as configured; returns the run directory (see `benchmarks.training`).
+
+    torch's and numba's thread counts are set to ``opts.threads`` for the run and restored.
+    """
+    with thread_limit(opts.threads):
+        return _train(opts, argv)
+
+
+def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
+    import stable_baselines3
+    import torch
+    from stable_baselines3.common.callbacks import CallbackList
+    from stable_baselines3.common.utils import set_random_seed
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from benchmarks.training.callbacks import PeriodicCheckpoint, PeriodicEvaluation
+
+    cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
+    algorithm = ALGORITHMS[opts.algo].sb3_class()
+    n_timesteps = int(opts.n_timesteps or cfg.n_timesteps)
+    if opts.checkpoint_freq < 1:
+        raise ValueError("checkpoint_freq must be a positive number of env steps")
+    out = Path(opts.out)
+    if out.exists() and any(out.iterdir()) and not opts.resume:
+        raise ValueError(f"run directory {out} is not empty; pass --resume or another --out")
+    out.mkdir(parents=True, exist_ok=True)
+    eval_kwargs = {"max_time": float(opts.eval_duration)}  # the paper scenario: defaults
+    set_random_seed(opts.seed)
+    venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id)
+
+    previous: dict[str, Any] = {}
+    checkpoint = latest_checkpoint(out) if opts.resume else None
+    if opts.resume and checkpoint is None:
+        raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
+    if checkpoint is not None:
+        previous = json.loads((checkpoint / METADATA_FILE).read_text())
+        venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
+        venv.training = True
+        model = algorithm.load(checkpoint / MODEL_FILE, env=venv, device="cpu",
+                               tensorboard_log=str(out / "tb"), verbose=opts.verbose)  # fmt: skip
+        truncate_rows(out / EVAL_FILE, model.num_timesteps)
+    else:
+        venv = VecNormalize(venv, **cfg.normalize)
+        model = algorithm(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, seed=opts.seed,
+                          device="cpu", tensorboard_log=str(out / "tb"), verbose=opts.verbose,
+                          **cfg.model_kwargs())  # fmt: skip
+    start_wall = float(previous.get("wall_time_s", 0.0))
+    best: dict[str, Any] = dict(previous.get("best", {}))
+    sessions = [*previous.get("sessions", []), {
+        "argv": list(argv if argv is not None else sys.argv),
+        "started": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        "resumed_from": None if checkpoint is None else str(checkpoint),
+        "start_timesteps": int(model.num_timesteps),
+    }]  # fmt: skip
+    t0 = time.monotonic()
+
+    def metadata(extra: dict[str, Any]) -> dict[str, Any]:
+        return {
+            "algo": opts.algo, "env_id": opts.env_id, "seed": opts.seed,
+            "num_timesteps": int(model.num_timesteps), "n_timesteps": n_timesteps,
+            "wall_time_s": start_wall + (time.monotonic() - t0),
+            "command": " ".join(sessions[0]["argv"]), "sessions": sessions,
+            "options": asdict(opts), "config_file": str(opts.config), "config": cfg.raw,
+            "env_kwargs": cfg.env_kwargs, "eval_env_kwargs": eval_kwargs,
+            "eval_seeds": list(opts.eval_seeds), "obs_names": list(OBS_NAMES),
+            "observation_shape": [OBS_DIM], "action_shape": [3],
+            "versions": versions(), "sb3_version": stable_baselines3.__version__,
+            "git_commit": git_commit(), "vec_env": _describe(venv),
+            "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
+            "best": best, "auv_gym_version": auv_gym.__version__, **extra,
+        }  # fmt: skip
+
+    callbacks = []
+    if opts.eval_freq > 0:
+        callbacks.append(PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
+                                            metadata, start_wall, best, opts.verbose))  # fmt: skip
+    callbacks.append(PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata))
+    remaining = n_timesteps - int(model.num_timesteps)
+    if remaining > 0:
+        model.learn(remaining, callback=CallbackList(callbacks), progress_bar=opts.progress_bar,
+                    reset_num_timesteps=checkpoint is None,
+                    tb_log_name=algorithm.__name__)  # fmt: skip
+    final_meta = metadata({})
+    save_agent(model, venv, out / "final", final_meta)
+    write_metadata(out / METADATA_FILE, final_meta)
+    venv.close()
+    if opts.export:
+        source = out / "best" if (out / "best" / MODEL_FILE).is_file() else out / "final"
+        export_agent(source, Path(opts.export))
+        write_held_out_evaluation(opts.export, opts.eval_duration)
+    return out
