@@ -38,7 +38,7 @@ ENV_ID = "AUVPath3D-v0"
 MAX_EPISODE_STEPS = 6000  # 300 s at the default control_dt = 0.05 s
 
 
-# Variants are separate ids with fixed keyword arguments (DESIGN.md §3, Registration).
+# Variants are separate ids with fixed keyword arguments (docs/design.md §3, Registration).
 VARIANTS: dict[str, dict] = {
     ENV_ID: {},
     "AUVPath3DNominal-v0": {"disturbance": "none"},

@@ -1,4 +1,4 @@
-"""Disturbances (MODEL.md §2.5): bounded white noise, ocean current, parameter uncertainty.
+"""Disturbances (docs/model.md §2.5): bounded white noise, ocean current, parameter uncertainty.
 
 Randomness inside the simulation is counter-based: every noise value is a pure function of an
 episode key (drawn once from the reset seed) and the index of the physics step it belongs to
@@ -106,7 +106,7 @@ class NoiseConfig:
     """Bounded white noise f_i = A_i·U(−1, 1) on (f_u, f_v, f_w, f_q, f_r), held `hold` seconds.
 
     Amplitudes in [N, N, N, N·m, N·m]; the paper uses 35 on every channel. The equivalent
-    spectral density is A²·hold/3, so the hold time is part of the model (MODEL.md §2.5, §10.1).
+    spectral density is A²·hold/3, so the hold time is part of the model (docs/model.md §2.5, §10.1).
     """
 
     amplitude: tuple[float, float, float, float, float] = (35.0,) * 5

@@ -39,8 +39,8 @@ class AUVPath3DEnv(gym.Env):
 
     ## Description
     A REMUS 100 vehicle, modelled in five degrees of freedom (surge, sway, heave, pitch, yaw;
-    MODEL.md §2), must follow a 3D path with a Serret–Frenet virtual point that moves with
-    u_p = u_D(1 + tanh(x_e/σ)) (MODEL.md §3.3). It has three inputs only — surge thrust X, pitch
+    docs/model.md §2), must follow a 3D path with a Serret–Frenet virtual point that moves with
+    u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3). It has three inputs only — surge thrust X, pitch
     moment M, yaw moment N — so sway and heave are unactuated. The defaults reproduce the paper's
     simulation: the helix x = 20 cos(πs/20) + 10, y = 20 sin(πs/20), z = −8 − s, start at
     (15, 5, 0) m at rest with ψ = θ = 0, and bounded white-noise disturbances of ±35 N / N·m.
@@ -48,7 +48,7 @@ class AUVPath3DEnv(gym.Env):
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
     (50 N, 10 N·m, 10 N·m); "fins" scale X by 50 N and M, N by the fin authority
-    6.15·u|u|·π/6 N·m (MODEL.md §2.3). Values beyond ±1 saturate (the only clipping);
+    6.15·u|u|·π/6 N·m (docs/model.md §2.3). Values beyond ±1 saturate (the only clipping);
     NaN, inf or a wrong shape raise ValueError.
 
     ## Observation Space
@@ -118,7 +118,7 @@ class AUVPath3DEnv(gym.Env):
     runs the same compiled kernel over all vehicles.
 
     ## Version History
-    * v0: initial release (REMUS 100 in the paper's 5-DOF form, MODEL.md corrections).
+    * v0: initial release (REMUS 100 in the paper's 5-DOF form, docs/model.md §6 corrections).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}

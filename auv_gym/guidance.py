@@ -1,7 +1,7 @@
-"""Serret-Frenet guidance: path angles, body-frame errors, virtual-point speed (MODEL.md §3).
+"""Serret-Frenet guidance: path angles, body-frame errors, virtual-point speed (docs/model.md §3).
 
 Conventions: ε = (x_e, y_e, z_e) = R_Bᵀ(η_pos − p(s)), vehicle minus virtual point, expressed in
-the body frame with R_B = Rz(ψ)·Ry(θ) (paper (5)–(8), computed geometrically as MODEL.md §3.2
+the body frame with R_B = Rz(ψ)·Ry(θ) (paper (5)–(8), computed geometrically as docs/model.md §3.2
 prescribes). x_e > 0 means the vehicle is ahead of the virtual point P.
 """
 
@@ -30,7 +30,7 @@ def wrap_angle(angle):
 
 @njit(cache=True, inline="always")
 def path_angles(dx, dy, dz, ddx, ddy, ddz):
-    """(ψ_F, θ_F, dψ_F/ds, dθ_F/ds, |p'|) from p' and p'' (MODEL.md §3.1, paper (4)).
+    """(ψ_F, θ_F, dψ_F/ds, dθ_F/ds, |p'|) from p' and p'' (docs/model.md §3.1, paper (4)).
 
     ψ_F = atan2(y', x'), θ_F = −atan2(z', h) with h = sqrt(x'² + y'²) [rad, rad per unit s].
     """
@@ -58,7 +58,7 @@ def body_errors_trig(dx, dy, dz, cth, sth, cps, sps):
 
 @njit(cache=True, inline="always")
 def body_errors(x, y, z, theta, psi, px, py, pz):
-    """ε = R_Bᵀ(η_pos − p) with R_B = Rz(ψ)Ry(θ) [m] (MODEL.md §3.2)."""
+    """ε = R_Bᵀ(η_pos − p) with R_B = Rz(ψ)Ry(θ) [m] (docs/model.md §3.2)."""
     return body_errors_trig(
         x - px, y - py, z - pz, math.cos(theta), math.sin(theta), math.cos(psi), math.sin(psi)
     )
@@ -66,7 +66,7 @@ def body_errors(x, y, z, theta, psi, px, py, pz):
 
 @njit(cache=True, inline="always")
 def virtual_point_speed(x_e, u_d, sigma):
-    """u_p = u_D(1 + tanh(x_e/σ)) [m/s] (MODEL.md §3.3; the paper prints 1 − tanh, unstable)."""
+    """u_p = u_D(1 + tanh(x_e/σ)) [m/s] (docs/model.md §3.3; the paper prints 1 − tanh, unstable)."""
     return u_d * (1.0 + math.tanh(x_e / sigma))
 
 
@@ -74,7 +74,7 @@ def error_rates(
     eps: np.ndarray, nu: np.ndarray, theta: float, psi: float, psi_f: float, theta_f: float,
     u_p: float,
 ) -> np.ndarray:  # fmt: skip
-    """Exact ε̇ = −ω_b × ε + (u, v, w) − (R_Bᵀ R_F e1) u_p (MODEL.md §3.2) [m/s].
+    """Exact ε̇ = −ω_b × ε + (u, v, w) − (R_Bᵀ R_F e1) u_p (docs/model.md §3.2) [m/s].
 
     ``nu`` is (u, v, w, q, r); ω_b = (−r tanθ, q, r) since roll is held at zero.
     """

@@ -1,4 +1,4 @@
-"""Parametric 3D paths p(s) with analytic p'(s) and p''(s) (MODEL.md §3.1, §3.5).
+"""Parametric 3D paths p(s) with analytic p'(s) and p''(s) (docs/model.md §3.1, §3.5).
 
 Every path is described to the numba kernels by an integer ``kind`` and a float64 ``data``
 vector, and evaluated by the single function `path_eval`; the Python classes only build those
@@ -94,7 +94,7 @@ class Helix(Path):
     """The paper's helix (45): x = R cos(ωs) + x0, y = R sin(ωs) + y0, z = z0 − c s.
 
     Defaults R = 20 m, ω = π/20 rad per unit s, c = 1 m per unit s, (x0, y0, z0) = (10, 0, −8) m
-    (MODEL.md §3.5: a 17.7° climb, one turn per Δs = 40).
+    (docs/model.md §3.5: a 17.7° climb, one turn per Δs = 40).
     """
 
     kind = HELIX

@@ -43,7 +43,7 @@ from auv_gym.vehicle import N_PARAMS, AUVParams, remus100
 
 __all__ = ["ACTUATOR_LIMITS", "DISTURBANCE_PRESETS", "SimConfig", "Simulator"]
 
-# "paper" mode limits (MODEL.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
+# "paper" mode limits (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
 ACTUATOR_LIMITS = (50.0, 10.0, 10.0)
 DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
 VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
@@ -66,8 +66,8 @@ class SimConfig:
     max_time: float = 300.0  # [s]
     u_desired: float = 1.0  # [m/s] u_D
     sigma: float = 0.5  # [m] virtual-point law width σ
-    # "corrected": u_p = u_D(1 + tanh(x_e/σ)) (MODEL.md §3.3); "printed": the paper's misprint
-    # u_D(1 − tanh(x_e/σ)), unstable, kept only for the sign-regression tests (MODEL.md §8.9).
+    # "corrected": u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3); "printed": the paper's misprint
+    # u_D(1 − tanh(x_e/σ)), unstable, kept only for the sign-regression tests (docs/model.md §8.9).
     virtual_point_law: str = "corrected"
     randomize_start: bool = False
     start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default

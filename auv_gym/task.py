@@ -9,7 +9,7 @@ Reward per control step (weights are constructor arguments of the envs):
       − w_effort·|a|²/3                       normalised actuator effort
       − w_termination·[terminated by failure]  corridor, pitch, non-finite or envelope exit
 
-Because the virtual point waits for a slow vehicle (MODEL.md §3.3), error penalties alone are
+Because the virtual point waits for a slow vehicle (docs/model.md §3.3), error penalties alone are
 maximised by not moving; the progress and speed terms make idling cost about 1.5 per step while
 following the path earns about 2 per step.
 """

@@ -32,16 +32,16 @@ __all__ = [
 
 @dataclass(frozen=True)
 class AUVParams:
-    """REMUS 100 (Prestero 2001) mapped onto the paper's 5-DOF form (MODEL.md §2.2).
+    """REMUS 100 (Prestero 2001) mapped onto the paper's 5-DOF form (docs/model.md §2.2).
 
     All values SI. Coefficient names follow Fossen/Prestero: ``X_uu`` is X_u|u| (the
     quadratic drag in u|u|), ``Y_vv`` is Y_v|v|, and so on. Signs are the NED signs of
-    MODEL.md §2.1, where every coefficient enters with a ``+``.
+    docs/model.md §2.1, where every coefficient enters with a ``+``.
     """
 
     m: float = 30.48  # [kg] W/g, W = 299 N
     W: float = 299.0  # [N] weight
-    B: float = 299.0  # [N] buoyancy; neutral as in the paper (MODEL.md §2.1 f)
+    B: float = 299.0  # [N] buoyancy; neutral as in the paper (docs/model.md §2.1 f)
     I_y: float = 3.45  # [kg m²]
     I_z: float = 3.45  # [kg m²]
     z_g: float = 0.0196  # [m] CG below CB
@@ -56,11 +56,11 @@ class AUVParams:
     X_ww: float = 0.0  # [kg/m] not in Prestero
     X_qq: float = -1.93  # [kg m/rad]
     X_rr: float = -1.93  # [kg m/rad]
-    X_vr: float = 35.5  # [kg/rad] used as (X_vr + m) v r, MODEL.md §2.1 c
+    X_vr: float = 35.5  # [kg/rad] used as (X_vr + m) v r, docs/model.md §2.1 c
     X_wq: float = -35.5  # [kg/rad] used as (X_wq − m) w q
     Y_ur: float = 5.22  # [kg/rad] added mass + fin lift (−0.93 + 6.15)
     Y_uv: float = -28.6  # [kg/m]
-    Y_vv: float = -131.0  # [kg/m] Y_v|v|; table's −1310 read as a ×10 typo (MODEL.md §2.2 note 1)
+    Y_vv: float = -131.0  # [kg/m] Y_v|v|; table's −1310 read as a ×10 typo (docs/model.md §2.2 note 1)
     Z_uq: float = -5.22  # [kg/rad]
     Z_uw: float = -28.6  # [kg/m]
     Z_ww: float = -131.0  # [kg/m] Z_w|w|
@@ -71,10 +71,10 @@ class AUVParams:
     N_uv: float = -24.0  # [kg]
     N_vv: float = -3.18  # [kg] N_v|v|
     N_ur: float = -2.0  # [kg m/rad]
-    N_rr: float = -94.0  # [kg m²/rad²] N_r|r|, lost in the paper's OCR (MODEL.md §2.1 d)
+    N_rr: float = -94.0  # [kg m²/rad²] N_r|r|, lost in the paper's OCR (docs/model.md §2.1 d)
     fin_moment_coeff: float = 6.15  # [kg/rad] |M_uuδs| = |N_uuδr|, fin moment per u² per rad
     fin_max: float = math.pi / 6.0  # [rad] fin deflection limit ±30°
-    surge_coriolis: bool = True  # include (X_vr + m) v r + (X_wq − m) w q (MODEL.md §2.1 c)
+    surge_coriolis: bool = True  # include (X_vr + m) v r + (X_wq − m) w q (docs/model.md §2.1 c)
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -139,7 +139,7 @@ class AUVParams:
 
         The perturbed set is `HYDRODYNAMIC_FIELDS` (added mass, damping, lift, Munk and
         cross-flow terms, and z_g for the restoring moment z_g W); rigid-body mass and
-        inertia are not uncertain (MODEL.md §10 item 7).
+        inertia are not uncertain (docs/model.md §10 item 7).
         """
         if not (math.isfinite(epsilon) and 0.0 <= epsilon < 1.0):
             raise ValueError(f"parameter uncertainty epsilon must be in [0, 1), got {epsilon}")
@@ -167,7 +167,7 @@ ParamsRecord = record_type("ParamsRecord", PARAM_NAMES, __name__)
 
 
 def remus100(**overrides: float) -> AUVParams:
-    """The default vehicle: REMUS 100 as in MODEL.md §2.2, with optional field overrides."""
+    """The default vehicle: REMUS 100 as in docs/model.md §2.2, with optional field overrides."""
     return AUVParams(**overrides)
 
 

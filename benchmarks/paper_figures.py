@@ -4,7 +4,7 @@
 
 Both controllers (`controllers.make("fbsm")`, `controllers.make("backstepping")`) run the same
 seeded episode of `AUVPath3D-v0` with the env defaults — the paper's helix, start (15, 5, 0) m at
-rest, bounded white noise ±35 N / N·m on all five channels held 0.01 s (MODEL.md §2.5) — and
+rest, bounded white noise ±35 N / N·m on all five channels held 0.01 s (docs/model.md §2.5) — and
 the script writes into ``--out``:
 
     fig3_path_3d.png … fig9_controls.png   3D path, horizontal and vertical projections, errors
@@ -166,7 +166,7 @@ def make_figures(
     noise = env_kwargs.get("disturbance", "paper")
     header = (
         f"# Paper scenario: {' vs '.join(policies)}\n\n"
-        f"Helix of MODEL.md §3.5, start (15, 5, 0) m at rest, disturbance {noise!r} "
+        f"Helix of docs/model.md §3.5, start (15, 5, 0) m at rest, disturbance {noise!r} "
         f'("paper": uniform white noise ±35 N / N·m on all five channels, held 0.01 s), '
         f"seed {seed}, {duration:g} s, windowed metrics over t ≥ {window:g} s. "
         f"Best value per row in bold.\n\n"

@@ -147,7 +147,7 @@ def measure_ppo_collection(
     from auv_gym import AUVPath3DEnv
     from auv_gym.sb3 import make_sb3_vec_env
 
-    torch.set_num_threads(1)  # DESIGN.md §4: one thread is as fast for these small networks
+    torch.set_num_threads(1)  # docs/design.md §4: one thread is as fast for these small networks
     kwargs = {"max_time": 30.0, "randomize_start": True}
     if backend == "adapter":
         env = make_sb3_vec_env(n_envs, seed=seed, **kwargs)

@@ -55,7 +55,7 @@ HELP = {
     "eval_duration": "evaluation episode length [s]",
     "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
     "threads": "torch and numba threads during training, restored after (1 is fastest on 2 "
-    "shared cores, DESIGN.md §4)",
+    "shared cores, docs/design.md §4)",
     "progress_bar": "show the progress bar (tqdm + rich)",
     "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
     "verbose": "SB3 verbosity; 1 also prints every evaluation",

@@ -1,7 +1,7 @@
-r"""Traditional backstepping comparator (MODEL.md §4.7): nominal-model inverse, same guidance.
+r"""Traditional backstepping comparator (docs/model.md §4.7): nominal-model inverse, same guidance.
 
 With the nominal model ν̇ = f_n(ν, θ) + b_n τ (f_n from `auv_gym.dynamics.nu_dot` with τ = 0,
-including the surge Coriolis terms when the model has them, MODEL.md §10.3):
+including the surge Coriolis terms when the model has them, docs/model.md §10.3):
 
     X = m11 (−f1 + u̇_D − k_u S1),                  k_u = h1 + λ1
     M = I55 (−f5 + α̇1 − z1 − k_q z2),              k_q = c1 + h2 + λ2
@@ -13,7 +13,7 @@ Notes: with an exact model the closed loop is ż1 = z2 − k1 z1, ż2 = −z1 �
 ż3 = z4/cosθ − k2 z3, ż4 = −z3/cosθ − k_r z4, so V = ½(S1² + z1² + z2² + z3² + z4²) has
 V̇ = −k_u S1² − k1 z1² − k_q z2² − k2 z3² − k_r z4² (the cross terms cancel).
 A mis-specified model (e.g. coefficients × 1.3) leaves the f_n error uncompensated: a steady
-offset, which is what MODEL.md §8 check 7 measures.
+offset, which is what docs/model.md §8 check 7 measures.
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ def actuator_vector(actuator: str, params: AUVParams) -> tuple[float, float, flo
     """(fins flag, fin gain K·δ_max [kg], X_max [N], M_max [N·m], N_max [N·m]) of an actuator model.
 
     "paper": constant limits (50 N, 10 N·m, 10 N·m); "fins": M, N limited by K·δ_max·u|u|
-    (MODEL.md §2.3), evaluated by the controller at the observed surge speed.
+    (docs/model.md §2.3), evaluated by the controller at the observed surge speed.
     """
     if actuator not in ("paper", "fins"):
         raise ValueError(f"unknown actuator {actuator!r}; valid: ['fins', 'paper']")

@@ -1,4 +1,4 @@
-r"""Fuzzy backstepping sliding-mode controller (FBSM) of Liang et al. (2018), MODEL.md §4.
+r"""Fuzzy backstepping sliding-mode controller (FBSM) of Liang et al. (2018), docs/model.md §4.
 
 Surge (31)–(34), first order, S1 = u − u_D:
 
@@ -8,13 +8,13 @@ Pitch (35)–(39), with z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α
 
     M = (1/b̂5) [ −f̂5(v) − c1 ż1 + α̇1 − d̂5(S2) − (h2 + λ2) S2 ]
 
-Yaw (40)–(43), with the 1/cosθ correction of MODEL.md §4.4, z3 = ψ − ψ_d,
+Yaw (40)–(43), with the 1/cosθ correction of docs/model.md §4.4, z3 = ψ − ψ_d,
 α2 = cosθ(−k2 z3 + ψ̇_d), z4 = r − α2, S3 = c2 z3 + z4:
 
     N = (1/b̂6) [ −f̂6(v) − c2 ż3 + α̇2 − d̂6(S3) − (h3 + λ3) S3 ]
 
 f̂, b̂ are 3125-rule adaptive fuzzy systems of v = (u, v, w, q, r) and d̂ a 3-rule one of S
-(`controllers.fuzzy`); θ_d and ψ_d come from the LOS laws of MODEL.md §3.4 (`controllers.los`).
+(`controllers.fuzzy`); θ_d and ψ_d come from the LOS laws of docs/model.md §3.4 (`controllers.los`).
 
 Notes (Lyapunov argument, paper (44)–(53)): with V = ½S² + Σ(1/2α)|θ − θ*|², the adaptive laws
 (30) cancel the parameter-error terms, leaving V̇ ≤ −(h + λ − η)S² + ε|S| for the approximation
@@ -106,9 +106,9 @@ class FBSM(BatchedController):
     """The paper's FBSM controller (module docstring), batched over vehicles.
 
     Args:
-        gains: `ControllerGains` (defaults: the paper's Section 6, MODEL.md §4.6).
+        gains: `ControllerGains` (defaults: the paper's Section 6, docs/model.md §4.6).
         params: nominal `AUVParams`; the FBSM uses only b_n = (1/m11, 1/I55, 1/I66) to
-            initialise and bound b̂ (MODEL.md §4.6), never the true perturbed vehicle.
+            initialise and bound b̂ (docs/model.md §4.6), never the true perturbed vehicle.
         control_dt: control period [s], the Euler step of the adaptive laws and filter.
         actuator: "paper" or "fins" — how τ is normalised into actions.
         threads: "auto" runs batches of ≥ 64 vehicles on numba's threads, "serial" never.
@@ -129,7 +129,7 @@ class FBSM(BatchedController):
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         theta_b = np.empty((n, 3, N_RULES))
-        theta_b[:] = np.asarray(self.b_nominal)[None, :, None]  # b̂(0) = b_n (MODEL.md §4.6)
+        theta_b[:] = np.asarray(self.b_nominal)[None, :, None]  # b̂(0) = b_n (docs/model.md §4.6)
         return {
             "theta_f": np.zeros((n, 3, N_RULES)),
             "theta_b": theta_b,

@@ -1,4 +1,4 @@
-"""Adaptive fuzzy approximators of the FBSM (paper (27)–(30), MODEL.md §4.1, §4.5).
+"""Adaptive fuzzy approximators of the FBSM (paper (27)–(30), docs/model.md §4.1, §4.5).
 
 f̂(v) = θ_fᵀξ(v) and b̂(v) = θ_bᵀξ(v) use 5 Gaussian membership functions on each of the five
 inputs v = (u, v, w, q, r): 5⁵ = 3125 rules, product inference and centre-average
@@ -10,7 +10,7 @@ updates stream θ once each, which made it 2.6× faster than materialising ξ.
 d̂(S) = θ_dᵀξ_d(S) uses three Gaussians in the sliding variable S.
 
 Adaptive laws (30), Euler-integrated at the control period dt, with optional σ-modification
-leakage σ_l (MODEL.md §4.8) and projection of every θ_b entry into [0.5, 2]·b_n:
+leakage σ_l (docs/model.md §4.8) and projection of every θ_b entry into [0.5, 2]·b_n:
 
     θ̇_f = α_f (S ξ − σ_l θ_f),   θ̇_b = α_b (S ξ τ − σ_l (θ_b − b_n)),   θ̇_d = α_d (S ξ_d − σ_l θ_d)
 
@@ -135,7 +135,7 @@ def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta
         for i in range(N_INPUTS):
             memberships(v_in[i], centre0, spacing, sigma_b, mu[i])
         basis_factors(mu, ab_b, cde_b)
-    else:  # b̂ shares f̂'s basis (σ_b = σ, MODEL.md §4.6)
+    else:  # b̂ shares f̂'s basis (σ_b = σ, docs/model.md §4.6)
         ab_b, cde_b = ab, cde
     acc_f[:] = 0.0
     acc_b[:] = 0.0

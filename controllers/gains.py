@@ -1,4 +1,4 @@
-"""Gains of the paper's controllers (MODEL.md §3.4, §4.6) and their packed form for the kernels."""
+"""Gains of the paper's controllers (docs/model.md §3.4, §4.6) and their packed form for the kernels."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ __all__ = ["GAIN_LAYOUT", "ControllerGains", "MembershipSet"]
 class MembershipSet:
     """Five Gaussian MFs per input: centres c_j = −p + (j − 1)·q_mf, widths σ (f̂), σ_b (b̂).
 
-    d̂(S) uses three Gaussians of width σ_d centred at −σ_d, 0, +σ_d (MODEL.md §4.5).
+    d̂(S) uses three Gaussians of width σ_d centred at −σ_d, 0, +σ_d (docs/model.md §4.5).
     Units follow the fuzzy inputs (u, v, w [m/s], q, r [rad/s]) and S of the loop.
     """
 
@@ -36,12 +36,12 @@ NON_NEGATIVE = ("sigma_leak", "ilos_y", "ilos_z")  # gains where 0 switches a fe
 
 @dataclass(frozen=True)
 class ControllerGains:
-    """Gains and widths; the defaults are the paper's Section 6 as read in MODEL.md §4.6.
+    """Gains and widths; the defaults are the paper's Section 6 as read in docs/model.md §4.6.
 
     Surge: Ṡ1 = −(h1 + λ1)S1. Pitch: z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, S2 = c1 z1 + z2.
-    Yaw: z3 = ψ − ψ_d, α2 = cosθ(−k2 z3 + ψ̇_d), S3 = c2 z3 + z4. LOS (MODEL.md §3.4):
+    Yaw: z3 = ψ − ψ_d, α2 = cosθ(−k2 z3 + ψ̇_d), S3 = c2 z3 + z4. LOS (docs/model.md §3.4):
     ψ_d = ψ_F − arctan(k_y y_e) − β, θ_d = sat(θ_F + arctan(k_z z_e) + α, ±θ_max), with the
-    corrections command-filtered (2nd order, ω_n, ζ; MODEL.md §10.4).
+    corrections command-filtered (2nd order, ω_n, ζ; docs/model.md §10.4).
 
     ``ilos_y``, ``ilos_z`` > 0 switch on integral LOS (Børhaug, Pavlov & Pettersen 2008;
     Caharija et al. 2016), not in the paper: y_e is replaced by y_e + σ_y y_int with
@@ -65,12 +65,12 @@ class ControllerGains:
     filter_wn: float = 2.0  # [rad/s]
     filter_zeta: float = 1.0
     u_guard: float = 0.1  # [m/s] α = β = 0 below this surge speed
-    sideslip_3d: bool = False  # divide β by cos θ_F (MODEL.md §10.5); paper: False
+    sideslip_3d: bool = False  # divide β by cos θ_F (docs/model.md §10.5); paper: False
     printed_pitch_los: bool = False  # the paper's misprinted θ_d = θ_F − arctan(k_z z_e) − α
-    alpha_f: float = 1.0  # adaptation gains (MODEL.md §4.6, chosen)
+    alpha_f: float = 1.0  # adaptation gains (docs/model.md §4.6, chosen)
     alpha_b: float = 0.1
     alpha_d: float = 0.1
-    sigma_leak: float = 0.0  # σ-modification leakage (MODEL.md §4.8); 0 = paper-faithful
+    sigma_leak: float = 0.0  # σ-modification leakage (docs/model.md §4.8); 0 = paper-faithful
     ilos_y: float = 0.0  # integral-LOS gain σ_y (horizontal); 0 = paper's LOS
     ilos_z: float = 0.0  # integral-LOS gain σ_z (vertical); 0 = paper's LOS
     separate_b_basis: bool = False  # False: b̂ shares f̂'s basis (σ_b = σ), as the prototype

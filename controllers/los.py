@@ -1,6 +1,6 @@
 """LOS guidance with command-filtered corrections and the backstepping error variables.
 
-Shared by FBSM and backstepping (MODEL.md §3.4, §4.3, §4.4, §10.4). All functions are numba
+Shared by FBSM and backstepping (docs/model.md §3.4, §4.3, §4.4, §10.4). All functions are numba
 kernels on one vehicle; ``o`` is one observation row (layout `auv_gym.OBS_NAMES`), ``g`` the
 packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the 8-entry memory
 (x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F, integral-LOS states y_int, z_int [m]).
@@ -52,7 +52,7 @@ def loop_errors(o, g, filt, started, out):
     through ẍ = ω_n²(c − x) − 2ζω_n ẋ (initialised at c with zero rate). θ̇_d, θ̈_d add the
     analytic θ̇_F and its finite difference over one control step (likewise for ψ).
     Pitch (35)–(36): z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α1, S2 = c1 z1 + z2,
-    ż1 = q − θ̇_d, α̇1 = −k1 ż1 + θ̈_d. Yaw (40) with the 1/cosθ correction (MODEL.md §4.4):
+    ż1 = q − θ̇_d, α̇1 = −k1 ż1 + θ̈_d. Yaw (40) with the 1/cosθ correction (docs/model.md §4.4):
     z3 = wrap(ψ − ψ_d), α2 = cosθ(−k2 z3 + ψ̇_d), z4 = r − α2, S3 = c2 z3 + z4,
     ż3 = r/cosθ − ψ̇_d, α̇2 = −q sinθ(−k2 z3 + ψ̇_d) + cosθ(−k2 ż3 + ψ̈_d).
     """
@@ -74,7 +74,7 @@ def loop_errors(o, g, filt, started, out):
     y_los = y_e + g[ILOS_Y] * y_int  # = y_e unless integral LOS is on
     z_los = z_e + g[ILOS_Z] * z_int
     c_y = -math.atan(k_y * y_los) - beta
-    if g[PRINTED_PITCH] > 0.0:  # the paper's print: both signs flipped (fails, MODEL.md §8.9)
+    if g[PRINTED_PITCH] > 0.0:  # the paper's print: both signs flipped (fails, docs/model.md §8.9)
         theta_d_raw = theta_f - math.atan(k_z * z_los) - alpha
     else:
         theta_d_raw = theta_f + math.atan(k_z * z_los) + alpha

@@ -45,7 +45,7 @@ METADATA_FILE = "metadata.json"
 
 
 class PPOPolicy:
-    """A trained PPO actor with its observation normalisation: the Policy protocol (DESIGN.md §3).
+    """A trained PPO actor with its observation normalisation: the Policy protocol (docs/design.md §3).
 
     `predict` normalises like `VecNormalize` — clip((o − μ)/√(σ² + ε), −c, c) — then runs the
     SB3 actor with torch on `num_threads` intra-op threads (set for the call, then restored;
@@ -182,7 +182,7 @@ def load_policy(
     ValueError naming the file when the zip is corrupt or the agent was trained for another
     observation layout (its `obs_names` differ from `auv_gym.OBS_NAMES`, or its observation
     space is not (15,)). `num_threads`: torch's intra-op threads while the policy predicts (1 is
-    fastest for these small networks on this machine, DESIGN.md §4; None: torch's setting);
+    fastest for these small networks on this machine, docs/design.md §4; None: torch's setting);
     loading itself leaves torch's settings alone.
     """
     from stable_baselines3 import PPO

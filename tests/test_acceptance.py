@@ -1,7 +1,7 @@
-"""MODEL.md §8 acceptance checks 3, 4, 6, 7, 8, 9 (and 10 for the controllers).
+"""docs/model.md §8 acceptance checks 3, 4, 6, 7, 8, 9 (and 10 for the controllers).
 
 Run at the env's default control period (0.05 s) and at the physics step (0.01 s), with the noise
-held for 0.01 s in both (MODEL.md §10.1). Thresholds are MODEL.md's. Measured at both periods
+held for 0.01 s in both (docs/model.md §10.1). Thresholds are docs/model.md §8's. Measured at both periods
 (FBSM, 300 s): noise-free overshoot 0.004 m/s, distance < 0.5 m from 31 s, final 0.017 m;
 ±35 noise RMS y_e 0.03–0.06 m against 0.22–0.43 m for backstepping; +30 % model error: backstepping
 0.12 m, FBSM 0.017 m; printed u_p law 17.7 m, printed pitch LOS 379 m at 300 s.
@@ -86,7 +86,7 @@ def test_check7_model_error_hurts_backstepping_not_fbsm(dt):
 @pytest.mark.parametrize("dt", PERIODS)
 def test_check8_bounded_and_safe_over_1000_s(dt):
     """One 1000-s noisy run: finite, b̂ in its projection bounds, |θ| ≤ θ_max + 5°, commands
-    within their limits, every adaptive weight ≤ 10 (MODEL.md §8.8)."""
+    within their limits, every adaptive weight ≤ 10 (docs/model.md §8.8)."""
     policy = controllers.make("fbsm", control_dt=dt)
     b_nominal = np.asarray(policy.b_nominal)[None, :, None]
     peaks = {"theta_f": 0.0, "theta_d": 0.0, "b_low": np.inf, "b_high": 0.0}
@@ -118,7 +118,7 @@ def test_check8_bounded_and_safe_over_1000_s(dt):
 
 @pytest.mark.parametrize("name", ["fbsm", "backstepping"])
 def test_fin_limited_actuator_still_converges_without_noise(name):
-    """MODEL.md §2.3 "realistic mode": |M|, |N| ≤ 6.15·u²·π/6; prototype: < 0.5 m from 41 s."""
+    """docs/model.md §2.3 "realistic mode": |M|, |N| ≤ 6.15·u²·π/6; prototype: < 0.5 m from 41 s."""
     (tr,) = rollouts(controllers.make(name, actuator="fins"), [0], actuator="fins",
                      disturbance="none")  # fmt: skip
     assert tr.termination_reason == "time_limit"
@@ -158,7 +158,7 @@ def test_check10_noise_free_runs_do_not_depend_on_the_seed(name):
 
 
 def test_check8_sigma_leakage_keeps_the_disturbance_weights_stationary():
-    """With σ_l = 0.05: max |θ_d| over [500, 1000] s ≤ 1.5 × max over [0, 500] s (MODEL.md §8.8)."""
+    """With σ_l = 0.05: max |θ_d| over [500, 1000] s ≤ 1.5 × max over [0, 500] s (docs/model.md §8.8)."""
     policy = controllers.make("fbsm", sigma_leak=0.05)
     peaks = []
 

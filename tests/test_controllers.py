@@ -109,7 +109,7 @@ def test_fuzzy_basis_is_a_normalised_product_of_memberships():
 
 
 def d_basis(S, sigma_d):
-    """ξ_d(S): three normalised Gaussians of width σ_d centred at −σ_d, 0, σ_d (MODEL.md §4.5)."""
+    """ξ_d(S): three normalised Gaussians of width σ_d centred at −σ_d, 0, σ_d (docs/model.md §4.5)."""
     mu = np.exp(-(((S - sigma_d * np.array([-1.0, 0.0, 1.0])) / sigma_d) ** 2))
     return mu / mu.sum()
 
@@ -159,7 +159,7 @@ def test_fuzzy_kernel_matches_the_reference_basis_and_adaptive_laws(leak, separa
 
 
 def test_yaw_error_decays_at_k2_plus_c2_over_cos_theta_on_the_surface():
-    """MODEL.md §10.6: with S3 = 0, ż3 = −(k2 + c2/cosθ) z3 (the 1/cosθ correction)."""
+    """docs/model.md §10.6: with S3 = 0, ż3 = −(k2 + c2/cosθ) z3 (the 1/cosθ correction)."""
     gains = ControllerGains()
     g = pack_gains(gains, 0.05, (0.03, 0.12, 0.12), (0.0, 1.0, 50.0, 10.0, 10.0))
     o = np.zeros(OBS_DIM)

@@ -124,7 +124,7 @@ def test_disturbance_sequence_does_not_depend_on_actions():
 
 
 def test_noise_free_runs_do_not_depend_on_the_seed():
-    """MODEL.md §8 check 10, second half."""
+    """docs/model.md §8 check 10, second half."""
     actions = random_actions(4, 300)
     a = rollout(AUVPath3DEnv(disturbance="none"), 1, actions)
     b = rollout(AUVPath3DEnv(disturbance="none"), 99, actions)

@@ -19,7 +19,7 @@ class ProportionalPolicy:
     """A small LOS + PD policy (not the paper's controller), enough to follow the helix roughly.
 
     X feeds u_D − u back around the 1.6-N drag at 1 m/s; M and N track θ_d = θ_F + atan(k_z z_e)
-    and ψ_d = ψ_F − atan(k_y y_e) (MODEL.md §3.4) with rate damping. Row-wise, so batched calls
+    and ψ_d = ψ_F − atan(k_y y_e) (docs/model.md §3.4) with rate damping. Row-wise, so batched calls
     equal per-row calls bit for bit.
     """
 

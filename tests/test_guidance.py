@@ -1,4 +1,4 @@
-"""Paths, Serret–Frenet errors and the virtual point (MODEL.md §3, §8 checks 1 and 5)."""
+"""Paths, Serret–Frenet errors and the virtual point (docs/model.md §3, §8 checks 1 and 5)."""
 
 from __future__ import annotations
 

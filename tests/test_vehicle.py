@@ -1,4 +1,4 @@
-"""Vehicle model: parameters, open-loop physics (MODEL.md §8 check 2), RK4 order, batching."""
+"""Vehicle model: parameters, open-loop physics (docs/model.md §8 check 2), RK4 order, batching."""
 
 from __future__ import annotations
 

@@ -125,7 +125,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     if normalize is True:
         normalize = {}
     elif normalize is False:
-        raise ValueError(f"{path}: normalize must be enabled (VecNormalize, DESIGN.md §3)")
+        raise ValueError(f"{path}: normalize must be enabled (VecNormalize, docs/design.md §3)")
     elif not isinstance(normalize, dict):
         raise ValueError(f"{path}: normalize must be a bool, a dict or a dict expression")
     normalize = {"norm_obs": True, "norm_reward": True, **normalize}
