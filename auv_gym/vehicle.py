@@ -18,6 +18,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numba import njit
 
+from auv_gym.validation import flag, real
+
 __all__ = [
     "HYDRODYNAMIC_FIELDS",
     "N_PARAMS",
@@ -79,11 +81,8 @@ class AUVParams:
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool):
-                continue
-            if not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"AUVParams.{f.name} must be a finite number, got {value!r}")
+            check = flag if f.name == "surge_coriolis" else real  # True is no mass
+            check(f"AUVParams.{f.name}", getattr(self, f.name))
         for name in ("m", "W", "B", "I_y", "I_z", "fin_max"):
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"AUVParams.{name} must be positive, got {getattr(self, name)}")
@@ -96,6 +95,8 @@ class AUVParams:
         ):
             if value <= 0.0:
                 raise ValueError(f"AUVParams: {name} must be positive, got {value}")
+        if self.fin_max > math.pi / 2:
+            raise ValueError(f"AUVParams.fin_max must be in (0, π/2] rad, got {self.fin_max}")
         if self.fin_moment_coeff < 0.0:
             raise ValueError("AUVParams.fin_moment_coeff must be non-negative")
 
