@@ -35,7 +35,6 @@ __all__ = [
 __version__ = "0.1.0"
 
 ENV_ID = "AUVPath3D-v0"
-MAX_EPISODE_STEPS = 6000  # 300 s at the default control_dt = 0.05 s
 
 
 # Variants are separate ids with fixed keyword arguments (docs/design.md §3, Registration).
@@ -54,7 +53,10 @@ def _register() -> None:
             id=env_id,
             entry_point="auv_gym.env:AUVPath3DEnv",
             vector_entry_point="auv_gym.vector_env:AUVPath3DVectorEnv",
-            max_episode_steps=MAX_EPISODE_STEPS,
+            # The envs truncate at max_time themselves, for any control_dt; a registered
+            # TimeLimit would cut every other control_dt at the wrong step (env.spec reports the
+            # episode length of the arguments).
+            max_episode_steps=None,
             kwargs=kwargs,
         )
 

@@ -10,13 +10,14 @@ without sharing generator state.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numba import njit
 
 from auv_gym.records import field_indices
+from auv_gym.validation import ArgumentTypeError, is_real, keys_within, real, vector
 
 __all__ = [
     "KEY",
@@ -32,6 +33,12 @@ __all__ = [
 N_CHANNELS = 5  # white-noise channels f_u, f_v, f_w, f_q, f_r
 # The two 64-bit keys of an episode (`draw_keys`), one per random stream.
 KEY = field_indices("KeyIndex", ("noise", "current"), __name__)
+
+# Documented ranges (AUVPath3DEnv docstring, "Arguments").
+MAX_NOISE_AMPLITUDE = 1e4  # [N, N·m] 200× the thrust limit
+MAX_NOISE_HOLD = 1e6  # [s]
+MAX_CURRENT_SPEED = 10.0  # [m/s] per axis, mean and std; ocean currents stay below 3 m/s
+MAX_CURRENT_TIME_CONSTANT = 1e6  # [s]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -106,19 +113,20 @@ class NoiseConfig:
     """Bounded white noise f_i = A_i·U(−1, 1) on (f_u, f_v, f_w, f_q, f_r), held `hold` seconds.
 
     Amplitudes in [N, N, N, N·m, N·m]; the paper uses 35 on every channel. The equivalent
-    spectral density is A²·hold/3, so the hold time is part of the model (docs/model.md §2.5, §10.1).
+    spectral density is A²·hold/3, so the hold time is part of the model
+    (docs/model.md §2.5, §10.1).
     """
 
     amplitude: tuple[float, float, float, float, float] = (35.0,) * 5
     hold: float = 0.01  # [s]
 
     def __post_init__(self) -> None:
-        amp = tuple(float(a) for a in np.broadcast_to(np.asarray(self.amplitude, float), (5,)))
-        if not all(math.isfinite(a) and a >= 0.0 for a in amp):
-            raise ValueError(f"noise amplitude must be finite and >= 0, got {self.amplitude}")
-        if not (math.isfinite(self.hold) and self.hold > 0.0):
-            raise ValueError(f"noise hold must be a positive time in s, got {self.hold}")
+        # One amplitude stands for all five channels.
+        amplitude = (self.amplitude,) * 5 if is_real(self.amplitude) else self.amplitude
+        amp = vector("NoiseConfig.amplitude", amplitude, 5, 0.0, MAX_NOISE_AMPLITUDE, "N or N·m")
+        hold = real("NoiseConfig.hold", self.hold, 0.0, MAX_NOISE_HOLD, low_open=True, unit="s")
         object.__setattr__(self, "amplitude", amp)
+        object.__setattr__(self, "hold", hold)
 
 
 @dataclass(frozen=True)
@@ -136,15 +144,12 @@ class CurrentConfig:
     time_constant: float = 60.0  # [s] τ of the Gauss–Markov process
 
     def __post_init__(self) -> None:
-        for name in ("mean", "std"):
-            value = np.asarray(getattr(self, name), dtype=float)
-            if value.shape != (3,) or not np.all(np.isfinite(value)):
-                raise ValueError(f"current {name} must be a finite 3-vector in m/s, got {value}")
-            object.__setattr__(self, name, tuple(float(x) for x in value))
-        if any(s < 0 for s in self.std):
-            raise ValueError(f"current std must be >= 0, got {self.std}")
-        if not (math.isfinite(self.time_constant) and self.time_constant > 0):
-            raise ValueError(f"current time_constant must be > 0 s, got {self.time_constant}")
+        limit = MAX_CURRENT_SPEED
+        object.__setattr__(self, "mean", vector("current mean", self.mean, 3, -limit, limit, "m/s"))
+        object.__setattr__(self, "std", vector("current std", self.std, 3, 0.0, limit, "m/s"))
+        tau = real("current time_constant", self.time_constant, 0.0, MAX_CURRENT_TIME_CONSTANT,
+                   low_open=True, unit="s")  # fmt: skip
+        object.__setattr__(self, "time_constant", tau)
 
     @classmethod
     def from_spec(cls, spec: CurrentConfig | Sequence[float] | dict | None) -> CurrentConfig:
@@ -153,9 +158,14 @@ class CurrentConfig:
             return cls()
         if isinstance(spec, CurrentConfig):
             return spec
-        if isinstance(spec, dict):
-            return cls(**spec)
-        return cls(mean=tuple(spec))
+        if isinstance(spec, Mapping):
+            return cls(**keys_within("current", spec, [f.name for f in fields(cls)]))
+        if isinstance(spec, (str, bytes)) or not isinstance(spec, Iterable):
+            raise ArgumentTypeError(
+                f"current must be None, a 3-vector mean [m/s], a dict of CurrentConfig fields or "
+                f"a CurrentConfig, got {spec!r:.80}"
+            )
+        return cls(mean=spec)
 
 
 def gauss_markov_coefficients(config: CurrentConfig, dt: float) -> tuple[float, np.ndarray]:

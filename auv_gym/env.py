@@ -2,36 +2,64 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.envs.registration import EnvSpec
 
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
-from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
+from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW, OBS_NAMES, OBS_UNITS
 from auv_gym.paths import Path
 from auv_gym.simulator import SimConfig, Simulator
-from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS, RewardWeights
+from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
+from auv_gym.validation import ArgumentTypeError
 from auv_gym.vehicle import AUVParams
 
-__all__ = ["AUVPath3DEnv", "validate_actions"]
+__all__ = ["AUVPath3DEnv", "check_reset_observations", "validate_actions"]
 
 _UP = GUIDANCE_FIELDS.index("u_p")
 _REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
 
 
 def validate_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
-    """float64 array of the given shape, or ValueError naming the problem.
+    """float64 array of real numbers of the given shape, or a named error.
 
-    Non-finite values are rejected by `Simulator.step`, inside the compiled kernel.
+    Strings, booleans, complex numbers and objects raise `ArgumentTypeError` (a TypeError), a
+    wrong shape ValueError; non-finite values are rejected by `Simulator.step`, inside the
+    compiled kernel, before any vehicle moves.
     """
-    a = np.asarray(action, dtype=np.float64)
+    try:
+        a = np.asarray(action)
+    except (TypeError, ValueError):  # ragged nesting
+        a = np.asarray(None)
+    if a.dtype.kind not in "iuf":
+        raise ArgumentTypeError(
+            f"action must be an array of real numbers, got dtype {a.dtype}: {action!r:.80}"
+        )
     if a.shape != shape:
         raise ValueError(f"action must have shape {shape}, got {a.shape}")
-    return a
+    return a.astype(np.float64, copy=False)
+
+
+def check_reset_observations(obs: np.ndarray, rows: Sequence[int] | np.ndarray) -> None:
+    """Raise ValueError, naming the component, if a reset observation (float32, one row per
+    vehicle) lies outside the observation space; the configuration checks make this unreachable
+    for the built-in paths, so it guards what they cannot see (a spline between its samples)."""
+    outside = ~((obs >= OBS_LOW) & (obs <= OBS_HIGH))  # NaN counts as outside
+    if outside.any():
+        i, j = np.argwhere(outside)[0]
+        name = OBS_NAMES[j]
+        raise ValueError(
+            f"reset gave {name} = {obs[i, j]:.6g} {OBS_UNITS[name]} (vehicle {rows[i]}), outside "
+            f"the observation space [{OBS_LOW[j]:.6g}, {OBS_HIGH[j]:.6g}]: the start "
+            "(start_position, start_heading, randomize_start) or the path (its turn rate at "
+            "u_p <= 2 u_desired) does not fit the observation bounds"
+        )
 
 
 class AUVPath3DEnv(gym.Env):
@@ -40,16 +68,16 @@ class AUVPath3DEnv(gym.Env):
     ## Description
     A REMUS 100 vehicle, modelled in five degrees of freedom (surge, sway, heave, pitch, yaw;
     docs/model.md §2), must follow a 3D path with a Serret–Frenet virtual point that moves with
-    u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3). It has three inputs only — surge thrust X, pitch
-    moment M, yaw moment N — so sway and heave are unactuated. The defaults reproduce the paper's
-    simulation: the helix x = 20 cos(πs/20) + 10, y = 20 sin(πs/20), z = −8 − s, start at
+    u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3). It has three inputs only — surge thrust X,
+    pitch moment M, yaw moment N — so sway and heave are unactuated. The defaults reproduce the
+    paper's simulation: the helix x = 20 cos(πs/20) + 10, y = 20 sin(πs/20), z = −8 − s, start at
     (15, 5, 0) m at rest with ψ = θ = 0, and bounded white-noise disturbances of ±35 N / N·m.
 
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
     (50 N, 10 N·m, 10 N·m); "fins" scale X by 50 N and M, N by the fin authority
     6.15·u|u|·π/6 N·m (docs/model.md §2.3). Values beyond ±1 saturate (the only clipping);
-    NaN, inf or a wrong shape raise ValueError.
+    NaN, inf or a wrong shape raise ValueError, strings, booleans and complex numbers TypeError.
 
     ## Observation Space
     `Box(OBS_LOW, OBS_HIGH, (15,), float32)`, physical SI units, layout `auv_gym.OBS_NAMES`:
@@ -78,6 +106,9 @@ class AUVPath3DEnv(gym.Env):
     The path's default start (paper: (15, 5, 0) m, ψ = θ = 0, ν = 0, s = 0). With
     `randomize_start=True`, half of the episodes start within ±2 m of it, the rest anywhere on
     the first turn of the path with up to 8 m offset, ±60° heading error and 0–1.5 m/s surge.
+    The arguments' ranges (below) keep every reset observation inside the observation space;
+    `reset` raises ValueError, naming the component, if a start still falls outside it.
+    `reset` takes no `options` (None or an empty dict).
 
     ## Info
     `x_e`, `y_e`, `z_e`, `distance` [m], `s`, `u_p` [m/s], `t` [s]; `tau` — the applied
@@ -87,12 +118,23 @@ class AUVPath3DEnv(gym.Env):
 
     ## Episode End
     Terminated (`info["termination_reason"]`): "corridor" — distance to the virtual point above
-    `corridor` (30 m); "pitch" — |θ| above `max_pitch` (60°); "non_finite" — the state is no
-    longer finite (the last finite observation is returned); "envelope" — the observation left
-    its documented bounds; "path_end" — s reached the end of a finite path. Truncated at
-    `max_time` (300 s = 6000 steps of 0.05 s, the registered `max_episode_steps`).
+    `corridor` (30 m); "pitch" — |θ| above `max_pitch` (60°); "non_finite" — the state or the
+    observation is no longer finite (NaN, inf or beyond the float32 range; the last observation
+    returned before is returned again); "envelope" — the observation left its documented
+    bounds; "path_end" — s reached the end of a finite path. Every other step returns an
+    observation inside `observation_space`, and every reward is finite.
+
+    Truncated at `max_time`: `truncated` is True from the first control step at which
+    t ≥ `max_time` (after ⌈max_time/control_dt⌉ steps; 300 s = 6000 steps of 0.05 s), whether or
+    not that step also terminates — the env owns its time limit for every `control_dt`, so
+    `gym.make` adds no `TimeLimit` and `env.spec.max_episode_steps` is that step count.
 
     ## Arguments
+    Every argument is checked when the env is built: a value of the wrong type raises
+    `auv_gym.validation.ArgumentTypeError` (a TypeError, and a ValueError), a value outside the
+    range below ValueError; both name the argument, the value and the allowed range. Nothing is
+    coerced silently (``randomize_start="False"`` is an error, not True).
+
     | argument | default | meaning |
     |---|---|---|
     | `path` | "helix" | "helix", "line", "waypoints" or a `auv_gym.paths.Path` |
@@ -102,7 +144,7 @@ class AUVPath3DEnv(gym.Env):
     | `actuator` | "paper" | "paper" or "fins" |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
     | `physics_dt` | 0.01 | RK4 step [s] |
-    | `noise_hold` | 0.01 | zero-order hold of the white noise [s] |
+    | `noise_hold` | None | white-noise hold [s]; None: the `NoiseConfig`'s, else 0.01 s |
     | `max_time` | 300.0 | truncation time [s] |
     | `randomize_start` | False | random initial offset (training) |
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
@@ -113,12 +155,36 @@ class AUVPath3DEnv(gym.Env):
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3D track with projections |
 
+    Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
+    `task` and `paths`):
+    - `physics_dt` in [1e-6, 0.1] s; `control_dt` a whole multiple of it, at most 10 000 physics
+      steps per control step (bounds the cost of one `step`); `max_time` in [control_dt, 1e6] s.
+    - `noise_hold` a whole multiple of `physics_dt`, ≤ 1e6 s; given together with a `NoiseConfig`
+      it must equal that config's `hold` (no silent override). Amplitudes in [0, 1e4] N or N·m.
+    - `current`: mean and std per axis within ±10 m/s (std ≥ 0), time constant in (0, 1e6] s.
+    - `param_uncertainty` in [0, 1); `u_desired` in (0, 10] m/s, so that u_D and u_p ≤ 2u_D stay
+      inside their observation bounds; `sigma` > 0 m.
+    - `corridor` in [0.01, 500] m, inside the ±500 m bounds of the observed errors; `max_pitch`
+      in (0, π/2) rad; reward weights in [0, 1e6] (the formula gives each term its sign).
+    - `start_position` within 500 m of the path's start p(0) (496.5 m with `randomize_start`),
+      so that the reset errors are observable; `start_heading` in [−2π, 2π] rad.
+    - `randomize_start` a bool; `params` an `AUVParams` (finite fields, positive inertias).
+
+    Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
+    in (0, 1e5] m, ω in (0, 1e3] rad per unit s, |climb| ≤ 1e5 m per unit s, |p'| ≥ 1e-6; a
+    `StraightLine` direction non-zero; a `Spline` through 2 to 1000 distinct waypoints. The
+    path's turn rate must keep the virtual point's ψ̇_F and θ̇_F within their ±10 rad/s bounds
+    for u_p ≤ 2u_D (checked exactly for helix and line, at 64 points per spline segment).
+
     ## Vectorized environment
     `gym.make_vec("AUVPath3D-v0", num_envs=n)` returns the native `AUVPath3DVectorEnv`, which
     runs the same compiled kernel over all vehicles.
 
     ## Version History
     * v0: initial release (REMUS 100 in the paper's 5-DOF form, docs/model.md §6 corrections).
+      Later v0 fixes, default behaviour unchanged: the env owns truncation at `max_time` (was a
+      registered `TimeLimit` of 6000 steps, wrong for any other `control_dt`); every argument is
+      range-checked; a non-finite observation ends the episode as "non_finite".
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
@@ -132,7 +198,7 @@ class AUVPath3DEnv(gym.Env):
         actuator: str = "paper",
         control_dt: float = 0.05,
         physics_dt: float = 0.01,
-        noise_hold: float = 0.01,
+        noise_hold: float | None = None,
         max_time: float = 300.0,
         randomize_start: bool = False,
         u_desired: float = 1.0,
@@ -157,33 +223,68 @@ class AUVPath3DEnv(gym.Env):
             reward_weights=reward_weights,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r:.80}"
+            )
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(1.0 / control_dt))}
         self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.sim = Simulator(self.config, 1)
         self._truncation_index = self.config.max_steps * self.config.substeps
+        self._last_obs = np.zeros(len(OBS_LOW), dtype=np.float32)  # the last one returned
         self._track: list[np.ndarray] = []
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The spec `gym.make` set, with ``max_episode_steps`` = the steps to `max_time`.
+
+        The env truncates there by itself (the registration has no `TimeLimit`), so the spec
+        states the episode length of these arguments, whatever their `control_dt`.
+        """
+        if self._spec is None:
+            return None
+        return dataclasses.replace(self._spec, max_episode_steps=self.config.max_steps)
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self._spec = value
+
+    _spec: EnvSpec | None = None
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        if options is not None and not isinstance(options, Mapping):
+            raise ArgumentTypeError(f"options must be None or a dict, got {options!r:.80}")
+        if options:
+            raise ValueError(f"AUVPath3DEnv.reset takes no options, got {sorted(map(str, options))}"
+                             )  # fmt: skip
         super().reset(seed=seed)
         self.sim.reset_row(0, self.np_random)
+        obs = self.sim.obs[0].astype(np.float32)
+        check_reset_observations(obs[None], [0])
+        self._last_obs[:] = obs
         if self.render_mode is not None:
             self._track = [self.sim.state[0, 0:3].copy()]
-        return self.sim.obs[0].astype(np.float32), self._info(0, reset=True)
+        return obs, self._info(0, reset=True)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         sim = self.sim
         sim.step(validate_actions(action, (3,))[None])
         code = int(sim.code[0])
-        truncated = code == 0 and int(sim.step_index[0]) >= self._truncation_index
+        # Truncated whenever max_time is reached, terminated or not, as under `TimeLimit`.
+        truncated = int(sim.step_index[0]) >= self._truncation_index
+        if code == NON_FINITE:  # the last observation returned: finite and inside the space
+            obs = self._last_obs.copy()
+        else:
+            obs = sim.obs[0].astype(np.float32)
+            self._last_obs[:] = obs
         if self.render_mode is not None:
             self._track.append(sim.state[0, 0:3].copy())
         info = self._info(code)
-        return sim.obs[0].astype(np.float32), float(sim.reward[0]), code != 0, truncated, info
+        return obs, float(sim.reward[0]), code != 0, truncated, info
 
     def _info(self, code: int, reset: bool = False) -> dict[str, Any]:
         sim = self.sim

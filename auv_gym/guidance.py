@@ -66,7 +66,7 @@ def body_errors(x, y, z, theta, psi, px, py, pz):
 
 @njit(cache=True, inline="always")
 def virtual_point_speed(x_e, u_d, sigma):
-    """u_p = u_D(1 + tanh(x_e/σ)) [m/s] (docs/model.md §3.3; the paper prints 1 − tanh, unstable)."""
+    """u_p = u_D(1 + tanh(x_e/σ)) [m/s] (docs/model.md §3.3; the paper's 1 − tanh is unstable)."""
     return u_d * (1.0 + math.tanh(x_e / sigma))
 
 

@@ -85,7 +85,8 @@ OBS = field_indices("ObservationIndex", OBS_NAMES, __name__)
 @njit(cache=True)
 def guidance_row(st, kind, pdata, u_d, sigma, out):
     """Fill one guidance row ``out`` (layout `GUIDE`) from the simulator state ``st`` (layout
-    `dynamics.STATE`): errors, distance, path angles and their rates, u_p and ṡ (docs/model.md §3)."""
+    `dynamics.STATE`): errors, distance, path angles and their rates, u_p and ṡ
+    (docs/model.md §3)."""
     px, py, pz, dpx, dpy, dpz, ddx, ddy, ddz = path_eval(kind, pdata, st[STATE.s])
     x_e, y_e, z_e = body_errors(st[STATE.x], st[STATE.y], st[STATE.z], st[STATE.theta],
                                 st[STATE.psi], px, py, pz)  # fmt: skip

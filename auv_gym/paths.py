@@ -14,9 +14,27 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
+from auv_gym.validation import ArgumentTypeError, is_real, real, vector
+
 __all__ = ["PATHS", "Helix", "Path", "Spline", "StraightLine", "make_path", "path_eval"]
 
 HELIX, LINE, SPLINE = 0, 1, 2
+# Documented ranges of the path arguments: they keep every evaluation of p, p', p'' finite.
+POSITION_BOUND = 1e6  # [m] |coordinate| of centres, starts and waypoints (1000 km)
+SCALE_BOUND = 1e5  # [m] helix radius, |climb| per unit s
+MAX_OMEGA = 1e3  # [rad per unit s] helix ω
+MIN_TANGENT = 1e-6  # [m per unit s] smallest |p'(s)|: ṡ = u_p/|p'| stays finite
+MAX_WAYPOINTS = 1000  # the natural spline solves a dense (n × n) system
+MIN_CHORD = 1e-9  # [m] distance between consecutive waypoints
+
+
+def _s_end(owner: str, value: float) -> float:
+    """A path's end parameter: a positive real or math.inf (endless)."""
+    if not is_real(value):
+        raise ArgumentTypeError(f"{owner} must be a positive real number or inf, got {value!r}")
+    if not float(value) > 0:
+        raise ValueError(f"{owner} must be a positive real number or inf, got {value!r}")
+    return float(value)
 
 
 @njit(cache=True, inline="always")
@@ -107,16 +125,18 @@ class Helix(Path):
         center: Sequence[float] = (10.0, 0.0, -8.0),
         s_end: float = math.inf,
     ) -> None:
-        values = [radius, omega, climb, *center, s_end]
-        if len(center) != 3 or not all(math.isfinite(x) for x in values[:-1]):
-            raise ValueError("Helix: radius, omega, climb and a 3-vector center must be finite")
-        if radius <= 0 or omega <= 0:
-            raise ValueError(f"Helix: radius and omega must be positive, got {radius}, {omega}")
-        if not s_end > 0:
-            raise ValueError(f"Helix: s_end must be positive, got {s_end}")
-        self.radius, self.omega, self.climb = float(radius), float(omega), float(climb)
-        self.center = tuple(float(c) for c in center)
-        self.s_end = float(s_end)
+        radius = real("Helix radius", radius, 0.0, SCALE_BOUND, low_open=True, unit="m")
+        omega = real("Helix omega", omega, 0.0, MAX_OMEGA, low_open=True, unit="rad per unit s")
+        climb = real("Helix climb", climb, -SCALE_BOUND, SCALE_BOUND, unit="m per unit s")
+        center = vector("Helix center", center, 3, -POSITION_BOUND, POSITION_BOUND, "m")
+        if math.hypot(radius * omega, climb) < MIN_TANGENT:
+            raise ValueError(
+                f"Helix: |p'(s)| = sqrt((radius·omega)² + climb²) must be >= {MIN_TANGENT} m per "
+                f"unit s, got radius = {radius}, omega = {omega}, climb = {climb}"
+            )
+        self.radius, self.omega, self.climb = radius, omega, climb
+        self.center = center
+        self.s_end = _s_end("Helix s_end", s_end)
         self.data = np.array([radius, omega, climb, *center], dtype=np.float64)
 
     def default_start(self) -> tuple[np.ndarray, float]:
@@ -138,16 +158,13 @@ class StraightLine(Path):
         direction: Sequence[float] = (1.0, 0.5, -0.2),
         length: float = math.inf,
     ) -> None:
-        d = np.asarray(direction, dtype=np.float64)
-        p0 = np.asarray(start, dtype=np.float64)
-        if d.shape != (3,) or p0.shape != (3,) or not np.all(np.isfinite(np.r_[d, p0])):
-            raise ValueError("StraightLine: start and direction must be finite 3-vectors")
+        p0 = np.array(vector("StraightLine start", start, 3, -POSITION_BOUND, POSITION_BOUND, "m"))
+        d = np.array(vector("StraightLine direction", direction, 3, -SCALE_BOUND, SCALE_BOUND))
         norm = float(np.linalg.norm(d))
-        if norm == 0.0:
-            raise ValueError("StraightLine: direction must be non-zero")
-        if not length > 0:
-            raise ValueError(f"StraightLine: length must be positive, got {length}")
-        self.s_end = float(length)
+        if norm < MIN_TANGENT:
+            raise ValueError(f"StraightLine: direction must be non-zero (norm >= {MIN_TANGENT}), "
+                             f"got {tuple(d)}")  # fmt: skip
+        self.s_end = _s_end("StraightLine length", length)
         self.data = np.r_[p0, d / norm]
 
 
@@ -157,16 +174,28 @@ class Spline(Path):
     kind = SPLINE
 
     def __init__(self, waypoints: Sequence[Sequence[float]]) -> None:
-        pts = np.asarray(waypoints, dtype=np.float64)
-        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2:
-            raise ValueError(f"Spline: waypoints must have shape (n >= 2, 3), got {pts.shape}")
-        if not np.all(np.isfinite(pts)):
-            raise ValueError("Spline: waypoints must be finite")
+        shape = f"(n, 3) with 2 <= n <= {MAX_WAYPOINTS}, coordinates in [-{POSITION_BOUND:g}, " \
+            f"{POSITION_BOUND:g}] m"  # fmt: skip
+        try:
+            pts = np.asarray(waypoints)
+        except (TypeError, ValueError):  # ragged nesting
+            pts = np.asarray(None)
+        if pts.dtype.kind not in "iuf":
+            raise ArgumentTypeError(f"Spline waypoints must be real numbers of shape {shape}, "
+                                    f"got {waypoints!r:.80}")  # fmt: skip
+        pts = pts.astype(np.float64)
+        if pts.ndim != 2 or pts.shape[1] != 3 or not 2 <= pts.shape[0] <= MAX_WAYPOINTS:
+            raise ValueError(f"Spline: waypoints must have shape {shape}, got {pts.shape}")
+        if not np.all(np.isfinite(pts)) or np.abs(pts).max() > POSITION_BOUND:
+            raise ValueError(f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, "
+                             f"{POSITION_BOUND:g}] m")  # fmt: skip
         chords = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-        if np.any(chords <= 1e-9):
+        if np.any(chords <= MIN_CHORD):
             raise ValueError("Spline: consecutive waypoints must be distinct")
         knots = np.r_[0.0, np.cumsum(chords)]
         coeffs = _natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
+        if not np.all(np.isfinite(coeffs)):
+            raise ValueError("Spline: the waypoints give a spline with non-finite coefficients")
         self.waypoints = pts
         self.s_end = float(knots[-1])
         self.data = np.r_[float(len(chords)), knots, coeffs.ravel()]
@@ -208,6 +237,9 @@ def make_path(path: str | Path) -> Path:
     """A path from its registry name or a `Path` instance; unknown names raise ValueError."""
     if isinstance(path, Path):
         return path
-    if isinstance(path, str) and path in PATHS:
+    if not isinstance(path, str):
+        raise ArgumentTypeError(f"path must be one of {sorted(PATHS)} or a Path instance, "
+                                f"got {path!r:.80}")  # fmt: skip
+    if path in PATHS:
         return PATHS[path]()
     raise ValueError(f"unknown path {path!r}; valid names are {sorted(PATHS)} or a Path instance")

@@ -7,8 +7,9 @@ a `Simulator` with n = 1, the vector env one with n = num_envs, so the two canno
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,12 +17,15 @@ from numba import njit, prange
 
 from auv_gym.disturbances import (
     KEY,
+    MAX_NOISE_AMPLITUDE,
+    MAX_NOISE_HOLD,
     CurrentConfig,
     NoiseConfig,
     draw_keys,
     gauss_markov_coefficients,
 )
 from auv_gym.dynamics import STATE, STATE_DIM
+from auv_gym.guidance import path_angles
 from auv_gym.integrator import (
     ACTUATORS,
     CONFIG_FIELDS,
@@ -30,15 +34,19 @@ from auv_gym.integrator import (
     config_record,
 )
 from auv_gym.observation import (
+    ERROR_BOUND,
     GUIDANCE_DIM,
     OBS_DIM,
     OBS_HIGH,
     OBS_LOW,
+    PATH_RATE_BOUND,
+    SPEED_BOUND,
     build_observation,
     guidance_row,
 )
-from auv_gym.paths import Path, make_path
+from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, make_path, path_eval
 from auv_gym.task import REWARD_TERMS, RewardWeights, TaskLimits, task_row, task_vector
+from auv_gym.validation import ArgumentTypeError, choice, flag, is_real, keys_within, real, vector
 from auv_gym.vehicle import N_PARAMS, AUVParams, remus100
 
 __all__ = ["ACTUATOR_LIMITS", "DISTURBANCE_PRESETS", "SimConfig", "Simulator"]
@@ -48,6 +56,93 @@ ACTUATOR_LIMITS = (50.0, 10.0, 10.0)
 DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
 VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
 _SUBSTEP_TOL = 1e-9
+# Documented ranges of the timing and start arguments (AUVPath3DEnv docstring, "Arguments").
+PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
+MAX_SUBSTEPS = 10_000  # physics steps per control step: bounds the cost of one step()
+MAX_EPISODE_TIME = 1e6  # [s] max_time (11.6 days)
+DEFAULT_NOISE_HOLD = 0.01  # [s]
+HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
+START_JITTER = 2.0 * math.sqrt(3.0)  # [m] largest offset of a random start near the start point
+
+
+def _noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None) -> NoiseConfig:
+    """The white noise of the `disturbance` and `noise_hold` arguments; a conflict is an error."""
+    hold = DEFAULT_NOISE_HOLD
+    if noise_hold is not None:
+        hold = real("noise_hold", noise_hold, 0.0, MAX_NOISE_HOLD, low_open=True, unit="s")
+    if isinstance(disturbance, NoiseConfig):
+        if noise_hold is not None and hold != disturbance.hold:
+            raise ValueError(
+                f"noise_hold = {noise_hold!r} s conflicts with disturbance = {disturbance!r}: "
+                "give the hold once (NoiseConfig.hold or noise_hold)"
+            )
+        return disturbance
+    if isinstance(disturbance, str) and disturbance in DISTURBANCE_PRESETS:
+        return NoiseConfig((DISTURBANCE_PRESETS[disturbance],) * 5, hold)
+    if is_real(disturbance):
+        amplitude = real("disturbance (noise amplitude)", disturbance, 0.0, MAX_NOISE_AMPLITUDE,
+                         unit="N or N·m")  # fmt: skip
+        return NoiseConfig((amplitude,) * 5, hold)
+    error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
+    raise error(
+        f"unknown disturbance {disturbance!r:.80}; valid: {sorted(DISTURBANCE_PRESETS)}, "
+        f"a NoiseConfig or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
+    )
+
+
+def _reward_from(reward_weights: RewardWeights | dict | None) -> RewardWeights:
+    if reward_weights is None:
+        return RewardWeights()
+    if isinstance(reward_weights, RewardWeights):
+        return reward_weights
+    if not isinstance(reward_weights, Mapping):
+        raise ArgumentTypeError(
+            f"reward_weights must be None, a RewardWeights or a dict with keys among "
+            f"{list(REWARD_TERMS)}, got {reward_weights!r:.80}"
+        )
+    return RewardWeights(**keys_within("reward_weights", reward_weights, REWARD_TERMS))
+
+
+def _check_path(path: Path) -> None:
+    """The path's kernel description is complete and finite (the kernels do not bounds-check)."""
+    if not isinstance(path, Path):
+        raise ArgumentTypeError(f"path must be a Path, got {path!r:.80}")
+    data = getattr(path, "data", None)
+    ok = (
+        isinstance(data, np.ndarray) and data.dtype == np.float64 and data.ndim == 1
+        and path.kind in (HELIX, LINE, SPLINE) and data.size >= 6 and np.all(np.isfinite(data))
+    )  # fmt: skip
+    if ok and path.kind == SPLINE:
+        n_seg = data[0]
+        ok = n_seg >= 1 and n_seg == int(n_seg) and data.size == 2 + 13 * int(n_seg)
+    elif ok:
+        ok = data.size == 6
+    if not ok:
+        raise ValueError(f"path {type(path).__name__} has no valid kernel data (kind, data); "
+                         "build paths with Helix, StraightLine, Spline or make_path")  # fmt: skip
+
+
+def path_turn_rates(path: Path) -> tuple[float, float]:
+    """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
+
+    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (MODEL.md §3.1, §3.3), so ψ̇_F = this rate × u_p. Exact for
+    the helix (constant in s) and the line (0); a spline is sampled 64 times per segment.
+    """
+    if path.kind == SPLINE:
+        knots = path.data[1 : int(path.data[0]) + 2]
+        grid = [np.linspace(a, b, 64, endpoint=False) for a, b in itertools.pairwise(knots)]
+        samples = np.concatenate([*grid, knots[-1:]])
+    else:
+        samples = np.linspace(0.0, 100.0, 9)
+    rates = np.empty((len(samples), 2))
+    for k, s in enumerate(samples):
+        _, _, _, dx, dy, dz, ddx, ddy, ddz = path_eval(path.kind, path.data, float(s))
+        _, _, dpsi_ds, dtheta_ds, speed = path_angles(dx, dy, dz, ddx, ddy, ddz)
+        rates[k] = abs(dpsi_ds) / speed, abs(dtheta_ds) / speed
+    if not np.all(np.isfinite(rates)):
+        raise ValueError(f"path {type(path).__name__}: p'(s) or p''(s) is not finite or zero")
+    psi_rate, theta_rate = rates.max(axis=0)
+    return float(psi_rate), float(theta_rate)
 
 
 @dataclass(frozen=True)
@@ -85,7 +180,7 @@ class SimConfig:
         actuator: str = "paper",
         control_dt: float = 0.05,
         physics_dt: float = 0.01,
-        noise_hold: float = 0.01,
+        noise_hold: float | None = None,
         max_time: float = 300.0,
         randomize_start: bool = False,
         u_desired: float = 1.0,
@@ -98,70 +193,106 @@ class SimConfig:
         start_heading: float | None = None,
         reward_weights: RewardWeights | dict | None = None,
     ) -> SimConfig:
-        """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning."""
+        """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
+        and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
+        argument, its value and the allowed range."""
         the_path = make_path(path)
-        if isinstance(disturbance, NoiseConfig):
-            noise = NoiseConfig(disturbance.amplitude, noise_hold)
-        elif isinstance(disturbance, str):
-            if disturbance not in DISTURBANCE_PRESETS:
-                raise ValueError(
-                    f"unknown disturbance {disturbance!r}; valid: {sorted(DISTURBANCE_PRESETS)}, "
-                    "a NoiseConfig or an amplitude in N / N·m"
-                )
-            noise = NoiseConfig((DISTURBANCE_PRESETS[disturbance],) * 5, noise_hold)
-        else:
-            noise = NoiseConfig((float(disturbance),) * 5, noise_hold)
-        if isinstance(reward_weights, dict):
-            reward_weights = RewardWeights(**reward_weights)
         return cls(
             path=the_path,
             params=params if params is not None else remus100(),
-            noise=noise,
+            noise=_noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
-            param_uncertainty=float(param_uncertainty),
+            param_uncertainty=param_uncertainty,
             actuator=actuator,
-            control_dt=float(control_dt),
-            physics_dt=float(physics_dt),
-            max_time=float(max_time),
-            u_desired=float(u_desired),
-            sigma=float(sigma),
+            control_dt=control_dt,
+            physics_dt=physics_dt,
+            max_time=max_time,
+            u_desired=u_desired,
+            sigma=sigma,
             virtual_point_law=virtual_point_law,
-            randomize_start=bool(randomize_start),
-            start_position=None if start_position is None else tuple(map(float, start_position)),
+            randomize_start=randomize_start,
+            start_position=start_position,
             start_heading=start_heading,
-            reward=reward_weights if reward_weights is not None else RewardWeights(),
+            reward=_reward_from(reward_weights),
             limits=TaskLimits(corridor=corridor, max_pitch=max_pitch, s_end=the_path.s_end),
         )
 
     def __post_init__(self) -> None:
-        if not isinstance(self.params, AUVParams):
-            raise ValueError(f"params must be an AUVParams, got {type(self.params).__name__}")
-        if self.virtual_point_law not in VIRTUAL_POINT_LAWS:
-            raise ValueError(
-                f"unknown virtual_point_law {self.virtual_point_law!r}; "
-                f"valid: {sorted(VIRTUAL_POINT_LAWS)}"
-            )
-        if self.actuator not in ACTUATORS:
-            raise ValueError(f"unknown actuator {self.actuator!r}; valid: {sorted(ACTUATORS)}")
-        for name in ("control_dt", "physics_dt", "max_time", "u_desired", "sigma"):
-            value = getattr(self, name)
-            if not (isinstance(value, float) and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-        if not (0.0 <= self.param_uncertainty < 1.0):
-            raise ValueError(f"param_uncertainty must be in [0, 1), got {self.param_uncertainty}")
-        if not all(math.isfinite(v) and v > 0 for v in self.actuator_limits):
+        def put(name: str, value: object) -> None:  # canonical value (float, tuple) of a field
+            object.__setattr__(self, name, value)
+
+        _check_path(self.path)
+        for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
+                           ("current", CurrentConfig), ("reward", RewardWeights),
+                           ("limits", TaskLimits)):  # fmt: skip
+            if not isinstance(getattr(self, name), kind):
+                raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
+                                        f"got {getattr(self, name)!r:.80}")  # fmt: skip
+        put("actuator", choice("actuator", self.actuator, ACTUATORS))
+        put("virtual_point_law", choice("virtual_point_law", self.virtual_point_law,
+                                        VIRTUAL_POINT_LAWS))  # fmt: skip
+        put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
+                                      high_open=True))  # fmt: skip
+        put("actuator_limits", vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6,
+                                      "N, N·m"))  # fmt: skip
+        if min(self.actuator_limits) <= 0.0:
             raise ValueError(f"actuator_limits must be positive, got {self.actuator_limits}")
-        for name, value in (("control_dt", self.control_dt), ("noise_hold", self.noise.hold)):
+        put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
+        most = MAX_SUBSTEPS * self.physics_dt
+        put("control_dt", real("control_dt", self.control_dt, 0.0, most, low_open=True,
+                               unit=f"s (<= {MAX_SUBSTEPS} physics steps)"))  # fmt: skip
+        put("max_time", real("max_time", self.max_time, self.control_dt, MAX_EPISODE_TIME,
+                             unit="s (at least one control_dt)"))  # fmt: skip
+        put("u_desired", real("u_desired", self.u_desired, 0.0, SPEED_BOUND, low_open=True,
+                              unit="m/s, the observation's bound on u_D"))  # fmt: skip
+        put("sigma", real("sigma", self.sigma, 0.0, math.inf, low_open=True, unit="m"))
+        put("randomize_start", flag("randomize_start", self.randomize_start))
+        if self.start_position is not None:
+            put("start_position", vector("start_position", self.start_position, 3,
+                                         -POSITION_BOUND, POSITION_BOUND, "m"))  # fmt: skip
+        if self.start_heading is not None:
+            put("start_heading", real("start_heading", self.start_heading, -HEADING_BOUND,
+                                      HEADING_BOUND, unit="rad (±2π)"))  # fmt: skip
+        for name, value in (("control_dt", self.control_dt),
+                            ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)",
+                             self.noise.hold)):  # fmt: skip
             ratio = value / self.physics_dt
             if abs(ratio - round(ratio)) > _SUBSTEP_TOL * ratio or round(ratio) < 1:
                 raise ValueError(
                     f"{name} = {value} s must be a whole multiple of physics_dt = "
                     f"{self.physics_dt} s"
                 )
-        if self.start_position is not None and (
-            len(self.start_position) != 3 or not all(map(math.isfinite, self.start_position))
-        ):
-            raise ValueError(f"start_position must be a finite 3-vector, got {self.start_position}")
+        self._check_path_fits_the_observation()
+        self._check_start_fits_the_observation()
+
+    def _check_path_fits_the_observation(self) -> None:
+        """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D."""
+        psi_rate, theta_rate = path_turn_rates(self.path)
+        worst = 2.0 * self.u_desired * max(psi_rate, theta_rate)
+        if worst > PATH_RATE_BOUND:
+            raise ValueError(
+                f"path turns at up to {max(psi_rate, theta_rate):.4g} rad/m: with u_desired = "
+                f"{self.u_desired} m/s the virtual point (u_p <= 2 u_D) turns at up to "
+                f"{worst:.4g} rad/s, beyond the observation bound {PATH_RATE_BOUND} rad/s; use "
+                f"u_desired <= {PATH_RATE_BOUND / (2 * max(psi_rate, theta_rate)):.4g} m/s or a "
+                "gentler path"
+            )
+
+    def _check_start_fits_the_observation(self) -> None:
+        """The start's errors to p(0) lie within the observation's ±ERROR_BOUND."""
+        p0 = self.path.evaluate(0.0)[0]
+        given = self.start_position is not None
+        start = np.asarray(self.start_position) if given else self.path.default_start()[0]
+        distance = float(np.linalg.norm(start - p0))
+        allowed = ERROR_BOUND - (START_JITTER if self.randomize_start else 0.0)
+        if not distance <= allowed:
+            name = "start_position" if given else "the path's default start"
+            raise ValueError(
+                f"{name} {tuple(start.tolist())} m is {distance:.4g} m from the path's start "
+                f"p(0) = {tuple(p0.tolist())} m; the observation bounds the position errors to "
+                f"±{ERROR_BOUND:g} m, so the start must lie within {allowed:.4g} m of p(0)"
+                + (" (less the random offset of randomize_start)" if self.randomize_start else "")
+            )
 
     @property
     def kernel_sigma(self) -> float:

@@ -23,8 +23,9 @@ import numpy as np
 from numba import njit
 
 from auv_gym.dynamics import STATE
-from auv_gym.observation import GUIDE, OBS, OBS_DIM
+from auv_gym.observation import ERROR_BOUND, GUIDE, OBS, OBS_DIM
 from auv_gym.records import field_indices, fixed_tuple, record_type
+from auv_gym.validation import is_real, real
 
 __all__ = [
     "REWARD_TERMS",
@@ -48,6 +49,12 @@ TaskRecord = record_type("TaskRecord", TASK_FIELDS, __name__)
 TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end")
 CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END = 1, 2, 3, 4, 5
 TRACKING_SCALE = 1.0  # [m] d_0 of the tracking bonus
+# Documented ranges. Bounded weights and a corridor of at least 1 cm keep every reward finite
+# (the observation is bounded by the float32 range or the episode ends as "non_finite"); a
+# corridor inside the observation's ±ERROR_BOUND keeps a running vehicle's errors in bounds.
+MAX_REWARD_WEIGHT = 1e6
+MIN_CORRIDOR = 0.01  # [m]
+FLOAT32_MAX = float(np.finfo(np.float32).max)  # observations are returned as float32
 
 
 @dataclass(frozen=True)
@@ -62,9 +69,9 @@ class RewardWeights:
     termination: float = 100.0
 
     def __post_init__(self) -> None:
-        for name, value in zip(REWARD_TERMS, astuple(self), strict=True):
-            if not math.isfinite(value):
-                raise ValueError(f"reward weight {name} must be finite, got {value}")
+        for name in REWARD_TERMS:  # the formula gives each term its sign; weights are magnitudes
+            value = real(f"reward weight {name}", getattr(self, name), 0.0, MAX_REWARD_WEIGHT)
+            object.__setattr__(self, name, value)
 
 
 @dataclass(frozen=True)
@@ -76,10 +83,14 @@ class TaskLimits:
     s_end: float = math.inf  # path parameter at which the path ends
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.corridor) and self.corridor > 0):
-            raise ValueError(f"corridor must be a positive distance in m, got {self.corridor}")
-        if not (0 < self.max_pitch < math.pi / 2):
-            raise ValueError(f"max_pitch must be in (0, π/2) rad, got {self.max_pitch}")
+        corridor = real("corridor", self.corridor, MIN_CORRIDOR, ERROR_BOUND, unit="m")
+        max_pitch = real("max_pitch", self.max_pitch, 0.0, math.pi / 2, low_open=True,
+                         high_open=True, unit="rad")  # fmt: skip
+        if not (is_real(self.s_end) and self.s_end > 0):  # math.inf: an endless path
+            raise ValueError(f"s_end must be a positive path parameter or inf, got {self.s_end!r}")
+        object.__setattr__(self, "corridor", corridor)
+        object.__setattr__(self, "max_pitch", max_pitch)
+        object.__setattr__(self, "s_end", float(self.s_end))
 
 
 def task_vector(weights: RewardWeights, limits: TaskLimits) -> np.ndarray:
@@ -107,6 +118,9 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
     finite = True
     for j in range(st.shape[0]):
         if not math.isfinite(st[j]):
+            finite = False
+    for j in range(OBS_DIM):  # NaN, inf or beyond float32: the env could not return it finite
+        if not abs(obs[j]) <= FLOAT32_MAX:
             finite = False
     if not finite:
         code = NON_FINITE

@@ -8,21 +8,24 @@ seed k + i, so it reproduces `AUVPath3DEnv` step for step, autoresets included.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numba
 import numpy as np
 from gymnasium import spaces
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from auv_gym.env import validate_actions
+from auv_gym.env import check_reset_observations, validate_actions
 from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
 from auv_gym.simulator import SimConfig, Simulator
-from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS
+from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS
+from auv_gym.validation import ArgumentTypeError, integer
 
 __all__ = ["PARALLEL_MIN_VEHICLES", "AUVPath3DVectorEnv", "parse_autoreset_mode"]
 
@@ -33,6 +36,7 @@ _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
 # Below this many vehicles the kernel runs on one thread unless told otherwise: a step costs
 # < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
 PARALLEL_MIN_VEHICLES = 256
+MAX_VEHICLES = 2**24  # about 60 GB of state: a bound that names the argument before numpy fails
 
 
 def parse_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
@@ -57,14 +61,16 @@ class AUVPath3DVectorEnv(VectorEnv):
     ## Arguments (in addition to the single env's)
     | argument | default | meaning |
     |---|---|---|
-    | `num_envs` | 1 | number of vehicles n ≥ 1 |
-    | `max_episode_steps` | None | `TimeLimit`-like step limit (`make_vec` passes 6000) |
+    | `num_envs` | 1 | number of vehicles, 1 ≤ n ≤ 2^24 |
+    | `max_episode_steps` | None | `TimeLimit`-like step limit, an integer >= 1 |
     | `autoreset_mode` | NEXT_STEP | `AutoresetMode` or its value: NEXT_STEP, SAME_STEP, DISABLED |
     | `render_vehicle` | 0 | index of the vehicle `render()` draws |
     | `threads` | None | numba threads of the kernel; None: 1 below 256 vehicles, else all |
 
-    Truncation happens where the single env under `gym.make` truncates: at `max_time` unless
-    the episode terminated, and at `max_episode_steps` control steps in any case.
+    Truncation happens where the single env truncates: from the first control step at which
+    t ≥ `max_time`, and at `max_episode_steps` control steps if given, whether or not the step
+    also terminates. `gym.make_vec` passes no `max_episode_steps` (the registration has none);
+    `spec.max_episode_steps` is the smaller of the two limits.
 
     Results are identical for any thread count. On a machine whose cores are busy with other
     processes, the threads' barrier can make a step several times slower than `threads=1`
@@ -97,8 +103,10 @@ class AUVPath3DVectorEnv(VectorEnv):
 
     ## Bad input
     A wrong action batch shape, a NaN or inf in any row (no vehicle moves then) and
-    ``num_envs < 1`` raise ValueError. A vehicle whose state stops being finite terminates alone
-    with ``termination_reason == "non_finite"``; rows never share state.
+    ``num_envs < 1`` raise ValueError; non-numeric actions, seeds and options of the wrong type
+    raise `ArgumentTypeError` (a TypeError and a ValueError). A vehicle whose state or
+    observation stops being finite terminates alone with ``termination_reason == "non_finite"``
+    and returns its last observation again; rows never share state.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -118,27 +126,17 @@ class AUVPath3DVectorEnv(VectorEnv):
         threads: int | None = None,
         **env_kwargs: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
-            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
-        if num_envs < 1:
-            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+        num_envs = integer("num_envs", num_envs, 1, MAX_VEHICLES)
         unknown = sorted(set(env_kwargs) - set(_ENV_KWARGS))
         if unknown:
             raise TypeError(
                 f"unexpected keyword argument(s) {unknown}; valid: {sorted(_ENV_KWARGS)}, "
                 "num_envs, max_episode_steps, autoreset_mode, render_mode, render_vehicle, threads"
             )
-        if max_episode_steps is not None and (
-            isinstance(max_episode_steps, bool)
-            or not isinstance(max_episode_steps, (int, np.integer))
-            or max_episode_steps < 1
-        ):
-            raise ValueError(f"max_episode_steps must be None or an integer >= 1, got "
-                             f"{max_episode_steps!r}")  # fmt: skip
-        if threads is not None and (
-            isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1
-        ):
-            raise ValueError(f"threads must be None or an integer >= 1, got {threads!r}")
+        if max_episode_steps is not None:
+            max_episode_steps = integer("max_episode_steps", max_episode_steps, 1)
+        if threads is not None:
+            threads = integer("threads", threads, 1)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be None or one of {self.metadata['render_modes']}, "
@@ -168,15 +166,12 @@ class AUVPath3DVectorEnv(VectorEnv):
 
         # One thread: the serial kernel, which leaves numba's thread pool alone.
         self.sim = Simulator(self.config, self.num_envs, parallel=self.threads != 1)
-        substeps = self.config.substeps
-        # The single env truncates at max_time unless terminated; TimeLimit (max_episode_steps)
-        # truncates whatever happened. Both are physics-step indices here.
-        self._own_limit = self.config.max_steps * substeps
-        self._time_limit = (
-            np.iinfo(np.int64).max
-            if self.max_episode_steps is None
-            else self.max_episode_steps * substeps
-        )
+        # Both limits truncate whatever else happened (as `TimeLimit`); a physics-step index.
+        self._episode_steps = min(self.config.max_steps, self.max_episode_steps or np.inf)
+        self._limit = int(self._episode_steps) * self.config.substeps
+        self._last_obs = np.zeros(self.single_observation_space.shape, np.float32)[None].repeat(
+            self.num_envs, axis=0
+        )  # the last observation returned per vehicle
         self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._ever_reset = False
@@ -184,6 +179,19 @@ class AUVPath3DVectorEnv(VectorEnv):
         self._render_vehicle = 0
         self._track: list[np.ndarray] = []  # positions of `render_vehicle` since its reset [m]
         self.render_vehicle = render_vehicle
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The spec `gym.make_vec` set, with ``max_episode_steps`` = the episode length."""
+        if self._spec is None:
+            return None
+        return dataclasses.replace(self._spec, max_episode_steps=int(self._episode_steps))
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self._spec = value
+
+    _spec: EnvSpec | None = None
 
     # ----------------------------------------------------------------------------------- reset
     def reset(
@@ -208,20 +216,31 @@ class AUVPath3DVectorEnv(VectorEnv):
         self._ever_reset = True
         infos: dict[str, Any] = {}
         self._add_infos(infos, mask, np.zeros(n, dtype=bool), fill=True)
-        return self.sim.obs.astype(np.float32), infos
+        return self._observations(), infos
 
     def _seed_list(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
         n = self.num_envs
         if seed is None:
             return [None] * n
-        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            return [int(seed) + i for i in range(n)]
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
+            first = integer("seed", seed, 0)
+            return [first + i for i in range(n)]
+        if isinstance(seed, (str, bytes, Mapping)) or not isinstance(seed, Sequence | np.ndarray):
+            raise ArgumentTypeError(
+                f"seed must be None, an integer >= 0 or a list of num_envs = {n} integers or "
+                f"None, got {seed!r:.80}"
+            )
         seeds = list(seed)
         if len(seeds) != n:
             raise ValueError(f"a list of seeds must have num_envs = {n} entries, got {len(seeds)}")
-        return [None if s is None else int(s) for s in seeds]
+        return [None if s is None else integer(f"seed[{i}]", s, 0) for i, s in enumerate(seeds)]
 
     def _reset_mask(self, options: dict[str, Any] | None) -> np.ndarray:
+        if options is not None and not isinstance(options, Mapping):
+            raise ArgumentTypeError(f"options must be None or a dict, got {options!r:.80}")
+        unknown = sorted(map(str, set(options or ()) - {"reset_mask"}))
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {unknown}; valid: ['reset_mask']")
         if not options or "reset_mask" not in options:
             return self._all.copy()
         mask = options["reset_mask"]
@@ -238,6 +257,9 @@ class AUVPath3DVectorEnv(VectorEnv):
     def _reset_rows(self, rows: np.ndarray) -> None:
         """New episodes for `rows`, each drawn from its vehicle's generator (single-env order)."""
         self.sim.reset_rows(rows, [self._rngs[i] for i in rows])
+        first = self.sim.obs[rows].astype(np.float32)
+        check_reset_observations(first, rows)
+        self._last_obs[rows] = first
         if self.render_mode is not None and self._render_vehicle in rows:
             self._track = [self.sim.state[self._render_vehicle, 0:3].copy()]
 
@@ -261,9 +283,7 @@ class AUVPath3DVectorEnv(VectorEnv):
                 numba.set_num_threads(previous)
         code = sim.code
         terminated = code != 0
-        truncated = ((~terminated) & (sim.step_index >= self._own_limit)) | (
-            sim.step_index >= self._time_limit
-        )
+        truncated = sim.step_index >= self._limit
         if self.render_mode is not None:
             self._track.append(sim.state[self._render_vehicle, 0:3].copy())
 
@@ -277,7 +297,7 @@ class AUVPath3DVectorEnv(VectorEnv):
             self._add_infos(infos, self._all, stepped)
         elif mode is AutoresetMode.SAME_STEP and (terminated.any() or truncated.any()):
             done = terminated | truncated
-            final_obs = sim.obs.astype(np.float32)
+            final_obs = self._observations()
             final_rows = np.flatnonzero(done)
             final_info: dict[str, Any] = {}
             self._add_infos(final_info, done, done, fill=True)
@@ -289,13 +309,24 @@ class AUVPath3DVectorEnv(VectorEnv):
                 boxed[i] = final_obs[i]
             infos["final_obs"], infos["_final_obs"] = boxed, done.copy()
             infos["final_info"], infos["_final_info"] = final_info, done.copy()
-            return sim.obs.astype(np.float32), rewards, terminated, truncated, infos
+            return self._observations(), rewards, terminated, truncated, infos
         else:
             self._add_infos(infos, self._all, self._all)
         rewards = sim.reward.copy()  # 0 for the vehicles just reset
         if mode is AutoresetMode.NEXT_STEP:
             self._autoreset = terminated | truncated
-        return sim.obs.astype(np.float32), rewards, terminated, truncated, infos
+        return self._observations(), rewards, terminated, truncated, infos
+
+    def _observations(self) -> np.ndarray:
+        """float32 observations; a "non_finite" vehicle repeats the last one it returned."""
+        broken = self.sim.code == NON_FINITE
+        if broken.any():  # their rows may not even fit float32
+            obs = self._last_obs.copy()
+            obs[~broken] = self.sim.obs[~broken]
+        else:
+            obs = self.sim.obs.astype(np.float32)
+        self._last_obs[:] = obs
+        return obs
 
     def _add_infos(
         self, infos: dict[str, Any], base: np.ndarray, stepped: np.ndarray, fill: bool = False

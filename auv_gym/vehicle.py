@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from auv_gym.records import fixed_tuple, record_type
+from auv_gym.validation import flag, real
 
 __all__ = [
     "DERIVED_INERTIAS",
@@ -60,7 +61,7 @@ class AUVParams:
     X_wq: float = -35.5  # [kg/rad] used as (X_wq − m) w q
     Y_ur: float = 5.22  # [kg/rad] added mass + fin lift (−0.93 + 6.15)
     Y_uv: float = -28.6  # [kg/m]
-    Y_vv: float = -131.0  # [kg/m] Y_v|v|; table's −1310 read as a ×10 typo (docs/model.md §2.2 note 1)
+    Y_vv: float = -131.0  # [kg/m] Y_v|v|; table's −1310 is a ×10 typo (docs/model.md §2.2)
     Z_uq: float = -5.22  # [kg/rad]
     Z_uw: float = -28.6  # [kg/m]
     Z_ww: float = -131.0  # [kg/m] Z_w|w|
@@ -78,11 +79,8 @@ class AUVParams:
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool):
-                continue
-            if not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"AUVParams.{f.name} must be a finite number, got {value!r}")
+            check = flag if f.name == "surge_coriolis" else real  # True is no mass
+            check(f"AUVParams.{f.name}", getattr(self, f.name))
         for name in ("m", "W", "B", "I_y", "I_z", "fin_max"):
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"AUVParams.{name} must be positive, got {getattr(self, name)}")
@@ -95,6 +93,8 @@ class AUVParams:
         ):
             if value <= 0.0:
                 raise ValueError(f"AUVParams: {name} must be positive, got {value}")
+        if self.fin_max > math.pi / 2:
+            raise ValueError(f"AUVParams.fin_max must be in (0, π/2] rad, got {self.fin_max}")
         if self.fin_moment_coeff < 0.0:
             raise ValueError("AUVParams.fin_moment_coeff must be non-negative")
 

@@ -1,4 +1,4 @@
-"""Gains of the paper's controllers (docs/model.md §3.4, §4.6) and their packed form for the kernels."""
+"""Gains of the paper's controllers (docs/model.md §3.4, §4.6), packed for the kernels."""
 
 from __future__ import annotations
 

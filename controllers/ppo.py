@@ -45,7 +45,8 @@ METADATA_FILE = "metadata.json"
 
 
 class PPOPolicy:
-    """A trained PPO actor with its observation normalisation: the Policy protocol (docs/design.md §3).
+    """A trained PPO actor with its observation normalisation: the Policy protocol
+    (docs/design.md §3).
 
     `predict` normalises like `VecNormalize` — clip((o − μ)/√(σ² + ε), −c, c) — then runs the
     SB3 actor with torch on `num_threads` intra-op threads (set for the call, then restored;

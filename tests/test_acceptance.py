@@ -1,10 +1,10 @@
 """docs/model.md §8 acceptance checks 3, 4, 6, 7, 8, 9 (and 10 for the controllers).
 
 Run at the env's default control period (0.05 s) and at the physics step (0.01 s), with the noise
-held for 0.01 s in both (docs/model.md §10.1). Thresholds are docs/model.md §8's. Measured at both periods
-(FBSM, 300 s): noise-free overshoot 0.004 m/s, distance < 0.5 m from 31 s, final 0.017 m;
-±35 noise RMS y_e 0.03–0.06 m against 0.22–0.43 m for backstepping; +30 % model error: backstepping
-0.12 m, FBSM 0.017 m; printed u_p law 17.7 m, printed pitch LOS 379 m at 300 s.
+held for 0.01 s in both (docs/model.md §10.1). Thresholds are docs/model.md §8's. Measured at
+both periods (FBSM, 300 s): noise-free overshoot 0.004 m/s, distance < 0.5 m from 31 s, final
+0.017 m; ±35 noise RMS y_e 0.03–0.06 m against 0.22–0.43 m for backstepping; +30 % model error:
+backstepping 0.12 m, FBSM 0.017 m; printed u_p law 17.7 m, printed pitch LOS 379 m at 300 s.
 """
 
 from __future__ import annotations
@@ -158,7 +158,8 @@ def test_check10_noise_free_runs_do_not_depend_on_the_seed(name):
 
 
 def test_check8_sigma_leakage_keeps_the_disturbance_weights_stationary():
-    """With σ_l = 0.05: max |θ_d| over [500, 1000] s ≤ 1.5 × max over [0, 500] s (docs/model.md §8.8)."""
+    """With σ_l = 0.05: max |θ_d| over [500, 1000] s ≤ 1.5 × max over [0, 500] s
+    (docs/model.md §8.8)."""
     policy = controllers.make("fbsm", sigma_leak=0.05)
     peaks = []
 

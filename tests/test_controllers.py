@@ -109,7 +109,8 @@ def test_fuzzy_basis_is_a_normalised_product_of_memberships():
 
 
 def d_basis(S, sigma_d):
-    """ξ_d(S): three normalised Gaussians of width σ_d centred at −σ_d, 0, σ_d (docs/model.md §4.5)."""
+    """ξ_d(S): three normalised Gaussians of width σ_d centred at −σ_d, 0, σ_d
+    (docs/model.md §4.5)."""
     mu = np.exp(-(((S - sigma_d * np.array([-1.0, 0.0, 1.0])) / sigma_d) ** 2))
     return mu / mu.sum()
 

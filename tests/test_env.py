@@ -248,7 +248,7 @@ def test_non_finite_state_terminates_with_last_finite_observation():
 @pytest.mark.parametrize(
     ("action", "match"),
     [([np.nan, 0, 0], "finite"), ([0, np.inf, 0], "finite"), ([0, 0], "shape"),
-     (np.zeros((1, 3)), "shape"), ("abc", "could not convert")],
+     (np.zeros((1, 3)), "shape"), ("abc", "real numbers")],
 )  # fmt: skip
 def test_bad_actions_raise(action, match):
     env = AUVPath3DEnv()

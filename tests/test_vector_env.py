@@ -145,7 +145,8 @@ def test_make_vec_returns_the_native_env_with_registered_limits():
     env = gym.make_vec("AUVPath3D-v0", num_envs=6, disturbance="none", max_time=1.0)
     assert isinstance(env, AUVPath3DVectorEnv)
     assert env.num_envs == 6
-    assert env.max_episode_steps == 6000  # the registered max_episode_steps
+    assert env.max_episode_steps is None  # the registration has no TimeLimit ...
+    assert env.spec.max_episode_steps == 20  # ... the env truncates at max_time = 1 s itself
     assert env.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
     assert env.config.noise.amplitude == (0.0,) * 5
     single = gym.make("AUVPath3D-v0")

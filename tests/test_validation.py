@@ -1,0 +1,433 @@
+"""Issue 11: every argument checked at the boundary, episode length = max_time, observations.
+
+One regression test per bad input found by the fuzz and bad-input campaign (the issue's list and
+the ones found since); the property-based suite is tests/test_properties.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import auv_gym  # noqa: F401  (registers the ids)
+from auv_gym import AUVPath3DEnv
+from auv_gym.disturbances import CurrentConfig, NoiseConfig
+from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW
+from auv_gym.paths import Helix, Spline, StraightLine
+from auv_gym.simulator import SimConfig
+from auv_gym.task import TERMINATION_REASONS, RewardWeights, TaskLimits, task_row
+from auv_gym.validation import ArgumentTypeError, choice, flag, integer, real, vector
+from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.vehicle import AUVParams
+
+STILL = np.zeros(3, np.float32)
+
+
+def steps_until_truncated(env, limit: int) -> int:
+    env.reset(seed=0)
+    for k in range(1, limit + 1):
+        _, _, terminated, truncated, _ = env.step(STILL)
+        assert not terminated
+        if truncated:
+            return k
+    return -1
+
+
+# ------------------------------------------------------------------ episode length (item 2)
+def test_gym_make_truncates_at_max_time_for_a_short_control_period():
+    """Was: control_dt=0.01 truncated by the registered TimeLimit after 6000 steps, at 60 s."""
+    env = gym.make("AUVPath3D-v0", control_dt=0.01, disturbance="none", max_time=61.0)
+    assert env.spec.max_episode_steps == 6100
+    assert steps_until_truncated(env, 6200) == 6100  # 61 s, not 60 s
+
+
+def test_gym_make_truncates_at_a_long_max_time():
+    """Was: max_time=600 cut at 300 s (6000 steps) by the registered TimeLimit."""
+    env = gym.make("AUVPath3D-v0", max_time=600.0, disturbance="none")
+    assert env.spec.max_episode_steps == 12000
+    assert steps_until_truncated(env, 12100) == 12000
+
+
+def test_make_vec_truncates_at_max_time_and_its_spec_says_so():
+    env = gym.make_vec("AUVPath3D-v0", num_envs=2, control_dt=0.01, max_time=60.5,
+                       disturbance="none")  # fmt: skip
+    assert env.spec.max_episode_steps == 6050
+    env.reset(seed=0)
+    ends = [env.step(np.zeros((2, 3)))[3].copy() for _ in range(6060)]
+    assert np.flatnonzero(np.asarray(ends)[:, 0]).tolist() == [6049]  # step 6050; reset after
+
+
+def test_the_registration_has_no_time_limit_and_the_default_is_6000_steps():
+    assert gym.spec("AUVPath3D-v0").max_episode_steps is None
+    env = gym.make("AUVPath3D-v0")
+    assert not isinstance(env, gym.wrappers.TimeLimit)
+    assert env.spec.max_episode_steps == env.unwrapped.config.max_steps == 6000
+    assert AUVPath3DEnv().spec is None  # built directly: no spec, as before
+    assert gym.make_vec("AUVPath3D-v0", num_envs=2).spec.max_episode_steps == 6000
+    # A user's TimeLimit still applies on top, and the outer spec names it.
+    short = gym.make("AUVPath3D-v0", max_episode_steps=7, disturbance="none")
+    assert short.spec.max_episode_steps == 7
+    assert steps_until_truncated(short, 10) == 7
+
+
+def test_truncation_coincident_with_termination_reports_both():
+    """The env truncates at max_time whether or not that step terminates, as TimeLimit did."""
+    env = AUVPath3DEnv(max_time=0.1, disturbance="none")
+    env.reset(seed=0)
+    env.step(STILL)
+    env.sim.state[0, 3] = 1.2  # pitch beyond 60°: the second (last) step terminates
+    _, _, terminated, truncated, info = env.step(STILL)
+    assert terminated and truncated and info["termination_reason"] == "pitch"
+
+
+@pytest.mark.parametrize(
+    ("control_dt", "max_time", "steps"),
+    [(0.05, 1.0, 20), (0.03, 1.0, 34), (0.1, 0.1, 1), (0.07, 0.5, 8)],
+)
+def test_truncation_is_the_first_step_at_or_after_max_time(control_dt, max_time, steps):
+    env = AUVPath3DEnv(control_dt=control_dt, max_time=max_time, disturbance="none")
+    assert env.config.max_steps == steps == math.ceil(max_time / control_dt - 1e-9)
+    assert steps_until_truncated(env, steps + 2) == steps
+
+
+# -------------------------------------------------------------- timing arguments (item 1)
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [({"control_dt": 1e20}, r"control_dt .*\(0, 100\] s"),  # substeps overflowed int64
+     ({"physics_dt": 1e-300}, r"physics_dt .*\[1e-06, 0.1\] s.*1e-300"),
+     ({"physics_dt": 1e-12}, r"physics_dt .*1e-12"),  # one step() ran for minutes
+     ({"physics_dt": 1e-5, "control_dt": 0.10001}, r"control_dt .*10000 physics steps"),
+     ({"max_time": 1e300}, r"max_time .*1e\+06"),
+     ({"max_time": 1e-300}, r"max_time .*at least one control_dt"),
+     ({"max_time": True}, r"max_time must be a real number"),
+     ({"noise_hold": 0.02, "disturbance": NoiseConfig(hold=0.03)}, r"noise_hold .*conflicts")],
+)  # fmt: skip
+def test_timing_arguments_out_of_range_raise(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        SimConfig.from_kwargs(**kwargs)
+
+
+def test_substeps_are_bounded_at_ten_thousand():
+    assert SimConfig.from_kwargs(physics_dt=1e-5, control_dt=0.1, max_time=0.1).substeps == 10_000
+    with pytest.raises(ValueError, match="10000 physics steps"):
+        SimConfig.from_kwargs(physics_dt=1e-5, control_dt=0.10001, max_time=1.0)
+
+
+def test_noise_config_hold_is_honoured_not_overridden():
+    """Was: NoiseConfig(hold=0.02) silently replaced by the noise_hold default 0.01 s."""
+    config = SimConfig.from_kwargs(disturbance=NoiseConfig(hold=0.02))
+    assert config.noise.hold == 0.02
+    assert SimConfig.from_kwargs(disturbance=NoiseConfig(hold=0.02), noise_hold=0.02).noise.hold
+    with pytest.raises(ValueError, match=r"noise_hold = 0.01 s conflicts .*hold=0.02"):
+        SimConfig.from_kwargs(disturbance=NoiseConfig(hold=0.02), noise_hold=0.01)
+    assert SimConfig.from_kwargs(noise_hold=0.05).noise.hold == 0.05
+    assert SimConfig.from_kwargs().noise.hold == 0.01
+    env = AUVPath3DEnv(control_dt=0.01, disturbance=NoiseConfig(hold=0.02))
+    env.reset(seed=1)
+    f = np.array([env.step(STILL)[4]["disturbance"] for _ in range(40)])
+    assert np.all(f[0::2] == f[1::2])  # held for two control periods of 0.01 s
+
+
+# ------------------------------------------------------------- observation range (item 3)
+def test_nan_start_heading_is_refused():
+    """Was: start_heading=nan gave a NaN observation on reset."""
+    for heading in (math.nan, math.inf, 1e300, 7.0):
+        with pytest.raises(ValueError, match=r"start_heading .*\[-6.28319, 6.28319\] rad"):
+            AUVPath3DEnv(start_heading=heading)
+    obs, _ = AUVPath3DEnv(start_heading=-2 * math.pi).reset(seed=0)
+    assert np.all(np.isfinite(obs))
+
+
+def test_u_desired_is_bounded_by_the_observation_envelope():
+    """Was: u_desired above the bound accepted, and every episode ended on step 1."""
+    with pytest.raises(ValueError, match=r"u_desired .*\(0, 10\] m/s.*got 10.5"):
+        AUVPath3DEnv(u_desired=10.5)
+    env = AUVPath3DEnv(u_desired=10.0, path="line")
+    obs, _ = env.reset(seed=0)
+    assert obs[OBS_INDEX["u_D"]] == 10.0 and env.observation_space.contains(obs)
+    _, _, terminated, _, _ = env.step(STILL)
+    assert not terminated
+
+
+def test_far_start_position_is_refused_at_construction():
+    """Was: reset returned x_e = 9970 m, outside observation_space."""
+    with pytest.raises(ValueError, match=r"start_position .*9970 m from the path's start"):
+        AUVPath3DEnv(start_position=(1e4, 0.0, 0.0))
+    # 500 m is observable, but not with the ±2 m random offsets on top.
+    edge = (30.0 + 499.0, 0.0, -8.0)
+    assert AUVPath3DEnv(start_position=edge, corridor=500.0).observation_space.contains(
+        AUVPath3DEnv(start_position=edge, corridor=500.0).reset(seed=0)[0]
+    )
+    with pytest.raises(ValueError, match="randomize_start"):
+        AUVPath3DEnv(start_position=edge, randomize_start=True)
+
+
+@pytest.mark.parametrize(
+    "path",
+    [Helix(radius=0.01, omega=100.0),  # a tiny, fast-turning helix
+     Spline([(0, 0, 0), (0.01, 0.0, 0.0), (0.01, 0.01, 0.0), (0.0, 0.01, 0.01)])],
+)  # fmt: skip
+def test_tiny_paths_that_turn_beyond_the_observation_are_refused(path):
+    """Was: with randomize_start, reset returned psi_F_dot outside observation_space."""
+    with pytest.raises(ValueError, match=r"path turns at up to .* rad/s, beyond the observation"):
+        AUVPath3DEnv(path=path, randomize_start=True)
+
+
+def test_a_turn_rate_check_that_fits_u_desired_accepts_the_path():
+    path = Helix(radius=0.5, omega=1.0, climb=0.2)  # 1.86 rad/m
+    with pytest.raises(ValueError, match=r"use u_desired <= 2.69"):
+        AUVPath3DEnv(path=path, u_desired=3.0)
+    env = AUVPath3DEnv(path=path, u_desired=2.6, randomize_start=True, start_position=(1, 0, 0))
+    for seed in range(20):
+        assert env.observation_space.contains(env.reset(seed=seed)[0])
+
+
+def test_reset_outside_the_space_raises_naming_the_component():
+    env = AUVPath3DEnv()
+    env.sim._pdata[3] = 1e4  # the helix centre moved behind the configuration's back
+    with pytest.raises(ValueError, match=r"reset gave x_e = -10005 m \(vehicle 0\), outside"):
+        env.reset(seed=0)
+    venv = AUVPath3DVectorEnv(3)
+    venv.sim._pdata[3] = 1e4
+    with pytest.raises(ValueError, match=r"reset gave x_e = -10005 m \(vehicle 0\)"):
+        venv.reset(seed=0)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -1e39])
+def test_a_non_finite_observation_of_a_finite_state_is_non_finite(bad):
+    """Was: a NaN observation with a finite state (absurd path scales) did not end the episode,
+    the envelope test being false for NaN; now `task_row` reports "non_finite", with the
+    termination penalty as the only (finite) reward term."""
+    env = AUVPath3DEnv()
+    env.reset(seed=0)
+    sim = env.sim
+    obs = sim.obs[0].copy()
+    obs[OBS_INDEX["psi_F_dot"]] = bad  # the state stays finite
+    terms = np.zeros(6)
+    reward, code = task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH,
+                            sim._task, terms)  # fmt: skip
+    assert TERMINATION_REASONS[code] == "non_finite"
+    assert reward == -100.0 and terms.tolist() == [0, 0, 0, 0, 0, -100.0]
+    obs[OBS_INDEX["psi_F_dot"]] = 9.0  # inside: the same call runs on
+    assert task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task,
+                    terms)[1] == 0  # fmt: skip
+
+
+def test_an_observation_beyond_float32_ends_the_episode_as_non_finite():
+    for n in (1, 3):
+        env = AUVPath3DVectorEnv(n, autoreset_mode="SameStep") if n > 1 else AUVPath3DEnv()
+        env.reset(seed=0)
+        zeros = np.zeros((n, 3)) if n > 1 else STILL
+        last = env.step(zeros)[0]
+        env.sim.state[0, 0] = 1e200  # finite in float64, inf in float32
+        obs, reward, terminated, _, info = env.step(zeros)
+        if n > 1:
+            assert terminated.tolist() == [True, False, False]
+            assert info["final_info"]["termination_reason"][0] == "non_finite"
+            np.testing.assert_array_equal(info["final_obs"][0], last[0])
+            assert np.all(np.isfinite(obs)) and np.all(np.isfinite(reward))
+        else:
+            assert terminated and info["termination_reason"] == "non_finite"
+            np.testing.assert_array_equal(obs, last)
+            assert math.isfinite(reward)
+
+
+def test_rewards_stay_finite_at_the_extremes_of_the_ranges():
+    env = AUVPath3DEnv(corridor=0.01, reward_weights=dict.fromkeys(RewardWeights().__dict__, 1e6),
+                       u_desired=1e-9)  # fmt: skip
+    env.reset(seed=0)
+    env.sim.state[0, 0:3] = 3e38  # the largest errors that are still float32-finite
+    _, reward, terminated, *_ = env.step(STILL)
+    assert terminated and math.isfinite(reward)
+
+
+# ------------------------------------------------------------ types and coercion (item 1)
+BAD_TYPES = [
+    ("path", ["helix"]), ("path", {"kind": 0}), ("path", 3),
+    ("disturbance", [1, 2, 3, 4, 5]), ("disturbance", True), ("disturbance", 1j),
+    ("current", "0.3"), ("current", 0.3), ("current", {"mean": "abc"}),
+    ("param_uncertainty", "0.1"), ("param_uncertainty", None),
+    ("actuator", ["paper"]), ("actuator", 0),
+    ("control_dt", "0.05"), ("control_dt", None), ("control_dt", [0.05]),
+    ("physics_dt", "0.01"), ("noise_hold", "0.01"), ("max_time", True), ("max_time", "300"),
+    ("randomize_start", "False"), ("randomize_start", 0), ("randomize_start", None),
+    ("u_desired", "1"), ("u_desired", 1 + 0j), ("sigma", b"0.5"),
+    ("virtual_point_law", ["corrected"]), ("corridor", "30"), ("max_pitch", "1.0"),
+    ("reward_weights", 5), ("reward_weights", [1.0]), ("reward_weights", {"progress": "1"}),
+    ("params", {"m": 30.0}), ("params", "remus100"),
+    ("start_position", "abc"), ("start_position", (1, 2, "3")), ("start_position", 5.0),
+    ("start_heading", "0.5"), ("start_heading", [0.5]),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "value"), BAD_TYPES, ids=lambda v: repr(v)[:20])
+def test_wrong_types_raise_a_type_error_naming_the_argument(name, value):
+    """Was, e.g.: actuator=['paper'] → "unhashable type: 'list'", reward_weights=5 → "astuple()
+    should be called on dataclass instances"; randomize_start="False" became True."""
+    with pytest.raises(TypeError) as caught:
+        AUVPath3DEnv(**{name: value})
+    assert isinstance(caught.value, ValueError)  # also caught by `except ValueError`
+    message = str(caught.value)
+    key = {"reward_weights": "reward"}.get(name, name)
+    assert key in message, message
+
+
+BAD_VALUES = [
+    ("disturbance", -5.0), ("disturbance", math.nan), ("disturbance", 1e5),
+    ("current", (0.1, 0.2)), ("current", (20.0, 0.0, 0.0)), ("current", {"std": (-1, 0, 0)}),
+    ("current", {"time_constant": 0.0}), ("current", {"speed": 1.0}),
+    ("param_uncertainty", 1.0), ("param_uncertainty", -0.1), ("param_uncertainty", math.nan),
+    ("actuator", "jets"), ("control_dt", 0.0), ("control_dt", -0.05), ("control_dt", math.inf),
+    ("control_dt", 0.015), ("physics_dt", 0.0), ("physics_dt", 0.5), ("noise_hold", 0.005),
+    ("noise_hold", -0.01), ("max_time", math.nan), ("max_time", 0.0), ("u_desired", 0.0),
+    ("u_desired", -1.0), ("sigma", 0.0), ("sigma", math.inf), ("virtual_point_law", "other"),
+    ("corridor", 0.0), ("corridor", 0.001), ("corridor", 501.0), ("max_pitch", math.pi / 2),
+    ("max_pitch", 0.0), ("reward_weights", {"speed": -1.0}), ("reward_weights", {"x": 1.0}),
+    ("reward_weights", {"termination": math.inf}), ("reward_weights", {"effort": 1e7}),
+    ("start_position", (0.0, 0.0)), ("start_position", (math.nan, 0.0, 0.0)),
+    ("start_position", (1e7, 0.0, 0.0)), ("start_heading", -7.0), ("max_time", 10**400),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "value"), BAD_VALUES, ids=lambda v: repr(v)[:20])
+def test_out_of_range_values_raise_a_value_error_naming_argument_and_range(name, value):
+    with pytest.raises(ValueError) as caught:
+        AUVPath3DEnv(**{name: value})
+    message = str(caught.value)
+    key = {"reward_weights": "reward"}.get(name, name)
+    assert key in message or (name == "noise_hold" and "noise hold" in message), message
+
+
+@pytest.mark.parametrize(
+    ("build", "match"),
+    [(lambda: NoiseConfig(hold=0.0), r"NoiseConfig.hold .*\(0, 1e\+06\] s"),
+     (lambda: NoiseConfig(amplitude="35"), r"NoiseConfig.amplitude"),
+     (lambda: NoiseConfig(amplitude=(1, 2)), r"NoiseConfig.amplitude must be 5 real"),
+     (lambda: CurrentConfig(mean=(0, 0, math.inf)), r"current mean"),
+     (lambda: CurrentConfig(time_constant="60"), r"current time_constant"),
+     (lambda: RewardWeights(progress=True), r"reward weight progress"),
+     (lambda: TaskLimits(s_end=0.0), r"s_end"), (lambda: TaskLimits(max_pitch=2.0), "max_pitch"),
+     (lambda: Helix(radius=1e300), r"Helix radius .*\(0, 100000\] m"),
+     (lambda: Helix(omega=1e300), r"Helix omega"), (lambda: Helix(center="abc"), "Helix center"),
+     (lambda: Helix(radius=1e-300, omega=1e-300, climb=0.0), r"\|p'\(s\)\|"),
+     (lambda: Helix(s_end="10"), "Helix s_end"), (lambda: Helix(s_end=-1.0), "Helix s_end"),
+     (lambda: StraightLine(start=(1e300, 0, 0)), "StraightLine start"),
+     (lambda: StraightLine(direction=(1e-300, 0, 0)), "StraightLine: direction"),
+     (lambda: StraightLine(length=math.nan), "StraightLine length"),
+     (lambda: Spline("abc"), "Spline waypoints"), (lambda: Spline([[0, 0, 0], [1, 1]]), "Spline"),
+     (lambda: Spline(np.zeros((1001, 3)) + np.arange(1001)[:, None]), "1000"),
+     (lambda: Spline([(0, 0, 0), (1e300, 0, 0)]), "Spline"),
+     (lambda: AUVParams(m=True), r"AUVParams.m "), (lambda: AUVParams(X_uu="1"), "AUVParams.X_uu"),
+     (lambda: AUVParams(surge_coriolis="yes"), "AUVParams.surge_coriolis"),
+     (lambda: AUVParams(fin_max=4.0), "AUVParams.fin_max"),
+     (lambda: AUVParams(X_uu=10**400), "AUVParams.X_uu")],
+)  # fmt: skip
+def test_dataclasses_and_paths_check_their_fields(build, match):
+    with pytest.raises(ValueError, match=match):
+        build()
+
+
+def test_accepted_numbers_are_canonical_floats():
+    config = SimConfig.from_kwargs(max_time=300, control_dt=np.float64(0.05),
+                                   u_desired=np.int64(1), start_position=np.array([15, 5, 0]),
+                                   start_heading=0)  # fmt: skip
+    assert type(config.max_time) is float and config.max_time == 300.0
+    assert type(config.u_desired) is float and config.start_position == (15.0, 5.0, 0.0)
+    assert type(config.start_heading) is float
+    assert config.randomize_start is False
+    assert SimConfig.from_kwargs(randomize_start=np.bool_(True)).randomize_start is True
+
+
+# ---------------------------------------------------------------------- actions and reset
+@pytest.mark.parametrize(
+    "action",
+    [["0.1", "0", "0"], np.array([0.1 + 1j, 0, 0]), [True, False, True], [None, 0, 0],
+     np.array(["a", "b", "c"]), [0.1, [0], 0]],
+)  # fmt: skip
+def test_non_numeric_actions_raise_type_error(action):
+    """Was: strings and complex numbers were converted and stepped."""
+    env = AUVPath3DEnv()
+    env.reset(seed=0)
+    before = env.state
+    with pytest.raises(TypeError, match="action must be an array of real numbers"):
+        env.step(action)
+    np.testing.assert_array_equal(env.state, before)
+    venv = AUVPath3DVectorEnv(2)
+    venv.reset(seed=0)
+    with pytest.raises(TypeError, match="action"):
+        venv.step(np.array([action, action], dtype=object))
+
+
+def test_integer_and_float32_actions_are_accepted_unchanged():
+    a, b = AUVPath3DEnv(), AUVPath3DEnv()
+    a.reset(seed=3)
+    b.reset(seed=3)
+    out_a = a.step(np.array([1, 0, -1], dtype=np.int32))
+    out_b = b.step(np.array([1.0, 0.0, -1.0]))
+    np.testing.assert_array_equal(out_a[0], out_b[0])
+
+
+def test_reset_options_and_seeds_are_checked():
+    env = AUVPath3DEnv()
+    env.reset(seed=0, options={})  # SB3's DummyVecEnv passes an empty dict
+    with pytest.raises(ValueError, match=r"takes no options, got \['foo'\]"):
+        env.reset(options={"foo": 1})
+    with pytest.raises(TypeError, match="options must be None or a dict"):
+        env.reset(options=["reset_mask"])
+    venv = AUVPath3DVectorEnv(2)
+    venv.reset(seed=0, options={})
+    with pytest.raises(ValueError, match=r"unknown reset option\(s\) \['mask'\]"):
+        venv.reset(options={"mask": np.ones(2, bool)})
+    for seed, match in ((1.5, "seed must be"), ("1", "seed must be"), (True, "seed must be"),
+                        (-1, "seed must be an integer"), ([0, "1"], r"seed\[1\]"),
+                        ([0, -2], r"seed\[1\]"), ([0, 1.0], r"seed\[1\]")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            venv.reset(seed=seed)
+    venv.reset(seed=[3, None])
+    venv.reset(seed=np.int64(4))
+
+
+def test_vector_env_integer_arguments_name_themselves():
+    for kwargs, match in (({"num_envs": 2**70}, r"num_envs .*16777216"),
+                          ({"max_episode_steps": 1.5}, "max_episode_steps"),
+                          ({"threads": "2"}, "threads"),
+                          ({"num_envs": "4"}, "num_envs")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            AUVPath3DVectorEnv(**kwargs)
+    env = AUVPath3DVectorEnv(2, max_episode_steps=10**30, max_time=0.5, disturbance="none")
+    env.reset(seed=0)
+    ends = [env.step(np.zeros((2, 3)))[3][0] for _ in range(10)]
+    assert ends.index(True) == 9  # max_time's 10 steps, no overflow from the huge limit
+
+
+# -------------------------------------------------------------------------- the checkers
+def test_checkers_name_argument_value_and_range():
+    assert real("x", 3, 0, 5) == 3.0
+    with pytest.raises(ValueError, match=r"x must be a finite number in \(0, 5\) m, got 5"):
+        real("x", 5, 0, 5, low_open=True, high_open=True, unit="m")
+    with pytest.raises(ArgumentTypeError, match=r"x must be a real number in \[0, ∞\), got True"):
+        real("x", True, 0)
+    assert integer("n", np.int32(4), 1) == 4
+    with pytest.raises(ArgumentTypeError, match=r"n must be an integer in \[1, ∞\], got 2.0"):
+        integer("n", 2.0, 1)
+    assert flag("f", np.False_) is False
+    with pytest.raises(ArgumentTypeError, match="f must be True or False, got 'True'"):
+        flag("f", "True")
+    assert choice("c", "a", ["a", "b"]) == "a"
+    with pytest.raises(ValueError, match=r"unknown c 'z'; valid: \['a', 'b'\]"):
+        choice("c", "z", ["a", "b"])
+    assert vector("v", np.array([1, 2, 3]), 3) == (1.0, 2.0, 3.0)
+    with pytest.raises(ValueError, match=r"v must be 3 real numbers in \[0, 1\]"):
+        vector("v", [0.5, 0.5, 2.0], 3, 0.0, 1.0)
+    with pytest.raises(ArgumentTypeError, match="v must be 3 real numbers"):
+        vector("v", np.zeros((3, 1)), 3)
+
+
+def test_observation_bounds_are_what_the_ranges_assume():
+    """The ranges above are derived from these bounds; a change there must revisit them."""
+    assert OBS_HIGH[OBS_INDEX["x_e"]] == 500.0 and OBS_HIGH[OBS_INDEX["u_D"]] == 10.0
+    assert OBS_HIGH[OBS_INDEX["u_p"]] == 20.0 and OBS_LOW[OBS_INDEX["u_p"]] == 0.0
+    assert OBS_HIGH[OBS_INDEX["psi_F_dot"]] == 10.0
