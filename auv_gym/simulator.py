@@ -125,8 +125,8 @@ def _check_path(path: Path) -> None:
 def path_turn_rates(path: Path) -> tuple[float, float]:
     """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
 
-    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (MODEL.md §3.1, §3.3), so ψ̇_F = this rate × u_p. Exact for
-    the helix (constant in s) and the line (0); a spline is sampled 64 times per segment.
+    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (docs/model.md §3.1, §3.3), so ψ̇_F = this rate × u_p.
+    Exact for the helix (constant in s) and the line (0); a spline is sampled 64 times per segment.
     """
     if path.kind == SPLINE:
         knots = path.data[1 : int(path.data[0]) + 2]

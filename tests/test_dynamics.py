@@ -1,4 +1,4 @@
-"""Equations of motion (paper (1)–(2), MODEL.md §2.1): each group of terms against hand values."""
+"""Equations of motion (paper (1)–(2), docs/model.md §2.1): each group of terms vs hand values."""
 
 from __future__ import annotations
 
