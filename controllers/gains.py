@@ -34,6 +34,7 @@ class MembershipSet:
 
 
 NON_NEGATIVE = ("sigma_leak", "ilos_y", "ilos_z")  # gains where 0 switches a feature off
+OBSERVER_STEP_LIMIT = 2.0 * math.sqrt(2.0) - 2.0
 # The current guidance (`controllers.alos`), checked with `auv_gym.validation.real`:
 # name -> (low, high, low_open, high_open, unit); 0 switches the observer and the trims off.
 GUIDANCE_RANGES = {
@@ -147,7 +148,12 @@ GAIN_LAYOUT = (
 
 def pack_gains(gains: ControllerGains, dt: float, b: tuple[float, float, float],
                actuator: tuple[float, float, float, float, float]) -> np.ndarray:  # fmt: skip
-    """The float64 vector of `GAIN_LAYOUT` for the kernels."""
+    """The float64 vector of `GAIN_LAYOUT` for the kernels (dt [s]: the control period)."""
+    # the discretised current observer is stable for ω_o Δt < 2√2 − 2 (controllers.alos, 1)
+    if gains.current_observer * dt >= OBSERVER_STEP_LIMIT:
+        raise ValueError(f"ControllerGains.current_observer × control_dt must be below "
+                         f"{OBSERVER_STEP_LIMIT:.3f}, got {gains.current_observer} rad/s × "
+                         f"{dt} s")  # fmt: skip
     values = {f.name: float(getattr(gains, f.name)) for f in fields(gains)
               if not isinstance(getattr(gains, f.name), MembershipSet)}  # fmt: skip
     for k, mf in enumerate((gains.surge_mf, gains.pitch_mf, gains.yaw_mf), start=1):

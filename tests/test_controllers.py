@@ -245,6 +245,7 @@ def test_fins_actuator_normalises_by_speed_dependent_authority():
      ({"alos_max": -0.1}, "alos_max must be a finite number in"),
      ({"alos_max": 2.0}, r"alos_max must be a finite number in \(0, 1.5708\) rad, got 2.0"),
      ({"speed_over_ground": "yes"}, "speed_over_ground must be True or False"),
+     ({"current_observer": 20.0}, "current_observer × control_dt must be below 0.828"),
      ({"speed_over_ground": True}, "speed_over_ground=True needs current_observer > 0")],
 )  # fmt: skip
 def test_bad_configuration_raises(kwargs, error):
