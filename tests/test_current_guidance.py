@@ -40,6 +40,8 @@ def test_speed_reference_gives_u_d_over_ground_along_the_path():
     assert speed_reference(1.0, *t, 0.0, 0.0, 0.0) == 1.0  # still water: exactly u_D
     along = 0.3 * np.asarray(t)
     assert speed_reference(1.0, *t, *along) == pytest.approx(0.7, abs=1e-12)  # with the current
+    # a strong following current: never slower through the water than |ĉ| + 0.2 u_D
+    assert speed_reference(1.0, *t, *(2.0 * along)) == pytest.approx(0.8, abs=1e-12)
     across = 0.3 * np.array([-t[1], t[0], 0.0]) / math.hypot(t[0], t[1])
     assert speed_reference(1.0, *t, *across) == pytest.approx(math.hypot(1.0, 0.3), abs=1e-12)
     assert speed_reference(1.0, *t, *(-3.0 * np.asarray(t))) == 2.0  # limited to 2 u_D
