@@ -38,10 +38,9 @@ __all__ = [
 
 # Named variants of the classical controllers (not in the paper), against ocean currents; see
 # `ControllerGains` and README "Results". Integral LOS in the horizontal plane, σ_y = 3. Current-
-# observer LOS (`controllers.alos`): observer ω_o = 3 rad/s, crab angles over ground, speed over
-# ground; backstepping adds the gated ALOS trims (γ = 0.01 rad/(m·s)) that remove the bias its
-# fixed nominal model leaves (the FBSM adapts that bias away itself, and the trims would amplify
-# its response to the white noise: paper scenario 0.064 → 0.071 m).
+# observer LOS (`controllers.alos`, docs/model.md §3.7): observer ω_o = 3 rad/s, crab angles over
+# ground, speed over ground; backstepping adds the gated ALOS trims (γ = 0.01 rad/(m·s)) that
+# remove the bias its fixed nominal model leaves (the FBSM adapts that bias away itself).
 _COLOS = {"current_observer": 3.0, "speed_over_ground": True}
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "fbsm_ilos": ("fbsm", {"ilos_y": 3.0}),
