@@ -9,12 +9,13 @@ helix it is not arc length: |p'(s)| = sqrt(R²ω² + c²)).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numba import njit
 
-from auv_gym.validation import ArgumentTypeError, is_real, real, vector
+from auv_gym.validation import ArgumentTypeError, choice, is_real, real, vector
 
 __all__ = ["PATHS", "Helix", "Path", "Spline", "StraightLine", "make_path", "path_eval"]
 
@@ -233,12 +234,24 @@ PATHS = {
 }
 
 
-def make_path(path: str | Path) -> Path:
-    """A path from its registry name or a `Path` instance; unknown names raise ValueError."""
+def make_path(path: str | Path | Mapping[str, Any]) -> Path:
+    """A path from its registry name, a `Path` instance, or a mapping {"kind": name, **arguments}
+    (e.g. ``{"kind": "line", "direction": [1, 0, 0.25]}``, as a TOML scenario writes it);
+    unknown names or arguments raise ValueError."""
     if isinstance(path, Path):
         return path
+    if isinstance(path, Mapping):
+        arguments = dict(path)
+        kind = choice("path kind", arguments.pop("kind", None), PATHS)
+        try:
+            return PATHS[kind](**arguments)
+        except ArgumentTypeError:
+            raise
+        except TypeError as exc:  # an argument the path does not take
+            raise ValueError(f"path {path!r:.80}: {exc}") from exc
     if not isinstance(path, str):
-        raise ArgumentTypeError(f"path must be one of {sorted(PATHS)} or a Path instance, "
+        raise ArgumentTypeError(f"path must be one of {sorted(PATHS)}, a Path instance or a "
+                                "mapping with 'kind' one of them, "
                                 f"got {path!r:.80}")  # fmt: skip
     if path in PATHS:
         return PATHS[path]()

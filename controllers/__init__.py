@@ -36,11 +36,17 @@ __all__ = [
     "make",
 ]
 
-# Named variants of the classical controllers (not in the paper): integral LOS in the horizontal
-# plane, σ_y = 3 — against ocean currents; see `ControllerGains` and README "Results".
+# Named variants of the classical controllers (not in the paper), against ocean currents; see
+# `ControllerGains` and README "Results". Integral LOS in the horizontal plane, σ_y = 3. Current-
+# observer LOS (`controllers.alos`, docs/model.md §3.7): observer ω_o = 3 rad/s, crab angles over
+# ground, speed over ground; backstepping adds the gated ALOS trims (γ = 0.01 rad/(m·s)) that
+# remove the bias its fixed nominal model leaves (the FBSM adapts that bias away itself).
+_COLOS = {"current_observer": 3.0, "speed_over_ground": True}
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "fbsm_ilos": ("fbsm", {"ilos_y": 3.0}),
     "backstepping_ilos": ("backstepping", {"ilos_y": 3.0}),
+    "fbsm_colos": ("fbsm", _COLOS),
+    "backstepping_colos": ("backstepping", {**_COLOS, "alos_y": 0.01, "alos_z": 0.01}),
 }
 CLASSICAL = ("fbsm", "backstepping", *PRESETS)
 REGISTRY = (*CLASSICAL, "ppo")

@@ -26,6 +26,7 @@ from numba import njit, prange
 from auv_gym.dynamics import nu_dot
 from auv_gym.observation import OBS_INDEX
 from auv_gym.vehicle import AUVParams, params_record
+from controllers.alos import guidance_diagnostics
 from controllers.base import BatchedController
 from controllers.fbsm import moment_limits
 from controllers.gains import (
@@ -40,6 +41,7 @@ from controllers.gains import (
     LAM1,
     LAM2,
     LAM3,
+    SPEED_OVER_GROUND,
     X_MAX,
     ControllerGains,
     pack_gains,
@@ -69,7 +71,10 @@ def _backstepping_row(o, g, p, filt, started, action, diag, errors):
     k_u = g[H1] + g[LAM1]
     k_q = g[C1] + g[H2] + g[LAM2]
     k_r = g[C2] + g[H3] + g[LAM3]
-    X = (-f1 - k_u * (u - o[_UD])) / g[B1]
+    if g[SPEED_OVER_GROUND] > 0.0:  # u_ref and u̇_ref from controllers.alos
+        X = (-f1 + errors[13] - k_u * (u - errors[12])) / g[B1]
+    else:
+        X = (-f1 - k_u * (u - o[_UD])) / g[B1]
     M = (-f5 + da1 - z1 - k_q * z2) / g[B5]
     N = (-f6 + da2 - z3 / math.cos(theta) - k_r * z4) / g[B6]
     m_max, n_max = moment_limits(u, g)
@@ -120,5 +125,6 @@ class Backstepping(BatchedController):
         kernel(obs, self._g, self._p, state["filter"], state["started"], actions, state["diag"])
 
     def diagnostics(self, state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Desired angles for `auv_gym.evaluation` (extras)."""
-        return {"theta_d": state["diag"][:, 3].copy(), "psi_d_rel": state["diag"][:, 4].copy()}
+        """Desired angles and the current-guidance states (`controllers.alos`) (extras)."""
+        out = {"theta_d": state["diag"][:, 3].copy(), "psi_d_rel": state["diag"][:, 4].copy()}
+        return {**out, **guidance_diagnostics(self.gains, state["filter"])}

@@ -29,6 +29,7 @@ from numba import njit, prange
 
 from auv_gym.observation import OBS_INDEX
 from auv_gym.vehicle import AUVParams
+from controllers.alos import guidance_diagnostics
 from controllers.base import BatchedController
 from controllers.fuzzy import N_RULES, WORK_DIM, adaptive_loop
 from controllers.gains import (
@@ -47,6 +48,7 @@ from controllers.gains import (
     LAM3,
     M_MAX,
     N_MAX,
+    SPEED_OVER_GROUND,
     X_MAX,
     ControllerGains,
     pack_gains,
@@ -55,7 +57,7 @@ from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
 
 __all__ = ["FBSM", "moment_limits"]
 
-_U, _V, _W, _Q, _R, _UD = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r", "u_D"))
+_U, _V, _W, _Q, _R = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r"))
 LOOPS = ("surge", "pitch", "yaw")
 # Per-vehicle diagnostics row: (f̂, b̂, d̂) per loop, then θ_d and ψ_d − ψ_F [rad].
 DIAG_DIM = 11
@@ -77,9 +79,12 @@ def _fbsm_row(o, g, theta_f, theta_b, theta_d, filt, started, action, diag, erro
     u = o[_U]
     v_in[0], v_in[1], v_in[2], v_in[3], v_in[4] = u, o[_V], o[_W], o[_Q], o[_R]
     m_max, n_max = moment_limits(u, g)
-    S1 = u - o[_UD]
+    S1 = u - errors[12]  # u_D, or the speed-over-ground reference (controllers.alos)
     h1, h2, h3 = g[H1] + g[LAM1], g[H2] + g[LAM2], g[H3] + g[LAM3]
-    action[0] = adaptive_loop(0, v_in, S1, -h1 * S1, g[X_MAX], g[B1], theta_f[0], theta_b[0],
+    rest1 = -h1 * S1
+    if g[SPEED_OVER_GROUND] > 0.0:
+        rest1 += errors[13]
+    action[0] = adaptive_loop(0, v_in, S1, rest1, g[X_MAX], g[B1], theta_f[0], theta_b[0],
                               theta_d[0], g, work, diag[0:3])  # fmt: skip
     action[1] = adaptive_loop(1, v_in, S2, -g[C1] * dz1 + da1 - h2 * S2, m_max, g[B5],
                               theta_f[1], theta_b[1], theta_d[1], g, work, diag[3:6])  # fmt: skip
@@ -114,7 +119,7 @@ class FBSM(BatchedController):
         threads: "auto" runs batches of ≥ 64 vehicles on numba's threads, "serial" never.
 
     State (dict of arrays, leading vehicle axis): theta_f, theta_b (n, 3, 3125), theta_d
-    (n, 3, 3), filter (n, 8), started (n,), diag (n, 11).
+    (n, 3, 3), filter (n, FILTER_DIM), started (n,), diag (n, 11).
     """
 
     name = "fbsm"
@@ -145,10 +150,11 @@ class FBSM(BatchedController):
                state["filter"], state["started"], actions, state["diag"])  # fmt: skip
 
     def diagnostics(self, state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Desired angles and adaptive-parameter norms for `auv_gym.evaluation` (extras)."""
+        """Desired angles, adaptive-parameter norms and the current-guidance states
+        (`controllers.alos.guidance_diagnostics`) for `auv_gym.rollout` (extras)."""
         out = {"theta_d": state["diag"][:, 9].copy(), "psi_d_rel": state["diag"][:, 10].copy()}
         for k, loop in enumerate(LOOPS):
             out[f"norm_theta_f_{loop}"] = np.linalg.norm(state["theta_f"][:, k], axis=1)
             out[f"norm_theta_d_{loop}"] = np.linalg.norm(state["theta_d"][:, k], axis=1)
             out[f"b_hat_{loop}"] = state["diag"][:, 3 * k + 1].copy()
-        return out
+        return {**out, **guidance_diagnostics(self.gains, state["filter"])}

@@ -7,6 +7,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from auv_gym.validation import flag, real
+
 __all__ = ["GAIN_LAYOUT", "ControllerGains", "MembershipSet"]
 
 
@@ -32,6 +34,16 @@ class MembershipSet:
 
 
 NON_NEGATIVE = ("sigma_leak", "ilos_y", "ilos_z")  # gains where 0 switches a feature off
+OBSERVER_STEP_LIMIT = 2.0 * math.sqrt(2.0) - 2.0
+# The current guidance (`controllers.alos`), checked with `auv_gym.validation.real`:
+# name -> (low, high, low_open, high_open, unit); 0 switches the observer and the trims off.
+GUIDANCE_RANGES = {
+    "current_observer": (0.0, math.inf, False, False, "rad/s"),
+    "alos_y": (0.0, math.inf, False, False, "rad/(m·s)"),
+    "alos_z": (0.0, math.inf, False, False, "rad/(m·s)"),
+    "alos_radius": (0.0, math.inf, True, False, "m"),
+    "alos_max": (0.0, math.pi / 2, True, True, "rad"),
+}
 
 
 @dataclass(frozen=True)
@@ -47,6 +59,13 @@ class ControllerGains:
     Caharija et al. 2016), not in the paper: y_e is replaced by y_e + σ_y y_int with
     ẏ_int = k_y y_e / (1 + k_y²(y_e + σ_y y_int)²) (likewise z), which removes the steady
     cross-track offset a constant ocean current leaves on a straight path. 0 = the paper's LOS.
+
+    ``current_observer`` > 0 (ω_o [rad/s]) switches on the current observer and the crab angles
+    from the estimated velocity over ground; ``alos_y``, ``alos_z`` > 0 (γ_h, γ_v [rad/(m·s)])
+    the adaptive LOS trims β̂, α̂, gated to within ``alos_radius`` of the virtual point and
+    projected to ±``alos_max``; ``speed_over_ground`` makes the surge reference the speed
+    through the water that gives u_D over ground along the path (needs the observer). All of
+    it is `controllers.alos`; none of it is in the paper (0 / False = the paper's guidance).
     """
 
     h1: float = 1.0
@@ -73,6 +92,12 @@ class ControllerGains:
     sigma_leak: float = 0.0  # σ-modification leakage (docs/model.md §4.8); 0 = paper-faithful
     ilos_y: float = 0.0  # integral-LOS gain σ_y (horizontal); 0 = paper's LOS
     ilos_z: float = 0.0  # integral-LOS gain σ_z (vertical); 0 = paper's LOS
+    current_observer: float = 0.0  # [rad/s] observer bandwidth ω_o; 0 = off (controllers.alos)
+    alos_y: float = 0.0  # [rad/(m·s)] ALOS adaptation gain γ_h; 0 = off
+    alos_z: float = 0.0  # [rad/(m·s)] ALOS adaptation gain γ_v; 0 = off
+    alos_radius: float = 1.0  # [m] capture radius R of the ALOS gate
+    alos_max: float = 0.5  # [rad] projection bound M of β̂, α̂
+    speed_over_ground: bool = False  # surge reference for u_D over ground (needs the observer)
     separate_b_basis: bool = False  # False: b̂ shares f̂'s basis (σ_b = σ), as the prototype
     surge_mf: MembershipSet = MembershipSet(1.0, 0.5, 1.0, 0.1, 1.0)
     pitch_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, math.pi / 6, math.pi / 24,
@@ -80,9 +105,16 @@ class ControllerGains:
     yaw_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, 1 / 3, math.pi / 12, 1 / 6)
 
     def __post_init__(self) -> None:
+        for name, (low, high, low_open, high_open, unit) in GUIDANCE_RANGES.items():
+            real(f"ControllerGains.{name}", getattr(self, name), low, high, low_open=low_open,
+                 high_open=high_open, unit=unit)  # fmt: skip
+        flag("ControllerGains.speed_over_ground", self.speed_over_ground)
+        if self.speed_over_ground and self.current_observer == 0.0:
+            raise ValueError("ControllerGains.speed_over_ground=True needs current_observer > 0 "
+                             "(the speed over ground comes from the current estimate)")  # fmt: skip
         for f in fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, (bool, MembershipSet)):
+            if isinstance(value, (bool, MembershipSet)) or f.name in GUIDANCE_RANGES:
                 continue
             if not math.isfinite(value):
                 raise ValueError(f"ControllerGains.{f.name} must be finite, got {value}")
@@ -100,6 +132,7 @@ GAIN_LAYOUT = (
     "h1", "lam1", "h2", "lam2", "h3", "lam3", "k1", "c1", "k2", "c2", "k_y", "k_z", "theta_max",
     "filter_wn", "filter_zeta", "u_guard", "sideslip_3d", "printed_pitch_los", "alpha_f",
     "alpha_b", "alpha_d", "sigma_leak", "separate_b_basis", "ilos_y", "ilos_z",
+    "current_observer", "alos_y", "alos_z", "alos_radius", "alos_max", "speed_over_ground",
     "mf1_c0", "mf1_dc", "mf1_s", "mf1_sb", "mf1_sd",
     "mf2_c0", "mf2_dc", "mf2_s", "mf2_sb", "mf2_sd",
     "mf3_c0", "mf3_dc", "mf3_s", "mf3_sb", "mf3_sd",
@@ -107,6 +140,7 @@ GAIN_LAYOUT = (
 )  # fmt: skip
 (H1, LAM1, H2, LAM2, H3, LAM3, K1, C1, K2, C2, KY, KZ, THETA_MAX, WN, ZETA, U_GUARD, BETA_3D,
  PRINTED_PITCH, ALPHA_F, ALPHA_B, ALPHA_D, SIGMA_LEAK, SEPARATE_B, ILOS_Y, ILOS_Z,
+ OBSERVER_WN, ALOS_Y, ALOS_Z, ALOS_RADIUS, ALOS_MAX, SPEED_OVER_GROUND,
  MF1, _m1b, _m1c, _m1d, _m1e,
  MF2, _m2b, _m2c, _m2d, _m2e, MF3, _m3b, _m3c, _m3d, _m3e, DT, B1, B5, B6, FINS, FIN_GAIN,
  X_MAX, M_MAX, N_MAX) = range(len(GAIN_LAYOUT))  # fmt: skip
@@ -114,7 +148,12 @@ GAIN_LAYOUT = (
 
 def pack_gains(gains: ControllerGains, dt: float, b: tuple[float, float, float],
                actuator: tuple[float, float, float, float, float]) -> np.ndarray:  # fmt: skip
-    """The float64 vector of `GAIN_LAYOUT` for the kernels."""
+    """The float64 vector of `GAIN_LAYOUT` for the kernels (dt [s]: the control period)."""
+    # the discretised current observer is stable for ω_o Δt < 2√2 − 2 (controllers.alos, 1)
+    if gains.current_observer * dt >= OBSERVER_STEP_LIMIT:
+        raise ValueError(f"ControllerGains.current_observer × control_dt must be below "
+                         f"{OBSERVER_STEP_LIMIT:.3f}, got {gains.current_observer} rad/s × "
+                         f"{dt} s")  # fmt: skip
     values = {f.name: float(getattr(gains, f.name)) for f in fields(gains)
               if not isinstance(getattr(gains, f.name), MembershipSet)}  # fmt: skip
     for k, mf in enumerate((gains.surge_mf, gains.pitch_mf, gains.yaw_mf), start=1):

@@ -2,8 +2,10 @@
 
 Shared by FBSM and backstepping (docs/model.md §3.4, §4.3, §4.4, §10.4). All functions are numba
 kernels on one vehicle; ``o`` is one observation row (layout `auv_gym.OBS_NAMES`), ``g`` the
-packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the 8-entry memory
-(x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F, integral-LOS states y_int, z_int [m]).
+packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the `FILTER_DIM`-entry memory
+(x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F, integral-LOS states y_int, z_int [m], then the
+current-guidance memory of `controllers.alos`: ε̂ [m], ĉ [m/s], last g [m/s], β̂, α̂ [rad],
+previous u_ref [m/s]).
 """
 
 from __future__ import annotations
@@ -14,7 +16,22 @@ from numba import njit
 
 from auv_gym.guidance import wrap_angle
 from auv_gym.observation import OBS_INDEX
+from controllers.alos import (
+    ALPHA_HAT,
+    BETA_HAT,
+    C_HAT,
+    U_REF,
+    adapt_trims,
+    crab_angles,
+    observe_current,
+    path_tangent,
+    speed_reference,
+)
 from controllers.gains import (
+    ALOS_MAX,
+    ALOS_RADIUS,
+    ALOS_Y,
+    ALOS_Z,
     BETA_3D,
     C1,
     C2,
@@ -25,7 +42,9 @@ from controllers.gains import (
     K2,
     KY,
     KZ,
+    OBSERVER_WN,
     PRINTED_PITCH,
+    SPEED_OVER_GROUND,
     THETA_MAX,
     U_GUARD,
     WN,
@@ -34,12 +53,14 @@ from controllers.gains import (
 
 __all__ = ["FILTER_DIM", "LOOP_DIM", "loop_errors"]
 
-_YE, _ZE, _PSIE, _TH, _THF = (OBS_INDEX[k] for k in ("y_e", "z_e", "psi_error", "theta", "theta_F"))
+_XE, _YE, _ZE = OBS_INDEX["x_e"], OBS_INDEX["y_e"], OBS_INDEX["z_e"]
+_PSIE, _TH, _THF = OBS_INDEX["psi_error"], OBS_INDEX["theta"], OBS_INDEX["theta_F"]
 _U, _V, _W, _Q, _R = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r"))
+_UD, _UP = OBS_INDEX["u_D"], OBS_INDEX["u_p"]
 _DPSIF, _DTHF = OBS_INDEX["psi_F_dot"], OBS_INDEX["theta_F_dot"]
-FILTER_DIM = 8
-# loop_errors output: z1, z2, S2, ż1, α̇1, z3, z4, S3, ż3, α̇2, θ_d, ψ_d − ψ_F
-LOOP_DIM = 12
+FILTER_DIM = U_REF + 1
+# loop_errors output: z1, z2, S2, ż1, α̇1, z3, z4, S3, ż3, α̇2, θ_d, ψ_d − ψ_F, u_ref, u̇_ref
+LOOP_DIM = 14
 
 
 @njit(cache=True)
@@ -51,6 +72,9 @@ def loop_errors(o, g, filt, started, out):
     (with integral LOS, y_e + σ_y y_int and z_e + σ_z z_int in place of y_e and z_e)
     through ẍ = ω_n²(c − x) − 2ζω_n ẋ (initialised at c with zero rate). θ̇_d, θ̈_d add the
     analytic θ̇_F and its finite difference over one control step (likewise for ψ).
+    With `controllers.alos` switched on, α and β are the crab angles over ground (α_c, β_c)
+    from the current observer, the ALOS trims α̂, β̂ are added, and the surge reference u_ref
+    (out[12], u_D unless ``speed_over_ground``) and its rate (out[13]) account for the current.
     Pitch (35)–(36): z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α1, S2 = c1 z1 + z2,
     ż1 = q − θ̇_d, α̇1 = −k1 ż1 + θ̈_d. Yaw (40) with the 1/cosθ correction (docs/model.md §4.4):
     z3 = wrap(ψ − ψ_d), α2 = cosθ(−k2 z3 + ψ̇_d), z4 = r − α2, S3 = c2 z3 + z4,
@@ -69,7 +93,23 @@ def loop_errors(o, g, filt, started, out):
         beta = 0.0
     if g[BETA_3D] > 0.0:
         beta /= math.cos(theta_f)
-    k_y, k_z, y_e, z_e = g[KY], g[KZ], o[_YE], o[_ZE]
+    k_y, k_z, x_e, y_e, z_e = g[KY], g[KZ], o[_XE], o[_YE], o[_ZE]
+    observer, trims = g[OBSERVER_WN] > 0.0, g[ALOS_Y] > 0.0 or g[ALOS_Z] > 0.0
+    if not started:  # β̂(0) = α̂(0) = 0, u_ref = u_D (the observer initialises itself)
+        filt[BETA_HAT], filt[ALPHA_HAT], filt[U_REF] = 0.0, 0.0, o[_UD]
+    t0, t1, t2 = 0.0, 0.0, 0.0
+    dc_y = dc_z = 0.0  # rates of the corrections fed forward through the filter (alos only)
+    if observer:
+        t0, t1, t2 = path_tangent(o[_PSIE], theta, theta_f)
+        cx, cy, cz = filt[C_HAT], filt[C_HAT + 1], filt[C_HAT + 2]
+        observe_current(x_e, y_e, z_e, u, v, w, q, r, theta, t0, t1, t2, o[_UP], g[OBSERVER_WN],
+                        dt, started, filt)  # fmt: skip
+        if u >= g[U_GUARD]:
+            beta, alpha = crab_angles(u + filt[C_HAT], v + filt[C_HAT + 1], w + filt[C_HAT + 2],
+                                      theta)  # fmt: skip
+            # the part of their rate that the turning estimate ĉ causes (ν, θ held)
+            beta0, alpha0 = crab_angles(u + cx, v + cy, w + cz, theta)
+            dc_y, dc_z = -(beta - beta0) / dt, (alpha - alpha0) / dt
     y_int, z_int = (filt[6], filt[7]) if started else (0.0, 0.0)
     y_los = y_e + g[ILOS_Y] * y_int  # = y_e unless integral LOS is on
     z_los = z_e + g[ILOS_Z] * z_int
@@ -78,7 +118,21 @@ def loop_errors(o, g, filt, started, out):
         theta_d_raw = theta_f - math.atan(k_z * z_los) - alpha
     else:
         theta_d_raw = theta_f + math.atan(k_z * z_los) + alpha
+    if trims:
+        beta_hat, alpha_hat = filt[BETA_HAT], filt[ALPHA_HAT]
+        c_y -= beta_hat
+        theta_d_raw += alpha_hat
+        adapt_trims(x_e, y_e, z_e, k_y, k_z, g[ALOS_Y], g[ALOS_Z], g[ALOS_RADIUS], g[ALOS_MAX],
+                    dt, filt)  # fmt: skip
+        dc_y -= (filt[BETA_HAT] - beta_hat) / dt
+        dc_z += (filt[ALPHA_HAT] - alpha_hat) / dt
     c_z = min(max(theta_d_raw, -g[THETA_MAX]), g[THETA_MAX]) - theta_f
+    if g[SPEED_OVER_GROUND] > 0.0:
+        u_ref = speed_reference(o[_UD], t0, t1, t2, filt[C_HAT], filt[C_HAT + 1], filt[C_HAT + 2])
+        out[12], out[13] = u_ref, (u_ref - filt[U_REF]) / dt if started else 0.0
+        filt[U_REF] = u_ref
+    else:
+        out[12], out[13] = o[_UD], 0.0
     if not started:
         filt[0], filt[1], filt[2], filt[3] = c_z, 0.0, c_y, 0.0
         filt[4], filt[5] = o[_DPSIF], o[_DTHF]
@@ -87,8 +141,12 @@ def loop_errors(o, g, filt, started, out):
     filt[7] = z_int + dt * k_z * z_e / (1.0 + (k_z * z_los) ** 2) if g[ILOS_Z] > 0.0 else 0.0
     wn, zeta = g[WN], g[ZETA]
     x_z, v_z, x_y, v_y = filt[0], filt[1], filt[2], filt[3]
-    a_z = wn * wn * (c_z - x_z) - 2.0 * zeta * wn * v_z
-    a_y = wn * wn * (c_y - x_y) - 2.0 * zeta * wn * v_y
+    if observer or trims:  # ẍ = ω_n²(c − x) + 2ζω_n(ċ − ẋ): no lag behind a ramp in c
+        a_z = wn * wn * (c_z - x_z) + 2.0 * zeta * wn * (dc_z - v_z)
+        a_y = wn * wn * (c_y - x_y) + 2.0 * zeta * wn * (dc_y - v_y)
+    else:
+        a_z = wn * wn * (c_z - x_z) - 2.0 * zeta * wn * v_z
+        a_y = wn * wn * (c_y - x_y) - 2.0 * zeta * wn * v_y
     theta_d = theta_f + x_z
     dtheta_d = o[_DTHF] + v_z
     ddtheta_d = (o[_DTHF] - filt[5]) / dt + a_z

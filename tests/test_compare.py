@@ -161,6 +161,9 @@ def test_scenario_file_documents_every_scenario():
         "line",
         "waypoints",
         "storm",
+        "current_turning",
+        "current_vertical",
+        "line_current",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}

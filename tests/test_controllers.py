@@ -16,7 +16,14 @@ from controllers.fuzzy import N_RULES, WORK_DIM, adaptive_loop, fuzzy_basis
 from controllers.gains import ControllerGains, pack_gains
 from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
 
-NAMES = ["fbsm", "backstepping", "fbsm_ilos", "backstepping_ilos"]
+NAMES = [
+    "fbsm",
+    "backstepping",
+    "fbsm_ilos",
+    "backstepping_ilos",
+    "fbsm_colos",
+    "backstepping_colos",
+]
 
 
 def observations(n, seed=0):
@@ -227,7 +234,19 @@ def test_fins_actuator_normalises_by_speed_dependent_authority():
     [({"control_dt": -0.05}, "control_dt"), ({"actuator": "jets"}, "actuator"),
      ({"k1": -1.0}, "k1"), ({"bogus_gain": 1.0}, "unknown controller gains"),
      ({"params": "remus"}, "AUVParams"), ({"threads": 2}, "threads"),
-     ({"ilos_y": -1.0}, "ilos_y must be >= 0"), ({"ilos_z": math.nan}, "ilos_z")],
+     ({"ilos_y": -1.0}, "ilos_y must be >= 0"), ({"ilos_z": math.nan}, "ilos_z"),
+     ({"current_observer": -1.0}, r"current_observer must be a finite number in \[0, ∞\) rad/s"),
+     ({"current_observer": math.nan}, "current_observer must be a finite number"),
+     ({"current_observer": "3"}, "current_observer must be a real number"),
+     ({"alos_y": -0.01}, r"alos_y must be a finite number in \[0, ∞\)"),
+     ({"alos_z": math.inf}, "alos_z must be a finite number"),
+     ({"alos_radius": 0.0}, r"alos_radius must be a finite number in \(0, ∞\) m, got 0.0"),
+     ({"alos_radius": math.nan}, "alos_radius must be a finite number"),
+     ({"alos_max": -0.1}, "alos_max must be a finite number in"),
+     ({"alos_max": 2.0}, r"alos_max must be a finite number in \(0, 1.5708\) rad, got 2.0"),
+     ({"speed_over_ground": "yes"}, "speed_over_ground must be True or False"),
+     ({"current_observer": 20.0}, "current_observer × control_dt must be below 0.828"),
+     ({"speed_over_ground": True}, "speed_over_ground=True needs current_observer > 0")],
 )  # fmt: skip
 def test_bad_configuration_raises(kwargs, error):
     with pytest.raises(ValueError, match=error):

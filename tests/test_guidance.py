@@ -62,6 +62,24 @@ def test_unknown_path_name_lists_valid_names():
     assert set(PATHS) == {"helix", "line", "waypoints"}
 
 
+def test_a_mapping_names_a_path_with_arguments():
+    """The form a TOML scenario writes: {"kind": name, **arguments}."""
+    line = make_path({"kind": "line", "direction": [1.0, 0.0, 0.25]})
+    assert isinstance(line, StraightLine)
+    np.testing.assert_allclose(
+        line.evaluate(4.0)[1], np.array([1.0, 0.0, 0.25]) / math.hypot(1, 0.25)
+    )
+    assert make_path({"kind": "helix", "radius": 10.0}).radius == 10.0
+    with pytest.raises(ValueError, match="unexpected keyword argument 'slope'"):
+        make_path({"kind": "line", "slope": 3.0})
+    with pytest.raises(ValueError, match="unknown path kind 'spiral'"):
+        make_path({"kind": "spiral"})
+    with pytest.raises(TypeError, match="path kind must be one of"):
+        make_path({"direction": [1, 0, 0]})
+    with pytest.raises(ValueError, match="direction must be non-zero"):
+        make_path({"kind": "line", "direction": [0, 0, 0]})
+
+
 @pytest.mark.parametrize(
     "build",
     [lambda: Helix(radius=-1.0), lambda: Helix(omega=float("nan")),
