@@ -21,6 +21,7 @@ import contextlib
 import json
 import os
 import zipfile
+import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -237,16 +238,20 @@ def _check_model_zip(model: Path) -> None:
         raise ValueError(f"PPO model {model} is not a valid zip file (corrupt or truncated)")
     try:
         with zipfile.ZipFile(model) as archive:
-            damaged = archive.testzip()
-            members = set(archive.namelist())
-            missing = sorted({"data", "policy.pth"} - members)
-            if damaged is not None or missing:
+            members = archive.namelist()
+            for name in members:  # reading a member checks its CRC-32
+                try:
+                    archive.read(name)
+                except (zipfile.BadZipFile, zlib.error, EOFError) as exc:
+                    problem = f"member {name!r}: {exc}"
+                    raise ValueError(f"PPO model {model} is damaged: {problem}") from exc
+            missing = sorted({"data", "policy.pth"} - set(members))
+            if missing:
                 raise ValueError(
-                    f"PPO model {model} is damaged: "
-                    + (f"member {damaged!r} fails its CRC check" if damaged else f"no {missing}")
+                    f"PPO model {model} is damaged (truncated, or not an SB3 model): no {missing}"
                 )
             data = json.loads(archive.read("data"))
-    except (zipfile.BadZipFile, OSError, EOFError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except (zipfile.BadZipFile, OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"PPO model {model} cannot be read (corrupt or truncated): {exc}") from exc
     for key, expected in (("observation_space", (OBS_DIM,)), ("action_space", (ACTION_DIM,))):
         space = data.get(key) if isinstance(data, dict) else None
