@@ -369,3 +369,20 @@ def test_a_killed_compare_leaves_no_worker_running(tmp_path):
     while time.time() < deadline and any(alive(p) for p in children):
         time.sleep(0.1)
     assert not [p for p in children if alive(p)]
+
+
+def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys):
+    scenarios = tmp_path / "scenarios.toml"
+    scenarios.write_text('[ok]\ndescription = "fine"\n\n[bad]\ndescription = "no"\n'
+                         "env = { control_dt = 0.015 }\n")  # fmt: skip
+    out = tmp_path / "out"
+    err = usage_error(capsys, main, ["--policies", "fbsm", "--scenario-file", str(scenarios),
+                                     "--out", str(out)])  # fmt: skip
+    assert "scenario 'bad': control_dt = 0.015 s must be a whole multiple" in err
+    assert not out.exists()
+    scenarios.write_text("[bad]\nenv = 3\n")
+    err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
+    assert "scenario 'bad': env must be a table" in err
+    scenarios.write_text("not toml [")
+    err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
+    assert "not a valid TOML file" in err
