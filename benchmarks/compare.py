@@ -21,7 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
-from benchmarks.cli import ArgumentParser, comma_names, finite_number, usage_errors, writable_folder
+from benchmarks.arguments import (
+    ArgumentParser,
+    comma_names,
+    finite_number,
+    usage_errors,
+    writable_folder,
+)
 from benchmarks.jobs import Job, run_jobs
 from benchmarks.policies import PolicySpec, build_policy, check_policy_spec, policy_label
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select

@@ -50,7 +50,7 @@ from auv_gym.paths import POSITION_BOUND, Helix, Spline, StraightLine, make_path
 from auv_gym.simulator import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
 from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.vehicle import remus100
-from benchmarks.cli import ArgumentParser, finite_number, usage_errors
+from benchmarks.arguments import ArgumentParser, finite_number, usage_errors
 
 FAILURES = frozenset({"corridor", "pitch", "envelope", "non_finite"})  # may leave the space
 COUNTERS = ("nan_observations", "non_finite_rewards", "exceptions", "wrong_truncations",

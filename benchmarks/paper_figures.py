@@ -33,7 +33,7 @@ from typing import Any
 from auv_gym.files import environment, jsonable, write_json, write_text
 from auv_gym.rollout import policy_name
 from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
-from benchmarks.cli import (
+from benchmarks.arguments import (
     ArgumentParser,
     comma_names,
     exit_with_usage_error,

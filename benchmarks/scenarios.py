@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from benchmarks.cli import comma_names
+from benchmarks.arguments import comma_names
 
 __all__ = ["SCENARIOS_FILE", "Scenario", "load_scenarios", "select"]
 
