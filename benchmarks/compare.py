@@ -13,7 +13,6 @@ the number of workers or the backend. Policies: `benchmarks.policies`; scenarios
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 from collections.abc import Sequence
@@ -21,15 +20,27 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
+from benchmarks.arguments import (
+    ArgumentParser,
+    comma_names,
+    finite_number,
+    usage_errors,
+    writable_folder,
+)
 from benchmarks.jobs import Job, run_jobs
-from benchmarks.policies import check_policy_spec
+from benchmarks.policies import PolicySpec, build_policy, check_policy_spec, policy_label
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.tables import write_tables
 from controllers import REGISTRY
 
+MAX_SEEDS = 100_000  # seeds per scenario
+MAX_WORKERS = 1024
 
-def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = ArgumentParser(
+        prog="python -m benchmarks.compare",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -41,13 +52,14 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--scenarios", default="all", help="comma-separated names or 'all'")
     parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
                         help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
-    parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per scenario")
+    parser.add_argument("--seeds", type=int, default=10,
+                        help=f"seeds 0..N-1 per scenario, 1 <= N <= {MAX_SEEDS}")  # fmt: skip
     parser.add_argument("--duration", type=float, default=300.0, help="episode length [s]")
     parser.add_argument(
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s]; None: min(100, duration/2)",
+        help="metrics window start [s], in [0, duration); None: min(100, duration/2)",
     )
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="local worker processes (results do not depend on it)")  # fmt: skip
@@ -58,31 +70,76 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
                         help="output folder; a rerun with the same arguments resumes")  # fmt: skip
     parser.add_argument("--no-figures", action="store_true", help="tables only")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    return parser.parse_args(argv)
+    return parser
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The arguments, every one checked before any episode runs (a bad one exits with code 2
+    and a one-line message). Adds ``jobs``, ``scenario_table`` (name → Scenario) and
+    ``transient`` (resolved)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    with usage_errors(parser):
+        check_args(args)
+    return args
+
+
+def check_args(args: argparse.Namespace) -> None:
+    """Validate ``args`` and resolve them into jobs; ValueError/OSError naming the argument."""
+    try:
+        scenarios = load_scenarios(args.scenario_file)
+    except OSError as error:
+        raise OSError(f"--scenario-file {str(args.scenario_file)!r}: {error.strerror}") from None
+    names = select(args.scenarios, list(scenarios), "scenario")
+    policies = comma_names(args.policies, "--policies")
+    labels: dict[str, str] = {}
+    for spec in policies:
+        check_policy_spec(spec)
+        label = policy_label(spec)
+        if label in labels:  # both would write OUT/episodes/<scenario>/<label>/
+            raise ValueError(f"--policies {labels[label]!r} and {spec!r} share the label {label!r}")
+        labels[label] = spec
+    if not 1 <= args.seeds <= MAX_SEEDS:
+        raise ValueError(f"--seeds must be an integer in [1, {MAX_SEEDS}], got {args.seeds}")
+    finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
+    if args.transient is None:
+        args.transient = min(100.0, args.duration / 2)
+    finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
+    if not 1 <= args.workers <= MAX_WORKERS:
+        raise ValueError(f"--workers must be an integer in [1, {MAX_WORKERS}], got {args.workers}")
+    if args.address is not None and args.backend != "ray":
+        raise ValueError("--address needs --backend ray")
+    for name in names:
+        scenario = scenarios[name]
+        env_kwargs = {**scenario.env, "max_time": args.duration}
+        try:
+            SimConfig.from_kwargs(**env_kwargs)
+            control_dt = float(env_kwargs.get("control_dt", 0.05))
+            for spec in policies:
+                if PolicySpec.parse(spec).kind == "classical":
+                    build_policy(spec, control_dt, scenario.controller)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"scenario {name!r}: {error}") from None
+    writable_folder(args.out)  # last: a bad argument above creates no folder
+    args.policy_list = policies
+    args.scenario_table = {n: scenarios[n] for n in names}
+    args.jobs = [
+        Job(policy, scenarios[name], seed, args.duration, args.transient)
+        for name in names
+        for policy in policies
+        for seed in range(args.seeds)
+    ]
 
 
 def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
     args = parse_args(argv)
-    scenarios = load_scenarios(args.scenario_file)
-    scenario_names = select(args.scenarios, list(scenarios), "scenario")
-    policies = [p.strip() for p in args.policies.split(",") if p.strip()]
-    for spec in policies:
-        check_policy_spec(spec)  # every error before the first episode
-    if args.seeds < 1 or not (math.isfinite(args.duration) and args.duration > 0):
-        raise ValueError("--seeds must be >= 1 and --duration a positive number of seconds")
-    transient = args.transient if args.transient is not None else min(100.0, args.duration / 2)
-    jobs = [
-        Job(policy, scenarios[name], seed, args.duration, transient)
-        for name in scenario_names
-        for policy in policies
-        for seed in range(args.seeds)
-    ]
+    scenarios = args.scenario_table
     config = {
-        "policies": policies,
-        "scenarios": {n: asdict(scenarios[n]) for n in scenario_names},
+        "policies": args.policy_list,
+        "scenarios": {n: asdict(s) for n, s in scenarios.items()},
         "seeds": args.seeds,
         "duration": args.duration,
-        "transient": transient,
+        "transient": args.transient,
         "command": " ".join(
             [
                 Path(sys.executable).name,
@@ -93,19 +150,16 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         ),
     }
     records = run_jobs(
-        jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
+        args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
     )
     summary = write_tables(records, args.out, config)
     if not args.no_figures:
         from benchmarks.figures import comparison_figures
 
-        comparison_figures(records, args.out, scenarios={n: scenarios[n] for n in scenario_names})
+        comparison_figures(records, args.out, scenarios=scenarios)
     print(summary)
     return records
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except (ValueError, FileNotFoundError) as error:
-        raise SystemExit(f"error: {error}") from None
+    main()

@@ -8,9 +8,14 @@ number of workers or the backend: every episode is a pure function of the job.
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import hashlib
 import json
+import os
+import signal
+import sys
+import threading
 import time
 from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -28,7 +33,9 @@ from auv_gym.rollout import rollout
 from benchmarks.policies import PolicySpec, build_policy, policy_label
 from benchmarks.scenarios import Scenario
 
-__all__ = ["Job", "code_digest", "finished", "run_job", "run_jobs"]
+__all__ = ["Job", "code_digest", "die_with_parent", "finished", "run_job", "run_jobs"]
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 @dataclass(frozen=True)
@@ -164,13 +171,38 @@ def _execute(
             yield index, run_job(job, out)
     else:
         # spawn: numba's threading layer is not fork-safe once its threads have started.
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+        with ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=get_context("spawn"),
+            initializer=die_with_parent,
+            initargs=(os.getpid(),),
+        ) as pool:
             futures = {
                 pool.submit(run_job, job, out): index
                 for index, job in zip(indices, jobs, strict=True)
             }
             for future in as_completed(futures):
                 yield futures[future], future.result()
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Worker initializer: end this process when the parent ends, even by SIGKILL (which runs
+    no clean-up in the parent). Linux: the kernel sends SIGKILL on the parent's death
+    (prctl PR_SET_PDEATHSIG); elsewhere a daemon thread polls the parent's pid every 0.5 s."""
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0:
+            raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG) failed")
+    else:
+
+        def watch() -> None:
+            while os.getppid() == parent_pid:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+    if os.getppid() != parent_pid:  # the parent died before the signal was armed
+        os._exit(1)
 
 
 def _execute_ray(

@@ -22,7 +22,6 @@ metrics windows then start at min(100 s, duration/2).
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import time
@@ -33,9 +32,20 @@ from typing import Any
 
 from auv_gym.files import environment, jsonable, write_json, write_text
 from auv_gym.rollout import policy_name
+from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
+from benchmarks.arguments import (
+    ArgumentParser,
+    comma_names,
+    exit_with_usage_error,
+    finite_number,
+    usage_errors,
+    writable_folder,
+)
 from benchmarks.policies import build_policy, check_policy_spec, policy_label
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
+PROG = "python -m benchmarks.paper_figures"
+DPI_RANGE = (20, 1200)  # figure resolution [dots per inch]
 LABELS = {"fbsm": "FBSM", "backstepping": "backstepping"}
 
 
@@ -54,8 +64,11 @@ class Args:
 
 
 def parse_args(argv: Sequence[str] | None = None) -> Args:
+    """The arguments, every one checked before any episode runs (a bad one exits with code 2
+    and a one-line message)."""
     defaults = Args()
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
+        prog=PROG,
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -79,36 +92,48 @@ def parse_args(argv: Sequence[str] | None = None) -> Args:
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s] (default min(100, duration/2))",
+        help="metrics window start [s] in [0, duration) (default min(100, duration/2))",
     )
-    parser.add_argument("--dpi", type=int, default=defaults.dpi)
+    parser.add_argument("--dpi", type=int, default=defaults.dpi, help=f"in {list(DPI_RANGE)}")
     ns = parser.parse_args(argv)
-    policies = tuple(p.strip() for p in ns.policies.split(",") if p.strip())
-    args = Args(
-        out=ns.out,
-        duration=ns.duration,
-        seed=ns.seed,
-        policies=policies,
-        control_dt=ns.control_dt,
-        transient=ns.transient,
-        dpi=ns.dpi,
-    )
-    validate(args)
+    with usage_errors(parser):
+        args = Args(
+            out=ns.out,
+            duration=ns.duration,
+            seed=ns.seed,
+            policies=tuple(comma_names(ns.policies, "--policies")),
+            control_dt=ns.control_dt,
+            transient=ns.transient,
+            dpi=ns.dpi,
+        )
+        validate(args)
+        writable_folder(args.out)  # last: a bad argument above creates no folder
     return args
 
 
 def validate(args: Args) -> None:
-    """ValueError naming the bad argument."""
-    if not (math.isfinite(args.duration) and args.duration > 0):
-        raise ValueError(f"--duration must be a positive number of seconds, got {args.duration}")
+    """ValueError naming the bad argument: ranges, policy specs and labels, env settings."""
+    finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
     if args.seed < 0:
         raise ValueError(f"--seed must be non-negative, got {args.seed}")
     if not args.policies:
         raise ValueError("--policies must name at least one controller")
-    if args.transient is not None and not (math.isfinite(args.transient) and args.transient >= 0):
-        raise ValueError(f"--transient must be a non-negative time in s, got {args.transient}")
-    if args.dpi < 20:
-        raise ValueError(f"--dpi must be at least 20, got {args.dpi}")
+    if args.transient is not None:
+        finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
+    if not DPI_RANGE[0] <= args.dpi <= DPI_RANGE[1]:
+        raise ValueError(f"--dpi must be an integer in {list(DPI_RANGE)}, got {args.dpi}")
+    finite_number("--control-dt", args.control_dt, 0.0, low_open=True, unit="s")
+    try:
+        SimConfig.from_kwargs(control_dt=args.control_dt, max_time=args.duration, **args.env)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"--control-dt/--duration: {error}") from None
+    labels: dict[str, str] = {}
+    for spec in args.policies:
+        check_policy_spec(spec)
+        label = policy_label(LABELS.get(spec, spec))
+        if label in labels:  # both would write trajectories/<label>.npz
+            raise ValueError(f"--policies {labels[label]!r} and {spec!r} share the label {label!r}")
+        labels[label] = spec
 
 
 def build_policies(names: Sequence[str], control_dt: float) -> dict[str, Any]:
@@ -123,8 +148,8 @@ def build_policies(names: Sequence[str], control_dt: float) -> dict[str, Any]:
         kind = check_policy_spec(spec).kind
         policy = build_policy(spec, control_dt)
         label = policy_name(policy) if kind == "import" else LABELS.get(spec, spec)
-        if label in policies:
-            raise ValueError(f"two policies share the label {label!r}")
+        if policy_label(label) in {policy_label(other) for other in policies}:
+            raise ValueError(f"--policies: two policies share the label {label!r}")
         policies[label] = policy
     return policies
 
@@ -188,7 +213,10 @@ def make_figures(
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     args = parse_args(argv)
     start = time.perf_counter()
-    policies = build_policies(args.policies, args.control_dt)
+    try:  # agents are loaded here, before any episode: a corrupt one is a usage error
+        policies = build_policies(args.policies, args.control_dt)
+    except (ValueError, TypeError, OSError) as error:
+        exit_with_usage_error(PROG, error)
     result = make_figures(
         policies,
         args.out,
@@ -211,7 +239,4 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    try:
-        main(sys.argv[1:])
-    except ValueError as error:
-        raise SystemExit(f"error: {error}") from None
+    main(sys.argv[1:])

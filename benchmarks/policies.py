@@ -50,12 +50,20 @@ class PolicySpec:
 def check_policy_spec(spec: str) -> PolicySpec:
     """The parsed spec, after checking that its agent exists or its object imports.
 
-    Raises ValueError (unknown name, import failure) or FileNotFoundError (missing agent) with a
-    message naming the spec: call it on every spec before any episode runs.
+    Raises ValueError (unknown name, import failure, an agent's damaged or inconsistent files,
+    `controllers.ppo.check_agent`) or FileNotFoundError (missing agent) with a message naming
+    the spec: call it on every spec before any episode runs.
     """
     parsed = PolicySpec.parse(spec)
-    if parsed.agent is not None and not parsed.agent.exists():
-        raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
+    if parsed.agent is not None:
+        if not parsed.agent.exists():
+            raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
+        from controllers.ppo import check_agent
+
+        try:
+            check_agent(parsed.agent)
+        except (OSError, ValueError) as error:
+            raise type(error)(f"policy {spec!r}: {error}") from None
     if parsed.kind == "import":
         controllers.import_policy(spec, instantiate=False)
     return parsed

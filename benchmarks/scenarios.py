@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmarks.arguments import comma_names
+
 __all__ = ["SCENARIOS_FILE", "Scenario", "load_scenarios", "select"]
 
 SCENARIOS_FILE = Path(__file__).resolve().parent / "scenarios.toml"
@@ -26,12 +28,22 @@ class Scenario:
 def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
     """Scenarios from a TOML file: one table per scenario with description, env, controller."""
     with open(path, "rb") as fh:
-        raw = tomllib.load(fh)
+        try:
+            raw = tomllib.load(fh)
+        except tomllib.TOMLDecodeError as error:
+            raise ValueError(f"{path}: not a valid TOML file: {error}") from None
     scenarios = {}
+    if not raw:
+        raise ValueError(f"{path}: no scenarios")
     for name, table in raw.items():
+        if not isinstance(table, dict):
+            raise ValueError(f"{path}: scenario {name!r} must be a table, got {table!r}")
         unknown = set(table) - {"description", "env", "controller"}
         if unknown:
             raise ValueError(f"{path}: scenario {name!r} has unknown keys {sorted(unknown)}")
+        for key in ("env", "controller"):
+            if not isinstance(table.get(key, {}), dict):
+                raise ValueError(f"{path}: scenario {name!r}: {key} must be a table")
         scenarios[name] = Scenario(
             name,
             table.get("description", ""),
@@ -42,8 +54,9 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
 
 
 def select(names: str, available: Sequence[str], what: str) -> list[str]:
-    """Comma-separated names ("all" for every one), validated against the available ones."""
-    chosen = list(available) if names == "all" else [n.strip() for n in names.split(",") if n]
+    """Comma-separated names ("all" for every one), validated against the available ones:
+    ValueError for an unknown, empty or repeated name."""
+    chosen = list(available) if names.strip() == "all" else comma_names(names, f"--{what}s")
     unknown = [n for n in chosen if n not in available]
     if unknown:
         raise ValueError(f"unknown {what} {unknown}; valid: {list(available)}")

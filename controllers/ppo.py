@@ -21,20 +21,27 @@ import contextlib
 import json
 import os
 import zipfile
+import zlib
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from auv_gym import __version__
 from auv_gym.observation import OBS_DIM, OBS_NAMES
+
+ACTION_DIM = 3  # normalised (X, M, N) commands in [-1, 1]
 
 __all__ = [
     "METADATA_FILE",
     "MODEL_FILE",
     "STATS_FILE",
     "VECNORM_FILE",
+    "AgentFiles",
     "PPOPolicy",
+    "check_agent",
     "load_policy",
 ]
 
@@ -42,6 +49,7 @@ MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent needs
 VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
 METADATA_FILE = "metadata.json"
+STATS_SHAPES = {"mean": (OBS_DIM,), "var": (OBS_DIM,), "clip_obs": (), "epsilon": ()}
 
 
 class PPOPolicy:
@@ -156,22 +164,151 @@ def _locate(path: Path) -> tuple[Path, Path | None, Path | None]:
     return model, stats, (meta if meta.is_file() else None)
 
 
-def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float, tuple[str, ...] | None]:
-    """(mean, var, clip_obs, epsilon, obs_names or None) from a .npz or a pickled VecNormalize."""
+@dataclass(frozen=True)
+class AgentFiles:
+    """An agent's files, checked (`check_agent`): where they are and what they hold."""
+
+    model: Path
+    stats: Path
+    metadata_file: Path | None
+    obs_mean: np.ndarray  # (15,) finite
+    obs_var: np.ndarray  # (15,) finite, >= 0
+    clip_obs: float  # finite, > 0
+    epsilon: float  # finite, > 0
+    metadata: dict[str, Any]
+
+
+def check_agent(path: str | os.PathLike) -> AgentFiles:
+    """Validate a saved agent completely, without torch (except for a pickled VecNormalize,
+    whose classes need stable-baselines3): every problem raises an error naming the file.
+
+    FileNotFoundError: the agent, its model.zip or its statistics are missing. ValueError:
+    model.zip is not a zip, fails its CRC check, lacks SB3's ``data``/``policy.pth`` or was saved
+    for another observation/action shape; the statistics are unreadable, lack a key, have the
+    wrong shape, or are not finite with var >= 0, clip_obs > 0, epsilon > 0; metadata.json is not
+    a JSON object or names another algorithm, observation layout or shape, action shape, or
+    auv-gym major version.
+    """
+    model, stats, meta = _locate(Path(path))
+    if stats is None:
+        raise FileNotFoundError(
+            f"PPO agent {model}: normalisation statistics missing (expected "
+            f"{model.parent / STATS_FILE} or {model.parent / VECNORM_FILE})"
+        )
+    metadata = _read_metadata(meta) if meta is not None else {}
+    _check_model_zip(model)
+    mean, var, clip_obs, epsilon = _read_stats(stats)
+    return AgentFiles(model, stats, meta, mean, var, clip_obs, epsilon, metadata)
+
+
+def _read_metadata(meta: Path) -> dict[str, Any]:
+    try:
+        metadata = json.loads(meta.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"agent metadata {meta} is unreadable: {exc}") from exc
+    if not isinstance(metadata, dict):
+        kind = type(metadata).__name__
+        raise ValueError(f"agent metadata {meta} must be a JSON object, got a {kind}")
+    names = metadata.get("obs_names")
+    if names is not None and (not isinstance(names, list) or tuple(names) != OBS_NAMES):
+        raise ValueError(
+            f"{meta}: agent trained for observation layout {names!r}, this auv_gym has "
+            f"{list(OBS_NAMES)}"
+        )
+    expected = {"algo": "ppo", "observation_shape": [OBS_DIM], "action_shape": [ACTION_DIM]}
+    for key, value in expected.items():
+        if key in metadata and metadata[key] != value:
+            raise ValueError(f"{meta}: {key} is {metadata[key]!r}, expected {value!r}")
+    version = metadata.get("auv_gym_version")
+    if version is not None:
+        major = str(version).split(".")[0]
+        if not (isinstance(version, str) and major.isdigit()):
+            raise ValueError(f"{meta}: auv_gym_version {version!r} is not a version number")
+        if major != __version__.split(".")[0]:
+            raise ValueError(
+                f"{meta}: agent trained with auv-gym {version}, this is auv-gym {__version__} "
+                "(another major version: its observations may differ)"
+            )
+    return metadata
+
+
+def _check_model_zip(model: Path) -> None:
+    """SB3's zip: intact (CRC), with its parameters and a (15,) → (3,) Box policy."""
+    if not zipfile.is_zipfile(model):
+        raise ValueError(f"PPO model {model} is not a valid zip file (corrupt or truncated)")
+    try:
+        with zipfile.ZipFile(model) as archive:
+            members = archive.namelist()
+            for name in members:  # reading a member checks its CRC-32
+                try:
+                    archive.read(name)
+                except (zipfile.BadZipFile, zlib.error, EOFError) as exc:
+                    problem = f"member {name!r}: {exc}"
+                    raise ValueError(f"PPO model {model} is damaged: {problem}") from exc
+            missing = sorted({"data", "policy.pth"} - set(members))
+            if missing:
+                raise ValueError(
+                    f"PPO model {model} is damaged (truncated, or not an SB3 model): no {missing}"
+                )
+            data = json.loads(archive.read("data"))
+    except (zipfile.BadZipFile, OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"PPO model {model} cannot be read (corrupt or truncated): {exc}") from exc
+    for key, expected in (("observation_space", (OBS_DIM,)), ("action_space", (ACTION_DIM,))):
+        space = data.get(key) if isinstance(data, dict) else None
+        shape = space.get("_shape") if isinstance(space, dict) else None
+        if shape is not None and tuple(shape) != expected:
+            what = key.replace("_", " ")
+            raise ValueError(
+                f"PPO model {model}: {what} shape {tuple(shape)}, expected {expected}"
+                + (f" (layout {list(OBS_NAMES)})" if key == "observation_space" else "")
+            )
+
+
+def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """(mean, var, clip_obs, epsilon) from a .npz or a pickled VecNormalize, checked: shapes
+    (15,), (15,), (), (); all finite; var >= 0; clip_obs > 0; epsilon > 0."""
     try:
         if stats.suffix == ".npz":
             with np.load(stats, allow_pickle=False) as data:
-                names = tuple(str(n) for n in data["obs_names"]) if "obs_names" in data else None
-                return (data["mean"], data["var"], float(data["clip_obs"]),
-                        float(data["epsilon"]), names)  # fmt: skip
-        import pickle
+                values = {key: data[key] for key in data.files}
+        else:
+            import pickle
 
-        with stats.open("rb") as f:
-            vec_normalize = pickle.load(f)
-        rms = vec_normalize.obs_rms
-        return rms.mean, rms.var, float(vec_normalize.clip_obs), float(vec_normalize.epsilon), None
+            with stats.open("rb") as f:
+                vec_normalize = pickle.load(f)
+            rms = vec_normalize.obs_rms
+            values = {"mean": rms.mean, "var": rms.var, "clip_obs": vec_normalize.clip_obs,
+                      "epsilon": vec_normalize.epsilon}  # fmt: skip
     except Exception as exc:
         raise ValueError(f"normalisation statistics {stats} are unreadable: {exc}") from exc
+    missing = [key for key in STATS_SHAPES if key not in values]
+    if missing:
+        raise ValueError(f"{stats}: missing statistics {missing}")
+    if "obs_names" in values:
+        names = tuple(str(n) for n in np.atleast_1d(values["obs_names"]))
+        if names != OBS_NAMES:
+            raise ValueError(
+                f"{stats}: statistics for observation layout {list(names)}, this auv_gym has "
+                f"{list(OBS_NAMES)}"
+            )
+    arrays = {key: np.asarray(values[key]) for key in STATS_SHAPES}
+    for key, shape in STATS_SHAPES.items():
+        a = arrays[key]
+        if a.dtype.kind not in "iuf":
+            raise ValueError(f"{stats}: {key} must hold real numbers, got dtype {a.dtype}")
+        if a.shape != shape:
+            raise ValueError(f"{stats}: statistics of shape {a.shape} for {key}, expected {shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{stats}: {key} is not finite: {a.tolist()}")
+    mean, var = arrays["mean"].astype(np.float64), arrays["var"].astype(np.float64)
+    clip_obs, epsilon = float(arrays["clip_obs"]), float(arrays["epsilon"])
+    if np.any(var < 0):
+        raise ValueError(f"{stats}: var must be >= 0, got {var.tolist()}")
+    if clip_obs <= 0:
+        raise ValueError(f"{stats}: clip_obs must be > 0, got {clip_obs}")
+    if epsilon <= 0:
+        raise ValueError(f"{stats}: epsilon must be > 0, got {epsilon}")
+    return mean, var, clip_obs, epsilon
 
 
 def load_policy(
@@ -179,56 +316,28 @@ def load_policy(
 ) -> PPOPolicy:
     """Load a PPO agent (directory with model.zip + vecnormalize.npz + metadata.json, or a zip).
 
-    Raises FileNotFoundError when the model or its normalisation statistics are missing, and
-    ValueError naming the file when the zip is corrupt or the agent was trained for another
-    observation layout (its `obs_names` differ from `auv_gym.OBS_NAMES`, or its observation
-    space is not (15,)). `num_threads`: torch's intra-op threads while the policy predicts (1 is
-    fastest for these small networks on this machine, docs/design.md §4; None: torch's setting);
-    loading itself leaves torch's settings alone.
+    The files are validated first, before torch is imported (`check_agent`: FileNotFoundError
+    when the model or its statistics are missing, ValueError naming the file and the problem
+    otherwise). `num_threads`: torch's intra-op threads while the policy predicts (1 is fastest
+    for these small networks on this machine, docs/design.md §4; None: torch's setting); loading
+    itself leaves torch's settings alone.
     """
+    files = check_agent(path)
     from stable_baselines3 import PPO
 
-    model_path, stats_path, meta_path = _locate(Path(path))
-    if stats_path is None:
-        raise FileNotFoundError(
-            f"PPO agent {model_path}: normalisation statistics missing (expected "
-            f"{model_path.parent / STATS_FILE} or {model_path.parent / VECNORM_FILE})"
-        )
-    metadata: dict[str, Any] = {}
-    if meta_path is not None:
-        try:
-            metadata = json.loads(meta_path.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ValueError(f"agent metadata {meta_path} is unreadable: {exc}") from exc
-    names = metadata.get("obs_names")
-    if names is not None and tuple(names) != OBS_NAMES:
-        raise ValueError(
-            f"{meta_path}: agent trained for observation layout {list(names)}, this auv_gym has "
-            f"{list(OBS_NAMES)}"
-        )
-    if not zipfile.is_zipfile(model_path):
-        raise ValueError(f"PPO model {model_path} is not a valid zip file (corrupt or truncated)")
     # Schedules are not needed for inference; replacing them avoids unpickling closures.
     custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
     try:
-        model = PPO.load(model_path, device=device, custom_objects=custom)
+        model = PPO.load(files.model, device=device, custom_objects=custom)
     except Exception as exc:
-        raise ValueError(f"PPO model {model_path} cannot be loaded: {exc}") from exc
+        raise ValueError(f"PPO model {files.model} cannot be loaded: {exc}") from exc
     shape = tuple(model.observation_space.shape or ())
     if shape != (OBS_DIM,):
         raise ValueError(
-            f"PPO model {model_path}: observation space shape {shape}, expected ({OBS_DIM},) "
+            f"PPO model {files.model}: observation space shape {shape}, expected ({OBS_DIM},) "
             f"(layout {list(OBS_NAMES)})"
         )
-    mean, var, clip_obs, epsilon, stat_names = _read_stats(stats_path)
-    if stat_names is not None and stat_names != OBS_NAMES:
-        raise ValueError(f"{stats_path}: statistics for observation layout {list(stat_names)}")
-    if np.shape(mean) != (OBS_DIM,) or np.shape(var) != (OBS_DIM,):
-        raise ValueError(
-            f"{stats_path}: statistics of shape {np.shape(mean)}, expected ({OBS_DIM},)"
-        )
-    if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(var)) and np.all(var >= 0)):
-        raise ValueError(f"{stats_path}: non-finite or negative normalisation statistics")
     return PPOPolicy(
-        model.policy, mean, var, clip_obs, epsilon, metadata, str(model_path), num_threads
-    )
+        model.policy, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon,
+        files.metadata, str(files.model), num_threads,
+    )  # fmt: skip

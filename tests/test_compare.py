@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from benchmarks.compare import main
@@ -194,3 +196,196 @@ def test_ray_backend_matches_local_processes(tmp_path, monkeypatch):
     finally:
         ray.shutdown()
     assert [r["metrics"] for r in local] == [r["metrics"] for r in remote]
+
+
+# ----------------------------------------------------- usage errors (issue 11, item 4)
+def usage_error(capsys, main_function, argv: list[str]) -> str:
+    """The one stderr line of a CLI refusing ``argv`` with exit code 2."""
+    with pytest.raises(SystemExit) as caught:
+        main_function(argv)
+    assert caught.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [(["--policies", ""], "--policies must name at least one, got ''"),
+     (["--policies", " , "], "--policies has an empty name"),
+     (["--policies", "fbsm,,backstepping"], "--policies has an empty name"),
+     (["--policies", f"{USER},fbsm,{USER}"], f"--policies names ['{USER}'] more than once"),
+     (["--scenarios", "hurricane"], "unknown scenario ['hurricane']"),
+     (["--scenarios", ""], "--scenarios must name at least one"),
+     (["--scenarios", "paper,paper"], "--scenarios names ['paper'] more than once"),
+     (["--seeds", "0"], "--seeds must be an integer in [1, 100000], got 0"),
+     (["--seeds", "x"], "argument --seeds: invalid int value: 'x'"),
+     (["--duration", "nan"], "--duration must be a finite number in (0, 1e+06] s, got nan"),
+     (["--duration", "-5"], "--duration must be"),
+     (["--transient", "30"], "--transient must be a finite number in [0, 20) s, got 30.0"),
+     (["--workers", "0"], "--workers must be an integer in [1, 1024], got 0"),
+     (["--address", "auto"], "--address needs --backend ray"),
+     (["--scenario-file", "/nonexistent.toml"], "--scenario-file '/nonexistent.toml': No such"),
+     (["--policies", "lqr"], "unknown policy 'lqr'")],
+)  # fmt: skip
+def test_bad_arguments_exit_2_with_one_line_before_any_work(argv, message, tmp_path, capsys):
+    """Was: `--policies ""` exited 0 with an empty summary, duplicated names wrote duplicated
+    rows, and errors were tracebacks or exit code 1."""
+    out = tmp_path / "out"
+    base = ["--policies", USER, "--scenarios", "nominal", "--seeds", "1", "--duration", "20"]
+    err = usage_error(capsys, main, [*base, "--out", str(out), *argv])
+    assert err.startswith("python -m benchmarks.compare: error: ") and message in err, err
+    assert not out.exists()  # refused before the output folder was even created
+
+
+@pytest.mark.parametrize("where", ["under_a_file", "a_file", "proc"])
+def test_unwritable_out_is_refused_before_the_first_episode(where, tmp_path, capsys, monkeypatch):
+    """Was: a 60-line traceback after running the first episode."""
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("not a folder")
+    out = {"under_a_file": blocker / "out", "a_file": blocker, "proc": Path("/proc/auv_out")}
+    monkeypatch.syspath_prepend(str(ROOT / "tests"))
+    import benchmarks.compare
+
+    def no_episodes(*args, **kwargs):
+        raise AssertionError("an episode ran")
+
+    monkeypatch.setattr(benchmarks.compare, "run_jobs", no_episodes)
+    err = usage_error(capsys, main, ["--policies", USER, "--scenarios", "nominal", "--seeds", "1",
+                                     "--duration", "20", "--out", str(out[where])])  # fmt: skip
+    assert f"--out '{out[where]}' is not a writable folder" in err
+
+
+def test_unwritable_out_in_a_subprocess_is_one_line_without_traceback(tmp_path):
+    (tmp_path / "file.txt").write_text("")
+    bad = run_cli("--policies", USER, *TINY, "--out", str(tmp_path / "file.txt" / "out"),
+                  check=False)  # fmt: skip
+    assert bad.returncode == 2 and bad.stdout == ""
+    assert bad.stderr.splitlines() == [
+        f"python -m benchmarks.compare: error: --out '{tmp_path / 'file.txt' / 'out'}' is not "
+        "a writable folder: Not a directory"
+    ]
+
+
+def test_two_policies_writing_the_same_files_are_refused(tmp_path, capsys):
+    """`ppo:a/b` and `ppo:a_b` both store episodes under ppo-a_b/: one would overwrite the other."""
+    for name in ("a/b", "a_b"):
+        shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_helix", tmp_path / name)
+    specs = f"ppo:{tmp_path / 'a/b'},ppo:{tmp_path / 'a_b'}"
+    err = usage_error(capsys, main, ["--policies", specs, "--out", str(tmp_path / "out")])
+    assert "share the label" in err
+
+
+def test_a_damaged_agent_is_refused_before_the_first_episode(tmp_path, capsys):
+    agent = shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_helix", tmp_path / "agent")
+    stats = dict(np.load(agent / "vecnormalize.npz"))
+    np.savez(agent / "vecnormalize.npz", **{**stats, "clip_obs": np.float64("nan")})
+    err = usage_error(capsys, main, ["--policies", f"ppo:{agent}", "--out", str(tmp_path / "o")])
+    assert f"policy 'ppo:{agent}'" in err and "clip_obs is not finite" in err
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [(["--policies", ""], "--policies must name at least one"),
+     (["--policies", "fbsm,fbsm"], "--policies names ['fbsm'] more than once"),
+     (["--policies", "fbsm,,backstepping"], "--policies has an empty name"),
+     (["--control-dt", "0.015"], "control_dt = 0.015 s must be a whole multiple"),
+     (["--duration", "0"], "--duration must be a finite number in (0, 1e+06] s, got 0.0"),
+     (["--transient", "60"], "--transient must be a finite number in [0, 60) s"),
+     (["--dpi", "5"], "--dpi must be an integer in [20, 1200], got 5"),
+     (["--seed", "-1"], "--seed must be non-negative, got -1"),
+     (["--policies", "ppo:/nonexistent"], "agent /nonexistent does not exist")],
+)  # fmt: skip
+def test_paper_figures_refuses_bad_arguments_in_one_line(argv, message, tmp_path, capsys):
+    from benchmarks.paper_figures import main as paper_main
+
+    out = tmp_path / "out"
+    err = usage_error(capsys, paper_main, ["--duration", "60", "--out", str(out), *argv])
+    assert err.startswith("python -m benchmarks.paper_figures: error: ") and message in err, err
+    assert not out.exists()
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("")
+    err = usage_error(capsys, paper_main, ["--out", str(blocker / "out")])
+    assert f"--out '{blocker / 'out'}' is not a writable folder" in err
+
+
+# ------------------------------------------------ workers die with the parent (item 4)
+def process_table() -> dict[int, tuple[int, str]]:
+    """pid → (parent pid, state) of the live processes (Linux /proc)."""
+    table = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:
+            continue
+        state, ppid = text[text.rindex(")") + 2 :].split()[:2]
+        table[int(stat.parent.name)] = (int(ppid), state)
+    return table
+
+
+def descendants(pid: int) -> set[int]:
+    table = process_table()
+    found, frontier = set(), {pid}
+    while frontier:
+        frontier = {p for p, (ppid, _) in table.items() if ppid in frontier} - found
+        found |= frontier
+    return found
+
+
+def cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
+def alive(pid: int) -> bool:
+    state = process_table().get(pid, (0, "Z"))[1]
+    return state not in ("Z", "X")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_killed_compare_leaves_no_worker_running(tmp_path):
+    """Was: after SIGKILL of `compare --workers 2` the workers ran on (their episodes and the
+    queued ones). Now they get SIGKILL with their parent (prctl PR_SET_PDEATHSIG)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "benchmarks.compare", "--policies", USER, "--scenarios", "paper",
+         "--seeds", "8", "--duration", "6000", "--workers", "2", "--quiet", "--no-figures",
+         "--out", str(tmp_path)],
+        cwd=ROOT, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    try:
+        deadline = time.time() + 120
+        workers: set[int] = set()
+        while time.time() < deadline and len(workers) < 2:
+            time.sleep(0.2)
+            workers = {p for p in descendants(proc.pid) if b"spawn_main" in cmdline(p)}
+        assert len(workers) == 2, "the workers never started"
+        time.sleep(3.0)  # into their first episodes
+        children = descendants(proc.pid)
+        assert all(alive(p) for p in workers)
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    deadline = time.time() + 5
+    while time.time() < deadline and any(alive(p) for p in children):
+        time.sleep(0.1)
+    assert not [p for p in children if alive(p)]
+
+
+def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys):
+    scenarios = tmp_path / "scenarios.toml"
+    scenarios.write_text('[ok]\ndescription = "fine"\n\n[bad]\ndescription = "no"\n'
+                         "env = { control_dt = 0.015 }\n")  # fmt: skip
+    out = tmp_path / "out"
+    err = usage_error(capsys, main, ["--policies", "fbsm", "--scenario-file", str(scenarios),
+                                     "--out", str(out)])  # fmt: skip
+    assert "scenario 'bad': control_dt = 0.015 s must be a whole multiple" in err
+    assert not out.exists()
+    scenarios.write_text("[bad]\nenv = 3\n")
+    err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
+    assert "scenario 'bad': env must be a table" in err
+    scenarios.write_text("not toml [")
+    err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
+    assert "not a valid TOML file" in err

@@ -150,6 +150,27 @@ def env_kwargs(draw):
 actions_for = arrays(np.float64, (60, 3), elements=st.floats(-3.0, 3.0, allow_nan=False))
 
 
+OUT_OF_SPACE = "obs returned by the `step()` method is not within the observation space"
+
+
+def checked_step(env, action):
+    """``env.step(action)``, letting through gymnasium's passive-checker warning that the
+    observation left the space only on a step that ended the episode with a failure reason
+    (the documented terminal observation, e.g. x_e beyond ±500 m when the corridor is left);
+    any other warning is re-emitted."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = env.step(action)
+    reason = result[4].get("termination_reason", "")
+    for warning in caught:
+        if OUT_OF_SPACE in str(warning.message):
+            assert result[2] and reason in FAILURES, (reason, result[0])
+        else:
+            warnings.warn_explicit(warning.message, warning.category, warning.filename,
+                                   warning.lineno)  # fmt: skip
+    return result
+
+
 def run_episode(env, seed, actions):
     """(observations, rewards, terminated, truncated, reasons) of one episode, checking every
     step's invariants on the way."""
@@ -158,7 +179,7 @@ def run_episode(env, seed, actions):
     assert obs.dtype == np.float32 and space.contains(obs), obs
     out = [[obs], [], [], [], []]
     for k, action in enumerate(actions, start=1):
-        obs, reward, terminated, truncated, info = env.step(action)
+        obs, reward, terminated, truncated, info = checked_step(env, action)
         reason = info.get("termination_reason", "")
         assert obs.dtype == np.float32 and np.all(np.isfinite(obs)), (k, obs)
         assert math.isfinite(reward), (k, reward)
@@ -176,9 +197,7 @@ def run_episode(env, seed, actions):
 @given(env_kwargs(), actions_for, st.integers(0, 2**31 - 1))
 def test_episodes_keep_their_invariants(drawn, actions, seed):
     kwargs, n_steps = drawn
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the passive checker's notes on terminal observations
-        env = gym.make("AUVPath3D-v0", **kwargs)
+    env = gym.make("AUVPath3D-v0", **kwargs)
     config = env.unwrapped.config
     assert config.max_steps == n_steps == math.ceil(config.max_time / config.control_dt - 1e-9)
     assert env.spec.max_episode_steps == n_steps
@@ -190,9 +209,7 @@ def test_episodes_keep_their_invariants(drawn, actions, seed):
     t = steps * config.control_dt
     assert (t >= config.max_time * (1 - 1e-9)) == truncated[-1]
     # Same seed ⇒ bit-identical.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        again = run_episode(gym.make("AUVPath3D-v0", **kwargs), seed, actions[:n_steps])
+    again = run_episode(gym.make("AUVPath3D-v0", **kwargs), seed, actions[:n_steps])
     np.testing.assert_array_equal(np.asarray(obs), np.asarray(again[0]))
     assert rewards == again[1] and reasons == again[4]
 

@@ -431,3 +431,23 @@ def test_observation_bounds_are_what_the_ranges_assume():
     assert OBS_HIGH[OBS_INDEX["x_e"]] == 500.0 and OBS_HIGH[OBS_INDEX["u_D"]] == 10.0
     assert OBS_HIGH[OBS_INDEX["u_p"]] == 20.0 and OBS_LOW[OBS_INDEX["u_p"]] == 0.0
     assert OBS_HIGH[OBS_INDEX["psi_F_dot"]] == 10.0
+
+
+# ------------------------------------------------- the same checks in evaluation (item 1)
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [({"control_dt": 1e20}, "control_dt"), ({"start_heading": math.nan}, "start_heading"),
+     ({"randomize_start": "False"}, "randomize_start"), ({"u_desired": 10.5}, "u_desired"),
+     ({"actuator": ["paper"]}, "actuator"), ({"reward_weights": 5}, "reward")],
+)  # fmt: skip
+def test_rollouts_and_evaluate_refuse_what_the_env_refuses(kwargs, match):
+    """The evaluation entry points build their `SimConfig` through the same validation layer."""
+    from auv_gym.rollout import evaluate, rollouts
+
+    class Idle:
+        def predict(self, observation, state=None, episode_start=None, deterministic=True):
+            return np.zeros((len(observation), 3), np.float32), state
+
+    for run in (rollouts, evaluate):
+        with pytest.raises(ValueError, match=match):
+            run(Idle(), [0], max_time=0.1, **kwargs)

@@ -1,0 +1,96 @@
+"""Argument checks shared by the benchmark command lines: one-line errors, exit code 2.
+
+Every check runs before any episode: a bad argument costs no compute and leaves no partial
+output. `ArgumentParser` is argparse's, except that an error is one line on stderr,
+``<prog>: error: <message>``, with exit code 2 (argparse's code for bad usage) and no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import NoReturn
+
+__all__ = [
+    "ArgumentParser",
+    "comma_names",
+    "exit_with_usage_error",
+    "finite_number",
+    "usage_errors",
+    "writable_folder",
+]
+
+
+def exit_with_usage_error(prog: str, error: BaseException | str) -> NoReturn:
+    """Exit like `ArgumentParser.error`: ``prog: error: message`` on one line, exit code 2."""
+    line = " ".join(str(error).split())
+    sys.stderr.write(f"{prog}: error: {line}\n")
+    raise SystemExit(2)
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``prog: error: message`` on stderr, exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        exit_with_usage_error(self.prog, message)
+
+
+@contextlib.contextmanager
+def usage_errors(parser: argparse.ArgumentParser) -> Iterator[None]:
+    """Inside the block, ValueError, TypeError and OSError (a missing file, an unwritable
+    folder) become ``parser.error``: one line, exit code 2."""
+    try:
+        yield
+    except (ValueError, TypeError, OSError) as error:
+        parser.error(str(error))
+
+
+def comma_names(text: str, flag: str) -> list[str]:
+    """The names of a comma-separated list; ValueError for an empty list, an empty name or a name
+    given twice (each would run nothing, or the same episodes twice)."""
+    names = [name.strip() for name in text.split(",")]
+    if not text.strip():
+        raise ValueError(f"{flag} must name at least one, got {text!r}")
+    if "" in names:
+        raise ValueError(f"{flag} has an empty name in {text!r}")
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise ValueError(f"{flag} names {repeated} more than once")
+    return names
+
+
+def finite_number(
+    flag: str, value: float, low: float, high: float = math.inf, *, low_open: bool = False,
+    high_open: bool = False, unit: str = "",
+) -> float:  # fmt: skip
+    """``value`` if it is finite and within the bounds; else ValueError naming the flag."""
+    below = value <= low if low_open else value < low
+    above = value >= high if high_open else value > high
+    if not math.isfinite(value) or below or above:
+        left, right = "(" if low_open else "[", ")" if high_open or high == math.inf else "]"
+        top = "∞" if high == math.inf else f"{high:g}"
+        raise ValueError(
+            f"{flag} must be a finite number in {left}{low:g}, {top}{right}"
+            f"{' ' + unit if unit else ''}, got {value!r}"
+        )
+    return value
+
+
+def writable_folder(path: Path, flag: str = "--out") -> Path:
+    """Create ``path`` (and its parents) if needed and prove it writable with a temporary file;
+    OSError naming the flag and the folder otherwise."""
+    try:
+        if path.exists() and not path.is_dir():
+            raise NotADirectoryError(f"{path} is a file, not a folder")
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path, prefix=".write-test-", suffix=".tmp"):
+            pass
+    except OSError as error:
+        reason = error.strerror or str(error)
+        raise OSError(f"{flag} {str(path)!r} is not a writable folder: {reason}") from None
+    return path

@@ -1,0 +1,93 @@
+"""The long fuzz run (`benchmarks.fuzz`): its configurations are valid, and it sees violations.
+
+The run itself (>= 10^7 vehicle-steps) is a benchmark; here a short one, and the same checks
+against a vector env that misbehaves on purpose.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from auv_gym.simulator import SimConfig
+from auv_gym.vector_env import AUVPath3DVectorEnv
+from benchmarks import fuzz
+
+
+def test_drawn_configurations_are_valid_and_span_the_ranges():
+    drawn = [fuzz.draw_config(np.random.default_rng([0, k]), 1000) for k in range(300)]
+    configs = [SimConfig.from_kwargs(**kw) for kw, _ in drawn]  # every one accepted
+    substeps = [c.substeps for c in configs]
+    assert min(substeps) == 1 and max(substeps) > 1000
+    assert all(c.max_steps == n for c, (_, n) in zip(configs, drawn, strict=True))
+    steps = [n for _, n in drawn]
+    assert all(
+        n * s <= fuzz.EPISODE_PHYSICS or n == 1 for n, s in zip(steps, substeps, strict=True)
+    )
+    kinds = {type(kw["path"]).__name__ if not isinstance(kw["path"], str) else kw["path"]
+             for kw, _ in drawn}  # fmt: skip
+    assert kinds == {"helix", "line", "waypoints", "Helix", "StraightLine", "Spline"}
+    corridors = [kw["corridor"] for kw, _ in drawn]
+    assert min(corridors) < 0.1 and max(corridors) > 100
+
+
+def test_actions_include_the_extremes():
+    actions = np.concatenate([fuzz.draw_actions(np.random.default_rng(k), 512) for k in range(4)])
+    assert np.all(np.isfinite(actions))
+    assert np.abs(actions).max() == np.finfo(np.float64).max
+    assert 0 < np.abs(actions[actions != 0]).min() < 1e-300  # denormals
+    assert np.any(np.all(actions == 0.0, axis=1)) and np.any(np.all(np.abs(actions) == 1, axis=1))
+
+
+def test_a_short_run_finds_no_violation_and_reports_counts():
+    tally = fuzz.run(30_000, seed=5, physics_budget=100_000, max_vehicles=64, progress=False)
+    assert tally.steps >= 30_000 and tally.episodes > 0 and tally.violations == 0
+    assert sum(tally.reasons.values()) == tally.episodes
+    text = fuzz.report(tally, 1.0)
+    assert "wrong truncations:         0" in text
+    assert text.splitlines()[-1].startswith("verdict: PASS")
+
+
+def corrupt_step(kind: str):
+    """A vector-env step that breaks one invariant on vehicle 0."""
+    honest = AUVPath3DVectorEnv.step
+
+    def step(self, actions):
+        obs, reward, terminated, truncated, info = honest(self, actions)
+        if kind == "nan":
+            obs[0, 0] = math.nan
+        elif kind == "reward":
+            reward[0] = math.inf
+        elif kind == "truncation":
+            truncated[0] = not truncated[0]
+        elif kind == "outside":
+            obs[0, 0] = 1e4
+        return obs, reward, terminated, truncated, info
+
+    return step
+
+
+@pytest.mark.parametrize(
+    ("kind", "counter"),
+    [("nan", "nan_observations"), ("reward", "non_finite_rewards"),
+     ("truncation", "wrong_truncations"), ("outside", "out_of_space_observations")],
+)  # fmt: skip
+def test_the_checks_catch_a_misbehaving_env(kind, counter, monkeypatch):
+    monkeypatch.setattr(AUVPath3DVectorEnv, "step", corrupt_step(kind))
+    tally = fuzz.Tally()
+    kw = {"disturbance": "none", "max_time": 0.5}
+    fuzz.fuzz_configuration(kw, 10, 4, 20, 1e9, np.random.default_rng(0), tally, "test")
+    assert tally.counts[counter] >= 10 and tally.examples[0].startswith(counter)
+    assert fuzz.report(tally, 1.0).splitlines()[-1].startswith("verdict: FAIL")
+
+
+def test_an_exception_is_counted_not_raised(monkeypatch):
+    def boom(self, actions):
+        raise RuntimeError("kernel exploded")
+
+    monkeypatch.setattr(AUVPath3DVectorEnv, "step", boom)
+    tally = fuzz.Tally()
+    fuzz.fuzz_configuration({}, 10, 2, 5, 1e9, np.random.default_rng(0), tally, "here")
+    assert tally.counts["exceptions"] == 1 and "kernel exploded" in tally.examples[0]
