@@ -21,6 +21,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from auv_gym.metrics import check_window, window_start
 from benchmarks.jobs import Job, run_jobs
 from benchmarks.policies import check_policy_spec
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
@@ -47,7 +48,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s]; None: min(100, duration/2)",
+        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
     )
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="local worker processes (results do not depend on it)")  # fmt: skip
@@ -70,7 +71,9 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         check_policy_spec(spec)  # every error before the first episode
     if args.seeds < 1 or not (math.isfinite(args.duration) and args.duration > 0):
         raise ValueError("--seeds must be >= 1 and --duration a positive number of seconds")
-    transient = args.transient if args.transient is not None else min(100.0, args.duration / 2)
+    transient = window_start(args.duration, args.transient)
+    for name in scenario_names:  # the window must hold a metric at every scenario's period
+        check_window(args.duration, transient, scenarios[name].env.get("control_dt", 0.05))
     jobs = [
         Job(policy, scenarios[name], seed, args.duration, transient)
         for name in scenario_names

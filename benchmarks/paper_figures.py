@@ -143,7 +143,7 @@ def make_figures(
     Returns {"figures": stem → file, "metrics": label → metrics, "wall_time": label → s}.
     ``env_kwargs`` override the env defaults (the paper's scenario); ``max_time`` = duration.
     """
-    from auv_gym.metrics import compute_metrics
+    from auv_gym.metrics import check_window, compute_metrics
     from auv_gym.paths import make_path
     from auv_gym.plotting import metrics_table, paper_figures
     from auv_gym.rollout import rollout
@@ -152,7 +152,7 @@ def make_figures(
         raise ValueError("make_figures needs at least one policy")
     out = Path(out)
     (out / "trajectories").mkdir(parents=True, exist_ok=True)
-    window = transient if transient is not None else min(100.0, duration / 2.0)
+    window = check_window(duration, transient, env_kwargs.get("control_dt", 0.05))
     trajectories, metrics, wall = {}, {}, {}
     for label, policy in policies.items():
         start = time.perf_counter()
