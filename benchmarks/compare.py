@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.metrics import check_window, window_start
+from benchmarks.cli import HelpFormatter
 from benchmarks.jobs import Job, run_jobs
 from benchmarks.policies import check_policy_spec
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
@@ -32,14 +33,16 @@ from controllers import REGISTRY
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument(
         "--policies",
         default="fbsm,backstepping,ppo",
         help=f"comma-separated: {', '.join(REGISTRY)}, ppo:PATH, module:attribute",
     )
-    parser.add_argument("--scenarios", default="all", help="comma-separated names or 'all'")
+    parser.add_argument("--scenarios", default="all",
+                        help="comma-separated names of --scenario-file or 'all'; the shipped "
+                        f"file has: {', '.join(load_scenarios())}")  # fmt: skip
     parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
                         help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per scenario")

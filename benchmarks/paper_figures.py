@@ -33,6 +33,7 @@ from typing import Any
 
 from auv_gym.files import environment, jsonable, write_json, write_text
 from auv_gym.rollout import policy_name
+from benchmarks.cli import HelpFormatter
 from benchmarks.policies import build_policy, check_policy_spec, policy_label
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
@@ -57,31 +58,31 @@ def parse_args(argv: Sequence[str] | None = None) -> Args:
     defaults = Args()
     parser = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--out", type=Path, default=defaults.out, help="output folder")
-    parser.add_argument(
-        "--duration", type=float, default=defaults.duration, help="episode length [s] (default 300)"
-    )
-    parser.add_argument("--seed", type=int, default=defaults.seed, help="reset seed (default 0)")
+    parser.add_argument("--duration", type=float, default=defaults.duration,
+                        help="episode length [s]")  # fmt: skip
+    parser.add_argument("--seed", type=int, default=defaults.seed,
+                        help="reset seed shared by the policies (same noise)")  # fmt: skip
     parser.add_argument(
         "--policies",
         default=",".join(defaults.policies),
-        help="comma-separated controllers.make names or module:attribute",
+        help="comma-separated specs: controllers.make names, ppo, ppo:PATH, module:attribute",
     )
     parser.add_argument(
         "--control-dt",
         type=float,
         default=defaults.control_dt,
-        help="control period [s] (default 0.05)",
+        help="control period [s]",
     )
     parser.add_argument(
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s] (default min(100, duration/2))",
+        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
     )
-    parser.add_argument("--dpi", type=int, default=defaults.dpi)
+    parser.add_argument("--dpi", type=int, default=defaults.dpi, help="figure resolution [dots/in]")
     ns = parser.parse_args(argv)
     policies = tuple(p.strip() for p in ns.policies.split(",") if p.strip())
     args = Args(
