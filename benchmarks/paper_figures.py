@@ -144,9 +144,10 @@ def make_figures(
     Returns {"figures": stem → file, "metrics": label → metrics, "wall_time": label → s}.
     ``env_kwargs`` override the env defaults (the paper's scenario); ``max_time`` = duration.
     """
+    from auv_gym.episode_figures import paper_figures
     from auv_gym.metrics import check_window, compute_metrics
     from auv_gym.paths import make_path
-    from auv_gym.plotting import metrics_table, paper_figures
+    from auv_gym.plotting import metrics_table
     from auv_gym.rollout import rollout
 
     if not policies:
