@@ -2,13 +2,13 @@
 
 A frame (960 × 320 px by default) shows the path and the vehicle's track in 3-D (height −z up,
 NED, docs/model.md §2.0) and the path-following errors x_e, y_e, z_e over time on a symmetric
-log scale (linear within ±0.1 m), with the time and the distance to the virtual point.
+log scale (linear within ±0.1 m); the vehicle is a dot at the head of its track.
 
 Speed: one figure per renderer, built once. Everything that does not change from frame to frame
 (axes, ticks, labels, the path) is drawn once into a cached background; a frame restores it and
 draws only what moved (matplotlib's blitting). The track and the error lines only grow, so the
-stretch drawn so far is kept in that cached layer and a frame draws just the new stretch, the
-vehicle marker and the text: its cost does not grow with the episode. The background is redrawn
+stretch drawn so far is kept in that cached layer and a frame draws just the new stretch and the
+vehicle marker: its cost does not grow with the episode. The background is redrawn
 only when the view must grow (the track leaves the 3-D limits, or the virtual point nears the
 end of the drawn stretch of path; both grow geometrically, so this happens a handful of times
 per episode). ``fast=False`` draws the whole figure for every frame instead: the reference the
@@ -118,14 +118,6 @@ class EpisodeRenderer:
     # ----------------------------------------------------------------------------------- frames
     def frame(self) -> np.ndarray:
         """The current frame, RGB (height_px, width_px, 3) uint8."""
-        from matplotlib import rc_context
-
-        # No path simplification: it would place the vertices of a line drawn in stretches
-        # differently from the same line drawn whole.
-        with rc_context({"path.simplify": False}):
-            return self._frame()
-
-    def _frame(self) -> np.ndarray:
         if self._positions.size == 0:
             raise RuntimeError("EpisodeRenderer.frame before reset")
         if self._figure is None:
@@ -152,7 +144,6 @@ class EpisodeRenderer:
         self._drawn = self._positions.size
         self._set_current()
         self._ax3d.draw_artist(self._vehicle)
-        self._figure.draw_artist(self._text)
         return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
     def _set_growing(self, start: int) -> None:
@@ -163,11 +154,9 @@ class EpisodeRenderer:
             line.set_data(err[:, 0], err[:, j + 1])
 
     def _set_current(self) -> None:
-        """The vehicle marker and the text of the last recorded step."""
-        pos, err = self._positions.rows[-1], self._errors.rows[-1]
+        """The vehicle marker at the last recorded position."""
+        pos = self._positions.rows[-1]
         self._vehicle.set_data_3d(pos[1:2], pos[2:3], -pos[3:4])
-        distance = float(np.linalg.norm(err[1:]))
-        self._text.set_text(f"t = {err[0]:.1f} s   distance {distance:.3f} m")
 
     def _build(self) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -202,10 +191,12 @@ class EpisodeRenderer:
             ax_err.plot([], [], color=color, lw=1.0, label=name, **style)[0]
             for color, name in zip(_ERROR_COLORS, ("x_e", "y_e", "z_e"), strict=True)
         ]
-        # Legend and text above the plot, where no line passes (the fast path draws lines last).
+        # The legend above the plot, where no line passes (the fast path draws lines last).
+        # No text changes from frame to frame: glyphs cost more than all the lines together;
+        # the time is where the error lines end.
         ax_err.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=7, ncol=3,
                       frameon=False, borderaxespad=0.2)  # fmt: skip
-        self._text = fig.text(0.52, 0.91, "", fontsize=8, animated=animated)
+        ax_err.set_title("body-frame errors, vehicle − virtual point", loc="left", fontsize=8)
         self._growing = [self._track_line, *self._error_lines]
         self._figure, self._ax3d = fig, ax3d
 
