@@ -123,6 +123,17 @@ class EpisodeRenderer:
         if self._figure is None:
             self._build()
         self._update_view()
+        if self.fast and not self._stale and self._positions.size - self._drawn < 100:
+            return self._draw()
+        # matplotlib simplifies lines of 128 points or more; a line drawn in short stretches is
+        # never simplified, so neither is one drawn whole (rare on the fast path: rc_context
+        # costs about as much as a frame).
+        from matplotlib import rc_context
+
+        with rc_context({"path.simplify": False}):
+            return self._draw()
+
+    def _draw(self) -> np.ndarray:
         canvas = self._canvas
         if not self.fast:
             self._set_growing(0)
