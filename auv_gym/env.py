@@ -74,6 +74,18 @@ class AUVPath3DEnv(gym.Env):
     paper's simulation: the helix x = 20 cos(πs/20) + 10, y = 20 sin(πs/20), z = −8 − s, start at
     (15, 5, 0) m at rest with ψ = θ = 0, and bounded white-noise disturbances of ±35 N / N·m.
 
+    ## Frames and signs (docs/model.md §2.0)
+    Earth frame North-East-Down (NED): x north, y east, **z down** [m], so a larger z is deeper
+    and depth below the origin is +z. Heading ψ is measured from north, positive clockwise seen
+    from above (ψ = π/2 heads east); pitch θ is positive **nose-up**, so with forward speed a
+    positive θ makes the vehicle rise (ż = −u sin θ + w cos θ). Body axes: x forward, y to
+    starboard, z down through the keel; w is positive downwards, q nose-up, r to starboard; the
+    inputs M and N are positive nose-up and to starboard. The default helix, z = −8 − s, lies at
+    negative z, i.e. *above* the start point: it climbs about 97 m in 300 s. The origin is a
+    reference point, not the sea surface: the model has no free surface and nothing depends
+    on depth, so a vertical shift of path and start changes nothing (to make z a true depth,
+    shift both by at least 100 m, docs/model.md §2.0).
+
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
     (50 N, 10 N·m, 10 N·m); "fins" scale X by 50 N and M, N by the fin authority

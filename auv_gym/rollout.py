@@ -143,10 +143,10 @@ def rollouts(
         batch_size: rows simulated together (bounds memory; results do not depend on it).
         name: policy label for the metadata (default `policy_name`).
         threads: numba threads for the simulator kernel during the call (None: leave numba's
-            setting). The default 1 is deliberate: a control step of a few dozen rows takes
-            microseconds, and on a loaded machine the threaded kernel's barrier made batches of
-            16–64 rows 10–20× slower than one thread (2-core machine, load ≈ 4). Results do not
-            depend on it.
+            setting). The default 1 is deliberate: a control step of a few dozen rows is far
+            too short to share among threads, and on a loaded machine the threaded kernel's
+            barrier makes small batches slower than one thread (README, Performance). Results do
+            not depend on it.
         **env_kwargs: `AUVPath3DEnv` keyword arguments (not ``render_mode``).
 
     The policy is called once per control step with the float32 observations of all rows of a

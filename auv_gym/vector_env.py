@@ -75,7 +75,7 @@ class AUVPath3DVectorEnv(VectorEnv):
 
     Results are identical for any thread count. On a machine whose cores are busy with other
     processes, the threads' barrier can make a step several times slower than `threads=1`
-    (2 cores, one busy: 1,024 vehicles 7.8 ms vs 2.6 ms per step); pass `threads=1` there.
+    (README, Performance; `auv-gym speed vector` measures it); pass `threads=1` there.
 
     ## Seeding and parity
     `reset(seed=k)` seeds vehicle i with k + i (a list gives one seed per vehicle, None entries

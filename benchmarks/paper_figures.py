@@ -15,8 +15,8 @@ the script writes into ``--out``:
     metrics.json                           the same numbers, with the settings, versions, commit
     trajectories/<policy>.npz              the recorded time series (`Trajectory.load`)
 
-Every file is written atomically. ``--duration 60`` gives a quick run (about a minute on 2 cores);
-metrics windows then start at min(100 s, duration/2).
+Every file is written atomically. ``--duration 60`` gives a quick run; the metrics window then
+starts at min(100 s, duration/2) = 30 s (docs/design.md §3.9).
 """
 
 from __future__ import annotations

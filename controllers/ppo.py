@@ -182,8 +182,8 @@ def load_policy(
     Raises FileNotFoundError when the model or its normalisation statistics are missing, and
     ValueError naming the file when the zip is corrupt or the agent was trained for another
     observation layout (its `obs_names` differ from `auv_gym.OBS_NAMES`, or its observation
-    space is not (15,)). `num_threads`: torch's intra-op threads while the policy predicts (1 is
-    fastest for these small networks on this machine, docs/design.md §4; None: torch's setting);
+    space is not (15,)). `num_threads`: torch's intra-op threads while the policy predicts (1 suits
+    these small networks, docs/design.md §4; None: torch's setting);
     loading itself leaves torch's settings alone.
     """
     from stable_baselines3 import PPO

@@ -65,7 +65,7 @@ class TrainOptions:
 def thread_limit(threads: int) -> Iterator[None]:
     """torch's intra-op and numba's threads set to ``threads`` inside the block, restored after.
 
-    One thread is fastest on this 2-core machine shared with other jobs: two-threaded kernels
+    One thread is the default: on a machine shared with other jobs, multi-threaded kernels
     stall at their barriers (docs/design.md §4).
     """
     import numba
