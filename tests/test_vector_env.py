@@ -171,6 +171,12 @@ def test_constructor_accepts_exactly_the_single_env_arguments():
     single = set(inspect.signature(AUVPath3DEnv.__init__).parameters) - {"self"}
     config = set(inspect.signature(SimConfig.from_kwargs).parameters)
     assert single - {"render_mode"} == config
+    # The env spells its arguments out for help() and IDEs; SimConfig.from_kwargs is the one that
+    # uses them. Their defaults and annotations must never drift apart.
+    env_params = inspect.signature(AUVPath3DEnv.__init__).parameters
+    for name, param in inspect.signature(SimConfig.from_kwargs).parameters.items():
+        assert env_params[name].default == param.default, name
+        assert env_params[name].annotation == param.annotation, name
     env = AUVPath3DVectorEnv(2, path="line", u_desired=1.5, corridor=12.0, render_mode=None)
     assert env.config.u_desired == 1.5
     assert env.config.limits.corridor == 12.0

@@ -1,0 +1,65 @@
+"""The reproduction checker finds every differing cell and every one-sided row."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from benchmarks.check_reproduction import (
+    Report,
+    _rerun_arguments,
+    compare_episodes,
+    compare_json,
+)
+
+HEADER = "scenario,policy,seed,rms_distance,settling_time\n"
+
+
+def _csv(path: Path, rows: list[str]) -> Path:
+    path.write_text(HEADER + "".join(r + "\n" for r in rows))
+    return path
+
+
+def test_rerun_arguments_replace_out_and_workers_only() -> None:
+    recorded = ("python -m benchmarks.compare --policies fbsm,ppo --scenarios all --seeds 10 "
+                "--duration 300 --workers 2 --out benchmarks/results/full --quiet")  # fmt: skip
+    args = _rerun_arguments(recorded, Path("/tmp/x"), 1)
+    assert (
+        args
+        == (
+            "--policies fbsm,ppo --scenarios all --seeds 10 --duration 300 --quiet "
+            "--out /tmp/x --workers 1"
+        ).split()
+    )
+
+
+def test_compare_episodes_counts_cells_and_one_sided_rows(tmp_path: Path, capsys) -> None:
+    old = _csv(tmp_path / "a.csv", ["paper,fbsm,0,0.0640,31.5", "paper,fbsm,1,0.0650,30.0"])
+    same = _csv(tmp_path / "b.csv", ["paper,fbsm,1,0.0650,30.0", "paper,fbsm,0,0.0640,31.5"])
+    report = Report(allow_new=False)
+    compare_episodes(old, same, report)
+    assert report.failures == 0  # row order does not matter
+    assert "10 values compared, 0 differ" in capsys.readouterr().out
+
+    # one differing last digit, and one extra row in the new run
+    changed = _csv(tmp_path / "c.csv", ["paper,fbsm,0,0.0641,31.5", "paper,fbsm,1,0.0650,30.0",
+                                        "paper,ppo,0,0.5,40.0"])  # fmt: skip
+    strict = Report(allow_new=False)
+    compare_episodes(old, changed, strict)
+    assert strict.failures == 2
+    lenient = Report(allow_new=True)
+    compare_episodes(old, changed, lenient)
+    assert lenient.failures == 1
+    assert "0.0640 -> 0.0641" in capsys.readouterr().out
+
+
+def test_compare_json_ignores_wall_times_only(tmp_path: Path) -> None:
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    a.write_text(json.dumps({"wall_time_s": 1.0, "metrics": {"fbsm": {"rms": [0.1, 0.2]}}}))
+    b.write_text(json.dumps({"wall_time_s": 9.0, "metrics": {"fbsm": {"rms": [0.1, 0.2]}}}))
+    report = Report(allow_new=False)
+    compare_json("m", a, b, report)
+    assert report.failures == 0
+    b.write_text(json.dumps({"wall_time_s": 9.0, "metrics": {"fbsm": {"rms": [0.1, 0.25]}}}))
+    compare_json("m", a, b, report)
+    assert report.failures == 1
