@@ -15,6 +15,7 @@ from gymnasium.envs.registration import EnvSpec
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW, OBS_NAMES, OBS_UNITS
 from auv_gym.paths import Path
+from auv_gym.rendering import EpisodeRenderer
 from auv_gym.simulator import SimConfig, Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
@@ -72,6 +73,18 @@ class AUVPath3DEnv(gym.Env):
     pitch moment M, yaw moment N — so sway and heave are unactuated. The defaults reproduce the
     paper's simulation: the helix x = 20 cos(πs/20) + 10, y = 20 sin(πs/20), z = −8 − s, start at
     (15, 5, 0) m at rest with ψ = θ = 0, and bounded white-noise disturbances of ±35 N / N·m.
+
+    ## Frames and signs (docs/model.md §2.0)
+    Earth frame North-East-Down (NED): x north, y east, **z down** [m], so a larger z is deeper
+    and depth below the origin is +z. Heading ψ is measured from north, positive clockwise seen
+    from above (ψ = π/2 heads east); pitch θ is positive **nose-up**, so with forward speed a
+    positive θ makes the vehicle rise (ż = −u sin θ + w cos θ). Body axes: x forward, y to
+    starboard, z down through the keel; w is positive downwards, q nose-up, r to starboard; the
+    inputs M and N are positive nose-up and to starboard. The default helix, z = −8 − s, lies at
+    negative z, i.e. *above* the start point: it climbs about 97 m in 300 s. The origin is a
+    reference point, not the sea surface: the model has no free surface and nothing depends
+    on depth, so a vertical shift of path and start changes nothing (to make z a true depth,
+    shift both by at least 100 m, docs/model.md §2.0).
 
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
@@ -153,7 +166,7 @@ class AUVPath3DEnv(gym.Env):
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
     | `params` | REMUS 100 | `AUVParams` of the true vehicle |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
-    | `render_mode` | None | "rgb_array": 3D track with projections |
+    | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -234,7 +247,9 @@ class AUVPath3DEnv(gym.Env):
         self.sim = Simulator(self.config, 1)
         self._truncation_index = self.config.max_steps * self.config.substeps
         self._last_obs = np.zeros(len(OBS_LOW), dtype=np.float32)  # the last one returned
-        self._track: list[np.ndarray] = []
+        self._renderer = (
+            EpisodeRenderer(self.config.path, self.config.max_time) if render_mode else None
+        )
 
     @property
     def spec(self) -> EnvSpec | None:
@@ -266,8 +281,9 @@ class AUVPath3DEnv(gym.Env):
         obs = self.sim.obs[0].astype(np.float32)
         check_reset_observations(obs[None], [0])
         self._last_obs[:] = obs
-        if self.render_mode is not None:
-            self._track = [self.sim.state[0, 0:3].copy()]
+        if self._renderer is not None:
+            sim = self.sim
+            self._renderer.reset(sim.state[0, 0:3], sim.guid[0, 0:3], sim.state[0, 10])
         return obs, self._info(0, reset=True)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
@@ -281,8 +297,9 @@ class AUVPath3DEnv(gym.Env):
         else:
             obs = sim.obs[0].astype(np.float32)
             self._last_obs[:] = obs
-        if self.render_mode is not None:
-            self._track.append(sim.state[0, 0:3].copy())
+        if self._renderer is not None:
+            t = int(sim.step_index[0]) * self.config.physics_dt
+            self._renderer.append(sim.state[0, 0:3], sim.guid[0, 0:3], sim.state[0, 10], t)
         info = self._info(code)
         return obs, float(sim.reward[0]), code != 0, truncated, info
 
@@ -309,8 +326,7 @@ class AUVPath3DEnv(gym.Env):
         return self.sim.state[0].copy()
 
     def render(self) -> np.ndarray | None:
-        if self.render_mode != "rgb_array":
+        """RGB frame (320, 960, 3) uint8 of the episode so far (`auv_gym.rendering`), or None."""
+        if self._renderer is None:
             return None
-        from auv_gym.plotting import render_track
-
-        return render_track(self.config.path, np.asarray(self._track), self.sim.state[0, 10])
+        return self._renderer.frame()

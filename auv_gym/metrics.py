@@ -1,26 +1,73 @@
 """Scalar metrics of a recorded episode (`compute_metrics`): errors, speed, actuation, outcome.
 
-Windowed metrics start at ``transient`` (default `DEFAULT_TRANSIENT` = 100 s, docs/model.md §8),
-after the approach from the start point.
+The metrics window (docs/design.md §3.9) is one rule shared by `compute_metrics`, the benchmark
+(`benchmarks.compare`, `benchmarks.paper_figures`) and the training evaluation: windowed metrics
+use the samples with t ≥ transient, where transient is given explicitly or, by default,
+`window_start` = min(`DEFAULT_TRANSIENT`, T/2) of the planned episode length T = max_time: it
+skips the approach from the start point and always leaves half of a short episode to measure.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numpy as np
 
 from auv_gym.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 
-__all__ = ["DEFAULT_TRANSIENT", "compute_metrics"]
+__all__ = [
+    "DEFAULT_TRANSIENT",
+    "MetricsWindowWarning",
+    "check_window",
+    "compute_metrics",
+    "window_start",
+]
 
-DEFAULT_TRANSIENT = 100.0  # [s] start of the metrics window
+DEFAULT_TRANSIENT = 100.0  # [s] longest default start of the metrics window
 _SAT_TOL = 1e-9
+_T_TOL = 1e-9  # [s] sample times k·control_dt are compared with this tolerance
+
+
+class MetricsWindowWarning(UserWarning):
+    """An episode that did not fail left fewer than two samples in its metrics window."""
+
+
+def window_start(duration: float, transient: float | None = None) -> float:
+    """Start [s] of the metrics window of an episode planned to last ``duration`` [s].
+
+    ``transient`` [s] if given, else min(`DEFAULT_TRANSIENT`, duration/2) (docs/design.md §3.9):
+    100 s for the 300-s benchmark, half of any episode shorter than 200 s.
+    """
+    if transient is not None:
+        if not (math.isfinite(transient) and transient >= 0):
+            raise ValueError(f"transient must be a non-negative time in s, got {transient}")
+        return float(transient)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be a positive time in s, got {duration}")
+    return min(DEFAULT_TRANSIENT, duration / 2.0)
+
+
+def check_window(duration: float, transient: float | None, control_dt: float) -> float:
+    """`window_start`, after checking that an episode running to ``duration`` [s] puts at least
+    two samples (one control period, ``control_dt`` [s]) into the window; ValueError otherwise.
+
+    Call it before running episodes: a window that cannot hold a metric is a configuration error.
+    """
+    start = window_start(duration, transient)
+    if duration - start < control_dt - _T_TOL:
+        raise ValueError(
+            f"the metrics window t ≥ {start:g} s of a {duration:g}-s episode holds fewer than two "
+            f"samples (control period {control_dt:g} s), so every windowed metric would be "
+            f"undefined: use a transient ≤ {duration - control_dt:g} s or a longer episode "
+            "(docs/design.md §3.9)"
+        )
+    return start
 
 
 def _window_rms(t: np.ndarray, values: np.ndarray, start: float) -> float:
-    mask = t >= start - 1e-9
+    mask = t >= start - _T_TOL
     if not mask.any():
         return math.nan
     return float(np.sqrt(np.mean(np.square(values[mask]))))
@@ -43,15 +90,20 @@ def _settling_time(t: np.ndarray, distance: np.ndarray, threshold: float) -> flo
 
 def compute_metrics(
     trajectory: Trajectory,
-    transient: float = DEFAULT_TRANSIENT,
+    transient: float | None = None,
     success_distance: float = 1.0,
     final_window: float = 10.0,
 ) -> dict[str, Any]:
     """Scalar metrics of one episode. Units: m, s, m/s; τ normalised by `actuator_limits`.
 
-    Windowed metrics use the samples (or intervals) with t ≥ ``transient`` [s] and are NaN when
-    the episode is shorter than that. With d the distance to the virtual point, e = (x_e, y_e,
-    z_e), τ̄_j = τ_j / τ_max,j and a_j the policy's action:
+    Windowed metrics use the samples (or intervals) with t ≥ ``transient`` [s]; None applies
+    the shared rule `window_start` to the planned episode length (the recorded ``max_time``,
+    else the duration): min(100 s, max_time/2). ``window_samples`` counts the samples in the
+    window. Windowed metrics are NaN exactly when it is 0 (chattering and iae_distance_window
+    when it is below 2): the episode ended before t = transient. A failed episode says why in
+    termination_reason; any other episode that leaves fewer than two samples in the window
+    also raises a `MetricsWindowWarning`. With d the distance to the virtual point,
+    e = (x_e, y_e, z_e), τ̄_j = τ_j / τ_max,j and a_j the policy's action:
 
     Distance and errors [m]:
       rms_distance, rms_x_e, rms_y_e, rms_z_e — √mean(·²) over the window;
@@ -76,18 +128,29 @@ def compute_metrics(
       success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
       ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
       episode_return — Σ reward; termination_reason — the episode end (`EPISODE_ENDS`);
-      duration [s], steps; transient — the window start used [s].
+      duration [s], steps; transient — the window start used [s]; window_samples — the
+      number of samples with t ≥ transient.
     """
-    if not (math.isfinite(transient) and transient >= 0):
-        raise ValueError(f"transient must be a non-negative time in s, got {transient}")
+    tr = trajectory
+    transient = window_start(float(tr.metadata.get("max_time") or tr.duration), transient)
     if not (success_distance > 0 and final_window > 0):
         raise ValueError("success_distance and final_window must be positive")
-    tr = trajectory
     t, t_int, dt = tr.t, tr.t_interval, tr.control_dt
     distance = tr["distance"]
     failed = tr.termination_reason in FAILURE_REASONS
-    window = t >= transient - 1e-9
-    window_int = t_int >= transient - 1e-9
+    window = t >= transient - _T_TOL
+    window_int = t_int >= transient - _T_TOL
+    window_samples = int(window.sum())
+    if window_samples < 2 and not failed:
+        warnings.warn(
+            MetricsWindowWarning(
+                f"the metrics window t ≥ {transient:g} s holds {window_samples} sample(s) of an "
+                f"episode that ended at t = {tr.duration:g} s ({tr.termination_reason}): "
+                "windowed metrics are undefined (NaN); use a shorter transient or a longer "
+                "episode (docs/design.md §3.9)"
+            ),
+            stacklevel=2,
+        )
     speed_error = tr["u"] - tr.u_desired
     tau_norm = tr.tau / np.asarray(tr.actuator_limits)
     actions = tr.actions
@@ -137,4 +200,5 @@ def compute_metrics(
     metrics["duration"] = tr.duration
     metrics["steps"] = steps
     metrics["transient"] = float(transient)
+    metrics["window_samples"] = window_samples
     return metrics

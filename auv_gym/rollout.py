@@ -43,7 +43,7 @@ from gymnasium.utils import seeding
 
 from auv_gym.dynamics import STATE_NAMES
 from auv_gym.files import environment, json_default
-from auv_gym.metrics import DEFAULT_TRANSIENT, compute_metrics
+from auv_gym.metrics import compute_metrics
 from auv_gym.observation import GUIDANCE_FIELDS
 from auv_gym.simulator import SimConfig, Simulator
 from auv_gym.task import REWARD_TERMS
@@ -143,10 +143,10 @@ def rollouts(
         batch_size: rows simulated together (bounds memory; results do not depend on it).
         name: policy label for the metadata (default `policy_name`).
         threads: numba threads for the simulator kernel during the call (None: leave numba's
-            setting). The default 1 is deliberate: a control step of a few dozen rows takes
-            microseconds, and on a loaded machine the threaded kernel's barrier made batches of
-            16–64 rows 10–20× slower than one thread (2-core machine, load ≈ 4). Results do not
-            depend on it.
+            setting). The default 1 is deliberate: a control step of a few dozen rows is far
+            too short to share among threads, and on a loaded machine the threaded kernel's
+            barrier makes small batches slower than one thread (README, Performance). Results do
+            not depend on it.
         **env_kwargs: `AUVPath3DEnv` keyword arguments (not ``render_mode``).
 
     The policy is called once per control step with the float32 observations of all rows of a
@@ -279,12 +279,15 @@ def evaluate(
     policy: Any,
     seeds: Sequence[int],
     *,
-    transient: float = DEFAULT_TRANSIENT,
+    transient: float | None = None,
     batch_size: int = DEFAULT_BATCH,
     threads: int | None = 1,
     **env_kwargs: Any,
 ) -> list[dict[str, Any]]:
     """Metrics (`compute_metrics`) of ``policy`` on each seed, in the order of ``seeds``.
+
+    ``transient`` [s]: the metrics window start; None: the shared rule min(100 s, max_time/2)
+    (`auv_gym.metrics.window_start`).
 
     Each dict also holds "seed" and "policy". The same seed gives every policy the same
     disturbances, parameters and start, so the dicts of two policies compare episode by episode.

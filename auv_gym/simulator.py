@@ -392,7 +392,7 @@ class Simulator:
 
     ``parallel`` picks the threaded kernel (default: when n > 1) or the serial one; both give
     identical results. The serial kernel never starts numba's OpenMP pool, whose spinning
-    threads slowed torch in the same process 25× on a loaded 2-core machine.
+    threads compete with torch in the same process (README, Performance).
     """
 
     def __init__(self, config: SimConfig, n: int = 1, parallel: bool | None = None) -> None:

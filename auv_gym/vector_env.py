@@ -23,6 +23,7 @@ from gymnasium.vector.utils import batch_space
 
 from auv_gym.env import check_reset_observations, validate_actions
 from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
+from auv_gym.rendering import EpisodeRenderer
 from auv_gym.simulator import SimConfig, Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.validation import ArgumentTypeError, integer
@@ -74,7 +75,7 @@ class AUVPath3DVectorEnv(VectorEnv):
 
     Results are identical for any thread count. On a machine whose cores are busy with other
     processes, the threads' barrier can make a step several times slower than `threads=1`
-    (2 cores, one busy: 1,024 vehicles 7.8 ms vs 2.6 ms per step); pass `threads=1` there.
+    (README, Performance; `auv-gym speed vector` measures it); pass `threads=1` there.
 
     ## Seeding and parity
     `reset(seed=k)` seeds vehicle i with k + i (a list gives one seed per vehicle, None entries
@@ -177,7 +178,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         self._ever_reset = False
         self._all = np.ones(self.num_envs, dtype=bool)
         self._render_vehicle = 0
-        self._track: list[np.ndarray] = []  # positions of `render_vehicle` since its reset [m]
+        self._renderer = (
+            EpisodeRenderer(self.config.path, self.config.max_time) if render_mode else None
+        )  # draws vehicle `render_vehicle` since its reset
         self.render_vehicle = render_vehicle
 
     @property
@@ -260,8 +263,8 @@ class AUVPath3DVectorEnv(VectorEnv):
         first = self.sim.obs[rows].astype(np.float32)
         check_reset_observations(first, rows)
         self._last_obs[rows] = first
-        if self.render_mode is not None and self._render_vehicle in rows:
-            self._track = [self.sim.state[self._render_vehicle, 0:3].copy()]
+        if self._render_vehicle in rows:
+            self._restart_rendering()
 
     # ------------------------------------------------------------------------------------ step
     def step(
@@ -284,8 +287,10 @@ class AUVPath3DVectorEnv(VectorEnv):
         code = sim.code
         terminated = code != 0
         truncated = sim.step_index >= self._limit
-        if self.render_mode is not None:
-            self._track.append(sim.state[self._render_vehicle, 0:3].copy())
+        if self._renderer is not None:
+            v = self._render_vehicle
+            t = int(sim.step_index[v]) * self.config.physics_dt
+            self._renderer.append(sim.state[v, 0:3], sim.guid[v, 0:3], sim.state[v, 10], t)
 
         mode = self.autoreset_mode
         infos: dict[str, Any] = {}
@@ -381,16 +386,19 @@ class AUVPath3DVectorEnv(VectorEnv):
         if not 0 <= index < self.num_envs:
             raise ValueError(f"render_vehicle must be in [0, {self.num_envs}), got {index}")
         self._render_vehicle = int(index)
-        self._track = [self.sim.state[self._render_vehicle, 0:3].copy()]
+        self._restart_rendering()
+
+    def _restart_rendering(self) -> None:
+        if self._renderer is not None:
+            v, sim = self._render_vehicle, self.sim
+            t = int(sim.step_index[v]) * self.config.physics_dt
+            self._renderer.reset(sim.state[v, 0:3], sim.guid[v, 0:3], sim.state[v, 10], t)
 
     def render(self) -> np.ndarray | None:
         """RGB image (H, W, 3) of vehicle `render_vehicle`'s track since its last reset."""
-        if self.render_mode != "rgb_array":
+        if self._renderer is None:
             return None
-        from auv_gym.plotting import render_track
-
-        v = self._render_vehicle
-        return render_track(self.config.path, np.asarray(self._track), self.sim.state[v, 10])
+        return self._renderer.frame()
 
     def __repr__(self) -> str:
         return (

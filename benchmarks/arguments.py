@@ -21,9 +21,18 @@ __all__ = [
     "comma_names",
     "exit_with_usage_error",
     "finite_number",
+    "program_name",
     "usage_errors",
     "writable_folder",
 ]
+
+
+def program_name(module: str) -> str:
+    """The program name for help and errors: ``auv-gym <command>`` when the installed command
+    dispatches (it puts that name in ``sys.argv[0]``), else ``python -m <module>`` (argparse
+    would say ``compare.py``, or ``-c`` inside a test worker)."""
+    invoked = sys.argv[0] if sys.argv else ""
+    return invoked if invoked.startswith("auv-gym") else f"python -m {module}"
 
 
 def exit_with_usage_error(prog: str, error: BaseException | str) -> NoReturn:

@@ -20,14 +20,17 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from auv_gym.metrics import check_window
 from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,
     finite_number,
+    program_name,
     usage_errors,
     writable_folder,
 )
+from benchmarks.cli import HelpFormatter
 from benchmarks.jobs import Job, run_jobs
 from benchmarks.policies import PolicySpec, build_policy, check_policy_spec, policy_label
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
@@ -40,16 +43,18 @@ MAX_WORKERS = 1024
 
 def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(
-        prog="python -m benchmarks.compare",
+        prog=program_name("benchmarks.compare"),
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument(
         "--policies",
         default="fbsm,backstepping,ppo",
         help=f"comma-separated: {', '.join(REGISTRY)}, ppo:PATH, module:attribute",
     )
-    parser.add_argument("--scenarios", default="all", help="comma-separated names or 'all'")
+    parser.add_argument("--scenarios", default="all",
+                        help="comma-separated names of --scenario-file or 'all'; the shipped "
+                        f"file has: {', '.join(load_scenarios())}")  # fmt: skip
     parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
                         help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
     parser.add_argument("--seeds", type=int, default=10,
@@ -59,7 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s], in [0, duration); None: min(100, duration/2)",
+        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
     )
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="local worker processes (results do not depend on it)")  # fmt: skip
@@ -102,9 +107,8 @@ def check_args(args: argparse.Namespace) -> None:
     if not 1 <= args.seeds <= MAX_SEEDS:
         raise ValueError(f"--seeds must be an integer in [1, {MAX_SEEDS}], got {args.seeds}")
     finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
-    if args.transient is None:
-        args.transient = min(100.0, args.duration / 2)
-    finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
+    if args.transient is not None:
+        finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
     if not 1 <= args.workers <= MAX_WORKERS:
         raise ValueError(f"--workers must be an integer in [1, {MAX_WORKERS}], got {args.workers}")
     if args.address is not None and args.backend != "ray":
@@ -115,12 +119,15 @@ def check_args(args: argparse.Namespace) -> None:
         try:
             SimConfig.from_kwargs(**env_kwargs)
             control_dt = float(env_kwargs.get("control_dt", 0.05))
+            # one metrics-window rule (docs/design.md §3.9); it must hold a metric everywhere
+            transient = check_window(args.duration, args.transient, control_dt)
             for spec in policies:
                 if PolicySpec.parse(spec).kind == "classical":
                     build_policy(spec, control_dt, scenario.controller)
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
     writable_folder(args.out)  # last: a bad argument above creates no folder
+    args.transient = transient
     args.policy_list = policies
     args.scenario_table = {n: scenarios[n] for n in names}
     args.jobs = [

@@ -15,13 +15,12 @@ the script writes into ``--out``:
     metrics.json                           the same numbers, with the settings, versions, commit
     trajectories/<policy>.npz              the recorded time series (`Trajectory.load`)
 
-Every file is written atomically. ``--duration 60`` gives a quick run (about a minute on 2 cores);
-metrics windows then start at min(100 s, duration/2).
+Every file is written atomically. ``--duration 60`` gives a quick run; the metrics window then
+starts at min(100 s, duration/2) = 30 s (docs/design.md §3.9).
 """
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
@@ -38,13 +37,14 @@ from benchmarks.arguments import (
     comma_names,
     exit_with_usage_error,
     finite_number,
+    program_name,
     usage_errors,
     writable_folder,
 )
+from benchmarks.cli import HelpFormatter
 from benchmarks.policies import build_policy, check_policy_spec, policy_label
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
-PROG = "python -m benchmarks.paper_figures"
 DPI_RANGE = (20, 1200)  # figure resolution [dots per inch]
 LABELS = {"fbsm": "FBSM", "backstepping": "backstepping"}
 
@@ -68,33 +68,35 @@ def parse_args(argv: Sequence[str] | None = None) -> Args:
     and a one-line message)."""
     defaults = Args()
     parser = ArgumentParser(
-        prog=PROG,
+        prog=program_name("benchmarks.paper_figures"),
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--out", type=Path, default=defaults.out, help="output folder")
-    parser.add_argument(
-        "--duration", type=float, default=defaults.duration, help="episode length [s] (default 300)"
-    )
-    parser.add_argument("--seed", type=int, default=defaults.seed, help="reset seed (default 0)")
+    parser.add_argument("--duration", type=float, default=defaults.duration,
+                        help="episode length [s]")  # fmt: skip
+    parser.add_argument("--seed", type=int, default=defaults.seed,
+                        help="reset seed shared by the policies (same noise)")  # fmt: skip
     parser.add_argument(
         "--policies",
         default=",".join(defaults.policies),
-        help="comma-separated controllers.make names or module:attribute",
+        help="comma-separated specs: controllers.make names, ppo, ppo:PATH, module:attribute",
     )
     parser.add_argument(
         "--control-dt",
         type=float,
         default=defaults.control_dt,
-        help="control period [s] (default 0.05)",
+        help="control period [s]",
     )
     parser.add_argument(
         "--transient",
         type=float,
         default=None,
-        help="metrics window start [s] in [0, duration) (default min(100, duration/2))",
+        help="metrics window start [s] in [0, duration); None: min(100, duration/2) "
+        "(docs/design.md §3.9)",
     )
-    parser.add_argument("--dpi", type=int, default=defaults.dpi, help=f"in {list(DPI_RANGE)}")
+    parser.add_argument("--dpi", type=int, default=defaults.dpi,
+                        help=f"figure resolution [dots/in], in {list(DPI_RANGE)}")  # fmt: skip
     ns = parser.parse_args(argv)
     with usage_errors(parser):
         args = Args(
@@ -168,16 +170,17 @@ def make_figures(
     Returns {"figures": stem → file, "metrics": label → metrics, "wall_time": label → s}.
     ``env_kwargs`` override the env defaults (the paper's scenario); ``max_time`` = duration.
     """
-    from auv_gym.metrics import compute_metrics
+    from auv_gym.episode_figures import paper_figures
+    from auv_gym.metrics import check_window, compute_metrics
     from auv_gym.paths import make_path
-    from auv_gym.plotting import metrics_table, paper_figures
+    from auv_gym.plotting import metrics_table
     from auv_gym.rollout import rollout
 
     if not policies:
         raise ValueError("make_figures needs at least one policy")
     out = Path(out)
     (out / "trajectories").mkdir(parents=True, exist_ok=True)
-    window = transient if transient is not None else min(100.0, duration / 2.0)
+    window = check_window(duration, transient, env_kwargs.get("control_dt", 0.05))
     trajectories, metrics, wall = {}, {}, {}
     for label, policy in policies.items():
         start = time.perf_counter()
@@ -216,7 +219,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     try:  # agents are loaded here, before any episode: a corrupt one is a usage error
         policies = build_policies(args.policies, args.control_dt)
     except (ValueError, TypeError, OSError) as error:
-        exit_with_usage_error(PROG, error)
+        exit_with_usage_error(program_name("benchmarks.paper_figures"), error)
     result = make_figures(
         policies,
         args.out,

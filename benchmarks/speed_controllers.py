@@ -23,6 +23,7 @@ import numpy as np
 
 import controllers
 from auv_gym.simulator import SimConfig, Simulator
+from benchmarks.cli import HelpFormatter
 
 
 def closed_loop(name: str, n: int, steps: int, threads: int, warmup: int = 100) -> dict[str, float]:
@@ -80,7 +81,7 @@ def episode_wall_time(name: str = "fbsm") -> float:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--steps", type=int, default=200, help="timed control steps")
     parser.add_argument("--vehicles", type=int, default=1024, help="batch size")
     args = parser.parse_args(argv)

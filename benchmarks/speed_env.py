@@ -15,6 +15,8 @@ import time
 
 import numpy as np
 
+from benchmarks.cli import HelpFormatter
+
 
 def measure(steps: int, seed: int = 0) -> dict[str, float]:
     """Time `steps` env.step calls through gym.make with pre-drawn actions (default settings)."""
@@ -60,9 +62,10 @@ def measure_reference(steps: int) -> dict[str, float]:
 
 
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--steps", type=int, default=60_000, help="control steps to time")
-    parser.add_argument("--reference-steps", type=int, default=400)
+    parser.add_argument("--reference-steps", type=int, default=400,
+                        help="control steps of the JIT-off (plain Python) reference")  # fmt: skip
     args = parser.parse_args(argv)
     results = {"numba (gym.make)": measure(args.steps),
                "plain Python/numpy (JIT off)": measure_reference(args.reference_steps)}  # fmt: skip

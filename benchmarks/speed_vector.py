@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.cli import HelpFormatter
+
 SIZES = (1, 64, 1024, 4096, 16384)
 MEMORY_N = 65_536
 
@@ -187,16 +189,19 @@ def machine() -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES),
+                        help="numbers of vehicles of the throughput table")  # fmt: skip
     parser.add_argument("--seconds", type=float, default=4.0, help="timed wall clock per size")
     parser.add_argument("--max-time", type=float, default=10.0,
                         help="episode length [s]; short so that autoresets happen")  # fmt: skip
     parser.add_argument("--memory-n", type=int, default=MEMORY_N,
                         help="vehicles of the peak-memory run; 0 skips it")  # fmt: skip
-    parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64])
+    parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64],
+                        help="n_envs of the SB3 collection runs; none skips them")  # fmt: skip
     parser.add_argument("--ppo-steps", type=int, default=128, help="n_steps per rollout")
-    parser.add_argument("--ppo-repeats", type=int, default=3)
+    parser.add_argument("--ppo-repeats", type=int, default=3,
+                        help="timed collect_rollouts calls per run")  # fmt: skip
     parser.add_argument("--threads", type=int, nargs="+", default=[2, 1],
                         help="numba thread counts of the throughput table")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")

@@ -1,9 +1,10 @@
-"""Speed of the simulator, the vector env and the controllers; prints tables.
+"""Speed of the simulator, the vector env, the controllers and rendering; prints tables.
 
-    python -m benchmarks.throughput [--sections env,vector,controllers]
+    auv-gym speed all [--sections env,vector,controllers,render]
+    python -m benchmarks.throughput [--sections …]
 
-Each section lives in its own module (speed_env, speed_vector, speed_controllers) and can be run
-alone with `python -m benchmarks.speed_<name>`.
+Each section lives in its own module (speed_env, speed_vector, speed_controllers, speed_render)
+and runs alone with `auv-gym speed <name>` or `python -m benchmarks.speed_<name>`.
 """
 
 from __future__ import annotations
@@ -15,8 +16,11 @@ import platform
 import numba
 import numpy as np
 
+from benchmarks.cli import HelpFormatter
+
 SECTIONS = {"env": "benchmarks.speed_env", "vector": "benchmarks.speed_vector",
-            "controllers": "benchmarks.speed_controllers"}  # fmt: skip
+            "controllers": "benchmarks.speed_controllers",
+            "render": "benchmarks.speed_render"}  # fmt: skip
 
 
 def machine() -> str:
@@ -30,15 +34,17 @@ def machine() -> str:
     )
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--sections", default=",".join(SECTIONS),
-                        help=f"comma-separated subset of {list(SECTIONS)}")  # fmt: skip
-    args = parser.parse_args()
+                        help=f"comma-separated subset of {', '.join(SECTIONS)}")  # fmt: skip
+    args = parser.parse_args(argv)
+    names = [name.strip() for name in args.sections.split(",")]
+    unknown = [name for name in names if name not in SECTIONS]
+    if unknown or not names:
+        parser.error(f"--sections: unknown {unknown}; valid: {', '.join(SECTIONS)}")
     print(machine())
-    for name in args.sections.split(","):
-        if name not in SECTIONS:
-            raise SystemExit(f"unknown section {name!r}; valid: {list(SECTIONS)}")
+    for name in names:
         importlib.import_module(SECTIONS[name]).main([])
 
 

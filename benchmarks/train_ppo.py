@@ -36,6 +36,7 @@ from collections.abc import Sequence
 from dataclasses import MISSING, fields
 from pathlib import Path
 
+from benchmarks.cli import HelpFormatter
 from benchmarks.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 
@@ -64,7 +65,8 @@ HELP = {
 
 def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argparse.Namespace]:
     """TrainOptions (every dataclass field is an option) and the plotting options."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=HelpFormatter)  # fmt: skip
     parser.add_argument(
         "--curve",
         default=None,

@@ -318,8 +318,8 @@ def load_policy(
 
     The files are validated first, before torch is imported (`check_agent`: FileNotFoundError
     when the model or its statistics are missing, ValueError naming the file and the problem
-    otherwise). `num_threads`: torch's intra-op threads while the policy predicts (1 is fastest
-    for these small networks on this machine, docs/design.md §4; None: torch's setting); loading
+    otherwise). `num_threads`: torch's intra-op threads while the policy predicts (1 suits
+    these small networks, docs/design.md §4; None: torch's setting); loading
     itself leaves torch's settings alone.
     """
     files = check_agent(path)

@@ -9,4 +9,4 @@ fi
 python -m pip install -q --upgrade pip
 # Pin the CPU wheel first so that stable-baselines3 never pulls a multi-GB CUDA torch.
 python -m pip install -q "torch==2.13.0"
-python -m pip install -q -e ".[rl,test,ray,stats]"
+python -m pip install -q -e ".[rl,test,ray,stats,video]"

@@ -90,3 +90,15 @@ def test_kinematics_at_level_heading_and_pitched():
     np.testing.assert_allclose(got[:3], rotation @ np.array(nu[:3]), rtol=1e-14)
     assert got[3] == 0.05
     assert got[4] == pytest.approx(0.3 / ct, rel=1e-15)
+
+
+def test_heave_coriolis_sign_is_the_corrected_one():
+    """docs/model.md §6 row 2: heave +(m + Z_uq) u q (NED rigid body), not the paper's printed
+    −(m − Z_uq) u q. At u = 1 m/s, q = 0.1 rad/s (all else 0) a nose-up pitch rate pushes the
+    body down its z_b axis: ẇ = ((m + Z_uq) u q + m z_g q²) / (m − Z_ẇ)
+    = (25.26·0.1 + 0.005974) / 65.98 = +0.03837 m/s²; the printed sign would give −0.0540."""
+    p = params_record(remus100().to_vector())
+    w_dot = nu_dot((1.0, 0.0, 0.0, 0.1, 0.0), 0.0, ZERO_TAU, ZERO_F, p)[2]
+    assert w_dot == pytest.approx(0.03837, abs=5e-6)
+    expected = ((30.48 - 5.22) * 0.1 + M_ZG * 0.01) / (30.48 + 35.5)
+    assert w_dot == pytest.approx(expected, rel=1e-14)

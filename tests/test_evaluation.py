@@ -10,7 +10,7 @@ import pytest
 
 import controllers
 from auv_gym import OBS_INDEX, AUVPath3DEnv
-from auv_gym.metrics import compute_metrics
+from auv_gym.metrics import MetricsWindowWarning, compute_metrics
 from auv_gym.rollout import evaluate, rollout, rollouts
 from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
 
@@ -130,6 +130,7 @@ def test_metrics_match_hand_computed_values():
         "duration": 10.0,
         "steps": 10,
         "transient": 5.0,
+        "window_samples": 6,
     }
     for name, value in expected.items():
         np.testing.assert_allclose(m[name], value, rtol=1e-12, atol=1e-14, err_msg=name)
@@ -149,9 +150,11 @@ def test_metrics_failure_and_never_settling():
     m = compute_metrics(tr, transient=5.0)
     assert m["settling_time_0p1"] == math.inf
     assert m["settling_time_0p5"] == 5.0
-    # A window beyond the episode gives NaN windowed metrics, not an error.
-    late = compute_metrics(synthetic_trajectory(), transient=20.0)
+    # A window beyond the episode gives NaN windowed metrics, not an error, and says so.
+    with pytest.warns(MetricsWindowWarning, match="holds 0 sample"):
+        late = compute_metrics(synthetic_trajectory(), transient=20.0)
     assert math.isnan(late["rms_distance"]) and math.isnan(late["chattering"])
+    assert late["window_samples"] == 0
     assert late["iae_distance"] == pytest.approx(13.155)
 
 

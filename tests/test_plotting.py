@@ -1,4 +1,4 @@
-"""auv_gym.plotting and benchmarks.paper_figures: PNG files of the right size, tables, the CLI."""
+"""auv_gym.plotting, .episode_figures and benchmarks.paper_figures: PNGs, tables, the CLI."""
 
 from __future__ import annotations
 
@@ -14,13 +14,8 @@ import numpy as np
 import pytest
 
 from auv_gym import OBS_INDEX, make_path
-from auv_gym.plotting import (
-    PAPER_FIGURES,
-    metrics_table,
-    paper_figures,
-    render_track,
-    save_figure,
-)
+from auv_gym.episode_figures import PAPER_FIGURES, paper_figures
+from auv_gym.plotting import metrics_table, save_figure
 from auv_gym.rollout import rollouts
 from auv_gym.trajectory import Trajectory
 
@@ -147,8 +142,6 @@ def test_render_track_still_renders_the_env():
     frame = env.render()
     assert frame.shape == (320, 960, 3) and frame.dtype == np.uint8
     assert frame.min() < 100 and frame.max() == 255
-    direct = render_track(make_path("helix"), np.zeros((2, 3)), 0.0)
-    assert direct.shape == (320, 960, 3)
 
 
 def test_metrics_table_marks_the_best_value():

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.files import write_json
-from auv_gym.metrics import DEFAULT_TRANSIENT
+from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.trajectory import env_termination_reason
 from controllers.ppo import load_policy
@@ -26,6 +26,7 @@ __all__ = [
     "HELD_OUT_FILE",
     "HELD_OUT_SEEDS",
     "TRAIN_SEED_BASE",
+    "check_evaluation_duration",
     "evaluate_policy_on_seeds",
     "held_out_evaluation",
     "score",
@@ -42,15 +43,16 @@ HELD_OUT_FILE = "held_out_evaluation.json"  # written beside an exported agent
 def evaluate_policy_on_seeds(
     policy: Any,
     seeds: Sequence[int] = HELD_OUT_SEEDS,
-    transient: float = DEFAULT_TRANSIENT,
+    transient: float | None = None,
     **env_kwargs: Any,
 ) -> list[dict[str, Any]]:
     """Seeded episodes of `policy` through `auv_gym.rollout.evaluate` (batched rows).
 
     Returns one dict per seed with seed, rms_distance and rms_x_e, rms_y_e, rms_z_e [m] over
-    t ≥ transient (NaN if the episode ended earlier), max_distance [m] over that window,
-    duration [s] and termination_reason in the env's spelling ("" when the episode ran to
-    max_time, `auv_gym.trajectory.env_termination_reason`).
+    t ≥ transient (None: the shared rule min(100 s, max_time/2), docs/design.md §3.9),
+    max_distance [m] over that window, window_samples (0 when the episode ended before the
+    window: then the rms values are NaN), duration [s] and termination_reason in the env's
+    spelling ("" when the episode ran to max_time, `auv_gym.trajectory.env_termination_reason`).
     """
     results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)
     return [
@@ -58,6 +60,7 @@ def evaluate_policy_on_seeds(
          "rms_x_e": float(r["rms_x_e"]), "rms_y_e": float(r["rms_y_e"]),
          "rms_z_e": float(r["rms_z_e"]),
          "max_distance": float(r["max_distance_window"]), "duration": float(r["duration"]),
+         "window_samples": int(r["window_samples"]),
          "termination_reason": env_termination_reason(str(r["termination_reason"]))}
         for r in results
     ]  # fmt: skip
@@ -84,6 +87,15 @@ def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+def check_evaluation_duration(duration: float, control_dt: float = 0.05) -> float:
+    """The metrics window start [s] of evaluation episodes of ``duration`` [s]; ValueError (one
+    line, naming the duration) if such episodes cannot produce a windowed metric."""
+    try:
+        return check_window(duration, None, control_dt)
+    except ValueError as error:
+        raise ValueError(f"evaluation duration {duration!r} s: {error}") from None
+
+
 def score(summary: dict[str, Any]) -> tuple[int, float]:
     """Lower is better: first fewer terminated episodes, then lower mean rms distance."""
     mean = summary["rms_distance_mean"]
@@ -97,7 +109,8 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> di
     return {
         "scenario": "paper (helix, white noise ±35 N / N·m, defaults of AUVPath3D-v0)",
         "seeds": list(HELD_OUT_SEEDS), "duration_s": float(duration),
-        "transient_s": DEFAULT_TRANSIENT, "summary": summarize(results), "results": results,
+        "transient_s": window_start(float(duration)), "summary": summarize(results),
+        "results": results,
         "agent_num_timesteps": policy.metadata.get("num_timesteps"),
         "agent_wall_time_s": policy.metadata.get("wall_time_s"),
     }  # fmt: skip

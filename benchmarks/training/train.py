@@ -24,7 +24,12 @@ from benchmarks.training.checkpoints import (
     write_metadata,
 )
 from benchmarks.training.config import ALGORITHMS, read_zoo_config
-from benchmarks.training.evaluation import EVAL_SEEDS, TRAIN_SEED_BASE, write_held_out_evaluation
+from benchmarks.training.evaluation import (
+    EVAL_SEEDS,
+    TRAIN_SEED_BASE,
+    check_evaluation_duration,
+    write_held_out_evaluation,
+)
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
 from controllers.ppo import METADATA_FILE, MODEL_FILE, VECNORM_FILE
 
@@ -60,7 +65,7 @@ class TrainOptions:
 def thread_limit(threads: int) -> Iterator[None]:
     """torch's intra-op and numba's threads set to ``threads`` inside the block, restored after.
 
-    One thread is fastest on this 2-core machine shared with other jobs: two-threaded kernels
+    One thread is the default: on a machine shared with other jobs, multi-threaded kernels
     stall at their barriers (docs/design.md §4).
     """
     import numba
@@ -112,7 +117,10 @@ def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
     """Train (or resume) as configured; returns the run directory (see `benchmarks.training`).
 
     torch's and numba's thread counts are set to ``opts.threads`` for the run and restored.
+    An evaluation duration that cannot produce a metric is refused before anything starts.
     """
+    if opts.eval_freq > 0 or opts.export:
+        check_evaluation_duration(opts.eval_duration)
     with thread_limit(opts.threads):
         return _train(opts, argv)
 

@@ -1,0 +1,114 @@
+"""`auv-gym`: the one installed command, dispatching to the benchmark command lines.
+
+    auv-gym compare --policies fbsm,backstepping --scenarios paper --seeds 3 --duration 150
+    auv-gym train --config …                 # needs the rl extra
+    auv-gym paper-figures --out out/paper
+    auv-gym speed env|vector|controllers|render|all [options]
+    auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
+
+Each subcommand is the `main(argv)` of a module that also runs as ``python -m benchmarks.<name>``
+and shows its options, defaults and choices with ``--help``. Data the commands read (scenarios,
+hyper-parameters, the shipped agent) is package data, found beside the modules, so every command
+works from any folder; outputs go to paths relative to the current folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+__all__ = ["COMMANDS", "SPEED", "HelpFormatter", "main"]
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Help that shows every option's default and keeps the description's line breaks."""
+
+
+# Subcommand → (module whose main(argv) runs it, one-line description).
+COMMANDS: dict[str, tuple[str, str]] = {
+    "compare": ("benchmarks.compare", "policies on seeded scenarios: tables and figures"),
+    "train": ("benchmarks.train_ppo", "train or evaluate a PPO agent (rl extra)"),
+    "paper-figures": ("benchmarks.paper_figures", "the paper's Figs. 3-9, FBSM vs backstepping"),
+    "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),
+    "video": ("benchmarks.video", "an episode's video: 3-D track and errors (video extra)"),
+}
+# `auv-gym speed NAME` → (module, one-line description).
+SPEED: dict[str, tuple[str, str]] = {
+    "all": ("benchmarks.throughput", "every section below, in one run"),
+    "env": ("benchmarks.speed_env", "single env through gym.make, against the JIT-off reference"),
+    "vector": ("benchmarks.speed_vector", "native vector env, peak memory, SB3 data collection"),
+    "controllers": ("benchmarks.speed_controllers", "FBSM and backstepping predict cost"),
+    "render": ("benchmarks.speed_render", "rgb_array frames per second, fast and full redraw"),
+}
+# Modules of the optional extras: a missing one is named with the extra that installs it.
+EXTRAS = {"stable_baselines3": "rl", "torch": "rl", "yaml": "rl", "rich": "rl",
+          "tensorboard": "rl", "moviepy": "video", "imageio_ffmpeg": "video", "ray": "ray",
+          "rliable": "stats", "arch": "stats", "pandas": "stats"}  # fmt: skip
+
+
+def _table(entries: dict[str, tuple[str, str]]) -> str:
+    width = max(map(len, entries))
+    return "\n".join(f"  {name:<{width}}  {text}" for name, (_, text) in entries.items())
+
+
+def _run(module: str, prog: str, argv: list[str]) -> None:
+    """``module.main(argv)`` with ``prog`` as the program name of its help and errors."""
+    saved = sys.argv[0]
+    sys.argv[0] = prog  # argparse names the program after sys.argv[0]
+    try:
+        importlib.import_module(module).main(argv)
+    finally:
+        sys.argv[0] = saved
+
+
+def _speed(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(
+        prog="auv-gym speed",
+        description="Speed benchmarks; each prints its figures (and the machine they ran on).\n\n"
+        + _table(SPEED),
+        epilog="`auv-gym speed NAME --help` lists the options of one benchmark.",
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument("benchmark", choices=list(SPEED), help="which benchmark to run")
+    parser.add_argument("options", nargs=argparse.REMAINDER, help="that benchmark's options")
+    args = parser.parse_args(argv)
+    _run(SPEED[args.benchmark][0], f"auv-gym speed {args.benchmark}", args.options)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``auv-gym COMMAND [options]``; errors in the arguments end with one line, exit 2."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    parser = argparse.ArgumentParser(
+        prog="auv-gym",
+        description="3-D path following of an underactuated AUV: benchmark, training, figures, "
+        "speed and video.\n\ncommands:\n" + _table(COMMANDS),
+        epilog="`auv-gym COMMAND --help` lists a command's options with their defaults.",
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument("command", choices=list(COMMANDS), help="what to run")
+    parser.add_argument("options", nargs=argparse.REMAINDER, help="the command's options")
+    parsed = parser.parse_args(args[:1] if args[:1] not in (["-h"], ["--help"]) else args)
+    command, rest = parsed.command, args[1:]
+    try:
+        if command == "speed":
+            _speed(rest)
+        else:
+            _run(COMMANDS[command][0], f"auv-gym {command}", rest)
+    except ModuleNotFoundError as error:
+        extra = EXTRAS.get((error.name or "").split(".")[0])
+        if extra is None:
+            raise
+        raise SystemExit(
+            f"auv-gym {command}: needs {error.name}, from the {extra!r} extra: "
+            f"pip install 'auv-gym[{extra}]'"
+        ) from None
+    except (ValueError, FileNotFoundError) as error:
+        print(f"auv-gym {command}: error: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
