@@ -42,6 +42,7 @@ MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent needs
 VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
 METADATA_FILE = "metadata.json"
+ALGORITHM_CLASSES = {"ppo": "PPO", "sac": "SAC"}  # metadata "algo" → stable_baselines3 class
 
 
 class PPOPolicy:
@@ -177,7 +178,8 @@ def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float, tupl
 def load_policy(
     path: str | os.PathLike, *, device: str = "cpu", num_threads: int | None = 1
 ) -> PPOPolicy:
-    """Load a PPO agent (directory with model.zip + vecnormalize.npz + metadata.json, or a zip).
+    """Load a PPO agent (directory with model.zip + vecnormalize.npz + metadata.json, or a zip);
+    a SAC agent of the same layout when its metadata says ``"algo": "sac"``.
 
     Raises FileNotFoundError when the model or its normalisation statistics are missing, and
     ValueError naming the file when the zip is corrupt or the agent was trained for another
@@ -186,7 +188,7 @@ def load_policy(
     fastest for these small networks on this machine, docs/design.md §4; None: torch's setting);
     loading itself leaves torch's settings alone.
     """
-    from stable_baselines3 import PPO
+    import stable_baselines3
 
     model_path, stats_path, meta_path = _locate(Path(path))
     if stats_path is None:
@@ -208,10 +210,15 @@ def load_policy(
         )
     if not zipfile.is_zipfile(model_path):
         raise ValueError(f"PPO model {model_path} is not a valid zip file (corrupt or truncated)")
+    # The harness trains PPO and SAC (benchmarks.training.config); metadata names the algorithm.
+    algo = str(metadata.get("algo", "ppo"))
+    if algo not in ALGORITHM_CLASSES:
+        raise ValueError(f"{meta_path}: algo {algo!r} is not one of {sorted(ALGORITHM_CLASSES)}")
+    algorithm = getattr(stable_baselines3, ALGORITHM_CLASSES[algo])
     # Schedules are not needed for inference; replacing them avoids unpickling closures.
     custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
     try:
-        model = PPO.load(model_path, device=device, custom_objects=custom)
+        model = algorithm.load(model_path, device=device, custom_objects=custom)
     except Exception as exc:
         raise ValueError(f"PPO model {model_path} cannot be loaded: {exc}") from exc
     shape = tuple(model.observation_space.shape or ())
