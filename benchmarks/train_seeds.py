@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import typing
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -35,9 +36,14 @@ def _number(text: str) -> int:
     return int(value)
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> typing.NoReturn:
+        """One line and exit code 2 (argparse prints the usage too)."""
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m benchmarks.train_seeds",
-                                description=__doc__.split("\n\n")[0])  # fmt: skip
+    p = _Parser(prog="python -m benchmarks.train_seeds", description=__doc__.split("\n\n")[0])
     p.add_argument("--algo", choices=sorted(ALGORITHMS), default="ppo")
     p.add_argument("--config", default=None,
                    help="RL-Zoo YAML (default benchmarks/hyperparams/<algo>.yml)")  # fmt: skip
