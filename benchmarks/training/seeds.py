@@ -194,7 +194,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
 
 def check_evaluation_window(duration: float) -> None:
     """Evaluation episodes of ``duration`` [s] must leave samples in the metrics window."""
-    try:  # the shared window rule of auv_gym.metrics (docs/design.md §3.9) where it exists
+    try:  # the shared window rule of auv_gym.metrics, where this checkout has it
         from benchmarks.training.evaluation import check_evaluation_duration
     except ImportError:
         from auv_gym.metrics import DEFAULT_TRANSIENT
