@@ -1,6 +1,7 @@
 """auv-gym: 3D path following of an underactuated AUV, for control and RL research.
 
-Importing the package registers `AUVPath3D-v0` with Gymnasium (idempotently).
+Importing the package registers `AUVPath3D-v0`, `AUVPath3D-v1` (v0 with the realistic-speed
+limit, `auv_gym.task.SURGE_LIMIT`) and the variants below with Gymnasium (idempotently).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from gymnasium.envs.registration import register, registry
 from auv_gym.env import AUVPath3DEnv
 from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW, OBS_NAMES, OBS_UNITS
 from auv_gym.paths import Helix, Path, Spline, StraightLine, make_path
+from auv_gym.task import SURGE_LIMIT
 from auv_gym.vehicle import AUVParams, remus100
 
 __all__ = [
@@ -42,6 +44,8 @@ VARIANTS: dict[str, dict] = {
     ENV_ID: {},
     "AUVPath3DNominal-v0": {"disturbance": "none"},
     "AUVPath3DFins-v0": {"actuator": "fins"},
+    # v1: the default reward changed (overspeed term and termination above 2.0 m/s, env docstring)
+    "AUVPath3D-v1": {"surge_limit": SURGE_LIMIT},
 }
 
 

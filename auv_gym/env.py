@@ -111,9 +111,16 @@ class AUVPath3DEnv(gym.Env):
 
     ## Rewards
     r = w_progress·min(u_p/u_D, 1) + w_tracking·exp(−d²/1 m²) − w_distance·d/corridor
-    − w_speed·min(((u − u_D)/u_D)², 1) − w_effort·|a|²/3 − w_termination·[failure], with
-    d the distance to the virtual point (`auv_gym.task`). Idling scores about −1.5 per step,
-    following about +2; every term is reported in `info` as `reward_<term>`.
+    − w_speed·min(((u − u_D)/u_D)², 1) − w_overspeed·min(max(u − u_D, 0)/(u_max − u_D), 1)²
+    − w_effort·|a|²/3 − w_termination·[failure], with d the distance to the virtual point and
+    u_max = `surge_limit` (`auv_gym.task`). Idling scores about −1.5 per step, following about
+    +2; every term is reported in `info` as `reward_<term>`.
+
+    Realistic speed: the speed term is capped at u = 2u_D, so an agent may buy accuracy by
+    sprinting far beyond REMUS 100's top speed (~2.3-2.5 m/s). A finite `surge_limit` u_max
+    adds the overspeed penalty (0 at u_D, w_overspeed at u_max) and ends the episode as
+    "overspeed" when u > u_max. `AUVPath3D-v1` sets u_max = 2.0 m/s; in v0 (u_max = inf) the
+    overspeed term is −0.0 and the rewards are those of the first release bit for bit.
 
     ## Starting State
     The path's default start (paper: (15, 5, 0) m, ψ = θ = 0, ν = 0, s = 0). With
@@ -134,7 +141,8 @@ class AUVPath3DEnv(gym.Env):
     `corridor` (30 m); "pitch" — |θ| above `max_pitch` (60°); "non_finite" — the state or the
     observation is no longer finite (NaN, inf or beyond the float32 range; the last observation
     returned before is returned again); "envelope" — the observation left its documented
-    bounds; "path_end" — s reached the end of a finite path. Every other step returns an
+    bounds; "path_end" — s reached the end of a finite path; "overspeed" — u above
+    `surge_limit` (none in v0). Every other step returns an
     observation inside `observation_space`, and every reward is finite.
 
     Truncated at `max_time`: `truncated` is True from the first control step at which
@@ -163,6 +171,7 @@ class AUVPath3DEnv(gym.Env):
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
     | `virtual_point_law` | "corrected" | "printed" restores the paper's unstable 1 − tanh |
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
+    | `surge_limit` | inf (v1: 2.0) | u_max [m/s]: overspeed penalty and termination (Rewards) |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
     | `params` | REMUS 100 | `AUVParams` of the true vehicle |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
@@ -175,6 +184,7 @@ class AUVPath3DEnv(gym.Env):
     - `noise_hold` a whole multiple of `physics_dt`, ≤ 1e6 s; given together with a `NoiseConfig`
       it must equal that config's `hold` (no silent override). Amplitudes in [0, 1e4] N or N·m.
     - `current`: mean and std per axis within ±10 m/s (std ≥ 0), time constant in (0, 1e6] s.
+    - `surge_limit` in (u_desired, 10] m/s or inf.
     - `param_uncertainty` in [0, 1); `u_desired` in (0, 10] m/s, so that u_D and u_p ≤ 2u_D stay
       inside their observation bounds; `sigma` > 0 m.
     - `corridor` in [0.01, 500] m, inside the ±500 m bounds of the observed errors; `max_pitch`
@@ -197,7 +207,11 @@ class AUVPath3DEnv(gym.Env):
     * v0: initial release (REMUS 100 in the paper's 5-DOF form, docs/model.md §6 corrections).
       Later v0 fixes, default behaviour unchanged: the env owns truncation at `max_time` (was a
       registered `TimeLimit` of 6000 steps, wrong for any other `control_dt`); every argument is
-      range-checked; a non-finite observation ends the episode as "non_finite".
+      range-checked; a non-finite observation ends the episode as "non_finite"; the
+      `surge_limit` argument (default inf: no limit, rewards unchanged bit for bit).
+    * v1: realistic speed — the v0 environment with `surge_limit` = 2.0 m/s by default: the
+      overspeed reward term and the "overspeed" termination (docs/design.md §3). Everything
+      else, including every other default, is v0's.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
@@ -219,6 +233,7 @@ class AUVPath3DEnv(gym.Env):
         virtual_point_law: str = "corrected",
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
+        surge_limit: float = math.inf,
         reward_weights: RewardWeights | dict | None = None,
         params: AUVParams | None = None,
         start_position: Sequence[float] | None = None,
@@ -231,7 +246,7 @@ class AUVPath3DEnv(gym.Env):
             physics_dt=physics_dt, noise_hold=noise_hold, max_time=max_time,
             randomize_start=randomize_start, u_desired=u_desired, sigma=sigma,
             virtual_point_law=virtual_point_law,
-            corridor=corridor, max_pitch=max_pitch, params=params,
+            corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights,
         )  # fmt: skip

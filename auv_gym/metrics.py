@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.task import SURGE_LIMIT
 from auv_gym.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 
 __all__ = [
@@ -116,7 +117,10 @@ def compute_metrics(
     Speed [m/s]:
       surge_overshoot — max_k (u − u_D) over the episode (negative if u never reaches u_D);
       surge_overshoot_percent — 100·surge_overshoot/u_D;
-      rms_speed_error — √mean((u − u_D)²) over the window.
+      rms_speed_error — √mean((u − u_D)²) over the window;
+      max_surge — max_k u over the episode (realistic speed: REMUS 100 tops out near
+      2.3-2.5 m/s); overspeed_fraction — fraction of the episode's control intervals
+      [t_k, t_{k+1}) whose end sample has u > `SURGE_LIMIT` (2.0 m/s) [-].
     Actuation:
       control_effort — Σ_k Σ_j τ̄_j² Δt over the episode, i.e. ∫ of the squared normalised τ [s];
       chattering — Σ_k Σ_j abs(τ̄_j(t_{k+1}) − τ̄_j(t_k)) / window length, the total variation
@@ -174,6 +178,9 @@ def compute_metrics(
     metrics["surge_overshoot"] = overshoot
     metrics["surge_overshoot_percent"] = 100.0 * overshoot / tr.u_desired
     metrics["rms_speed_error"] = _window_rms(t, speed_error, transient)
+    surge = tr["u"]
+    metrics["max_surge"] = float(surge.max())
+    metrics["overspeed_fraction"] = float((surge[1:] > SURGE_LIMIT).mean()) if tr.steps else 0.0
     per_channel_effort = (tau_norm**2).sum(axis=0) * dt
     metrics["control_effort"] = float(per_channel_effort.sum())
     # Chattering: total variation inside the window, per second of window.

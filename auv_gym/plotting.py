@@ -39,6 +39,8 @@ TABLE_METRICS: dict[str, tuple[str, str, str]] = {
     "settling_time_0p1": ("settling time to 0.1 m", "s", "min"),
     "surge_overshoot": ("surge overshoot max(u − u_D)", "m/s", "min"),
     "rms_speed_error": ("RMS(u − u_D), t ≥ transient", "m/s", "min"),
+    "max_surge": ("max surge u", "m/s", "min"),
+    "overspeed_fraction": ("time with u > 2.0 m/s", "-", "min"),
     "control_effort": ("control effort ∫Σ(τ/τ_max)² dt", "s", "min"),
     "chattering": ("chattering TV(τ/τ_max) per s", "1/s", "min"),
     "saturation_fraction": ("saturated control steps", "-", "min"),

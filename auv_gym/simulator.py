@@ -188,6 +188,7 @@ class SimConfig:
         virtual_point_law: str = "corrected",
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
+        surge_limit: float = math.inf,
         params: AUVParams | None = None,
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
@@ -214,7 +215,12 @@ class SimConfig:
             start_position=start_position,
             start_heading=start_heading,
             reward=_reward_from(reward_weights),
-            limits=TaskLimits(corridor=corridor, max_pitch=max_pitch, s_end=the_path.s_end),
+            limits=TaskLimits(
+                corridor=corridor,
+                max_pitch=max_pitch,
+                s_end=the_path.s_end,
+                surge_limit=surge_limit,
+            ),
         )
 
     def __post_init__(self) -> None:
@@ -246,6 +252,12 @@ class SimConfig:
         put("u_desired", real("u_desired", self.u_desired, 0.0, SPEED_BOUND, low_open=True,
                               unit="m/s, the observation's bound on u_D"))  # fmt: skip
         put("sigma", real("sigma", self.sigma, 0.0, math.inf, low_open=True, unit="m"))
+        surge_limit = self.limits.surge_limit
+        if not (self.u_desired < surge_limit <= SPEED_BOUND or surge_limit == math.inf):
+            raise ValueError(
+                f"surge_limit must be above u_desired = {self.u_desired} m/s and at most "
+                f"{SPEED_BOUND} m/s, or inf, got {surge_limit!r} m/s"
+            )
         put("randomize_start", flag("randomize_start", self.randomize_start))
         if self.start_position is not None:
             put("start_position", vector("start_position", self.start_position, 3,

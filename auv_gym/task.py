@@ -6,12 +6,20 @@ Reward per control step (weights are constructor arguments of the envs):
       + w_tracking·exp(−(d/d_0)²)             dense bonus for being on the path, d_0 = 1 m
       − w_distance·d/d_corridor               distance to the virtual point, normalised
       − w_speed·min(((u − u_D)/u_D)², 1)      surge-speed tracking
+      − w_overspeed·min(max(u − u_D, 0)/(u_max − u_D), 1)²   approaching the surge limit u_max
       − w_effort·|a|²/3                       normalised actuator effort
       − w_termination·[terminated by failure]  corridor, pitch, non-finite or envelope exit
 
 Because the virtual point waits for a slow vehicle (docs/model.md §3.3), error penalties alone are
 maximised by not moving; the progress and speed terms make idling cost about 1.5 per step while
 following the path earns about 2 per step.
+
+Surge limit (`TaskLimits.surge_limit` u_max, the env argument `surge_limit`): the speed term is
+capped at u = 2u_D, so without a limit an agent may sprint (4.5 m/s seen, a REMUS 100 tops out
+near 2.3-2.5 m/s). With a finite u_max the overspeed term grows from 0 at u_D to w_overspeed at
+u_max and u > u_max ends the episode as "overspeed", a failure (docs/design.md §3). With
+u_max = inf (the `AUVPath3D-v0` default) the term is exactly −0.0 and nothing terminates, so v0
+rewards are unchanged bit for bit; `AUVPath3D-v1` sets u_max = `SURGE_LIMIT` = 2.0 m/s.
 """
 
 from __future__ import annotations
@@ -38,17 +46,24 @@ __all__ = [
     "task_vector",
 ]
 
-REWARD_TERMS = ("progress", "tracking", "distance", "speed", "effort", "termination")
+REWARD_TERMS = ("progress", "tracking", "distance", "speed", "overspeed", "effort", "termination")
 N_TERMS = len(REWARD_TERMS)
 TERM = field_indices("RewardTermIndex", REWARD_TERMS, __name__)
-# Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -].
-TASK_FIELDS = (*(f"w_{name}" for name in REWARD_TERMS), "corridor", "max_pitch", "s_end")
+# Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -, m/s].
+TASK_FIELDS = (
+    *(f"w_{name}" for name in REWARD_TERMS),
+    "corridor",
+    "max_pitch",
+    "s_end",
+    "surge_limit",
+)
 TASK_DIM = len(TASK_FIELDS)
 TaskRecord = record_type("TaskRecord", TASK_FIELDS, __name__)
 # Codes returned by `task_row`; 0 means "running".
-TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end")
-CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END = 1, 2, 3, 4, 5
+TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end", "overspeed")
+CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END, OVERSPEED = 1, 2, 3, 4, 5, 6
 TRACKING_SCALE = 1.0  # [m] d_0 of the tracking bonus
+SURGE_LIMIT = 2.0  # [m/s] u_max of AUVPath3D-v1: below REMUS 100's top speed of ~2.3-2.5 m/s
 # Documented ranges. Bounded weights and a corridor of at least 1 cm keep every reward finite
 # (the observation is bounded by the float32 range or the episode ends as "non_finite"); a
 # corridor inside the observation's ±ERROR_BOUND keeps a running vehicle's errors in bounds.
@@ -65,6 +80,7 @@ class RewardWeights:
     tracking: float = 1.0
     distance: float = 1.0
     speed: float = 0.5
+    overspeed: float = 1.0  # acts only with a finite surge_limit (AUVPath3D-v1)
     effort: float = 0.05
     termination: float = 100.0
 
@@ -76,11 +92,13 @@ class RewardWeights:
 
 @dataclass(frozen=True)
 class TaskLimits:
-    """Episode-end limits: the corridor [m] around the virtual point and the safe pitch [rad]."""
+    """Episode-end limits: the corridor [m] around the virtual point, the safe pitch [rad] and
+    the surge limit u_max [m/s] (inf: none)."""
 
     corridor: float = 30.0  # [m] initial distance is 17.7 m in the paper scenario
     max_pitch: float = math.radians(60.0)  # [rad]
     s_end: float = math.inf  # path parameter at which the path ends
+    surge_limit: float = math.inf  # [m/s] u_max; inf: no limit (AUVPath3D-v0)
 
     def __post_init__(self) -> None:
         corridor = real("corridor", self.corridor, MIN_CORRIDOR, ERROR_BOUND, unit="m")
@@ -91,11 +109,16 @@ class TaskLimits:
         object.__setattr__(self, "corridor", corridor)
         object.__setattr__(self, "max_pitch", max_pitch)
         object.__setattr__(self, "s_end", float(self.s_end))
+        if not (is_real(self.surge_limit) and self.surge_limit > 0):
+            raise ValueError(f"surge_limit must be a positive speed in m/s or inf, got "
+                             f"{self.surge_limit!r:.80}")  # fmt: skip
+        object.__setattr__(self, "surge_limit", float(self.surge_limit))
 
 
 def task_vector(weights: RewardWeights, limits: TaskLimits) -> np.ndarray:
     """Pack weights and limits into the row `task_row` reads (layout `TASK_FIELDS`)."""
-    return np.array([*astuple(weights), limits.corridor, limits.max_pitch, limits.s_end])
+    return np.array([*astuple(weights), limits.corridor, limits.max_pitch, limits.s_end,
+                     limits.surge_limit])  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -135,15 +158,20 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
         if code == 0 and st[STATE.s] >= t.s_end:
             code = PATH_END
     u_d, u = obs[OBS.u_D], obs[OBS.u]
+    if code == 0 and u > t.surge_limit:
+        code = OVERSPEED
     if not finite:
         out_terms[TERM.progress] = out_terms[TERM.tracking] = out_terms[TERM.distance] = 0.0
-        out_terms[TERM.speed] = out_terms[TERM.effort] = 0.0
+        out_terms[TERM.speed] = out_terms[TERM.overspeed] = out_terms[TERM.effort] = 0.0
     else:
         out_terms[TERM.progress] = t.w_progress * min(obs[OBS.u_p] / u_d, 1.0) if u_d > 0 else 0.0
         out_terms[TERM.tracking] = t.w_tracking * math.exp(-((distance / TRACKING_SCALE) ** 2))
         out_terms[TERM.distance] = -t.w_distance * distance / t.corridor
         speed_err = (u - u_d) / u_d if u_d > 0 else u
         out_terms[TERM.speed] = -t.w_speed * min(speed_err * speed_err, 1.0)
+        # (u − u_D)/inf = 0 without a limit: the term is −0.0 and the total is unchanged
+        excess = min(max(u - u_d, 0.0) / (t.surge_limit - u_d), 1.0)
+        out_terms[TERM.overspeed] = -t.w_overspeed * excess * excess
         effort = action[0] ** 2 + action[1] ** 2 + action[2] ** 2
         out_terms[TERM.effort] = -t.w_effort * effort / 3.0
     failed = code != 0 and code != PATH_END

@@ -22,6 +22,8 @@ SUMMARY_METRICS = {
     "settling_time_0p5": "min",
     "surge_overshoot": "min",
     "rms_speed_error": "min",
+    "max_surge": "min",
+    "overspeed_fraction": "min",
     "control_effort": "min",
     "chattering": "min",
     "saturation_fraction": "min",

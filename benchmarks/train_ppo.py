@@ -39,6 +39,7 @@ from pathlib import Path
 from benchmarks.cli import HelpFormatter
 from benchmarks.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
+from benchmarks.training.train import check_options
 
 FIXED = {"algo": "ppo"}  # TrainOptions this CLI does not offer
 # One-line help per option (the TrainOptions field comments, for the CLI).
@@ -118,6 +119,11 @@ def main(argv: Sequence[str] | None = None) -> None:
         print(json.dumps(report["summary"], indent=2))
         return
     if not extra.plot_only:
+        try:  # bad options: one line and exit code 2, before any training starts
+            check_options(opts)
+        except (ValueError, FileNotFoundError) as exc:
+            print(f"train_ppo: error: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
         out = train(opts, argv=["benchmarks/train_ppo.py", *args])
         print(f"run directory: {out}")
     if extra.curve:

@@ -50,6 +50,7 @@ STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent
 VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
 METADATA_FILE = "metadata.json"
 STATS_SHAPES = {"mean": (OBS_DIM,), "var": (OBS_DIM,), "clip_obs": (), "epsilon": ()}
+ALGORITHM_CLASSES = {"ppo": "PPO", "sac": "SAC"}  # metadata "algo" → stable_baselines3 class
 
 
 class PPOPolicy:
@@ -215,7 +216,10 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
             f"{meta}: agent trained for observation layout {names!r}, this auv_gym has "
             f"{list(OBS_NAMES)}"
         )
-    expected = {"algo": "ppo", "observation_shape": [OBS_DIM], "action_shape": [ACTION_DIM]}
+    algo = metadata.get("algo", "ppo")
+    if not isinstance(algo, str) or algo not in ALGORITHM_CLASSES:
+        raise ValueError(f"{meta}: algo is {algo!r}, expected one of {sorted(ALGORITHM_CLASSES)}")
+    expected = {"observation_shape": [OBS_DIM], "action_shape": [ACTION_DIM]}
     for key, value in expected.items():
         if key in metadata and metadata[key] != value:
             raise ValueError(f"{meta}: {key} is {metadata[key]!r}, expected {value!r}")
@@ -314,7 +318,8 @@ def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float]:
 def load_policy(
     path: str | os.PathLike, *, device: str = "cpu", num_threads: int | None = 1
 ) -> PPOPolicy:
-    """Load a PPO agent (directory with model.zip + vecnormalize.npz + metadata.json, or a zip).
+    """Load a PPO agent (directory with model.zip + vecnormalize.npz + metadata.json, or a zip);
+    a SAC agent of the same layout when its metadata says ``"algo": "sac"``.
 
     The files are validated first, before torch is imported (`check_agent`: FileNotFoundError
     when the model or its statistics are missing, ValueError naming the file and the problem
@@ -323,12 +328,16 @@ def load_policy(
     itself leaves torch's settings alone.
     """
     files = check_agent(path)
-    from stable_baselines3 import PPO
+    import stable_baselines3
 
+    # The harness trains PPO and SAC (benchmarks.training.config); metadata names the algorithm.
+    algorithm = getattr(
+        stable_baselines3, ALGORITHM_CLASSES[str(files.metadata.get("algo", "ppo"))]
+    )
     # Schedules are not needed for inference; replacing them avoids unpickling closures.
     custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
     try:
-        model = PPO.load(files.model, device=device, custom_objects=custom)
+        model = algorithm.load(files.model, device=device, custom_objects=custom)
     except Exception as exc:
         raise ValueError(f"PPO model {files.model} cannot be loaded: {exc}") from exc
     shape = tuple(model.observation_space.shape or ())

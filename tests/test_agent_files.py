@@ -136,7 +136,7 @@ DAMAGES = {
                       r"observation_shape is \[16\], expected \[15\]"),
     "meta action size": (edit_meta(action_shape=[4]), META,
                          r"action_shape is \[4\], expected \[3\]"),
-    "meta algo": (edit_meta(algo="sac"), META, r"algo is 'sac', expected 'ppo'"),
+    "meta algo": (edit_meta(algo="dqn"), META, r"algo is 'dqn', expected one of \['ppo', 'sac'\]"),
     "meta version": (edit_meta(auv_gym_version="1.0.0"), META,
                      r"trained with auv-gym 1.0.0, this is auv-gym 0\.\d+\.\d+"),
     "meta bad version": (edit_meta(auv_gym_version="abc"), META, r"'abc' is not a version"),

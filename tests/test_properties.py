@@ -42,7 +42,8 @@ from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, TERMINAT
 from auv_gym.vector_env import AUVPath3DVectorEnv
 from auv_gym.vehicle import remus100
 
-FAILURES = {"corridor", "pitch", "envelope", "non_finite"}  # may leave the observation space
+# may leave the observation space
+FAILURES = {"corridor", "pitch", "envelope", "non_finite", "overspeed"}
 assert FAILURES | {"path_end", ""} == set(TERMINATION_REASONS)
 PHYSICS_STEPS_PER_EXAMPLE = 20_000  # keeps an example in milliseconds
 CI = settings(

@@ -18,7 +18,7 @@ from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW
 from auv_gym.paths import Helix, Spline, StraightLine
 from auv_gym.simulator import SimConfig
-from auv_gym.task import TERMINATION_REASONS, RewardWeights, TaskLimits, task_row
+from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS, RewardWeights, TaskLimits, task_row
 from auv_gym.validation import ArgumentTypeError, choice, flag, integer, real, vector
 from auv_gym.vector_env import AUVPath3DVectorEnv
 from auv_gym.vehicle import AUVParams
@@ -206,11 +206,11 @@ def test_a_non_finite_observation_of_a_finite_state_is_non_finite(bad):
     sim = env.sim
     obs = sim.obs[0].copy()
     obs[OBS_INDEX["psi_F_dot"]] = bad  # the state stays finite
-    terms = np.zeros(6)
+    terms = np.zeros(len(REWARD_TERMS))
     reward, code = task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH,
                             sim._task, terms)  # fmt: skip
     assert TERMINATION_REASONS[code] == "non_finite"
-    assert reward == -100.0 and terms.tolist() == [0, 0, 0, 0, 0, -100.0]
+    assert reward == -100.0 and terms.tolist() == [0] * (len(REWARD_TERMS) - 1) + [-100.0]
     obs[OBS_INDEX["psi_F_dot"]] = 9.0  # inside: the same call runs on
     assert task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task,
                     terms)[1] == 0  # fmt: skip

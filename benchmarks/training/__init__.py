@@ -18,11 +18,12 @@ layout) and written atomically, so a killed run never leaves a half-written agen
 `resume=True` restarts from the newest checkpoint with `reset_num_timesteps=False`, losing at
 most one checkpoint interval. The agents load with `controllers.ppo.load_policy`.
 
-Modules: `config` (YAML files, `ALGORITHMS`), `train` (`TrainOptions`, `train`: one algorithm,
-one seed, one run directory — a multi-seed run is a loop over seeds with one run directory
-each), `callbacks` (evaluation and checkpoints during training), `checkpoints` (agent
-directories), `evaluation` (seeds, scoring, held-out evaluation), `learning_curve`
-(evaluations.csv). SB3 and torch are imported only when training or evaluating.
+Modules: `config` (YAML files, `ALGORITHMS`: PPO, SAC), `train` (`TrainOptions`, `train`: one
+algorithm, one seed, one run directory), `seeds` (`train_seeds`: N seeds, one run directory
+each, as local processes or Ray tasks; CLI `python -m benchmarks.train_seeds`), `callbacks`
+(evaluation and checkpoints during training), `checkpoints` (agent directories), `evaluation`
+(seeds, scoring, held-out evaluation), `learning_curve` (evaluations.csv). SB3 and torch are
+imported only when training or evaluating.
 """
 
 from benchmarks.training.config import ALGORITHMS, ZooConfig, read_zoo_config

@@ -84,11 +84,14 @@ class PeriodicEvaluation(BaseCallback):
 
 
 class PeriodicCheckpoint(BaseCallback):
-    """Every `every` env steps: the agent to OUT/checkpoints/step_<n>/; the newest `keep` stay."""
+    """Every `every` env steps: the agent (with the replay buffer if `replay_buffer`) to
+    OUT/checkpoints/step_<n>/; the newest `keep` stay."""
 
-    def __init__(self, out: Path, every: int, keep: int, metadata: MetadataFn) -> None:
+    def __init__(self, out: Path, every: int, keep: int, metadata: MetadataFn,
+                 replay_buffer: bool = False) -> None:  # fmt: skip
         super().__init__()
         self.out, self.every, self.keep, self.metadata = out, every, keep, metadata
+        self.replay_buffer = replay_buffer
         self.next_checkpoint = 0
 
     def _on_training_start(self) -> None:
@@ -98,6 +101,7 @@ class PeriodicCheckpoint(BaseCallback):
         if self.num_timesteps >= self.next_checkpoint:
             self.next_checkpoint += self.every
             folder = checkpoint_folder(self.out, self.num_timesteps)
-            save_agent(self.model, self.model.get_vec_normalize_env(), folder, self.metadata({}))
+            save_agent(self.model, self.model.get_vec_normalize_env(), folder, self.metadata({}),
+                       replay_buffer=self.replay_buffer)  # fmt: skip
             prune_checkpoints(self.out, self.keep)
         return True

@@ -22,6 +22,7 @@ from controllers.ppo import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 __all__ = [
     "CHECKPOINTS",
+    "REPLAY_FILE",
     "export_agent",
     "latest_checkpoint",
     "list_checkpoints",
@@ -31,6 +32,7 @@ __all__ = [
 ]
 
 CHECKPOINTS = "checkpoints"  # folder of a run holding step_<num_timesteps>/ agent directories
+REPLAY_FILE = "replay_buffer.pkl"  # off-policy checkpoints (SAC): the replay buffer, for resuming
 
 
 def write_metadata(path: Path, metadata: dict[str, Any]) -> None:
@@ -38,8 +40,10 @@ def write_metadata(path: Path, metadata: dict[str, Any]) -> None:
     write_json(path, metadata, indent=2, sort_keys=True)
 
 
-def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str, Any]) -> None:
-    """Write model.zip, vecnormalize.pkl/.npz and metadata.json as the folder ``folder``.
+def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str, Any],
+               replay_buffer: bool = False) -> None:  # fmt: skip
+    """Write model.zip, vecnormalize.pkl/.npz and metadata.json as the folder ``folder``
+    (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl).
 
     The folder is filled beside its place and then swapped in (`write_folder_atomic`), so
     readers see either the previous complete agent or the new one.
@@ -55,6 +59,8 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
             epsilon=np.float64(vec_normalize.epsilon), obs_names=np.array(OBS_NAMES),
         )  # fmt: skip
         write_metadata(tmp / METADATA_FILE, metadata)
+        if replay_buffer:
+            model.save_replay_buffer(tmp / REPLAY_FILE)
 
     write_folder_atomic(folder, fill)
 

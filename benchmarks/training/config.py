@@ -10,8 +10,10 @@ A file has one top-level section per env id, in rl_zoo3 2.x format::
       learning_rate: lin_3e-4
       ...
 
-The keys an algorithm accepts are listed in its `Algorithm` entry of `ALGORITHMS`; another
-algorithm (SAC, say) is one more entry, read with the same `read_zoo_config`.
+The keys an algorithm accepts are listed in its `Algorithm` entry of `ALGORITHMS` (PPO, SAC);
+another algorithm is one more entry, read with the same `read_zoo_config`. Off-policy algorithms
+(`Algorithm.off_policy`) also save their replay buffer in checkpoints, so a resumed run continues
+with the samples it had.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ class Algorithm:
     class_name: str
     hyperparameters: frozenset[str]
     schedules: tuple[str, ...] = ()
+    off_policy: bool = False
 
     def sb3_class(self) -> Any:
         """The SB3 class (imports stable_baselines3)."""
@@ -59,6 +62,18 @@ ALGORITHMS: dict[str, Algorithm] = {
             "max_grad_norm", "use_sde", "sde_sample_freq", "target_kl", "stats_window_size",
         }),
         schedules=("learning_rate", "clip_range"),
+    ),
+    "sac": Algorithm(
+        "sac",
+        "SAC",
+        frozenset({
+            "learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma",
+            "train_freq", "gradient_steps", "optimize_memory_usage", "ent_coef",
+            "target_update_interval", "target_entropy", "use_sde", "sde_sample_freq",
+            "use_sde_at_warmup", "stats_window_size",
+        }),
+        schedules=("learning_rate",),
+        off_policy=True,
     ),
 }  # fmt: skip
 

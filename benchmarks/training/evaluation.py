@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym import ENV_ID, VARIANTS
 from auv_gym.files import write_json
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
@@ -51,8 +52,9 @@ def evaluate_policy_on_seeds(
     Returns one dict per seed with seed, rms_distance and rms_x_e, rms_y_e, rms_z_e [m] over
     t ≥ transient (None: the shared rule min(100 s, max_time/2), docs/design.md §3.9),
     max_distance [m] over that window, window_samples (0 when the episode ended before the
-    window: then the rms values are NaN), duration [s] and termination_reason in the env's
-    spelling ("" when the episode ran to max_time, `auv_gym.trajectory.env_termination_reason`).
+    window: then the rms values are NaN), duration [s], max_surge [m/s] and overspeed_fraction
+    (time with u > 2.0 m/s) over the episode, and termination_reason in the env's spelling (""
+    when the episode ran to max_time, `auv_gym.trajectory.env_termination_reason`).
     """
     results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)
     return [
@@ -61,13 +63,15 @@ def evaluate_policy_on_seeds(
          "rms_z_e": float(r["rms_z_e"]),
          "max_distance": float(r["max_distance_window"]), "duration": float(r["duration"]),
          "window_samples": int(r["window_samples"]),
+         "max_surge": float(r["max_surge"]), "overspeed_fraction": float(r["overspeed_fraction"]),
          "termination_reason": env_termination_reason(str(r["termination_reason"]))}
         for r in results
     ]  # fmt: skip
 
 
 def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """Mean ± std of rms_distance over seeds and the number of terminated episodes."""
+    """Mean ± std of rms_distance over seeds, the number of terminated episodes and the largest
+    surge speed [m/s] of any episode."""
     rms = np.array([r["rms_distance"] for r in results], dtype=float)
     terminated = [r["termination_reason"] for r in results if r["termination_reason"]]
     finite = rms[np.isfinite(rms)]
@@ -81,6 +85,7 @@ def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "rms_distance_mean": float(finite.mean()) if finite.size else math.nan,
         "rms_distance_std": float(finite.std()) if finite.size else math.nan,
         "rms_distance_max": float(finite.max()) if finite.size else math.nan,
+        "max_surge_max": max((r.get("max_surge", math.nan) for r in results), default=math.nan),
         "n_episodes": len(results),
         "n_terminated": len(terminated),
         "terminations": sorted(set(terminated)),
@@ -102,12 +107,18 @@ def score(summary: dict[str, Any]) -> tuple[int, float]:
     return summary["n_terminated"], (mean if math.isfinite(mean) else math.inf)
 
 
-def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> dict[str, Any]:
-    """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results."""
+def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
+                        env_id: str = ENV_ID) -> dict[str, Any]:  # fmt: skip
+    """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results.
+
+    ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
+    AUVPath3D-v1, under which an agent faster than 2.0 m/s terminates as "overspeed".
+    """
     policy = load_policy(agent)
-    results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration))
+    fixed = VARIANTS[env_id]
+    results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
-        "scenario": "paper (helix, white noise ±35 N / N·m, defaults of AUVPath3D-v0)",
+        "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",
         "seeds": list(HELD_OUT_SEEDS), "duration_s": float(duration),
         "transient_s": window_start(float(duration)), "summary": summarize(results),
         "results": results,
@@ -116,8 +127,9 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> di
     }  # fmt: skip
 
 
-def write_held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0) -> dict[str, Any]:
+def write_held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
+                              env_id: str = ENV_ID) -> dict[str, Any]:  # fmt: skip
     """`held_out_evaluation` of an agent directory, written to AGENT/held_out_evaluation.json."""
-    report = held_out_evaluation(agent, duration)
+    report = held_out_evaluation(agent, duration, env_id)
     write_json(Path(agent) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
     return report

@@ -1,7 +1,8 @@
 """The learning curve of a run: RUN/evaluations.csv, one row per evaluation during training.
 
 Columns: env steps, training wall time [s] (summed over resumed sessions), and the mean, std and
-max rms distance [m] and number of terminated episodes over the evaluation seeds. Rows are
+max rms distance [m], the number of terminated episodes and the largest surge speed [m/s]
+over the evaluation seeds. Rows are
 appended and flushed to disk one by one; a resumed run first drops the rows past the checkpoint
 it restarts from. `benchmarks.figures.plot_learning_curve` draws it.
 """
@@ -20,14 +21,14 @@ __all__ = ["EVAL_FILE", "EVAL_HEADER", "append_row", "read_rows", "truncate_rows
 
 EVAL_FILE = "evaluations.csv"
 EVAL_HEADER = ["num_timesteps", "wall_time_s", "rms_distance_mean", "rms_distance_std",
-               "rms_distance_max", "n_terminated"]  # fmt: skip
+               "rms_distance_max", "n_terminated", "max_surge_max"]  # fmt: skip
 
 
 def append_row(path: Path, num_timesteps: int, wall_time: float, summary: dict[str, Any]) -> None:
     """Append one evaluation (a `benchmarks.training.evaluation.summarize` dict) to the curve."""
     row = [num_timesteps, f"{wall_time:.1f}", f"{summary['rms_distance_mean']:.6g}",
            f"{summary['rms_distance_std']:.6g}", f"{summary['rms_distance_max']:.6g}",
-           summary["n_terminated"]]  # fmt: skip
+           summary["n_terminated"], f"{summary['max_surge_max']:.6g}"]  # fmt: skip
     new = not path.exists()
     with path.open("a", newline="") as f:
         writer = csv.writer(f)

@@ -14,10 +14,11 @@ from pathlib import Path
 from typing import Any
 
 import auv_gym
-from auv_gym import ENV_ID
+from auv_gym import ENV_ID, VARIANTS
 from auv_gym.files import git_commit, versions
 from auv_gym.observation import OBS_DIM, OBS_NAMES
 from benchmarks.training.checkpoints import (
+    REPLAY_FILE,
     export_agent,
     latest_checkpoint,
     save_agent,
@@ -26,6 +27,7 @@ from benchmarks.training.checkpoints import (
 from benchmarks.training.config import ALGORITHMS, read_zoo_config
 from benchmarks.training.evaluation import (
     EVAL_SEEDS,
+    HELD_OUT_SEEDS,
     TRAIN_SEED_BASE,
     check_evaluation_duration,
     write_held_out_evaluation,
@@ -33,7 +35,7 @@ from benchmarks.training.evaluation import (
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
 from controllers.ppo import METADATA_FILE, MODEL_FILE, VECNORM_FILE
 
-__all__ = ["TrainOptions", "make_training_env", "thread_limit", "train"]
+__all__ = ["TrainOptions", "check_options", "make_training_env", "thread_limit", "train"]
 
 HERE = Path(__file__).resolve().parent.parent  # benchmarks/
 
@@ -86,19 +88,21 @@ def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: 
     """An SB3 VecEnv of `n_envs` training environments.
 
     "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
-    "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available.
+    "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available. The native env
+    simulates every id of `auv_gym.VARIANTS` (its fixed keyword arguments, then `env_kwargs`).
     """
     if kind not in ("auto", "native", "dummy"):
         raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
     env_seed = TRAIN_SEED_BASE + 1000 * int(seed)
-    if kind in ("auto", "native") and env_id == ENV_ID:
+    if kind in ("auto", "native") and env_id in VARIANTS:
         from stable_baselines3.common.vec_env import VecMonitor
 
         from auv_gym.sb3 import make_sb3_vec_env
 
-        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, **env_kwargs))
+        kwargs = {**VARIANTS[env_id], **env_kwargs}
+        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, **kwargs))
     if kind == "native":
-        raise ValueError(f"the native vector env simulates {ENV_ID} only, not {env_id}")
+        raise ValueError(f"the native vector env simulates {sorted(VARIANTS)} only, not {env_id}")
     from stable_baselines3.common.env_util import make_vec_env
 
     return make_vec_env(env_id, n_envs=n_envs, seed=env_seed, env_kwargs=env_kwargs)
@@ -111,6 +115,46 @@ def _describe(venv: Any) -> str:
         names.append(type(venv).__name__)
         venv = getattr(venv, "venv", None)
     return "<".join(names) + ">" * (len(names) - 1)
+
+
+def check_options(opts: TrainOptions) -> None:
+    """Refuse options that cannot give a meaningful run, before any work starts: ValueError
+    naming the option, its value and the allowed range (the CLIs print it as one line).
+
+    Budgets and frequencies must be positive (``n_timesteps`` None: the config's), evaluation
+    seeds non-empty, unique and disjoint from the held-out seeds `HELD_OUT_SEEDS` of the
+    reported results, the algorithm known and the config readable for ``env_id``.
+    """
+    if opts.algo not in ALGORITHMS:
+        raise ValueError(f"algo {opts.algo!r} is unknown; valid: {sorted(ALGORITHMS)}")
+    if opts.n_timesteps is not None and not opts.n_timesteps >= 1:
+        raise ValueError(f"n_timesteps must be a positive number of env steps, got "
+                         f"{opts.n_timesteps}")  # fmt: skip
+    for name in ("checkpoint_freq", "keep_checkpoints", "threads"):
+        if not getattr(opts, name) >= 1:
+            raise ValueError(f"{name} must be a positive integer, got {getattr(opts, name)}")
+    if opts.eval_freq < 0:
+        raise ValueError(f"eval_freq must be >= 0 env steps (0: no evaluation), got "
+                         f"{opts.eval_freq}")  # fmt: skip
+    seeds = tuple(opts.eval_seeds)
+    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
+        raise ValueError(f"eval_seeds must be distinct non-negative integers, got {list(seeds)}")
+    overlap = sorted(set(seeds) & set(HELD_OUT_SEEDS))
+    if overlap:
+        raise ValueError(
+            f"eval_seeds {overlap} overlap the held-out seeds {HELD_OUT_SEEDS[0]}-"
+            f"{HELD_OUT_SEEDS[-1]} of the reported results: choose evaluation (validation) "
+            "seeds outside them, e.g. 100-104"
+        )
+    if not (opts.eval_duration > 0 and opts.eval_duration < float("inf")):
+        raise ValueError(f"eval_duration must be a positive time in s, got {opts.eval_duration}")
+    read_zoo_config(opts.config, opts.env_id, opts.algo)
+
+
+def _eval_kwargs(opts: TrainOptions) -> dict[str, Any]:
+    """The evaluation episodes: the paper scenario under the trained id's fixed arguments (the
+    surge limit of AUVPath3D-v1), `eval_duration` long."""
+    return {**VARIANTS.get(opts.env_id, {}), "max_time": float(opts.eval_duration)}
 
 
 def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
@@ -134,16 +178,16 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
 
     from benchmarks.training.callbacks import PeriodicCheckpoint, PeriodicEvaluation
 
+    check_options(opts)
     cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
-    algorithm = ALGORITHMS[opts.algo].sb3_class()
-    n_timesteps = int(opts.n_timesteps or cfg.n_timesteps)
-    if opts.checkpoint_freq < 1:
-        raise ValueError("checkpoint_freq must be a positive number of env steps")
+    spec = ALGORITHMS[opts.algo]
+    algorithm = spec.sb3_class()
+    n_timesteps = int(cfg.n_timesteps if opts.n_timesteps is None else opts.n_timesteps)
     out = Path(opts.out)
     if out.exists() and any(out.iterdir()) and not opts.resume:
         raise ValueError(f"run directory {out} is not empty; pass --resume or another --out")
     out.mkdir(parents=True, exist_ok=True)
-    eval_kwargs = {"max_time": float(opts.eval_duration)}  # the paper scenario: defaults
+    eval_kwargs = _eval_kwargs(opts)
     set_random_seed(opts.seed)
     venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id)
 
@@ -157,6 +201,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         venv.training = True
         model = algorithm.load(checkpoint / MODEL_FILE, env=venv, device="cpu",
                                tensorboard_log=str(out / "tb"), verbose=opts.verbose)  # fmt: skip
+        if spec.off_policy and (checkpoint / REPLAY_FILE).is_file():
+            model.load_replay_buffer(checkpoint / REPLAY_FILE)
         truncate_rows(out / EVAL_FILE, model.num_timesteps)
     else:
         venv = VecNormalize(venv, **cfg.normalize)
@@ -193,7 +239,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if opts.eval_freq > 0:
         callbacks.append(PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
                                             metadata, start_wall, best, opts.verbose))  # fmt: skip
-    callbacks.append(PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata))
+    callbacks.append(PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata,
+                                        replay_buffer=spec.off_policy))  # fmt: skip
     remaining = n_timesteps - int(model.num_timesteps)
     if remaining > 0:
         model.learn(remaining, callback=CallbackList(callbacks), progress_bar=opts.progress_bar,
@@ -206,5 +253,5 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if opts.export:
         source = out / "best" if (out / "best" / MODEL_FILE).is_file() else out / "final"
         export_agent(source, Path(opts.export))
-        write_held_out_evaluation(opts.export, opts.eval_duration)
+        write_held_out_evaluation(opts.export, opts.eval_duration, opts.env_id)
     return out

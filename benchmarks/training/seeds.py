@@ -1,0 +1,448 @@
+"""Multi-seed training: N seeds of one configuration, as local processes or Ray tasks, resumable.
+
+Layout of a multi-seed run directory OUT::
+
+    OUT/train_seeds.json          the plan (algorithm, env id, config, budget, seeds, evaluation)
+    OUT/seed_<k>/                 the run directory of seed k (`benchmarks.training.train`)
+    OUT/logs/seed_<k>.log         its output (local backend)
+    OUT/seed_<k>/best/held_out_evaluation.json   the seed's agent on the test episodes
+    OUT/summary.json              every seed's validation score, test summary, wall time, and
+                                  the selected seed
+
+Every seed is an independent `train` run with its own checkpoints, so a killed multi-seed run
+is continued with the same command plus ``--resume``: finished seeds are kept, every unfinished
+seed restarts from its newest checkpoint (losing at most one checkpoint interval), and a seed
+killed before its first checkpoint starts again from scratch.
+
+Selection: each seed's `best/` agent is its best evaluation on the validation seeds
+(`eval_seeds`, never the test seeds); the shipped agent is the seed whose best validation score
+(`evaluation.score`: fewer terminated episodes, then lower mean rms distance) is lowest. The test
+episodes (`HELD_OUT_SEEDS` of the task set) are evaluated for every seed and reported, never used
+to choose.
+
+Workers: local processes (spawn) get SIGKILL when the parent dies (Linux `PR_SET_PDEATHSIG`), so
+no training outlives a killed command; Ray tasks (``backend="ray"``) run the same function on a
+cluster whose nodes share OUT.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import math
+import multiprocessing
+import os
+import shutil
+import signal
+import socket
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+from multiprocessing.connection import wait
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import write_json, write_text
+from benchmarks.training.checkpoints import export_agent, latest_checkpoint
+from benchmarks.training.config import read_zoo_config
+from benchmarks.training.evaluation import HELD_OUT_FILE, score
+from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.train import TrainOptions, check_options
+from controllers.ppo import METADATA_FILE, MODEL_FILE
+
+__all__ = [
+    "PLAN_FILE",
+    "SUMMARY_FILE",
+    "TASK_SETS",
+    "SeedsOptions",
+    "check_ray_address",
+    "check_seeds_options",
+    "parse_seeds",
+    "seed_status",
+    "train_seeds",
+]
+
+PLAN_FILE = "train_seeds.json"
+SUMMARY_FILE = "summary.json"
+LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
+# Task sets: where validation and test episodes come from. "paper": the paper scenario (helix,
+# white noise ±35 N / N·m) with validation seeds `EVAL_SEEDS` and test seeds `HELD_OUT_SEEDS`.
+# The training distribution is the config's env_kwargs (the task source of the YAML file).
+TASK_SETS = {"paper": "paper scenario: validation seeds 100-104, test seeds 0-9"}
+# Plan entries that must match when a run is resumed (the rest may change: workers, backend).
+PLAN_KEYS = ("algo", "env_id", "config", "n_timesteps", "eval_seeds", "eval_duration",
+             "eval_freq", "checkpoint_freq", "task_set", "vec_env")  # fmt: skip
+
+
+@dataclass
+class SeedsOptions:
+    """Arguments of `train_seeds` (CLI `python -m benchmarks.train_seeds`)."""
+
+    train: TrainOptions  # the per-seed options; `out` and `seed` are set per seed
+    seeds: tuple[int, ...] = (0,)
+    out: str = "runs/seeds"
+    workers: int = 2  # local processes at once
+    backend: str = "local"  # "local" or "ray"
+    address: str | None = None  # Ray cluster address; None: a local Ray instance
+    resume: bool = False
+    task_set: str = "paper"
+    export: str | None = None  # copy the selected agent here
+    results: str | None = None  # per-seed test results and learning curves, for committing
+    progress: bool = True
+    poll_s: float = 5.0  # [s] between progress updates
+
+
+def parse_seeds(text: str) -> tuple[int, ...]:
+    """ "N" (N ≥ 1 seeds 0…N−1, as `benchmarks.compare --seeds`), "a-b" (inclusive) or "a,b,c"."""
+    text = str(text).strip()
+    try:
+        if "," in text:
+            seeds = tuple(int(s) for s in text.split(",") if s.strip())
+        elif "-" in text[1:]:
+            low, high = (int(s) for s in text.split("-", 1))
+            if high < low:
+                raise ValueError(f"range {text!r} is empty (high {high} < low {low})")
+            seeds = tuple(range(low, high + 1))
+        else:
+            count = int(text)
+            if count < 1:
+                raise ValueError(f"a seed count must be at least 1, got {count}")
+            seeds = tuple(range(count))
+    except ValueError as exc:
+        raise ValueError(
+            f"--seeds {text!r}: {exc}; use a count N >= 1 (seeds 0..N-1), a range a-b or a "
+            "list a,b,c of non-negative integers"
+        ) from None
+    if not seeds:
+        raise ValueError(f"--seeds {text!r} selects no seed")
+    if min(seeds) < 0:
+        raise ValueError(f"--seeds {text!r}: seeds must be non-negative, got {min(seeds)}")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"--seeds {text!r} repeats a seed")
+    return seeds
+
+
+def check_ray_address(address: str | None, timeout_s: float = 3.0) -> None:
+    """A ``host:port`` (or ``ray://host:port``) Ray address must accept a TCP connection within
+    ``timeout_s``; None and "auto" are left to Ray. ValueError naming the address otherwise."""
+    if address in (None, "auto", "local"):
+        return
+    target = address.split("://", 1)[-1]
+    host, _, port = target.rpartition(":")
+    if not host or not port.isdigit():
+        raise ValueError(f"--address {address!r} is not host:port or ray://host:port")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        raise ValueError(f"--address {address!r}: Ray cluster unreachable ({exc})") from None
+
+
+def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
+    """Validate everything before any training starts; returns the plan (PLAN_FILE content).
+
+    ValueError (one line) for: no or negative seeds, bad budgets or evaluation seeds
+    (`check_options`), an evaluation duration that cannot produce a metric, an unknown task
+    set, unknown backend, workers < 1, an unreachable Ray address or a missing Ray, an output
+    folder that holds another run (or no run to resume).
+    """
+    if not opts.seeds or min(opts.seeds) < 0:
+        raise ValueError(f"seeds must be non-empty and non-negative, got {list(opts.seeds)}")
+    if opts.task_set not in TASK_SETS:
+        raise ValueError(f"task set {opts.task_set!r} is unknown; valid: {sorted(TASK_SETS)}")
+    if not (isinstance(opts.workers, int) and opts.workers >= 1):
+        raise ValueError(f"workers must be a positive integer, got {opts.workers!r}")
+    if opts.backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {opts.backend!r}")
+    train = opts.train
+    check_options(train)
+    if train.eval_freq < 1:
+        raise ValueError("eval_freq must be positive: the shipped agent is selected on the "
+                         "validation evaluations")  # fmt: skip
+    check_evaluation_window(train.eval_duration)
+    if opts.backend == "ray":
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
+        check_ray_address(opts.address)
+    cfg = read_zoo_config(train.config, train.env_id, train.algo)
+    n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
+    plan = {
+        "algo": train.algo, "env_id": train.env_id, "config": cfg.raw,
+        "config_file": str(train.config), "n_timesteps": n_timesteps,
+        "eval_seeds": list(train.eval_seeds), "eval_duration": float(train.eval_duration),
+        "eval_freq": train.eval_freq, "checkpoint_freq": train.checkpoint_freq,
+        "task_set": opts.task_set, "vec_env": train.vec_env, "seeds": list(opts.seeds),
+    }  # fmt: skip
+    out = Path(opts.out)
+    plan_file = out / PLAN_FILE
+    if opts.resume:
+        if not plan_file.is_file():
+            raise ValueError(f"--resume: {out} holds no multi-seed run ({PLAN_FILE} missing)")
+        previous = json.loads(plan_file.read_text())
+        for key in PLAN_KEYS:
+            if previous.get(key) != plan[key]:
+                raise ValueError(f"--resume: {key} was {previous.get(key)!r} in {plan_file}, "
+                                 f"now {plan[key]!r}; resume with the same settings")  # fmt: skip
+    elif out.exists() and any(out.iterdir()):
+        raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
+    _check_writable(out)
+    return plan
+
+
+def check_evaluation_window(duration: float) -> None:
+    """Evaluation episodes of ``duration`` [s] must leave samples in the metrics window."""
+    try:  # the shared window rule of auv_gym.metrics, where this checkout has it
+        from benchmarks.training.evaluation import check_evaluation_duration
+    except ImportError:
+        from auv_gym.metrics import DEFAULT_TRANSIENT
+
+        if not duration > DEFAULT_TRANSIENT + 0.05:
+            raise ValueError(
+                f"evaluation duration {duration!r} s leaves no sample in the metrics window "
+                f"t ≥ {DEFAULT_TRANSIENT:g} s: use an eval duration above it"
+            ) from None
+        return
+    check_evaluation_duration(duration)
+
+
+def _check_writable(out: Path) -> None:
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".write_test_{os.getpid()}"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise ValueError(f"output folder {out} is not writable: {exc}") from None
+
+
+def seed_dir(out: str | os.PathLike, seed: int) -> Path:
+    return Path(out) / f"seed_{seed}"
+
+
+def seed_status(out: Path, seed: int, n_timesteps: int) -> str:
+    """ "done" (trained to the budget and tested), "trained" (trained, test evaluation missing),
+    "resume" (a checkpoint to continue from) or "fresh"."""
+    run = seed_dir(out, seed)
+    final = run / "final" / METADATA_FILE
+    if final.is_file() and json.loads(final.read_text()).get("num_timesteps", 0) >= n_timesteps:
+        best = run / "best"
+        return "done" if (best / HELD_OUT_FILE).is_file() else "trained"
+    return "resume" if latest_checkpoint(run) is not None else "fresh"
+
+
+def train_one_seed(train_opts: dict[str, Any], status: str) -> dict[str, Any]:
+    """Train (or resume) one seed and evaluate its best agent on the test episodes.
+
+    Module-level and picklable: the local processes and the Ray tasks run it. Returns the
+    seed's entry of the summary.
+    """
+    from benchmarks.training.evaluation import write_held_out_evaluation
+    from benchmarks.training.train import train
+
+    opts = TrainOptions(**train_opts)
+    run = Path(opts.out)
+    if status == "fresh" and run.exists():
+        shutil.rmtree(run)  # killed before its first checkpoint: nothing to keep
+    if status in ("fresh", "resume"):
+        train(replace(opts, resume=status == "resume", export=None),
+              argv=["benchmarks.train_seeds", f"--seed={opts.seed}"])  # fmt: skip
+    best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
+    if not (best / HELD_OUT_FILE).is_file():
+        write_held_out_evaluation(best, opts.eval_duration, opts.env_id)
+    return seed_entry(run)
+
+
+def seed_entry(run: Path) -> dict[str, Any]:
+    """A finished seed: validation score of its agent, test summary, steps and wall time."""
+    best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
+    final = json.loads((run / "final" / METADATA_FILE).read_text())
+    report = json.loads((best / HELD_OUT_FILE).read_text())
+    validation = final.get("best", {})
+    return {
+        "seed": final["seed"], "agent": str(best), "num_timesteps": final["num_timesteps"],
+        "wall_time_s": final["wall_time_s"],
+        "validation_score": validation.get("score"),
+        "validation_num_timesteps": validation.get("num_timesteps"),
+        "validation_summary": validation.get("summary"), "test_summary": report["summary"],
+    }  # fmt: skip
+
+
+def _set_parent_death_signal() -> None:
+    """Linux: this process gets SIGKILL when its parent dies (no orphaned training)."""
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        pr_set_pdeathsig = 1
+        libc.prctl(pr_set_pdeathsig, signal.SIGKILL)
+        if os.getppid() == 1:  # the parent died before the call
+            os._exit(1)
+
+
+def _child(train_opts: dict[str, Any], status: str, log: str) -> None:
+    _set_parent_death_signal()
+    fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    os.dup2(fd, 1)
+    os.dup2(fd, 2)
+    sys.stdout = os.fdopen(1, "w", buffering=1, closefd=False)
+    sys.stderr = os.fdopen(2, "w", buffering=1, closefd=False)
+    try:
+        train_one_seed(train_opts, status)
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+        sys.stderr.flush()
+        os._exit(1)
+
+
+def _steps_done(out: Path, seed: int) -> int:
+    """Env steps of a seed as far as its learning curve shows (for the progress bar)."""
+    curve = seed_dir(out, seed) / EVAL_FILE
+    try:
+        lines = curve.read_text().strip().splitlines()
+        return int(lines[-1].split(",")[0]) if len(lines) > 1 else 0
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def _run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: Path,
+               bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
+    """Run the jobs as spawned processes, ``workers`` at once; seed → error text (failures)."""
+    ctx = multiprocessing.get_context("spawn")  # numba's threads are not fork-safe
+    pending = list(jobs)
+    running: dict[Any, tuple[int, Any]] = {}
+    failures: dict[int, str] = {}
+    try:
+        while pending or running:
+            while pending and len(running) < workers:
+                seed, train_opts, status = pending.pop(0)
+                log = out / LOGS / f"seed_{seed}.log"
+                log.parent.mkdir(parents=True, exist_ok=True)
+                proc = ctx.Process(target=_child, args=(train_opts, status, str(log)), daemon=False)
+                proc.start()
+                running[proc.sentinel] = (seed, proc)
+            for sentinel in wait(list(running), timeout=poll_s):
+                seed, proc = running.pop(sentinel)
+                proc.join()
+                if proc.exitcode != 0:
+                    failures[seed] = (f"seed {seed} failed (exit code {proc.exitcode}); see "
+                                      f"{out / LOGS / f'seed_{seed}.log'}")  # fmt: skip
+            _update(bar, out, [s for s, *_ in jobs])
+    finally:
+        for _, proc in running.values():  # an exception or Ctrl-C here: stop the workers
+            proc.kill()
+            proc.join()
+    return failures
+
+
+def _run_ray(jobs: list[tuple[int, dict[str, Any], str]], address: str | None, workers: int,
+             out: Path, bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
+    import ray
+
+    if not ray.is_initialized():
+        if address is None:
+            ray.init(num_cpus=workers, log_to_driver=False, include_dashboard=False)
+        else:
+            ray.init(address=address, log_to_driver=False)
+    remote = ray.remote(num_cpus=1, max_retries=0)(train_one_seed)
+    refs = {remote.remote(train_opts, status): seed for seed, train_opts, status in jobs}
+    failures: dict[int, str] = {}
+    while refs:
+        done, _ = ray.wait(list(refs), num_returns=1, timeout=poll_s)
+        for ref in done:
+            seed = refs.pop(ref)
+            try:
+                ray.get(ref)
+            except Exception as exc:  # a failed seed does not stop the others
+                failures[seed] = f"seed {seed} failed on Ray: {str(exc).splitlines()[0]}"
+        _update(bar, out, [s for s, *_ in jobs])
+    return failures
+
+
+def _update(bar: Any, out: Path, seeds: Sequence[int]) -> None:
+    if bar is not None:
+        bar.n = bar.initial + sum(_steps_done(out, s) for s in seeds)
+        bar.refresh()
+
+
+def select(entries: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The entry with the lowest validation score (`evaluation.score`; ties: lower seed)."""
+
+    def key(entry: dict[str, Any]) -> tuple[float, float, int]:
+        summary = entry.get("validation_summary")
+        if not summary:
+            return (math.inf, math.inf, entry["seed"])
+        n_term, rms = score(summary)
+        return (n_term, rms, entry["seed"])
+
+    return min(entries, key=key)
+
+
+def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
+    """Train every seed (see the module doc); returns the summary written to OUT/summary.json.
+
+    Raises ValueError before any work for bad options (`check_seeds_options`) and RuntimeError
+    after the run when a seed failed (the others are finished and kept).
+    """
+    plan = check_seeds_options(opts)
+    out = Path(opts.out)
+    write_json(out / PLAN_FILE, plan, indent=2, sort_keys=True)
+    n_timesteps = plan["n_timesteps"]
+    jobs = []
+    done_steps = 0
+    for seed in opts.seeds:
+        status = seed_status(out, seed, n_timesteps)
+        if status == "done":
+            done_steps += n_timesteps
+            continue
+        train_opts = asdict(replace(opts.train, seed=seed, out=str(seed_dir(out, seed)),
+                                    n_timesteps=n_timesteps, progress_bar=False,
+                                    export=None, resume=False))  # fmt: skip
+        train_opts["eval_seeds"] = tuple(train_opts["eval_seeds"])
+        jobs.append((seed, train_opts, status))
+    bar = None
+    if opts.progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_timesteps * len(opts.seeds), initial=done_steps, unit="step",
+                   desc=f"{plan['algo']} × {len(opts.seeds)} seeds")  # fmt: skip
+    t0 = time.monotonic()
+    if opts.backend == "ray":
+        failures = _run_ray(jobs, opts.address, opts.workers, out, bar, opts.poll_s)
+    else:
+        failures = _run_local(jobs, opts.workers, out, bar, opts.poll_s)
+    if bar is not None:
+        bar.close()
+    if failures:
+        raise RuntimeError("; ".join(failures[s] for s in sorted(failures)))
+    entries = [seed_entry(seed_dir(out, seed)) for seed in opts.seeds]
+    chosen = select(entries)
+    summary = {
+        "plan": plan, "seeds": entries, "selected_seed": chosen["seed"],
+        "selection": "lowest validation score (terminated episodes, then mean rms distance) "
+                     "on eval_seeds; test episodes are never used to choose",
+        "session_wall_time_s": time.monotonic() - t0,
+    }  # fmt: skip
+    write_json(out / SUMMARY_FILE, summary, indent=2, sort_keys=True)
+    if opts.results:
+        _write_results(Path(opts.results), out, entries, summary)
+    if opts.export:
+        export_agent(Path(chosen["agent"]), Path(opts.export))
+        report = json.loads((Path(chosen["agent"]) / HELD_OUT_FILE).read_text())
+        write_json(Path(opts.export) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
+    return summary
+
+
+def _write_results(results: Path, out: Path, entries: Sequence[dict[str, Any]],
+                   summary: dict[str, Any]) -> None:  # fmt: skip
+    """Per seed: the test evaluation and the learning curve; and the summary (all atomic)."""
+    for entry in entries:
+        seed = entry["seed"]
+        report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
+        write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2,
+                   sort_keys=True)  # fmt: skip
+        curve = seed_dir(out, seed) / EVAL_FILE
+        write_text(results / f"seed_{seed}_learning_curve.csv", curve.read_text())
+    write_json(results / SUMMARY_FILE, summary, indent=2, sort_keys=True)

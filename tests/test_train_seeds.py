@@ -1,0 +1,250 @@
+"""Multi-seed training (`benchmarks.train_seeds`): bad input, an end-to-end smoke run with both
+algorithms, SAC's replay buffer across a resume, a killed run resumed, and the Ray backend."""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from benchmarks.train_seeds import main
+from benchmarks.training.seeds import check_evaluation_window, parse_seeds
+
+ROOT = Path(__file__).resolve().parent.parent
+TINY = {
+    "ppo": {"n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True,
+            "n_steps": 64, "batch_size": 128, "n_epochs": 1,
+            "policy_kwargs": "dict(net_arch=[16, 16])"},
+    "sac": {"n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy",
+            "normalize": "dict(norm_obs=True, norm_reward=False)", "buffer_size": 2000,
+            "learning_starts": 64, "batch_size": 64, "train_freq": 1, "gradient_steps": 1,
+            "policy_kwargs": "dict(net_arch=[16, 16])"},
+}  # fmt: skip
+
+
+def _shortest_eval_duration() -> float:
+    """The shortest evaluation episode the metrics-window rule accepts, from a few candidates."""
+    for duration in (10.0, 110.0):
+        try:
+            check_evaluation_window(duration)
+            return duration
+        except ValueError:
+            continue
+    raise AssertionError("no evaluation duration accepted")
+
+
+def _config(tmp_path: Path, algo: str) -> Path:
+    section = {**TINY[algo], "env_kwargs": {"randomize_start": True, "max_time": 20.0}}
+    path = tmp_path / f"{algo}.yml"
+    path.write_text(yaml.safe_dump({"AUVPath3D-v1": section}))
+    return path
+
+
+def _args(tmp_path: Path, algo: str, out: str, *extra: str) -> list[str]:
+    return ["--algo", algo, "--config", str(_config(tmp_path, algo)), "--out", str(tmp_path / out),
+            "--eval-seeds", "100", "--eval-freq", "256", "--checkpoint-freq", "128",
+            "--eval-duration", str(_shortest_eval_duration()), "--quiet", *extra]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("text", "seeds"),
+    [("3", (0, 1, 2)), ("0-4", (0, 1, 2, 3, 4)), ("2-2", (2,)), ("5,1,7", (5, 1, 7))],
+)
+def test_parse_seeds(text, seeds):
+    assert parse_seeds(text) == seeds
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--seeds", "0"], "a seed count must be at least 1, got 0"),
+        (["--seeds", ""], "--seeds ''"),
+        (["--seeds", "-1"], "a seed count must be at least 1, got -1"),
+        (["--seeds=-3,2"], "seeds must be non-negative, got -3"),
+        (["--seeds", "2", "--algo", "dqn"], "argument --algo: invalid choice: 'dqn'"),
+        (["--seeds", "4-2"], "range '4-2' is empty"),
+        (["--seeds", "1,1"], "repeats a seed"),
+        (["--seeds", "2", "--n-timesteps", "0"], "n_timesteps must be a positive number"),
+        (["--seeds", "2", "--n-timesteps", "-5"], "n_timesteps must be a positive number"),
+        (["--seeds", "2", "--eval-seeds", "3,100"], "eval_seeds [3] overlap the held-out"),
+        (["--seeds", "2", "--task-set", "nope"], "task set 'nope' is unknown; valid: ['paper']"),
+        (["--seeds", "2", "--eval-duration", "0.04"], "evaluation duration 0.04"),
+        (["--seeds", "2", "--workers", "0"], "workers must be a positive integer, got 0"),
+        (["--seeds", "2", "--checkpoint-freq", "0"], "checkpoint_freq must be a positive"),
+        (["--seeds", "2", "--env-id", "Nope-v0"], "no top-level key 'Nope-v0'"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2_before_training(tmp_path, capsys, argv, message):
+    out = tmp_path / "run"
+    config = _config(tmp_path, "ppo")
+    with pytest.raises(SystemExit) as exit_info:
+        code = main(["--config", str(config), "--out", str(out), "--quiet", *argv])
+        raise SystemExit(code)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not (out / "seed_0").exists()  # nothing trained
+
+
+def test_unreachable_ray_address_and_occupied_output_are_refused(tmp_path, capsys):
+    pytest.importorskip("ray")
+    config = str(_config(tmp_path, "ppo"))
+    base = ["--config", config, "--seeds", "2", "--quiet"]
+    t0 = time.monotonic()
+    code = main([*base, "--out", str(tmp_path / "a"), "--backend", "ray",
+                 "--address", "127.0.0.1:9"])  # fmt: skip
+    assert code == 2 and time.monotonic() - t0 < 10
+    assert "Ray cluster unreachable" in capsys.readouterr().err
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "x").write_text("")
+    assert main([*base, "--out", str(tmp_path / "b")]) == 2
+    assert "is not empty; pass --resume" in capsys.readouterr().err
+    assert main([*base, "--out", str(tmp_path / "c"), "--resume"]) == 2
+    assert "holds no multi-seed run" in capsys.readouterr().err
+
+
+def _summary(out: Path) -> dict:
+    return json.loads((out / "summary.json").read_text())
+
+
+@pytest.mark.rl
+@pytest.mark.parametrize("algo", ["ppo", "sac"])
+def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
+    """2 seeds, 256 env steps each, as two local processes: per-seed run directories, test
+    evaluations and learning curves, the selection on validation, the exported agent."""
+    outputs = ["--export", str(tmp_path / "agent"), "--results", str(tmp_path / "results")]
+    args = _args(tmp_path, algo, "run", "--seeds", "2", "--workers", "2", *outputs)
+    assert main(args) == 0
+    summary = _summary(tmp_path / "run")
+    assert [e["seed"] for e in summary["seeds"]] == [0, 1]
+    for entry in summary["seeds"]:
+        assert entry["num_timesteps"] == 256
+        assert entry["validation_summary"]["n_episodes"] == 1  # the validation seed 100 only
+        assert entry["test_summary"]["n_episodes"] == 10  # the test seeds 0-9
+        seed = entry["seed"]
+        curve = (tmp_path / "results" / f"seed_{seed}_learning_curve.csv").read_text()
+        assert [line.split(",")[0] for line in curve.splitlines()] == ["num_timesteps", "0", "256"]
+        test = json.loads((tmp_path / "results" / f"seed_{seed}_test_evaluation.json").read_text())
+        assert test["seeds"] == list(range(10))
+    scores = {e["seed"]: e["validation_score"] for e in summary["seeds"]}
+    assert summary["selected_seed"] == min(scores, key=lambda s: (*scores[s], s))
+    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    assert meta["seed"] == summary["selected_seed"] and meta["algo"] == algo
+    from controllers.ppo import load_policy
+
+    assert load_policy(tmp_path / "agent").metadata["env_id"] == "AUVPath3D-v1"
+    # Everything finished: a resumed run trains nothing and reports the same seeds.
+    assert main([*args[:-4], "--resume"]) == 0
+    again = _summary(tmp_path / "run")
+    assert again["seeds"] == summary["seeds"]
+
+
+@pytest.mark.rl
+def test_sac_resume_restores_the_replay_buffer(tmp_path):
+    from benchmarks.training.train import TrainOptions, train
+
+    opts = TrainOptions(algo="sac", config=str(_config(tmp_path, "sac")), env_id="AUVPath3D-v1",
+                        out=str(tmp_path / "run"), n_timesteps=128, checkpoint_freq=128,
+                        eval_freq=0, progress_bar=False)  # fmt: skip
+    train(opts)
+    train(TrainOptions(**{**opts.__dict__, "n_timesteps": 256, "resume": True}))
+    last = tmp_path / "run" / "checkpoints" / "step_0000000256" / "replay_buffer.pkl"
+    with last.open("rb") as f:
+        buffer = pickle.load(f)
+    # A checkpoint is written before SB3 stores the step's transition: 128/4 − 1 = 31 rows of
+    # 4 vehicles at step 128, 31 + 32 − 1 = 62 at step 256 (31 without the restored buffer).
+    assert buffer.n_envs == 4 and buffer.size() == 62
+
+
+@pytest.mark.rl
+def test_killed_run_resumes_every_unfinished_seed(tmp_path):
+    """SIGKILL the command once both seeds have a checkpoint: no worker survives it, and
+    --resume continues each seed from its newest checkpoint to the full budget."""
+    args = _args(tmp_path, "ppo", "run", "--seeds", "2", "--workers", "2",
+                 "--n-timesteps", "2048")  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    command = [sys.executable, "-m", "benchmarks.train_seeds", *args]
+    proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)  # fmt: skip
+    run = tmp_path / "run"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline:
+        if all(len(list((run / f"seed_{s}" / "checkpoints").glob("step_*"))) >= 1
+               for s in (0, 1)):  # fmt: skip
+            break
+        time.sleep(0.5)
+    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    time.sleep(2)
+    for pid in children.stdout.split():
+        assert not Path(f"/proc/{pid}").exists() or "zombie" in _state(pid), pid
+    saved = {}
+    for s in (0, 1):
+        steps = [int(p.name[5:]) for p in (run / f"seed_{s}" / "checkpoints").glob("step_*")]
+        saved[s] = max(steps)
+        assert not (run / f"seed_{s}" / "final").exists()
+    assert main([*args, "--resume"]) == 0
+    for entry in _summary(run)["seeds"]:
+        meta = json.loads((run / f"seed_{entry['seed']}" / "final" / "metadata.json").read_text())
+        # the budget, completed to a whole rollout of 4 × 64 steps (as PPO does)
+        assert 2048 <= meta["num_timesteps"] < 2048 + 256
+        resumed = meta["sessions"][-1]["start_timesteps"]
+        assert resumed >= saved[entry["seed"]]  # at most one checkpoint interval lost
+
+
+def _state(pid: str) -> str:
+    try:
+        return Path(f"/proc/{pid}/status").read_text().lower()
+    except OSError:
+        return "zombie"
+
+
+@pytest.mark.rl
+def test_ray_backend_runs_the_same_seeds(tmp_path, monkeypatch):
+    ray = pytest.importorskip("ray")
+    monkeypatch.setenv("PYTHONPATH", str(ROOT))  # Ray workers import this checkout
+    local = _args(tmp_path, "ppo", "local", "--seeds", "1", "--workers", "1")
+    assert main(local) == 0
+    ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)
+    try:
+        assert main(_args(tmp_path, "ppo", "ray", "--seeds", "1", "--backend", "ray")) == 0
+    finally:
+        ray.shutdown()
+    a, b = _summary(tmp_path / "local")["seeds"], _summary(tmp_path / "ray")["seeds"]
+    assert [e["test_summary"] for e in a] == [e["test_summary"] for e in b]
+    assert [e["validation_summary"] for e in a] == [e["validation_summary"] for e in b]
+
+
+@pytest.mark.rl
+@pytest.mark.parametrize(
+    ("file", "algo"), [("sac.yml", "sac"), ("ppo_generalist.yml", "ppo"), ("ppo.yml", "ppo")]
+)
+def test_shipped_configs_build_their_algorithm(file, algo):
+    """The YAML files parse and their hyper-parameters construct the SB3 model (on a small
+    helix env: the task-distribution env_kwargs belong to the env)."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from benchmarks.training.config import ALGORITHMS, read_zoo_config
+    from benchmarks.training.train import make_training_env
+
+    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / file, "AUVPath3D-v1", algo)
+    assert cfg.env_kwargs["reward_weights"] == {"distance": 3.0, "termination": 300.0,
+                                                "tracking": 3.0}  # fmt: skip
+    kwargs = cfg.model_kwargs()
+    if algo == "sac":
+        kwargs["buffer_size"] = 1000  # the real buffer allocates ~100 MB
+    venv = VecNormalize(make_training_env(2, 0, {"max_time": 5.0}, env_id="AUVPath3D-v1"),
+                        **cfg.normalize)  # fmt: skip
+    model = ALGORITHMS[algo].sb3_class()(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs,
+                                         device="cpu", **kwargs)  # fmt: skip
+    assert model.gamma == 0.995
+    venv.close()
