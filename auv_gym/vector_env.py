@@ -390,7 +390,7 @@ class AUVPath3DVectorEnv(VectorEnv):
         from auv_gym.plotting import render_track
 
         v = self._render_vehicle
-        return render_track(self.config.path, np.asarray(self._track), self.sim.state[v, 10])
+        return render_track(self.sim.paths[v], np.asarray(self._track), self.sim.state[v, 10])
 
     def __repr__(self) -> str:
         return (
