@@ -38,9 +38,17 @@ __all__ = [
     "SAMPLE_SPACING",
     "PathDistribution",
     "curvature_and_angle",
+    "overlaps",
 ]
 
 FAMILIES = ("helix", "line", "spline", "lawnmower")
+# The ranges each family draws from (`overlaps`).
+FAMILY_RANGES = {
+    "helix": ("radius", "climb_angle_deg"),
+    "line": ("climb_angle_deg",),
+    "spline": ("radius", "climb_angle_deg", "piece_length"),
+    "lawnmower": ("radius", "climb_angle_deg", "leg_length"),
+}
 # Vehicle limits (docs/model.md §3.7). At u = 1 m/s full yaw authority turns the REMUS 100 on a
 # 4.0-m radius ("paper" and "fins" alike); generated paths keep twice that. Full fin authority
 # holds a steady climb of γ = 25.6° at 1 m/s (θ = 25.0°); "paper" actuators hold any pitch.
@@ -271,3 +279,16 @@ def curvature_and_angle(path: Path, per_segment: int = _CHECKS_PER_SEGMENT) -> t
     kappa = np.linalg.norm(np.cross(dp, ddp), axis=1) / speed**3
     gamma = np.arcsin(np.clip(np.abs(dp[:, 2]) / speed, 0.0, 1.0))
     return float(kappa.max()), float(gamma.max())
+
+
+def overlaps(a: PathDistribution, b: PathDistribution) -> list[str]:
+    """The families ``a`` draws that ``b`` could draw too: drawn by both, and every range the
+    family uses (`FAMILY_RANGES`) overlapping; [] means no path of ``a`` lies in ``b``'s support."""
+    common = []
+    for family in a.families:
+        if family in b.families and all(
+            getattr(a, r)[0] <= getattr(b, r)[1] and getattr(b, r)[0] <= getattr(a, r)[1]
+            for r in FAMILY_RANGES[family]
+        ):
+            common.append(family)
+    return common

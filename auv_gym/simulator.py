@@ -113,10 +113,15 @@ def _reward_from(reward_weights: RewardWeights | dict | None) -> RewardWeights:
     return RewardWeights(**keys_within("reward_weights", reward_weights, REWARD_TERMS))
 
 
+def path_is_random(path: object) -> bool:
+    """True for the name "random"."""
+    return isinstance(path, str) and path == "random"
+
+
 def _path_from(path: object) -> Path | PathDistribution:
     """The `path` argument: a name, "random", a `Path`, a `PathDistribution`, a dict of its
     fields, or a list of (x, y, z) waypoints."""
-    if isinstance(path, PathDistribution) or path == "random" or isinstance(path, Mapping):
+    if isinstance(path, (PathDistribution, Mapping)) or path_is_random(path):
         return PathDistribution.from_spec(path)  # type: ignore[arg-type]
     return make_path(path)  # type: ignore[arg-type]
 
