@@ -210,6 +210,9 @@ class AUVPath3DEnv(gym.Env):
       Later v0 fixes, default behaviour unchanged: the env owns truncation at `max_time` (was a
       registered `TimeLimit` of 6000 steps, wrong for any other `control_dt`); every argument is
       range-checked; a non-finite observation ends the episode as "non_finite".
+      New arguments with defaults that change nothing: waypoint lists, fitted curves and port
+      helices as paths; ``path="random"`` (a `PathDistribution`), `random_current`,
+      `random_noise`, ``actuator="random"`` and `params` as a dict (docs/model.md §3.7).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
