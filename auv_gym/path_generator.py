@@ -7,15 +7,17 @@ A `PathDistribution` draws, from a numpy generator, one path of one of four fami
 - ``line``: a straight line in any horizontal direction with flight-path angle ±γ;
 - ``spline``: a smooth random track — pieces of random length, each straight or turning with a
   random radius, its flight-path angle varying linearly between random values — sampled every
-  `SAMPLE_SPACING` m and interpolated by the natural cubic `Spline` through those waypoints;
+  `SAMPLE_SPACING` m (or a third of the smallest radius) and interpolated by the natural cubic
+  `Spline` through those waypoints;
 - ``lawnmower``: a survey pattern — parallel legs joined by half-circle turns of alternating
   direction, climbing or descending at ±γ — sampled and interpolated the same way.
 
 Every path starts at the origin, p(0) = (0, 0, 0) m, and respects the limits the vehicle can follow
 (docs/model.md §3.7): radius of curvature ≥ the distribution's smallest radius (never below
-`MIN_TURN_RADIUS`) and |γ| ≤ its largest angle (never above `MAX_FLIGHT_PATH_ANGLE_DEG`), checked
-on every drawn spline at 16 points per segment (a draw outside is redrawn from the same
-generator, so a path is still a function of the generator's state only).
+`MIN_TURN_RADIUS`; splines within `CURVATURE_SLACK`) and |γ| ≤ its largest angle (never above
+`MAX_FLIGHT_PATH_ANGLE_DEG`; splines within 0.5°), checked on every drawn spline at 16 points
+per segment (a draw outside is redrawn from the same generator, so a path is still a function
+of the generator's state only).
 """
 
 from __future__ import annotations
@@ -23,7 +25,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
-from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -54,13 +55,16 @@ FAMILY_RANGES = {
 # holds a steady climb of γ = 25.6° at 1 m/s (θ = 25.0°); "paper" actuators hold any pitch.
 MIN_TURN_RADIUS = 8.0  # [m]
 MAX_FLIGHT_PATH_ANGLE_DEG = 25.0  # [deg]
-SAMPLE_SPACING = 5.0  # [m] waypoint spacing of the spline and lawnmower families
+SAMPLE_SPACING = 5.0  # [m] largest waypoint spacing of the spline and lawnmower families
+MIN_SAMPLES_PER_RADIUS = 3.0  # spacing ≤ radius low / 3: the spline follows arcs to ≤ 5 %
 MAX_RADIUS = 1e4  # [m]
 LENGTH_RANGE = (50.0, 2000.0)  # [m] of spline and lawnmower paths
 _INTEGRATION_STEP = 0.5  # [m] arc-length step of the heading/climb profiles
 _SMOOTHING = 20.0  # [m] length of the curvature ramps between pieces
 _CHECKS_PER_SEGMENT = 16
-_MAX_REDRAWS = 100
+_MAX_REDRAWS = 20
+VERTICAL_SHARE, HORIZONTAL_SHARE = 0.3, math.sqrt(1.0 - 0.3**2)
+MIN_PIECE = 20.0  # [m] shortest spline piece or lawnmower leg: one curvature ramp long
 # The spline through the track's samples follows its curvature ramps to within a few per cent
 # (measured on 200 draws: ≤ 3.7 % above 1/R at 5-m spacing, 24 % at 10 m); the check allows 5 %.
 CURVATURE_SLACK = 1.05
@@ -89,8 +93,8 @@ class PathDistribution:
     - ``climb_angle_deg`` [deg]: |γ| of helices, lines, lawnmower legs and the spline's
       flight-path-angle profile (sign drawn: ascending or descending); high ≤
       `MAX_FLIGHT_PATH_ANGLE_DEG` (25°).
-    - ``piece_length`` [m]: length of the spline's pieces, in [10, 1000].
-    - ``leg_length`` [m]: lawnmower leg length, in [10, 1000].
+    - ``piece_length`` [m]: length of the spline's pieces, in [20, 1000].
+    - ``leg_length`` [m]: lawnmower leg length, in [20, 1000].
     - ``length`` [m]: arc length of spline and lawnmower paths, in [50, 2000] (helix and line
       are endless); at u_D = 1 m/s a 300-s episode covers about 300 m.
     """
@@ -128,8 +132,8 @@ class PathDistribution:
             )
         angle = _range("PathDistribution climb_angle_deg", angle, 0.0, MAX_FLIGHT_PATH_ANGLE_DEG,
                        "deg")  # fmt: skip
-        piece = _range("PathDistribution piece_length", self.piece_length, 10.0, 1000.0, "m")
-        leg = _range("PathDistribution leg_length", self.leg_length, 10.0, 1000.0, "m")
+        piece = _range("PathDistribution piece_length", self.piece_length, MIN_PIECE, 1000.0, "m")
+        leg = _range("PathDistribution leg_length", self.leg_length, MIN_PIECE, 1000.0, "m")
         length = real("PathDistribution length", self.length, *LENGTH_RANGE, unit="m")
         for name, value in (("families", tuple(families)), ("radius", radius),
                             ("climb_angle_deg", angle), ("piece_length", piece),
@@ -148,9 +152,15 @@ class PathDistribution:
                       for k, v in keys_within("path", spec, names).items()})  # fmt: skip
 
     @property
+    def spacing(self) -> float:
+        """Waypoint spacing of the spline and lawnmower families [m]: `SAMPLE_SPACING`, or a
+        third of the smallest radius if that is shorter."""
+        return min(SAMPLE_SPACING, self.radius[0] / MIN_SAMPLES_PER_RADIUS)
+
+    @property
     def max_waypoints(self) -> int:
         """Most waypoints of a generated spline (sizes the simulator's path table)."""
-        return math.ceil(self.length / SAMPLE_SPACING) + 1
+        return math.ceil(self.length / self.spacing) + 1
 
     @property
     def max_data_size(self) -> int:
@@ -177,7 +187,8 @@ class PathDistribution:
                 path.family = family
                 return path
         raise RuntimeError(f"PathDistribution: no {family} path within the limits after "
-                           f"{_MAX_REDRAWS} draws: {self}")  # fmt: skip
+                           f"{_MAX_REDRAWS} draws (κ = {kappa:.4g} 1/m, |γ| = "
+                           f"{math.degrees(gamma):.3g}°): {self}")  # fmt: skip
 
     def _angle(self, rng: np.random.Generator) -> float:
         """A signed flight-path angle [rad]: |γ| uniform in the range, sign ±1."""
@@ -206,16 +217,21 @@ class PathDistribution:
         """Waypoints of a random track: pieces straight (⅓) or turning (⅔) at a random radius and
         side, the flight-path angle linear between random values at the piece ends."""
         lengths, curvatures, angles = [], [], [self._angle(rng)]
+        # The climb may change at most VERTICAL_SHARE/R_low per metre, the heading turns at
+        # most HORIZONTAL_SHARE/R: together a curvature of at most 1/R (shares squared sum to 1).
+        pitch_rate = VERTICAL_SHARE / self.radius[0]
         total = 0.0
         while total < self.length:
             lengths.append(rng.uniform(*self.piece_length))
             turning = rng.random() < 2.0 / 3.0
             side = 1.0 if rng.random() < 0.5 else -1.0
-            curvatures.append(side / rng.uniform(*self.radius) if turning else 0.0)
-            angles.append(self._angle(rng))
+            curvatures.append(HORIZONTAL_SHARE * side / rng.uniform(*self.radius) if turning
+                              else 0.0)  # fmt: skip
+            step = pitch_rate * lengths[-1]
+            angles.append(min(max(self._angle(rng), angles[-1] - step), angles[-1] + step))
             total += lengths[-1]
         heading0 = rng.uniform(-math.pi, math.pi)
-        return _integrate(lengths, curvatures, angles, heading0, self.length)
+        return _integrate(lengths, curvatures, angles, heading0, self.length, self.spacing)
 
     def _lawnmower(self, rng: np.random.Generator) -> np.ndarray:
         """Waypoints of a survey: legs of one length joined by half circles of alternating side."""
@@ -233,16 +249,17 @@ class PathDistribution:
             total += leg + math.pi * radius
             k += 1
         angles = [gamma] * (len(lengths) + 1)
-        return _integrate(lengths, curvatures, angles, heading0, self.length)
+        return _integrate(lengths, curvatures, angles, heading0, self.length, self.spacing)
 
 
 def _integrate(
     lengths: list[float], curvatures: list[float], angles: list[float], heading0: float,
-    total: float,
+    total: float, spacing: float,
 ) -> np.ndarray:  # fmt: skip
-    """Waypoints every `SAMPLE_SPACING` m of arc length along a track whose heading turns at the
-    given horizontal curvature per piece [1/m] and whose flight-path angle goes linearly
-    between the given values [rad]; starts at the origin with heading ``heading0`` [rad]."""
+    """Waypoints every ``spacing`` m (rounded down to the integration step) of arc length along
+    a track whose heading turns at the given horizontal curvature per piece [1/m] and whose
+    flight-path angle goes linearly between the given values [rad]; starts at the origin with
+    heading ``heading0`` [rad]."""
     edges = np.r_[0.0, np.cumsum(lengths)]
     ell = np.arange(0.0, total + _INTEGRATION_STEP / 2, _INTEGRATION_STEP)
     piece = np.clip(np.searchsorted(edges, ell, side="right") - 1, 0, len(lengths) - 1)
@@ -261,7 +278,7 @@ def _integrate(
     # Trapezoidal integration of the unit tangent.
     steps = 0.5 * (tangent[1:] + tangent[:-1]) * _INTEGRATION_STEP
     points = np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
-    every = round(SAMPLE_SPACING / _INTEGRATION_STEP)
+    every = max(1, math.floor(spacing / _INTEGRATION_STEP))
     return points[::every]
 
 
@@ -269,16 +286,30 @@ def curvature_and_angle(path: Path, per_segment: int = _CHECKS_PER_SEGMENT) -> t
     """Largest curvature κ = |p' × p''|/|p'|³ [1/m] and largest |γ| = asin(|z'|/|p'|) [rad] of a
     path, sampled ``per_segment`` times per spline segment (helix, line: exact)."""
     if isinstance(path, Spline):
-        knots = path.data[1 : int(path.data[0]) + 2]
-        grid = [np.linspace(a, b, per_segment, endpoint=False) for a, b in pairwise(knots)]
-        s = np.concatenate([*grid, knots[-1:]])
+        dp, ddp = _spline_derivatives(path.data, per_segment)
     else:
-        s = np.array([0.0, 1.0])
-    _, dp, ddp = path.evaluate(s)
+        _, dp, ddp = path.evaluate(np.array([0.0, 1.0]))
     speed = np.linalg.norm(dp, axis=1)
     kappa = np.linalg.norm(np.cross(dp, ddp), axis=1) / speed**3
     gamma = np.arcsin(np.clip(np.abs(dp[:, 2]) / speed, 0.0, 1.0))
     return float(kappa.max()), float(gamma.max())
+
+
+def _spline_derivatives(data: np.ndarray, per_segment: int) -> tuple[np.ndarray, np.ndarray]:
+    """p' and p'' of a SPLINE kernel vector at ``per_segment`` points in every segment and at
+    the end, vectorised (the same cubics `paths.path_eval` evaluates one point at a time)."""
+    n_seg = int(data[0])
+    knots = data[1 : n_seg + 2]
+    coeffs = data[n_seg + 2 :].reshape(n_seg, 3, 4)
+    fractions = np.arange(per_segment) / per_segment
+    segment = np.r_[np.repeat(np.arange(n_seg), per_segment), n_seg - 1]
+    ds = np.r_[np.tile(fractions, n_seg) * np.repeat(np.diff(knots), per_segment),
+               knots[-1] - knots[-2]]  # fmt: skip
+    a = coeffs[segment]  # (points, 3 axes, 4)
+    d = ds[:, None]
+    dp = a[..., 1] + d * (2.0 * a[..., 2] + 3.0 * d * a[..., 3])
+    ddp = 2.0 * a[..., 2] + 6.0 * d * a[..., 3]
+    return dp, ddp
 
 
 def overlaps(a: PathDistribution, b: PathDistribution) -> list[str]:

@@ -236,9 +236,9 @@ def _natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarra
     A = np.zeros((n, n))
     rhs = np.zeros((n, 3))
     A[0, 0] = A[-1, -1] = 1.0
-    for i in range(1, n - 1):
-        A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-        rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i] - (pts[i] - pts[i - 1]) / h[i - 1])
+    i = np.arange(1, n - 1)  # element-wise the same operations as a loop over the rows
+    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
+    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
     m = np.linalg.solve(A, rhs)
     return _cubic_coefficients(knots, pts, m)
 

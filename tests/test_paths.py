@@ -300,7 +300,7 @@ def test_fixed_paths_share_one_table_row():
         ({"families": ("helix", "spiral")}, r"families must be distinct names among"),
         ({"families": ()}, r"families must be distinct names among"),
         ({"length": 10.0}, r"PathDistribution length"),
-        ({"piece_length": (1.0, 5.0)}, r"piece_length must lie in \[10, 1000\]"),
+        ({"piece_length": (10.0, 50.0)}, r"piece_length must lie in \[20, 1000\]"),
     ],
 )
 def test_impossible_generator_ranges_raise_one_line_errors(kwargs, match):
