@@ -154,8 +154,9 @@ class PathDistribution:
     @property
     def spacing(self) -> float:
         """Waypoint spacing of the spline and lawnmower families [m]: `SAMPLE_SPACING`, or a
-        third of the smallest radius if that is shorter."""
-        return min(SAMPLE_SPACING, self.radius[0] / MIN_SAMPLES_PER_RADIUS)
+        third of the smallest radius if that is shorter, rounded down to the integration step."""
+        wanted = min(SAMPLE_SPACING, self.radius[0] / MIN_SAMPLES_PER_RADIUS)
+        return max(1, math.floor(wanted / _INTEGRATION_STEP)) * _INTEGRATION_STEP
 
     @property
     def max_waypoints(self) -> int:
@@ -256,7 +257,7 @@ def _integrate(
     lengths: list[float], curvatures: list[float], angles: list[float], heading0: float,
     total: float, spacing: float,
 ) -> np.ndarray:  # fmt: skip
-    """Waypoints every ``spacing`` m (rounded down to the integration step) of arc length along
+    """Waypoints every ``spacing`` m (a multiple of the integration step) of arc length along
     a track whose heading turns at the given horizontal curvature per piece [1/m] and whose
     flight-path angle goes linearly between the given values [rad]; starts at the origin with
     heading ``heading0`` [rad]."""
@@ -278,7 +279,7 @@ def _integrate(
     # Trapezoidal integration of the unit tangent.
     steps = 0.5 * (tangent[1:] + tangent[:-1]) * _INTEGRATION_STEP
     points = np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
-    every = max(1, math.floor(spacing / _INTEGRATION_STEP))
+    every = round(spacing / _INTEGRATION_STEP)
     return points[::every]
 
 

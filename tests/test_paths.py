@@ -282,6 +282,17 @@ def test_batched_random_tasks_equal_single_envs_bit_for_bit():
         assert np.array_equal(env.sim.paths[0].data, venv.sim.paths[i].data)
 
 
+def test_the_path_table_holds_the_longest_drawn_path():
+    for radius in ((8.0, 9.0), (11.0, 40.0), (15.0, 40.0)):
+        dist = PathDistribution(families=("spline", "lawnmower"), radius=radius, length=300.0)
+        sizes = [dist.draw(np.random.default_rng(k)).data.size for k in range(10)]
+        assert max(sizes) <= dist.max_data_size
+        env = AUVPath3DEnv(path=dist)
+        for seed in range(3):
+            env.reset(seed=seed)
+            assert env.sim._pdata.shape == (1, dist.max_data_size)
+
+
 def test_fixed_paths_share_one_table_row():
     venv = AUVPath3DVectorEnv(8)
     assert venv.sim._pdata.shape == (1, 6) and not venv.sim._row.any()
