@@ -14,7 +14,8 @@ from gymnasium.envs.registration import register, registry
 
 from auv_gym.env import AUVPath3DEnv
 from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW, OBS_NAMES, OBS_UNITS
-from auv_gym.paths import Helix, Path, Spline, StraightLine, make_path
+from auv_gym.path_generator import PathDistribution
+from auv_gym.paths import FittedCurve, Helix, Path, Spline, StraightLine, fit_curve, make_path
 from auv_gym.task import SURGE_LIMIT
 from auv_gym.vehicle import AUVParams, remus100
 
@@ -26,10 +27,13 @@ __all__ = [
     "OBS_UNITS",
     "AUVParams",
     "AUVPath3DEnv",
+    "FittedCurve",
     "Helix",
     "Path",
+    "PathDistribution",
     "Spline",
     "StraightLine",
+    "fit_curve",
     "make_path",
     "remus100",
 ]

@@ -14,6 +14,7 @@ from gymnasium.envs.registration import EnvSpec
 
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW, OBS_NAMES, OBS_UNITS
+from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
 from auv_gym.simulator import SimConfig, Simulator
@@ -158,11 +159,13 @@ class AUVPath3DEnv(gym.Env):
 
     | argument | default | meaning |
     |---|---|---|
-    | `path` | "helix" | "helix", "line", "waypoints" or a `auv_gym.paths.Path` |
+    | `path` | "helix" | "helix", "line", "waypoints", "random", a `Path`, waypoints (below) |
     | `disturbance` | "paper" | "paper" (±35 white noise), "none", an amplitude, a `NoiseConfig` |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
     | `param_uncertainty` | 0.0 | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode |
-    | `actuator` | "paper" | "paper" or "fins" |
+    | `actuator` | "paper" | "paper", "fins" or "random" (either, ½ each, per episode) |
+    | `random_current` | 0.0 | V [m/s]: per episode a horizontal current, speed U[0, V] |
+    | `random_noise` | 0.0 | ε: white-noise amplitudes × (1 + U[−ε, ε]) per episode |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
     | `physics_dt` | 0.01 | RK4 step [s] |
     | `noise_hold` | None | white-noise hold [s]; None: the `NoiseConfig`'s, else 0.01 s |
@@ -173,7 +176,7 @@ class AUVPath3DEnv(gym.Env):
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
     | `surge_limit` | inf (v1: 2.0) | u_max [m/s]: overspeed penalty and termination (Rewards) |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
-    | `params` | REMUS 100 | `AUVParams` of the true vehicle |
+    | `params` | REMUS 100 | `AUVParams` of the true vehicle, or a dict: fields, `scale` factors |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
 
@@ -191,13 +194,35 @@ class AUVPath3DEnv(gym.Env):
       in (0, π/2) rad; reward weights in [0, 1e6] (the formula gives each term its sign).
     - `start_position` within 500 m of the path's start p(0) (496.5 m with `randomize_start`),
       so that the reset errors are observable; `start_heading` in [−2π, 2π] rad.
-    - `randomize_start` a bool; `params` an `AUVParams` (finite fields, positive inertias).
+    - `randomize_start` a bool; `params` an `AUVParams` (finite fields, positive inertias) or a
+      dict of its field values and an optional `scale` dict of factors, e.g. ``{"m": 32.0,
+      "scale": {"X_uu": 1.2}}`` (an unknown name is an error naming it).
+    - `random_current` in [0, 1] m/s (no headway against ~1 m/s at u_D = 1 m/s);
+      `random_noise` in [0, 1]; `actuator="random"` draws "paper" or "fins" per episode.
 
     Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
-    in (0, 1e5] m, ω in (0, 1e3] rad per unit s, |climb| ≤ 1e5 m per unit s, |p'| ≥ 1e-6; a
-    `StraightLine` direction non-zero; a `Spline` through 2 to 1000 distinct waypoints. The
-    path's turn rate must keep the virtual point's ψ̇_F and θ̇_F within their ±10 rad/s bounds
-    for u_p ≤ 2u_D (checked exactly for helix and line, at 64 points per spline segment).
+    in (0, 1e5] m, ω in [−1e3, 0) ∪ (0, 1e3] rad per unit s (ω > 0 a starboard, ω < 0 a port
+    turn), |climb| ≤ 1e5 m per unit s (> 0 climbs), |p'| ≥ 1e-6; a `StraightLine` direction
+    non-zero; a `Spline` through 2 to 1000 distinct waypoints. The path's turn rate must keep the
+    virtual point's ψ̇_F and θ̇_F within their ±10 rad/s bounds for u_p ≤ 2u_D (checked exactly
+    for helix and line, at 64 points per spline segment).
+
+    User paths: a list of (x, y, z) waypoints [m] (``path=[(0, 0, 5), (40, 10, 8), ...]``)
+    becomes the natural cubic `Spline` through them, parameterised by chord length, ending at
+    the last waypoint ("path_end"). A parametric curve p(s) (a Python callable) becomes a
+    kernel path with ``auv_gym.fit_curve(p, s_end)`` (a C² spline in the same s, position error
+    ≤ 1 mm by default; docs/model.md §3.8). A user path starts like the built-in ones: the
+    vehicle at rest at p(0) + R_z(ψ_F(0))·(−15, 5, 0) m + (0, 0, 8) m (15 m behind the path's
+    start, 5 m to starboard, 8 m deeper: the paper's initial errors), heading ψ_F(0), θ = 0; use
+    `start_position` and `start_heading` to override it.
+
+    Random paths (``path="random"``, a `auv_gym.path_generator.PathDistribution` or a dict of its
+    fields): every reset draws one path, a function of the seed only — a helix (either turn,
+    ascending or descending), a straight line in any direction, a smooth random spline or a
+    lawnmower survey — radius of curvature ≥ 15 m and |flight-path angle| ≤ 20° by default,
+    never beyond the vehicle's 8 m and 25° (docs/model.md §3.8). Each starts at the origin with
+    the default start above (`start_position`, `start_heading` are refused); the vector env
+    draws each vehicle's own path exactly as the single env would for its seed.
 
     ## Vectorized environment
     `gym.make_vec("AUVPath3D-v0", num_envs=n)` returns the native `AUVPath3DVectorEnv`, which
@@ -209,6 +234,9 @@ class AUVPath3DEnv(gym.Env):
       registered `TimeLimit` of 6000 steps, wrong for any other `control_dt`); every argument is
       range-checked; a non-finite observation ends the episode as "non_finite"; the
       `surge_limit` argument (default inf: no limit, rewards unchanged bit for bit).
+      New arguments with defaults that change nothing: waypoint lists, fitted curves and port
+      helices as paths; ``path="random"`` (a `PathDistribution`), `random_current`,
+      `random_noise`, ``actuator="random"`` and `params` as a dict (docs/model.md §3.8).
     * v1: realistic speed — the v0 environment with `surge_limit` = 2.0 m/s by default: the
       overspeed reward term and the "overspeed" termination (docs/design.md §3). Everything
       else, including every other default, is v0's.
@@ -218,7 +246,7 @@ class AUVPath3DEnv(gym.Env):
 
     def __init__(
         self,
-        path: str | Path = "helix",
+        path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
         disturbance: str | float | NoiseConfig = "paper",
         current: CurrentConfig | Sequence[float] | dict | None = None,
         param_uncertainty: float = 0.0,
@@ -239,6 +267,8 @@ class AUVPath3DEnv(gym.Env):
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
         render_mode: str | None = None,
+        random_current: float = 0.0,
+        random_noise: float = 0.0,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -248,7 +278,8 @@ class AUVPath3DEnv(gym.Env):
             virtual_point_law=virtual_point_law,
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
-            reward_weights=reward_weights,
+            reward_weights=reward_weights, random_current=random_current,
+            random_noise=random_noise,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
@@ -298,7 +329,8 @@ class AUVPath3DEnv(gym.Env):
         self._last_obs[:] = obs
         if self._renderer is not None:
             sim = self.sim
-            self._renderer.reset(sim.state[0, 0:3], sim.guid[0, 0:3], sim.state[0, 10])
+            self._renderer.reset(sim.state[0, 0:3], sim.guid[0, 0:3], sim.state[0, 10],
+                                 path=sim.paths[0])  # fmt: skip
         return obs, self._info(0, reset=True)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

@@ -9,15 +9,25 @@ helix it is not arc length: |p'(s)| = sqrt(R²ω² + c²)).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 from numba import njit
 
-from auv_gym.validation import ArgumentTypeError, choice, is_real, real, vector
+from auv_gym.validation import ArgumentTypeError, choice, integer, is_real, real, vector
 
-__all__ = ["PATHS", "Helix", "Path", "Spline", "StraightLine", "make_path", "path_eval"]
+__all__ = [
+    "PATHS",
+    "FittedCurve",
+    "Helix",
+    "Path",
+    "Spline",
+    "StraightLine",
+    "fit_curve",
+    "make_path",
+    "path_eval",
+]
 
 HELIX, LINE, SPLINE = 0, 1, 2
 # Documented ranges of the path arguments: they keep every evaluation of p, p', p'' finite.
@@ -113,7 +123,9 @@ class Helix(Path):
     """The paper's helix (45): x = R cos(ωs) + x0, y = R sin(ωs) + y0, z = z0 − c s.
 
     Defaults R = 20 m, ω = π/20 rad per unit s, c = 1 m per unit s, (x0, y0, z0) = (10, 0, −8) m
-    (docs/model.md §3.5: a 17.7° climb, one turn per Δs = 40).
+    (docs/model.md §3.5: a 17.7° climb, one turn per Δs = 40). Both turning directions: ω > 0
+    makes ψ_F grow, a starboard turn (clockwise seen from above: NED, z down), ω < 0 a port turn;
+    c > 0 climbs (z decreases), c < 0 descends.
     """
 
     kind = HELIX
@@ -127,7 +139,11 @@ class Helix(Path):
         s_end: float = math.inf,
     ) -> None:
         radius = real("Helix radius", radius, 0.0, SCALE_BOUND, low_open=True, unit="m")
-        omega = real("Helix omega", omega, 0.0, MAX_OMEGA, low_open=True, unit="rad per unit s")
+        omega = real("Helix omega", omega, -MAX_OMEGA, MAX_OMEGA, unit="rad per unit s")
+        if omega == 0.0:
+            raise ValueError("Helix omega must be non-zero (> 0: starboard turn, < 0: port turn), "
+                             f"in [-{MAX_OMEGA:g}, {MAX_OMEGA:g}] rad per unit s, got {omega!r}"
+                             )  # fmt: skip
         climb = real("Helix climb", climb, -SCALE_BOUND, SCALE_BOUND, unit="m per unit s")
         center = vector("Helix center", center, 3, -POSITION_BOUND, POSITION_BOUND, "m")
         if math.hypot(radius * omega, climb) < MIN_TANGENT:
@@ -175,21 +191,7 @@ class Spline(Path):
     kind = SPLINE
 
     def __init__(self, waypoints: Sequence[Sequence[float]]) -> None:
-        shape = f"(n, 3) with 2 <= n <= {MAX_WAYPOINTS}, coordinates in [-{POSITION_BOUND:g}, " \
-            f"{POSITION_BOUND:g}] m"  # fmt: skip
-        try:
-            pts = np.asarray(waypoints)
-        except (TypeError, ValueError):  # ragged nesting
-            pts = np.asarray(None)
-        if pts.dtype.kind not in "iuf":
-            raise ArgumentTypeError(f"Spline waypoints must be real numbers of shape {shape}, "
-                                    f"got {waypoints!r:.80}")  # fmt: skip
-        pts = pts.astype(np.float64)
-        if pts.ndim != 2 or pts.shape[1] != 3 or not 2 <= pts.shape[0] <= MAX_WAYPOINTS:
-            raise ValueError(f"Spline: waypoints must have shape {shape}, got {pts.shape}")
-        if not np.all(np.isfinite(pts)) or np.abs(pts).max() > POSITION_BOUND:
-            raise ValueError(f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, "
-                             f"{POSITION_BOUND:g}] m")  # fmt: skip
+        pts = _waypoint_array(waypoints)
         chords = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         if np.any(chords <= MIN_CHORD):
             raise ValueError("Spline: consecutive waypoints must be distinct")
@@ -199,7 +201,32 @@ class Spline(Path):
             raise ValueError("Spline: the waypoints give a spline with non-finite coefficients")
         self.waypoints = pts
         self.s_end = float(knots[-1])
-        self.data = np.r_[float(len(chords)), knots, coeffs.ravel()]
+        self.data = _spline_data(knots, coeffs)
+
+
+def _waypoint_array(waypoints: object) -> np.ndarray:
+    """Waypoints as a float64 (n, 3) array [m], or a named error."""
+    shape = f"(n, 3) with 2 <= n <= {MAX_WAYPOINTS}, coordinates in [-{POSITION_BOUND:g}, " \
+        f"{POSITION_BOUND:g}] m"  # fmt: skip
+    try:
+        pts = np.asarray(waypoints)
+    except (TypeError, ValueError):  # ragged nesting
+        pts = np.asarray(None)
+    if pts.dtype.kind not in "iuf":
+        raise ArgumentTypeError(f"Spline waypoints must be real numbers of shape {shape}, "
+                                f"got {waypoints!r:.80}")  # fmt: skip
+    pts = pts.astype(np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3 or not 2 <= pts.shape[0] <= MAX_WAYPOINTS:
+        raise ValueError(f"Spline: waypoints must have shape {shape}, got {pts.shape}")
+    if not np.all(np.isfinite(pts)) or np.abs(pts).max() > POSITION_BOUND:
+        raise ValueError(f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, "
+                         f"{POSITION_BOUND:g}] m")  # fmt: skip
+    return pts
+
+
+def _spline_data(knots: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
+    """The SPLINE kernel vector [n_seg, knots, coeffs (n_seg, 3, 4) flattened]."""
+    return np.r_[float(len(knots) - 1), knots, coeffs.ravel()]
 
 
 def _natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -210,15 +237,137 @@ def _natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarra
     A = np.zeros((n, n))
     rhs = np.zeros((n, 3))
     A[0, 0] = A[-1, -1] = 1.0
-    for i in range(1, n - 1):
-        A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-        rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i] - (pts[i] - pts[i - 1]) / h[i - 1])
+    i = np.arange(1, n - 1)  # element-wise the same operations as a loop over the rows
+    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
+    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
     m = np.linalg.solve(A, rhs)
+    return _cubic_coefficients(knots, pts, m)
+
+
+def _cubic_coefficients(knots: np.ndarray, pts: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """(a0..a3) per segment, shape (n_seg, 3, 4), of the cubic spline with knot values ``pts``
+    and second derivatives ``m``."""
+    h = np.diff(knots)
     a0 = pts[:-1]
     a1 = (pts[1:] - pts[:-1]) / h[:, None] - h[:, None] * (2.0 * m[:-1] + m[1:]) / 6.0
     a2 = m[:-1] / 2.0
     a3 = (m[1:] - m[:-1]) / (6.0 * h[:, None])
     return np.stack([a0, a1, a2, a3], axis=-1)
+
+
+def _clamped_cubic_coefficients(
+    knots: np.ndarray, pts: np.ndarray, slope0: np.ndarray, slope1: np.ndarray
+) -> np.ndarray:
+    """Coefficients (n_seg, 3, 4) of the cubic spline with end slopes p'(s_0), p'(s_n) given:
+    fourth-order accurate up to the ends (a natural spline's p'' = 0 there is only second)."""
+    n = len(knots)
+    h = np.diff(knots)
+    A = np.zeros((n, n))
+    rhs = np.zeros((n, 3))
+    A[0, 0], A[0, 1] = 2.0 * h[0], h[0]
+    rhs[0] = 6.0 * ((pts[1] - pts[0]) / h[0] - slope0)
+    A[-1, -2], A[-1, -1] = h[-1], 2.0 * h[-1]
+    rhs[-1] = 6.0 * (slope1 - (pts[-1] - pts[-2]) / h[-1])
+    i = np.arange(1, n - 1)
+    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
+    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
+    return _cubic_coefficients(knots, pts, np.linalg.solve(A, rhs))
+
+
+# fit_curve: the check points inside each segment and the finite-difference steps.
+_CHECK_FRACTIONS = (0.25, 0.5, 0.75)
+FIT_TOLERANCE = 1e-3  # [m] default largest position error of a fitted curve
+MIN_FIT_SEGMENTS = 8
+
+
+class FittedCurve(Path):
+    """A user's parametric curve p(s), s in [0, s_end], as a clamped cubic spline in the SAME
+    parameter s (kernel kind SPLINE); build it with `fit_curve`.
+
+    ``position_error`` [m] is the largest |spline(s) − p(s)| and ``tangent_error`` [rad] the
+    largest angle between the spline's tangent and p'(s) (central differences of the callable),
+    both over three check points inside every segment (¼, ½, ¾ of it).
+    """
+
+    kind = SPLINE
+
+    def __init__(self, knots: np.ndarray, coeffs: np.ndarray, position_error: float,
+                 tangent_error: float) -> None:  # fmt: skip
+        self.s_end = float(knots[-1])
+        self.data = _spline_data(knots, coeffs)
+        self.position_error = position_error
+        self.tangent_error = tangent_error
+        self.segments = len(knots) - 1
+
+
+def _curve_points(curve: Callable[[float], Sequence[float]], s: np.ndarray) -> np.ndarray:
+    out = np.empty((len(s), 3))
+    for k, x in enumerate(s):
+        out[k] = vector(f"curve(s) at s = {x:.6g}", curve(float(x)), 3, -POSITION_BOUND,
+                        POSITION_BOUND, "m")  # fmt: skip
+    return out
+
+
+def fit_curve(
+    curve: Callable[[float], Sequence[float]],
+    s_end: float,
+    *,
+    tolerance: float = FIT_TOLERANCE,
+    max_segments: int = MAX_WAYPOINTS - 1,
+) -> FittedCurve:
+    """A kernel path of the user's curve ``curve(s) -> (x, y, z)`` [m], s in [0, s_end].
+
+    The curve is sampled at uniform knots and interpolated by a C² cubic spline whose end slopes
+    are the curve's (fourth-order one-sided differences), so the path parameter is the user's s
+    and ṡ = u_p/|p'(s)| holds as for the built-in paths. The number of segments doubles from 8
+    until the largest position error at the check points is at most ``tolerance`` [m]; a curve
+    that needs more than ``max_segments`` raises ValueError with the error reached. Cubic
+    interpolation errors fall as h⁴ (position) and h³ (tangent) with the knot spacing h: the
+    default helix sampled over 200 units of s fits to 1 mm with 64 segments (docs/model.md §3.8).
+    """
+    if not callable(curve):
+        raise ArgumentTypeError(f"curve must be a callable s -> (x, y, z), got {curve!r:.80}")
+    s_end = real("fit_curve s_end", s_end, 0.0, POSITION_BOUND, low_open=True, unit="unit s")
+    tolerance = real("fit_curve tolerance", tolerance, 0.0, math.inf, low_open=True, unit="m")
+    max_segments = integer("fit_curve max_segments", max_segments, MIN_FIT_SEGMENTS,
+                           MAX_WAYPOINTS - 1)  # fmt: skip
+    n = MIN_FIT_SEGMENTS
+    while True:
+        knots = np.linspace(0.0, s_end, n + 1)
+        h = s_end / n
+        pts = _curve_points(curve, knots)
+        # Fourth-order one-sided differences for the end slopes, step h/4.
+        d = h / 4.0
+        ahead = _curve_points(curve, np.array([d, 2 * d, 3 * d, 4 * d]))
+        behind = _curve_points(curve, s_end - np.array([d, 2 * d, 3 * d, 4 * d]))
+        w = np.array([-25.0, 48.0, -36.0, 16.0, -3.0]) / (12.0 * d)
+        slope0 = w[0] * pts[0] + w[1:] @ ahead
+        slope1 = -(w[0] * pts[-1] + w[1:] @ behind)
+        coeffs = _clamped_cubic_coefficients(knots, pts, slope0, slope1)
+        if not np.all(np.isfinite(coeffs)):
+            raise ValueError("fit_curve: the curve's samples give non-finite coefficients")
+        fitted = FittedCurve(knots, coeffs, math.nan, math.nan)
+        check = (knots[:-1, None] + h * np.array(_CHECK_FRACTIONS)).ravel()
+        p_fit, dp_fit, _ = fitted.evaluate(check)
+        position_error = float(np.linalg.norm(p_fit - _curve_points(curve, check), axis=1).max())
+        if position_error <= tolerance or 2 * n > max_segments:
+            break
+        n *= 2
+    if position_error > tolerance:
+        raise ValueError(
+            f"fit_curve: {n} segments fit the curve to {position_error:.3g} m, above tolerance = "
+            f"{tolerance:g} m; raise max_segments (<= {MAX_WAYPOINTS - 1}) or the tolerance"
+        )
+    step = 1e-4 * h
+    dp_true = (_curve_points(curve, np.minimum(check + step, s_end))
+               - _curve_points(curve, np.maximum(check - step, 0.0))) / (2 * step)  # fmt: skip
+    norms = np.linalg.norm(dp_true, axis=1) * np.linalg.norm(dp_fit, axis=1)
+    if not np.all(norms >= MIN_TANGENT * MIN_TANGENT):
+        raise ValueError(f"fit_curve: |p'(s)| must be >= {MIN_TANGENT} m per unit s everywhere")
+    cosine = np.clip(np.einsum("ij,ij->i", dp_true, dp_fit) / norms, -1.0, 1.0)
+    fitted.position_error = position_error
+    fitted.tangent_error = float(np.arccos(cosine).max())
+    return fitted
 
 
 DEFAULT_WAYPOINTS = (
@@ -234,12 +383,20 @@ PATHS = {
 }
 
 
-def make_path(path: str | Path | Mapping[str, Any]) -> Path:
-    """A path from its registry name, a `Path` instance, or a mapping {"kind": name, **arguments}
-    (e.g. ``{"kind": "line", "direction": [1, 0, 0.25]}``, as a TOML scenario writes it);
-    unknown names or arguments raise ValueError."""
+def make_path(path: str | Path | Mapping[str, Any] | Sequence[Sequence[float]]) -> Path:
+    """A path from its registry name, a `Path` instance, a mapping {"kind": name, **arguments}
+    (e.g. ``{"kind": "line", "direction": [1, 0, 0.25]}``, as a TOML scenario writes it) or a
+    list of (x, y, z) waypoints [m] (a `Spline` through them); anything else raises a named
+    error."""
     if isinstance(path, Path):
         return path
+    if isinstance(path, str):
+        if path in PATHS:
+            return PATHS[path]()
+        raise ValueError(
+            f"unknown path {path!r}; valid names are {sorted(PATHS)}, a Path instance, "
+            "a mapping with 'kind' or a list of (x, y, z) waypoints"
+        )
     if isinstance(path, Mapping):
         arguments = dict(path)
         kind = choice("path kind", arguments.pop("kind", None), PATHS)
@@ -249,10 +406,17 @@ def make_path(path: str | Path | Mapping[str, Any]) -> Path:
             raise
         except TypeError as exc:  # an argument the path does not take
             raise ValueError(f"path {path!r:.80}: {exc}") from exc
-    if not isinstance(path, str):
-        raise ArgumentTypeError(f"path must be one of {sorted(PATHS)}, a Path instance or a "
-                                "mapping with 'kind' one of them, "
-                                f"got {path!r:.80}")  # fmt: skip
-    if path in PATHS:
-        return PATHS[path]()
-    raise ValueError(f"unknown path {path!r}; valid names are {sorted(PATHS)} or a Path instance")
+    if isinstance(path, (Sequence, np.ndarray)) and not isinstance(path, bytes):
+        try:
+            return Spline(path)
+        except ValueError as exc:  # ArgumentTypeError too: the same type, the argument named
+            raise type(exc)(f"path as a list of (x, y, z) waypoints: {exc}") from None
+    if callable(path):
+        raise ArgumentTypeError(
+            f"path {path!r:.60} is a callable: turn a curve p(s) into a path with "
+            "auv_gym.paths.fit_curve(p, s_end) and pass that"
+        )
+    raise ArgumentTypeError(
+        f"path must be one of {sorted(PATHS)}, a Path instance, a mapping with 'kind' or a list "
+        f"of (x, y, z) waypoints, got {path!r:.80}"
+    )

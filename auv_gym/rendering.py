@@ -95,8 +95,15 @@ class EpisodeRenderer:
         self._stale = True  # the background must be redrawn
 
     # ----------------------------------------------------------------------------- episode data
-    def reset(self, position: np.ndarray, errors: np.ndarray, s: float, t: float = 0.0) -> None:
-        """Start a new episode at ``position`` (x, y, z) [m] with errors (x_e, y_e, z_e) [m]."""
+    def reset(
+        self, position: np.ndarray, errors: np.ndarray, s: float, t: float = 0.0,
+        path: Path | None = None,
+    ) -> None:  # fmt: skip
+        """Start a new episode at ``position`` (x, y, z) [m] with errors (x_e, y_e, z_e) [m];
+        ``path``: the episode's path when it changes per episode (``path="random"``)."""
+        if path is not None and path is not self.path:
+            self.path = path
+            self._figure = None  # the background shows the path: build it again
         self._positions.clear()
         self._errors.clear()
         self._s_drawn = -math.inf

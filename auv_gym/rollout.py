@@ -239,7 +239,7 @@ def _run_batch(
     for i, seed in enumerate(seeds):
         length = int(steps[i])
         s = samples[i, : length + 1, _S_COLUMN]
-        samples[i, : length + 1, -3:] = config.path.evaluate(s)[0]
+        samples[i, : length + 1, -3:] = sim.paths[i].evaluate(s)[0]
         result.append(
             Trajectory(
                 # As the env's info["t"]: physics steps × physics_dt.

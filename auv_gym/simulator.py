@@ -11,6 +11,7 @@ import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -44,10 +45,19 @@ from auv_gym.observation import (
     build_observation,
     guidance_row,
 )
+from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, make_path, path_eval
-from auv_gym.task import REWARD_TERMS, RewardWeights, TaskLimits, task_row, task_vector
+from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE, EpisodeTask, draw_task
+from auv_gym.task import (
+    REWARD_TERMS,
+    TASK_FIELDS,
+    RewardWeights,
+    TaskLimits,
+    task_row,
+    task_vector,
+)
 from auv_gym.validation import ArgumentTypeError, choice, flag, is_real, keys_within, real, vector
-from auv_gym.vehicle import N_PARAMS, AUVParams, remus100
+from auv_gym.vehicle import N_PARAMS, AUVParams, params_from_spec, remus100
 
 __all__ = ["ACTUATOR_LIMITS", "DISTURBANCE_PRESETS", "SimConfig", "Simulator"]
 
@@ -103,6 +113,19 @@ def _reward_from(reward_weights: RewardWeights | dict | None) -> RewardWeights:
     return RewardWeights(**keys_within("reward_weights", reward_weights, REWARD_TERMS))
 
 
+def path_is_random(path: object) -> bool:
+    """True for the name "random"."""
+    return isinstance(path, str) and path == "random"
+
+
+def _path_from(path: object) -> Path | PathDistribution:
+    """The `path` argument: a name, "random", a `Path`, a `PathDistribution`, a dict of its
+    fields, or a list of (x, y, z) waypoints."""
+    if isinstance(path, (PathDistribution, Mapping)) or path_is_random(path):
+        return PathDistribution.from_spec(path)  # type: ignore[arg-type]
+    return make_path(path)  # type: ignore[arg-type]
+
+
 def _check_path(path: Path) -> None:
     """The path's kernel description is complete and finite (the kernels do not bounds-check)."""
     if not isinstance(path, Path):
@@ -149,12 +172,15 @@ def path_turn_rates(path: Path) -> tuple[float, float]:
 class SimConfig:
     """Validated simulation settings (units: s, m, m/s, N, N·m)."""
 
-    path: Path = field(default_factory=lambda: make_path("helix"))
+    # A fixed path, or a `PathDistribution` drawing one per episode (`randomization.draw_task`).
+    path: Path | PathDistribution = field(default_factory=lambda: make_path("helix"))
     params: AUVParams = field(default_factory=remus100)
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     current: CurrentConfig = field(default_factory=CurrentConfig)
     param_uncertainty: float = 0.0  # ε: coefficients scaled by 1 + U[−ε, ε] per episode
-    actuator: str = "paper"
+    actuator: str = "paper"  # "paper", "fins" or "random" (one of the two per episode)
+    random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
+    random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
     actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS  # [N, N·m, N·m]
     control_dt: float = 0.05  # [s]
     physics_dt: float = 0.01  # [s]
@@ -189,22 +215,27 @@ class SimConfig:
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
         surge_limit: float = math.inf,
-        params: AUVParams | None = None,
+        params: AUVParams | Mapping[str, Any] | None = None,
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
         reward_weights: RewardWeights | dict | None = None,
+        random_current: float = 0.0,
+        random_noise: float = 0.0,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
         argument, its value and the allowed range."""
-        the_path = make_path(path)
+        the_path = _path_from(path)
+        s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
         return cls(
             path=the_path,
-            params=params if params is not None else remus100(),
+            params=params_from_spec(params),
             noise=_noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
             param_uncertainty=param_uncertainty,
             actuator=actuator,
+            random_current=random_current,
+            random_noise=random_noise,
             control_dt=control_dt,
             physics_dt=physics_dt,
             max_time=max_time,
@@ -218,7 +249,7 @@ class SimConfig:
             limits=TaskLimits(
                 corridor=corridor,
                 max_pitch=max_pitch,
-                s_end=the_path.s_end,
+                s_end=s_end,
                 surge_limit=surge_limit,
             ),
         )
@@ -227,14 +258,18 @@ class SimConfig:
         def put(name: str, value: object) -> None:  # canonical value (float, tuple) of a field
             object.__setattr__(self, name, value)
 
-        _check_path(self.path)
+        if not isinstance(self.path, PathDistribution):
+            _check_path(self.path)
         for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
                            ("current", CurrentConfig), ("reward", RewardWeights),
                            ("limits", TaskLimits)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
                                         f"got {getattr(self, name)!r:.80}")  # fmt: skip
-        put("actuator", choice("actuator", self.actuator, ACTUATORS))
+        put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
+        put("random_current", real("random_current", self.random_current, 0.0,
+                                   MAX_RANDOM_CURRENT, unit="m/s"))  # fmt: skip
+        put("random_noise", real("random_noise", self.random_noise, 0.0, MAX_RANDOM_NOISE))
         put("virtual_point_law", choice("virtual_point_law", self.virtual_point_law,
                                         VIRTUAL_POINT_LAWS))  # fmt: skip
         put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
@@ -274,8 +309,23 @@ class SimConfig:
                     f"{name} = {value} s must be a whole multiple of physics_dt = "
                     f"{self.physics_dt} s"
                 )
-        self._check_path_fits_the_observation()
-        self._check_start_fits_the_observation()
+        if isinstance(self.path, PathDistribution):
+            # Generated paths start at the origin with a drawn heading: a fixed start would
+            # be meaningless (docs/model.md §3.8); their turn rates (≤ 1/8 m) always fit.
+            for name in ("start_position", "start_heading"):
+                if getattr(self, name) is not None:
+                    raise ValueError(f"{name} cannot be given with a random path (path = "
+                                     "'random' or a PathDistribution): each episode starts at "
+                                     "its own path's default start")  # fmt: skip
+        else:
+            self._check_path_fits_the_observation()
+            self._check_start_fits_the_observation()
+
+    @property
+    def randomized(self) -> bool:
+        """True if episodes draw their own path, current, noise amplitude or actuator."""
+        return (isinstance(self.path, PathDistribution) or self.random_current > 0.0
+                or self.random_noise > 0.0 or self.actuator == "random")  # fmt: skip
 
     def _check_path_fits_the_observation(self) -> None:
         """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D."""
@@ -330,7 +380,7 @@ class SimConfig:
             "hold_steps": round(self.noise.hold / self.physics_dt),
             "u_d": self.u_desired,
             "sigma": self.kernel_sigma,
-            "actuator": ACTUATORS[self.actuator],
+            "actuator": ACTUATORS.get(self.actuator, 0),  # "random": set per episode
             "gm_a": gm_a,
         }
         for c, name in enumerate(("f_u", "f_v", "f_w", "f_q", "f_r")):
@@ -344,16 +394,20 @@ class SimConfig:
 
 
 @njit(cache=True, inline="always")
-def _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
               obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
-    """Advance vehicle i one control step with its saturated action, then score it."""
+    """Advance vehicle i one control step with its saturated action, then score it. Its path,
+    config and task are row ``row[i]`` of the episode table (`Simulator`)."""
     a = actions[i]
     for j in range(3):  # documented actuator saturation: |a_j| <= 1
         a[j] = min(max(a[j], -1.0), 1.0)
+    r = row[i]
+    cfg = cfgs[r]
     advance_vehicle(state[i], current[i], a, params[i], keys[i, KEY.noise], keys[i, KEY.current],
-                    step_index[i], kind, pdata, cfg, guid[i], obs[i], record[i])  # fmt: skip
+                    step_index[i], kinds[r], pdata[r], cfg, guid[i], obs[i], record[i])  # fmt: skip
     step_index[i] += int(config_record(cfg).n_sub)
-    reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, task, terms[i])
+    reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r],
+                                  terms[i])  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -371,36 +425,51 @@ def _first_non_finite_row(actions):
 # runs without numba's reference counting (`_nrt=False`): the row views of its loop otherwise
 # cost two atomic updates each, a quarter of its time (the threaded kernel's loop has none).
 @njit(cache=True, _nrt=False)
-def _step_one(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+def _step_one(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
               obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in range(state.shape[0]):
-            _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg,
-                      task, obs_low, obs_high, guid, obs, record, terms, reward, code)  # fmt: skip
+            _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
+                      cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
+                      code)  # fmt: skip
     return bad
 
 
 @njit(cache=True, parallel=True)
-def _step_all(state, current, actions, params, keys, step_index, kind, pdata, cfg, task,
+def _step_all(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
               obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in prange(state.shape[0]):
-            _step_row(i, state, current, actions, params, keys, step_index, kind, pdata, cfg,
-                      task, obs_low, obs_high, guid, obs, record, terms, reward, code)  # fmt: skip
+            _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
+                      cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
+                      code)  # fmt: skip
     return bad
 
 
 @njit(cache=True)
-def _observe_rows(rows, state, kind, pdata, u_d, sigma, guid, obs):
+def _observe_rows(rows, state, row, kinds, pdata, cfgs, guid, obs):
     for i in rows:
-        guidance_row(state[i], kind, pdata, u_d, sigma, guid[i])
-        build_observation(state[i], guid[i], u_d, obs[i])
+        cfg = config_record(cfgs[row[i]])
+        guidance_row(state[i], kinds[row[i]], pdata[row[i]], cfg.u_d, cfg.sigma, guid[i])
+        build_observation(state[i], guid[i], cfg.u_d, obs[i])
+
+
+_S_END = TASK_FIELDS.index("s_end")
+_CONFIG_INDEX = {name: j for j, name in enumerate(CONFIG_FIELDS)}
+_NOISE_COLUMNS = [_CONFIG_INDEX[f"noise_f_{c}"] for c in "uvwqr"]
+_CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
 
 
 class Simulator:
     """n vehicles of one `SimConfig`, as arrays; rows reset independently.
+
+    The kernels read each vehicle's path, packed config and task row from an episode table
+    indexed by ``row``: one shared row for a fixed configuration, one row per vehicle when
+    episodes draw their own path, current, noise amplitude or actuator
+    (`SimConfig.randomized`, `randomization.draw_task`). The path table is padded to the
+    longest path vector; `paths` holds each vehicle's current `Path`.
 
     ``parallel`` picks the threaded kernel (default: when n > 1) or the serial one; both give
     identical results. The serial kernel never starts numba's OpenMP pool, whose spinning
@@ -412,10 +481,19 @@ class Simulator:
             raise ValueError(f"number of vehicles must be an integer >= 1, got {n!r}")
         self.config = config
         self.n = int(n)
-        self._cfg = config.packed()
-        self._task = task_vector(config.reward, config.limits)
-        self._pdata = np.ascontiguousarray(config.path.data, dtype=np.float64)
-        self._kind = int(config.path.kind)
+        self._per_vehicle = config.randomized
+        m = self.n if self._per_vehicle else 1
+        self._row = np.arange(n, dtype=np.int64) if self._per_vehicle else np.zeros(n, np.int64)
+        self._cfg = np.tile(config.packed(), (m, 1))
+        self._task = np.tile(task_vector(config.reward, config.limits), (m, 1))
+        fixed = isinstance(config.path, Path)
+        width = config.path.data.size if fixed else config.path.max_data_size
+        self._pdata = np.zeros((m, width))
+        self._kind = np.zeros(m, dtype=np.int64)
+        self.paths: list[Path | None] = [config.path if fixed else None] * self.n
+        if fixed:
+            self._pdata[:] = config.path.data
+            self._kind[:] = config.path.kind
         self._nominal = config.params.to_vector()
         self._kernel = _step_all if (n > 1 if parallel is None else parallel) else _step_one
         self.state = np.zeros((n, STATE_DIM))
@@ -450,18 +528,35 @@ class Simulator:
         """`reset_row` for each row with its own generator; the observations in one kernel call."""
         for i, rng in zip(rows, rngs, strict=True):
             self._draw_episode(int(i), rng)
-        cfg = self.config
-        _observe_rows(np.asarray(rows, dtype=np.int64), self.state, self._kind, self._pdata,
-                      cfg.u_desired, cfg.kernel_sigma, self.guid, self.obs)  # fmt: skip
+        _observe_rows(np.asarray(rows, dtype=np.int64), self.state, self._row, self._kind,
+                      self._pdata, self._cfg, self.guid, self.obs)  # fmt: skip
+
+    def _set_task(self, i: int, task: EpisodeTask) -> None:
+        """Write vehicle i's drawn task into its row of the episode table."""
+        path = task.path
+        if path.data.size > self._pdata.shape[1]:  # a user's distribution cannot exceed it
+            raise RuntimeError(f"drawn path of {path.data.size} values exceeds the table width")
+        self.paths[i] = path
+        self._kind[i] = path.kind
+        self._pdata[i] = 0.0
+        self._pdata[i, : path.data.size] = path.data
+        cfg = self.config.packed()
+        cfg[_CONFIG_INDEX["actuator"]] = ACTUATORS[task.actuator]
+        cfg[_NOISE_COLUMNS] *= task.noise_scale
+        cfg[_CURRENT_COLUMNS] += task.current
+        self._cfg[i] = cfg
+        self._task[i, _S_END] = path.s_end
 
     def _draw_episode(self, i: int, rng: np.random.Generator) -> None:
         cfg = self.config
+        if self._per_vehicle:  # the task first, from its own seeds (`draw_task`)
+            self._set_task(i, draw_task(cfg, rng))
         self.keys[i] = draw_keys(rng)
         if cfg.param_uncertainty > 0.0:
             self.params[i] = cfg.params.perturbed(rng, cfg.param_uncertainty).to_vector()
         else:
             self.params[i] = self._nominal
-        position, heading, s0, u0 = self._start(rng)
+        position, heading, s0, u0 = self._start(rng, self.paths[i])
         self.state[i] = 0.0
         self.state[i, [STATE.x, STATE.y, STATE.z]] = position
         self.state[i, STATE.psi] = heading
@@ -475,9 +570,11 @@ class Simulator:
         self.reward[i] = 0.0
         self.code[i] = 0
 
-    def _start(self, rng: np.random.Generator) -> tuple[np.ndarray, float, float, float]:
+    def _start(
+        self, rng: np.random.Generator, path: Path
+    ) -> tuple[np.ndarray, float, float, float]:
         cfg = self.config
-        position, heading = cfg.path.default_start()
+        position, heading = path.default_start()
         if cfg.start_position is not None:
             position = np.asarray(cfg.start_position)
         if cfg.start_heading is not None:
@@ -489,9 +586,9 @@ class Simulator:
         draws = rng.uniform(-1.0, 1.0, size=7)
         if draws[0] < 0.0:
             return position + 2.0 * draws[1:4], heading + 0.2 * draws[4], 0.0, 0.0
-        s_span = min(40.0, cfg.path.s_end) if math.isfinite(cfg.path.s_end) else 40.0
+        s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
         s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
-        p, dp, _ = cfg.path.evaluate(s0)
+        p, dp, _ = path.evaluate(s0)
         offset = 8.0 * rng.uniform(-1.0, 1.0, size=3)
         path_heading = math.atan2(dp[1], dp[0])
         return p + offset, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
@@ -503,7 +600,7 @@ class Simulator:
         """
         np.copyto(self._actions, actions)
         bad_row = self._kernel(self.state, self.current, self._actions, self.params, self.keys,
-                     self.step_index, self._kind, self._pdata, self._cfg, self._task,
+                     self.step_index, self._row, self._kind, self._pdata, self._cfg, self._task,
                      OBS_LOW, OBS_HIGH, self.guid, self.obs, self.record, self.terms,
                      self.reward, self.code)  # fmt: skip
         if bad_row >= 0:

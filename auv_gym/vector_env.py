@@ -392,7 +392,8 @@ class AUVPath3DVectorEnv(VectorEnv):
         if self._renderer is not None:
             v, sim = self._render_vehicle, self.sim
             t = int(sim.step_index[v]) * self.config.physics_dt
-            self._renderer.reset(sim.state[v, 0:3], sim.guid[v, 0:3], sim.state[v, 10], t)
+            self._renderer.reset(sim.state[v, 0:3], sim.guid[v, 0:3], sim.state[v, 10], t,
+                                 path=sim.paths[v])  # fmt: skip
 
     def render(self) -> np.ndarray | None:
         """RGB image (H, W, 3) of vehicle `render_vehicle`'s track since its last reset."""

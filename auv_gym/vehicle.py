@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 from auv_gym.records import fixed_tuple, record_type
-from auv_gym.validation import flag, real
+from auv_gym.validation import ArgumentTypeError, flag, keys_within, real
 
 __all__ = [
     "DERIVED_INERTIAS",
@@ -26,6 +28,7 @@ __all__ = [
     "PARAM_NAMES",
     "AUVParams",
     "ParamsRecord",
+    "params_from_spec",
     "params_record",
     "remus100",
 ]
@@ -164,6 +167,31 @@ PARAM_NAMES: tuple[str, ...] = (*(f.name for f in fields(AUVParams)), *DERIVED_I
 PARAM_INDEX: dict[str, int] = {name: i for i, name in enumerate(PARAM_NAMES)}
 N_PARAMS = len(PARAM_NAMES)
 ParamsRecord = record_type("ParamsRecord", PARAM_NAMES, __name__)
+
+
+def params_from_spec(spec: AUVParams | Mapping[str, Any] | None) -> AUVParams:
+    """The vehicle of the env's ``params`` argument: None (REMUS 100), an `AUVParams`, or a dict
+    of field values [SI] with an optional ``scale`` dict of factors on REMUS 100's fields, e.g.
+    ``{"m": 32.0, "scale": {"X_uu": 1.2}}`` (values first, then the factors). An unknown name
+    raises ValueError naming it."""
+    if spec is None:
+        return remus100()
+    if isinstance(spec, AUVParams):
+        return spec
+    names = [f.name for f in fields(AUVParams)]
+    if not isinstance(spec, Mapping):
+        raise ArgumentTypeError(f"params must be None, an AUVParams or a dict of its fields "
+                                f"(and 'scale'), got {spec!r:.80}")  # fmt: skip
+    values = keys_within("params", spec, [*names, "scale"])
+    scale = values.pop("scale", {})
+    scale = keys_within("params scale", scale, names)
+    for name, factor in scale.items():
+        real(f"params scale {name}", factor)
+    try:
+        params = AUVParams(**values)
+    except TypeError as exc:  # a wrong kind of value, named by AUVParams' own checks
+        raise ArgumentTypeError(str(exc)) from None
+    return params.scaled(scale) if scale else params
 
 
 def remus100(**overrides: float) -> AUVParams:

@@ -13,8 +13,9 @@ from typing import Any
 import numpy as np
 
 from auv_gym.files import write_atomic
-from auv_gym.paths import make_path
 from auv_gym.plotting import new_figure, plot_track, save_figure
+from auv_gym.randomization import task_for_seed
+from auv_gym.simulator import SimConfig
 from auv_gym.trajectory import Trajectory
 from benchmarks.training.learning_curve import EVAL_FILE, read_rows
 
@@ -50,7 +51,8 @@ def comparison_figures(
             if r["scenario"] == name and r["seed"] == first_seed
         }
         if trajectories:
-            path = make_path(scenario.env.get("path", "helix"))
+            # The path of that seed's episode (a random-path scenario draws one per seed).
+            path = task_for_seed(SimConfig.from_kwargs(**scenario.env), first_seed).path
             written += _scenario_figures(name, path, trajectories, first_seed, out / "figures")
     names = [n for n in scenarios if any(r["scenario"] == n for r in records)]
     for metric, label in BAR_METRICS.items():

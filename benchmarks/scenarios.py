@@ -1,4 +1,10 @@
-"""Named benchmark scenarios (`benchmarks/scenarios.toml`): env and controller keyword arguments."""
+"""Named benchmark scenarios (`benchmarks/scenarios.toml`): env and controller keyword arguments.
+
+An env table takes every `AUVPath3D-v0` argument, including a waypoint path
+(``path = [[0, 0, 5], [40, 10, 8], ...]``), a random-path table (``path = { families =
+["helix"], radius = [10, 13] }``) and vehicle parameters by name or scale factor
+(``params = { m = 32.0, scale = { X_uu = 1.2 } }``); each is validated when the file is loaded.
+"""
 
 from __future__ import annotations
 
@@ -50,7 +56,19 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
             dict(table.get("env", {})),
             dict(table.get("controller", {})),
         )
+        _check_env(path, name, scenarios[name].env)
     return scenarios
+
+
+def _check_env(path: Path, name: str, env: dict[str, Any]) -> None:
+    """The env arguments build (paths, waypoint lists, `params` by name or scale factor): a bad
+    one raises ValueError naming the file, the scenario and the argument."""
+    from auv_gym.simulator import SimConfig
+
+    try:
+        SimConfig.from_kwargs(**env)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{path}: scenario {name!r}: {exc}") from None
 
 
 def select(names: str, available: Sequence[str], what: str) -> list[str]:

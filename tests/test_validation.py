@@ -187,11 +187,11 @@ def test_a_turn_rate_check_that_fits_u_desired_accepts_the_path():
 
 def test_reset_outside_the_space_raises_naming_the_component():
     env = AUVPath3DEnv()
-    env.sim._pdata[3] = 1e4  # the helix centre moved behind the configuration's back
+    env.sim._pdata[0, 3] = 1e4  # the helix centre moved behind the configuration's back
     with pytest.raises(ValueError, match=r"reset gave x_e = -10005 m \(vehicle 0\), outside"):
         env.reset(seed=0)
     venv = AUVPath3DVectorEnv(3)
-    venv.sim._pdata[3] = 1e4
+    venv.sim._pdata[0, 3] = 1e4
     with pytest.raises(ValueError, match=r"reset gave x_e = -10005 m \(vehicle 0\)"):
         venv.reset(seed=0)
 
@@ -208,11 +208,11 @@ def test_a_non_finite_observation_of_a_finite_state_is_non_finite(bad):
     obs[OBS_INDEX["psi_F_dot"]] = bad  # the state stays finite
     terms = np.zeros(len(REWARD_TERMS))
     reward, code = task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH,
-                            sim._task, terms)  # fmt: skip
+                            sim._task[0], terms)  # fmt: skip
     assert TERMINATION_REASONS[code] == "non_finite"
     assert reward == -100.0 and terms.tolist() == [0] * (len(REWARD_TERMS) - 1) + [-100.0]
     obs[OBS_INDEX["psi_F_dot"]] = 9.0  # inside: the same call runs on
-    assert task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task,
+    assert task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task[0],
                     terms)[1] == 0  # fmt: skip
 
 
@@ -246,7 +246,7 @@ def test_rewards_stay_finite_at_the_extremes_of_the_ranges():
 
 # ------------------------------------------------------------ types and coercion (item 1)
 BAD_TYPES = [
-    ("path", ["helix"]), ("path", {"kind": 0}), ("path", 3),
+    ("path", ["helix"]), ("path", {"kind"}), ("path", 3),
     ("disturbance", [1, 2, 3, 4, 5]), ("disturbance", True), ("disturbance", 1j),
     ("current", "0.3"), ("current", 0.3), ("current", {"mean": "abc"}),
     ("param_uncertainty", "0.1"), ("param_uncertainty", None),
@@ -257,7 +257,7 @@ BAD_TYPES = [
     ("u_desired", "1"), ("u_desired", 1 + 0j), ("sigma", b"0.5"),
     ("virtual_point_law", ["corrected"]), ("corridor", "30"), ("max_pitch", "1.0"),
     ("reward_weights", 5), ("reward_weights", [1.0]), ("reward_weights", {"progress": "1"}),
-    ("params", {"m": 30.0}), ("params", "remus100"),
+    ("params", ["m", 30.0]), ("params", "remus100"),
     ("start_position", "abc"), ("start_position", (1, 2, "3")), ("start_position", 5.0),
     ("start_heading", "0.5"), ("start_heading", [0.5]),
 ]  # fmt: skip

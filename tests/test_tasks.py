@@ -1,0 +1,120 @@
+"""Named task sets (benchmarks/tasks.toml): the split cannot leak; bad files fail early."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from auv_gym.path_generator import PathDistribution, overlaps
+from auv_gym.randomization import task_for_seed
+from auv_gym.simulator import SimConfig
+from benchmarks.scenarios import load_scenarios
+from benchmarks.tasks import TASKS_FILE, load_task_sets, task_set
+from benchmarks.tasks import test_suite as the_test_suite
+
+BENCHMARK_SCENARIOS = ["nominal", "paper", "current", "uncertain", "fins", "line", "waypoints",
+                       "storm"]  # fmt: skip
+
+
+def _helix_parameters(path):
+    """(radius [m], |γ| [deg]) of a generated helix (arc-length parameterised)."""
+    return path.radius, float(np.degrees(np.arcsin(abs(path.climb))))
+
+
+def test_training_seeds_and_draws_never_meet_a_test_episode():
+    sets = load_task_sets()
+    train, validation = sets["train"], sets["validation"]
+    tests = the_test_suite()
+    assert {s.role for s in tests} == {"test"}
+    test_seeds = set().union(*(set(s.seeds) for s in tests))
+    assert not test_seeds & set(validation.seeds)
+    assert min(train.seeds) > max(test_seeds | set(validation.seeds))  # disjoint ranges
+    # Held-out families: no test draw lies in the training support, and no training draw
+    # (a sample of training seeds) lies in a held-out family's ranges.
+    train_dist = SimConfig.from_kwargs(**train.env).path
+    held_out = [s for s in tests if s.held_out == "train"]
+    assert len(held_out) >= 2
+    train_draws = [task_for_seed(SimConfig.from_kwargs(**train.env), seed).path
+                   for seed in train.seeds[:200]]  # fmt: skip
+    for s in held_out:
+        config = SimConfig.from_kwargs(**s.env)
+        dist = config.path
+        assert overlaps(dist, train_dist) == []
+        for _, seed in s.episodes():
+            path = task_for_seed(config, seed).path
+            if path.family == "helix":
+                radius, gamma = _helix_parameters(path)
+                inside_radius = train_dist.radius[0] <= radius <= train_dist.radius[1]
+                inside_angle = gamma <= train_dist.climb_angle_deg[1]
+                assert not (inside_radius and inside_angle), (s.name, radius, gamma)
+            else:  # a line: only its angle can hold it out
+                gamma = np.degrees(np.arcsin(abs(path.data[5])))
+                assert gamma > train_dist.climb_angle_deg[1]
+        for path in train_draws:
+            if path.family == "helix" and path.family in dist.families:
+                radius, gamma = _helix_parameters(path)
+                low, high = dist.climb_angle_deg
+                assert not (dist.radius[0] <= radius <= dist.radius[1] and low <= gamma <= high)
+
+
+def test_the_test_suite_holds_the_benchmark_scenarios():
+    suite = {s.name: s for s in the_test_suite()}
+    scenarios = load_scenarios()
+    for name in BENCHMARK_SCENARIOS:
+        s = suite[f"scenario:{name}"]
+        assert s.env == scenarios[name].env and s.controller == scenarios[name].controller
+        assert list(s.seeds) == list(range(10))
+    assert {"test_tight_helix", "test_steep", "test_wide_helix", "test_distribution"} <= set(suite)
+
+
+def test_task_sets_build_their_envs():
+    train = task_set("train")
+    config = SimConfig.from_kwargs(**train.env)
+    assert isinstance(config.path, PathDistribution) and config.randomized
+    assert config.actuator == "random" and config.randomize_start
+    assert task_set("validation").episodes()[0] == (task_set("validation").env, 100_000)
+
+
+def _write(tmp_path, text):
+    file = tmp_path / "tasks.toml"
+    file.write_text(text)
+    return file
+
+
+TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { path = "random" }\n'
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (TRAIN + '[t]\nrole = "test"\nseeds = { first = 120, count = 5 }\nenv = {}\n',
+         r"train set 'train' and test set 't' share seeds \[120, 125\): test episodes would leak"),
+        (TRAIN + '[v]\nrole = "validation"\nseeds = { first = 0, count = 101 }\nenv = {}\n',
+         r"train set 'train' and validation set 'v' share seeds \[100, 101\)"),
+        (TRAIN + '[t]\nrole = "test"\nheld_out = "train"\nseeds = { first = 0, count = 5 }\n'
+         'env = { path = { families = ["helix"], radius = [15.0, 20.0] } }\n',
+         r"'t' is marked held_out but the training set 'train' can draw its helix paths"),
+        ('[train]\nrole = "train"\nseeds = { first = 0, count = 5 }\n'
+         "env = { path = { radius = [0.0, 20.0] } }\n",
+         r"task set 'train': PathDistribution radius must be positive"),
+        ('[train]\nrole = "train"\nseeds = { first = 0, count = 5 }\n'
+         "env = { path = { climb_angle_deg = [0.0, 40.0] } }\n",
+         r"task set 'train': PathDistribution climb_angle_deg .* exceeds the vehicle's largest"),
+        ('[x]\nrole = "exam"\nseeds = { first = 0, count = 5 }\n', r"role must be one of"),
+        ('[x]\nrole = "test"\nseeds = { first = 0, count = 0 }\n', r"count >= 1"),
+        ('[x]\nrole = "test"\nseeds = [0, 5]\n', r"seeds must be \{ first"),
+        ('[x]\nrole = "test"\nseed = { first = 0, count = 5 }\n', r"unknown keys \['seed'\]"),
+        ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["papr"]\n',
+         r"unknown scenarios \['papr'\]"),
+    ],
+)  # fmt: skip
+def test_bad_task_files_raise_one_line_errors(tmp_path, text, match):
+    with pytest.raises(ValueError, match=match) as caught:
+        load_task_sets(_write(tmp_path, text))
+    assert "\n" not in str(caught.value)
+
+
+def test_unknown_task_set_names_are_refused():
+    with pytest.raises(ValueError, match=r"unknown task set 'trian'; valid: \[.*'train'"):
+        task_set("trian")
+    assert TASKS_FILE.exists()
