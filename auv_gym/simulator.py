@@ -120,8 +120,10 @@ def path_is_random(path: object) -> bool:
 
 def _path_from(path: object) -> Path | PathDistribution:
     """The `path` argument: a name, "random", a `Path`, a `PathDistribution`, a dict of its
-    fields, or a list of (x, y, z) waypoints."""
-    if isinstance(path, (PathDistribution, Mapping)) or path_is_random(path):
+    fields, a dict {"kind": name, **arguments} of one fixed path, or a list of (x, y, z)
+    waypoints."""
+    fixed = isinstance(path, Mapping) and "kind" in path
+    if not fixed and (isinstance(path, (PathDistribution, Mapping)) or path_is_random(path)):
         return PathDistribution.from_spec(path)  # type: ignore[arg-type]
     return make_path(path)  # type: ignore[arg-type]
 
