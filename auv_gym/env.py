@@ -263,7 +263,7 @@ class AUVPath3DEnv(gym.Env):
         max_pitch: float = math.radians(60.0),
         surge_limit: float = math.inf,
         reward_weights: RewardWeights | dict | None = None,
-        params: AUVParams | None = None,
+        params: AUVParams | Mapping[str, Any] | None = None,
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
         render_mode: str | None = None,

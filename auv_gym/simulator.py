@@ -201,7 +201,7 @@ class SimConfig:
     @classmethod
     def from_kwargs(
         cls,
-        path: str | Path = "helix",
+        path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
         disturbance: str | float | NoiseConfig = "paper",
         current: CurrentConfig | Sequence[float] | dict | None = None,
         param_uncertainty: float = 0.0,

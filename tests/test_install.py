@@ -123,7 +123,7 @@ def test_compare_runs_from_another_folder_on_the_base_install(installed, tmp_pat
     assert row["policy"] == "backstepping" and row["scenario"] == "nominal"
     assert float(row["transient"]) == 2.0 and int(row["window_samples"]) == 41
     assert 0.0 < float(row["rms_distance"]) < 20.0  # the approach from 17.7 m away
-    bad = _run([*args[:-1], "--transient", "4"], tmp_path, env)
+    bad = _run([*args[:-1], "--transient", "3.99"], tmp_path, env)
     assert bad.returncode == 2 and "fewer than two samples" in bad.stderr
     assert len(bad.stderr.strip().splitlines()) == 1
 

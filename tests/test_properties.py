@@ -125,7 +125,9 @@ def env_kwargs(draw):
     kw["randomize_start"] = draw(st.booleans())
     path = make_path(kw["path"])
     turn = max(path_turn_rates(path))
+    # 1 - 1e-12: the env's check 2·u·turn <= bound must not fail by one rounding at u = u_max
     u_max = SPEED_BOUND if turn == 0 else min(SPEED_BOUND, PATH_RATE_BOUND / (2 * turn))
+    u_max *= 1 - 1e-12
     kw["u_desired"] = u_max * draw(st.one_of(st.just(1.0), log_uniform(1e-4, 1.0)))
     kw["sigma"] = draw(log_uniform(1e-6, 1e6))
     kw["virtual_point_law"] = draw(st.sampled_from(["corrected", "printed"]))
