@@ -37,6 +37,9 @@ ROOT = Path(__file__).resolve().parents[1]
 TEXT_SUFFIXES = {".py", ".md", ".toml", ".yml", ".yaml", ".sh", ".cfg", ".txt", ".ini"}
 CITED_SUFFIXES = "md py toml yml yaml json csv png sh npz zip txt".split()
 SKIPPED_DIRS = {".git", ".venv", "build", "out", "runs", "__pycache__", ".pytest_cache"}
+# What the checker must refuse, spelt in pieces so that no file of the project contains them.
+OUTSIDE = "../" + "shared"
+OLD_MANUAL = "MODEL" + ".md"
 
 HEADING = re.compile(r"^ {0,3}(#{1,6})[ \t]+(.*?)[ \t]*#*[ \t]*$", re.M)
 SECTION_HEADING = re.compile(r"^§(\d+(?:\.\d+)*)(?=[ \t]|$)")
@@ -472,9 +475,8 @@ def test_checker_reports_each_kind_of_broken_reference(tmp_path):
         '"""Law of docs/guide.md §1.2, §1.5; docs/guide.md §7 and docs/guide.md.\n'
         "Tests: tests/test_a.py::test_there, tests/test_a.py::test_gone; pkg/none.md; "
         "RUN/out.json; out/x.md.\n"
-        "Old: MODEL"
-        '.md §2, ../shared/x.\n"""\n'
-    )  # split: immune to a rename by sed
+        f'Old: {OLD_MANUAL} §2, {OUTSIDE}/x.\n"""\n'
+    )
     _write(tmp_path, "pkg/mod.py", module)
     _write(tmp_path, "tests/test_a.py", "def test_there():\n    pass\n")
     checker = Checker(tmp_path, [p for p in tmp_path.rglob("*") if p.is_file()])
@@ -497,8 +499,8 @@ def test_checker_reports_each_kind_of_broken_reference(tmp_path):
     assert inner == ["docs/guide.md:7: §1.3 is not a heading of this file"]
     forbidden = sorted(str(p) for p in checker.forbidden_problems())
     assert len(forbidden) == 2
-    assert forbidden[0].startswith("pkg/mod.py:3: '../shared'")
-    assert forbidden[1].startswith("pkg/mod.py:3: 'MODEL.md' cites a design file")
+    assert forbidden[0].startswith(f"pkg/mod.py:3: '{OUTSIDE}'")
+    assert forbidden[1].startswith(f"pkg/mod.py:3: '{OLD_MANUAL}' cites a design file")
 
 
 def test_github_slugs_of_manual_headings():
