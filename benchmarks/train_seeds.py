@@ -22,7 +22,13 @@ from pathlib import Path
 
 from benchmarks.training.config import ALGORITHMS
 from benchmarks.training.evaluation import EVAL_SEEDS
-from benchmarks.training.seeds import TASK_SETS, SeedsOptions, parse_seeds, train_seeds
+from benchmarks.training.seeds import (
+    DEFAULT_EVAL_EPISODES,
+    TASK_SETS,
+    SeedsOptions,
+    parse_seeds,
+    train_seeds,
+)
 from benchmarks.training.train import TrainOptions
 
 HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams"
@@ -68,7 +74,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="env steps between checkpoints (a kill loses at most this many)",
     )
     p.add_argument("--keep-checkpoints", type=int, default=2)
-    p.add_argument("--task-set", default="paper", help=f"one of {sorted(TASK_SETS)}")
+    p.add_argument("--task-set", default="paper",
+                   help=f"validation episodes: {sorted(TASK_SETS)} or a validation set of "
+                   "benchmarks/tasks.toml (e.g. 'validation')")  # fmt: skip
+    p.add_argument("--eval-episodes", type=int, default=DEFAULT_EVAL_EPISODES,
+                   help="validation episodes taken from a task set (its first seeds)")  # fmt: skip
     p.add_argument("--vec-env", default="auto", choices=("auto", "native", "dummy"))
     p.add_argument("--threads", type=int, default=1, help="torch/numba threads per seed")
     p.add_argument("--export", default=None, help="copy the selected agent here")
@@ -98,7 +108,7 @@ def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
     return SeedsOptions(
         train=train, seeds=seeds, out=ns.out, workers=ns.workers, backend=ns.backend,
         address=ns.address, resume=ns.resume, task_set=ns.task_set, export=ns.export,
-        results=ns.results, progress=not ns.quiet,
+        eval_episodes=ns.eval_episodes, results=ns.results, progress=not ns.quiet,
     )  # fmt: skip
 
 

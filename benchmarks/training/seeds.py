@@ -46,7 +46,7 @@ from typing import Any
 from auv_gym.files import write_json, write_text
 from benchmarks.training.checkpoints import export_agent, latest_checkpoint
 from benchmarks.training.config import read_zoo_config
-from benchmarks.training.evaluation import HELD_OUT_FILE, score
+from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.train import TrainOptions, check_options
 from controllers.ppo import METADATA_FILE, MODEL_FILE
@@ -59,6 +59,7 @@ __all__ = [
     "check_ray_address",
     "check_seeds_options",
     "parse_seeds",
+    "resolve_validation",
     "seed_status",
     "train_seeds",
 ]
@@ -66,13 +67,16 @@ __all__ = [
 PLAN_FILE = "train_seeds.json"
 SUMMARY_FILE = "summary.json"
 LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
-# Task sets: where validation and test episodes come from. "paper": the paper scenario (helix,
-# white noise ±35 N / N·m) with validation seeds `EVAL_SEEDS` and test seeds `HELD_OUT_SEEDS`.
-# The training distribution is the config's env_kwargs (the task source of the YAML file).
+# Validation episodes (model selection): "paper", the paper scenario (helix, white noise
+# ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
+# arguments on its first `eval_episodes` seeds, or on the given eval seeds, which must lie in its
+# range). The per-seed test report is the paper scenario on `HELD_OUT_SEEDS` either way; the whole
+# test suite is `benchmarks.evaluate_suite`. The training distribution is the config's env_kwargs.
 TASK_SETS = {"paper": "paper scenario: validation seeds 100-104, test seeds 0-9"}
+DEFAULT_EVAL_EPISODES = 32  # validation episodes drawn from a task set
 # Plan entries that must match when a run is resumed (the rest may change: workers, backend).
 PLAN_KEYS = ("algo", "env_id", "config", "n_timesteps", "eval_seeds", "eval_duration",
-             "eval_freq", "checkpoint_freq", "task_set", "vec_env")  # fmt: skip
+             "eval_freq", "checkpoint_freq", "task_set", "eval_env", "vec_env")  # fmt: skip
 
 
 @dataclass
@@ -86,7 +90,8 @@ class SeedsOptions:
     backend: str = "local"  # "local" or "ray"
     address: str | None = None  # Ray cluster address; None: a local Ray instance
     resume: bool = False
-    task_set: str = "paper"
+    task_set: str = "paper"  # "paper" or a validation set of benchmarks/tasks.toml
+    eval_episodes: int = DEFAULT_EVAL_EPISODES  # validation seeds taken from a task set
     export: str | None = None  # copy the selected agent here
     results: str | None = None  # per-seed test results and learning curves, for committing
     progress: bool = True
@@ -149,8 +154,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     """
     if not opts.seeds or min(opts.seeds) < 0:
         raise ValueError(f"seeds must be non-empty and non-negative, got {list(opts.seeds)}")
-    if opts.task_set not in TASK_SETS:
-        raise ValueError(f"task set {opts.task_set!r} is unknown; valid: {sorted(TASK_SETS)}")
+    opts = resolve_validation(opts)
     if not (isinstance(opts.workers, int) and opts.workers >= 1):
         raise ValueError(f"workers must be a positive integer, got {opts.workers!r}")
     if opts.backend not in ("local", "ray"):
@@ -174,7 +178,8 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         "config_file": str(train.config), "n_timesteps": n_timesteps,
         "eval_seeds": list(train.eval_seeds), "eval_duration": float(train.eval_duration),
         "eval_freq": train.eval_freq, "checkpoint_freq": train.checkpoint_freq,
-        "task_set": opts.task_set, "vec_env": train.vec_env, "seeds": list(opts.seeds),
+        "task_set": opts.task_set, "eval_env": train.eval_env, "vec_env": train.vec_env,
+        "seeds": list(opts.seeds),
     }  # fmt: skip
     out = Path(opts.out)
     plan_file = out / PLAN_FILE
@@ -190,6 +195,34 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
     _check_writable(out)
     return plan
+
+
+def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
+    """`opts` with the validation episodes of its task set filled in (`TrainOptions.eval_env`
+    and `eval_seeds`); ValueError (one line) for an unknown set, a set that is not a validation
+    set, or evaluation seeds outside the set's range."""
+    if opts.task_set in TASK_SETS:
+        return opts
+    from benchmarks.tasks import load_task_sets
+
+    sets = load_task_sets()
+    validation = sorted(name for name, s in sets.items() if s.role == "validation")
+    if opts.task_set not in sets or sets[opts.task_set].role != "validation":
+        raise ValueError(f"task set {opts.task_set!r} is not a validation set; valid: "
+                         f"{sorted(TASK_SETS) + validation}")  # fmt: skip
+    chosen = sets[opts.task_set]
+    seeds = tuple(opts.train.eval_seeds)
+    if seeds == tuple(EVAL_SEEDS):  # the paper default: take the set's own seeds
+        if not 1 <= opts.eval_episodes <= len(chosen.seeds):
+            raise ValueError(f"eval_episodes must be 1-{len(chosen.seeds)} (the size of task set "
+                             f"{chosen.name!r}), got {opts.eval_episodes}")  # fmt: skip
+        seeds = tuple(chosen.seeds[: opts.eval_episodes])
+    outside = sorted(set(seeds) - set(chosen.seeds))
+    if outside:
+        raise ValueError(f"eval seeds {outside[:5]} lie outside task set {chosen.name!r} (seeds "
+                         f"{chosen.seeds.start}-{chosen.seeds.stop - 1})")  # fmt: skip
+    train = replace(opts.train, eval_env=dict(chosen.env), eval_seeds=seeds)
+    return replace(opts, train=train)
 
 
 def check_evaluation_window(duration: float) -> None:
@@ -387,6 +420,7 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
     after the run when a seed failed (the others are finished and kept).
     """
     plan = check_seeds_options(opts)
+    opts = resolve_validation(opts)
     out = Path(opts.out)
     write_json(out / PLAN_FILE, plan, indent=2, sort_keys=True)
     n_timesteps = plan["n_timesteps"]

@@ -9,7 +9,7 @@ import os
 import sys
 import time
 from collections.abc import Iterator, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -55,7 +55,10 @@ class TrainOptions:
     keep_checkpoints: int = 3  # newest checkpoints kept on disk
     eval_freq: int = 100_000  # [env steps] between evaluations; 0 disables
     eval_seeds: tuple[int, ...] = EVAL_SEEDS  # seeds of the evaluation episodes
-    eval_duration: float = 300.0  # [s] evaluation episode length (paper scenario)
+    eval_duration: float = 300.0  # [s] evaluation episode length
+    # Env keyword arguments of the evaluation episodes on top of the id's fixed ones; empty: the
+    # paper scenario. A validation task set of benchmarks/tasks.toml fills it (train_seeds).
+    eval_env: dict[str, Any] = field(default_factory=dict)
     vec_env: str = "auto"  # "auto" (native batched if available), "native" or "dummy"
     threads: int = 1  # torch intra-op and numba threads during training (restored after)
     progress_bar: bool = True
@@ -152,9 +155,9 @@ def check_options(opts: TrainOptions) -> None:
 
 
 def _eval_kwargs(opts: TrainOptions) -> dict[str, Any]:
-    """The evaluation episodes: the paper scenario under the trained id's fixed arguments (the
-    surge limit of AUVPath3D-v1), `eval_duration` long."""
-    return {**VARIANTS.get(opts.env_id, {}), "max_time": float(opts.eval_duration)}
+    """The evaluation episodes: `eval_env` (empty: the paper scenario) under the trained id's
+    fixed arguments (the surge limit of AUVPath3D-v1), `eval_duration` long."""
+    return {**VARIANTS.get(opts.env_id, {}), **opts.eval_env, "max_time": float(opts.eval_duration)}
 
 
 def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
