@@ -63,6 +63,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue every unfinished seed")
     p.add_argument("--n-timesteps", type=_number, default=None,
                    help="env steps per seed (default: the config's)")  # fmt: skip
+    p.add_argument("--stop-at", type=_number, default=None,
+                   help="pause every seed at this many env steps; schedules still run over "
+                   "--n-timesteps, and a later --resume with a larger --stop-at continues "
+                   "them exactly")  # fmt: skip
     p.add_argument("--eval-seeds", default=",".join(map(str, EVAL_SEEDS)),
                    help="validation seeds (disjoint from the test seeds 0-9)")  # fmt: skip
     p.add_argument("--eval-duration", type=float, default=300.0, help="evaluation episode [s]")
@@ -101,7 +105,8 @@ def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
     config = ns.config or str(HYPERPARAMS / f"{ns.algo}.yml")
     train = TrainOptions(
         algo=ns.algo, config=config, env_id=ns.env_id, n_timesteps=ns.n_timesteps,
-        checkpoint_freq=ns.checkpoint_freq, keep_checkpoints=ns.keep_checkpoints,
+        stop_at=ns.stop_at, checkpoint_freq=ns.checkpoint_freq,
+        keep_checkpoints=ns.keep_checkpoints,
         eval_freq=ns.eval_freq, eval_seeds=eval_seeds, eval_duration=ns.eval_duration,
         vec_env=ns.vec_env, threads=ns.threads, progress_bar=False,
     )  # fmt: skip

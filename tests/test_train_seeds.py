@@ -75,7 +75,19 @@ def test_parse_seeds(text, seeds):
         (["--seeds", "2", "--n-timesteps", "0"], "n_timesteps must be a positive number"),
         (["--seeds", "2", "--n-timesteps", "-5"], "n_timesteps must be a positive number"),
         (["--seeds", "2", "--eval-seeds", "3,100"], "eval_seeds [3] overlap the held-out"),
-        (["--seeds", "2", "--task-set", "nope"], "task set 'nope' is unknown; valid: ['paper']"),
+        (
+            ["--seeds", "2", "--task-set", "nope"],
+            "task set 'nope' is not a validation set; valid: ['paper', 'validation']",
+        ),
+        (["--seeds", "2", "--task-set", "test_steep"], "'test_steep' is not a validation set"),
+        (
+            ["--seeds", "2", "--task-set", "validation", "--eval-seeds", "5"],
+            "eval seeds [5] lie outside task set 'validation' (seeds 100000-100099)",
+        ),
+        (
+            ["--seeds", "2", "--task-set", "validation", "--eval-episodes", "101"],
+            "eval_episodes must be 1-100 (the size of task set 'validation'), got 101",
+        ),
         (["--seeds", "2", "--eval-duration", "0.04"], "evaluation duration 0.04"),
         (["--seeds", "2", "--workers", "0"], "workers must be a positive integer, got 0"),
         (["--seeds", "2", "--checkpoint-freq", "0"], "checkpoint_freq must be a positive"),
@@ -134,6 +146,10 @@ def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
         assert [line.split(",")[0] for line in curve.splitlines()] == ["num_timesteps", "0", "256"]
         test = json.loads((tmp_path / "results" / f"seed_{seed}_test_evaluation.json").read_text())
         assert test["seeds"] == list(range(10))
+        seed_agent = json.loads((tmp_path / "results" / f"agent_seed_{seed}" / "metadata.json")
+                                .read_text())  # fmt: skip
+        assert seed_agent["seed"] == seed
+        assert seed_agent["num_timesteps"] == entry["validation_num_timesteps"]  # its best
     scores = {e["seed"]: e["validation_score"] for e in summary["seeds"]}
     assert summary["selected_seed"] == min(scores, key=lambda s: (*scores[s], s))
     meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
@@ -145,6 +161,55 @@ def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
     assert main([*args[:-4], "--resume"]) == 0
     again = _summary(tmp_path / "run")
     assert again["seeds"] == summary["seeds"]
+
+
+@pytest.mark.rl
+def test_validation_on_a_task_set(tmp_path):
+    """--task-set validation: the agent is selected on the validation set's env (its path
+    distribution, current, noise, actuators) on its first --eval-episodes seeds, recorded in the
+    plan and the agent's metadata; the per-seed test report stays the paper scenario."""
+    from benchmarks.tasks import task_set
+
+    validation = task_set("validation")
+    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1")
+    args[args.index("--eval-seeds") : args.index("--eval-seeds") + 2] = []
+    assert main([*args, "--task-set", "validation", "--eval-episodes", "3"]) == 0
+    plan = json.loads((tmp_path / "run" / "train_seeds.json").read_text())
+    assert plan["task_set"] == "validation" and plan["eval_env"] == validation.env
+    assert plan["eval_seeds"] == [100_000, 100_001, 100_002]
+    meta = json.loads((tmp_path / "run" / "seed_0" / "final" / "metadata.json").read_text())
+    assert meta["eval_env_kwargs"]["path"] == validation.env["path"]
+    assert meta["eval_env_kwargs"]["surge_limit"] == 2.0  # AUVPath3D-v1's fixed argument
+    entry = _summary(tmp_path / "run")["seeds"][0]
+    assert entry["validation_summary"]["n_episodes"] == 3
+    assert entry["test_summary"]["n_episodes"] == 10
+    # Resuming with another validation set is refused: selection must not change mid-run.
+    assert main([*args, "--task-set", "paper", "--eval-seeds", "100", "--resume"]) == 2
+
+
+@pytest.mark.rl
+def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path):
+    """--stop-at pauses every seed with the schedules still running over --n-timesteps (the
+    learning rate's progress is that of the full budget), and a --resume with a larger stop
+    continues the same run to the new target."""
+    from stable_baselines3 import PPO
+
+    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1", "--n-timesteps",
+                 "512")  # fmt: skip
+    assert main([*args, "--stop-at", "384"]) == 0
+    paused = _summary(tmp_path / "run")["seeds"][0]
+    assert paused["num_timesteps"] == 384
+    final = tmp_path / "run" / "seed_0" / "final" / "model.zip"
+    # One rollout of 4 × 64 steps was trained (the second stopped at 384, untrained), at the
+    # progress of 256 of 512 steps: half the schedule is left.
+    assert PPO.load(final, device="cpu")._current_progress_remaining == pytest.approx(0.5)
+    assert main([*args, "--stop-at", "10"]) == 2  # not a multiple of n_envs = 4
+    assert main([*args, "--resume"]) == 0
+    done = _summary(tmp_path / "run")["seeds"][0]
+    # Resumed from the checkpoint at 384: SB3 collects whole rollouts, so it ends within one
+    # rollout (256 steps) past the budget, with the schedule exhausted.
+    assert 512 <= done["num_timesteps"] < 512 + 256
+    assert PPO.load(final, device="cpu")._current_progress_remaining <= 0.0
 
 
 @pytest.mark.rl

@@ -15,7 +15,7 @@ from benchmarks.training.evaluation import evaluate_policy_on_seeds, score, summ
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from controllers.ppo import PPOPolicy
 
-__all__ = ["PeriodicCheckpoint", "PeriodicEvaluation", "policy_from_model"]
+__all__ = ["PeriodicCheckpoint", "PeriodicEvaluation", "StopAt", "policy_from_model"]
 
 # metadata(extra) → the agent metadata of the model's current state, updated with `extra`.
 MetadataFn = Callable[[dict[str, Any]], dict[str, Any]]
@@ -105,3 +105,15 @@ class PeriodicCheckpoint(BaseCallback):
                        replay_buffer=self.replay_buffer)  # fmt: skip
             prune_checkpoints(self.out, self.keep)
         return True
+
+
+class StopAt(BaseCallback):
+    """Stop training once `num_timesteps` reaches ``target`` env steps (placed after the
+    evaluation and checkpoint callbacks, which still see that step)."""
+
+    def __init__(self, target: int) -> None:
+        super().__init__()
+        self.target = int(target)
+
+    def _on_step(self) -> bool:
+        return self.num_timesteps < self.target

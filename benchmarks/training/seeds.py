@@ -48,10 +48,11 @@ from benchmarks.training.checkpoints import export_agent, latest_checkpoint
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
-from benchmarks.training.train import TrainOptions, check_options
+from benchmarks.training.train import TrainOptions, check_options, target_timesteps
 from controllers.ppo import METADATA_FILE, MODEL_FILE
 
 __all__ = [
+    "AGENT_PREFIX",
     "PLAN_FILE",
     "SUMMARY_FILE",
     "TASK_SETS",
@@ -66,6 +67,7 @@ __all__ = [
 
 PLAN_FILE = "train_seeds.json"
 SUMMARY_FILE = "summary.json"
+AGENT_PREFIX = "agent_seed_"  # RESULTS/agent_seed_<k>/: the agent of training seed k
 LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
 # Validation episodes (model selection): "paper", the paper scenario (helix, white noise
 # ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
@@ -173,9 +175,12 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         check_ray_address(opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
+    if train.stop_at is not None and train.stop_at % cfg.n_envs:
+        raise ValueError(f"stop_at {train.stop_at} is not a multiple of the config's n_envs "
+                         f"({cfg.n_envs}): a run pauses after whole vector steps")  # fmt: skip
     plan = {
         "algo": train.algo, "env_id": train.env_id, "config": cfg.raw,
-        "config_file": str(train.config), "n_timesteps": n_timesteps,
+        "config_file": str(train.config), "n_timesteps": n_timesteps, "stop_at": train.stop_at,
         "eval_seeds": list(train.eval_seeds), "eval_duration": float(train.eval_duration),
         "eval_freq": train.eval_freq, "checkpoint_freq": train.checkpoint_freq,
         "task_set": opts.task_set, "eval_env": train.eval_env, "vec_env": train.vec_env,
@@ -256,8 +261,8 @@ def seed_dir(out: str | os.PathLike, seed: int) -> Path:
 
 
 def seed_status(out: Path, seed: int, n_timesteps: int) -> str:
-    """ "done" (trained to the budget and tested), "trained" (trained, test evaluation missing),
-    "resume" (a checkpoint to continue from) or "fresh"."""
+    """ "done" (trained to ``n_timesteps``, this invocation's target, and tested), "trained"
+    (trained, test evaluation missing), "resume" (a checkpoint to continue from) or "fresh"."""
     run = seed_dir(out, seed)
     final = run / "final" / METADATA_FILE
     if final.is_file() and json.loads(final.read_text()).get("num_timesteps", 0) >= n_timesteps:
@@ -423,7 +428,7 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
     opts = resolve_validation(opts)
     out = Path(opts.out)
     write_json(out / PLAN_FILE, plan, indent=2, sort_keys=True)
-    n_timesteps = plan["n_timesteps"]
+    n_timesteps = target_timesteps(plan["n_timesteps"], plan["stop_at"])  # this invocation's
     jobs = []
     done_steps = 0
     for seed in opts.seeds:
@@ -432,7 +437,7 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
             done_steps += n_timesteps
             continue
         train_opts = asdict(replace(opts.train, seed=seed, out=str(seed_dir(out, seed)),
-                                    n_timesteps=n_timesteps, progress_bar=False,
+                                    n_timesteps=plan["n_timesteps"], progress_bar=False,
                                     export=None, resume=False))  # fmt: skip
         train_opts["eval_seeds"] = tuple(train_opts["eval_seeds"])
         jobs.append((seed, train_opts, status))
@@ -471,9 +476,12 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
 
 def _write_results(results: Path, out: Path, entries: Sequence[dict[str, Any]],
                    summary: dict[str, Any]) -> None:  # fmt: skip
-    """Per seed: the test evaluation and the learning curve; and the summary (all atomic)."""
+    """Per seed: its selected agent (``agent_seed_<k>/``, so every seed can be re-evaluated on
+    the whole test suite, `benchmarks.evaluate_suite`), the test evaluation and the learning
+    curve; and the summary (all atomic)."""
     for entry in entries:
         seed = entry["seed"]
+        export_agent(Path(entry["agent"]), results / f"{AGENT_PREFIX}{seed}")
         report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
         write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2,
                    sort_keys=True)  # fmt: skip

@@ -50,6 +50,10 @@ class TrainOptions:
     out: str = "runs/ppo_helix"  # run directory
     seed: int = 0  # seeds torch, numpy and the training environments
     n_timesteps: int | None = None  # override the config's n_timesteps
+    # Pause at this many env steps (None: train to n_timesteps). The schedules (learning rate,
+    # clip range) still run over n_timesteps, so a later --resume with a larger stop_at continues
+    # the same run exactly as if it had never paused.
+    stop_at: int | None = None
     resume: bool = False  # continue from the newest checkpoint in `out`
     checkpoint_freq: int = 100_000  # [env steps] between checkpoints
     keep_checkpoints: int = 3  # newest checkpoints kept on disk
@@ -133,6 +137,8 @@ def check_options(opts: TrainOptions) -> None:
     if opts.n_timesteps is not None and not opts.n_timesteps >= 1:
         raise ValueError(f"n_timesteps must be a positive number of env steps, got "
                          f"{opts.n_timesteps}")  # fmt: skip
+    if opts.stop_at is not None and not opts.stop_at >= 1:
+        raise ValueError(f"stop_at must be a positive number of env steps, got {opts.stop_at}")
     for name in ("checkpoint_freq", "keep_checkpoints", "threads"):
         if not getattr(opts, name) >= 1:
             raise ValueError(f"{name} must be a positive integer, got {getattr(opts, name)}")
@@ -152,6 +158,11 @@ def check_options(opts: TrainOptions) -> None:
     if not (opts.eval_duration > 0 and opts.eval_duration < float("inf")):
         raise ValueError(f"eval_duration must be a positive time in s, got {opts.eval_duration}")
     read_zoo_config(opts.config, opts.env_id, opts.algo)
+
+
+def target_timesteps(n_timesteps: int, stop_at: int | None) -> int:
+    """Env steps a run trains to in this invocation: n_timesteps, or stop_at when smaller."""
+    return int(n_timesteps if stop_at is None else min(n_timesteps, stop_at))
 
 
 def _eval_kwargs(opts: TrainOptions) -> dict[str, Any]:
@@ -179,7 +190,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from benchmarks.training.callbacks import PeriodicCheckpoint, PeriodicEvaluation
+    from benchmarks.training.callbacks import PeriodicCheckpoint, PeriodicEvaluation, StopAt
 
     check_options(opts)
     cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
@@ -244,8 +255,11 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
                                             metadata, start_wall, best, opts.verbose))  # fmt: skip
     callbacks.append(PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata,
                                         replay_buffer=spec.off_policy))  # fmt: skip
+    target = target_timesteps(n_timesteps, opts.stop_at)
+    if target < n_timesteps:
+        callbacks.append(StopAt(target))
     remaining = n_timesteps - int(model.num_timesteps)
-    if remaining > 0:
+    if int(model.num_timesteps) < target:
         model.learn(remaining, callback=CallbackList(callbacks), progress_bar=opts.progress_bar,
                     reset_num_timesteps=checkpoint is None,
                     tb_log_name=algorithm.__name__)  # fmt: skip
