@@ -12,12 +12,13 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
+from auv_gym.config import SimConfig
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW, OBS_NAMES, OBS_UNITS
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
-from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
 from auv_gym.vehicle import AUVParams

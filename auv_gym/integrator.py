@@ -39,7 +39,7 @@ __all__ = [
 PAPER_ACTUATOR, FIN_ACTUATOR = 0, 1
 ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR}
 
-# Layout of the packed simulation config (`simulator.SimConfig.packed`), read as a record.
+# Layout of the packed simulation config (`config.SimConfig.packed`), read as a record.
 CONFIG_FIELDS = (
     "n_sub", "physics_dt", "hold_steps", "u_d", "sigma", "actuator", "gm_a",
     "noise_f_u", "noise_f_v", "noise_f_w", "noise_f_q", "noise_f_r",

@@ -30,7 +30,7 @@ from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 
 if TYPE_CHECKING:
-    from auv_gym.simulator import SimConfig
+    from auv_gym.config import SimConfig
 
 __all__ = ["MAX_RANDOM_CURRENT", "MAX_RANDOM_NOISE", "EpisodeTask", "draw_task", "task_for_seed"]
 

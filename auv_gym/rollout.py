@@ -41,11 +41,12 @@ import numba
 import numpy as np
 from gymnasium.utils import seeding
 
+from auv_gym.config import SimConfig
 from auv_gym.dynamics import STATE_NAMES
 from auv_gym.files import environment, json_default
 from auv_gym.metrics import compute_metrics
 from auv_gym.observation import GUIDANCE_FIELDS
-from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.simulator import Simulator
 from auv_gym.task import REWARD_TERMS
 from auv_gym.trajectory import (
     DISTURBANCE_FIELDS,

@@ -1,32 +1,24 @@
-"""Configuration and batched state of the path-following simulation, shared by both envs.
+"""Batched state of the path-following simulation, shared by both envs.
 
-`SimConfig` turns the environments' keyword arguments into validated settings; `Simulator` holds
-the state of n vehicles as arrays and advances them all with one compiled call. The single env is
-a `Simulator` with n = 1, the vector env one with n = num_envs, so the two cannot diverge.
+`Simulator` holds the state of n vehicles as arrays and advances them all with one compiled call;
+its settings are a `auv_gym.config.SimConfig`. The single env is a `Simulator` with n = 1, the
+vector env one with n = num_envs, so the two cannot diverge.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 from numba import njit, prange
 
+from auv_gym.config import SimConfig
 from auv_gym.disturbances import (
     KEY,
-    MAX_NOISE_AMPLITUDE,
-    MAX_NOISE_HOLD,
-    CurrentConfig,
-    NoiseConfig,
     draw_keys,
-    gauss_markov_coefficients,
 )
 from auv_gym.dynamics import STATE, STATE_DIM
-from auv_gym.guidance import path_angles
 from auv_gym.integrator import (
     ACTUATORS,
     CONFIG_FIELDS,
@@ -35,364 +27,24 @@ from auv_gym.integrator import (
     config_record,
 )
 from auv_gym.observation import (
-    ERROR_BOUND,
     GUIDANCE_DIM,
     OBS_DIM,
     OBS_HIGH,
     OBS_LOW,
-    PATH_RATE_BOUND,
-    SPEED_BOUND,
     build_observation,
     guidance_row,
 )
-from auv_gym.path_generator import PathDistribution
-from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, make_path, path_eval
-from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE, EpisodeTask, draw_task
+from auv_gym.paths import Path
+from auv_gym.randomization import EpisodeTask, draw_task
 from auv_gym.task import (
     REWARD_TERMS,
     TASK_FIELDS,
-    RewardWeights,
-    TaskLimits,
     task_row,
     task_vector,
 )
-from auv_gym.validation import ArgumentTypeError, choice, flag, is_real, keys_within, real, vector
-from auv_gym.vehicle import N_PARAMS, AUVParams, params_from_spec, remus100
+from auv_gym.vehicle import N_PARAMS
 
-__all__ = ["ACTUATOR_LIMITS", "DISTURBANCE_PRESETS", "SimConfig", "Simulator"]
-
-# "paper" mode limits (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
-ACTUATOR_LIMITS = (50.0, 10.0, 10.0)
-DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
-VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
-_SUBSTEP_TOL = 1e-9
-# Documented ranges of the timing and start arguments (AUVPath3DEnv docstring, "Arguments").
-PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
-MAX_SUBSTEPS = 10_000  # physics steps per control step: bounds the cost of one step()
-MAX_EPISODE_TIME = 1e6  # [s] max_time (11.6 days)
-DEFAULT_NOISE_HOLD = 0.01  # [s]
-HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
-START_JITTER = 2.0 * math.sqrt(3.0)  # [m] largest offset of a random start near the start point
-
-
-def _noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None) -> NoiseConfig:
-    """The white noise of the `disturbance` and `noise_hold` arguments; a conflict is an error."""
-    hold = DEFAULT_NOISE_HOLD
-    if noise_hold is not None:
-        hold = real("noise_hold", noise_hold, 0.0, MAX_NOISE_HOLD, low_open=True, unit="s")
-    if isinstance(disturbance, NoiseConfig):
-        if noise_hold is not None and hold != disturbance.hold:
-            raise ValueError(
-                f"noise_hold = {noise_hold!r} s conflicts with disturbance = {disturbance!r}: "
-                "give the hold once (NoiseConfig.hold or noise_hold)"
-            )
-        return disturbance
-    if isinstance(disturbance, str) and disturbance in DISTURBANCE_PRESETS:
-        return NoiseConfig((DISTURBANCE_PRESETS[disturbance],) * 5, hold)
-    if is_real(disturbance):
-        amplitude = real("disturbance (noise amplitude)", disturbance, 0.0, MAX_NOISE_AMPLITUDE,
-                         unit="N or N·m")  # fmt: skip
-        return NoiseConfig((amplitude,) * 5, hold)
-    error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
-    raise error(
-        f"unknown disturbance {disturbance!r:.80}; valid: {sorted(DISTURBANCE_PRESETS)}, "
-        f"a NoiseConfig or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
-    )
-
-
-def _reward_from(reward_weights: RewardWeights | dict | None) -> RewardWeights:
-    if reward_weights is None:
-        return RewardWeights()
-    if isinstance(reward_weights, RewardWeights):
-        return reward_weights
-    if not isinstance(reward_weights, Mapping):
-        raise ArgumentTypeError(
-            f"reward_weights must be None, a RewardWeights or a dict with keys among "
-            f"{list(REWARD_TERMS)}, got {reward_weights!r:.80}"
-        )
-    return RewardWeights(**keys_within("reward_weights", reward_weights, REWARD_TERMS))
-
-
-def path_is_random(path: object) -> bool:
-    """True for the name "random"."""
-    return isinstance(path, str) and path == "random"
-
-
-def _path_from(path: object) -> Path | PathDistribution:
-    """The `path` argument: a name, "random", a `Path`, a `PathDistribution`, a dict of its
-    fields, a dict {"kind": name, **arguments} of one fixed path, or a list of (x, y, z)
-    waypoints."""
-    fixed = isinstance(path, Mapping) and "kind" in path
-    if not fixed and (isinstance(path, (PathDistribution, Mapping)) or path_is_random(path)):
-        return PathDistribution.from_spec(path)  # type: ignore[arg-type]
-    return make_path(path)  # type: ignore[arg-type]
-
-
-def _check_path(path: Path) -> None:
-    """The path's kernel description is complete and finite (the kernels do not bounds-check)."""
-    if not isinstance(path, Path):
-        raise ArgumentTypeError(f"path must be a Path, got {path!r:.80}")
-    data = getattr(path, "data", None)
-    ok = (
-        isinstance(data, np.ndarray) and data.dtype == np.float64 and data.ndim == 1
-        and path.kind in (HELIX, LINE, SPLINE) and data.size >= 6 and np.all(np.isfinite(data))
-    )  # fmt: skip
-    if ok and path.kind == SPLINE:
-        n_seg = data[0]
-        ok = n_seg >= 1 and n_seg == int(n_seg) and data.size == 2 + 13 * int(n_seg)
-    elif ok:
-        ok = data.size == 6
-    if not ok:
-        raise ValueError(f"path {type(path).__name__} has no valid kernel data (kind, data); "
-                         "build paths with Helix, StraightLine, Spline or make_path")  # fmt: skip
-
-
-def path_turn_rates(path: Path) -> tuple[float, float]:
-    """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
-
-    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (docs/model.md §3.1, §3.3), so ψ̇_F = this rate × u_p.
-    Exact for the helix (constant in s) and the line (0); a spline is sampled 64 times per segment.
-    """
-    if path.kind == SPLINE:
-        knots = path.data[1 : int(path.data[0]) + 2]
-        grid = [np.linspace(a, b, 64, endpoint=False) for a, b in itertools.pairwise(knots)]
-        samples = np.concatenate([*grid, knots[-1:]])
-    else:
-        samples = np.linspace(0.0, 100.0, 9)
-    rates = np.empty((len(samples), 2))
-    for k, s in enumerate(samples):
-        _, _, _, dx, dy, dz, ddx, ddy, ddz = path_eval(path.kind, path.data, float(s))
-        _, _, dpsi_ds, dtheta_ds, speed = path_angles(dx, dy, dz, ddx, ddy, ddz)
-        rates[k] = abs(dpsi_ds) / speed, abs(dtheta_ds) / speed
-    if not np.all(np.isfinite(rates)):
-        raise ValueError(f"path {type(path).__name__}: p'(s) or p''(s) is not finite or zero")
-    psi_rate, theta_rate = rates.max(axis=0)
-    return float(psi_rate), float(theta_rate)
-
-
-@dataclass(frozen=True)
-class SimConfig:
-    """Validated simulation settings (units: s, m, m/s, N, N·m)."""
-
-    # A fixed path, or a `PathDistribution` drawing one per episode (`randomization.draw_task`).
-    path: Path | PathDistribution = field(default_factory=lambda: make_path("helix"))
-    params: AUVParams = field(default_factory=remus100)
-    noise: NoiseConfig = field(default_factory=NoiseConfig)
-    current: CurrentConfig = field(default_factory=CurrentConfig)
-    param_uncertainty: float = 0.0  # ε: coefficients scaled by 1 + U[−ε, ε] per episode
-    actuator: str = "paper"  # "paper", "fins" or "random" (one of the two per episode)
-    random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
-    random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
-    actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS  # [N, N·m, N·m]
-    control_dt: float = 0.05  # [s]
-    physics_dt: float = 0.01  # [s]
-    max_time: float = 300.0  # [s]
-    u_desired: float = 1.0  # [m/s] u_D
-    sigma: float = 0.5  # [m] virtual-point law width σ
-    # "corrected": u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3); "printed": the paper's misprint
-    # u_D(1 − tanh(x_e/σ)), unstable, kept only for the sign-regression tests (docs/model.md §8.9).
-    virtual_point_law: str = "corrected"
-    randomize_start: bool = False
-    start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default
-    start_heading: float | None = None  # [rad]
-    reward: RewardWeights = field(default_factory=RewardWeights)
-    limits: TaskLimits = field(default_factory=TaskLimits)
-
-    @classmethod
-    def from_kwargs(
-        cls,
-        path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
-        disturbance: str | float | NoiseConfig = "paper",
-        current: CurrentConfig | Sequence[float] | dict | None = None,
-        param_uncertainty: float = 0.0,
-        actuator: str = "paper",
-        control_dt: float = 0.05,
-        physics_dt: float = 0.01,
-        noise_hold: float | None = None,
-        max_time: float = 300.0,
-        randomize_start: bool = False,
-        u_desired: float = 1.0,
-        sigma: float = 0.5,
-        virtual_point_law: str = "corrected",
-        corridor: float = 30.0,
-        max_pitch: float = math.radians(60.0),
-        surge_limit: float = math.inf,
-        params: AUVParams | Mapping[str, Any] | None = None,
-        start_position: Sequence[float] | None = None,
-        start_heading: float | None = None,
-        reward_weights: RewardWeights | dict | None = None,
-        random_current: float = 0.0,
-        random_noise: float = 0.0,
-    ) -> SimConfig:
-        """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
-        and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
-        argument, its value and the allowed range."""
-        the_path = _path_from(path)
-        s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
-        return cls(
-            path=the_path,
-            params=params_from_spec(params),
-            noise=_noise_from(disturbance, noise_hold),
-            current=CurrentConfig.from_spec(current),
-            param_uncertainty=param_uncertainty,
-            actuator=actuator,
-            random_current=random_current,
-            random_noise=random_noise,
-            control_dt=control_dt,
-            physics_dt=physics_dt,
-            max_time=max_time,
-            u_desired=u_desired,
-            sigma=sigma,
-            virtual_point_law=virtual_point_law,
-            randomize_start=randomize_start,
-            start_position=start_position,
-            start_heading=start_heading,
-            reward=_reward_from(reward_weights),
-            limits=TaskLimits(
-                corridor=corridor,
-                max_pitch=max_pitch,
-                s_end=s_end,
-                surge_limit=surge_limit,
-            ),
-        )
-
-    def __post_init__(self) -> None:
-        def put(name: str, value: object) -> None:  # canonical value (float, tuple) of a field
-            object.__setattr__(self, name, value)
-
-        if not isinstance(self.path, PathDistribution):
-            _check_path(self.path)
-        for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
-                           ("current", CurrentConfig), ("reward", RewardWeights),
-                           ("limits", TaskLimits)):  # fmt: skip
-            if not isinstance(getattr(self, name), kind):
-                raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
-                                        f"got {getattr(self, name)!r:.80}")  # fmt: skip
-        put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
-        put("random_current", real("random_current", self.random_current, 0.0,
-                                   MAX_RANDOM_CURRENT, unit="m/s"))  # fmt: skip
-        put("random_noise", real("random_noise", self.random_noise, 0.0, MAX_RANDOM_NOISE))
-        put("virtual_point_law", choice("virtual_point_law", self.virtual_point_law,
-                                        VIRTUAL_POINT_LAWS))  # fmt: skip
-        put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
-                                      high_open=True))  # fmt: skip
-        put("actuator_limits", vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6,
-                                      "N, N·m"))  # fmt: skip
-        if min(self.actuator_limits) <= 0.0:
-            raise ValueError(f"actuator_limits must be positive, got {self.actuator_limits}")
-        put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
-        most = MAX_SUBSTEPS * self.physics_dt
-        put("control_dt", real("control_dt", self.control_dt, 0.0, most, low_open=True,
-                               unit=f"s (<= {MAX_SUBSTEPS} physics steps)"))  # fmt: skip
-        put("max_time", real("max_time", self.max_time, self.control_dt, MAX_EPISODE_TIME,
-                             unit="s (at least one control_dt)"))  # fmt: skip
-        put("u_desired", real("u_desired", self.u_desired, 0.0, SPEED_BOUND, low_open=True,
-                              unit="m/s, the observation's bound on u_D"))  # fmt: skip
-        put("sigma", real("sigma", self.sigma, 0.0, math.inf, low_open=True, unit="m"))
-        surge_limit = self.limits.surge_limit
-        if not (self.u_desired < surge_limit <= SPEED_BOUND or surge_limit == math.inf):
-            raise ValueError(
-                f"surge_limit must be above u_desired = {self.u_desired} m/s and at most "
-                f"{SPEED_BOUND} m/s, or inf, got {surge_limit!r} m/s"
-            )
-        put("randomize_start", flag("randomize_start", self.randomize_start))
-        if self.start_position is not None:
-            put("start_position", vector("start_position", self.start_position, 3,
-                                         -POSITION_BOUND, POSITION_BOUND, "m"))  # fmt: skip
-        if self.start_heading is not None:
-            put("start_heading", real("start_heading", self.start_heading, -HEADING_BOUND,
-                                      HEADING_BOUND, unit="rad (±2π)"))  # fmt: skip
-        for name, value in (("control_dt", self.control_dt),
-                            ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)",
-                             self.noise.hold)):  # fmt: skip
-            ratio = value / self.physics_dt
-            if abs(ratio - round(ratio)) > _SUBSTEP_TOL * ratio or round(ratio) < 1:
-                raise ValueError(
-                    f"{name} = {value} s must be a whole multiple of physics_dt = "
-                    f"{self.physics_dt} s"
-                )
-        if isinstance(self.path, PathDistribution):
-            # Generated paths start at the origin with a drawn heading: a fixed start would
-            # be meaningless (docs/model.md §3.8); their turn rates (≤ 1/8 m) always fit.
-            for name in ("start_position", "start_heading"):
-                if getattr(self, name) is not None:
-                    raise ValueError(f"{name} cannot be given with a random path (path = "
-                                     "'random' or a PathDistribution): each episode starts at "
-                                     "its own path's default start")  # fmt: skip
-        else:
-            self._check_path_fits_the_observation()
-            self._check_start_fits_the_observation()
-
-    @property
-    def randomized(self) -> bool:
-        """True if episodes draw their own path, current, noise amplitude or actuator."""
-        return (isinstance(self.path, PathDistribution) or self.random_current > 0.0
-                or self.random_noise > 0.0 or self.actuator == "random")  # fmt: skip
-
-    def _check_path_fits_the_observation(self) -> None:
-        """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D."""
-        psi_rate, theta_rate = path_turn_rates(self.path)
-        worst = 2.0 * self.u_desired * max(psi_rate, theta_rate)
-        if worst > PATH_RATE_BOUND:
-            raise ValueError(
-                f"path turns at up to {max(psi_rate, theta_rate):.4g} rad/m: with u_desired = "
-                f"{self.u_desired} m/s the virtual point (u_p <= 2 u_D) turns at up to "
-                f"{worst:.4g} rad/s, beyond the observation bound {PATH_RATE_BOUND} rad/s; use "
-                f"u_desired <= {PATH_RATE_BOUND / (2 * max(psi_rate, theta_rate)):.4g} m/s or a "
-                "gentler path"
-            )
-
-    def _check_start_fits_the_observation(self) -> None:
-        """The start's errors to p(0) lie within the observation's ±ERROR_BOUND."""
-        p0 = self.path.evaluate(0.0)[0]
-        given = self.start_position is not None
-        start = np.asarray(self.start_position) if given else self.path.default_start()[0]
-        distance = float(np.linalg.norm(start - p0))
-        allowed = ERROR_BOUND - (START_JITTER if self.randomize_start else 0.0)
-        if not distance <= allowed:
-            name = "start_position" if given else "the path's default start"
-            raise ValueError(
-                f"{name} {tuple(start.tolist())} m is {distance:.4g} m from the path's start "
-                f"p(0) = {tuple(p0.tolist())} m; the observation bounds the position errors to "
-                f"±{ERROR_BOUND:g} m, so the start must lie within {allowed:.4g} m of p(0)"
-                + (" (less the random offset of randomize_start)" if self.randomize_start else "")
-            )
-
-    @property
-    def kernel_sigma(self) -> float:
-        """σ as the kernels use it: u_D(1 + tanh(x_e/σ)) with σ < 0 gives the printed law."""
-        return VIRTUAL_POINT_LAWS[self.virtual_point_law] * self.sigma
-
-    @property
-    def substeps(self) -> int:
-        """Physics steps per control step."""
-        return round(self.control_dt / self.physics_dt)
-
-    @property
-    def max_steps(self) -> int:
-        """Control steps until truncation at `max_time`."""
-        return math.ceil(self.max_time / self.control_dt - _SUBSTEP_TOL)
-
-    def packed(self) -> np.ndarray:
-        """The float64 row `integrator.advance_vehicle` reads (layout `CONFIG_FIELDS`)."""
-        gm_a, gm_b = gauss_markov_coefficients(self.current, self.physics_dt)
-        values = {
-            "n_sub": self.substeps,
-            "physics_dt": self.physics_dt,
-            "hold_steps": round(self.noise.hold / self.physics_dt),
-            "u_d": self.u_desired,
-            "sigma": self.kernel_sigma,
-            "actuator": ACTUATORS.get(self.actuator, 0),  # "random": set per episode
-            "gm_a": gm_a,
-        }
-        for c, name in enumerate(("f_u", "f_v", "f_w", "f_q", "f_r")):
-            values[f"noise_{name}"] = self.noise.amplitude[c]
-        for c, axis in enumerate("XMN"):
-            values[f"limit_{axis}"] = self.actuator_limits[c]
-        for c, axis in enumerate("xyz"):
-            values[f"current_{axis}"] = self.current.mean[c]
-            values[f"gm_b_{axis}"] = gm_b[c]
-        return np.array([float(values[name]) for name in CONFIG_FIELDS])
+__all__ = ["Simulator"]
 
 
 @njit(cache=True, inline="always")

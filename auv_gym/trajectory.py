@@ -31,10 +31,10 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.config import ACTUATOR_LIMITS
 from auv_gym.dynamics import STATE_NAMES
 from auv_gym.files import json_default, write_atomic
 from auv_gym.observation import GUIDANCE_FIELDS
-from auv_gym.simulator import ACTUATOR_LIMITS
 from auv_gym.task import PATH_END, REWARD_TERMS, TERMINATION_REASONS
 
 __all__ = [

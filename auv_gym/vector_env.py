@@ -21,10 +21,11 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from auv_gym.config import SimConfig
 from auv_gym.env import check_reset_observations, validate_actions
 from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
 from auv_gym.rendering import EpisodeRenderer
-from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.validation import ArgumentTypeError, integer
 

@@ -20,8 +20,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from auv_gym.config import MAX_EPISODE_TIME, SimConfig
 from auv_gym.metrics import check_window
-from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,

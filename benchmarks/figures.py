@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.config import SimConfig
 from auv_gym.files import write_atomic
 from auv_gym.plotting import new_figure, plot_track, save_figure
 from auv_gym.randomization import task_for_seed
-from auv_gym.simulator import SimConfig
 from auv_gym.trajectory import Trajectory
 from benchmarks.training.learning_curve import EVAL_FILE, read_rows
 

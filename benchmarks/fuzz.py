@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
 from auv_gym.disturbances import (
     MAX_CURRENT_SPEED,
     MAX_CURRENT_TIME_CONSTANT,
@@ -47,7 +48,6 @@ from auv_gym.disturbances import (
 )
 from auv_gym.observation import ERROR_BOUND, OBS_HIGH, OBS_LOW, PATH_RATE_BOUND, SPEED_BOUND
 from auv_gym.paths import POSITION_BOUND, Helix, Spline, StraightLine, make_path
-from auv_gym.simulator import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
 from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.vehicle import remus100
 from benchmarks.arguments import ArgumentParser, finite_number, usage_errors

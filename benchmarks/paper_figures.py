@@ -29,9 +29,9 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from auv_gym.config import MAX_EPISODE_TIME, SimConfig
 from auv_gym.files import environment, jsonable, write_json, write_text
 from auv_gym.rollout import policy_name
-from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,

@@ -22,7 +22,8 @@ import numba
 import numpy as np
 
 import controllers
-from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.config import SimConfig
+from auv_gym.simulator import Simulator
 from benchmarks.cli import HelpFormatter
 
 

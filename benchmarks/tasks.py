@@ -27,8 +27,8 @@ from itertools import combinations
 from pathlib import Path
 from typing import Any
 
+from auv_gym.config import SimConfig
 from auv_gym.path_generator import PathDistribution, overlaps
-from auv_gym.simulator import SimConfig
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios
 
 __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test_suite"]

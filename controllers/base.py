@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.config import ACTUATOR_LIMITS
 from auv_gym.observation import OBS_DIM
 from auv_gym.rollout import Policy  # the one definition, shared with the rollouts
-from auv_gym.simulator import ACTUATOR_LIMITS
 from auv_gym.vehicle import AUVParams, remus100
 from controllers.gains import ControllerGains
 

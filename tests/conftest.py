@@ -3,7 +3,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_gym.simulator import SimConfig, Simulator
+from auv_gym.config import SimConfig
+from auv_gym.simulator import Simulator
 
 
 @pytest.fixture

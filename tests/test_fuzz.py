@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from auv_gym.simulator import SimConfig
+from auv_gym.config import SimConfig
 from auv_gym.vector_env import AUVPath3DVectorEnv
 from benchmarks import fuzz
 

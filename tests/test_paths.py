@@ -11,6 +11,7 @@ import pytest
 
 import auv_gym
 import controllers
+from auv_gym.config import SimConfig
 from auv_gym.dynamics import STATE, STATE_DIM
 from auv_gym.env import AUVPath3DEnv
 from auv_gym.integrator import rk4_step
@@ -24,7 +25,6 @@ from auv_gym.path_generator import (
 from auv_gym.paths import HELIX, Helix, Spline, fit_curve, make_path
 from auv_gym.randomization import task_for_seed
 from auv_gym.rollout import evaluate
-from auv_gym.simulator import SimConfig
 from auv_gym.validation import ArgumentTypeError
 from auv_gym.vector_env import AUVPath3DVectorEnv
 from auv_gym.vehicle import remus100

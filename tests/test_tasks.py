@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from auv_gym.config import SimConfig
 from auv_gym.path_generator import PathDistribution, overlaps
 from auv_gym.randomization import task_for_seed
-from auv_gym.simulator import SimConfig
 from benchmarks.scenarios import load_scenarios
 from benchmarks.tasks import TASKS_FILE, load_task_sets, task_set
 from benchmarks.tasks import test_suite as the_test_suite

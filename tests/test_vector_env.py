@@ -13,7 +13,7 @@ from gymnasium.wrappers import TimeLimit
 
 import auv_gym  # noqa: F401  (registers the ids)
 from auv_gym import AUVPath3DEnv
-from auv_gym.simulator import SimConfig
+from auv_gym.config import SimConfig
 from auv_gym.vector_env import PARALLEL_MIN_VEHICLES, AUVPath3DVectorEnv, parse_autoreset_mode
 
 # Episodes that end within a few dozen steps: a corridor just above the initial 17.7 m distance,

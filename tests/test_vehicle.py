@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from auv_gym.config import ACTUATOR_LIMITS
 from auv_gym.dynamics import STATE_DIM
 from auv_gym.integrator import rk4_step
 from auv_gym.paths import Helix
-from auv_gym.simulator import ACTUATOR_LIMITS
 from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, AUVParams, remus100
 
 
