@@ -300,3 +300,20 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     assert float(first["rms_distance_mean"]) == pytest.approx(alone[0]["rms_distance"], rel=1e-4)
     policy = load_policy(out / "seed_0" / "final")
     assert isinstance(policy, ResidualPolicy) and policy.settings.tv_weight == 0.25
+
+
+def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settings(tmp_path):
+    from benchmarks.training.config import read_zoo_config
+
+    hyper = ROOT / "benchmarks" / "hyperparams"
+    cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3D-v1")
+    generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3D-v1")
+    assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
+    assert cfg.residual == ResidualSettings()  # the documented defaults
+    assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.tv_weight == 0.25
+    assert cfg.n_timesteps == 4_000_000 == generalist.n_timesteps // 5
+    text = (hyper / "ppo_residual.yml").read_text().replace("tv_weight: 0.25", "tv_weight: -1")
+    broken = tmp_path / "bad.yml"
+    broken.write_text(text)
+    with pytest.raises(ValueError, match=r"bad.yml: residual: tv_weight must be a number"):
+        read_zoo_config(broken, "AUVPath3D-v1")
