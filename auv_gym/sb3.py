@@ -48,17 +48,24 @@ class SB3VecEnv(VecEnv):
     `env_method` calls the vector env's method once and returns its result for each index;
     `env_is_wrapped` is False (no gymnasium wrappers; wrap the whole VecEnv with `VecMonitor`,
     `VecNormalize`, ...). `render` draws the vector env's `render_vehicle`.
+
+    ``venv`` may also be a gymnasium `VectorWrapper` around an `AUVPath3DVectorEnv` (e.g.
+    `controllers.residual_env.ResidualVectorEnv`): steps, resets and spaces are the wrapper's;
+    the per-vehicle attributes and the autoreset mode are the vector env's (``unwrapped``), and
+    other attributes are looked up on the wrapper first.
     """
 
-    def __init__(self, venv: AUVPath3DVectorEnv) -> None:
-        if not isinstance(venv, AUVPath3DVectorEnv):
+    def __init__(self, venv: Any) -> None:  # the vector env, or a VectorWrapper of it
+        if not isinstance(getattr(venv, "unwrapped", None), AUVPath3DVectorEnv):
             raise ValueError(f"SB3VecEnv wraps an AUVPath3DVectorEnv, got {type(venv).__name__}")
-        if venv.autoreset_mode is not AutoresetMode.SAME_STEP:
+        core = venv.unwrapped
+        if core.autoreset_mode is not AutoresetMode.SAME_STEP:
             raise ValueError(
                 "SB3VecEnv needs the vector env's autoreset_mode=AutoresetMode.SAME_STEP "
-                f"(SB3 semantics), got {venv.autoreset_mode}"
+                f"(SB3 semantics), got {core.autoreset_mode}"
             )
         self.venv = venv
+        self.core: AUVPath3DVectorEnv = core
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self.metadata = {**self.metadata, "render_fps": venv.metadata["render_fps"]}
         self._actions: np.ndarray | None = None
@@ -104,11 +111,11 @@ class SB3VecEnv(VecEnv):
         rows = self._rows(indices)
         if attr_name in _PER_VEHICLE:
             if attr_name == "state":
-                return [self.venv.sim.state[i].copy() for i in rows]
+                return [self.core.sim.state[i].copy() for i in rows]
             if attr_name == "np_random":
-                return [self.venv.vehicle_np_random[i] for i in rows]
+                return [self.core.vehicle_np_random[i] for i in rows]
             return [getattr(self.venv, f"single_{attr_name}")] * len(rows)
-        value = getattr(self.venv, attr_name)
+        value = getattr(self._holder(attr_name), attr_name)
         return [value] * len(rows)
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
@@ -117,14 +124,18 @@ class SB3VecEnv(VecEnv):
                 f"attribute {attr_name!r} is shared by all vehicles of the vector env; "
                 "set_attr needs every index (indices=None)"
             )
-        setattr(self.venv, attr_name, value)
+        setattr(self._holder(attr_name), attr_name, value)
 
     def env_method(
         self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
     ) -> list[Any]:
         rows = self._rows(indices)
-        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
+        result = getattr(self._holder(method_name), method_name)(*method_args, **method_kwargs)
         return [result] * len(rows)
+
+    def _holder(self, name: str) -> Any:
+        """The wrapper if it has the attribute, else the vector env it wraps."""
+        return self.venv if hasattr(self.venv, name) else self.core
 
     def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
         return [False] * len(self._rows(indices))

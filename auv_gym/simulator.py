@@ -114,6 +114,7 @@ _S_END = TASK_FIELDS.index("s_end")
 _CONFIG_INDEX = {name: j for j, name in enumerate(CONFIG_FIELDS)}
 _NOISE_COLUMNS = [_CONFIG_INDEX[f"noise_f_{c}"] for c in "uvwqr"]
 _CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
+_ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code → name
 
 
 class Simulator:
@@ -173,6 +174,13 @@ class Simulator:
     def time(self) -> np.ndarray:
         """Simulated time of each vehicle since its reset [s]."""
         return self.step_index * self.config.physics_dt
+
+    @property
+    def actuators(self) -> np.ndarray:
+        """Each vehicle's actuator model in its current episode, "paper" or "fins" (n,): the
+        configured one, or the one its episode drew (``actuator="random"``)."""
+        codes = self._cfg[self._row, _CONFIG_INDEX["actuator"]].astype(np.int64)
+        return _ACTUATOR_NAMES[codes]
 
     def reset_row(self, i: int, rng: np.random.Generator) -> None:
         """Draw vehicle i's episode (keys, parameters, start, current) from rng, in fixed order."""

@@ -3,7 +3,8 @@
 * a name of `controllers.CLASSICAL` ("fbsm", "backstepping", their presets): built with
   `controllers.make` for the scenario's control period and controller keyword arguments;
 * "ppo": the shipped agent `benchmarks/agents/ppo_helix`; "ppo:PATH": any saved agent directory
-  or model zip (`controllers.ppo.load_policy`);
+  or model zip (`controllers.ppo.load_policy`); a residual agent's base controller is built like a
+  classical one, for the scenario;
 * "module:attribute": an importable Policy object, or a class / factory called with the
   scenario's controller keyword arguments (`controllers.import_policy`).
 """
@@ -73,13 +74,14 @@ def build_policy(
     spec: str, control_dt: float, controller_kwargs: dict[str, Any] | None = None
 ) -> Any:
     """The Policy named by ``spec``, configured for a scenario (control period [s], controller
-    keyword arguments; an agent takes neither)."""
+    keyword arguments; an agent takes neither, a residual agent's base controller both)."""
     parsed = PolicySpec.parse(spec)
     kwargs = dict(controller_kwargs or {})
     if parsed.kind == "classical":
         return controllers.make(spec, control_dt=control_dt, **kwargs)
-    if parsed.kind == "agent":
-        return controllers.make("ppo", path=str(parsed.agent))
+    if parsed.kind == "agent":  # a residual agent's base is configured like a classical one
+        base_kwargs = {"control_dt": control_dt, **kwargs}
+        return controllers.make("ppo", path=str(parsed.agent), base_kwargs=base_kwargs)
     return controllers.import_policy(spec, **kwargs)
 
 

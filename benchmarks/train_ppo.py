@@ -41,7 +41,7 @@ from benchmarks.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.train import check_options
 
-FIXED = {"algo": "ppo"}  # TrainOptions this CLI does not offer
+FIXED = {"algo": "ppo", "eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 # One-line help per option (the TrainOptions field comments, for the CLI).
 HELP = {
     "config": "RL-Zoo hyper-parameter YAML (top-level key = env id)",

@@ -1,4 +1,4 @@
-"""Policies for `AUVPath3D-v0`: the paper's FBSM, backstepping and PPO agents.
+"""Policies for `AUVPath3D-v0`: the paper's FBSM, backstepping, PPO agents and residual policies.
 
 Every controller implements stable-baselines3's `predict` (`controllers.base.Policy`), so the
 evaluation code treats FBSM, backstepping, a PPO agent and a user's object alike.
@@ -49,7 +49,7 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "backstepping_colos": ("backstepping", {**_COLOS, "alos_y": 0.01, "alos_z": 0.01}),
 }
 CLASSICAL = ("fbsm", "backstepping", *PRESETS)
-REGISTRY = (*CLASSICAL, "ppo")
+REGISTRY = (*CLASSICAL, "ppo")  # policy names of the benchmark CLIs (a residual agent: ppo:PATH)
 
 
 def make(name: str, **kwargs: Any) -> Any:
@@ -57,7 +57,10 @@ def make(name: str, **kwargs: Any) -> Any:
 
     "fbsm" and "backstepping" (and their `PRESETS`) accept `gains`, `params` (the nominal model),
     `control_dt`, `actuator` and individual gain names; "ppo" takes `path` (a saved agent
-    directory).
+    directory). "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes
+    `agent` (a Policy of the 21-value residual observation, or a saved residual agent's
+    directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
+    default (0.25, 0.5, 0.5)); every other keyword configures the base controller.
     """
     if name in PRESETS:
         base, preset = PRESETS[name]
@@ -72,7 +75,11 @@ def make(name: str, **kwargs: Any) -> Any:
         if "path" not in kwargs:
             raise ValueError("controllers.make('ppo') needs path=<saved agent directory>")
         return load_policy(kwargs.pop("path"), **kwargs)
-    raise ValueError(f"unknown controller {name!r}; valid: {list(REGISTRY)}")
+    if name == "residual":
+        from controllers.residual import make_residual
+
+        return make_residual(**kwargs)
+    raise ValueError(f"unknown controller {name!r}; valid: {[*REGISTRY, 'residual']}")
 
 
 def import_policy(spec: str, instantiate: bool = True, **factory_kwargs: Any) -> Any:

@@ -9,10 +9,13 @@ An agent directory holds::
 
 `load_policy` (or ``controllers.make("ppo", path=...)``) returns a `PPOPolicy`, which applies the
 saved observation normalisation itself and follows the Policy protocol (`controllers.base`), so
-the rollouts treat it exactly like FBSM. Training, checkpoints and export live on the benchmarks
-side (`benchmarks.training`). Nothing here changes process-wide state: the torch thread count a
-policy predicts with is set for each `predict` call and restored after it. torch and SB3 are
-imported lazily: `import controllers.ppo` works without the rl extra.
+the rollouts treat it exactly like FBSM. An agent whose metadata holds a "residual" section
+(`controllers.residual.ResidualSettings`) was trained on the 21-value residual observation
+(`controllers.residual_env`); it loads as a `controllers.residual.ResidualPolicy`: its base
+controller plus the actor's bounded correction. Training, checkpoints and export live on the
+benchmarks side (`benchmarks.training`). Nothing here changes process-wide state: the torch
+thread count a policy predicts with is set for each `predict` call and restored after it. torch
+and SB3 are imported lazily: `import controllers.ppo` works without the rl extra.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import numpy as np
 
 from auv_gym import __version__
 from auv_gym.observation import OBS_DIM, OBS_NAMES
+from controllers.residual import RESIDUAL_OBS_NAMES, ResidualPolicy, ResidualSettings
 
 ACTION_DIM = 3  # normalised (X, M, N) commands in [-1, 1]
 
@@ -49,7 +53,7 @@ MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent needs
 VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
 METADATA_FILE = "metadata.json"
-STATS_SHAPES = {"mean": (OBS_DIM,), "var": (OBS_DIM,), "clip_obs": (), "epsilon": ()}
+STATS_KEYS = ("mean", "var", "clip_obs", "epsilon")
 ALGORITHM_CLASSES = {"ppo": "PPO", "sac": "SAC"}  # metadata "algo" → stable_baselines3 class
 
 
@@ -86,6 +90,7 @@ class PPOPolicy:
         self.num_threads = num_threads
         self.observation_space = sb3_policy.observation_space
         self.action_space = sb3_policy.action_space
+        self.obs_dim = int(self.obs_mean.shape[0])  # 15, or 21 for a residual agent's actor
         sb3_policy.set_training_mode(False)
 
     def normalize(self, observation: np.ndarray) -> np.ndarray:
@@ -103,14 +108,14 @@ class PPOPolicy:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
-        """Actions in [−1, 1]³ for observations (15,) or (n, 15) (layout `auv_gym.OBS_NAMES`)."""
+        """Actions in [−1, 1]³ for observations (15,) or (n, 15) (layout `auv_gym.OBS_NAMES`;
+        a residual agent's actor: 21 values, `controllers.residual.RESIDUAL_OBS_NAMES`)."""
         obs = np.asarray(observation, dtype=np.float32)
-        if obs.ndim not in (1, 2) or obs.shape[-1] != OBS_DIM:
-            raise ValueError(
-                f"observation must have shape ({OBS_DIM},) or (n, {OBS_DIM}), got {obs.shape}"
-            )
+        dim = self.obs_dim
+        if obs.ndim not in (1, 2) or obs.shape[-1] != dim:
+            raise ValueError(f"observation must have shape ({dim},) or (n, {dim}), got {obs.shape}")
         single = obs.ndim == 1
-        normed = self.normalize(obs.reshape(-1, OBS_DIM)).astype(np.float32)
+        normed = self.normalize(obs.reshape(-1, dim)).astype(np.float32)
         with _torch_threads(self.num_threads):
             action, _ = self.sb3_policy.predict(normed, deterministic=deterministic)
         return (action[0] if single else action), state
@@ -172,11 +177,17 @@ class AgentFiles:
     model: Path
     stats: Path
     metadata_file: Path | None
-    obs_mean: np.ndarray  # (15,) finite
-    obs_var: np.ndarray  # (15,) finite, >= 0
+    obs_mean: np.ndarray  # (15,) finite; (21,) for a residual agent
+    obs_var: np.ndarray  # (15,) finite, >= 0; (21,) for a residual agent
     clip_obs: float  # finite, > 0
     epsilon: float  # finite, > 0
     metadata: dict[str, Any]
+    residual: ResidualSettings | None = None  # metadata "residual": a residual agent
+
+
+def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:
+    """The observation names an agent was trained on: the env's 15, or the residual 21."""
+    return RESIDUAL_OBS_NAMES if "residual" in metadata else OBS_NAMES
 
 
 def check_agent(path: str | os.PathLike) -> AgentFiles:
@@ -188,7 +199,8 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     for another observation/action shape; the statistics are unreadable, lack a key, have the
     wrong shape, or are not finite with var >= 0, clip_obs > 0, epsilon > 0; metadata.json is not
     a JSON object or names another algorithm, observation layout or shape, action shape, or
-    auv-gym major version.
+    auv-gym major version, or has an invalid "residual" section. The expected observation is
+    the env's 15 values, or the residual 21 when the metadata has a "residual" section.
     """
     model, stats, meta = _locate(Path(path))
     if stats is None:
@@ -197,9 +209,13 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
             f"{model.parent / STATS_FILE} or {model.parent / VECNORM_FILE})"
         )
     metadata = _read_metadata(meta) if meta is not None else {}
-    _check_model_zip(model)
-    mean, var, clip_obs, epsilon = _read_stats(stats)
-    return AgentFiles(model, stats, meta, mean, var, clip_obs, epsilon, metadata)
+    residual = None
+    if "residual" in metadata:
+        residual = ResidualSettings.from_dict(metadata["residual"], f"{meta}: residual")
+    names = observation_layout(metadata)
+    _check_model_zip(model, len(names))
+    mean, var, clip_obs, epsilon = _read_stats(stats, names)
+    return AgentFiles(model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual)
 
 
 def _read_metadata(meta: Path) -> dict[str, Any]:
@@ -210,16 +226,17 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     if not isinstance(metadata, dict):
         kind = type(metadata).__name__
         raise ValueError(f"agent metadata {meta} must be a JSON object, got a {kind}")
+    layout = observation_layout(metadata)
     names = metadata.get("obs_names")
-    if names is not None and (not isinstance(names, list) or tuple(names) != OBS_NAMES):
+    if names is not None and (not isinstance(names, list) or tuple(names) != layout):
         raise ValueError(
             f"{meta}: agent trained for observation layout {names!r}, this auv_gym has "
-            f"{list(OBS_NAMES)}"
+            f"{list(layout)}"
         )
     algo = metadata.get("algo", "ppo")
     if not isinstance(algo, str) or algo not in ALGORITHM_CLASSES:
         raise ValueError(f"{meta}: algo is {algo!r}, expected one of {sorted(ALGORITHM_CLASSES)}")
-    expected = {"observation_shape": [OBS_DIM], "action_shape": [ACTION_DIM]}
+    expected = {"observation_shape": [len(layout)], "action_shape": [ACTION_DIM]}
     for key, value in expected.items():
         if key in metadata and metadata[key] != value:
             raise ValueError(f"{meta}: {key} is {metadata[key]!r}, expected {value!r}")
@@ -236,8 +253,8 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     return metadata
 
 
-def _check_model_zip(model: Path) -> None:
-    """SB3's zip: intact (CRC), with its parameters and a (15,) → (3,) Box policy."""
+def _check_model_zip(model: Path, obs_dim: int = OBS_DIM) -> None:
+    """SB3's zip: intact (CRC), with its parameters and an (obs_dim,) → (3,) Box policy."""
     if not zipfile.is_zipfile(model):
         raise ValueError(f"PPO model {model} is not a valid zip file (corrupt or truncated)")
     try:
@@ -257,20 +274,25 @@ def _check_model_zip(model: Path) -> None:
             data = json.loads(archive.read("data"))
     except (zipfile.BadZipFile, OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"PPO model {model} cannot be read (corrupt or truncated): {exc}") from exc
-    for key, expected in (("observation_space", (OBS_DIM,)), ("action_space", (ACTION_DIM,))):
+    for key, expected in (("observation_space", (obs_dim,)), ("action_space", (ACTION_DIM,))):
         space = data.get(key) if isinstance(data, dict) else None
         shape = space.get("_shape") if isinstance(space, dict) else None
         if shape is not None and tuple(shape) != expected:
             what = key.replace("_", " ")
+            layout = RESIDUAL_OBS_NAMES if obs_dim == len(RESIDUAL_OBS_NAMES) else OBS_NAMES
             raise ValueError(
                 f"PPO model {model}: {what} shape {tuple(shape)}, expected {expected}"
-                + (f" (layout {list(OBS_NAMES)})" if key == "observation_space" else "")
+                + (f" (layout {list(layout)})" if key == "observation_space" else "")
             )
 
 
-def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float]:
+def _read_stats(
+    stats: Path, names: tuple[str, ...] = OBS_NAMES
+) -> tuple[np.ndarray, np.ndarray, float, float]:
     """(mean, var, clip_obs, epsilon) from a .npz or a pickled VecNormalize, checked: shapes
-    (15,), (15,), (), (); all finite; var >= 0; clip_obs > 0; epsilon > 0."""
+    (d,), (d,), (), () for the d = len(names) observation values; all finite; var >= 0;
+    clip_obs > 0; epsilon > 0."""
+    shapes = {"mean": (len(names),), "var": (len(names),), "clip_obs": (), "epsilon": ()}
     try:
         if stats.suffix == ".npz":
             with np.load(stats, allow_pickle=False) as data:
@@ -285,18 +307,18 @@ def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float]:
                       "epsilon": vec_normalize.epsilon}  # fmt: skip
     except Exception as exc:
         raise ValueError(f"normalisation statistics {stats} are unreadable: {exc}") from exc
-    missing = [key for key in STATS_SHAPES if key not in values]
+    missing = [key for key in STATS_KEYS if key not in values]
     if missing:
         raise ValueError(f"{stats}: missing statistics {missing}")
     if "obs_names" in values:
-        names = tuple(str(n) for n in np.atleast_1d(values["obs_names"]))
-        if names != OBS_NAMES:
+        saved = tuple(str(n) for n in np.atleast_1d(values["obs_names"]))
+        if saved != names:
             raise ValueError(
-                f"{stats}: statistics for observation layout {list(names)}, this auv_gym has "
-                f"{list(OBS_NAMES)}"
+                f"{stats}: statistics for observation layout {list(saved)}, this auv_gym has "
+                f"{list(names)}"
             )
-    arrays = {key: np.asarray(values[key]) for key in STATS_SHAPES}
-    for key, shape in STATS_SHAPES.items():
+    arrays = {key: np.asarray(values[key]) for key in STATS_KEYS}
+    for key, shape in shapes.items():
         a = arrays[key]
         if a.dtype.kind not in "iuf":
             raise ValueError(f"{stats}: {key} must hold real numbers, got dtype {a.dtype}")
@@ -316,10 +338,17 @@ def _read_stats(stats: Path) -> tuple[np.ndarray, np.ndarray, float, float]:
 
 
 def load_policy(
-    path: str | os.PathLike, *, device: str = "cpu", num_threads: int | None = 1
-) -> PPOPolicy:
+    path: str | os.PathLike,
+    *,
+    device: str = "cpu",
+    num_threads: int | None = 1,
+    base_kwargs: dict[str, Any] | None = None,
+) -> PPOPolicy | ResidualPolicy:
     """Load a PPO agent (directory with model.zip + vecnormalize.npz + metadata.json, or a zip);
-    a SAC agent of the same layout when its metadata says ``"algo": "sac"``.
+    a SAC agent of the same layout when its metadata says ``"algo": "sac"``; a residual agent
+    (metadata "residual") as a `ResidualPolicy` of its base controller, built with the recorded
+    settings and ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for
+    other agents), and its actor.
 
     The files are validated first, before torch is imported (`check_agent`: FileNotFoundError
     when the model or its statistics are missing, ValueError naming the file and the problem
@@ -340,13 +369,18 @@ def load_policy(
         model = algorithm.load(files.model, device=device, custom_objects=custom)
     except Exception as exc:
         raise ValueError(f"PPO model {files.model} cannot be loaded: {exc}") from exc
+    layout = observation_layout(files.metadata)
     shape = tuple(model.observation_space.shape or ())
-    if shape != (OBS_DIM,):
+    if shape != (len(layout),):
         raise ValueError(
-            f"PPO model {files.model}: observation space shape {shape}, expected ({OBS_DIM},) "
-            f"(layout {list(OBS_NAMES)})"
+            f"PPO model {files.model}: observation space shape {shape}, expected ({len(layout)},) "
+            f"(layout {list(layout)})"
         )
-    return PPOPolicy(
+    actor = PPOPolicy(
         model.policy, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon,
         files.metadata, str(files.model), num_threads,
     )  # fmt: skip
+    if files.residual is None:
+        return actor
+    base = files.residual.make_base(**(base_kwargs or {}))
+    return ResidualPolicy(base, actor, files.residual.bound, files.residual)

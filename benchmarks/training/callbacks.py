@@ -14,6 +14,7 @@ from benchmarks.training.checkpoints import checkpoint_folder, prune_checkpoints
 from benchmarks.training.evaluation import evaluate_policy_on_seeds, score, summarize
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from controllers.ppo import PPOPolicy
+from controllers.residual import ResidualPolicy, ResidualSettings, base_kwargs_for_env
 
 __all__ = ["PeriodicCheckpoint", "PeriodicEvaluation", "StopAt", "policy_from_model"]
 
@@ -21,12 +22,22 @@ __all__ = ["PeriodicCheckpoint", "PeriodicEvaluation", "StopAt", "policy_from_mo
 MetadataFn = Callable[[dict[str, Any]], dict[str, Any]]
 
 
-def policy_from_model(model: Any, vec_normalize: Any) -> PPOPolicy:
+def policy_from_model(
+    model: Any,
+    vec_normalize: Any,
+    residual: ResidualSettings | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+) -> PPOPolicy | ResidualPolicy:
     """The Policy of a model in training, with a snapshot of the current statistics (torch's
-    thread setting is the training's)."""
+    thread setting is the training's); with ``residual``, the `ResidualPolicy` of its base
+    controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`)."""
     rms = vec_normalize.obs_rms
-    return PPOPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
-                     vec_normalize.epsilon)  # fmt: skip
+    actor = PPOPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
+                      vec_normalize.epsilon)  # fmt: skip
+    if residual is None:
+        return actor
+    base = residual.make_base(**base_kwargs_for_env(env_kwargs or {}))
+    return ResidualPolicy(base, actor, residual.bound, residual)
 
 
 def _next_multiple(n: int, every: int) -> int:
@@ -38,12 +49,14 @@ class PeriodicEvaluation(BaseCallback):
     the learning curve, and the agent saved to OUT/best when its `score` improves.
 
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
+    A residual agent (``residual``) is evaluated as its `ResidualPolicy`.
     """
 
     def __init__(self, out: Path, every: int, seeds: Sequence[int], eval_kwargs: dict[str, Any],
                  metadata: MetadataFn, start_wall: float, best: dict[str, Any],
-                 verbose: int = 0) -> None:  # fmt: skip
+                 verbose: int = 0, residual: ResidualSettings | None = None) -> None:  # fmt: skip
         super().__init__(verbose)
+        self.residual = residual
         self.out, self.every, self.seeds = out, every, tuple(seeds)
         self.eval_kwargs, self.metadata = eval_kwargs, metadata
         self.start_wall, self.best = start_wall, best
@@ -65,7 +78,7 @@ class PeriodicEvaluation(BaseCallback):
     def evaluate(self) -> None:
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
-        policy = policy_from_model(self.model, vec_normalize)
+        policy = policy_from_model(self.model, vec_normalize, self.residual, self.eval_kwargs)
         results = evaluate_policy_on_seeds(policy, self.seeds, **self.eval_kwargs)
         summary = summarize(results)
         self.model.policy.set_training_mode(False)

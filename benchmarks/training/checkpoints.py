@@ -43,7 +43,8 @@ def write_metadata(path: Path, metadata: dict[str, Any]) -> None:
 def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str, Any],
                replay_buffer: bool = False) -> None:  # fmt: skip
     """Write model.zip, vecnormalize.pkl/.npz and metadata.json as the folder ``folder``
-    (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl).
+    (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl). The .npz
+    names the observation layout ``metadata["obs_names"]`` (default: the env's).
 
     The folder is filled beside its place and then swapped in (`write_folder_atomic`), so
     readers see either the previous complete agent or the new one.
@@ -56,7 +57,8 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
         np.savez(
             tmp / STATS_FILE, mean=rms.mean, var=rms.var, count=np.float64(rms.count),
             clip_obs=np.float64(vec_normalize.clip_obs),
-            epsilon=np.float64(vec_normalize.epsilon), obs_names=np.array(OBS_NAMES),
+            epsilon=np.float64(vec_normalize.epsilon),
+            obs_names=np.array(metadata.get("obs_names", OBS_NAMES)),
         )  # fmt: skip
         write_metadata(tmp / METADATA_FILE, metadata)
         if replay_buffer:

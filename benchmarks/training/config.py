@@ -14,6 +14,16 @@ The keys an algorithm accepts are listed in its `Algorithm` entry of `ALGORITHMS
 another algorithm is one more entry, read with the same `read_zoo_config`. Off-policy algorithms
 (`Algorithm.off_policy`) also save their replay buffer in checkpoints, so a resumed run continues
 with the samples it had.
+
+An optional ``residual`` section trains a residual agent (docs/design.md §3.10): the harness
+wraps the training env in `controllers.residual_env.ResidualVectorEnv` with these settings
+(`controllers.residual.ResidualSettings`)::
+
+      residual:
+        base: fbsm_colos            # a classical controller name (controllers.CLASSICAL)
+        bound: [0.25, 0.5, 0.5]     # β per X, M, N, normalised actuator units
+        tv_weight: 0.25             # chattering charge per unit TV of the applied action
+        base_kwargs: {}             # base gains (actuator and control_dt come from the env)
 """
 
 from __future__ import annotations
@@ -25,12 +35,13 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID
+from controllers.residual import ResidualSettings
 
 __all__ = ["ALGORITHMS", "Algorithm", "ZooConfig", "read_zoo_config", "schedule"]
 
 # RL-Zoo keys of the harness itself (not constructor arguments of the algorithm).
 ZOO_KEYS = frozenset(
-    {"n_envs", "n_timesteps", "policy", "normalize", "policy_kwargs", "env_kwargs"}
+    {"n_envs", "n_timesteps", "policy", "normalize", "policy_kwargs", "env_kwargs", "residual"}
 )
 
 
@@ -84,7 +95,7 @@ class ZooConfig:
 
     `normalize` holds the `VecNormalize` keyword arguments; `algo_kwargs` the algorithm's
     constructor arguments, with "lin_<x>" schedules still as strings (`model_kwargs` resolves
-    them).
+    them). `residual` holds the residual settings when the file has a ``residual`` section.
     """
 
     algo: str
@@ -96,6 +107,7 @@ class ZooConfig:
     env_kwargs: dict[str, Any]
     algo_kwargs: dict[str, Any]
     raw: dict[str, Any] = field(default_factory=dict)
+    residual: ResidualSettings | None = None
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -152,10 +164,13 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     if isinstance(policy_kwargs, str):
         policy_kwargs = _eval_kwargs(policy_kwargs, path, "policy_kwargs")
     env_kwargs = dict(section.get("env_kwargs") or {})
+    residual = None
+    if "residual" in section:
+        residual = ResidualSettings.from_dict(section["residual"], f"{path}: residual")
     return ZooConfig(
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
-        algo_kwargs=algo_kwargs, raw=section,
+        algo_kwargs=algo_kwargs, raw=section, residual=residual,
     )  # fmt: skip
 
 

@@ -21,6 +21,7 @@ from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.trajectory import env_termination_reason
 from controllers.ppo import load_policy
+from controllers.residual import base_kwargs_for_env
 
 __all__ = [
     "EVAL_SEEDS",
@@ -114,8 +115,8 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
     AUVPath3D-v1, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
-    policy = load_policy(agent)
     fixed = VARIANTS[env_id]
+    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(fixed))  # a residual agent's base
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
         "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",

@@ -16,7 +16,7 @@ from typing import Any
 import auv_gym
 from auv_gym import ENV_ID, VARIANTS
 from auv_gym.files import git_commit, versions
-from auv_gym.observation import OBS_DIM, OBS_NAMES
+from auv_gym.observation import OBS_NAMES
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
     export_agent,
@@ -34,8 +34,16 @@ from benchmarks.training.evaluation import (
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
 from controllers.ppo import METADATA_FILE, MODEL_FILE, VECNORM_FILE
+from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
 
-__all__ = ["TrainOptions", "check_options", "make_training_env", "thread_limit", "train"]
+__all__ = [
+    "TrainOptions",
+    "check_options",
+    "make_training_env",
+    "thread_limit",
+    "train",
+    "zero_correction_layer",
+]
 
 HERE = Path(__file__).resolve().parent.parent  # benchmarks/
 
@@ -91,28 +99,55 @@ def thread_limit(threads: int) -> Iterator[None]:
 
 
 def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: str = "auto",
-                      env_id: str = ENV_ID) -> Any:  # fmt: skip
+                      env_id: str = ENV_ID, residual: ResidualSettings | None = None,
+                      ) -> Any:  # fmt: skip
     """An SB3 VecEnv of `n_envs` training environments.
 
     "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
     "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available. The native env
     simulates every id of `auv_gym.VARIANTS` (its fixed keyword arguments, then `env_kwargs`).
+    With ``residual`` the native env is wrapped in `controllers.residual_env.ResidualVectorEnv`
+    (the residual agent's observation, action and chattering charge; native only).
     """
     if kind not in ("auto", "native", "dummy"):
         raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
     env_seed = TRAIN_SEED_BASE + 1000 * int(seed)
+    if residual is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
+        raise ValueError(f"a residual agent trains on the native vector env of "
+                         f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}")  # fmt: skip
     if kind in ("auto", "native") and env_id in VARIANTS:
         from stable_baselines3.common.vec_env import VecMonitor
 
         from auv_gym.sb3 import make_sb3_vec_env
 
         kwargs = {**VARIANTS[env_id], **env_kwargs}
+        if residual is not None:
+            from controllers.residual_env import make_residual_sb3_env
+
+            return VecMonitor(make_residual_sb3_env(n_envs, residual, seed=env_seed, **kwargs))
         return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, **kwargs))
     if kind == "native":
         raise ValueError(f"the native vector env simulates {sorted(VARIANTS)} only, not {env_id}")
     from stable_baselines3.common.env_util import make_vec_env
 
     return make_vec_env(env_id, n_envs=n_envs, seed=env_seed, env_kwargs=env_kwargs)
+
+
+def zero_correction_layer(model: Any) -> None:
+    """Zero the last layer of the actor's mean (PPO ``action_net``, SAC ``actor.mu``): the
+    untrained residual agent's deterministic correction is exactly 0, so it starts at the base
+    controller's performance; exploration comes from the policy's std (``log_std_init``)."""
+    policy = model.policy
+    layer = getattr(policy, "action_net", None)
+    if layer is None:
+        layer = getattr(getattr(policy, "actor", None), "mu", None)
+    if layer is None or not hasattr(layer, "weight"):
+        raise ValueError(f"cannot find the actor's last layer of {type(policy).__name__}")
+    import torch
+
+    with torch.no_grad():
+        layer.weight.zero_()
+        layer.bias.zero_()
 
 
 def _describe(venv: Any) -> str:
@@ -203,7 +238,9 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     eval_kwargs = _eval_kwargs(opts)
     set_random_seed(opts.seed)
-    venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id)
+    residual = cfg.residual
+    venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id,
+                             residual)  # fmt: skip
 
     previous: dict[str, Any] = {}
     checkpoint = latest_checkpoint(out) if opts.resume else None
@@ -223,6 +260,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         model = algorithm(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, seed=opts.seed,
                           device="cpu", tensorboard_log=str(out / "tb"), verbose=opts.verbose,
                           **cfg.model_kwargs())  # fmt: skip
+        if residual is not None:
+            zero_correction_layer(model)
     start_wall = float(previous.get("wall_time_s", 0.0))
     best: dict[str, Any] = dict(previous.get("best", {}))
     sessions = [*previous.get("sessions", []), {
@@ -232,6 +271,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         "start_timesteps": int(model.num_timesteps),
     }]  # fmt: skip
     t0 = time.monotonic()
+    obs_names = OBS_NAMES if residual is None else RESIDUAL_OBS_NAMES
+    residual_meta = {} if residual is None else {"residual": residual.to_dict()}
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:
         return {
@@ -241,8 +282,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "command": " ".join(sessions[0]["argv"]), "sessions": sessions,
             "options": asdict(opts), "config_file": str(opts.config), "config": cfg.raw,
             "env_kwargs": cfg.env_kwargs, "eval_env_kwargs": eval_kwargs,
-            "eval_seeds": list(opts.eval_seeds), "obs_names": list(OBS_NAMES),
-            "observation_shape": [OBS_DIM], "action_shape": [3],
+            "eval_seeds": list(opts.eval_seeds), "obs_names": list(obs_names),
+            "observation_shape": [len(obs_names)], "action_shape": [3], **residual_meta,
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": _describe(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
@@ -252,7 +293,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     callbacks = []
     if opts.eval_freq > 0:
         callbacks.append(PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
-                                            metadata, start_wall, best, opts.verbose))  # fmt: skip
+                                            metadata, start_wall, best, opts.verbose,
+                                            residual))  # fmt: skip
     callbacks.append(PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata,
                                         replay_buffer=spec.off_policy))  # fmt: skip
     target = target_timesteps(n_timesteps, opts.stop_at)

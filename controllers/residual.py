@@ -1,0 +1,313 @@
+r"""Residual policy: a classical base controller plus a learned, bounded correction
+(docs/design.md §3.10).
+
+Per control step k, with o_k the env's observation (`auv_gym.observation`), b_k the base
+controller's normalised action and a_{k−1} the previously applied action (0 at an episode's
+first step):
+
+    b_k  = base.predict(o_k, episode_start)                    exactly as the base runs alone
+    c_k  = agent.predict([o_k, b_k, a_{k−1}])                  21 values, `RESIDUAL_OBS_NAMES`
+    a_k  = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)             β = `bound` per input (X, M, N)
+
+β is a fraction of the actuator range in normalised units (1 = the full limit: 50 N for X,
+10 N·m or the fin authority for M and N, docs/model.md §2.3), so |a_k − b_k| ≤ β for any agent
+output and |a_k| ≤ 1 (the actuator saturation). A non-finite c_k is an error, never an action.
+The default β = (0.25, 0.5, 0.5): under the paper's noise the FBSM's pitch and yaw commands
+swing with a standard deviation of 0.6 and 0.45 (surge 0.03, measured over 4 episodes of
+`fbsm_colos`), so halving that chattering needs a correction of half the range; surge needs
+less.
+
+The base controller gets every observation, `episode_start` flag and `deterministic` flag the
+evaluation would give it alone, so its adaptive laws, filters and observers evolve exactly as
+without the agent: with c ≡ 0 the residual policy reproduces its base bit for bit.
+
+The training side (observation of the wrapper, chattering charge) is `controllers.residual_env`;
+the saved agent's `metadata.json` holds `ResidualSettings.to_dict()` under "residual", and
+`controllers.ppo.load_policy` rebuilds a `ResidualPolicy` from it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
+
+__all__ = [
+    "DEFAULT_BASE",
+    "DEFAULT_BOUND",
+    "DEFAULT_TV_WEIGHT",
+    "RESIDUAL_FEATURES",
+    "RESIDUAL_OBS_DIM",
+    "RESIDUAL_OBS_NAMES",
+    "ResidualPolicy",
+    "ResidualSettings",
+    "agent_observation",
+    "base_kwargs_for_env",
+    "check_bound",
+    "make_residual",
+    "residual_action",
+    "residual_observation_bounds",
+]
+
+DEFAULT_BASE = "fbsm_colos"  # the current-robust FBSM (controllers.PRESETS)
+DEFAULT_BOUND = (0.25, 0.5, 0.5)  # β per input (X, M, N), normalised actuator units
+# Chattering charge per unit of total variation of the applied normalised action per step
+# (docs/design.md §3.10): FBSM alone (TV ≈ 0.87 per step under the paper's noise) pays ≈ 0.22
+# per step, about 5 % of what following the path earns.
+DEFAULT_TV_WEIGHT = 0.25
+MAX_TV_WEIGHT = 1e3
+RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
+RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
+RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
+# Set by the env (the scenario), never by the residual settings.
+ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt")
+
+
+def check_bound(bound: Any) -> tuple[float, float, float]:
+    """β as three floats in [0, 2] (2: the whole range [−1, 1]); ValueError naming the value."""
+    try:
+        values = tuple(float(b) for b in np.broadcast_to(np.asarray(bound, dtype=float), (3,)))
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"bound must be a number or three numbers (X, M, N) in [0, 2], got {bound!r}"
+        ) from None
+    if not all(math.isfinite(b) and 0.0 <= b <= 2.0 for b in values):
+        raise ValueError(f"bound must lie in [0, 2] for each of X, M, N, got {list(values)}")
+    return values  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class ResidualSettings:
+    """What makes an agent residual: the base controller (a name of `controllers.CLASSICAL` and
+    its keyword arguments other than the env-owned ``actuator``/``control_dt``), β and the
+    chattering weight of training (docs/design.md §3.10)."""
+
+    base: str = DEFAULT_BASE
+    bound: tuple[float, float, float] = DEFAULT_BOUND
+    tv_weight: float = DEFAULT_TV_WEIGHT
+    base_kwargs: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        from controllers import CLASSICAL
+
+        if self.base not in CLASSICAL:
+            raise ValueError(f"residual base {self.base!r} is not a classical controller; "
+                             f"valid: {list(CLASSICAL)}")  # fmt: skip
+        object.__setattr__(self, "bound", check_bound(self.bound))
+        w = self.tv_weight
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 <= w <= MAX_TV_WEIGHT:
+            raise ValueError(f"tv_weight must be a number in [0, {MAX_TV_WEIGHT:g}], got {w!r}")
+        object.__setattr__(self, "tv_weight", float(w))
+        if not isinstance(self.base_kwargs, Mapping):
+            raise ValueError(f"base_kwargs must be a mapping, got {self.base_kwargs!r}")
+        owned = sorted(set(self.base_kwargs) & set(ENV_OWNED_BASE_KWARGS))
+        if owned:
+            raise ValueError(f"base_kwargs must not set {owned}: the env (scenario) sets them")
+        object.__setattr__(self, "base_kwargs", dict(self.base_kwargs))
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "residual") -> ResidualSettings:
+        """Settings from a YAML/JSON mapping with keys base, bound, tv_weight, base_kwargs
+        (all optional); ValueError naming ``where`` and the problem."""
+        if data is None or data is True:
+            data = {}
+        if not isinstance(data, Mapping):
+            raise ValueError(f"{where} must be a mapping, got {data!r}")
+        unknown = sorted(set(data) - {"base", "bound", "tv_weight", "base_kwargs"})
+        if unknown:
+            raise ValueError(f"{where}: unknown keys {unknown}; valid: "
+                             "['base', 'base_kwargs', 'bound', 'tv_weight']")  # fmt: skip
+        try:
+            return cls(
+                base=str(data.get("base", DEFAULT_BASE)),
+                bound=data.get("bound", DEFAULT_BOUND),
+                tv_weight=data.get("tv_weight", DEFAULT_TV_WEIGHT),
+                base_kwargs=data.get("base_kwargs") or {},
+            )
+        except ValueError as exc:
+            raise ValueError(f"{where}: {exc}") from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form recorded in an agent's metadata."""
+        return {"base": self.base, "bound": list(self.bound), "tv_weight": self.tv_weight,
+                "base_kwargs": dict(self.base_kwargs)}  # fmt: skip
+
+    def make_base(self, **kwargs: Any) -> Any:
+        """The base controller: `base_kwargs`, then ``kwargs`` (the scenario's ``actuator``,
+        ``control_dt``, ...; they win)."""
+        import controllers
+
+        return controllers.make(self.base, **{**self.base_kwargs, **kwargs})
+
+
+def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """The base controller's env-owned arguments for episodes of ``env_kwargs``: its
+    ``control_dt`` and a fixed ``actuator`` ("random" draws per episode, which a Policy cannot
+    see: the base then keeps its default "paper", like any classical controller)."""
+    out: dict[str, Any] = {}
+    if "control_dt" in env_kwargs:
+        out["control_dt"] = env_kwargs["control_dt"]
+    if env_kwargs.get("actuator") in ("paper", "fins"):
+        out["actuator"] = env_kwargs["actuator"]
+    return out
+
+
+def residual_observation_bounds() -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) of the agent's observation: the env's bounds, then ±1 for b and a_{k−1}."""
+    ones = np.ones(len(RESIDUAL_FEATURES), dtype=np.float32)
+    return np.concatenate([OBS_LOW, -ones]), np.concatenate([OBS_HIGH, ones])
+
+
+def agent_observation(obs: np.ndarray, base_action: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """The agent's float32 observation (n, 21): env observation, base action, previous action."""
+    return np.concatenate(
+        [np.asarray(obs, np.float32), np.asarray(base_action, np.float32),
+         np.asarray(previous, np.float32)], axis=1,
+    )  # fmt: skip
+
+
+def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[float]) -> np.ndarray:
+    """a = clip(b + β ⊙ clip(c, −1, 1), −1, 1) as float32 (n, 3); ValueError for a correction
+    of another shape or with NaN/inf (naming the first bad row)."""
+    b = np.asarray(base_action, dtype=np.float64)
+    try:
+        c = np.asarray(correction, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"residual agent returned a non-numeric correction {correction!r:.80}"
+        ) from None
+    if c.shape != b.shape:
+        raise ValueError(f"residual agent returned a correction of shape {c.shape}, "
+                         f"expected {b.shape}")  # fmt: skip
+    finite = np.isfinite(c)
+    if not finite.all():
+        row = int(np.argwhere(~finite)[0][0])
+        raise ValueError(
+            f"residual agent returned a non-finite correction {c[row].tolist()} (row {row}): "
+            "NaN/inf is an error, not an action"
+        )
+    applied = np.clip(b + np.asarray(bound) * np.clip(c, -1.0, 1.0), -1.0, 1.0)
+    return applied.astype(np.float32)
+
+
+class ResidualPolicy:
+    """Base controller + bounded agent correction (module doc); the Policy protocol
+    (docs/design.md §3.6).
+
+    Args:
+        base: the base controller (any Policy; `controllers.make(name)` of a classical one).
+        agent: a Policy of 21-value observations (`RESIDUAL_OBS_NAMES`) giving corrections in
+            [−1, 1]³ (e.g. the actor of a saved residual agent, `controllers.ppo.PPOPolicy`).
+        bound: β per input (X, M, N) in normalised actuator units, each in [0, 2].
+        settings: the `ResidualSettings` it was built from (recorded, optional).
+
+    State: a dict with the base's state ("base"), the previously applied actions
+    ("previous", (n, 3) float32) and the last correction actually applied ("correction",
+    a − b). `diagnostics` forwards the base's and adds ``correction`` (n, 3).
+    """
+
+    name = "residual"
+
+    def __init__(self, base: Any, agent: Any, bound: Any = DEFAULT_BOUND,
+                 settings: ResidualSettings | None = None) -> None:  # fmt: skip
+        for role, policy in (("base", base), ("agent", agent)):
+            if not callable(getattr(policy, "predict", None)):
+                raise ValueError(f"residual {role} must have predict(...), got "
+                                 f"{type(policy).__name__}")  # fmt: skip
+        self.base = base
+        self.agent = agent
+        self.bound = check_bound(bound)
+        self.settings = settings
+        self.metadata = dict(getattr(agent, "metadata", {}) or {})
+
+    def init_state(self, n: int) -> dict[str, Any]:
+        return {"base": None, "previous": np.zeros((n, 3), np.float32),
+                "correction": np.zeros((n, 3), np.float32)}  # fmt: skip
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: dict[str, Any] | None = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Actions in [−1, 1] for a batch (n, 15) or one (15,) observation; see the module doc."""
+        obs = np.asarray(observation)
+        single = obs.ndim == 1
+        if obs.ndim not in (1, 2) or obs.shape[-1] != OBS_DIM:
+            raise ValueError(f"observation must have shape (n, {OBS_DIM}) or ({OBS_DIM},), "
+                             f"got {obs.shape}")  # fmt: skip
+        batch = obs[None] if single else obs
+        n = batch.shape[0]
+        if state is None:
+            state = self.init_state(n)
+        elif state["previous"].shape[0] != n:
+            raise ValueError(f"state is for {state['previous'].shape[0]} vehicles, "
+                             f"observation for {n}")  # fmt: skip
+        # The base sees exactly what it would see alone (the caller's arrays, unchanged).
+        base_action, state["base"] = self.base.predict(
+            observation, state=state["base"], episode_start=episode_start,
+            deterministic=deterministic,
+        )  # fmt: skip
+        base_action = np.asarray(base_action, np.float32).reshape(n, 3)
+        if episode_start is not None:
+            start = np.asarray(episode_start, dtype=bool).reshape(-1)
+            state["previous"][start] = 0.0
+        features = agent_observation(batch, base_action, state["previous"])
+        correction, _ = self.agent.predict(features, deterministic=deterministic)
+        if np.size(correction) == 3 * n:  # an agent may return (3,) for a single row
+            correction = np.reshape(correction, (n, 3))
+        applied = residual_action(base_action, correction, self.bound)
+        state["previous"][:] = applied
+        state["correction"][:] = applied - base_action
+        return (applied[0] if single else applied), state
+
+    def diagnostics(self, state: dict[str, Any]) -> dict[str, np.ndarray]:
+        """The base's diagnostics (if it has any) and the applied correction a − b (n, 3)."""
+        hook = getattr(self.base, "diagnostics", None)
+        out = dict(hook(state["base"])) if hook is not None else {}
+        out["correction"] = state["correction"].astype(np.float64)
+        return out
+
+    def __repr__(self) -> str:
+        return f"ResidualPolicy(base={self.base!r}, agent={self.agent!r}, bound={self.bound})"
+
+
+def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
+                  **base_kwargs: Any) -> ResidualPolicy:  # fmt: skip
+    """``controllers.make("residual", ...)``: a `ResidualPolicy`.
+
+    ``agent`` is a Policy of the 21-value observation, or the directory of a saved residual
+    agent (its recorded base and β are used; a ``base`` or ``bound`` given here must equal them).
+    ``base`` (default "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``,
+    gains) build the base controller with `controllers.make`; ``bound`` is β (X, M, N).
+    """
+    if agent is None:
+        raise ValueError("controllers.make('residual') needs agent=<Policy or saved residual "
+                         "agent directory>")  # fmt: skip
+    if callable(getattr(agent, "predict", None)):
+        owned = {k: base_kwargs.pop(k) for k in ENV_OWNED_BASE_KWARGS if k in base_kwargs}
+        settings = ResidualSettings(
+            base=DEFAULT_BASE if base is None else base,
+            bound=DEFAULT_BOUND if bound is None else bound, base_kwargs=base_kwargs,
+        )  # fmt: skip
+        return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)
+    from controllers.ppo import load_policy
+
+    policy = load_policy(agent, base_kwargs=base_kwargs)
+    if not isinstance(policy, ResidualPolicy):
+        raise ValueError(f"agent {agent!r} is not a residual agent (its metadata.json has no "
+                         "'residual' section)")  # fmt: skip
+    recorded = policy.settings
+    assert recorded is not None
+    if base is not None and base != recorded.base:
+        raise ValueError(f"agent {agent!r} was trained on base {recorded.base!r}, not {base!r}")
+    if bound is not None and check_bound(bound) != recorded.bound:
+        raise ValueError(f"agent {agent!r} was trained with bound {list(recorded.bound)}, "
+                         f"not {list(check_bound(bound))}")  # fmt: skip
+    return policy

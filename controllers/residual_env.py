@@ -1,0 +1,218 @@
+r"""Training side of the residual policy: the native vector env with the base controller inside
+(docs/design.md §3.10).
+
+`ResidualVectorEnv` wraps an `auv_gym.vector_env.AUVPath3DVectorEnv` (any autoreset mode). It
+runs the base controller of all vehicles in one batched `predict` per control step, exactly as
+`controllers.residual.ResidualPolicy` and the evaluation run it, and exposes to the agent
+
+    observation  [o_k, b_k, a_{k−1}]  (21 float32 values, `RESIDUAL_OBS_NAMES`)
+    action       c_k ∈ [−1, 1]³, applied as a_k = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)
+    reward       r_k − w_TV · Σ_j |a_{k,j} − a_{k−1,j}|     (no charge at an episode's first step)
+
+The chattering charge w_TV (``tv_weight``, default 0.25) is the total variation of the applied
+normalised action per step, the quantity the benchmark's ``chattering`` metric sums per second
+(`auv_gym.metrics`); it is reported per step as ``info["reward_chattering"]`` beside the env's
+reward terms. With ``actuator="random"`` each vehicle's base controller uses the actuator its
+episode drew (`auv_gym.simulator.Simulator.actuators`), as a scenario would configure it: one
+controller per actuator model, each called for the whole batch while any vehicle uses it.
+
+`make_residual_sb3_env` gives the same env as a stable-baselines3 VecEnv (`auv_gym.sb3`).
+Deterministic: the base controllers are deterministic functions of the observations, so the same
+seed and actions give bit-identical trajectories.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorWrapper
+from gymnasium.vector.utils import batch_space
+
+from auv_gym.env import validate_actions
+from auv_gym.vector_env import AUVPath3DVectorEnv
+from controllers.residual import (
+    ResidualSettings,
+    agent_observation,
+    residual_action,
+    residual_observation_bounds,
+)
+
+__all__ = ["CHATTERING_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
+
+CHATTERING_KEY = "reward_chattering"  # info key of −w_TV·TV_k, beside the env's reward terms
+
+
+class ResidualVectorEnv(VectorWrapper):
+    """The residual agent's view of an `AUVPath3DVectorEnv` (module doc).
+
+    Args:
+        env: the vector env (its ``unwrapped`` must be an `AUVPath3DVectorEnv`).
+        settings: `ResidualSettings` (base controller, β, w_TV); default: their defaults.
+
+    Info: the env's, plus ``reward_chattering`` (with its ``_`` mask; in ``final_info`` for the
+    vehicles whose episode ended in SAME_STEP mode), ``base_action`` (n, 3), the base action of
+    the returned observation.
+    """
+
+    def __init__(self, env: Any, settings: ResidualSettings | None = None) -> None:
+        core = getattr(env, "unwrapped", None)
+        if not isinstance(core, AUVPath3DVectorEnv):
+            raise ValueError(f"ResidualVectorEnv wraps an AUVPath3DVectorEnv, got "
+                             f"{type(env).__name__}")  # fmt: skip
+        super().__init__(env)
+        self.core = core
+        self.settings = settings if settings is not None else ResidualSettings()
+        self.bound = np.asarray(self.settings.bound)
+        config = core.config
+        names = ("paper", "fins") if config.actuator == "random" else (config.actuator,)
+        self.controllers = {
+            name: self.settings.make_base(actuator=name, control_dt=config.control_dt)
+            for name in names
+        }
+        self._states: dict[str, Any] = dict.fromkeys(names)
+        low, high = residual_observation_bounds()
+        self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        n = self.num_envs
+        self._base = np.zeros((n, 3), np.float32)  # b_k of the last returned observation
+        self._previous = np.zeros((n, 3), np.float32)  # a_{k−1} (0 at an episode's start)
+        self._started = np.zeros(n, dtype=bool)  # a_{k−1} exists (not the first step)
+        self._actuators = core.sim.actuators  # each vehicle's actuator when b_k was computed
+        self._pending = np.zeros(n, dtype=bool)  # NEXT_STEP: reset by the coming step
+        self._ever_reset = False
+
+    # ------------------------------------------------------------------------ base controller
+    def _base_predict(self, obs: np.ndarray, episode_start: np.ndarray) -> np.ndarray:
+        """b for every vehicle: one batched call per actuator model in use (all rows)."""
+        actuators = self.core.sim.actuators
+        out = np.empty((self.num_envs, 3), np.float32)
+        for name, controller in self.controllers.items():
+            rows = actuators == name
+            if rows.any():
+                action, self._states[name] = controller.predict(
+                    obs, state=self._states[name], episode_start=episode_start,
+                    deterministic=True,
+                )  # fmt: skip
+                out[rows] = np.asarray(action, np.float32).reshape(-1, 3)[rows]
+        self._actuators = actuators
+        return out
+
+    def _base_predict_rows(self, obs: np.ndarray, rows: np.ndarray, episode_start: bool,
+                           actuators: np.ndarray, keep: bool) -> np.ndarray:  # fmt: skip
+        """b for ``rows`` only, on copies of their controller states (written back if
+        ``keep``): partial resets, and the final observations of ended episodes (not kept)."""
+        out = np.empty((rows.size, 3), np.float32)
+        for name, controller in self.controllers.items():
+            pick = actuators[rows] == name
+            if not pick.any():
+                continue
+            chosen = rows[pick]
+            full = self._states[name]
+            sub = None if full is None else {k: v[chosen] for k, v in full.items()}
+            start = np.full(chosen.size, episode_start)
+            action, sub = controller.predict(obs[chosen], state=sub, episode_start=start,
+                                             deterministic=True)  # fmt: skip
+            out[pick] = np.asarray(action, np.float32).reshape(-1, 3)
+            if keep:
+                if full is None:  # first use: a fresh state for every vehicle, then these rows
+                    full = self._states[name] = controller.init_state(self.num_envs)
+                for key, value in sub.items():
+                    full[key][chosen] = value
+        return out
+
+    # --------------------------------------------------------------------------------- API
+    def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:  # fmt: skip
+        """Reset as the vector env does; the base controllers restart for the reset vehicles."""
+        obs, info = self.env.reset(seed=seed, options=options)
+        mask = (options or {}).get("reset_mask")
+        mask = np.ones(self.num_envs, dtype=bool) if mask is None else np.asarray(mask, bool)
+        if mask.all() or not self._ever_reset:
+            self._base = self._base_predict(obs, mask)
+        else:
+            rows = np.flatnonzero(mask)
+            actuators = self.core.sim.actuators
+            self._base[rows] = self._base_predict_rows(obs, rows, True, actuators, keep=True)
+            self._actuators = actuators
+        self._ever_reset = True
+        self._previous[mask] = 0.0
+        self._started[mask] = False
+        self._pending[mask] = False
+        info["base_action"], info["_base_action"] = self._base.copy(), mask.copy()
+        return agent_observation(obs, self._base, self._previous), info
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                          dict[str, Any]]:  # fmt: skip
+        """Apply base + bounded correction, charge chattering, run the base on the new
+        observation. A NaN or inf correction raises ValueError before any vehicle moves."""
+        if not self._ever_reset:
+            raise RuntimeError("call reset() before step()")
+        correction = validate_actions(actions, (self.num_envs, 3))
+        applied = residual_action(self._base, correction, self.bound)
+        obs, reward, terminated, truncated, info = self.env.step(applied)
+        stepped = ~self._pending  # NEXT_STEP: vehicles reset by this step did not move
+        variation = np.abs(applied.astype(np.float64) - self._previous).sum(axis=1)
+        charge = np.where(stepped & self._started, -self.settings.tv_weight * variation, 0.0)
+        reward = reward + charge
+        done = terminated | truncated
+        mode = self.core.autoreset_mode
+        fresh = self._pending.copy() if mode is AutoresetMode.NEXT_STEP else np.zeros_like(done)
+        if mode is AutoresetMode.SAME_STEP and done.any():
+            fresh = done.copy()
+            rows = np.flatnonzero(done)
+            final_obs = np.stack([info["final_obs"][i] for i in rows])
+            final = np.zeros((self.num_envs, final_obs.shape[1]), np.float32)
+            final[rows] = final_obs
+            # b at the last observation, from copies of the ended episodes' controller states
+            final_base = self._base_predict_rows(final, rows, False, self._actuators, keep=False)
+            boxed = info["final_obs"].copy()
+            for j, i in enumerate(rows):
+                boxed[i] = agent_observation(final_obs[j : j + 1], final_base[j : j + 1],
+                                             applied[i : i + 1])[0]  # fmt: skip
+            info["final_obs"] = boxed
+            final_info = info["final_info"]
+            final_info[CHATTERING_KEY] = np.where(done, charge, 0.0)
+            final_info[f"_{CHATTERING_KEY}"] = done.copy()
+            info[CHATTERING_KEY] = np.where(done, 0.0, charge)
+            info[f"_{CHATTERING_KEY}"] = ~done
+        else:
+            info[CHATTERING_KEY] = charge
+            info[f"_{CHATTERING_KEY}"] = stepped.copy()
+        self._previous[stepped] = applied[stepped]
+        self._started[stepped] = True
+        self._previous[fresh] = 0.0
+        self._started[fresh] = False
+        self._base = self._base_predict(obs, fresh)
+        self._pending = done if mode is AutoresetMode.NEXT_STEP else np.zeros_like(done)
+        info["base_action"] = self._base.copy()
+        info["_base_action"] = np.ones(self.num_envs, dtype=bool)
+        features = agent_observation(obs, self._base, self._previous)
+        return features, reward, terminated, truncated, info
+
+    def __repr__(self) -> str:
+        s = self.settings
+        return f"ResidualVectorEnv({self.env!r}, base={s.base!r}, bound={s.bound})"
+
+
+def make_residual_sb3_env(
+    num_envs: int,
+    settings: ResidualSettings | None = None,
+    *,
+    seed: int | None = None,
+    max_episode_steps: int | None = None,
+    threads: int | None = None,
+    **env_kwargs: Any,
+) -> Any:
+    """`ResidualVectorEnv` over ``num_envs`` vehicles as an SB3 VecEnv (`auv_gym.sb3`);
+    keyword arguments as `auv_gym.sb3.make_sb3_vec_env`."""
+    from auv_gym.sb3 import SB3VecEnv
+
+    core = AUVPath3DVectorEnv(num_envs, max_episode_steps=max_episode_steps,
+                              autoreset_mode=AutoresetMode.SAME_STEP, threads=threads,
+                              **env_kwargs)  # fmt: skip
+    venv = SB3VecEnv(ResidualVectorEnv(core, settings))
+    if seed is not None:
+        venv.seed(seed)
+    return venv

@@ -1,0 +1,319 @@
+"""Residual policy and its training wrapper (issue 15): zero correction = the base bit for bit,
+the correction bound for any agent output, NaN is an error, the chattering charge, determinism,
+a saved-and-reloaded agent, and a smoke training through the multi-seed command."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from gymnasium.vector import AutoresetMode
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import controllers
+from auv_gym.rollout import rollouts
+from auv_gym.vector_env import AUVPath3DVectorEnv
+from controllers.residual import (
+    RESIDUAL_OBS_DIM,
+    ResidualPolicy,
+    ResidualSettings,
+    residual_action,
+)
+from controllers.residual_env import CHATTERING_KEY, ResidualVectorEnv
+
+ROOT = Path(__file__).resolve().parent.parent
+ENV = {"disturbance": "paper", "max_time": 4.0}  # 80 control steps
+RANDOM_TASKS = {**ENV, "actuator": "random", "random_current": 0.3, "param_uncertainty": 0.3}
+_ACTIONS = ("a_X", "a_M", "a_N")
+
+
+class ConstantAgent:
+    """An agent that outputs the same correction for every row (and checks its input)."""
+
+    def __init__(self, value: float | tuple[float, float, float]) -> None:
+        self.value = np.broadcast_to(np.asarray(value, np.float32), (3,))
+        self.calls = 0
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        assert observation.dtype == np.float32 and observation.shape[1] == RESIDUAL_OBS_DIM
+        self.calls += 1
+        return np.tile(self.value, (observation.shape[0], 1)), state
+
+
+def _assert_same_episodes(a, b) -> None:
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        assert x.termination_reason == y.termination_reason
+        for name in x.samples:
+            np.testing.assert_array_equal(x.samples[name], y.samples[name], err_msg=name)
+        for name in x.intervals:
+            np.testing.assert_array_equal(x.intervals[name], y.intervals[name], err_msg=name)
+
+
+@pytest.mark.parametrize(
+    ("base", "base_kwargs", "env"),
+    [
+        ("fbsm_colos", {}, ENV),
+        ("fbsm", {"actuator": "fins"}, {**ENV, "actuator": "fins", "current": [0.0, 0.3, 0.0]}),
+        ("backstepping_colos", {}, {**ENV, "param_uncertainty": 0.3}),
+    ],
+)
+def test_zero_correction_policy_is_the_base_bit_for_bit(base, base_kwargs, env):
+    agent = ConstantAgent(0.0)
+    residual = controllers.make("residual", agent=agent, base=base, **base_kwargs)
+    seeds = [0, 1, 2]
+    got = rollouts(residual, seeds, **env)
+    _assert_same_episodes(got, rollouts(controllers.make(base, **base_kwargs), seeds, **env))
+    assert agent.calls == 80  # one batched agent call per control step
+    assert all(np.all(t.extras["correction"] == 0.0) for t in got)
+
+
+def _drive_wrapper(env: ResidualVectorEnv, actions, seed: int, steps: int):
+    """(states, agent observations, rewards, infos) of ``steps`` steps from ``reset(seed)``."""
+    obs, _ = env.reset(seed=seed)
+    states, observations, rewards, infos = [], [], [], []
+    for k in range(steps):
+        states.append(env.core.sim.state.copy())
+        observations.append(obs.copy())
+        obs, reward, _, _, info = env.step(actions(k))
+        rewards.append(reward)
+        infos.append(info)
+    return np.array(states), np.array(observations), np.array(rewards), infos
+
+
+def test_zero_correction_wrapper_is_the_base_bit_for_bit_per_actuator():
+    """With actuator="random" each vehicle's base runs with the actuator its episode drew."""
+    n, steps = 4, 79
+    core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **RANDOM_TASKS)
+    env = ResidualVectorEnv(core)
+    states, observations, _, _ = _drive_wrapper(env, lambda k: np.zeros((n, 3)), 10, steps)
+    base = observations[:, :, 15:18]
+    drawn = env.core.sim.actuators
+    assert set(drawn) == {"paper", "fins"}  # both models in the batch
+    for i in range(n):
+        alone = controllers.make("fbsm_colos", actuator=str(drawn[i]))
+        ref = rollouts(alone, [10 + i], **RANDOM_TASKS)[0]
+        np.testing.assert_array_equal(
+            np.stack([ref.intervals[a] for a in _ACTIONS], 1)[:steps], base[:, i]
+        )
+        ref_state = np.stack([ref.samples[f] for f in ("x", "y", "z", "theta", "psi")], 1)
+        np.testing.assert_array_equal(ref_state[:steps], states[:, i, :5])
+
+
+def test_wrapper_restarts_the_base_at_autoresets_and_is_deterministic():
+    n, steps = 3, 130  # episodes of 80 steps: every vehicle autoresets once
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-3.0, 3.0, size=(steps, n, 3))
+
+    def run():
+        core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **RANDOM_TASKS)
+        env = ResidualVectorEnv(core, ResidualSettings(bound=(0.3, 0.6, 0.9)))
+        return env, _drive_wrapper(env, lambda k: actions[k], 3, steps)
+
+    env, (states, observations, rewards, infos) = run()
+    _, (states2, observations2, rewards2, _) = run()
+    for a, b in ((states, states2), (observations, observations2), (rewards, rewards2)):
+        np.testing.assert_array_equal(a, b)
+    k = 80  # step 79 ended every episode; its observation is the new episode's first
+    assert infos[k - 1]["_final_obs"].all()
+    assert infos[k - 1]["final_obs"][0].shape == (RESIDUAL_OBS_DIM,)
+    np.testing.assert_array_equal(observations[k, :, 18:21], 0.0)  # no previous action yet
+    drawn = env.core.sim.actuators
+    for i in range(n):  # the base restarted: a fresh controller gives the same action
+        fresh = controllers.make("fbsm_colos", actuator=str(drawn[i]))
+        expected, _ = fresh.predict(observations[k, i, :15])
+        np.testing.assert_array_equal(observations[k, i, 15:18], expected)
+    assert np.any(observations[k - 1, :, 15:18] != observations[k, :, 15:18])
+
+
+def test_chattering_charge_is_the_total_variation_of_the_applied_action():
+    n, steps, weight = 2, 40, 0.7
+    rng = np.random.default_rng(1)
+    corrections = rng.uniform(-1.0, 1.0, size=(steps, n, 3))
+    core = AUVPath3DVectorEnv(n, **ENV)
+    env = ResidualVectorEnv(core, ResidualSettings(tv_weight=weight))
+    raw = AUVPath3DVectorEnv(n, **ENV)
+    obs, _ = env.reset(seed=5)
+    raw.reset(seed=5)
+    previous = None
+    for k in range(steps):
+        applied = residual_action(obs[:, 15:18], corrections[k], env.bound)
+        obs, reward, _, _, info = env.step(corrections[k])
+        _, raw_reward, _, _, _ = raw.step(applied)
+        np.testing.assert_array_equal(obs[:, 18:21], applied)  # a_{k−1} in the observation
+        tv = 0.0 if previous is None else np.abs(applied.astype(float) - previous).sum(1)
+        np.testing.assert_allclose(reward - raw_reward, -weight * tv, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(info[CHATTERING_KEY], -weight * tv + np.zeros(n))
+        previous = applied.astype(float)
+    assert np.all(np.abs(reward - raw_reward) > 0.0)  # the charge is not zero
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    base=st.lists(st.floats(-1.0, 1.0, width=32), min_size=3, max_size=3),
+    correction=st.lists(st.floats(-1e30, 1e30), min_size=3, max_size=3),
+    bound=st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
+)
+def test_correction_bound_holds_for_any_agent_output(base, correction, bound):
+    b = np.array([base], np.float32)
+    a = residual_action(b, np.array([correction]), bound)
+    assert a.dtype == np.float32
+    assert np.all(np.abs(a) <= 1.0)  # the actuator saturation
+    # |a − b| ≤ β, up to the float32 rounding of a (half an ulp of 1, 2^−24)
+    assert np.all(np.abs(a.astype(float) - b.astype(float)) <= np.array(bound) + 2.0**-24)
+
+
+def test_wrapper_bound_holds_for_extreme_agent_actions():
+    n = 8
+    env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), ResidualSettings(bound=0.1))
+    obs, _ = env.reset(seed=0)
+    rng = np.random.default_rng(2)
+    for _ in range(30):
+        base = obs[:, 15:18].astype(float)
+        obs, *_ = env.step(rng.choice([-1e30, -5.0, 0.3, 7.0, 1e30], size=(n, 3)))
+        applied = obs[:, 18:21].astype(float)
+        assert np.all(np.abs(applied - base) <= 0.1 + 2.0**-24) and np.all(np.abs(applied) <= 1)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_agent_output_is_an_error_not_an_action(bad):
+    policy = controllers.make("residual", agent=ConstantAgent((0.0, bad, 0.0)))
+    with pytest.raises(ValueError, match=r"non-finite correction .* \(row 0\): NaN/inf is an"):
+        rollouts(policy, [0], **ENV)
+    env = ResidualVectorEnv(AUVPath3DVectorEnv(2, **ENV))
+    env.reset(seed=0)
+    before = env.core.sim.state.copy()
+    actions = np.zeros((2, 3))
+    actions[1, 2] = bad
+    with pytest.raises(ValueError, match=r"\(row 1\): NaN/inf is an error"):
+        env.step(actions)
+    np.testing.assert_array_equal(env.core.sim.state, before)  # no vehicle moved
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"base": "lqr"}, "residual base 'lqr' is not a classical controller"),
+        ({"bound": (0.1, -0.2, 0.3)}, r"bound must lie in \[0, 2\]"),
+        ({"bound": 2.5}, r"bound must lie in \[0, 2\]"),
+        ({"bound": "x"}, "bound must be a number or three numbers"),
+        ({"tv_weight": -1.0}, r"tv_weight must be a number in \[0, 1000\]"),
+        ({"base_kwargs": {"actuator": "fins"}}, r"base_kwargs must not set \['actuator'\]"),
+    ],
+)
+def test_bad_settings_are_named(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        ResidualSettings(**kwargs)
+
+
+def test_make_residual_needs_an_agent_and_a_residual_agent_directory(tmp_path):
+    with pytest.raises(ValueError, match="needs agent="):
+        controllers.make("residual")
+    with pytest.raises(FileNotFoundError):
+        controllers.make("residual", agent=str(tmp_path / "missing"))
+    with pytest.raises(ValueError, match="unknown keys \\['bonud'\\]"):
+        ResidualSettings.from_dict({"bonud": 0.1})
+
+
+# ----------------------------------------------------------------------- saved agents (rl extra)
+def _tiny_model(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from benchmarks.training.checkpoints import save_agent
+    from controllers.residual import RESIDUAL_OBS_NAMES
+    from controllers.residual_env import make_residual_sb3_env
+
+    settings_ = ResidualSettings(bound=(0.2, 0.4, 0.4))
+    venv = VecNormalize(make_residual_sb3_env(4, settings_, seed=7, **ENV))
+    model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0, device="cpu",
+                policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
+    model.learn(128)
+    meta = {"algo": "ppo", "obs_names": list(RESIDUAL_OBS_NAMES),
+            "observation_shape": [RESIDUAL_OBS_DIM], "action_shape": [3],
+            "residual": settings_.to_dict()}  # fmt: skip
+    save_agent(model, venv, tmp_path / "agent", meta)
+    return model, venv, settings_
+
+
+@pytest.mark.rl
+def test_saved_and_reloaded_residual_agent_predicts_identically(tmp_path):
+    from benchmarks.training.callbacks import policy_from_model
+    from controllers.ppo import check_agent, load_policy
+
+    model, venv, settings_ = _tiny_model(tmp_path)
+    live = policy_from_model(model, venv, settings_)
+    loaded = load_policy(tmp_path / "agent")
+    assert isinstance(loaded, ResidualPolicy) and loaded.bound == (0.2, 0.4, 0.4)
+    assert check_agent(tmp_path / "agent").residual == settings_
+    same = controllers.make("residual", agent=str(tmp_path / "agent"))
+    episodes = rollouts(loaded, [0, 1], **ENV)
+    _assert_same_episodes(episodes, rollouts(live, [0, 1], **ENV))
+    _assert_same_episodes(episodes, rollouts(same, [0, 1], **ENV))
+    corrections = np.concatenate([t.extras["correction"] for t in episodes])
+    assert np.abs(corrections).max() > 1e-3  # the agent acts: the comparison is not trivial
+    with pytest.raises(ValueError, match="was trained on base 'fbsm_colos', not 'fbsm'"):
+        controllers.make("residual", agent=str(tmp_path / "agent"), base="fbsm")
+    # Without its residual section the 21-value agent is refused, naming the shape.
+    meta_file = tmp_path / "agent" / "metadata.json"
+    meta = json.loads(meta_file.read_text())
+    del meta["residual"], meta["obs_names"], meta["observation_shape"]
+    meta_file.write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match=r"observation space shape \(21,\), expected \(15,\)"):
+        check_agent(tmp_path / "agent")
+
+
+@pytest.mark.rl
+def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
+    """≤ 60 s: the shipped YAML, one seed, one PPO rollout; the untrained agent (zero last
+    layer) scores exactly what its base scores alone on the validation episode."""
+    from benchmarks.train_seeds import main
+    from benchmarks.training.evaluation import evaluate_policy_on_seeds
+    from controllers.ppo import load_policy
+
+    config = yaml.safe_load((ROOT / "benchmarks/hyperparams/ppo_residual.yml").read_text())
+    section = config["AUVPath3D-v1"]
+    section.update(n_envs=4, n_steps=64, batch_size=128, n_epochs=1)
+    small = tmp_path / "ppo_residual.yml"
+    small.write_text(yaml.safe_dump(config))
+    out = tmp_path / "run"
+    code = main(["--config", str(small), "--seeds", "0-0", "--n-timesteps", "256",
+                 "--eval-freq", "256", "--checkpoint-freq", "256", "--eval-seeds", "100",
+                 "--eval-duration", "10", "--out", str(out), "--quiet"])  # fmt: skip
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["selected_seed"] == 0 and summary["seeds"][0]["num_timesteps"] == 256
+    meta = json.loads((out / "seed_0" / "final" / "metadata.json").read_text())
+    assert meta["residual"] == ResidualSettings.from_dict(section["residual"]).to_dict()
+    assert meta["observation_shape"] == [RESIDUAL_OBS_DIM]
+    assert "ResidualVectorEnv" in meta["vec_env"]
+    curve = (out / "seed_0" / "evaluations.csv").read_text().splitlines()
+    first = dict(zip(curve[0].split(","), curve[1].split(","), strict=True))
+    assert first["num_timesteps"] == "0"
+    eval_env = {"surge_limit": 2.0, "max_time": 10.0}
+    alone = evaluate_policy_on_seeds(controllers.make("fbsm_colos"), [100], **eval_env)
+    assert float(first["rms_distance_mean"]) == pytest.approx(alone[0]["rms_distance"], rel=1e-4)
+    policy = load_policy(out / "seed_0" / "final")
+    assert isinstance(policy, ResidualPolicy) and policy.settings.tv_weight == 0.25
+
+
+def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settings(tmp_path):
+    from benchmarks.training.config import read_zoo_config
+
+    hyper = ROOT / "benchmarks" / "hyperparams"
+    cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3D-v1")
+    generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3D-v1")
+    assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
+    assert cfg.residual == ResidualSettings()  # the documented defaults
+    assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.tv_weight == 0.25
+    assert cfg.n_timesteps == 4_000_000 == generalist.n_timesteps // 5
+    text = (hyper / "ppo_residual.yml").read_text().replace("tv_weight: 0.25", "tv_weight: -1")
+    broken = tmp_path / "bad.yml"
+    broken.write_text(text)
+    with pytest.raises(ValueError, match=r"bad.yml: residual: tv_weight must be a number"):
+        read_zoo_config(broken, "AUVPath3D-v1")
