@@ -49,6 +49,8 @@ HELP = {
     "out": "run directory (checkpoints, best/, final/, evaluations.csv, tb/)",
     "seed": "seed of torch, numpy and the training environments",
     "n_timesteps": "override the config's n_timesteps",
+    "stop_at": "pause at this many env steps (schedules still run over n_timesteps; --resume "
+    "with a larger --stop-at continues)",
     "resume": "continue from the newest checkpoint in --out (num_timesteps kept)",
     "checkpoint_freq": "env steps between checkpoints (a kill loses at most this many)",
     "keep_checkpoints": "number of newest checkpoints kept on disk",
@@ -92,7 +94,7 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
                                 help=HELP[f.name])  # fmt: skip
         elif f.name == "eval_seeds":
             parser.add_argument(flag, default=",".join(map(str, default)), help=HELP[f.name])
-        elif f.name == "n_timesteps":
+        elif f.name in ("n_timesteps", "stop_at"):
             parser.add_argument(flag, type=lambda v: int(float(v)), default=None,
                                 help=HELP[f.name])  # fmt: skip
         elif f.name == "export":
