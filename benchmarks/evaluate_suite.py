@@ -289,11 +289,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
 
 def check_args(args: argparse.Namespace) -> None:
     """Validate ``args`` and resolve them into chunks; ValueError/OSError naming the argument."""
-    from benchmarks.suite_stats import check_stats_options
-
-    check_stats_options(args.reps, args.bootstrap_seed)
     if args.stats_only and args.no_stats:
         raise ValueError("--stats-only and --no-stats exclude each other")
+    if not args.no_stats:  # the statistics need the stats extra (rliable); --no-stats does not
+        from benchmarks.suite_stats import check_stats_options
+
+        check_stats_options(args.reps, args.bootstrap_seed)
     if args.stats_only:
         for name in (EPISODES_FILE, SUITE_FILE):
             if not (args.out / name).is_file():
