@@ -4,7 +4,7 @@ figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliab
 * **Score** of an episode: its RMS distance to the virtual point over the metrics window [m]. A
   failed episode (termination_reason in `auv_gym.trajectory.FAILURE_REASONS`: corridor, pitch,
   non_finite, envelope, overspeed) scores its set's corridor half-width (30 m by default,
-  docs/design.md §3), the distance at which the env declares the path lost: no episode that
+  docs/model.md §11.5), the distance at which the env declares the path lost: no episode that
   keeps the path scores worse. `failed` counts them in every table.
 * **Per set and "aggregate"** (every set pooled, each set's episodes resampled within the set):
   IQM and mean with 95 % stratified bootstrap CIs over runs × episodes (one run for a
