@@ -1,6 +1,7 @@
 """`auv-gym`: the one installed command, dispatching to the benchmark command lines.
 
     auv-gym compare --policies fbsm,backstepping --scenarios paper --seeds 3 --duration 150
+    auv-gym suite --policies fbsm,ppo_generalist=runs/ppo/results   # whole test suite + statistics
     auv-gym train --config …                 # needs the rl extra
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|all [options]
@@ -29,6 +30,7 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescript
 # Subcommand → (module whose main(argv) runs it, one-line description).
 COMMANDS: dict[str, tuple[str, str]] = {
     "compare": ("benchmarks.compare", "policies on seeded scenarios: tables and figures"),
+    "suite": ("benchmarks.evaluate_suite", "every policy and seed on the test suite: statistics"),
     "train": ("benchmarks.train_ppo", "train or evaluate a PPO agent (rl extra)"),
     "paper-figures": ("benchmarks.paper_figures", "the paper's Figs. 3-9, FBSM vs backstepping"),
     "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),

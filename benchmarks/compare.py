@@ -32,10 +32,15 @@ from benchmarks.arguments import (
 )
 from benchmarks.cli import HelpFormatter
 from benchmarks.jobs import Job, run_jobs
-from benchmarks.policies import PolicySpec, build_policy, check_policy_spec, policy_label
+from benchmarks.policies import (
+    PolicySpec,
+    build_policy,
+    check_policy_spec,
+    policy_label,
+    policy_names,
+)
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.tables import write_tables
-from controllers import REGISTRY
 
 MAX_SEEDS = 100_000  # seeds per scenario
 MAX_WORKERS = 1024
@@ -50,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--policies",
         default="fbsm,backstepping,ppo",
-        help=f"comma-separated: {', '.join(REGISTRY)}, ppo:PATH, module:attribute",
+        help=f"comma-separated: {', '.join(policy_names())}, ppo:PATH, module:attribute",
     )
     parser.add_argument("--scenarios", default="all",
                         help="comma-separated names of --scenario-file or 'all'; the shipped "

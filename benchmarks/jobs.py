@@ -17,7 +17,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from multiprocessing import get_context
@@ -33,7 +33,16 @@ from auv_gym.rollout import rollout
 from benchmarks.policies import PolicySpec, build_policy, policy_label
 from benchmarks.scenarios import Scenario
 
-__all__ = ["Job", "code_digest", "die_with_parent", "finished", "run_job", "run_jobs"]
+__all__ = [
+    "Job",
+    "agent_digest",
+    "code_digest",
+    "die_with_parent",
+    "finished",
+    "parallel_map",
+    "run_job",
+    "run_jobs",
+]
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
@@ -61,7 +70,7 @@ class Job:
             "seed": self.seed,
             "duration": self.duration,
             "transient": self.transient,
-            "agent": _agent_digest(PolicySpec.parse(self.policy).agent),
+            "agent": agent_digest(PolicySpec.parse(self.policy).agent),
             "code": code_digest(),
         }
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
@@ -79,7 +88,8 @@ def code_digest() -> str:
     return sources_digest(*packages)[:16]
 
 
-def _agent_digest(agent: Path | None) -> str:
+def agent_digest(agent: Path | None) -> str:
+    """Hash of an agent's files (a directory's, sorted by path, or one model zip); "" for None."""
     if agent is None:
         return ""
     digest = hashlib.sha256()
@@ -166,23 +176,37 @@ def _execute(
         return
     if backend == "ray":
         yield from _execute_ray(jobs, indices, out, address)
-    elif workers <= 1:
-        for index, job in zip(indices, jobs, strict=True):
-            yield index, run_job(job, out)
     else:
-        # spawn: numba's threading layer is not fork-safe once its threads have started.
-        with ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=get_context("spawn"),
-            initializer=die_with_parent,
-            initargs=(os.getpid(),),
-        ) as pool:
-            futures = {
-                pool.submit(run_job, job, out): index
-                for index, job in zip(indices, jobs, strict=True)
-            }
-            for future in as_completed(futures):
-                yield futures[future], future.result()
+        yield from parallel_map(run_job, jobs, indices, out, workers)
+
+
+def parallel_map(
+    function: Callable[[Any, Path], Any],
+    items: Sequence[Any],
+    indices: Sequence[int],
+    out: Path,
+    workers: int,
+) -> Iterable[tuple[int, Any]]:
+    """(index, ``function(item, out)``) for every item, in completion order: in this process
+    for ``workers`` <= 1, else in that many spawned worker processes that die with this one.
+    ``function`` must be a module-level (picklable) function."""
+    if workers <= 1:
+        for index, item in zip(indices, items, strict=True):
+            yield index, function(item, out)
+        return
+    # spawn: numba's threading layer is not fork-safe once its threads have started.
+    with ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=get_context("spawn"),
+        initializer=die_with_parent,
+        initargs=(os.getpid(),),
+    ) as pool:
+        futures = {
+            pool.submit(function, item, out): index
+            for index, item in zip(indices, items, strict=True)
+        }
+        for future in as_completed(futures):
+            yield futures[future], future.result()
 
 
 def die_with_parent(parent_pid: int) -> None:

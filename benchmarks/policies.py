@@ -2,9 +2,12 @@
 
 * a name of `controllers.CLASSICAL` ("fbsm", "backstepping", their presets): built with
   `controllers.make` for the scenario's control period and controller keyword arguments;
-* "ppo": the shipped agent `benchmarks/agents/ppo_helix`; "ppo:PATH": any saved agent directory
-  or model zip (`controllers.ppo.load_policy`); a residual agent's base controller is built like a
-  classical one, for the scenario;
+* a name of `SHIPPED_AGENTS` ("ppo", "ppo_helix_v1", "ppo_generalist", "sac_generalist",
+  "ppo_residual"): the
+  agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
+  one-line error saying so); "ppo:PATH": any saved agent directory or model zip
+  (`controllers.ppo.load_policy`, PPO or SAC); a residual agent's base controller is built
+  like a classical one, for the scenario;
 * "module:attribute": an importable Policy object, or a class / factory called with the
   scenario's controller keyword arguments (`controllers.import_policy`).
 """
@@ -16,11 +19,30 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
-from controllers import CLASSICAL, REGISTRY
+from controllers import CLASSICAL
 
-__all__ = ["DEFAULT_AGENT", "PolicySpec", "build_policy", "check_policy_spec", "policy_label"]
+__all__ = [
+    "AGENTS_DIR",
+    "DEFAULT_AGENT",
+    "SHIPPED_AGENTS",
+    "PolicySpec",
+    "build_policy",
+    "check_policy_spec",
+    "policy_label",
+    "policy_names",
+]
 
-DEFAULT_AGENT = Path(__file__).resolve().parent / "agents" / "ppo_helix"
+AGENTS_DIR = Path(__file__).resolve().parent / "agents"
+# Policy name → folder of benchmarks/agents/ (README "Agents"; issue 14: the realistic-speed
+# retrained specialist and the generalists trained on the task distribution, AUVPath3D-v1).
+SHIPPED_AGENTS = {
+    "ppo": "ppo_helix",
+    "ppo_helix_v1": "ppo_helix_v1",
+    "ppo_generalist": "ppo_generalist",
+    "sac_generalist": "sac_generalist",
+    "ppo_residual": "ppo_residual",
+}
+DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
 AGENT_PREFIX = "ppo:"
 
 
@@ -37,15 +59,20 @@ class PolicySpec:
         """Classify ``spec`` without touching files or importing; ValueError if it names nothing."""
         if spec in CLASSICAL:
             return cls(spec, "classical")
-        if spec == "ppo":
-            return cls(spec, "agent", DEFAULT_AGENT)
+        if spec in SHIPPED_AGENTS:
+            return cls(spec, "agent", AGENTS_DIR / SHIPPED_AGENTS[spec])
         if spec.startswith(AGENT_PREFIX):
             return cls(spec, "agent", Path(spec[len(AGENT_PREFIX) :]))
         if ":" in spec:
             return cls(spec, "import")
         raise ValueError(
-            f"unknown policy {spec!r}; valid: {list(REGISTRY)}, 'ppo:PATH' or 'module:attribute'"
+            f"unknown policy {spec!r}; valid: {policy_names()}, 'ppo:PATH' or 'module:attribute'"
         )
+
+
+def policy_names() -> list[str]:
+    """The policies known by name: the classical controllers and presets, the shipped agents."""
+    return [*CLASSICAL, *SHIPPED_AGENTS]
 
 
 def check_policy_spec(spec: str) -> PolicySpec:
@@ -57,6 +84,10 @@ def check_policy_spec(spec: str) -> PolicySpec:
     """
     parsed = PolicySpec.parse(spec)
     if parsed.agent is not None:
+        if not parsed.agent.exists() and spec in SHIPPED_AGENTS:
+            raise FileNotFoundError(
+                f"policy {spec!r}: the agent is not shipped (yet): {parsed.agent} does not exist"
+            )
         if not parsed.agent.exists():
             raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
         from controllers.ppo import check_agent

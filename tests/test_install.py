@@ -128,8 +128,8 @@ def test_compare_runs_from_another_folder_on_the_base_install(installed, tmp_pat
     assert len(bad.stderr.strip().splitlines()) == 1
 
 
-HELP_COMMANDS = [["compare"], ["paper-figures"], ["train"], *(["speed", name] for name in SPEED),
-                 ["video"]]  # fmt: skip
+HELP_COMMANDS = [["compare"], ["suite"], ["paper-figures"], ["train"],
+                 *(["speed", name] for name in SPEED), ["video"]]  # fmt: skip
 
 
 @pytest.mark.parametrize("argv", HELP_COMMANDS, ids=" ".join)
