@@ -51,10 +51,10 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
+from auv_gym.config import MAX_EPISODE_TIME, SimConfig
 from auv_gym.files import environment, json_default, write_json, write_text
 from auv_gym.metrics import check_window
 from auv_gym.rollout import evaluate
-from auv_gym.simulator import MAX_EPISODE_TIME, SimConfig
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,

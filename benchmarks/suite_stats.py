@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.config import SimConfig
 from auv_gym.files import jsonable, write_json, write_text
-from auv_gym.simulator import SimConfig
 from auv_gym.task import SURGE_LIMIT
 from auv_gym.trajectory import FAILURE_REASONS
 from benchmarks.stats import (
