@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The main job: set-up (idempotent), then a quick FBSM vs backstepping vs PPO comparison (plus the
-# integral-LOS and current-observer-LOS variants of the classical two) on every scenario (3 seeds,
-# 150-s episodes; about a minute on 2 cores) -> out/quick/{summary.md,figures/}.
+# integral-LOS and current-observer-LOS variants of the classical two, the generalist PPO and the
+# residual PPO on top of FBSM + CO-LOS) on every scenario (3 seeds, 150-s episodes; a few minutes
+# on 2 cores) -> out/quick/{summary.md,figures/}.
 # The full-size run that produced benchmarks/results/ is in the README.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 . .venv/bin/activate
 python -m benchmarks.compare \
-    --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos,fbsm_colos,backstepping_colos \
+    --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos,fbsm_colos,backstepping_colos,ppo_generalist,ppo_residual \
     --scenarios all --seeds 3 --duration 150 --out out/quick "$@"
