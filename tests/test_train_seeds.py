@@ -77,7 +77,8 @@ def test_parse_seeds(text, seeds):
         (["--seeds", "2", "--eval-seeds", "3,100"], "eval_seeds [3] overlap the held-out"),
         (
             ["--seeds", "2", "--task-set", "nope"],
-            "task set 'nope' is not a validation set; valid: ['paper', 'validation']",
+            "task set 'nope' is not a validation set; valid: ['paper', 'validation', "
+            "'validation_paper_actuator']",
         ),
         (["--seeds", "2", "--task-set", "test_steep"], "'test_steep' is not a validation set"),
         (
