@@ -68,6 +68,7 @@ from benchmarks.jobs import agent_digest, code_digest, parallel_map
 from benchmarks.policies import PolicySpec, build_policy, check_policy_spec, policy_label
 from benchmarks.scenarios import select
 from benchmarks.tasks import TASKS_FILE, TaskSet, test_suite
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
 
 __all__ = [
     "EPISODES_FILE",
@@ -84,7 +85,9 @@ __all__ = [
 EPISODES_FILE = "episodes.csv"
 SUITE_FILE = "suite.json"
 CHUNKS = "chunks"  # OUT/chunks/<policy>/run_<k>/<set>.json
-AGENT_SEED = re.compile(r"agent_seed_(\d+)")  # DIR/agent_seed_<k>/ (benchmarks.train_seeds)
+AGENT_SEED = re.compile(
+    re.escape(SEED_AGENT_PREFIX) + r"(\d+)"
+)  # DIR/agent_seed_<k>/ (train_seeds)
 DEFAULT_POLICIES = "fbsm,backstepping,ppo"
 MAX_WORKERS = 1024
 # episodes.csv metric column → key of `auv_gym.metrics.compute_metrics` (units: m, m/s, -, s).
@@ -205,7 +208,7 @@ def resolve_policy(spec: str) -> SuitePolicy:
         )
     runs = []
     for seed in seeds:
-        agent = directory / f"agent_seed_{seed}"
+        agent = directory / f"{SEED_AGENT_PREFIX}{seed}"
         _, env_id = _agent_run(where, agent)
         runs.append(Run(seed, env_id, f"ppo:{agent}"))
     return SuitePolicy(name, "agent", tuple(runs), str(directory))

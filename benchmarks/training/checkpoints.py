@@ -23,6 +23,7 @@ from controllers.ppo import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 __all__ = [
     "CHECKPOINTS",
     "REPLAY_FILE",
+    "SEED_AGENT_PREFIX",
     "export_agent",
     "latest_checkpoint",
     "list_checkpoints",
@@ -33,6 +34,7 @@ __all__ = [
 
 CHECKPOINTS = "checkpoints"  # folder of a run holding step_<num_timesteps>/ agent directories
 REPLAY_FILE = "replay_buffer.pkl"  # off-policy checkpoints (SAC): the replay buffer, for resuming
+SEED_AGENT_PREFIX = "agent_seed_"  # multi-seed results: <prefix><k>/ is training seed k's agent
 
 
 def write_metadata(path: Path, metadata: dict[str, Any]) -> None:

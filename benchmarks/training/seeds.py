@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.files import write_json, write_text
-from benchmarks.training.checkpoints import export_agent, latest_checkpoint
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent, latest_checkpoint
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
@@ -52,7 +52,6 @@ from benchmarks.training.train import TrainOptions, check_options, target_timest
 from controllers.ppo import METADATA_FILE, MODEL_FILE
 
 __all__ = [
-    "AGENT_PREFIX",
     "PLAN_FILE",
     "SUMMARY_FILE",
     "TASK_SETS",
@@ -67,7 +66,6 @@ __all__ = [
 
 PLAN_FILE = "train_seeds.json"
 SUMMARY_FILE = "summary.json"
-AGENT_PREFIX = "agent_seed_"  # RESULTS/agent_seed_<k>/: the agent of training seed k
 LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
 # Validation episodes (model selection): "paper", the paper scenario (helix, white noise
 # ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
@@ -481,7 +479,7 @@ def _write_results(results: Path, out: Path, entries: Sequence[dict[str, Any]],
     curve; and the summary (all atomic)."""
     for entry in entries:
         seed = entry["seed"]
-        export_agent(Path(entry["agent"]), results / f"{AGENT_PREFIX}{seed}")
+        export_agent(Path(entry["agent"]), results / f"{SEED_AGENT_PREFIX}{seed}")
         report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
         write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2,
                    sort_keys=True)  # fmt: skip
