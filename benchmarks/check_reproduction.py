@@ -35,7 +35,7 @@ from typing import Any
 
 RESULTS = Path(__file__).resolve().parent / "results"
 AGENTS = Path(__file__).resolve().parent / "agents"
-UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time")  # differ from run to run by design
+UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # differ by design
 
 
 def _run(module: str, args: Sequence[str]) -> None:

@@ -47,6 +47,9 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "backstepping_ilos": ("backstepping", {"ilos_y": 3.0}),
     "fbsm_colos": ("fbsm", _COLOS),
     "backstepping_colos": ("backstepping", {**_COLOS, "alos_y": 0.01, "alos_z": 0.01}),
+    # The current-robust FBSM through a first-order low-pass (`controllers.lowpass`, α = 0.5):
+    # the classical answer to chattering, which a residual agent must beat (docs/design.md §3.11).
+    "fbsm_colos_lowpass": ("lowpass", {"base": "fbsm_colos"}),
 }
 CLASSICAL = ("fbsm", "backstepping", *PRESETS)
 REGISTRY = (*CLASSICAL, "ppo")  # policy names of the benchmark CLIs (a residual agent: ppo:PATH)
@@ -60,7 +63,9 @@ def make(name: str, **kwargs: Any) -> Any:
     directory). "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes
     `agent` (a Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
-    default (0.25, 0.5, 0.5)); every other keyword configures the base controller.
+    default (0.25, 0.5, 0.5)); every other keyword configures the base controller. "lowpass"
+    (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
+    default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
     """
     if name in PRESETS:
         base, preset = PRESETS[name]
@@ -79,7 +84,11 @@ def make(name: str, **kwargs: Any) -> Any:
         from controllers.residual import make_residual
 
         return make_residual(**kwargs)
-    raise ValueError(f"unknown controller {name!r}; valid: {[*REGISTRY, 'residual']}")
+    if name == "lowpass":
+        from controllers.lowpass import make_lowpass
+
+        return make_lowpass(**kwargs)
+    raise ValueError(f"unknown controller {name!r}; valid: {[*REGISTRY, 'residual', 'lowpass']}")
 
 
 def import_policy(spec: str, instantiate: bool = True, **factory_kwargs: Any) -> Any:

@@ -40,10 +40,14 @@ from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
 __all__ = [
     "DEFAULT_BASE",
     "DEFAULT_BOUND",
+    "DEFAULT_PRECISION_SCALE",
+    "DEFAULT_PRECISION_WEIGHT",
+    "DEFAULT_SELECTION_CHATTERING",
     "DEFAULT_TV_WEIGHT",
     "RESIDUAL_FEATURES",
     "RESIDUAL_OBS_DIM",
     "RESIDUAL_OBS_NAMES",
+    "SETTINGS_KEYS",
     "ResidualPolicy",
     "ResidualSettings",
     "agent_observation",
@@ -61,6 +65,15 @@ DEFAULT_BOUND = (0.25, 0.5, 0.5)  # β per input (X, M, N), normalised actuator 
 # per step, about 5 % of what following the path earns.
 DEFAULT_TV_WEIGHT = 0.25
 MAX_TV_WEIGHT = 1e3
+# Precision bonus w_P·exp(−(d/d_P)²) of training (docs/design.md §3.10): the env's tracking bonus
+# has d_0 = 1 m and is flat where FBSM already is (d ≈ 0.07 m), so without it smoothing looks free.
+# Weight 0: the reward of the first residual agents.
+DEFAULT_PRECISION_WEIGHT = 0.0
+DEFAULT_PRECISION_SCALE = 0.1  # [m] d_P
+# Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.
+DEFAULT_SELECTION_CHATTERING = 0.0
+SETTINGS_KEYS = ("base", "bound", "tv_weight", "precision_weight", "precision_scale",
+                 "selection_chattering", "base_kwargs")  # fmt: skip
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
@@ -84,12 +97,16 @@ def check_bound(bound: Any) -> tuple[float, float, float]:
 @dataclass(frozen=True)
 class ResidualSettings:
     """What makes an agent residual: the base controller (a name of `controllers.CLASSICAL` and
-    its keyword arguments other than the env-owned ``actuator``/``control_dt``), β and the
-    chattering weight of training (docs/design.md §3.10)."""
+    its keyword arguments other than the env-owned ``actuator``/``control_dt``), β, the reward
+    terms training adds (chattering charge w_TV, precision bonus w_P with scale d_P [m]) and the
+    chattering weight λ [m·s] of the validation score (docs/design.md §3.10)."""
 
     base: str = DEFAULT_BASE
     bound: tuple[float, float, float] = DEFAULT_BOUND
     tv_weight: float = DEFAULT_TV_WEIGHT
+    precision_weight: float = DEFAULT_PRECISION_WEIGHT
+    precision_scale: float = DEFAULT_PRECISION_SCALE
+    selection_chattering: float = DEFAULT_SELECTION_CHATTERING
     base_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -99,10 +116,18 @@ class ResidualSettings:
             raise ValueError(f"residual base {self.base!r} is not a classical controller; "
                              f"valid: {list(CLASSICAL)}")  # fmt: skip
         object.__setattr__(self, "bound", check_bound(self.bound))
-        w = self.tv_weight
-        if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 <= w <= MAX_TV_WEIGHT:
-            raise ValueError(f"tv_weight must be a number in [0, {MAX_TV_WEIGHT:g}], got {w!r}")
-        object.__setattr__(self, "tv_weight", float(w))
+        for name, low, high, unit in (
+            ("tv_weight", 0.0, MAX_TV_WEIGHT, ""),
+            ("precision_weight", 0.0, MAX_TV_WEIGHT, ""),
+            ("precision_scale", 1e-3, 10.0, " m"),
+            ("selection_chattering", 0.0, 1.0, " m·s"),
+        ):
+            w = getattr(self, name)
+            if (isinstance(w, bool) or not isinstance(w, (int, float))
+                    or not low <= w <= high):  # fmt: skip
+                raise ValueError(f"{name} must be a number in [{low:g}, {high:g}]{unit}, "
+                                 f"got {w!r}")  # fmt: skip
+            object.__setattr__(self, name, float(w))
         if not isinstance(self.base_kwargs, Mapping):
             raise ValueError(f"base_kwargs must be a mapping, got {self.base_kwargs!r}")
         owned = sorted(set(self.base_kwargs) & set(ENV_OWNED_BASE_KWARGS))
@@ -112,29 +137,35 @@ class ResidualSettings:
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "residual") -> ResidualSettings:
-        """Settings from a YAML/JSON mapping with keys base, bound, tv_weight, base_kwargs
-        (all optional); ValueError naming ``where`` and the problem."""
+        """Settings from a YAML/JSON mapping with the keys `SETTINGS_KEYS` (all optional; a
+        missing one takes its default); ValueError naming ``where`` and the problem."""
         if data is None or data is True:
             data = {}
         if not isinstance(data, Mapping):
             raise ValueError(f"{where} must be a mapping, got {data!r}")
-        unknown = sorted(set(data) - {"base", "bound", "tv_weight", "base_kwargs"})
+        unknown = sorted(set(data) - set(SETTINGS_KEYS))
         if unknown:
-            raise ValueError(f"{where}: unknown keys {unknown}; valid: "
-                             "['base', 'base_kwargs', 'bound', 'tv_weight']")  # fmt: skip
+            raise ValueError(f"{where}: unknown keys {unknown}; valid: {sorted(SETTINGS_KEYS)}")
         try:
             return cls(
                 base=str(data.get("base", DEFAULT_BASE)),
                 bound=data.get("bound", DEFAULT_BOUND),
                 tv_weight=data.get("tv_weight", DEFAULT_TV_WEIGHT),
+                precision_weight=data.get("precision_weight", DEFAULT_PRECISION_WEIGHT),
+                precision_scale=data.get("precision_scale", DEFAULT_PRECISION_SCALE),
+                selection_chattering=data.get("selection_chattering",
+                                              DEFAULT_SELECTION_CHATTERING),
                 base_kwargs=data.get("base_kwargs") or {},
-            )
+            )  # fmt: skip
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form recorded in an agent's metadata."""
         return {"base": self.base, "bound": list(self.bound), "tv_weight": self.tv_weight,
+                "precision_weight": self.precision_weight,
+                "precision_scale": self.precision_scale,
+                "selection_chattering": self.selection_chattering,
                 "base_kwargs": dict(self.base_kwargs)}  # fmt: skip
 
     def make_base(self, **kwargs: Any) -> Any:

@@ -8,11 +8,16 @@ runs the base controller of all vehicles in one batched `predict` per control st
     observation  [o_k, b_k, a_{k−1}]  (21 float32 values, `RESIDUAL_OBS_NAMES`)
     action       c_k ∈ [−1, 1]³, applied as a_k = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)
     reward       r_k − w_TV · Σ_j |a_{k,j} − a_{k−1,j}|     (no charge at an episode's first step)
+                 + w_P · exp(−(d_{k+1}/d_P)²)               (precision bonus, d [m] after the step)
 
 The chattering charge w_TV (``tv_weight``, default 0.25) is the total variation of the applied
 normalised action per step, the quantity the benchmark's ``chattering`` metric sums per second
 (`auv_gym.metrics`); it is reported per step as ``info["reward_chattering"]`` beside the env's
-reward terms. With ``actuator="random"`` each vehicle's base controller uses the actuator its
+reward terms. The precision bonus (``precision_weight`` w_P, default 0, scale
+``precision_scale`` d_P = 0.1 m) is the env's tracking bonus at the scale where a classical
+base already holds the path, so that accuracy lost to smoothing costs reward; it is reported as
+``info["reward_precision"]`` (present when w_P > 0).
+With ``actuator="random"`` each vehicle's base controller uses the actuator its
 episode drew (`auv_gym.simulator.Simulator.actuators`), as a scenario would configure it: one
 controller per actuator model, each called for the whole batch while any vehicle uses it.
 
@@ -39,9 +44,10 @@ from controllers.residual import (
     residual_observation_bounds,
 )
 
-__all__ = ["CHATTERING_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
+__all__ = ["CHATTERING_KEY", "PRECISION_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
 
 CHATTERING_KEY = "reward_chattering"  # info key of −w_TV·TV_k, beside the env's reward terms
+PRECISION_KEY = "reward_precision"  # info key of w_P·exp(−(d/d_P)²)
 
 
 class ResidualVectorEnv(VectorWrapper):
@@ -158,6 +164,15 @@ class ResidualVectorEnv(VectorWrapper):
         reward = reward + charge
         done = terminated | truncated
         mode = self.core.autoreset_mode
+        bonus = None
+        if self.settings.precision_weight > 0.0:
+            distance = np.asarray(info["distance"], np.float64)
+            if mode is AutoresetMode.SAME_STEP and done.any():  # info holds the new episodes'
+                distance = np.where(done, info["final_info"]["distance"], distance)
+            scaled = distance / self.settings.precision_scale
+            bonus = np.where(stepped, self.settings.precision_weight * np.exp(-scaled * scaled),
+                             0.0)  # fmt: skip
+            reward = reward + bonus
         fresh = self._pending.copy() if mode is AutoresetMode.NEXT_STEP else np.zeros_like(done)
         if mode is AutoresetMode.SAME_STEP and done.any():
             fresh = done.copy()
@@ -177,9 +192,17 @@ class ResidualVectorEnv(VectorWrapper):
             final_info[f"_{CHATTERING_KEY}"] = done.copy()
             info[CHATTERING_KEY] = np.where(done, 0.0, charge)
             info[f"_{CHATTERING_KEY}"] = ~done
+            if bonus is not None:
+                final_info[PRECISION_KEY] = np.where(done, bonus, 0.0)
+                final_info[f"_{PRECISION_KEY}"] = done.copy()
+                info[PRECISION_KEY] = np.where(done, 0.0, bonus)
+                info[f"_{PRECISION_KEY}"] = ~done
         else:
             info[CHATTERING_KEY] = charge
             info[f"_{CHATTERING_KEY}"] = stepped.copy()
+            if bonus is not None:
+                info[PRECISION_KEY] = bonus
+                info[f"_{PRECISION_KEY}"] = stepped.copy()
         self._previous[stepped] = applied[stepped]
         self._started[stepped] = True
         self._previous[fresh] = 0.0

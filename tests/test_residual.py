@@ -23,7 +23,7 @@ from controllers.residual import (
     ResidualSettings,
     residual_action,
 )
-from controllers.residual_env import CHATTERING_KEY, ResidualVectorEnv
+from controllers.residual_env import CHATTERING_KEY, PRECISION_KEY, ResidualVectorEnv
 
 ROOT = Path(__file__).resolve().parent.parent
 ENV = {"disturbance": "paper", "max_time": 4.0}  # 80 control steps
@@ -60,6 +60,7 @@ def _assert_same_episodes(a, b) -> None:
         ("fbsm_colos", {}, ENV),
         ("fbsm", {"actuator": "fins"}, {**ENV, "actuator": "fins", "current": [0.0, 0.3, 0.0]}),
         ("backstepping_colos", {}, {**ENV, "param_uncertainty": 0.3}),
+        ("fbsm_colos_lowpass", {}, ENV),  # a base whose state carries the filter's memory
     ],
 )
 def test_zero_correction_policy_is_the_base_bit_for_bit(base, base_kwargs, env):
@@ -85,33 +86,35 @@ def _drive_wrapper(env: ResidualVectorEnv, actions, seed: int, steps: int):
     return np.array(states), np.array(observations), np.array(rewards), infos
 
 
-def test_zero_correction_wrapper_is_the_base_bit_for_bit_per_actuator():
+@pytest.mark.parametrize("base", ["fbsm_colos", "fbsm_colos_lowpass"])
+def test_zero_correction_wrapper_is_the_base_bit_for_bit_per_actuator(base):
     """With actuator="random" each vehicle's base runs with the actuator its episode drew."""
     n, steps = 4, 79
     core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **RANDOM_TASKS)
-    env = ResidualVectorEnv(core)
+    env = ResidualVectorEnv(core, ResidualSettings(base=base))
     states, observations, _, _ = _drive_wrapper(env, lambda k: np.zeros((n, 3)), 10, steps)
-    base = observations[:, :, 15:18]
+    base_actions = observations[:, :, 15:18]
     drawn = env.core.sim.actuators
     assert set(drawn) == {"paper", "fins"}  # both models in the batch
     for i in range(n):
-        alone = controllers.make("fbsm_colos", actuator=str(drawn[i]))
+        alone = controllers.make(base, actuator=str(drawn[i]))
         ref = rollouts(alone, [10 + i], **RANDOM_TASKS)[0]
         np.testing.assert_array_equal(
-            np.stack([ref.intervals[a] for a in _ACTIONS], 1)[:steps], base[:, i]
+            np.stack([ref.intervals[a] for a in _ACTIONS], 1)[:steps], base_actions[:, i]
         )
         ref_state = np.stack([ref.samples[f] for f in ("x", "y", "z", "theta", "psi")], 1)
         np.testing.assert_array_equal(ref_state[:steps], states[:, i, :5])
 
 
-def test_wrapper_restarts_the_base_at_autoresets_and_is_deterministic():
+@pytest.mark.parametrize("base", ["fbsm_colos", "fbsm_colos_lowpass"])
+def test_wrapper_restarts_the_base_at_autoresets_and_is_deterministic(base):
     n, steps = 3, 130  # episodes of 80 steps: every vehicle autoresets once
     rng = np.random.default_rng(0)
     actions = rng.uniform(-3.0, 3.0, size=(steps, n, 3))
 
     def run():
         core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **RANDOM_TASKS)
-        env = ResidualVectorEnv(core, ResidualSettings(bound=(0.3, 0.6, 0.9)))
+        env = ResidualVectorEnv(core, ResidualSettings(base=base, bound=(0.3, 0.6, 0.9)))
         return env, _drive_wrapper(env, lambda k: actions[k], 3, steps)
 
     env, (states, observations, rewards, infos) = run()
@@ -124,7 +127,7 @@ def test_wrapper_restarts_the_base_at_autoresets_and_is_deterministic():
     np.testing.assert_array_equal(observations[k, :, 18:21], 0.0)  # no previous action yet
     drawn = env.core.sim.actuators
     for i in range(n):  # the base restarted: a fresh controller gives the same action
-        fresh = controllers.make("fbsm_colos", actuator=str(drawn[i]))
+        fresh = controllers.make(base, actuator=str(drawn[i]))
         expected, _ = fresh.predict(observations[k, i, :15])
         np.testing.assert_array_equal(observations[k, i, 15:18], expected)
     assert np.any(observations[k - 1, :, 15:18] != observations[k, :, 15:18])
@@ -150,6 +153,58 @@ def test_chattering_charge_is_the_total_variation_of_the_applied_action():
         np.testing.assert_array_equal(info[CHATTERING_KEY], -weight * tv + np.zeros(n))
         previous = applied.astype(float)
     assert np.all(np.abs(reward - raw_reward) > 0.0)  # the charge is not zero
+
+
+def test_precision_bonus_is_a_gaussian_of_the_distance_after_each_step_across_resets():
+    """w_P·exp(−(d/d_P)²) with d after the step, the ended episode's d at an autoreset; the
+    chattering charge is unchanged by it."""
+    n, steps, weight, scale = 3, 100, 2.5, 5.0  # episodes of 80 steps: every vehicle resets
+    rng = np.random.default_rng(3)
+    corrections = rng.uniform(-1.0, 1.0, size=(steps, n, 3))
+
+    def make(settings):
+        core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **ENV)
+        env = ResidualVectorEnv(core, settings)
+        env.reset(seed=11)
+        return env
+
+    plain = make(ResidualSettings())
+    shaped = make(ResidualSettings(precision_weight=weight, precision_scale=scale))
+    ended, seen = 0, []
+    for k in range(steps):
+        _, r0, term, trunc, info0 = plain.step(corrections[k])
+        _, r1, _, _, info = shaped.step(corrections[k])
+        done = term | trunc
+        d = np.where(done, info["final_info"]["distance"], info["distance"]) if done.any() else (
+            info["distance"])  # fmt: skip
+        bonus = weight * np.exp(-((d / scale) ** 2))
+        np.testing.assert_allclose(r1 - r0, bonus, rtol=1e-12, atol=1e-12)
+        got = np.where(done, info["final_info"][PRECISION_KEY], info[PRECISION_KEY]) if (
+            done.any()) else info[PRECISION_KEY]  # fmt: skip
+        np.testing.assert_array_equal(got, bonus)
+        np.testing.assert_array_equal(info[CHATTERING_KEY], info0[CHATTERING_KEY])
+        assert PRECISION_KEY not in info0  # no term without a weight
+        ended += int(done.sum())
+        seen.append(bonus)
+    assert ended == n and 0.0 < np.min(seen) and np.max(seen) < weight  # a real, varying term
+
+
+def test_selection_score_adds_the_weighted_chattering_and_selects_on_the_recorded_score():
+    from benchmarks.training.evaluation import chattering_mean, score
+    from benchmarks.training.seeds import select
+
+    results = [{"chattering": 20.0}, {"chattering": 10.0}, {"chattering": float("nan")}]
+    assert chattering_mean(results) == 15.0
+    summary = {"rms_distance_mean": 0.06, "n_terminated": 0, "chattering_mean": 15.0}
+    assert score(summary) == (0, 0.06)  # λ = 0: rms distance alone, as before
+    assert score(summary, 0.0005) == (0, pytest.approx(0.06 + 0.0075, abs=1e-15))
+    # seed 1 is closer to the path, seed 0 smoother: the recorded combined score decides
+    smooth = {"seed": 0, "validation_summary": summary, "validation_score": [0, 0.0675]}
+    rough = {"seed": 1, "validation_summary": {**summary, "rms_distance_mean": 0.058},
+             "validation_score": [0, 0.078]}  # fmt: skip
+    assert select([rough, smooth])["seed"] == 0
+    legacy = [{**e, "validation_score": None} for e in (rough, smooth)]  # rms alone
+    assert select(legacy)["seed"] == 1
 
 
 @settings(max_examples=300, deadline=None)
@@ -202,6 +257,9 @@ def test_non_finite_agent_output_is_an_error_not_an_action(bad):
         ({"bound": 2.5}, r"bound must lie in \[0, 2\]"),
         ({"bound": "x"}, "bound must be a number or three numbers"),
         ({"tv_weight": -1.0}, r"tv_weight must be a number in \[0, 1000\]"),
+        ({"precision_weight": float("nan")}, r"precision_weight must be a number in \[0, 1000\]"),
+        ({"precision_scale": 0.0}, r"precision_scale must be a number in \[0.001, 10\] m"),
+        ({"selection_chattering": -0.1}, r"selection_chattering must be a number in \[0, 1\]"),
         ({"base_kwargs": {"actuator": "fins"}}, r"base_kwargs must not set \['actuator'\]"),
     ],
 )
@@ -288,6 +346,12 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["selected_seed"] == 0 and summary["seeds"][0]["num_timesteps"] == 256
+    entry = summary["seeds"][0]  # selection on distance + λ·chattering (λ of the YAML)
+    chattering = entry["validation_summary"]["chattering_mean"]
+    assert 1.0 < chattering < 100.0  # [1/s] FBSM under the paper's noise: about 20
+    rms = entry["validation_summary"]["rms_distance_mean"]
+    assert entry["validation_score"] == [0, pytest.approx(rms + 0.0005 * chattering, rel=1e-12)]
+    assert "0.0005 m·s × mean chattering" in summary["selection"]
     meta = json.loads((out / "seed_0" / "final" / "metadata.json").read_text())
     assert meta["residual"] == ResidualSettings.from_dict(section["residual"]).to_dict()
     assert meta["observation_shape"] == [RESIDUAL_OBS_DIM]
@@ -309,8 +373,9 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3D-v1")
     generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3D-v1")
     assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
-    assert cfg.residual == ResidualSettings()  # the documented defaults
+    assert cfg.residual == ResidualSettings(precision_weight=3.0, selection_chattering=0.0005)
     assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.tv_weight == 0.25
+    assert cfg.residual.precision_scale == 0.1
     assert cfg.n_timesteps == 4_000_000 == generalist.n_timesteps // 5
     text = (hyper / "ppo_residual.yml").read_text().replace("tv_weight: 0.25", "tv_weight: -1")
     broken = tmp_path / "bad.yml"

@@ -11,7 +11,12 @@ from typing import Any
 from stable_baselines3.common.callbacks import BaseCallback
 
 from benchmarks.training.checkpoints import checkpoint_folder, prune_checkpoints, save_agent
-from benchmarks.training.evaluation import evaluate_policy_on_seeds, score, summarize
+from benchmarks.training.evaluation import (
+    chattering_mean,
+    evaluate_policy_on_seeds,
+    score,
+    summarize,
+)
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from controllers.ppo import PPOPolicy
 from controllers.residual import ResidualPolicy, ResidualSettings, base_kwargs_for_env
@@ -79,15 +84,22 @@ class PeriodicEvaluation(BaseCallback):
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
         policy = policy_from_model(self.model, vec_normalize, self.residual, self.eval_kwargs)
-        results = evaluate_policy_on_seeds(policy, self.seeds, **self.eval_kwargs)
+        extra = () if self.residual is None else ("chattering",)
+        results = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra,
+                                           **self.eval_kwargs)  # fmt: skip
         summary = summarize(results)
+        weight = 0.0 if self.residual is None else self.residual.selection_chattering
+        if self.residual is not None:  # a residual agent is also judged on smoothness
+            summary["chattering_mean"] = chattering_mean(results)
+            self.logger.record("eval/chattering_mean", summary["chattering_mean"])
         self.model.policy.set_training_mode(False)
         wall = self.start_wall + (time.monotonic() - self.t0)
         self.logger.record("eval/rms_distance_mean", summary["rms_distance_mean"])
         self.logger.record("eval/n_terminated", summary["n_terminated"])
         append_row(self.out / EVAL_FILE, self.num_timesteps, wall, summary)
-        if self.best.get("score") is None or score(summary) < tuple(self.best["score"]):
-            self.best["score"] = list(score(summary))
+        current = score(summary, weight)
+        if self.best.get("score") is None or current < tuple(self.best["score"]):
+            self.best["score"] = list(current)
             self.best["num_timesteps"] = self.num_timesteps
             self.best["summary"] = summary
             meta = self.metadata({"evaluation": summary, "eval_results": results})

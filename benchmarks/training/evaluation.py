@@ -28,6 +28,7 @@ __all__ = [
     "HELD_OUT_FILE",
     "HELD_OUT_SEEDS",
     "TRAIN_SEED_BASE",
+    "chattering_mean",
     "check_evaluation_duration",
     "evaluate_policy_on_seeds",
     "held_out_evaluation",
@@ -46,6 +47,7 @@ def evaluate_policy_on_seeds(
     policy: Any,
     seeds: Sequence[int] = HELD_OUT_SEEDS,
     transient: float | None = None,
+    extra_metrics: Sequence[str] = (),
     **env_kwargs: Any,
 ) -> list[dict[str, Any]]:
     """Seeded episodes of `policy` through `auv_gym.rollout.evaluate` (batched rows).
@@ -55,7 +57,8 @@ def evaluate_policy_on_seeds(
     max_distance [m] over that window, window_samples (0 when the episode ended before the
     window: then the rms values are NaN), duration [s], max_surge [m/s] and overspeed_fraction
     (time with u > 2.0 m/s) over the episode, and termination_reason in the env's spelling (""
-    when the episode ran to max_time, `auv_gym.trajectory.env_termination_reason`).
+    when the episode ran to max_time, `auv_gym.trajectory.env_termination_reason`), then the
+    `auv_gym.metrics` named in ``extra_metrics`` (e.g. "chattering" [1/s]) as floats.
     """
     results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)
     return [
@@ -65,7 +68,8 @@ def evaluate_policy_on_seeds(
          "max_distance": float(r["max_distance_window"]), "duration": float(r["duration"]),
          "window_samples": int(r["window_samples"]),
          "max_surge": float(r["max_surge"]), "overspeed_fraction": float(r["overspeed_fraction"]),
-         "termination_reason": env_termination_reason(str(r["termination_reason"]))}
+         "termination_reason": env_termination_reason(str(r["termination_reason"])),
+         **{name: float(r[name]) for name in extra_metrics}}
         for r in results
     ]  # fmt: skip
 
@@ -102,10 +106,21 @@ def check_evaluation_duration(duration: float, control_dt: float = 0.05) -> floa
         raise ValueError(f"evaluation duration {duration!r} s: {error}") from None
 
 
-def score(summary: dict[str, Any]) -> tuple[int, float]:
-    """Lower is better: first fewer terminated episodes, then lower mean rms distance."""
+def score(summary: dict[str, Any], chattering_weight: float = 0.0) -> tuple[int, float]:
+    """Lower is better: first fewer terminated episodes, then lower mean rms distance [m] plus
+    ``chattering_weight`` λ [m·s] times the mean chattering [1/s] (``summary["chattering_mean"]``,
+    needed when λ > 0; residual agents, docs/design.md §3.10)."""
     mean = summary["rms_distance_mean"]
+    if chattering_weight > 0.0:
+        mean = mean + chattering_weight * summary["chattering_mean"]
     return summary["n_terminated"], (mean if math.isfinite(mean) else math.inf)
+
+
+def chattering_mean(results: Sequence[dict[str, Any]]) -> float:
+    """Mean chattering [1/s] (`auv_gym.metrics`) over the episodes where it is finite."""
+    values = np.array([r.get("chattering", math.nan) for r in results], dtype=float)
+    values = values[np.isfinite(values)]
+    return float(values.mean()) if values.size else math.nan
 
 
 def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,

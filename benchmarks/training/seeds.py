@@ -403,15 +403,23 @@ def _update(bar: Any, out: Path, seeds: Sequence[int]) -> None:
         bar.refresh()
 
 
+def _chattering_clause(plan: dict[str, Any]) -> str:
+    residual = plan["config"].get("residual") or {}
+    weight = residual.get("selection_chattering", 0.0) if isinstance(residual, dict) else 0.0
+    return f" + {weight:g} m·s × mean chattering" if weight else ""
+
+
 def select(entries: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """The entry with the lowest validation score (`evaluation.score`; ties: lower seed)."""
+    """The entry with the lowest validation score (`evaluation.score`, as the run recorded it
+    for its best agent, which includes a residual agent's chattering; ties: lower seed)."""
 
     def key(entry: dict[str, Any]) -> tuple[float, float, int]:
         summary = entry.get("validation_summary")
         if not summary:
             return (math.inf, math.inf, entry["seed"])
-        n_term, rms = score(summary)
-        return (n_term, rms, entry["seed"])
+        recorded = entry.get("validation_score")
+        n_term, value = recorded if recorded else score(summary)
+        return (n_term, value, entry["seed"])
 
     return min(entries, key=key)
 
@@ -458,8 +466,9 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
     chosen = select(entries)
     summary = {
         "plan": plan, "seeds": entries, "selected_seed": chosen["seed"],
-        "selection": "lowest validation score (terminated episodes, then mean rms distance) "
-                     "on eval_seeds; test episodes are never used to choose",
+        "selection": "lowest validation score (terminated episodes, then mean rms distance"
+                     f"{_chattering_clause(plan)}) on eval_seeds; test episodes are never used "
+                     "to choose",
         "session_wall_time_s": time.monotonic() - t0,
     }  # fmt: skip
     write_json(out / SUMMARY_FILE, summary, indent=2, sort_keys=True)
