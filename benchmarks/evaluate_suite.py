@@ -90,7 +90,7 @@ AGENT_SEED = re.compile(
 )  # DIR/agent_seed_<k>/ (train_seeds)
 DEFAULT_POLICIES = "fbsm,backstepping,ppo"
 MAX_WORKERS = 1024
-# episodes.csv metric column → key of `auv_gym.metrics.compute_metrics` (units: m, m/s, -, s).
+# episodes.csv metric column → key of `auv_gym.metrics.compute_metrics` (units: m, m/s, -, 1/s, s).
 METRICS = {
     "rms_distance": "rms_distance",
     "rms_x_e": "rms_x_e",
@@ -99,6 +99,8 @@ METRICS = {
     "max_distance": "max_distance_window",
     "max_surge": "max_surge",
     "overspeed_fraction": "overspeed_fraction",
+    "chattering": "chattering",  # [1/s]
+    "saturation_fraction": "saturation_fraction",
     "termination_reason": "termination_reason",
     "window_samples": "window_samples",
     "duration": "duration",

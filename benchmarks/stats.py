@@ -154,6 +154,66 @@ def interval_estimates(
     return out
 
 
+def mean_interval(
+    x: Any,
+    groups: Sequence[str] | None = None,
+    *,
+    key: str = "",
+    reps: int = 2000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> Interval:
+    """Mean of the finite entries of one policy's ``(n_runs, n_episodes)`` matrix (NaN: no value,
+    e.g. an episode that ended before the metrics window) with its bootstrap CI; ``key`` names the
+    statistic in the bootstrap seed. NaN if no entry is finite."""
+    _check_options(reps, confidence, seed)
+    a = np.asarray(x, dtype=float)
+    # NaN marks a missing value; the rest must pass the usual checks
+    _check_scores({"x": np.where(np.isnan(a), 0.0, a)}, groups)
+    strata = np.zeros(a.shape[1], dtype=str) if groups is None else np.asarray(groups, dtype=str)
+    if not np.isfinite(a).any():
+        return Interval(np.nan, np.nan, np.nan)
+
+    def finite_mean(m: np.ndarray) -> np.ndarray:
+        return np.array([np.mean(m[np.isfinite(m)]) if np.isfinite(m).any() else np.nan])
+
+    crc = zlib.crc32("|".join([f"mean|{key}", *strata.tolist()]).encode())
+    bs = _SeedEpisodeBootstrap(a, strata=strata, generator=np.random.default_rng([int(seed), crc]))
+    # a replicate that drew only missing values has no mean: the percentiles skip it
+    replicates = bs.apply(finite_mean, reps)[:, 0]
+    tail = 50.0 * (1.0 - confidence)
+    low, high = np.nanpercentile(replicates, [tail, 100.0 - tail])
+    return Interval(float(finite_mean(a)[0]), float(low), float(high))
+
+
+def paired_difference(
+    x: Any,
+    y: Any,
+    groups: Sequence[str] | None = None,
+    *,
+    key: str = "",
+    reps: int = 2000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> dict[str, Interval]:
+    """mean(x) − mean(y) for two score matrices on the same episode columns (a policy and its
+    reference, e.g. a residual agent and its base), and that difference relative to mean(y),
+    with CIs: {"difference": ..., "relative": ...}. Paired: every replicate resamples the same
+    episodes for both (within their group) and the runs of each separately."""
+    _check_options(reps, confidence, seed)
+    arrays, strata = _check_scores({"x": x, "y": y}, groups)
+
+    def both(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        diff = np.mean(a) - np.mean(b)
+        return np.array([diff, diff / np.mean(b)])
+
+    a, b = arrays["x"], arrays["y"]
+    low, high = _bootstrap(both, [a, b], strata, f"paired|{key}", reps, confidence, seed)
+    value = both(a, b)
+    return {name: Interval(float(value[k]), float(low[k]), float(high[k]))
+            for k, name in enumerate(("difference", "relative"))}  # fmt: skip
+
+
 def _probability_lower(x: np.ndarray, y: np.ndarray) -> float:
     """rliable's probability_of_improvement(-x, -y) (Mann-Whitney U / (n_x n_y) per episode,
     averaged), vectorised over episodes: P(x < y) + ½ P(x = y)."""

@@ -14,6 +14,9 @@ figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliab
 * **Target table** (issue 14): per set, the ratio of a policy's mean score to the reference's;
   a set passes when the ratio is ≤ `MAX_RATIO`, no episode failed and the largest surge speed
   of any episode is ≤ `auv_gym.task.SURGE_LIMIT` (2.0 m/s).
+* **Smoothness** (issue 15, `benchmarks.smoothness_stats`): paired RMS-distance differences of
+  residual agents and the low-pass baseline against their base, and every policy's chattering
+  (when episodes.csv has the column).
 * **Learning curves** of the policies given as a multi-seed results directory (its
   ``seed_<k>_learning_curve.csv`` per run; columns num_timesteps, wall_time_s,
   rms_distance_mean, ...): IQM over the runs with CI band against env steps and against wall
@@ -39,6 +42,12 @@ from auv_gym.config import SimConfig
 from auv_gym.files import jsonable, write_json, write_text
 from auv_gym.task import SURGE_LIMIT
 from auv_gym.trajectory import FAILURE_REASONS
+from benchmarks.smoothness_stats import (
+    chattering_table,
+    metric_matrices,
+    paired_table,
+    smoothness_markdown,
+)
 from benchmarks.stats import (
     AGGREGATE,
     MIN_REPS,
@@ -94,6 +103,9 @@ def read_episodes(path: Path) -> list[dict[str, Any]]:
             "duration",
         ):
             row[key] = float(row[key])
+        for key in ("chattering", "saturation_fraction"):  # absent from older files
+            if key in row:
+                row[key] = float(row[key])
     return rows
 
 
@@ -354,7 +366,13 @@ def write_stats(
         "learning_curves": curves,
         "learning_curve_notes": notes,
     }
+    if rows and "chattering" in rows[0]:
+        chattering = metric_matrices(rows, list(suite["sets"]), "chattering", runs)
+        stats["paired"] = paired_table(scores, groups, reps, seed)
+        stats["chattering"] = chattering_table(chattering, groups, reps, seed)
     text = _markdown({**stats, "improvement_tables": improvement}, summary)
+    if "chattering" in stats:
+        text += "\n" + smoothness_markdown(stats["paired"], stats["chattering"])
     write_json(out / "stats.json", jsonable(stats), indent=1)
     write_text(out / "stats.md", text)
     if figures:

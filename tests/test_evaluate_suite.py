@@ -306,6 +306,11 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
         )
         assert t["max_surge_m_s"] == surge
         assert t["passed"] == (t["ratio"] <= 2 and t["failed"] == 0 and surge <= 2.0)
+    chattering = [float(r["chattering"]) for r in rows if r["policy"] == "fbsm"]
+    aggregate = stats["chattering"]["aggregate"]
+    assert aggregate["fbsm"]["value"] == pytest.approx(np.mean(chattering), rel=1e-12)
+    assert aggregate["fbsm"]["ratio"] == 1.0 and 1.0 < aggregate["fbsm"]["value"] < 100.0
+    assert stats["paired"] == {}  # no residual agent or low-pass baseline evaluated
     curves = stats["learning_curves"]["gen"]
     assert curves["env steps"]["x"] == [0.0, 1000.0, 2000.0]
     assert curves["env steps"]["iqm"] == [5.0, 2.5, 1.5]  # mean of two runs (IQM of 2 = mean)
@@ -318,6 +323,22 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
     monkeypatch.setattr(suite_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
     main(["--stats-only", "--out", str(out), "--reps", REPS, "--no-figures"])
     assert (out / "stats.json").read_bytes() == before
+
+
+def test_paired_table_by_hand():
+    from benchmarks.smoothness_stats import paired_table
+
+    base = np.array([[0.10, 0.10, 0.20, 0.20]])
+    scores = {"fbsm_colos": base, "ppo_residual": np.vstack([base - 0.01, base - 0.03]),
+              "fbsm_colos_lowpass": base * 1.2}  # fmt: skip
+    table = paired_table(scores, ["a", "a", "b", "b"], reps=200, seed=0)
+    assert list(table) == ["ppo_residual−fbsm_colos", "fbsm_colos_lowpass−fbsm_colos",
+                           "ppo_residual−fbsm_colos_lowpass"]  # fmt: skip
+    res = table["ppo_residual−fbsm_colos"]["aggregate"]
+    assert res["difference"]["value"] == pytest.approx(-0.02) and res["win"] and not res["worse"]
+    assert res["relative"]["value"] == pytest.approx(-0.02 / 0.15)
+    low = table["fbsm_colos_lowpass−fbsm_colos"]["a"]
+    assert low["relative"]["value"] == pytest.approx(0.2) and low["worse"] and not low["win"]
 
 
 def test_target_table_by_hand(tmp_path):

@@ -292,3 +292,26 @@ def test_figures_are_written_as_png_atomically(tmp_path: Path):
         improvement_figure(stats.summarize({"ppo": scores["ppo"]}, groups, reps=REPS))
     with pytest.raises(ValueError, match="scope='storm'"):
         profile_figure(summ, "storm")
+
+
+def test_paired_difference_hand_example():
+    x = np.array([[1.0, 2.0, 3.0, 4.0], [2.0, 3.0, 4.0, 5.0]])  # run 1 is 1 worse everywhere
+    y = np.array([[1.0, 2.0, 3.0, 4.0]])
+    groups = ["a", "a", "b", "b"]
+    out = stats.paired_difference(x, y, groups, reps=REPS)
+    assert out["difference"].value == 0.5 and out["relative"].value == pytest.approx(0.2)
+    # paired: the episodes cancel, only the run offset (0 or 1 per draw) varies
+    assert 0.0 <= out["difference"].low < 0.5 < out["difference"].high <= 1.0
+    same = stats.paired_difference(y, y, groups, reps=REPS)
+    assert same["difference"] == Interval(0.0, 0.0, 0.0)
+    better = stats.paired_difference(y - 0.1, y, groups, reps=REPS)["difference"]
+    assert better.value == pytest.approx(-0.1) and better.high < 0.0
+
+
+def test_mean_interval_leaves_missing_values_out():
+    x = np.array([[1.0, np.nan, 3.0], [np.nan, 5.0, np.nan]])
+    iv = stats.mean_interval(x, reps=REPS)
+    assert iv.value == 3.0 and 1.0 <= iv.low <= 3.0 <= iv.high <= 5.0
+    assert np.isnan(stats.mean_interval(np.full((1, 2), np.nan), reps=REPS).value)
+    with pytest.raises(ValueError, match="non-finite"):
+        stats.mean_interval(np.array([[1.0, np.inf]]), reps=REPS)

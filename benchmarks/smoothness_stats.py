@@ -1,0 +1,149 @@
+"""Residual agents against their base on the test suite (issue 15's targets): the paired
+RMS-distance difference with its CI, and the chattering of every policy.
+
+* **Paired difference** of a (policy, base) pair per set and "aggregate": mean score of the policy
+  minus mean score of the base on the same episodes [m] (scores as `benchmarks.suite_stats`:
+  RMS distance, a failed episode the corridor), relative to the base, with a 95 % stratified
+  bootstrap CI (`benchmarks.stats.paired_difference`). A set is a **win** when the upper bound
+  of the difference's CI is below zero, **worse** when the point estimate is more than
+  `WORSE_RATIO` above the base.
+* **Chattering** [1/s] (`auv_gym.metrics`: total variation of the normalised action per second
+  over the metrics window) of every policy per set, mean over runs × episodes with its CI; an
+  episode that ended before the window has none and is left out. The ratio to `SMOOTHNESS_REFERENCE`
+  (FBSM alone) says whether a policy halves it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from benchmarks.stats import AGGREGATE, Interval, mean_interval, paired_difference
+
+__all__ = [
+    "PAIRS",
+    "SMOOTHNESS_REFERENCE",
+    "WORSE_RATIO",
+    "chattering_table",
+    "metric_matrices",
+    "paired_table",
+    "smoothness_markdown",
+]
+
+# (policy, base) pairs compared when both were evaluated: the residual agent and the low-pass
+# baseline, each against the controller they are built on.
+PAIRS = (("ppo_residual", "fbsm_colos"), ("fbsm_colos_lowpass", "fbsm_colos"),
+         ("ppo_residual", "fbsm_colos_lowpass"))  # fmt: skip
+SMOOTHNESS_REFERENCE = "fbsm"
+WORSE_RATIO = 0.10  # issue 15: never worse than the base by more than 10 %
+
+
+def metric_matrices(rows: Sequence[Mapping[str, Any]], sets: Sequence[str], metric: str,
+                    runs: Mapping[str, Sequence[int]]) -> dict[str, np.ndarray]:  # fmt: skip
+    """{policy: (n_runs, n_episodes)} of an episodes.csv ``metric`` (NaN where missing), in the
+    column order of `benchmarks.suite_stats.score_matrices` ((set, seed) by ``sets``)."""
+    order = {name: k for k, name in enumerate(sets)}
+    cells: dict[str, dict[int, dict[tuple[int, int], float]]] = {}
+    for row in rows:
+        value = row.get(metric)
+        cell = cells.setdefault(row["policy"], {}).setdefault(row["run"], {})
+        cell[(order[row["set"]], row["seed"])] = np.nan if value is None else float(value)
+    out = {}
+    for policy, by_run in cells.items():
+        columns = sorted(next(iter(by_run.values())))
+        out[policy] = np.array([[by_run[r][c] for c in columns] for r in runs[policy]])
+    return out
+
+
+def _scopes(groups: Sequence[str]) -> list[str]:
+    return [*dict.fromkeys(groups), AGGREGATE]
+
+
+def _columns(labels: np.ndarray, scope: str) -> np.ndarray:
+    return np.ones(labels.size, bool) if scope == AGGREGATE else labels == scope
+
+
+def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: int, seed: int
+                 ) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
+    """{"policy−base": {scope: {"difference", "relative" (Intervals as dicts), "win", "worse"}}}
+    for every pair of `PAIRS` whose two policies were evaluated."""
+    labels = np.asarray(groups)
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for policy, base in PAIRS:
+        if policy not in scores or base not in scores:
+            continue
+        name = f"{policy}−{base}"
+        out[name] = {}
+        for scope in _scopes(groups):
+            cols = _columns(labels, scope)
+            iv = paired_difference(scores[policy][:, cols], scores[base][:, cols], labels[cols],
+                                   key=f"{name}|{scope}", reps=reps, seed=seed)  # fmt: skip
+            out[name][scope] = {
+                "difference": iv["difference"]._asdict(),
+                "relative": iv["relative"]._asdict(),
+                "win": iv["difference"].high < 0.0,
+                "worse": iv["relative"].value > WORSE_RATIO,
+            }
+    return out
+
+
+def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str], reps: int,
+                     seed: int) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
+    """{scope: {policy: {"value", "low", "high", "ratio"}}}: mean chattering [1/s] with CI and
+    its ratio to `SMOOTHNESS_REFERENCE`'s (NaN when that was not evaluated)."""
+    labels = np.asarray(groups)
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for scope in _scopes(groups):
+        cols = _columns(labels, scope)
+        row: dict[str, dict[str, Any]] = {}
+        for policy, x in chattering.items():
+            iv = mean_interval(x[:, cols], labels[cols], key=f"chattering|{policy}|{scope}",
+                               reps=reps, seed=seed)  # fmt: skip
+            row[policy] = iv._asdict()
+        ref = row.get(SMOOTHNESS_REFERENCE, {}).get("value", np.nan)
+        for entry in row.values():
+            entry["ratio"] = entry["value"] / ref if ref and np.isfinite(ref) else np.nan
+        out[scope] = row
+    return out
+
+
+def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any]) -> str:
+    """The two tables of the module doc as Markdown (rows = sets)."""
+    lines: list[str] = []
+    if paired:
+        names = list(paired)
+        lines += [
+            "## Paired RMS-distance difference, policy − base [m] (relative), 95 % CI\n",
+            f"win: CI below zero; worse: more than {100 * WORSE_RATIO:g} % above the base.\n",
+            "| set | " + " | ".join(names) + " |",
+            "|---" * (len(names) + 1) + "|",
+        ]
+        for scope in paired[names[0]]:
+            cells = []
+            for name in names:
+                e = paired[name][scope]
+                d, r = Interval(**e["difference"]), Interval(**e["relative"])
+                tag = " **win**" if e["win"] else (" **worse**" if e["worse"] else "")
+                cells.append(f"{d.value:+.4f} [{d.low:+.4f}, {d.high:+.4f}] "
+                             f"({100 * r.value:+.1f} %){tag}")  # fmt: skip
+            lines.append(f"| {scope} | " + " | ".join(cells) + " |")
+        lines.append("")
+    if chattering:
+        policies = list(next(iter(chattering.values())))
+        lines += [
+            f"## Chattering [1/s] (ratio to {SMOOTHNESS_REFERENCE}), 95 % CI\n",
+            "| set | " + " | ".join(policies) + " |",
+            "|---" * (len(policies) + 1) + "|",
+        ]
+        for scope, row in chattering.items():
+            cells = [
+                "–" if not np.isfinite(row[p]["value"]) else
+                f"{row[p]['value']:.2f} [{row[p]['low']:.2f}, {row[p]['high']:.2f}] "
+                f"({row[p]['ratio']:.2f})"
+                for p in policies
+            ]  # fmt: skip
+            lines.append(f"| {scope} | " + " | ".join(cells) + " |")
+        lines.append("")
+    return "\n".join(lines) + "\n"
