@@ -36,6 +36,7 @@ from benchmarks.policies import (
     PolicySpec,
     build_policy,
     check_policy_spec,
+    policy_env_id,
     policy_label,
     policy_names,
 )
@@ -103,8 +104,10 @@ def check_args(args: argparse.Namespace) -> None:
     names = select(args.scenarios, list(scenarios), "scenario")
     policies = comma_names(args.policies, "--policies")
     labels: dict[str, str] = {}
+    env_ids: dict[str, str] = {}
     for spec in policies:
         check_policy_spec(spec)
+        env_ids[spec] = policy_env_id(spec)
         label = policy_label(spec)
         if label in labels:  # both would write OUT/episodes/<scenario>/<label>/
             raise ValueError(f"--policies {labels[label]!r} and {spec!r} share the label {label!r}")
@@ -134,9 +137,10 @@ def check_args(args: argparse.Namespace) -> None:
     writable_folder(args.out)  # last: a bad argument above creates no folder
     args.transient = transient
     args.policy_list = policies
+    args.env_ids = env_ids
     args.scenario_table = {n: scenarios[n] for n in names}
     args.jobs = [
-        Job(policy, scenarios[name], seed, args.duration, args.transient)
+        Job(policy, scenarios[name], seed, args.duration, args.transient, env_ids[policy])
         for name in names
         for policy in policies
         for seed in range(args.seeds)
@@ -148,6 +152,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
     scenarios = args.scenario_table
     config = {
         "policies": args.policy_list,
+        "env_ids": args.env_ids,  # an agent runs under its training env
         "scenarios": {n: asdict(s) for n, s in scenarios.items()},
         "seeds": args.seeds,
         "duration": args.duration,

@@ -65,7 +65,13 @@ from benchmarks.arguments import (
 )
 from benchmarks.cli import HelpFormatter
 from benchmarks.jobs import agent_digest, code_digest, parallel_map
-from benchmarks.policies import PolicySpec, build_policy, check_policy_spec, policy_label
+from benchmarks.policies import (
+    PolicySpec,
+    agent_run,
+    build_policy,
+    check_policy_spec,
+    policy_label,
+)
 from benchmarks.scenarios import select
 from benchmarks.tasks import TASKS_FILE, TaskSet, test_suite
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
@@ -164,23 +170,8 @@ class Chunk:
 
 
 def _agent_run(where: str, agent: Path) -> tuple[int, str]:
-    """(training seed, env id) of a checked agent directory; errors name ``where``."""
-    from controllers.ppo import check_agent
-
-    try:
-        files = check_agent(agent)
-    except (OSError, ValueError) as error:
-        raise type(error)(f"{where}: {error}") from None
-    env_id = files.metadata.get("env_id")
-    if env_id not in VARIANTS:
-        raise ValueError(
-            f"{where}: {agent}/metadata.json records env_id {env_id!r}; the suite "
-            f"runs an agent under its training env, one of {list(VARIANTS)}"
-        )
-    seed = files.metadata.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"{where}: {agent}/metadata.json records seed {seed!r}, not an int >= 0")
-    return seed, env_id
+    """(training seed, env id) of a checked agent directory (`benchmarks.policies.agent_run`)."""
+    return agent_run(where, agent)
 
 
 def resolve_policy(spec: str) -> SuitePolicy:

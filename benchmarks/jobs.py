@@ -1,5 +1,9 @@
 """Benchmark episodes as jobs: (policy, scenario, seed, duration), fingerprinted, resumable.
 
+An agent's episode runs under the env id its metadata.json records (e.g. AUVPath3D-v1's 2.0 m/s
+surge limit, under which a faster agent terminates "overspeed"), everything else under
+AUVPath3D-v0; the record says which (``env_id``).
+
 Each finished episode is written atomically to ``OUT/episodes/<scenario>/<policy>/seed_<k>.json``
 (metrics) and ``.npz`` (time series) with a fingerprint of everything that determines it, so a
 run restarted with the same arguments reuses finished episodes. Results do not depend on the
@@ -26,6 +30,7 @@ from typing import Any
 
 import auv_gym
 import controllers
+from auv_gym import ENV_ID, VARIANTS
 from auv_gym.files import jsonable, write_json
 from auv_gym.metrics import compute_metrics
 from auv_gym.numba_cache import sources_digest
@@ -56,10 +61,12 @@ class Job:
     seed: int
     duration: float
     transient: float
+    env_id: str = ENV_ID  # an agent's training env (`benchmarks.policies.policy_env_id`)
 
     @property
     def env_kwargs(self) -> dict[str, Any]:
-        return {**self.scenario.env, "max_time": self.duration}
+        """The env: the env id's fixed arguments, the scenario's, the duration [s]."""
+        return {**VARIANTS[self.env_id], **self.scenario.env, "max_time": self.duration}
 
     def fingerprint(self) -> str:
         """Hash of everything that determines the episode: the job, the agent file if any, and
@@ -73,6 +80,8 @@ class Job:
             "agent": agent_digest(PolicySpec.parse(self.policy).agent),
             "code": code_digest(),
         }
+        if self.env_id != ENV_ID:  # the default keeps the fingerprints of earlier runs
+            payload["env_id"] = self.env_id
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
     def path(self, out: Path) -> Path:
@@ -124,6 +133,7 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
     record = {
         "policy": job.policy,
         "scenario": job.scenario.name,
+        "env_id": job.env_id,
         "seed": job.seed,
         "duration": job.duration,
         "transient": job.transient,

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
+from auv_gym import ENV_ID, VARIANTS
 from controllers import CLASSICAL
 
 __all__ = [
@@ -26,8 +27,10 @@ __all__ = [
     "DEFAULT_AGENT",
     "SHIPPED_AGENTS",
     "PolicySpec",
+    "agent_run",
     "build_policy",
     "check_policy_spec",
+    "policy_env_id",
     "policy_label",
     "policy_names",
 ]
@@ -120,3 +123,36 @@ def policy_label(text: str) -> str:
     """A file-system-safe label of a spec or policy name ("ppo:runs/x" → "ppo-runs_x")."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in text.replace(":", "-", 1))
     return safe.strip("_") or "policy"
+
+
+def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tuple[int, str]:
+    """(training seed, env id) that a checked agent's metadata.json records; the env id must be
+    a key of `auv_gym.VARIANTS` (an agent is evaluated under the env it was trained on, e.g.
+    AUVPath3D-v1's surge limit); ``default_env_id`` stands in for a missing one (None: an
+    error). Errors name ``where``."""
+    from controllers.ppo import check_agent
+
+    try:
+        files = check_agent(agent)
+    except (OSError, ValueError) as error:
+        raise type(error)(f"{where}: {error}") from None
+    env_id = files.metadata.get("env_id", default_env_id)
+    if env_id not in VARIANTS:
+        raise ValueError(
+            f"{where}: {agent}/metadata.json records env_id {env_id!r}; an agent runs under "
+            f"its training env, one of {list(VARIANTS)}"
+        )
+    seed = files.metadata.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"{where}: {agent}/metadata.json records seed {seed!r}, not an int >= 0")
+    return seed, env_id
+
+
+def policy_env_id(spec: str) -> str:
+    """The env id a policy runs under: an agent's training env (`agent_run`), else the
+    benchmark's `auv_gym.ENV_ID` (the classical controllers, imported policies and agents
+    whose files record no env id, e.g. an RL Zoo model zip)."""
+    parsed = PolicySpec.parse(spec)
+    if parsed.kind != "agent" or parsed.agent is None:
+        return ENV_ID
+    return agent_run(f"policy {spec!r}", parsed.agent, default_env_id=ENV_ID)[1]

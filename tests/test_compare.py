@@ -389,3 +389,26 @@ def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys
     scenarios.write_text("not toml [")
     err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
     assert "not a valid TOML file" in err
+
+
+def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
+    """A v1-trained agent meets the 2.0 m/s surge limit in compare, as in the suite; the
+    controllers and the v0 agent keep AUVPath3D-v0 (and their episode fingerprints)."""
+    from benchmarks.jobs import Job
+    from benchmarks.policies import policy_env_id
+
+    scenario = load_scenarios()["paper"]
+    assert policy_env_id("fbsm") == policy_env_id("ppo") == "AUVPath3D-v0"
+    assert policy_env_id("ppo_generalist") == "AUVPath3D-v1"
+    v1 = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v1")
+    assert v1.env_kwargs["surge_limit"] == 2.0
+    assert "surge_limit" not in Job("fbsm", scenario, 0, 10.0, 5.0).env_kwargs
+    same = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v0")
+    assert v1.fingerprint() != same.fingerprint()
+    argv = ["--policies", "fbsm,ppo_generalist", "--scenarios", "paper", "--seeds", "1",
+            "--duration", "10", "--quiet", "--no-figures", "--out", str(tmp_path)]  # fmt: skip
+    records = main(argv)
+    assert {r["policy"]: r["env_id"] for r in records} == {
+        "fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3D-v1"}  # fmt: skip
+    config = json.loads((tmp_path / "episodes.json").read_text())["config"]
+    assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3D-v1"}
