@@ -131,6 +131,48 @@ def learning_curve_figure(
     return fig
 
 
+def tradeoff_figure(
+    summary: Mapping[str, Any],
+    chattering: Mapping[str, Mapping[str, Mapping[str, float]]],
+    scopes: list[str],
+    max_distance_m: float = 1.0,
+) -> Figure:
+    """Accuracy against smoothness, one panel per scope: mean RMS distance [m] over mean
+    chattering [1/s], each with its CI, per policy; policies whose mean distance exceeds
+    ``max_distance_m`` (or without a chattering value) are left out and named in the title."""
+    fig, axes = _panels(len(scopes), 4.2, 3.4)
+    colors = {p: f"C{k % 10}" for k, p in enumerate(summary["policies"])}  # one per policy
+    for ax, scope in zip(axes, scopes, strict=True):
+        shown, left_out, heights = [], [], []
+        for policy, distance in summary["mean"][scope].items():
+            chat = chattering.get(scope, {}).get(policy)
+            if chat is None or not np.isfinite(chat["value"]) or distance.value > max_distance_m:
+                left_out.append(policy)
+                continue
+            shown.append(policy)
+            x = np.array([chat["value"], chat["low"], chat["high"]])
+            y = np.array([distance.value, distance.low, distance.high])
+            heights.extend(y)
+            ax.errorbar(x[0], y[0], xerr=np.abs(x[1:, None] - x[0]),
+                        yerr=np.abs(y[1:, None] - y[0]), capsize=3, marker="o", ls="",
+                        label=policy, color=colors[policy])  # fmt: skip
+        if heights:
+            _scale(ax, "y", heights)
+        ax.set_xlabel("chattering [1/s]")
+        ax.set_ylabel("mean RMS distance [m]")
+        title = (
+            scope
+            if not left_out
+            else f"{scope}\n(> {max_distance_m:g} m: {len(left_out)} left out)"
+        )
+        ax.set_title(title, fontsize=9)
+        ax.grid(alpha=0.3)
+        if shown:
+            ax.legend(fontsize=7)
+    fig.suptitle(f"Accuracy against smoothness, {_ci(summary)} CIs")
+    return fig
+
+
 def save_figure(fig: Figure, path: str | os.PathLike, dpi: int = 150) -> Path:
     """Write ``fig`` atomically (temporary file in the same folder, then os.replace)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg

@@ -376,7 +376,7 @@ def write_stats(
     write_json(out / "stats.json", jsonable(stats), indent=1)
     write_text(out / "stats.md", text)
     if figures:
-        _figures(out / FIGURES, summary, improvement, curves)
+        _figures(out / FIGURES, summary, improvement, curves, stats.get("chattering"))
     return text
 
 
@@ -385,6 +385,7 @@ def _figures(
     summary: Mapping[str, Any],
     improvement: Mapping[str, Any],
     curves: Mapping[str, Mapping[str, Any]],
+    chattering: Mapping[str, Any] | None = None,
 ) -> None:
     from benchmarks.stats_figures import (
         improvement_figure,
@@ -392,7 +393,13 @@ def _figures(
         learning_curve_figure,
         profile_figure,
         save_figure,
+        tradeoff_figure,
     )
+
+    if chattering:  # accuracy against smoothness where the paper's noise acts
+        scopes = [s for s in ("scenario:paper", "test_distribution", AGGREGATE) if s in chattering]
+        fig = tradeoff_figure(summary, chattering, scopes)
+        save_figure(fig, folder / "smoothness_tradeoff.png")
 
     save_figure(interval_figure(summary), folder / "intervals.png")
     for other, table in improvement.items() if len(summary["policies"]) > 1 else ():

@@ -314,7 +314,8 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
     curves = stats["learning_curves"]["gen"]
     assert curves["env steps"]["x"] == [0.0, 1000.0, 2000.0]
     assert curves["env steps"]["iqm"] == [5.0, 2.5, 1.5]  # mean of two runs (IQM of 2 = mean)
-    for name in ("intervals", "improvement_over_fbsm", "profile_aggregate", "learning_curves"):
+    for name in ("intervals", "improvement_over_fbsm", "profile_aggregate", "learning_curves",
+                 "smoothness_tradeoff"):  # fmt: skip
         assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
     md = (out / "stats.md").read_text()
     assert "| scenario:fins | gen |" in md and "## IQM RMS distance [m]" in md
