@@ -189,7 +189,7 @@ def test_validation_on_a_task_set(tmp_path):
 
 
 @pytest.mark.rl
-def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path):
+def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path, capsys):
     """--stop-at pauses every seed with the schedules still running over --n-timesteps (the
     learning rate's progress is that of the full budget), and a --resume with a larger stop
     continues the same run to the new target."""
@@ -205,6 +205,11 @@ def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path):
     # progress of 256 of 512 steps: half the schedule is left.
     assert PPO.load(final, device="cpu")._current_progress_remaining == pytest.approx(0.5)
     assert main([*args, "--stop-at", "10"]) == 2  # not a multiple of n_envs = 4
+    # a pause only moves forward: the seed is at 384 steps already
+    capsys.readouterr()
+    assert main([*args, "--stop-at", "256", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "seed 0 has already trained 384 env steps, past the target 256" in err
     assert main([*args, "--resume"]) == 0
     done = _summary(tmp_path / "run")["seeds"][0]
     # Resumed from the checkpoint at 384: SB3 collects whole rollouts, so it ends within one

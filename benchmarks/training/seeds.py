@@ -44,7 +44,12 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.files import write_json, write_text
-from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent, latest_checkpoint
+from benchmarks.training.checkpoints import (
+    SEED_AGENT_PREFIX,
+    export_agent,
+    latest_checkpoint,
+    list_checkpoints,
+)
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
@@ -194,6 +199,15 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
             if previous.get(key) != plan[key]:
                 raise ValueError(f"--resume: {key} was {previous.get(key)!r} in {plan_file}, "
                                  f"now {plan[key]!r}; resume with the same settings")  # fmt: skip
+        # A pause only moves forward: a lower target than last time must not leave seeds past
+        # it (a run itself may end up to one rollout past its target, as PPO collects them).
+        target = target_timesteps(n_timesteps, train.stop_at)
+        before = target_timesteps(previous["n_timesteps"], previous.get("stop_at"))
+        for seed in opts.seeds if target < before else ():
+            done = seed_progress(seed_dir(out, seed))
+            if done > target:
+                raise ValueError(f"--resume: seed {seed} has already trained {done} env steps, "
+                                 f"past the target {target}; use --stop-at >= {done}")  # fmt: skip
     elif out.exists() and any(out.iterdir()):
         raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
     _check_writable(out)
@@ -256,6 +270,15 @@ def _check_writable(out: Path) -> None:
 
 def seed_dir(out: str | os.PathLike, seed: int) -> Path:
     return Path(out) / f"seed_{seed}"
+
+
+def seed_progress(run: Path) -> int:
+    """Env steps a seed's run folder holds: its newest checkpoint or its final agent (0: none)."""
+    steps = [n for n, _ in list_checkpoints(run)]
+    final = run / "final" / METADATA_FILE
+    if final.is_file():
+        steps.append(int(json.loads(final.read_text()).get("num_timesteps", 0)))
+    return max(steps, default=0)
 
 
 def seed_status(out: Path, seed: int, n_timesteps: int) -> str:
