@@ -169,11 +169,6 @@ class Chunk:
         )
 
 
-def _agent_run(where: str, agent: Path) -> tuple[int, str]:
-    """(training seed, env id) of a checked agent directory (`benchmarks.policies.agent_run`)."""
-    return agent_run(where, agent)
-
-
 def resolve_policy(spec: str) -> SuitePolicy:
     """The policy of one ``--policies`` entry, its agents checked (`controllers.ppo.check_agent`);
     ValueError / FileNotFoundError naming the entry otherwise."""
@@ -181,7 +176,7 @@ def resolve_policy(spec: str) -> SuitePolicy:
         parsed = check_policy_spec(spec)
         if parsed.agent is None:
             return SuitePolicy(spec, parsed.kind, (Run(0, ENV_ID, spec),))
-        seed, env_id = _agent_run(f"policy {spec!r}", parsed.agent)
+        seed, env_id = agent_run(f"policy {spec!r}", parsed.agent)
         return SuitePolicy(spec, "agent", (Run(seed, env_id, f"ppo:{parsed.agent}"),))
     name, _, folder = spec.partition("=")
     where = f"--policies {spec!r}"
@@ -191,7 +186,7 @@ def resolve_policy(spec: str) -> SuitePolicy:
     if not folder or not directory.is_dir():
         raise FileNotFoundError(f"{where}: agent directory {folder!r} does not exist")
     if (directory / "model.zip").is_file():
-        seed, env_id = _agent_run(where, directory)
+        seed, env_id = agent_run(where, directory)
         return SuitePolicy(name, "agent", (Run(seed, env_id, f"ppo:{directory}"),))
     seeds = sorted(int(m[1]) for p in directory.iterdir() if (m := AGENT_SEED.fullmatch(p.name)))
     if not seeds:
@@ -202,7 +197,7 @@ def resolve_policy(spec: str) -> SuitePolicy:
     runs = []
     for seed in seeds:
         agent = directory / f"{SEED_AGENT_PREFIX}{seed}"
-        _, env_id = _agent_run(where, agent)
+        _, env_id = agent_run(where, agent)
         runs.append(Run(seed, env_id, f"ppo:{agent}"))
     return SuitePolicy(name, "agent", tuple(runs), str(directory))
 

@@ -115,11 +115,16 @@ def _check_scores(
     return arrays, strata
 
 
-def _bootstrap(func, arrays, strata, key: str, reps: int, confidence: float, seed: int):
-    """(low, high) percentile bounds of ``func(*arrays)``, seeded by (seed, key, strata)."""
+def _seeded_bootstrap(arrays, strata, key: str, seed: int) -> _SeedEpisodeBootstrap:
+    """The bootstrap of ``arrays``, its generator seeded by (seed, key, strata)."""
     crc = zlib.crc32("|".join([key, *strata.tolist()]).encode())
     gen = np.random.default_rng([int(seed), crc])
-    bs = _SeedEpisodeBootstrap(*arrays, strata=strata, generator=gen)
+    return _SeedEpisodeBootstrap(*arrays, strata=strata, generator=gen)
+
+
+def _bootstrap(func, arrays, strata, key: str, reps: int, confidence: float, seed: int):
+    """(low, high) percentile bounds of ``func(*arrays)``, seeded by (seed, key, strata)."""
+    bs = _seeded_bootstrap(arrays, strata, key, seed)
     return bs.conf_int(func, reps=reps, method="percentile", size=confidence)
 
 
@@ -177,8 +182,7 @@ def mean_interval(
     def finite_mean(m: np.ndarray) -> np.ndarray:
         return np.array([np.mean(m[np.isfinite(m)]) if np.isfinite(m).any() else np.nan])
 
-    crc = zlib.crc32("|".join([f"mean|{key}", *strata.tolist()]).encode())
-    bs = _SeedEpisodeBootstrap(a, strata=strata, generator=np.random.default_rng([int(seed), crc]))
+    bs = _seeded_bootstrap([a], strata, f"mean|{key}", seed)
     # a replicate that drew only missing values has no mean: the percentiles skip it
     replicates = bs.apply(finite_mean, reps)[:, 0]
     tail = 50.0 * (1.0 - confidence)
