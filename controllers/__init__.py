@@ -63,7 +63,8 @@ def make(name: str, **kwargs: Any) -> Any:
     directory). "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes
     `agent` (a Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
-    default (0.25, 0.5, 0.5)); every other keyword configures the base controller. "lowpass"
+    default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none); every
+    other keyword configures the base controller. "lowpass"
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
     """

@@ -212,8 +212,12 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     residual = None
     if "residual" in metadata:
         residual = ResidualSettings.from_dict(metadata["residual"], f"{meta}: residual")
+    action_dim = ACTION_DIM if residual is None else residual.action_dim
+    if "action_shape" in metadata and metadata["action_shape"] != [action_dim]:
+        raise ValueError(f"{meta}: action_shape is {metadata['action_shape']!r}, "
+                         f"expected {[action_dim]!r}")  # fmt: skip
     names = observation_layout(metadata)
-    _check_model_zip(model, len(names))
+    _check_model_zip(model, len(names), action_dim)
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
     return AgentFiles(model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual)
 
@@ -236,10 +240,10 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     algo = metadata.get("algo", "ppo")
     if not isinstance(algo, str) or algo not in ALGORITHM_CLASSES:
         raise ValueError(f"{meta}: algo is {algo!r}, expected one of {sorted(ALGORITHM_CLASSES)}")
-    expected = {"observation_shape": [len(layout)], "action_shape": [ACTION_DIM]}
-    for key, value in expected.items():
-        if key in metadata and metadata[key] != value:
-            raise ValueError(f"{meta}: {key} is {metadata[key]!r}, expected {value!r}")
+    expected = [len(layout)]  # the action shape depends on the residual section (check_agent)
+    if "observation_shape" in metadata and metadata["observation_shape"] != expected:
+        raise ValueError(f"{meta}: observation_shape is {metadata['observation_shape']!r}, "
+                         f"expected {expected!r}")  # fmt: skip
     version = metadata.get("auv_gym_version")
     if version is not None:
         major = str(version).split(".")[0]
@@ -253,8 +257,9 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     return metadata
 
 
-def _check_model_zip(model: Path, obs_dim: int = OBS_DIM) -> None:
-    """SB3's zip: intact (CRC), with its parameters and an (obs_dim,) → (3,) Box policy."""
+def _check_model_zip(model: Path, obs_dim: int = OBS_DIM, action_dim: int = ACTION_DIM) -> None:
+    """SB3's zip: intact (CRC), with its parameters and an (obs_dim,) → (action_dim,) Box
+    policy (3 actions; a residual agent with a learned filter: 6)."""
     if not zipfile.is_zipfile(model):
         raise ValueError(f"PPO model {model} is not a valid zip file (corrupt or truncated)")
     try:
@@ -274,7 +279,7 @@ def _check_model_zip(model: Path, obs_dim: int = OBS_DIM) -> None:
             data = json.loads(archive.read("data"))
     except (zipfile.BadZipFile, OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"PPO model {model} cannot be read (corrupt or truncated): {exc}") from exc
-    for key, expected in (("observation_space", (obs_dim,)), ("action_space", (ACTION_DIM,))):
+    for key, expected in (("observation_space", (obs_dim,)), ("action_space", (action_dim,))):
         space = data.get(key) if isinstance(data, dict) else None
         shape = space.get("_shape") if isinstance(space, dict) else None
         if shape is not None and tuple(shape) != expected:

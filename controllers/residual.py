@@ -9,9 +9,21 @@ first step):
     c_k  = agent.predict([o_k, b_k, a_{k−1}])                  21 values, `RESIDUAL_OBS_NAMES`
     a_k  = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)             β = `bound` per input (X, M, N)
 
+With a learned filter (``filter_max`` α_max > 0) the agent returns six values (c_k, g_k) and
+also chooses, per input and per step, how much of its previous action to keep:
+
+    t_k  = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)
+    α_k  = α_max · clip(g_k, 0, 1)                             α_k = 0 at an episode's first step
+    a_k  = α_k ⊙ a_{k−1} + (1 − α_k) ⊙ t_k
+
+a first-order low-pass (`controllers.lowpass`) whose coefficient the agent sets from the state:
+smoothing is one output away instead of a function the network has to build from b_k and
+a_{k−1} (docs/design.md §3.10). g_k ≡ 1, c_k ≡ 0 is `controllers.lowpass` at α = α_max.
+
 β is a fraction of the actuator range in normalised units (1 = the full limit: 50 N for X,
 10 N·m or the fin authority for M and N, docs/model.md §2.3), so |a_k − b_k| ≤ β for any agent
-output and |a_k| ≤ 1 (the actuator saturation). A non-finite c_k is an error, never an action.
+output without the filter, |a_k| ≤ 1 (the actuator saturation) with or without it (a convex
+combination of two actions in range). A non-finite agent output is an error, never an action.
 The default β = (0.25, 0.5, 0.5): under the paper's noise the FBSM's pitch and yaw commands
 swing with a standard deviation of 0.6 and 0.45 (surge 0.03, measured over 4 episodes of
 `fbsm_colos`), so halving that chattering needs a correction of half the range; surge needs
@@ -19,7 +31,7 @@ less.
 
 The base controller gets every observation, `episode_start` flag and `deterministic` flag the
 evaluation would give it alone, so its adaptive laws, filters and observers evolve exactly as
-without the agent: with c ≡ 0 the residual policy reproduces its base bit for bit.
+without the agent: with c ≡ 0 (and g ≤ 0) the residual policy reproduces its base bit for bit.
 
 The training side (observation of the wrapper, chattering charge) is `controllers.residual_env`;
 the saved agent's `metadata.json` holds `ResidualSettings.to_dict()` under "residual", and
@@ -40,6 +52,7 @@ from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
 __all__ = [
     "DEFAULT_BASE",
     "DEFAULT_BOUND",
+    "DEFAULT_FILTER_MAX",
     "DEFAULT_PRECISION_SCALE",
     "DEFAULT_PRECISION_WEIGHT",
     "DEFAULT_SELECTION_CHATTERING",
@@ -50,6 +63,7 @@ __all__ = [
     "SETTINGS_KEYS",
     "ResidualPolicy",
     "ResidualSettings",
+    "agent_action_dim",
     "agent_observation",
     "base_kwargs_for_env",
     "check_bound",
@@ -65,6 +79,7 @@ DEFAULT_BOUND = (0.25, 0.5, 0.5)  # β per input (X, M, N), normalised actuator 
 # per step, about 5 % of what following the path earns.
 DEFAULT_TV_WEIGHT = 0.25
 MAX_TV_WEIGHT = 1e3
+MAX_FILTER = 0.99  # α_max ≤ 0.99: a time constant of at most 100 control steps
 # Precision bonus w_P·exp(−(d/d_P)²) of training (docs/design.md §3.10): the env's tracking bonus
 # has d_0 = 1 m and is flat where FBSM already is (d ≈ 0.07 m), so without it smoothing looks free.
 # Weight 0: the reward of the first residual agents.
@@ -72,8 +87,10 @@ DEFAULT_PRECISION_WEIGHT = 0.0
 DEFAULT_PRECISION_SCALE = 0.1  # [m] d_P
 # Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.
 DEFAULT_SELECTION_CHATTERING = 0.0
+# Largest learned filter coefficient α_max; 0: no filter, the agent returns three corrections.
+DEFAULT_FILTER_MAX = 0.0
 SETTINGS_KEYS = ("base", "bound", "tv_weight", "precision_weight", "precision_scale",
-                 "selection_chattering", "base_kwargs")  # fmt: skip
+                 "selection_chattering", "filter_max", "base_kwargs")  # fmt: skip
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
@@ -99,7 +116,8 @@ class ResidualSettings:
     """What makes an agent residual: the base controller (a name of `controllers.CLASSICAL` and
     its keyword arguments other than the env-owned ``actuator``/``control_dt``), β, the reward
     terms training adds (chattering charge w_TV, precision bonus w_P with scale d_P [m]) and the
-    chattering weight λ [m·s] of the validation score (docs/design.md §3.10)."""
+    chattering weight λ [m·s] of the validation score, and the learned filter's largest
+    coefficient α_max (0: none; docs/design.md §3.10)."""
 
     base: str = DEFAULT_BASE
     bound: tuple[float, float, float] = DEFAULT_BOUND
@@ -107,6 +125,7 @@ class ResidualSettings:
     precision_weight: float = DEFAULT_PRECISION_WEIGHT
     precision_scale: float = DEFAULT_PRECISION_SCALE
     selection_chattering: float = DEFAULT_SELECTION_CHATTERING
+    filter_max: float = DEFAULT_FILTER_MAX
     base_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -121,6 +140,7 @@ class ResidualSettings:
             ("precision_weight", 0.0, MAX_TV_WEIGHT, ""),
             ("precision_scale", 1e-3, 10.0, " m"),
             ("selection_chattering", 0.0, 1.0, " m·s"),
+            ("filter_max", 0.0, MAX_FILTER, " (1 would freeze the action)"),
         ):
             w = getattr(self, name)
             if (isinstance(w, bool) or not isinstance(w, (int, float))
@@ -155,6 +175,7 @@ class ResidualSettings:
                 precision_scale=data.get("precision_scale", DEFAULT_PRECISION_SCALE),
                 selection_chattering=data.get("selection_chattering",
                                               DEFAULT_SELECTION_CHATTERING),
+                filter_max=data.get("filter_max", DEFAULT_FILTER_MAX),
                 base_kwargs=data.get("base_kwargs") or {},
             )  # fmt: skip
         except ValueError as exc:
@@ -166,7 +187,13 @@ class ResidualSettings:
                 "precision_weight": self.precision_weight,
                 "precision_scale": self.precision_scale,
                 "selection_chattering": self.selection_chattering,
+                "filter_max": self.filter_max,
                 "base_kwargs": dict(self.base_kwargs)}  # fmt: skip
+
+    @property
+    def action_dim(self) -> int:
+        """Values per vehicle the agent returns: 3 corrections, 6 with the learned filter."""
+        return agent_action_dim(self.filter_max)
 
     def make_base(self, **kwargs: Any) -> Any:
         """The base controller: `base_kwargs`, then ``kwargs`` (the scenario's ``actuator``,
@@ -202,9 +229,18 @@ def agent_observation(obs: np.ndarray, base_action: np.ndarray, previous: np.nda
     )  # fmt: skip
 
 
-def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[float]) -> np.ndarray:
-    """a = clip(b + β ⊙ clip(c, −1, 1), −1, 1) as float32 (n, 3); ValueError for a correction
-    of another shape or with NaN/inf (naming the first bad row)."""
+def agent_action_dim(filter_max: float) -> int:
+    """Values per vehicle a residual agent returns: 3 (c), or 6 (c, g) with a learned filter."""
+    return 6 if filter_max > 0.0 else 3
+
+
+def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[float],
+                    filter_max: float = 0.0, previous: np.ndarray | None = None,
+                    started: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """The applied action as float32 (n, 3) (module doc): a = clip(b + β ⊙ clip(c, −1, 1), −1, 1),
+    then with ``filter_max`` α_max > 0 (``correction`` (n, 6) = (c, g)) the learned low-pass
+    a = α ⊙ a_prev + (1 − α) ⊙ a, α = α_max·clip(g, 0, 1), 0 on rows not ``started``.
+    ValueError for an output of another shape or with NaN/inf (naming the first bad row)."""
     b = np.asarray(base_action, dtype=np.float64)
     try:
         c = np.asarray(correction, dtype=np.float64)
@@ -212,9 +248,10 @@ def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[fl
         raise ValueError(
             f"residual agent returned a non-numeric correction {correction!r:.80}"
         ) from None
-    if c.shape != b.shape:
+    expected = (b.shape[0], agent_action_dim(filter_max))
+    if c.shape != expected:
         raise ValueError(f"residual agent returned a correction of shape {c.shape}, "
-                         f"expected {b.shape}")  # fmt: skip
+                         f"expected {expected}")  # fmt: skip
     finite = np.isfinite(c)
     if not finite.all():
         row = int(np.argwhere(~finite)[0][0])
@@ -222,8 +259,16 @@ def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[fl
             f"residual agent returned a non-finite correction {c[row].tolist()} (row {row}): "
             "NaN/inf is an error, not an action"
         )
-    applied = np.clip(b + np.asarray(bound) * np.clip(c, -1.0, 1.0), -1.0, 1.0)
-    return applied.astype(np.float32)
+    target = np.clip(b + np.asarray(bound) * np.clip(c[:, :3], -1.0, 1.0), -1.0, 1.0)
+    target = target.astype(np.float32)
+    if filter_max == 0.0:
+        return target
+    if previous is None or started is None:
+        raise ValueError("a learned filter needs the previous actions and the started flags")
+    # float32 throughout, as `controllers.lowpass`, so g ≡ 1 reproduces it bit for bit
+    alpha = np.float32(filter_max) * np.clip(c[:, 3:], 0.0, 1.0).astype(np.float32)
+    alpha[~np.asarray(started, dtype=bool)] = 0.0
+    return (alpha * previous + (np.float32(1.0) - alpha) * target).astype(np.float32)
 
 
 class ResidualPolicy:
@@ -233,13 +278,16 @@ class ResidualPolicy:
     Args:
         base: the base controller (any Policy; `controllers.make(name)` of a classical one).
         agent: a Policy of 21-value observations (`RESIDUAL_OBS_NAMES`) giving corrections in
-            [−1, 1]³ (e.g. the actor of a saved residual agent, `controllers.ppo.PPOPolicy`).
+            [−1, 1]³, or (c, g) ∈ [−1, 1]⁶ with a learned filter (e.g. the actor of a saved
+            residual agent, `controllers.ppo.PPOPolicy`).
         bound: β per input (X, M, N) in normalised actuator units, each in [0, 2].
-        settings: the `ResidualSettings` it was built from (recorded, optional).
+        settings: the `ResidualSettings` it was built from (recorded, optional; its
+            ``filter_max`` α_max switches the learned filter on).
 
     State: a dict with the base's state ("base"), the previously applied actions
-    ("previous", (n, 3) float32) and the last correction actually applied ("correction",
-    a − b). `diagnostics` forwards the base's and adds ``correction`` (n, 3).
+    ("previous", (n, 3) float32), the last correction actually applied ("correction",
+    a − b) and filter coefficient ("filter", α, 0 without the filter). `diagnostics` forwards
+    the base's and adds ``correction`` and, with the filter, ``filter_coefficient`` (n, 3).
     """
 
     name = "residual"
@@ -254,11 +302,14 @@ class ResidualPolicy:
         self.agent = agent
         self.bound = check_bound(bound)
         self.settings = settings
+        self.filter_max = 0.0 if settings is None else settings.filter_max
+        self.action_dim = agent_action_dim(self.filter_max)
         self.metadata = dict(getattr(agent, "metadata", {}) or {})
 
     def init_state(self, n: int) -> dict[str, Any]:
         return {"base": None, "previous": np.zeros((n, 3), np.float32),
-                "correction": np.zeros((n, 3), np.float32)}  # fmt: skip
+                "started": np.zeros(n, dtype=bool), "correction": np.zeros((n, 3), np.float32),
+                "filter": np.zeros((n, 3), np.float32)}  # fmt: skip
 
     def predict(
         self,
@@ -289,20 +340,29 @@ class ResidualPolicy:
         if episode_start is not None:
             start = np.asarray(episode_start, dtype=bool).reshape(-1)
             state["previous"][start] = 0.0
+            state["started"][start] = False
         features = agent_observation(batch, base_action, state["previous"])
         correction, _ = self.agent.predict(features, deterministic=deterministic)
-        if np.size(correction) == 3 * n:  # an agent may return (3,) for a single row
-            correction = np.reshape(correction, (n, 3))
-        applied = residual_action(base_action, correction, self.bound)
+        if np.size(correction) == self.action_dim * n:  # an agent may return (k,) for one row
+            correction = np.reshape(correction, (n, self.action_dim))
+        applied = residual_action(base_action, correction, self.bound, self.filter_max,
+                                  state["previous"], state["started"])  # fmt: skip
+        if self.filter_max > 0.0:
+            alpha = self.filter_max * np.clip(np.asarray(correction, np.float32)[:, 3:], 0.0, 1.0)
+            state["filter"][:] = np.where(state["started"][:, None], alpha, 0.0)
         state["previous"][:] = applied
+        state["started"][:] = True
         state["correction"][:] = applied - base_action
         return (applied[0] if single else applied), state
 
     def diagnostics(self, state: dict[str, Any]) -> dict[str, np.ndarray]:
-        """The base's diagnostics (if it has any) and the applied correction a − b (n, 3)."""
+        """The base's diagnostics (if it has any), the applied correction a − b and, with a
+        learned filter, its coefficient α ("filter_coefficient"), each (n, 3)."""
         hook = getattr(self.base, "diagnostics", None)
         out = dict(hook(state["base"])) if hook is not None else {}
         out["correction"] = state["correction"].astype(np.float64)
+        if self.filter_max > 0.0:
+            out["filter_coefficient"] = state["filter"].astype(np.float64)
         return out
 
     def __repr__(self) -> str:
@@ -310,13 +370,15 @@ class ResidualPolicy:
 
 
 def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
-                  **base_kwargs: Any) -> ResidualPolicy:  # fmt: skip
+                  filter_max: float | None = None, **base_kwargs: Any
+                  ) -> ResidualPolicy:  # fmt: skip
     """``controllers.make("residual", ...)``: a `ResidualPolicy`.
 
     ``agent`` is a Policy of the 21-value observation, or the directory of a saved residual
     agent (its recorded base and β are used; a ``base`` or ``bound`` given here must equal them).
     ``base`` (default "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``,
-    gains) build the base controller with `controllers.make`; ``bound`` is β (X, M, N).
+    gains) build the base controller with `controllers.make`; ``bound`` is β (X, M, N);
+    ``filter_max`` α_max > 0 gives the learned filter (an agent of six outputs).
     """
     if agent is None:
         raise ValueError("controllers.make('residual') needs agent=<Policy or saved residual "
@@ -326,6 +388,7 @@ def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
         settings = ResidualSettings(
             base=DEFAULT_BASE if base is None else base,
             bound=DEFAULT_BOUND if bound is None else bound, base_kwargs=base_kwargs,
+            filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
         )  # fmt: skip
         return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)
     from controllers.ppo import load_policy
@@ -341,4 +404,7 @@ def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
     if bound is not None and check_bound(bound) != recorded.bound:
         raise ValueError(f"agent {agent!r} was trained with bound {list(recorded.bound)}, "
                          f"not {list(check_bound(bound))}")  # fmt: skip
+    if filter_max is not None and filter_max != recorded.filter_max:
+        raise ValueError(f"agent {agent!r} was trained with filter_max {recorded.filter_max}, "
+                         f"not {filter_max!r}")  # fmt: skip
     return policy

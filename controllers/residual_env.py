@@ -6,7 +6,9 @@ runs the base controller of all vehicles in one batched `predict` per control st
 `controllers.residual.ResidualPolicy` and the evaluation run it, and exposes to the agent
 
     observation  [o_k, b_k, a_{k−1}]  (21 float32 values, `RESIDUAL_OBS_NAMES`)
-    action       c_k ∈ [−1, 1]³, applied as a_k = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)
+    action       c_k ∈ [−1, 1]³, applied as a_k = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1);
+                 with ``filter_max`` > 0, (c_k, g_k) ∈ [−1, 1]⁶ and the learned low-pass of
+                 `controllers.residual` (α_k = 0 at an episode's first step)
     reward       r_k − w_TV · Σ_j |a_{k,j} − a_{k−1,j}|     (no charge at an episode's first step)
                  + w_P · exp(−(d_{k+1}/d_P)²)               (precision bonus, d [m] after the step)
 
@@ -71,6 +73,9 @@ class ResidualVectorEnv(VectorWrapper):
         self.core = core
         self.settings = settings if settings is not None else ResidualSettings()
         self.bound = np.asarray(self.settings.bound)
+        dim = self.settings.action_dim  # 3 corrections, or 6 with the learned filter
+        self.single_action_space = spaces.Box(-1.0, 1.0, (dim,), dtype=np.float32)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
         config = core.config
         names = ("paper", "fins") if config.actuator == "random" else (config.actuator,)
         self.controllers = {
@@ -155,8 +160,9 @@ class ResidualVectorEnv(VectorWrapper):
         observation. A NaN or inf correction raises ValueError before any vehicle moves."""
         if not self._ever_reset:
             raise RuntimeError("call reset() before step()")
-        correction = validate_actions(actions, (self.num_envs, 3))
-        applied = residual_action(self._base, correction, self.bound)
+        correction = validate_actions(actions, (self.num_envs, self.settings.action_dim))
+        applied = residual_action(self._base, correction, self.bound, self.settings.filter_max,
+                                  self._previous, self._started)  # fmt: skip
         obs, reward, terminated, truncated, info = self.env.step(applied)
         stepped = ~self._pending  # NEXT_STEP: vehicles reset by this step did not move
         variation = np.abs(applied.astype(np.float64) - self._previous).sum(axis=1)

@@ -273,6 +273,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     t0 = time.monotonic()
     obs_names = OBS_NAMES if residual is None else RESIDUAL_OBS_NAMES
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
+    action_dim = 3 if residual is None else residual.action_dim
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:
         return {
@@ -283,7 +284,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "options": asdict(opts), "config_file": str(opts.config), "config": cfg.raw,
             "env_kwargs": cfg.env_kwargs, "eval_env_kwargs": eval_kwargs,
             "eval_seeds": list(opts.eval_seeds), "obs_names": list(obs_names),
-            "observation_shape": [len(obs_names)], "action_shape": [3], **residual_meta,
+            "observation_shape": [len(obs_names)], "action_shape": [action_dim], **residual_meta,
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": _describe(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
