@@ -363,7 +363,8 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     alone = evaluate_policy_on_seeds(controllers.make("fbsm_colos"), [100], **eval_env)
     assert float(first["rms_distance_mean"]) == pytest.approx(alone[0]["rms_distance"], rel=1e-4)
     policy = load_policy(out / "seed_0" / "final")
-    assert isinstance(policy, ResidualPolicy) and policy.settings.tv_weight == 0.25
+    assert isinstance(policy, ResidualPolicy) and policy.settings.tv_weight == 1.0
+    assert policy.filter_max == 0.8 and meta["action_shape"] == [6]
 
 
 def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settings(tmp_path):
@@ -373,11 +374,13 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3D-v1")
     generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3D-v1")
     assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
-    assert cfg.residual == ResidualSettings(precision_weight=3.0, selection_chattering=0.0005)
-    assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.tv_weight == 0.25
+    expected = {"tv_weight": 1.0, "precision_weight": 3.0, "selection_chattering": 0.0005,
+                "filter_max": 0.8}  # fmt: skip
+    assert cfg.residual == ResidualSettings(**expected)
+    assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.action_dim == 6
     assert cfg.residual.precision_scale == 0.1
     assert cfg.n_timesteps == 4_000_000 == generalist.n_timesteps // 5
-    text = (hyper / "ppo_residual.yml").read_text().replace("tv_weight: 0.25", "tv_weight: -1")
+    text = (hyper / "ppo_residual.yml").read_text().replace("tv_weight: 1.0", "tv_weight: -1")
     broken = tmp_path / "bad.yml"
     broken.write_text(text)
     with pytest.raises(ValueError, match=r"bad.yml: residual: tv_weight must be a number"):
