@@ -34,8 +34,10 @@ __all__ = [
 
 # (policy, base) pairs compared when both were evaluated: the residual agent and the low-pass
 # baseline, each against the controller they are built on.
-PAIRS = (("ppo_residual", "fbsm_colos"), ("fbsm_colos_lowpass", "fbsm_colos"),
-         ("ppo_residual", "fbsm_colos_lowpass"))  # fmt: skip
+# The shipped residual agent, its second version (no learned filter, charge 0.25: the accuracy
+# side of the trade-off) and the low-pass baseline against their base, and residual − low-pass.
+PAIRS = (("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
+         ("fbsm_colos_lowpass", "fbsm_colos"), ("ppo_residual", "fbsm_colos_lowpass"))  # fmt: skip
 SMOOTHNESS_REFERENCE = "fbsm"
 WORSE_RATIO = 0.10  # issue 15: never worse than the base by more than 10 %
 
