@@ -20,6 +20,18 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from benchmarks.stats import AGGREGATE
 
 
+def policy_colors(policies) -> dict[str, Any]:
+    """One distinct colour per policy: matplotlib's ten-colour cycle, or tab20 for more than ten
+    (the cycle repeats after ten, which gave two policies the same colour)."""
+    names = list(policies)
+    if len(names) <= 10:
+        return {p: f"C{k}" for k, p in enumerate(names)}
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab20"]
+    return {p: cmap(k % 20) for k, p in enumerate(names)}
+
+
 def _errorbars(ax, intervals: list, offset: float = 0.0, **style) -> None:
     """Horizontal Interval(value, low, high) bars, one row per entry, first row on top."""
     iv = np.array(intervals, dtype=float).reshape(-1, 3)
@@ -103,9 +115,11 @@ def profile_figure(summary: Mapping[str, Any], scope: str = AGGREGATE, unit: str
         raise ValueError(f"scope={scope!r}: not among {list(summary['profiles'])}")
     fig = Figure(figsize=(6.0, 4.0), layout="constrained")
     ax = fig.subplots()
-    for k, (policy, prof) in enumerate(summary["profiles"][scope].items()):
-        ax.plot(prof["tau_m"], prof["fraction"], color=f"C{k}", label=policy)
-        ax.fill_between(prof["tau_m"], prof["low"], prof["high"], color=f"C{k}", alpha=0.2)
+    colors = policy_colors(summary["profiles"][scope])
+    for policy, prof in summary["profiles"][scope].items():
+        ax.plot(prof["tau_m"], prof["fraction"], color=colors[policy], label=policy)
+        ax.fill_between(prof["tau_m"], prof["low"], prof["high"], color=colors[policy],
+                        alpha=0.2)  # fmt: skip
     _scale(ax, "x", np.concatenate([p["tau_m"] for p in summary["profiles"][scope].values()]))
     title = f"{scope}: performance profiles, {_ci(summary)} bands"
     ax.set(xlabel=f"threshold τ: RMS distance [{unit}]", ylabel="fraction of episodes < τ",
@@ -141,7 +155,7 @@ def tradeoff_figure(
     chattering [1/s], each with its CI, per policy; policies whose mean distance exceeds
     ``max_distance_m`` (or without a chattering value) are left out and named in the title."""
     fig, axes = _panels(len(scopes), 4.2, 3.4)
-    colors = {p: f"C{k % 10}" for k, p in enumerate(summary["policies"])}  # one per policy
+    colors = policy_colors(summary["policies"])
     for ax, scope in zip(axes, scopes, strict=True):
         shown, left_out, heights = [], [], []
         for policy, distance in summary["mean"][scope].items():

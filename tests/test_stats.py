@@ -315,3 +315,13 @@ def test_mean_interval_leaves_missing_values_out():
     assert np.isnan(stats.mean_interval(np.full((1, 2), np.nan), reps=REPS).value)
     with pytest.raises(ValueError, match="non-finite"):
         stats.mean_interval(np.array([[1.0, np.inf]]), reps=REPS)
+
+
+def test_policy_colors_stay_distinct_beyond_ten_policies():
+    from matplotlib.colors import to_hex
+
+    from benchmarks.stats_figures import policy_colors
+
+    assert policy_colors(["a", "b"]) == {"a": "C0", "b": "C1"}
+    eleven = policy_colors([f"p{k}" for k in range(11)])
+    assert len({to_hex(c) for c in eleven.values()}) == 11  # C10 would repeat C0
