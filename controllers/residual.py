@@ -67,6 +67,7 @@ __all__ = [
     "agent_observation",
     "base_kwargs_for_env",
     "check_bound",
+    "filter_coefficient",
     "make_residual",
     "residual_action",
     "residual_observation_bounds",
@@ -265,10 +266,16 @@ def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[fl
         return target
     if previous is None or started is None:
         raise ValueError("a learned filter needs the previous actions and the started flags")
+    alpha = filter_coefficient(c[:, 3:], filter_max, started)
     # float32 throughout, as `controllers.lowpass`, so g ≡ 1 reproduces it bit for bit
-    alpha = np.float32(filter_max) * np.clip(c[:, 3:], 0.0, 1.0).astype(np.float32)
-    alpha[~np.asarray(started, dtype=bool)] = 0.0
     return (alpha * previous + (np.float32(1.0) - alpha) * target).astype(np.float32)
+
+
+def filter_coefficient(g: np.ndarray, filter_max: float, started: np.ndarray) -> np.ndarray:
+    """α = α_max·clip(g, 0, 1) as float32 (n, 3), 0 on rows not ``started`` (no a_{k−1})."""
+    alpha = np.float32(filter_max) * np.clip(np.asarray(g), 0.0, 1.0).astype(np.float32)
+    alpha[~np.asarray(started, dtype=bool)] = 0.0
+    return alpha
 
 
 class ResidualPolicy:
@@ -348,8 +355,8 @@ class ResidualPolicy:
         applied = residual_action(base_action, correction, self.bound, self.filter_max,
                                   state["previous"], state["started"])  # fmt: skip
         if self.filter_max > 0.0:
-            alpha = self.filter_max * np.clip(np.asarray(correction, np.float32)[:, 3:], 0.0, 1.0)
-            state["filter"][:] = np.where(state["started"][:, None], alpha, 0.0)
+            g = np.asarray(correction, np.float64)[:, 3:]
+            state["filter"][:] = filter_coefficient(g, self.filter_max, state["started"])
         state["previous"][:] = applied
         state["started"][:] = True
         state["correction"][:] = applied - base_action
