@@ -18,3 +18,48 @@ def make_sim():
         return sim
 
     return _make
+
+
+def _assert_same_episodes(a, b) -> None:
+    """Two lists of `auv_gym.rollout.Trajectory` are identical: end, samples and intervals."""
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        assert x.termination_reason == y.termination_reason
+        for name in x.samples:
+            np.testing.assert_array_equal(x.samples[name], y.samples[name], err_msg=name)
+        for name in x.intervals:
+            np.testing.assert_array_equal(x.intervals[name], y.intervals[name], err_msg=name)
+
+
+@pytest.fixture
+def assert_same_episodes():
+    """`_assert_same_episodes`: bit-for-bit equality of two episode lists."""
+    return _assert_same_episodes
+
+
+@pytest.fixture
+def save_tiny_residual_agent():
+    """Train a tiny PPO residual agent (4 vehicles, 128 env steps) on ``env`` with ``settings``
+    and save it to ``directory`` as the harness does: (settings, directory, seed, env) →
+    (model, VecNormalize)."""
+    pytest.importorskip("stable_baselines3")
+
+    def _save(settings, directory, seed: int, env: dict):
+        from stable_baselines3 import PPO
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        from benchmarks.training.checkpoints import save_agent
+        from controllers.residual import RESIDUAL_OBS_DIM, RESIDUAL_OBS_NAMES
+        from controllers.residual_env import make_residual_sb3_env
+
+        venv = VecNormalize(make_residual_sb3_env(4, settings, seed=seed, **env))
+        model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0,
+                    device="cpu", policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
+        model.learn(128)
+        meta = {"algo": "ppo", "obs_names": list(RESIDUAL_OBS_NAMES),
+                "observation_shape": [RESIDUAL_OBS_DIM], "action_shape": [settings.action_dim],
+                "residual": settings.to_dict()}  # fmt: skip
+        save_agent(model, venv, directory, meta)
+        return model, venv
+
+    return _save

@@ -44,16 +44,6 @@ class ConstantAgent:
         return np.tile(self.value, (observation.shape[0], 1)), state
 
 
-def _assert_same_episodes(a, b) -> None:
-    assert len(a) == len(b)
-    for x, y in zip(a, b, strict=True):
-        assert x.termination_reason == y.termination_reason
-        for name in x.samples:
-            np.testing.assert_array_equal(x.samples[name], y.samples[name], err_msg=name)
-        for name in x.intervals:
-            np.testing.assert_array_equal(x.intervals[name], y.intervals[name], err_msg=name)
-
-
 @pytest.mark.parametrize(
     ("base", "base_kwargs", "env"),
     [
@@ -63,12 +53,14 @@ def _assert_same_episodes(a, b) -> None:
         ("fbsm_colos_lowpass", {}, ENV),  # a base whose state carries the filter's memory
     ],
 )
-def test_zero_correction_policy_is_the_base_bit_for_bit(base, base_kwargs, env):
+def test_zero_correction_policy_is_the_base_bit_for_bit(
+    base, base_kwargs, env, assert_same_episodes
+):
     agent = ConstantAgent(0.0)
     residual = controllers.make("residual", agent=agent, base=base, **base_kwargs)
     seeds = [0, 1, 2]
     got = rollouts(residual, seeds, **env)
-    _assert_same_episodes(got, rollouts(controllers.make(base, **base_kwargs), seeds, **env))
+    assert_same_episodes(got, rollouts(controllers.make(base, **base_kwargs), seeds, **env))
     assert agent.calls == 80  # one batched agent call per control step
     assert all(np.all(t.extras["correction"] == 0.0) for t in got)
 
@@ -278,41 +270,23 @@ def test_make_residual_needs_an_agent_and_a_residual_agent_directory(tmp_path):
 
 
 # ----------------------------------------------------------------------- saved agents (rl extra)
-def _tiny_model(tmp_path):
-    pytest.importorskip("stable_baselines3")
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecNormalize
-
-    from benchmarks.training.checkpoints import save_agent
-    from controllers.residual import RESIDUAL_OBS_NAMES
-    from controllers.residual_env import make_residual_sb3_env
-
-    settings_ = ResidualSettings(bound=(0.2, 0.4, 0.4))
-    venv = VecNormalize(make_residual_sb3_env(4, settings_, seed=7, **ENV))
-    model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0, device="cpu",
-                policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
-    model.learn(128)
-    meta = {"algo": "ppo", "obs_names": list(RESIDUAL_OBS_NAMES),
-            "observation_shape": [RESIDUAL_OBS_DIM], "action_shape": [3],
-            "residual": settings_.to_dict()}  # fmt: skip
-    save_agent(model, venv, tmp_path / "agent", meta)
-    return model, venv, settings_
-
-
 @pytest.mark.rl
-def test_saved_and_reloaded_residual_agent_predicts_identically(tmp_path):
+def test_saved_and_reloaded_residual_agent_predicts_identically(
+    tmp_path, save_tiny_residual_agent, assert_same_episodes
+):
     from benchmarks.training.callbacks import policy_from_model
     from controllers.ppo import check_agent, load_policy
 
-    model, venv, settings_ = _tiny_model(tmp_path)
+    settings_ = ResidualSettings(bound=(0.2, 0.4, 0.4))
+    model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 7, ENV)
     live = policy_from_model(model, venv, settings_)
     loaded = load_policy(tmp_path / "agent")
     assert isinstance(loaded, ResidualPolicy) and loaded.bound == (0.2, 0.4, 0.4)
     assert check_agent(tmp_path / "agent").residual == settings_
     same = controllers.make("residual", agent=str(tmp_path / "agent"))
     episodes = rollouts(loaded, [0, 1], **ENV)
-    _assert_same_episodes(episodes, rollouts(live, [0, 1], **ENV))
-    _assert_same_episodes(episodes, rollouts(same, [0, 1], **ENV))
+    assert_same_episodes(episodes, rollouts(live, [0, 1], **ENV))
+    assert_same_episodes(episodes, rollouts(same, [0, 1], **ENV))
     corrections = np.concatenate([t.extras["correction"] for t in episodes])
     assert np.abs(corrections).max() > 1e-3  # the agent acts: the comparison is not trivial
     with pytest.raises(ValueError, match="was trained on base 'fbsm_colos', not 'fbsm'"):

@@ -40,14 +40,6 @@ class ConstantAgent:
         return np.tile(self.value, (observation.shape[0], 1)), state
 
 
-def _same(a, b) -> None:
-    for x, y in zip(a, b, strict=True):
-        for name in x.samples:
-            np.testing.assert_array_equal(x.samples[name], y.samples[name], err_msg=name)
-        for name in x.intervals:
-            np.testing.assert_array_equal(x.intervals[name], y.intervals[name], err_msg=name)
-
-
 def test_action_dim_is_six_with_the_filter_and_three_without():
     assert agent_action_dim(0.0) == 3 and agent_action_dim(0.5) == 6
     assert ResidualSettings(filter_max=0.8).action_dim == 6
@@ -55,18 +47,18 @@ def test_action_dim_is_six_with_the_filter_and_three_without():
     assert ResidualSettings.from_dict({"filter_max": 0.8}).to_dict()["filter_max"] == 0.8
 
 
-def test_zero_output_is_the_base_bit_for_bit():
+def test_zero_output_is_the_base_bit_for_bit(assert_same_episodes):
     policy = controllers.make("residual", agent=ConstantAgent(np.zeros(6)), filter_max=0.8)
     got = rollouts(policy, [0, 1], **ENV)
-    _same(got, rollouts(controllers.make("fbsm_colos"), [0, 1], **ENV))
+    assert_same_episodes(got, rollouts(controllers.make("fbsm_colos"), [0, 1], **ENV))
     assert all(np.all(t.extras["filter_coefficient"] == 0.0) for t in got)
 
 
-def test_full_filter_without_correction_is_the_lowpass_baseline_bit_for_bit():
+def test_full_filter_without_correction_is_the_lowpass_baseline_bit_for_bit(assert_same_episodes):
     agent = ConstantAgent([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
     policy = controllers.make("residual", agent=agent, filter_max=0.5)
     got = rollouts(policy, [0, 1], **ENV)
-    _same(got, rollouts(controllers.make("fbsm_colos_lowpass"), [0, 1], **ENV))
+    assert_same_episodes(got, rollouts(controllers.make("fbsm_colos_lowpass"), [0, 1], **ENV))
     alpha = got[0].extras["filter_coefficient"]
     assert np.all(alpha[0] == 0.0) and np.all(alpha[1:] == 0.5)  # no history at the start
 
@@ -129,30 +121,17 @@ def test_wrapper_with_filter_takes_six_values_and_matches_the_policy():
 
 
 @pytest.mark.rl
-def test_saved_filter_agent_reloads_with_six_actions(tmp_path):
-    pytest.importorskip("stable_baselines3")
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecNormalize
-
+def test_saved_filter_agent_reloads_with_six_actions(tmp_path, save_tiny_residual_agent,
+                                                     assert_same_episodes):  # fmt: skip
     from benchmarks.training.callbacks import policy_from_model
-    from benchmarks.training.checkpoints import save_agent
     from controllers.ppo import check_agent, load_policy
-    from controllers.residual import RESIDUAL_OBS_NAMES
-    from controllers.residual_env import make_residual_sb3_env
 
     residual = ResidualSettings(filter_max=0.6)
-    venv = VecNormalize(make_residual_sb3_env(4, residual, seed=3, **ENV))
-    model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0, device="cpu",
-                policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
-    model.learn(128)
-    meta = {"algo": "ppo", "obs_names": list(RESIDUAL_OBS_NAMES),
-            "observation_shape": [RESIDUAL_OBS_DIM], "action_shape": [6],
-            "residual": residual.to_dict()}  # fmt: skip
-    save_agent(model, venv, tmp_path / "agent", meta)
+    model, venv = save_tiny_residual_agent(residual, tmp_path / "agent", 3, ENV)
     loaded = load_policy(tmp_path / "agent")
     assert isinstance(loaded, ResidualPolicy) and loaded.filter_max == 0.6
     episodes = rollouts(loaded, [0], **ENV)
-    _same(episodes, rollouts(policy_from_model(model, venv, residual), [0], **ENV))
+    assert_same_episodes(episodes, rollouts(policy_from_model(model, venv, residual), [0], **ENV))
     alpha = episodes[0].extras["filter_coefficient"]
     assert alpha.max() > 0.0 and alpha.max() <= 0.6  # the untrained agent filters somewhere
     with pytest.raises(ValueError, match=r"trained with filter_max 0\.6, not 0\.3"):
