@@ -1,7 +1,20 @@
 """auv-gym: 3D path following of an underactuated AUV, for control and RL research.
 
-Importing the package registers `AUVPath3D-v0`, `AUVPath3D-v1` (v0 with the realistic-speed
-limit, `auv_gym.task.SURGE_LIMIT`) and the variants below with Gymnasium (idempotently).
+Importing the package registers these ids with Gymnasium (idempotently); each is
+`AUVPath3DEnv` with the keyword arguments of `VARIANTS` as its defaults:
+
+| id                       | what it is                                                       |
+|--------------------------|------------------------------------------------------------------|
+| `AUVPath3D-v0`           | the paper's scenario: helix, ±35 white noise, 15-entry observation |
+| `AUVPath3DNominal-v0`    | v0 without disturbances                                          |
+| `AUVPath3DFins-v0`       | v0 with fin actuators (moment authority ∝ u²)                    |
+| `AUVPath3DSpeedLimit-v0` | v0 with the 2.0 m/s surge limit (`task.SURGE_LIMIT`); was v1     |
+| `AUVPath3DPreview-v0`    | the RL task: the surge limit and the agent observation (path     |
+|                          | preview, velocity over ground, previous action; `observation`)  |
+
+The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
+no "out of date" warning. `LEGACY_ENV_IDS` maps ids that agents' metadata may still record
+(`AUVPath3D-v1`) to today's (`resolve_env_id`).
 """
 
 from __future__ import annotations
@@ -13,7 +26,14 @@ import auv_gym.numba_cache  # noqa: F401
 from gymnasium.envs.registration import register, registry
 
 from auv_gym.env import AUVPath3DEnv
-from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW, OBS_NAMES, OBS_UNITS
+from auv_gym.observation import (
+    OBS_HIGH,
+    OBS_INDEX,
+    OBS_LOW,
+    OBS_NAMES,
+    OBS_UNITS,
+    ObservationConfig,
+)
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import FittedCurve, Helix, Path, Spline, StraightLine, fit_curve, make_path
 from auv_gym.task import SURGE_LIMIT
@@ -29,6 +49,7 @@ __all__ = [
     "AUVPath3DEnv",
     "FittedCurve",
     "Helix",
+    "ObservationConfig",
     "Path",
     "PathDistribution",
     "Spline",
@@ -36,6 +57,7 @@ __all__ = [
     "fit_curve",
     "make_path",
     "remus100",
+    "resolve_env_id",
 ]
 
 __version__ = "0.1.0"
@@ -43,14 +65,33 @@ __version__ = "0.1.0"
 ENV_ID = "AUVPath3D-v0"
 
 
+SPEED_LIMIT_ENV_ID = "AUVPath3DSpeedLimit-v0"
+PREVIEW_ENV_ID = "AUVPath3DPreview-v0"
+
 # Variants are separate ids with fixed keyword arguments (docs/design.md §3, Registration).
 VARIANTS: dict[str, dict] = {
     ENV_ID: {},
     "AUVPath3DNominal-v0": {"disturbance": "none"},
     "AUVPath3DFins-v0": {"actuator": "fins"},
-    # v1: the default reward changed (overspeed term and termination above 2.0 m/s, env docstring)
-    "AUVPath3D-v1": {"surge_limit": SURGE_LIMIT},
+    # the default reward changed: overspeed term and termination above 2.0 m/s (env docstring)
+    SPEED_LIMIT_ENV_ID: {"surge_limit": SURGE_LIMIT},
+    PREVIEW_ENV_ID: {"surge_limit": SURGE_LIMIT, "observation": "preview"},
 }
+# Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium
+# call v0 "out of date" on every `gym.make("AUVPath3D-v0")`.
+LEGACY_ENV_IDS: dict[str, str] = {"AUVPath3D-v1": SPEED_LIMIT_ENV_ID}
+
+
+def resolve_env_id(env_id: str) -> str:
+    """Today's id for ``env_id`` (a `VARIANTS` key or a `LEGACY_ENV_IDS` one); ValueError
+    naming the id and the ids that exist otherwise."""
+    env_id = LEGACY_ENV_IDS.get(env_id, env_id) if isinstance(env_id, str) else env_id
+    if env_id not in VARIANTS:
+        raise ValueError(
+            f"unknown env id {env_id!r}; valid: {list(VARIANTS)} (and the earlier "
+            f"{list(LEGACY_ENV_IDS)})"
+        )
+    return env_id
 
 
 def _register() -> None:

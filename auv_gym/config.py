@@ -31,6 +31,7 @@ from auv_gym.observation import (
     ERROR_BOUND,
     PATH_RATE_BOUND,
     SPEED_BOUND,
+    ObservationConfig,
 )
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, make_path, path_eval
@@ -190,6 +191,8 @@ class SimConfig:
     start_heading: float | None = None  # [rad]
     reward: RewardWeights = field(default_factory=RewardWeights)
     limits: TaskLimits = field(default_factory=TaskLimits)
+    # "paper": the paper's 15 entries; "preview": the agent observation (`auv_gym.observation`)
+    observation: ObservationConfig = field(default_factory=ObservationConfig)
 
     @classmethod
     def from_kwargs(
@@ -216,6 +219,7 @@ class SimConfig:
         reward_weights: RewardWeights | dict | None = None,
         random_current: float = 0.0,
         random_noise: float = 0.0,
+        observation: str | Mapping | ObservationConfig | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -247,6 +251,7 @@ class SimConfig:
                 s_end=s_end,
                 surge_limit=surge_limit,
             ),
+            observation=ObservationConfig.from_spec(observation),
         )
 
     def __post_init__(self) -> None:
@@ -257,7 +262,8 @@ class SimConfig:
             _check_path(self.path)
         for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
                            ("current", CurrentConfig), ("reward", RewardWeights),
-                           ("limits", TaskLimits)):  # fmt: skip
+                           ("limits", TaskLimits),
+                           ("observation", ObservationConfig)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
                                         f"got {getattr(self, name)!r:.80}")  # fmt: skip

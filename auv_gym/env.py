@@ -14,7 +14,7 @@ from gymnasium.envs.registration import EnvSpec
 
 from auv_gym.config import SimConfig
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
-from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW, OBS_NAMES, OBS_UNITS
+from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
@@ -49,17 +49,22 @@ def validate_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
     return a.astype(np.float64, copy=False)
 
 
-def check_reset_observations(obs: np.ndarray, rows: Sequence[int] | np.ndarray) -> None:
+def check_reset_observations(
+    obs: np.ndarray, rows: Sequence[int] | np.ndarray, layout: ObservationConfig | None = None
+) -> None:
     """Raise ValueError, naming the component, if a reset observation (float32, one row per
-    vehicle) lies outside the observation space; the configuration checks make this unreachable
-    for the built-in paths, so it guards what they cannot see (a spline between its samples)."""
-    outside = ~((obs >= OBS_LOW) & (obs <= OBS_HIGH))  # NaN counts as outside
+    vehicle, ``layout`` default: the paper's) lies outside the observation space; the
+    configuration checks make this unreachable for the built-in paths, so it guards what they
+    cannot see (a spline between its samples)."""
+    layout = layout or ObservationConfig()
+    low, high = layout.bounds()
+    outside = ~((obs >= low) & (obs <= high))  # NaN counts as outside
     if outside.any():
         i, j = np.argwhere(outside)[0]
-        name = OBS_NAMES[j]
+        name = layout.names[j]
         raise ValueError(
-            f"reset gave {name} = {obs[i, j]:.6g} {OBS_UNITS[name]} (vehicle {rows[i]}), outside "
-            f"the observation space [{OBS_LOW[j]:.6g}, {OBS_HIGH[j]:.6g}]: the start "
+            f"reset gave {name} = {obs[i, j]:.6g} {layout.units[name]} (vehicle {rows[i]}), "
+            f"outside the observation space [{low[j]:.6g}, {high[j]:.6g}]: the start "
             "(start_position, start_heading, randomize_start) or the path (its turn rate at "
             "u_p <= 2 u_desired) does not fit the observation bounds"
         )
@@ -111,17 +116,29 @@ class AUVPath3DEnv(gym.Env):
     (x_e, y_e, z_e) is vehicle minus virtual point in the body frame; psi_error = ψ − ψ_F
     wrapped to (−π, π]; velocities are relative to the water.
 
+    With ``observation="preview"`` (the default of `AUVPath3DPreview-v0`) the observation is the
+    agent observation, `Box(low, high, (21 + 5K,), float32)`: these 15 entries, then what a real
+    AUV's navigation system and planner know — velocity over ground u_ground, v_ground,
+    w_ground [m/s] (body frame, what a DVL with bottom lock measures), the previous saturated
+    action a_X_prev, a_M_prev, a_N_prev, and K path points Δs [m] of arc apart ahead of the
+    virtual point (vector from the vehicle, body frame [m], with the curvature and torsion there
+    [1/m]). Defaults K = 5, Δs = 2 m; ``observation={"points": K, "spacing": Δs}`` sets them.
+    Names, units and bounds: ``env.unwrapped.config.observation`` (`auv_gym.ObservationConfig`)
+    and `auv_gym.observation` (docs/design.md §3.12).
+
     ## Rewards
     r = w_progress·min(u_p/u_D, 1) + w_tracking·exp(−d²/1 m²) − w_distance·d/corridor
     − w_speed·min(((u − u_D)/u_D)², 1) − w_overspeed·min(max(u − u_D, 0)/(u_max − u_D), 1)²
-    − w_effort·|a|²/3 − w_termination·[failure], with d the distance to the virtual point and
+    − w_effort·|a|²/3 + w_precision·exp(−d²/0.01 m²) − w_termination·[failure], with d the
+    distance to the virtual point and
     u_max = `surge_limit` (`auv_gym.task`). Idling scores about −1.5 per step, following about
     +2; every term is reported in `info` as `reward_<term>`.
 
     Realistic speed: the speed term is capped at u = 2u_D, so an agent may buy accuracy by
     sprinting far beyond REMUS 100's top speed (~2.3-2.5 m/s). A finite `surge_limit` u_max
     adds the overspeed penalty (0 at u_D, w_overspeed at u_max) and ends the episode as
-    "overspeed" when u > u_max. `AUVPath3D-v1` sets u_max = 2.0 m/s; in v0 (u_max = inf) the
+    "overspeed" when u > u_max. `AUVPath3DSpeedLimit-v0` and `AUVPath3DPreview-v0` set
+    u_max = 2.0 m/s; in v0 (u_max = inf) the
     overspeed term is −0.0 and the rewards are those of the first release bit for bit.
 
     ## Starting State
@@ -175,11 +192,12 @@ class AUVPath3DEnv(gym.Env):
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
     | `virtual_point_law` | "corrected" | "printed" restores the paper's unstable 1 − tanh |
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
-    | `surge_limit` | inf (v1: 2.0) | u_max [m/s]: overspeed penalty and termination (Rewards) |
+    | `surge_limit` | inf | u_max [m/s]: overspeed penalty and termination (Rewards) |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
     | `params` | REMUS 100 | `AUVParams` of the true vehicle, or a dict: fields, `scale` factors |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
+    | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -238,9 +256,16 @@ class AUVPath3DEnv(gym.Env):
       New arguments with defaults that change nothing: waypoint lists, fitted curves and port
       helices as paths; ``path="random"`` (a `PathDistribution`), `random_current`,
       `random_noise`, ``actuator="random"`` and `params` as a dict (docs/model.md §3.8).
-    * v1: realistic speed — the v0 environment with `surge_limit` = 2.0 m/s by default: the
-      overspeed reward term and the "overspeed" termination (docs/design.md §3). Everything
-      else, including every other default, is v0's.
+      Also without effect on v0: the `observation` argument and the "precision" reward term
+      (weight 0 by default).
+    * `AUVPath3DSpeedLimit-v0` (registered as `AUVPath3D-v1` until the ids were renamed, so that
+      v0 is not reported "out of date"): realistic speed — the v0 environment with
+      `surge_limit` = 2.0 m/s by default: the overspeed reward term and the "overspeed"
+      termination (docs/design.md §3). Everything else, including every other default, is v0's.
+    * `AUVPath3DPreview-v0`: the RL task — the speed limit and ``observation="preview"``.
+
+    Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8); an
+    agent's metadata naming `AUVPath3D-v1` is read as `AUVPath3DSpeedLimit-v0`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
@@ -270,6 +295,7 @@ class AUVPath3DEnv(gym.Env):
         render_mode: str | None = None,
         random_current: float = 0.0,
         random_noise: float = 0.0,
+        observation: str | Mapping | ObservationConfig | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -280,7 +306,7 @@ class AUVPath3DEnv(gym.Env):
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights, random_current=random_current,
-            random_noise=random_noise,
+            random_noise=random_noise, observation=observation,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
@@ -289,11 +315,11 @@ class AUVPath3DEnv(gym.Env):
             )
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(1.0 / control_dt))}
-        self.observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.sim = Simulator(self.config, 1)
+        self.observation_space = spaces.Box(self.sim.obs_low, self.sim.obs_high, dtype=np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self._truncation_index = self.config.max_steps * self.config.substeps
-        self._last_obs = np.zeros(len(OBS_LOW), dtype=np.float32)  # the last one returned
+        self._last_obs = np.zeros(self.observation_space.shape, np.float32)  # the last returned
         self._renderer = (
             EpisodeRenderer(self.config.path, self.config.max_time) if render_mode else None
         )
@@ -325,8 +351,8 @@ class AUVPath3DEnv(gym.Env):
                              )  # fmt: skip
         super().reset(seed=seed)
         self.sim.reset_row(0, self.np_random)
-        obs = self.sim.obs[0].astype(np.float32)
-        check_reset_observations(obs[None], [0])
+        obs = self.sim.observations()[0]
+        check_reset_observations(obs[None], [0], self.config.observation)
         self._last_obs[:] = obs
         if self._renderer is not None:
             sim = self.sim
@@ -343,7 +369,7 @@ class AUVPath3DEnv(gym.Env):
         if code == NON_FINITE:  # the last observation returned: finite and inside the space
             obs = self._last_obs.copy()
         else:
-            obs = sim.obs[0].astype(np.float32)
+            obs = sim.observations()[0]
             self._last_obs[:] = obs
         if self._renderer is not None:
             t = int(sim.step_index[0]) * self.config.physics_dt

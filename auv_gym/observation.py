@@ -14,11 +14,30 @@
 | 12    | u_p           | m/s   | virtual-point speed u_D(1 + tanh(x_e/σ))                     |
 | 13    | psi_F_dot     | rad/s | ψ̇_F = ψ_F'(s)·ṡ                                              |
 | 14    | theta_F_dot   | rad/s | θ̇_F = θ_F'(s)·ṡ                                              |
+
+The agent observation (``observation="preview"``, `ObservationConfig`; docs/design.md §3.12)
+appends what a real AUV's navigation system and mission planner give, after these 15:
+
+| index     | name                   | unit | meaning                                           |
+|-----------|------------------------|------|---------------------------------------------------|
+| 15–17     | u_ground, v_ground,    | m/s  | velocity over ground, body frame, ν + R_Bᵀv_c     |
+|           | w_ground               |      | (what a DVL with bottom lock measures)            |
+| 18–20     | a_X_prev, a_M_prev,    | –    | the previous saturated action (0 after a reset)   |
+|           | a_N_prev               |      |                                                   |
+| j..j+2    | preview{k}_x, _y, _z   | m    | path point k·Δs of arc ahead of the virtual point |
+|           |                        |      | minus the vehicle, body frame                     |
+| j+3       | preview{k}_curvature   | 1/m  | κ = ‖p′×p″‖/‖p′‖³ there, saturated at 1/m         |
+| j+4       | preview{k}_torsion     | 1/m  | τ = (p′×p″)·p‴/‖p′×p″‖² (0 where κ = 0), ±1/m     |
+
+for k = 1 … K, j = 21 + 5(k − 1). Past the end of a finite path the preview continues along its
+last tangent (a straight line, κ = τ = 0).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -27,17 +46,20 @@ from auv_gym.dynamics import STATE
 from auv_gym.guidance import body_errors, path_angles, virtual_point_speed, wrap_angle
 from auv_gym.paths import path_eval
 from auv_gym.records import field_indices
+from auv_gym.validation import ArgumentTypeError, choice, integer, keys_within, real
 
 __all__ = [
     "GUIDANCE_DIM",
     "GUIDANCE_FIELDS",
     "GUIDE",
     "OBS",
+    "OBSERVATION_KINDS",
     "OBS_HIGH",
     "OBS_INDEX",
     "OBS_LOW",
     "OBS_NAMES",
     "OBS_UNITS",
+    "ObservationConfig",
     "build_observation",
     "guidance_row",
 ]
@@ -119,3 +141,102 @@ def build_observation(st, guid, u_d, out):
     out[OBS.u_p] = guid[GUIDE.u_p]
     out[OBS.psi_F_dot] = guid[GUIDE.psi_F_dot]
     out[OBS.theta_F_dot] = guid[GUIDE.theta_F_dot]
+
+
+# The agent observation (module docstring): kinds, defaults and the bounds of its extra entries.
+OBSERVATION_KINDS = ("paper", "preview")
+DEFAULT_PREVIEW_POINTS = 5  # K
+DEFAULT_PREVIEW_SPACING = 2.0  # [m] Δs: K·Δs = 10 m, 10 s of travel at u_D = 1 m/s
+MAX_PREVIEW_POINTS = 64
+MAX_PREVIEW_LENGTH = ERROR_BOUND  # [m] K·Δs
+CURVATURE_BOUND = 1.0  # [1/m] κ and |τ| saturate here: 8× sharper than the vehicle can turn
+GROUND_SPEED_BOUND = 30.0  # [m/s] |ν + R_Bᵀ v_c| per axis: SPEED_BOUND plus a 10 m/s current, ×1.5
+# Vehicle to a preview point: at most the distance to the virtual point (bounded per axis by
+# ERROR_BOUND, so √3·ERROR_BOUND in all) plus the arc K·Δs; the margin covers the midpoint
+# march's arc-length error on splines.
+_PREVIEW_MARGIN = 1.5
+PREVIEW_FEATURES = ("x", "y", "z", "curvature", "torsion")
+EXTRA_HEAD = ("u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_prev")
+
+
+@dataclass(frozen=True)
+class ObservationConfig:
+    """Which observation the envs return: "paper" (the 15 entries above, the default of every
+    registered id but `AUVPath3DPreview-v0`) or "preview" (those 15, then velocity over ground,
+    the previous action and K path points Δs [m] of arc apart ahead of the virtual point)."""
+
+    kind: str = "paper"
+    points: int = DEFAULT_PREVIEW_POINTS  # K
+    spacing: float = DEFAULT_PREVIEW_SPACING  # [m] Δs
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
+        points = integer("observation points (preview K)", self.points, 1, MAX_PREVIEW_POINTS)
+        spacing = real("observation spacing (preview Δs)", self.spacing, 0.0,
+                       MAX_PREVIEW_LENGTH / points, low_open=True,
+                       unit=f"m (K·Δs <= {MAX_PREVIEW_LENGTH:g} m)")  # fmt: skip
+        object.__setattr__(self, "points", points)
+        object.__setattr__(self, "spacing", spacing)
+
+    @classmethod
+    def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
+        """From None or "paper", "preview" (default K and Δs), a dict {"kind", "points",
+        "spacing"} or an `ObservationConfig`."""
+        if spec is None:
+            return cls()
+        if isinstance(spec, ObservationConfig):
+            return spec
+        if isinstance(spec, str):
+            return cls(kind=spec)
+        if isinstance(spec, Mapping):
+            fields = keys_within("observation", spec, ("kind", "points", "spacing"))
+            return cls(**{"kind": "preview", **fields})
+        raise ArgumentTypeError(
+            f"observation must be one of {list(OBSERVATION_KINDS)}, a dict with keys kind, "
+            f"points, spacing or an ObservationConfig, got {spec!r:.80}"
+        )
+
+    def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict (agent metadata); "paper" holds its kind only."""
+        if self.kind == "paper":
+            return {"kind": "paper"}
+        return {"kind": self.kind, "points": self.points, "spacing": self.spacing}
+
+    @property
+    def extra_dim(self) -> int:
+        """Entries after the paper's 15 (0 for "paper")."""
+        if self.kind == "paper":
+            return 0
+        return len(EXTRA_HEAD) + len(PREVIEW_FEATURES) * self.points
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Every entry's name, in order."""
+        if self.kind == "paper":
+            return OBS_NAMES
+        preview = tuple(
+            f"preview{k}_{feature}"
+            for k in range(1, self.points + 1)
+            for feature in PREVIEW_FEATURES
+        )
+        return (*OBS_NAMES, *EXTRA_HEAD, *preview)
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit of every entry, by name."""
+        extra = {"u_ground": "m/s", "v_ground": "m/s", "w_ground": "m/s", "a_X_prev": "-",
+                 "a_M_prev": "-", "a_N_prev": "-"}  # fmt: skip
+        units = {"x": "m", "y": "m", "z": "m", "curvature": "1/m", "torsion": "1/m"}
+        for name in self.names[OBS_DIM + len(EXTRA_HEAD) :]:
+            extra[name] = units[name.split("_", 1)[1]]
+        return {**OBS_UNITS, **(extra if self.kind != "paper" else {})}
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high) float32 arrays of the observation space."""
+        if self.kind == "paper":
+            return OBS_LOW.copy(), OBS_HIGH.copy()
+        reach = math.sqrt(3.0) * ERROR_BOUND + _PREVIEW_MARGIN * self.points * self.spacing
+        point = (reach, reach, reach, CURVATURE_BOUND, CURVATURE_BOUND)
+        high = np.array([*(GROUND_SPEED_BOUND,) * 3, 1.0, 1.0, 1.0, *point * self.points])
+        return (np.concatenate([OBS_LOW, -high.astype(np.float32)]),
+                np.concatenate([OBS_HIGH, high.astype(np.float32)]))  # fmt: skip

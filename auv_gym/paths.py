@@ -27,6 +27,7 @@ __all__ = [
     "fit_curve",
     "make_path",
     "path_eval",
+    "path_third_derivative",
 ]
 
 HELIX, LINE, SPLINE = 0, 1, 2
@@ -90,6 +91,27 @@ def path_eval(kind, data, s):
     y, dy, ddy = _cubic(data, base + 4, ds)
     z, dz, ddz = _cubic(data, base + 8, ds)
     return x, y, z, dx, dy, dz, ddx, ddy, ddz
+
+
+@njit(cache=True, inline="always")
+def path_third_derivative(kind, data, s):
+    """p‴(s) = (x‴, y‴, z‴) [m per unit s³], for the torsion of the path preview."""
+    if kind == HELIX:
+        radius, omega = data[0], data[1]
+        w3 = radius * omega * omega * omega
+        return w3 * math.sin(omega * s), -w3 * math.cos(omega * s), 0.0
+    if kind == LINE:
+        return 0.0, 0.0, 0.0
+    n_seg = int(data[0])
+    lo, hi = 0, n_seg - 1
+    while lo < hi:  # the segment `path_eval` evaluates
+        mid = (lo + hi + 1) // 2
+        if data[1 + mid] <= s:
+            lo = mid
+        else:
+            hi = mid - 1
+    base = 1 + (n_seg + 1) + lo * 12
+    return 6.0 * data[base + 3], 6.0 * data[base + 7], 6.0 * data[base + 11]
 
 
 class Path:

@@ -199,7 +199,7 @@ def _run_batch(
     steps = np.full(n, max_steps, dtype=np.int64)
     codes = np.zeros(n, dtype=np.int64)  # termination code at each row's terminating step
     alive = np.ones(n, dtype=bool)
-    obs = sim.obs.astype(np.float32)
+    obs = sim.observations()
     state = None
     episode_start = np.ones(n, dtype=bool)
     for k in range(max_steps):
@@ -226,7 +226,7 @@ def _run_batch(
             if not alive.any():
                 break
         episode_start = np.zeros(n, dtype=bool)
-        fresh = sim.obs.astype(np.float32)
+        fresh = sim.observations()
         obs = fresh if alive.all() else np.where(alive[:, None], fresh, obs)
     base_meta = {
         "policy": label,

@@ -35,10 +35,13 @@ from auv_gym.observation import (
     guidance_row,
 )
 from auv_gym.paths import Path
+from auv_gym.preview import extend_rows
 from auv_gym.randomization import EpisodeTask, draw_task
 from auv_gym.task import (
+    ENVELOPE,
     REWARD_TERMS,
     TASK_FIELDS,
+    TERM,
     task_row,
     task_vector,
 )
@@ -111,6 +114,7 @@ def _observe_rows(rows, state, row, kinds, pdata, cfgs, guid, obs):
 
 
 _S_END = TASK_FIELDS.index("s_end")
+_W_TERMINATION = TASK_FIELDS.index("w_termination")
 _CONFIG_INDEX = {name: j for j, name in enumerate(CONFIG_FIELDS)}
 _NOISE_COLUMNS = [_CONFIG_INDEX[f"noise_f_{c}"] for c in "uvwqr"]
 _CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
@@ -163,6 +167,12 @@ class Simulator:
         self.reward = np.zeros(n)
         self.code = np.zeros(n, dtype=np.int64)
         self._actions = np.zeros((n, 3))
+        # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
+        self.layout = config.observation
+        self.obs_low, self.obs_high = self.layout.bounds()
+        self.extra = np.zeros((n, self.layout.extra_dim))
+        self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
+        self._every_row = np.arange(n, dtype=np.int64)
         assert self.params.shape[1] == N_PARAMS
 
     @property
@@ -190,8 +200,27 @@ class Simulator:
         """`reset_row` for each row with its own generator; the observations in one kernel call."""
         for i, rng in zip(rows, rngs, strict=True):
             self._draw_episode(int(i), rng)
-        _observe_rows(np.asarray(rows, dtype=np.int64), self.state, self._row, self._kind,
-                      self._pdata, self._cfg, self.guid, self.obs)  # fmt: skip
+        rows = np.asarray(rows, dtype=np.int64)
+        _observe_rows(rows, self.state, self._row, self._kind, self._pdata, self._cfg, self.guid,
+                      self.obs)  # fmt: skip
+        if self.extra.shape[1]:
+            self.last_action[rows] = 0.0
+            self._extend(rows)
+
+    def observations(self, rows: np.ndarray | None = None) -> np.ndarray:
+        """float32 observations of ``rows`` (default all): the paper's 15 entries, then the
+        agent observation's extra ones when configured (`auv_gym.observation`)."""
+        base = self.obs if rows is None else self.obs[rows]
+        if not self.extra.shape[1]:
+            return base.astype(np.float32)
+        extra = self.extra if rows is None else self.extra[rows]
+        return np.concatenate([base, extra], axis=1, dtype=np.float32)
+
+    def _extend(self, rows: np.ndarray) -> None:
+        layout = self.layout
+        extend_rows(rows, self.state, self.current, self.last_action, self._row, self._kind,
+                    self._pdata, self._cfg, self._task, _S_END, layout.points, layout.spacing,
+                    self.extra)  # fmt: skip
 
     def _set_task(self, i: int, task: EpisodeTask) -> None:
         """Write vehicle i's drawn task into its row of the episode table."""
@@ -267,3 +296,18 @@ class Simulator:
                      self.reward, self.code)  # fmt: skip
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
+        if self.extra.shape[1]:
+            self.last_action[:] = self._actions  # saturated in place by the kernel
+            self._extend(self._every_row)
+            self._end_outside_extra_bounds()
+
+    def _end_outside_extra_bounds(self) -> None:
+        """A running vehicle whose extra entries left their bounds ends as "envelope", with the
+        termination charge, as `task.task_row` ends one whose paper entries did."""
+        low, high = self.obs_low[OBS_DIM:], self.obs_high[OBS_DIM:]
+        outside = ~((self.extra >= low) & (self.extra <= high)).all(axis=1) & (self.code == 0)
+        for i in np.flatnonzero(outside):  # practically never: the bounds hold by construction
+            charge = -self._task[self._row[i], _W_TERMINATION]
+            self.code[i] = ENVELOPE
+            self.terms[i, TERM.termination] = charge
+            self.reward[i] += charge

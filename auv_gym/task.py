@@ -8,6 +8,7 @@ Reward per control step (weights are constructor arguments of the envs):
       − w_speed·min(((u − u_D)/u_D)², 1)      surge-speed tracking
       − w_overspeed·min(max(u − u_D, 0)/(u_max − u_D), 1)²   approaching the surge limit u_max
       − w_effort·|a|²/3                       normalised actuator effort
+      + w_precision·exp(−(d/d_P)²)            precision bonus, d_P = 0.1 m (0 by default)
       − w_termination·[terminated by failure]  corridor, pitch, non-finite or envelope exit
 
 Because the virtual point waits for a slow vehicle (docs/model.md §3.3), error penalties alone are
@@ -19,7 +20,8 @@ capped at u = 2u_D, so without a limit an agent may sprint (4.5 m/s seen, a REMU
 near 2.3-2.5 m/s). With a finite u_max the overspeed term grows from 0 at u_D to w_overspeed at
 u_max and u > u_max ends the episode as "overspeed", a failure (docs/design.md §3). With
 u_max = inf (the `AUVPath3D-v0` default) the term is exactly −0.0 and nothing terminates, so v0
-rewards are unchanged bit for bit; `AUVPath3D-v1` sets u_max = `SURGE_LIMIT` = 2.0 m/s.
+rewards are unchanged bit for bit; `AUVPath3DSpeedLimit-v0` (and `AUVPath3DPreview-v0`) set
+u_max = `SURGE_LIMIT` = 2.0 m/s.
 """
 
 from __future__ import annotations
@@ -46,7 +48,9 @@ __all__ = [
     "task_vector",
 ]
 
-REWARD_TERMS = ("progress", "tracking", "distance", "speed", "overspeed", "effort", "termination")
+REWARD_TERMS = (
+    "progress", "tracking", "distance", "speed", "overspeed", "effort", "precision", "termination",
+)  # fmt: skip
 N_TERMS = len(REWARD_TERMS)
 TERM = field_indices("RewardTermIndex", REWARD_TERMS, __name__)
 # Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -, m/s].
@@ -63,7 +67,11 @@ TaskRecord = record_type("TaskRecord", TASK_FIELDS, __name__)
 TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end", "overspeed")
 CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END, OVERSPEED = 1, 2, 3, 4, 5, 6
 TRACKING_SCALE = 1.0  # [m] d_0 of the tracking bonus
-SURGE_LIMIT = 2.0  # [m/s] u_max of AUVPath3D-v1: below REMUS 100's top speed of ~2.3-2.5 m/s
+# [m] d_P of the precision bonus: the tracking bonus's slope at d = 5 cm is only 0.1 w_tracking
+# per metre; this one's is 3.9 w_precision per metre (docs/design.md §3.12)
+PRECISION_SCALE = 0.1
+# [m/s] u_max of AUVPath3DSpeedLimit-v0: below REMUS 100's top speed of ~2.3-2.5 m/s
+SURGE_LIMIT = 2.0
 # Documented ranges. Bounded weights and a corridor of at least 1 cm keep every reward finite
 # (the observation is bounded by the float32 range or the episode ends as "non_finite"); a
 # corridor inside the observation's ±ERROR_BOUND keeps a running vehicle's errors in bounds.
@@ -80,8 +88,9 @@ class RewardWeights:
     tracking: float = 1.0
     distance: float = 1.0
     speed: float = 0.5
-    overspeed: float = 1.0  # acts only with a finite surge_limit (AUVPath3D-v1)
+    overspeed: float = 1.0  # acts only with a finite surge_limit (AUVPath3DSpeedLimit-v0)
     effort: float = 0.05
+    precision: float = 0.0  # off by default: v0's rewards are unchanged (+0.0)
     termination: float = 100.0
 
     def __post_init__(self) -> None:
@@ -163,6 +172,7 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
     if not finite:
         out_terms[TERM.progress] = out_terms[TERM.tracking] = out_terms[TERM.distance] = 0.0
         out_terms[TERM.speed] = out_terms[TERM.overspeed] = out_terms[TERM.effort] = 0.0
+        out_terms[TERM.precision] = 0.0
     else:
         out_terms[TERM.progress] = t.w_progress * min(obs[OBS.u_p] / u_d, 1.0) if u_d > 0 else 0.0
         out_terms[TERM.tracking] = t.w_tracking * math.exp(-((distance / TRACKING_SCALE) ** 2))
@@ -174,6 +184,7 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
         out_terms[TERM.overspeed] = -t.w_overspeed * excess * excess
         effort = action[0] ** 2 + action[1] ** 2 + action[2] ** 2
         out_terms[TERM.effort] = -t.w_effort * effort / 3.0
+        out_terms[TERM.precision] = t.w_precision * math.exp(-((distance / PRECISION_SCALE) ** 2))
     failed = code != 0 and code != PATH_END
     out_terms[TERM.termination] = -t.w_termination if failed else 0.0
     total = 0.0

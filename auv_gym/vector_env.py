@@ -23,7 +23,7 @@ from gymnasium.vector.utils import batch_space
 
 from auv_gym.config import SimConfig
 from auv_gym.env import check_reset_observations, validate_actions
-from auv_gym.observation import GUIDANCE_FIELDS, OBS_HIGH, OBS_LOW
+from auv_gym.observation import GUIDANCE_FIELDS
 from auv_gym.rendering import EpisodeRenderer
 from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS
@@ -161,13 +161,14 @@ class AUVPath3DVectorEnv(VectorEnv):
             None if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
         )
 
-        self.single_observation_space = spaces.Box(OBS_LOW, OBS_HIGH, dtype=np.float32)
+        # One thread: the serial kernel, which leaves numba's thread pool alone.
+        self.sim = Simulator(self.config, self.num_envs, parallel=self.threads != 1)
+        self.single_observation_space = spaces.Box(self.sim.obs_low, self.sim.obs_high,
+                                                   dtype=np.float32)  # fmt: skip
         self.single_action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
 
-        # One thread: the serial kernel, which leaves numba's thread pool alone.
-        self.sim = Simulator(self.config, self.num_envs, parallel=self.threads != 1)
         # Both limits truncate whatever else happened (as `TimeLimit`); a physics-step index.
         self._episode_steps = min(self.config.max_steps, self.max_episode_steps or np.inf)
         self._limit = int(self._episode_steps) * self.config.substeps
@@ -261,8 +262,8 @@ class AUVPath3DVectorEnv(VectorEnv):
     def _reset_rows(self, rows: np.ndarray) -> None:
         """New episodes for `rows`, each drawn from its vehicle's generator (single-env order)."""
         self.sim.reset_rows(rows, [self._rngs[i] for i in rows])
-        first = self.sim.obs[rows].astype(np.float32)
-        check_reset_observations(first, rows)
+        first = self.sim.observations(rows)
+        check_reset_observations(first, rows, self.config.observation)
         self._last_obs[rows] = first
         if self._render_vehicle in rows:
             self._restart_rendering()
@@ -328,9 +329,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         broken = self.sim.code == NON_FINITE
         if broken.any():  # their rows may not even fit float32
             obs = self._last_obs.copy()
-            obs[~broken] = self.sim.obs[~broken]
+            obs[~broken] = self.sim.observations(np.flatnonzero(~broken))
         else:
-            obs = self.sim.obs.astype(np.float32)
+            obs = self.sim.observations()
         self._last_obs[:] = obs
         return obs
 

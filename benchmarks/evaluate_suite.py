@@ -18,9 +18,9 @@ Policies (``--policies``, comma-separated):
 Episodes: every test set of the tasks file (`benchmarks.tasks.test_suite`: the test
 distribution, the held-out families, one set per benchmark scenario), each on its seeds, for
 ``--duration`` seconds. An agent runs under the env id its metadata.json records (the fixed
-arguments of `auv_gym.VARIANTS`, e.g. AUVPath3D-v1's 2.0 m/s surge limit, under which a faster
-agent terminates "overspeed"), every other policy under AUVPath3D-v0, the benchmark's env; the
-``env_id`` column says which.
+arguments of `auv_gym.VARIANTS`, e.g. AUVPath3DSpeedLimit-v0's 2.0 m/s surge limit, under which
+a faster agent terminates "overspeed"), every other policy under AUVPath3D-v0, the benchmark's
+env; the ``env_id`` column says which.
 
 The work is split in chunks (policy, run, set): the set's episodes in one batched
 `auv_gym.rollout.evaluate` call. A finished chunk is stored atomically under ``OUT/chunks/``

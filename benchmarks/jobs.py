@@ -1,7 +1,7 @@
 """Benchmark episodes as jobs: (policy, scenario, seed, duration), fingerprinted, resumable.
 
-An agent's episode runs under the env id its metadata.json records (e.g. AUVPath3D-v1's 2.0 m/s
-surge limit, under which a faster agent terminates "overspeed"), everything else under
+An agent's episode runs under the env id its metadata.json records (e.g. AUVPath3DSpeedLimit-v0's
+2.0 m/s surge limit, under which a faster agent terminates "overspeed"), everything else under
 AUVPath3D-v0; the record says which (``env_id``).
 
 Each finished episode is written atomically to ``OUT/episodes/<scenario>/<policy>/seed_<k>.json``

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
-from auv_gym import ENV_ID, VARIANTS
+from auv_gym import ENV_ID, resolve_env_id
 from controllers import CLASSICAL
 
 __all__ = [
@@ -37,7 +37,8 @@ __all__ = [
 
 AGENTS_DIR = Path(__file__).resolve().parent / "agents"
 # Policy name → folder of benchmarks/agents/ (README "Agents"; issue 14: the realistic-speed
-# retrained specialist and the generalists trained on the task distribution, AUVPath3D-v1).
+# retrained specialist and the generalists trained on the task distribution,
+# AUVPath3DSpeedLimit-v0).
 SHIPPED_AGENTS = {
     "ppo": "ppo_helix",
     "ppo_helix_v1": "ppo_helix_v1",
@@ -127,21 +128,24 @@ def policy_label(text: str) -> str:
 
 def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tuple[int, str]:
     """(training seed, env id) that a checked agent's metadata.json records; the env id must be
-    a key of `auv_gym.VARIANTS` (an agent is evaluated under the env it was trained on, e.g.
-    AUVPath3D-v1's surge limit); ``default_env_id`` stands in for a missing one (None: an
-    error). Errors name ``where``."""
+    a key of `auv_gym.VARIANTS` or an earlier id that `auv_gym.resolve_env_id` maps to one (an
+    agent is evaluated under the env it was trained on, e.g. AUVPath3DSpeedLimit-v0's surge
+    limit); ``default_env_id`` stands in for a missing one (None: an error). Errors name
+    ``where``."""
     from controllers.ppo import check_agent
 
     try:
         files = check_agent(agent)
     except (OSError, ValueError) as error:
         raise type(error)(f"{where}: {error}") from None
-    env_id = files.metadata.get("env_id", default_env_id)
-    if env_id not in VARIANTS:
+    recorded = files.metadata.get("env_id", default_env_id)
+    try:  # an id of an earlier release (AUVPath3D-v1) runs under today's name for that env
+        env_id = resolve_env_id(recorded)
+    except ValueError as error:
         raise ValueError(
-            f"{where}: {agent}/metadata.json records env_id {env_id!r}; an agent runs under "
-            f"its training env, one of {list(VARIANTS)}"
-        )
+            f"{where}: {agent}/metadata.json records env_id {recorded!r}; an agent runs under "
+            f"its training env: {error}"
+        ) from None
     seed = files.metadata.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"{where}: {agent}/metadata.json records seed {seed!r}, not an int >= 0")

@@ -31,7 +31,7 @@ from benchmarks.training.config import read_zoo_config
 from controllers.residual_env import ResidualVectorEnv
 
 CONFIG = Path(__file__).resolve().parent / "hyperparams" / "ppo_residual.yml"
-ENV_ID = "AUVPath3D-v1"
+ENV_ID = "AUVPath3DSpeedLimit-v0"
 BUDGET_S = 25 * 60  # [s] per seed, one core
 
 

@@ -2,7 +2,7 @@
 
 Examples (see `benchmarks.training.seeds` for the layout, resuming and the agent selection)::
 
-    python -m benchmarks.train_seeds --algo ppo --env-id AUVPath3D-v1 \\
+    python -m benchmarks.train_seeds --algo ppo --env-id AUVPath3DSpeedLimit-v0 \\
         --config benchmarks/hyperparams/ppo.yml --seeds 0-4 --workers 2 --out runs/ppo_helix_v1 \\
         --export benchmarks/agents/ppo_helix_v1 --results benchmarks/results/seeds/ppo_helix_v1
     python -m benchmarks.train_seeds ... --resume          # continue a killed run
@@ -53,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--algo", choices=sorted(ALGORITHMS), default="ppo")
     p.add_argument("--config", default=None,
                    help="RL-Zoo YAML (default benchmarks/hyperparams/<algo>.yml)")  # fmt: skip
-    p.add_argument("--env-id", default="AUVPath3D-v1",
+    p.add_argument("--env-id", default="AUVPath3DSpeedLimit-v0",
                    help="Gymnasium id and YAML key (v1: the 2.0 m/s surge limit)")  # fmt: skip
     p.add_argument("--seeds", required=True, help="count N, range a-b or list a,b,c")
     p.add_argument("--workers", type=int, default=2, help="seeds trained at once")

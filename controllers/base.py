@@ -88,18 +88,22 @@ class BatchedController:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Actions in [−1, 1] for a batch (n, 15) or one (15,) observation; see module doc.
+        """Actions in [−1, 1] for a batch (n, d) or one (d,) observation, d ≥ 15; see module doc.
 
-        The returned ``state`` is the one passed in, updated in place (copying the FBSM's
-        150 kB of adaptive weights per vehicle every step would cost more than the control law);
-        ``state=None`` starts fresh memory for every row.
+        The law reads the paper's 15 entries (`auv_gym.OBS_NAMES`); the agent observation's
+        further entries (``observation="preview"``) follow them and are ignored. The returned
+        ``state`` is the one passed in, updated in place (copying the FBSM's 150 kB of adaptive
+        weights per vehicle every step would cost more than the control law); ``state=None``
+        starts fresh memory for every row.
         """
         obs = np.asarray(observation, dtype=np.float64)
         single = obs.ndim == 1
-        obs = np.ascontiguousarray(obs[None] if single else obs)
-        if obs.ndim != 2 or obs.shape[1] != OBS_DIM:
-            raise ValueError(f"observation must have shape (n, {OBS_DIM}) or ({OBS_DIM},), "
-                             f"got {np.shape(observation)}")  # fmt: skip
+        obs = obs[None] if single else obs
+        if obs.ndim != 2 or obs.shape[1] < OBS_DIM:
+            raise ValueError(f"observation must have shape (n, d) or (d,) with d >= {OBS_DIM} "
+                             f"(layout auv_gym.OBS_NAMES first), got {np.shape(observation)}"
+                             )  # fmt: skip
+        obs = np.ascontiguousarray(obs[:, :OBS_DIM])
         if not np.isfinite(obs).all():
             raise ValueError("observation must be finite")
         n = obs.shape[0]

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym import __version__
-from auv_gym.observation import OBS_DIM, OBS_NAMES
+from auv_gym.observation import OBS_DIM, OBS_NAMES, ObservationConfig
 from controllers.residual import RESIDUAL_OBS_NAMES, ResidualPolicy, ResidualSettings
 
 ACTION_DIM = 3  # normalised (X, M, N) commands in [-1, 1]
@@ -186,8 +186,11 @@ class AgentFiles:
 
 
 def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:
-    """The observation names an agent was trained on: the env's 15, or the residual 21."""
-    return RESIDUAL_OBS_NAMES if "residual" in metadata else OBS_NAMES
+    """The observation names an agent was trained on: the env's 15, the agent observation of
+    its "observation" section (`auv_gym.ObservationConfig`), or the residual 21."""
+    if "residual" in metadata:
+        return RESIDUAL_OBS_NAMES
+    return ObservationConfig.from_spec(metadata.get("observation")).names
 
 
 def check_agent(path: str | os.PathLike) -> AgentFiles:
@@ -230,7 +233,10 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     if not isinstance(metadata, dict):
         kind = type(metadata).__name__
         raise ValueError(f"agent metadata {meta} must be a JSON object, got a {kind}")
-    layout = observation_layout(metadata)
+    try:
+        layout = observation_layout(metadata)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{meta}: invalid observation section: {exc}") from None
     names = metadata.get("obs_names")
     if names is not None and (not isinstance(names, list) or tuple(names) != layout):
         raise ValueError(

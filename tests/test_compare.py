@@ -399,8 +399,8 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
 
     scenario = load_scenarios()["paper"]
     assert policy_env_id("fbsm") == policy_env_id("ppo") == "AUVPath3D-v0"
-    assert policy_env_id("ppo_generalist") == "AUVPath3D-v1"
-    v1 = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v1")
+    assert policy_env_id("ppo_generalist") == "AUVPath3DSpeedLimit-v0"
+    v1 = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3DSpeedLimit-v0")
     assert v1.env_kwargs["surge_limit"] == 2.0
     assert "surge_limit" not in Job("fbsm", scenario, 0, 10.0, 5.0).env_kwargs
     same = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v0")
@@ -409,6 +409,6 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
             "--duration", "10", "--quiet", "--no-figures", "--out", str(tmp_path)]  # fmt: skip
     records = main(argv)
     assert {r["policy"]: r["env_id"] for r in records} == {
-        "fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3D-v1"}  # fmt: skip
+        "fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}  # fmt: skip
     config = json.loads((tmp_path / "episodes.json").read_text())["config"]
-    assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3D-v1"}
+    assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}

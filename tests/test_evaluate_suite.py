@@ -42,7 +42,9 @@ DURATION = "10"
 REPS = "200"
 
 
-def make_multi_seed(folder: Path, seeds=(3, 5), env_ids=("AUVPath3D-v0", "AUVPath3D-v1")) -> Path:
+def make_multi_seed(
+    folder: Path, seeds=(3, 5), env_ids=("AUVPath3D-v0", "AUVPath3DSpeedLimit-v0")
+) -> Path:
     """A multi-seed results directory (layout of `benchmarks.train_seeds --results`): the shipped
     agent per seed, metadata with that seed and env id, and a learning curve per seed."""
     folder.mkdir(parents=True)
@@ -107,7 +109,7 @@ def test_rows_cover_every_policy_run_set_and_seed(tiny):
     assert env_ids == {
         ("fbsm", "0"): "AUVPath3D-v0",
         ("gen", "3"): "AUVPath3D-v0",
-        ("gen", "5"): "AUVPath3D-v1",
+        ("gen", "5"): "AUVPath3DSpeedLimit-v0",
     }
     for r in rows:
         assert float(r["duration"]) <= 10.0 and float(r["max_surge"]) > 0.5
@@ -117,7 +119,7 @@ def test_rows_cover_every_policy_run_set_and_seed(tiny):
     # The surge limit of v1 (2.0 m/s) ends an episode exactly when the agent exceeds it.
     for r in rows:
         over = float(r["max_surge"]) > 2.0
-        if r["env_id"] == "AUVPath3D-v1":
+        if r["env_id"] == "AUVPath3DSpeedLimit-v0":
             assert (r["termination_reason"] == "overspeed") == over
         else:
             assert r["termination_reason"] != "overspeed"

@@ -309,7 +309,7 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     from controllers.ppo import load_policy
 
     config = yaml.safe_load((ROOT / "benchmarks/hyperparams/ppo_residual.yml").read_text())
-    section = config["AUVPath3D-v1"]
+    section = config["AUVPath3DSpeedLimit-v0"]
     section.update(n_envs=4, n_steps=64, batch_size=128, n_epochs=1)
     small = tmp_path / "ppo_residual.yml"
     small.write_text(yaml.safe_dump(config))
@@ -345,8 +345,8 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     from benchmarks.training.config import read_zoo_config
 
     hyper = ROOT / "benchmarks" / "hyperparams"
-    cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3D-v1")
-    generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3D-v1")
+    cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3DSpeedLimit-v0")
+    generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3DSpeedLimit-v0")
     assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
     expected = {"tv_weight": 1.0, "precision_weight": 3.0, "selection_chattering": 0.0005,
                 "filter_max": 0.8}  # fmt: skip
@@ -358,4 +358,4 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     broken = tmp_path / "bad.yml"
     broken.write_text(text)
     with pytest.raises(ValueError, match=r"bad.yml: residual: tv_weight must be a number"):
-        read_zoo_config(broken, "AUVPath3D-v1")
+        read_zoo_config(broken, "AUVPath3DSpeedLimit-v0")

@@ -1,4 +1,5 @@
-"""Realistic speed (issue 14 item 3): the surge limit of AUVPath3D-v1 and the speed metrics."""
+"""Realistic speed (issue 14 item 3): the surge limit of AUVPath3DSpeedLimit-v0 and the speed
+metrics."""
 
 from __future__ import annotations
 
@@ -44,7 +45,7 @@ def test_v0_has_no_surge_limit_and_its_reward_is_the_sum_without_the_overspeed_t
 
 
 def test_v1_terminates_above_the_surge_limit_with_the_failure_penalty():
-    env = gym.make("AUVPath3D-v1")
+    env = gym.make("AUVPath3DSpeedLimit-v0")
     assert env.unwrapped.config.limits.surge_limit == SURGE_LIMIT == 2.0
     surges, _, infos, terminated = _sprint(env)
     assert terminated and infos[-1]["termination_reason"] == "overspeed"
@@ -60,7 +61,7 @@ def test_v1_terminates_above_the_surge_limit_with_the_failure_penalty():
 
 
 def test_v1_vector_env_matches_the_single_env_and_weights_are_arguments():
-    venv = gym.make_vec("AUVPath3D-v1", num_envs=2)
+    venv = gym.make_vec("AUVPath3DSpeedLimit-v0", num_envs=2)
     assert isinstance(venv, AUVPath3DVectorEnv) and venv.config.limits.surge_limit == 2.0
     env = AUVPath3DEnv(surge_limit=2.0, reward_weights=RewardWeights(overspeed=5.0))
     env.reset(seed=0)

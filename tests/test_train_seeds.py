@@ -44,7 +44,7 @@ def _shortest_eval_duration() -> float:
 def _config(tmp_path: Path, algo: str) -> Path:
     section = {**TINY[algo], "env_kwargs": {"randomize_start": True, "max_time": 20.0}}
     path = tmp_path / f"{algo}.yml"
-    path.write_text(yaml.safe_dump({"AUVPath3D-v1": section}))
+    path.write_text(yaml.safe_dump({"AUVPath3DSpeedLimit-v0": section}))
     return path
 
 
@@ -157,7 +157,7 @@ def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
     assert meta["seed"] == summary["selected_seed"] and meta["algo"] == algo
     from controllers.ppo import load_policy
 
-    assert load_policy(tmp_path / "agent").metadata["env_id"] == "AUVPath3D-v1"
+    assert load_policy(tmp_path / "agent").metadata["env_id"] == "AUVPath3DSpeedLimit-v0"
     # Everything finished: a resumed run trains nothing and reports the same seeds.
     assert main([*args[:-4], "--resume"]) == 0
     again = _summary(tmp_path / "run")
@@ -180,7 +180,7 @@ def test_validation_on_a_task_set(tmp_path):
     assert plan["eval_seeds"] == [100_000, 100_001, 100_002]
     meta = json.loads((tmp_path / "run" / "seed_0" / "final" / "metadata.json").read_text())
     assert meta["eval_env_kwargs"]["path"] == validation.env["path"]
-    assert meta["eval_env_kwargs"]["surge_limit"] == 2.0  # AUVPath3D-v1's fixed argument
+    assert meta["eval_env_kwargs"]["surge_limit"] == 2.0  # AUVPath3DSpeedLimit-v0's fixed argument
     entry = _summary(tmp_path / "run")["seeds"][0]
     assert entry["validation_summary"]["n_episodes"] == 3
     assert entry["test_summary"]["n_episodes"] == 10
@@ -222,9 +222,10 @@ def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path, caps
 def test_sac_resume_restores_the_replay_buffer(tmp_path):
     from benchmarks.training.train import TrainOptions, train
 
-    opts = TrainOptions(algo="sac", config=str(_config(tmp_path, "sac")), env_id="AUVPath3D-v1",
-                        out=str(tmp_path / "run"), n_timesteps=128, checkpoint_freq=128,
-                        eval_freq=0, progress_bar=False)  # fmt: skip
+    opts = TrainOptions(algo="sac", config=str(_config(tmp_path, "sac")),
+                        env_id="AUVPath3DSpeedLimit-v0", out=str(tmp_path / "run"),
+                        n_timesteps=128, checkpoint_freq=128, eval_freq=0,
+                        progress_bar=False)  # fmt: skip
     train(opts)
     train(TrainOptions(**{**opts.__dict__, "n_timesteps": 256, "resume": True}))
     last = tmp_path / "run" / "checkpoints" / "step_0000000256" / "replay_buffer.pkl"
@@ -307,13 +308,15 @@ def test_shipped_configs_build_their_algorithm(file, algo):
     from benchmarks.training.config import ALGORITHMS, read_zoo_config
     from benchmarks.training.train import make_training_env
 
-    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / file, "AUVPath3D-v1", algo)
+    cfg = read_zoo_config(
+        ROOT / "benchmarks" / "hyperparams" / file, "AUVPath3DSpeedLimit-v0", algo
+    )
     assert cfg.env_kwargs["reward_weights"] == {"distance": 3.0, "termination": 300.0,
                                                 "tracking": 3.0}  # fmt: skip
     kwargs = cfg.model_kwargs()
     if algo == "sac":
         kwargs["buffer_size"] = 1000  # the real buffer allocates ~100 MB
-    venv = VecNormalize(make_training_env(2, 0, {"max_time": 5.0}, env_id="AUVPath3D-v1"),
+    venv = VecNormalize(make_training_env(2, 0, {"max_time": 5.0}, env_id="AUVPath3DSpeedLimit-v0"),
                         **cfg.normalize)  # fmt: skip
     model = ALGORITHMS[algo].sb3_class()(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs,
                                          device="cpu", **kwargs)  # fmt: skip

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym import ENV_ID, VARIANTS
+from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 from auv_gym.files import write_json
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
@@ -128,9 +128,9 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
     """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results.
 
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
-    AUVPath3D-v1, under which an agent faster than 2.0 m/s terminates as "overspeed".
+    AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
-    fixed = VARIANTS[env_id]
+    fixed = VARIANTS[resolve_env_id(env_id)]
     policy = load_policy(agent, base_kwargs=base_kwargs_for_env(fixed))  # a residual agent's base
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {

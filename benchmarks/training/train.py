@@ -16,7 +16,7 @@ from typing import Any
 import auv_gym
 from auv_gym import ENV_ID, VARIANTS
 from auv_gym.files import git_commit, versions
-from auv_gym.observation import OBS_NAMES
+from auv_gym.observation import ObservationConfig
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
     export_agent,
@@ -200,10 +200,19 @@ def target_timesteps(n_timesteps: int, stop_at: int | None) -> int:
     return int(n_timesteps if stop_at is None else min(n_timesteps, stop_at))
 
 
-def _eval_kwargs(opts: TrainOptions) -> dict[str, Any]:
+def _eval_kwargs(opts: TrainOptions, env_kwargs: dict[str, Any]) -> dict[str, Any]:
     """The evaluation episodes: `eval_env` (empty: the paper scenario) under the trained id's
-    fixed arguments (the surge limit of AUVPath3D-v1), `eval_duration` long."""
-    return {**VARIANTS.get(opts.env_id, {}), **opts.eval_env, "max_time": float(opts.eval_duration)}
+    fixed arguments (the surge limit of AUVPath3DSpeedLimit-v0) and the training env's
+    observation, `eval_duration` long."""
+    seen = {"observation": env_kwargs["observation"]} if "observation" in env_kwargs else {}
+    return {**VARIANTS.get(opts.env_id, {}), **seen, **opts.eval_env,
+            "max_time": float(opts.eval_duration)}  # fmt: skip
+
+
+def observation_layout_of(env_id: str, env_kwargs: dict[str, Any]) -> ObservationConfig:
+    """The observation an agent trained on ``env_id`` with ``env_kwargs`` sees."""
+    spec = env_kwargs.get("observation", VARIANTS.get(env_id, {}).get("observation"))
+    return ObservationConfig.from_spec(spec)
 
 
 def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
@@ -236,7 +245,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if out.exists() and any(out.iterdir()) and not opts.resume:
         raise ValueError(f"run directory {out} is not empty; pass --resume or another --out")
     out.mkdir(parents=True, exist_ok=True)
-    eval_kwargs = _eval_kwargs(opts)
+    eval_kwargs = _eval_kwargs(opts, cfg.env_kwargs)
     set_random_seed(opts.seed)
     residual = cfg.residual
     venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id,
@@ -271,8 +280,11 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         "start_timesteps": int(model.num_timesteps),
     }]  # fmt: skip
     t0 = time.monotonic()
-    obs_names = OBS_NAMES if residual is None else RESIDUAL_OBS_NAMES
+    layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
+    obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
+    if residual is None and layout.kind != "paper":
+        residual_meta["observation"] = layout.to_dict()
     action_dim = 3 if residual is None else residual.action_dim
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:

@@ -1,0 +1,220 @@
+"""The agent observation (``observation="preview"``): path preview, velocity over ground, previous
+action; the ids that register it; v0 untouched."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+import auv_gym
+from auv_gym import AUVPath3DEnv, ObservationConfig
+from auv_gym.observation import OBS_DIM, OBS_NAMES
+from auv_gym.paths import Helix, Spline, StraightLine
+from tests.test_vector_env import DISTURBED, SHORT, run_parity
+
+PREVIEW = ObservationConfig("preview", points=4, spacing=3.0)
+HEAD = 6  # ground velocity, previous action
+
+
+def body_frame(theta: float, psi: float) -> np.ndarray:
+    """R_B = Rz(ψ)Ry(θ) (docs/model.md §2.0): body → earth."""
+    c, s = math.cos, math.sin
+    rz = np.array([[c(psi), -s(psi), 0], [s(psi), c(psi), 0], [0, 0, 1]])
+    ry = np.array([[c(theta), 0, s(theta)], [0, 1, 0], [-s(theta), 0, c(theta)]])
+    return rz @ ry
+
+
+def preview_points(obs: np.ndarray, points: int) -> np.ndarray:
+    return obs[OBS_DIM + HEAD :].reshape(points, 5)
+
+
+def stepped_env(path, steps: int = 60, **kwargs) -> tuple[AUVPath3DEnv, np.ndarray]:
+    env = AUVPath3DEnv(path=path, observation=PREVIEW, disturbance="none", **kwargs)
+    obs, _ = env.reset(seed=4)
+    rng = np.random.default_rng(0)
+    for _ in range(steps):
+        obs, *_ = env.step(rng.uniform(-0.3, 0.6, size=3))
+    return env, obs
+
+
+def test_layout_names_units_and_bounds():
+    names = PREVIEW.names
+    assert names[:OBS_DIM] == OBS_NAMES
+    assert len(names) == OBS_DIM + HEAD + 5 * 4 == 41
+    assert names[OBS_DIM : OBS_DIM + 7] == (
+        "u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_prev", "preview1_x",
+    )  # fmt: skip
+    assert names[-1] == "preview4_torsion" and PREVIEW.units["preview4_torsion"] == "1/m"
+    assert PREVIEW.units["u_ground"] == "m/s" and PREVIEW.units["preview2_z"] == "m"
+    low, high = PREVIEW.bounds()
+    assert low.dtype == high.dtype == np.float32
+    assert np.all(low[OBS_DIM:] == -high[OBS_DIM:]) and np.all(low[OBS_DIM:] < 0)
+    # a point is at most √3·500 m (the errors' bounds) plus 1.5·K·Δs away
+    assert high[OBS_DIM + HEAD] == pytest.approx(math.sqrt(3) * 500 + 1.5 * 12, rel=1e-6)
+    env = gym.make("AUVPath3D-v0", observation=PREVIEW)
+    assert env.observation_space.shape == (41,)
+
+
+def test_helix_points_equal_the_path_at_arc_steps_in_the_body_frame():
+    helix = Helix()  # the paper's: ‖p′‖ = √(π² + 1), κ and τ constant
+    env, obs = stepped_env(helix)
+    st = env.unwrapped.state
+    speed = math.sqrt(math.pi**2 + 1.0)
+    rotation = body_frame(st[3], st[4])
+    points = preview_points(obs, 4)
+    for k in range(1, 5):
+        p, _, _ = helix.evaluate(st[10] + k * 3.0 / speed)
+        expected = rotation.T @ (p - st[:3])
+        np.testing.assert_allclose(points[k - 1, :3], expected, rtol=1e-6, atol=1e-5)
+    # (R cos ωs, R sin ωs, −cs): κ = Rω²/(R²ω² + c²), τ = −cω/(R²ω² + c²)
+    omega = math.pi / 20
+    np.testing.assert_allclose(points[:, 3], 20 * omega**2 / speed**2, rtol=1e-6)
+    np.testing.assert_allclose(points[:, 4], -omega / speed**2, rtol=1e-6)
+
+
+def test_hand_computed_case_level_vehicle_on_a_line():
+    # Vehicle at rest at the origin heading north, path along +x from (10, 0, 0): the virtual
+    # point starts at s = 0, so preview point k is (10 + 3k, 0, 0) m ahead, κ = τ = 0.
+    line = StraightLine(start=(10.0, 0.0, 0.0), direction=(2.0, 0.0, 0.0))
+    env = AUVPath3DEnv(path=line, observation=PREVIEW, disturbance="none",
+                       start_position=(0.0, 0.0, 0.0), start_heading=0.0)  # fmt: skip
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_array_equal(obs[OBS_DIM : OBS_DIM + HEAD], np.zeros(HEAD))
+    expected = [[10.0 + 3.0 * k, 0.0, 0.0, 0.0, 0.0] for k in range(1, 5)]
+    np.testing.assert_allclose(preview_points(obs, 4), expected, atol=1e-12)
+    # heading east instead: the same points lie to port (body y < 0)
+    env = AUVPath3DEnv(path=line, observation=PREVIEW, disturbance="none",
+                       start_position=(0.0, 0.0, 0.0), start_heading=math.pi / 2)  # fmt: skip
+    obs, _ = env.reset(seed=0)
+    expected = [[0.0, -(10.0 + 3.0 * k), 0.0, 0.0, 0.0] for k in range(1, 5)]
+    np.testing.assert_allclose(preview_points(obs, 4), expected, atol=1e-5)
+
+
+def test_spline_points_are_the_spline_at_arc_steps():
+    spline = Spline([(0, 0, 5), (40, 10, 8), (80, -5, 12), (120, 20, 10)])
+    env, obs = stepped_env(spline, steps=200)
+    st = env.unwrapped.state
+    rotation = body_frame(st[3], st[4])
+    points = preview_points(obs, 4)
+    s_grid = np.linspace(st[10], st[10] + 20.0, 20001)
+    p, _, _ = spline.evaluate(s_grid)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    for k in range(1, 5):
+        target = np.interp(3.0 * k, arc, s_grid)  # the parameter 3k m of arc ahead
+        expected = rotation.T @ (spline.evaluate(target)[0] - st[:3])
+        np.testing.assert_allclose(points[k - 1, :3], expected, atol=2e-3)  # the march's error
+    _, d1, d2 = spline.evaluate(np.interp(3.0, arc, s_grid))
+    kappa = np.linalg.norm(np.cross(d1, d2)) / np.linalg.norm(d1) ** 3
+    assert points[0, 3] == pytest.approx(kappa, rel=1e-3)
+
+
+def test_preview_past_the_end_continues_along_the_last_tangent():
+    spline = Spline([(0, 0, 5), (30, 0, 5), (60, 10, 5)])
+    env = AUVPath3DEnv(path=spline, observation={"points": 6, "spacing": 10.0},
+                       disturbance="none")  # fmt: skip
+    env.reset(seed=0)
+    sim = env.unwrapped.sim
+    sim.state[0, 10] = spline.s_end - 5.0  # the virtual point 5 m of parameter before the end
+    sim._extend(np.array([0]))  # the extra entries of that state, as after a step
+    obs = sim.observations()[0]
+    p_end, d_end, _ = spline.evaluate(spline.s_end)
+    tangent = d_end / np.linalg.norm(d_end)
+    st = sim.state[0]
+    rotation = body_frame(st[3], st[4])
+    points = obs[OBS_DIM + HEAD :].reshape(6, 5)
+    assert np.all(np.isfinite(points))
+    for k in range(2, 7):  # points 2… lie beyond the end: on the tangent line, κ = τ = 0
+        earth = rotation @ points[k - 1, :3] + st[:3]
+        offset = earth - p_end
+        np.testing.assert_allclose(np.cross(offset, tangent), 0.0, atol=1e-3)
+        assert offset @ tangent > 0 and points[k - 1, 3] == points[k - 1, 4] == 0.0
+    gaps = np.linalg.norm(np.diff(rotation @ points[1:, :3].T, axis=1), axis=0)
+    np.testing.assert_allclose(gaps, 10.0, rtol=1e-5)  # still Δs of arc apart
+
+
+def test_ground_velocity_reveals_the_current_and_previous_action_is_the_saturated_one():
+    current = (0.2, -0.3, 0.05)
+    env = AUVPath3DEnv(observation=PREVIEW, disturbance="none", current={"mean": current})
+    obs, _ = env.reset(seed=1)
+    st = env.state
+    ground = obs[OBS_DIM : OBS_DIM + 3]
+    # at rest in the water, the vehicle moves with the current: R_Bᵀ v_c
+    np.testing.assert_allclose(ground, body_frame(st[3], st[4]).T @ np.array(current), atol=1e-7)
+    obs, *_ = env.step(np.array([2.5, -0.4, 0.1]))
+    np.testing.assert_array_equal(obs[OBS_DIM + 3 : OBS_DIM + 6], np.float32([1.0, -0.4, 0.1]))
+    st = env.state
+    velocity = np.array([st[5], st[6], st[7]])
+    np.testing.assert_allclose(
+        obs[OBS_DIM : OBS_DIM + 3],
+        velocity + body_frame(st[3], st[4]).T @ np.array(current), atol=1e-6,
+    )  # fmt: skip
+    obs, _ = env.reset(seed=2)
+    assert np.all(obs[OBS_DIM + 3 : OBS_DIM + 6] == 0.0)
+
+
+def test_paper_entries_and_classical_controllers_are_unchanged_by_the_preview():
+    import controllers
+
+    kwargs = {"path": "waypoints", "current": {"mean": (0.0, 0.2, 0.0)}, "max_time": 20.0}
+    plain, extended = AUVPath3DEnv(**kwargs), AUVPath3DEnv(observation="preview", **kwargs)
+    fbsm_plain, fbsm_extended = controllers.make("fbsm"), controllers.make("fbsm")
+    o1, _ = plain.reset(seed=7)
+    o2, _ = extended.reset(seed=7)
+    for _ in range(150):
+        np.testing.assert_array_equal(o2[:OBS_DIM], o1)
+        a1, _ = fbsm_plain.predict(o1)
+        a2, _ = fbsm_extended.predict(o2)
+        np.testing.assert_array_equal(a1, a2)
+        o1, r1, *_ = plain.step(a1)
+        o2, r2, *_ = extended.step(a2)
+        assert r1 == r2
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP],
+                         ids=lambda m: m.name)  # fmt: skip
+def test_batched_equals_single_bit_for_bit_with_autoresets(mode):
+    counts = run_parity(5, mode, steps=110, seed=3, observation=PREVIEW, **DISTURBED)
+    assert counts["terminated"] >= 1 and counts["truncated"] >= 1
+    counts = run_parity(4, mode, steps=100, seed=8, observation="preview", path="random",
+                        **SHORT)  # fmt: skip
+    assert counts["terminated"] + counts["truncated"] >= 4
+
+
+def test_observations_stay_inside_the_space_on_random_paths():
+    env = gym.make_vec("AUVPath3DPreview-v0", num_envs=16, path="random", random_current=0.5,
+                       current={"std": (0.1, 0.1, 0.03), "time_constant": 60.0})  # fmt: skip
+    space = env.single_observation_space
+    obs, _ = env.reset(seed=0)
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        assert np.all((obs >= space.low) & (obs <= space.high))
+        obs, *_ = env.step(rng.uniform(-1, 1, size=(16, 3)))
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"points": 0}, "observation points"), ({"points": 2.5}, "observation points"),
+    ({"spacing": 0.0}, "observation spacing"), ({"spacing": math.nan}, "observation spacing"),
+    ({"spacing": math.inf}, "observation spacing"), ({"points": 64, "spacing": 10.0}, "K·Δs"),
+    ({"kind": "future"}, "observation kind"), ({"depth": 3}, "observation"),
+])  # fmt: skip
+def test_bad_preview_arguments_name_the_argument(bad, message):
+    with pytest.raises(ValueError, match=message):
+        AUVPath3DEnv(observation=bad)
+    with pytest.raises(TypeError, match="observation must be"):
+        AUVPath3DEnv(observation=5)
+
+
+def test_ids_print_nothing_and_legacy_ids_resolve():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for env_id in auv_gym.VARIANTS:
+            gym.make(env_id).close()
+    assert gym.spec("AUVPath3DPreview-v0").kwargs == {"surge_limit": 2.0, "observation": "preview"}
+    assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
+    with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
+        auv_gym.resolve_env_id("AUVPath3D-v9")
