@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
-from auv_gym import ENV_ID, resolve_env_id
+from auv_gym import ENV_ID, VARIANTS, ObservationConfig, resolve_env_id
 from controllers import CLASSICAL
 
 __all__ = [
@@ -146,6 +146,14 @@ def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tup
             f"{where}: {agent}/metadata.json records env_id {recorded!r}; an agent runs under "
             f"its training env: {error}"
         ) from None
+    trained = ObservationConfig.from_spec(files.metadata.get("observation"))
+    registered = ObservationConfig.from_spec(VARIANTS[env_id].get("observation"))
+    if trained != registered:  # the benchmark builds an agent's env from its id alone
+        raise ValueError(
+            f"{where}: {agent} was trained on the observation {trained.to_dict()}, but its env "
+            f"{env_id} gives {registered.to_dict()}; benchmarks run an agent under its env id's "
+            "registered arguments (evaluate it with auv_gym.rollout and that observation)"
+        )
     seed = files.metadata.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"{where}: {agent}/metadata.json records seed {seed!r}, not an int >= 0")

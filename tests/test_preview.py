@@ -218,3 +218,35 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
     assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
     with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
         auv_gym.resolve_env_id("AUVPath3D-v9")
+
+
+@pytest.mark.rl
+def test_sb3_adapter_sets_terminal_observation_and_truncation_on_every_autoreset():
+    """Truncations (time limit) and terminations (corridor) both: every done carries the
+    46-entry terminal observation; "TimeLimit.truncated" is True exactly for the time limits."""
+    from auv_gym.sb3 import make_sb3_vec_env
+
+    n = 6
+    env = make_sb3_vec_env(n, seed=0, max_time=1.0, corridor=17.75, observation="preview")
+    obs = env.reset()
+    assert obs.shape == (n, 46)
+    actions = np.tile(np.float32([0.8, 0.0, 0.0]), (n, 1))
+    actions[::2, 0] = -1.0  # astern: those leave the 17.75 m corridor before the time limit
+    seen = {"truncated": 0, "terminated": 0}
+    for _ in range(60):
+        last = obs
+        obs, _, dones, infos = env.step(actions)
+        for i in range(n):
+            info = infos[i]
+            if not dones[i]:
+                assert "terminal_observation" not in info and info["TimeLimit.truncated"] is False
+                continue
+            final = info["terminal_observation"]
+            assert final.shape == (46,) and final.dtype == np.float32
+            assert np.all(final[OBS_DIM + 3 : OBS_DIM + 6] == actions[i])  # its last action
+            assert np.all(obs[i, OBS_DIM + 3 : OBS_DIM + 6] == 0.0)  # the new episode's first
+            assert not np.array_equal(final, last[i])
+            truncated = "termination_reason" not in info
+            assert info["TimeLimit.truncated"] is truncated
+            seen["truncated" if truncated else "terminated"] += 1
+    assert seen["truncated"] >= 3 and seen["terminated"] >= 3

@@ -165,6 +165,39 @@ def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
 
 
 @pytest.mark.rl
+def test_smoke_on_the_agent_observation(tmp_path):
+    """One seed on AUVPath3DPreview-v0 with a custom preview (K = 3, Δs = 4 m): the agent records
+    its 36-entry observation, loads, and acts on the env it was trained on."""
+    import gymnasium as gym
+    import numpy as np
+
+    from benchmarks.policies import agent_run
+    from controllers.ppo import load_policy
+
+    section = {**TINY["ppo"], "env_kwargs": {"randomize_start": True, "max_time": 20.0,
+                                             "observation": {"points": 3, "spacing": 4.0}}}
+    config = tmp_path / "preview.yml"
+    config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
+    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1",
+                 "--export", str(tmp_path / "agent"))  # fmt: skip
+    args[args.index("--config") + 1] = str(config)
+    assert main([*args, "--env-id", "AUVPath3DPreview-v0"]) == 0
+    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    assert meta["observation"] == {"kind": "preview", "points": 3, "spacing": 4.0}
+    assert meta["observation_shape"] == [36] and meta["obs_names"][-1] == "preview3_torsion"
+    assert meta["eval_env_kwargs"]["observation"] == {"points": 3, "spacing": 4.0}
+    held_out = json.loads((tmp_path / "agent" / "held_out_evaluation.json").read_text())
+    assert held_out["summary"]["n_episodes"] == 10  # the test report ran on its observation
+    with pytest.raises(ValueError, match=r"trained on the observation .*'points': 3.*'points': 5"):
+        agent_run("agent", tmp_path / "agent")  # its id's default preview differs
+    policy = load_policy(tmp_path / "agent")
+    env = gym.make("AUVPath3DPreview-v0", observation={"points": 3, "spacing": 4.0})
+    obs, _ = env.reset(seed=0)
+    action, _ = policy.predict(obs)
+    assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
+
+
+@pytest.mark.rl
 def test_validation_on_a_task_set(tmp_path):
     """--task-set validation: the agent is selected on the validation set's env (its path
     distribution, current, noise, actuators) on its first --eval-episodes seeds, recorded in the
