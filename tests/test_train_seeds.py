@@ -174,8 +174,14 @@ def test_smoke_on_the_agent_observation(tmp_path):
     from benchmarks.policies import agent_run
     from controllers.ppo import load_policy
 
-    section = {**TINY["ppo"], "env_kwargs": {"randomize_start": True, "max_time": 20.0,
-                                             "observation": {"points": 3, "spacing": 4.0}}}
+    section = {
+        **TINY["ppo"],
+        "env_kwargs": {
+            "randomize_start": True,
+            "max_time": 20.0,
+            "observation": {"points": 3, "spacing": 4.0},
+        },
+    }
     config = tmp_path / "preview.yml"
     config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
     args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1",
