@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -335,29 +336,66 @@ def test_ray_backend_runs_the_same_seeds(tmp_path, monkeypatch):
     assert [e["validation_summary"] for e in a] == [e["validation_summary"] for e in b]
 
 
+SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
+    ("sac.yml", "sac", "AUVPath3DSpeedLimit-v0", 0.995, None),
+    ("ppo_generalist.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
+    ("ppo.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
+    ("ppo_preview.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.99, 3.0),
+]
+
+
 @pytest.mark.rl
-@pytest.mark.parametrize(
-    ("file", "algo"), [("sac.yml", "sac"), ("ppo_generalist.yml", "ppo"), ("ppo.yml", "ppo")]
-)
-def test_shipped_configs_build_their_algorithm(file, algo):
+@pytest.mark.parametrize(("file", "algo", "env_id", "gamma", "precision"), SHIPPED_CONFIGS)
+def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precision):
     """The YAML files parse and their hyper-parameters construct the SB3 model (on a small
-    helix env: the task-distribution env_kwargs belong to the env)."""
+    helix env: the task-distribution env_kwargs belong to the env), inside the action box the
+    file sets."""
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from benchmarks.training.action_box import ActionBox
     from benchmarks.training.config import ALGORITHMS, read_zoo_config
     from benchmarks.training.train import make_training_env
 
-    cfg = read_zoo_config(
-        ROOT / "benchmarks" / "hyperparams" / file, "AUVPath3DSpeedLimit-v0", algo
-    )
-    assert cfg.env_kwargs["reward_weights"] == {"distance": 3.0, "termination": 300.0,
-                                                "tracking": 3.0}  # fmt: skip
+    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / file, env_id, algo)
+    weights = {"distance": 3.0, "termination": 300.0, "tracking": 3.0}
+    if precision is not None:
+        weights["precision"] = precision
+    assert cfg.env_kwargs["reward_weights"] == weights
     kwargs = cfg.model_kwargs()
     if algo == "sac":
         kwargs["buffer_size"] = 1000  # the real buffer allocates ~100 MB
-    venv = VecNormalize(make_training_env(2, 0, {"max_time": 5.0}, env_id="AUVPath3DSpeedLimit-v0"),
-                        **cfg.normalize)  # fmt: skip
+    venv = make_training_env(2, 0, {"max_time": 5.0}, env_id=env_id)
+    if cfg.action_bounds is not None:
+        venv = ActionBox(venv, *cfg.action_bounds)
+    venv = VecNormalize(venv, **cfg.normalize)
     model = ALGORITHMS[algo].sb3_class()(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs,
                                          device="cpu", **kwargs)  # fmt: skip
-    assert model.gamma == 0.995
+    assert model.gamma == gamma
+    assert model.observation_space.shape == venv.observation_space.shape
+    if cfg.action_bounds is not None:
+        np.testing.assert_array_equal(model.action_space.low, np.float32(cfg.action_bounds[0]))
+        model.learn(64)  # acts inside the box (ActionBox refuses anything else)
     venv.close()
+
+
+@pytest.mark.rl
+def test_action_box_refuses_actions_outside_it_and_boxes_outside_the_env(tmp_path):
+    from benchmarks.training.action_box import ActionBox
+    from benchmarks.training.config import read_zoo_config
+    from benchmarks.training.train import make_training_env
+
+    venv = ActionBox(make_training_env(2, 0, {"max_time": 5.0}), (-0.3, -1, -1), (0.3, 1, 1))
+    venv.reset()
+    with pytest.raises(ValueError, match=r"vehicle 1\) is outside the agent's box"):
+        venv.step(np.array([[0.1, 0.0, 0.0], [0.5, 0.0, 0.0]], np.float32))
+    with pytest.raises(ValueError, match="is not inside the env's"):
+        ActionBox(make_training_env(2, 0, {"max_time": 5.0}), (-2, -1, -1), (0.3, 1, 1))
+    bad = tmp_path / "bad.yml"
+    bad.write_text(
+        yaml.safe_dump(
+            {"AUVPath3D-v0": {**TINY["sac"], "action_bounds": [[0.5, 0, 0], [0.2, 1, 1]]}}
+        )
+    )
+    with pytest.raises(ValueError, match="action_bounds must be"):
+        read_zoo_config(bad, "AUVPath3D-v0", "sac")

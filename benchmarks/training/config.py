@@ -24,6 +24,12 @@ wraps the training env in `controllers.residual_env.ResidualVectorEnv` with thes
         bound: [0.25, 0.5, 0.5]     # β per X, M, N, normalised actuator units
         tv_weight: 0.25             # chattering charge per unit TV of the applied action
         base_kwargs: {}             # base gains (actuator and control_dt come from the env)
+
+An optional ``action_bounds`` key narrows the box the agent acts in, a sub-box of the env's
+[−1, 1]³ given as ``[[low_X, low_M, low_N], [high_X, high_M, high_N]]``: the agent's action
+space becomes that box (`benchmarks.training.train.ActionBox`), saved with the model, so a loaded
+agent acts inside it too. For off-policy agents, whose squashed-Gaussian exploration covers the
+whole box from the first step (`benchmarks.action_bounds` measures what that does).
 """
 
 from __future__ import annotations
@@ -41,7 +47,16 @@ __all__ = ["ALGORITHMS", "Algorithm", "ZooConfig", "read_zoo_config", "schedule"
 
 # RL-Zoo keys of the harness itself (not constructor arguments of the algorithm).
 ZOO_KEYS = frozenset(
-    {"n_envs", "n_timesteps", "policy", "normalize", "policy_kwargs", "env_kwargs", "residual"}
+    {
+        "n_envs",
+        "n_timesteps",
+        "policy",
+        "normalize",
+        "policy_kwargs",
+        "env_kwargs",
+        "residual",
+        "action_bounds",
+    }
 )
 
 
@@ -81,7 +96,7 @@ ALGORITHMS: dict[str, Algorithm] = {
             "learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma",
             "train_freq", "gradient_steps", "optimize_memory_usage", "ent_coef",
             "target_update_interval", "target_entropy", "use_sde", "sde_sample_freq",
-            "use_sde_at_warmup", "stats_window_size",
+            "use_sde_at_warmup", "stats_window_size", "n_steps",
         }),
         schedules=("learning_rate",),
         off_policy=True,
@@ -108,6 +123,7 @@ class ZooConfig:
     algo_kwargs: dict[str, Any]
     raw: dict[str, Any] = field(default_factory=dict)
     residual: ResidualSettings | None = None
+    action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -167,11 +183,36 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     residual = None
     if "residual" in section:
         residual = ResidualSettings.from_dict(section["residual"], f"{path}: residual")
+    action_bounds = None
+    if "action_bounds" in section:
+        if residual is not None:
+            raise ValueError(f"{path}: action_bounds and residual exclude each other")
+        action_bounds = _action_bounds(section["action_bounds"], path)
     return ZooConfig(
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
-        algo_kwargs=algo_kwargs, raw=section, residual=residual,
+        algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
     )  # fmt: skip
+
+
+def _action_bounds(value: Any, path: Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """[[low × 3], [high × 3]] inside [−1, 1] with low < high per axis, or a named error."""
+    import math
+
+    try:
+        low, high = (tuple(float(v) for v in side) for side in value)
+        ok = len(low) == len(high) == 3 and all(
+            math.isfinite(a) and math.isfinite(b) and -1.0 <= a < b <= 1.0
+            for a, b in zip(low, high, strict=True)
+        )
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ValueError(
+            f"{path}: action_bounds must be [[low_X, low_M, low_N], [high_X, high_M, high_N]] "
+            f"with -1 <= low < high <= 1 per axis, got {value!r}"
+        )
+    return low, high
 
 
 def _eval_kwargs(text: str, path: Path, key: str) -> dict[str, Any]:

@@ -250,6 +250,10 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     residual = cfg.residual
     venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id,
                              residual)  # fmt: skip
+    if cfg.action_bounds is not None:
+        from benchmarks.training.action_box import ActionBox
+
+        venv = ActionBox(venv, *cfg.action_bounds)
 
     previous: dict[str, Any] = {}
     checkpoint = latest_checkpoint(out) if opts.resume else None
@@ -283,7 +287,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
-    if residual is None and layout.kind != "paper":
+    if residual is None:  # the held-out evaluation and the benchmark build its env from this
         residual_meta["observation"] = layout.to_dict()
     action_dim = 3 if residual is None else residual.action_dim
 
