@@ -3,7 +3,7 @@
 * a name of `controllers.CLASSICAL` ("fbsm", "backstepping", their presets): built with
   `controllers.make` for the scenario's control period and controller keyword arguments;
 * a name of `SHIPPED_AGENTS` ("ppo", "ppo_helix_v1", "ppo_generalist", "sac_generalist",
-  "ppo_residual"): the
+  "ppo_residual", "ppo_preview"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
   (`controllers.ppo.load_policy`, PPO or SAC); a residual agent's base controller is built
@@ -45,6 +45,7 @@ SHIPPED_AGENTS = {
     "ppo_generalist": "ppo_generalist",
     "sac_generalist": "sac_generalist",
     "ppo_residual": "ppo_residual",
+    "ppo_preview": "ppo_preview",
 }
 DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
 AGENT_PREFIX = "ppo:"
