@@ -125,7 +125,8 @@ def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: 
             from controllers.residual_env import make_residual_sb3_env
 
             return VecMonitor(make_residual_sb3_env(n_envs, residual, seed=env_seed, **kwargs))
-        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, **kwargs))
+        # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.sb3).
+        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, infos="minimal", **kwargs))
     if kind == "native":
         raise ValueError(f"the native vector env simulates {sorted(VARIANTS)} only, not {env_id}")
     from stable_baselines3.common.env_util import make_vec_env
