@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 import json
 import os
 import statistics
@@ -90,13 +91,26 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
             phases[-1] = (start, collected, time.perf_counter())
 
     with trainer.thread_limit(1):
-        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto",
-                                         ENV_ID)  # fmt: skip
+        # As `train._train` with threads=1 builds it: the trees that can pass the kernel's
+        # thread count to the env pass 1 (the serial kernel at every N).
+        serial = "threads" in inspect.signature(trainer.make_training_env).parameters
+        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto", ENV_ID,
+                                         **({"threads": 1} if serial else {}))  # fmt: skip
         venv = VecNormalize(venv, **cfg.normalize)
-        kwargs = {**cfg.model_kwargs(), "n_steps": n_steps,
-                  "batch_size": int(spec["batch_size"] or cfg.algo_kwargs["batch_size"])}  # fmt: skip
-        model = TimedPPO(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, seed=int(spec["seed"]),
-                         device="cpu", verbose=0, **kwargs)  # fmt: skip
+        kwargs = {
+            **cfg.model_kwargs(),
+            "n_steps": n_steps,
+            "batch_size": int(spec["batch_size"] or cfg.algo_kwargs["batch_size"]),
+        }
+        model = TimedPPO(
+            cfg.policy,
+            venv,
+            policy_kwargs=cfg.policy_kwargs,
+            seed=int(spec["seed"]),
+            device="cpu",
+            verbose=0,
+            **kwargs,
+        )
         rollouts = int(spec["warmup"]) + int(spec["rollouts"])
         model.learn(rollouts * n_envs * n_steps)
     timed = phases[int(spec["warmup"]) :]
@@ -117,14 +131,20 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
 
 def extract(ref: str, cache: Path) -> Path:
     """The tree of git ``ref`` (a commit-ish of this repository) in ``cache``/<commit>."""
-    commit = subprocess.run(["git", "rev-parse", "--verify", f"{ref}^{{commit}}"], cwd=TREE,
-                            capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    commit = subprocess.run(
+        ["git", "rev-parse", "--verify", f"{ref}^{{commit}}"],
+        cwd=TREE,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
     folder = cache / commit
     if not (folder / "auv_gym" / "__init__.py").is_file():
         partial = Path(tempfile.mkdtemp(prefix=f"{commit[:12]}.", dir=cache))
         with tempfile.TemporaryFile() as archive:
-            subprocess.run(["git", "archive", "--format=tar", commit], cwd=TREE, stdout=archive,
-                           check=True)  # fmt: skip
+            subprocess.run(
+                ["git", "archive", "--format=tar", commit], cwd=TREE, stdout=archive, check=True
+            )
             archive.seek(0)
             with tarfile.open(fileobj=archive) as tar:
                 tar.extractall(partial, filter="data")
@@ -140,8 +160,13 @@ def run_in(tree: Path, spec: dict[str, Any]) -> dict[str, Any]:
         f"m = runpy.run_path({str(HERE)!r})\n"
         "print(json.dumps(m['measure'](json.loads(sys.argv[1]))))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code, json.dumps(spec)], cwd=tree, env=env,
-                         capture_output=True, text=True)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(spec)],
+        cwd=tree,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
     if out.returncode != 0:
         raise RuntimeError(f"benchmark run in {tree} failed:\n{out.stderr[-3000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -164,13 +189,17 @@ def table(results: dict[tuple[str, int, int], list[dict[str, Any]]], sides: list
         runs = {side: results[side, n, t] for side in sides}
         line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {t:>7}"
         for side in sides:
-            line += (f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
-                     f"{_median(runs[side], 'collect_per_s'):>9,.0f} "
-                     f"{_median(runs[side], 'update_per_s'):>8,.0f}")  # fmt: skip
+            line += (
+                f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
+                f"{_median(runs[side], 'collect_per_s'):>9,.0f} "
+                f"{_median(runs[side], 'update_per_s'):>8,.0f}"
+            )
         if len(sides) == 2:
             old, new = runs[sides[0]], runs[sides[1]]
-            ratios = [_median(new, k) / _median(old, k)
-                      for k in ("total_per_s", "collect_per_s", "update_per_s")]  # fmt: skip
+            ratios = [
+                _median(new, k) / _median(old, k)
+                for k in ("total_per_s", "collect_per_s", "update_per_s")
+            ]
             line += f" | {ratios[0]:>10.2f}× {ratios[1]:>7.2f}× {ratios[2]:>6.2f}×"
         lines.append(line)
     return "\n".join(lines)
@@ -178,22 +207,50 @@ def table(results: dict[tuple[str, int, int], list[dict[str, Any]]], sides: list
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--n-envs", type=int, nargs="+", default=list(N_ENVS),
-                        help="numbers of vehicles (training envs)")  # fmt: skip
-    parser.add_argument("--baseline", default=DEFAULT_BASELINE,
-                        help="git ref of the code to compare with; 'none': this tree only")  # fmt: skip
+    parser.add_argument(
+        "--n-envs",
+        type=int,
+        nargs="+",
+        default=list(N_ENVS),
+        help="numbers of vehicles (training envs)",
+    )
+    parser.add_argument(
+        "--baseline",
+        default=DEFAULT_BASELINE,
+        help="git ref of the code to compare with; 'none': this tree only",
+    )
     parser.add_argument("--rollouts", type=int, default=4, help="timed rollouts per run")
     parser.add_argument("--warmup", type=int, default=1, help="untimed rollouts first")
-    parser.add_argument("--repeats", type=int, default=2,
-                        help="runs per tree and setting (alternating; medians are printed)")  # fmt: skip
-    parser.add_argument("--n-steps", type=int, default=None,
-                        help=f"steps per env and rollout (default {ROLLOUT_STEPS} / N)")  # fmt: skip
-    parser.add_argument("--batch-size", type=int, default=None,
-                        help="minibatch size (default: the configuration's, 2048)")  # fmt: skip
-    parser.add_argument("--update-threads", type=int, nargs="+", default=[1],
-                        help="torch threads of the update (collection: one); one row each")  # fmt: skip
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
-                        help="folder of the extracted baseline trees")  # fmt: skip
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=2,
+        help="runs per tree and setting (alternating; medians are printed)",
+    )
+    parser.add_argument(
+        "--n-steps",
+        type=int,
+        default=None,
+        help=f"steps per env and rollout (default {ROLLOUT_STEPS} / N)",
+    )
+    parser.add_argument(
+        "--batch-size",
+        type=int,
+        default=None,
+        help="minibatch size (default: the configuration's, 2048)",
+    )
+    parser.add_argument(
+        "--update-threads",
+        type=int,
+        nargs="+",
+        default=[1],
+        help="torch threads of the update (collection: one); one row each",
+    )
+    parser.add_argument(
+        "--cache",
+        default=os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
+        help="folder of the extracted baseline trees",
+    )
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write every run to this file")
     args = parser.parse_args(argv)
@@ -211,22 +268,36 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         cache.mkdir(parents=True, exist_ok=True)
         trees = {"old": extract(args.baseline, cache), **trees}
     sides = list(trees)
-    specs = [{"n_envs": n, "n_steps": args.n_steps or max(1, ROLLOUT_STEPS // n),
-              "batch_size": args.batch_size, "rollouts": args.rollouts, "warmup": args.warmup,
-              "update_threads": t, "seed": 0}
-             for t in args.update_threads for n in args.n_envs]  # fmt: skip
+    specs = [
+        {
+            "n_envs": n,
+            "n_steps": args.n_steps or max(1, ROLLOUT_STEPS // n),
+            "batch_size": args.batch_size,
+            "rollouts": args.rollouts,
+            "warmup": args.warmup,
+            "update_threads": t,
+            "seed": 0,
+        }
+        for t in args.update_threads
+        for n in args.n_envs
+    ]
     plan = []
     for repeat in range(args.repeats):
         for k, spec in enumerate(specs):  # alternate which side goes first
             order = sides if (repeat + k) % 2 == 0 else sides[::-1]
             plan += [(side, spec) for side in order]
-    print(f"PPO on {CONFIG} ({ENV_ID}); new = {TREE}"
-          + (f", old = {args.baseline} ({trees['old'].name[:12]})" if "old" in trees else "")
-          + f"; {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at start\n", flush=True)  # fmt: skip
+    print(
+        f"PPO on {CONFIG} ({ENV_ID}); new = {TREE}"
+        + (f", old = {args.baseline} ({trees['old'].name[:12]})" if "old" in trees else "")
+        + f"; {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at start\n",
+        flush=True,
+    )
     results: dict[tuple[str, int, int], list[dict[str, Any]]] = {}
     for side in tqdm(sides, desc="loading kernels", leave=False):  # compile once per tree
-        run_in(trees[side], {**specs[0], "n_envs": 2, "n_steps": 8, "batch_size": 16,
-                             "rollouts": 1, "warmup": 0})  # fmt: skip
+        run_in(
+            trees[side],
+            {**specs[0], "n_envs": 2, "n_steps": 8, "batch_size": 16, "rollouts": 1, "warmup": 0},
+        )
     for side, spec in tqdm(plan, desc="training runs"):
         r = {"side": side, **run_in(trees[side], spec)}
         results.setdefault((side, spec["n_envs"], spec["update_threads"]), []).append(r)

@@ -21,7 +21,13 @@ from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from controllers.ppo import PPOPolicy
 from controllers.residual import ResidualPolicy, ResidualSettings, base_kwargs_for_env
 
-__all__ = ["PeriodicCheckpoint", "PeriodicEvaluation", "StopAt", "policy_from_model"]
+__all__ = [
+    "PeriodicCheckpoint",
+    "PeriodicEvaluation",
+    "StopAt",
+    "UpdateThreads",
+    "policy_from_model",
+]
 
 # metadata(extra) → the agent metadata of the model's current state, updated with `extra`.
 MetadataFn = Callable[[dict[str, Any]], dict[str, Any]]
@@ -142,3 +148,29 @@ class StopAt(BaseCallback):
 
     def _on_step(self) -> bool:
         return self.num_timesteps < self.target
+
+
+class UpdateThreads(BaseCallback):
+    """torch on ``update`` threads for the gradient updates after each rollout, on ``collect``
+    threads while collecting (and after training). Collection alternates the policy's forward
+    pass and the env's kernel, one core at a time; the update has both cores to itself."""
+
+    def __init__(self, collect: int, update: int) -> None:
+        super().__init__()
+        self.collect, self.update = int(collect), int(update)
+
+    def _on_rollout_start(self) -> None:
+        import torch
+
+        torch.set_num_threads(self.collect)
+
+    def _on_rollout_end(self) -> None:
+        import torch
+
+        torch.set_num_threads(self.update)
+
+    def _on_step(self) -> bool:
+        return True
+
+    def _on_training_end(self) -> None:
+        self._on_rollout_start()
