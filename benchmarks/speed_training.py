@@ -205,6 +205,16 @@ def table(results: dict[tuple[str, int, int], list[dict[str, Any]]], sides: list
     return "\n".join(lines)
 
 
+def versus_shipped(results: dict[tuple[str, int, int], list[dict[str, Any]]]) -> str:
+    """Every new total against the old one of the first N on one update thread (the shipped
+    configuration when N = 32): code and settings together."""
+    n0 = min(n for _, n, _ in results)
+    ref = _median(results["old", n0, min(t for _, _, t in results)], "total_per_s")
+    cells = [f"N={n}, {t} upd thr: {_median(runs, 'total_per_s') / ref:.2f}×"
+             for (side, n, t), runs in sorted(results.items()) if side == "new"]  # fmt: skip
+    return f"new total / old total at N={n0} (one update thread): " + ", ".join(cells)
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument(
@@ -266,7 +276,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if args.baseline.lower() != "none":
         cache = Path(args.cache)
         cache.mkdir(parents=True, exist_ok=True)
-        trees = {"old": extract(args.baseline, cache), **trees}
+        try:
+            trees = {"old": extract(args.baseline, cache), **trees}
+        except (OSError, subprocess.CalledProcessError) as error:  # no git, not a checkout
+            print(f"baseline {args.baseline!r} unavailable ({error}); timing this tree only")
     sides = list(trees)
     specs = [
         {
@@ -303,6 +316,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results.setdefault((side, spec["n_envs"], spec["update_threads"]), []).append(r)
     print("\nenv steps/s (medians of the runs); ratio = new / old, measured in this run")
     print(table(results, sides))
+    if "old" in trees:
+        print(versus_shipped(results))
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
     out = {"baseline": args.baseline, "runs": [r for rs in results.values() for r in rs]}
     if args.json:
