@@ -50,6 +50,8 @@ ROLLOUT_STEPS = 8192  # env steps per rollout of the generalist configuration (3
 CONFIG = "benchmarks/hyperparams/ppo_generalist.yml"
 ENV_ID = "AUVPath3D-v1"
 HERE = Path(__file__).resolve()
+# (side, N, update threads, batch size) → the runs of that tree and setting
+Results = dict[tuple[str, int, int, int], list[dict[str, Any]]]
 TREE = HERE.parent.parent  # this tree's root
 
 
@@ -100,7 +102,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         kwargs = {
             **cfg.model_kwargs(),
             "n_steps": n_steps,
-            "batch_size": int(spec["batch_size"] or cfg.algo_kwargs["batch_size"]),
+            "batch_size": int(spec["batch_size"]),
         }
         model = TimedPPO(
             cfg.policy,
@@ -176,18 +178,19 @@ def _median(runs: list[dict[str, Any]], key: str) -> float:
     return statistics.median(r[key] for r in runs)
 
 
-def table(results: dict[tuple[str, int, int], list[dict[str, Any]]], sides: list[str]) -> str:
-    """One row per (N, update threads): each side's median rates and new/old ratios."""
-    head = f"{'N':>5} {'n_steps':>7} {'upd thr':>7}"
+def table(results: Results, sides: list[str]) -> str:
+    """One row per setting (N, update threads, batch): each side's median rates and the
+    new/old ratios."""
+    head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'upd thr':>7}"
     for side in sides:
         head += f" | {side + ' total':>12} {'collect':>9} {'update':>8}"
     if len(sides) == 2:
         head += f" | {'ratio total':>11} {'collect':>8} {'update':>7}"
     lines = [head, "-" * len(head)]
-    keys = sorted({(n, t) for _, n, t in results})
-    for n, t in keys:
-        runs = {side: results[side, n, t] for side in sides}
-        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {t:>7}"
+    for setting in sorted({key[1:] for key in results}):
+        runs = {side: results[(side, *setting)] for side in sides}
+        n, t, b = setting
+        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {b:>6} {t:>7}"
         for side in sides:
             line += (
                 f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
@@ -205,14 +208,15 @@ def table(results: dict[tuple[str, int, int], list[dict[str, Any]]], sides: list
     return "\n".join(lines)
 
 
-def versus_shipped(results: dict[tuple[str, int, int], list[dict[str, Any]]]) -> str:
-    """Every new total against the old one of the first N on one update thread (the shipped
-    configuration when N = 32): code and settings together."""
-    n0 = min(n for _, n, _ in results)
-    ref = _median(results["old", n0, min(t for _, _, t in results)], "total_per_s")
-    cells = [f"N={n}, {t} upd thr: {_median(runs, 'total_per_s') / ref:.2f}×"
-             for (side, n, t), runs in sorted(results.items()) if side == "new"]  # fmt: skip
-    return f"new total / old total at N={n0} (one update thread): " + ", ".join(cells)
+def versus_shipped(results: Results) -> str:
+    """Every new total against the old one of the first setting (the shipped configuration:
+    N = 32, batch 2048, one thread, with the defaults): code and settings together."""
+    first = min(key[1:] for key in results if key[0] == "old")
+    ref = _median(results[("old", *first)], "total_per_s")
+    cells = [f"N={n} b={b} thr={t}: {_median(runs, 'total_per_s') / ref:.2f}×"
+             for (side, n, t, b), runs in sorted(results.items()) if side == "new"]  # fmt: skip
+    n, t, b = first
+    return f"new total / old total at N={n} b={b} thr={t}: " + ", ".join(cells)
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -246,8 +250,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument(
         "--batch-size",
         type=int,
-        default=None,
-        help="minibatch size (default: the configuration's, 2048)",
+        nargs="+",
+        default=[2048],
+        help="minibatch sizes (the configuration's: 2048); one row each",
     )
     parser.add_argument(
         "--update-threads",
@@ -266,7 +271,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     if args.quick:
         args.n_envs, args.rollouts, args.repeats, args.n_steps = [8], 1, 1, 16
-        args.batch_size = 64
+        args.batch_size = [64]
     if min(args.n_envs) < 1 or args.rollouts < 1 or args.repeats < 1 or args.warmup < 0:
         parser.error("--n-envs, --rollouts and --repeats must be >= 1, --warmup >= 0")
 
@@ -285,12 +290,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         {
             "n_envs": n,
             "n_steps": args.n_steps or max(1, ROLLOUT_STEPS // n),
-            "batch_size": args.batch_size,
+            "batch_size": b,
             "rollouts": args.rollouts,
             "warmup": args.warmup,
             "update_threads": t,
             "seed": 0,
         }
+        for b in args.batch_size
         for t in args.update_threads
         for n in args.n_envs
     ]
@@ -305,7 +311,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         + f"; {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at start\n",
         flush=True,
     )
-    results: dict[tuple[str, int, int], list[dict[str, Any]]] = {}
+    results: Results = {}
     for side in tqdm(sides, desc="loading kernels", leave=False):  # compile once per tree
         run_in(
             trees[side],
@@ -313,7 +319,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         )
     for side, spec in tqdm(plan, desc="training runs"):
         r = {"side": side, **run_in(trees[side], spec)}
-        results.setdefault((side, spec["n_envs"], spec["update_threads"]), []).append(r)
+        key = (side, spec["n_envs"], spec["update_threads"], spec["batch_size"])
+        results.setdefault(key, []).append(r)
     print("\nenv steps/s (medians of the runs); ratio = new / old, measured in this run")
     print(table(results, sides))
     if "old" in trees:
