@@ -154,3 +154,25 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     r = runs[0]
     assert r["total_per_s"] == pytest.approx(r["steps"] / (r["collect_s"] + r["update_s"]))
     assert 0 < r["total_per_s"] < min(r["collect_per_s"], r["update_per_s"])
+
+
+def test_update_threads_train_the_same_weights_bit_for_bit():
+    import torch
+    from stable_baselines3 import PPO
+
+    from benchmarks.training.callbacks import UpdateThreads
+
+    before = torch.get_num_threads()
+    weights = []
+    try:
+        for update in (1, 2):
+            torch.set_num_threads(1)
+            env = VecNormalize(make_sb3_vec_env(32, seed=0, infos="minimal", **SHORT))
+            model = PPO("MlpPolicy", env, n_steps=64, batch_size=2048, n_epochs=2, seed=0,
+                        device="cpu", policy_kwargs={"net_arch": [64, 64]})  # fmt: skip
+            model.learn(2 * 32 * 64, callback=UpdateThreads(1, update))
+            assert torch.get_num_threads() == 1
+            weights.append([p.detach().clone() for p in model.policy.parameters()])
+    finally:
+        torch.set_num_threads(before)
+    assert all(torch.equal(a, b) for a, b in zip(*weights, strict=True))

@@ -75,7 +75,7 @@ class TrainOptions:
     threads: int = 1  # torch intra-op and numba threads during training (restored after)
     # torch threads of the gradient updates between rollouts (0: `threads`). On an idle machine
     # two make PPO's update about 1.4x faster (the env waits then); on cores loaded by other jobs
-    # much slower, and a different count changes the floating-point sums (not bit-reproducible).
+    # 15-50x slower. The trained weights are the same bit for bit (tests/test_sb3_infos.py).
     update_threads: int = 0
     progress_bar: bool = True
     export: str | None = None  # copy the best agent here at the end (e.g. benchmarks/agents/x)
