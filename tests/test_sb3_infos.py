@@ -176,3 +176,34 @@ def test_update_threads_train_the_same_weights_bit_for_bit():
     finally:
         torch.set_num_threads(before)
     assert all(torch.equal(a, b) for a, b in zip(*weights, strict=True))
+
+
+@pytest.mark.parametrize("two_threads_faster", [False, True])
+def test_adaptive_update_threads_keeps_the_faster_count_and_backs_off_its_probes(
+    two_threads_faster, monkeypatch
+):
+    import torch
+
+    from benchmarks.training import callbacks as module
+
+    cost = {1: 1.0, 2: 0.7 if two_threads_faster else 20.0}  # [s] per update
+    clock = [0.0]
+    monkeypatch.setattr(module.time, "perf_counter", lambda: clock[0])
+    before = torch.get_num_threads()
+    callback = module.AdaptiveUpdateThreads(1, (1, 2))
+    try:
+        for _ in range(60):
+            callback.on_rollout_start()
+            callback.on_rollout_end()
+            clock[0] += cost[callback.update]  # the update
+        callback.on_training_end()
+    finally:
+        torch.set_num_threads(before)
+    used = [threads for threads, _ in callback.history]
+    assert used[:2] == [1, 2] and len(used) == 60
+    assert all(seconds == pytest.approx(cost[threads]) for threads, seconds in callback.history)
+    best, other = (2, 1) if two_threads_faster else (1, 2)
+    # After one try each: the faster count, the other probed after 10, then 20 updates (each
+    # probe loses, so the interval doubles; the next would come after 40).
+    assert [k for k, threads in enumerate(used) if threads == other][1:] == [11, 31]
+    assert used[2:11] == [best] * 9 and callback.probe_every == 40

@@ -77,6 +77,9 @@ class TrainOptions:
     # two make PPO's update about 1.4x faster (the env waits then); on cores loaded by other jobs
     # 15-50x slower. The trained weights are the same bit for bit (tests/test_sb3_infos.py).
     update_threads: int = 0
+    # Time the updates on `threads` and on max(2, update_threads) threads and keep the faster,
+    # probing the other now and then (`callbacks.AdaptiveUpdateThreads`).
+    adaptive_threads: bool = False
     progress_bar: bool = True
     export: str | None = None  # copy the best agent here at the end (e.g. benchmarks/agents/x)
     verbose: int = 0
@@ -237,6 +240,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     from stable_baselines3.common.vec_env import VecNormalize
 
     from benchmarks.training.callbacks import (
+        AdaptiveUpdateThreads,
         PeriodicCheckpoint,
         PeriodicEvaluation,
         StopAt,
@@ -309,7 +313,10 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         }  # fmt: skip
 
     callbacks = []
-    if opts.update_threads not in (0, opts.threads):
+    if opts.adaptive_threads:
+        candidates = (opts.threads, max(2, opts.update_threads))
+        callbacks.append(AdaptiveUpdateThreads(opts.threads, candidates))
+    elif opts.update_threads not in (0, opts.threads):
         callbacks.append(UpdateThreads(opts.threads, opts.update_threads))
     if opts.eval_freq > 0:
         callbacks.append(PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
