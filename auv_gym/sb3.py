@@ -10,7 +10,7 @@ ImportError naming the extra when it is missing.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -26,7 +26,11 @@ except ImportError as error:  # pragma: no cover - exercised in a subprocess by 
 
 from auv_gym.vector_env import AUVPath3DVectorEnv
 
-__all__ = ["SB3VecEnv", "make_sb3_vec_env"]
+__all__ = ["INFO_MODES", "SB3VecEnv", "make_sb3_vec_env"]
+
+# `SB3VecEnv(infos=...)`: "full" per-vehicle info dicts, or "minimal" ones with only the keys SB3
+# itself reads ("TimeLimit.truncated"; "terminal_observation" when the episode ended).
+INFO_MODES = ("full", "minimal")
 
 # Attributes that differ between vehicles; every other attribute is shared by all of them.
 _PER_VEHICLE = ("state", "np_random", "observation_space", "action_space")
@@ -49,13 +53,21 @@ class SB3VecEnv(VecEnv):
     `env_is_wrapped` is False (no gymnasium wrappers; wrap the whole VecEnv with `VecMonitor`,
     `VecNormalize`, ...). `render` draws the vector env's `render_vehicle`.
 
+    ``infos="minimal"`` (opt-in; default "full") skips the per-vehicle copies of the vector env's
+    info: each dict then holds only what SB3 reads, ``"TimeLimit.truncated"`` and, when the
+    episode ended, ``"terminal_observation"`` (same values as "full"), and `reset_infos` are
+    empty dicts. Observations, rewards and dones are unchanged; at 512 vehicles the full dicts
+    cost about as much as the physics.
+
     ``venv`` may also be a gymnasium `VectorWrapper` around an `AUVPath3DVectorEnv` (e.g.
     `controllers.residual_env.ResidualVectorEnv`): steps, resets and spaces are the wrapper's;
     the per-vehicle attributes and the autoreset mode are the vector env's (``unwrapped``), and
     other attributes are looked up on the wrapper first.
     """
 
-    def __init__(self, venv: Any) -> None:  # the vector env, or a VectorWrapper of it
+    def __init__(self, venv: Any, infos: str = "full") -> None:  # venv: or a VectorWrapper
+        if infos not in INFO_MODES:
+            raise ValueError(f"infos must be one of {list(INFO_MODES)}, got {infos!r}")
         if not isinstance(getattr(venv, "unwrapped", None), AUVPath3DVectorEnv):
             raise ValueError(f"SB3VecEnv wraps an AUVPath3DVectorEnv, got {type(venv).__name__}")
         core = venv.unwrapped
@@ -69,12 +81,13 @@ class SB3VecEnv(VecEnv):
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self.metadata = {**self.metadata, "render_fps": venv.metadata["render_fps"]}
         self._actions: np.ndarray | None = None
+        self.info_mode = infos
 
     # ------------------------------------------------------------------------------- stepping
     def reset(self) -> np.ndarray:
         seeds = self._seeds if any(s is not None for s in self._seeds) else None
         obs, info = self.venv.reset(seed=seeds)
-        self.reset_infos = _info_dicts(info, self.num_envs)
+        self.reset_infos = self._dicts(info)
         self._reset_seeds()
         self._reset_options()
         return obs
@@ -89,19 +102,23 @@ class SB3VecEnv(VecEnv):
         obs, reward, terminated, truncated, info = self.venv.step(actions)
         dones = terminated | truncated
         time_limit = (truncated & ~terminated).tolist()
-        if not dones.any():
-            infos = _info_dicts(info, self.num_envs)
-        else:
+        infos = self._dicts(info)
+        if dones.any():
             # Ended vehicles report their last step's info; the reset info goes to reset_infos.
-            infos = _info_dicts(info, self.num_envs)
-            final = _info_dicts(info["final_info"], self.num_envs)
-            for i in np.flatnonzero(dones):
+            final = self._dicts(info["final_info"])
+            for i in np.flatnonzero(dones).tolist():
                 self.reset_infos[i] = infos[i]
                 infos[i] = final[i]
                 infos[i]["terminal_observation"] = info["final_obs"][i]
-        for i, flag in enumerate(time_limit):
-            infos[i]["TimeLimit.truncated"] = flag
+        for row, flag in zip(infos, time_limit, strict=True):
+            row["TimeLimit.truncated"] = flag
         return obs, reward.astype(np.float32), dones, infos
+
+    def _dicts(self, info: dict[str, Any]) -> list[dict[str, Any]]:
+        """One info dict per vehicle: the vector env's (``infos="full"``) or empty ones."""
+        if self.info_mode == "full":
+            return _info_dicts(info, self.num_envs)
+        return [{} for _ in range(self.num_envs)]
 
     def close(self) -> None:
         self.venv.close()
@@ -152,20 +169,23 @@ class SB3VecEnv(VecEnv):
 
 
 def _info_dicts(info: dict[str, Any], n: int) -> list[dict[str, Any]]:
-    """Gymnasium's dict of arrays (with ``_key`` masks) → one dict per vehicle, as single envs."""
+    """Gymnasium's dict of arrays (with ``_key`` masks) → one dict per vehicle, as single envs.
+
+    Each vehicle's dict holds the keys its masks mark, in the vector env's key order; values are
+    Python scalars for 1-D numeric columns and rows (views) of the others. Built column-wise (one
+    `tolist` per key, one `dict(zip(...))` per vehicle): its cost is the dicts themselves.
+    """
     keys = [k for k in info if not k.startswith("_") and k not in ("final_obs", "final_info")]
-    out: list[dict[str, Any]] = [{} for _ in range(n)]
-    for key in keys:
-        values, mask = info[key], info[f"_{key}"]
-        if mask.all():
-            columns: Iterable[Any] = values.tolist() if values.ndim == 1 else list(values)
-            for row, value in zip(out, columns, strict=True):
-                row[key] = value
-        else:
-            scalar = values.ndim == 1 and values.dtype != object
-            for i in np.flatnonzero(mask):
-                out[i][key] = values[i].item() if scalar else values[i]
-    return out
+    columns = [info[k].tolist() if info[k].ndim == 1 else list(info[k]) for k in keys]
+    rows = zip(*columns, strict=True) if keys else ((),) * n
+    masks = [info[f"_{k}"] for k in keys]
+    if all(mask.all() for mask in masks):
+        return [dict(zip(keys, row, strict=True)) for row in rows]
+    present = np.stack(masks, axis=1).tolist()
+    return [
+        {k: v for k, v, here in zip(keys, row, marks, strict=True) if here}
+        for row, marks in zip(rows, present, strict=True)
+    ]
 
 
 def make_sb3_vec_env(
@@ -176,6 +196,7 @@ def make_sb3_vec_env(
     render_mode: str | None = None,
     render_vehicle: int = 0,
     threads: int | None = None,
+    infos: str = "full",
     **env_kwargs: Any,
 ) -> SB3VecEnv:
     """An `SB3VecEnv` of ``num_envs`` vehicles; keyword arguments as `AUVPath3DEnv`.
@@ -183,6 +204,7 @@ def make_sb3_vec_env(
     ``seed`` seeds the first reset (vehicle i gets seed + i). ``max_episode_steps`` defaults to
     none: the env truncates at its ``max_time`` like ``AUVPath3DEnv`` itself. ``threads``: numba
     threads of the kernel (None: one below 256 vehicles, else all; see `AUVPath3DVectorEnv`).
+    ``infos``: "full" or "minimal" per-vehicle info dicts (`SB3VecEnv`).
     """
     venv = AUVPath3DVectorEnv(
         num_envs,
@@ -193,7 +215,7 @@ def make_sb3_vec_env(
         threads=threads,
         **env_kwargs,
     )
-    env = SB3VecEnv(venv)
+    env = SB3VecEnv(venv, infos=infos)
     if seed is not None:
         env.seed(seed)
     return env

@@ -4,7 +4,7 @@
     auv-gym suite --policies fbsm,ppo_generalist=runs/ppo/results   # whole test suite + statistics
     auv-gym train --config …                 # needs the rl extra
     auv-gym paper-figures --out out/paper
-    auv-gym speed env|vector|controllers|render|all [options]
+    auv-gym speed env|vector|controllers|render|training|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m benchmarks.<name>``
@@ -43,6 +43,7 @@ SPEED: dict[str, tuple[str, str]] = {
     "vector": ("benchmarks.speed_vector", "native vector env, peak memory, SB3 data collection"),
     "controllers": ("benchmarks.speed_controllers", "FBSM and backstepping predict cost"),
     "render": ("benchmarks.speed_render", "rgb_array frames per second, fast and full redraw"),
+    "training": ("benchmarks.speed_training", "PPO training env steps/s, against a baseline ref"),
 }
 # Modules of the optional extras: a missing one is named with the extra that installs it.
 EXTRAS = {"stable_baselines3": "rl", "torch": "rl", "yaml": "rl", "rich": "rl",

@@ -1,10 +1,12 @@
-"""Speed of the simulator, the vector env, the controllers and rendering; prints tables.
+"""Speed of the simulator, the vector env, the controllers, rendering and PPO training; prints
+tables.
 
-    auv-gym speed all [--sections env,vector,controllers,render]
+    auv-gym speed all [--sections env,vector,controllers,render,training]
     python -m benchmarks.throughput [--sections …]
 
-Each section lives in its own module (speed_env, speed_vector, speed_controllers, speed_render)
-and runs alone with `auv-gym speed <name>` or `python -m benchmarks.speed_<name>`.
+Each section lives in its own module (speed_env, speed_vector, speed_controllers, speed_render,
+speed_training: this tree against the default baseline ref) and runs alone with
+`auv-gym speed <name>` or `python -m benchmarks.speed_<name>`.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from benchmarks.cli import HelpFormatter
 
 SECTIONS = {"env": "benchmarks.speed_env", "vector": "benchmarks.speed_vector",
             "controllers": "benchmarks.speed_controllers",
-            "render": "benchmarks.speed_render"}  # fmt: skip
+            "render": "benchmarks.speed_render",
+            "training": "benchmarks.speed_training"}  # fmt: skip
 
 
 def machine() -> str:

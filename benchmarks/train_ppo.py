@@ -60,6 +60,10 @@ HELP = {
     "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
     "threads": "torch and numba threads during training, restored after (1 is fastest on 2 "
     "shared cores, docs/design.md §4)",
+    "update_threads": "torch threads of the gradient updates between rollouts (0: --threads); 2 "
+    "speeds PPO's update up about 1.4x on an idle 2-core machine, slows it down on loaded cores",
+    "adaptive_threads": "time the updates on --threads and on max(2, --update-threads) torch "
+    "threads, keep the faster and probe the other now and then (same weights bit for bit)",
     "progress_bar": "show the progress bar (tqdm + rich)",
     "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
     "verbose": "SB3 verbosity; 1 also prints every evaluation",
