@@ -30,7 +30,10 @@ appends what a real AUV's navigation system and mission planner give, after thes
 | j+4       | preview{k}_torsion     | 1/m  | τ = (p′×p″)·p‴/‖p′×p″‖² (0 where κ = 0), ±1/m     |
 
 for k = 1 … K, j = 21 + 5(k − 1). Past the end of a finite path the preview continues along its
-last tangent (a straight line, κ = τ = 0).
+last tangent (a straight line, κ = τ = 0). With an integral time T > 0 (``integral_time``) two
+entries follow: y_e_integral, z_e_integral [m·s], leaky integrals
+I ← e^(−Δt/T)·I + T(1 − e^(−Δt/T))·e of the cross- and vertical-track errors at each control
+step (0 after a reset): the memory a controller's integral term keeps, here for the agent.
 """
 
 from __future__ import annotations
@@ -157,6 +160,8 @@ GROUND_SPEED_BOUND = 30.0  # [m/s] |ν + R_Bᵀ v_c| per axis: SPEED_BOUND plus 
 _PREVIEW_MARGIN = 1.5
 PREVIEW_FEATURES = ("x", "y", "z", "curvature", "torsion")
 EXTRA_HEAD = ("u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_prev")
+INTEGRAL_NAMES = ("y_e_integral", "z_e_integral")
+MAX_INTEGRAL_TIME = 1e4  # [s]
 
 
 @dataclass(frozen=True)
@@ -168,6 +173,7 @@ class ObservationConfig:
     kind: str = "paper"
     points: int = DEFAULT_PREVIEW_POINTS  # K
     spacing: float = DEFAULT_PREVIEW_SPACING  # [m] Δs
+    integral_time: float = 0.0  # [s] T of the error integrals; 0: none
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
@@ -177,11 +183,14 @@ class ObservationConfig:
                        unit=f"m (K·Δs <= {MAX_PREVIEW_LENGTH:g} m)")  # fmt: skip
         object.__setattr__(self, "points", points)
         object.__setattr__(self, "spacing", spacing)
+        integral_time = real("observation integral_time", self.integral_time, 0.0,
+                             MAX_INTEGRAL_TIME, unit="s (0: no error integrals)")  # fmt: skip
+        object.__setattr__(self, "integral_time", integral_time)
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
         """From None or "paper", "preview" (default K and Δs), a dict {"kind", "points",
-        "spacing"} or an `ObservationConfig`."""
+        "spacing", "integral_time"} or an `ObservationConfig`."""
         if spec is None:
             return cls()
         if isinstance(spec, ObservationConfig):
@@ -189,25 +198,34 @@ class ObservationConfig:
         if isinstance(spec, str):
             return cls(kind=spec)
         if isinstance(spec, Mapping):
-            fields = keys_within("observation", spec, ("kind", "points", "spacing"))
+            fields = keys_within("observation", spec,
+                                 ("kind", "points", "spacing", "integral_time"))  # fmt: skip
             return cls(**{"kind": "preview", **fields})
         raise ArgumentTypeError(
             f"observation must be one of {list(OBSERVATION_KINDS)}, a dict with keys kind, "
-            f"points, spacing or an ObservationConfig, got {spec!r:.80}"
+            f"points, spacing, integral_time or an ObservationConfig, got {spec!r:.80}"
         )
 
     def to_dict(self) -> dict:
         """The fields as a JSON-ready dict (agent metadata); "paper" holds its kind only."""
         if self.kind == "paper":
             return {"kind": "paper"}
-        return {"kind": self.kind, "points": self.points, "spacing": self.spacing}
+        fields = {"kind": self.kind, "points": self.points, "spacing": self.spacing}
+        if self.integral_time > 0.0:
+            fields["integral_time"] = self.integral_time
+        return fields
+
+    @property
+    def integrals(self) -> int:
+        """Number of error-integral entries: 2 with an integral time, else 0."""
+        return len(INTEGRAL_NAMES) if self.kind != "paper" and self.integral_time > 0.0 else 0
 
     @property
     def extra_dim(self) -> int:
         """Entries after the paper's 15 (0 for "paper")."""
         if self.kind == "paper":
             return 0
-        return len(EXTRA_HEAD) + len(PREVIEW_FEATURES) * self.points
+        return len(EXTRA_HEAD) + len(PREVIEW_FEATURES) * self.points + self.integrals
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -219,7 +237,7 @@ class ObservationConfig:
             for k in range(1, self.points + 1)
             for feature in PREVIEW_FEATURES
         )
-        return (*OBS_NAMES, *EXTRA_HEAD, *preview)
+        return (*OBS_NAMES, *EXTRA_HEAD, *preview, *INTEGRAL_NAMES[: self.integrals])
 
     @property
     def units(self) -> dict[str, str]:
@@ -228,7 +246,7 @@ class ObservationConfig:
                  "a_M_prev": "-", "a_N_prev": "-"}  # fmt: skip
         units = {"x": "m", "y": "m", "z": "m", "curvature": "1/m", "torsion": "1/m"}
         for name in self.names[OBS_DIM + len(EXTRA_HEAD) :]:
-            extra[name] = units[name.split("_", 1)[1]]
+            extra[name] = "m·s" if name in INTEGRAL_NAMES else units[name.split("_", 1)[1]]
         return {**OBS_UNITS, **(extra if self.kind != "paper" else {})}
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -237,6 +255,8 @@ class ObservationConfig:
             return OBS_LOW.copy(), OBS_HIGH.copy()
         reach = math.sqrt(3.0) * ERROR_BOUND + _PREVIEW_MARGIN * self.points * self.spacing
         point = (reach, reach, reach, CURVATURE_BOUND, CURVATURE_BOUND)
-        high = np.array([*(GROUND_SPEED_BOUND,) * 3, 1.0, 1.0, 1.0, *point * self.points])
+        integral = (ERROR_BOUND * self.integral_time,) * self.integrals  # |e| ≤ 500 m: |I| ≤ 500 T
+        high = np.array([*(GROUND_SPEED_BOUND,) * 3, 1.0, 1.0, 1.0, *point * self.points,
+                         *integral])  # fmt: skip
         return (np.concatenate([OBS_LOW, -high.astype(np.float32)]),
                 np.concatenate([OBS_HIGH, high.astype(np.float32)]))  # fmt: skip

@@ -172,6 +172,11 @@ class Simulator:
         self.obs_low, self.obs_high = self.layout.bounds()
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
+        # Leaky error integrals (y_e, z_e) [m·s] (`ObservationConfig.integral_time`).
+        self.error_integral = np.zeros((n, self.layout.integrals))
+        if self.layout.integrals:
+            decay = math.exp(-config.control_dt / self.layout.integral_time)
+            self._integral_gain = (decay, self.layout.integral_time * (1.0 - decay))
         self._every_row = np.arange(n, dtype=np.int64)
         assert self.params.shape[1] == N_PARAMS
 
@@ -205,6 +210,7 @@ class Simulator:
                       self.obs)  # fmt: skip
         if self.extra.shape[1]:
             self.last_action[rows] = 0.0
+            self.error_integral[rows] = 0.0
             self._extend(rows)
 
     def observations(self, rows: np.ndarray | None = None) -> np.ndarray:
@@ -221,6 +227,8 @@ class Simulator:
         extend_rows(rows, self.state, self.current, self.last_action, self._row, self._kind,
                     self._pdata, self._cfg, self._task, _S_END, layout.points, layout.spacing,
                     self.extra)  # fmt: skip
+        if layout.integrals:  # the kernel leaves these columns alone
+            self.extra[rows, -layout.integrals :] = self.error_integral[rows]
 
     def _set_task(self, i: int, task: EpisodeTask) -> None:
         """Write vehicle i's drawn task into its row of the episode table."""
@@ -298,6 +306,10 @@ class Simulator:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
         if self.extra.shape[1]:
             self.last_action[:] = self._actions  # saturated in place by the kernel
+            if self.layout.integrals:  # exact for an error held over the control period
+                decay, gain = self._integral_gain
+                self.error_integral *= decay
+                self.error_integral += gain * self.guid[:, 1:3]
             self._extend(self._every_row)
             self._end_outside_extra_bounds()
 

@@ -180,8 +180,8 @@ def test_paper_entries_and_classical_controllers_are_unchanged_by_the_preview():
 def test_batched_equals_single_bit_for_bit_with_autoresets(mode):
     counts = run_parity(5, mode, steps=110, seed=3, observation=PREVIEW, **DISTURBED)
     assert counts["terminated"] >= 1 and counts["truncated"] >= 1
-    counts = run_parity(4, mode, steps=100, seed=8, observation="preview", path="random",
-                        **SHORT)  # fmt: skip
+    integrating = {"points": 3, "spacing": 1.5, "integral_time": 5.0}
+    counts = run_parity(4, mode, steps=100, seed=8, path="random", observation=integrating, **SHORT)
     assert counts["terminated"] + counts["truncated"] >= 4
 
 
@@ -250,3 +250,32 @@ def test_sb3_adapter_sets_terminal_observation_and_truncation_on_every_autoreset
             assert info["TimeLimit.truncated"] is truncated
             seen["truncated" if truncated else "terminated"] += 1
     assert seen["truncated"] >= 3 and seen["terminated"] >= 3
+
+
+def test_error_integrals_are_leaky_integrals_of_the_track_errors():
+    """integral_time T: I_k = e^(−Δt/T) I_{k−1} + T(1 − e^(−Δt/T)) e_k, 0 after a reset; the
+    other entries are those of the same observation without integrals."""
+    with_integrals = ObservationConfig("preview", points=2, spacing=3.0, integral_time=20.0)
+    assert with_integrals.names[-2:] == ("y_e_integral", "z_e_integral")
+    assert with_integrals.units["z_e_integral"] == "m·s"
+    assert with_integrals.bounds()[1][-1] == 500.0 * 20.0
+    assert with_integrals.to_dict()["integral_time"] == 20.0
+    env = AUVPath3DEnv(observation=with_integrals, max_time=10.0)
+    plain = AUVPath3DEnv(observation={"points": 2, "spacing": 3.0}, max_time=10.0)
+    obs, _ = env.reset(seed=5)
+    reference, _ = plain.reset(seed=5)
+    assert np.all(obs[-2:] == 0.0)
+    decay = math.exp(-0.05 / 20.0)
+    integral = np.zeros(2)
+    rng = np.random.default_rng(2)
+    for _ in range(100):
+        action = rng.uniform(-0.5, 0.5, size=3)
+        obs, *_ = env.step(action)
+        reference, *_ = plain.step(action)
+        integral = decay * integral + 20.0 * (1.0 - decay) * np.array([obs[1], obs[2]], float)
+        np.testing.assert_array_equal(obs[:-2], reference)
+        np.testing.assert_allclose(obs[-2:], integral, rtol=1e-5, atol=1e-6)  # float32 errors
+    obs, _ = env.reset(seed=6)
+    assert np.all(obs[-2:] == 0.0)
+    with pytest.raises(ValueError, match="observation integral_time"):
+        ObservationConfig("preview", integral_time=-1.0)
