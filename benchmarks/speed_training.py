@@ -1,7 +1,8 @@
 """PPO training speed on the generalist configuration, this tree against a baseline, side by side.
 
 For each number of vehicles N (default 32, 128, 512) PPO trains on the generalist configuration
-(`benchmarks/hyperparams/ppo_generalist.yml`: AUVPath3D-v1 with the [train] task distribution,
+(`benchmarks/hyperparams/ppo_generalist.yml`: AUVPath3DSpeedLimit-v0 with the [train] task
+distribution,
 VecMonitor and VecNormalize, MlpPolicy [64, 64], batch 2048, 10 epochs) as
 `benchmarks.training.train` builds it, once with this tree's code and once with the code of a
 baseline git ref (default `b8de6c4`), each in a fresh subprocess whose ``PYTHONPATH`` points at
@@ -48,7 +49,8 @@ DEFAULT_BASELINE = "b8de6c4"
 N_ENVS = (32, 128, 512)
 ROLLOUT_STEPS = 8192  # env steps per rollout of the generalist configuration (32 × 256)
 CONFIG = "benchmarks/hyperparams/ppo_generalist.yml"
-ENV_ID = "AUVPath3D-v1"
+ENV_ID = "AUVPath3DSpeedLimit-v0"
+LEGACY_ENV_ID = "AUVPath3D-v1"  # the same env's id in trees before the rename
 HERE = Path(__file__).resolve()
 # (side, N, update threads, batch size) → the runs of that tree and setting
 Results = dict[tuple[str, int, int, int], list[dict[str, Any]]]
@@ -66,10 +68,12 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
+    import auv_gym
     from benchmarks.training.config import read_zoo_config
 
     trainer = importlib.import_module("benchmarks.training.train")  # the package hides the name
-    cfg = read_zoo_config(Path(trainer.__file__).parents[2] / CONFIG, ENV_ID, "ppo")
+    env_id = ENV_ID if ENV_ID in auv_gym.VARIANTS else LEGACY_ENV_ID  # the tree's name for it
+    cfg = read_zoo_config(Path(trainer.__file__).parents[2] / CONFIG, env_id, "ppo")
     n_envs, n_steps = int(spec["n_envs"]), int(spec["n_steps"])
     phases: list[tuple[float, float, float]] = []  # (start, collected, updated) per rollout
 
@@ -96,7 +100,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         # As `train._train` with threads=1 builds it: the trees that can pass the kernel's
         # thread count to the env pass 1 (the serial kernel at every N).
         serial = "threads" in inspect.signature(trainer.make_training_env).parameters
-        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto", ENV_ID,
+        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto", env_id,
                                          **({"threads": 1} if serial else {}))  # fmt: skip
         venv = VecNormalize(venv, **cfg.normalize)
         kwargs = {

@@ -18,7 +18,8 @@ normalised action per step, the quantity the benchmark's ``chattering`` metric s
 reward terms. The precision bonus (``precision_weight`` w_P, default 0, scale
 ``precision_scale`` d_P = 0.1 m) is the env's tracking bonus at the scale where a classical
 base already holds the path, so that accuracy lost to smoothing costs reward; it is reported as
-``info["reward_precision"]`` (present when w_P > 0).
+``info["reward_residual_precision"]`` (present when w_P > 0; the env's own "precision" term,
+`auv_gym.task`, has a fixed d_P).
 With ``actuator="random"`` each vehicle's base controller uses the actuator its
 episode drew (`auv_gym.simulator.Simulator.actuators`), as a scenario would configure it: one
 controller per actuator model, each called for the whole batch while any vehicle uses it.
@@ -49,7 +50,7 @@ from controllers.residual import (
 __all__ = ["CHATTERING_KEY", "PRECISION_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
 
 CHATTERING_KEY = "reward_chattering"  # info key of −w_TV·TV_k, beside the env's reward terms
-PRECISION_KEY = "reward_precision"  # info key of w_P·exp(−(d/d_P)²)
+PRECISION_KEY = "reward_residual_precision"  # info key of w_P·exp(−(d/d_P)²)
 
 
 class ResidualVectorEnv(VectorWrapper):

@@ -101,7 +101,7 @@ def test_unknown_info_mode_is_refused():
 def test_training_env_uses_minimal_infos_and_the_serial_kernel():
     from benchmarks.training.train import make_training_env
 
-    venv = make_training_env(300, 0, {"max_time": 5.0}, env_id="AUVPath3D-v1", threads=1)
+    venv = make_training_env(300, 0, {"max_time": 5.0}, env_id="AUVPath3DSpeedLimit-v0", threads=1)
     adapter = venv.venv
     assert adapter.info_mode == "minimal" and adapter.core.threads == 1
     from auv_gym.simulator import _step_one
