@@ -341,7 +341,7 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo_generalist.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
     ("ppo.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
     ("ppo_preview.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
-    ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.99, 3.0),
+    ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
 ]
 
 
