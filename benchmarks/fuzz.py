@@ -10,7 +10,7 @@ currents, parameter uncertainty, both actuator models, random or far starts, eve
 weight, …) and runs a batch of vehicles (`AUVPath3DVectorEnv`, SAME_STEP autoreset) through
 several episodes. Actions mix uniform [−1, 1], saturating [−3, 3], the corners ±1, zeros,
 huge finite values up to ±1.8e308 and denormals. Every control step is checked for the
-invariants of issue 11 / tests/test_properties.py; the counts are printed with a one-line
+invariants of tests/test_properties.py; the counts are printed with a one-line
 verdict, and the exit code is 1 if any invariant was violated:
 
 - NaN observations: a non-finite value in a returned observation (or final observation);

@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 AGENTS_DIR = Path(__file__).resolve().parent / "agents"
-# Policy name → folder of benchmarks/agents/ (README "Agents"; issue 14: the realistic-speed
+# Policy name → folder of benchmarks/agents/ (README "Agents"; the realistic-speed
 # retrained specialist and the generalists trained on the task distribution,
 # AUVPath3DSpeedLimit-v0).
 SHIPPED_AGENTS = {

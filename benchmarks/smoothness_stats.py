@@ -1,4 +1,4 @@
-"""Residual agents against their base on the test suite (issue 15's targets): the paired
+"""Residual agents against their base on the test suite (the residual targets): the paired
 RMS-distance difference with its CI, and the chattering of every policy.
 
 * **Paired difference** of a (policy, base) pair per set and "aggregate": mean score of the policy
@@ -39,7 +39,7 @@ __all__ = [
 PAIRS = (("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
          ("fbsm_colos_lowpass", "fbsm_colos"), ("ppo_residual", "fbsm_colos_lowpass"))  # fmt: skip
 SMOOTHNESS_REFERENCE = "fbsm"
-WORSE_RATIO = 0.10  # issue 15: never worse than the base by more than 10 %
+WORSE_RATIO = 0.10  # residual target: never worse than the base by more than 10 %
 
 
 def metric_matrices(rows: Sequence[Mapping[str, Any]], sets: Sequence[str], metric: str,

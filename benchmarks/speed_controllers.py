@@ -2,7 +2,7 @@
 
     python -m benchmarks.speed_controllers [--steps 200] [--vehicles 1024]
 
-Targets (issue 3): one 300-s FBSM episode through `gym.make` in < 2 s of wall time on one core;
+Targets: one 300-s FBSM episode through `gym.make` in < 2 s of wall time on one core;
 batched FBSM ≥ 100,000 vehicle-control-steps/s.
 
 The controllers are timed in closed loop on the paper's scenario (±35 white noise, default

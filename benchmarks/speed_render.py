@@ -5,7 +5,7 @@
 FBSM follows the paper's helix under ±35 white noise through `gym.make(..., render_mode=
 "rgb_array")`; a frame is taken every ``--every`` control steps and only `env.render()` is timed
 (the default 960 × 320 px frame). The full-redraw reference (`EpisodeRenderer(fast=False)`) is
-timed on the same episode for comparison. Target (issue 12): ≥ 50 frames/s on the fast path.
+timed on the same episode for comparison. Target: ≥ 50 frames/s on the fast path.
 """
 
 from __future__ import annotations

@@ -11,10 +11,10 @@ figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliab
   controller: over episodes), `benchmarks.stats.summarize`; probability that a policy's score is
   below the reference's on the same episode (``--reference``, default fbsm; also against
   fbsm_colos when it was evaluated); performance profiles (fraction of scores below τ [m]).
-* **Target table** (issue 14): per set, the ratio of a policy's mean score to the reference's;
+* **Target table**: per set, the ratio of a policy's mean score to the reference's;
   a set passes when the ratio is ≤ `MAX_RATIO`, no episode failed and the largest surge speed
   of any episode is ≤ `auv_gym.task.SURGE_LIMIT` (2.0 m/s).
-* **Smoothness** (issue 15, `benchmarks.smoothness_stats`): paired RMS-distance differences of
+* **Smoothness** (`benchmarks.smoothness_stats`): paired RMS-distance differences of
   residual agents and the low-pass baseline against their base, and every policy's chattering
   (when episodes.csv has the column).
 * **Learning curves** of the policies given as a multi-seed results directory (its
@@ -70,7 +70,7 @@ __all__ = [
     "write_stats",
 ]
 
-MAX_RATIO = 2.0  # issue 14: RMS distance within 2x the reference's (FBSM) on every set
+MAX_RATIO = 2.0  # generalist target: RMS distance within 2x the reference's (FBSM) on every set
 SECOND_REFERENCE = "fbsm_colos"  # probability of improvement also against it, when evaluated
 DEFAULT_FAILURE_SCORE_M = SimConfig.from_kwargs().limits.corridor
 CURVE_FILE = "seed_{}_learning_curve.csv"  # in a multi-seed results directory
