@@ -60,6 +60,21 @@ def _cubic(data, i, ds):
     )
 
 
+@njit(cache=True, inline="always")
+def _spline_segment(data, s):
+    """(offset of the segment's x coefficients in ``data``, s − its knot) of the spline segment
+    holding s, by binary search, clamped to the end segments."""
+    n_seg = int(data[0])
+    lo, hi = 0, n_seg - 1
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if data[1 + mid] <= s:
+            lo = mid
+        else:
+            hi = mid - 1
+    return 1 + (n_seg + 1) + lo * 12, s - data[1 + lo]
+
+
 @njit(cache=True, inline="always")  # inlined into the RK4 stages: ~7% faster kernel
 def path_eval(kind, data, s):
     """(x, y, z, x', y', z', x'', y'', z'') of the path at parameter s [m, m/unit s, ...]."""
@@ -77,16 +92,7 @@ def path_eval(kind, data, s):
             data[3], data[4], data[5], 0.0, 0.0, 0.0,
         )  # fmt: skip
     # SPLINE: data = [n_seg, knots[0..n_seg], coeffs[n_seg, 3 axes, 4]]; cubic in (s − knot_k)
-    n_seg = int(data[0])
-    lo, hi = 0, n_seg - 1
-    while lo < hi:  # binary search for the segment, clamped to the end segments
-        mid = (lo + hi + 1) // 2
-        if data[1 + mid] <= s:
-            lo = mid
-        else:
-            hi = mid - 1
-    ds = s - data[1 + lo]
-    base = 1 + (n_seg + 1) + lo * 12
+    base, ds = _spline_segment(data, s)
     x, dx, ddx = _cubic(data, base, ds)
     y, dy, ddy = _cubic(data, base + 4, ds)
     z, dz, ddz = _cubic(data, base + 8, ds)
@@ -102,15 +108,7 @@ def path_third_derivative(kind, data, s):
         return w3 * math.sin(omega * s), -w3 * math.cos(omega * s), 0.0
     if kind == LINE:
         return 0.0, 0.0, 0.0
-    n_seg = int(data[0])
-    lo, hi = 0, n_seg - 1
-    while lo < hi:  # the segment `path_eval` evaluates
-        mid = (lo + hi + 1) // 2
-        if data[1 + mid] <= s:
-            lo = mid
-        else:
-            hi = mid - 1
-    base = 1 + (n_seg + 1) + lo * 12
+    base, _ = _spline_segment(data, s)
     return 6.0 * data[base + 3], 6.0 * data[base + 7], 6.0 * data[base + 11]
 
 

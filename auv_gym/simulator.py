@@ -172,8 +172,9 @@ class Simulator:
         self.obs_low, self.obs_high = self.layout.bounds()
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
-        # Leaky error integrals (y_e, z_e) [m·s] (`ObservationConfig.integral_time`).
-        self.error_integral = np.zeros((n, self.layout.integrals))
+        # Leaky error integrals (y_e, z_e) [m·s] (`ObservationConfig.integral_time`): the last
+        # columns of `extra`, which `extend_rows` leaves alone, updated in place.
+        self.error_integral = self.extra[:, self.extra.shape[1] - self.layout.integrals :]
         if self.layout.integrals:
             decay = math.exp(-config.control_dt / self.layout.integral_time)
             self._integral_gain = (decay, self.layout.integral_time * (1.0 - decay))
@@ -227,8 +228,6 @@ class Simulator:
         extend_rows(rows, self.state, self.current, self.last_action, self._row, self._kind,
                     self._pdata, self._cfg, self._task, _S_END, layout.points, layout.spacing,
                     self.extra)  # fmt: skip
-        if layout.integrals:  # the kernel leaves these columns alone
-            self.extra[rows, -layout.integrals :] = self.error_integral[rows]
 
     def _set_task(self, i: int, task: EpisodeTask) -> None:
         """Write vehicle i's drawn task into its row of the episode table."""

@@ -20,7 +20,7 @@ from auv_gym.files import write_json
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.trajectory import env_termination_reason
-from controllers.ppo import check_agent, load_policy
+from controllers.ppo import load_policy
 from controllers.residual import base_kwargs_for_env
 
 __all__ = [
@@ -131,10 +131,10 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
     fixed = VARIANTS[resolve_env_id(env_id)]
-    observation = check_agent(agent).metadata.get("observation")
+    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(fixed))  # a residual agent's base
+    observation = policy.metadata.get("observation")
     if observation is not None:  # an agent trained on another preview than its id's default
         fixed = {**fixed, "observation": observation}
-    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(fixed))  # a residual agent's base
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
         "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",
