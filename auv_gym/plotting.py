@@ -20,6 +20,14 @@ import numpy as np
 
 from auv_gym.files import write_atomic
 from auv_gym.paths import Path
+from auv_gym.table_format import (
+    FAILURE_CONVENTION,
+    METRIC_INFO,
+    display_scale,
+    format_number,
+    mark_best,
+    markdown_table,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -27,27 +35,9 @@ if TYPE_CHECKING:
 
 __all__ = ["TABLE_METRICS", "metrics_table", "new_figure", "plot_track", "save_figure"]
 
-# Metrics of the markdown table: name → (label, unit, better: "min" / "max").
-TABLE_METRICS: dict[str, tuple[str, str, str]] = {
-    "rms_distance": ("RMS distance, t ≥ transient", "m", "min"),
-    "rms_x_e": ("RMS x_e, t ≥ transient", "m", "min"),
-    "rms_y_e": ("RMS y_e, t ≥ transient", "m", "min"),
-    "rms_z_e": ("RMS z_e, t ≥ transient", "m", "min"),
-    "max_distance_window": ("max distance, t ≥ transient", "m", "min"),
-    "iae_distance": ("IAE distance (whole episode)", "m·s", "min"),
-    "settling_time_0p5": ("settling time to 0.5 m", "s", "min"),
-    "settling_time_0p1": ("settling time to 0.1 m", "s", "min"),
-    "surge_overshoot": ("surge overshoot max(u − u_D)", "m/s", "min"),
-    "rms_speed_error": ("RMS(u − u_D), t ≥ transient", "m/s", "min"),
-    "max_surge": ("max surge u", "m/s", "min"),
-    "overspeed_fraction": ("time with u > 2.0 m/s", "-", "min"),
-    "control_effort": ("control effort ∫Σ(τ/τ_max)² dt", "s", "min"),
-    "chattering": ("chattering TV(τ/τ_max) per s", "1/s", "min"),
-    "saturation_fraction": ("saturated control steps", "-", "min"),
-    "final_distance": ("final distance", "m", "min"),
-    "success": ("success", "-", "max"),
-    "termination_reason": ("episode end", "-", ""),
-}
+# Metrics of the markdown table: name → (label, unit, better); the one table lives in
+# `auv_gym.table_format`.
+TABLE_METRICS = METRIC_INFO
 
 _DPI = 150  # default resolution [dots/in]
 
@@ -98,56 +88,48 @@ def plot_track(fig, path: Path, tracks: dict[str, np.ndarray], s_max: float) -> 
         ax.grid(True, alpha=0.3)
 
 
-def _format(value: Any) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return "yes" if value else "no"
-    if isinstance(value, str):
-        return value or "–"
-    if value is None:
-        return "–"
-    value = float(value)
-    if math.isnan(value):
-        return "–"
-    if math.isinf(value):
-        return "never" if value > 0 else "−inf"
-    return f"{value:.4g}"
-
-
 def metrics_table(
     results: Mapping[str, Mapping[str, Any]], metrics: Sequence[str] | None = None
 ) -> str:
-    """Markdown table: one row per metric, one column per policy; the best value in bold.
+    """Markdown table: one row per metric (its unit in the second column), one column per policy.
 
-    ``results`` maps a policy label to its `compute_metrics` dict. "never" marks a settling
-    time that was not reached, "–" an undefined value (e.g. a window the episode did not reach).
+    ``results`` maps a policy label to its `compute_metrics` dict. The conventions are
+    `auv_gym.table_format`'s: three significant figures, millimetres where metres would round
+    to zero, "never" for a settling threshold not reached, "—" for an undefined value, and the
+    best value in bold only among policies whose episode did not fail (its
+    ``termination_reason`` is not a failure).
     """
+    from auv_gym.trajectory import FAILURE_REASONS
+
     names = list(results)
     rows = list(metrics) if metrics is not None else list(TABLE_METRICS)
-    lines = [
-        "| metric | unit | " + " | ".join(names) + " |",
-        "|---|---|" + "---|" * len(names),
-    ]
+    eligible = [results[n].get("termination_reason") not in FAILURE_REASONS for n in names]
+    body = []
     for metric in rows:
         label, unit, better = TABLE_METRICS.get(metric, (metric, "", ""))
         values = [results[name].get(metric) for name in names]
-        texts = [_format(v) for v in values]
-        numeric = [
-            float(v)
-            for v in values
-            if isinstance(v, (int, float, np.number)) and not isinstance(v, (bool, np.bool_))
+        numeric = [_number(v) for v in values]
+        unit, scale = display_scale(unit, [v for v in numeric if not math.isnan(v)])
+        texts = [
+            format_number(raw if math.isnan(v) else v * scale, metric=metric)
+            for v, raw in zip(numeric, values, strict=True)
         ]
-        if better and len(names) > 1 and numeric and all(not math.isnan(v) for v in numeric):
-            best = min(numeric) if better == "min" else max(numeric)
-            if math.isfinite(best) and numeric.count(best) < len(numeric):
-                texts = [
-                    f"**{t}**" if _is(v, best) else t for t, v in zip(texts, values, strict=True)
-                ]
-        lines.append(f"| {label} | {unit} | " + " | ".join(texts) + " |")
-    return "\n".join(lines) + "\n"
+        if not any(math.isnan(v) for v in numeric):  # an undefined value: no winner
+            texts = mark_best(texts, numeric, eligible, better)
+        body.append([label, unit, *texts])
+    return markdown_table(["metric", "unit", *names], body, ["l", "l", *["r"] * len(names)])
 
 
-def _is(value: Any, best: float) -> bool:
+def metrics_table_note() -> str:
+    """The one-paragraph reading key printed above `metrics_table`."""
+    return FAILURE_CONVENTION
+
+
+def _number(value: Any) -> float:
+    """A metric value as a float for ranking; NaN for text, booleans and missing values."""
+    if isinstance(value, (bool, np.bool_, str)) or value is None:
+        return math.nan
     try:
-        return float(value) == best
+        return float(value)
     except (TypeError, ValueError):
-        return False
+        return math.nan

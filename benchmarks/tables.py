@@ -4,30 +4,45 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from auv_gym.files import environment, write_json, write_text
+from auv_gym.table_format import (
+    FAILURE_CONVENTION,
+    METRIC_INFO,
+    Cell,
+    display_scale,
+    mark_best,
+    markdown_table,
+)
+from auv_gym.trajectory import FAILURE_REASONS
 
-__all__ = ["SUMMARY_METRICS", "aggregate", "summarise", "write_tables"]
+__all__ = ["SUMMARY_GROUPS", "SUMMARY_METRICS", "aggregate", "summarise", "write_tables"]
 
-# Metrics in the summary table, with the direction that is better.
-SUMMARY_METRICS = {
-    "rms_distance": "min",
-    "rms_y_e": "min",
-    "rms_z_e": "min",
-    "iae_distance": "min",
-    "settling_time_0p5": "min",
-    "surge_overshoot": "min",
-    "rms_speed_error": "min",
-    "max_surge": "min",
-    "overspeed_fraction": "min",
-    "control_effort": "min",
-    "chattering": "min",
-    "saturation_fraction": "min",
-    "success": "max",
+# Metrics in the summary table, with the direction that is better, in the column groups that
+# keep each table's rows within a screen: tracking, speed, effort.
+SUMMARY_GROUPS: dict[str, tuple[str, ...]] = {
+    "tracking": ("rms_distance", "rms_y_e", "rms_z_e", "iae_distance", "settling_time_0p5"),
+    "speed": ("surge_overshoot", "rms_speed_error", "max_surge", "overspeed_fraction"),
+    "effort": ("control_effort", "chattering", "saturation_fraction"),
+}
+SUMMARY_METRICS = {m: METRIC_INFO[m][2] for group in SUMMARY_GROUPS.values() for m in group}
+# Short column headers (the long labels are in `auv_gym.table_format.METRIC_INFO`).
+_HEADERS = {
+    "rms_distance": "RMS d",
+    "rms_y_e": "RMS y_e",
+    "rms_z_e": "RMS z_e",
+    "iae_distance": "IAE d",
+    "settling_time_0p5": "settle 0.5 m",
+    "surge_overshoot": "overshoot",
+    "rms_speed_error": "RMS(u − u_D)",
+    "max_surge": "max u",
+    "overspeed_fraction": "time u > 2 m/s",
+    "control_effort": "effort",
+    "chattering": "chattering",
+    "saturation_fraction": "saturated",
 }
 
 
@@ -51,19 +66,32 @@ def write_tables(records: list[dict[str, Any]], out: Path, config: dict[str, Any
     return summary
 
 
-def aggregate(records: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, np.ndarray]]:
-    """(scenario, policy) → metric → per-seed values (NaN where undefined)."""
-    table: dict[tuple[str, str], dict[str, list[float]]] = {}
+def aggregate(records: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, Cell]]:
+    """(scenario, policy) → metric → `Cell`: the finished episodes' values and the failures."""
+    table: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in records:
-        cell = table.setdefault((r["scenario"], r["policy"]), {})
-        for metric in SUMMARY_METRICS:
-            value = r["metrics"].get(metric)
-            cell.setdefault(metric, []).append(np.nan if value is None else float(value))
-    return {key: {m: np.asarray(v) for m, v in cell.items()} for key, cell in table.items()}
+        table.setdefault((r["scenario"], r["policy"]), []).append(r["metrics"])
+    cells = {}
+    for key, episodes in table.items():
+        finished = [m for m in episodes if m.get("termination_reason") not in FAILURE_REASONS]
+        failed = len(episodes) - len(finished)
+        cells[key] = {
+            metric: Cell(tuple(_value(m.get(metric)) for m in finished), failed)
+            for metric in SUMMARY_METRICS
+        }
+    return cells
+
+
+def _value(value: Any) -> float:
+    return math.nan if value is None else float(value)
 
 
 def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
-    """Markdown: mean ± std of each metric per policy per scenario; the best value in bold."""
+    """Markdown: per scenario, one row per policy, mean ± std over the finished episodes.
+
+    Three tables per scenario (tracking, speed, effort), each with the failed-episode count;
+    the conventions are `auv_gym.table_format`'s.
+    """
     cells = aggregate(records)
     policies = list(dict.fromkeys(r["policy"] for r in records))
     scenarios = list(dict.fromkeys(r["scenario"] for r in records))
@@ -71,42 +99,34 @@ def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
         "# Benchmark summary",
         "",
         f"Seeds per cell: {config['seeds']}; duration {config['duration']} s; metrics over "
-        f"t ≥ {config['transient']} s where windowed. Mean ± std over seeds (n = finite "
-        "values); **bold** marks the best policy per row. Settling times are `inf` when the "
-        "distance never stays below the threshold.",
+        f"t ≥ {config['transient']} s where windowed (IAE and settling time: the whole "
+        "episode). Mean ± std over seeds. " + FAILURE_CONVENTION,
     ]
     for scenario in scenarios:
-        lines += [
-            "",
-            f"## {scenario}",
-            "",
-            "| metric | " + " | ".join(policies) + " |",
-            "|---|" + "---|" * len(policies),
-        ]
-        for metric, better in SUMMARY_METRICS.items():
-            means = []
-            texts = []
-            for policy in policies:
-                values = cells.get((scenario, policy), {}).get(metric, np.array([]))
-                finite = values[np.isfinite(values)]
-                if values.size and finite.size == 0:
-                    means.append(np.inf if better == "min" else -np.inf)
-                    texts.append("inf")
-                elif finite.size:
-                    mean = float(finite.mean())
-                    means.append(mean)
-                    std = float(finite.std())
-                    suffix = f" (n={finite.size})" if finite.size < values.size else ""
-                    texts.append(f"{mean:.4g} ± {std:.2g}{suffix}")
-                else:
-                    means.append(np.nan)
-                    texts.append("–")
-            finite_means = [m for m in means if not np.isnan(m)]
-            if finite_means:
-                best = min(finite_means) if better == "min" else max(finite_means)
-                texts = [
-                    f"**{t}**" if m == best and np.isfinite(m) else t
-                    for t, m in zip(texts, means, strict=True)
-                ]
-            lines.append(f"| {metric} | " + " | ".join(texts) + " |")
-    return "\n".join(lines) + "\n"
+        lines += ["", f"## {scenario}"]
+        for group, metrics in SUMMARY_GROUPS.items():
+            lines += ["", f"{group}:", "", _group_table(cells, scenario, policies, metrics).rstrip()]
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _group_table(
+    cells: dict[tuple[str, str], dict[str, Cell]],
+    scenario: str,
+    policies: list[str],
+    metrics: tuple[str, ...],
+) -> str:
+    present = [p for p in policies if (scenario, p) in cells]
+    first = {p: cells[(scenario, p)][metrics[0]] for p in present}
+    columns = [["failed", *(f"{first[p].failed}/{first[p].episodes}" for p in present)]]
+    eligible = [first[p].failed == 0 for p in present]
+    for metric in metrics:
+        _, unit, better = METRIC_INFO[metric]
+        row = [cells[(scenario, p)][metric] for p in present]
+        means = [c.mean() for c in row]
+        unit, scale = display_scale(unit, means)
+        texts = [c.text(metric, scale) for c in row]
+        header = f"{_HEADERS[metric]} [{unit}]" if unit != "-" else _HEADERS[metric]
+        columns.append([header, *mark_best(texts, means, eligible, better)])
+    header = ["policy", *(c[0] for c in columns)]
+    rows = [[p, *(c[i + 1] for c in columns)] for i, p in enumerate(present)]
+    return markdown_table(header, rows)

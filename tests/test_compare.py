@@ -57,7 +57,8 @@ def test_cli_end_to_end_writes_tables_and_figures(tmp_path):
     payload = json.loads((tmp_path / "episodes.json").read_text())
     assert payload["config"]["seeds"] == 2 and "numpy" in payload["versions"]
     summary = (tmp_path / "summary.md").read_text()
-    assert "## nominal" in summary and "| rms_distance |" in summary and "**" in summary
+    assert "## nominal" in summary and "**" in summary
+    assert "| policy | failed | RMS d [m] |" in summary
     for name in ("track_nominal", "distance_paper", "bars_rms_distance"):
         assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 10_000
     # A factory and an instance of the same policy meet identical disturbances.

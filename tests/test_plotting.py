@@ -167,10 +167,10 @@ def test_metrics_table_marks_the_best_value():
     )
     lines = table.strip().splitlines()
     assert lines[0] == "| metric | unit | A | B |"
-    assert lines[2] == "| RMS distance, t ≥ transient | m | **0.04** | 0.3 |"
+    assert lines[2] == "| RMS distance, t ≥ transient | m | **0.0400** | 0.300 |"
     assert lines[3] == "| settling time to 0.5 m | s | **31.2** | never |"
     assert lines[4] == "| success | - | yes | no |"
-    assert lines[5] == "| chattering TV(τ/τ_max) per s | 1/s | – | 0.5 |"  # NaN: no winner
+    assert lines[5] == "| chattering TV(τ/τ_max) per s | 1/s | — | 0.500 |"  # NaN: no winner
     assert lines[6] == "| episode end | - | time_limit | corridor |"
 
 
