@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.table_format import EMPTY, format_number, markdown_table
 from benchmarks.stats import AGGREGATE, Interval, mean_interval, paired_difference
 
 __all__ = [
@@ -112,40 +113,48 @@ def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str]
 
 
 def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any]) -> str:
-    """The two tables of the module doc as Markdown (rows = sets)."""
+    """The two tables of the module doc as Markdown (rows = sets), three policies per table."""
     lines: list[str] = []
     if paired:
-        names = list(paired)
         lines += [
-            "## Paired RMS-distance difference, policy − base [m] (relative), 95 % CI\n",
+            "## Paired RMS-distance difference, policy − base [mm] (relative), 95 % CI\n",
             f"win: CI below zero; worse: more than {100 * WORSE_RATIO:g} % above the base.\n",
-            "| set | " + " | ".join(names) + " |",
-            "|---" * (len(names) + 1) + "|",
         ]
-        for scope in paired[names[0]]:
-            cells = []
-            for name in names:
-                e = paired[name][scope]
-                d, r = Interval(**e["difference"]), Interval(**e["relative"])
-                tag = " **win**" if e["win"] else (" **worse**" if e["worse"] else "")
-                cells.append(f"{d.value:+.4f} [{d.low:+.4f}, {d.high:+.4f}] "
-                             f"({100 * r.value:+.1f} %){tag}")  # fmt: skip
-            lines.append(f"| {scope} | " + " | ".join(cells) + " |")
-        lines.append("")
+        for names in column_chunks(list(paired), 3):
+            rows = []
+            for scope in paired[names[0]]:
+                cells = []
+                for name in names:
+                    e = paired[name][scope]
+                    d, r = Interval(**e["difference"]), Interval(**e["relative"])
+                    tag = " **win**" if e["win"] else (" **worse**" if e["worse"] else "")
+                    cells.append(f"{1e3 * d.value:+.2f} [{1e3 * d.low:+.2f}, {1e3 * d.high:+.2f}]"
+                                 f" ({100 * r.value:+.1f} %){tag}")  # fmt: skip
+                rows.append([scope, *cells])
+            lines += [markdown_table(["set", *names], rows)]
     if chattering:
         policies = list(next(iter(chattering.values())))
-        lines += [
-            f"## Chattering [1/s] (ratio to {SMOOTHNESS_REFERENCE}), 95 % CI\n",
-            "| set | " + " | ".join(policies) + " |",
-            "|---" * (len(policies) + 1) + "|",
-        ]
-        for scope, row in chattering.items():
-            cells = [
-                "–" if not np.isfinite(row[p]["value"]) else
-                f"{row[p]['value']:.2f} [{row[p]['low']:.2f}, {row[p]['high']:.2f}] "
-                f"({row[p]['ratio']:.2f})"
-                for p in policies
-            ]  # fmt: skip
-            lines.append(f"| {scope} | " + " | ".join(cells) + " |")
-        lines.append("")
+        lines.append(f"## Chattering [1/s] (ratio to {SMOOTHNESS_REFERENCE}), 95 % CI\n")
+        for names in column_chunks(policies, 3):
+            rows = [
+                [scope, *(_chattering_cell(row[p]) for p in names)]
+                for scope, row in chattering.items()
+            ]
+            lines += [markdown_table(["set", *names], rows)]
     return "\n".join(lines) + "\n"
+
+
+def _chattering_cell(entry: Mapping[str, float]) -> str:
+    if not np.isfinite(entry["value"]):
+        return EMPTY
+    value, low, high = (format_number(entry[k]) for k in ("value", "low", "high"))
+    return f"{value} [{low}, {high}] ({format_number(entry['ratio'])})"
+
+
+def column_chunks(names: list[str], most: int) -> list[list[str]]:
+    """``names`` in consecutive chunks of at most ``most``, as even in size as possible."""
+    if not names:
+        return []
+    count = -(-len(names) // most)
+    size = -(-len(names) // count)
+    return [names[i : i + size] for i in range(0, len(names), size)]

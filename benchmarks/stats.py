@@ -39,6 +39,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from rliable import library
 
+from auv_gym.table_format import EMPTY, format_number
+
 AGGREGATE = "aggregate"
 MIN_REPS = 100
 
@@ -381,8 +383,9 @@ def learning_curve(
 
 
 def format_interval(interval: Interval, digits: int = 3) -> str:
-    """'0.064 [0.061, 0.068]'."""
-    return f"{interval.value:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
+    """'0.0640 [0.0610, 0.0680]': each bound with ``digits`` significant figures."""
+    value, low, high = (format_number(x, digits) for x in interval[:3])
+    return f"{value} [{low}, {high}]"
 
 
 def markdown_table(
@@ -393,6 +396,6 @@ def markdown_table(
     rows = list(dict.fromkeys(r for col in table.values() for r in col))
     lines = ["| " + " | ".join([corner, *columns]) + " |", "|---" * (len(columns) + 1) + "|"]
     for r in rows:
-        cells = [format_interval(table[c][r], digits) if r in table[c] else "–" for c in columns]
+        cells = [format_interval(table[c][r], digits) if r in table[c] else EMPTY for c in columns]
         lines.append("| " + " | ".join([r, *cells]) + " |")
     return "\n".join(lines) + "\n"

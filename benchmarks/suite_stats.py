@@ -40,10 +40,12 @@ import numpy as np
 
 from auv_gym.config import SimConfig
 from auv_gym.files import jsonable, write_json, write_text
+from auv_gym.table_format import format_number
 from auv_gym.task import SURGE_LIMIT
 from auv_gym.trajectory import FAILURE_REASONS
 from benchmarks.smoothness_stats import (
     chattering_table,
+    column_chunks,
     metric_matrices,
     paired_table,
     smoothness_markdown,
@@ -267,16 +269,13 @@ def _markdown(stats: Mapping[str, Any], summary: Mapping[str, Any]) -> str:
         f" {ci} stratified bootstrap intervals ({stats['reps']} replicates, seed "
         f"{stats['seed']}) over runs × episodes. Runs: {runs}.\n",
     ]
+    kinds = stats.get("kinds", {})
     for name, title in (("iqm", "IQM"), ("mean", "Mean")):
-        lines += [
-            f"## {title} RMS distance [m]\n",
-            markdown_table(_by_policy(summary[name]), corner="set"),
-        ]
+        lines.append(f"## {title} RMS distance [m]\n")
+        lines += _split_tables(_by_policy(summary[name]), kinds)
     for other, table in stats["improvement_tables"].items():
-        lines += [
-            f"## Probability of a smaller RMS distance than {other} (ties ½)\n",
-            markdown_table(_by_policy(table), corner="set"),
-        ]
+        lines.append(f"## Probability of a smaller RMS distance than {other} (ties ½)\n")
+        lines += _split_tables(_by_policy(table), kinds)
     lines += [
         f"## Target: mean RMS distance within {MAX_RATIO:g}× {ref}, no failed episode, max "
         f"surge ≤ {SURGE_LIMIT:g} m/s\n",
@@ -288,9 +287,9 @@ def _markdown(stats: Mapping[str, Any], summary: Mapping[str, Any]) -> str:
             f" ({', '.join(t['failures'])})" if t["failures"] else ""
         )
         lines.append(
-            f"| {t['set']} | {t['policy']} | {t['mean_m']:.4f} | "
-            f"{t['reference_mean_m']:.4f} | {t['ratio']:.2f} | {failed} | "
-            f"{t['max_surge_m_s']:.3f} | {'pass' if t['passed'] else '**FAIL**'} |"
+            f"| {t['set']} | {t['policy']} | {format_number(t['mean_m'])} | "
+            f"{format_number(t['reference_mean_m'])} | {format_number(t['ratio'])} | {failed} | "
+            f"{format_number(t['max_surge_m_s'])} | {'pass' if t['passed'] else '**FAIL**'} |"
         )
     lines.append("")
     for policy, verdict in stats["verdicts"].items():
@@ -303,6 +302,36 @@ def _markdown(stats: Mapping[str, Any], summary: Mapping[str, Any]) -> str:
     for policy, note in stats["learning_curve_notes"].items():
         lines.append(f"- learning curve of {policy}: {note}")
     return "\n".join(lines) + "\n"
+
+
+# Policies per table: four interval columns keep a row within about 110 characters.
+_COLUMNS_PER_TABLE = 4
+_GROUP_TITLES = {"classical": "classical", "rl": "RL", "hybrid": "hybrid (classical + RL residual)"}
+
+
+def policy_group(name: str, kind: str) -> str:
+    """ "classical", "hybrid" (a residual agent on a classical controller) or "rl"."""
+    if kind == "classical":
+        return "classical"
+    return "hybrid" if "residual" in name else "rl"
+
+
+def _split_tables(
+    table: Mapping[str, Mapping[str, Interval]], kinds: Mapping[str, str]
+) -> list[str]:
+    """One markdown table per policy group, at most `_COLUMNS_PER_TABLE` policies each."""
+    groups: dict[str, list[str]] = {}
+    for policy in table:
+        groups.setdefault(policy_group(policy, kinds.get(policy, "agent")), []).append(policy)
+    out = []
+    for group in ("classical", "rl", "hybrid"):
+        names = groups.get(group, [])
+        for chunk in column_chunks(names, _COLUMNS_PER_TABLE):
+            out += [
+                f"{_GROUP_TITLES[group]}:\n",
+                markdown_table({p: table[p] for p in chunk}, corner="set"),
+            ]
+    return out
 
 
 def write_stats(
@@ -370,7 +399,8 @@ def write_stats(
         chattering = metric_matrices(rows, list(suite["sets"]), "chattering", runs)
         stats["paired"] = paired_table(scores, groups, reps, seed)
         stats["chattering"] = chattering_table(chattering, groups, reps, seed)
-    text = _markdown({**stats, "improvement_tables": improvement}, summary)
+    kinds = {name: entry.get("kind", "agent") for name, entry in suite["policies"].items()}
+    text = _markdown({**stats, "improvement_tables": improvement, "kinds": kinds}, summary)
     if "chattering" in stats:
         text += "\n" + smoothness_markdown(stats["paired"], stats["chattering"])
     write_json(out / "stats.json", jsonable(stats), indent=1)

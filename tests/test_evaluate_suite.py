@@ -389,7 +389,7 @@ def test_target_table_by_hand(tmp_path):
     assert b["failures"] == ["overspeed"] and not b["passed"]
     assert stats["verdicts"]["x"] == {"sets": 2, "passed": 1, "failing_sets": ["b"]}
     assert stats["failure_score_m"] == {"a": 30.0, "b": 20.0}
-    assert "| b | x | 5.1000 | 0.2000 | 25.50 | 1/4 (overspeed) | 2.500 | **FAIL** |" in text
+    assert "| b | x | 5.10 | 0.200 | 25.5 | 1/4 (overspeed) | 2.50 | **FAIL** |" in text
     # IQM of set a for x: 4 scores [0.1, 0.2, 0.3, 0.5] → the middle two, 0.25.
     assert math.isclose(stats["iqm"]["a"]["x"]["value"], 0.25)
     # fbsm beats x in set a on 1 of 4 (run, episode) pairs per episode, ties ½:

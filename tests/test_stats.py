@@ -250,15 +250,18 @@ def test_bad_input_names_the_problem(call, message):
 
 
 def test_markdown_cells_and_table():
-    assert stats.format_interval(Interval(0.0642, 0.0611, 0.0678)) == "0.064 [0.061, 0.068]"
+    assert stats.format_interval(Interval(0.0642, 0.0611, 0.0678)) == "0.0642 [0.0611, 0.0678]"
     assert stats.format_interval(Interval(0.5, 0.25, 0.75), digits=2) == "0.50 [0.25, 0.75]"
+    # Sub-millimetre values keep their figures instead of printing 0.000.
+    tiny = stats.format_interval(Interval(4.2e-4, 4.1e-4, 4.3e-4))
+    assert tiny == "4.20e-04 [4.10e-04, 4.30e-04]"
     table = {"line": {"fbsm": Interval(0.07, 0.06, 0.08), "ppo": Interval(0.6, 0.5, 0.7)}}
     table["aggregate"] = {"ppo": Interval(1.0, 0.9, 1.1)}
     assert stats.markdown_table(table).splitlines() == [
         "| policy | line | aggregate |",
         "|---|---|---|",
-        "| fbsm | 0.070 [0.060, 0.080] | – |",
-        "| ppo | 0.600 [0.500, 0.700] | 1.000 [0.900, 1.100] |",
+        "| fbsm | 0.0700 [0.0600, 0.0800] | — |",
+        "| ppo | 0.600 [0.500, 0.700] | 1.00 [0.900, 1.10] |",
     ]
 
 
