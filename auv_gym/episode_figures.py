@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from auv_gym.paths import Path
-from auv_gym.plotting import new_figure, save_figure
+from auv_gym.plotting import new_figure, policy_colours, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -45,8 +45,8 @@ def _reference(trajectories: Mapping[str, Trajectory], path: Path | None) -> np.
 
 
 def _styles(names: Sequence[str]) -> dict[str, dict[str, Any]]:
-    colors = ("C0", "C3", "C2", "C1", "C4", "C5", "C6")
-    return {name: {"color": colors[i % len(colors)], "lw": 1.2} for i, name in enumerate(names)}
+    colours = policy_colours(list(names))
+    return {name: {"color": colours[name], "lw": 1.2} for name in names}
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], title: str) -> None:

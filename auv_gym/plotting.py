@@ -33,11 +33,70 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
-__all__ = ["TABLE_METRICS", "metrics_table", "new_figure", "plot_track", "save_figure"]
+__all__ = [
+    "POLICY_COLOURS",
+    "TABLE_METRICS",
+    "metrics_table",
+    "new_figure",
+    "plot_track",
+    "policy_colours",
+    "save_figure",
+]
 
 # Metrics of the markdown table: name → (label, unit, better); the one table lives in
 # `auv_gym.table_format`.
 TABLE_METRICS = METRIC_INFO
+
+# One colour per policy, the same in every figure and every run: the policies the project ships
+# have fixed colours (classical in blues/greens, agents in warm colours); any other name takes a
+# colour from tab20 by a stable hash of its name, probing past colours already taken in that
+# figure so that no two policies of one figure share a colour.
+POLICY_COLOURS: dict[str, str] = {
+    "fbsm": "#1f77b4",
+    "FBSM": "#1f77b4",
+    "fbsm_colos": "#17becf",
+    "fbsm_colos_lowpass": "#9edae5",
+    "fbsm_ilos": "#aec7e8",
+    "backstepping": "#2ca02c",
+    "backstepping_colos": "#98df8a",
+    "backstepping_ilos": "#bcbd22",
+    "ppo": "#d62728",
+    "ppo_helix_v1": "#ff9896",
+    "ppo_generalist": "#ff7f0e",
+    "ppo_preview": "#9467bd",
+    "ppo_preview_net256": "#e377c2",
+    "sac_generalist": "#8c564b",
+    "sac_helix": "#c49c94",
+    "ppo_residual": "#7f7f7f",
+    "ppo_residual_v2": "#c7c7c7",
+}
+_HASH_PALETTE = (
+    "#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
+    "#756bb1", "#636363", "#6baed6", "#fd8d3c", "#74c476", "#9e9ac8", "#969696", "#e7ba52",
+    "#ad494a", "#a55194", "#5254a3", "#b5cf6b",
+)  # fmt: skip
+
+
+def policy_colours(names: Sequence[str]) -> dict[str, str]:
+    """Name → colour for the policies of one figure: fixed for known names, stable otherwise.
+
+    The colour of a known policy never depends on which other policies are drawn; an unknown
+    name keeps its colour unless another policy of the same figure already holds it.
+    """
+    import zlib
+
+    colours = {n: POLICY_COLOURS[n] for n in names if n in POLICY_COLOURS}
+    taken = set(colours.values())
+    for name in sorted(n for n in dict.fromkeys(names) if n not in POLICY_COLOURS):
+        start = zlib.crc32(name.encode())
+        for k in range(len(_HASH_PALETTE)):
+            colour = _HASH_PALETTE[(start + k) % len(_HASH_PALETTE)]
+            if colour not in taken:
+                break
+        colours[name] = colour
+        taken.add(colour)
+    return {n: colours[n] for n in names}
+
 
 _DPI = 150  # default resolution [dots/in]
 
@@ -66,7 +125,8 @@ def save_figure(fig: Figure, file: str | os.PathLike, dpi: int | None = None) ->
 def plot_track(fig, path: Path, tracks: dict[str, np.ndarray], s_max: float) -> None:
     """Draw the path and tracks (name → (T, 3) NED positions [m]) in 3D plus x–y and x–z views.
 
-    Depth is plotted as −z so that "up" is up.
+    Depth is plotted as −z so that "up" is up. Each policy has its `policy_colours` colour;
+    the legend sits below the panels, where it covers no data.
     """
     ref = path.sample(600, s_max=max(s_max, 1.0))
     ax3d = fig.add_subplot(1, 3, 1, projection="3d")
@@ -75,17 +135,21 @@ def plot_track(fig, path: Path, tracks: dict[str, np.ndarray], s_max: float) -> 
     ax3d.plot(ref[:, 0], ref[:, 1], -ref[:, 2], "k--", lw=1, label="path")
     ax_xy.plot(ref[:, 0], ref[:, 1], "k--", lw=1)
     ax_xz.plot(ref[:, 0], -ref[:, 2], "k--", lw=1)
+    colours = policy_colours(list(tracks))
     for name, track in tracks.items():
-        ax3d.plot(track[:, 0], track[:, 1], -track[:, 2], lw=1.5, label=name)
-        ax_xy.plot(track[:, 0], track[:, 1], lw=1.5)
-        ax_xz.plot(track[:, 0], -track[:, 2], lw=1.5)
-        ax3d.scatter(*track[-1, :2], -track[-1, 2], s=12)
+        style = {"lw": 1.2, "color": colours[name], "alpha": 0.85}
+        ax3d.plot(track[:, 0], track[:, 1], -track[:, 2], label=name, **style)
+        ax_xy.plot(track[:, 0], track[:, 1], **style)
+        ax_xz.plot(track[:, 0], -track[:, 2], **style)
+        ax3d.scatter(*track[-1, :2], -track[-1, 2], s=12, color=colours[name])
     ax3d.set(xlabel="x [m]", ylabel="y [m]", zlabel="−z [m]", title="3D path")
-    ax3d.legend(loc="upper left", fontsize=7)
     ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="horizontal projection", aspect="equal")
     ax_xz.set(xlabel="x [m]", ylabel="−z [m]", title="vertical projection")
     for ax in (ax_xy, ax_xz):
         ax.grid(True, alpha=0.3)
+    handles, labels = ax3d.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8,
+               frameon=False)  # fmt: skip
 
 
 def metrics_table(

@@ -17,19 +17,13 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from auv_gym.plotting import policy_colours
 from benchmarks.stats import AGGREGATE
 
 
 def policy_colors(policies) -> dict[str, Any]:
-    """One distinct colour per policy: matplotlib's ten-colour cycle, or tab20 for more than ten
-    (the cycle repeats after ten, which gave two policies the same colour)."""
-    names = list(policies)
-    if len(names) <= 10:
-        return {p: f"C{k}" for k, p in enumerate(names)}
-    from matplotlib import colormaps
-
-    cmap = colormaps["tab20"]
-    return {p: cmap(k % 20) for k, p in enumerate(names)}
+    """One colour per policy, the same in every figure (`auv_gym.plotting.policy_colours`)."""
+    return policy_colours(list(policies))
 
 
 def _errorbars(ax, intervals: list, offset: float = 0.0, **style) -> None:
@@ -56,10 +50,11 @@ def _ci(summary: Mapping[str, Any]) -> str:
     return f"{100 * summary['confidence']:g} %"
 
 
-def _panels(n: int, width_in: float, height_in: float, sharey: bool = False):
+def _panels(n: int, width_in: float, height_in: float, sharey: bool = False, columns: int = 3):
+    """A grid of ``n`` panels, at most ``columns`` wide (rows below), unused cells hidden."""
     if n < 1:
         raise ValueError("nothing to plot: no panels")
-    cols = min(n, 3)
+    cols = min(n, columns)
     rows = -(-n // cols)
     fig = Figure(figsize=(width_in * cols, height_in * rows), layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False, sharey=sharey).ravel()
@@ -68,26 +63,34 @@ def _panels(n: int, width_in: float, height_in: float, sharey: bool = False):
     return fig, list(axes[:n])
 
 
+def _label_policies(axes: list, policies: list[str]) -> None:
+    """Policy names on the shared y axis; `Figure.subplots` shows them on the first column."""
+    axes[0].set_yticks(range(len(policies)), policies)
+    axes[0].invert_yaxis()  # first policy on top (the axis is shared: once)
+
+
 def interval_figure(summary: Mapping[str, Any], unit: str = "m") -> Figure:
-    """One panel per scope: IQM (dots) and mean (squares) with CIs per policy."""
+    """One panel per scope in a grid: IQM (dots) and mean (squares) with CIs per policy."""
     scopes, policies = summary["scopes"], summary["policies"]
-    fig, axes = _panels(len(scopes), 3.6, 0.45 * len(policies) + 1.0)
+    columns = 5
+    fig, axes = _panels(len(scopes), 2.9, 0.22 * len(policies) + 1.0, sharey=True,
+                        columns=columns)  # fmt: skip
     for ax, scope in zip(axes, scopes, strict=True):
-        for k, (name, label, dy) in enumerate((("iqm", "IQM", -0.12), ("mean", "mean", 0.12))):
+        for k, (name, label, dy) in enumerate((("iqm", "IQM", -0.15), ("mean", "mean", 0.15))):
             bars = [summary[name][scope][p] for p in policies]
-            _errorbars(ax, bars, dy, marker="os"[k], color=f"C{k}", label=label)
-        ax.set_yticks(range(len(policies)), policies)
-        ax.invert_yaxis()
+            _errorbars(ax, bars, dy, marker="os"[k], color=("k", "0.55")[k], ms=3, label=label)
         _scale(ax, "x", [summary[m][scope][p][1:] for m in ("iqm", "mean") for p in policies])
-        ax.set(title=scope, xlabel=f"RMS distance [{unit}]")
+        ax.set_title(scope, fontsize=9)
+        ax.set_xlabel(f"RMS distance [{unit}]", fontsize=8)
         ax.grid(True, axis="x", which="both", alpha=0.3)
-    axes[0].legend(fontsize=8)
+    _label_policies(axes, policies)
+    axes[0].legend(fontsize=7)
     fig.suptitle(f"IQM and mean with {_ci(summary)} confidence intervals (lower is better)")
     return fig
 
 
 def improvement_figure(summary: Mapping[str, Any]) -> Figure:
-    """One panel per scope: P(policy beats the reference on an episode) with CIs."""
+    """One panel per scope in a grid: P(policy beats the reference on an episode) with CIs."""
     scopes = [s for s in summary["scopes"] if s in summary["improvement"]]
     if not scopes:
         reference = summary["reference"]
@@ -95,13 +98,17 @@ def improvement_figure(summary: Mapping[str, Any]) -> Figure:
             f"summary: no probability of improvement: {reference!r} not among the policies"
         )
     policies = list(summary["improvement"][scopes[0]])
-    fig, axes = _panels(len(scopes), 3.6, 0.45 * len(policies) + 1.0)
+    columns = 5
+    fig, axes = _panels(len(scopes), 2.9, 0.22 * len(policies) + 1.0, sharey=True,
+                        columns=columns)  # fmt: skip
     for ax, scope in zip(axes, scopes, strict=True):
-        _errorbars(ax, [summary["improvement"][scope][p] for p in policies], marker="o")
+        _errorbars(ax, [summary["improvement"][scope][p] for p in policies], marker="o", ms=3,
+                   color="k")  # fmt: skip
         ax.axvline(0.5, color="k", ls="--", lw=0.8)
-        ax.set_yticks(range(len(policies)), policies)
-        ax.invert_yaxis()
-        ax.set(xlim=(-0.02, 1.02), title=scope, xlabel=f"P(better than {summary['reference']})")
+        ax.set(xlim=(-0.02, 1.02))
+        ax.set_title(scope, fontsize=9)
+        ax.set_xlabel(f"P(better than {summary['reference']})", fontsize=8)
+    _label_policies(axes, policies)
     fig.suptitle(
         f"Probability of a smaller RMS distance than {summary['reference']} on an episode "
         f"(ties ½), {_ci(summary)} confidence intervals"
@@ -135,9 +142,11 @@ def learning_curve_figure(
     """One panel per x label ({x label: {policy: `learning_curve` output}}), shared log y."""
     fig, axes = _panels(len(panels), 4.5, 3.6, sharey=True)
     for ax, (xlabel, curves) in zip(axes, panels.items(), strict=True):
-        for k, (policy, c) in enumerate(curves.items()):
-            ax.plot(c["x"], c["iqm"], color=f"C{k}", label=f"{policy} ({c['n_runs']} runs)")
-            ax.fill_between(c["x"], c["low"], c["high"], color=f"C{k}", alpha=0.2)
+        colours = policy_colours(list(curves))
+        for policy, c in curves.items():
+            colour = colours[policy]
+            ax.plot(c["x"], c["iqm"], color=colour, label=f"{policy} ({c['n_runs']} runs)")
+            ax.fill_between(c["x"], c["low"], c["high"], color=colour, alpha=0.2)
         _scale(ax, "y", np.concatenate([np.r_[c["low"], c["high"]] for c in curves.values()]))
         ax.set(xlabel=xlabel, ylabel=ylabel)
         ax.grid(True, which="both", alpha=0.3)

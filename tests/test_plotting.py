@@ -266,3 +266,33 @@ def test_cli_with_the_paper_controllers(tmp_path):
     )
     np.testing.assert_array_equal(fbsm["f_u"], backstepping["f_u"])  # the same noise
     assert np.abs(fbsm["f_u"]).max() <= 35.0 and np.abs(fbsm["f_u"]).max() > 5.0
+
+
+def test_a_policy_has_one_colour_in_every_figure():
+    from matplotlib.colors import to_hex
+
+    from auv_gym.paths import Helix
+    from auv_gym.plotting import new_figure, plot_track, policy_colours
+    from benchmarks.stats_figures import learning_curve_figure
+
+    names = ["fbsm", "my_agent", "ppo_preview", "other_agent"]
+    colours = policy_colours(names)
+    assert len(set(colours.values())) == len(names)
+    # Fixed for shipped names, stable for others, whatever else is drawn and in which order.
+    assert policy_colours(["ppo_preview", "fbsm"]) == {
+        "ppo_preview": colours["ppo_preview"],
+        "fbsm": colours["fbsm"],
+    }
+    assert policy_colours(["my_agent"])["my_agent"] == policy_colours(["x", "my_agent"])["my_agent"]
+
+    fig = new_figure(9, 3, 60)
+    tracks = {n: np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)]) for n in names}
+    plot_track(fig, Helix(), tracks, s_max=10.0)
+    track_colours = {line.get_label(): to_hex(line.get_color()) for line in fig.axes[0].lines}
+    curve = {"x": [0.0, 1.0], "iqm": [2.0, 1.0], "low": [1.5, 0.5], "high": [2.5, 1.5], "n_runs": 2}
+    curves = learning_curve_figure({"env steps": {n: curve for n in reversed(names)}})
+    curve_colours = {
+        line.get_label().split(" (")[0]: to_hex(line.get_color()) for line in curves.axes[0].lines
+    }
+    for name in names:
+        assert track_colours[name] == curve_colours[name] == to_hex(colours[name])
