@@ -1,4 +1,4 @@
-"""The Python examples in the READMEs run as written (from the project root)."""
+"""The Python examples in the READMEs and the usage manual run as written (from the root)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = ("README.md", "benchmarks/agents/README.md")
+DOCS = ("README.md", "docs/usage.md", "benchmarks/agents/README.md")
 
 
 def _examples() -> list[tuple[str, int, str]]:
