@@ -7,7 +7,6 @@ compiled step reads (`auv_gym.integrator.CONFIG_FIELDS`).
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -33,8 +32,9 @@ from auv_gym.observation import (
     SPEED_BOUND,
     ObservationConfig,
 )
+from auv_gym.path_bounds import Bound, spline_turn_rates
 from auv_gym.path_generator import PathDistribution
-from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, make_path, path_eval
+from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, Spline, make_path, path_eval
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.task import (
     REWARD_TERMS,
@@ -141,18 +141,26 @@ def _check_path(path: Path) -> None:
                          "build paths with Helix, StraightLine, Spline or make_path")  # fmt: skip
 
 
-def path_turn_rates(path: Path) -> tuple[float, float]:
+def path_turn_rates(path: Path, accept_below: float = -math.inf) -> tuple[float, float]:
     """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
 
     ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (docs/model.md §3.1, §3.3), so ψ̇_F = this rate × u_p.
-    Exact for the helix (constant in s) and the line (0); a spline is sampled 64 times per segment.
+    Exact for the helix (constant in s) and the line (0); for a spline a proven upper bound at
+    most 0.1 % above the maximum (`path_bounds.spline_turn_rates`), or, with ``accept_below``,
+    a bound at most that limit whenever the maximum is. A path whose p'(s) vanishes raises.
     """
+    return tuple(b.upper for b in _turn_rate_bounds(path, accept_below))  # type: ignore[return-value]
+
+
+def _turn_rate_bounds(path: Path, accept_below: float = -math.inf) -> tuple[Bound, Bound]:
+    """`path_turn_rates` with where each maximum lies (`path_bounds.Bound`)."""
     if path.kind == SPLINE:
-        knots = path.data[1 : int(path.data[0]) + 2]
-        grid = [np.linspace(a, b, 64, endpoint=False) for a, b in itertools.pairwise(knots)]
-        samples = np.concatenate([*grid, knots[-1:]])
-    else:
-        samples = np.linspace(0.0, 100.0, 9)
+        bounds = spline_turn_rates(path.data, accept_below)
+        if not all(math.isfinite(b.upper) for b in bounds):
+            raise ValueError(f"path {type(path).__name__}: p'(s) is zero at s = "
+                             f"{bounds[0].s:.6g}, where its heading is undefined")  # fmt: skip
+        return bounds
+    samples = np.linspace(0.0, 100.0, 9)
     rates = np.empty((len(samples), 2))
     for k, s in enumerate(samples):
         _, _, _, dx, dy, dz, ddx, ddy, ddz = path_eval(path.kind, path.data, float(s))
@@ -161,7 +169,9 @@ def path_turn_rates(path: Path) -> tuple[float, float]:
     if not np.all(np.isfinite(rates)):
         raise ValueError(f"path {type(path).__name__}: p'(s) or p''(s) is not finite or zero")
     psi_rate, theta_rate = rates.max(axis=0)
-    return float(psi_rate), float(theta_rate)
+    return Bound(float(psi_rate), float(psi_rate), 0, 0.0), Bound(
+        float(theta_rate), float(theta_rate), 0, 0.0
+    )
 
 
 @dataclass(frozen=True)
@@ -275,6 +285,7 @@ class SimConfig:
                                         VIRTUAL_POINT_LAWS))  # fmt: skip
         put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
                                       high_open=True))  # fmt: skip
+        self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
         put("actuator_limits", vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6,
                                       "N, N·m"))  # fmt: skip
         if min(self.actuator_limits) <= 0.0:
@@ -329,16 +340,27 @@ class SimConfig:
                 or self.random_noise > 0.0 or self.actuator == "random")  # fmt: skip
 
     def _check_path_fits_the_observation(self) -> None:
-        """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D."""
-        psi_rate, theta_rate = path_turn_rates(self.path)
-        worst = 2.0 * self.u_desired * max(psi_rate, theta_rate)
-        if worst > PATH_RATE_BOUND:
+        """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D: a proven bound
+        on the whole path, so no start or s later in an episode can leave the bounds."""
+        limit = PATH_RATE_BOUND / (2.0 * self.u_desired)
+        bounds = _turn_rate_bounds(self.path, accept_below=limit)
+        bound = max(bounds, key=lambda b: b.upper)
+        rate = bound.upper
+        if rate > limit and 2.0 * self.u_desired * rate > PATH_RATE_BOUND:
+            where = ""
+            if self.path.kind == SPLINE:
+                knots = self.path.data[1 : int(self.path.data[0]) + 2]
+                k = bound.segment + int(bound.s - knots[bound.segment]
+                                        > knots[bound.segment + 1] - bound.s)  # fmt: skip
+                where = f" (near s = {bound.s:.6g}, waypoint {k})" if isinstance(
+                    self.path, Spline) else f" (near s = {bound.s:.6g})"  # fmt: skip
             raise ValueError(
-                f"path turns at up to {max(psi_rate, theta_rate):.4g} rad/m: with u_desired = "
+                f"path turns at up to {rate:.4g} rad/m{where}: with u_desired = "
                 f"{self.u_desired} m/s the virtual point (u_p <= 2 u_D) turns at up to "
-                f"{worst:.4g} rad/s, beyond the observation bound {PATH_RATE_BOUND} rad/s; use "
-                f"u_desired <= {PATH_RATE_BOUND / (2 * max(psi_rate, theta_rate)):.4g} m/s or a "
-                "gentler path"
+                f"{2.0 * self.u_desired * rate:.4g} rad/s, beyond the observation bound "
+                f"{PATH_RATE_BOUND} rad/s; use u_desired <= {PATH_RATE_BOUND / (2 * rate):.4g} m/s "
+                "or a gentler path (a waypoint path that nearly doubles back needs a turn "
+                "waypoint beside the reversal)"
             )
 
     def _check_start_fits_the_observation(self) -> None:

@@ -17,7 +17,12 @@ Every path starts at the origin, p(0) = (0, 0, 0) m, and respects the limits the
 `MIN_TURN_RADIUS`; splines within `CURVATURE_SLACK`) and |γ| ≤ its largest angle (never above
 `MAX_FLIGHT_PATH_ANGLE_DEG`; splines within 0.5°), checked on every drawn spline at 16 points
 per segment (a draw outside is redrawn from the same generator, so a path is still a function
-of the generator's state only).
+of the generator's state only). Every drawn path also has, proven on the whole path
+(`auv_gym.path_bounds`), |p'| >= `paths.MIN_TANGENT` and turn rates |dψ_F/ds|/|p'|,
+|dθ_F/ds|/|p'| <= `MAX_TURN_RATE`, so it fits the observation bounds at any u_desired. If all
+`_MAX_REDRAWS` natural splines miss the limits (a track that ends inside a turn, with ranges
+too narrow to draw another), the same tracks are interpolated with their own end tangents
+instead of the natural ends; measured over random configurations, that always succeeds.
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.observation import PATH_RATE_BOUND, SPEED_BOUND
+from auv_gym.path_bounds import spline_turn_rates
 from auv_gym.paths import Helix, Path, Spline, StraightLine
 from auv_gym.validation import ArgumentTypeError, keys_within, real, vector
 
@@ -68,6 +75,11 @@ MIN_PIECE = 20.0  # [m] shortest spline piece or lawnmower leg: one curvature ra
 # The spline through the track's samples follows its curvature ramps to within a few per cent
 # (measured on 200 draws: ≤ 3.7 % above 1/R at 5-m spacing, 24 % at 10 m); the check allows 5 %.
 CURVATURE_SLACK = 1.05
+# [rad/m] Proven bound on every drawn path's |dψ_F/ds|/|p'| and |dθ_F/ds|/|p'|: the virtual point
+# (u_p <= 2 u_D) then turns within the observation's ±PATH_RATE_BOUND for any u_desired, which
+# is why the environment needs no turn-rate check for a distribution. Drawn paths keep far
+# below it (about 1/R_low ≤ 1/8 m, cos γ/R for a helix).
+MAX_TURN_RATE = PATH_RATE_BOUND / (2.0 * SPEED_BOUND)
 
 
 def _range(name: str, value: Any, low: float, high: float, unit: str) -> tuple[float, float]:
@@ -178,18 +190,45 @@ class PathDistribution:
             return self._helix(rng)
         if family == "line":
             return self._line(rng)
+        tracks = []
         for _ in range(_MAX_REDRAWS):
-            track = self._spline_track(rng) if family == "spline" else self._lawnmower(rng)
-            path = Spline(track)
-            kappa, gamma = curvature_and_angle(path)
-            if kappa <= CURVATURE_SLACK / self.radius[0] and gamma <= math.radians(
-                self.climb_angle_deg[1] + 0.5
-            ):
+            track, ends = self._spline_track(rng) if family == "spline" else self._lawnmower(rng)
+            path = self._within_limits(track)
+            if path is not None:
+                path.family = family
+                return path
+            tracks.append((track, ends))
+        # A natural spline straightens the track's ends (p'' = 0 there): a track that ends
+        # inside a turn overshoots the curvature limit near its end, and a distribution whose
+        # ranges are narrow draws such tracks every time. Clamping the end slopes to the
+        # track's own tangents follows the turn; only draws that failed every natural attempt
+        # come here, so the paths drawn before are unchanged.
+        for track, ends in tracks:
+            path = self._within_limits(track, ends)
+            if path is not None:
                 path.family = family
                 return path
         raise RuntimeError(f"PathDistribution: no {family} path within the limits after "
-                           f"{_MAX_REDRAWS} draws (κ = {kappa:.4g} 1/m, |γ| = "
-                           f"{math.degrees(gamma):.3g}°): {self}")  # fmt: skip
+                           f"{_MAX_REDRAWS} draws: {self}")  # fmt: skip
+
+    def _within_limits(
+        self, track: np.ndarray, ends: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> Spline | None:
+        """The spline through ``track`` (natural, or with end slopes ``ends``) if it keeps the
+        distribution's limits (curvature and flight-path angle, sampled as documented) and the
+        proven ones every environment needs (|p'| >= `paths.MIN_TANGENT`, turn rates <=
+        `MAX_TURN_RATE`); else None."""
+        try:
+            path = Spline(track, end_tangents=ends)
+        except ValueError:  # |p'| below the minimum somewhere
+            return None
+        kappa, gamma = curvature_and_angle(path)
+        if kappa > CURVATURE_SLACK / self.radius[0] or gamma > math.radians(
+            self.climb_angle_deg[1] + 0.5
+        ):
+            return None
+        rates = spline_turn_rates(path.data, accept_below=MAX_TURN_RATE)
+        return path if max(r.upper for r in rates) <= MAX_TURN_RATE else None
 
     def _angle(self, rng: np.random.Generator) -> float:
         """A signed flight-path angle [rad]: |γ| uniform in the range, sign ±1."""
@@ -214,7 +253,7 @@ class PathDistribution:
         path.family = "line"
         return path
 
-    def _spline_track(self, rng: np.random.Generator) -> np.ndarray:
+    def _spline_track(self, rng: np.random.Generator) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """Waypoints of a random track: pieces straight (⅓) or turning (⅔) at a random radius and
         side, the flight-path angle linear between random values at the piece ends."""
         lengths, curvatures, angles = [], [], [self._angle(rng)]
@@ -234,7 +273,7 @@ class PathDistribution:
         heading0 = rng.uniform(-math.pi, math.pi)
         return _integrate(lengths, curvatures, angles, heading0, self.length, self.spacing)
 
-    def _lawnmower(self, rng: np.random.Generator) -> np.ndarray:
+    def _lawnmower(self, rng: np.random.Generator) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """Waypoints of a survey: legs of one length joined by half circles of alternating side."""
         leg = rng.uniform(*self.leg_length)
         radius = rng.uniform(*self.radius)
@@ -256,11 +295,12 @@ class PathDistribution:
 def _integrate(
     lengths: list[float], curvatures: list[float], angles: list[float], heading0: float,
     total: float, spacing: float,
-) -> np.ndarray:  # fmt: skip
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:  # fmt: skip
     """Waypoints every ``spacing`` m (a multiple of the integration step) of arc length along
     a track whose heading turns at the given horizontal curvature per piece [1/m] and whose
     flight-path angle goes linearly between the given values [rad]; starts at the origin with
-    heading ``heading0`` [rad]."""
+    heading ``heading0`` [rad]. Also the track's unit tangents at the first and last
+    waypoint."""
     edges = np.r_[0.0, np.cumsum(lengths)]
     ell = np.arange(0.0, total + _INTEGRATION_STEP / 2, _INTEGRATION_STEP)
     piece = np.clip(np.searchsorted(edges, ell, side="right") - 1, 0, len(lengths) - 1)
@@ -280,7 +320,8 @@ def _integrate(
     steps = 0.5 * (tangent[1:] + tangent[:-1]) * _INTEGRATION_STEP
     points = np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
     every = round(spacing / _INTEGRATION_STEP)
-    return points[::every]
+    last = (len(points) - 1) // every * every
+    return points[::every], (tangent[0], tangent[last])
 
 
 def curvature_and_angle(path: Path, per_segment: int = _CHECKS_PER_SEGMENT) -> tuple[float, float]:

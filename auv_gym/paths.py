@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from auv_gym.path_bounds import min_tangent_squared
 from auv_gym.validation import ArgumentTypeError, choice, integer, is_real, real, vector
 
 __all__ = [
@@ -206,22 +207,70 @@ class StraightLine(Path):
 
 
 class Spline(Path):
-    """A C²-smooth natural cubic spline through 3D waypoints, parameterised by chord length [m]."""
+    """A C²-smooth cubic spline through 3D waypoints, parameterised by chord length [m].
+
+    Natural (p″ = 0 at both ends) by default; ``end_tangents`` = (p′(0), p′(s_end)) clamps the
+    end slopes instead (unit vectors for an arc-length-like parameter), which follows a track
+    that ends inside a turn without the natural spline's straightening.
+
+    A path that doubles back — a waypoint after which the next one lies straight behind, such
+    as the survey line (0, 0, 0) → (100, 0, 0) → (0, 0, 0) — has p′(s) = 0 at the reversal,
+    where neither its heading nor ṡ = u_p/|p′| is defined: the constructor refuses any spline
+    whose |p′(s)| falls below `MIN_TANGENT` anywhere (a proven bound, `path_bounds`), naming
+    the waypoint. Give such a path a turn instead: a waypoint beside the reversal, e.g.
+    (0, 0, 0) → (100, 0, 0) → (110, 10, 0) → (100, 20, 0) → (0, 20, 0). Near-reversals whose
+    turn is too tight for the virtual point are refused by the environment's turn-rate check.
+    """
 
     kind = SPLINE
 
-    def __init__(self, waypoints: Sequence[Sequence[float]]) -> None:
+    def __init__(
+        self,
+        waypoints: Sequence[Sequence[float]],
+        end_tangents: Sequence[Sequence[float]] | None = None,
+    ) -> None:
         pts = _waypoint_array(waypoints)
         chords = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         if np.any(chords <= MIN_CHORD):
             raise ValueError("Spline: consecutive waypoints must be distinct")
         knots = np.r_[0.0, np.cumsum(chords)]
-        coeffs = _natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
+        if end_tangents is None:
+            coeffs = _natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
+        else:
+            if isinstance(end_tangents, (str, bytes)) or len(end_tangents) != 2:
+                raise ArgumentTypeError(f"Spline end_tangents must be two (x, y, z) vectors, "
+                                        f"got {end_tangents!r:.80}")  # fmt: skip
+            slopes = [np.array(vector(f"Spline end_tangents[{k}]", v, 3, -SCALE_BOUND,
+                                      SCALE_BOUND, "m per unit s"))
+                      for k, v in enumerate(end_tangents)]  # fmt: skip
+            coeffs = _clamped_cubic_coefficients(knots, pts, *slopes)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("Spline: the waypoints give a spline with non-finite coefficients")
         self.waypoints = pts
         self.s_end = float(knots[-1])
         self.data = _spline_data(knots, coeffs)
+        check_tangent("Spline", self.data, knots)
+
+
+def check_tangent(owner: str, data: np.ndarray, knots: np.ndarray | None = None) -> None:
+    """Raise ValueError if |p′(s)| of a SPLINE kernel vector falls below `MIN_TANGENT`
+    anywhere (a proven lower bound, not samples), naming the waypoint nearest to where it does
+    (``knots``: the waypoints' s) or its s."""
+    low = min_tangent_squared(data, accept_above=MIN_TANGENT * MIN_TANGENT)
+    if -low.upper >= MIN_TANGENT * MIN_TANGENT:
+        return
+    speed = math.sqrt(max(-low.reached, 0.0))
+    where = f"s = {low.s:.6g}"
+    if knots is not None:
+        k = low.segment + int(low.s - knots[low.segment] > knots[low.segment + 1] - low.s)
+        raise ValueError(
+            f"{owner}: the path doubles back at waypoint {k} ({where} m: |p'(s)| = {speed:.3g} < "
+            f"{MIN_TANGENT:g}); add a turn waypoint beside waypoint {k} (or split the path there)"
+        )
+    raise ValueError(
+        f"{owner}: |p'(s)| must be >= {MIN_TANGENT:g} m per unit s everywhere, got {speed:.3g} "
+        f"at {where}; the curve must not stop or double back"
+    )
 
 
 def _waypoint_array(waypoints: object) -> np.ndarray:
@@ -344,6 +393,8 @@ def fit_curve(
     that needs more than ``max_segments`` raises ValueError with the error reached. Cubic
     interpolation errors fall as h⁴ (position) and h³ (tangent) with the knot spacing h: the
     default helix sampled over 200 units of s fits to 1 mm with 64 segments (docs/model.md §3.8).
+    The fitted path's |p'(s)| >= `MIN_TANGENT` is checked everywhere (a proven bound,
+    `check_tangent`), not only at the check points.
     """
     if not callable(curve):
         raise ArgumentTypeError(f"curve must be a callable s -> (x, y, z), got {curve!r:.80}")
@@ -378,6 +429,7 @@ def fit_curve(
             f"fit_curve: {n} segments fit the curve to {position_error:.3g} m, above tolerance = "
             f"{tolerance:g} m; raise max_segments (<= {MAX_WAYPOINTS - 1}) or the tolerance"
         )
+    check_tangent("fit_curve", fitted.data)  # the path the kernels follow, everywhere
     step = 1e-4 * h
     dp_true = (_curve_points(curve, np.minimum(check + step, s_end))
                - _curve_points(curve, np.maximum(check - step, 0.0))) / (2 * step)  # fmt: skip

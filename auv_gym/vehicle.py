@@ -149,6 +149,35 @@ class AUVParams:
         delta = rng.uniform(-epsilon, epsilon, size=len(HYDRODYNAMIC_FIELDS))
         return self.scaled(dict(zip(HYDRODYNAMIC_FIELDS, 1.0 + delta, strict=True)))
 
+    def check_perturbation(self, epsilon: float) -> None:
+        """Raise ValueError, naming the coefficient, if some draw of `perturbed` with this ε
+        could be an invalid vehicle; every draw is valid otherwise.
+
+        A draw scales each coefficient by a factor f = 1 + δ ≤ 1 + ε (floating-point rounding
+        is monotonic, so the bound holds for the computed products too). The checks of
+        `AUVParams` that a scaled coefficient enters are the inertias m − X_u̇ … I_z − N_ṙ > 0,
+        smallest at f = 1 + ε for a positive added mass, and finiteness, worst at f = 1 + ε.
+        """
+        if not (math.isfinite(epsilon) and 0.0 <= epsilon < 1.0):
+            raise ValueError(f"parameter uncertainty epsilon must be in [0, 1), got {epsilon}")
+        most = 1.0 + epsilon
+        for name in HYDRODYNAMIC_FIELDS:
+            if not math.isfinite(getattr(self, name) * most):
+                raise ValueError(f"param_uncertainty = {epsilon:g} can scale AUVParams.{name} = "
+                                 f"{getattr(self, name):g} beyond the float range")  # fmt: skip
+        for inertia, rigid, added in (("m11", "m", "X_udot"), ("m22", "m", "Y_vdot"),
+                                      ("m33", "m", "Z_wdot"), ("I55", "I_y", "M_qdot"),
+                                      ("I66", "I_z", "N_rdot")):  # fmt: skip
+            body, coefficient = getattr(self, rigid), getattr(self, added)
+            worst = body - coefficient * most
+            if coefficient > 0.0 and not worst > 0.0:
+                raise ValueError(
+                    f"param_uncertainty = {epsilon:g} can draw an invalid vehicle: {inertia} = "
+                    f"{rigid} - {added}·(1 + δ) falls to {worst:.4g} at δ = +{epsilon:g} "
+                    f"({rigid} = {body:g}, {added} = {coefficient:g}); use param_uncertainty < "
+                    f"{body / coefficient - 1.0:.4g} or a smaller {added}"
+                )
+
     def to_vector(self) -> np.ndarray:
         """Pack into the float64 row the numba kernels read (layout `PARAM_NAMES`)."""
         return np.array([float(getattr(self, name)) for name in PARAM_NAMES])

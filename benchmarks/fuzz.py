@@ -4,14 +4,16 @@
     python -m benchmarks.fuzz --steps 1e6 --seed 3     # a shorter run with another seed
 
 Each configuration is drawn across the documented argument space of `AUVPath3DEnv` (paths of
-every kind and scale, RK4 steps 1 µs–0.1 s with 1–10 000 physics steps per control step (half
-of the configurations 1–10), noise,
-currents, parameter uncertainty, both actuator models, random or far starts, every reward
-weight, …) and runs a batch of vehicles (`AUVPath3DVectorEnv`, SAME_STEP autoreset) through
-several episodes. Actions mix uniform [−1, 1], saturating [−3, 3], the corners ±1, zeros,
-huge finite values up to ±1.8e308 and denormals. Every control step is checked for the
-invariants of tests/test_properties.py; the counts are printed with a one-line
-verdict, and the exit code is 1 if any invariant was violated:
+every kind and scale: helices, lines, waypoint splines, out-and-back lines with or without a
+turn, user curves fitted by `fit_curve`, "random" and random `PathDistribution` configurations;
+the v0, speed-limited and preview envs; RK4 steps 1 µs–0.1 s with 1–10 000 physics steps
+per control step (half of the configurations 1–10), noise, currents, random currents and
+noise, parameter uncertainty up to the limit of a vehicle with positive added mass, all
+actuator models, random or far starts, every reward weight, …) and runs a batch of vehicles
+(`AUVPath3DVectorEnv`, SAME_STEP autoreset) through several episodes. Actions mix uniform
+[−1, 1], saturating [−3, 3], the corners ±1, zeros, huge finite values up to ±1.8e308 and
+denormals. Every control step is checked for the invariants of tests/test_properties.py; the
+counts are printed with a one-line verdict, and the exit code is 1 if any invariant was violated:
 
 - NaN observations: a non-finite value in a returned observation (or final observation);
 - non-finite rewards;
@@ -21,6 +23,9 @@ verdict, and the exit code is 1 if any invariant was violated:
   (corridor, pitch, envelope, non_finite), a reset observation outside it;
 - unknown reasons: `terminated` without a documented reason, or a reason without `terminated`;
 - inconsistent infos: ``info["_final_obs"]`` not marking exactly the finished vehicles.
+
+A draw that a constructor refuses with a named error (waypoints that double back, a curve that
+stops, a parameter range that could draw an invalid vehicle) is counted as refused, not run.
 
 Physics work per configuration is bounded (`--physics-budget`), so configurations with many
 physics steps per control step contribute fewer control steps.
@@ -38,7 +43,8 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
+from auv_gym import PREVIEW_ENV_ID, SPEED_LIMIT_ENV_ID, VARIANTS
+from auv_gym.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, SimConfig, path_turn_rates
 from auv_gym.disturbances import (
     MAX_CURRENT_SPEED,
     MAX_CURRENT_TIME_CONSTANT,
@@ -46,8 +52,16 @@ from auv_gym.disturbances import (
     CurrentConfig,
     NoiseConfig,
 )
-from auv_gym.observation import ERROR_BOUND, OBS_HIGH, OBS_LOW, PATH_RATE_BOUND, SPEED_BOUND
-from auv_gym.paths import POSITION_BOUND, Helix, Spline, StraightLine, make_path
+from auv_gym.observation import ERROR_BOUND, PATH_RATE_BOUND, SPEED_BOUND
+from auv_gym.path_generator import (
+    FAMILIES,
+    LENGTH_RANGE,
+    MAX_FLIGHT_PATH_ANGLE_DEG,
+    MIN_TURN_RADIUS,
+    PathDistribution,
+)
+from auv_gym.paths import POSITION_BOUND, Helix, Path, Spline, StraightLine, fit_curve, make_path
+from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.vehicle import remus100
 from benchmarks.arguments import ArgumentParser, finite_number, usage_errors
@@ -60,6 +74,11 @@ EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays 
 # about as much as this many physics steps: configurations whose episodes end at once (a
 # corridor narrower than the start's distance) stop early instead of spending the run on resets.
 RESET_WORK = 1000
+# A reset that draws a spline from a PathDistribution costs milliseconds (a dense solve per
+# drawn spline and its proven bounds): counted as this many physics steps.
+RANDOM_PATH_RESET_WORK = 50_000
+RANDOM_PATH_VEHICLES = 32  # vehicles per configuration with a PathDistribution, at most
+VARIANT_IDS = ("AUVPath3D-v0", SPEED_LIMIT_ENV_ID, PREVIEW_ENV_ID)  # the envs fuzzed
 RANDOM_START_REACH = 2.0 * math.sqrt(3.0)  # [m] the largest random start offset (±2 m per axis)
 
 
@@ -70,6 +89,7 @@ class Tally:
     steps: int = 0
     episodes: int = 0
     configurations: int = 0
+    refused: int = 0  # draws a constructor refused with a named error (not violations)
     reasons: dict[str, int] = field(default_factory=dict)
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(COUNTERS, 0))
     examples: list[str] = field(default_factory=list)  # the first few violations, reproducible
@@ -92,10 +112,71 @@ def log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
     return float(min(max(10.0 ** rng.uniform(math.log10(low), math.log10(high)), low), high))
 
 
+PATH_KINDS = ("helix", "line", "waypoints", "Helix", "StraightLine", "Spline", "Reversal",
+              "FittedCurve", "random", "PathDistribution")  # fmt: skip
+
+
+def draw_distribution(rng: np.random.Generator) -> PathDistribution:
+    """A `PathDistribution` anywhere in its documented ranges (narrow ranges included: they
+    draw the same track shape every time)."""
+
+    def span(low: float, high: float, log: bool = False) -> tuple[float, float]:
+        a = log_uniform(rng, low, high) if log else float(rng.uniform(low, high))
+        if rng.random() < 0.3:
+            return a, a
+        b = log_uniform(rng, low, high) if log else float(rng.uniform(low, high))
+        return min(a, b), max(a, b)
+
+    families = [f for f in FAMILIES if rng.random() < 0.5] or [str(rng.choice(FAMILIES))]
+    return PathDistribution(
+        families=tuple(families),
+        radius=span(MIN_TURN_RADIUS, 1e4, log=True),
+        climb_angle_deg=span(0.0, MAX_FLIGHT_PATH_ANGLE_DEG),
+        piece_length=span(20.0, 1000.0, log=True),
+        leg_length=span(20.0, 1000.0, log=True),
+        length=round(float(rng.uniform(*LENGTH_RANGE)), 1) if rng.random() < 0.7
+        else round(float(rng.uniform(50.0, 400.0)), 1),
+    )  # fmt: skip
+
+
+def draw_curve(rng: np.random.Generator) -> Path:
+    """A user's curve p(s) fitted by `fit_curve` (raises ValueError if it refuses it)."""
+    shape = int(rng.integers(3))
+    a, b, c = (log_uniform(rng, 0.1, 100.0) for _ in range(3))
+    k = log_uniform(rng, 1e-3, 1.0)
+    s_end = log_uniform(rng, 1.0, 2000.0)
+    if shape == 0:  # a helix with an arbitrary parameterisation speed
+
+        def curve(s: float) -> tuple[float, float, float]:
+            return a * math.cos(k * s), a * math.sin(k * s), -b * k * s
+    elif shape == 1:  # a sinusoidal track
+
+        def curve(s: float) -> tuple[float, float, float]:
+            return s, a * math.sin(k * s), c * math.cos(0.5 * k * s)
+    else:  # a Lissajous figure: may stop or double back, then refused
+
+        def curve(s: float) -> tuple[float, float, float]:
+            return a * math.sin(k * s), b * math.sin(2 * k * s + 0.3), c * math.sin(3 * k * s)
+
+    return fit_curve(curve, s_end, tolerance=log_uniform(rng, 1e-3, 1.0))
+
+
 def draw_path(rng: np.random.Generator) -> Any:
-    kind = rng.choice(["helix", "line", "waypoints", "Helix", "StraightLine", "Spline"])
-    if kind in ("helix", "line", "waypoints"):
-        return str(kind)
+    """A path argument of any kind; ValueError when the kind's constructor refuses the draw
+    (waypoints that double back, a curve that stops): `run` counts those as refused."""
+    kind = str(rng.choice(PATH_KINDS))
+    if kind in ("helix", "line", "waypoints", "random"):
+        return kind
+    if kind == "PathDistribution":
+        return draw_distribution(rng)
+    if kind == "FittedCurve":
+        return draw_curve(rng)
+    if kind == "Reversal":  # an out-and-back line, optionally with a turn at the far end
+        length = log_uniform(rng, 1.0, 1000.0)
+        offset = 0.0 if rng.random() < 0.3 else log_uniform(rng, 1e-4, length)
+        turn = [(length + offset, offset, 0.0)] if rng.random() < 0.5 else []
+        return Spline([(0.0, 0.0, 0.0), (length, 0.0, 0.0), *turn,
+                       (float(rng.uniform(-length, length)), 2.0 * offset, 0.0)])  # fmt: skip
     end = math.inf if rng.random() < 0.5 else log_uniform(rng, 1e-3, 1e4)
     if kind == "Helix":
         radius, omega = log_uniform(rng, 1e-3, 1e5), log_uniform(rng, 1e-4, 1e3)
@@ -155,11 +236,24 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
             time_constant=log_uniform(rng, 1e-3, MAX_CURRENT_TIME_CONSTANT),
         )
     kw["param_uncertainty"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.0, 0.999))
-    kw["actuator"] = str(rng.choice(["paper", "fins"]))
+    kw["actuator"] = str(rng.choice(["paper", "fins", "random"]))
     kw["randomize_start"] = bool(rng.random() < 0.5)
-    path = make_path(kw["path"])
-    turn = max(path_turn_rates(path))
+    if rng.random() < 0.25:
+        kw["random_current"] = float(rng.uniform(0.0, MAX_RANDOM_CURRENT))
+    if rng.random() < 0.25:
+        kw["random_noise"] = float(rng.uniform(0.0, MAX_RANDOM_NOISE))
+    variant = str(rng.choice(list(VARIANT_IDS)))
+    kw.update(VARIANTS[variant])
+    random_path = isinstance(kw["path"], PathDistribution) or kw["path"] == "random"
+    if random_path:  # drawn paths turn within MAX_TURN_RATE: any u_desired fits
+        turn = 0.0
+    else:
+        path = make_path(kw["path"])
+        turn = max(path_turn_rates(path))
     u_max = SPEED_BOUND if turn == 0 else min(SPEED_BOUND, PATH_RATE_BOUND / (2 * turn))
+    u_max *= 1 - 1e-12  # the env's check 2·u·turn <= bound must not fail by one rounding
+    if "surge_limit" in kw:  # u_desired < surge_limit
+        u_max = min(u_max, kw["surge_limit"] * (1.0 - 1e-9))
     kw["u_desired"] = u_max * (1.0 if rng.random() < 0.2 else log_uniform(rng, 1e-4, 1.0))
     kw["sigma"] = log_uniform(rng, 1e-6, 1e6)
     kw["virtual_point_law"] = str(rng.choice(["corrected", "printed"]))
@@ -170,17 +264,24 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
             t: 0.0 if rng.random() < 0.2 else log_uniform(rng, 1e-6, MAX_REWARD_WEIGHT)
             for t in REWARD_TERMS
         }
-    if rng.random() < 0.5:
+    if rng.random() < 0.5 and not random_path:
         kw["start_heading"] = float(rng.uniform(-2 * math.pi, 2 * math.pi))
-    if rng.random() < 0.5:  # anywhere the errors stay observable, possibly beyond the corridor
+    if rng.random() < 0.5 and not random_path:  # anywhere the errors stay observable
         offset = rng.uniform(-1.0, 1.0, 3)
         reach = ERROR_BOUND - RANDOM_START_REACH - 1e-6
         distance = rng.uniform(0.0, reach)
         start = path.evaluate(0.0)[0] + offset / max(np.linalg.norm(offset), 1e-9) * distance
         if np.abs(start).max() <= POSITION_BOUND:
             kw["start_position"] = tuple(float(x) for x in start)
-    if rng.random() < 0.5:
+    choice = rng.random()
+    if choice < 0.4:
         kw["params"] = remus100().perturbed(rng, 0.5)
+    elif choice < 0.6:  # a positive added mass: param_uncertainty up to its documented limit
+        m = remus100().m
+        added = float(rng.uniform(0.0, 0.99 * m))
+        kw["params"] = {"X_udot": added, "Y_vdot": float(rng.uniform(-50.0, 0.99 * m))}
+        limit = min(m / max(added, kw["params"]["Y_vdot"]) - 1.0, 0.999)
+        kw["param_uncertainty"] = float(rng.uniform(0.0, limit)) * (1.0 - 1e-9)
     return kw, n_steps
 
 
@@ -225,8 +326,10 @@ def fuzz_configuration(
         tally.violation("exceptions", 1, f"{where}: {type(error).__name__}: {error}")
         return
     tally.violation("nan_observations", int((~np.isfinite(obs)).any(axis=1).sum()), where)
-    outside = ~((obs >= OBS_LOW) & (obs <= OBS_HIGH)).all(axis=1)
+    low, high = env.single_observation_space.low, env.single_observation_space.high
+    outside = ~((obs >= low) & (obs <= high)).all(axis=1)
     tally.violation("out_of_space_observations", int(outside.sum()), f"reset, {where}")
+    reset_work = RANDOM_PATH_RESET_WORK if env.config.randomized else RESET_WORK
     count = np.zeros(n_vehicles, dtype=np.int64)  # control steps since each vehicle's reset
     documented = set(TERMINATION_REASONS[1:])
     substeps = env.config.substeps
@@ -243,12 +346,12 @@ def fuzz_configuration(
         count += 1
         tally.steps += n_vehicles
         done = terminated | truncated
-        work += n_vehicles * substeps + RESET_WORK * int(done.sum())
+        work += n_vehicles * substeps + reset_work * int(done.sum())
         # Returned rows are the stepped vehicles' observations (not terminated: must be inside
         # the space) and, for finished ones, their reset observations (inside as well).
         tally.violation("nan_observations", int((~np.isfinite(obs)).any(axis=1).sum()), where)
         tally.violation("non_finite_rewards", int((~np.isfinite(reward)).sum()), where)
-        outside = ~((obs >= OBS_LOW) & (obs <= OBS_HIGH)).all(axis=1)
+        outside = ~((obs >= low) & (obs <= high)).all(axis=1)
         tally.violation("out_of_space_observations", int(outside.sum()), where)
         wrong = truncated != (count == n_steps)
         tally.violation("wrong_truncations", int(wrong.sum()), f"{where}, steps {count[wrong]}")
@@ -266,7 +369,7 @@ def fuzz_configuration(
         tally.violation("unknown_reasons", sum(unknown), f"{where}, reasons {reasons}")
         tally.violation("nan_observations", int((~np.isfinite(final_obs)).any(axis=1).sum()),
                         f"final observation, {where}")  # fmt: skip
-        inside = ((final_obs >= OBS_LOW) & (final_obs <= OBS_HIGH)).all(axis=1)
+        inside = ((final_obs >= low) & (final_obs <= high)).all(axis=1)
         excused = np.array([t and r in FAILURES for t, r in zip(ended, reasons, strict=True)])
         tally.violation("out_of_space_observations", int((~inside & ~excused).sum()),
                         f"final observation, {where}")  # fmt: skip
@@ -299,10 +402,18 @@ def run(
     while tally.steps < total_steps:
         index = tally.configurations
         rng = np.random.default_rng([seed, index])  # each configuration reproducible alone
-        kw, n_steps = draw_config(rng, max_episode_steps)
+        try:
+            kw, n_steps = draw_config(rng, max_episode_steps)
+            SimConfig.from_kwargs(**kw)
+        except ValueError:  # a named refusal of an invalid draw (ArgumentTypeError too)
+            tally.configurations += 1
+            tally.refused += 1
+            continue
         substeps = round(kw["control_dt"] / kw["physics_dt"])
         control_steps = 3 * n_steps + 3  # through at least three episodes per vehicle
         n_vehicles = int(np.clip(physics_budget // (control_steps * substeps), 1, max_vehicles))
+        if isinstance(kw["path"], PathDistribution) or kw["path"] == "random":
+            n_vehicles = min(n_vehicles, RANDOM_PATH_VEHICLES)  # resets of up to 0.2 s each
         before = tally.steps
         where = f"--seed {seed}, configuration {index}: {_brief(kw)}"
         fuzz_configuration(kw, n_steps, n_vehicles, control_steps, physics_budget, rng, tally,
@@ -324,7 +435,8 @@ def report(tally: Tally, seconds: float) -> str:
     lines = [
         f"vehicle-steps:             {tally.steps:,}",
         f"episodes:                  {tally.episodes:,}",
-        f"configurations:            {tally.configurations:,}",
+        f"configurations:            {tally.configurations:,} ({tally.refused:,} refused at "
+        "construction with a named error)",
         f"NaN observations:          {tally.counts['nan_observations']}",
         f"non-finite rewards:        {tally.counts['non_finite_rewards']}",
         f"exceptions:                {tally.counts['exceptions']}",

@@ -17,8 +17,15 @@ from benchmarks import fuzz
 
 
 def test_drawn_configurations_are_valid_and_span_the_ranges():
-    drawn = [fuzz.draw_config(np.random.default_rng([0, k]), 1000) for k in range(300)]
-    configs = [SimConfig.from_kwargs(**kw) for kw, _ in drawn]  # every one accepted
+    drawn, refused = [], []
+    for k in range(300):
+        try:
+            drawn.append(fuzz.draw_config(np.random.default_rng([0, k]), 1000))
+        except ValueError as error:  # a constructor's named refusal of the path drawn
+            refused.append(str(error))
+    configs = [SimConfig.from_kwargs(**kw) for kw, _ in drawn]  # every other one accepted
+    assert 0 < len(refused) < 15
+    assert any("doubles back at waypoint" in text for text in refused)
     substeps = [c.substeps for c in configs]
     assert min(substeps) == 1 and max(substeps) > 1000
     assert all(c.max_steps == n for c, (_, n) in zip(configs, drawn, strict=True))
@@ -28,7 +35,12 @@ def test_drawn_configurations_are_valid_and_span_the_ranges():
     )
     kinds = {type(kw["path"]).__name__ if not isinstance(kw["path"], str) else kw["path"]
              for kw, _ in drawn}  # fmt: skip
-    assert kinds == {"helix", "line", "waypoints", "Helix", "StraightLine", "Spline"}
+    assert kinds == {"helix", "line", "waypoints", "Helix", "StraightLine", "Spline",
+                     "FittedCurve", "random", "PathDistribution"}  # fmt: skip
+    assert {(kw.get("surge_limit"), kw.get("observation")) for kw, _ in drawn} == {
+        (None, None), (2.0, None), (2.0, "preview")}  # fmt: skip
+    limited = [kw for kw, _ in drawn if isinstance(kw.get("params"), dict)]
+    assert limited and all(kw["param_uncertainty"] > 0 for kw in limited)
     corridors = [kw["corridor"] for kw, _ in drawn]
     assert min(corridors) < 0.1 and max(corridors) > 100
 
