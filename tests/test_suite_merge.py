@@ -1,0 +1,79 @@
+"""Adding a policy to a committed suite evaluation only when the episodes are the same."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from benchmarks.suite_merge import main, merge_suites
+
+HEADER = ["policy", "run", "set", "seed", "rms_distance", "termination_reason"]
+
+
+def _suite(folder: Path, rows: list[list[str]], policies: list[str], **extra) -> Path:
+    folder.mkdir(parents=True)
+    suite = {
+        "command": f"evaluate {folder.name}",
+        "sets": {"a": {"seeds": {"first": 0, "count": 2}}},
+        "duration_s": 300.0,
+        "transient_s": 100.0,
+        "policies": {p: {"name": p, "kind": "agent"} for p in policies},
+        "agents": {},
+        "git_commit": "abc",
+        **extra,
+    }
+    (folder / "suite.json").write_text(json.dumps(suite))
+    with (folder / "episodes.csv").open("w", newline="") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(HEADER)
+        writer.writerows(rows)
+    return folder
+
+
+FBSM = [
+    ["fbsm", "0", "a", "0", "0.0641", "time_limit"],
+    ["fbsm", "0", "a", "1", "0.0702", "time_limit"],
+]
+NEW = [["new", "0", "a", "0", "0.15", "time_limit"], ["new", "1", "a", "0", "30.0", "corridor"]]
+
+
+def test_rows_and_provenance_are_added(tmp_path):
+    target = _suite(tmp_path / "target", FBSM, ["fbsm"])
+    source = _suite(tmp_path / "source", [*FBSM, *NEW], ["fbsm", "new"])
+    assert merge_suites(source, target, ["new"]) == {"new": 2}
+    rows = list(csv.reader((target / "episodes.csv").open()))
+    assert rows == [HEADER, *FBSM, *NEW]
+    suite = json.loads((target / "suite.json").read_text())
+    assert list(suite["policies"]) == ["fbsm", "new"]
+    (addition,) = suite["additions"]
+    assert addition["command"] == "evaluate source" and addition["policies"] == ["new"]
+    assert addition["checked_equal"] == {"policies": ["fbsm"], "episodes": 2, "rtol": 1e-12}
+
+
+def test_different_shared_episodes_are_refused(tmp_path):
+    changed = [FBSM[0], ["fbsm", "0", "a", "1", "0.0703", "time_limit"]]
+    target = _suite(tmp_path / "target", FBSM, ["fbsm"])
+    source = _suite(tmp_path / "source", [*changed, *NEW], ["fbsm", "new"])
+    with pytest.raises(ValueError, match=r"fbsm run 0 set a seed 1: rms_distance = 0.0703 here"):
+        merge_suites(source, target, ["new"])
+    assert list(csv.reader((target / "episodes.csv").open())) == [HEADER, *FBSM]  # untouched
+    # Below the tolerance (another machine's last digits) it is the same experiment.
+    assert merge_suites(source, target, ["new"], rtol=0.01) == {"new": 2}
+
+
+def test_not_the_same_suite_or_nothing_to_check(tmp_path, capsys):
+    target = _suite(tmp_path / "target", FBSM, ["fbsm"])
+    other = _suite(tmp_path / "other", [*FBSM, *NEW], ["fbsm", "new"], duration_s=200.0)
+    with pytest.raises(ValueError, match="differ in 'duration_s'"):
+        merge_suites(other, target, ["new"])
+    alone = _suite(tmp_path / "alone", NEW, ["new"])
+    with pytest.raises(ValueError, match="shares no policy"):
+        merge_suites(alone, target, ["new"])
+    same = _suite(tmp_path / "same", [*FBSM, *NEW], ["fbsm", "new"])
+    with pytest.raises(ValueError, match=r"\['fbsm'\]: already in"):
+        merge_suites(same, target, ["fbsm"])
+    code = main(["--from", str(tmp_path / "missing"), "--into", str(target), "--policies", "x"])
+    assert code == 2 and "no such file" in capsys.readouterr().err
