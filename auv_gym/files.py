@@ -4,19 +4,26 @@ Every file the project writes (trajectories, figures, tables, agents, learning c
 through `write_atomic` or `write_folder_atomic`: readers, and a run restarted after a kill, see
 the previous complete file or folder or the new one, never a partial write. `environment` is the
 one record of what produced a result (package versions and the git commit of the code).
+
+One output folder, one run: `output_lock` holds an exclusive lock on a folder for the run that
+writes it (a second run is refused with the holder's pid) and removes the temporary files of
+runs killed mid-write; `replace_outputs` removes the files a previous run with other arguments
+wrote and this one did not (so no stale figure sits beside new tables).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import math
 import os
 import platform
+import re
 import shutil
 import subprocess
 import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import asdict, is_dataclass
 from importlib import metadata
 from pathlib import Path
@@ -25,10 +32,16 @@ from typing import IO, Any, Literal
 import numpy as np
 
 __all__ = [
+    "LOCK_FILE",
+    "OUTPUTS_FILE",
+    "FolderInUseError",
     "environment",
     "git_commit",
     "json_default",
     "jsonable",
+    "output_lock",
+    "remove_temporaries",
+    "replace_outputs",
     "versions",
     "write_atomic",
     "write_folder_atomic",
@@ -39,6 +52,12 @@ __all__ = [
 # Distributions whose versions determine a result (Python is added).
 PACKAGES = ("auv-gym", "numpy", "numba", "gymnasium", "stable-baselines3", "torch")
 _ROOT = Path(__file__).resolve().parent.parent  # the checkout holding the auv_gym package
+LOCK_FILE = ".lock"  # in an output folder: its run's pid, flock-ed while the run lasts
+OUTPUTS_FILE = ".outputs.json"  # in an output folder: the files its last run wrote
+# Temporary names of `write_atomic` / `write_folder_atomic` (mkstemp's 8 random characters) and
+# the folder they set aside while swapping.
+TEMPORARY = re.compile(r"\..+\.[A-Za-z0-9_]{8}\.tmp|\..+\.old\d+")
+TEMPORARY_DEPTH = 4  # folder levels searched: OUT/episodes/<scenario>/<policy>/ is 3
 
 
 def write_atomic(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> Path:
@@ -186,3 +205,94 @@ def git_commit() -> str | None:
 def environment() -> dict[str, Any]:
     """The record stored with every result: {"versions": `versions()`, "git_commit": ...}."""
     return {"versions": dict(versions()), "git_commit": git_commit()}
+
+
+class FolderInUseError(OSError):
+    """Another live run holds the output folder's lock."""
+
+
+@contextlib.contextmanager
+def output_lock(folder: str | os.PathLike, flag: str = "--out") -> Iterator[Path]:
+    """Hold ``folder`` (created if needed) for this run: an exclusive `fcntl.flock` on
+    ``folder/.lock``, which holds the pid; the kernel releases it when the run ends, even by
+    SIGKILL, so a killed run never blocks the next one.
+
+    `FolderInUseError` (one line naming ``flag``, the folder and the holder's pid) while another
+    run holds it. Once held, the temporary files of runs killed mid-write are removed
+    (`remove_temporaries`): no live run can be writing them.
+    """
+    import fcntl  # POSIX; imported here so that auv_gym imports everywhere
+
+    path = Path(folder)
+    path.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+        os.close(fd)
+        raise FolderInUseError(
+            f"{flag} {str(path)!r} is in use by another run (pid {holder}); wait for it to end "
+            f"or choose another {flag}"
+        ) from None
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        remove_temporaries(path)
+        yield path
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def remove_temporaries(folder: str | os.PathLike, depth: int = TEMPORARY_DEPTH) -> list[Path]:
+    """Remove the temporary files and folders `write_atomic` and `write_folder_atomic` leave
+    when killed (``.NAME.XXXXXXXX.tmp``, ``.NAME.old<pid>``) in ``folder`` and its subfolders
+    down to ``depth`` levels; returns them. Call it only while holding `output_lock`."""
+    removed = []
+    level = [Path(folder)]
+    for _ in range(depth):
+        below = []
+        for parent in level:
+            try:
+                entries = list(os.scandir(parent))
+            except OSError:
+                continue
+            for entry in entries:
+                if TEMPORARY.fullmatch(entry.name):
+                    if entry.is_dir(follow_symlinks=False):
+                        shutil.rmtree(entry.path, ignore_errors=True)
+                    else:
+                        Path(entry.path).unlink(missing_ok=True)
+                    removed.append(Path(entry.path))
+                elif entry.is_dir(follow_symlinks=False) and not entry.name.startswith("."):
+                    below.append(Path(entry.path))
+        level = below
+    return removed
+
+
+def replace_outputs(folder: str | os.PathLike, written: Iterable[str | os.PathLike]) -> list[Path]:
+    """Record ``written`` (files this run wrote in ``folder``) in ``folder/.outputs.json`` and
+    delete the files the previous record lists that this run did not write; returns them.
+
+    Only files this project recorded are ever deleted, so an output folder may hold the
+    user's own files too. Folders left empty by the deletion are removed.
+    """
+    root = Path(folder)
+    record = root / OUTPUTS_FILE
+    keep = sorted({Path(os.path.relpath(Path(f), root)).as_posix() for f in written})
+    try:
+        before = json.loads(record.read_text())["files"]
+    except (OSError, ValueError, KeyError, TypeError):
+        before = []
+    removed = []
+    for name in sorted(set(before) - set(keep)):
+        stale = root / name
+        if ".." in Path(name).parts or Path(name).is_absolute() or not stale.is_file():
+            continue  # a hand-edited record names nothing outside the folder
+        stale.unlink()
+        removed.append(stale)
+        if stale.parent != root:
+            with contextlib.suppress(OSError):  # not empty: something else lives there
+                stale.parent.rmdir()
+    write_json(record, {"files": keep}, indent=1)
+    return removed

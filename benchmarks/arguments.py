@@ -10,20 +10,25 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import os
 import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import NoReturn
 
+from auv_gym.files import output_lock
+
 __all__ = [
     "ArgumentParser",
     "comma_names",
     "exit_with_usage_error",
     "finite_number",
+    "locked_folder",
     "program_name",
     "usage_errors",
     "writable_folder",
+    "writable_location",
 ]
 
 
@@ -103,3 +108,45 @@ def writable_folder(path: Path, flag: str = "--out") -> Path:
         reason = error.strerror or str(error)
         raise OSError(f"{flag} {str(path)!r} is not a writable folder: {reason}") from None
     return path
+
+
+def writable_location(path: str | os.PathLike, flag: str, folder: bool = True) -> Path:
+    """Check, creating nothing, that ``path`` can be written later: a folder (``folder``) or a
+    file that does not exist yet or exists as that kind, under an existing ancestor that is a
+    writable folder (proved with a temporary file, removed). Missing parents are fine: the
+    writer creates them. OSError naming the flag and the path otherwise, so a command refuses
+    an output it could not write before its first episode or training step."""
+    target = Path(path)
+    kind = "folder" if folder else "file"
+    problem = None
+    if folder and target.exists() and not target.is_dir():
+        problem = "it is a file, not a folder"
+    elif not folder and target.is_dir():
+        problem = "it is a folder, not a file"
+    ancestor = target if folder and target.is_dir() else target.parent
+    while problem is None and not ancestor.exists():
+        ancestor = ancestor.parent
+    if problem is None and not ancestor.is_dir():
+        problem = f"{ancestor} is a file, not a folder"
+    if problem is None:
+        try:
+            with tempfile.NamedTemporaryFile(dir=ancestor, prefix=".write-test-", suffix=".tmp"):
+                pass
+        except OSError as error:
+            problem = f"{ancestor} is not writable: {error.strerror or error}"
+    if problem is not None:
+        raise OSError(f"{flag} {str(target)!r} cannot be written as a {kind}: {problem}")
+    return target
+
+
+@contextlib.contextmanager
+def locked_folder(prog: str, folder: Path, flag: str = "--out") -> Iterator[Path]:
+    """`auv_gym.files.output_lock` on ``folder`` for the block; another live run holding it (or
+    a folder that cannot be created) ends the command like a usage error: one line, exit 2."""
+    stack = contextlib.ExitStack()
+    try:
+        held = stack.enter_context(output_lock(folder, flag))
+    except OSError as error:
+        exit_with_usage_error(prog, error)
+    with stack:
+        yield held

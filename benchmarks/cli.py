@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -54,6 +55,19 @@ EXTRAS = {"stable_baselines3": "rl", "torch": "rl", "yaml": "rl", "rich": "rl",
 def _table(entries: dict[str, tuple[str, str]]) -> str:
     width = max(map(len, entries))
     return "\n".join(f"  {name:<{width}}  {text}" for name, (_, text) in entries.items())
+
+
+def _current_folder_importable() -> None:
+    """Make modules of the current folder importable, as ``python -m`` does.
+
+    ``python -m benchmarks`` puts the current folder first on ``sys.path``; the installed
+    script puts its own bin folder there instead, so ``--policies mymod:policy`` would not find
+    ./mymod.py. The folder goes last: it adds the user's modules without shadowing an installed
+    package. Spawned workers inherit ``sys.path``.
+    """
+    here = os.getcwd()
+    if "" not in sys.path and here not in sys.path:
+        sys.path.append(here)
 
 
 def _run(module: str, prog: str, argv: list[str]) -> None:
@@ -94,6 +108,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("options", nargs=argparse.REMAINDER, help="the command's options")
     parsed = parser.parse_args(args[:1] if args[:1] not in (["-h"], ["--help"]) else args)
     command, rest = parsed.command, args[1:]
+    _current_folder_importable()
     try:
         if command == "speed":
             _speed(rest)
@@ -110,6 +125,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, FileNotFoundError) as error:
         print(f"auv-gym {command}: error: {error}", file=sys.stderr)
         return 2
+    except SystemExit as stop:  # a command's usage error: its exit code, as for errors above
+        if isinstance(stop.code, int) and stop.code != 0:
+            return stop.code
+        raise
     return 0
 
 

@@ -21,17 +21,19 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.config import MAX_EPISODE_TIME, SimConfig
+from auv_gym.files import replace_outputs
 from auv_gym.metrics import check_window
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,
     finite_number,
+    locked_folder,
     program_name,
     usage_errors,
     writable_folder,
 )
 from benchmarks.cli import HelpFormatter
-from benchmarks.jobs import Job, run_jobs
+from benchmarks.jobs import Job, check_ray_address, run_jobs
 from benchmarks.policies import (
     PolicySpec,
     build_policy,
@@ -44,6 +46,7 @@ from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.tables import write_tables
 
 MAX_SEEDS = 100_000  # seeds per scenario
+TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.tables.write_tables`
 MAX_WORKERS = 1024
 
 
@@ -121,6 +124,13 @@ def check_args(args: argparse.Namespace) -> None:
         raise ValueError(f"--workers must be an integer in [1, {MAX_WORKERS}], got {args.workers}")
     if args.address is not None and args.backend != "ray":
         raise ValueError("--address needs --backend ray")
+    if args.backend == "ray":
+        try:
+            import ray
+        except ImportError:
+            raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
+        if not ray.is_initialized():  # ray.init would retry an unreachable address for ever
+            check_ray_address(args.address)
     for name in names:
         scenario = scenarios[name]
         env_kwargs = {**scenario.env, "max_time": args.duration}
@@ -166,14 +176,18 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             ]
         ),
     }
-    records = run_jobs(
-        args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
-    )
-    summary = write_tables(records, args.out, config)
-    if not args.no_figures:
-        from benchmarks.figures import comparison_figures
+    # One run per folder: a second one is refused, a killed one's temporary files removed.
+    with locked_folder(program_name("benchmarks.compare"), args.out):
+        records = run_jobs(
+            args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
+        )
+        summary = write_tables(records, args.out, config)
+        written = [args.out / name for name in TABLES]
+        if not args.no_figures:
+            from benchmarks.figures import comparison_figures
 
-        comparison_figures(records, args.out, scenarios=scenarios)
+            written += comparison_figures(records, args.out, scenarios=scenarios)
+        replace_outputs(args.out, written)  # no figure of an earlier run beside these tables
     print(summary)
     return records
 

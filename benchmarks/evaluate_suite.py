@@ -52,13 +52,14 @@ from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
 from auv_gym.config import MAX_EPISODE_TIME, SimConfig
-from auv_gym.files import environment, json_default, write_json, write_text
+from auv_gym.files import environment, json_default, replace_outputs, write_json, write_text
 from auv_gym.metrics import check_window
 from auv_gym.rollout import evaluate
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,
     finite_number,
+    locked_folder,
     program_name,
     usage_errors,
     writable_folder,
@@ -476,23 +477,40 @@ def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict
     return records
 
 
+STATS_FILES = ("stats.json", "stats.md")  # `benchmarks.suite_stats.write_stats`, with figures/
+
+
+def _files(folder: Path) -> dict[Path, int]:
+    """file → inode of the files in ``folder`` (none if it does not exist)."""
+    return {f: f.stat().st_ino for f in folder.iterdir() if f.is_file()} if folder.is_dir() else {}
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     args = parse_args(argv)
-    if not args.stats_only:
-        run_suite(args, argv)
-    if args.no_stats:
-        return
-    from benchmarks.suite_stats import write_stats
+    # One run per folder: a second one is refused, a killed one's temporary files removed.
+    with locked_folder(program_name("benchmarks.evaluate_suite"), args.out):
+        before = _files(args.out / "figures")
+        if not args.stats_only:
+            run_suite(args, argv)
+        written = [args.out / EPISODES_FILE, args.out / SUITE_FILE]
+        if not args.no_stats:
+            from benchmarks.suite_stats import FIGURES, write_stats
 
-    print(
-        write_stats(
-            args.out,
-            reference=args.reference,
-            reps=args.reps,
-            seed=args.bootstrap_seed,
-            figures=not args.no_figures,
-        )
-    )
+            text = write_stats(
+                args.out,
+                reference=args.reference,
+                reps=args.reps,
+                seed=args.bootstrap_seed,
+                figures=not args.no_figures,
+            )
+            written += [args.out / name for name in STATS_FILES]
+            after = _files(args.out / FIGURES)  # written atomically: a new inode each
+            written += [f for f, inode in after.items() if before.get(f) != inode]
+        # Statistics and figures of an earlier run (other policies, or stats of other
+        # episodes) do not stay beside this run's episodes.csv.
+        replace_outputs(args.out, written)
+    if not args.no_stats:
+        print(text)
 
 
 if __name__ == "__main__":

@@ -39,8 +39,10 @@ from benchmarks.policies import PolicySpec, build_policy, policy_label
 from benchmarks.scenarios import Scenario
 
 __all__ = [
+    "RAY_PROBE_TIMEOUT_S",
     "Job",
     "agent_digest",
+    "check_ray_address",
     "code_digest",
     "die_with_parent",
     "finished",
@@ -50,6 +52,12 @@ __all__ = [
 ]
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
+RAY_PROBE_TIMEOUT_S = 10.0  # [s] deadline of the handshake with a Ray cluster
+# One cheap RPC each that only a Ray server answers: the GCS of a cluster (HOST:PORT) returns its
+# cluster id; a Ray Client server (ray://HOST:PORT) answers a ping (ClusterInfoType PING = 6).
+RAY_GCS_METHOD = "/ray.rpc.NodeInfoGcsService/GetClusterId"
+RAY_CLIENT_METHOD = "/ray.rpc.RayletDriver/ClusterInfo"
+RAY_CLIENT_PING = b"\x08\x06"
 
 
 @dataclass(frozen=True)
@@ -247,6 +255,7 @@ def _execute_ray(
     except ImportError as exc:
         raise ImportError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from exc
     if not ray.is_initialized():
+        check_ray_address(address)  # ray.init retries an unreachable address for ever
         ray.init(address=address, log_to_driver=False)
     remote = ray.remote(num_cpus=1)(run_job)
     pending = {remote.remote(job, out): index for index, job in zip(indices, jobs, strict=True)}
@@ -254,3 +263,78 @@ def _execute_ray(
         done, _ = ray.wait(list(pending), num_returns=1)
         for ref in done:
             yield pending.pop(ref), ray.get(ref)
+
+
+def _ray_target(address: str | None) -> str | None:
+    """The address ``ray.init(address=address)`` would connect to (None: it starts a local
+    instance): ``RAY_ADDRESS`` and, for None and "auto", the cluster ``ray start`` recorded."""
+    if address == "local":
+        return None
+    if address is None or address == "auto":
+        try:
+            from ray._private.services import get_ray_address_from_environment
+        except ImportError:  # Ray moved it: the environment variable is the documented way
+            return os.environ.get("RAY_ADDRESS") or (None if address is None else "auto")
+        try:
+            return get_ray_address_from_environment(address, None)
+        except ConnectionError as error:  # "auto" and no running cluster
+            raise ValueError(f"--address {address!r}: {error}") from None
+    return address
+
+
+def _ray_token() -> tuple[tuple[str, str], ...]:
+    """The token header Ray itself sends to a cluster with token authentication (none when
+    this machine has no token, or this Ray has no token authentication)."""
+    try:
+        from ray._raylet import AuthenticationTokenLoader
+
+        loader = AuthenticationTokenLoader.instance()
+        if not loader.has_token(ignore_auth_mode=True):
+            return ()
+        return tuple(loader.get_token_for_http_header().items())
+    except (ImportError, AttributeError, RuntimeError, TypeError):
+        return ()
+
+
+def check_ray_address(address: str | None, timeout_s: float | None = None) -> None:
+    """Refuse a Ray address that no Ray server answers within ``timeout_s`` [s] (None:
+    `RAY_PROBE_TIMEOUT_S`).
+
+    ``ray.init`` retries an unreachable cluster for ever, and a TCP connection proves only that
+    something listens; so this makes one Ray RPC over gRPC with a deadline: the cluster id from
+    the GCS of ``HOST:PORT``, a ping to the Ray Client server of ``ray://HOST:PORT``. None,
+    "auto" and "local" are resolved as Ray resolves them (``RAY_ADDRESS``, the cluster of
+    ``ray start``); a new local instance needs no probe. ValueError naming the address, one
+    line, otherwise.
+    """
+    target = _ray_target(address)
+    if target is None:
+        return
+    timeout_s = RAY_PROBE_TIMEOUT_S if timeout_s is None else timeout_s
+    name = f"--address {address!r}" if target == address else f"--address {address!r} ({target})"
+    client = target.startswith("ray://")
+    host_port = target.split("://", 1)[1] if "://" in target else target
+    host, _, port = host_port.rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"{name} is not HOST:PORT or ray://HOST:PORT")
+    import grpc  # a dependency of Ray
+
+    channel = grpc.insecure_channel(host_port, options=[("grpc.enable_http_proxy", 0)])
+    try:
+        rpc = channel.unary_unary(RAY_CLIENT_METHOD if client else RAY_GCS_METHOD)
+        rpc(RAY_CLIENT_PING if client else b"", timeout=timeout_s, metadata=_ray_token())
+    except grpc.RpcError as error:
+        code = error.code()
+        if code == grpc.StatusCode.DEADLINE_EXCEEDED:
+            reason = f"no answer within {timeout_s:g} s"
+        elif code == grpc.StatusCode.UNAUTHENTICATED:
+            reason = "Ray refused this machine's token: set RAY_AUTH_TOKEN to the cluster's"
+        elif code == grpc.StatusCode.UNIMPLEMENTED:
+            reason = "the server there is not a Ray " + ("client server" if client else "GCS")
+        else:
+            details = (error.details() or "").splitlines()
+            reason = f"{code.name.lower()}: {details[0] if details else 'no details'}"
+        what = "Ray client server" if client else "Ray cluster (GCS)"
+        raise ValueError(f"{name}: no {what} answered the handshake ({reason})") from None
+    finally:
+        channel.close()

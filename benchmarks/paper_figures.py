@@ -30,13 +30,14 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.config import MAX_EPISODE_TIME, SimConfig
-from auv_gym.files import environment, jsonable, write_json, write_text
+from auv_gym.files import environment, jsonable, replace_outputs, write_json, write_text
 from auv_gym.rollout import policy_name
 from benchmarks.arguments import (
     ArgumentParser,
     comma_names,
     exit_with_usage_error,
     finite_number,
+    locked_folder,
     program_name,
     usage_errors,
     writable_folder,
@@ -167,7 +168,8 @@ def make_figures(
 ) -> dict[str, Any]:
     """Run each policy on the seeded episode, write figures, tables and trajectories to ``out``.
 
-    Returns {"figures": stem → file, "metrics": label → metrics, "wall_time": label → s}.
+    Returns {"figures": stem → file, "files": the other files written, "metrics": label →
+    metrics, "wall_time": label → s}.
     ``env_kwargs`` override the env defaults (the paper's scenario); ``max_time`` = duration.
     """
     from auv_gym.episode_figures import paper_figures
@@ -210,7 +212,9 @@ def make_figures(
         **environment(),
     }
     write_json(out / "metrics.json", payload, indent=1)
-    return {"figures": figures, "metrics": metrics, "wall_time": wall}
+    files = [out / "metrics.md", out / "metrics.json"]
+    files += [out / "trajectories" / f"{policy_label(label)}.npz" for label in trajectories]
+    return {"figures": figures, "files": files, "metrics": metrics, "wall_time": wall}
 
 
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
@@ -220,16 +224,20 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         policies = build_policies(args.policies, args.control_dt)
     except (ValueError, TypeError, OSError) as error:
         exit_with_usage_error(program_name("benchmarks.paper_figures"), error)
-    result = make_figures(
-        policies,
-        args.out,
-        duration=args.duration,
-        seed=args.seed,
-        transient=args.transient,
-        dpi=args.dpi,
-        control_dt=args.control_dt,
-        **args.env,
-    )
+    # One run per folder: a second one is refused, a killed one's temporary files removed.
+    with locked_folder(program_name("benchmarks.paper_figures"), args.out):
+        result = make_figures(
+            policies,
+            args.out,
+            duration=args.duration,
+            seed=args.seed,
+            transient=args.transient,
+            dpi=args.dpi,
+            control_dt=args.control_dt,
+            **args.env,
+        )
+        written = [*map(Path, result["figures"].values()), *result["files"]]
+        replace_outputs(args.out, written)  # e.g. no fig10 or trajectory of other policies
     print((args.out / "metrics.md").read_text(encoding="utf-8"))
     for label, seconds in result["wall_time"].items():
         print(f"{label}: {args.duration:g}-s episode in {seconds:.2f} s of wall time")

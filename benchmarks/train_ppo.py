@@ -36,9 +36,18 @@ from collections.abc import Sequence
 from dataclasses import MISSING, fields
 from pathlib import Path
 
+from benchmarks.arguments import (
+    ArgumentParser,
+    exit_with_usage_error,
+    locked_folder,
+    program_name,
+    writable_location,
+)
 from benchmarks.cli import HelpFormatter
 from benchmarks.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
+from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.seeds import MAX_SEED
 from benchmarks.training.train import check_options
 
 FIXED = {"algo": "ppo", "eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
@@ -72,8 +81,9 @@ HELP = {
 
 def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argparse.Namespace]:
     """TrainOptions (every dataclass field is an option) and the plotting options."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                     formatter_class=HelpFormatter)  # fmt: skip
+    parser = ArgumentParser(prog=program_name("benchmarks.train_ppo"),
+                            description=__doc__.split("\n\n")[0],
+                            formatter_class=HelpFormatter)  # fmt: skip
     parser.add_argument(
         "--curve",
         default=None,
@@ -117,20 +127,50 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
     return TrainOptions(**ns, **FIXED), extra
 
 
+def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
+    """Everything this command will write or read later, checked before the first training
+    step: the run folder, the export folder, the learning-curve files (which need
+    evaluations), the agent to evaluate. OSError / ValueError naming the option otherwise."""
+    if extra.evaluate:
+        from controllers.ppo import check_agent
+
+        check_agent(Path(extra.evaluate))
+        writable_location(extra.evaluate, "--evaluate")  # AGENT/held_out_evaluation.json
+        return
+    if not MAX_SEED >= opts.seed >= 0:
+        raise ValueError(f"--seed must be an integer in [0, {MAX_SEED}], got {opts.seed}")
+    if extra.plot_only:
+        if not (Path(opts.out) / EVAL_FILE).is_file():
+            raise FileNotFoundError(f"--plot-only: {Path(opts.out) / EVAL_FILE} does not exist")
+    else:
+        writable_location(opts.out, "--out")
+        if opts.export:
+            writable_location(opts.export, "--export")
+        if extra.curve and opts.eval_freq == 0:
+            raise ValueError("--curve plots the evaluations, and --eval-freq 0 makes none")
+    if extra.curve:
+        for suffix in (".csv", ".png"):
+            writable_location(Path(extra.curve).with_suffix(suffix), "--curve", folder=False)
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     opts, extra = parse_args(args)
+    prog = program_name("benchmarks.train_ppo")
+    try:  # bad options: one line and exit code 2, before any training starts
+        check_outputs(opts, extra)
+        if not extra.plot_only and not extra.evaluate:
+            check_options(opts)
+    except (ValueError, OSError) as exc:
+        exit_with_usage_error(prog, exc)
     if extra.evaluate:
         report = write_held_out_evaluation(extra.evaluate, opts.eval_duration)
         print(json.dumps(report["summary"], indent=2))
         return
     if not extra.plot_only:
-        try:  # bad options: one line and exit code 2, before any training starts
-            check_options(opts)
-        except (ValueError, FileNotFoundError) as exc:
-            print(f"train_ppo: error: {exc}", file=sys.stderr)
-            raise SystemExit(2) from None
-        out = train(opts, argv=["benchmarks/train_ppo.py", *args])
+        # One run per folder: a second one is refused, a killed one's temporary files removed.
+        with locked_folder(prog, Path(opts.out)):
+            out = train(opts, argv=["benchmarks/train_ppo.py", *args])
         print(f"run directory: {out}")
     if extra.curve:
         plot_learning_curve(Path(opts.out), Path(extra.curve))

@@ -14,20 +14,27 @@ binary of imageio-ffmpeg (the video extra) and the file appears atomically when 
 from __future__ import annotations
 
 import argparse
+import glob
 import os
+import re
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from auv_gym.config import SimConfig
+from benchmarks.arguments import ArgumentParser, program_name, usage_errors, writable_location
 from benchmarks.cli import HelpFormatter
 from benchmarks.policies import build_policy, check_policy_spec
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    """The arguments, every one checked before the episode runs (a bad one exits with code 2
+    and a one-line message): ranges, the scenario, the policy, the video file's folder."""
+    parser = ArgumentParser(prog=program_name("benchmarks.video"), description=__doc__,
+                            formatter_class=HelpFormatter)  # fmt: skip
     parser.add_argument("--policy", default="fbsm",
                         help="policy spec: a controllers.make name, ppo, ppo:PATH or "
                         "module:attribute")  # fmt: skip
@@ -41,6 +48,14 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--out", type=Path, default=Path("run.mp4"), help="video file (.mp4)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    with usage_errors(parser):
+        check_args(args)
+    return args
+
+
+def check_args(args: argparse.Namespace) -> None:
+    """Validate ``args``; adds ``env_kwargs`` and ``policy_object`` (built for the scenario).
+    ValueError / OSError naming the argument."""
     if not (0 < args.duration <= 1e5):
         raise ValueError(f"--duration must be in (0, 1e5] s, got {args.duration}")
     if not (1 <= args.every <= 10_000 and 1 <= args.fps <= 240):
@@ -50,7 +65,46 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         raise ValueError(f"--seed must be non-negative, got {args.seed}")
     if args.out.suffix.lower() != ".mp4":
         raise ValueError(f"--out must name an .mp4 file, got {args.out}")
-    return args
+    try:
+        scenarios = load_scenarios(args.scenario_file)
+    except OSError as error:
+        raise OSError(f"--scenario-file {str(args.scenario_file)!r}: {error.strerror}") from None
+    names = select(args.scenario, list(scenarios), "scenario")
+    if len(names) != 1:
+        raise ValueError(f"--scenario must name one scenario, got {args.scenario!r}")
+    scenario = scenarios[names[0]]
+    args.env_kwargs = {**scenario.env, "max_time": float(args.duration)}
+    try:
+        SimConfig.from_kwargs(**args.env_kwargs)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"scenario {names[0]!r}: {error}") from None
+    check_policy_spec(args.policy)
+    control_dt = float(args.env_kwargs.get("control_dt", 0.05))
+    args.policy_object = build_policy(args.policy, control_dt, scenario.controller)
+    writable_location(args.out, "--out", folder=False)
+
+
+def remove_stale_videos(out: Path) -> list[Path]:
+    """Remove the temporary videos (``.NAME.<pid>.tmp.mp4``) beside ``out`` that runs killed
+    mid-recording left; a live recorder's file (its pid still runs) is kept."""
+    removed = []
+    pattern = re.compile(re.escape(f".{out.name}.") + r"(\d+)\.tmp\.mp4")
+    for file in out.parent.glob(f".{glob.escape(out.name)}.*.tmp.mp4"):
+        match = pattern.fullmatch(file.name)
+        if match and not _alive(int(match.group(1))):
+            file.unlink(missing_ok=True)
+            removed.append(file)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    return True
 
 
 def record(
@@ -115,18 +169,10 @@ def record(
 
 def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     args = parse_args(argv)
-    scenarios = load_scenarios(args.scenario_file)
-    names = select(args.scenario, list(scenarios), "scenario")
-    if len(names) != 1:
-        raise ValueError(f"--scenario must name one scenario, got {args.scenario!r}")
-    name = names[0]
-    scenario = scenarios[name]
-    check_policy_spec(args.policy)
-    env_kwargs = {**scenario.env, "max_time": float(args.duration)}
-    control_dt = float(env_kwargs.get("control_dt", 0.05))
-    policy = build_policy(args.policy, control_dt, scenario.controller)
-    result = record(policy, env_kwargs, args.out, args.seed, args.every, args.fps,
-                    progress=not args.quiet)  # fmt: skip
+    remove_stale_videos(args.out)
+    result = record(args.policy_object, args.env_kwargs, args.out, args.seed, args.every,
+                    args.fps, progress=not args.quiet)  # fmt: skip
+    control_dt = float(args.env_kwargs.get("control_dt", 0.05))
     speedup = args.every * control_dt * args.fps
     print(f"wrote {args.out}: {result['frames']} frames at {args.fps} fps "
           f"({result['frames'] / args.fps:.1f} s of video, {speedup:g}× the episode's pace) "
@@ -136,7 +182,4 @@ def main(argv: Sequence[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except (ValueError, FileNotFoundError) as error:
-        raise SystemExit(f"error: {error}") from None
+    main()

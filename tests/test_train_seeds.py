@@ -116,7 +116,7 @@ def test_unreachable_ray_address_and_occupied_output_are_refused(tmp_path, capsy
     code = main([*base, "--out", str(tmp_path / "a"), "--backend", "ray",
                  "--address", "127.0.0.1:9"])  # fmt: skip
     assert code == 2 and time.monotonic() - t0 < 10
-    assert "Ray cluster unreachable" in capsys.readouterr().err
+    assert "--address '127.0.0.1:9': no Ray cluster (GCS) answered" in capsys.readouterr().err
     (tmp_path / "b").mkdir()
     (tmp_path / "b" / "x").write_text("")
     assert main([*base, "--out", str(tmp_path / "b")]) == 2

@@ -34,8 +34,10 @@ whole box from the first step (`benchmarks.action_bounds` measures what that doe
 
 from __future__ import annotations
 
+import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -43,7 +45,15 @@ from typing import Any
 from auv_gym import ENV_ID
 from controllers.residual import ResidualSettings
 
-__all__ = ["ALGORITHMS", "Algorithm", "ZooConfig", "read_zoo_config", "schedule"]
+__all__ = [
+    "ALGORITHMS",
+    "Algorithm",
+    "ZooConfig",
+    "check_algo_kwargs",
+    "check_normalize",
+    "read_zoo_config",
+    "schedule",
+]
 
 # RL-Zoo keys of the harness itself (not constructor arguments of the algorithm).
 ZOO_KEYS = frozenset(
@@ -157,10 +167,17 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     for key in ("n_timesteps", "policy"):
         if key not in section:
             raise ValueError(f"{path}: {env_id} needs {key!r}")
-    n_envs = int(section.get("n_envs", 1))
-    n_timesteps = int(float(section["n_timesteps"]))
-    if n_envs < 1 or n_timesteps < 1:
-        raise ValueError(f"{path}: n_envs and n_timesteps must be positive")
+    n_envs = section.get("n_envs", 1)
+    if isinstance(n_envs, bool) or not isinstance(n_envs, int) or n_envs < 1:
+        raise ValueError(f"{path}: {env_id}: n_envs must be an integer >= 1, got {n_envs!r}")
+    try:
+        n_timesteps = float(section["n_timesteps"])
+    except (TypeError, ValueError):
+        n_timesteps = math.nan
+    if not (math.isfinite(n_timesteps) and n_timesteps >= 1 and n_timesteps == int(n_timesteps)):
+        raise ValueError(f"{path}: {env_id}: n_timesteps must be a whole number >= 1, got "
+                         f"{section['n_timesteps']!r}")  # fmt: skip
+    n_timesteps = int(n_timesteps)
     algo_kwargs = {k: section[k] for k in accepted if k in section}
     normalize = section.get("normalize", False)
     if isinstance(normalize, str):
@@ -188,11 +205,181 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         if residual is not None:
             raise ValueError(f"{path}: action_bounds and residual exclude each other")
         action_bounds = _action_bounds(section["action_bounds"], path)
+    # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
+    # the first training step, not at the model's construction or in its first update.
+    where = f"{path}: {env_id}"
+    check_algo_kwargs(algo, algo_kwargs, n_envs, where)
+    check_normalize(normalize, where)
+    _check_policy(section["policy"], policy_kwargs, algo, where)
+    _check_env_kwargs(env_id, env_kwargs, where)
     return ZooConfig(
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
         algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
     )  # fmt: skip
+
+
+# (low, high, low_open, high_open) of the numeric hyper-parameters; None: unbounded.
+_RANGES: dict[str, tuple[float, float, bool, bool]] = {
+    "learning_rate": (0.0, math.inf, True, True),
+    "gamma": (0.0, 1.0, False, False),
+    "gae_lambda": (0.0, 1.0, False, False),
+    "clip_range": (0.0, math.inf, True, True),
+    "clip_range_vf": (0.0, math.inf, True, True),
+    "vf_coef": (0.0, math.inf, False, True),
+    "max_grad_norm": (0.0, math.inf, True, True),
+    "target_kl": (0.0, math.inf, True, True),
+    "tau": (0.0, 1.0, True, False),
+    "ent_coef": (0.0, math.inf, False, True),
+}
+# Integer hyper-parameters and their smallest value.
+_INTEGERS = {"n_epochs": 1, "stats_window_size": 1, "sde_sample_freq": -1, "buffer_size": 1,
+             "learning_starts": 0, "target_update_interval": 1, "n_steps": 1}  # fmt: skip
+_BOOLEANS = ("normalize_advantage", "use_sde", "optimize_memory_usage", "use_sde_at_warmup")
+_OPTIONAL = ("clip_range_vf", "target_kl")  # None (null) switches them off
+# VecNormalize keyword arguments a config may set, with their checks.
+_NORMALIZE = {"norm_obs": bool, "norm_reward": bool, "clip_obs": "positive",
+              "clip_reward": "positive", "gamma": "unit", "epsilon": "positive"}  # fmt: skip
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _number(key: str, value: Any, where: str) -> None:
+    """A finite number inside the key's range (`_RANGES`); ValueError naming key and range."""
+    low, high, low_open, high_open = _RANGES[key]
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok:
+        ok = (value > low if low_open else value >= low) and (
+            value < high if high_open else value <= high
+        )
+    if not ok:
+        left, right = "(" if low_open else "[", ")" if high_open else "]"
+        top = "inf" if high == math.inf else f"{high:g}"
+        raise ValueError(f"{where}: {key} must be a number in {left}{low:g}, {top}{right}, "
+                         f"got {value!r}")  # fmt: skip
+
+
+def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: str) -> None:
+    """Refuse hyper-parameter values SB3 would reject or train nonsense with (a negative
+    learning rate, a batch of one, γ > 1, ...): ValueError naming ``where``, the key, the
+    allowed range and the value."""
+    for key, value in kwargs.items():
+        if key in _OPTIONAL and value is None:
+            continue
+        if key in ALGORITHMS[algo].schedules and isinstance(value, str):
+            match = re.fullmatch(r"lin_([0-9.eE+-]+)", value)
+            try:
+                start = float(match.group(1)) if match else math.nan
+            except ValueError:
+                start = math.nan
+            if not (math.isfinite(start) and start > 0):
+                raise ValueError(f"{where}: {key} {value!r} must be a positive number or "
+                                 "'lin_<x>' with x > 0")  # fmt: skip
+        elif key == "ent_coef" and algo == "sac" and isinstance(value, str):
+            match = re.fullmatch(r"auto(?:_([0-9.eE+-]+))?", value)
+            try:
+                ok = bool(match) and (match.group(1) is None or float(match.group(1)) > 0)
+            except ValueError:
+                ok = False
+            if not ok:
+                raise ValueError(f"{where}: ent_coef {value!r} must be a number >= 0, 'auto' "
+                                 "or 'auto_<x>' with x > 0")  # fmt: skip
+        elif key in _RANGES:
+            _number(key, value, where)
+        elif key in _INTEGERS:
+            if not _is_int(value) or value < _INTEGERS[key]:
+                raise ValueError(f"{where}: {key} must be an integer >= {_INTEGERS[key]}, "
+                                 f"got {value!r}")  # fmt: skip
+        elif key in _BOOLEANS:
+            if not isinstance(value, bool):
+                raise ValueError(f"{where}: {key} must be true or false, got {value!r}")
+        elif key == "batch_size":
+            smallest = 2 if algo == "ppo" else 1  # PPO normalises advantages over a batch
+            if not _is_int(value) or value < smallest:
+                raise ValueError(f"{where}: batch_size must be an integer >= {smallest}, "
+                                 f"got {value!r}")  # fmt: skip
+        elif key == "gradient_steps":
+            if not _is_int(value) or not (value >= 1 or value == -1):
+                raise ValueError(f"{where}: gradient_steps must be an integer >= 1 or -1 (as "
+                                 f"many as env steps), got {value!r}")  # fmt: skip
+        elif key == "train_freq":
+            unit_ok = (isinstance(value, (list, tuple)) and len(value) == 2
+                       and value[1] in ("step", "episode"))  # fmt: skip
+            count = value[0] if unit_ok else value
+            if not _is_int(count) or count < 1:
+                raise ValueError(f"{where}: train_freq must be an integer >= 1 or [n, 'step' | "
+                                 f"'episode'], got {value!r}")  # fmt: skip
+        elif key == "target_entropy":
+            finite = isinstance(value, (int, float)) and math.isfinite(value)
+            if value != "auto" and (isinstance(value, bool) or not finite):
+                raise ValueError(f"{where}: target_entropy must be 'auto' or a finite number, "
+                                 f"got {value!r}")  # fmt: skip
+    if algo == "ppo" and kwargs.get("n_steps", 2048) * n_envs < 2:
+        raise ValueError(f"{where}: n_steps × n_envs must be at least 2 (PPO's rollout), got "
+                         f"{kwargs.get('n_steps', 2048)} × {n_envs}")  # fmt: skip
+
+
+def check_normalize(normalize: Mapping[str, Any], where: str) -> None:
+    """VecNormalize keyword arguments: known keys, booleans, positive clips and ε, γ in [0, 1]."""
+    unknown = sorted(set(normalize) - set(_NORMALIZE))
+    if unknown:
+        raise ValueError(f"{where}: normalize has unknown keys {unknown}; valid: "
+                         f"{sorted(_NORMALIZE)}")  # fmt: skip
+    for key, value in normalize.items():
+        kind = _NORMALIZE[key]
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if kind is bool:
+            ok = isinstance(value, bool)
+        elif kind == "positive":
+            ok = number and math.isfinite(value) and value > 0
+        else:
+            ok = number and 0.0 <= value <= 1.0
+        if not ok:
+            wanted = {bool: "true or false", "positive": "a finite number > 0",
+                      "unit": "a number in [0, 1]"}[kind]  # fmt: skip
+            raise ValueError(f"{where}: normalize {key} must be {wanted}, got {value!r}")
+
+
+def _check_policy(policy: Any, policy_kwargs: Mapping[str, Any], algo: str, where: str) -> None:
+    """MlpPolicy (the observation is a vector) and keyword arguments its constructor takes."""
+    if policy != "MlpPolicy":
+        raise ValueError(f"{where}: policy must be 'MlpPolicy' (the observation is a vector), "
+                         f"got {policy!r}")  # fmt: skip
+    import inspect
+
+    policy_class = ALGORITHMS[algo].sb3_class().policy_aliases["MlpPolicy"]
+    accepted = set(inspect.signature(policy_class.__init__).parameters) - {
+        "self", "observation_space", "action_space", "lr_schedule"}  # fmt: skip
+    unknown = sorted(set(policy_kwargs) - accepted)
+    if unknown:
+        raise ValueError(f"{where}: policy_kwargs has keys {policy_class.__name__} does not "
+                         f"take: {unknown}")  # fmt: skip
+    arch = policy_kwargs.get("net_arch")
+    layers = list(arch.values()) if isinstance(arch, dict) else [arch] if arch is not None else []
+    for sizes in layers:
+        if not isinstance(sizes, (list, tuple)) or not all(_is_int(n) and n >= 1 for n in sizes):
+            raise ValueError(f"{where}: policy_kwargs net_arch must be a list of layer sizes "
+                             f">= 1 (or a dict of such lists), got {arch!r}")  # fmt: skip
+    log_std = policy_kwargs.get("log_std_init", 0.0)
+    number = isinstance(log_std, (int, float)) and not isinstance(log_std, bool)
+    if not (number and math.isfinite(log_std)):
+        raise ValueError(f"{where}: policy_kwargs log_std_init must be a finite number, got "
+                         f"{log_std!r}")  # fmt: skip
+
+
+def _check_env_kwargs(env_id: str, env_kwargs: Mapping[str, Any], where: str) -> None:
+    """The training env's keyword arguments, as the env would check them at its creation."""
+    from auv_gym import VARIANTS
+    from auv_gym.config import SimConfig
+
+    if env_id not in VARIANTS:
+        return  # another registered env checks its own arguments
+    try:
+        SimConfig.from_kwargs(**{**VARIANTS[env_id], **env_kwargs})
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{where}: env_kwargs: {error}") from None
 
 
 def _action_bounds(value: Any, path: Path) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -27,6 +27,7 @@ cluster whose nodes share OUT.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import json
 import math
@@ -34,7 +35,6 @@ import multiprocessing
 import os
 import shutil
 import signal
-import socket
 import sys
 import time
 from collections.abc import Sequence
@@ -43,7 +43,9 @@ from multiprocessing.connection import wait
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import write_json, write_text
+from auv_gym.files import LOCK_FILE, output_lock, write_json, write_text
+from benchmarks.arguments import writable_location
+from benchmarks.jobs import check_ray_address
 from benchmarks.training.checkpoints import (
     SEED_AGENT_PREFIX,
     export_agent,
@@ -57,6 +59,8 @@ from benchmarks.training.train import TrainOptions, check_options, target_timest
 from controllers.ppo import METADATA_FILE, MODEL_FILE
 
 __all__ = [
+    "MAX_SEED",
+    "MAX_SEEDS",
     "PLAN_FILE",
     "SUMMARY_FILE",
     "TASK_SETS",
@@ -79,6 +83,8 @@ LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
 # test suite is `benchmarks.evaluate_suite`. The training distribution is the config's env_kwargs.
 TASK_SETS = {"paper": "paper scenario: validation seeds 100-104, test seeds 0-9"}
 DEFAULT_EVAL_EPISODES = 32  # validation episodes drawn from a task set
+MAX_SEEDS = 1000  # training runs of one command
+MAX_SEED = 2**32 - 1  # np.random.seed (SB3's set_random_seed) takes seeds below 2**32
 # Plan entries that must match when a run is resumed (the rest may change: workers, backend).
 PLAN_KEYS = ("algo", "env_id", "config", "n_timesteps", "eval_seeds", "eval_duration",
              "eval_freq", "checkpoint_freq", "task_set", "eval_env", "vec_env")  # fmt: skip
@@ -104,7 +110,9 @@ class SeedsOptions:
 
 
 def parse_seeds(text: str) -> tuple[int, ...]:
-    """ "N" (N ≥ 1 seeds 0…N−1, as `benchmarks.compare --seeds`), "a-b" (inclusive) or "a,b,c"."""
+    """ "N" (N ≥ 1 seeds 0…N−1, as `benchmarks.compare --seeds`), "a-b" (inclusive) or "a,b,c";
+    at most `MAX_SEEDS` seeds, each at most `MAX_SEED` (the count is checked before the seeds
+    are listed: a typo like 1e9 costs no memory)."""
     text = str(text).strip()
     try:
         if "," in text:
@@ -113,40 +121,38 @@ def parse_seeds(text: str) -> tuple[int, ...]:
             low, high = (int(s) for s in text.split("-", 1))
             if high < low:
                 raise ValueError(f"range {text!r} is empty (high {high} < low {low})")
+            _check_count(high - low + 1, text)
             seeds = tuple(range(low, high + 1))
         else:
             count = int(text)
             if count < 1:
                 raise ValueError(f"a seed count must be at least 1, got {count}")
+            _check_count(count, text)
             seeds = tuple(range(count))
     except ValueError as exc:
+        if str(exc).startswith("--seeds"):
+            raise
         raise ValueError(
             f"--seeds {text!r}: {exc}; use a count N >= 1 (seeds 0..N-1), a range a-b or a "
             "list a,b,c of non-negative integers"
         ) from None
     if not seeds:
         raise ValueError(f"--seeds {text!r} selects no seed")
+    _check_count(len(seeds), text)
     if min(seeds) < 0:
         raise ValueError(f"--seeds {text!r}: seeds must be non-negative, got {min(seeds)}")
+    if max(seeds) > MAX_SEED:
+        raise ValueError(f"--seeds {text!r}: seeds must be at most {MAX_SEED} (numpy's seed "
+                         f"range), got {max(seeds)}")  # fmt: skip
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"--seeds {text!r} repeats a seed")
     return seeds
 
 
-def check_ray_address(address: str | None, timeout_s: float = 3.0) -> None:
-    """A ``host:port`` (or ``ray://host:port``) Ray address must accept a TCP connection within
-    ``timeout_s``; None and "auto" are left to Ray. ValueError naming the address otherwise."""
-    if address in (None, "auto", "local"):
-        return
-    target = address.split("://", 1)[-1]
-    host, _, port = target.rpartition(":")
-    if not host or not port.isdigit():
-        raise ValueError(f"--address {address!r} is not host:port or ray://host:port")
-    try:
-        with socket.create_connection((host, int(port)), timeout=timeout_s):
-            pass
-    except OSError as exc:
-        raise ValueError(f"--address {address!r}: Ray cluster unreachable ({exc})") from None
+def _check_count(count: int, text: str) -> None:
+    if count > MAX_SEEDS:
+        raise ValueError(f"--seeds {text!r} selects {count} seeds, more than {MAX_SEEDS}: "
+                         "every seed is a whole training run")  # fmt: skip
 
 
 def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
@@ -172,10 +178,11 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     check_evaluation_window(train.eval_duration)
     if opts.backend == "ray":
         try:
-            import ray  # noqa: F401
+            import ray
         except ImportError:
             raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
-        check_ray_address(opts.address)
+        if not ray.is_initialized():  # a connected driver needs no handshake
+            check_ray_address(opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
@@ -208,10 +215,31 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
             if done > target:
                 raise ValueError(f"--resume: seed {seed} has already trained {done} env steps, "
                                  f"past the target {target}; use --stop-at >= {done}")  # fmt: skip
-    elif out.exists() and any(out.iterdir()):
+    elif holds_work(out):
         raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
     _check_writable(out)
+    for flag, folder in (("--export", opts.export), ("--results", opts.results)):
+        if folder is not None:  # written at the end: refused now, not after the training
+            try:
+                writable_location(folder, flag)
+            except OSError as error:
+                raise ValueError(str(error)) from None
     return plan
+
+
+def holds_work(out: Path) -> bool:
+    """Whether ``out`` holds anything a fresh start would lose: a file or folder other than
+    what a start that failed before any training leaves (the lock, the plan, logs, seed folders
+    without a checkpoint or final agent), which a corrected command may replace."""
+    if not out.is_dir():
+        return out.exists()
+    for entry in out.iterdir():
+        if entry.name in (LOCK_FILE, PLAN_FILE, LOGS):
+            continue
+        is_seed = entry.is_dir() and entry.name.startswith("seed_")
+        if not is_seed or seed_progress(entry) > 0 or (entry / "final").exists():
+            return True
+    return False
 
 
 def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
@@ -404,6 +432,7 @@ def _run_ray(jobs: list[tuple[int, dict[str, Any], str]], address: str | None, w
         if address is None:
             ray.init(num_cpus=workers, log_to_driver=False, include_dashboard=False)
         else:
+            check_ray_address(address)  # ray.init retries an unreachable address for ever
             ray.init(address=address, log_to_driver=False)
     remote = ray.remote(num_cpus=1, max_retries=0)(train_one_seed)
     refs = {remote.remote(train_opts, status): seed for seed, train_opts, status in jobs}
@@ -456,6 +485,16 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
     plan = check_seeds_options(opts)
     opts = resolve_validation(opts)
     out = Path(opts.out)
+    # One run per folder: a second one is refused, a killed one's temporary files removed.
+    with contextlib.ExitStack() as stack:
+        try:
+            stack.enter_context(output_lock(out, "--out"))
+        except OSError as error:
+            raise ValueError(str(error)) from None
+        return _train_seeds(opts, plan, out)
+
+
+def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[str, Any]:
     write_json(out / PLAN_FILE, plan, indent=2, sort_keys=True)
     n_timesteps = target_timesteps(plan["n_timesteps"], plan["stop_at"])  # this invocation's
     jobs = []

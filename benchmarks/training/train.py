@@ -15,7 +15,7 @@ from typing import Any
 
 import auv_gym
 from auv_gym import ENV_ID, VARIANTS
-from auv_gym.files import git_commit, versions
+from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
@@ -262,7 +262,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     algorithm = spec.sb3_class()
     n_timesteps = int(cfg.n_timesteps if opts.n_timesteps is None else opts.n_timesteps)
     out = Path(opts.out)
-    if out.exists() and any(out.iterdir()) and not opts.resume:
+    if out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()) and not opts.resume:
         raise ValueError(f"run directory {out} is not empty; pass --resume or another --out")
     out.mkdir(parents=True, exist_ok=True)
     eval_kwargs = _eval_kwargs(opts, cfg.env_kwargs)
