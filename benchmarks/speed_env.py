@@ -67,6 +67,8 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
     parser.add_argument("--reference-steps", type=int, default=400,
                         help="control steps of the JIT-off (plain Python) reference")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.steps < 1 or args.reference_steps < 1:  # a rate of no steps is no figure
+        parser.error("--steps and --reference-steps must be >= 1")
     results = {"numba (gym.make)": measure(args.steps),
                "plain Python/numpy (JIT off)": measure_reference(args.reference_steps)}  # fmt: skip
     print("\nSingle env, default settings (helix, white noise ±35, control 0.05 s, RK4 0.01 s)")

@@ -43,6 +43,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from auv_gym.files import write_json
+from benchmarks.arguments import usage_errors, writable_location
 from benchmarks.cli import HelpFormatter
 
 DEFAULT_BASELINE = "b8de6c4"
@@ -273,6 +275,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write every run to this file")
     args = parser.parse_args(argv)
+    if args.json:  # written after the benchmark: refused now, not after minutes of timing
+        with usage_errors(parser):
+            writable_location(args.json, "--json", folder=False)
     if args.quick:
         args.n_envs, args.rollouts, args.repeats, args.n_steps = [8], 1, 1, 16
         args.batch_size = [64]
@@ -332,7 +337,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
     out = {"baseline": args.baseline, "runs": [r for rs in results.values() for r in rs]}
     if args.json:
-        Path(args.json).write_text(json.dumps(out, indent=2))
+        write_json(args.json, out, indent=2)
     return out
 
 

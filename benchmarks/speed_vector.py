@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.files import write_json
+from benchmarks.arguments import usage_errors, writable_location
 from benchmarks.cli import HelpFormatter
 
 SIZES = (1, 64, 1024, 4096, 16384)
@@ -207,6 +209,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write the results to this file")
     args = parser.parse_args(argv)
+    if args.json:  # written after the benchmark: refused now, not after minutes of timing
+        with usage_errors(parser):
+            writable_location(args.json, "--json", folder=False)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
         args.threads = [1]
@@ -252,8 +257,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 print(f"{backend:<12} {n_envs:>7} {r['timesteps_per_s']:>12,.0f}")
     results["machine"]["load_average_1min_end"] = os.getloadavg()[0]
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(results, f, indent=2)
+        write_json(args.json, results, indent=2)
     return results
 
 

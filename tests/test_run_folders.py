@@ -448,3 +448,23 @@ def test_installed_command_imports_a_policy_from_the_current_folder(tmp_path):
     assert done.returncode == 0, done.stderr
     rows = (tmp_path / "out" / "episodes.csv").read_text().splitlines()
     assert len(rows) == 2 and rows[1].startswith("nominal,mymod:policy,0,")
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [(["env", "--steps", "0"], "--steps and --reference-steps must be >= 1"),
+     (["vector", "--quick", "--json", "{file}/x.json"], "--json '{file}/x.json' cannot be "
+      "written as a file: {file} is a file, not a folder"),
+     (["training", "--quick", "--json", "{file}/x.json"], "--json '{file}/x.json' cannot be "
+      "written as a file: {file} is a file, not a folder")],
+)  # fmt: skip
+def test_speed_benchmarks_refuse_options_before_timing(tmp_path, capsys, argv, message):
+    """Was: `speed env --steps 0` ended in an IndexError traceback, and a bad --json was found
+    after the whole benchmark had run."""
+    from benchmarks.cli import main
+
+    blocker = _in_a_file(tmp_path)
+    t0 = time.monotonic()
+    assert main(["speed", *(a.format(file=blocker) for a in argv)]) == 2
+    assert message.format(file=blocker) in capsys.readouterr().err
+    assert time.monotonic() - t0 < 10.0
