@@ -33,6 +33,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from benchmarks.arguments import writable_location
+
 RESULTS = Path(__file__).resolve().parent / "results"
 AGENTS = Path(__file__).resolve().parent / "agents"
 UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # differ by design
@@ -148,6 +150,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.workers < 1:
         parser.error(f"--workers must be ≥ 1, got {args.workers}")
+    if args.keep is not None:  # refused now, not after the first re-run has finished
+        try:
+            writable_location(args.keep, "--keep")
+        except OSError as error:
+            parser.error(str(error))
     episodes_json = args.results / "full" / "episodes.json"
     paper_json = args.results / "paper" / "metrics.json"
     for required in (episodes_json, paper_json):

@@ -48,6 +48,7 @@ from benchmarks.tables import write_tables
 MAX_SEEDS = 100_000  # seeds per scenario
 TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.tables.write_tables`
 MAX_WORKERS = 1024
+MAX_EPISODES = 1_000_000  # episodes of one run: each is a job held in memory and on disk
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -117,6 +118,10 @@ def check_args(args: argparse.Namespace) -> None:
         labels[label] = spec
     if not 1 <= args.seeds <= MAX_SEEDS:
         raise ValueError(f"--seeds must be an integer in [1, {MAX_SEEDS}], got {args.seeds}")
+    episodes = args.seeds * len(names) * len(policies)
+    if episodes > MAX_EPISODES:  # refused before the jobs are listed: no memory, no silence
+        raise ValueError(f"--seeds {args.seeds} × {len(names)} scenarios × {len(policies)} "
+                         f"policies = {episodes} episodes, more than {MAX_EPISODES}")  # fmt: skip
     finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
     if args.transient is not None:
         finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")

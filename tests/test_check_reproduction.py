@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from benchmarks.check_reproduction import (
     Report,
     _rerun_arguments,
@@ -63,3 +65,16 @@ def test_compare_json_ignores_wall_times_only(tmp_path: Path) -> None:
     b.write_text(json.dumps({"wall_time_s": 9.0, "metrics": {"fbsm": {"rms": [0.1, 0.25]}}}))
     compare_json("m", a, b, report)
     assert report.failures == 1
+
+
+def test_a_keep_folder_it_could_not_write_is_refused_before_any_rerun(tmp_path: Path, capsys):
+    """Was: found by the re-run of compare, minutes later, as a CalledProcessError traceback."""
+    from benchmarks.check_reproduction import main
+
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    with pytest.raises(SystemExit) as stop:
+        main(["--keep", str(blocker)])
+    assert stop.value.code == 2
+    assert (f"--keep '{blocker}' cannot be written as a folder: it is a file, not a folder"
+            in capsys.readouterr().err)  # fmt: skip

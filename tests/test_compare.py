@@ -413,3 +413,16 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
         "fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}  # fmt: skip
     config = json.loads((tmp_path / "episodes.json").read_text())["config"]
     assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}
+
+
+def test_a_run_of_too_many_episodes_is_refused_before_the_jobs_are_listed(tmp_path, capsys):
+    """Was: --seeds 100000 on every scenario listed 2.2 million jobs (620 MB, 10 s) before the
+    first word; now refused at once, naming the product."""
+    n = len(load_scenarios())
+    t0 = time.monotonic()
+    err = usage_error(capsys, main, ["--seeds", "100000", "--policies", "fbsm,backstepping",
+                                     "--out", str(tmp_path / "out")])  # fmt: skip
+    assert time.monotonic() - t0 < 5.0
+    assert (f"--seeds 100000 × {n} scenarios × 2 policies = {200_000 * n} episodes, more "
+            "than 1000000") in err  # fmt: skip
+    assert not (tmp_path / "out").exists()

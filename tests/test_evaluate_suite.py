@@ -396,3 +396,17 @@ def test_target_table_by_hand(tmp_path):
     # episode 0: fbsm 0.1 vs x 0.2, 0.5 → x better on none; episode 1: 0.3 vs 0.3 (½), 0.1 (1).
     assert math.isclose(stats["improvement"]["fbsm"]["a"]["x"]["value"], (0 + 0.75) / 2)
     assert np.isfinite(stats["mean"]["aggregate"]["x"]["value"])
+
+
+def test_a_rerun_without_statistics_removes_the_earlier_statistics(tiny, tmp_path):
+    """Was: stats.json, stats.md and figures/ of the earlier run stayed beside the new
+    episodes.csv they do not describe."""
+    out = tmp_path / "out"
+    shutil.copytree(tiny["out"], out)
+    assert (out / "stats.json").is_file() and any((out / "figures").iterdir())
+    argv = [*tiny["argv"][:-4], str(out), "--no-stats", "--quiet"]
+    assert argv[argv.index("--out") + 1] == str(out)
+    main(argv)  # every chunk is cached: no episode runs
+    assert not (out / "stats.json").exists() and not (out / "stats.md").exists()
+    assert not (out / "figures").exists()
+    assert (out / "episodes.csv").read_text() == (tiny["out"] / "episodes.csv").read_text()
