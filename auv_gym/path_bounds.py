@@ -20,6 +20,7 @@ sample: a spike between two samples cannot hide.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -63,8 +64,9 @@ def _pad(a: np.ndarray, n: int) -> np.ndarray:
     return np.concatenate([a, np.zeros((*a.shape[:-1], n - a.shape[-1]))], axis=-1)
 
 
-def _polynomials(data: np.ndarray) -> dict[str, np.ndarray]:
-    """Per segment, in u = (s − knot)/h ∈ [0, 1]: |p′|², h², N_ψ, N_θ and |p′ × p″|²."""
+def _polynomials(data: np.ndarray, tangent_only: bool = False) -> dict[str, np.ndarray]:
+    """Per segment, in u = (s − knot)/h ∈ [0, 1]: |p′|², h², N_ψ, N_θ and |p′ × p″|² (only
+    |p′|² and h² with ``tangent_only``)."""
     knots, a = _segments(data)
     h = np.diff(knots)[:, None]
     one = np.ones_like(h)
@@ -76,6 +78,8 @@ def _polynomials(data: np.ndarray) -> dict[str, np.ndarray]:
     ddx, ddy, ddz = dd
     horizontal = _mul(dx, dx) + _mul(dy, dy)
     speed2 = horizontal + _mul(dz, dz)
+    if tangent_only:
+        return {"speed2": speed2, "horizontal": horizontal}
     n_psi = _mul(dx, ddy) - _mul(dy, ddx)
     g = _mul(dx, ddx) + _mul(dy, ddy)
     n_theta = _mul(ddz, horizontal) - _pad(_mul(dz, g), 6)
@@ -85,16 +89,24 @@ def _polynomials(data: np.ndarray) -> dict[str, np.ndarray]:
             "cross2": cross2}  # fmt: skip
 
 
+@functools.cache
+def _basis_change(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For degree n: the exponents j − m (≥ 0) and the matrices C(j, m) [m, j] of the Taylor
+    shift and C(i, m)/C(n, m) [i, m] from the power to the Bernstein basis on [0, 1]."""
+    j = np.arange(n + 1)
+    binom = np.array([[math.comb(r, c) for c in range(n + 1)] for r in range(n + 1)], float)
+    shift = np.where(j[None, :] >= j[:, None], binom.T, 0.0)
+    to_bernstein = np.where(j[:, None] >= j[None, :], binom / binom[n][None, :], 0.0)
+    return np.clip(j[None, :] - j[:, None], 0, None), shift, to_bernstein
+
+
 def _bernstein(coeffs: np.ndarray, u0: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Bernstein coefficients on [u0, u0 + w] of the polynomials ``coeffs`` (P, n + 1)."""
     n = coeffs.shape[1] - 1
-    j = np.arange(n + 1)
-    binom = np.array([[math.comb(r, c) for c in range(n + 1)] for r in range(n + 1)], float)
+    exponents, shift, to_bernstein = _basis_change(n)
     # Taylor coefficients at u0, scaled to the piece: c'_m = w^m Σ_j C(j, m) c_j u0^(j − m).
-    powers = u0[:, None, None] ** np.clip(j[None, :] - j[:, None], 0, None)[None]
-    shift = np.where(j[None, :] >= j[:, None], binom.T, 0.0)[None] * powers  # [m, j]
-    taylor = np.einsum("pmj,pj->pm", shift, coeffs) * w[:, None] ** j[None, :]
-    to_bernstein = np.where(j[:, None] >= j[None, :], binom / binom[n][None, :], 0.0)  # [i, m]
+    taylor = np.einsum("pmj,pj->pm", shift[None] * u0[:, None, None] ** exponents[None], coeffs)
+    taylor *= w[:, None] ** np.arange(n + 1)[None, :]
     return taylor @ to_bernstein.T
 
 
@@ -223,7 +235,7 @@ def min_tangent_squared(data: np.ndarray, accept_above: float = math.inf, rtol: 
     """A proven LOWER bound of |p′(s)|² [m² per unit s²] over a SPLINE kernel vector, as a
     `Bound` of −|p′|² (``-upper`` is the lower bound, ``-reached`` the smallest value met and
     where): refined until within ``rtol`` of the minimum or at least ``accept_above``."""
-    speed2 = _polynomials(data)["speed2"]
+    speed2 = _polynomials(data, tangent_only=True)["speed2"]
 
     def upper(seg: np.ndarray, u0: np.ndarray, w: np.ndarray) -> np.ndarray:
         return -_enclosure(speed2, seg, u0, w)[0]

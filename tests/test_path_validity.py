@@ -120,6 +120,21 @@ def test_the_bounds_enclose_every_value_the_kernels_compute(steps, scale):
     assert -low.upper >= MIN_TANGENT**2
 
 
+@settings(CI, max_examples=30)
+@given(waypoint_steps, st.floats(1.0, 100.0), st.floats(0.1, 2.0))
+def test_an_accepted_waypoint_path_resets_for_every_seed(steps, scale, u_desired):
+    points = scale * np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
+    try:
+        env = gym.make("AUVPath3D-v0", path=points, u_desired=u_desired, randomize_start=True,
+                       disturbance="none")  # fmt: skip
+    except ValueError as error:  # doubles back or turns too fast: refused when built
+        assert "doubles back at waypoint" in str(error) or "path turns at up to" in str(error)
+        return
+    for seed in range(100):  # 3,000 resets in all, anywhere on the path's first 40 m
+        obs, _ = env.reset(seed=seed)
+        assert env.observation_space.contains(obs)
+
+
 def _natural(points: np.ndarray) -> np.ndarray:
     """The SPLINE kernel vector of the natural spline through ``points``, unchecked."""
     from auv_gym.paths import _natural_cubic_coefficients, _spline_data
