@@ -468,3 +468,33 @@ def test_speed_benchmarks_refuse_options_before_timing(tmp_path, capsys, argv, m
     assert main(["speed", *(a.format(file=blocker) for a in argv)]) == 2
     assert message.format(file=blocker) in capsys.readouterr().err
     assert time.monotonic() - t0 < 10.0
+
+
+def _fake_seed(out: Path, seed: int) -> dict:
+    """The files `_write_results` reads for one finished seed (contents are placeholders)."""
+    from controllers.ppo import METADATA_FILE, MODEL_FILE, STATS_FILE
+
+    agent = out / f"seed_{seed}" / "best"
+    agent.mkdir(parents=True)
+    for name in (MODEL_FILE, STATS_FILE, METADATA_FILE):
+        (agent / name).write_text(f"{name} of seed {seed}")
+    (agent / "held_out_evaluation.json").write_text(json.dumps({"seed": seed}))
+    (out / f"seed_{seed}" / "evaluations.csv").write_text("num_timesteps\n0\n")
+    return {"seed": seed, "agent": str(agent)}
+
+
+def test_results_of_a_run_with_other_seeds_are_replaced_not_mixed(tmp_path):
+    """Was: a rerun of train_seeds --results with seeds 0-1 after seeds 0-2 left
+    agent_seed_2/, which the suite (NAME=DIR) then evaluated as a seed of the new run."""
+    from benchmarks.training.seeds import _write_results
+
+    out, results = tmp_path / "run", tmp_path / "results"
+    entries = [_fake_seed(out, seed) for seed in range(3)]
+    _write_results(results, out, entries, {"seeds": [0, 1, 2]})
+    assert (results / "agent_seed_2" / "model.zip").is_file()
+    (results / "my_notes.md").write_text("kept")
+    _write_results(results, out, entries[:2], {"seeds": [0, 1]})
+    assert sorted(p.name for p in results.iterdir()) == [
+        OUTPUTS_FILE, "agent_seed_0", "agent_seed_1", "my_notes.md", "seed_0_learning_curve.csv",
+        "seed_0_test_evaluation.json", "seed_1_learning_curve.csv",
+        "seed_1_test_evaluation.json", "summary.json"]  # fmt: skip

@@ -43,7 +43,7 @@ from multiprocessing.connection import wait
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import LOCK_FILE, output_lock, write_json, write_text
+from auv_gym.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
 from benchmarks.arguments import writable_location
 from benchmarks.jobs import check_ray_address
 from benchmarks.training.checkpoints import (
@@ -547,13 +547,18 @@ def _write_results(results: Path, out: Path, entries: Sequence[dict[str, Any]],
                    summary: dict[str, Any]) -> None:  # fmt: skip
     """Per seed: its selected agent (``agent_seed_<k>/``, so every seed can be re-evaluated on
     the whole test suite, `benchmarks.evaluate_suite`), the test evaluation and the learning
-    curve; and the summary (all atomic)."""
+    curve; and the summary (all atomic). Files an earlier run with other seeds wrote there are
+    removed (`replace_outputs`): the suite would take a stale agent for a seed of this run."""
+    written = [results / SUMMARY_FILE]
     for entry in entries:
         seed = entry["seed"]
-        export_agent(Path(entry["agent"]), results / f"{SEED_AGENT_PREFIX}{seed}")
+        agent = results / f"{SEED_AGENT_PREFIX}{seed}"
+        export_agent(Path(entry["agent"]), agent)
+        written += [f for f in agent.iterdir() if f.is_file()]
         report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
-        write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2,
-                   sort_keys=True)  # fmt: skip
+        written.append(write_json(results / f"seed_{seed}_test_evaluation.json", report,
+                                  indent=2, sort_keys=True))  # fmt: skip
         curve = seed_dir(out, seed) / EVAL_FILE
-        write_text(results / f"seed_{seed}_learning_curve.csv", curve.read_text())
+        written.append(write_text(results / f"seed_{seed}_learning_curve.csv", curve.read_text()))
     write_json(results / SUMMARY_FILE, summary, indent=2, sort_keys=True)
+    replace_outputs(results, written)
