@@ -178,6 +178,17 @@ def test_a_lawnmower_that_ends_in_a_turn_draws_for_every_seed():
         assert 59.5 < path.s_end <= 60.0  # 13 waypoints about 5 m apart
 
 
+def test_end_tangents_clamp_a_spline_that_ends_inside_a_turn():
+    angles = np.linspace(0.0, math.pi / 2, 8)  # a quarter circle of radius 20 m
+    arc = np.stack([20 * np.sin(angles), 20 * (1 - np.cos(angles)), 0 * angles], axis=1)
+    ends = [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0)]
+    natural, clamped = Spline(arc), Spline(arc, end_tangents=ends)
+    assert curvature_and_angle(natural)[0] * 20 > 1.2  # straightened ends, a tighter middle
+    assert abs(curvature_and_angle(clamped)[0] * 20 - 1.0) < 0.01
+    with pytest.raises(TypeError, match=r"end_tangents must be two \(x, y, z\) vectors"):
+        Spline(arc, end_tangents=[(1.0, 0.0, 0.0)])
+
+
 def test_successful_draws_are_unchanged():
     digest = hashlib.sha256()
     for distribution in (PathDistribution(),
