@@ -50,6 +50,7 @@ from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seeds import MAX_SEED
 from benchmarks.training.train import check_options
 
+VEC_ENVS = ("auto", "native", "dummy")  # `benchmarks.training.train.make_training_env`
 FIXED = {"algo": "ppo", "eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 # One-line help per option (the TrainOptions field comments, for the CLI).
 HELP = {
@@ -137,6 +138,8 @@ def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
         check_agent(Path(extra.evaluate))
         writable_location(extra.evaluate, "--evaluate")  # AGENT/held_out_evaluation.json
         return
+    if opts.vec_env not in VEC_ENVS:
+        raise ValueError(f"--vec-env must be one of {list(VEC_ENVS)}, got {opts.vec_env!r}")
     if not MAX_SEED >= opts.seed >= 0:
         raise ValueError(f"--seed must be an integer in [0, {MAX_SEED}], got {opts.seed}")
     if extra.plot_only:

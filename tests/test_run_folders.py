@@ -498,3 +498,18 @@ def test_results_of_a_run_with_other_seeds_are_replaced_not_mixed(tmp_path):
         OUTPUTS_FILE, "agent_seed_0", "agent_seed_1", "my_notes.md", "seed_0_learning_curve.csv",
         "seed_0_test_evaluation.json", "seed_1_learning_curve.csv",
         "seed_1_test_evaluation.json", "summary.json"]  # fmt: skip
+
+
+def test_train_refuses_an_unknown_vec_env_and_an_unregistered_env_id(tmp_path, capsys):
+    """Was: both raised inside the training, after the run folder was made."""
+    pytest.importorskip("stable_baselines3")
+    config = _seeds_config(tmp_path)
+    base = ["--config", str(config), "--out", str(tmp_path / "run"), "--no-progress-bar"]
+    err = one_line_exit_2(capsys, _train_main, [*base, "--env-id", "AUVPath3DSpeedLimit-v0",
+                                                "--vec-env", "fast"])  # fmt: skip
+    assert "--vec-env must be one of ['auto', 'native', 'dummy'], got 'fast'" in err
+    config.write_text(yaml.safe_dump({"Nope-v0": yaml.safe_load(config.read_text())[
+        "AUVPath3DSpeedLimit-v0"]}))  # fmt: skip
+    err = one_line_exit_2(capsys, _train_main, [*base, "--env-id", "Nope-v0"])
+    assert f"{config}: Nope-v0: Environment `Nope` doesn't exist" in err
+    assert not (tmp_path / "run").exists()

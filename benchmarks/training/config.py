@@ -374,8 +374,14 @@ def _check_env_kwargs(env_id: str, env_kwargs: Mapping[str, Any], where: str) ->
     from auv_gym import VARIANTS
     from auv_gym.config import SimConfig
 
-    if env_id not in VARIANTS:
-        return  # another registered env checks its own arguments
+    if env_id not in VARIANTS:  # another registered env checks its own arguments
+        import gymnasium
+
+        try:
+            gymnasium.spec(env_id)
+        except gymnasium.error.Error as error:
+            raise ValueError(f"{where}: {error}") from None
+        return
     try:
         SimConfig.from_kwargs(**{**VARIANTS[env_id], **env_kwargs})
     except (TypeError, ValueError) as error:
