@@ -10,6 +10,7 @@ ImportError naming the extra when it is missing.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from typing import Any
 
@@ -122,6 +123,28 @@ class SB3VecEnv(VecEnv):
 
     def close(self) -> None:
         self.venv.close()
+
+    # ------------------------------------------------------------------------ snapshots
+    def snapshot(self) -> dict[str, Any]:
+        """A copy of the state stepping reads: the vector env's (`AUVPath3DVectorEnv.snapshot`),
+        every attribute of a wrapper in between (e.g. the residual agent's base-controller
+        states and previous actions), and the seeds and options of the next `reset`."""
+        wrapper = None
+        if self.venv is not self.core:
+            wrapper = copy.deepcopy({k: v for k, v in vars(self.venv).items()
+                                     if k not in ("env", "core")})  # fmt: skip
+        return {"core": self.core.snapshot(), "wrapper": wrapper,
+                "seeds": list(self._seeds), "options": copy.deepcopy(self._options)}  # fmt: skip
+
+    def restore(self, snapshot: dict[str, Any]) -> None:
+        """Continue from a `snapshot` of an SB3VecEnv built with the same arguments."""
+        if (snapshot["wrapper"] is None) != (self.venv is self.core):
+            raise ValueError("snapshot and env differ in their wrapper of the vector env")
+        self.core.restore(snapshot["core"])
+        for key, value in copy.deepcopy(snapshot["wrapper"] or {}).items():
+            setattr(self.venv, key, value)
+        self._seeds = list(snapshot["seeds"])
+        self._options = copy.deepcopy(snapshot["options"])
 
     # --------------------------------------------------------------------- attribute access
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:

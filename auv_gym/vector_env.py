@@ -8,6 +8,7 @@ seed k + i, so it reproduces `AUVPath3DEnv` step for step, autoresets included.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import inspect
 from collections.abc import Mapping, Sequence
@@ -39,6 +40,11 @@ _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
 # < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
 PARALLEL_MIN_VEHICLES = 256
 MAX_VEHICLES = 2**24  # about 60 GB of state: a bound that names the argument before numpy fails
+# The simulator arrays that change while stepping or at a reset (`snapshot`); the others are
+# fixed at construction. `error_integral` is a view into `extra` and follows it.
+_SIM_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
+               "terms", "reward", "code", "_actions", "extra", "last_action", "_cfg", "_task",
+               "_pdata", "_kind")  # fmt: skip
 
 
 def parse_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
@@ -364,6 +370,49 @@ class AUVPath3DVectorEnv(VectorEnv):
         if reason_mask.any():
             infos["termination_reason"] = np.where(reason_mask, _REASONS[sim.code], None)
             infos["_termination_reason"] = reason_mask
+
+    # ------------------------------------------------------------------------ snapshots
+    def snapshot(self) -> dict[str, Any]:
+        """A copy of everything stepping and autoresets read: the simulator's arrays (vehicle
+        states, ocean currents, parameter and task draws, noise keys, step counters), each
+        vehicle's path and random generator, the last observations and the autoreset flags.
+
+        `restore` of it on a vector env built with the same arguments continues bit for bit as
+        this one would (what a paused training run needs); the renderer's track is not included.
+        """
+        sim = self.sim
+        return {
+            "num_envs": self.num_envs,
+            "sim": {name: getattr(sim, name).copy() for name in _SIM_ARRAYS},
+            "paths": list(sim.paths),  # immutable, shared
+            "rngs": copy.deepcopy(self._rngs),
+            "np_random": copy.deepcopy((self._np_random, self._np_random_seed)),
+            "last_obs": self._last_obs.copy(),
+            "autoreset": self._autoreset.copy(),
+            "ever_reset": self._ever_reset,
+        }
+
+    def restore(self, snapshot: dict[str, Any]) -> None:
+        """Continue from a `snapshot` of a vector env built with the same arguments; ValueError
+        if its number of vehicles or array shapes differ."""
+        if snapshot.get("num_envs") != self.num_envs:
+            raise ValueError(f"snapshot of {snapshot.get('num_envs')} vehicles, this vector env "
+                             f"has {self.num_envs}")  # fmt: skip
+        sim = self.sim
+        for name in _SIM_ARRAYS:
+            target, value = getattr(sim, name), snapshot["sim"][name]
+            if target.shape != value.shape:
+                raise ValueError(f"snapshot array {name} has shape {value.shape}, this vector "
+                                 f"env's {target.shape}: built with other arguments")  # fmt: skip
+        for name in _SIM_ARRAYS:  # in place: views such as `error_integral` stay attached
+            np.copyto(getattr(sim, name), snapshot["sim"][name])
+        sim.paths[:] = snapshot["paths"]
+        self._rngs = copy.deepcopy(snapshot["rngs"])
+        self._np_random, self._np_random_seed = copy.deepcopy(snapshot["np_random"])
+        self._last_obs[:] = snapshot["last_obs"]
+        self._autoreset[:] = snapshot["autoreset"]
+        self._ever_reset = bool(snapshot["ever_reset"])
+        self._restart_rendering()
 
     # ---------------------------------------------------------------------------- properties
     @property

@@ -236,25 +236,23 @@ def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path, caps
     from stable_baselines3 import PPO
 
     args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1", "--n-timesteps",
-                 "512")  # fmt: skip
+                 "768")  # fmt: skip
     assert main([*args, "--stop-at", "384"]) == 0
     paused = _summary(tmp_path / "run")["seeds"][0]
-    assert paused["num_timesteps"] == 384
+    # SB3 collects whole rollouts of 4 × 64 steps: the pause comes at the first rollout start
+    # at or after 384, with two rollouts trained, at the progress of 512 of 768 steps.
+    assert paused["num_timesteps"] == 512
     final = tmp_path / "run" / "seed_0" / "final" / "model.zip"
-    # One rollout of 4 × 64 steps was trained (the second stopped at 384, untrained), at the
-    # progress of 256 of 512 steps: half the schedule is left.
-    assert PPO.load(final, device="cpu")._current_progress_remaining == pytest.approx(0.5)
+    assert PPO.load(final, device="cpu")._current_progress_remaining == pytest.approx(1 / 3)
     assert main([*args, "--stop-at", "10"]) == 2  # not a multiple of n_envs = 4
-    # a pause only moves forward: the seed is at 384 steps already
+    # a pause only moves forward: the seed is at 512 steps already
     capsys.readouterr()
     assert main([*args, "--stop-at", "256", "--resume"]) == 2
     err = capsys.readouterr().err
-    assert "seed 0 has already trained 384 env steps, past the target 256" in err
+    assert "seed 0 has already trained 512 env steps, past the target 256" in err
     assert main([*args, "--resume"]) == 0
     done = _summary(tmp_path / "run")["seeds"][0]
-    # Resumed from the checkpoint at 384: SB3 collects whole rollouts, so it ends within one
-    # rollout (256 steps) past the budget, with the schedule exhausted.
-    assert 512 <= done["num_timesteps"] < 512 + 256
+    assert done["num_timesteps"] == 768
     assert PPO.load(final, device="cpu")._current_progress_remaining <= 0.0
 
 
@@ -271,9 +269,9 @@ def test_sac_resume_restores_the_replay_buffer(tmp_path):
     last = tmp_path / "run" / "checkpoints" / "step_0000000256" / "replay_buffer.pkl"
     with last.open("rb") as f:
         buffer = pickle.load(f)
-    # A checkpoint is written before SB3 stores the step's transition: 128/4 − 1 = 31 rows of
-    # 4 vehicles at step 128, 31 + 32 − 1 = 62 at step 256 (31 without the restored buffer).
-    assert buffer.n_envs == 4 and buffer.size() == 62
+    # Checkpoints are taken between SB3's collections, with every step stored: 128/4 = 32 rows
+    # of 4 vehicles at step 128, 64 at step 256 (32 without the restored buffer).
+    assert buffer.n_envs == 4 and buffer.size() == 64
 
 
 @pytest.mark.rl

@@ -1,5 +1,6 @@
-"""SB3 callbacks of the training harness: periodic evaluation (learning curve, best agent) and
-periodic checkpoints. Imports stable-baselines3 (the rl extra)."""
+"""SB3 callbacks of the training harness: periodic evaluation (learning curve, best agent),
+periodic checkpoints (and the pause at ``stop_at``) and the exact resume. Imports
+stable-baselines3 (the rl extra)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,12 @@ from typing import Any
 
 from stable_baselines3.common.callbacks import BaseCallback
 
-from benchmarks.training.checkpoints import checkpoint_folder, prune_checkpoints, save_agent
+from benchmarks.training.checkpoints import (
+    checkpoint_folder,
+    prune_checkpoints,
+    restore_random_state,
+    save_agent,
+)
 from benchmarks.training.evaluation import (
     chattering_mean,
     evaluate_policy_on_seeds,
@@ -23,15 +29,18 @@ from controllers.residual import ResidualPolicy, ResidualSettings, base_kwargs_f
 
 __all__ = [
     "AdaptiveUpdateThreads",
+    "PauseTraining",
     "PeriodicCheckpoint",
     "PeriodicEvaluation",
-    "StopAt",
+    "RestoreRandomState",
     "UpdateThreads",
     "policy_from_model",
 ]
 
 # metadata(extra) → the agent metadata of the model's current state, updated with `extra`.
 MetadataFn = Callable[[dict[str, Any]], dict[str, Any]]
+# state(phase) → `checkpoints.capture_training_state` of the run now.
+StateFn = Callable[[str], dict[str, Any]]
 
 
 def policy_from_model(
@@ -61,12 +70,14 @@ class PeriodicEvaluation(BaseCallback):
     the learning curve, and the agent saved to OUT/best when its `score` improves.
 
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
-    A residual agent (``residual``) is evaluated as its `ResidualPolicy`.
+    A residual agent (``residual``) is evaluated as its `ResidualPolicy`. ``next_eval``: the
+    schedule of a resumed run (its checkpoint's), else the first multiple of `every` ahead.
     """
 
     def __init__(self, out: Path, every: int, seeds: Sequence[int], eval_kwargs: dict[str, Any],
                  metadata: MetadataFn, start_wall: float, best: dict[str, Any],
-                 verbose: int = 0, residual: ResidualSettings | None = None) -> None:  # fmt: skip
+                 verbose: int = 0, residual: ResidualSettings | None = None,
+                 next_eval: int | None = None) -> None:  # fmt: skip
         super().__init__(verbose)
         self.residual = residual
         self.out, self.every, self.seeds = out, every, tuple(seeds)
@@ -74,9 +85,13 @@ class PeriodicEvaluation(BaseCallback):
         self.start_wall, self.best = start_wall, best
         self.t0 = time.monotonic()
         self.next_eval = 0
+        self._resumed_next = next_eval
 
     def _on_training_start(self) -> None:
         n = self.num_timesteps
+        if self._resumed_next is not None:
+            self.next_eval = self._resumed_next
+            return
         self.next_eval = _next_multiple(n, self.every)
         if n == 0:
             self.evaluate()  # the untrained agent: the curve starts at step 0
@@ -115,40 +130,87 @@ class PeriodicEvaluation(BaseCallback):
             print(f"[eval] steps={self.num_timesteps} wall={wall:.0f}s {summary}", flush=True)
 
 
+class PauseTraining(Exception):
+    """Raised out of `learn` by `PeriodicCheckpoint` once the pause checkpoint is written."""
+
+
 class PeriodicCheckpoint(BaseCallback):
-    """Every `every` env steps: the agent (with the replay buffer if `replay_buffer`) to
-    OUT/checkpoints/step_<n>/; the newest `keep` stay."""
+    """Checkpoints to OUT/checkpoints/step_<n>/ (the newest `keep` stay), with the replay buffer
+    if `replay_buffer` and the training state ``state(phase)`` (`capture_training_state`):
+
+    - where SB3 starts collecting a rollout, once `every` more env steps have passed (SB3 steps
+      whole rollouts: PPO's n_steps × n_envs, SAC's train_freq × n_envs; a checkpoint in the
+      middle of one could not be resumed exactly);
+    - there too once ``stop_at`` env steps are reached, then `PauseTraining` is raised: a run
+      pauses at the first rollout start at or after ``stop_at``, before collecting anything;
+    - when `learn` returns (the end of this invocation's budget), unless just written.
+
+    ``next_checkpoint``: the schedule of a resumed run (its checkpoint's).
+    """
 
     def __init__(self, out: Path, every: int, keep: int, metadata: MetadataFn,
-                 replay_buffer: bool = False) -> None:  # fmt: skip
+                 replay_buffer: bool = False, state: StateFn | None = None,
+                 stop_at: int | None = None,
+                 next_checkpoint: int | None = None) -> None:  # fmt: skip
         super().__init__()
         self.out, self.every, self.keep, self.metadata = out, every, keep, metadata
-        self.replay_buffer = replay_buffer
+        self.replay_buffer, self.state, self.stop_at = replay_buffer, state, stop_at
         self.next_checkpoint = 0
+        self._resumed_next = next_checkpoint
+        self.last_saved: int | None = None
 
     def _on_training_start(self) -> None:
-        self.next_checkpoint = _next_multiple(self.num_timesteps, self.every)
+        if self._resumed_next is not None:
+            self.next_checkpoint = self._resumed_next
+        else:
+            self.next_checkpoint = _next_multiple(self.num_timesteps, self.every)
+        self.last_saved = self.num_timesteps if self._resumed_next is not None else None
+
+    def _on_rollout_start(self) -> None:
+        n = self.num_timesteps
+        pause = self.stop_at is not None and n >= self.stop_at
+        if n >= self.next_checkpoint:
+            self.next_checkpoint = _next_multiple(n, self.every)
+            self.save("rollout_start")
+        elif pause and self.last_saved != n:
+            self.save("rollout_start")
+        if pause:
+            raise PauseTraining(f"paused at {n} env steps (stop_at {self.stop_at})")
 
     def _on_step(self) -> bool:
-        if self.num_timesteps >= self.next_checkpoint:
-            self.next_checkpoint += self.every
-            folder = checkpoint_folder(self.out, self.num_timesteps)
-            save_agent(self.model, self.model.get_vec_normalize_env(), folder, self.metadata({}),
-                       replay_buffer=self.replay_buffer)  # fmt: skip
-            prune_checkpoints(self.out, self.keep)
         return True
 
+    def _on_training_end(self) -> None:
+        if self.last_saved != self.num_timesteps:
+            self.save("training_end")
 
-class StopAt(BaseCallback):
-    """Stop training once `num_timesteps` reaches ``target`` env steps (placed after the
-    evaluation and checkpoint callbacks, which still see that step)."""
+    def save(self, phase: str) -> None:
+        """The checkpoint of now, taken at ``phase`` (see `capture_training_state`)."""
+        n = self.num_timesteps
+        state = None if self.state is None else self.state(phase)
+        save_agent(self.model, self.model.get_vec_normalize_env(), checkpoint_folder(self.out, n),
+                   self.metadata({}), replay_buffer=self.replay_buffer,
+                   training_state=state)  # fmt: skip
+        prune_checkpoints(self.out, self.keep)
+        self.last_saved = n
 
-    def __init__(self, target: int) -> None:
+
+class RestoreRandomState(BaseCallback):
+    """At the first rollout start of a resumed run, put back the random generators and the
+    gSDE noise of a "rollout_start" training state (first in the callback list: SB3 has just
+    redrawn the noise there, and the other callbacks see the restored run)."""
+
+    def __init__(self, state: dict[str, Any]) -> None:
         super().__init__()
-        self.target = int(target)
+        self.pending: dict[str, Any] | None = state
+
+    def _on_rollout_start(self) -> None:
+        if self.pending is not None:
+            restore_random_state(self.model, self.pending)
+            self.pending = None
 
     def _on_step(self) -> bool:
-        return self.num_timesteps < self.target
+        return True
 
 
 class UpdateThreads(BaseCallback):

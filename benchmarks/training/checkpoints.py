@@ -4,13 +4,26 @@ Every agent directory (`final/`, `best/`, `checkpoints/step_<num_timesteps>/`, a
 is complete on its own — model, normalisation statistics, metadata — in the layout
 `controllers.ppo.load_policy` reads, and each is written through `auv_gym.files.
 write_folder_atomic`, so a killed run never leaves a half-written agent.
+
+A checkpoint also holds the training state (`TRAINING_STATE_FILE`, `capture_training_state`)
+that model.zip and vecnormalize.pkl leave out: the random generators (python, numpy, torch, the
+action space's, the gSDE noise and action noise), the training env mid-episode (every vehicle's
+state, task draws, generators and step counters; the episode counters of VecMonitor and the
+discounted returns of VecNormalize) and the last observation the algorithm holds, and the
+evaluation and checkpoint schedules. Checkpoints are taken where SB3 starts collecting a rollout
+(nothing half-collected), so a run resumed from one continues bit for bit as if it had never
+stopped (single thread, same machine and versions); with the replay buffer for SAC.
 """
 
 from __future__ import annotations
 
+import copy
 import os
+import pickle
+import random
 import re
 import shutil
+from collections import deque
 from pathlib import Path
 from typing import Any
 
@@ -24,16 +37,22 @@ __all__ = [
     "CHECKPOINTS",
     "REPLAY_FILE",
     "SEED_AGENT_PREFIX",
+    "TRAINING_STATE_FILE",
+    "capture_training_state",
     "export_agent",
     "latest_checkpoint",
     "list_checkpoints",
     "prune_checkpoints",
+    "read_training_state",
+    "restore_env_state",
+    "restore_random_state",
     "save_agent",
     "write_metadata",
 ]
 
 CHECKPOINTS = "checkpoints"  # folder of a run holding step_<num_timesteps>/ agent directories
 REPLAY_FILE = "replay_buffer.pkl"  # off-policy checkpoints (SAC): the replay buffer, for resuming
+TRAINING_STATE_FILE = "training_state.pkl"  # checkpoints: what resuming exactly needs besides
 SEED_AGENT_PREFIX = "agent_seed_"  # multi-seed results: <prefix><k>/ is training seed k's agent
 
 
@@ -43,10 +62,12 @@ def write_metadata(path: Path, metadata: dict[str, Any]) -> None:
 
 
 def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str, Any],
-               replay_buffer: bool = False) -> None:  # fmt: skip
+               replay_buffer: bool = False,
+               training_state: dict[str, Any] | None = None) -> None:  # fmt: skip
     """Write model.zip, vecnormalize.pkl/.npz and metadata.json as the folder ``folder``
-    (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl). The .npz
-    names the observation layout ``metadata["obs_names"]`` (default: the env's).
+    (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl; with
+    ``training_state``, `TRAINING_STATE_FILE`). The .npz names the observation layout
+    ``metadata["obs_names"]`` (default: the env's).
 
     The folder is filled beside its place and then swapped in (`write_folder_atomic`), so
     readers see either the previous complete agent or the new one.
@@ -65,6 +86,9 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
         write_metadata(tmp / METADATA_FILE, metadata)
         if replay_buffer:
             model.save_replay_buffer(tmp / REPLAY_FILE)
+        if training_state is not None:
+            with (tmp / TRAINING_STATE_FILE).open("wb") as f:
+                pickle.dump(training_state, f, protocol=pickle.HIGHEST_PROTOCOL)
 
     write_folder_atomic(folder, fill)
 
@@ -109,3 +133,130 @@ def prune_checkpoints(out: Path, keep: int) -> None:
     """Delete all but the newest ``keep`` (at least one) checkpoints."""
     for _, old in list_checkpoints(out)[: -max(1, keep)]:
         shutil.rmtree(old, ignore_errors=True)
+
+
+# ------------------------------------------------------------------------------ training state
+# Attributes of an SB3 algorithm that model.zip keeps but `load(env=...)` discards (the last
+# observation) or `learn` resets; restored before `learn` so it does not reset the env.
+_MODEL_ATTRIBUTES = ("_last_obs", "_last_episode_starts", "_last_original_obs", "_episode_num",
+                     "ep_info_buffer", "ep_success_buffer")  # fmt: skip
+# Per-wrapper state VecNormalize.save and VecMonitor leave out (the running discounted return of
+# reward normalisation restarts at 0 on load; episode returns and lengths of the log).
+_WRAPPER_ATTRIBUTES = {
+    "VecNormalize": ("returns", "old_obs", "old_reward", "obs_rms", "ret_rms"),
+    "VecMonitor": ("episode_returns", "episode_lengths", "episode_count"),
+}
+
+
+def _env_chain(venv: Any) -> list[Any]:
+    """The VecEnv wrappers of ``venv``, outermost first, down to the base VecEnv."""
+    chain = []
+    while venv is not None:
+        chain.append(venv)
+        venv = getattr(venv, "venv", None)
+    return chain
+
+
+def _action_distributions(model: Any) -> list[Any]:
+    """The policy's action distributions (PPO's ``policy.action_dist``, SAC's actor's)."""
+    return [m.action_dist for m in model.policy.modules() if hasattr(m, "action_dist")]
+
+
+def _tensors(obj: Any) -> dict[str, Any]:
+    """The tensor attributes of a distribution (the gSDE exploration matrices), detached."""
+    import torch
+
+    return {k: v.detach().clone() for k, v in vars(obj).items() if isinstance(v, torch.Tensor)}
+
+
+def _env_state(venv: Any) -> dict[str, Any]:
+    names = next((names for cls in type(venv).__mro__
+                  if (names := _WRAPPER_ATTRIBUTES.get(cls.__name__))), ())  # fmt: skip
+    if names:
+        return {name: copy.deepcopy(getattr(venv, name)) for name in names}
+    if hasattr(venv, "snapshot"):  # auv_gym.sb3.SB3VecEnv
+        return {"snapshot": venv.snapshot()}
+    if getattr(venv, "venv", None) is None:  # another base VecEnv (DummyVecEnv): all of it
+        return {"vars": copy.deepcopy(vars(venv))}
+    return {}  # a stateless wrapper (ActionBox)
+
+
+def capture_training_state(model: Any, phase: str, schedules: dict[str, Any]) -> dict[str, Any]:
+    """Everything a resumed run needs besides model.zip, vecnormalize.pkl and the replay buffer
+    to continue bit for bit (module doc); ``phase`` says where it was taken: "rollout_start"
+    (SB3 starts collecting a rollout; the gSDE noise of that rollout is drawn) or
+    "training_end" (`learn` returned). ``schedules``: the callbacks' next evaluation and next
+    checkpoint [env steps]."""
+    import torch
+
+    if phase not in ("rollout_start", "training_end"):
+        raise ValueError(f"phase must be 'rollout_start' or 'training_end', got {phase!r}")
+    chain = _env_chain(model.get_env())
+    return {
+        "phase": phase,
+        "num_timesteps": int(model.num_timesteps),
+        "random": {
+            "python": random.getstate(),
+            "numpy": np.random.get_state(),  # noqa: NPY002 - SB3 samples minibatches from it
+            "torch": torch.get_rng_state(),
+            "action_space": copy.deepcopy(model.action_space._np_random),
+            "action_dists": [_tensors(d) for d in _action_distributions(model)],
+            "action_noise": copy.deepcopy(model.action_noise),
+        },
+        "model": {name: copy.deepcopy(getattr(model, name)) for name in _MODEL_ATTRIBUTES},
+        "envs": [(type(v).__name__, _env_state(v)) for v in chain],
+        "schedules": dict(schedules),
+    }
+
+
+def read_training_state(folder: Path) -> dict[str, Any] | None:
+    """The training state of a checkpoint directory (None: written before it was kept)."""
+    path = folder / TRAINING_STATE_FILE
+    if not path.is_file():
+        return None
+    with path.open("rb") as f:
+        return pickle.load(f)
+
+
+def restore_env_state(model: Any, state: dict[str, Any]) -> None:
+    """Put the training env and the algorithm's last observation back (before `learn`, which
+    then does not reset the env); ValueError if the env chain differs from the saved one."""
+    chain = _env_chain(model.get_env())
+    names = [type(v).__name__ for v in chain]
+    saved = [name for name, _ in state["envs"]]
+    if names != saved:
+        raise ValueError(f"the training env {'<'.join(names)} differs from the checkpoint's "
+                         f"{'<'.join(saved)}")  # fmt: skip
+    for venv, (_, values) in zip(chain, state["envs"], strict=True):
+        if "snapshot" in values:
+            venv.restore(values["snapshot"])
+        elif "vars" in values:
+            vars(venv).update(copy.deepcopy(values["vars"]))
+        else:
+            for name, value in values.items():
+                setattr(venv, name, copy.deepcopy(value))
+    for name, value in state["model"].items():
+        value = copy.deepcopy(value)
+        if isinstance(value, deque) and getattr(model, name, None) is not None:
+            value = deque(value, maxlen=getattr(model, name).maxlen)
+        setattr(model, name, value)
+    model.num_timesteps = int(state["num_timesteps"])
+
+
+def restore_random_state(model: Any, state: dict[str, Any]) -> None:
+    """Put the random generators, the gSDE noise and the action noise back: where the state
+    was taken (`capture_training_state`'s ``phase``), after SB3 drew what it draws there."""
+    import torch
+
+    saved = state["random"]
+    random.setstate(saved["python"])
+    np.random.set_state(saved["numpy"])  # noqa: NPY002 - the generator SB3 seeds and uses
+    torch.set_rng_state(saved["torch"])
+    model.action_space._np_random = copy.deepcopy(saved["action_space"])
+    dists = _action_distributions(model)
+    if len(dists) != len(saved["action_dists"]):
+        raise ValueError("the policy's action distributions differ from the checkpoint's")
+    for dist, tensors in zip(dists, saved["action_dists"], strict=True):
+        for name, value in tensors.items():
+            setattr(dist, name, value.clone())
+    model.action_noise = copy.deepcopy(saved["action_noise"])

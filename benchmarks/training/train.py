@@ -19,8 +19,12 @@ from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
+    capture_training_state,
     export_agent,
     latest_checkpoint,
+    read_training_state,
+    restore_env_state,
+    restore_random_state,
     save_agent,
     write_metadata,
 )
@@ -58,11 +62,17 @@ class TrainOptions:
     out: str = "runs/ppo_helix"  # run directory
     seed: int = 0  # seeds torch, numpy and the training environments
     n_timesteps: int | None = None  # override the config's n_timesteps
-    # Pause at this many env steps (None: train to n_timesteps). The schedules (learning rate,
-    # clip range) still run over n_timesteps, so a later --resume with a larger stop_at continues
-    # the same run exactly as if it had never paused.
+    # Pause at the first rollout start at or after this many env steps (None: train to
+    # n_timesteps); SB3 collects whole rollouts (PPO: n_steps x n_envs env steps, SAC:
+    # train_freq x n_envs), so the pause is up to one rollout later. The schedules (learning
+    # rate, clip range) still run over n_timesteps, and the pause writes a checkpoint with the
+    # whole training state, so a later --resume (with a larger stop_at or none) continues bit for
+    # bit as if the run had never paused (`checkpoints` module doc).
     stop_at: int | None = None
-    resume: bool = False  # continue from the newest checkpoint in `out`
+    # Continue from the newest checkpoint in `out`: exactly (weights, evaluations, checkpoints) for
+    # a pause or a checkpoint of the same settings, e.g. after a kill; a larger n_timesteps
+    # continues with schedules over the new budget instead.
+    resume: bool = False
     checkpoint_freq: int = 100_000  # [env steps] between checkpoints
     keep_checkpoints: int = 3  # newest checkpoints kept on disk
     eval_freq: int = 100_000  # [env steps] between evaluations; 0 disables
@@ -244,15 +254,16 @@ def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
 def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     import stable_baselines3
     import torch
-    from stable_baselines3.common.callbacks import CallbackList
+    from stable_baselines3.common.callbacks import CallbackList, ProgressBarCallback
     from stable_baselines3.common.utils import set_random_seed
     from stable_baselines3.common.vec_env import VecNormalize
 
     from benchmarks.training.callbacks import (
         AdaptiveUpdateThreads,
+        PauseTraining,
         PeriodicCheckpoint,
         PeriodicEvaluation,
-        StopAt,
+        RestoreRandomState,
         UpdateThreads,
     )
 
@@ -280,6 +291,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     checkpoint = latest_checkpoint(out) if opts.resume else None
     if opts.resume and checkpoint is None:
         raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
+    state: dict[str, Any] | None = None
     if checkpoint is not None:
         previous = json.loads((checkpoint / METADATA_FILE).read_text())
         venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
@@ -288,6 +300,18 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
                                tensorboard_log=str(out / "tb"), verbose=opts.verbose)  # fmt: skip
         if spec.off_policy and (checkpoint / REPLAY_FILE).is_file():
             model.load_replay_buffer(checkpoint / REPLAY_FILE)
+        state = read_training_state(checkpoint)
+        if state is None:
+            print(
+                f"--resume: {checkpoint} holds no training state (an older checkpoint): the "
+                "environments restart and the random generators are reseeded, so the run "
+                "continues from these weights but not as it would have",
+                file=sys.stderr,
+            )
+        else:
+            restore_env_state(model, state)
+            if state["phase"] == "training_end":  # SB3 draws nothing before the next rollout
+                restore_random_state(model, state)
         truncate_rows(out / EVAL_FILE, model.num_timesteps)
     else:
         venv = VecNormalize(venv, **cfg.normalize)
@@ -302,6 +326,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         "argv": list(argv if argv is not None else sys.argv),
         "started": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "resumed_from": None if checkpoint is None else str(checkpoint),
+        "exact_resume": None if checkpoint is None else state is not None,
         "start_timesteps": int(model.num_timesteps),
     }]  # fmt: skip
     t0 = time.monotonic()
@@ -328,26 +353,47 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "best": best, "auv_gym_version": auv_gym.__version__, **extra,
         }  # fmt: skip
 
-    callbacks = []
+    schedules = {} if state is None else state["schedules"]
+    callbacks: list[Any] = []
+    if state is not None and state["phase"] == "rollout_start":
+        callbacks.append(RestoreRandomState(state))
     if opts.adaptive_threads:
         candidates = (opts.threads, max(2, opts.update_threads))
         callbacks.append(AdaptiveUpdateThreads(opts.threads, candidates))
     elif opts.update_threads not in (0, opts.threads):
         callbacks.append(UpdateThreads(opts.threads, opts.update_threads))
+    evaluation = None
     if opts.eval_freq > 0:
-        callbacks.append(PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
-                                            metadata, start_wall, best, opts.verbose,
-                                            residual))  # fmt: skip
-    callbacks.append(PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata,
-                                        replay_buffer=spec.off_policy))  # fmt: skip
+        evaluation = PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
+                                        metadata, start_wall, best, opts.verbose, residual,
+                                        next_eval=schedules.get("next_eval"))  # fmt: skip
+        callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)
-    if target < n_timesteps:
-        callbacks.append(StopAt(target))
+
+    def training_state(phase: str) -> dict[str, Any]:
+        return capture_training_state(model, phase, {
+            "next_eval": None if evaluation is None else evaluation.next_eval,
+            "next_checkpoint": checkpoints.next_checkpoint,
+        })  # fmt: skip
+
+    checkpoints = PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata,
+                                     replay_buffer=spec.off_policy, state=training_state,
+                                     stop_at=target if target < n_timesteps else None,
+                                     next_checkpoint=schedules.get("next_checkpoint"))  # fmt: skip
+    callbacks.append(checkpoints)
+    if opts.progress_bar:  # ours, to close it at a pause too
+        callbacks.append(ProgressBarCallback())
     remaining = n_timesteps - int(model.num_timesteps)
     if int(model.num_timesteps) < target:
-        model.learn(remaining, callback=CallbackList(callbacks), progress_bar=opts.progress_bar,
-                    reset_num_timesteps=checkpoint is None,
-                    tb_log_name=algorithm.__name__)  # fmt: skip
+        try:
+            model.learn(remaining, callback=CallbackList(callbacks), progress_bar=False,
+                        reset_num_timesteps=checkpoint is None,
+                        tb_log_name=algorithm.__name__)  # fmt: skip
+        except PauseTraining:  # the checkpoint of the pause is written; the model is as in it
+            for callback in callbacks:
+                if isinstance(callback, ProgressBarCallback | UpdateThreads):
+                    callback.on_training_end()
+            model.logger.close()
     final_meta = metadata({})
     save_agent(model, venv, out / "final", final_meta)
     write_metadata(out / METADATA_FILE, final_meta)
