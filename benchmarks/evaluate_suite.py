@@ -52,7 +52,14 @@ from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
 from auv_gym.config import MAX_EPISODE_TIME, SimConfig
-from auv_gym.files import environment, json_default, replace_outputs, write_json, write_text
+from auv_gym.files import (
+    environment,
+    json_default,
+    remove_temporaries,
+    replace_outputs,
+    write_json,
+    write_text,
+)
 from auv_gym.metrics import check_window
 from auv_gym.rollout import evaluate
 from benchmarks.arguments import (
@@ -394,9 +401,7 @@ def run_chunks(
     """Run the chunks that are not finished yet; the records of all chunks, in chunk order."""
     from tqdm.auto import tqdm
 
-    if (out / CHUNKS).exists():
-        for stale in (out / CHUNKS).rglob(".*.tmp"):
-            stale.unlink(missing_ok=True)  # temporary files of a run killed mid-write
+    remove_temporaries(out / CHUNKS)  # of a run killed mid-write (callers hold the folder)
     records: dict[int, dict[str, Any]] = {}
     for index, chunk in enumerate(chunks):
         done = finished_chunk(chunk, out)

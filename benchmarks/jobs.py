@@ -31,7 +31,7 @@ from typing import Any
 import auv_gym
 import controllers
 from auv_gym import ENV_ID, VARIANTS
-from auv_gym.files import jsonable, write_json
+from auv_gym.files import jsonable, remove_temporaries, write_json
 from auv_gym.metrics import compute_metrics
 from auv_gym.numba_cache import sources_digest
 from auv_gym.rollout import rollout
@@ -167,8 +167,7 @@ def run_jobs(
     """Run the jobs that are not finished yet; return the records of all jobs, in job order."""
     from tqdm.auto import tqdm
 
-    for stale in (out / "episodes").rglob(".*.tmp") if (out / "episodes").exists() else ():
-        stale.unlink(missing_ok=True)  # temporary files of a run killed mid-write
+    remove_temporaries(out / "episodes")  # of a run killed mid-write (callers hold the folder)
     records: dict[int, dict[str, Any]] = {}
     todo = []
     for index, job in enumerate(jobs):

@@ -156,7 +156,7 @@ def test_resume_after_a_crash_reruns_only_unfinished_chunks(tiny, tmp_path, monk
     lost = out / "chunks" / "gen" / "run_5" / "test_mixed.json"
     lost.unlink()
     (out / "episodes.csv").unlink()
-    (lost.parent / ".test_mixed.json.x.tmp").write_text("{")  # a write killed half-way
+    (lost.parent / ".test_mixed.json.k1ll3d00.tmp").write_text("{")  # a write killed half-way
     stamps = {p: p.stat().st_mtime_ns for p in chunk_files if p != lost}
     calls = []
     real = suite_module.evaluate
