@@ -1,4 +1,5 @@
-"""Policies for `AUVPath3D-v0`: the paper's FBSM, backstepping, PPO agents and residual policies.
+"""Policies for `AUVPath3D-v0`: the paper's FBSM, backstepping, a PID + LOS autopilot, PPO
+agents and residual policies.
 
 Every controller implements stable-baselines3's `predict` (`controllers.base.Policy`), so the
 evaluation code treats FBSM, backstepping, a PPO agent and a user's object alike.
@@ -21,16 +22,19 @@ from controllers.backstepping import Backstepping  # noqa: E402
 from controllers.base import BatchedController, Policy  # noqa: E402
 from controllers.fbsm import FBSM  # noqa: E402
 from controllers.gains import ControllerGains, MembershipSet  # noqa: E402
+from controllers.pid import PIDLOS, PIDGains  # noqa: E402
 
 __all__ = [
     "CLASSICAL",
     "FBSM",
+    "PIDLOS",
     "PRESETS",
     "REGISTRY",
     "Backstepping",
     "BatchedController",
     "ControllerGains",
     "MembershipSet",
+    "PIDGains",
     "Policy",
     "import_policy",
     "make",
@@ -50,8 +54,11 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     # The current-robust FBSM through a first-order low-pass (`controllers.lowpass`, α = 0.5):
     # the classical answer to chattering, which a residual agent must beat (docs/design.md §3.11).
     "fbsm_colos_lowpass": ("lowpass", {"base": "fbsm_colos"}),
+    # The textbook baseline (`controllers.pid`, docs/model.md §4.9) with the same guidance options.
+    "pid_ilos": ("pid_los", {"ilos_y": 3.0}),
+    "pid_colos": ("pid_los", _COLOS),
 }
-CLASSICAL = ("fbsm", "backstepping", *PRESETS)
+CLASSICAL = ("fbsm", "backstepping", "pid_los", *PRESETS)
 REGISTRY = (*CLASSICAL, "ppo")  # policy names of the benchmark CLIs (a residual agent: ppo:PATH)
 
 
@@ -59,9 +66,12 @@ def make(name: str, **kwargs: Any) -> Any:
     """A policy by name, configured for the default env; keyword arguments override.
 
     "fbsm" and "backstepping" (and their `PRESETS`) accept `gains`, `params` (the nominal model),
-    `control_dt`, `actuator` and individual gain names; "ppo" takes `path` (a saved agent
-    directory). "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes
-    `agent` (a Policy of the 21-value residual observation, or a saved residual agent's
+    `control_dt`, `actuator` and individual gain names. "pid_los" (and its `PRESETS`;
+    `controllers.pid.PIDLOS`) accepts `pid` (`controllers.pid.PIDGains`), `gains` (read for
+    the guidance only), `params`, `control_dt`, `actuator` and the names of `PIDGains` and
+    `controllers.pid.GUIDANCE_GAINS`. "ppo" takes `path` (a saved agent directory).
+    "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
+    Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
     default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none); every
     other keyword configures the base controller. "lowpass"
@@ -75,6 +85,8 @@ def make(name: str, **kwargs: Any) -> Any:
         return FBSM(**kwargs)
     if name == "backstepping":
         return Backstepping(**kwargs)
+    if name == "pid_los":
+        return PIDLOS(**kwargs)
     if name == "ppo":
         from controllers.ppo import load_policy
 
