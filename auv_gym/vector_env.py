@@ -103,6 +103,11 @@ class AUVPath3DVectorEnv(VectorEnv):
     ``reset(options={"reset_mask": mask})`` (bool array of shape (n,)) resets only the masked
     vehicles, in every mode; the returned infos describe those vehicles.
 
+    ## Snapshots
+    `snapshot()` copies everything stepping reads (vehicle states, task draws, generators, step
+    counters, last observations); `restore(snapshot)` on a vector env built with the same
+    arguments continues bit for bit (a paused training run resumes with it).
+
     ## Info
     Gymnasium's vector convention, identical to `SyncVectorEnv` over the single env: for every key
     of the single env's info an array over vehicles (``tau`` (n, 3), ``disturbance`` (n, 5),

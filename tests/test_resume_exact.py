@@ -163,3 +163,22 @@ def test_vector_env_snapshot_restores_mid_episode(tmp_path: Path) -> None:
     other = make_sb3_vec_env(4, seed=7, **kwargs)
     with pytest.raises(ValueError, match="snapshot of 3 vehicles, this vector env has 4"):
         other.restore(snapshot)
+
+
+def test_checkpoint_without_training_state_resumes_and_says_it_is_not_exact(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A checkpoint written before the training state was kept still resumes (weights and
+    step counter), with one line on stderr and ``exact_resume`` false in the sessions."""
+    from benchmarks.training.checkpoints import TRAINING_STATE_FILE
+    from benchmarks.training.train import train
+
+    train(_options(tmp_path, "ppo", "old", stop_at=256))
+    checkpoint = tmp_path / "old" / "checkpoints" / "step_0000000256"
+    (checkpoint / TRAINING_STATE_FILE).unlink()
+    capsys.readouterr()
+    train(_options(tmp_path, "ppo", "old", resume=True))
+    assert f"--resume: {checkpoint} holds no training state" in capsys.readouterr().err
+    sessions = json.loads((tmp_path / "old" / "metadata.json").read_text())["sessions"]
+    assert [s["exact_resume"] for s in sessions] == [None, False]
+    assert [s["start_timesteps"] for s in sessions] == [0, 256]
