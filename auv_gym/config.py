@@ -334,6 +334,15 @@ class SimConfig:
             self._check_start_fits_the_observation()
 
     @property
+    def current_speed_bound(self) -> float:
+        """Largest current speed [m/s] an episode can meet: per axis |mean| + the random current
+        + 8 stationary standard deviations of the Gauss–Markov part (exceeded with probability
+        about 1e-15 per draw), combined over the three axes."""
+        axes = [abs(m) + self.random_current + 8.0 * s
+                for m, s in zip(self.current.mean, self.current.std, strict=True)]  # fmt: skip
+        return math.sqrt(sum(a * a for a in axes))
+
+    @property
     def randomized(self) -> bool:
         """True if episodes draw their own path, current, noise amplitude or actuator."""
         return (isinstance(self.path, PathDistribution) or self.random_current > 0.0

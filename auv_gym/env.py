@@ -50,14 +50,17 @@ def validate_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
 
 
 def check_reset_observations(
-    obs: np.ndarray, rows: Sequence[int] | np.ndarray, layout: ObservationConfig | None = None
+    obs: np.ndarray,
+    rows: Sequence[int] | np.ndarray,
+    layout: ObservationConfig | None = None,
+    current_speed: float = 0.0,
 ) -> None:
     """Raise ValueError, naming the component, if a reset observation (float32, one row per
     vehicle, ``layout`` default: the paper's) lies outside the observation space; the
     configuration checks make this unreachable for the built-in paths, so it guards what they
     cannot see (a spline between its samples)."""
     layout = layout or ObservationConfig()
-    low, high = layout.bounds()
+    low, high = layout.bounds(current_speed)
     outside = ~((obs >= low) & (obs <= high))  # NaN counts as outside
     if outside.any():
         i, j = np.argwhere(outside)[0]
@@ -352,7 +355,9 @@ class AUVPath3DEnv(gym.Env):
         super().reset(seed=seed)
         self.sim.reset_row(0, self.np_random)
         obs = self.sim.observations()[0]
-        check_reset_observations(obs[None], [0], self.config.observation)
+        check_reset_observations(
+            obs[None], [0], self.config.observation, self.config.current_speed_bound
+        )
         self._last_obs[:] = obs
         if self._renderer is not None:
             sim = self.sim

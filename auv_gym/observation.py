@@ -154,10 +154,15 @@ MAX_PREVIEW_POINTS = 64
 MAX_PREVIEW_LENGTH = ERROR_BOUND  # [m] K·Δs
 CURVATURE_BOUND = 1.0  # [1/m] κ and |τ| saturate here: 8× sharper than the vehicle can turn
 GROUND_SPEED_BOUND = 30.0  # [m/s] |ν + R_Bᵀ v_c| per axis: SPEED_BOUND plus a 10 m/s current, ×1.5
+# A configuration whose current can exceed 10 m/s (`SimConfig.current_speed_bound`: the mean,
+# a random current and 8 stationary standard deviations of the Gauss–Markov part) widens the
+# ground-speed bound to 1.5·(SPEED_BOUND + that speed).
+_GROUND_MARGIN = 1.5
 # Vehicle to a preview point: at most the distance to the virtual point (bounded per axis by
-# ERROR_BOUND, so √3·ERROR_BOUND in all) plus the arc K·Δs; the margin covers the midpoint
-# march's arc-length error on splines.
-_PREVIEW_MARGIN = 1.5
+# ERROR_BOUND, so √3·ERROR_BOUND in all) plus K chords of at most 1.5 Δs each: the margin
+# covers the midpoint march's arc-length error on splines, and the march halves any step whose
+# chord exceeds it (`preview.extend_rows`).
+PREVIEW_MARGIN = 1.5
 PREVIEW_FEATURES = ("x", "y", "z", "curvature", "torsion")
 EXTRA_HEAD = ("u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_prev")
 INTEGRAL_NAMES = ("y_e_integral", "z_e_integral")
@@ -249,14 +254,16 @@ class ObservationConfig:
             extra[name] = "m·s" if name in INTEGRAL_NAMES else units[name.split("_", 1)[1]]
         return {**OBS_UNITS, **(extra if self.kind != "paper" else {})}
 
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """(low, high) float32 arrays of the observation space."""
+    def bounds(self, current_speed: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high) float32 arrays of the observation space; ``current_speed`` [m/s] is the
+        largest current the configuration can draw (`SimConfig.current_speed_bound`)."""
         if self.kind == "paper":
             return OBS_LOW.copy(), OBS_HIGH.copy()
-        reach = math.sqrt(3.0) * ERROR_BOUND + _PREVIEW_MARGIN * self.points * self.spacing
+        ground = max(GROUND_SPEED_BOUND, _GROUND_MARGIN * (SPEED_BOUND + current_speed))
+        reach = math.sqrt(3.0) * ERROR_BOUND + PREVIEW_MARGIN * self.points * self.spacing
         point = (reach, reach, reach, CURVATURE_BOUND, CURVATURE_BOUND)
         integral = (ERROR_BOUND * self.integral_time,) * self.integrals  # |e| ≤ 500 m: |I| ≤ 500 T
-        high = np.array([*(GROUND_SPEED_BOUND,) * 3, 1.0, 1.0, 1.0, *point * self.points,
+        high = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points,
                          *integral])  # fmt: skip
         return (np.concatenate([OBS_LOW, -high.astype(np.float32)]),
                 np.concatenate([OBS_HIGH, high.astype(np.float32)]))  # fmt: skip

@@ -169,7 +169,7 @@ class Simulator:
         self._actions = np.zeros((n, 3))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
         self.layout = config.observation
-        self.obs_low, self.obs_high = self.layout.bounds()
+        self.obs_low, self.obs_high = self.layout.bounds(config.current_speed_bound)
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
         # Leaky error integrals (y_e, z_e) [m·s] (`ObservationConfig.integral_time`): the last

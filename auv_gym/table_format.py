@@ -4,8 +4,9 @@ Every markdown table the project writes (the paper figures' `metrics.md`, a benc
 `summary.md`, the suite's tables) goes through this module, so a reader learns one convention:
 
 - Numbers carry ``SIGNIFICANT_FIGURES`` significant figures, positional from 0.001 to 10⁶
-  (``0.0173``, ``988``) and scientific outside (``5.63e-06``), never float noise (``0.01728 ± 3.5e-18``). A spread is printed to the same decimal
-  place as its mean (``988 ± 110``, ``0.0173 ± 0``).
+  (``0.0173``, ``988``) and scientific outside (``5.63e-06``), never float noise
+  (``0.01728 ± 3.5e-18``). A spread is printed to the same decimal place as its mean
+  (``988 ± 110``, ``0.0173 ± 0``).
 - Units live in the header. A row or column in metres whose largest value is below 1 cm is
   shown in millimetres (``0.42 mm`` instead of ``0.000``), and the same for m/s.
 - A failed episode (an end in `auv_gym.trajectory.FAILURE_REASONS`) contributes no metric: the

@@ -274,7 +274,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         """New episodes for `rows`, each drawn from its vehicle's generator (single-env order)."""
         self.sim.reset_rows(rows, [self._rngs[i] for i in rows])
         first = self.sim.observations(rows)
-        check_reset_observations(first, rows, self.config.observation)
+        check_reset_observations(
+            first, rows, self.config.observation, self.config.current_speed_bound
+        )
         self._last_obs[rows] = first
         if self._render_vehicle in rows:
             self._restart_rendering()

@@ -279,3 +279,19 @@ def test_error_integrals_are_leaky_integrals_of_the_track_errors():
     assert np.all(obs[-2:] == 0.0)
     with pytest.raises(ValueError, match="observation integral_time"):
         ObservationConfig("preview", integral_time=-1.0)
+
+
+def test_ground_speed_bound_covers_every_current_the_config_can_draw():
+    """A Gauss–Markov current is unbounded; the bound covers 8 stationary standard deviations
+    (an accepted configuration with mean 10 m/s and std 10 m/s raised at 19 of 300 resets
+    against the fixed 30 m/s bound)."""
+    strong = {"mean": (10.0, 10.0, 10.0), "std": (10.0, 10.0, 10.0)}
+    env = gym.make("AUVPath3DPreview-v0", current=strong).unwrapped
+    expected = 1.5 * (10.0 + math.sqrt(3.0) * 90.0)
+    assert env.observation_space.high[15] == np.float32(expected)
+    for seed in range(300):
+        obs, _ = env.reset(seed=seed)
+        assert env.observation_space.contains(obs)
+    # Configurations whose current stays within 10 m/s keep the 30 m/s bound.
+    calm = gym.make("AUVPath3DPreview-v0", current={"mean": (0.3, 0, 0), "std": (0.1, 0.1, 0.03)})
+    assert calm.observation_space.high[15] == 30.0
