@@ -21,7 +21,7 @@ from numba import njit
 from auv_gym.dynamics import STATE
 from auv_gym.guidance import body_errors_trig
 from auv_gym.integrator import config_record
-from auv_gym.observation import CURVATURE_BOUND, EXTRA_HEAD, PREVIEW_FEATURES
+from auv_gym.observation import CURVATURE_BOUND, EXTRA_HEAD, PREVIEW_FEATURES, PREVIEW_MARGIN
 from auv_gym.paths import path_eval, path_third_derivative
 
 __all__ = ["curvature_torsion", "extend_rows", "extended_path"]
@@ -87,10 +87,22 @@ def extend_rows(rows, state, current, last_action, row, kinds, pdata, cfgs, task
         o[3], o[4], o[5] = last_action[i, 0], last_action[i, 1], last_action[i, 2]
         kind, data, end = kinds[r], pdata[r], tasks[r, s_end_column]
         s = st[STATE.s]
+        prev = extended_path(kind, data, s, end)
         for k in range(points):
             half = 0.5 * spacing / _tangent_norm(kind, data, s, end)
-            s = s + spacing / _tangent_norm(kind, data, s + half, end)
-            p = extended_path(kind, data, s, end)
+            step = spacing / _tangent_norm(kind, data, s + half, end)
+            p = extended_path(kind, data, s + step, end)
+            # Where ‖p′‖ changes fast within a step (a spline's near-reversal) the midpoint
+            # rule can jump far along the path: halve the step until its chord is at most
+            # the margin the observation bound allows, so every point stays in its bound.
+            for _ in range(64):
+                dx, dy, dz = p[0] - prev[0], p[1] - prev[1], p[2] - prev[2]
+                if dx * dx + dy * dy + dz * dz <= (PREVIEW_MARGIN * spacing) ** 2:
+                    break
+                step *= 0.5
+                p = extended_path(kind, data, s + step, end)
+            s = s + step
+            prev = p
             ex, ey, ez = body_errors_trig(p[0] - st[STATE.x], p[1] - st[STATE.y],
                                           p[2] - st[STATE.z], cth, sth, cps, sps)  # fmt: skip
             kappa, tau = curvature_torsion(p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])

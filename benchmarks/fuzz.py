@@ -244,11 +244,6 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
         kw["random_noise"] = float(rng.uniform(0.0, MAX_RANDOM_NOISE))
     variant = str(rng.choice(list(VARIANT_IDS)))
     kw.update(VARIANTS[variant])
-    if kw.get("observation") == "preview" and "current" in kw:
-        # The preview's ground-speed entries are bounded (±30 m/s) but a Gauss–Markov current
-        # is not: its reset draw can fall outside and reset raises. Until the preview bounds
-        # the current, preview configurations get a steady current.
-        kw["current"] = CurrentConfig(mean=kw["current"].mean)
     random_path = isinstance(kw["path"], PathDistribution) or kw["path"] == "random"
     if random_path:  # drawn paths turn within MAX_TURN_RATE: any u_desired fits
         turn = 0.0

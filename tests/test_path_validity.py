@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 import auv_gym  # registers the ids
 from auv_gym.config import SimConfig, path_turn_rates
+from auv_gym.dynamics import STATE
 from auv_gym.guidance import path_angles
 from auv_gym.observation import PATH_RATE_BOUND
 from auv_gym.path_bounds import _kernel_rates, min_tangent_squared, spline_turn_rates
@@ -90,6 +91,21 @@ def test_the_turn_rate_check_still_accepts_a_path_just_within_the_bound():
     SimConfig.from_kwargs(path=spline, u_desired=u_max * (1 - 1e-9))
     with pytest.raises(ValueError, match="path turns at up to"):
         SimConfig.from_kwargs(path=spline, u_desired=u_max * 1.01)
+
+
+def test_the_preview_stays_in_its_bounds_at_a_near_reversal():
+    # Accepted at this u_desired (the turn-rate check allows 1e9 rad/m). Before: with the
+    # virtual point just before the reversal, the preview's midpoint march stepped by
+    # Δs/‖p′‖ with ‖p′‖ nearly 0 and put a point 3 km away, outside the space (4 of these 601
+    # virtual-point positions; the fuzz raised at a reset inside step()).
+    path = [(0.0, 0.0, 0.0), (24.0, 0.0, 0.0), (-15.0, 0.0004, 0.0)]
+    env = gym.make("AUVPath3DPreview-v0", path=path, u_desired=1e-10)
+    env.reset(seed=0)
+    sim = env.unwrapped.sim
+    for s in np.linspace(20.0, 26.0, 601):  # the virtual point anywhere near the reversal
+        sim.state[0, STATE.s] = s
+        sim._extend(np.array([0]))
+        assert env.observation_space.contains(sim.observations()[0])
 
 
 # --- proven bounds -----------------------------------------------------------------------------
