@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     print(f"{'controller':<14} {'N':>6} {'threads':>8} {'steps/s':>12} {'µs/vehicle-step':>16} "
           f"{'saturated':>10}")  # fmt: skip
     max_threads = numba.config.NUMBA_NUM_THREADS
-    for name in ("fbsm", "backstepping"):
+    for name in ("fbsm", "backstepping", "pid_los"):
         sizes = ((1, 1), (64, 1), (args.vehicles, 1), (args.vehicles, min(2, max_threads)))
         for n, threads in sizes:
             steps = args.steps * (10 if n == 1 else 1 if n > 64 else 3)
@@ -101,7 +101,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
             results[f"{name}_n{n}_t{threads}"] = out["rate"]
             print(f"{name:<14} {n:>6} {threads:>8} {out['rate']:>12,.0f} "
                   f"{1e6 / out['rate']:>16.2f} {out['saturated']:>10.1%}")  # fmt: skip
-    for name in ("fbsm", "backstepping"):
+    for name in ("fbsm", "backstepping", "pid_los"):
         wall = episode_wall_time(name)
         results[f"{name}_episode_s"] = wall
         print(f"one 300-s {name} episode through gym.make (6000 steps): {wall:.2f} s wall")

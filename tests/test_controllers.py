@@ -23,6 +23,9 @@ NAMES = [
     "backstepping_ilos",
     "fbsm_colos",
     "backstepping_colos",
+    "pid_los",
+    "pid_ilos",
+    "pid_colos",
 ]
 
 
