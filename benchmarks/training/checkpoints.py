@@ -94,14 +94,19 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
 
 
 def export_agent(source: Path, target: Path) -> None:
-    """Copy an agent directory (model.zip, vecnormalize.npz, metadata.json) atomically.
+    """Copy an agent directory (model.zip, vecnormalize.npz, metadata.json and, when the run
+    wrote it, vecnormalize.pkl) atomically.
 
-    The pickled VecNormalize is left out: a shipped agent needs only the .npz statistics.
+    `controllers.ppo.load_policy` needs only the .npz statistics; the pickled VecNormalize is
+    what SB3's `VecNormalize.load` and RL Zoo's `enjoy` read, so the exported folder works with
+    them as it is.
     """
 
     def fill(tmp: Path) -> None:
         for name in (MODEL_FILE, STATS_FILE, METADATA_FILE):
             shutil.copy2(source / name, tmp / name)
+        if (source / VECNORM_FILE).is_file():
+            shutil.copy2(source / VECNORM_FILE, tmp / VECNORM_FILE)
 
     write_folder_atomic(target, fill)
 
