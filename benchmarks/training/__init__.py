@@ -15,8 +15,11 @@ with fixed seeds, and writes, under the run directory::
 Every agent directory is complete on its own (model, normalisation statistics, metadata with the
 command line, configuration, seed, package versions, git commit, wall time and the observation
 layout) and written atomically, so a killed run never leaves a half-written agent.
-`resume=True` restarts from the newest checkpoint with `reset_num_timesteps=False`, losing at
-most one checkpoint interval. The agents load with `controllers.ppo.load_policy`.
+Checkpoints are taken where SB3 starts a rollout and hold the whole training state
+(training_state.pkl: random generators, gSDE noise, the environments mid-episode, VecNormalize's
+running return, the schedules); `resume=True` continues from the newest one bit for bit (single
+thread, same machine and package versions), after a pause (`stop_at`) or a kill. A kill loses at
+most one checkpoint interval of compute, never exactness. The agents load with `controllers.ppo.load_policy`.
 
 Modules: `config` (YAML files, `ALGORITHMS`: PPO, SAC), `train` (`TrainOptions`, `train`: one
 algorithm, one seed, one run directory), `seeds` (`train_seeds`: N seeds, one run directory
