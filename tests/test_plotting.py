@@ -106,9 +106,13 @@ def test_figures_draw_the_data(episodes, tmp_path):
     pixels = imread(file)[..., :3]
     colours = np.unique((pixels.reshape(-1, 3) * 255).astype(np.uint8), axis=0)
     assert colours.shape[0] > 50  # anti-aliased lines and text in several colours
-    blue = np.array([0x1F, 0x77, 0xB4]) / 255.0  # matplotlib "C0", the first controller
-    near_blue = np.all(np.abs(pixels - blue) < 0.05, axis=-1)
-    assert near_blue.sum() > 300  # three panels of 20-s error curves
+    from matplotlib.colors import to_rgb
+
+    from auv_gym.plotting import policy_colours
+
+    colour = np.array(to_rgb(policy_colours(["plain"])["plain"]))  # the policy's own colour
+    near = np.all(np.abs(pixels - colour) < 0.05, axis=-1)
+    assert near.sum() > 300  # three panels of 20-s error curves
 
 
 def test_adaptive_figure_only_with_norms(episodes, tmp_path):
