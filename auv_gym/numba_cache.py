@@ -33,7 +33,14 @@ from pathlib import Path
 
 from numba.core import caching, config
 
-__all__ = ["NumbaCacheWarning", "cache_directory", "register_package", "sources_digest"]
+__all__ = [
+    "NumbaCacheWarning",
+    "cache_directory",
+    "kernels_are_cached",
+    "mark_kernels_cached",
+    "register_package",
+    "sources_digest",
+]
 
 NUMBA_MARKER = b"numba"  # files without it cannot hold a kernel
 
@@ -132,6 +139,33 @@ def _choose_directory(package: Path) -> str:
         )
     _DIRECTORIES[package] = chosen
     return chosen
+
+
+def _marker(package_dir: str | Path) -> Path | None:
+    package = Path(package_dir).resolve()
+    if package not in _PACKAGES:
+        return None
+    return Path(_choose_directory(package)) / f".compiled-{_digest(_PACKAGES[package])[:16]}"
+
+
+def kernels_are_cached(*package_dirs: str | Path) -> bool:
+    """True if a command already ran to its end with these packages' current sources, so their
+    kernels load from the cache instead of compiling (20–60 s); a hint for a progress message,
+    not a guarantee (a command may use kernels an earlier one did not)."""
+    markers = [_marker(p) for p in package_dirs]
+    return all(m is not None and m.is_file() for m in markers)
+
+
+def mark_kernels_cached(*package_dirs: str | Path) -> None:
+    """Record that a command ran to its end with the current sources (`kernels_are_cached`)."""
+    for package in package_dirs:
+        marker = _marker(package)
+        if marker is not None:
+            try:
+                marker.parent.mkdir(parents=True, exist_ok=True)
+                marker.touch()
+            except OSError:  # a read-only cache: the message shows again, nothing fails
+                pass
 
 
 class _PackageCacheLocator(caching._CacheLocator):

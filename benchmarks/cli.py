@@ -20,6 +20,9 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
+
+from auv_gym.numba_cache import kernels_are_cached, mark_kernels_cached
 
 __all__ = ["COMMANDS", "SPEED", "HelpFormatter", "main"]
 
@@ -33,6 +36,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "compare": ("benchmarks.compare", "policies on seeded scenarios: tables and figures"),
     "suite": ("benchmarks.evaluate_suite", "every policy and seed on the test suite: statistics"),
     "train": ("benchmarks.train_ppo", "train or evaluate a PPO agent (rl extra)"),
+    "train-seeds": (
+        "benchmarks.train_seeds",
+        "N training seeds, selection on validation (rl extra)",
+    ),
     "paper-figures": ("benchmarks.paper_figures", "the paper's Figs. 3-9, FBSM vs backstepping"),
     "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),
     "video": ("benchmarks.video", "an episode's video: 3-D track and errors (video extra)"),
@@ -70,17 +77,19 @@ def _current_folder_importable() -> None:
         sys.path.append(here)
 
 
-def _run(module: str, prog: str, argv: list[str]) -> None:
-    """``module.main(argv)`` with ``prog`` as the program name of its help and errors."""
+def _run(module: str, prog: str, argv: list[str]) -> int:
+    """``module.main(argv)`` with ``prog`` as the program name of its help and errors; its exit
+    code (a ``main`` that returns one instead of raising SystemExit)."""
     saved = sys.argv[0]
     sys.argv[0] = prog  # argparse names the program after sys.argv[0]
     try:
-        importlib.import_module(module).main(argv)
+        code = importlib.import_module(module).main(argv)
     finally:
         sys.argv[0] = saved
+    return code if isinstance(code, int) else 0
 
 
-def _speed(argv: list[str]) -> None:
+def _speed(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(
         prog="auv-gym speed",
         description="Speed benchmarks; each prints its figures (and the machine they ran on).\n\n"
@@ -91,29 +100,65 @@ def _speed(argv: list[str]) -> None:
     parser.add_argument("benchmark", choices=list(SPEED), help="which benchmark to run")
     parser.add_argument("options", nargs=argparse.REMAINDER, help="that benchmark's options")
     args = parser.parse_args(argv)
-    _run(SPEED[args.benchmark][0], f"auv-gym speed {args.benchmark}", args.options)
+    return _run(SPEED[args.benchmark][0], f"auv-gym speed {args.benchmark}", args.options)
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("auv-gym")
+    except PackageNotFoundError:  # run from a source tree without installing
+        import auv_gym
+
+        return auv_gym.__version__
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="auv-gym",
+        description="3-D path following of an underactuated AUV: benchmark, training, figures, "
+        "speed and video.",
+        epilog="`auv-gym COMMAND --help` lists a command's options with their defaults.",
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"auv-gym {_version()}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands",
+                                     required=True)  # fmt: skip
+    for name, (_, text) in COMMANDS.items():
+        # Each command parses its own options (its module's main): the subparser only names it.
+        commands.add_parser(name, help=text, add_help=False)
+    return parser
+
+
+def _compile_notice() -> Path | None:
+    """Say, once per install or edit of the physics, why the first episodes take a while."""
+    import auv_gym
+    import controllers
+
+    packages = (Path(auv_gym.__file__).parent, Path(controllers.__file__).parent)
+    if kernels_are_cached(*packages):
+        return None
+    notice = ("auv-gym: compiling the simulation kernels (first run after an install or an "
+              "edit of the physics, about 20-60 s; cached afterwards)")  # fmt: skip
+    print(notice, file=sys.stderr, flush=True)
+    return packages
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``auv-gym COMMAND [options]``; errors in the arguments end with one line, exit 2."""
     args = list(sys.argv[1:] if argv is None else argv)
-    parser = argparse.ArgumentParser(
-        prog="auv-gym",
-        description="3-D path following of an underactuated AUV: benchmark, training, figures, "
-        "speed and video.\n\ncommands:\n" + _table(COMMANDS),
-        epilog="`auv-gym COMMAND --help` lists a command's options with their defaults.",
-        formatter_class=HelpFormatter,
-    )
-    parser.add_argument("command", choices=list(COMMANDS), help="what to run")
-    parser.add_argument("options", nargs=argparse.REMAINDER, help="the command's options")
-    parsed = parser.parse_args(args[:1] if args[:1] not in (["-h"], ["--help"]) else args)
-    command, rest = parsed.command, args[1:]
+    parsed, rest = _parser().parse_known_args(args[:1])
+    command, rest = parsed.command, [*rest, *args[1:]]
     _current_folder_importable()
+    compiled = None
     try:
         if command == "speed":
-            _speed(rest)
+            code = _speed(rest)
         else:
-            _run(COMMANDS[command][0], f"auv-gym {command}", rest)
+            if not {"-h", "--help"} & set(rest):
+                compiled = _compile_notice()
+            code = _run(COMMANDS[command][0], f"auv-gym {command}", rest)
     except ModuleNotFoundError as error:
         extra = EXTRAS.get((error.name or "").split(".")[0])
         if extra is None:
@@ -129,6 +174,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if isinstance(stop.code, int) and stop.code != 0:
             return stop.code
         raise
+    if code:
+        return code
+    if compiled:
+        mark_kernels_cached(*compiled)
     return 0
 
 

@@ -128,7 +128,7 @@ def test_compare_runs_from_another_folder_on_the_base_install(installed, tmp_pat
     assert len(bad.stderr.strip().splitlines()) == 1
 
 
-HELP_COMMANDS = [["compare"], ["suite"], ["paper-figures"], ["train"],
+HELP_COMMANDS = [["compare"], ["suite"], ["paper-figures"], ["train"], ["train-seeds"],
                  *(["speed", name] for name in SPEED), ["video"]]  # fmt: skip
 
 

@@ -1,0 +1,50 @@
+"""The `auv-gym` command behaves like the tools people know: --version, one command listing,
+exit codes of the commands it runs, and a word about compiling on the first run."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from auv_gym import __version__
+from benchmarks import cli
+
+
+def test_version_and_one_listing_of_the_commands(capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--version"])
+    assert stop.value.code == 0 and capsys.readouterr().out.strip() == f"auv-gym {__version__}"
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--help"])
+    listing = capsys.readouterr().out
+    assert stop.value.code == 0
+    for name in cli.COMMANDS:
+        assert len(re.findall(rf"^ +{name}\b(?!-)", listing, re.M)) == 1, name  # listed once
+    with pytest.raises(SystemExit) as stop:
+        cli.main([])
+    assert stop.value.code == 2 and "required: COMMAND" in capsys.readouterr().err
+
+
+def test_a_commands_returned_exit_code_is_the_commands(capsys):
+    # train-seeds returns 2 (instead of raising) for a bad option: the command must say so too.
+    assert cli.main(["train-seeds", "--seeds", "0", "--out", "unused"]) == 2
+    assert "--seeds" in capsys.readouterr().err
+
+
+def test_first_run_says_it_is_compiling_and_remembers_when_done(monkeypatch, capsys):
+    marked = []
+    monkeypatch.setattr(cli, "kernels_are_cached", lambda *packages: False)
+    monkeypatch.setattr(cli, "mark_kernels_cached", lambda *packages: marked.append(packages))
+    monkeypatch.setattr(cli, "_run", lambda module, prog, argv: 0)
+    assert cli.main(["compare", "--seeds", "1"]) == 0
+    assert "compiling the simulation kernels" in capsys.readouterr().err
+    assert len(marked) == 1  # remembered after a command that ran to its end
+    monkeypatch.setattr(cli, "_run", lambda module, prog, argv: 2)
+    assert cli.main(["compare", "--seeds", "1"]) == 2 and len(marked) == 1  # not after a failure
+    capsys.readouterr()
+    cli.main(["compare", "--help"])
+    assert "compiling" not in capsys.readouterr().err  # help compiles nothing
+    monkeypatch.setattr(cli, "kernels_are_cached", lambda *packages: True)
+    monkeypatch.setattr(cli, "_run", lambda module, prog, argv: 0)
+    assert cli.main(["compare"]) == 0 and "compiling" not in capsys.readouterr().err
