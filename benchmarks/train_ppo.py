@@ -1,9 +1,11 @@
-"""Train a PPO baseline on AUVPath3D-v0 from an RL-Zoo hyper-parameter file.
+"""Train a PPO agent from an RL-Zoo hyper-parameter file (default: the paper helix under the
+2.0 m/s surge limit, `AUVPath3DSpeedLimit-v0`).
 
-The shipped agent `benchmarks/agents/ppo_helix` was produced by::
+The shipped agent `benchmarks/agents/ppo_helix` (the paper's unlimited `AUVPath3D-v0`) was
+produced by::
 
     python -m benchmarks.train_ppo --config benchmarks/hyperparams/ppo.yml --seed 1 \\
-        --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
+        --env-id AUVPath3D-v0 --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
         --curve benchmarks/results/ppo_learning_curve
 
 An interrupted run continues from its newest checkpoint (step counter intact) with the same
@@ -49,19 +51,22 @@ from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seeds import MAX_SEED
 from benchmarks.training.train import check_options
+from controllers.ppo import METADATA_FILE
 
 VEC_ENVS = ("auto", "native", "dummy")  # `benchmarks.training.train.make_training_env`
 FIXED = {"algo": "ppo", "eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 # One-line help per option (the TrainOptions field comments, for the CLI).
 HELP = {
     "config": "RL-Zoo hyper-parameter YAML (top-level key = env id)",
-    "env_id": "Gymnasium id and YAML key",
+    "env_id": "Gymnasium id and YAML key (AUVPath3D-v0: the paper's task without a speed limit)",
     "out": "run directory (checkpoints, best/, final/, evaluations.csv, tb/)",
     "seed": "seed of torch, numpy and the training environments",
     "n_timesteps": "override the config's n_timesteps",
-    "stop_at": "pause at this many env steps (schedules still run over n_timesteps; --resume "
-    "with a larger --stop-at continues)",
-    "resume": "continue from the newest checkpoint in --out (num_timesteps kept)",
+    "stop_at": "pause at the first rollout start at or after this many env steps (PPO: a "
+    "multiple of n_steps x n_envs); schedules still run over n_timesteps; a later --resume "
+    "continues bit for bit as if never paused",
+    "resume": "continue from the newest checkpoint in --out; exact (same weights and "
+    "evaluations as an uninterrupted run) after a pause or a kill",
     "checkpoint_freq": "env steps between checkpoints (a kill loses at most this many)",
     "keep_checkpoints": "number of newest checkpoints kept on disk",
     "eval_freq": "env steps between paper-scenario evaluations (0: none)",
@@ -156,6 +161,32 @@ def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
             writable_location(Path(extra.curve).with_suffix(suffix), "--curve", folder=False)
 
 
+def training_report(out: Path, export: str | None = None) -> str:
+    """One summary line of a finished (or paused) run: the best evaluation, its step, score and
+    terminations, and where the agent went; a loud warning when the best agent is the untrained
+    network of step 0 (every later evaluation scored worse), which an export would ship."""
+    best_file = Path(out) / "best" / METADATA_FILE
+    if not best_file.is_file():
+        return (f"training: no evaluation ran (--eval-freq 0); the final agent is {out}/final"
+                + (f", exported to {export}" if export else ""))  # fmt: skip
+    best = json.loads(best_file.read_text()).get("best", {})
+    summary, step = best.get("summary", {}), int(best.get("num_timesteps", 0))
+    line = (
+        f"training: best evaluation at step {step:,}: mean RMS distance "
+        f"{summary.get('rms_distance_mean', float('nan')):.4g} m, "
+        f"{summary.get('n_terminated', '?')} of {summary.get('n_episodes', '?')} episodes "
+        f"ended early; " + (f"exported to {export}" if export else f"agent in {out}/best")
+    )
+    if step == 0:
+        line += (
+            "\nWARNING: the best agent is the UNTRAINED network of step 0 (no later evaluation "
+            "scored better)"
+            + (f"; {export} holds it" if export else "")
+            + ". Train longer, or check the reward and the evaluation episodes."
+        )
+    return line
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     opts, extra = parse_args(args)
@@ -175,6 +206,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         with locked_folder(prog, Path(opts.out)):
             out = train(opts, argv=["benchmarks/train_ppo.py", *args])
         print(f"run directory: {out}")
+        print(training_report(out, opts.export), file=sys.stderr)
     if extra.curve:
         plot_learning_curve(Path(opts.out), Path(extra.curve))
 

@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", default=None,
                    help="RL-Zoo YAML (default benchmarks/hyperparams/<algo>.yml)")  # fmt: skip
     p.add_argument("--env-id", default="AUVPath3DSpeedLimit-v0",
-                   help="Gymnasium id and YAML key (v1: the 2.0 m/s surge limit)")  # fmt: skip
+                   help="Gymnasium id and YAML key (default: the 2.0 m/s surge limit)")  # fmt: skip
     p.add_argument("--seeds", required=True, help="count N, range a-b or list a,b,c")
     p.add_argument("--workers", type=int, default=2, help="seeds trained at once")
     p.add_argument("--backend", choices=("local", "ray"), default="local")
@@ -64,9 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--n-timesteps", type=_number, default=None,
                    help="env steps per seed (default: the config's)")  # fmt: skip
     p.add_argument("--stop-at", type=_number, default=None,
-                   help="pause every seed at this many env steps; schedules still run over "
-                   "--n-timesteps, and a later --resume with a larger --stop-at continues "
-                   "them exactly")  # fmt: skip
+                   help="pause every seed at the first rollout start at or after this many "
+                   "env steps; schedules still run over --n-timesteps, and a later --resume "
+                   "continues them bit for bit as if never paused")  # fmt: skip
     p.add_argument("--eval-seeds", default=",".join(map(str, EVAL_SEEDS)),
                    help="validation seeds (disjoint from the test seeds 0-9)")  # fmt: skip
     p.add_argument("--eval-duration", type=float, default=300.0, help="evaluation episode [s]")

@@ -48,3 +48,28 @@ def test_first_run_says_it_is_compiling_and_remembers_when_done(monkeypatch, cap
     monkeypatch.setattr(cli, "kernels_are_cached", lambda *packages: True)
     monkeypatch.setattr(cli, "_run", lambda module, prog, argv: 0)
     assert cli.main(["compare"]) == 0 and "compiling" not in capsys.readouterr().err
+
+
+def test_training_ends_with_a_summary_and_warns_about_an_untrained_best(tmp_path):
+    import json
+
+    from benchmarks.train_ppo import training_report
+
+    best = tmp_path / "run" / "best"
+    best.mkdir(parents=True)
+    summary = {"rms_distance_mean": 0.4321, "n_terminated": 1, "n_episodes": 32}
+    (best / "metadata.json").write_text(
+        json.dumps({"best": {"num_timesteps": 250_000, "summary": summary}})
+    )
+    line = training_report(tmp_path / "run", "agents/mine")
+    assert line == (
+        "training: best evaluation at step 250,000: mean RMS distance 0.4321 m, 1 of 32 "
+        "episodes ended early; exported to agents/mine"
+    )
+    (best / "metadata.json").write_text(
+        json.dumps({"best": {"num_timesteps": 0, "summary": summary}})
+    )
+    assert "WARNING: the best agent is the UNTRAINED network of step 0" in training_report(
+        tmp_path / "run", "agents/mine"
+    )
+    assert "no evaluation ran" in training_report(tmp_path / "other")

@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SHIPPED = ROOT / "benchmarks" / "agents" / "ppo_helix"
 
 TINY_YAML = """\
-AUVPath3D-v0:
+AUVPath3D-v0: &tiny
   n_envs: 2
   n_timesteps: 256
   policy: MlpPolicy
@@ -39,6 +39,7 @@ AUVPath3D-v0:
     randomize_start: true
     max_time: 5.0
     reward_weights: {distance: 2.0}
+AUVPath3DSpeedLimit-v0: *tiny  # the training default
 """
 
 

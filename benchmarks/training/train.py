@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import auv_gym
-from auv_gym import ENV_ID, VARIANTS
+from auv_gym import ENV_ID, SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.training.checkpoints import (
@@ -58,7 +58,9 @@ class TrainOptions:
 
     algo: str = "ppo"  # a key of benchmarks.training.config.ALGORITHMS
     config: str = str(HERE / "hyperparams" / "ppo.yml")  # RL-Zoo hyper-parameter file
-    env_id: str = ENV_ID  # top-level key of the config and Gymnasium id
+    # Top-level key of the config and Gymnasium id; the surge-limited task by default, so that a
+    # new agent cannot win by sprinting at speeds a REMUS cannot reach (docs/results.md).
+    env_id: str = SPEED_LIMIT_ENV_ID
     out: str = "runs/ppo_helix"  # run directory
     seed: int = 0  # seeds torch, numpy and the training environments
     n_timesteps: int | None = None  # override the config's n_timesteps
