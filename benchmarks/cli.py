@@ -163,10 +163,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         extra = EXTRAS.get((error.name or "").split(".")[0])
         if extra is None:
             raise
-        raise SystemExit(
-            f"auv-gym {command}: needs {error.name}, from the {extra!r} extra: "
-            f"pip install 'auv-gym[{extra}]'"
-        ) from None
+        print(f"auv-gym {command}: needs {error.name}, from the {extra!r} extra: "
+              f"pip install 'auv-gym[{extra}]'", file=sys.stderr)  # fmt: skip
+        return 2
     except (ValueError, FileNotFoundError) as error:
         print(f"auv-gym {command}: error: {error}", file=sys.stderr)
         return 2

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -26,6 +27,7 @@ __all__ = [
     "AGENTS_DIR",
     "DEFAULT_AGENT",
     "SHIPPED_AGENTS",
+    "MissingExtraError",
     "PolicySpec",
     "agent_run",
     "build_policy",
@@ -49,6 +51,19 @@ SHIPPED_AGENTS = {
 }
 DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
 AGENT_PREFIX = "ppo:"
+RL_MODULES = ("torch", "stable_baselines3")  # what loading an agent imports (the rl extra)
+
+
+def _importable(module: str) -> bool:
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        return False
+    return True
+
+
+class MissingExtraError(ValueError):
+    """A policy needs an optional extra that is not installed (a usage error: exit code 2)."""
 
 
 @dataclass(frozen=True)
@@ -89,6 +104,12 @@ def check_policy_spec(spec: str) -> PolicySpec:
     """
     parsed = PolicySpec.parse(spec)
     if parsed.agent is not None:
+        missing = [m for m in RL_MODULES if not _importable(m)]
+        if missing:  # before any episode: a base install fails here, not after the others ran
+            raise MissingExtraError(
+                f"policy {spec!r}: running an agent needs {', '.join(missing)}, from the 'rl' "
+                "extra: pip install 'auv-gym[rl]'"
+            )
         if not parsed.agent.exists() and spec in SHIPPED_AGENTS:
             raise FileNotFoundError(
                 f"policy {spec!r}: the agent is not shipped (yet): {parsed.agent} does not exist"

@@ -49,15 +49,20 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="python -m benchmarks.train_seeds", description=__doc__.split("\n\n")[0])
-    p.add_argument("--algo", choices=sorted(ALGORITHMS), default="ppo")
+    from benchmarks.arguments import program_name
+    from benchmarks.cli import HelpFormatter
+
+    p = _Parser(prog=program_name("benchmarks.train_seeds"), description=__doc__.split("\n\n")[0],
+                formatter_class=HelpFormatter)  # fmt: skip
+    p.add_argument("--algo", choices=sorted(ALGORITHMS), default="ppo", help="RL algorithm")
     p.add_argument("--config", default=None,
                    help="RL-Zoo YAML (default benchmarks/hyperparams/<algo>.yml)")  # fmt: skip
     p.add_argument("--env-id", default="AUVPath3DSpeedLimit-v0",
                    help="Gymnasium id and YAML key (default: the 2.0 m/s surge limit)")  # fmt: skip
     p.add_argument("--seeds", required=True, help="count N, range a-b or list a,b,c")
     p.add_argument("--workers", type=int, default=2, help="seeds trained at once")
-    p.add_argument("--backend", choices=("local", "ray"), default="local")
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help="local processes or a Ray cluster")  # fmt: skip
     p.add_argument("--address", default=None, help="Ray cluster address (host:port)")
     p.add_argument("--out", required=True, help="multi-seed run directory")
     p.add_argument("--resume", action="store_true", help="continue every unfinished seed")
@@ -77,13 +82,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=100_000,
         help="env steps between checkpoints (a kill loses at most this many)",
     )
-    p.add_argument("--keep-checkpoints", type=int, default=2)
+    p.add_argument("--keep-checkpoints", type=int, default=2,
+                   help="newest checkpoints kept per seed")  # fmt: skip
     p.add_argument("--task-set", default="paper",
                    help=f"validation episodes: {sorted(TASK_SETS)} or a validation set of "
                    "benchmarks/tasks.toml (e.g. 'validation')")  # fmt: skip
     p.add_argument("--eval-episodes", type=int, default=DEFAULT_EVAL_EPISODES,
                    help="validation episodes taken from a task set (its first seeds)")  # fmt: skip
-    p.add_argument("--vec-env", default="auto", choices=("auto", "native", "dummy"))
+    p.add_argument("--vec-env", default="auto", choices=("auto", "native", "dummy"),
+                   help="training envs: native vector env, SB3 DummyVecEnv, or auto")  # fmt: skip
     p.add_argument("--threads", type=int, default=1, help="torch/numba threads per seed")
     p.add_argument("--export", default=None, help="copy the selected agent here")
     p.add_argument(

@@ -73,3 +73,26 @@ def test_training_ends_with_a_summary_and_warns_about_an_untrained_best(tmp_path
         tmp_path / "run", "agents/mine"
     )
     assert "no evaluation ran" in training_report(tmp_path / "other")
+
+
+def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, tmp_path, capsys):
+    import importlib
+
+    from benchmarks import compare, policies
+
+    real = importlib.import_module
+
+    def without_torch(name, *args):
+        if name == "torch":
+            raise ModuleNotFoundError("No module named 'torch'", name="torch")
+        return real(name, *args)
+
+    monkeypatch.setattr(importlib, "import_module", without_torch)
+    monkeypatch.setattr(compare, "run_jobs", lambda *a, **k: pytest.fail("an episode ran"))
+    with pytest.raises(policies.MissingExtraError, match=r"pip install 'auv-gym\[rl\]'"):
+        policies.check_policy_spec("ppo")
+    code = cli.main(["compare", "--policies", "fbsm,ppo", "--scenarios", "paper",
+                     "--seeds", "1", "--out", str(tmp_path / "out")])  # fmt: skip
+    assert code == 2
+    assert "running an agent needs torch, from the 'rl' extra" in capsys.readouterr().err
+    assert policies.check_policy_spec("fbsm").kind == "classical"  # classical ones still run

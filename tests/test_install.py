@@ -106,7 +106,7 @@ def test_help_lists_every_command_with_defaults(installed, tmp_path: Path) -> No
     # Training itself needs the rl extra: one line that names it, not a traceback.
     train = _run([str(bin_dir / "auv-gym"), "train", "--out", "run", "--n-timesteps", "64"],
                  tmp_path, env)  # fmt: skip
-    assert train.returncode == 1 and "pip install 'auv-gym[rl]'" in train.stderr
+    assert train.returncode == 2 and "pip install 'auv-gym[rl]'" in train.stderr
     assert "Traceback" not in train.stderr and not (tmp_path / "run").exists()
 
 
@@ -147,3 +147,15 @@ def test_every_option_shows_its_default(argv: list[str], capsys) -> None:
     assert len(options) > 1
     for block in options[1:]:
         assert re.search(r"\(default:\s", block), f"no default shown for {block.split()[0]}"
+
+
+def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
+    installed, tmp_path: Path
+) -> None:
+    bin_dir, env = installed
+    args = [str(bin_dir / "auv-gym"), "compare", "--policies", "fbsm,ppo", "--scenarios",
+            "paper", "--seeds", "1", "--duration", "4", "--out", "run"]  # fmt: skip
+    result = _run(args, tmp_path, env)
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert "from the 'rl' extra: pip install 'auv-gym[rl]'" in result.stderr
+    assert "Traceback" not in result.stderr and not (tmp_path / "run" / "episodes").exists()
