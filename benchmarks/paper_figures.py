@@ -29,6 +29,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from auv_gym import ENV_ID, VARIANTS
 from auv_gym.config import MAX_EPISODE_TIME, SimConfig
 from auv_gym.files import environment, jsonable, replace_outputs, write_json, write_text
 from auv_gym.rollout import policy_name
@@ -43,7 +44,7 @@ from benchmarks.arguments import (
     writable_folder,
 )
 from benchmarks.cli import HelpFormatter
-from benchmarks.policies import build_policy, check_policy_spec, policy_label
+from benchmarks.policies import build_policy, check_policy_spec, policy_env_id, policy_label
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
 DPI_RANGE = (20, 1200)  # figure resolution [dots per inch]
@@ -164,9 +165,14 @@ def make_figures(
     seed: int = 0,
     transient: float | None = None,
     dpi: int = 150,
+    env_ids: Mapping[str, str] | None = None,
     **env_kwargs: Any,
 ) -> dict[str, Any]:
     """Run each policy on the seeded episode, write figures, tables and trajectories to ``out``.
+
+    ``env_ids`` maps a label to the env id whose defaults its episode starts from (an agent's
+    training env, `benchmarks.policies.policy_env_id`; default `auv_gym.ENV_ID`), so a
+    speed-limited agent meets its limit here as in `compare` and the suite.
 
     Returns {"figures": stem → file, "files": the other files written, "metrics": label →
     metrics, "wall_time": label → s}.
@@ -186,7 +192,9 @@ def make_figures(
     trajectories, metrics, wall = {}, {}, {}
     for label, policy in policies.items():
         start = time.perf_counter()
-        tr = rollout(policy, seed, name=label, max_time=duration, **env_kwargs)
+        env_id = (env_ids or {}).get(label, ENV_ID)
+        tr = rollout(policy, seed, name=label, max_time=duration,
+                     **{**VARIANTS[env_id], **env_kwargs})  # fmt: skip
         wall[label] = time.perf_counter() - start
         trajectories[label] = tr
         metrics[label] = compute_metrics(tr, transient=window)
@@ -222,6 +230,8 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     start = time.perf_counter()
     try:  # agents are loaded here, before any episode: a corrupt one is a usage error
         policies = build_policies(args.policies, args.control_dt)
+        env_ids = {label: policy_env_id(spec)
+                   for spec, label in zip(args.policies, policies, strict=True)}  # fmt: skip
     except (ValueError, TypeError, OSError) as error:
         exit_with_usage_error(program_name("benchmarks.paper_figures"), error)
     # One run per folder: a second one is refused, a killed one's temporary files removed.
@@ -234,6 +244,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             transient=args.transient,
             dpi=args.dpi,
             control_dt=args.control_dt,
+            env_ids=env_ids,
             **args.env,
         )
         written = [*map(Path, result["figures"].values()), *result["files"]]

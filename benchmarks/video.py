@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
+from auv_gym import VARIANTS
 from auv_gym.config import SimConfig
 from benchmarks.arguments import ArgumentParser, program_name, usage_errors, writable_location
 from benchmarks.cli import HelpFormatter
-from benchmarks.policies import build_policy, check_policy_spec
+from benchmarks.policies import build_policy, check_policy_spec, policy_env_id
 from benchmarks.scenarios import SCENARIOS_FILE, load_scenarios, select
 
 
@@ -74,11 +75,13 @@ def check_args(args: argparse.Namespace) -> None:
         raise ValueError(f"--scenario must name one scenario, got {args.scenario!r}")
     scenario = scenarios[names[0]]
     args.env_kwargs = {**scenario.env, "max_time": float(args.duration)}
+    check_policy_spec(args.policy)
+    # An agent runs under the env id it records, as in `compare` and the suite.
+    args.env_id = policy_env_id(args.policy)
     try:
-        SimConfig.from_kwargs(**args.env_kwargs)
+        SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
     except (TypeError, ValueError) as error:
         raise ValueError(f"scenario {names[0]!r}: {error}") from None
-    check_policy_spec(args.policy)
     control_dt = float(args.env_kwargs.get("control_dt", 0.05))
     args.policy_object = build_policy(args.policy, control_dt, scenario.controller)
     writable_location(args.out, "--out", folder=False)
@@ -115,8 +118,9 @@ def record(
     every: int = 5,
     fps: int = 20,
     progress: bool = True,
+    env_id: str = "AUVPath3D-v0",
 ) -> dict[str, float]:
-    """Run one episode of ``policy`` and write its video to ``out`` atomically.
+    """Run one episode of ``policy`` under ``env_id`` and write its video to ``out`` atomically.
 
     Returns frames, episode time [s], wall time [s] and the reason the episode ended.
     """
@@ -126,7 +130,7 @@ def record(
 
     import auv_gym  # noqa: F401  (registers the env)
 
-    env = gym.make("AUVPath3D-v0", render_mode="rgb_array", **env_kwargs).unwrapped
+    env = gym.make(env_id, render_mode="rgb_array", **env_kwargs).unwrapped
     steps = env.spec.max_episode_steps if env.spec else env.config.max_steps
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp.mp4")
@@ -171,7 +175,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     args = parse_args(argv)
     remove_stale_videos(args.out)
     result = record(args.policy_object, args.env_kwargs, args.out, args.seed, args.every,
-                    args.fps, progress=not args.quiet)  # fmt: skip
+                    args.fps, progress=not args.quiet, env_id=args.env_id)  # fmt: skip
     control_dt = float(args.env_kwargs.get("control_dt", 0.05))
     speedup = args.every * control_dt * args.fps
     print(f"wrote {args.out}: {result['frames']} frames at {args.fps} fps "

@@ -96,3 +96,35 @@ def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, t
     assert code == 2
     assert "running an agent needs torch, from the 'rl' extra" in capsys.readouterr().err
     assert policies.check_policy_spec("fbsm").kind == "classical"  # classical ones still run
+
+
+@pytest.mark.rl
+def test_video_runs_a_speed_limited_agent_under_its_own_env(tmp_path):
+    from benchmarks.video import parse_args
+
+    args = parse_args(["--policy", "ppo_helix_v1", "--out", str(tmp_path / "v.mp4")])
+    assert args.env_id == "AUVPath3DSpeedLimit-v0"  # recorded as AUVPath3D-v1, renamed
+    assert parse_args(["--policy", "fbsm", "--out", str(tmp_path / "f.mp4")]).env_id == (
+        "AUVPath3D-v0"
+    )
+
+
+def test_paper_figures_run_each_policy_under_its_env_id(tmp_path):
+    from benchmarks.paper_figures import make_figures
+    from tests.test_plotting import LOSPolicy
+
+    result = make_figures(
+        {"plain": LOSPolicy(), "limited": LOSPolicy()},
+        tmp_path,
+        duration=4.0,
+        seed=1,
+        dpi=30,
+        env_ids={"limited": "AUVPath3DSpeedLimit-v0"},
+    )
+    assert set(result["metrics"]) == {"plain", "limited"}
+    from auv_gym.trajectory import Trajectory
+
+    plain = Trajectory.load(tmp_path / "trajectories" / "plain.npz")
+    limited = Trajectory.load(tmp_path / "trajectories" / "limited.npz")
+    assert limited.metadata["env_kwargs"]["surge_limit"] == 2.0
+    assert plain.metadata["env_kwargs"].get("surge_limit", float("inf")) == float("inf")
