@@ -248,8 +248,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--out",
         type=Path,
-        default=Path("benchmarks/results/suite"),
-        help="output folder; a rerun with the same arguments resumes",
+        default=Path("out/suite"),
+        help="output folder; a rerun with the same arguments resumes (the committed results: "
+        "benchmarks/results/suite)",
     )
     parser.add_argument(
         "--stats-only",
