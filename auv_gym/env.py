@@ -225,9 +225,10 @@ class AUVPath3DEnv(gym.Env):
     Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
     in (0, 1e5] m, ω in [−1e3, 0) ∪ (0, 1e3] rad per unit s (ω > 0 a starboard, ω < 0 a port
     turn), |climb| ≤ 1e5 m per unit s (> 0 climbs), |p'| ≥ 1e-6; a `StraightLine` direction
-    non-zero; a `Spline` through 2 to 1000 distinct waypoints. The path's turn rate must keep the
+    non-zero; a `Spline` through 2 to 1000 distinct waypoints that never doubles back (|p'| ≥ 1e-6
+    everywhere). The path's turn rate must keep the
     virtual point's ψ̇_F and θ̇_F within their ±10 rad/s bounds for u_p ≤ 2u_D (checked exactly
-    for helix and line, at 64 points per spline segment).
+    for helix and line; for a spline by a proven bound over every segment, naming the waypoint).
 
     User paths: a list of (x, y, z) waypoints [m] (``path=[(0, 0, 5), (40, 10, 8), ...]``)
     becomes the natural cubic `Spline` through them, parameterised by chord length, ending at
