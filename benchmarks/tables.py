@@ -105,7 +105,8 @@ def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
     for scenario in scenarios:
         lines += ["", f"## {scenario}"]
         for group, metrics in SUMMARY_GROUPS.items():
-            lines += ["", f"{group}:", "", _group_table(cells, scenario, policies, metrics).rstrip()]
+            table = _group_table(cells, scenario, policies, metrics).rstrip()
+            lines += ["", f"{group}:", "", table]
     return "\n".join(lines).rstrip("\n") + "\n"
 
 

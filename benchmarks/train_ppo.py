@@ -78,7 +78,8 @@ HELP = {
     "update_threads": "torch threads of the gradient updates between rollouts (0: --threads); 2 "
     "speeds PPO's update up about 1.4x on an idle 2-core machine, slows it down on loaded cores",
     "adaptive_threads": "time the updates on --threads and on max(2, --update-threads) torch "
-    "threads, keep the faster and probe the other now and then (same weights bit for bit)",
+    "threads, keep the faster and probe the other now and then (the same weights up to float "
+    "rounding; bit for bit only where torch's kernels reduce alike on 1 and 2 threads)",
     "progress_bar": "show the progress bar (tqdm + rich)",
     "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
     "verbose": "SB3 verbosity; 1 also prints every evaluation",

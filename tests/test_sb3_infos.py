@@ -156,7 +156,9 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     assert 0 < r["total_per_s"] < min(r["collect_per_s"], r["update_per_s"])
 
 
-def test_update_threads_train_the_same_weights_bit_for_bit():
+def test_update_threads_train_the_same_weights_up_to_float_rounding():
+    """Bit for bit on some CPUs, not on all (torch's 2-thread kernels may sum in another
+    order): the training is the same, its float rounding may differ."""
     import torch
     from stable_baselines3 import PPO
 
@@ -175,7 +177,8 @@ def test_update_threads_train_the_same_weights_bit_for_bit():
             weights.append([p.detach().clone() for p in model.policy.parameters()])
     finally:
         torch.set_num_threads(before)
-    assert all(torch.equal(a, b) for a, b in zip(*weights, strict=True))
+    for a, b in zip(*weights, strict=True):
+        torch.testing.assert_close(a, b, rtol=1e-4, atol=1e-6)
 
 
 @pytest.mark.parametrize("two_threads_faster", [False, True])

@@ -19,7 +19,8 @@ Checkpoints are taken where SB3 starts a rollout and hold the whole training sta
 (training_state.pkl: random generators, gSDE noise, the environments mid-episode, VecNormalize's
 running return, the schedules); `resume=True` continues from the newest one bit for bit (single
 thread, same machine and package versions), after a pause (`stop_at`) or a kill. A kill loses at
-most one checkpoint interval of compute, never exactness. The agents load with `controllers.ppo.load_policy`.
+most one checkpoint interval of compute, never exactness. The agents load with
+`controllers.ppo.load_policy`.
 
 Modules: `config` (YAML files, `ALGORITHMS`: PPO, SAC), `train` (`TrainOptions`, `train`: one
 algorithm, one seed, one run directory), `seeds` (`train_seeds`: N seeds, one run directory

@@ -87,7 +87,8 @@ class TrainOptions:
     threads: int = 1  # torch intra-op and numba threads during training (restored after)
     # torch threads of the gradient updates between rollouts (0: `threads`). On an idle machine
     # two make PPO's update about 1.4x faster (the env waits then); on cores loaded by other jobs
-    # 15-50x slower. The trained weights are the same bit for bit (tests/test_sb3_infos.py).
+    # 15-50x slower. The trained weights are the same up to float rounding; bit for bit only
+    # where torch's kernels sum alike on 1 and 2 threads (tests/test_sb3_infos.py).
     update_threads: int = 0
     # Time the updates on `threads` and on max(2, update_threads) threads and keep the faster,
     # probing the other now and then (`callbacks.AdaptiveUpdateThreads`).
