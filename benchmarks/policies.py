@@ -3,7 +3,7 @@
 * a name of `controllers.CLASSICAL` ("fbsm", "backstepping", their presets): built with
   `controllers.make` for the scenario's control period and controller keyword arguments;
 * a name of `SHIPPED_AGENTS` ("ppo", "ppo_helix_v1", "ppo_generalist", "sac_generalist",
-  "ppo_residual", "ppo_preview"): the
+  "ppo_residual", "ppo_preview", "ppo_preview_net256"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
   (`controllers.ppo.load_policy`, PPO or SAC); a residual agent's base controller is built
@@ -48,6 +48,7 @@ SHIPPED_AGENTS = {
     "sac_generalist": "sac_generalist",
     "ppo_residual": "ppo_residual",
     "ppo_preview": "ppo_preview",
+    "ppo_preview_net256": "ppo_preview_net256",
 }
 DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
 AGENT_PREFIX = "ppo:"
