@@ -34,7 +34,17 @@ from auv_gym.observation import (
 )
 from auv_gym.path_bounds import Bound, spline_turn_rates
 from auv_gym.path_generator import PathDistribution
-from auv_gym.paths import HELIX, LINE, POSITION_BOUND, SPLINE, Path, Spline, make_path, path_eval
+from auv_gym.paths import (
+    HELIX,
+    LINE,
+    PATHS,
+    POSITION_BOUND,
+    SPLINE,
+    Path,
+    Spline,
+    make_path,
+    path_eval,
+)
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.task import (
     REWARD_TERMS,
@@ -119,7 +129,13 @@ def _path_from(path: object) -> Path | PathDistribution:
     fixed = isinstance(path, Mapping) and "kind" in path
     if not fixed and (isinstance(path, (PathDistribution, Mapping)) or path_is_random(path)):
         return PathDistribution.from_spec(path)  # type: ignore[arg-type]
-    return make_path(path)  # type: ignore[arg-type]
+    try:
+        return make_path(path)  # type: ignore[arg-type]
+    except ValueError as error:
+        if isinstance(path, str):  # the env also takes "random": list it with the others
+            names, with_random = str(sorted(PATHS)), str(sorted([*PATHS, "random"]))
+            raise ValueError(str(error).replace(names, with_random, 1)) from None
+        raise
 
 
 def _check_path(path: Path) -> None:
