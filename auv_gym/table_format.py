@@ -114,6 +114,8 @@ def format_mean_std(
     text = format_number(mean, significant, metric)
     if not (math.isfinite(mean) and math.isfinite(std)):
         return text
+    if "e" in text:  # a mean in scientific notation: its spread too ("6.77e-04 ± 6.8e-05")
+        return f"{text} ± {format_number(std, 2)}" if std else f"{text} ± 0"
     decimals = _decimals(float(f"{mean:.{significant - 1}e}"), significant) if mean else 0
     spread = round(std, decimals)
     if spread == 0:

@@ -48,6 +48,7 @@ def test_spread_to_the_means_last_decimal_and_no_float_noise():
     assert format_mean_std(0.01728, 3.5e-18) == "0.0173 ± 0"
     assert format_mean_std(987.8, 110.4) == "988 ± 110"
     assert format_mean_std(0.297, 0.0412) == "0.297 ± 0.041"
+    assert format_mean_std(6.77e-4, 6.8e-5) == "6.77e-04 ± 6.8e-05"  # one notation per cell
 
 
 def test_millimetres_where_metres_would_round_to_zero():
