@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -41,3 +43,32 @@ def test_an_agent_folder_without_the_pickle_exports_without_it(tmp_path):
         (run / name).write_bytes(b"x")
     export_agent(run, tmp_path / "agent")
     assert not (tmp_path / "agent" / VECNORM_FILE).exists()
+
+
+def test_a_pickle_rebuilt_from_the_stats_normalises_like_the_loader():
+    import gymnasium as gym
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_preview"
+    stats = np.load(agent / STATS_FILE)
+    pickle = agent / VECNORM_FILE
+    assert pickle.is_file()  # shipped: every agent folder loads in SB3 and RL Zoo as it is
+    venv = VecNormalize.load(str(pickle), DummyVecEnv([lambda: gym.make("AUVPath3DPreview-v0")]))
+    obs = venv.venv.reset()
+    expected = np.clip((obs - stats["mean"]) / np.sqrt(stats["var"] + stats["epsilon"]),
+                       -stats["clip_obs"], stats["clip_obs"])  # fmt: skip
+    np.testing.assert_allclose(venv.normalize_obs(obs), expected, rtol=1e-6, atol=1e-6)
+    assert not venv.training and not venv.norm_reward
+
+
+def test_rebuilding_the_pickle_is_deterministic(tmp_path):
+    import shutil
+
+    from benchmarks.training.checkpoints import write_vecnormalize_from_stats
+
+    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_helix"
+    copy = tmp_path / "agent"
+    shutil.copytree(agent, copy)
+    (copy / VECNORM_FILE).unlink(missing_ok=True)
+    first = write_vecnormalize_from_stats(copy).read_bytes()
+    assert write_vecnormalize_from_stats(copy).read_bytes() == first

@@ -48,6 +48,7 @@ __all__ = [
     "restore_random_state",
     "save_agent",
     "write_metadata",
+    "write_vecnormalize_from_stats",
 ]
 
 CHECKPOINTS = "checkpoints"  # folder of a run holding step_<num_timesteps>/ agent directories
@@ -109,6 +110,33 @@ def export_agent(source: Path, target: Path) -> None:
             shutil.copy2(source / VECNORM_FILE, tmp / VECNORM_FILE)
 
     write_folder_atomic(target, fill)
+
+
+def write_vecnormalize_from_stats(agent: Path, gamma: float = 0.99) -> Path:
+    """Write AGENT/vecnormalize.pkl from AGENT/vecnormalize.npz, for agents exported before the
+    pickle was: SB3's `VecNormalize.load` and RL Zoo then normalise observations exactly as
+    `controllers.ppo` does (mean, var, count, clip_obs, epsilon). The reward statistics, which
+    inference never uses, start fresh (``norm_reward`` off, ``training`` off)."""
+    import gymnasium as gym
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    stats = np.load(Path(agent) / STATS_FILE, allow_pickle=False)
+    mean, var = stats["mean"], stats["var"]
+
+    class _Shape(gym.Env):  # only the observation shape matters to VecNormalize
+        observation_space = gym.spaces.Box(-np.inf, np.inf, mean.shape, np.float32)
+        action_space = gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
+
+    venv = VecNormalize(DummyVecEnv([_Shape]), training=False, norm_obs=True, norm_reward=False,
+                        clip_obs=float(stats["clip_obs"]), gamma=gamma,
+                        epsilon=float(stats["epsilon"]))  # fmt: skip
+    venv.obs_rms = RunningMeanStd(shape=mean.shape)
+    venv.obs_rms.mean, venv.obs_rms.var = mean.astype(np.float64), var.astype(np.float64)
+    venv.obs_rms.count = float(stats["count"])
+    target = Path(agent) / VECNORM_FILE
+    venv.save(str(target))
+    return target
 
 
 def list_checkpoints(out: Path) -> list[tuple[int, Path]]:
