@@ -43,6 +43,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "paper-figures": ("benchmarks.paper_figures", "the paper's Figs. 3-9, FBSM vs backstepping"),
     "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),
     "video": ("benchmarks.video", "an episode's video: 3-D track and errors (video extra)"),
+    "docs": ("", "where the manual is (docs/*.md: model, design, usage, results)"),
 }
 # `auv-gym speed NAME` → (module, one-line description).
 SPEED: dict[str, tuple[str, str]] = {
@@ -103,6 +104,30 @@ def _speed(argv: list[str]) -> int:
     return _run(SPEED[args.benchmark][0], f"auv-gym speed {args.benchmark}", args.options)
 
 
+def docs_folder() -> Path | None:
+    """The manual's folder: installed with the package (``<prefix>/share/doc/auv-gym``), or
+    ``docs/`` of the source tree an editable install runs from; None if neither exists."""
+    installed = Path(sys.prefix) / "share" / "doc" / "auv-gym" / "docs"
+    source = Path(__file__).resolve().parents[1] / "docs"
+    return next((p for p in (installed, source) if (p / "model.md").is_file()), None)
+
+
+def _docs(argv: list[str]) -> int:
+    """Print the manual's folder and its pages (the help texts cite them as docs/<page>.md)."""
+    parser = argparse.ArgumentParser(prog="auv-gym docs", description=_docs.__doc__)
+    parser.parse_args(argv)
+    folder = docs_folder()
+    if folder is None:
+        print("auv-gym docs: error: no manual found (expected share/doc/auv-gym/docs under "
+              f"{sys.prefix}, or docs/ in the source tree)", file=sys.stderr)  # fmt: skip
+        return 2
+    print(folder)
+    for page in sorted(folder.glob("*.md")):
+        title = page.read_text(encoding="utf-8").lstrip().splitlines()[0].lstrip("# ").strip()
+        print(f"  {page.name:<16} {title}")
+    return 0
+
+
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -119,7 +144,8 @@ def _parser() -> argparse.ArgumentParser:
         prog="auv-gym",
         description="3-D path following of an underactuated AUV: benchmark, training, figures, "
         "speed and video.",
-        epilog="`auv-gym COMMAND --help` lists a command's options with their defaults.",
+        epilog="`auv-gym COMMAND --help` lists a command's options with their defaults; help "
+        "texts cite the manual as docs/<page>.md, which `auv-gym docs` finds.",
         formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"auv-gym {_version()}")
@@ -155,6 +181,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if command == "speed":
             code = _speed(rest)
+        elif command == "docs":
+            return _docs(rest)
         else:
             if not {"-h", "--help"} & set(rest):
                 compiled = _compile_notice()

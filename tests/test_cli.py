@@ -128,3 +128,12 @@ def test_paper_figures_run_each_policy_under_its_env_id(tmp_path):
     limited = Trajectory.load(tmp_path / "trajectories" / "limited.npz")
     assert limited.metadata["env_kwargs"]["surge_limit"] == 2.0
     assert plain.metadata["env_kwargs"].get("surge_limit", float("inf")) == float("inf")
+
+
+def test_docs_prints_the_manual_folder_and_its_pages(capsys):
+    from pathlib import Path
+
+    assert cli.main(["docs"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert (Path(lines[0]) / "model.md").is_file()
+    assert any(line.split()[0] == "results.md" for line in lines[1:])

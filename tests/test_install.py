@@ -159,3 +159,13 @@ def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
     assert result.returncode == 2, result.stderr[-2000:]
     assert "from the 'rl' extra: pip install 'auv-gym[rl]'" in result.stderr
     assert "Traceback" not in result.stderr and not (tmp_path / "run" / "episodes").exists()
+
+
+def test_the_installed_command_finds_the_manual(installed, tmp_path: Path) -> None:
+    bin_dir, env = installed
+    result = _run([str(bin_dir / "auv-gym"), "docs"], tmp_path, env)
+    assert result.returncode == 0, result.stderr
+    folder = Path(result.stdout.splitlines()[0])
+    assert bin_dir.parent in folder.parents  # installed with the package, not the source tree
+    assert (folder / "model.md").is_file() and (folder.parent / "README.md").is_file()
+    assert "model.md" in result.stdout and "usage.md" in result.stdout
