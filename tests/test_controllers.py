@@ -67,6 +67,8 @@ def test_batched_equals_per_row(name):
         for k, obs in enumerate(batch_obs):
             a, row_state = policy.predict(obs[row : row + 1], row_state)
             np.testing.assert_array_equal(a[0], batch_actions[k][row])
+        for key, value in state.items():  # the memory too (weights, filters, integrators)
+            np.testing.assert_array_equal(row_state[key][0], value[row], err_msg=key)
     big = observations(100)  # the threaded kernel gives the same numbers
     threaded, _ = policy.predict(big)
     serial = np.vstack([policy.predict(big[i : i + 1])[0] for i in range(100)])

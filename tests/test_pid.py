@@ -9,29 +9,15 @@ import numpy as np
 import pytest
 
 import controllers
-from auv_gym import OBS_INDEX
 from auv_gym.metrics import compute_metrics
-from auv_gym.observation import OBS_DIM
 from auv_gym.rollout import rollouts
 from auv_gym.vehicle import remus100
 from controllers.base import Policy
 from controllers.pid import PIDGains, pid_tuning
+from tests.test_controllers import observations
 
 NAMES = ["pid_los", "pid_ilos", "pid_colos"]
 CURRENT = {"disturbance": "none", "current": {"mean": (0.0, 0.3, 0.0)}}
-
-
-def observations(n, seed=0):
-    rng = np.random.default_rng(seed)
-    obs = np.zeros((n, OBS_DIM), dtype=np.float32)
-    for name, (lo, hi) in {"x_e": (-5, 5), "y_e": (-5, 5), "z_e": (-5, 5),
-                           "psi_error": (-3, 3), "theta": (-0.4, 0.4), "theta_F": (0.2, 0.4),
-                           "u": (0.0, 1.5), "v": (-0.2, 0.2), "w": (-0.2, 0.2),
-                           "q": (-0.2, 0.2), "r": (-0.2, 0.2), "u_p": (0, 2),
-                           "psi_F_dot": (0.0, 0.2)}.items():  # fmt: skip
-        obs[:, OBS_INDEX[name]] = rng.uniform(lo, hi, n)
-    obs[:, OBS_INDEX["u_D"]] = 1.0
-    return obs
 
 
 def test_pole_placement_gives_the_chosen_closed_loop_poles():
@@ -101,26 +87,6 @@ def test_current_observer_beats_plain_and_integral_los_in_a_constant_current():
     assert 0.3 < rms["pid_ilos"] < 0.6  # measured 0.42 m
     assert rms["pid_colos"] < 0.03  # measured 0.0195 m
     assert rms["pid_colos"] < rms["pid_ilos"] / 10 < rms["pid_los"] / 10
-
-
-@pytest.mark.parametrize("name", NAMES)
-def test_batched_predict_equals_one_by_one(name):
-    policy = controllers.make(name)
-    batch_obs = [observations(4, seed=k) for k in range(20)]
-    batch_actions, state = [], None
-    for obs in batch_obs:
-        a, state = policy.predict(obs, state)
-        batch_actions.append(a)
-    for row in range(4):
-        row_state = None
-        for k, obs in enumerate(batch_obs):
-            a, row_state = policy.predict(obs[row : row + 1], row_state)
-            np.testing.assert_array_equal(a[0], batch_actions[k][row])
-        np.testing.assert_array_equal(row_state["integral"][0], state["integral"][row])
-    big = observations(100)  # the threaded kernel gives the same numbers
-    threaded, _ = policy.predict(big)
-    serial = np.vstack([policy.predict(big[i : i + 1])[0] for i in range(100)])
-    np.testing.assert_array_equal(threaded, serial)
 
 
 def test_batched_rollouts_equal_single_episodes():
