@@ -39,6 +39,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from rliable import library
 
+from auv_gym import table_format
 from auv_gym.table_format import EMPTY, format_number
 
 AGGREGATE = "aggregate"
@@ -393,9 +394,8 @@ def markdown_table(
 ) -> str:
     """Markdown table of {column (scope): {row (policy): Interval}}; missing cells are '–'."""
     columns = list(table)
-    rows = list(dict.fromkeys(r for col in table.values() for r in col))
-    lines = ["| " + " | ".join([corner, *columns]) + " |", "|---" * (len(columns) + 1) + "|"]
-    for r in rows:
-        cells = [format_interval(table[c][r], digits) if r in table[c] else EMPTY for c in columns]
-        lines.append("| " + " | ".join([r, *cells]) + " |")
-    return "\n".join(lines) + "\n"
+    rows = [
+        [r, *(format_interval(table[c][r], digits) if r in table[c] else EMPTY for c in columns)]
+        for r in dict.fromkeys(r for col in table.values() for r in col)
+    ]
+    return table_format.markdown_table([corner, *columns], rows, ["l"] * (len(columns) + 1))

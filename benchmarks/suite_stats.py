@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym import table_format
 from auv_gym.config import SimConfig
 from auv_gym.files import jsonable, write_json, write_text
 from auv_gym.table_format import format_number
@@ -279,19 +280,19 @@ def _markdown(stats: Mapping[str, Any], summary: Mapping[str, Any]) -> str:
     lines += [
         f"## Target: mean RMS distance within {MAX_RATIO:g}× {ref}, no failed episode, max "
         f"surge ≤ {SURGE_LIMIT:g} m/s\n",
-        f"| set | policy | mean [m] | {ref} mean [m] | ratio | failed | max surge [m/s] | |",
-        "|---|---|---|---|---|---|---|---|",
     ]
+    rows = []
     for t in stats["target"]:
         failed = f"{t['failed']}/{t['episodes']}" + (
             f" ({', '.join(t['failures'])})" if t["failures"] else ""
         )
-        lines.append(
-            f"| {t['set']} | {t['policy']} | {format_number(t['mean_m'])} | "
-            f"{format_number(t['reference_mean_m'])} | {format_number(t['ratio'])} | {failed} | "
-            f"{format_number(t['max_surge_m_s'])} | {'pass' if t['passed'] else '**FAIL**'} |"
-        )
-    lines.append("")
+        rows.append([t["set"], t["policy"], format_number(t["mean_m"]),
+                     format_number(t["reference_mean_m"]), format_number(t["ratio"]), failed,
+                     format_number(t["max_surge_m_s"]),
+                     "pass" if t["passed"] else "**FAIL**"])  # fmt: skip
+    header = ["set", "policy", "mean [m]", f"{ref} mean [m]", "ratio", "failed",
+              "max surge [m/s]", "verdict"]  # fmt: skip
+    lines += [table_format.markdown_table(header, rows, ["l"] * len(header))]
     for policy, verdict in stats["verdicts"].items():
         failing = ", ".join(verdict["failing_sets"]) or "none"
         lines.append(
