@@ -8,7 +8,8 @@ vector env one with n = num_envs, so the two cannot diverge.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -121,6 +122,13 @@ _CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
 _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code → name
 
 
+# The arrays of a `Simulator` that change while stepping or at a reset (`Simulator.snapshot`);
+# the others are fixed at construction. `error_integral` is a view into `extra` and follows it.
+SNAPSHOT_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
+                   "terms", "reward", "code", "_actions", "extra", "last_action", "_cfg",
+                   "_task", "_pdata", "_kind")  # fmt: skip
+
+
 class Simulator:
     """n vehicles of one `SimConfig`, as arrays; rows reset independently.
 
@@ -197,6 +205,25 @@ class Simulator:
         configured one, or the one its episode drew (``actuator="random"``)."""
         codes = self._cfg[self._row, _CONFIG_INDEX["actuator"]].astype(np.int64)
         return _ACTUATOR_NAMES[codes]
+
+    def snapshot(self) -> dict[str, Any]:
+        """Copies of the arrays that change while stepping or at a reset (`SNAPSHOT_ARRAYS`)
+        and each vehicle's path: with `restore`, a simulator built with the same arguments
+        continues bit for bit (the vector env's snapshots, a paused training run)."""
+        arrays = {name: getattr(self, name).copy() for name in SNAPSHOT_ARRAYS}
+        return {"arrays": arrays, "paths": list(self.paths)}  # paths are immutable, shared
+
+    def restore(self, snapshot: Mapping[str, Any]) -> None:
+        """Continue from a `snapshot` of a simulator built with the same arguments; ValueError
+        naming the first array whose shape differs (then nothing is changed)."""
+        for name in SNAPSHOT_ARRAYS:
+            target, value = getattr(self, name), snapshot["arrays"][name]
+            if target.shape != value.shape:
+                raise ValueError(f"snapshot array {name} has shape {value.shape}, this vector "
+                                 f"env's {target.shape}: built with other arguments")  # fmt: skip
+        for name in SNAPSHOT_ARRAYS:  # in place: views such as `error_integral` stay attached
+            np.copyto(getattr(self, name), snapshot["arrays"][name])
+        self.paths[:] = snapshot["paths"]
 
     def reset_row(self, i: int, rng: np.random.Generator) -> None:
         """Draw vehicle i's episode (keys, parameters, start, current) from rng, in fixed order."""

@@ -40,11 +40,6 @@ _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
 # < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
 PARALLEL_MIN_VEHICLES = 256
 MAX_VEHICLES = 2**24  # about 60 GB of state: a bound that names the argument before numpy fails
-# The simulator arrays that change while stepping or at a reset (`snapshot`); the others are
-# fixed at construction. `error_integral` is a view into `extra` and follows it.
-_SIM_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
-               "terms", "reward", "code", "_actions", "extra", "last_action", "_cfg", "_task",
-               "_pdata", "_kind")  # fmt: skip
 
 
 def parse_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
@@ -387,11 +382,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         `restore` of it on a vector env built with the same arguments continues bit for bit as
         this one would (what a paused training run needs); the renderer's track is not included.
         """
-        sim = self.sim
         return {
             "num_envs": self.num_envs,
-            "sim": {name: getattr(sim, name).copy() for name in _SIM_ARRAYS},
-            "paths": list(sim.paths),  # immutable, shared
+            "sim": self.sim.snapshot(),
             "rngs": copy.deepcopy(self._rngs),
             "np_random": copy.deepcopy((self._np_random, self._np_random_seed)),
             "last_obs": self._last_obs.copy(),
@@ -405,15 +398,7 @@ class AUVPath3DVectorEnv(VectorEnv):
         if snapshot.get("num_envs") != self.num_envs:
             raise ValueError(f"snapshot of {snapshot.get('num_envs')} vehicles, this vector env "
                              f"has {self.num_envs}")  # fmt: skip
-        sim = self.sim
-        for name in _SIM_ARRAYS:
-            target, value = getattr(sim, name), snapshot["sim"][name]
-            if target.shape != value.shape:
-                raise ValueError(f"snapshot array {name} has shape {value.shape}, this vector "
-                                 f"env's {target.shape}: built with other arguments")  # fmt: skip
-        for name in _SIM_ARRAYS:  # in place: views such as `error_integral` stay attached
-            np.copyto(getattr(sim, name), snapshot["sim"][name])
-        sim.paths[:] = snapshot["paths"]
+        self.sim.restore(snapshot["sim"])
         self._rngs = copy.deepcopy(snapshot["rngs"])
         self._np_random, self._np_random_seed = copy.deepcopy(snapshot["np_random"])
         self._last_obs[:] = snapshot["last_obs"]
