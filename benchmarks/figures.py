@@ -17,7 +17,9 @@ from auv_gym.files import write_atomic
 from auv_gym.metrics import window_start
 from auv_gym.plotting import new_figure, plot_track, policy_colours, save_figure
 from auv_gym.randomization import task_for_seed
+from auv_gym.table_format import Cell
 from auv_gym.trajectory import FAILURE_REASONS, Trajectory
+from benchmarks.tables import aggregate
 from benchmarks.training.learning_curve import EVAL_FILE, read_rows
 
 __all__ = ["BAR_METRICS", "comparison_figures", "plot_learning_curve"]
@@ -56,8 +58,10 @@ def comparison_figures(
             path = task_for_seed(SimConfig.from_kwargs(**scenario.env), first_seed).path
             written += _scenario_figures(name, path, trajectories, first_seed, out / "figures")
     names = [n for n in scenarios if any(r["scenario"] == n for r in records)]
+    policies = list(dict.fromkeys(r["policy"] for r in records))
+    cells = aggregate(records)  # the summary table's cells: finished episodes and failures
     for metric, label in BAR_METRICS.items():
-        written.append(_bar_chart(records, names, metric, label, out / "figures"))
+        written.append(_bar_chart(cells, policies, names, metric, label, out / "figures"))
     return written
 
 
@@ -96,34 +100,35 @@ def _scenario_figures(
 
 
 def _bar_chart(
-    records: Sequence[Mapping[str, Any]], names: list[str], metric: str, label: str, folder: Path
+    cells: Mapping[tuple[str, str], Mapping[str, Cell]],
+    policies: list[str],
+    names: list[str],
+    metric: str,
+    label: str,
+    folder: Path,
 ) -> Path:
     """bars_<metric>.png: mean ± std over the finished episodes per scenario, one bar per policy.
 
     A linear axis (a bar's length is its value). Failed episodes are left out of the mean and
     counted above the bar ("✕n"); a policy whose episodes all failed gets a hatched empty bar.
+    ``cells`` are `benchmarks.tables.aggregate`'s.
     """
-    policies = list(dict.fromkeys(r["policy"] for r in records))
     colours = policy_colours(policies)
     fig = new_figure(max(7.0, 0.12 * len(names) * len(policies) + 3.0), 4.6, _COMPARISON_DPI)
     ax = fig.subplots()
     width = 0.8 / max(len(policies), 1)
     x = np.arange(len(names))
-    cells = {}
+    bars = {}
     for policy in policies:
         for scenario in names:
-            episodes = [r for r in records if r["scenario"] == scenario and r["policy"] == policy]
-            finished = [
-                r for r in episodes
-                if r["metrics"].get("termination_reason") not in FAILURE_REASONS
-            ]  # fmt: skip
-            values = np.array([_number(r["metrics"].get(metric)) for r in finished])
-            cells[(policy, scenario)] = (values[np.isfinite(values)], len(episodes) - len(finished))
-    top = max((v.mean() + v.std() for v, _ in cells.values() if v.size), default=1.0)
+            cell = cells.get((scenario, policy), {}).get(metric, Cell(()))
+            values = np.asarray(cell.values, dtype=float)
+            bars[(policy, scenario)] = (values[np.isfinite(values)], cell.failed)
+    top = max((v.mean() + v.std() for v, _ in bars.values() if v.size), default=1.0)
     for k, policy in enumerate(policies):
         offset = (k - (len(policies) - 1) / 2) * width
         for i, scenario in enumerate(names):
-            values, failed = cells[(policy, scenario)]
+            values, failed = bars[(policy, scenario)]
             xi = x[i] + offset
             if values.size:
                 ax.bar(xi, values.mean(), width, yerr=values.std(), capsize=2,
@@ -147,10 +152,6 @@ def _bar_chart(
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
     fig.tight_layout()
     return save_figure(fig, folder / f"bars_{metric}.png")
-
-
-def _number(value: Any) -> float:
-    return np.nan if value is None else float(value)
 
 
 def plot_learning_curve(run: Path, prefix: Path) -> None:
