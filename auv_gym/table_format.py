@@ -114,8 +114,10 @@ def format_mean_std(
     text = format_number(mean, significant, metric)
     if not (math.isfinite(mean) and math.isfinite(std)):
         return text
-    if "e" in text:  # a mean in scientific notation: its spread too ("6.77e-04 ± 6.8e-05")
-        return f"{text} ± {format_number(std, 2)}" if std else f"{text} ± 0"
+    if "e" in text:  # a mean in scientific notation: its spread too ("6.77e-04 ± 6.8e-05"),
+        # zero below the mean's last significant digit, as in positional notation
+        last_digit = 10.0 ** (math.floor(math.log10(abs(mean))) - (significant - 1))
+        return f"{text} ± {format_number(std, 2)}" if std >= 0.5 * last_digit else f"{text} ± 0"
     decimals = _decimals(float(f"{mean:.{significant - 1}e}"), significant) if mean else 0
     spread = round(std, decimals)
     if spread == 0:

@@ -49,6 +49,7 @@ def test_spread_to_the_means_last_decimal_and_no_float_noise():
     assert format_mean_std(987.8, 110.4) == "988 ± 110"
     assert format_mean_std(0.297, 0.0412) == "0.297 ± 0.041"
     assert format_mean_std(6.77e-4, 6.8e-5) == "6.77e-04 ± 6.8e-05"  # one notation per cell
+    assert format_mean_std(4.84e-4, 5.4e-20) == "4.84e-04 ± 0"  # no float noise there either
 
 
 def test_millimetres_where_metres_would_round_to_zero():
