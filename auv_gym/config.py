@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.depth_envelope import DepthEnvelope, check_path_depths
 from auv_gym.disturbances import (
     MAX_NOISE_AMPLITUDE,
     MAX_NOISE_HOLD,
@@ -34,6 +35,7 @@ from auv_gym.observation import (
 )
 from auv_gym.path_bounds import Bound, spline_turn_rates
 from auv_gym.path_generator import PathDistribution
+from auv_gym.path_offset import shift_path
 from auv_gym.paths import (
     HELIX,
     LINE,
@@ -46,6 +48,7 @@ from auv_gym.paths import (
     path_eval,
 )
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
+from auv_gym.safety_cost import SafetyCost
 from auv_gym.task import (
     REWARD_TERMS,
     RewardWeights,
@@ -219,6 +222,10 @@ class SimConfig:
     limits: TaskLimits = field(default_factory=TaskLimits)
     # "paper": the paper's 15 entries; "preview": the agent observation (`auv_gym.observation`)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
+    # [m] added to every drawn path; `from_kwargs` moves a fixed path itself (`path_offset`)
+    path_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    depth_envelope: DepthEnvelope | None = None  # None: no surface, no seabed (the paper's)
+    safety_cost: SafetyCost = field(default_factory=SafetyCost)
 
     @classmethod
     def from_kwargs(
@@ -246,11 +253,19 @@ class SimConfig:
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        path_offset: Sequence[float] | None = None,
+        depth_envelope: DepthEnvelope | Mapping | bool | None = None,
+        safety_cost: SafetyCost | Mapping | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
         argument, its value and the allowed range."""
         the_path = _path_from(path)
+        offset = (0.0, 0.0, 0.0)
+        if path_offset is not None:
+            offset = vector("path_offset", path_offset, 3, -POSITION_BOUND, POSITION_BOUND, "m")
+        if isinstance(the_path, Path):
+            the_path, offset = shift_path(the_path, offset), (0.0, 0.0, 0.0)
         s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
         return cls(
             path=the_path,
@@ -278,6 +293,9 @@ class SimConfig:
                 surge_limit=surge_limit,
             ),
             observation=ObservationConfig.from_spec(observation),
+            path_offset=offset,
+            depth_envelope=DepthEnvelope.from_spec(depth_envelope),
+            safety_cost=SafetyCost.from_spec(safety_cost),
         )
 
     def __post_init__(self) -> None:
@@ -289,10 +307,16 @@ class SimConfig:
         for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
                            ("current", CurrentConfig), ("reward", RewardWeights),
                            ("limits", TaskLimits),
-                           ("observation", ObservationConfig)):  # fmt: skip
+                           ("observation", ObservationConfig),
+                           ("safety_cost", SafetyCost)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
                                         f"got {getattr(self, name)!r:.80}")  # fmt: skip
+        if not isinstance(self.depth_envelope, DepthEnvelope | None):
+            raise ArgumentTypeError(f"depth_envelope must be a DepthEnvelope or None, "
+                                    f"got {self.depth_envelope!r:.80}")  # fmt: skip
+        put("path_offset", vector("path_offset", self.path_offset, 3, -POSITION_BOUND,
+                                  POSITION_BOUND, "m"))  # fmt: skip
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
         put("random_current", real("random_current", self.random_current, 0.0,
                                    MAX_RANDOM_CURRENT, unit="m/s"))  # fmt: skip
@@ -348,6 +372,18 @@ class SimConfig:
         else:
             self._check_path_fits_the_observation()
             self._check_start_fits_the_observation()
+            self.check_depths(self.path)
+
+    def check_depths(self, path: Path, drawn: bool = False) -> None:
+        """The path (a drawn one at its reset) and the start lie inside the depth envelope's
+        safe band (`depth_envelope.check_path_depths`); nothing to check without one."""
+        if self.depth_envelope is None:
+            return
+        given = self.start_position is not None and not drawn
+        start = self.start_position if given else path.default_start()[0]
+        check_path_depths(path, self.depth_envelope, start_z=float(start[2]),
+                          u_desired=self.u_desired, max_time=self.max_time,
+                          randomize_start=self.randomize_start, drawn=drawn)  # fmt: skip
 
     @property
     def current_speed_bound(self) -> float:

@@ -13,11 +13,13 @@ from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
 from auv_gym.config import SimConfig
+from auv_gym.depth_envelope import DepthEnvelope
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
+from auv_gym.safety_cost import SafetyCost
 from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
@@ -156,7 +158,8 @@ class AUVPath3DEnv(gym.Env):
     `x_e`, `y_e`, `z_e`, `distance` [m], `s`, `u_p` [m/s], `t` [s]; `tau` — the applied
     (X, M, N) after saturation [N, N·m] and `disturbance` — the white-noise (f_u, f_v, f_w, f_q,
     f_r) [N, N·m], both averaged over the physics steps of the control period; `reward_<term>`
-    for each reward term; `termination_reason` when the episode terminates.
+    for each reward term; `cost` — the step's safety cost (`auv_gym.safety_cost`, Safety-Gymnasium's
+    convention, not part of the reward); `termination_reason` when the episode terminates.
 
     ## Episode End
     Terminated (`info["termination_reason"]`): "corridor" — distance to the virtual point above
@@ -164,7 +167,8 @@ class AUVPath3DEnv(gym.Env):
     observation is no longer finite (NaN, inf or beyond the float32 range; the last observation
     returned before is returned again); "envelope" — the observation left its documented
     bounds; "path_end" — s reached the end of a finite path; "overspeed" — u above
-    `surge_limit` (none in v0). Every other step returns an
+    `surge_limit` (none in v0); with a `depth_envelope` only, "broached" — z < 0, above the sea
+    surface, and "grounded" — z below the seabed (docs/model.md §9). Every other step returns an
     observation inside `observation_space`, and every reward is finite.
 
     Truncated at `max_time`: `truncated` is True from the first control step at which
@@ -201,6 +205,9 @@ class AUVPath3DEnv(gym.Env):
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
+    | `path_offset` | None | (dx, dy, dz) [m] moving the path and its default start (real depth) |
+    | `depth_envelope` | None | True, {seabed_depth, margin} or `DepthEnvelope`: surface z = 0 |
+    | `safety_cost` | defaults | {depth, speed, pitch, speed_limit, pitch_limit}: `info["cost"]` |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -300,6 +307,9 @@ class AUVPath3DEnv(gym.Env):
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        path_offset: Sequence[float] | None = None,
+        depth_envelope: DepthEnvelope | Mapping | bool | None = None,
+        safety_cost: SafetyCost | Mapping | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -310,7 +320,8 @@ class AUVPath3DEnv(gym.Env):
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights, random_current=random_current,
-            random_noise=random_noise, observation=observation,
+            random_noise=random_noise, observation=observation, path_offset=path_offset,
+            depth_envelope=depth_envelope, safety_cost=safety_cost,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
@@ -325,7 +336,11 @@ class AUVPath3DEnv(gym.Env):
         self._truncation_index = self.config.max_steps * self.config.substeps
         self._last_obs = np.zeros(self.observation_space.shape, np.float32)  # the last returned
         self._renderer = (
-            EpisodeRenderer(self.config.path, self.config.max_time) if render_mode else None
+            EpisodeRenderer(
+                self.config.path, self.config.max_time, envelope=self.config.depth_envelope
+            )
+            if render_mode
+            else None
         )
 
     @property
@@ -396,6 +411,7 @@ class AUVPath3DEnv(gym.Env):
         }  # fmt: skip
         if not reset:
             info.update(zip(_REWARD_KEYS, sim.terms[0].tolist(), strict=True))
+            info["cost"] = float(sim.cost[0])
         if code:
             info["termination_reason"] = TERMINATION_REASONS[code]
         return info

@@ -16,6 +16,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from auv_gym.envelope_drawing import (
+    draw_boundaries_3d,
+    draw_boundary_lines,
+    envelope_of,
+    extent,
+    trajectory_points,
+)
 from auv_gym.paths import Path
 from auv_gym.plotting import new_figure, policy_colours, save_figure
 
@@ -70,6 +77,8 @@ def figure_path_3d(
         pos = tr.position
         ax.plot(pos[:, 0], pos[:, 1], -pos[:, 2], label=name, **styles[name])
         ax.scatter(pos[0, 0], pos[0, 1], -pos[0, 2], color="k", marker="o", s=12)
+    envelope = envelope_of(trajectories.values())  # the surface and seabed, if any
+    draw_boundaries_3d(ax, envelope, *extent([ref, *trajectory_points(trajectories)]))
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="−z (height) [m]")
     ax.legend(loc="upper left", fontsize=8)
     _finish(fig, [ax], "3D path following")
@@ -94,6 +103,8 @@ def _projection(
         pos = tr.position * sign
         ax.plot(pos[:, i], pos[:, j], label=name, **styles[name])
         ax.plot(pos[0, i], pos[0, j], "ko", ms=3)
+    if j == 2:  # a height axis: the surface and seabed, if any
+        draw_boundary_lines(ax, envelope_of(trajectories.values()))
     ax.set(xlabel=labels[0], ylabel=labels[1])
     if axes_index == (0, 1):
         ax.set_aspect("equal", adjustable="datalim")

@@ -131,7 +131,9 @@ def compute_metrics(
     Outcome:
       success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
       ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
-      episode_return — Σ reward; termination_reason — the episode end (`EPISODE_ENDS`);
+      episode_return — Σ reward; episode_cost — Σ safety cost (`auv_gym.safety_cost`; NaN
+      for a file recorded before the cost existed); termination_reason — the episode end
+      (`EPISODE_ENDS`);
       duration [s], steps; transient — the window start used [s]; window_samples — the
       number of samples with t ≥ transient.
     """
@@ -203,6 +205,7 @@ def compute_metrics(
     final_rms = float(np.sqrt(np.mean(np.square(distance[final]))))
     metrics["success"] = bool(not failed and final_rms <= success_distance)
     metrics["episode_return"] = float(tr["reward"].sum())
+    metrics["episode_cost"] = float(tr["cost"].sum())
     metrics["termination_reason"] = tr.termination_reason
     metrics["duration"] = tr.duration
     metrics["steps"] = steps

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from auv_gym.envelope_drawing import draw_boundaries_3d, draw_boundary_lines, extent
 from auv_gym.files import write_atomic
 from auv_gym.paths import Path
 from auv_gym.table_format import (
@@ -31,6 +32,8 @@ from auv_gym.table_format import (
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+    from auv_gym.depth_envelope import DepthEnvelope
 
 
 __all__ = [
@@ -125,8 +128,12 @@ def save_figure(fig: Figure, file: str | os.PathLike, dpi: int | None = None) ->
     return write_atomic(file, lambda fh: fig.savefig(fh, format="png", dpi=dots))
 
 
-def plot_track(fig, path: Path, tracks: dict[str, np.ndarray], s_max: float) -> None:
-    """Draw the path and tracks (name → (T, 3) NED positions [m]) in 3D plus x–y and x–z views.
+def plot_track(
+    fig, path: Path, tracks: dict[str, np.ndarray], s_max: float,
+    envelope: DepthEnvelope | None = None,
+) -> None:  # fmt: skip
+    """Draw the path and tracks (name → (T, 3) NED positions [m]) in 3D plus x–y and x–z views,
+    with the sea surface and seabed of ``envelope`` if given.
 
     Depth is plotted as −z so that "up" is up. Each policy has its `policy_colours` colour;
     the legend sits below the panels, where it covers no data.
@@ -145,6 +152,8 @@ def plot_track(fig, path: Path, tracks: dict[str, np.ndarray], s_max: float) -> 
         ax_xy.plot(track[:, 0], track[:, 1], **style)
         ax_xz.plot(track[:, 0], -track[:, 2], **style)
         ax3d.scatter(*track[-1, :2], -track[-1, 2], s=12, color=colours[name])
+    draw_boundaries_3d(ax3d, envelope, *extent([ref, *tracks.values()]))
+    draw_boundary_lines(ax_xz, envelope)
     ax3d.set(xlabel="x [m]", ylabel="y [m]", zlabel="−z [m]", title="3D path")
     ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="horizontal projection", aspect="equal")
     ax_xz.set(xlabel="x [m]", ylabel="−z [m]", title="vertical projection")

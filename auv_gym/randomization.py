@@ -27,6 +27,7 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from auv_gym.path_generator import PathDistribution
+from auv_gym.path_offset import shift_path
 from auv_gym.paths import Path
 
 if TYPE_CHECKING:
@@ -55,7 +56,9 @@ def draw_task(config: SimConfig, rng: np.random.Generator) -> EpisodeTask:
     """The episode's task from its generator (consumes one draw of four 63-bit seeds)."""
     seeds = rng.integers(0, 2**63, size=4, dtype=np.int64)
     path_rng, current_rng, noise_rng, actuator_rng = (np.random.default_rng(int(s)) for s in seeds)
-    path = config.path.draw(path_rng) if isinstance(config.path, PathDistribution) else config.path
+    path = config.path
+    if isinstance(path, PathDistribution):  # a fixed path carries its offset already
+        path = shift_path(path.draw(path_rng), config.path_offset)
     current = (0.0, 0.0, 0.0)
     if config.random_current > 0.0:
         direction = current_rng.uniform(-math.pi, math.pi)

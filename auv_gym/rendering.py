@@ -23,7 +23,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from auv_gym.envelope_drawing import depth_limits, draw_boundaries_3d, set_boundaries_3d
+
 if TYPE_CHECKING:
+    from auv_gym.depth_envelope import DepthEnvelope
     from auv_gym.paths import Path
 
 __all__ = ["ERROR_LIMIT_M", "EpisodeRenderer"]
@@ -66,6 +69,7 @@ class EpisodeRenderer:
         max_time: episode length [s], the span of the time axis.
         width_px, height_px, dpi: frame size [px] and resolution [dots/in].
         fast: blit the moving artists over a cached background (default), or redraw everything.
+        envelope: the depth envelope, drawn as the sea surface and seabed planes (None: none).
     """
 
     def __init__(
@@ -76,6 +80,7 @@ class EpisodeRenderer:
         height_px: int = 320,
         dpi: int = 100,
         fast: bool = True,
+        envelope: DepthEnvelope | None = None,
     ) -> None:
         if not (math.isfinite(max_time) and max_time > 0):
             raise ValueError(f"max_time must be a positive time in s, got {max_time}")
@@ -83,6 +88,7 @@ class EpisodeRenderer:
             raise ValueError(f"frame size must be 16-8192 px, got {width_px} × {height_px}")
         self.path, self.max_time, self.fast = path, float(max_time), bool(fast)
         self._size = (int(width_px), int(height_px), int(dpi))
+        self.envelope = envelope
         self._positions = _Buffer(4)  # t [s], x, y, z [m]
         self._errors = _Buffer(4)  # t [s], x_e, y_e, z_e [m]
         self._s = 0.0  # path parameter of the virtual point
@@ -216,6 +222,8 @@ class EpisodeRenderer:
                       frameon=False, borderaxespad=0.2)  # fmt: skip
         ax_err.set_title("body-frame errors, vehicle − virtual point", loc="left", fontsize=8)
         self._growing = [self._track_line, *self._error_lines]
+        self._boundaries = draw_boundaries_3d(ax3d, self.envelope, np.zeros(3), np.ones(3),
+                                              zorder=0)  # fmt: skip
         self._figure, self._ax3d = fig, ax3d
 
     def _update_view(self) -> None:
@@ -242,9 +250,11 @@ class EpisodeRenderer:
             old_half = (self._limits[1] - self._limits[0]) / 2
             half = np.maximum(half, _GROW * old_half)
             lo, hi = centre - half, centre + half
+        lo[2], hi[2] = depth_limits(self.envelope, lo[2], hi[2])
         span = np.maximum(hi - lo, 1.0)
         lo, hi = lo - _PAD * span, hi + _PAD * span
         self._limits = (lo, hi)
+        set_boundaries_3d(self._boundaries, self.envelope, lo, hi)
         ax = self._ax3d
         ax.set_xlim(lo[0], hi[0])
         ax.set_ylim(lo[1], hi[1])

@@ -68,6 +68,7 @@ _ACTION_SLICE = slice(0, 3)
 _RECORD_SLICE = slice(3, 3 + len(TAU_FIELDS) + len(DISTURBANCE_FIELDS))  # = Simulator.record
 _REWARD_COLUMN = INTERVAL_FIELDS.index("reward")
 _TERMS_SLICE = slice(_REWARD_COLUMN + 1, _REWARD_COLUMN + 1 + len(REWARD_TERMS))
+_COST_COLUMN = INTERVAL_FIELDS.index("cost")
 
 
 @runtime_checkable
@@ -218,6 +219,7 @@ def _run_batch(
         intervals[:, k, _RECORD_SLICE] = sim.record
         intervals[:, k, _REWARD_COLUMN] = sim.reward
         intervals[:, k, _TERMS_SLICE] = sim.terms
+        intervals[:, k, _COST_COLUMN] = sim.cost
         ended = alive & (sim.code != 0)
         if ended.any():
             steps[ended] = k + 1

@@ -38,11 +38,13 @@ from auv_gym.observation import (
 from auv_gym.paths import Path
 from auv_gym.preview import extend_rows
 from auv_gym.randomization import EpisodeTask, draw_task
+from auv_gym.safety_cost import safety_vector
 from auv_gym.task import (
     ENVELOPE,
     REWARD_TERMS,
     TASK_FIELDS,
     TERM,
+    task_cost,
     task_row,
     task_vector,
 )
@@ -53,7 +55,7 @@ __all__ = ["Simulator"]
 
 @njit(cache=True, inline="always")
 def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
+              obs_low, obs_high, guid, obs, record, terms, reward, code, cost):  # fmt: skip
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
     config and task are row ``row[i]`` of the episode table (`Simulator`)."""
     a = actions[i]
@@ -66,6 +68,7 @@ def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, 
     step_index[i] += int(config_record(cfg).n_sub)
     reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r],
                                   terms[i])  # fmt: skip
+    cost[i] = task_cost(state[i], tasks[r])
 
 
 @njit(cache=True, inline="always")
@@ -84,25 +87,25 @@ def _first_non_finite_row(actions):
 # cost two atomic updates each, a quarter of its time (the threaded kernel's loop has none).
 @njit(cache=True, _nrt=False)
 def _step_one(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
+              obs_low, obs_high, guid, obs, record, terms, reward, code, cost):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in range(state.shape[0]):
             _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
                       cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
-                      code)  # fmt: skip
+                      code, cost)  # fmt: skip
     return bad
 
 
 @njit(cache=True, parallel=True)
 def _step_all(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code):  # fmt: skip
+              obs_low, obs_high, guid, obs, record, terms, reward, code, cost):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in prange(state.shape[0]):
             _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
                       cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
-                      code)  # fmt: skip
+                      code, cost)  # fmt: skip
     return bad
 
 
@@ -125,7 +128,7 @@ _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code
 # The arrays of a `Simulator` that change while stepping or at a reset (`Simulator.snapshot`);
 # the others are fixed at construction. `error_integral` is a view into `extra` and follows it.
 SNAPSHOT_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
-                   "terms", "reward", "code", "_actions", "extra", "last_action", "_cfg",
+                   "terms", "reward", "code", "cost", "_actions", "extra", "last_action", "_cfg",
                    "_task", "_pdata", "_kind")  # fmt: skip
 
 
@@ -152,7 +155,8 @@ class Simulator:
         m = self.n if self._per_vehicle else 1
         self._row = np.arange(n, dtype=np.int64) if self._per_vehicle else np.zeros(n, np.int64)
         self._cfg = np.tile(config.packed(), (m, 1))
-        self._task = np.tile(task_vector(config.reward, config.limits), (m, 1))
+        safety = safety_vector(config.depth_envelope, config.safety_cost)
+        self._task = np.tile(task_vector(config.reward, config.limits, safety), (m, 1))
         fixed = isinstance(config.path, Path)
         width = config.path.data.size if fixed else config.path.max_data_size
         self._pdata = np.zeros((m, width))
@@ -174,6 +178,7 @@ class Simulator:
         self.terms = np.zeros((n, len(REWARD_TERMS)))
         self.reward = np.zeros(n)
         self.code = np.zeros(n, dtype=np.int64)
+        self.cost = np.zeros(n)  # safety cost of the last step (`auv_gym.safety_cost`)
         self._actions = np.zeros((n, 3))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
         self.layout = config.observation
@@ -261,6 +266,8 @@ class Simulator:
         path = task.path
         if path.data.size > self._pdata.shape[1]:  # a user's distribution cannot exceed it
             raise RuntimeError(f"drawn path of {path.data.size} values exceeds the table width")
+        if not isinstance(self.config.path, Path):  # drawn: its depths are known only now
+            self.config.check_depths(path, drawn=True)
         self.paths[i] = path
         self._kind[i] = path.kind
         self._pdata[i] = 0.0
@@ -294,6 +301,7 @@ class Simulator:
         self.terms[i] = 0.0
         self.reward[i] = 0.0
         self.code[i] = 0
+        self.cost[i] = 0.0
 
     def _start(
         self, rng: np.random.Generator, path: Path
@@ -327,7 +335,7 @@ class Simulator:
         bad_row = self._kernel(self.state, self.current, self._actions, self.params, self.keys,
                      self.step_index, self._row, self._kind, self._pdata, self._cfg, self._task,
                      OBS_LOW, OBS_HIGH, self.guid, self.obs, self.record, self.terms,
-                     self.reward, self.code)  # fmt: skip
+                     self.reward, self.code, self.cost)  # fmt: skip
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
         if self.extra.shape[1]:

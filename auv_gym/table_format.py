@@ -41,7 +41,8 @@ EMPTY = "—"  # no value: every episode failed, or the metric is undefined
 
 FAILURE_CONVENTION = (
     "Metrics are over the episodes that ran to the end; failed episodes (an early end: corridor, "
-    "envelope, overspeed, non-finite state) are counted in the *failed* column and excluded, "
+    "envelope, overspeed, non-finite state, broached, grounded) are counted in the *failed* "
+    "column and excluded, "
     f"“{EMPTY}” marks a cell with no finished episode, and a policy with a failed episode is "
     "never marked best (**bold**). “never”: the threshold was not reached."
 )
@@ -63,6 +64,7 @@ METRIC_INFO: dict[str, tuple[str, str, str]] = {
     "control_effort": ("control effort ∫Σ(τ/τ_max)² dt", "s", "min"),
     "chattering": ("chattering TV(τ/τ_max) per s", "1/s", "min"),
     "saturation_fraction": ("saturated control steps", "-", "min"),
+    "episode_cost": ("episode safety cost Σc (auv_gym.safety_cost)", "-", "min"),
     "final_distance": ("final distance", "m", "min"),
     "success": ("success", "-", "max"),
     "termination_reason": ("episode end", "-", ""),

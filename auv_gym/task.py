@@ -9,7 +9,8 @@ Reward per control step (weights are constructor arguments of the envs):
       − w_overspeed·min(max(u − u_D, 0)/(u_max − u_D), 1)²   approaching the surge limit u_max
       − w_effort·|a|²/3                       normalised actuator effort
       + w_precision·exp(−(d/d_P)²)            precision bonus, d_P = 0.1 m (0 by default)
-      − w_termination·[terminated by failure]  corridor, pitch, non-finite or envelope exit
+      − w_termination·[terminated by failure]  corridor, pitch, non-finite, envelope exit,
+                                              broached or grounded (`depth_envelope`)
 
 Because the virtual point waits for a slow vehicle (docs/model.md §3.3), error penalties alone are
 maximised by not moving; the progress and speed terms make idling cost about 1.5 per step while
@@ -35,6 +36,7 @@ from numba import njit
 from auv_gym.dynamics import STATE
 from auv_gym.observation import ERROR_BOUND, GUIDE, OBS, OBS_DIM
 from auv_gym.records import field_indices, fixed_tuple, record_type
+from auv_gym.safety_cost import SAFETY_FIELDS, SafetyCost, safety_cost, safety_vector
 from auv_gym.validation import is_real, real
 
 __all__ = [
@@ -44,6 +46,7 @@ __all__ = [
     "TERMINATION_REASONS",
     "RewardWeights",
     "TaskLimits",
+    "task_cost",
     "task_row",
     "task_vector",
 ]
@@ -53,19 +56,23 @@ REWARD_TERMS = (
 )  # fmt: skip
 N_TERMS = len(REWARD_TERMS)
 TERM = field_indices("RewardTermIndex", REWARD_TERMS, __name__)
-# Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -, m/s].
+# Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -, m/s], then
+# the depth envelope and the safety cost (`safety_cost.SAFETY_FIELDS`).
 TASK_FIELDS = (
     *(f"w_{name}" for name in REWARD_TERMS),
     "corridor",
     "max_pitch",
     "s_end",
     "surge_limit",
+    *SAFETY_FIELDS,
 )
 TASK_DIM = len(TASK_FIELDS)
 TaskRecord = record_type("TaskRecord", TASK_FIELDS, __name__)
 # Codes returned by `task_row`; 0 means "running".
-TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end", "overspeed")
+TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end", "overspeed",
+                       "broached", "grounded")  # fmt: skip
 CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END, OVERSPEED = 1, 2, 3, 4, 5, 6
+BROACHED, GROUNDED = 7, 8  # above the sea surface, below the seabed (`depth_envelope`)
 TRACKING_SCALE = 1.0  # [m] d_0 of the tracking bonus
 # [m] d_P of the precision bonus: the tracking bonus's slope at d = 5 cm is only 0.1 w_tracking
 # per metre; this one's is 3.9 w_precision per metre (docs/design.md §3.12)
@@ -124,10 +131,15 @@ class TaskLimits:
         object.__setattr__(self, "surge_limit", float(self.surge_limit))
 
 
-def task_vector(weights: RewardWeights, limits: TaskLimits) -> np.ndarray:
-    """Pack weights and limits into the row `task_row` reads (layout `TASK_FIELDS`)."""
+def task_vector(
+    weights: RewardWeights, limits: TaskLimits, safety: np.ndarray | None = None
+) -> np.ndarray:
+    """Pack weights, limits and the `safety_cost.safety_vector` (default: no depth envelope,
+    the default cost) into the row `task_row` reads (layout `TASK_FIELDS`)."""
+    if safety is None:
+        safety = safety_vector(None, SafetyCost())
     return np.array([*astuple(weights), limits.corridor, limits.max_pitch, limits.s_end,
-                     limits.surge_limit])  # fmt: skip
+                     limits.surge_limit, *safety])  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -156,6 +168,10 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
             finite = False
     if not finite:
         code = NON_FINITE
+    elif st[STATE.z] < t.surface_z:  # −inf without a depth envelope: never
+        code = BROACHED
+    elif st[STATE.z] > t.seabed_z:
+        code = GROUNDED
     elif distance > t.corridor:
         code = CORRIDOR
     elif abs(st[STATE.theta]) > t.max_pitch:
@@ -191,3 +207,12 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
     for j in range(N_TERMS):
         total += out_terms[j]
     return total, code
+
+
+@njit(cache=True, inline="always")
+def task_cost(st, task):
+    """The safety cost of the state ``st`` after a step (`safety_cost.safety_cost`) [-]."""
+    t = task_record(task)
+    return safety_cost(st[STATE.z], st[STATE.u], st[STATE.theta], t.surface_z, t.seabed_z,
+                       t.depth_margin, t.cost_w_depth, t.cost_w_speed, t.cost_w_pitch,
+                       t.cost_speed_limit, t.cost_pitch_limit)  # fmt: skip

@@ -11,7 +11,7 @@ Time base. Control step k runs from t_k = k·control_dt to t_{k+1}. A trajectory
 Units (SI): positions x, y, z, x_e, y_e, z_e, distance, x_p, y_p, z_p [m]; θ, ψ, ψ_F, θ_F
 [rad]; u, v, w, u_p [m/s]; q, r, ψ̇_F, θ̇_F [rad/s]; path parameter s [-], ṡ [1/s]; actions
 a_X, a_M, a_N [-] in [−1, 1]; τ = (X [N], M [N·m], N [N·m]); disturbance f_u, f_v, f_w [N],
-f_q, f_r [N·m]; reward and its terms [-].
+f_q, f_r [N·m]; reward and its terms, safety cost [-].
 
 Episode ends. The env names the reason of a terminated episode with
 `auv_gym.task.TERMINATION_REASONS` ("" = not terminated, the `info["termination_reason"]`
@@ -69,7 +69,7 @@ def env_termination_reason(end: str) -> str:
 POINT_FIELDS = ("x_p", "y_p", "z_p")
 SAMPLE_FIELDS: tuple[str, ...] = STATE_NAMES + GUIDANCE_FIELDS + POINT_FIELDS
 # Intervals [t_k, t_{k+1}): commanded action (as returned, before saturation), mean applied τ,
-# mean white-noise disturbance, reward and its terms.
+# mean white-noise disturbance, reward and its terms, safety cost (`auv_gym.safety_cost`).
 ACTION_FIELDS = ("a_X", "a_M", "a_N")
 TAU_FIELDS = ("X", "M", "N")
 DISTURBANCE_FIELDS = ("f_u", "f_v", "f_w", "f_q", "f_r")
@@ -79,6 +79,7 @@ INTERVAL_FIELDS: tuple[str, ...] = (
     + DISTURBANCE_FIELDS
     + ("reward",)
     + tuple(f"reward_{term}" for term in REWARD_TERMS)
+    + ("cost",)
 )
 
 
@@ -221,6 +222,8 @@ class Trajectory:
             meta = json.loads(str(data["metadata"]))
             samples = {k: data[k] for k in SAMPLE_FIELDS if k in data.files}
             intervals = {k: data[k] for k in data.files if k in INTERVAL_FIELDS}
+            if "cost" not in intervals and "reward" in intervals:  # written before the cost
+                intervals["cost"] = np.full(data["reward"].shape, np.nan)
             extras = {k[6:]: data[k] for k in data.files if k.startswith("extra.")}
             return cls(
                 t=data["t"],

@@ -187,7 +187,11 @@ class AUVPath3DVectorEnv(VectorEnv):
         self._all = np.ones(self.num_envs, dtype=bool)
         self._render_vehicle = 0
         self._renderer = (
-            EpisodeRenderer(self.config.path, self.config.max_time) if render_mode else None
+            EpisodeRenderer(
+                self.config.path, self.config.max_time, envelope=self.config.depth_envelope
+            )
+            if render_mode
+            else None
         )  # draws vehicle `render_vehicle` since its reset
         self.render_vehicle = render_vehicle
 
@@ -362,8 +366,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         }  # fmt: skip
         if stepped.any():
             columns.update(zip(_REWARD_KEYS, sim.terms.T, strict=True))
+            columns["cost"] = sim.cost
         for key, values in columns.items():
-            mask = stepped if key.startswith("reward_") else base
+            mask = stepped if key.startswith("reward_") or key == "cost" else base
             if fill and not mask.all():
                 values = np.where(mask.reshape(-1, *([1] * (values.ndim - 1))), values, 0.0)
             infos[key] = np.array(values, dtype=np.float64)

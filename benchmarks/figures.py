@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.config import SimConfig
+from auv_gym.envelope_drawing import envelope_of
 from auv_gym.files import write_atomic
 from auv_gym.metrics import window_start
 from auv_gym.plotting import new_figure, plot_track, policy_colours, save_figure
@@ -72,7 +73,8 @@ def _scenario_figures(
     s_max = max(float(np.nanmax(tr["s"])) for tr in trajectories.values())
     rows = -(-len(trajectories) // 6)  # legend rows below the panels
     fig = new_figure(13.0, 4.4 + 0.25 * rows, _COMPARISON_DPI)
-    plot_track(fig, path, {p: tr.position for p, tr in trajectories.items()}, s_max=s_max)
+    plot_track(fig, path, {p: tr.position for p, tr in trajectories.items()}, s_max=s_max,
+               envelope=envelope_of(trajectories.values()))  # fmt: skip
     fig.suptitle(f"{name}: tracks, seed {seed}")
     fig.tight_layout(rect=(0, 0.06 * rows, 1, 1))
     track = save_figure(fig, folder / f"track_{name}.png")

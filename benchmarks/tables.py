@@ -22,11 +22,12 @@ from auv_gym.trajectory import FAILURE_REASONS
 __all__ = ["SUMMARY_GROUPS", "SUMMARY_METRICS", "aggregate", "summarise", "write_tables"]
 
 # Metrics in the summary table, with the direction that is better, in the column groups that
-# keep each table's rows within a screen: tracking, speed, effort.
+# keep each table's rows within a screen: tracking, speed, effort, safety.
 SUMMARY_GROUPS: dict[str, tuple[str, ...]] = {
     "tracking": ("rms_distance", "rms_y_e", "rms_z_e", "iae_distance", "settling_time_0p5"),
     "speed": ("surge_overshoot", "rms_speed_error", "max_surge", "overspeed_fraction"),
     "effort": ("control_effort", "chattering", "saturation_fraction"),
+    "safety": ("episode_cost",),
 }
 SUMMARY_METRICS = {m: METRIC_INFO[m][2] for group in SUMMARY_GROUPS.values() for m in group}
 # Short column headers (the long labels are in `auv_gym.table_format.METRIC_INFO`).
@@ -43,6 +44,7 @@ _HEADERS = {
     "control_effort": "effort",
     "chattering": "chattering",
     "saturation_fraction": "saturated",
+    "episode_cost": "episode cost",
 }
 
 
@@ -89,7 +91,7 @@ def _value(value: Any) -> float:
 def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
     """Markdown: per scenario, one row per policy, mean ± std over the finished episodes.
 
-    Three tables per scenario (tracking, speed, effort), each with the failed-episode count;
+    Four tables per scenario (tracking, speed, effort, safety), each with the failed-episode count;
     the conventions are `auv_gym.table_format`'s.
     """
     cells = aggregate(records)
