@@ -1,6 +1,6 @@
 """The water column: a sea surface at z = 0 (NED, z down) and an optional seabed (`DepthEnvelope`).
 
-Opt-in through the envs' `depth_envelope` argument (docs/model.md §9); without it the ocean is
+Opt-in through the envs' `depth_envelope` argument (docs/model.md §12); without it the ocean is
 unbounded, as in the paper, and nothing depends on depth. With it:
 
 - the episode ends as "broached" when the vehicle's origin rises above the surface (z < 0) and

@@ -168,7 +168,7 @@ class AUVPath3DEnv(gym.Env):
     returned before is returned again); "envelope" — the observation left its documented
     bounds; "path_end" — s reached the end of a finite path; "overspeed" — u above
     `surge_limit` (none in v0); with a `depth_envelope` only, "broached" — z < 0, above the sea
-    surface, and "grounded" — z below the seabed (docs/model.md §9). Every other step returns an
+    surface, and "grounded" — z below the seabed (docs/model.md §12). Every other step returns an
     observation inside `observation_space`, and every reward is finite.
 
     Truncated at `max_time`: `truncated` is True from the first control step at which

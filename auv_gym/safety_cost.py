@@ -3,7 +3,7 @@
 A non-negative float per control step, apart from the reward, for constrained RL (a cost budget
 per episode instead of reward shaping). With δ the vehicle's intrusion into the depth envelope's
 safety margin m (`auv_gym.depth_envelope`; 0 without an envelope), u the surge speed through
-the water and θ the pitch, after the step (docs/model.md §9):
+the water and θ the pitch, after the step (docs/model.md §12):
 
     c = w_depth·min(δ/m, 1) + w_speed·min(max(u − u_c, 0)/u_c, 1)
         + w_pitch·min(max(|θ| − θ_c, 0)/θ_c, 1),
