@@ -96,7 +96,8 @@ class AUVPath3DEnv(gym.Env):
     negative z, i.e. *above* the start point: it climbs about 97 m in 300 s. The origin is a
     reference point, not the sea surface: the model has no free surface and nothing depends
     on depth, so a vertical shift of path and start changes nothing (to make z a true depth,
-    shift both by at least 100 m, docs/model.md §2.0).
+    shift both by at least 100 m, docs/model.md §2.0: ``path_offset=(0, 0, 110)``, and add the
+    sea surface and seabed with `depth_envelope`, docs/model.md §12).
 
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
