@@ -317,6 +317,10 @@ class SimConfig:
                                     f"got {self.depth_envelope!r:.80}")  # fmt: skip
         put("path_offset", vector("path_offset", self.path_offset, 3, -POSITION_BOUND,
                                   POSITION_BOUND, "m"))  # fmt: skip
+        if any(self.path_offset) and not isinstance(self.path, PathDistribution):
+            raise ValueError(f"path_offset {self.path_offset} m moves drawn paths here; a fixed "
+                             "path is moved by from_kwargs (the env argument) or ShiftedPath"
+                             )  # fmt: skip
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
         put("random_current", real("random_current", self.random_current, 0.0,
                                    MAX_RANDOM_CURRENT, unit="m/s"))  # fmt: skip

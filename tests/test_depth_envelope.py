@@ -177,6 +177,13 @@ def test_bad_input_is_a_named_error(kwargs, error, message):
         AUVPath3DEnv(**kwargs)
 
 
+def test_a_config_built_directly_refuses_an_offset_it_would_not_apply():
+    from auv_gym.config import SimConfig
+
+    with pytest.raises(ValueError, match=r"path_offset \(0.0, 0.0, 5.0\) m moves drawn paths"):
+        SimConfig(path=Helix(), path_offset=(0.0, 0.0, 5.0))
+
+
 def test_a_drawn_path_that_crosses_the_envelope_is_refused_at_reset():
     # Helices climbing 10-20° from 20 m: within 300 m they rise 52-103 m, through the surface.
     env = AUVPath3DEnv(path={"families": ["helix"], "climb_angle_deg": [10.0, 20.0]},
