@@ -43,7 +43,7 @@ from auv_gym.vector_env import AUVPath3DVectorEnv
 from auv_gym.vehicle import remus100
 
 # may leave the observation space
-FAILURES = {"corridor", "pitch", "envelope", "non_finite", "overspeed"}
+FAILURES = {"corridor", "pitch", "envelope", "non_finite", "overspeed", "broached", "grounded"}
 assert FAILURES | {"path_end", ""} == set(TERMINATION_REASONS)
 PHYSICS_STEPS_PER_EXAMPLE = 20_000  # keeps an example in milliseconds
 CI = settings(
@@ -308,6 +308,21 @@ BAD = {
         st.dictionaries(st.text(min_size=1, max_size=4), st.just(1.0), min_size=1).filter(
             lambda d: not set(d) <= set(REWARD_TERMS)
         ),
+    ),
+    "path_offset": st.one_of(
+        NOT_NUMBERS.filter(lambda v: v is not None),
+        st.tuples(st.just(0.0), st.just(0.0), outside(-POSITION_BOUND, POSITION_BOUND)),
+    ),
+    "depth_envelope": st.one_of(  # and the default helix crosses any surface
+        st.fixed_dictionaries({"seabed_depth": outside(4.0, 11_000.0)}),
+        st.fixed_dictionaries({"margin": outside(0.0, 1000.0)}),
+        st.text(max_size=4),
+    ),
+    "safety_cost": st.one_of(
+        st.fixed_dictionaries({"speed_limit": st.one_of(outside(0.0, 10.0), st.just(0.0))}),
+        st.fixed_dictionaries({"pitch_limit": outside(0.0, math.pi / 2)}),
+        st.fixed_dictionaries({"depth": outside(0.0, 1e6)}),
+        st.text(max_size=4),
     ),
 }
 NAMES_IN_MESSAGES = {"reward_weights": "reward", "noise_hold": "noise"}
