@@ -169,6 +169,7 @@ def test_scenario_file_documents_every_scenario():
         "line_current",
         "deep_helix",
         "deep_survey",
+        "coastal_no_waves",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
