@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.current_profile import CurrentProfile
 from auv_gym.disturbances import (
     MAX_NOISE_AMPLITUDE,
     MAX_NOISE_HOLD,
@@ -53,6 +54,7 @@ from auv_gym.task import (
 )
 from auv_gym.validation import ArgumentTypeError, choice, flag, is_real, keys_within, real, vector
 from auv_gym.vehicle import AUVParams, params_from_spec, remus100
+from auv_gym.waves import WaveConfig
 
 __all__ = [
     "ACTUATOR_LIMITS",
@@ -219,6 +221,8 @@ class SimConfig:
     limits: TaskLimits = field(default_factory=TaskLimits)
     # "paper": the paper's 15 entries; "preview": the agent observation (`auv_gym.observation`)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
+    waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §12)
+    current_profile: CurrentProfile | None = None  # None: the uniform current only (§12.5)
 
     @classmethod
     def from_kwargs(
@@ -246,6 +250,8 @@ class SimConfig:
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        waves: WaveConfig | str | int | Mapping | None = None,
+        current_profile: CurrentProfile | Mapping | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -278,6 +284,8 @@ class SimConfig:
                 surge_limit=surge_limit,
             ),
             observation=ObservationConfig.from_spec(observation),
+            waves=WaveConfig.from_spec(waves),
+            current_profile=CurrentProfile.from_spec(current_profile),
         )
 
     def __post_init__(self) -> None:
@@ -292,6 +300,10 @@ class SimConfig:
                            ("observation", ObservationConfig)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
+                                        f"got {getattr(self, name)!r:.80}")  # fmt: skip
+        for name, kind in (("waves", WaveConfig), ("current_profile", CurrentProfile)):
+            if not isinstance(getattr(self, name), (kind, type(None))):
+                raise ArgumentTypeError(f"{name} must be None or a {kind.__name__}, "
                                         f"got {getattr(self, name)!r:.80}")  # fmt: skip
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
         put("random_current", real("random_current", self.random_current, 0.0,

@@ -13,6 +13,7 @@ from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
 from auv_gym.config import SimConfig
+from auv_gym.current_profile import CurrentProfile
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
 from auv_gym.path_generator import PathDistribution
@@ -22,6 +23,7 @@ from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
 from auv_gym.vehicle import AUVParams
+from auv_gym.waves import WaveConfig
 
 __all__ = ["AUVPath3DEnv", "check_reset_observations", "validate_actions"]
 
@@ -201,6 +203,8 @@ class AUVPath3DEnv(gym.Env):
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
+    | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §12) |
+    | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§12.5) |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -300,6 +304,8 @@ class AUVPath3DEnv(gym.Env):
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        waves: WaveConfig | str | int | Mapping | None = None,
+        current_profile: CurrentProfile | Mapping | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -310,7 +316,8 @@ class AUVPath3DEnv(gym.Env):
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights, random_current=random_current,
-            random_noise=random_noise, observation=observation,
+            random_noise=random_noise, observation=observation, waves=waves,
+            current_profile=current_profile,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
