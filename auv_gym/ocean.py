@@ -32,8 +32,8 @@ OCEAN_HEADER = len(OCEAN_FIELDS)
 OCEAN = field_indices("OceanIndex", OCEAN_FIELDS, __name__)
 # A stream id mixed with the episode keys: the ocean draws touch no other random sequence.
 _OCEAN_STREAM = 0x0CEA
-# The wave state between refreshes: (v_x, v_y, v_z, a_x, a_y, a_z, t₀) [m/s, m/s², s].
-NO_WAVE = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+# The wave state between refreshes: velocity, acceleration, its rate and t₀ (`refresh_waves`).
+NO_WAVE = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 def ocean_width(waves: WaveConfig | None) -> int:
@@ -70,14 +70,14 @@ def ocean_row(waves: WaveConfig | None, profile: CurrentProfile | None, keys: np
 @njit(cache=True, inline="always")
 def refresh_waves(ocean, st, step, k, dt, wave):
     """The wave state at physics step ``step`` (the k-th of the control period): the field
-    (`waves.wave_kinematics`) at the state's position and t₀ = step·dt [s] on every
+    (`waves.wave_kinematics`: v, a, j) at the state's position and t₀ = step·dt [s] on every
     ``wave_every``-th step and the first of each period, else ``wave`` unchanged."""
     n = int(ocean[OCEAN.wave_components])
     if n == 0 or k % int(ocean[OCEAN.wave_every]) != 0:
         return wave
     t0 = step * dt
-    vx, vy, vz, ax, ay, az = wave_kinematics(ocean, OCEAN_HEADER, n, st[0], st[1], st[2], t0)
-    return vx, vy, vz, ax, ay, az, t0
+    field = wave_kinematics(ocean, OCEAN_HEADER, n, st[0], st[1], st[2], t0)
+    return (*field, t0)
 
 
 @njit(cache=True, inline="always")
@@ -85,16 +85,17 @@ def ocean_forcing(ocean, st, t, wave, current, f, p):
     """(current, f) with the ocean added at time t [s] (docs/model.md §12.3-§12.5).
 
     The earth-frame ``current`` [m/s] gains the orbital velocity, extrapolated from the last
-    refresh with its acceleration, v + a (t − t₀), and the profiled current at the depth
+    refresh in time, v + a τ + j τ²/2 with τ = t − t₀, and the profiled current at the depth
     z = st[2]. The disturbance ``f`` gains the net fluid-inertia force (ρ∇ − m) R_Bᵀ a on
     (f_u, f_v, f_w), ρ∇ = m B/W, which vanishes for a neutral vehicle (B = W).
     """
     cx, cy, cz = current
     if ocean[OCEAN.wave_components] > 0.0:
-        tau = t - wave[6]
-        cx += wave[0] + wave[3] * tau
-        cy += wave[1] + wave[4] * tau
-        cz += wave[2] + wave[5] * tau
+        tau = t - wave[9]
+        half_tau2 = 0.5 * tau * tau
+        cx += wave[0] + wave[3] * tau + wave[6] * half_tau2
+        cy += wave[1] + wave[4] * tau + wave[7] * half_tau2
+        cz += wave[2] + wave[5] * tau + wave[8] * half_tau2
         if p.B != p.W:
             gain = p.m * (p.B / p.W - 1.0)
             cos_theta, sin_theta = math.cos(st[3]), math.sin(st[3])

@@ -207,12 +207,13 @@ def surface_elevation(components: np.ndarray, x: float, y: float, t: np.ndarray)
 
 @njit(cache=True, inline="always")
 def wave_kinematics(row, start, n, x, y, depth, t):
-    """Orbital velocity and local acceleration (v_x, v_y, v_z, a_x, a_y, a_z) in NED [m/s,
-    m/s²] at (x, y) and ``depth`` [m] below the surface at time t [s], summed over the ``n``
-    components stored from column ``start`` of ``row``. Above the surface (depth < 0) the
-    surface value is used: linear theory ends at z = 0 (docs/model.md §12.1)."""
+    """Orbital velocity, local acceleration and its rate (v_x, v_y, v_z, a_x, a_y, a_z, j_x,
+    j_y, j_z) in NED [m/s, m/s², m/s³] at (x, y) and ``depth`` [m] below the surface at time t
+    [s], summed over the ``n`` components stored from column ``start`` of ``row``; per
+    component ∂²v/∂t² = −ω² v, so j costs no further trigonometry. Above the surface
+    (depth < 0) the surface value is used: linear theory ends at z = 0 (docs/model.md §12.1)."""
     d = max(depth, 0.0)
-    vx = vy = vz = ax = ay = az = 0.0
+    vx = vy = vz = ax = ay = az = jx = jy = jz = 0.0
     for i in range(n):
         j = start + i * COMPONENT_DIM
         omega = row[j + COMPONENT.omega]
@@ -222,10 +223,14 @@ def wave_kinematics(row, start, n, x, y, depth, t):
         e = row[j + COMPONENT.a_omega] * math.exp(-row[j + COMPONENT.k] * d)
         cb, sb = row[j + COMPONENT.cos_beta], row[j + COMPONENT.sin_beta]
         vh, ah = e * c, e * omega * s  # horizontal speed and its ∂/∂t along β
+        w2 = omega * omega
         vx += vh * cb
         vy += vh * sb
         vz -= e * s
         ax += ah * cb
         ay += ah * sb
         az += e * omega * c
-    return vx, vy, vz, ax, ay, az
+        jx -= w2 * vh * cb
+        jy -= w2 * vh * sb
+        jz += w2 * e * s
+    return vx, vy, vz, ax, ay, az, jx, jy, jz

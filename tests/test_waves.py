@@ -1,0 +1,220 @@
+"""The wave field: sea-state statistics of long records, depth decay, the kernel's use of it,
+determinism, batched = single, and bad input (docs/model.md §12)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from auv_gym import AUVPath3DEnv
+from auv_gym.config import SimConfig
+from auv_gym.ocean import OCEAN, OCEAN_HEADER, ocean_row
+from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.waves import (
+    COMPONENT,
+    COMPONENT_DIM,
+    GRAVITY,
+    SEA_STATES,
+    WaveConfig,
+    draw_components,
+    surface_elevation,
+    wave_kinematics,
+)
+
+RECORD_S, RECORD_DT = 7200.0, 0.5  # [s] two hours sampled at 2 Hz: ~800 peak periods
+
+
+def _peak_period(z: np.ndarray, dt: float, period: float) -> float:
+    """T_p [s] of a record: the peak of its periodogram smoothed by a Gaussian of 0.1/T_p Hz."""
+    p = np.abs(np.fft.rfft(z)) ** 2 * dt / len(z)
+    f = np.fft.rfftfreq(len(z), dt)
+    width = 0.1 / period
+    h = np.arange(-4 * width, 4 * width + f[1], f[1])
+    kernel = np.exp(-0.5 * (h / width) ** 2)
+    return 1.0 / f[np.argmax(np.convolve(p, kernel / kernel.sum(), mode="same"))]
+
+
+def _record(config: WaveConfig, seed: int) -> np.ndarray:
+    components = draw_components(config, np.random.default_rng(seed))
+    return surface_elevation(components, 12.0, -7.0, np.arange(0.0, RECORD_S, RECORD_DT))
+
+
+@pytest.mark.parametrize("sea_state", sorted(SEA_STATES))
+def test_jonswap_records_have_the_configured_height_and_peak_period(sea_state):
+    config = WaveConfig.from_spec(f"sea_state_{sea_state}")
+    for seed in range(4):
+        z = _record(config, seed)
+        assert 4.0 * z.std() == pytest.approx(config.significant_height, rel=0.05)
+        assert _peak_period(z, RECORD_DT, config.peak_period) == pytest.approx(
+            config.peak_period, rel=0.05
+        )
+
+
+def test_pierson_moskowitz_records_have_the_configured_height_and_peak_period():
+    # PM's peak is broad: a single 32-line record locates it to about ±6 % (docs/model.md
+    # §12.2), so the peak period is checked on the mean of eight records.
+    config = WaveConfig.from_spec({"sea_state": 4, "spectrum": "pierson_moskowitz"})
+    periods = []
+    for seed in range(8):
+        z = _record(config, seed)
+        assert 4.0 * z.std() == pytest.approx(config.significant_height, rel=0.05)
+        periods.append(_peak_period(z, RECORD_DT, config.peak_period))
+    assert np.mean(periods) == pytest.approx(config.peak_period, rel=0.05)
+
+
+def test_components_obey_the_deep_water_dispersion_relation_and_carry_m0():
+    config = WaveConfig(significant_height=2.0, peak_period=8.0, components=40)
+    c = draw_components(config, np.random.default_rng(3))
+    np.testing.assert_allclose(c[:, COMPONENT.k] * GRAVITY, c[:, COMPONENT.omega] ** 2)
+    np.testing.assert_allclose(np.hypot(c[:, COMPONENT.kx], c[:, COMPONENT.ky]), c[:, COMPONENT.k])
+    amplitude = c[:, COMPONENT.a_omega] / c[:, COMPONENT.omega]
+    assert 4.0 * math.sqrt(np.sum(amplitude**2) / 2.0) == pytest.approx(2.0, rel=1e-12)
+    omega_p = 2 * math.pi / 8.0
+    assert np.all((c[:, COMPONENT.omega] >= 0.5 * omega_p) & (c[:, COMPONENT.omega] <= 3 * omega_p))
+
+
+def test_long_crested_waves_travel_toward_the_mean_direction():
+    config = WaveConfig(spreading=1000.0, direction=0.5)
+    beta = np.arctan2(*draw_components(config, np.random.default_rng(0))[:, [1, 0]].T)
+    np.testing.assert_allclose(beta, 0.5, atol=0.2)
+    spread = WaveConfig(spreading=2.0, direction=0.5, components=400)
+    beta = np.arctan2(*draw_components(spread, np.random.default_rng(0))[:, [1, 0]].T)
+    assert 0.4 < np.std(beta - 0.5) < 1.0  # cos-2s with s = 2: σ ≈ 0.72 rad
+
+
+def test_orbital_velocity_decays_as_exp_minus_k_depth_per_component():
+    config = WaveConfig(components=16)
+    components = draw_components(config, np.random.default_rng(7))
+    depths = np.array([0.0, 1.0, 5.0, 10.0, 25.0, 60.0])
+    for c in components:
+        row = c.copy()
+        speed = []
+        for d in depths:
+            vx, vy, vz, ax, ay, az, jx, jy, jz = wave_kinematics(row, 0, 1, 3.0, -4.0, d, 17.0)
+            speed.append(math.sqrt(vx * vx + vy * vy + vz * vz))
+            # the local acceleration is ω times the velocity, a quarter period ahead
+            assert math.hypot(ax, ay, az) == pytest.approx(c[COMPONENT.omega] * speed[-1])
+            np.testing.assert_allclose(
+                (jx, jy, jz), -(c[COMPONENT.omega] ** 2) * np.array((vx, vy, vz))
+            )
+        expected = c[COMPONENT.a_omega] * np.exp(-c[COMPONENT.k] * depths)
+        np.testing.assert_allclose(speed, expected, rtol=1e-12)
+    # above the surface the field stays at its surface value
+    assert wave_kinematics(components[0], 0, 1, 3.0, -4.0, -10.0, 17.0) == wave_kinematics(
+        components[0], 0, 1, 3.0, -4.0, 0.0, 17.0
+    )
+
+
+def test_vertical_orbital_velocity_at_the_surface_is_the_elevation_rate():
+    components = draw_components(WaveConfig(), np.random.default_rng(1))
+    row = components.ravel()
+    t, h = 40.0, 1e-4
+    rate = (surface_elevation(components, 2.0, 3.0, np.array([t + h, t - h])) @ [1, -1]) / (2 * h)
+    vz = wave_kinematics(row, 0, len(components), 2.0, 3.0, 0.0, t)[2]
+    assert -vz == pytest.approx(rate, rel=1e-6)  # NED: v_z positive down
+
+
+@pytest.mark.parametrize(("interval", "tolerance"), [(0.05, 4e-3), (0.01, 1e-3)])
+def test_a_vehicle_at_rest_rides_the_orbital_motion(make_sim, interval, tolerance):
+    # A neutral vehicle with no thrust and no noise moves with the water (docs/model.md §12.3):
+    # its track is the integral of the orbital velocity along it, here by a fine Euler sum.
+    # The kernel holds the field at the refresh position between refreshes (§12.3).
+    waves = WaveConfig(update_interval=interval)
+    sim = make_sim(disturbance="none", waves=waves, start_position=(0.0, 0.0, 3.0))
+    row = sim.ocean[0]
+    n = int(row[OCEAN.wave_components])
+    p = sim.state[0, :3].copy()
+    dt = 0.001
+    for k in range(10_000):  # 10 s
+        v = wave_kinematics(row, OCEAN_HEADER, n, p[0], p[1], p[2], (k + 0.5) * dt)
+        p += dt * np.array(v[:3])
+    for _ in range(200):
+        sim.step(np.zeros((1, 3)))
+    assert np.linalg.norm(p - [0.0, 0.0, 3.0]) > 0.4  # the excursion
+    assert np.linalg.norm(p - sim.state[0, :3]) < tolerance
+    np.testing.assert_allclose(sim.state[0, 5:10], 0.0, atol=1e-12)  # no relative motion
+
+
+def test_ocean_rows_depend_on_the_seed_only():
+    a, b = AUVPath3DEnv(waves="sea_state_4"), AUVPath3DEnv(waves="sea_state_4")
+    a.reset(seed=11)
+    b.reset(seed=11)
+    rows = a.sim.ocean.copy()
+    assert np.array_equal(rows, b.sim.ocean)
+    for _ in range(20):
+        a.step(np.array([1.0, 0.5, -0.5], np.float32))
+        b.step(np.array([0.0, -1.0, 1.0], np.float32))
+    assert np.array_equal(a.sim.ocean, rows) and np.array_equal(b.sim.ocean, rows)
+    b.reset(seed=12)
+    assert not np.array_equal(b.sim.ocean, rows)
+
+
+def test_same_seed_gives_identical_wavy_episodes():
+    runs = []
+    for _ in range(2):
+        env = AUVPath3DEnv(waves={"sea_state": 5, "components": 8}, max_time=5.0)
+        obs = [env.reset(seed=4)[0]]
+        actions = np.random.default_rng(2).uniform(-1, 1, size=(100, 3)).astype(np.float32)
+        obs += [env.step(a)[0] for a in actions]
+        runs.append(np.array(obs))
+    assert np.array_equal(*runs)
+
+
+def test_batched_wavy_episodes_equal_single_envs_bit_for_bit():
+    kwargs = {"waves": {"sea_state": 4, "components": 8},
+              "current_profile": {"surface_speed": 0.3, "reference_depth": 40.0,
+                                  "drift_amplitude": 0.2, "drift_period": 300.0},
+              "start_position": (0.0, 0.0, 5.0), "max_time": 2.0}  # fmt: skip
+    n, steps = 3, 50  # 40 control steps per episode: every vehicle autoresets once
+    venv = AUVPath3DVectorEnv(n, **kwargs)
+    actions = np.random.default_rng(0).uniform(-0.5, 0.5, size=(steps, n, 3))
+    batched = [venv.reset(seed=20)[0]] + [venv.step(a)[0] for a in actions]
+    for i in range(n):
+        env = AUVPath3DEnv(**kwargs)
+        single, done = [env.reset(seed=20 + i)[0]], False
+        for a in actions:
+            if done:
+                obs, _ = env.reset()
+                done = False
+            else:
+                obs, _, terminated, truncated, _ = env.step(a[i])
+                done = terminated or truncated
+            single.append(obs)
+        assert np.array_equal(np.array(single), np.array(batched)[:, i])
+
+
+def test_no_waves_no_profile_leaves_the_ocean_row_inactive():
+    config = SimConfig.from_kwargs()
+    row = ocean_row(config.waves, config.current_profile, np.array([1, 2], np.uint64), 0.01)
+    assert row.shape == (OCEAN_HEADER,) and not row.any()
+    wavy = ocean_row(WaveConfig(components=5), None, np.array([1, 2], np.uint64), 0.01)
+    assert wavy.shape == (OCEAN_HEADER + 5 * COMPONENT_DIM,)
+    assert wavy[OCEAN.active] == 1.0 and wavy[OCEAN.wave_every] == 5.0
+
+
+@pytest.mark.parametrize(
+    ("waves", "message"),
+    [
+        ({"significant_height": -1.0}, r"waves significant_height must be a finite number in "
+                                       r"\(0, 30\] m, got -1.0"),
+        ({"significant_height": math.nan}, "waves significant_height must be a finite number"),
+        ({"peak_period": math.inf}, r"waves peak_period must be a finite number in \[1, 30\] s"),
+        ({"peak_period": -8.0}, r"waves peak_period must be a finite number in \[1, 30\] s"),
+        ({"spreading": -2.0}, r"waves spreading must be a finite number in \[0, 1000\], got -2"),
+        ({"spreading": math.nan}, "waves spreading must be a finite number"),
+        ({"components": 0}, r"waves components must be an integer in \[1, 1024\], got 0"),
+        ({"components": -3}, r"waves components must be an integer in \[1, 1024\], got -3"),
+        ({"spectrum": "bretschneider"}, "unknown waves spectrum 'bretschneider'; valid: "
+                                        r"\['jonswap', 'pierson_moskowitz'\]"),
+        ({"gamma": 0.5}, r"waves gamma must be a finite number in \[1, 7\]"),
+        ({"update_interval": 0.0}, r"waves update_interval must be a finite number in \(0, 1\]"),
+        ({"height": 2.0}, r"waves has unknown key\(s\) \['height'\]"),
+        ("sea_state_9", r"unknown waves sea state 'sea_state_9'; valid: \['sea_state_3'"),
+        (2.5, "waves must be None, a sea state"),
+    ],
+)  # fmt: skip
+def test_bad_wave_arguments_name_the_argument(waves, message):
+    with pytest.raises(ValueError, match=message):
+        AUVPath3DEnv(waves=waves)
