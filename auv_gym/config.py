@@ -221,8 +221,8 @@ class SimConfig:
     limits: TaskLimits = field(default_factory=TaskLimits)
     # "paper": the paper's 15 entries; "preview": the agent observation (`auv_gym.observation`)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
-    waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §12)
-    current_profile: CurrentProfile | None = None  # None: the uniform current only (§12.5)
+    waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §13)
+    current_profile: CurrentProfile | None = None  # None: the uniform current only (§13.5)
 
     @classmethod
     def from_kwargs(

@@ -1,4 +1,4 @@
-r"""A horizontal current that varies with depth and turns slowly (docs/model.md §12.5).
+r"""A horizontal current that varies with depth and turns slowly (docs/model.md §13.5).
 
 Added to the uniform current of `auv_gym.disturbances` (constant mean + Gauss–Markov), which is
 unchanged. With d the depth below the surface z = 0 (NED z) clamped to [0, h]:

@@ -203,8 +203,8 @@ class AUVPath3DEnv(gym.Env):
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
-    | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §12) |
-    | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§12.5) |
+    | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §13) |
+    | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):

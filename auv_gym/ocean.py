@@ -1,4 +1,4 @@
-r"""The ocean beyond the uniform current: waves and a depth-profiled current (docs/model.md §12).
+r"""The ocean beyond the uniform current: waves and a depth-profiled current (docs/model.md §13).
 
 Each vehicle carries an *ocean row* (layout `OCEAN_FIELDS`, then the wave components of
 `auv_gym.waves`), drawn at reset from its episode keys (`ocean_row`) and read by
@@ -82,7 +82,7 @@ def refresh_waves(ocean, st, step, k, dt, wave):
 
 @njit(cache=True, inline="always")
 def ocean_forcing(ocean, st, t, wave, current, f, p):
-    """(current, f) with the ocean added at time t [s] (docs/model.md §12.3-§12.5).
+    """(current, f) with the ocean added at time t [s] (docs/model.md §13.3-§13.5).
 
     The earth-frame ``current`` [m/s] gains the orbital velocity, extrapolated from the last
     refresh in time, v + a τ + j τ²/2 with τ = t − t₀, and the profiled current at the depth

@@ -1,4 +1,4 @@
-r"""Ocean waves: a seeded linear (Airy) deep-water wave field (docs/model.md §12).
+r"""Ocean waves: a seeded linear (Airy) deep-water wave field (docs/model.md §13).
 
 The sea surface is the plane z = 0 of the NED frame; depth below it is d = z [m], positive down.
 A field of N regular components i (amplitude a_i, frequency ω_i, direction of travel β_i,
@@ -47,7 +47,7 @@ SPECTRA = ("jonswap", "pierson_moskowitz")
 # wave environments); each H_s lies inside the WMO code's band (3: 0.5-1.25 m, 4: 1.25-2.5 m,
 # 5: 2.5-4 m).
 SEA_STATES = {3: (0.88, 7.5), 4: (1.88, 8.8), 5: (3.25, 9.7)}
-DEFAULT_COMPONENTS = 32  # docs/model.md §12.2: Hs, Tp within 5 %, ≥ 50 % of the no-wave speed
+DEFAULT_COMPONENTS = 32  # docs/model.md §13.2: Hs, Tp within 5 %, ≥ 50 % of the no-wave speed
 MAX_COMPONENTS = 1024
 MAX_HEIGHT = 30.0  # [m] beyond any recorded sea
 PERIOD_RANGE = (1.0, 30.0)  # [s] wind sea and swell
@@ -106,7 +106,7 @@ class WaveConfig:
     (east) [rad]; ``spreading`` the s of D(β) ∝ cos^{2s}((β − β₀)/2) (Longuet-Higgins et al.
     1963; Goda 2000: s ≈ 10 for wind waves, 25-75 for swell; 0 is isotropic).
     ``update_interval`` is how often the kernels re-evaluate the field at the vehicle's
-    position; in between they extrapolate it with its acceleration (docs/model.md §12.3).
+    position; in between they extrapolate it with its acceleration (docs/model.md §13.3).
     """
 
     significant_height: float = SEA_STATES[4][0]  # [m] H_s = 4 √m₀
@@ -211,7 +211,7 @@ def wave_kinematics(row, start, n, x, y, depth, t):
     j_y, j_z) in NED [m/s, m/s², m/s³] at (x, y) and ``depth`` [m] below the surface at time t
     [s], summed over the ``n`` components stored from column ``start`` of ``row``; per
     component ∂²v/∂t² = −ω² v, so j costs no further trigonometry. Above the surface
-    (depth < 0) the surface value is used: linear theory ends at z = 0 (docs/model.md §12.1)."""
+    (depth < 0) the surface value is used: linear theory ends at z = 0 (docs/model.md §13.1)."""
     d = max(depth, 0.0)
     vx = vy = vz = ax = ay = az = jx = jy = jz = 0.0
     for i in range(n):

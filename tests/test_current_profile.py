@@ -1,4 +1,4 @@
-"""The depth-profiled current with heading drift (docs/model.md §12.5)."""
+"""The depth-profiled current with heading drift (docs/model.md §13.5)."""
 
 from __future__ import annotations
 

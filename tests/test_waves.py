@@ -1,5 +1,5 @@
 """The wave field: sea-state statistics of long records, depth decay, the kernel's use of it,
-determinism, batched = single, and bad input (docs/model.md §12)."""
+determinism, batched = single, and bad input (docs/model.md §13)."""
 
 from __future__ import annotations
 
@@ -54,7 +54,7 @@ def test_jonswap_records_have_the_configured_height_and_peak_period(sea_state):
 
 def test_pierson_moskowitz_records_have_the_configured_height_and_peak_period():
     # PM's peak is broad: a single 32-line record locates it to about ±6 % (docs/model.md
-    # §12.2), so the peak period is checked on the mean of eight records.
+    # §13.2), so the peak period is checked on the mean of eight records.
     config = WaveConfig.from_spec({"sea_state": 4, "spectrum": "pierson_moskowitz"})
     periods = []
     for seed in range(8):
@@ -118,9 +118,9 @@ def test_vertical_orbital_velocity_at_the_surface_is_the_elevation_rate():
 
 @pytest.mark.parametrize(("interval", "tolerance"), [(0.05, 4e-3), (0.01, 1e-3)])
 def test_a_vehicle_at_rest_rides_the_orbital_motion(make_sim, interval, tolerance):
-    # A neutral vehicle with no thrust and no noise moves with the water (docs/model.md §12.3):
+    # A neutral vehicle with no thrust and no noise moves with the water (docs/model.md §13.3):
     # its track is the integral of the orbital velocity along it, here by a fine Euler sum.
-    # The kernel holds the field at the refresh position between refreshes (§12.3).
+    # The kernel holds the field at the refresh position between refreshes (§13.3).
     waves = WaveConfig(update_interval=interval)
     sim = make_sim(disturbance="none", waves=waves, start_position=(0.0, 0.0, 3.0))
     row = sim.ocean[0]
