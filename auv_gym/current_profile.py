@@ -9,7 +9,8 @@ unchanged. With d the depth below the surface z = 0 (NED z) clamped to [0, h]:
 
 U_0 is the surface speed, U_h the speed at and below the reference depth h (the seabed, or the
 bottom of a shear layer). p = 1 is a linear shear layer; p = 1/7 with U_h = 0 is the classic
-seventh-power law of a tidal current over the bed (Soulsby 1997, §3.3, with h the water depth).
+seventh-power law of a tidal current over the bed (Soulsby 1997, section 3.3; h the water
+depth).
 The phase φ of the heading drift is drawn per episode from the episode's seed.
 """
 

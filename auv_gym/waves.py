@@ -8,7 +8,7 @@ phase φ_i) with the deep-water dispersion relation ω² = g k gives at (x, y, d
     v_h = Σ a_i ω_i e^{−k_i d} cos θ_i   (horizontal, along β_i)
     v_z = −Σ a_i ω_i e^{−k_i d} sin θ_i  (NED: positive down)
 
-and the local accelerations ∂v/∂t (Faltinsen 1990, Table 2.1; DNV-RP-C205 §3.2). The
+and the local accelerations ∂v/∂t (Faltinsen 1990, Table 2.1; DNV-RP-C205, section 3.2). The
 components are drawn per episode (`draw_components`) from a JONSWAP or Pierson–Moskowitz
 spectrum in H_s and T_p with cos-2s directional spreading; `wave_kinematics` evaluates the
 field in the compiled kernels.
@@ -43,9 +43,9 @@ __all__ = [
 GRAVITY = 9.81  # [m/s²]
 SPECTRA = ("jonswap", "pierson_moskowitz")
 # WMO sea-state code → (H_s [m], T_p [s]): the mean significant height and most probable modal
-# period of the open North Atlantic for codes 3-5 (Lee & Bales 1984, NATO standardized wind and
-# wave environments); each H_s lies inside the WMO code's band (3: 0.5-1.25 m, 4: 1.25-2.5 m,
-# 5: 2.5-4 m).
+# period of the open North Atlantic for codes 3-5 (Bales, Lee & Voelker 1981, NATO standardized
+# wave and wind environments; docs/model.md §13.2); each H_s lies inside the WMO code's band
+# (3: 0.5-1.25 m, 4: 1.25-2.5 m, 5: 2.5-4 m).
 SEA_STATES = {3: (0.88, 7.5), 4: (1.88, 8.8), 5: (3.25, 9.7)}
 DEFAULT_COMPONENTS = 32  # docs/model.md §13.2: Hs, Tp within 5 %, ≥ 50 % of the no-wave speed
 MAX_COMPONENTS = 1024
@@ -64,7 +64,7 @@ COMPONENT = field_indices("ComponentIndex", COMPONENT_FIELDS, __name__)
 
 def spectral_density(omega: np.ndarray, height: float, period: float, spectrum: str,
                      gamma: float = 3.3) -> np.ndarray:  # fmt: skip
-    """One-sided wave spectrum S(ω) [m²·s/rad] (DNV-RP-C205 §3.5.5):
+    """One-sided wave spectrum S(ω) [m²·s/rad] (DNV-RP-C205, section 3.5.5):
 
     Pierson–Moskowitz  S_PM(ω) = 5/16 H_s² ω_p⁴ ω⁻⁵ exp(−5/4 (ω_p/ω)⁴),  ω_p = 2π/T_p
     JONSWAP            S_J(ω) = (1 − 0.287 ln γ) S_PM(ω) γ^exp(−(ω − ω_p)²/(2 σ² ω_p²)),
