@@ -3,14 +3,21 @@ determinism, batched = single, and bad input (docs/model.md §13)."""
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from auv_gym import AUVPath3DEnv
 from auv_gym.config import SimConfig
 from auv_gym.ocean import OCEAN, OCEAN_HEADER, ocean_row
+from auv_gym.simulator import Simulator
 from auv_gym.vector_env import AUVPath3DVectorEnv
 from auv_gym.waves import (
     COMPONENT,
@@ -218,3 +225,56 @@ def test_no_waves_no_profile_leaves_the_ocean_row_inactive():
 def test_bad_wave_arguments_name_the_argument(waves, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(waves=waves)
+
+
+@settings(deadline=None, derandomize=True, database=None, max_examples=60)
+@given(
+    height=st.floats(0.01, 30.0),
+    period=st.floats(1.0, 30.0),
+    spectrum=st.sampled_from(["jonswap", "pierson_moskowitz"]),
+    components=st.integers(1, 200),
+    spreading=st.floats(0.0, 1000.0),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_every_valid_sea_carries_its_energy_in_its_band(
+    height, period, spectrum, components, spreading, seed
+):
+    config = WaveConfig(significant_height=height, peak_period=period, spectrum=spectrum,
+                        components=components, spreading=spreading)  # fmt: skip
+    c = draw_components(config, np.random.default_rng(seed))
+    amplitude = c[:, COMPONENT.a_omega] / c[:, COMPONENT.omega]
+    assert 4.0 * math.sqrt(np.sum(amplitude**2) / 2.0) == pytest.approx(height, rel=1e-9)
+    omega_p = 2 * math.pi / period
+    assert np.all(c[:, COMPONENT.omega] >= 0.5 * omega_p * (1 - 1e-12))
+    assert np.all(c[:, COMPONENT.omega] <= 3.0 * omega_p * (1 + 1e-12))
+    np.testing.assert_allclose(np.hypot(c[:, COMPONENT.cos_beta], c[:, COMPONENT.sin_beta]), 1.0)
+    # the orbital speed anywhere is bounded by the sum of the component speeds
+    v = wave_kinematics(c.ravel(), 0, components, 5.0, 9.0, 0.0, 123.0)
+    assert math.hypot(*v[:3]) <= np.sum(c[:, COMPONENT.a_omega]) * (1 + 1e-12)
+
+
+def test_threaded_kernel_equals_the_serial_one_with_waves():
+    config = SimConfig.from_kwargs(waves={"sea_state": 5, "components": 6},
+                                   current_profile={"surface_speed": 0.3, "reference_depth": 20.0},
+                                   start_position=(15.0, 5.0, 6.0))  # fmt: skip
+    runs = []
+    for parallel in (False, True):
+        sim = Simulator(config, 4, parallel=parallel)
+        sim.reset_rows(range(4), [np.random.default_rng(s) for s in range(4)])
+        actions = np.random.default_rng(9).uniform(-1, 1, size=(30, 4, 3))
+        for a in actions:
+            sim.step(a)
+        runs.append(sim.state.copy())
+    assert np.array_equal(*runs)
+
+
+def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
+    out = tmp_path / "depth.json"
+    root = Path(__file__).resolve().parents[1]
+    subprocess.run([sys.executable, "-m", "benchmarks.wave_depth", "--depths", "3", "--seeds", "2",
+                    "--max-time", "4", "--json", str(out)], cwd=root, check=True,
+                   capture_output=True, text=True)  # fmt: skip
+    rows = json.loads(out.read_text())
+    assert [(r["depth"], r["waves"]) for r in rows] == [(3.0, "sea_state_4"), (3.0, None)]
+    assert all(r["episodes"] == 2 and r["low"] <= r["rms_distance"] <= r["high"] for r in rows)
+    assert rows[0]["rms_distance"] != rows[1]["rms_distance"]  # the waves moved the vehicle
