@@ -220,13 +220,15 @@ class Simulator:
     def restore(self, snapshot: Mapping[str, Any]) -> None:
         """Continue from a `snapshot` of a simulator built with the same arguments; ValueError
         naming the first array whose shape differs (then nothing is changed)."""
+        # A snapshot from before the ocean rows existed (a paused training run) had a flat sea.
+        arrays = {"ocean": np.zeros((self.n, ocean_width(None))), **snapshot["arrays"]}
         for name in SNAPSHOT_ARRAYS:
-            target, value = getattr(self, name), snapshot["arrays"][name]
+            target, value = getattr(self, name), arrays[name]
             if target.shape != value.shape:
                 raise ValueError(f"snapshot array {name} has shape {value.shape}, this vector "
                                  f"env's {target.shape}: built with other arguments")  # fmt: skip
         for name in SNAPSHOT_ARRAYS:  # in place: views such as `error_integral` stay attached
-            np.copyto(getattr(self, name), snapshot["arrays"][name])
+            np.copyto(getattr(self, name), arrays[name])
         self.paths[:] = snapshot["paths"]
 
     def reset_row(self, i: int, rng: np.random.Generator) -> None:

@@ -278,3 +278,21 @@ def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
     assert [(r["depth"], r["waves"]) for r in rows] == [(3.0, "sea_state_4"), (3.0, None)]
     assert all(r["episodes"] == 2 and r["low"] <= r["rms_distance"] <= r["high"] for r in rows)
     assert rows[0]["rms_distance"] != rows[1]["rms_distance"]  # the waves moved the vehicle
+
+
+def test_snapshots_carry_the_sea_and_older_snapshots_had_a_flat_one():
+    actions = np.random.default_rng(1).uniform(-0.5, 0.5, size=(60, 2, 3))
+    venv = AUVPath3DVectorEnv(2, waves={"components": 4}, max_time=1.0)  # autoresets redraw
+    venv.reset(seed=3)
+    for a in actions[:30]:
+        venv.step(a)
+    snapshot = venv.snapshot()
+    first = [venv.step(a)[0] for a in actions[30:]]
+    venv.restore(snapshot)
+    assert np.array_equal(first, [venv.step(a)[0] for a in actions[30:]])
+    flat = Simulator(SimConfig.from_kwargs(), 2)
+    old = flat.snapshot()
+    del old["arrays"]["ocean"]  # written before the ocean rows existed
+    flat.ocean[:] = 1.0
+    flat.restore(old)
+    assert not flat.ocean.any()
