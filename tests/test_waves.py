@@ -3,6 +3,7 @@ determinism, batched = single, and bad input (docs/model.md §13)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import subprocess
@@ -296,3 +297,30 @@ def test_snapshots_carry_the_sea_and_older_snapshots_had_a_flat_one():
     flat.ocean[:] = 1.0
     flat.restore(old)
     assert not flat.ocean.any()
+
+
+def test_only_a_non_neutral_vehicle_feels_the_fluid_acceleration():
+    # (ρ∇ − m) R_Bᵀ a with ρ∇ = m B/W (docs/model.md §13.3): zero for the neutral REMUS 100
+    from auv_gym.ocean import NO_WAVE, ocean_forcing
+    from auv_gym.vehicle import params_record, remus100
+
+    row = ocean_row(WaveConfig(components=3), None, np.array([5, 6], np.uint64), 0.01)
+    wave = (*NO_WAVE[:3], 0.1, -0.2, 0.3, *NO_WAVE[6:])  # a = (0.1, −0.2, 0.3) m/s², t₀ = 0
+    st = np.zeros(11)
+    st[3], st[4] = 0.2, 1.0  # θ, ψ [rad]
+    f = (1.0, 2.0, 3.0, 4.0, 5.0)
+    neutral = params_record(remus100().to_vector())
+    assert ocean_forcing(row, st, 0.0, wave, (0.0, 0.0, 0.0), f, neutral)[1] == f
+    nominal = remus100()
+    light = params_record(dataclasses.replace(nominal, B=1.1 * nominal.W).to_vector())
+    got = np.array(ocean_forcing(row, st, 0.0, wave, (0.0, 0.0, 0.0), f, light)[1]) - f
+    c, s = math.cos, math.sin
+    rotation = np.array(
+        [
+            [c(1.0) * c(0.2), s(1.0) * c(0.2), -s(0.2)],
+            [-s(1.0), c(1.0), 0.0],
+            [c(1.0) * s(0.2), s(1.0) * s(0.2), c(0.2)],
+        ]
+    )  # R_Bᵀ, roll 0
+    expected = 0.1 * nominal.m * rotation @ [0.1, -0.2, 0.3]
+    np.testing.assert_allclose(got, [*expected, 0.0, 0.0], rtol=1e-9, atol=1e-15)
