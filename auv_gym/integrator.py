@@ -1,7 +1,8 @@
 """Time integration: classical RK4 of `dynamics.state_derivative` and the control-period loop.
 
 `advance_vehicle` moves one vehicle through one control period: per physics step it draws the
-white noise, applies the actuator model, takes one RK4 step and advances the Gauss–Markov
+white noise, applies the actuator model, takes one RK4 step (with the waves and the profiled
+current of `auv_gym.ocean` added to the current, when configured) and advances the Gauss–Markov
 current; at the end it writes the period's mean τ and f and refreshes the guidance row and the
 observation. Everything that simulates calls it: the single env with one row, the vector env
 with thousands (`simulator`).
