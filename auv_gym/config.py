@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope, check_path_depths
 from auv_gym.disturbances import (
     MAX_NOISE_AMPLITUDE,
@@ -56,6 +57,7 @@ from auv_gym.task import (
 )
 from auv_gym.validation import ArgumentTypeError, choice, flag, is_real, keys_within, real, vector
 from auv_gym.vehicle import AUVParams, params_from_spec, remus100
+from auv_gym.waves import WaveConfig
 
 __all__ = [
     "ACTUATOR_LIMITS",
@@ -226,6 +228,8 @@ class SimConfig:
     path_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     depth_envelope: DepthEnvelope | None = None  # None: no surface, no seabed (the paper's)
     safety_cost: SafetyCost = field(default_factory=SafetyCost)
+    waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §13)
+    current_profile: CurrentProfile | None = None  # None: the uniform current only (§13.5)
 
     @classmethod
     def from_kwargs(
@@ -256,6 +260,8 @@ class SimConfig:
         path_offset: Sequence[float] | None = None,
         depth_envelope: DepthEnvelope | Mapping | bool | None = None,
         safety_cost: SafetyCost | Mapping | None = None,
+        waves: WaveConfig | str | int | Mapping | None = None,
+        current_profile: CurrentProfile | Mapping | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -296,6 +302,8 @@ class SimConfig:
             path_offset=offset,
             depth_envelope=DepthEnvelope.from_spec(depth_envelope),
             safety_cost=SafetyCost.from_spec(safety_cost),
+            waves=WaveConfig.from_spec(waves),
+            current_profile=CurrentProfile.from_spec(current_profile),
         )
 
     def __post_init__(self) -> None:
@@ -321,6 +329,10 @@ class SimConfig:
             raise ValueError(f"path_offset {self.path_offset} m moves drawn paths here; a fixed "
                              "path is moved by from_kwargs (the env argument) or ShiftedPath"
                              )  # fmt: skip
+        for name, kind in (("waves", WaveConfig), ("current_profile", CurrentProfile)):
+            if not isinstance(getattr(self, name), (kind, type(None))):
+                raise ArgumentTypeError(f"{name} must be None or a {kind.__name__}, "
+                                        f"got {getattr(self, name)!r:.80}")  # fmt: skip
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
         put("random_current", real("random_current", self.random_current, 0.0,
                                    MAX_RANDOM_CURRENT, unit="m/s"))  # fmt: skip

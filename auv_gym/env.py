@@ -13,6 +13,7 @@ from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
 from auv_gym.config import SimConfig
+from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
@@ -24,6 +25,7 @@ from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
 from auv_gym.vehicle import AUVParams
+from auv_gym.waves import WaveConfig
 
 __all__ = ["AUVPath3DEnv", "check_reset_observations", "validate_actions"]
 
@@ -209,6 +211,8 @@ class AUVPath3DEnv(gym.Env):
     | `path_offset` | None | (dx, dy, dz) [m] moving the path and its default start (real depth) |
     | `depth_envelope` | None | True, {seabed_depth, margin} or `DepthEnvelope`: surface z = 0 |
     | `safety_cost` | defaults | {depth, speed, pitch, speed_limit, pitch_limit}: `info["cost"]` |
+    | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §13) |
+    | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -269,7 +273,7 @@ class AUVPath3DEnv(gym.Env):
       helices as paths; ``path="random"`` (a `PathDistribution`), `random_current`,
       `random_noise`, ``actuator="random"`` and `params` as a dict (docs/model.md §3.8).
       Also without effect on v0: the `observation` argument and the "precision" reward term
-      (weight 0 by default).
+      (weight 0 by default), and `waves` and `current_profile` (None by default).
     * `AUVPath3DSpeedLimit-v0` (registered as `AUVPath3D-v1` until the ids were renamed, so that
       v0 is not reported "out of date"): realistic speed — the v0 environment with
       `surge_limit` = 2.0 m/s by default: the overspeed reward term and the "overspeed"
@@ -311,6 +315,8 @@ class AUVPath3DEnv(gym.Env):
         path_offset: Sequence[float] | None = None,
         depth_envelope: DepthEnvelope | Mapping | bool | None = None,
         safety_cost: SafetyCost | Mapping | None = None,
+        waves: WaveConfig | str | int | Mapping | None = None,
+        current_profile: CurrentProfile | Mapping | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -322,7 +328,8 @@ class AUVPath3DEnv(gym.Env):
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights, random_current=random_current,
             random_noise=random_noise, observation=observation, path_offset=path_offset,
-            depth_envelope=depth_envelope, safety_cost=safety_cost,
+            depth_envelope=depth_envelope, safety_cost=safety_cost, waves=waves,
+            current_profile=current_profile,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

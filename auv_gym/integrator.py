@@ -1,7 +1,8 @@
 """Time integration: classical RK4 of `dynamics.state_derivative` and the control-period loop.
 
 `advance_vehicle` moves one vehicle through one control period: per physics step it draws the
-white noise, applies the actuator model, takes one RK4 step and advances the Gauss–Markov
+white noise, applies the actuator model, takes one RK4 step (with the waves and the profiled
+current of `auv_gym.ocean` added to the current, when configured) and advances the Gauss–Markov
 current; at the end it writes the period's mean τ and f and refreshes the guidance row and the
 observation. Everything that simulates calls it: the single env with one row, the vector env
 with thousands (`simulator`).
@@ -21,6 +22,7 @@ from auv_gym.disturbances import N_CHANNELS, gauss_markov_step, white_noise
 from auv_gym.dynamics import STATE, STATE_DIM, state_derivative
 from auv_gym.guidance import wrap_angle
 from auv_gym.observation import build_observation, guidance_row
+from auv_gym.ocean import NO_WAVE, OCEAN, ocean_forcing, refresh_waves
 from auv_gym.records import field_indices, fixed_tuple, record_type
 from auv_gym.vehicle import params_record
 
@@ -120,7 +122,7 @@ def _actuation(a_X, a_M, a_N, cfg, fin_gain, u):
 
 @njit(cache=True, inline="always")
 def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index, kind, pdata,
-                    cfg_array, guid, obs, record):  # fmt: skip
+                    cfg_array, guid, obs, record, ocean):  # fmt: skip
     """Advance one vehicle by one control period, in place; returns False on a non-finite state.
 
     ``st`` (layout `dynamics.STATE`) and ``cur`` (Gauss–Markov current deviation (x, y, z)
@@ -128,7 +130,8 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     while the state is finite, so the caller keeps the last valid observation. ``action`` holds
     (a_X, a_M, a_N) in [−1, 1]; ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
     ``step_index`` counts physics steps since the reset and keys the noise (`white_noise`) and
-    the current (`gauss_markov_step`).
+    the current (`gauss_markov_step`). ``ocean`` is the vehicle's ocean row (`ocean.ocean_row`):
+    waves and a profiled current added to the current, when its ``active`` flag is set.
     """
     cfg = config_record(cfg_array)
     p = params_record(p_array)
@@ -142,11 +145,16 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     sum_X = sum_M = sum_N = 0.0
     sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
     finite = True
+    ocean_on = ocean[OCEAN.active] != 0.0
+    wave = NO_WAVE
     for k in range(n_sub):
         n = step_index + k
         f = white_noise(noise_amplitude, noise_key, n, hold_steps)
         X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
         current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
+        if ocean_on:  # held across the RK4 stages, like the current; t at mid-step
+            wave = refresh_waves(ocean, x, n, k, cfg.physics_dt, wave)
+            current, f = ocean_forcing(ocean, x, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
         nxt = rk4(x, (X, M, N), f, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
         dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
         sum_X += X

@@ -35,6 +35,7 @@ from auv_gym.observation import (
     build_observation,
     guidance_row,
 )
+from auv_gym.ocean import ocean_row, ocean_width
 from auv_gym.paths import Path
 from auv_gym.preview import extend_rows
 from auv_gym.randomization import EpisodeTask, draw_task
@@ -55,7 +56,7 @@ __all__ = ["Simulator"]
 
 @njit(cache=True, inline="always")
 def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code, cost):  # fmt: skip
+              obs_low, obs_high, guid, obs, record, terms, reward, code, cost, ocean):  # fmt: skip
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
     config and task are row ``row[i]`` of the episode table (`Simulator`)."""
     a = actions[i]
@@ -64,7 +65,8 @@ def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, 
     r = row[i]
     cfg = cfgs[r]
     advance_vehicle(state[i], current[i], a, params[i], keys[i, KEY.noise], keys[i, KEY.current],
-                    step_index[i], kinds[r], pdata[r], cfg, guid[i], obs[i], record[i])  # fmt: skip
+                    step_index[i], kinds[r], pdata[r], cfg, guid[i], obs[i], record[i],
+                    ocean[i])  # fmt: skip
     step_index[i] += int(config_record(cfg).n_sub)
     reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r],
                                   terms[i])  # fmt: skip
@@ -87,25 +89,25 @@ def _first_non_finite_row(actions):
 # cost two atomic updates each, a quarter of its time (the threaded kernel's loop has none).
 @njit(cache=True, _nrt=False)
 def _step_one(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code, cost):  # fmt: skip
+              obs_low, obs_high, guid, obs, record, terms, reward, code, cost, ocean):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in range(state.shape[0]):
             _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
                       cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
-                      code, cost)  # fmt: skip
+                      code, cost, ocean)  # fmt: skip
     return bad
 
 
 @njit(cache=True, parallel=True)
 def _step_all(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code, cost):  # fmt: skip
+              obs_low, obs_high, guid, obs, record, terms, reward, code, cost, ocean):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in prange(state.shape[0]):
             _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
                       cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
-                      code, cost)  # fmt: skip
+                      code, cost, ocean)  # fmt: skip
     return bad
 
 
@@ -129,7 +131,7 @@ _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code
 # the others are fixed at construction. `error_integral` is a view into `extra` and follows it.
 SNAPSHOT_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
                    "terms", "reward", "code", "cost", "_actions", "extra", "last_action", "_cfg",
-                   "_task", "_pdata", "_kind")  # fmt: skip
+                   "_task", "_pdata", "_kind", "ocean")  # fmt: skip
 
 
 class Simulator:
@@ -180,6 +182,8 @@ class Simulator:
         self.code = np.zeros(n, dtype=np.int64)
         self.cost = np.zeros(n)  # safety cost of the last step (`auv_gym.safety_cost`)
         self._actions = np.zeros((n, 3))
+        # Waves and profiled current per vehicle (`ocean.ocean_row`); all zero without them.
+        self.ocean = np.zeros((n, ocean_width(config.waves)))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
         self.layout = config.observation
         self.obs_low, self.obs_high = self.layout.bounds(config.current_speed_bound)
@@ -221,13 +225,15 @@ class Simulator:
     def restore(self, snapshot: Mapping[str, Any]) -> None:
         """Continue from a `snapshot` of a simulator built with the same arguments; ValueError
         naming the first array whose shape differs (then nothing is changed)."""
+        # A snapshot from before the ocean rows existed (a paused training run) had a flat sea.
+        arrays = {"ocean": np.zeros((self.n, ocean_width(None))), **snapshot["arrays"]}
         for name in SNAPSHOT_ARRAYS:
-            target, value = getattr(self, name), snapshot["arrays"][name]
+            target, value = getattr(self, name), arrays[name]
             if target.shape != value.shape:
                 raise ValueError(f"snapshot array {name} has shape {value.shape}, this vector "
                                  f"env's {target.shape}: built with other arguments")  # fmt: skip
         for name in SNAPSHOT_ARRAYS:  # in place: views such as `error_integral` stay attached
-            np.copyto(getattr(self, name), snapshot["arrays"][name])
+            np.copyto(getattr(self, name), arrays[name])
         self.paths[:] = snapshot["paths"]
 
     def reset_row(self, i: int, rng: np.random.Generator) -> None:
@@ -296,6 +302,8 @@ class Simulator:
         self.state[i, STATE.s] = s0
         # Start the Gauss–Markov deviation in its stationary distribution.
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
+        if cfg.waves is not None or cfg.current_profile is not None:
+            self.ocean[i] = ocean_row(cfg.waves, cfg.current_profile, self.keys[i], cfg.physics_dt)
         self.step_index[i] = 0
         self.record[i] = 0.0
         self.terms[i] = 0.0
@@ -335,7 +343,7 @@ class Simulator:
         bad_row = self._kernel(self.state, self.current, self._actions, self.params, self.keys,
                      self.step_index, self._row, self._kind, self._pdata, self._cfg, self._task,
                      OBS_LOW, OBS_HIGH, self.guid, self.obs, self.record, self.terms,
-                     self.reward, self.code, self.cost)  # fmt: skip
+                     self.reward, self.code, self.cost, self.ocean)  # fmt: skip
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
         if self.extra.shape[1]:

@@ -48,7 +48,12 @@ def _actions(n: int, count: int, seed: int) -> np.ndarray:
 
 
 def measure_vector(
-    n: int, seconds: float, max_time: float, threads: int | None = None, seed: int = 0
+    n: int,
+    seconds: float,
+    max_time: float,
+    threads: int | None = None,
+    seed: int = 0,
+    env_kwargs: dict[str, Any] | None = None,
 ) -> dict[str, float]:
     """Time `AUVPath3DVectorEnv.step` for `seconds` of wall clock, compilation excluded.
 
@@ -59,7 +64,7 @@ def measure_vector(
     from auv_gym.vector_env import AUVPath3DVectorEnv
 
     # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
-    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads)
+    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads, **(env_kwargs or {}))
     bank = _actions(n, 16, seed)
     env.reset(seed=seed)
     env.step(bank[0])  # compile / load the kernel outside the timed loop
@@ -190,6 +195,29 @@ def machine() -> dict[str, Any]:
     }
 
 
+def _waves_rows(args: argparse.Namespace, results: dict[str, Any]) -> None:
+    """The same N with and without waves, back to back per thread count: the ratio of the
+    two physics rates is measured under one machine load."""
+    from auv_gym.waves import WaveConfig
+
+    waves = WaveConfig()  # sea state 4, default components and update interval
+    print(
+        f"\nWaves: sea state 4 ({waves.spectrum}, {waves.components} components, field "
+        f"refreshed every {waves.update_interval:g} s) beside no waves, N = {args.waves_n}"
+    )
+    print(f"{'threads':>7} {'no waves steps/s':>17} {'waves steps/s':>14} {'ratio':>6}")
+    results["waves"] = []
+    for threads in args.threads:
+        calm = measure_vector(args.waves_n, args.seconds, args.max_time, threads)
+        wavy = measure_vector(args.waves_n, args.seconds, args.max_time, threads,
+                              env_kwargs={"waves": waves})  # fmt: skip
+        ratio = wavy["physics_steps_per_s"] / calm["physics_steps_per_s"]
+        results["waves"].append({"threads": calm["threads"], "no_waves": calm, "waves": wavy,
+                                 "ratio": ratio})  # fmt: skip
+        print(f"{calm['threads']:>7} {calm['physics_steps_per_s']:>17,.0f} "
+              f"{wavy['physics_steps_per_s']:>14,.0f} {ratio:>6.1%}")  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES),
@@ -197,6 +225,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--seconds", type=float, default=4.0, help="timed wall clock per size")
     parser.add_argument("--max-time", type=float, default=10.0,
                         help="episode length [s]; short so that autoresets happen")  # fmt: skip
+    parser.add_argument("--waves-n", type=int, default=4096,
+                        help="vehicles of the side-by-side run with waves (sea state 4, "
+                             "default components); 0 skips it")  # fmt: skip
     parser.add_argument("--memory-n", type=int, default=MEMORY_N,
                         help="vehicles of the peak-memory run; 0 skips it")  # fmt: skip
     parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64],
@@ -214,6 +245,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             writable_location(args.json, "--json", folder=False)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
+        args.waves_n = 64
         args.threads = [1]
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
 
@@ -233,6 +265,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{r['vehicle_steps_per_s']:>16,.0f} "
               f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
+
+    if args.waves_n > 0:
+        _waves_rows(args, results)
 
     if args.memory_n > 0:
         mem = _fresh_process(f"measure_memory({args.memory_n})")

@@ -206,5 +206,7 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
         assert r["real_time_factor"] == pytest.approx(0.05 * r["vehicle_steps_per_s"])
         assert r["autoresets"] >= r["n"]  # every vehicle went through a NEXT_STEP autoreset
     assert results["memory"]["n"] == 1024 and results["memory"]["peak_bytes"] > 0
+    assert [r["waves"]["n"] for r in results["waves"]] == [64]  # waves beside no waves
+    assert 0 < results["waves"][0]["ratio"] < 2
     assert {r["backend"] for r in results["ppo"]} == {"adapter", "DummyVecEnv"}
     assert all(r["timesteps_per_s"] > 0 for r in results["ppo"])
