@@ -12,6 +12,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
+from auv_gym.actuators import ActuatorParams
 from auv_gym.config import SimConfig
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
@@ -99,7 +100,9 @@ class AUVPath3DEnv(gym.Env):
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
     (50 N, 10 N·m, 10 N·m); "fins" scale X by 50 N and M, N by the fin authority
-    6.15·u|u|·π/6 N·m (docs/model.md §2.3). Values beyond ±1 saturate (the only clipping);
+    6.15·u|u|·π/6 N·m (docs/model.md §2.3). "realistic": normalised commands (n, δ_s, δ_r) of
+    the propeller shaft speed and the stern-plane and rudder angles, which must lie in the box
+    (docs/model.md §2.6). Values beyond ±1 saturate otherwise (the only clipping);
     NaN, inf or a wrong shape raise ValueError, strings, booleans and complex numbers TypeError.
 
     ## Observation Space
@@ -184,7 +187,8 @@ class AUVPath3DEnv(gym.Env):
     | `disturbance` | "paper" | "paper" (±35 white noise), "none", an amplitude, a `NoiseConfig` |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
     | `param_uncertainty` | 0.0 | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode |
-    | `actuator` | "paper" | "paper", "fins" or "random" (either, ½ each, per episode) |
+    | `actuator` | "paper" | "paper", "fins", "realistic" or "random" ("paper" or "fins", ½ each) |
+    | `actuator_params` | defaults | `ActuatorParams` or dict of its fields ("realistic" only) |
     | `random_current` | 0.0 | V [m/s]: per episode a horizontal current, speed U[0, V] |
     | `random_noise` | 0.0 | ε: white-noise amplitudes × (1 + U[−ε, ε]) per episode |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
@@ -300,6 +304,7 @@ class AUVPath3DEnv(gym.Env):
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -310,7 +315,7 @@ class AUVPath3DEnv(gym.Env):
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights, random_current=random_current,
-            random_noise=random_noise, observation=observation,
+            random_noise=random_noise, observation=observation, actuator_params=actuator_params,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

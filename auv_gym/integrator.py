@@ -17,6 +17,7 @@ import math
 
 from numba import njit
 
+from auv_gym.actuators import ACTUATOR_CONFIG_FIELDS, ACTUATOR_STATE, actuator_forces, actuator_step
 from auv_gym.disturbances import N_CHANNELS, gauss_markov_step, white_noise
 from auv_gym.dynamics import STATE, STATE_DIM, state_derivative
 from auv_gym.guidance import wrap_angle
@@ -36,15 +37,15 @@ __all__ = [
     "rk4_step",
 ]
 
-PAPER_ACTUATOR, FIN_ACTUATOR = 0, 1
-ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR}
+PAPER_ACTUATOR, FIN_ACTUATOR, REALISTIC_ACTUATOR = 0, 1, 2
+ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR, "realistic": REALISTIC_ACTUATOR}
 
 # Layout of the packed simulation config (`config.SimConfig.packed`), read as a record.
 CONFIG_FIELDS = (
     "n_sub", "physics_dt", "hold_steps", "u_d", "sigma", "actuator", "gm_a",
     "noise_f_u", "noise_f_v", "noise_f_w", "noise_f_q", "noise_f_r",
     "limit_X", "limit_M", "limit_N", "current_x", "current_y", "current_z",
-    "gm_b_x", "gm_b_y", "gm_b_z",
+    "gm_b_x", "gm_b_y", "gm_b_z", *ACTUATOR_CONFIG_FIELDS,
 )  # fmt: skip
 CONFIG_DIM = len(CONFIG_FIELDS)
 ConfigRecord = record_type("ConfigRecord", CONFIG_FIELDS, __name__)
@@ -119,14 +120,16 @@ def _actuation(a_X, a_M, a_N, cfg, fin_gain, u):
 
 
 @njit(cache=True, inline="always")
-def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index, kind, pdata,
-                    cfg_array, guid, obs, record):  # fmt: skip
+def advance_vehicle(st, cur, act, action, p_array, noise_key, current_key, step_index, kind,
+                    pdata, cfg_array, guid, obs, record):  # fmt: skip
     """Advance one vehicle by one control period, in place; returns False on a non-finite state.
 
-    ``st`` (layout `dynamics.STATE`) and ``cur`` (Gauss–Markov current deviation (x, y, z)
-    [m/s]) are updated; ``guid``, ``obs`` and ``record`` (layout `RECORD`) are rewritten only
+    ``st`` (layout `dynamics.STATE`), ``cur`` (Gauss–Markov current deviation (x, y, z)
+    [m/s]) and, with the realistic actuators, ``act`` (layout `actuators.ACTUATOR_STATE`) are
+    updated; ``guid``, ``obs`` and ``record`` (layout `RECORD`) are rewritten only
     while the state is finite, so the caller keeps the last valid observation. ``action`` holds
-    (a_X, a_M, a_N) in [−1, 1]; ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
+    (a_X, a_M, a_N) in [−1, 1] (realistic actuators: the normalised commands of n, δ_s, δ_r);
+    ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
     ``step_index`` counts physics steps since the reset and keys the noise (`white_noise`) and
     the current (`gauss_markov_step`).
     """
@@ -142,12 +145,27 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     sum_X = sum_M = sum_N = 0.0
     sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
     finite = True
+    # Realistic actuators (docs/model.md §2.6): their state moves first in each physics step,
+    # then its τ is held over the RK4 step; the fins' Y, Z enter where f_v, f_w do.
+    realistic = int(cfg.actuator) == REALISTIC_ACTUATOR
+    shaft, d_s = act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s]
+    d_r = act[ACTUATOR_STATE.delta_r]
+    rate_limited = 0
     for k in range(n_sub):
         n = step_index + k
         f = white_noise(noise_amplitude, noise_key, n, hold_steps)
-        X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
+        if realistic:
+            shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, cfg)
+            rate_limited += limited
+            X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w],
+                                            cfg)  # fmt: skip
+            f_in = (f[0], f[1] + Y, f[2] + Z, f[3], f[4])
+        else:
+            X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
+            f_in = f
         current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
-        nxt = rk4(x, (X, M, N), f, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
+        nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma,
+                  cfg.physics_dt)  # fmt: skip
         dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
         sum_X += X
         sum_M += M
@@ -167,6 +185,10 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     for j in range(STATE_DIM):
         st[j] = x[j]
     cur[0], cur[1], cur[2] = dc
+    if realistic:
+        act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s] = shaft, d_s
+        act[ACTUATOR_STATE.delta_r] = d_r
+        act[ACTUATOR_STATE.rate_limited] = rate_limited / n_sub
     if not finite:
         return False
     record[RECORD.X] = sum_X / n_sub
