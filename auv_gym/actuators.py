@@ -46,12 +46,15 @@ __all__ = [
     "propeller_torque",
 ]
 
-# Prestero's fin lift per u² per radian, Y_uuδr = −Z_uuδs [kg/(m·rad)], and fin position x_fin
-# [m]: x_fin · Y_uuδr = 6.15 kg/rad = `AUVParams.fin_moment_coeff`, the moment of the "fins" mode.
-_PRESTERO_FIN_LIFT = 9.64
+# The paper's vehicle (Prestero 2001): fin moment per u² per radian |M_uuδs| = |N_uuδr| [kg/rad]
+# (`AUVParams.fin_moment_coeff`, the "fins" mode) at the fin position x_fin [m]; their ratio is
+# the lift per u² per radian, 9.64 kg/(m·rad) = Prestero's Y_uuδr.
+_PRESTERO_FIN_MOMENT = 6.15
 _PRESTERO_X_FIN = -0.638
 _RHO = 1026.0  # [kg/m³] sea water, as the reference
 _FIN_PAIR_AREA = 2 * 0.00665  # [m²] two fins of 0.00665 m² (reference and Prestero)
+# [1/rad] the lift coefficient that gives the pair of fins at x_fin that moment
+_LIFT_COEFF = _PRESTERO_FIN_MOMENT / (-_PRESTERO_X_FIN * 0.5 * _RHO * _FIN_PAIR_AREA)
 
 
 @dataclass(frozen=True)
@@ -78,8 +81,8 @@ class ActuatorParams:
     motor_time_constant: float = 1.0  # [s] T_n of ṅ = (n_c − n)/T_n
     fin_area_stern: float = _FIN_PAIR_AREA  # [m²] A_s, both stern planes
     fin_area_rudder: float = _FIN_PAIR_AREA  # [m²] A_r, both rudders
-    lift_coeff_stern: float = _PRESTERO_FIN_LIFT / (0.5 * _RHO * _FIN_PAIR_AREA)  # [1/rad] C_Ls
-    lift_coeff_rudder: float = _PRESTERO_FIN_LIFT / (0.5 * _RHO * _FIN_PAIR_AREA)  # [1/rad] C_Lr
+    lift_coeff_stern: float = _LIFT_COEFF  # [1/rad] C_Ls = 1.4128
+    lift_coeff_rudder: float = _LIFT_COEFF  # [1/rad] C_Lr
     x_stern: float = _PRESTERO_X_FIN  # [m] stern-plane position, aft of the origin
     x_rudder: float = _PRESTERO_X_FIN  # [m] rudder position
     delta_max_stern: float = math.pi / 6.0  # [rad] |δ_s| limit, `AUVParams.fin_max`
