@@ -53,7 +53,8 @@ def test_round_trip_covers_ahead_astern_and_both_fins() -> None:
     for c, t, n in zip(commands, tau, nu, strict=True):
         assert np.abs(c).max() < 1.0
         np.testing.assert_allclose(_forces(c, tuple(n))[[0, 3, 4]], t, rtol=1e-9, atol=1e-12)
-    # trim at 1 m/s: 1.62 N of drag, X_prop = 1.8 N, n = (2.814 + √(2.814² + 4·0.4566·4.567))/0.9132 rps
+    # trim at 1 m/s: 1.62 N of drag, X_prop = 1.8 N, T = 4.567 rps²,
+    # n = (2.814 + √(2.814² + 4·0.4566·4.567))/0.9132 rps
     assert commands[2, 0] * P.rpm_max == pytest.approx(449.85, abs=0.01)
 
 
