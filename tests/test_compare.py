@@ -167,9 +167,11 @@ def test_scenario_file_documents_every_scenario():
         "current_turning",
         "current_vertical",
         "line_current",
+        "realistic_actuators",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
+    assert scenarios["realistic_actuators"].controller == {"actuator": "realistic"}
     assert select("all", list(scenarios), "scenario") == list(scenarios)
 
 
