@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from auv_gym.records import field_indices, record_type
+from auv_gym.records import field_indices, fixed_tuple, record_type
 from auv_gym.validation import ArgumentTypeError, keys_within, real
 
 __all__ = [
@@ -159,6 +159,17 @@ ACTUATOR_STATE = field_indices("ActuatorStateIndex", ACTUATOR_STATE_NAMES, __nam
 def actuator_record(params: ActuatorParams, physics_dt: float = 0.01) -> Any:
     """``params`` as the named record the kernels read (`ACTUATOR_CONFIG_FIELDS`)."""
     return ActuatorRecord(**params.packed(physics_dt))
+
+
+# A placeholder of the record's type for the kernels' other modes, which never read it.
+DEFAULT_ACTUATOR_CONFIG = actuator_record(ActuatorParams())
+_ACTUATOR_CONFIG_DIM = len(ACTUATOR_CONFIG_FIELDS)
+
+
+@njit(cache=True, inline="always")
+def actuator_config(row, offset):
+    """Entries offset … of the packed config row as an `ActuatorRecord` in registers."""
+    return ActuatorRecord(*fixed_tuple(row[offset:], _ACTUATOR_CONFIG_DIM))
 
 
 def actuator_params_from_spec(spec: ActuatorParams | Mapping[str, Any] | None) -> ActuatorParams:
