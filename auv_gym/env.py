@@ -265,7 +265,8 @@ class AUVPath3DEnv(gym.Env):
       helices as paths; ``path="random"`` (a `PathDistribution`), `random_current`,
       `random_noise`, ``actuator="random"`` and `params` as a dict (docs/model.md §3.8).
       Also without effect on v0: the `observation` argument and the "precision" reward term
-      (weight 0 by default).
+      (weight 0 by default); ``actuator="realistic"`` with `actuator_params` (propeller and
+      fin dynamics, docs/model.md §2.6).
     * `AUVPath3DSpeedLimit-v0` (registered as `AUVPath3D-v1` until the ids were renamed, so that
       v0 is not reported "out of date"): realistic speed — the v0 environment with
       `surge_limit` = 2.0 m/s by default: the overspeed reward term and the "overspeed"

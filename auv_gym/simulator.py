@@ -206,8 +206,8 @@ class Simulator:
 
     @property
     def actuators(self) -> np.ndarray:
-        """Each vehicle's actuator model in its current episode, "paper" or "fins" (n,): the
-        configured one, or the one its episode drew (``actuator="random"``)."""
+        """Each vehicle's actuator model in its current episode, "paper", "fins" or "realistic"
+        (n,): the configured one, or the one its episode drew (``actuator="random"``)."""
         codes = self._cfg[self._row, _CONFIG_INDEX["actuator"]].astype(np.int64)
         return _ACTUATOR_NAMES[codes]
 
