@@ -13,6 +13,7 @@ import controllers
 from auv_gym import OBS_NAMES
 from auv_gym.actuators import ActuatorParams, actuator_forces, actuator_record
 from auv_gym.rollout import rollouts
+from auv_gym.vehicle import remus100
 from controllers.allocation import allocate, fin_gain
 
 P = ActuatorParams()
@@ -93,3 +94,25 @@ def test_pid_los_follows_the_helix_on_realistic_actuators_with_noise() -> None:
     assert tr.termination_reason == "time_limit"
     assert tr["distance"][-200:].max() < 2.0
     assert abs(tr["u"][-200:].mean() - 1.0) < 0.1
+
+
+def test_controllers_take_the_actuator_params_of_the_env() -> None:
+    """A controller told the plant's `actuator_params` (here fins of half the area) allocates
+    the "fins" law of a vehicle with half the fin moment with them; an unknown key is a named
+    error."""
+    obs = np.zeros((2, len(OBS_NAMES)))
+    obs[:, OBS_NAMES.index("u")] = (0.9, 1.2)
+    obs[:, OBS_NAMES.index("z_e")], obs[:, OBS_NAMES.index("y_e")] = (0.4, -0.2), (0.1, 0.6)
+    small = P.replace(fin_area_stern=P.fin_area_stern / 2, fin_area_rudder=P.fin_area_rudder / 2)
+    weak = remus100(fin_moment_coeff=6.15 / 2)
+    u = obs[:, OBS_NAMES.index("u")]
+    authority = fin_gain(small) * u * u
+    for name in ("fbsm", "backstepping", "pid_los"):
+        fins, _ = controllers.make(name, actuator="fins", params=weak).predict(obs)
+        real, _ = controllers.make(name, actuator="realistic", params=weak,
+                                   actuator_params=small).predict(obs)  # fmt: skip
+        tau = fins.astype(np.float64) * np.stack([np.full(2, 50.0), authority, authority], 1)
+        want = allocate(tau, obs[:, [OBS_NAMES.index(k) for k in "uvw"]], small)
+        np.testing.assert_allclose(real, want, rtol=1e-5, atol=1e-6, err_msg=name)
+        with pytest.raises(ValueError, match=r"actuator_params has unknown key\(s\) \['area'\]"):
+            controllers.make(name, actuator="realistic", actuator_params={"area": 1.0})
