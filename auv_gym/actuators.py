@@ -13,8 +13,9 @@ and fin servos with angle limits, rate limits and a lag. `actuator_forces` turns
 
 with U_h² = u² + v², U_v² = u² + w² and V_a = (V_a/U)·√(u² + v² + w²). The propeller torque
 acts in roll, which the 5-DOF model does not have: `propeller_torque` is there for the record
-and the cross-check only. `ActuatorParams` holds the numbers (SI, validated); the kernels read
-them by name from the packed simulation config (`ACTUATOR_CONFIG_FIELDS`).
+and the cross-check only. `ActuatorParams` holds the numbers (SI, validated); they follow the
+packed simulation config's record fields (`ACTUATOR_CONFIG_FIELDS`), and the kernel reads them
+by name through `actuator_config`, in the realistic mode only.
 """
 
 from __future__ import annotations
