@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope, check_path_depths
 from auv_gym.disturbances import (
@@ -205,7 +206,9 @@ class SimConfig:
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     current: CurrentConfig = field(default_factory=CurrentConfig)
     param_uncertainty: float = 0.0  # ε: coefficients scaled by 1 + U[−ε, ε] per episode
-    actuator: str = "paper"  # "paper", "fins" or "random" (one of the two per episode)
+    actuator: str = "paper"  # "paper", "fins", "realistic" or "random" (paper or fins per episode)
+    # The propeller, motor, fins and servos of actuator="realistic" (docs/model.md §2.6).
+    actuator_params: ActuatorParams = field(default_factory=ActuatorParams)
     random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
     random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
     actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS  # [N, N·m, N·m]
@@ -262,6 +265,7 @@ class SimConfig:
         safety_cost: SafetyCost | Mapping | None = None,
         waves: WaveConfig | str | int | Mapping | None = None,
         current_profile: CurrentProfile | Mapping | None = None,
+        actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -280,6 +284,7 @@ class SimConfig:
             current=CurrentConfig.from_spec(current),
             param_uncertainty=param_uncertainty,
             actuator=actuator,
+            actuator_params=actuator_params_from_spec(actuator_params),
             random_current=random_current,
             random_noise=random_noise,
             control_dt=control_dt,
@@ -314,7 +319,7 @@ class SimConfig:
             _check_path(self.path)
         for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
                            ("current", CurrentConfig), ("reward", RewardWeights),
-                           ("limits", TaskLimits),
+                           ("limits", TaskLimits), ("actuator_params", ActuatorParams),
                            ("observation", ObservationConfig),
                            ("safety_cost", SafetyCost)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
@@ -490,4 +495,5 @@ class SimConfig:
         for c, axis in enumerate("xyz"):
             values[f"current_{axis}"] = self.current.mean[c]
             values[f"gm_b_{axis}"] = gm_b[c]
+        values.update(self.actuator_params.packed(self.physics_dt))
         return np.array([float(values[name]) for name in CONFIG_FIELDS])

@@ -12,6 +12,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
+from auv_gym.actuators import ActuatorParams
 from auv_gym.config import SimConfig
 from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope
@@ -104,7 +105,9 @@ class AUVPath3DEnv(gym.Env):
     ## Action Space
     `Box(-1, 1, (3,), float32)`: normalised (X, M, N). "paper" actuators scale by
     (50 N, 10 N·m, 10 N·m); "fins" scale X by 50 N and M, N by the fin authority
-    6.15·u|u|·π/6 N·m (docs/model.md §2.3). Values beyond ±1 saturate (the only clipping);
+    6.15·u|u|·π/6 N·m (docs/model.md §2.3). "realistic": normalised commands (n, δ_s, δ_r) of
+    the propeller shaft speed and the stern-plane and rudder angles, which must lie in the box
+    (docs/model.md §2.6). Values beyond ±1 saturate otherwise (the only clipping);
     NaN, inf or a wrong shape raise ValueError, strings, booleans and complex numbers TypeError.
 
     ## Observation Space
@@ -191,7 +194,8 @@ class AUVPath3DEnv(gym.Env):
     | `disturbance` | "paper" | "paper" (±35 white noise), "none", an amplitude, a `NoiseConfig` |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
     | `param_uncertainty` | 0.0 | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode |
-    | `actuator` | "paper" | "paper", "fins" or "random" (either, ½ each, per episode) |
+    | `actuator` | "paper" | "paper", "fins", "realistic" or "random" ("paper" or "fins", ½ each) |
+    | `actuator_params` | defaults | `ActuatorParams` or dict of its fields ("realistic" only) |
     | `random_current` | 0.0 | V [m/s]: per episode a horizontal current, speed U[0, V] |
     | `random_noise` | 0.0 | ε: white-noise amplitudes × (1 + U[−ε, ε]) per episode |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
@@ -273,7 +277,9 @@ class AUVPath3DEnv(gym.Env):
       helices as paths; ``path="random"`` (a `PathDistribution`), `random_current`,
       `random_noise`, ``actuator="random"`` and `params` as a dict (docs/model.md §3.8).
       Also without effect on v0: the `observation` argument and the "precision" reward term
-      (weight 0 by default), and `waves` and `current_profile` (None by default).
+      (weight 0 by default), `waves` and `current_profile` (None by default), and
+      ``actuator="realistic"`` with `actuator_params` (propeller and fin dynamics, docs/model.md
+      §2.6).
     * `AUVPath3DSpeedLimit-v0` (registered as `AUVPath3D-v1` until the ids were renamed, so that
       v0 is not reported "out of date"): realistic speed — the v0 environment with
       `surge_limit` = 2.0 m/s by default: the overspeed reward term and the "overspeed"
@@ -317,6 +323,7 @@ class AUVPath3DEnv(gym.Env):
         safety_cost: SafetyCost | Mapping | None = None,
         waves: WaveConfig | str | int | Mapping | None = None,
         current_profile: CurrentProfile | Mapping | None = None,
+        actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -329,7 +336,7 @@ class AUVPath3DEnv(gym.Env):
             reward_weights=reward_weights, random_current=random_current,
             random_noise=random_noise, observation=observation, path_offset=path_offset,
             depth_envelope=depth_envelope, safety_cost=safety_cost, waves=waves,
-            current_profile=current_profile,
+            current_profile=current_profile, actuator_params=actuator_params,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

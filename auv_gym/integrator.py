@@ -18,6 +18,14 @@ import math
 
 from numba import njit
 
+from auv_gym.actuators import (
+    ACTUATOR_CONFIG_FIELDS,
+    ACTUATOR_STATE,
+    DEFAULT_ACTUATOR_CONFIG,
+    actuator_config,
+    actuator_forces,
+    actuator_step,
+)
 from auv_gym.disturbances import N_CHANNELS, gauss_markov_step, white_noise
 from auv_gym.dynamics import STATE, STATE_DIM, state_derivative
 from auv_gym.guidance import wrap_angle
@@ -38,18 +46,21 @@ __all__ = [
     "rk4_step",
 ]
 
-PAPER_ACTUATOR, FIN_ACTUATOR = 0, 1
-ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR}
+PAPER_ACTUATOR, FIN_ACTUATOR, REALISTIC_ACTUATOR = 0, 1, 2
+ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR, "realistic": REALISTIC_ACTUATOR}
 
-# Layout of the packed simulation config (`config.SimConfig.packed`), read as a record.
-CONFIG_FIELDS = (
+# Layout of the packed simulation config (`config.SimConfig.packed`): the fields every mode
+# reads as a record, then the realistic actuators' parameters, read only in that mode (a wider
+# record costs the default kernel a third of its speed).
+_RECORD_FIELDS = (
     "n_sub", "physics_dt", "hold_steps", "u_d", "sigma", "actuator", "gm_a",
     "noise_f_u", "noise_f_v", "noise_f_w", "noise_f_q", "noise_f_r",
     "limit_X", "limit_M", "limit_N", "current_x", "current_y", "current_z",
     "gm_b_x", "gm_b_y", "gm_b_z",
 )  # fmt: skip
-CONFIG_DIM = len(CONFIG_FIELDS)
-ConfigRecord = record_type("ConfigRecord", CONFIG_FIELDS, __name__)
+CONFIG_FIELDS = (*_RECORD_FIELDS, *ACTUATOR_CONFIG_FIELDS)
+CONFIG_DIM = len(_RECORD_FIELDS)  # entries of `ConfigRecord`; the actuators' follow
+ConfigRecord = record_type("ConfigRecord", _RECORD_FIELDS, __name__)
 
 # Per-vehicle record of a control period: mean applied τ [N, N·m] and mean disturbance f.
 RECORD_FIELDS = ("X", "M", "N", "f_u", "f_v", "f_w", "f_q", "f_r")
@@ -121,14 +132,16 @@ def _actuation(a_X, a_M, a_N, cfg, fin_gain, u):
 
 
 @njit(cache=True, inline="always")
-def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index, kind, pdata,
-                    cfg_array, guid, obs, record, ocean):  # fmt: skip
+def advance_vehicle(st, cur, act, action, p_array, noise_key, current_key, step_index, kind,
+                    pdata, cfg_array, guid, obs, record, ocean):  # fmt: skip
     """Advance one vehicle by one control period, in place; returns False on a non-finite state.
 
-    ``st`` (layout `dynamics.STATE`) and ``cur`` (Gauss–Markov current deviation (x, y, z)
-    [m/s]) are updated; ``guid``, ``obs`` and ``record`` (layout `RECORD`) are rewritten only
+    ``st`` (layout `dynamics.STATE`), ``cur`` (Gauss–Markov current deviation (x, y, z)
+    [m/s]) and, with the realistic actuators, ``act`` (layout `actuators.ACTUATOR_STATE`) are
+    updated; ``guid``, ``obs`` and ``record`` (layout `RECORD`) are rewritten only
     while the state is finite, so the caller keeps the last valid observation. ``action`` holds
-    (a_X, a_M, a_N) in [−1, 1]; ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
+    (a_X, a_M, a_N) in [−1, 1] (realistic actuators: the normalised commands of n, δ_s, δ_r);
+    ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
     ``step_index`` counts physics steps since the reset and keys the noise (`white_noise`) and
     the current (`gauss_markov_step`). ``ocean`` is the vehicle's ocean row (`ocean.ocean_row`):
     waves and a profiled current added to the current, when its ``active`` flag is set.
@@ -147,15 +160,31 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     finite = True
     ocean_on = ocean[OCEAN.active] != 0.0
     wave = NO_WAVE
+    # Realistic actuators (docs/model.md §2.6): their state moves first in each physics step,
+    # then its τ is held over the RK4 step; the fins' Y, Z enter where f_v, f_w do.
+    realistic = int(cfg.actuator) == REALISTIC_ACTUATOR
+    a = actuator_config(cfg_array, CONFIG_DIM) if realistic else DEFAULT_ACTUATOR_CONFIG
+    shaft, d_s = act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s]
+    d_r = act[ACTUATOR_STATE.delta_r]
+    rate_limited = 0
     for k in range(n_sub):
         n = step_index + k
         f = white_noise(noise_amplitude, noise_key, n, hold_steps)
-        X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
         current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
         if ocean_on:  # held across the RK4 stages, like the current; t at mid-step
             wave = refresh_waves(ocean, x, n, k, cfg.physics_dt, wave)
             current, f = ocean_forcing(ocean, x, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
-        nxt = rk4(x, (X, M, N), f, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
+        if realistic:
+            shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, a)
+            rate_limited += limited
+            X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w],
+                                            a)  # fmt: skip
+            f_in = (f[0], f[1] + Y, f[2] + Z, f[3], f[4])
+        else:
+            X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
+            f_in = f
+        nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma,
+                  cfg.physics_dt)  # fmt: skip
         dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
         sum_X += X
         sum_M += M
@@ -175,6 +204,10 @@ def advance_vehicle(st, cur, action, p_array, noise_key, current_key, step_index
     for j in range(STATE_DIM):
         st[j] = x[j]
     cur[0], cur[1], cur[2] = dc
+    if realistic:
+        act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s] = shaft, d_s
+        act[ACTUATOR_STATE.delta_r] = d_r
+        act[ACTUATOR_STATE.rate_limited] = rate_limited / n_sub
     if not finite:
         return False
     record[RECORD.X] = sum_X / n_sub

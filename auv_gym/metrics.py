@@ -20,6 +20,7 @@ from auv_gym.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 
 __all__ = [
     "DEFAULT_TRANSIENT",
+    "FIN_RATE_LIMITED",
     "MetricsWindowWarning",
     "check_window",
     "compute_metrics",
@@ -27,6 +28,8 @@ __all__ = [
 ]
 
 DEFAULT_TRANSIENT = 100.0  # [s] longest default start of the metrics window
+# The trajectory extra with the realistic actuators' rate-limited fraction per control step.
+FIN_RATE_LIMITED = "fin_rate_limited"
 _SAT_TOL = 1e-9
 _T_TOL = 1e-9  # [s] sample times k·control_dt are compared with this tolerance
 
@@ -127,7 +130,8 @@ def compute_metrics(
       of the normalised τ per second of window [1/s];
       saturation_fraction — fraction of control steps with any abs(a_j) ≥ 1 (saturated
       command); control_effort_X/_M/_N, chattering_X/_M/_N, saturation_fraction_X/_M/_N — per
-      channel.
+      channel; fin_rate_saturation (realistic actuators only) — fraction of the episode's
+      physics steps in which a fin moved at its rate limit (docs/model.md §2.6).
     Outcome:
       success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
       ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
@@ -200,6 +204,8 @@ def compute_metrics(
         metrics[f"control_effort_{axis}"] = float(per_channel_effort[j])
         metrics[f"chattering_{axis}"] = float(variation[j])
         metrics[f"saturation_fraction_{axis}"] = float(saturated[:, j].mean()) if steps else 0.0
+    if FIN_RATE_LIMITED in tr.extras:  # realistic actuators only (`auv_gym.rollout`)
+        metrics["fin_rate_saturation"] = float(np.mean(tr.extras[FIN_RATE_LIMITED]))
     metrics["final_distance"] = float(distance[-1])
     final = t >= t[-1] - final_window + 1e-9
     final_rms = float(np.sqrt(np.mean(np.square(distance[final]))))

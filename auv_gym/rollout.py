@@ -41,10 +41,11 @@ import numba
 import numpy as np
 from gymnasium.utils import seeding
 
+from auv_gym.actuators import ACTUATOR_STATE
 from auv_gym.config import SimConfig
 from auv_gym.dynamics import STATE_NAMES
 from auv_gym.files import environment, json_default
-from auv_gym.metrics import compute_metrics
+from auv_gym.metrics import FIN_RATE_LIMITED, compute_metrics
 from auv_gym.observation import GUIDANCE_FIELDS
 from auv_gym.simulator import Simulator
 from auv_gym.task import REWARD_TERMS
@@ -220,6 +221,9 @@ def _run_batch(
         intervals[:, k, _REWARD_COLUMN] = sim.reward
         intervals[:, k, _TERMS_SLICE] = sim.terms
         intervals[:, k, _COST_COLUMN] = sim.cost
+        if config.actuator == "realistic":  # the plant's, beside the policy's diagnostics
+            limited = sim.actuator_state[:, ACTUATOR_STATE.rate_limited]
+            _record_extras(extras, {FIN_RATE_LIMITED: limited}, k, n, max_steps)
         ended = alive & (sim.code != 0)
         if ended.any():
             steps[ended] = k + 1

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
+from auv_gym.actuators import ACTUATOR_STATE_DIM, check_commands
 from auv_gym.config import SimConfig
 from auv_gym.disturbances import (
     KEY,
@@ -55,8 +56,9 @@ __all__ = ["Simulator"]
 
 
 @njit(cache=True, inline="always")
-def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code, cost, ocean):  # fmt: skip
+def _step_row(i, state, current, act, actions, params, keys, step_index, row, kinds, pdata, cfgs,
+              tasks, obs_low, obs_high, guid, obs, record, terms, reward, code, cost,
+              ocean):  # fmt: skip
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
     config and task are row ``row[i]`` of the episode table (`Simulator`)."""
     a = actions[i]
@@ -64,9 +66,9 @@ def _step_row(i, state, current, actions, params, keys, step_index, row, kinds, 
         a[j] = min(max(a[j], -1.0), 1.0)
     r = row[i]
     cfg = cfgs[r]
-    advance_vehicle(state[i], current[i], a, params[i], keys[i, KEY.noise], keys[i, KEY.current],
-                    step_index[i], kinds[r], pdata[r], cfg, guid[i], obs[i], record[i],
-                    ocean[i])  # fmt: skip
+    advance_vehicle(state[i], current[i], act[i], a, params[i], keys[i, KEY.noise],
+                    keys[i, KEY.current], step_index[i], kinds[r], pdata[r], cfg, guid[i], obs[i],
+                    record[i], ocean[i])  # fmt: skip
     step_index[i] += int(config_record(cfg).n_sub)
     reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r],
                                   terms[i])  # fmt: skip
@@ -88,25 +90,27 @@ def _first_non_finite_row(actions):
 # runs without numba's reference counting (`_nrt=False`): the row views of its loop otherwise
 # cost two atomic updates each, a quarter of its time (the threaded kernel's loop has none).
 @njit(cache=True, _nrt=False)
-def _step_one(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code, cost, ocean):  # fmt: skip
+def _step_one(state, current, act, actions, params, keys, step_index, row, kinds, pdata, cfgs,
+              tasks, obs_low, obs_high, guid, obs, record, terms, reward, code, cost,
+              ocean):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in range(state.shape[0]):
-            _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
-                      cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
+            _step_row(i, state, current, act, actions, params, keys, step_index, row, kinds,
+                      pdata, cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
                       code, cost, ocean)  # fmt: skip
     return bad
 
 
 @njit(cache=True, parallel=True)
-def _step_all(state, current, actions, params, keys, step_index, row, kinds, pdata, cfgs, tasks,
-              obs_low, obs_high, guid, obs, record, terms, reward, code, cost, ocean):  # fmt: skip
+def _step_all(state, current, act, actions, params, keys, step_index, row, kinds, pdata, cfgs,
+              tasks, obs_low, obs_high, guid, obs, record, terms, reward, code, cost,
+              ocean):  # fmt: skip
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in prange(state.shape[0]):
-            _step_row(i, state, current, actions, params, keys, step_index, row, kinds, pdata,
-                      cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
+            _step_row(i, state, current, act, actions, params, keys, step_index, row, kinds,
+                      pdata, cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
                       code, cost, ocean)  # fmt: skip
     return bad
 
@@ -131,7 +135,7 @@ _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code
 # the others are fixed at construction. `error_integral` is a view into `extra` and follows it.
 SNAPSHOT_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
                    "terms", "reward", "code", "cost", "_actions", "extra", "last_action", "_cfg",
-                   "_task", "_pdata", "_kind", "ocean")  # fmt: skip
+                   "_task", "_pdata", "_kind", "ocean", "actuator_state")  # fmt: skip
 
 
 class Simulator:
@@ -171,6 +175,9 @@ class Simulator:
         self._kernel = _step_all if (n > 1 if parallel is None else parallel) else _step_one
         self.state = np.zeros((n, STATE_DIM))
         self.current = np.zeros((n, 3))
+        # Realistic actuators' shaft speed, fin angles and rate-limited fraction (zero otherwise).
+        self.actuator_state = np.zeros((n, ACTUATOR_STATE_DIM))
+        self._command_box = config.actuator == "realistic"
         self.params = np.tile(self._nominal, (n, 1))
         self.keys = np.zeros((n, 2), dtype=np.uint64)
         self.step_index = np.zeros(n, dtype=np.int64)
@@ -210,8 +217,8 @@ class Simulator:
 
     @property
     def actuators(self) -> np.ndarray:
-        """Each vehicle's actuator model in its current episode, "paper" or "fins" (n,): the
-        configured one, or the one its episode drew (``actuator="random"``)."""
+        """Each vehicle's actuator model in its current episode, "paper", "fins" or "realistic"
+        (n,): the configured one, or the one its episode drew (``actuator="random"``)."""
         codes = self._cfg[self._row, _CONFIG_INDEX["actuator"]].astype(np.int64)
         return _ACTUATOR_NAMES[codes]
 
@@ -225,8 +232,11 @@ class Simulator:
     def restore(self, snapshot: Mapping[str, Any]) -> None:
         """Continue from a `snapshot` of a simulator built with the same arguments; ValueError
         naming the first array whose shape differs (then nothing is changed)."""
-        # A snapshot from before the ocean rows existed (a paused training run) had a flat sea.
-        arrays = {"ocean": np.zeros((self.n, ocean_width(None))), **snapshot["arrays"]}
+        # A snapshot from before these arrays existed (a paused training run) had a flat sea,
+        # the instantaneous actuators and no safety cost.
+        arrays = {"ocean": np.zeros((self.n, ocean_width(None))),
+                  "actuator_state": np.zeros_like(self.actuator_state),
+                  "cost": np.zeros(self.n), **snapshot["arrays"]}  # fmt: skip
         for name in SNAPSHOT_ARRAYS:
             target, value = getattr(self, name), arrays[name]
             if target.shape != value.shape:
@@ -302,6 +312,7 @@ class Simulator:
         self.state[i, STATE.s] = s0
         # Start the Gauss–Markov deviation in its stationary distribution.
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
+        self.actuator_state[i] = 0.0  # propeller stopped, fins centred
         if cfg.waves is not None or cfg.current_profile is not None:
             self.ocean[i] = ocean_row(cfg.waves, cfg.current_profile, self.keys[i], cfg.physics_dt)
         self.step_index[i] = 0
@@ -337,11 +348,16 @@ class Simulator:
     def step(self, actions: np.ndarray) -> None:
         """Advance all vehicles one control step with actions in [−1, 1], shape (n, 3).
 
-        Actions beyond ±1 saturate; a non-finite action raises ValueError before any row moves.
+        Actions beyond ±1 saturate, except the realistic actuators' commands (n, δ_s, δ_r), which
+        must lie in the box; a non-finite action or such a command raises ValueError before any
+        row moves.
         """
         np.copyto(self._actions, actions)
-        bad_row = self._kernel(self.state, self.current, self._actions, self.params, self.keys,
-                     self.step_index, self._row, self._kind, self._pdata, self._cfg, self._task,
+        if self._command_box:
+            check_commands(self._actions)
+        bad_row = self._kernel(self.state, self.current, self.actuator_state, self._actions,
+                     self.params, self.keys, self.step_index, self._row, self._kind, self._pdata,
+                     self._cfg, self._task,
                      OBS_LOW, OBS_HIGH, self.guid, self.obs, self.record, self.terms,
                      self.reward, self.code, self.cost, self.ocean)  # fmt: skip
         if bad_row >= 0:

@@ -4,7 +4,9 @@
    step) and the paper's white noise, N ∈ {1, 64, 1024, 4096, 16384} vehicles, random actions and
    a short `max_time` so that NEXT_STEP autoresets happen throughout the timed loop.
    Physics vehicle-steps/s = control vehicle-steps/s × 5; aggregate real-time factor =
-   simulated seconds of all vehicles per wall-clock second.
+   simulated seconds of all vehicles per wall-clock second. Each size runs once per actuator
+   model of ``--actuators``, side by side ("realistic": propeller and fin dynamics,
+   docs/model.md §2.6).
 2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
    growth of `ru_maxrss` over the same process after imports and compilation.
 3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
@@ -53,8 +55,9 @@ def measure_vector(
     max_time: float,
     threads: int | None = None,
     seed: int = 0,
+    actuator: str = "paper",
     env_kwargs: dict[str, Any] | None = None,
-) -> dict[str, float]:
+) -> dict[str, Any]:
     """Time `AUVPath3DVectorEnv.step` for `seconds` of wall clock, compilation excluded.
 
     The loop runs at least 1.25 episodes so that every vehicle goes through a NEXT_STEP
@@ -64,7 +67,9 @@ def measure_vector(
     from auv_gym.vector_env import AUVPath3DVectorEnv
 
     # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
-    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads, **(env_kwargs or {}))
+    env = AUVPath3DVectorEnv(
+        n, max_time=max_time, threads=threads, actuator=actuator, **(env_kwargs or {})
+    )
     bank = _actions(n, 16, seed)
     env.reset(seed=seed)
     env.step(bank[0])  # compile / load the kernel outside the timed loop
@@ -92,6 +97,7 @@ def measure_vector(
     vehicle_steps = steps * n
     return {
         "n": n,
+        "actuator": actuator,
         "threads": env.threads,
         "batch_steps": steps,
         "vehicle_steps_per_s": vehicle_steps / wall,
@@ -237,6 +243,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                         help="timed collect_rollouts calls per run")  # fmt: skip
     parser.add_argument("--threads", type=int, nargs="+", default=[2, 1],
                         help="numba thread counts of the throughput table")  # fmt: skip
+    parser.add_argument("--actuators", nargs="+", default=["paper", "realistic"],
+                        choices=["paper", "fins", "realistic"],
+                        help="actuator models of the throughput table, side by side")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write the results to this file")
     args = parser.parse_args(argv)
@@ -256,12 +265,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
     print(f"\nAUVPath3DVectorEnv, default physics, white noise ±35, NEXT_STEP autoreset "
           f"(max_time {args.max_time:g} s)")  # fmt: skip
-    print(f"{'N':>7} {'threads':>7} {'physics steps/s':>16} {'control steps/s':>16} "
-          f"{'real-time ×':>12} {'ms/step':>9} {'glue':>6} {'resets':>7}")  # fmt: skip
-    for threads, n in ((t, n) for t in args.threads for n in args.sizes):
-        r = measure_vector(n, args.seconds, args.max_time, threads)
+    print(f"{'N':>7} {'actuator':>9} {'threads':>7} {'physics steps/s':>16} "
+          f"{'control steps/s':>16} {'real-time ×':>12} {'ms/step':>9} {'glue':>6} "
+          f"{'resets':>7}")  # fmt: skip
+    runs = ((t, n, a) for t in args.threads for n in args.sizes for a in args.actuators)
+    for threads, n, actuator in runs:
+        r = measure_vector(n, args.seconds, args.max_time, threads, actuator=actuator)
         results["vector"].append(r)
-        print(f"{n:>7} {r['threads']:>7} {r['physics_steps_per_s']:>16,.0f} "
+        print(f"{n:>7} {actuator:>9} {r['threads']:>7} {r['physics_steps_per_s']:>16,.0f} "
               f"{r['vehicle_steps_per_s']:>16,.0f} "
               f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip

@@ -69,7 +69,9 @@ def make(name: str, **kwargs: Any) -> Any:
     `control_dt`, `actuator` and individual gain names. "pid_los" (and its `PRESETS`;
     `controllers.pid.PIDLOS`) accepts `pid` (`controllers.pid.PIDGains`), `gains` (read for
     the guidance only), `params`, `control_dt`, `actuator` and the names of `PIDGains` and
-    `controllers.pid.GUIDANCE_GAINS`. "ppo" takes `path` (a saved agent directory).
+    `controllers.pid.GUIDANCE_GAINS`. All three take ``actuator="realistic"`` with an optional
+    `actuator_params` (`auv_gym.actuators.ActuatorParams`; docs/model.md §2.7). "ppo" takes
+    `path` (a saved agent directory).
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
     Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,

@@ -17,23 +17,33 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.config import ACTUATOR_LIMITS
-from auv_gym.observation import OBS_DIM
+from auv_gym.observation import OBS_DIM, OBS_INDEX
 from auv_gym.rollout import Policy  # the one definition, shared with the rollouts
 from auv_gym.vehicle import AUVParams, remus100
+from controllers.allocation import allocate, fin_gain
 from controllers.gains import ControllerGains
 
 __all__ = ["BatchedController", "Policy", "actuator_vector"]
 
+_U, _V, _W = (OBS_INDEX[k] for k in ("u", "v", "w"))
 
-def actuator_vector(actuator: str, params: AUVParams) -> tuple[float, float, float, float, float]:
+
+def actuator_vector(
+    actuator: str, params: AUVParams, actuator_params: ActuatorParams | None = None
+) -> tuple[float, float, float, float, float]:
     """(fins flag, fin gain K·δ_max [kg], X_max [N], M_max [N·m], N_max [N·m]) of an actuator model.
 
     "paper": constant limits (50 N, 10 N·m, 10 N·m); "fins": M, N limited by K·δ_max·u|u|
-    (docs/model.md §2.3), evaluated by the controller at the observed surge speed.
+    (docs/model.md §2.3), evaluated by the controller at the observed surge speed;
+    "realistic": the same law with the fins' K·δ_max of ``actuator_params``, its τ then
+    allocated to shaft speed and fin angles (`controllers.allocation`, docs/model.md §2.7).
     """
-    if actuator not in ("paper", "fins"):
-        raise ValueError(f"unknown actuator {actuator!r}; valid: ['fins', 'paper']")
+    if actuator not in ("paper", "fins", "realistic"):
+        raise ValueError(f"unknown actuator {actuator!r}; valid: ['fins', 'paper', 'realistic']")
+    if actuator == "realistic":
+        return (1.0, fin_gain(actuator_params or ActuatorParams()), *ACTUATOR_LIMITS)
     fins = 1.0 if actuator == "fins" else 0.0
     return (fins, params.fin_moment_coeff * params.fin_max, *ACTUATOR_LIMITS)
 
@@ -68,7 +78,11 @@ class BatchedController:
         self.threads = threads
         self.control_dt = float(control_dt)
         self.actuator = actuator
-        self._actuator = actuator_vector(actuator, self.params)
+        # The realistic actuators' numbers (`ActuatorParams`), a keyword beside the gains.
+        gain_overrides = dict(gain_overrides)
+        spec = gain_overrides.pop("actuator_params", None)
+        self.actuator_params = actuator_params_from_spec(spec)
+        self._actuator = actuator_vector(actuator, self.params, self.actuator_params)
         base = gains if gains is not None else ControllerGains()
         unknown = set(gain_overrides) - {f.name for f in dataclasses.fields(base)}
         if unknown:
@@ -80,6 +94,13 @@ class BatchedController:
 
     def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
         raise NotImplementedError
+
+    def _allocate(self, obs: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        """The law's normalised τ → its τ_d at the observed u → shaft speed and fin angles."""
+        u = obs[:, _U]
+        authority = self._actuator[1] * np.maximum(u * np.abs(u), 0.0)  # `fbsm.moment_limits`
+        tau = actions * np.stack([np.full_like(u, self._actuator[2]), authority, authority], 1)
+        return allocate(tau, obs[:, [_U, _V, _W]], self.actuator_params)
 
     def predict(
         self,
@@ -122,5 +143,7 @@ class BatchedController:
                     value[reset] = fresh[key]
         actions = np.empty((n, 3))
         self._control(obs, state, actions)
+        if self.actuator == "realistic":
+            actions = self._allocate(obs, actions)
         out = actions.astype(np.float32)
         return (out[0] if single else out), state

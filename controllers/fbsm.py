@@ -115,7 +115,9 @@ class FBSM(BatchedController):
         params: nominal `AUVParams`; the FBSM uses only b_n = (1/m11, 1/I55, 1/I66) to
             initialise and bound b̂ (docs/model.md §4.6), never the true perturbed vehicle.
         control_dt: control period [s], the Euler step of the adaptive laws and filter.
-        actuator: "paper" or "fins" — how τ is normalised into actions.
+        actuator: "paper" or "fins" — how τ is normalised into actions; "realistic": the
+            "fins" law, its τ allocated to shaft speed and fin angles (`controllers.allocation`,
+            numbers from the keyword ``actuator_params``, an `ActuatorParams` or dict).
         threads: "auto" runs batches of ≥ 64 vehicles on numba's threads, "serial" never.
 
     State (dict of arrays, leading vehicle axis): theta_f, theta_b (n, 3, 3125), theta_d

@@ -255,7 +255,7 @@ class PIDLOS(BatchedController):
         if not isinstance(pid, PIDGains):
             raise ValueError(f"pid must be a PIDGains, got {type(pid).__name__}")
         pid_names = {f.name for f in fields(PIDGains)}
-        unknown = sorted(set(overrides) - pid_names - set(GUIDANCE_GAINS))
+        unknown = sorted(set(overrides) - pid_names - {*GUIDANCE_GAINS, "actuator_params"})
         if unknown:
             raise ValueError(f"unknown pid_los gains {unknown}; valid: the fields of PIDGains "
                              f"and {list(GUIDANCE_GAINS)}")  # fmt: skip

@@ -170,9 +170,11 @@ def test_scenario_file_documents_every_scenario():
         "deep_helix",
         "deep_survey",
         "coastal_no_waves",
+        "realistic_actuators",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
+    assert scenarios["realistic_actuators"].controller == {"actuator": "realistic"}
     assert select("all", list(scenarios), "scenario") == list(scenarios)
 
 

@@ -348,6 +348,8 @@ MANUAL_SECTIONS = (
     "2.3",
     "2.4",
     "2.5",
+    "2.6",
+    "2.7",
     "3",
     "3.1",
     "3.2",
@@ -404,12 +406,14 @@ def documented_defaults(text: str, names: set[str]) -> dict[str, list[float | bo
 
 
 def code_defaults() -> dict[str, float | bool]:
-    """The defaults of `AUVParams` and `ControllerGains`, membership sets as `surge_mf.p` etc."""
+    """The defaults of `AUVParams`, `ActuatorParams` and `ControllerGains`, membership sets as
+    `surge_mf.p` etc."""
+    from auv_gym.actuators import ActuatorParams
     from auv_gym.vehicle import AUVParams
     from controllers.gains import ControllerGains, MembershipSet
 
     defaults: dict[str, float | bool] = {}
-    for obj in (AUVParams(), ControllerGains()):
+    for obj in (AUVParams(), ActuatorParams(), ControllerGains()):
         for f in fields(obj):
             value = getattr(obj, f.name)
             if isinstance(value, MembershipSet):

@@ -200,7 +200,8 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
     subprocess.run([sys.executable, "-m", "benchmarks.speed_vector", "--quick", "--json", str(out)],
                    cwd=root, check=True, capture_output=True, text=True)  # fmt: skip
     results = json.loads(out.read_text())
-    assert [r["n"] for r in results["vector"]] == [1, 64]
+    assert [(r["n"], r["actuator"]) for r in results["vector"]] == [
+        (1, "paper"), (1, "realistic"), (64, "paper"), (64, "realistic")]  # fmt: skip
     for r in results["vector"]:
         assert r["physics_steps_per_s"] == pytest.approx(5 * r["vehicle_steps_per_s"])
         assert r["real_time_factor"] == pytest.approx(0.05 * r["vehicle_steps_per_s"])
