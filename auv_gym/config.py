@@ -46,6 +46,7 @@ from auv_gym.paths import (
     path_eval,
 )
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
+from auv_gym.sensors import SENSOR_PRESETS, SensorConfig
 from auv_gym.task import (
     REWARD_TERMS,
     RewardWeights,
@@ -219,6 +220,8 @@ class SimConfig:
     limits: TaskLimits = field(default_factory=TaskLimits)
     # "paper": the paper's 15 entries; "preview": the agent observation (`auv_gym.observation`)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
+    # "ideal": the observation is the exact state; else from a navigation estimate (`sensors`)
+    sensors: SensorConfig = field(default_factory=lambda: SENSOR_PRESETS["ideal"])
 
     @classmethod
     def from_kwargs(
@@ -246,6 +249,7 @@ class SimConfig:
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        sensors: str | Mapping | SensorConfig | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -278,6 +282,7 @@ class SimConfig:
                 surge_limit=surge_limit,
             ),
             observation=ObservationConfig.from_spec(observation),
+            sensors=SensorConfig.from_spec(sensors),
         )
 
     def __post_init__(self) -> None:
@@ -289,7 +294,8 @@ class SimConfig:
         for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
                            ("current", CurrentConfig), ("reward", RewardWeights),
                            ("limits", TaskLimits),
-                           ("observation", ObservationConfig)):  # fmt: skip
+                           ("observation", ObservationConfig),
+                           ("sensors", SensorConfig)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
                                         f"got {getattr(self, name)!r:.80}")  # fmt: skip
@@ -321,6 +327,7 @@ class SimConfig:
                 f"surge_limit must be above u_desired = {self.u_desired} m/s and at most "
                 f"{SPEED_BOUND} m/s, or inf, got {surge_limit!r} m/s"
             )
+        self.sensors.fix_steps(self.control_dt)  # the fix interval: whole control steps
         put("randomize_start", flag("randomize_start", self.randomize_start))
         if self.start_position is not None:
             put("start_position", vector("start_position", self.start_position, 3,

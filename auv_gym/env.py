@@ -18,6 +18,7 @@ from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
+from auv_gym.sensors import SensorConfig
 from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
@@ -201,6 +202,7 @@ class AUVPath3DEnv(gym.Env):
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
+    | `sensors` | "ideal" | "ideal" (exact state), "typical", a dict, `SensorConfig` (§11) |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -300,6 +302,7 @@ class AUVPath3DEnv(gym.Env):
         random_current: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
+        sensors: str | Mapping | SensorConfig | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -310,7 +313,7 @@ class AUVPath3DEnv(gym.Env):
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
             reward_weights=reward_weights, random_current=random_current,
-            random_noise=random_noise, observation=observation,
+            random_noise=random_noise, observation=observation, sensors=sensors,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
