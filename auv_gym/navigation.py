@@ -36,10 +36,10 @@ if TYPE_CHECKING:
 __all__ = ["MEAS", "MEAS_FIELDS", "NAV", "NAV_FIELDS", "STRIDE", "Navigation"]
 
 # Per-vehicle navigation state: per-episode biases and scale factors, the dead-reckoned
-# position [m] and the last valid DVL sample through the water and over ground [m/s].
+# position [m] and its rate [m/s], the last valid DVL sample through the water and over ground.
 NAV_FIELDS = (
     "b_u", "b_v", "b_w", "k_u", "k_v", "k_w", "b_theta", "b_psi", "b_q", "b_r", "b_z",
-    "x_hat", "y_hat", "dvl_u", "dvl_v", "dvl_w", "dvl_ground_u", "dvl_ground_v", "dvl_ground_w",
+    "x_hat", "y_hat", "x_dot_hat", "y_dot_hat", "dvl_u", "dvl_v", "dvl_w", "dvl_ground_u", "dvl_ground_v", "dvl_ground_w",
 )  # fmt: skip
 NAV = field_indices("NavIndex", NAV_FIELDS, __name__)
 NAV_DIM = len(NAV_FIELDS)
@@ -124,16 +124,19 @@ def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cf
     q = _add(st[STATE.q], nv[NAV.b_q] + _normal(s.rate_noise, key, block + CH_Q))
     r_rate = _add(st[STATE.r], nv[NAV.b_r] + _normal(s.rate_noise, key, block + CH_R))
     z = _add(st[STATE.z], nv[NAV.b_z] + _normal(s.depth_noise, key, block + CH_DEPTH))
+    # Dead reckoning: paper (2) on the measured velocity over ground and attitude, integrated
+    # by the trapezoidal rule over the control period (docs/model.md §11.1).
+    ground = (nv[NAV.dvl_ground_u], nv[NAV.dvl_ground_v], nv[NAV.dvl_ground_w], q, r_rate)
+    dx, dy, _, _, _ = eta_dot(ground, math.cos(theta), math.sin(theta), math.cos(psi),
+                              math.sin(psi))  # fmt: skip
     fix_steps = int(s.fix_steps)
     if reset or (fix_steps > 0 and t % fix_steps == 0):  # a fix: p̂ = p + σ_fix n
         nv[NAV.x_hat] = _add(st[STATE.x], _normal(s.fix_noise, key, block + CH_FIX))
         nv[NAV.y_hat] = _add(st[STATE.y], _normal(s.fix_noise, key, block + CH_FIX + 1))
-    else:  # dead reckoning, paper (2) on the measured velocity over ground and attitude
-        ground = (nv[NAV.dvl_ground_u], nv[NAV.dvl_ground_v], nv[NAV.dvl_ground_w], q, r_rate)
-        dx, dy, _, _, _ = eta_dot(ground, math.cos(theta), math.sin(theta), math.cos(psi),
-                                  math.sin(psi))  # fmt: skip
-        nv[NAV.x_hat] += s.control_dt * dx
-        nv[NAV.y_hat] += s.control_dt * dy
+    else:
+        nv[NAV.x_hat] += 0.5 * s.control_dt * (nv[NAV.x_dot_hat] + dx)
+        nv[NAV.y_hat] += 0.5 * s.control_dt * (nv[NAV.y_dot_hat] + dy)
+    nv[NAV.x_dot_hat], nv[NAV.y_dot_hat] = dx, dy
     size = ring.shape[0]  # k + 1: the slot of step t − k is the one after step t's
     slot = t % size
     for first in range(size if reset else 1):  # a reset fills the ring with its measurement
