@@ -39,7 +39,8 @@ __all__ = ["MEAS", "MEAS_FIELDS", "NAV", "NAV_FIELDS", "STRIDE", "Navigation"]
 # position [m] and its rate [m/s], the last valid DVL sample through the water and over ground.
 NAV_FIELDS = (
     "b_u", "b_v", "b_w", "k_u", "k_v", "k_w", "b_theta", "b_psi", "b_q", "b_r", "b_z",
-    "x_hat", "y_hat", "x_dot_hat", "y_dot_hat", "dvl_u", "dvl_v", "dvl_w", "dvl_ground_u", "dvl_ground_v", "dvl_ground_w",
+    "x_hat", "y_hat", "x_dot_hat", "y_dot_hat", "dvl_u", "dvl_v", "dvl_w", "dvl_ground_u",
+    "dvl_ground_v", "dvl_ground_w",
 )  # fmt: skip
 NAV = field_indices("NavIndex", NAV_FIELDS, __name__)
 NAV_DIM = len(NAV_FIELDS)

@@ -48,8 +48,9 @@ def _actions(n: int, count: int, seed: int) -> np.ndarray:
 
 
 def measure_vector(
-    n: int, seconds: float, max_time: float, threads: int | None = None, seed: int = 0
-) -> dict[str, float]:
+    n: int, seconds: float, max_time: float, threads: int | None = None, seed: int = 0,
+    sensors: str = "ideal",
+) -> dict[str, float]:  # fmt: skip
     """Time `AUVPath3DVectorEnv.step` for `seconds` of wall clock, compilation excluded.
 
     The loop runs at least 1.25 episodes so that every vehicle goes through a NEXT_STEP
@@ -59,7 +60,7 @@ def measure_vector(
     from auv_gym.vector_env import AUVPath3DVectorEnv
 
     # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
-    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads)
+    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads, sensors=sensors)
     bank = _actions(n, 16, seed)
     env.reset(seed=seed)
     env.step(bank[0])  # compile / load the kernel outside the timed loop
@@ -95,7 +96,26 @@ def measure_vector(
         "ms_per_batch_step": 1e3 * wall / steps,
         "glue_fraction": 1.0 - kernel_time[0] / wall,
         "autoresets": resets,
+        "sensors": sensors,
     }
+
+
+def _sensor_rows(args: argparse.Namespace) -> list[dict[str, float]]:
+    """Physics rate with "ideal" and "typical" sensors, measured alternately in this process
+    (same load), and their ratio; printed as a table."""
+    print("\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
+          "estimate ('typical'), side by side")  # fmt: skip
+    print(f"{'N':>7} {'threads':>7} {'ideal':>14} {'typical':>14} {'ratio':>7}")
+    rows = []
+    for threads, n in ((t, n) for t in args.threads for n in args.sensor_sizes):
+        ideal, typical = (measure_vector(n, args.seconds, args.max_time, threads, sensors=name)
+                          for name in ("ideal", "typical"))  # fmt: skip
+        ratio = typical["physics_steps_per_s"] / ideal["physics_steps_per_s"]
+        rows.append({"n": n, "threads": ideal["threads"], "ratio": ratio,
+                     "ideal": ideal, "typical": typical})  # fmt: skip
+        print(f"{n:>7} {ideal['threads']:>7} {ideal['physics_steps_per_s']:>14,.0f} "
+              f"{typical['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}")  # fmt: skip
+    return rows
 
 
 def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
@@ -206,6 +226,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                         help="timed collect_rollouts calls per run")  # fmt: skip
     parser.add_argument("--threads", type=int, nargs="+", default=[2, 1],
                         help="numba thread counts of the throughput table")  # fmt: skip
+    parser.add_argument("--sensor-sizes", type=int, nargs="*", default=[4096],
+                        help="N of the side-by-side rows without and with the 'typical' sensor "
+                             "model (docs/model.md §11); none skips them")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write the results to this file")
     args = parser.parse_args(argv)
@@ -214,7 +237,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             writable_location(args.json, "--json", folder=False)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
-        args.threads = [1]
+        args.threads, args.sensor_sizes = [1], [64]
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
 
     info = machine()
@@ -233,6 +256,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{r['vehicle_steps_per_s']:>16,.0f} "
               f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
+
+    if args.sensor_sizes:
+        results["sensors"] = _sensor_rows(args)
 
     if args.memory_n > 0:
         mem = _fresh_process(f"measure_memory({args.memory_n})")

@@ -180,21 +180,25 @@ def test_batched_equals_single_and_snapshots_resume_exactly():
 
 def test_heading_estimate_stays_wrapped():
     assert wrap_angle(math.pi + 0.1) == pytest.approx(-math.pi + 0.1)
-    states, estimates, _ = run({"heading_bias": 0.3}, n=20, steps=200,
-                               actions=np.array([[0.5, 0.0, 1.0]]))  # fmt: skip
+    _, estimates, _ = run({"heading_bias": 0.3}, n=20, steps=200,
+                          actions=np.array([[0.5, 0.0, 1.0]]))  # fmt: skip
     assert np.all(np.abs(estimates[..., STATE.psi]) <= math.pi)
+
+
+_FINITE = "must be a finite number in"
 
 
 @pytest.mark.parametrize(
     ("sensors", "message"),
     [
-        ({"dvl_noise": -0.1}, r"sensors dvl_noise must be a finite number in \[0, 1\] m/s, got -0.1"),
-        ({"heading_bias": math.nan}, r"sensors heading_bias must be a finite number in \[0, 0.5\] rad, got nan"),
-        ({"rate_noise": math.inf}, r"sensors rate_noise must be a finite number in \[0, 0.5\] rad/s, got inf"),
-        ({"dvl_dropout": 1.0}, r"sensors dvl_dropout must be a finite number in \[0, 0.99\], got 1.0"),
-        ({"fix_interval": -1.0}, r"sensors fix_interval must be a finite number in \[0, 1e\+06\] s"),
-        ({"fix_interval": math.inf}, r"sensors fix_interval must be a finite number .* got inf"),
-        ({"fix_interval": 0.07}, r"sensors fix_interval = 0.07 s must be a whole multiple of control_dt = 0.05 s"),
+        ({"dvl_noise": -0.1}, rf"sensors dvl_noise {_FINITE} \[0, 1\] m/s, got -0.1"),
+        ({"heading_bias": math.nan}, rf"sensors heading_bias {_FINITE} \[0, 0.5\] rad, got nan"),
+        ({"rate_noise": math.inf}, rf"sensors rate_noise {_FINITE} \[0, 0.5\] rad/s, got inf"),
+        ({"dvl_dropout": 1.0}, rf"sensors dvl_dropout {_FINITE} \[0, 0.99\], got 1.0"),
+        ({"fix_interval": -1.0}, rf"sensors fix_interval {_FINITE} \[0, 1e\+06\] s"),
+        ({"fix_interval": math.inf}, rf"sensors fix_interval {_FINITE} .* got inf"),
+        ({"fix_interval": 0.07},
+         r"sensors fix_interval = 0.07 s must be a whole multiple of control_dt = 0.05 s"),
         ({"delay": -1}, r"sensors delay must be an integer in \[0, 1000\], got -1"),
         ({"delay": 1.5}, r"sensors delay must be an integer in \[0, 1000\], got 1.5"),
         ("perfect", r"unknown sensors preset 'perfect'; valid: \['ideal', 'typical'\]"),
