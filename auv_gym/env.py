@@ -202,7 +202,7 @@ class AUVPath3DEnv(gym.Env):
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
-    | `sensors` | "ideal" | "ideal" (exact state), "typical", a dict, `SensorConfig` (§11) |
+    | `sensors` | "ideal" | "ideal" (exact state), "typical", dict, `SensorConfig`: model.md §12 |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):

@@ -1,6 +1,6 @@
 """The navigation estimate the observation is computed from when sensors are modelled.
 
-Per control step t and vehicle (docs/model.md §11): sample the DVL, AHRS and depth sensor with
+Per control step t and vehicle (docs/model.md §12): sample the DVL, AHRS and depth sensor with
 the errors of a `sensors.SensorConfig`, update the horizontal position (a fix, or dead reckoning
 on the DVL's velocity over ground rotated by the AHRS attitude), store the measurements in a
 ring of k + 1 slots and build the observation from those of step t − k: the guidance row is
@@ -87,7 +87,7 @@ def _draw_biases(s, bias_key, nv):
 
 @njit(cache=True, inline="always")
 def _sample_dvl(s, st, c_x, c_y, c_z, key, block, nv):
-    """One DVL sample ν̂ = (1 + k)ν + b + σn (docs/model.md §11.1) through the water and over
+    """One DVL sample ν̂ = (1 + k)ν + b + σn (docs/model.md §12.1) through the water and over
     ground (ν + R_Bᵀ v_c, bottom lock), with the same ping noise n, into ``nv``."""
     cth, sth = math.cos(st[STATE.theta]), math.sin(st[STATE.theta])
     cps, sps = math.cos(st[STATE.psi]), math.sin(st[STATE.psi])
@@ -126,7 +126,7 @@ def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cf
     r_rate = _add(st[STATE.r], nv[NAV.b_r] + _normal(s.rate_noise, key, block + CH_R))
     z = _add(st[STATE.z], nv[NAV.b_z] + _normal(s.depth_noise, key, block + CH_DEPTH))
     # Dead reckoning: paper (2) on the measured velocity over ground and attitude, integrated
-    # by the trapezoidal rule over the control period (docs/model.md §11.1).
+    # by the trapezoidal rule over the control period (docs/model.md §12.2).
     ground = (nv[NAV.dvl_ground_u], nv[NAV.dvl_ground_v], nv[NAV.dvl_ground_w], q, r_rate)
     dx, dy, _, _, _ = eta_dot(ground, math.cos(theta), math.sin(theta), math.cos(psi),
                               math.sin(psi))  # fmt: skip

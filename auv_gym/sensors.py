@@ -1,4 +1,4 @@
-"""Sensor and navigation settings (docs/model.md §11): what the observation is measured with.
+"""Sensor and navigation settings (docs/model.md §12): what the observation is measured with.
 
 `SensorConfig` holds the error model of each sensor of a REMUS-class navigation suite: a Doppler
 velocity log (DVL: white noise, a turn-on bias and scale-factor error per episode, dropout), an
@@ -9,7 +9,7 @@ reckoning on the DVL and AHRS reset by a position fix (USBL, or GPS at the surfa
 `auv_gym.navigation`; the reward, termination and metrics keep reading the true state.
 
 Presets (`SENSOR_PRESETS`): "ideal" (no sensor model: the observation is the exact state, the
-default) and "typical" (values and their sources in docs/model.md §11.3). A dict of fields, or
+default) and "typical" (values and their sources in docs/model.md §12.3). A dict of fields, or
 {"preset": name, **overrides}, sets them one by one.
 """
 
@@ -43,7 +43,7 @@ class SensorConfig:
     """Error model of the navigation suite; every σ is a standard deviation, every bias the σ of
     a constant drawn per episode (a turn-on bias), all 0 by default (exact sensors).
 
-    Measurements at each control step t (docs/model.md §11.1), n ~ N(0, 1) drawn per sample:
+    Measurements at each control step t (docs/model.md §12.1), n ~ N(0, 1) drawn per sample:
     DVL ν̂ = (1 + k)ν + b + σ n per axis (k, b drawn per episode); AHRS θ̂ = θ + b + σ n,
     ψ̂ = ψ + b + σ n, q̂, r̂ likewise; depth ẑ = z + b + σ n; horizontal position from a fix
     p̂ = p + σ_fix n every `fix_interval` [s] (0: every control step), else dead reckoning.
@@ -152,7 +152,7 @@ SENSOR_FIELDS = (
 _DEG = math.pi / 180.0
 SENSOR_PRESETS: dict[str, SensorConfig] = {
     "ideal": SensorConfig(preset="ideal"),
-    # A REMUS-class suite; each value's source is in docs/model.md §11.3.
+    # A REMUS-class suite; each value's source is in docs/model.md §12.3.
     "typical": SensorConfig(
         dvl_noise=0.01,  # [m/s] single-ping σ, 1200 kHz bottom track at ~1 m/s
         dvl_bias=0.002,  # [m/s] "±0.2 % ± 2 mm/s": the offset part

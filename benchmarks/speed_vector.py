@@ -228,7 +228,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                         help="numba thread counts of the throughput table")  # fmt: skip
     parser.add_argument("--sensor-sizes", type=int, nargs="*", default=[4096],
                         help="N of the side-by-side rows without and with the 'typical' sensor "
-                             "model (docs/model.md §11); none skips them")  # fmt: skip
+                             "model (docs/model.md §12); none skips them")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write the results to this file")
     args = parser.parse_args(argv)

@@ -167,6 +167,7 @@ def test_scenario_file_documents_every_scenario():
         "current_turning",
         "current_vertical",
         "line_current",
+        "realistic_sensors",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
