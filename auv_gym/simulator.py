@@ -191,7 +191,7 @@ class Simulator:
         assert self.params.shape[1] == N_PARAMS
         # The sensor model (`auv_gym.navigation`): None for ideal sensors, the exact state.
         self.navigation = None if config.sensors.ideal else Navigation(
-            config.sensors, config.control_dt, self.n, self._kernel is _step_all)  # fmt: skip
+            config.sensors, config.control_dt, self.n)  # fmt: skip
 
     @property
     def steps(self) -> np.ndarray:
