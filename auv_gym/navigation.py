@@ -28,7 +28,7 @@ from auv_gym.integrator import config_record
 from auv_gym.observation import GUIDANCE_DIM, OBS_DIM, build_observation, guidance_row
 from auv_gym.records import field_indices, fixed_tuple, record_type
 from auv_gym.sensors import SENSOR_FIELDS, SensorConfig, sensor_key
-from auv_gym.task import NON_FINITE
+from auv_gym.task import ENVELOPE, NON_FINITE
 
 if TYPE_CHECKING:
     from auv_gym.simulator import Simulator
@@ -155,7 +155,9 @@ def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cf
     guidance_row(est, kinds[r], pdata[r], cfg.u_d, cfg.sigma, nav_guid[i])
     o = obs[i]
     build_observation(est, nav_guid[i], cfg.u_d, o)
-    if code[i] == 0:  # a running vehicle's readings saturate at the observation bounds
+    # The readings saturate at the observation bounds, except where the true observation left
+    # them (an "envelope" end): there exact sensors return what "ideal" returns.
+    if code[i] != ENVELOPE:
         for j in range(OBS_DIM):
             o[j] = min(max(o[j], obs_low[j]), obs_high[j])
 

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from auv_gym import AUVPath3DEnv
 from auv_gym.config import SimConfig
@@ -145,6 +147,14 @@ def test_delay_returns_the_measurements_of_k_steps_before():
     np.testing.assert_array_equal(estimates[:4, :, MEASURED],
                                   states[:1, :, MEASURED].repeat(4, 0))  # fmt: skip
     np.testing.assert_array_equal(estimates[..., STATE.s], states[..., STATE.s])  # s: no delay
+
+
+@settings(max_examples=15, deadline=None)
+@given(delay=st.integers(0, 8), seed=st.integers(0, 2**31 - 1))
+def test_any_delay_returns_the_exact_state_of_k_steps_before(delay, seed):
+    states, estimates, _ = run({"delay": delay}, n=1, steps=20, seed=seed)
+    lagged = states[np.maximum(np.arange(21) - delay, 0)]
+    np.testing.assert_array_equal(estimates[..., MEASURED], lagged[..., MEASURED])
 
 
 def test_position_fixes_reset_dead_reckoning_at_their_interval():
