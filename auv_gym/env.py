@@ -223,6 +223,9 @@ class AUVPath3DEnv(gym.Env):
       "scale": {"X_uu": 1.2}}`` (an unknown name is an error naming it).
     - `random_current` in [0, 1] m/s (no headway against ~1 m/s at u_D = 1 m/s);
       `random_noise` in [0, 1]; `actuator="random"` draws "paper" or "fins" per episode.
+    - `sensors`: each σ finite and ≥ 0 (at most 1 m/s, 0.5 rad, 0.5 rad/s, 10 m, 100 m for the
+      fixes), `dvl_dropout` in [0, 0.99], `fix_interval` a whole multiple of `control_dt` (0:
+      every step) or None, `delay` an integer in [0, 1000] control steps (`auv_gym.sensors`).
 
     Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
     in (0, 1e5] m, ω in [−1e3, 0) ∪ (0, 1e3] rad per unit s (ω > 0 a starboard, ω < 0 a port
