@@ -36,6 +36,7 @@ from auv_gym.observation import (
 )
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import FittedCurve, Helix, Path, Spline, StraightLine, fit_curve, make_path
+from auv_gym.sensors import SensorConfig
 from auv_gym.task import SURGE_LIMIT
 from auv_gym.vehicle import AUVParams, remus100
 
@@ -52,6 +53,7 @@ __all__ = [
     "ObservationConfig",
     "Path",
     "PathDistribution",
+    "SensorConfig",
     "Spline",
     "StraightLine",
     "fit_curve",

@@ -51,6 +51,7 @@ from auv_gym.paths import (
 )
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.safety_cost import SafetyCost
+from auv_gym.sensors import SENSOR_PRESETS, SensorConfig
 from auv_gym.task import (
     REWARD_TERMS,
     RewardWeights,
@@ -233,6 +234,8 @@ class SimConfig:
     safety_cost: SafetyCost = field(default_factory=SafetyCost)
     waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §13)
     current_profile: CurrentProfile | None = None  # None: the uniform current only (§13.5)
+    # "ideal": the observation is the exact state; else from a navigation estimate (`sensors`)
+    sensors: SensorConfig = field(default_factory=lambda: SENSOR_PRESETS["ideal"])
 
     @classmethod
     def from_kwargs(
@@ -266,6 +269,7 @@ class SimConfig:
         waves: WaveConfig | str | int | Mapping | None = None,
         current_profile: CurrentProfile | Mapping | None = None,
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
+        sensors: str | Mapping | SensorConfig | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -309,6 +313,7 @@ class SimConfig:
             safety_cost=SafetyCost.from_spec(safety_cost),
             waves=WaveConfig.from_spec(waves),
             current_profile=CurrentProfile.from_spec(current_profile),
+            sensors=SensorConfig.from_spec(sensors),
         )
 
     def __post_init__(self) -> None:
@@ -321,7 +326,7 @@ class SimConfig:
                            ("current", CurrentConfig), ("reward", RewardWeights),
                            ("limits", TaskLimits), ("actuator_params", ActuatorParams),
                            ("observation", ObservationConfig),
-                           ("safety_cost", SafetyCost)):  # fmt: skip
+                           ("safety_cost", SafetyCost), ("sensors", SensorConfig)):  # fmt: skip
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
                                         f"got {getattr(self, name)!r:.80}")  # fmt: skip
@@ -366,6 +371,7 @@ class SimConfig:
                 f"surge_limit must be above u_desired = {self.u_desired} m/s and at most "
                 f"{SPEED_BOUND} m/s, or inf, got {surge_limit!r} m/s"
             )
+        self.sensors.fix_steps(self.control_dt)  # the fix interval: whole control steps
         put("randomize_start", flag("randomize_start", self.randomize_start))
         if self.start_position is not None:
             put("start_position", vector("start_position", self.start_position, 3,

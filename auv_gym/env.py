@@ -22,6 +22,7 @@ from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
 from auv_gym.safety_cost import SafetyCost
+from auv_gym.sensors import SensorConfig
 from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
 from auv_gym.validation import ArgumentTypeError
@@ -217,6 +218,7 @@ class AUVPath3DEnv(gym.Env):
     | `safety_cost` | defaults | {depth, speed, pitch, speed_limit, pitch_limit}: `info["cost"]` |
     | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §13) |
     | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
+    | `sensors` | "ideal" | "ideal" (exact state), "typical", dict, `SensorConfig`: model.md §14 |
 
     Allowed values (`auv_gym.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -237,6 +239,9 @@ class AUVPath3DEnv(gym.Env):
       "scale": {"X_uu": 1.2}}`` (an unknown name is an error naming it).
     - `random_current` in [0, 1] m/s (no headway against ~1 m/s at u_D = 1 m/s);
       `random_noise` in [0, 1]; `actuator="random"` draws "paper" or "fins" per episode.
+    - `sensors`: each σ finite and ≥ 0 (at most 1 m/s, 0.5 rad, 0.5 rad/s, 10 m, 100 m for the
+      fixes), `dvl_dropout` in [0, 0.99], `fix_interval` a whole multiple of `control_dt` (0:
+      every step) or None, `delay` an integer in [0, 1000] control steps (`auv_gym.sensors`).
 
     Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
     in (0, 1e5] m, ω in [−1e3, 0) ∪ (0, 1e3] rad per unit s (ω > 0 a starboard, ω < 0 a port
@@ -324,6 +329,7 @@ class AUVPath3DEnv(gym.Env):
         waves: WaveConfig | str | int | Mapping | None = None,
         current_profile: CurrentProfile | Mapping | None = None,
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
+        sensors: str | Mapping | SensorConfig | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path, disturbance=disturbance, current=current,
@@ -336,7 +342,7 @@ class AUVPath3DEnv(gym.Env):
             reward_weights=reward_weights, random_current=random_current,
             random_noise=random_noise, observation=observation, path_offset=path_offset,
             depth_envelope=depth_envelope, safety_cost=safety_cost, waves=waves,
-            current_profile=current_profile, actuator_params=actuator_params,
+            current_profile=current_profile, actuator_params=actuator_params, sensors=sensors,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

@@ -28,6 +28,7 @@ from auv_gym.integrator import (
     advance_vehicle,
     config_record,
 )
+from auv_gym.navigation import Navigation
 from auv_gym.observation import (
     GUIDANCE_DIM,
     OBS_DIM,
@@ -204,6 +205,9 @@ class Simulator:
             self._integral_gain = (decay, self.layout.integral_time * (1.0 - decay))
         self._every_row = np.arange(n, dtype=np.int64)
         assert self.params.shape[1] == N_PARAMS
+        # The sensor model (`auv_gym.navigation`): None for ideal sensors, the exact state.
+        self.navigation = None if config.sensors.ideal else Navigation(
+            config.sensors, config.control_dt, self.n)  # fmt: skip
 
     @property
     def steps(self) -> np.ndarray:
@@ -222,11 +226,19 @@ class Simulator:
         codes = self._cfg[self._row, _CONFIG_INDEX["actuator"]].astype(np.int64)
         return _ACTUATOR_NAMES[codes]
 
+    def _snapshot_arrays(self) -> dict[str, np.ndarray]:
+        """`SNAPSHOT_ARRAYS` by name, then the sensor model's (`Navigation.ARRAYS`) if any."""
+        arrays = {name: getattr(self, name) for name in SNAPSHOT_ARRAYS}
+        if self.navigation is not None:
+            for name in self.navigation.ARRAYS:
+                arrays[f"navigation.{name}"] = getattr(self.navigation, name)
+        return arrays
+
     def snapshot(self) -> dict[str, Any]:
         """Copies of the arrays that change while stepping or at a reset (`SNAPSHOT_ARRAYS`)
         and each vehicle's path: with `restore`, a simulator built with the same arguments
         continues bit for bit (the vector env's snapshots, a paused training run)."""
-        arrays = {name: getattr(self, name).copy() for name in SNAPSHOT_ARRAYS}
+        arrays = {name: array.copy() for name, array in self._snapshot_arrays().items()}
         return {"arrays": arrays, "paths": list(self.paths)}  # paths are immutable, shared
 
     def restore(self, snapshot: Mapping[str, Any]) -> None:
@@ -237,13 +249,15 @@ class Simulator:
         arrays = {"ocean": np.zeros((self.n, ocean_width(None))),
                   "actuator_state": np.zeros_like(self.actuator_state),
                   "cost": np.zeros(self.n), **snapshot["arrays"]}  # fmt: skip
-        for name in SNAPSHOT_ARRAYS:
-            target, value = getattr(self, name), arrays[name]
-            if target.shape != value.shape:
-                raise ValueError(f"snapshot array {name} has shape {value.shape}, this vector "
+        targets = self._snapshot_arrays()
+        for name, target in targets.items():
+            value = arrays.get(name)
+            if value is None or target.shape != value.shape:
+                shape = None if value is None else value.shape
+                raise ValueError(f"snapshot array {name} has shape {shape}, this vector "
                                  f"env's {target.shape}: built with other arguments")  # fmt: skip
-        for name in SNAPSHOT_ARRAYS:  # in place: views such as `error_integral` stay attached
-            np.copyto(getattr(self, name), arrays[name])
+        for name, target in targets.items():  # in place: views such as `error_integral` stay
+            np.copyto(target, arrays[name])
         self.paths[:] = snapshot["paths"]
 
     def reset_row(self, i: int, rng: np.random.Generator) -> None:
@@ -257,6 +271,8 @@ class Simulator:
         rows = np.asarray(rows, dtype=np.int64)
         _observe_rows(rows, self.state, self._row, self._kind, self._pdata, self._cfg, self.guid,
                       self.obs)  # fmt: skip
+        if self.navigation is not None:
+            self.navigation.sense(self, rows, reset=True)
         if self.extra.shape[1]:
             self.last_action[rows] = 0.0
             self.error_integral[rows] = 0.0
@@ -271,11 +287,21 @@ class Simulator:
         extra = self.extra if rows is None else self.extra[rows]
         return np.concatenate([base, extra], axis=1, dtype=np.float32)
 
+    @property
+    def _observed_state(self) -> np.ndarray:
+        """The state the observation is computed from: the navigation estimate or the truth."""
+        return self.state if self.navigation is None else self.navigation.estimate
+
+    @property
+    def _observed_guid(self) -> np.ndarray:
+        """The guidance row of `_observed_state` (the true one stays in `guid`)."""
+        return self.guid if self.navigation is None else self.navigation.guid
+
     def _extend(self, rows: np.ndarray) -> None:
         layout = self.layout
-        extend_rows(rows, self.state, self.current, self.last_action, self._row, self._kind,
-                    self._pdata, self._cfg, self._task, _S_END, layout.points, layout.spacing,
-                    self.extra)  # fmt: skip
+        extend_rows(rows, self._observed_state, self.current, self.last_action, self._row,
+                    self._kind, self._pdata, self._cfg, self._task, _S_END, layout.points,
+                    layout.spacing, self.extra)  # fmt: skip
 
     def _set_task(self, i: int, task: EpisodeTask) -> None:
         """Write vehicle i's drawn task into its row of the episode table."""
@@ -362,12 +388,14 @@ class Simulator:
                      self.reward, self.code, self.cost, self.ocean)  # fmt: skip
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
+        if self.navigation is not None:  # after scoring: the reward reads the true state
+            self.navigation.sense(self, self._every_row, reset=False)
         if self.extra.shape[1]:
             self.last_action[:] = self._actions  # saturated in place by the kernel
             if self.layout.integrals:  # exact for an error held over the control period
                 decay, gain = self._integral_gain
                 self.error_integral *= decay
-                self.error_integral += gain * self.guid[:, 1:3]
+                self.error_integral += gain * self._observed_guid[:, 1:3]
             self._extend(self._every_row)
             self._end_outside_extra_bounds()
 

@@ -106,7 +106,27 @@ def measure_vector(
         "ms_per_batch_step": 1e3 * wall / steps,
         "glue_fraction": 1.0 - kernel_time[0] / wall,
         "autoresets": resets,
+        "sensors": sensors,
     }
+
+
+def _sensor_rows(args: argparse.Namespace) -> list[dict[str, float]]:
+    """Physics rate with "ideal" and "typical" sensors, measured alternately in this process
+    (same load), and their ratio; printed as a table."""
+    print("\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
+          "estimate ('typical'), side by side")  # fmt: skip
+    print(f"{'N':>7} {'threads':>7} {'ideal':>14} {'typical':>14} {'ratio':>7}")
+    rows = []
+    for threads, n in ((t, n) for t in args.threads for n in args.sensor_sizes):
+        ideal, typical = (measure_vector(n, args.seconds, args.max_time, threads,
+                                         env_kwargs={"sensors": name})
+                          for name in ("ideal", "typical"))  # fmt: skip
+        ratio = typical["physics_steps_per_s"] / ideal["physics_steps_per_s"]
+        rows.append({"n": n, "threads": ideal["threads"], "ratio": ratio,
+                     "ideal": ideal, "typical": typical})  # fmt: skip
+        print(f"{n:>7} {ideal['threads']:>7} {ideal['physics_steps_per_s']:>14,.0f} "
+              f"{typical['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}")  # fmt: skip
+    return rows
 
 
 def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
@@ -246,6 +266,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--actuators", nargs="+", default=["paper", "realistic"],
                         choices=["paper", "fins", "realistic"],
                         help="actuator models of the throughput table, side by side")  # fmt: skip
+    parser.add_argument("--sensor-sizes", type=int, nargs="*", default=[4096],
+                        help="N of the side-by-side rows without and with the 'typical' sensor "
+                             "model (docs/model.md §14); none skips them")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
     parser.add_argument("--json", help="also write the results to this file")
     args = parser.parse_args(argv)
@@ -255,7 +278,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
         args.waves_n = 64
-        args.threads = [1]
+        args.threads, args.sensor_sizes = [1], [64]
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
 
     info = machine()
@@ -279,6 +302,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
     if args.waves_n > 0:
         _waves_rows(args, results)
+    if args.sensor_sizes:
+        results["sensors"] = _sensor_rows(args)
 
     if args.memory_n > 0:
         mem = _fresh_process(f"measure_memory({args.memory_n})")

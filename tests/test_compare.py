@@ -171,6 +171,7 @@ def test_scenario_file_documents_every_scenario():
         "deep_survey",
         "coastal_no_waves",
         "realistic_actuators",
+        "realistic_sensors",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
