@@ -106,7 +106,7 @@ def measure_vector(
         "ms_per_batch_step": 1e3 * wall / steps,
         "glue_fraction": 1.0 - kernel_time[0] / wall,
         "autoresets": resets,
-        "sensors": sensors,
+        "sensors": env.config.sensors.preset,
     }
 
 
