@@ -2,7 +2,8 @@
 
     auv-gym compare --policies fbsm,backstepping --scenarios paper --seeds 3 --duration 150
     auv-gym suite --policies fbsm,ppo_generalist=runs/ppo/results   # whole test suite + statistics
-    auv-gym train --config …                 # needs the rl extra
+    auv-gym train --algo sac --config …      # needs the rl extra
+    auv-gym train-seeds --algo ppo --seeds 5 --out runs/x   # several seeds, selection
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|training|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
@@ -35,7 +36,7 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescript
 COMMANDS: dict[str, tuple[str, str]] = {
     "compare": ("benchmarks.compare", "policies on seeded scenarios: tables and figures"),
     "suite": ("benchmarks.evaluate_suite", "every policy and seed on the test suite: statistics"),
-    "train": ("benchmarks.train_ppo", "train or evaluate a PPO agent (rl extra)"),
+    "train": ("benchmarks.train_ppo", "train or evaluate an RL agent, --algo ppo|sac (rl extra)"),
     "train-seeds": (
         "benchmarks.train_seeds",
         "N training seeds, selection on validation (rl extra)",

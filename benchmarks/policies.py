@@ -6,8 +6,8 @@
   "ppo_residual", "ppo_preview", "ppo_preview_net256"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
-  (`controllers.ppo.load_policy`, PPO or SAC); a residual agent's base controller is built
-  like a classical one, for the scenario;
+  (`controllers.loader.load_policy`, any algorithm of `controllers.algorithms`); a residual
+  agent's base controller is built like a classical one, for the scenario;
 * "module:attribute": an importable Policy object, or a class / factory called with the
   scenario's controller keyword arguments (`controllers.import_policy`).
 """
@@ -100,7 +100,7 @@ def check_policy_spec(spec: str) -> PolicySpec:
     """The parsed spec, after checking that its agent exists or its object imports.
 
     Raises ValueError (unknown name, import failure, an agent's damaged or inconsistent files,
-    `controllers.ppo.check_agent`) or FileNotFoundError (missing agent) with a message naming
+    `controllers.agent.check_agent`) or FileNotFoundError (missing agent) with a message naming
     the spec: call it on every spec before any episode runs.
     """
     parsed = PolicySpec.parse(spec)
@@ -117,7 +117,7 @@ def check_policy_spec(spec: str) -> PolicySpec:
             )
         if not parsed.agent.exists():
             raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
-        from controllers.ppo import check_agent
+        from controllers.agent import check_agent
 
         try:
             check_agent(parsed.agent)
@@ -139,7 +139,7 @@ def build_policy(
         return controllers.make(spec, control_dt=control_dt, **kwargs)
     if parsed.kind == "agent":  # a residual agent's base is configured like a classical one
         base_kwargs = {"control_dt": control_dt, **kwargs}
-        return controllers.make("ppo", path=str(parsed.agent), base_kwargs=base_kwargs)
+        return controllers.make("agent", path=str(parsed.agent), base_kwargs=base_kwargs)
     return controllers.import_policy(spec, **kwargs)
 
 
@@ -155,7 +155,7 @@ def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tup
     agent is evaluated under the env it was trained on, e.g. AUVPath3DSpeedLimit-v0's surge
     limit); ``default_env_id`` stands in for a missing one (None: an error). Errors name
     ``where``."""
-    from controllers.ppo import check_agent
+    from controllers.agent import check_agent
 
     try:
         files = check_agent(agent)

@@ -28,7 +28,7 @@ from auv_gym import VARIANTS
 from auv_gym.vector_env import AUVPath3DVectorEnv
 from benchmarks.cli import HelpFormatter
 from benchmarks.training.config import read_zoo_config
-from controllers.residual_env import ResidualVectorEnv
+from benchmarks.training.residual_env import ResidualVectorEnv
 
 CONFIG = Path(__file__).resolve().parent / "hyperparams" / "ppo_residual.yml"
 ENV_ID = "AUVPath3DSpeedLimit-v0"

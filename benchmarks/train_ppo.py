@@ -1,5 +1,6 @@
-"""Train a PPO agent from an RL-Zoo hyper-parameter file (default: the paper helix under the
-2.0 m/s surge limit, `AUVPath3DSpeedLimit-v0`).
+"""Train an RL agent (PPO by default; ``--algo`` any algorithm of `controllers.algorithms`) from
+an RL-Zoo hyper-parameter file (default: the paper helix under the 2.0 m/s surge limit,
+`AUVPath3DSpeedLimit-v0`).
 
 The shipped agent `benchmarks/agents/ppo_helix` (the paper's unlimited `AUVPath3D-v0`) was
 produced by::
@@ -25,7 +26,8 @@ The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
     python -m rl_zoo3.train --algo ppo --env AUVPath3D-v0 --gym-packages auv_gym \\
         -conf benchmarks/hyperparams/ppo.yml
 
-Outputs and file formats: see `benchmarks.training`; the agents load with `controllers.ppo`.
+Outputs and file formats: see `benchmarks.training`; the agents load with
+``controllers.make("agent", path=...)``.
 """
 
 from __future__ import annotations
@@ -50,14 +52,18 @@ from benchmarks.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seeds import MAX_SEED
-from benchmarks.training.train import check_options
-from controllers.ppo import METADATA_FILE
+from benchmarks.training.train import HERE, check_options
+from controllers.agent import METADATA_FILE
+from controllers.algorithms import ALGORITHMS
 
 VEC_ENVS = ("auto", "native", "dummy")  # `benchmarks.training.train.make_training_env`
-FIXED = {"algo": "ppo", "eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
+FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 # One-line help per option (the TrainOptions field comments, for the CLI).
 HELP = {
-    "config": "RL-Zoo hyper-parameter YAML (top-level key = env id)",
+    "algo": "RL algorithm (the saved agent records it; every one loads as controllers.make("
+    "'agent', path=...))",
+    "config": "RL-Zoo hyper-parameter YAML (top-level key = env id; default: "
+    "benchmarks/hyperparams/<algo>.yml)",
     "env_id": "Gymnasium id and YAML key (AUVPath3D-v0: the paper's task without a speed limit)",
     "out": "run directory (checkpoints, best/, final/, evaluations.csv, tb/)",
     "seed": "seed of torch, numpy and the training environments",
@@ -120,9 +126,16 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
                                 help=HELP[f.name])  # fmt: skip
         elif f.name == "export":
             parser.add_argument(flag, default=None, help=HELP[f.name])
+        elif f.name == "algo":
+            parser.add_argument(flag, choices=sorted(ALGORITHMS), default=default,
+                                help=HELP[f.name])  # fmt: skip
+        elif f.name == "config":  # the algorithm's file unless given
+            parser.add_argument(flag, default=None, help=HELP[f.name])
         else:
             parser.add_argument(flag, type=type(default), default=default, help=HELP[f.name])
     ns = vars(parser.parse_args(argv))
+    if ns["config"] is None:
+        ns["config"] = str(HERE / "hyperparams" / f"{ns['algo']}.yml")
     extra = argparse.Namespace(curve=ns.pop("curve"), plot_only=ns.pop("plot_only"),
                                evaluate=ns.pop("evaluate"))  # fmt: skip
     if extra.plot_only and not extra.curve:
@@ -139,7 +152,7 @@ def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
     step: the run folder, the export folder, the learning-curve files (which need
     evaluations), the agent to evaluate. OSError / ValueError naming the option otherwise."""
     if extra.evaluate:
-        from controllers.ppo import check_agent
+        from controllers.agent import check_agent
 
         check_agent(Path(extra.evaluate))
         writable_location(extra.evaluate, "--evaluate")  # AGENT/held_out_evaluation.json

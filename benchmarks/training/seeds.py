@@ -56,7 +56,7 @@ from benchmarks.training.config import read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.train import TrainOptions, check_options, target_timesteps
-from controllers.ppo import METADATA_FILE, MODEL_FILE
+from controllers.agent import METADATA_FILE, MODEL_FILE
 
 __all__ = [
     "MAX_SEED",

@@ -37,8 +37,9 @@ from benchmarks.training.evaluation import (
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
-from controllers.ppo import METADATA_FILE, MODEL_FILE, VECNORM_FILE
-from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
+from benchmarks.training.residual import ResidualTraining
+from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
+from controllers.residual import RESIDUAL_OBS_NAMES
 
 __all__ = [
     "TrainOptions",
@@ -56,7 +57,7 @@ HERE = Path(__file__).resolve().parent.parent  # benchmarks/
 class TrainOptions:
     """Arguments of `train` (and of the CLI `benchmarks/train_ppo.py`)."""
 
-    algo: str = "ppo"  # a key of benchmarks.training.config.ALGORITHMS
+    algo: str = "ppo"  # a key of controllers.algorithms.ALGORITHMS
     config: str = str(HERE / "hyperparams" / "ppo.yml")  # RL-Zoo hyper-parameter file
     # Top-level key of the config and Gymnasium id; the surge-limited task by default, so that a
     # new agent cannot win by sprinting at speeds a REMUS cannot reach (docs/results.md).
@@ -119,15 +120,16 @@ def thread_limit(threads: int) -> Iterator[None]:
 
 
 def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: str = "auto",
-                      env_id: str = ENV_ID, residual: ResidualSettings | None = None,
+                      env_id: str = ENV_ID, residual: ResidualTraining | None = None,
                       threads: int | None = None) -> Any:  # fmt: skip
     """An SB3 VecEnv of `n_envs` training environments.
 
     "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
     "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available. The native env
     simulates every id of `auv_gym.VARIANTS` (its fixed keyword arguments, then `env_kwargs`).
-    With ``residual`` the native env is wrapped in `controllers.residual_env.ResidualVectorEnv`
-    (the residual agent's observation, action and chattering charge; native only).
+    With ``residual`` the native env is wrapped in
+    `benchmarks.training.residual_env.ResidualVectorEnv` (the residual agent's observation,
+    action and chattering charge; native only).
     ``threads``: numba threads of the native env's kernel (1: the serial kernel at every N;
     None: `AUVPath3DVectorEnv`'s default).
     """
@@ -144,7 +146,7 @@ def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: 
 
         kwargs = {**VARIANTS[env_id], **env_kwargs}
         if residual is not None:
-            from controllers.residual_env import make_residual_sb3_env
+            from benchmarks.training.residual_env import make_residual_sb3_env
 
             return VecMonitor(make_residual_sb3_env(n_envs, residual, seed=env_seed,
                                                     threads=threads, **kwargs))  # fmt: skip
