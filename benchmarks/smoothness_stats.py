@@ -1,16 +1,17 @@
-"""Residual agents against their base on the test suite (the residual targets): the paired
-RMS-distance difference with its CI, and the chattering of every policy.
+"""Policies against the controller they are built on, on the test suite: the paired RMS-distance
+difference with its CI, and the chattering of every policy. Which pairs, the chattering
+reference and the "worse" threshold come from the report table (`benchmarks.report_spec`).
 
 * **Paired difference** of a (policy, base) pair per set and "aggregate": mean score of the policy
   minus mean score of the base on the same episodes [m] (scores as `benchmarks.suite_stats`:
   RMS distance, a failed episode the corridor), relative to the base, with a 95 % stratified
   bootstrap CI (`benchmarks.stats.paired_difference`). A set is a **win** when the upper bound
   of the difference's CI is below zero, **worse** when the point estimate is more than
-  `WORSE_RATIO` above the base.
+  ``worse_ratio`` above the base.
 * **Chattering** [1/s] (`auv_gym.metrics`: total variation of the normalised action per second
   over the metrics window) of every policy per set, mean over runs × episodes with its CI; an
-  episode that ended before the window has none and is left out. The ratio to `SMOOTHNESS_REFERENCE`
-  (FBSM alone) says whether a policy halves it.
+  episode that ended before the window has none and is left out. The ratio to the reference's
+  (``reference``) says whether a policy halves it.
 """
 
 from __future__ import annotations
@@ -24,23 +25,11 @@ from auv_gym.table_format import EMPTY, format_number, markdown_table
 from benchmarks.stats import AGGREGATE, Interval, mean_interval, paired_difference
 
 __all__ = [
-    "PAIRS",
-    "SMOOTHNESS_REFERENCE",
-    "WORSE_RATIO",
     "chattering_table",
     "metric_matrices",
     "paired_table",
     "smoothness_markdown",
 ]
-
-# (policy, base) pairs compared when both were evaluated: the residual agent and the low-pass
-# baseline, each against the controller they are built on.
-# The shipped residual agent, its second version (no learned filter, charge 0.25: the accuracy
-# side of the trade-off) and the low-pass baseline against their base, and residual − low-pass.
-PAIRS = (("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
-         ("fbsm_colos_lowpass", "fbsm_colos"), ("ppo_residual", "fbsm_colos_lowpass"))  # fmt: skip
-SMOOTHNESS_REFERENCE = "fbsm"
-WORSE_RATIO = 0.10  # residual target: never worse than the base by more than 10 %
 
 
 def metric_matrices(rows: Sequence[Mapping[str, Any]], sets: Sequence[str], metric: str,
@@ -68,13 +57,15 @@ def _columns(labels: np.ndarray, scope: str) -> np.ndarray:
     return np.ones(labels.size, bool) if scope == AGGREGATE else labels == scope
 
 
-def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: int, seed: int
+def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: int, seed: int,
+                 pairs: Sequence[tuple[str, str]], worse_ratio: float
                  ) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
     """{"policy−base": {scope: {"difference", "relative" (Intervals as dicts), "win", "worse"}}}
-    for every pair of `PAIRS` whose two policies were evaluated."""
+    for every (policy, base) of ``pairs`` whose two policies were evaluated; "worse": the
+    relative difference exceeds ``worse_ratio``."""
     labels = np.asarray(groups)
     out: dict[str, dict[str, dict[str, Any]]] = {}
-    for policy, base in PAIRS:
+    for policy, base in pairs:
         if policy not in scores or base not in scores:
             continue
         name = f"{policy}−{base}"
@@ -87,15 +78,16 @@ def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: 
                 "difference": iv["difference"]._asdict(),
                 "relative": iv["relative"]._asdict(),
                 "win": iv["difference"].high < 0.0,
-                "worse": iv["relative"].value > WORSE_RATIO,
+                "worse": iv["relative"].value > worse_ratio,
             }
     return out
 
 
 def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str], reps: int,
-                     seed: int) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
+                     seed: int, reference: str
+                     ) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
     """{scope: {policy: {"value", "low", "high", "ratio"}}}: mean chattering [1/s] with CI and
-    its ratio to `SMOOTHNESS_REFERENCE`'s (NaN when that was not evaluated)."""
+    its ratio to ``reference``'s (NaN when that was not evaluated)."""
     labels = np.asarray(groups)
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for scope in _scopes(groups):
@@ -105,20 +97,22 @@ def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str]
             iv = mean_interval(x[:, cols], labels[cols], key=f"chattering|{policy}|{scope}",
                                reps=reps, seed=seed)  # fmt: skip
             row[policy] = iv._asdict()
-        ref = row.get(SMOOTHNESS_REFERENCE, {}).get("value", np.nan)
+        ref = row.get(reference, {}).get("value", np.nan)
         for entry in row.values():
             entry["ratio"] = entry["value"] / ref if ref and np.isfinite(ref) else np.nan
         out[scope] = row
     return out
 
 
-def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any]) -> str:
-    """The two tables of the module doc as Markdown (rows = sets), three policies per table."""
+def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any], reference: str,
+                        worse_ratio: float) -> str:  # fmt: skip
+    """The two tables of the module doc as Markdown (rows = sets), three policies per table;
+    ``reference`` and ``worse_ratio`` as given to `chattering_table` and `paired_table`."""
     lines: list[str] = []
     if paired:
         lines += [
             "## Paired RMS-distance difference, policy − base [mm] (relative), 95 % CI\n",
-            f"win: CI below zero; worse: more than {100 * WORSE_RATIO:g} % above the base.\n",
+            f"win: CI below zero; worse: more than {100 * worse_ratio:g} % above the base.\n",
         ]
         for names in column_chunks(list(paired), 3):
             rows = []
@@ -134,7 +128,7 @@ def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any]
             lines += [markdown_table(["set", *names], rows)]
     if chattering:
         policies = list(next(iter(chattering.values())))
-        lines.append(f"## Chattering [1/s] (ratio to {SMOOTHNESS_REFERENCE}), 95 % CI\n")
+        lines.append(f"## Chattering [1/s] (ratio to {reference}), 95 % CI\n")
         for names in column_chunks(policies, 3):
             rows = [
                 [scope, *(_chattering_cell(row[p]) for p in names)]

@@ -9,14 +9,18 @@ figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliab
 * **Per set and "aggregate"** (every set pooled, each set's episodes resampled within the set):
   IQM and mean with 95 % stratified bootstrap CIs over runs × episodes (one run for a
   controller: over episodes), `benchmarks.stats.summarize`; probability that a policy's score is
-  below the reference's on the same episode (``--reference``, default fbsm; also against
-  fbsm_colos when it was evaluated); performance profiles (fraction of scores below τ [m]).
+  below the reference's on the same episode (the report table's reference, or ``--reference``;
+  also against its extra references that were evaluated); performance profiles (fraction of
+  scores below τ [m]).
 * **Target table**: per set, the ratio of a policy's mean score to the reference's;
-  a set passes when the ratio is ≤ `MAX_RATIO`, no episode failed and the largest surge speed
-  of any episode is ≤ `auv_gym.task.SURGE_LIMIT` (2.0 m/s).
-* **Smoothness** (`benchmarks.smoothness_stats`): paired RMS-distance differences of
-  residual agents and the low-pass baseline against their base, and every policy's chattering
-  (when episodes.csv has the column).
+  a set passes when the ratio is ≤ the report's ``max_ratio``, no episode failed and the largest
+  surge speed of any episode is ≤ `auv_gym.task.SURGE_LIMIT` (2.0 m/s).
+* **Smoothness** (`benchmarks.smoothness_stats`): paired RMS-distance differences of the
+  report's (policy, base) pairs, and every policy's chattering (when episodes.csv has the
+  column).
+
+What is compared is data, the report table (`benchmarks.report_spec.ReportSpec`, default
+``benchmarks/report.toml``); this module names no policy.
 * **Learning curves** of the policies given as a multi-seed results directory (its
   ``seed_<k>_learning_curve.csv`` per run; columns num_timesteps, wall_time_s,
   rms_distance_mean, ...): IQM over the runs with CI band against env steps and against wall
@@ -38,15 +42,13 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym import table_format
 from auv_gym.config import SimConfig
 from auv_gym.files import jsonable, write_json, write_text
-from auv_gym.table_format import format_number
 from auv_gym.task import SURGE_LIMIT
 from auv_gym.trajectory import FAILURE_REASONS
+from benchmarks.report_spec import ReportSpec
 from benchmarks.smoothness_stats import (
     chattering_table,
-    column_chunks,
     metric_matrices,
     paired_table,
     smoothness_markdown,
@@ -56,14 +58,12 @@ from benchmarks.stats import (
     MIN_REPS,
     Interval,
     learning_curve,
-    markdown_table,
     probability_of_improvement,
     summarize,
 )
+from benchmarks.suite_markdown import stats_markdown
 
 __all__ = [
-    "MAX_RATIO",
-    "SECOND_REFERENCE",
     "check_stats_options",
     "episode_score",
     "learning_curves",
@@ -73,8 +73,6 @@ __all__ = [
     "write_stats",
 ]
 
-MAX_RATIO = 2.0  # generalist target: RMS distance within 2x the reference's (FBSM) on every set
-SECOND_REFERENCE = "fbsm_colos"  # probability of improvement also against it, when evaluated
 DEFAULT_FAILURE_SCORE_M = SimConfig.from_kwargs().limits.corridor
 CURVE_FILE = "seed_{}_learning_curve.csv"  # in a multi-seed results directory
 FIGURES = "figures"
@@ -178,9 +176,11 @@ def target_table(
     scores: Mapping[str, np.ndarray],
     groups: Sequence[str],
     reference: str,
+    max_ratio: float,
 ) -> list[dict[str, Any]]:
     """One entry per (set, policy other than the reference): mean scores [m], their ratio,
-    failed episodes, largest surge [m/s] and whether the set passes (module doc)."""
+    failed episodes, largest surge [m/s] and whether the set passes: ratio ≤ ``max_ratio``,
+    no failed episode, surge ≤ `SURGE_LIMIT` (module doc)."""
     labels = np.asarray(groups)
     table = []
     for name in dict.fromkeys(groups):
@@ -207,7 +207,7 @@ def target_table(
                     "failures": sorted(set(failed)),
                     "max_surge_m_s": surge,
                     "episodes": len(mine),
-                    "passed": ratio <= MAX_RATIO and not failed and surge <= SURGE_LIMIT,
+                    "passed": ratio <= max_ratio and not failed and surge <= SURGE_LIMIT,
                 }
             )
     return table
@@ -250,97 +250,21 @@ def _intervals(table: Mapping[str, Mapping[str, Interval]]) -> dict[str, Any]:
     return {scope: {p: iv._asdict() for p, iv in row.items()} for scope, row in table.items()}
 
 
-def _by_policy(table: Mapping[str, Mapping[str, Interval]]) -> dict[str, dict[str, Interval]]:
-    """{scope: {policy: x}} → {policy: {scope: x}} (rows = sets in the Markdown tables)."""
-    out: dict[str, dict[str, Interval]] = {}
-    for scope, row in table.items():
-        for policy, value in row.items():
-            out.setdefault(policy, {})[scope] = value
-    return out
-
-
-def _markdown(stats: Mapping[str, Any], summary: Mapping[str, Any]) -> str:
-    ref, ci = stats["reference"], f"{100 * stats['confidence']:g} %"
-    runs = ", ".join(f"{p}: {n}" for p, n in stats["n_runs"].items())
-    lines = [
-        "# Test-suite statistics\n",
-        f"`{stats['command']}`\n",
-        f"Score: RMS distance [m] over the metrics window; a failed episode scores its set's "
-        f"corridor ({', '.join(sorted({f'{v:g} m' for v in stats['failure_score_m'].values()}))})."
-        f" {ci} stratified bootstrap intervals ({stats['reps']} replicates, seed "
-        f"{stats['seed']}) over runs × episodes. Runs: {runs}.\n",
-    ]
-    kinds = stats.get("kinds", {})
-    for name, title in (("iqm", "IQM"), ("mean", "Mean")):
-        lines.append(f"## {title} RMS distance [m]\n")
-        lines += _split_tables(_by_policy(summary[name]), kinds)
-    for other, table in stats["improvement_tables"].items():
-        lines.append(f"## Probability of a smaller RMS distance than {other} (ties ½)\n")
-        lines += _split_tables(_by_policy(table), kinds)
-    lines += [
-        f"## Target: mean RMS distance within {MAX_RATIO:g}× {ref}, no failed episode, max "
-        f"surge ≤ {SURGE_LIMIT:g} m/s\n",
-    ]
-    rows = []
-    for t in stats["target"]:
-        failed = f"{t['failed']}/{t['episodes']}" + (
-            f" ({', '.join(t['failures'])})" if t["failures"] else ""
-        )
-        rows.append([t["set"], t["policy"], format_number(t["mean_m"]),
-                     format_number(t["reference_mean_m"]), format_number(t["ratio"]), failed,
-                     format_number(t["max_surge_m_s"]),
-                     "pass" if t["passed"] else "**FAIL**"])  # fmt: skip
-    header = ["set", "policy", "mean [m]", f"{ref} mean [m]", "ratio", "failed",
-              "max surge [m/s]", "verdict"]  # fmt: skip
-    lines += [table_format.markdown_table(header, rows, ["l"] * len(header))]
-    for policy, verdict in stats["verdicts"].items():
-        failing = ", ".join(verdict["failing_sets"]) or "none"
-        lines.append(
-            f"- **{policy}**: passes {verdict['passed']} of {verdict['sets']} sets; "
-            f"failing: {failing}"
-        )
-    lines.append("")
-    for policy, note in stats["learning_curve_notes"].items():
-        lines.append(f"- learning curve of {policy}: {note}")
-    return "\n".join(lines) + "\n"
-
-
-# Policies per table: four interval columns keep a row within about 110 characters.
-_COLUMNS_PER_TABLE = 4
-_GROUP_TITLES = {"classical": "classical", "rl": "RL", "hybrid": "hybrid (classical + RL residual)"}
-
-
-def policy_group(name: str, kind: str) -> str:
-    """ "classical", "hybrid" (a residual agent on a classical controller) or "rl"."""
-    if kind == "classical":
-        return "classical"
-    return "hybrid" if "residual" in name else "rl"
-
-
-def _split_tables(
-    table: Mapping[str, Mapping[str, Interval]], kinds: Mapping[str, str]
-) -> list[str]:
-    """One markdown table per policy group, at most `_COLUMNS_PER_TABLE` policies each."""
-    groups: dict[str, list[str]] = {}
-    for policy in table:
-        groups.setdefault(policy_group(policy, kinds.get(policy, "agent")), []).append(policy)
-    out = []
-    for group in ("classical", "rl", "hybrid"):
-        names = groups.get(group, [])
-        for chunk in column_chunks(names, _COLUMNS_PER_TABLE):
-            out += [
-                f"{_GROUP_TITLES[group]}:\n",
-                markdown_table({p: table[p] for p in chunk}, corner="set"),
-            ]
-    return out
-
-
 def write_stats(
-    out: Path, reference: str = "fbsm", reps: int = 2000, seed: int = 0, figures: bool = True
+    out: Path,
+    reference: str | None = None,
+    reps: int = 2000,
+    seed: int = 0,
+    figures: bool = True,
+    report: ReportSpec | None = None,
 ) -> str:
     """Statistics of OUT/episodes.csv (module doc) → OUT/stats.json, OUT/stats.md and, with
-    ``figures``, OUT/figures/*.png; returns the Markdown. ValueError for a reference that was not
-    evaluated or episodes that do not form complete score matrices."""
+    ``figures``, OUT/figures/*.png; returns the Markdown. ``report``: what to compare (None:
+    `ReportSpec.read()`, the shipped table); ``reference`` replaces its reference. ValueError
+    for a reference that was not evaluated or episodes that do not form complete score
+    matrices."""
+    report = (report or ReportSpec.read()).with_reference(reference)
+    reference = report.reference
     out = Path(out)
     suite = json.loads((out / "suite.json").read_text())
     rows = read_episodes(out / "episodes.csv")
@@ -350,16 +274,18 @@ def write_stats(
         raise ValueError(f"--reference {reference!r} was not evaluated; policies: {list(scores)}")
     summary = summarize(scores, groups, reference=reference, reps=reps, seed=seed)
     improvement = {reference: summary["improvement"]}
-    if SECOND_REFERENCE in scores and SECOND_REFERENCE != reference:
+    for other in report.extra_references:
+        if other not in scores or other in improvement:
+            continue
         labels = np.asarray(groups)
-        improvement[SECOND_REFERENCE] = {}
+        improvement[other] = {}
         for scope in summary["scopes"]:
             cols = np.ones(labels.size, bool) if scope == AGGREGATE else labels == scope
             part = {p: a[:, cols] for p, a in scores.items()}
-            improvement[SECOND_REFERENCE][scope] = probability_of_improvement(
-                part, SECOND_REFERENCE, labels[cols], reps=reps, seed=seed
+            improvement[other][scope] = probability_of_improvement(
+                part, other, labels[cols], reps=reps, seed=seed
             )
-    target = target_table(rows, scores, groups, reference)
+    target = target_table(rows, scores, groups, reference, report.max_ratio)
     verdicts = {}
     for policy in scores:
         mine = [t for t in target if t["policy"] == policy]
@@ -398,16 +324,22 @@ def write_stats(
     }
     if rows and "chattering" in rows[0]:
         chattering = metric_matrices(rows, list(suite["sets"]), "chattering", runs)
-        stats["paired"] = paired_table(scores, groups, reps, seed)
-        stats["chattering"] = chattering_table(chattering, groups, reps, seed)
+        stats["paired"] = paired_table(scores, groups, reps, seed, report.pairs,
+                                       report.worse_ratio)  # fmt: skip
+        stats["chattering"] = chattering_table(chattering, groups, reps, seed,
+                                               report.smoothness_reference)  # fmt: skip
     kinds = {name: entry.get("kind", "agent") for name, entry in suite["policies"].items()}
-    text = _markdown({**stats, "improvement_tables": improvement, "kinds": kinds}, summary)
+    text = stats_markdown({**stats, "improvement_tables": improvement, "kinds": kinds}, summary,
+                          report.max_ratio)  # fmt: skip
     if "chattering" in stats:
-        text += "\n" + smoothness_markdown(stats["paired"], stats["chattering"])
+        text += "\n" + smoothness_markdown(
+            stats["paired"], stats["chattering"], report.smoothness_reference, report.worse_ratio
+        )
     write_json(out / "stats.json", jsonable(stats), indent=1)
     write_text(out / "stats.md", text)
     if figures:
-        _figures(out / FIGURES, summary, improvement, curves, stats.get("chattering"))
+        _figures(out / FIGURES, summary, improvement, curves, stats.get("chattering"),
+                 report.tradeoff_scopes)  # fmt: skip
     return text
 
 
@@ -417,6 +349,7 @@ def _figures(
     improvement: Mapping[str, Any],
     curves: Mapping[str, Mapping[str, Any]],
     chattering: Mapping[str, Any] | None = None,
+    tradeoff_scopes: Sequence[str] = (),
 ) -> None:
     from benchmarks.stats_figures import (
         improvement_figure,
@@ -428,7 +361,7 @@ def _figures(
     )
 
     if chattering:  # accuracy against smoothness where the paper's noise acts
-        scopes = [s for s in ("scenario:paper", "test_distribution", AGGREGATE) if s in chattering]
+        scopes = [s for s in tradeoff_scopes if s in chattering]
         fig = tradeoff_figure(summary, chattering, scopes)
         save_figure(fig, folder / "smoothness_tradeoff.png")
 

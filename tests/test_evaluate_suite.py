@@ -334,7 +334,11 @@ def test_paired_table_by_hand():
     base = np.array([[0.10, 0.10, 0.20, 0.20]])
     scores = {"fbsm_colos": base, "ppo_residual": np.vstack([base - 0.01, base - 0.03]),
               "fbsm_colos_lowpass": base * 1.2}  # fmt: skip
-    table = paired_table(scores, ["a", "a", "b", "b"], reps=200, seed=0)
+    pairs = [("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
+             ("fbsm_colos_lowpass", "fbsm_colos"),
+             ("ppo_residual", "fbsm_colos_lowpass")]  # fmt: skip
+    table = paired_table(scores, ["a", "a", "b", "b"], reps=200, seed=0, pairs=pairs,
+                         worse_ratio=0.1)  # fmt: skip
     assert list(table) == ["ppo_residual−fbsm_colos", "fbsm_colos_lowpass−fbsm_colos",
                            "ppo_residual−fbsm_colos_lowpass"]  # fmt: skip
     res = table["ppo_residual−fbsm_colos"]["aggregate"]
