@@ -13,27 +13,27 @@ the number of workers or the backend. Policies: `benchmarks.policies`; scenarios
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from auv_gym.config import MAX_EPISODE_TIME, SimConfig
+from auv_gym.config import SimConfig
 from auv_gym.files import replace_outputs
 from auv_gym.metrics import check_window
 from benchmarks.arguments import (
     ArgumentParser,
+    add_episode_arguments,
+    check_episode_arguments,
     comma_names,
-    finite_number,
     locked_folder,
     program_name,
     usage_errors,
     writable_folder,
 )
 from benchmarks.cli import HelpFormatter
-from benchmarks.jobs import Job, check_ray_address, run_jobs
+from benchmarks.jobs import Job, run_jobs
 from benchmarks.policies import (
     PolicySpec,
     build_policy,
@@ -47,7 +47,6 @@ from benchmarks.tables import write_tables
 
 MAX_SEEDS = 100_000  # seeds per scenario
 TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.tables.write_tables`
-MAX_WORKERS = 1024
 MAX_EPISODES = 1_000_000  # episodes of one run: each is a job held in memory and on disk
 
 
@@ -69,18 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
     parser.add_argument("--seeds", type=int, default=10,
                         help=f"seeds 0..N-1 per scenario, 1 <= N <= {MAX_SEEDS}")  # fmt: skip
-    parser.add_argument("--duration", type=float, default=300.0, help="episode length [s]")
-    parser.add_argument(
-        "--transient",
-        type=float,
-        default=None,
-        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
-    )
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                        help="local worker processes (results do not depend on it)")  # fmt: skip
-    parser.add_argument("--backend", choices=("local", "ray"), default="local",
-                        help="run the episodes in local processes or on a Ray cluster")  # fmt: skip
-    parser.add_argument("--address", default=None, help="Ray cluster address to join")
+    add_episode_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("out/compare"),
                         help="output folder; a rerun with the same arguments resumes")  # fmt: skip
     parser.add_argument("--no-figures", action="store_true", help="tables only")
@@ -122,20 +110,7 @@ def check_args(args: argparse.Namespace) -> None:
     if episodes > MAX_EPISODES:  # refused before the jobs are listed: no memory, no silence
         raise ValueError(f"--seeds {args.seeds} × {len(names)} scenarios × {len(policies)} "
                          f"policies = {episodes} episodes, more than {MAX_EPISODES}")  # fmt: skip
-    finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
-    if args.transient is not None:
-        finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
-    if not 1 <= args.workers <= MAX_WORKERS:
-        raise ValueError(f"--workers must be an integer in [1, {MAX_WORKERS}], got {args.workers}")
-    if args.address is not None and args.backend != "ray":
-        raise ValueError("--address needs --backend ray")
-    if args.backend == "ray":
-        try:
-            import ray
-        except ImportError:
-            raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
-        if not ray.is_initialized():  # ray.init would retry an unreachable address for ever
-            check_ray_address(args.address)
+    check_episode_arguments(args)
     for name in names:
         scenario = scenarios[name]
         env_kwargs = {**scenario.env, "max_time": args.duration}

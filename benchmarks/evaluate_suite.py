@@ -41,7 +41,6 @@ import csv
 import hashlib
 import io
 import json
-import os
 import re
 import sys
 import time
@@ -51,11 +50,10 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
-from auv_gym.config import MAX_EPISODE_TIME, SimConfig
+from auv_gym.config import SimConfig
 from auv_gym.files import (
     environment,
     json_default,
-    remove_temporaries,
     replace_outputs,
     write_json,
     write_text,
@@ -64,15 +62,17 @@ from auv_gym.metrics import check_window
 from auv_gym.rollout import evaluate
 from benchmarks.arguments import (
     ArgumentParser,
+    add_episode_arguments,
+    check_episode_arguments,
     comma_names,
-    finite_number,
     locked_folder,
     program_name,
     usage_errors,
     writable_folder,
 )
+from benchmarks.cache import run_resumable
 from benchmarks.cli import HelpFormatter
-from benchmarks.jobs import agent_digest, code_digest, parallel_map
+from benchmarks.jobs import agent_digest, code_digest
 from benchmarks.policies import (
     PolicySpec,
     agent_run,
@@ -80,6 +80,7 @@ from benchmarks.policies import (
     check_policy_spec,
     policy_label,
 )
+from benchmarks.report_spec import DEFAULT_REPORT, ReportSpec
 from benchmarks.scenarios import select
 from benchmarks.tasks import TASKS_FILE, TaskSet, test_suite
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
@@ -103,7 +104,6 @@ AGENT_SEED = re.compile(
     re.escape(SEED_AGENT_PREFIX) + r"(\d+)"
 )  # DIR/agent_seed_<k>/ (train_seeds)
 DEFAULT_POLICIES = "fbsm,backstepping,ppo"
-MAX_WORKERS = 1024
 # episodes.csv metric column → key of `auv_gym.metrics.compute_metrics` (units: m, m/s, -, 1/s, s).
 METRICS = {
     "rms_distance": "rms_distance",
@@ -176,9 +176,16 @@ class Chunk:
             out / CHUNKS / policy_label(self.policy) / run / f"{policy_label(self.task.name)}.json"
         )
 
+    def record_file(self, out: Path) -> Path:
+        """The chunk's record (`benchmarks.cache`): its episodes' metrics."""
+        return self.path(out)
+
+    def files(self, out: Path) -> tuple[Path]:
+        return (self.path(out),)
+
 
 def resolve_policy(spec: str) -> SuitePolicy:
-    """The policy of one ``--policies`` entry, its agents checked (`controllers.ppo.check_agent`);
+    """The policy of one ``--policies`` entry, its agents checked (`controllers.agent.check_agent`);
     ValueError / FileNotFoundError naming the entry otherwise."""
     if "=" not in spec:
         parsed = check_policy_spec(spec)
@@ -232,19 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=TASKS_FILE,
         help="TOML file of named task sets (benchmarks.tasks)",
     )
-    parser.add_argument("--duration", type=float, default=300.0, help="episode length [s]")
-    parser.add_argument(
-        "--transient",
-        type=float,
-        default=None,
-        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
-    )
-    parser.add_argument(
-        "--workers",
-        type=int,
-        default=os.cpu_count() or 1,
-        help="local worker processes (results do not depend on it)",
-    )
+    add_episode_arguments(parser)
     parser.add_argument(
         "--out",
         type=Path,
@@ -261,9 +256,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-stats", action="store_true", help="episodes.csv only")
     parser.add_argument("--no-figures", action="store_true", help="statistics without figures")
     parser.add_argument(
+        "--report",
+        type=Path,
+        default=DEFAULT_REPORT,
+        help="TOML report table: references, target ratio, (policy, base) pairs of the statistics",
+    )
+    parser.add_argument(
         "--reference",
-        default="fbsm",
-        help="policy the probability of improvement and the 2x ratio refer to",
+        default=None,
+        help="policy the probability of improvement and the target ratio refer to (default: the "
+        "report table's)",
     )
     parser.add_argument("--reps", type=int, default=2000, help="bootstrap replicates")
     parser.add_argument(
@@ -295,6 +297,8 @@ def check_args(args: argparse.Namespace) -> None:
         from benchmarks.suite_stats import check_stats_options
 
         check_stats_options(args.reps, args.bootstrap_seed)
+        args.report_spec = ReportSpec.read(args.report).with_reference(args.reference)
+        args.reference = args.report_spec.reference
     if args.stats_only:
         for name in (EPISODES_FILE, SUITE_FILE):
             if not (args.out / name).is_file():
@@ -326,11 +330,7 @@ def check_args(args: argparse.Namespace) -> None:
             f"--reference {args.reference!r} is not among --policies "
             f"{[p.name for p in policies]} (or pass --no-stats)"
         )
-    finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
-    if args.transient is not None:
-        finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
-    if not 1 <= args.workers <= MAX_WORKERS:
-        raise ValueError(f"--workers must be an integer in [1, {MAX_WORKERS}], got {args.workers}")
+    check_episode_arguments(args)
     chunks = []
     transient = args.transient
     for task in sets:
@@ -387,43 +387,6 @@ def run_chunk(chunk: Chunk, out: Path) -> dict[str, Any]:
     return record
 
 
-def finished_chunk(chunk: Chunk, out: Path) -> dict[str, Any] | None:
-    """The stored record of a finished chunk with a matching fingerprint, else None."""
-    try:
-        record = json.loads(chunk.path(out).read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-    return record if record.get("fingerprint") == chunk.fingerprint() else None
-
-
-def run_chunks(
-    chunks: list[Chunk], out: Path, workers: int, progress: bool = True
-) -> list[dict[str, Any]]:
-    """Run the chunks that are not finished yet; the records of all chunks, in chunk order."""
-    from tqdm.auto import tqdm
-
-    remove_temporaries(out / CHUNKS)  # of a run killed mid-write (callers hold the folder)
-    records: dict[int, dict[str, Any]] = {}
-    for index, chunk in enumerate(chunks):
-        done = finished_chunk(chunk, out)
-        if done is not None:
-            records[index] = done
-    todo = [i for i in range(len(chunks)) if i not in records]
-    sizes = [len(c.task.seeds) for c in chunks]
-    bar = tqdm(
-        total=sum(sizes),
-        initial=sum(sizes[i] for i in records),
-        desc="suite episodes",
-        unit="ep",
-        disable=not progress,
-    )
-    for index, record in parallel_map(run_chunk, [chunks[i] for i in todo], todo, out, workers):
-        records[index] = record
-        bar.update(sizes[index])
-    bar.close()
-    return [records[i] for i in range(len(chunks))]
-
-
 def episodes_csv(records: list[dict[str, Any]]) -> str:
     """episodes.csv of chunk records: floats as Python's repr (full precision, 'nan')."""
     buffer = io.StringIO()
@@ -452,7 +415,11 @@ def _set_entry(task: TaskSet) -> dict[str, Any]:
 
 def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict[str, Any]]:
     """Evaluate every chunk, then write episodes.csv and suite.json (atomically)."""
-    records = run_chunks(args.chunks, args.out, args.workers, progress=not args.quiet)
+    records = run_resumable(
+        args.chunks, args.out, args.out / CHUNKS, run_chunk, workers=args.workers,
+        backend=args.backend, address=args.address, progress=not args.quiet,
+        desc="suite episodes", sizes=[len(c.task.seeds) for c in args.chunks],
+    )  # fmt: skip
     command = [
         Path(sys.executable).name,
         "-m",
@@ -504,10 +471,10 @@ def main(argv: Sequence[str] | None = None) -> None:
 
             text = write_stats(
                 args.out,
-                reference=args.reference,
                 reps=args.reps,
                 seed=args.bootstrap_seed,
                 figures=not args.no_figures,
+                report=args.report_spec,
             )
             written += [args.out / name for name in STATS_FILES]
             after = _files(args.out / FIGURES)  # written atomically: a new inode each

@@ -28,13 +28,11 @@ cluster whose nodes share OUT.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import json
 import math
 import multiprocessing
 import os
 import shutil
-import signal
 import sys
 import time
 from collections.abc import Sequence
@@ -45,7 +43,7 @@ from typing import Any
 
 from auv_gym.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
 from benchmarks.arguments import writable_location
-from benchmarks.jobs import check_ray_address
+from benchmarks.pool import check_pool_options, check_ray_address, connect_ray, die_with_parent
 from benchmarks.training.checkpoints import (
     SEED_AGENT_PREFIX,
     export_agent,
@@ -176,13 +174,8 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         raise ValueError("eval_freq must be positive: the shipped agent is selected on the "
                          "validation evaluations")  # fmt: skip
     check_evaluation_window(train.eval_duration)
-    if opts.backend == "ray":
-        try:
-            import ray
-        except ImportError:
-            raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
-        if not ray.is_initialized():  # a connected driver needs no handshake
-            check_ray_address(opts.address)
+    if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.pool`)
+        check_pool_options(1, opts.backend, opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
@@ -357,18 +350,8 @@ def seed_entry(run: Path) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def _set_parent_death_signal() -> None:
-    """Linux: this process gets SIGKILL when its parent dies (no orphaned training)."""
-    if sys.platform.startswith("linux"):
-        libc = ctypes.CDLL(None, use_errno=True)
-        pr_set_pdeathsig = 1
-        libc.prctl(pr_set_pdeathsig, signal.SIGKILL)
-        if os.getppid() == 1:  # the parent died before the call
-            os._exit(1)
-
-
-def _child(train_opts: dict[str, Any], status: str, log: str) -> None:
-    _set_parent_death_signal()
+def _child(train_opts: dict[str, Any], status: str, log: str, parent_pid: int) -> None:
+    die_with_parent(parent_pid)  # no orphaned training
     fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
     os.dup2(fd, 1)
     os.dup2(fd, 2)
@@ -407,7 +390,8 @@ def _run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: P
                 seed, train_opts, status = pending.pop(0)
                 log = out / LOGS / f"seed_{seed}.log"
                 log.parent.mkdir(parents=True, exist_ok=True)
-                proc = ctx.Process(target=_child, args=(train_opts, status, str(log)), daemon=False)
+                proc = ctx.Process(target=_child, args=(train_opts, status, str(log), os.getpid()),
+                                   daemon=False)  # fmt: skip
                 proc.start()
                 running[proc.sentinel] = (seed, proc)
             for sentinel in wait(list(running), timeout=poll_s):
@@ -426,14 +410,9 @@ def _run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: P
 
 def _run_ray(jobs: list[tuple[int, dict[str, Any], str]], address: str | None, workers: int,
              out: Path, bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
-    import ray
-
-    if not ray.is_initialized():
-        if address is None:
-            ray.init(num_cpus=workers, log_to_driver=False, include_dashboard=False)
-        else:
-            check_ray_address(address)  # ray.init retries an unreachable address for ever
-            ray.init(address=address, log_to_driver=False)
+    # a new local instance gets ``workers`` CPUs; a cluster has its own
+    local = {"num_cpus": workers, "include_dashboard": False} if address is None else {}
+    ray = connect_ray(address, **local)
     remote = ray.remote(num_cpus=1, max_retries=0)(train_one_seed)
     refs = {remote.remote(train_opts, status): seed for seed, train_opts, status in jobs}
     failures: dict[int, str] = {}
