@@ -155,7 +155,7 @@ def locked_folder(prog: str, folder: Path, flag: str = "--out") -> Iterator[Path
 def add_episode_arguments(parser: argparse.ArgumentParser, duration: float = 300.0) -> None:
     """The options of every episode runner (compare, the suite): ``--duration``,
     ``--transient`` and the pool's ``--workers``, ``--backend``, ``--address``
-    (`benchmarks.pool`); checked by `check_episode_arguments`."""
+    (`benchmarks.runner.pool`); checked by `check_episode_arguments`."""
     parser.add_argument("--duration", type=float, default=duration, help="episode length [s]")
     parser.add_argument(
         "--transient",
@@ -172,9 +172,9 @@ def add_episode_arguments(parser: argparse.ArgumentParser, duration: float = 300
 
 def check_episode_arguments(args: argparse.Namespace) -> None:
     """ValueError naming the option: ``--duration`` in (0, `MAX_EPISODE_TIME`] s,
-    ``--transient`` in [0, duration) s, and the pool options (`benchmarks.pool`)."""
+    ``--transient`` in [0, duration) s, and the pool options (`benchmarks.runner.pool`)."""
     from auv_gym.config import MAX_EPISODE_TIME
-    from benchmarks.pool import check_pool_options
+    from benchmarks.runner.pool import check_pool_options
 
     finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
     if args.transient is not None:

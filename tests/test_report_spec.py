@@ -1,12 +1,12 @@
-"""The report table of the suite statistics (`benchmarks.report_spec`): the shipped file holds
-the shipped results' experiment, a custom one changes what is compared, and bad tables are
-refused with one line naming the key."""
+"""The report table of the suite statistics (`benchmarks.analysis.report_spec`): the shipped
+file holds the shipped results' experiment, a custom one changes what is compared, and bad
+tables are refused with one line naming the key."""
 
 from __future__ import annotations
 
 import pytest
 
-from benchmarks.report_spec import DEFAULT_REPORT, ReportSpec
+from benchmarks.analysis.report_spec import DEFAULT_REPORT, ReportSpec
 
 
 def test_the_shipped_table_is_the_shipped_experiment():

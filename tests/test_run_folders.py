@@ -19,8 +19,8 @@ import pytest
 import yaml
 
 from auv_gym.files import OUTPUTS_FILE, output_lock, remove_temporaries, replace_outputs
-from benchmarks import pool
-from benchmarks.pool import check_ray_address
+from benchmarks.runner import pool
+from benchmarks.runner.pool import check_ray_address
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["--policies", "fbsm", "--seeds", "1", "--duration", "4", "--transient", "0", "--quiet",

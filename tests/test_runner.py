@@ -1,5 +1,5 @@
-"""The one resumable runner of benchmark work (`benchmarks.cache` on `benchmarks.pool`), which
-compare's episodes and the suite's chunks both go through."""
+"""The one resumable runner of benchmark work (`benchmarks.runner.cache` on
+`benchmarks.runner.pool`), which compare's episodes and the suite's chunks both go through."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from auv_gym.files import write_json
-from benchmarks.cache import run_resumable, stored_record
-from benchmarks.pool import MAX_WORKERS, check_pool_options
+from benchmarks.runner.cache import run_resumable, stored_record
+from benchmarks.runner.pool import MAX_WORKERS, check_pool_options
 
 CALLS: list[int] = []
 

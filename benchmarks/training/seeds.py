@@ -43,7 +43,12 @@ from typing import Any
 
 from auv_gym.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
 from benchmarks.arguments import writable_location
-from benchmarks.pool import check_pool_options, check_ray_address, connect_ray, die_with_parent
+from benchmarks.runner.pool import (
+    check_pool_options,
+    check_ray_address,
+    connect_ray,
+    die_with_parent,
+)
 from benchmarks.training.checkpoints import (
     SEED_AGENT_PREFIX,
     export_agent,
@@ -174,7 +179,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         raise ValueError("eval_freq must be positive: the shipped agent is selected on the "
                          "validation evaluations")  # fmt: skip
     check_evaluation_window(train.eval_duration)
-    if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.pool`)
+    if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.runner.pool`)
         check_pool_options(1, opts.backend, opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
@@ -241,7 +246,7 @@ def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
     set, or evaluation seeds outside the set's range."""
     if opts.task_set in TASK_SETS:
         return opts
-    from benchmarks.tasks import load_task_sets
+    from benchmarks.catalog.tasks import load_task_sets
 
     sets = load_task_sets()
     validation = sorted(name for name, s in sets.items() if s.role == "validation")

@@ -16,7 +16,7 @@ from typing import Any
 
 __all__ = ["DEFAULT_REPORT", "ReportSpec"]
 
-DEFAULT_REPORT = Path(__file__).resolve().parent / "report.toml"
+DEFAULT_REPORT = Path(__file__).resolve().parents[1] / "report.toml"
 _KEYS = {"": {"reference", "extra_references", "target", "smoothness"},
          "target": {"max_ratio"},
          "smoothness": {"reference", "worse_ratio", "pairs", "tradeoff_scopes"}}  # fmt: skip

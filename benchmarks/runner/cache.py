@@ -6,8 +6,9 @@ what is finished and redoes only the rest.
 A unit of work has ``fingerprint()`` (a hash), ``record_file(out)`` (its JSON record) and
 ``files(out)`` (every file it writes, the record among them: a unit is finished only when all
 exist and the record's fingerprint matches). `run_resumable` removes the temporary files of a
-killed run, loads what is finished, runs the rest on the process pool (`benchmarks.pool`) with a
-progress bar, and returns the records in the order of the units.
+killed run, loads what is finished, runs the rest on the process pool
+(`benchmarks.runner.pool`) with a progress bar, and returns the records in the order of the
+units.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from auv_gym.files import remove_temporaries
-from benchmarks.pool import execute
+from benchmarks.runner.pool import execute
 
 __all__ = ["Work", "run_resumable", "stored_record"]
 

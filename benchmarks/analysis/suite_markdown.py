@@ -9,8 +9,8 @@ from typing import Any
 from auv_gym import table_format
 from auv_gym.table_format import format_number
 from auv_gym.task import SURGE_LIMIT
-from benchmarks.smoothness_stats import column_chunks
-from benchmarks.stats import Interval, markdown_table
+from benchmarks.analysis.smoothness_stats import column_chunks
+from benchmarks.analysis.stats import Interval, markdown_table
 
 __all__ = ["policy_group", "stats_markdown"]
 
