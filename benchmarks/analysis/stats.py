@@ -24,10 +24,9 @@ Conventions (Agarwal et al., "Deep RL at the edge of the statistical precipice",
   state, ignoring its ``random_state`` argument, so `_SeedEpisodeBootstrap` draws them from its
   own Generator, seeded by (seed, statistic, policy, episode groups): one seed gives
   bit-identical intervals, and adding a policy does not change another policy's intervals.
-* **Speed.** `_iqm` is the arithmetic of rliable's ``aggregate_iqm`` (scipy's ``trim_mean``,
-  25 %: partition, then the mean of the middle) without scipy's per-call argument
-  inspection, and `_probability_lower` is rliable's Mann-Whitney U statistic vectorised over
-  episodes (its loop calls scipy once per episode); tests check both equal rliable's.
+* **Speed.** `_iqm` is rliable's ``aggregate_iqm`` (scipy's 25 % ``trim_mean``) without scipy's
+  per-call argument inspection; `_probability_lower` is rliable's Mann-Whitney U statistic
+  vectorised over episodes (its loop calls scipy once per episode); tests check both equal it.
 """
 
 from __future__ import annotations
