@@ -60,8 +60,9 @@ class SB3VecEnv(VecEnv):
     empty dicts. Observations, rewards and dones are unchanged; at 512 vehicles the full dicts
     cost about as much as the physics.
 
-    ``venv`` may also be a gymnasium `VectorWrapper` around an `AUVPath3DVectorEnv` (e.g.
-    `controllers.residual_env.ResidualVectorEnv`): steps, resets and spaces are the wrapper's;
+    ``venv`` may also be a gymnasium `VectorWrapper` around an `AUVPath3DVectorEnv` (e.g. the
+    residual training wrapper, `benchmarks.training.residual_env.ResidualVectorEnv`): steps,
+    resets and spaces are the wrapper's;
     the per-vehicle attributes and the autoreset mode are the vector env's (``unwrapped``), and
     other attributes are looked up on the wrapper first.
     """

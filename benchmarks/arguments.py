@@ -150,3 +150,33 @@ def locked_folder(prog: str, folder: Path, flag: str = "--out") -> Iterator[Path
         exit_with_usage_error(prog, error)
     with stack:
         yield held
+
+
+def add_episode_arguments(parser: argparse.ArgumentParser, duration: float = 300.0) -> None:
+    """The options of every episode runner (compare, the suite): ``--duration``,
+    ``--transient`` and the pool's ``--workers``, ``--backend``, ``--address``
+    (`benchmarks.runner.pool`); checked by `check_episode_arguments`."""
+    parser.add_argument("--duration", type=float, default=duration, help="episode length [s]")
+    parser.add_argument(
+        "--transient",
+        type=float,
+        default=None,
+        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
+    )
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                        help="local worker processes (results do not depend on it)")  # fmt: skip
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="run the episodes in local processes or on a Ray cluster")  # fmt: skip
+    parser.add_argument("--address", default=None, help="Ray cluster address to join")
+
+
+def check_episode_arguments(args: argparse.Namespace) -> None:
+    """ValueError naming the option: ``--duration`` in (0, `MAX_EPISODE_TIME`] s,
+    ``--transient`` in [0, duration) s, and the pool options (`benchmarks.runner.pool`)."""
+    from auv_gym.config import MAX_EPISODE_TIME
+    from benchmarks.runner.pool import check_pool_options
+
+    finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
+    if args.transient is not None:
+        finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
+    check_pool_options(args.workers, args.backend, args.address)

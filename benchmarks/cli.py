@@ -2,12 +2,14 @@
 
     auv-gym compare --policies fbsm,backstepping --scenarios paper --seeds 3 --duration 150
     auv-gym suite --policies fbsm,ppo_generalist=runs/ppo/results   # whole test suite + statistics
-    auv-gym train --config …                 # needs the rl extra
+    auv-gym train --algo sac --config …      # needs the rl extra
+    auv-gym train-seeds --algo ppo --seeds 5 --out runs/x   # several seeds, selection
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|training|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m benchmarks.<name>``
+(its flat name, e.g. ``benchmarks.compare``, or its package path, ``benchmarks.runner.compare``)
 and shows its options, defaults and choices with ``--help``. Data the commands read (scenarios,
 hyper-parameters, the shipped agent) is package data, found beside the modules, so every command
 works from any folder; outputs go to paths relative to the current folder.
@@ -33,26 +35,35 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescript
 
 # Subcommand → (module whose main(argv) runs it, one-line description).
 COMMANDS: dict[str, tuple[str, str]] = {
-    "compare": ("benchmarks.compare", "policies on seeded scenarios: tables and figures"),
-    "suite": ("benchmarks.evaluate_suite", "every policy and seed on the test suite: statistics"),
-    "train": ("benchmarks.train_ppo", "train or evaluate a PPO agent (rl extra)"),
+    "compare": ("benchmarks.runner.compare", "policies on seeded scenarios: tables and figures"),
+    "suite": (
+        "benchmarks.runner.evaluate_suite",
+        "every policy and seed on the test suite: statistics",
+    ),
+    "train": (
+        "benchmarks.training.train_cli",
+        "train or evaluate an RL agent, --algo ppo|sac (rl extra)",
+    ),
     "train-seeds": (
-        "benchmarks.train_seeds",
+        "benchmarks.training.seeds_cli",
         "N training seeds, selection on validation (rl extra)",
     ),
-    "paper-figures": ("benchmarks.paper_figures", "the paper's Figs. 3-9, FBSM vs backstepping"),
+    "paper-figures": (
+        "benchmarks.reports.paper_figures",
+        "the paper's Figs. 3-9, FBSM vs backstepping",
+    ),
     "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),
-    "video": ("benchmarks.video", "an episode's video: 3-D track and errors (video extra)"),
+    "video": ("benchmarks.reports.video", "an episode's video: 3-D track and errors (video extra)"),
     "docs": ("", "where the manual is (docs/*.md: model, design, usage, results)"),
 }
 # `auv-gym speed NAME` → (module, one-line description).
 SPEED: dict[str, tuple[str, str]] = {
-    "all": ("benchmarks.throughput", "every section below, in one run"),
-    "env": ("benchmarks.speed_env", "single env through gym.make, against the JIT-off reference"),
+    "all": ("benchmarks.speed.throughput", "every section below, in one run"),
+    "env": ("benchmarks.speed.env", "single env through gym.make, against the JIT-off reference"),
     "vector": ("benchmarks.speed_vector", "native vector env, peak memory, SB3 data collection"),
-    "controllers": ("benchmarks.speed_controllers", "FBSM and backstepping predict cost"),
-    "render": ("benchmarks.speed_render", "rgb_array frames per second, fast and full redraw"),
-    "training": ("benchmarks.speed_training", "PPO training env steps/s, against a baseline ref"),
+    "controllers": ("benchmarks.speed.controllers", "FBSM and backstepping predict cost"),
+    "render": ("benchmarks.speed.render", "rgb_array frames per second, fast and full redraw"),
+    "training": ("benchmarks.speed.training", "PPO training env steps/s, against a baseline ref"),
 }
 # Modules of the optional extras: a missing one is named with the extra that installs it.
 EXTRAS = {"stable_baselines3": "rl", "torch": "rl", "yaml": "rl", "rich": "rl",

@@ -1,70 +1,13 @@
-"""Rendering speed: `render_mode="rgb_array"` frames per second, fast path and full redraw.
-
-    auv-gym speed render [--frames 300] [--every 1]
-
-FBSM follows the paper's helix under ±35 white noise through `gym.make(..., render_mode=
-"rgb_array")`; a frame is taken every ``--every`` control steps and only `env.render()` is timed
-(the default 960 × 320 px frame). The full-redraw reference (`EpisodeRenderer(fast=False)`) is
-timed on the same episode for comparison. Target: ≥ 50 frames/s on the fast path.
-"""
+"""Alias of `benchmarks.speed.render` under its former name: ``python -m benchmarks.speed_render``
+and ``import benchmarks.speed_render`` keep working."""
 
 from __future__ import annotations
 
-import argparse
-import time
+import sys
 
-import numpy as np
-
-from benchmarks.cli import HelpFormatter
-
-
-def measure(frames: int, every: int, fast: bool) -> dict[str, float]:
-    """Frames/s of `frames` renders, one every `every` control steps of an FBSM episode."""
-    import gymnasium as gym
-
-    import auv_gym  # noqa: F401  (registers the env)
-    import controllers
-    from auv_gym.rendering import EpisodeRenderer
-
-    max_time = (frames * every + 1) * 0.05
-    env = gym.make("AUVPath3D-v0", render_mode="rgb_array", max_time=max_time).unwrapped
-    if not fast:
-        env._renderer = EpisodeRenderer(env.config.path, max_time, fast=False)
-    policy = controllers.make("fbsm")
-    obs, _ = env.reset(seed=0)
-    env.render()  # builds the figure: not part of the steady rate
-    state, start = None, np.ones(1, dtype=bool)
-    spent, drawn = 0.0, 0
-    for k in range(1, frames * every + 1):
-        action, state = policy.predict(obs[None], state, start)
-        start[:] = False
-        obs, *_ = env.step(action[0])
-        if k % every == 0:
-            began = time.perf_counter()
-            env.render()
-            spent += time.perf_counter() - began
-            drawn += 1
-    return {"frames": drawn, "frames_per_s": drawn / spent, "ms_per_frame": 1e3 * spent / drawn}
-
-
-def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--frames", type=int, default=300, help="timed frames of the fast path")
-    parser.add_argument("--every", type=int, default=1, help="control steps between frames")
-    parser.add_argument("--reference-frames", type=int, default=20,
-                        help="timed frames of the full-redraw reference; 0 skips it")  # fmt: skip
-    args = parser.parse_args(argv)
-    if args.frames < 1 or args.every < 1 or args.reference_frames < 0:
-        parser.error("--frames and --every must be >= 1, --reference-frames >= 0")
-    results = {"fast": measure(args.frames, args.every, fast=True)}
-    if args.reference_frames:
-        results["full redraw"] = measure(args.reference_frames, args.every, fast=False)
-    print("\nrgb_array frames (960 × 320 px), FBSM on the paper scenario")
-    print(f"{'path':<12} {'frames':>7} {'frames/s':>9} {'ms/frame':>9}")
-    for name, r in results.items():
-        print(f"{name:<12} {r['frames']:>7} {r['frames_per_s']:>9.1f} {r['ms_per_frame']:>9.2f}")
-    return results
-
+from benchmarks.speed import render as _module
 
 if __name__ == "__main__":
-    main()
+    _module.main()
+else:
+    sys.modules[__name__] = _module

@@ -1,8 +1,8 @@
-"""Policies for `AUVPath3D-v0`: the paper's FBSM, backstepping, a PID + LOS autopilot, PPO
-agents and residual policies.
+"""Policies for `AUVPath3D-v0`: the paper's FBSM, backstepping, a PID + LOS autopilot, saved
+RL agents (PPO, SAC) and residual policies.
 
 Every controller implements stable-baselines3's `predict` (`controllers.base.Policy`), so the
-evaluation code treats FBSM, backstepping, a PPO agent and a user's object alike.
+evaluation code treats FBSM, backstepping, a trained agent and a user's object alike.
 """
 
 from __future__ import annotations
@@ -18,13 +18,16 @@ from auv_gym.numba_cache import register_package
 # guidance, so an edit there must also recompile them (see `auv_gym.numba_cache`).
 register_package(Path(__file__).parent, Path(auv_gym.__file__).parent)
 
+from controllers.algorithms import ALGORITHMS  # noqa: E402
 from controllers.backstepping import Backstepping  # noqa: E402
 from controllers.base import BatchedController, Policy  # noqa: E402
 from controllers.fbsm import FBSM  # noqa: E402
 from controllers.gains import ControllerGains, MembershipSet  # noqa: E402
 from controllers.pid import PIDLOS, PIDGains  # noqa: E402
+from controllers.registry import CLASSICAL, PRESETS, make_classical  # noqa: E402
 
 __all__ = [
+    "AGENT_NAMES",
     "CLASSICAL",
     "FBSM",
     "PIDLOS",
@@ -40,25 +43,9 @@ __all__ = [
     "make",
 ]
 
-# Named variants of the classical controllers (not in the paper), against ocean currents; see
-# `ControllerGains` and README "Results". Integral LOS in the horizontal plane, σ_y = 3. Current-
-# observer LOS (`controllers.alos`, docs/model.md §3.7): observer ω_o = 3 rad/s, crab angles over
-# ground, speed over ground; backstepping adds the gated ALOS trims (γ = 0.01 rad/(m·s)) that
-# remove the bias its fixed nominal model leaves (the FBSM adapts that bias away itself).
-_COLOS = {"current_observer": 3.0, "speed_over_ground": True}
-PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
-    "fbsm_ilos": ("fbsm", {"ilos_y": 3.0}),
-    "backstepping_ilos": ("backstepping", {"ilos_y": 3.0}),
-    "fbsm_colos": ("fbsm", _COLOS),
-    "backstepping_colos": ("backstepping", {**_COLOS, "alos_y": 0.01, "alos_z": 0.01}),
-    # The current-robust FBSM through a first-order low-pass (`controllers.lowpass`, α = 0.5):
-    # the classical answer to chattering, which a residual agent must beat (docs/design.md §3.11).
-    "fbsm_colos_lowpass": ("lowpass", {"base": "fbsm_colos"}),
-    # The textbook baseline (`controllers.pid`, docs/model.md §4.9) with the same guidance options.
-    "pid_ilos": ("pid_los", {"ilos_y": 3.0}),
-    "pid_colos": ("pid_los", _COLOS),
-}
-CLASSICAL = ("fbsm", "backstepping", "pid_los", *PRESETS)
+# "agent" loads any saved agent; "ppo" is its former name; another algorithm's name loads an
+# agent trained with that algorithm (`controllers.algorithms`).
+AGENT_NAMES = ("agent", *ALGORITHMS)
 REGISTRY = (*CLASSICAL, "ppo")  # policy names of the benchmark CLIs (a residual agent: ppo:PATH)
 
 
@@ -70,8 +57,10 @@ def make(name: str, **kwargs: Any) -> Any:
     `controllers.pid.PIDLOS`) accepts `pid` (`controllers.pid.PIDGains`), `gains` (read for
     the guidance only), `params`, `control_dt`, `actuator` and the names of `PIDGains` and
     `controllers.pid.GUIDANCE_GAINS`. All three take ``actuator="realistic"`` with an optional
-    `actuator_params` (`auv_gym.actuators.ActuatorParams`; docs/model.md §2.7). "ppo" takes
-    `path` (a saved agent directory).
+    `actuator_params` (`auv_gym.actuators.ActuatorParams`; docs/model.md §2.7). "agent" (alias
+    "ppo") takes `path` (a saved agent directory of any algorithm of `controllers.algorithms`,
+    plain or residual; `controllers.loader.load_policy`) and that function's keywords; "sac" (any
+    other algorithm name) does the same for an agent of that algorithm only.
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
     Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
@@ -80,30 +69,25 @@ def make(name: str, **kwargs: Any) -> Any:
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
     """
-    if name in PRESETS:
-        base, preset = PRESETS[name]
-        return make(base, **{**preset, **kwargs})
-    if name == "fbsm":
-        return FBSM(**kwargs)
-    if name == "backstepping":
-        return Backstepping(**kwargs)
-    if name == "pid_los":
-        return PIDLOS(**kwargs)
-    if name == "ppo":
-        from controllers.ppo import load_policy
+    if name in CLASSICAL:
+        return make_classical(name, **kwargs)
+    if name in AGENT_NAMES:
+        from controllers.loader import load_policy
 
         if "path" not in kwargs:
-            raise ValueError("controllers.make('ppo') needs path=<saved agent directory>")
-        return load_policy(kwargs.pop("path"), **kwargs)
+            raise ValueError(f"controllers.make({name!r}) needs path=<saved agent directory>")
+        algo = None if name in ("agent", "ppo") else name
+        return load_policy(kwargs.pop("path"), algo=algo, **kwargs)
     if name == "residual":
-        from controllers.residual import make_residual
+        from controllers.loader import make_residual
 
         return make_residual(**kwargs)
     if name == "lowpass":
-        from controllers.lowpass import make_lowpass
+        from controllers.registry import make_lowpass
 
         return make_lowpass(**kwargs)
-    raise ValueError(f"unknown controller {name!r}; valid: {[*REGISTRY, 'residual', 'lowpass']}")
+    valid = [*CLASSICAL, *AGENT_NAMES, "residual", "lowpass"]
+    raise ValueError(f"unknown controller {name!r}; valid: {valid}")
 
 
 def import_policy(spec: str, instantiate: bool = True, **factory_kwargs: Any) -> Any:

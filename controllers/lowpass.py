@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DEFAULT_ALPHA", "PREVIOUS_KEY", "LowPassPolicy", "check_alpha", "make_lowpass"]
+__all__ = ["DEFAULT_ALPHA", "PREVIOUS_KEY", "LowPassPolicy", "check_alpha"]
 
 PREVIOUS_KEY = "lowpass_previous"  # the filter's a_{k−1} in the policy state
 DEFAULT_ALPHA = 0.5  # halves FBSM's chattering under the paper's noise (docs/design.md §3.11)
@@ -106,17 +106,3 @@ class LowPassPolicy:
 
     def __repr__(self) -> str:
         return f"LowPassPolicy(base={self.base!r}, alpha={self.alpha})"
-
-
-def make_lowpass(base: str = "fbsm_colos", alpha: float = DEFAULT_ALPHA, **kwargs: Any
-                 ) -> LowPassPolicy:  # fmt: skip
-    """`LowPassPolicy` over the classical controller ``base`` (a name of `controllers.CLASSICAL`
-    other than a filtered one) built with ``kwargs`` (gains, actuator, control_dt, ...)."""
-    import controllers
-
-    if base not in controllers.CLASSICAL or controllers.PRESETS.get(base, ("",))[0] == "lowpass":
-        raise ValueError(
-            f"lowpass base {base!r} is not an unfiltered classical controller; "
-            f"valid: {[n for n in controllers.CLASSICAL if 'lowpass' not in n]}"
-        )
-    return LowPassPolicy(controllers.make(base, **kwargs), alpha)

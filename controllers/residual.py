@@ -33,34 +33,31 @@ The base controller gets every observation, `episode_start` flag and `determinis
 evaluation would give it alone, so its adaptive laws, filters and observers evolve exactly as
 without the agent: with c ≡ 0 (and g ≤ 0) the residual policy reproduces its base bit for bit.
 
-The training side (observation of the wrapper, chattering charge) is `controllers.residual_env`;
-the saved agent's `metadata.json` holds `ResidualSettings.to_dict()` under "residual", and
-`controllers.ppo.load_policy` rebuilds a `ResidualPolicy` from it.
+The training side (the wrapper's observation, the chattering charge and the other reward terms,
+`benchmarks.training.residual`) records its settings, a superset of `ResidualSettings`, under
+"residual" in the saved agent's `metadata.json`; `controllers.loader.load_policy` rebuilds a
+`ResidualPolicy` from it.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
 
 from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
+from controllers.registry import CLASSICAL, make_classical
 
 __all__ = [
     "DEFAULT_BASE",
     "DEFAULT_BOUND",
     "DEFAULT_FILTER_MAX",
-    "DEFAULT_PRECISION_SCALE",
-    "DEFAULT_PRECISION_WEIGHT",
-    "DEFAULT_SELECTION_CHATTERING",
-    "DEFAULT_TV_WEIGHT",
     "RESIDUAL_FEATURES",
     "RESIDUAL_OBS_DIM",
     "RESIDUAL_OBS_NAMES",
-    "SETTINGS_KEYS",
     "ResidualPolicy",
     "ResidualSettings",
     "agent_action_dim",
@@ -75,23 +72,9 @@ __all__ = [
 
 DEFAULT_BASE = "fbsm_colos"  # the current-robust FBSM (controllers.PRESETS)
 DEFAULT_BOUND = (0.25, 0.5, 0.5)  # β per input (X, M, N), normalised actuator units
-# Chattering charge per unit of total variation of the applied normalised action per step
-# (docs/design.md §3.10): FBSM alone (TV ≈ 0.87 per step under the paper's noise) pays ≈ 0.22
-# per step, about 5 % of what following the path earns.
-DEFAULT_TV_WEIGHT = 0.25
-MAX_TV_WEIGHT = 1e3
 MAX_FILTER = 0.99  # α_max ≤ 0.99: a time constant of at most 100 control steps
-# Precision bonus w_P·exp(−(d/d_P)²) of training (docs/design.md §3.10): the env's tracking bonus
-# has d_0 = 1 m and is flat where FBSM already is (d ≈ 0.07 m), so without it smoothing looks free.
-# Weight 0: the reward of the first residual agents.
-DEFAULT_PRECISION_WEIGHT = 0.0
-DEFAULT_PRECISION_SCALE = 0.1  # [m] d_P
-# Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.
-DEFAULT_SELECTION_CHATTERING = 0.0
 # Largest learned filter coefficient α_max; 0: no filter, the agent returns three corrections.
 DEFAULT_FILTER_MAX = 0.0
-SETTINGS_KEYS = ("base", "bound", "tv_weight", "precision_weight", "precision_scale",
-                 "selection_chattering", "filter_max", "base_kwargs")  # fmt: skip
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
@@ -112,43 +95,35 @@ def check_bound(bound: Any) -> tuple[float, float, float]:
     return values  # type: ignore[return-value]
 
 
+def check_number(name: str, value: Any, low: float, high: float, unit: str = "") -> float:
+    """``value`` as a float in [low, high]; ValueError naming ``name`` (bools are refused)."""
+    if (isinstance(value, bool) or not isinstance(value, (int, float))
+            or not low <= value <= high):  # fmt: skip
+        raise ValueError(f"{name} must be a number in [{low:g}, {high:g}]{unit}, got {value!r}")
+    return float(value)
+
+
 @dataclass(frozen=True)
 class ResidualSettings:
-    """What makes an agent residual: the base controller (a name of `controllers.CLASSICAL` and
-    its keyword arguments other than the env-owned ``actuator``/``control_dt``), β, the reward
-    terms training adds (chattering charge w_TV, precision bonus w_P with scale d_P [m]) and the
-    chattering weight λ [m·s] of the validation score, and the learned filter's largest
-    coefficient α_max (0: none; docs/design.md §3.10)."""
+    """What makes an agent residual at inference: the base controller (a name of
+    `controllers.CLASSICAL` and its keyword arguments other than the env-owned
+    ``actuator``/``control_dt``), β, and the learned filter's largest coefficient α_max (0: none;
+    docs/design.md §3.10). The reward terms training adds are the training side's
+    (`benchmarks.training.residual.ResidualTraining`, a subclass)."""
 
     base: str = DEFAULT_BASE
     bound: tuple[float, float, float] = DEFAULT_BOUND
-    tv_weight: float = DEFAULT_TV_WEIGHT
-    precision_weight: float = DEFAULT_PRECISION_WEIGHT
-    precision_scale: float = DEFAULT_PRECISION_SCALE
-    selection_chattering: float = DEFAULT_SELECTION_CHATTERING
     filter_max: float = DEFAULT_FILTER_MAX
     base_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        from controllers import CLASSICAL
-
         if self.base not in CLASSICAL:
             raise ValueError(f"residual base {self.base!r} is not a classical controller; "
                              f"valid: {list(CLASSICAL)}")  # fmt: skip
         object.__setattr__(self, "bound", check_bound(self.bound))
-        for name, low, high, unit in (
-            ("tv_weight", 0.0, MAX_TV_WEIGHT, ""),
-            ("precision_weight", 0.0, MAX_TV_WEIGHT, ""),
-            ("precision_scale", 1e-3, 10.0, " m"),
-            ("selection_chattering", 0.0, 1.0, " m·s"),
-            ("filter_max", 0.0, MAX_FILTER, " (1 would freeze the action)"),
-        ):
-            w = getattr(self, name)
-            if (isinstance(w, bool) or not isinstance(w, (int, float))
-                    or not low <= w <= high):  # fmt: skip
-                raise ValueError(f"{name} must be a number in [{low:g}, {high:g}]{unit}, "
-                                 f"got {w!r}")  # fmt: skip
-            object.__setattr__(self, name, float(w))
+        filter_max = check_number("filter_max", self.filter_max, 0.0, MAX_FILTER,
+                                  " (1 would freeze the action)")  # fmt: skip
+        object.__setattr__(self, "filter_max", filter_max)
         if not isinstance(self.base_kwargs, Mapping):
             raise ValueError(f"base_kwargs must be a mapping, got {self.base_kwargs!r}")
         owned = sorted(set(self.base_kwargs) & set(ENV_OWNED_BASE_KWARGS))
@@ -157,39 +132,35 @@ class ResidualSettings:
         object.__setattr__(self, "base_kwargs", dict(self.base_kwargs))
 
     @classmethod
-    def from_dict(cls, data: Any, where: str = "residual") -> ResidualSettings:
-        """Settings from a YAML/JSON mapping with the keys `SETTINGS_KEYS` (all optional; a
-        missing one takes its default); ValueError naming ``where`` and the problem."""
+    def from_dict(cls, data: Any, where: str = "residual", *, strict: bool = True) -> Any:
+        """Settings from a YAML/JSON mapping whose keys are the fields (all optional; a missing
+        one takes its default); ValueError naming ``where`` and the problem. ``strict=False``
+        ignores other keys (a saved agent's record of how it was trained)."""
         if data is None or data is True:
             data = {}
         if not isinstance(data, Mapping):
             raise ValueError(f"{where} must be a mapping, got {data!r}")
-        unknown = sorted(set(data) - set(SETTINGS_KEYS))
-        if unknown:
-            raise ValueError(f"{where}: unknown keys {unknown}; valid: {sorted(SETTINGS_KEYS)}")
+        keys = [f.name for f in fields(cls)]
+        unknown = sorted(set(data) - set(keys))
+        if unknown and strict:
+            raise ValueError(f"{where}: unknown keys {unknown}; valid: {sorted(keys)}")
+        values = {k: data[k] for k in keys if k in data}
+        if "base" in values:
+            values["base"] = str(values["base"])
+        values["base_kwargs"] = values.get("base_kwargs") or {}
         try:
-            return cls(
-                base=str(data.get("base", DEFAULT_BASE)),
-                bound=data.get("bound", DEFAULT_BOUND),
-                tv_weight=data.get("tv_weight", DEFAULT_TV_WEIGHT),
-                precision_weight=data.get("precision_weight", DEFAULT_PRECISION_WEIGHT),
-                precision_scale=data.get("precision_scale", DEFAULT_PRECISION_SCALE),
-                selection_chattering=data.get("selection_chattering",
-                                              DEFAULT_SELECTION_CHATTERING),
-                filter_max=data.get("filter_max", DEFAULT_FILTER_MAX),
-                base_kwargs=data.get("base_kwargs") or {},
-            )  # fmt: skip
+            return cls(**values)
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form recorded in an agent's metadata."""
-        return {"base": self.base, "bound": list(self.bound), "tv_weight": self.tv_weight,
-                "precision_weight": self.precision_weight,
-                "precision_scale": self.precision_scale,
-                "selection_chattering": self.selection_chattering,
-                "filter_max": self.filter_max,
+        return {"base": self.base, "bound": list(self.bound), "filter_max": self.filter_max,
                 "base_kwargs": dict(self.base_kwargs)}  # fmt: skip
+
+    def inference(self) -> ResidualSettings:
+        """The settings a `ResidualPolicy` needs (these, without any training terms)."""
+        return ResidualSettings(self.base, self.bound, self.filter_max, self.base_kwargs)
 
     @property
     def action_dim(self) -> int:
@@ -199,9 +170,7 @@ class ResidualSettings:
     def make_base(self, **kwargs: Any) -> Any:
         """The base controller: `base_kwargs`, then ``kwargs`` (the scenario's ``actuator``,
         ``control_dt``, ...; they win)."""
-        import controllers
-
-        return controllers.make(self.base, **{**self.base_kwargs, **kwargs})
+        return make_classical(self.base, **{**self.base_kwargs, **kwargs})
 
 
 def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
@@ -286,7 +255,7 @@ class ResidualPolicy:
         base: the base controller (any Policy; `controllers.make(name)` of a classical one).
         agent: a Policy of 21-value observations (`RESIDUAL_OBS_NAMES`) giving corrections in
             [−1, 1]³, or (c, g) ∈ [−1, 1]⁶ with a learned filter (e.g. the actor of a saved
-            residual agent, `controllers.ppo.PPOPolicy`).
+            residual agent, `controllers.agent.AgentPolicy`).
         bound: β per input (X, M, N) in normalised actuator units, each in [0, 2].
         settings: the `ResidualSettings` it was built from (recorded, optional; its
             ``filter_max`` α_max switches the learned filter on).
@@ -376,42 +345,18 @@ class ResidualPolicy:
         return f"ResidualPolicy(base={self.base!r}, agent={self.agent!r}, bound={self.bound})"
 
 
-def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
+def make_residual(agent: Any, base: str | None = None, bound: Any = None,
                   filter_max: float | None = None, **base_kwargs: Any
                   ) -> ResidualPolicy:  # fmt: skip
-    """``controllers.make("residual", ...)``: a `ResidualPolicy`.
-
-    ``agent`` is a Policy of the 21-value observation, or the directory of a saved residual
-    agent (its recorded base and β are used; a ``base`` or ``bound`` given here must equal them).
-    ``base`` (default "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``,
-    gains) build the base controller with `controllers.make`; ``bound`` is β (X, M, N);
-    ``filter_max`` α_max > 0 gives the learned filter (an agent of six outputs).
+    """A `ResidualPolicy` of the Policy ``agent`` (21-value observations): ``base`` (default
+    "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``, gains) build the base
+    controller; ``bound`` is β (X, M, N); ``filter_max`` α_max > 0 gives the learned filter (an
+    agent of six outputs). A saved residual agent's directory: `controllers.loader`.
     """
-    if agent is None:
-        raise ValueError("controllers.make('residual') needs agent=<Policy or saved residual "
-                         "agent directory>")  # fmt: skip
-    if callable(getattr(agent, "predict", None)):
-        owned = {k: base_kwargs.pop(k) for k in ENV_OWNED_BASE_KWARGS if k in base_kwargs}
-        settings = ResidualSettings(
-            base=DEFAULT_BASE if base is None else base,
-            bound=DEFAULT_BOUND if bound is None else bound, base_kwargs=base_kwargs,
-            filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
-        )  # fmt: skip
-        return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)
-    from controllers.ppo import load_policy
-
-    policy = load_policy(agent, base_kwargs=base_kwargs)
-    if not isinstance(policy, ResidualPolicy):
-        raise ValueError(f"agent {agent!r} is not a residual agent (its metadata.json has no "
-                         "'residual' section)")  # fmt: skip
-    recorded = policy.settings
-    assert recorded is not None
-    if base is not None and base != recorded.base:
-        raise ValueError(f"agent {agent!r} was trained on base {recorded.base!r}, not {base!r}")
-    if bound is not None and check_bound(bound) != recorded.bound:
-        raise ValueError(f"agent {agent!r} was trained with bound {list(recorded.bound)}, "
-                         f"not {list(check_bound(bound))}")  # fmt: skip
-    if filter_max is not None and filter_max != recorded.filter_max:
-        raise ValueError(f"agent {agent!r} was trained with filter_max {recorded.filter_max}, "
-                         f"not {filter_max!r}")  # fmt: skip
-    return policy
+    owned = {k: base_kwargs.pop(k) for k in ENV_OWNED_BASE_KWARGS if k in base_kwargs}
+    settings = ResidualSettings(
+        base=DEFAULT_BASE if base is None else base,
+        bound=DEFAULT_BOUND if bound is None else bound, base_kwargs=base_kwargs,
+        filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
+    )  # fmt: skip
+    return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)

@@ -49,8 +49,8 @@ def save_tiny_residual_agent():
         from stable_baselines3.common.vec_env import VecNormalize
 
         from benchmarks.training.checkpoints import save_agent
+        from benchmarks.training.residual_env import make_residual_sb3_env
         from controllers.residual import RESIDUAL_OBS_DIM, RESIDUAL_OBS_NAMES
-        from controllers.residual_env import make_residual_sb3_env
 
         venv = VecNormalize(make_residual_sb3_env(4, settings, seed=seed, **env))
         model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0,

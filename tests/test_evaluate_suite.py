@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import benchmarks.evaluate_suite as suite_module
+import benchmarks.runner.suite_chunks as chunks_module
 from auv_gym.trajectory import FAILURE_REASONS
 from benchmarks.evaluate_suite import main
 from benchmarks.jobs import Job, run_job
@@ -159,13 +160,13 @@ def test_resume_after_a_crash_reruns_only_unfinished_chunks(tiny, tmp_path, monk
     (lost.parent / ".test_mixed.json.k1ll3d00.tmp").write_text("{")  # a write killed half-way
     stamps = {p: p.stat().st_mtime_ns for p in chunk_files if p != lost}
     calls = []
-    real = suite_module.evaluate
+    real = chunks_module.evaluate
 
     def counting(policy, seeds, **kwargs):
         calls.append(list(seeds))
         return real(policy, seeds, **kwargs)
 
-    monkeypatch.setattr(suite_module, "evaluate", counting)
+    monkeypatch.setattr(chunks_module, "evaluate", counting)
     main(argv)
     assert calls == [[0, 1]]  # only the lost chunk is simulated again
     assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())
@@ -192,7 +193,7 @@ def test_a_crashed_run_keeps_its_finished_chunks(tiny, tmp_path, monkeypatch):
         "--no-stats",
         "--quiet",
     ]
-    real = suite_module.evaluate
+    real = chunks_module.evaluate
     calls = []
 
     def crash_on_third(policy, seeds, **kwargs):
@@ -201,13 +202,13 @@ def test_a_crashed_run_keeps_its_finished_chunks(tiny, tmp_path, monkeypatch):
             raise KeyboardInterrupt  # as a Ctrl-C mid-run
         return real(policy, seeds, **kwargs)
 
-    monkeypatch.setattr(suite_module, "evaluate", crash_on_third)
+    monkeypatch.setattr(chunks_module, "evaluate", crash_on_third)
     with pytest.raises(KeyboardInterrupt):
         main(argv)
     assert len(list((out / "chunks").rglob("*.json"))) == 2 and not (out / "episodes.csv").exists()
     calls.clear()
     monkeypatch.setattr(
-        suite_module, "evaluate", lambda p, s, **k: calls.append(s) or real(p, s, **k)
+        chunks_module, "evaluate", lambda p, s, **k: calls.append(s) or real(p, s, **k)
     )
     main(argv)
     assert len(calls) == 2  # 4 chunks, 2 kept
@@ -232,7 +233,7 @@ def usage_error(capsys, argv: list[str]) -> str:
 
 
 def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(suite_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
+    monkeypatch.setattr(chunks_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
     corrupt = tmp_path / "corrupt"
     shutil.copytree(tiny["multi"], corrupt)
     model = corrupt / "agent_seed_5" / "model.zip"
@@ -323,7 +324,7 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
     assert "| scenario:fins | gen |" in md and "## IQM RMS distance [m]" in md
     # --stats-only: regenerated without simulating, bit-identical.
     before = (out / "stats.json").read_bytes()
-    monkeypatch.setattr(suite_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
+    monkeypatch.setattr(chunks_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
     main(["--stats-only", "--out", str(out), "--reps", REPS, "--no-figures"])
     assert (out / "stats.json").read_bytes() == before
 
@@ -334,7 +335,11 @@ def test_paired_table_by_hand():
     base = np.array([[0.10, 0.10, 0.20, 0.20]])
     scores = {"fbsm_colos": base, "ppo_residual": np.vstack([base - 0.01, base - 0.03]),
               "fbsm_colos_lowpass": base * 1.2}  # fmt: skip
-    table = paired_table(scores, ["a", "a", "b", "b"], reps=200, seed=0)
+    pairs = [("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
+             ("fbsm_colos_lowpass", "fbsm_colos"),
+             ("ppo_residual", "fbsm_colos_lowpass")]  # fmt: skip
+    table = paired_table(scores, ["a", "a", "b", "b"], reps=200, seed=0, pairs=pairs,
+                         worse_ratio=0.1)  # fmt: skip
     assert list(table) == ["ppo_residual−fbsm_colos", "fbsm_colos_lowpass−fbsm_colos",
                            "ppo_residual−fbsm_colos_lowpass"]  # fmt: skip
     res = table["ppo_residual−fbsm_colos"]["aggregate"]

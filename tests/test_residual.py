@@ -17,13 +17,13 @@ from hypothesis import strategies as st
 import controllers
 from auv_gym.rollout import rollouts
 from auv_gym.vector_env import AUVPath3DVectorEnv
+from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.residual_env import CHATTERING_KEY, PRECISION_KEY, ResidualVectorEnv
 from controllers.residual import (
     RESIDUAL_OBS_DIM,
     ResidualPolicy,
-    ResidualSettings,
     residual_action,
 )
-from controllers.residual_env import CHATTERING_KEY, PRECISION_KEY, ResidualVectorEnv
 
 ROOT = Path(__file__).resolve().parent.parent
 ENV = {"disturbance": "paper", "max_time": 4.0}  # 80 control steps
@@ -83,7 +83,7 @@ def test_zero_correction_wrapper_is_the_base_bit_for_bit_per_actuator(base):
     """With actuator="random" each vehicle's base runs with the actuator its episode drew."""
     n, steps = 4, 79
     core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **RANDOM_TASKS)
-    env = ResidualVectorEnv(core, ResidualSettings(base=base))
+    env = ResidualVectorEnv(core, ResidualTraining(base=base))
     states, observations, _, _ = _drive_wrapper(env, lambda k: np.zeros((n, 3)), 10, steps)
     base_actions = observations[:, :, 15:18]
     drawn = env.core.sim.actuators
@@ -106,7 +106,7 @@ def test_wrapper_restarts_the_base_at_autoresets_and_is_deterministic(base):
 
     def run():
         core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **RANDOM_TASKS)
-        env = ResidualVectorEnv(core, ResidualSettings(base=base, bound=(0.3, 0.6, 0.9)))
+        env = ResidualVectorEnv(core, ResidualTraining(base=base, bound=(0.3, 0.6, 0.9)))
         return env, _drive_wrapper(env, lambda k: actions[k], 3, steps)
 
     env, (states, observations, rewards, infos) = run()
@@ -130,7 +130,7 @@ def test_chattering_charge_is_the_total_variation_of_the_applied_action():
     rng = np.random.default_rng(1)
     corrections = rng.uniform(-1.0, 1.0, size=(steps, n, 3))
     core = AUVPath3DVectorEnv(n, **ENV)
-    env = ResidualVectorEnv(core, ResidualSettings(tv_weight=weight))
+    env = ResidualVectorEnv(core, ResidualTraining(tv_weight=weight))
     raw = AUVPath3DVectorEnv(n, **ENV)
     obs, _ = env.reset(seed=5)
     raw.reset(seed=5)
@@ -160,8 +160,8 @@ def test_precision_bonus_is_a_gaussian_of_the_distance_after_each_step_across_re
         env.reset(seed=11)
         return env
 
-    plain = make(ResidualSettings())
-    shaped = make(ResidualSettings(precision_weight=weight, precision_scale=scale))
+    plain = make(ResidualTraining())
+    shaped = make(ResidualTraining(precision_weight=weight, precision_scale=scale))
     ended, seen = 0, []
     for k in range(steps):
         _, r0, term, trunc, info0 = plain.step(corrections[k])
@@ -216,7 +216,7 @@ def test_correction_bound_holds_for_any_agent_output(base, correction, bound):
 
 def test_wrapper_bound_holds_for_extreme_agent_actions():
     n = 8
-    env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), ResidualSettings(bound=0.1))
+    env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), ResidualTraining(bound=0.1))
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(2)
     for _ in range(30):
@@ -257,7 +257,7 @@ def test_non_finite_agent_output_is_an_error_not_an_action(bad):
 )
 def test_bad_settings_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        ResidualSettings(**kwargs)
+        ResidualTraining(**kwargs)
 
 
 def test_make_residual_needs_an_agent_and_a_residual_agent_directory(tmp_path):
@@ -266,7 +266,7 @@ def test_make_residual_needs_an_agent_and_a_residual_agent_directory(tmp_path):
     with pytest.raises(FileNotFoundError):
         controllers.make("residual", agent=str(tmp_path / "missing"))
     with pytest.raises(ValueError, match="unknown keys \\['bonud'\\]"):
-        ResidualSettings.from_dict({"bonud": 0.1})
+        ResidualTraining.from_dict({"bonud": 0.1})
 
 
 # ----------------------------------------------------------------------- saved agents (rl extra)
@@ -277,12 +277,12 @@ def test_saved_and_reloaded_residual_agent_predicts_identically(
     from benchmarks.training.callbacks import policy_from_model
     from controllers.ppo import check_agent, load_policy
 
-    settings_ = ResidualSettings(bound=(0.2, 0.4, 0.4))
+    settings_ = ResidualTraining(bound=(0.2, 0.4, 0.4))
     model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 7, ENV)
     live = policy_from_model(model, venv, settings_)
     loaded = load_policy(tmp_path / "agent")
     assert isinstance(loaded, ResidualPolicy) and loaded.bound == (0.2, 0.4, 0.4)
-    assert check_agent(tmp_path / "agent").residual == settings_
+    assert check_agent(tmp_path / "agent").residual == settings_.inference()
     same = controllers.make("residual", agent=str(tmp_path / "agent"))
     episodes = rollouts(loaded, [0, 1], **ENV)
     assert_same_episodes(episodes, rollouts(live, [0, 1], **ENV))
@@ -327,7 +327,7 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     assert entry["validation_score"] == [0, pytest.approx(rms + 0.0005 * chattering, rel=1e-12)]
     assert "0.0005 m·s × mean chattering" in summary["selection"]
     meta = json.loads((out / "seed_0" / "final" / "metadata.json").read_text())
-    assert meta["residual"] == ResidualSettings.from_dict(section["residual"]).to_dict()
+    assert meta["residual"] == ResidualTraining.from_dict(section["residual"]).to_dict()
     assert meta["observation_shape"] == [RESIDUAL_OBS_DIM]
     assert "ResidualVectorEnv" in meta["vec_env"]
     curve = (out / "seed_0" / "evaluations.csv").read_text().splitlines()
@@ -337,7 +337,7 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     alone = evaluate_policy_on_seeds(controllers.make("fbsm_colos"), [100], **eval_env)
     assert float(first["rms_distance_mean"]) == pytest.approx(alone[0]["rms_distance"], rel=1e-4)
     policy = load_policy(out / "seed_0" / "final")
-    assert isinstance(policy, ResidualPolicy) and policy.settings.tv_weight == 1.0
+    assert isinstance(policy, ResidualPolicy) and meta["residual"]["tv_weight"] == 1.0
     assert policy.filter_max == 0.8 and meta["action_shape"] == [6]
 
 
@@ -350,7 +350,7 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
     expected = {"tv_weight": 1.0, "precision_weight": 3.0, "selection_chattering": 0.0005,
                 "filter_max": 0.8}  # fmt: skip
-    assert cfg.residual == ResidualSettings(**expected)
+    assert cfg.residual == ResidualTraining(**expected)
     assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.action_dim == 6
     assert cfg.residual.precision_scale == 0.1
     assert cfg.n_timesteps == 4_000_000 == generalist.n_timesteps // 5

@@ -16,6 +16,8 @@ from hypothesis import strategies as st
 import controllers
 from auv_gym.rollout import rollouts
 from auv_gym.vector_env import AUVPath3DVectorEnv
+from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.residual_env import ResidualVectorEnv
 from controllers.residual import (
     RESIDUAL_OBS_DIM,
     ResidualPolicy,
@@ -23,7 +25,6 @@ from controllers.residual import (
     agent_action_dim,
     residual_action,
 )
-from controllers.residual_env import ResidualVectorEnv
 
 ENV = {"disturbance": "paper", "max_time": 4.0}  # 80 control steps
 STATE = ("x", "y", "z", "theta", "psi", "u", "v", "w", "q", "r")
@@ -104,7 +105,7 @@ def test_bad_filter_max_is_named(value):
 def test_wrapper_with_filter_takes_six_values_and_matches_the_policy():
     n, steps = 3, 79
     core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **ENV)
-    env = ResidualVectorEnv(core, ResidualSettings(filter_max=0.5))
+    env = ResidualVectorEnv(core, ResidualTraining(filter_max=0.5))
     assert env.single_action_space.shape == (6,) and env.action_space.shape == (n, 6)
     env.reset(seed=5)
     with pytest.raises(ValueError, match=r"action must have shape \(3, 6\), got \(3, 3\)"):
@@ -126,7 +127,7 @@ def test_saved_filter_agent_reloads_with_six_actions(tmp_path, save_tiny_residua
     from benchmarks.training.callbacks import policy_from_model
     from controllers.ppo import check_agent, load_policy
 
-    residual = ResidualSettings(filter_max=0.6)
+    residual = ResidualTraining(filter_max=0.6)
     model, venv = save_tiny_residual_agent(residual, tmp_path / "agent", 3, ENV)
     loaded = load_policy(tmp_path / "agent")
     assert isinstance(loaded, ResidualPolicy) and loaded.filter_max == 0.6

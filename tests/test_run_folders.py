@@ -19,8 +19,8 @@ import pytest
 import yaml
 
 from auv_gym.files import OUTPUTS_FILE, output_lock, remove_temporaries, replace_outputs
-from benchmarks import jobs
-from benchmarks.jobs import check_ray_address
+from benchmarks.runner import pool
+from benchmarks.runner.pool import check_ray_address
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["--policies", "fbsm", "--seeds", "1", "--duration", "4", "--transient", "0", "--quiet",
@@ -106,7 +106,7 @@ def test_compare_on_an_unreachable_ray_address_fails_fast_and_names_it(
     pytest.importorskip("ray")
     from benchmarks.compare import main
 
-    monkeypatch.setattr(jobs, "RAY_PROBE_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(pool, "RAY_PROBE_TIMEOUT_S", 1.0)
     out = tmp_path / "out"
     address = f"127.0.0.1:{silent_listener}"
     t0 = time.monotonic()
@@ -139,7 +139,7 @@ def test_train_seeds_refuses_a_listener_that_is_no_ray_and_writes_no_plan(
     same command."""
     pytest.importorskip("stable_baselines3")
     pytest.importorskip("ray")
-    monkeypatch.setattr(jobs, "RAY_PROBE_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(pool, "RAY_PROBE_TIMEOUT_S", 1.0)
     out = tmp_path / "run"
     address = f"127.0.0.1:{silent_listener}"
     t0 = time.monotonic()

@@ -20,14 +20,15 @@ Checkpoints are taken where SB3 starts a rollout and hold the whole training sta
 running return, the schedules); `resume=True` continues from the newest one bit for bit (single
 thread, same machine and package versions), after a pause (`stop_at`) or a kill. A kill loses at
 most one checkpoint interval of compute, never exactness. The agents load with
-`controllers.ppo.load_policy`.
+`controllers.loader.load_policy` (``controllers.make("agent", path=...)``).
 
-Modules: `config` (YAML files, `ALGORITHMS`: PPO, SAC), `train` (`TrainOptions`, `train`: one
-algorithm, one seed, one run directory), `seeds` (`train_seeds`: N seeds, one run directory
-each, as local processes or Ray tasks; CLI `python -m benchmarks.train_seeds`), `callbacks`
-(evaluation and checkpoints during training), `checkpoints` (agent directories), `evaluation`
-(seeds, scoring, held-out evaluation), `learning_curve` (evaluations.csv). SB3 and torch are
-imported only when training or evaluating.
+Modules: `config` (YAML files; `ALGORITHMS`, PPO and SAC, is the loader's table,
+`controllers.algorithms`), `residual` and `residual_env` (a residual agent's training settings
+and env wrapper), `train` (`TrainOptions`, `train`: one algorithm, one seed, one run directory),
+`seeds` (`train_seeds`: N seeds, one run directory each, as local processes or Ray tasks; CLI
+`python -m benchmarks.train_seeds`), `callbacks` (evaluation and checkpoints during training),
+`checkpoints` (agent directories), `evaluation` (seeds, scoring, held-out evaluation),
+`learning_curve` (evaluations.csv). SB3 and torch are imported only when training or evaluating.
 """
 
 from benchmarks.training.config import ALGORITHMS, ZooConfig, read_zoo_config

@@ -24,8 +24,9 @@ from benchmarks.training.evaluation import (
     summarize,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
-from controllers.ppo import PPOPolicy
-from controllers.residual import ResidualPolicy, ResidualSettings, base_kwargs_for_env
+from benchmarks.training.residual import ResidualTraining
+from controllers.agent import AgentPolicy
+from controllers.residual import ResidualPolicy, base_kwargs_for_env
 
 __all__ = [
     "AdaptiveUpdateThreads",
@@ -46,15 +47,15 @@ StateFn = Callable[[str], dict[str, Any]]
 def policy_from_model(
     model: Any,
     vec_normalize: Any,
-    residual: ResidualSettings | None = None,
+    residual: ResidualTraining | None = None,
     env_kwargs: dict[str, Any] | None = None,
-) -> PPOPolicy | ResidualPolicy:
+) -> AgentPolicy | ResidualPolicy:
     """The Policy of a model in training, with a snapshot of the current statistics (torch's
     thread setting is the training's); with ``residual``, the `ResidualPolicy` of its base
     controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`)."""
     rms = vec_normalize.obs_rms
-    actor = PPOPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
-                      vec_normalize.epsilon)  # fmt: skip
+    actor = AgentPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
+                        vec_normalize.epsilon)  # fmt: skip
     if residual is None:
         return actor
     base = residual.make_base(**base_kwargs_for_env(env_kwargs or {}))
@@ -76,7 +77,7 @@ class PeriodicEvaluation(BaseCallback):
 
     def __init__(self, out: Path, every: int, seeds: Sequence[int], eval_kwargs: dict[str, Any],
                  metadata: MetadataFn, start_wall: float, best: dict[str, Any],
-                 verbose: int = 0, residual: ResidualSettings | None = None,
+                 verbose: int = 0, residual: ResidualTraining | None = None,
                  next_eval: int | None = None) -> None:  # fmt: skip
         super().__init__(verbose)
         self.residual = residual

@@ -2,7 +2,7 @@
 
 Every agent directory (`final/`, `best/`, `checkpoints/step_<num_timesteps>/`, an exported agent)
 is complete on its own — model, normalisation statistics, metadata — in the layout
-`controllers.ppo.load_policy` reads, and each is written through `auv_gym.files.
+`controllers.loader.load_policy` reads, and each is written through `auv_gym.files.
 write_folder_atomic`, so a killed run never leaves a half-written agent.
 
 A checkpoint also holds the training state (`TRAINING_STATE_FILE`, `capture_training_state`)
@@ -31,7 +31,7 @@ import numpy as np
 
 from auv_gym.files import write_folder_atomic, write_json
 from auv_gym.observation import OBS_NAMES
-from controllers.ppo import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
+from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 __all__ = [
     "CHECKPOINTS",
@@ -98,7 +98,7 @@ def export_agent(source: Path, target: Path) -> None:
     """Copy an agent directory (model.zip, vecnormalize.npz, metadata.json and, when the run
     wrote it, vecnormalize.pkl) atomically.
 
-    `controllers.ppo.load_policy` needs only the .npz statistics; the pickled VecNormalize is
+    `controllers.loader.load_policy` needs only the .npz statistics; the pickled VecNormalize is
     what SB3's `VecNormalize.load` and RL Zoo's `enjoy` read, so the exported folder works with
     them as it is.
     """
@@ -115,7 +115,7 @@ def export_agent(source: Path, target: Path) -> None:
 def write_vecnormalize_from_stats(agent: Path, gamma: float = 0.99) -> Path:
     """Write AGENT/vecnormalize.pkl from AGENT/vecnormalize.npz, for agents exported before the
     pickle was: SB3's `VecNormalize.load` and RL Zoo then normalise observations exactly as
-    `controllers.ppo` does (mean, var, count, clip_obs, epsilon). The reward statistics, which
+    `controllers.agent` does (mean, var, count, clip_obs, epsilon). The reward statistics, which
     inference never uses, start fresh (``norm_reward`` off, ``training`` off)."""
     import gymnasium as gym
     from stable_baselines3.common.running_mean_std import RunningMeanStd

@@ -10,14 +10,15 @@ A file has one top-level section per env id, in rl_zoo3 2.x format::
       learning_rate: lin_3e-4
       ...
 
-The keys an algorithm accepts are listed in its `Algorithm` entry of `ALGORITHMS` (PPO, SAC);
-another algorithm is one more entry, read with the same `read_zoo_config`. Off-policy algorithms
+The keys an algorithm accepts are listed in its `Algorithm` entry of
+`controllers.algorithms.ALGORITHMS` (PPO, SAC), the table the agent loader reads too; another
+algorithm is one more entry there, read with the same `read_zoo_config`. Off-policy algorithms
 (`Algorithm.off_policy`) also save their replay buffer in checkpoints, so a resumed run continues
 with the samples it had.
 
 An optional ``residual`` section trains a residual agent (docs/design.md §3.10): the harness
-wraps the training env in `controllers.residual_env.ResidualVectorEnv` with these settings
-(`controllers.residual.ResidualSettings`)::
+wraps the training env in `benchmarks.training.residual_env.ResidualVectorEnv` with these
+settings (`benchmarks.training.residual.ResidualTraining`)::
 
       residual:
         base: fbsm_colos            # a classical controller name (controllers.CLASSICAL)
@@ -43,7 +44,8 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID
-from controllers.residual import ResidualSettings
+from benchmarks.training.residual import ResidualTraining
+from controllers.algorithms import ALGORITHMS, Algorithm
 
 __all__ = [
     "ALGORITHMS",
@@ -71,50 +73,6 @@ ZOO_KEYS = frozenset(
 
 
 @dataclass(frozen=True)
-class Algorithm:
-    """An SB3 algorithm: its class in `stable_baselines3` and the constructor arguments a
-    hyper-parameter file may set (`schedules`: those that may be "lin_<x>" schedules)."""
-
-    name: str
-    class_name: str
-    hyperparameters: frozenset[str]
-    schedules: tuple[str, ...] = ()
-    off_policy: bool = False
-
-    def sb3_class(self) -> Any:
-        """The SB3 class (imports stable_baselines3)."""
-        import stable_baselines3
-
-        return getattr(stable_baselines3, self.class_name)
-
-
-ALGORITHMS: dict[str, Algorithm] = {
-    "ppo": Algorithm(
-        "ppo",
-        "PPO",
-        frozenset({
-            "learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda",
-            "clip_range", "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef",
-            "max_grad_norm", "use_sde", "sde_sample_freq", "target_kl", "stats_window_size",
-        }),
-        schedules=("learning_rate", "clip_range"),
-    ),
-    "sac": Algorithm(
-        "sac",
-        "SAC",
-        frozenset({
-            "learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma",
-            "train_freq", "gradient_steps", "optimize_memory_usage", "ent_coef",
-            "target_update_interval", "target_entropy", "use_sde", "sde_sample_freq",
-            "use_sde_at_warmup", "stats_window_size", "n_steps",
-        }),
-        schedules=("learning_rate",),
-        off_policy=True,
-    ),
-}  # fmt: skip
-
-
-@dataclass(frozen=True)
 class ZooConfig:
     """One env's section of an RL-Zoo hyper-parameter file, validated for one algorithm.
 
@@ -132,7 +90,7 @@ class ZooConfig:
     env_kwargs: dict[str, Any]
     algo_kwargs: dict[str, Any]
     raw: dict[str, Any] = field(default_factory=dict)
-    residual: ResidualSettings | None = None
+    residual: ResidualTraining | None = None
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
 
     def model_kwargs(self) -> dict[str, Any]:
@@ -199,7 +157,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     env_kwargs = dict(section.get("env_kwargs") or {})
     residual = None
     if "residual" in section:
-        residual = ResidualSettings.from_dict(section["residual"], f"{path}: residual")
+        residual = ResidualTraining.from_dict(section["residual"], f"{path}: residual")
     action_bounds = None
     if "action_bounds" in section:
         if residual is not None:

@@ -20,7 +20,7 @@ from auv_gym.files import write_json
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.trajectory import env_termination_reason
-from controllers.ppo import load_policy
+from controllers.loader import load_policy
 from controllers.residual import base_kwargs_for_env
 
 __all__ = [

@@ -20,43 +20,39 @@ Selection: each seed's `best/` agent is its best evaluation on the validation se
 episodes (`HELD_OUT_SEEDS` of the task set) are evaluated for every seed and reported, never used
 to choose.
 
-Workers: local processes (spawn) get SIGKILL when the parent dies (Linux `PR_SET_PDEATHSIG`), so
-no training outlives a killed command; Ray tasks (``backend="ray"``) run the same function on a
-cluster whose nodes share OUT.
+Workers (`seed_workers`): local processes that die with the parent, or Ray tasks running the
+same function on a cluster whose nodes share OUT.
 """
 
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import json
 import math
-import multiprocessing
 import os
-import shutil
-import signal
-import sys
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
-from multiprocessing.connection import wait
 from pathlib import Path
 from typing import Any
 
 from auv_gym.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
 from benchmarks.arguments import writable_location
-from benchmarks.jobs import check_ray_address
-from benchmarks.training.checkpoints import (
-    SEED_AGENT_PREFIX,
-    export_agent,
-    latest_checkpoint,
-    list_checkpoints,
-)
+from benchmarks.runner.pool import check_pool_options, check_ray_address
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.seed_workers import (
+    LOGS,
+    run_local,
+    run_ray,
+    seed_dir,
+    seed_entry,
+    seed_progress,
+    seed_status,
+)
 from benchmarks.training.train import TrainOptions, check_options, target_timesteps
-from controllers.ppo import METADATA_FILE, MODEL_FILE
 
 __all__ = [
     "MAX_SEED",
@@ -75,7 +71,6 @@ __all__ = [
 
 PLAN_FILE = "train_seeds.json"
 SUMMARY_FILE = "summary.json"
-LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
 # Validation episodes (model selection): "paper", the paper scenario (helix, white noise
 # ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
 # arguments on its first `eval_episodes` seeds, or on the given eval seeds, which must lie in its
@@ -176,13 +171,8 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         raise ValueError("eval_freq must be positive: the shipped agent is selected on the "
                          "validation evaluations")  # fmt: skip
     check_evaluation_window(train.eval_duration)
-    if opts.backend == "ray":
-        try:
-            import ray
-        except ImportError:
-            raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
-        if not ray.is_initialized():  # a connected driver needs no handshake
-            check_ray_address(opts.address)
+    if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.runner.pool`)
+        check_pool_options(1, opts.backend, opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
@@ -248,7 +238,7 @@ def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
     set, or evaluation seeds outside the set's range."""
     if opts.task_set in TASK_SETS:
         return opts
-    from benchmarks.tasks import load_task_sets
+    from benchmarks.catalog.tasks import load_task_sets
 
     sets = load_task_sets()
     validation = sorted(name for name, s in sets.items() if s.role == "validation")
@@ -294,165 +284,6 @@ def _check_writable(out: Path) -> None:
         probe.unlink()
     except OSError as exc:
         raise ValueError(f"output folder {out} is not writable: {exc}") from None
-
-
-def seed_dir(out: str | os.PathLike, seed: int) -> Path:
-    return Path(out) / f"seed_{seed}"
-
-
-def seed_progress(run: Path) -> int:
-    """Env steps a seed's run folder holds: its newest checkpoint or its final agent (0: none)."""
-    steps = [n for n, _ in list_checkpoints(run)]
-    final = run / "final" / METADATA_FILE
-    if final.is_file():
-        steps.append(int(json.loads(final.read_text()).get("num_timesteps", 0)))
-    return max(steps, default=0)
-
-
-def seed_status(out: Path, seed: int, n_timesteps: int) -> str:
-    """ "done" (trained to ``n_timesteps``, this invocation's target, and tested), "trained"
-    (trained, test evaluation missing), "resume" (a checkpoint to continue from) or "fresh"."""
-    run = seed_dir(out, seed)
-    final = run / "final" / METADATA_FILE
-    if final.is_file() and json.loads(final.read_text()).get("num_timesteps", 0) >= n_timesteps:
-        best = run / "best"
-        return "done" if (best / HELD_OUT_FILE).is_file() else "trained"
-    return "resume" if latest_checkpoint(run) is not None else "fresh"
-
-
-def train_one_seed(train_opts: dict[str, Any], status: str) -> dict[str, Any]:
-    """Train (or resume) one seed and evaluate its best agent on the test episodes.
-
-    Module-level and picklable: the local processes and the Ray tasks run it. Returns the
-    seed's entry of the summary.
-    """
-    from benchmarks.training.evaluation import write_held_out_evaluation
-    from benchmarks.training.train import train
-
-    opts = TrainOptions(**train_opts)
-    run = Path(opts.out)
-    if status == "fresh" and run.exists():
-        shutil.rmtree(run)  # killed before its first checkpoint: nothing to keep
-    if status in ("fresh", "resume"):
-        train(replace(opts, resume=status == "resume", export=None),
-              argv=["benchmarks.train_seeds", f"--seed={opts.seed}"])  # fmt: skip
-    best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
-    if not (best / HELD_OUT_FILE).is_file():
-        write_held_out_evaluation(best, opts.eval_duration, opts.env_id)
-    return seed_entry(run)
-
-
-def seed_entry(run: Path) -> dict[str, Any]:
-    """A finished seed: validation score of its agent, test summary, steps and wall time."""
-    best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
-    final = json.loads((run / "final" / METADATA_FILE).read_text())
-    report = json.loads((best / HELD_OUT_FILE).read_text())
-    validation = final.get("best", {})
-    return {
-        "seed": final["seed"], "agent": str(best), "num_timesteps": final["num_timesteps"],
-        "wall_time_s": final["wall_time_s"],
-        "validation_score": validation.get("score"),
-        "validation_num_timesteps": validation.get("num_timesteps"),
-        "validation_summary": validation.get("summary"), "test_summary": report["summary"],
-    }  # fmt: skip
-
-
-def _set_parent_death_signal() -> None:
-    """Linux: this process gets SIGKILL when its parent dies (no orphaned training)."""
-    if sys.platform.startswith("linux"):
-        libc = ctypes.CDLL(None, use_errno=True)
-        pr_set_pdeathsig = 1
-        libc.prctl(pr_set_pdeathsig, signal.SIGKILL)
-        if os.getppid() == 1:  # the parent died before the call
-            os._exit(1)
-
-
-def _child(train_opts: dict[str, Any], status: str, log: str) -> None:
-    _set_parent_death_signal()
-    fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
-    os.dup2(fd, 1)
-    os.dup2(fd, 2)
-    sys.stdout = os.fdopen(1, "w", buffering=1, closefd=False)
-    sys.stderr = os.fdopen(2, "w", buffering=1, closefd=False)
-    try:
-        train_one_seed(train_opts, status)
-    except BaseException:
-        import traceback
-
-        traceback.print_exc()
-        sys.stderr.flush()
-        os._exit(1)
-
-
-def _steps_done(out: Path, seed: int) -> int:
-    """Env steps of a seed as far as its learning curve shows (for the progress bar)."""
-    curve = seed_dir(out, seed) / EVAL_FILE
-    try:
-        lines = curve.read_text().strip().splitlines()
-        return int(lines[-1].split(",")[0]) if len(lines) > 1 else 0
-    except (OSError, ValueError, IndexError):
-        return 0
-
-
-def _run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: Path,
-               bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
-    """Run the jobs as spawned processes, ``workers`` at once; seed → error text (failures)."""
-    ctx = multiprocessing.get_context("spawn")  # numba's threads are not fork-safe
-    pending = list(jobs)
-    running: dict[Any, tuple[int, Any]] = {}
-    failures: dict[int, str] = {}
-    try:
-        while pending or running:
-            while pending and len(running) < workers:
-                seed, train_opts, status = pending.pop(0)
-                log = out / LOGS / f"seed_{seed}.log"
-                log.parent.mkdir(parents=True, exist_ok=True)
-                proc = ctx.Process(target=_child, args=(train_opts, status, str(log)), daemon=False)
-                proc.start()
-                running[proc.sentinel] = (seed, proc)
-            for sentinel in wait(list(running), timeout=poll_s):
-                seed, proc = running.pop(sentinel)
-                proc.join()
-                if proc.exitcode != 0:
-                    failures[seed] = (f"seed {seed} failed (exit code {proc.exitcode}); see "
-                                      f"{out / LOGS / f'seed_{seed}.log'}")  # fmt: skip
-            _update(bar, out, [s for s, *_ in jobs])
-    finally:
-        for _, proc in running.values():  # an exception or Ctrl-C here: stop the workers
-            proc.kill()
-            proc.join()
-    return failures
-
-
-def _run_ray(jobs: list[tuple[int, dict[str, Any], str]], address: str | None, workers: int,
-             out: Path, bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
-    import ray
-
-    if not ray.is_initialized():
-        if address is None:
-            ray.init(num_cpus=workers, log_to_driver=False, include_dashboard=False)
-        else:
-            check_ray_address(address)  # ray.init retries an unreachable address for ever
-            ray.init(address=address, log_to_driver=False)
-    remote = ray.remote(num_cpus=1, max_retries=0)(train_one_seed)
-    refs = {remote.remote(train_opts, status): seed for seed, train_opts, status in jobs}
-    failures: dict[int, str] = {}
-    while refs:
-        done, _ = ray.wait(list(refs), num_returns=1, timeout=poll_s)
-        for ref in done:
-            seed = refs.pop(ref)
-            try:
-                ray.get(ref)
-            except Exception as exc:  # a failed seed does not stop the others
-                failures[seed] = f"seed {seed} failed on Ray: {str(exc).splitlines()[0]}"
-        _update(bar, out, [s for s, *_ in jobs])
-    return failures
-
-
-def _update(bar: Any, out: Path, seeds: Sequence[int]) -> None:
-    if bar is not None:
-        bar.n = bar.initial + sum(_steps_done(out, s) for s in seeds)
-        bar.refresh()
 
 
 def _chattering_clause(plan: dict[str, Any]) -> str:
@@ -517,9 +348,9 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
                    desc=f"{plan['algo']} × {len(opts.seeds)} seeds")  # fmt: skip
     t0 = time.monotonic()
     if opts.backend == "ray":
-        failures = _run_ray(jobs, opts.address, opts.workers, out, bar, opts.poll_s)
+        failures = run_ray(jobs, opts.address, opts.workers, out, bar, opts.poll_s)
     else:
-        failures = _run_local(jobs, opts.workers, out, bar, opts.poll_s)
+        failures = run_local(jobs, opts.workers, out, bar, opts.poll_s)
     if bar is not None:
         bar.close()
     if failures:

@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-import contextlib
 import datetime as _dt
 import json
 import os
 import sys
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import auv_gym
-from auv_gym import ENV_ID, SPEED_LIMIT_ENV_ID, VARIANTS
+from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.training.checkpoints import (
@@ -29,16 +28,21 @@ from benchmarks.training.checkpoints import (
     write_metadata,
 )
 from benchmarks.training.config import ALGORITHMS, read_zoo_config
+from benchmarks.training.envs import (  # importable from here too (`benchmarks.speed.training`)
+    describe_env,
+    make_training_env,
+    thread_limit,
+    zero_correction_layer,
+)
 from benchmarks.training.evaluation import (
     EVAL_SEEDS,
     HELD_OUT_SEEDS,
-    TRAIN_SEED_BASE,
     check_evaluation_duration,
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
-from controllers.ppo import METADATA_FILE, MODEL_FILE, VECNORM_FILE
-from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
+from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
+from controllers.residual import RESIDUAL_OBS_NAMES
 
 __all__ = [
     "TrainOptions",
@@ -56,7 +60,7 @@ HERE = Path(__file__).resolve().parent.parent  # benchmarks/
 class TrainOptions:
     """Arguments of `train` (and of the CLI `benchmarks/train_ppo.py`)."""
 
-    algo: str = "ppo"  # a key of benchmarks.training.config.ALGORITHMS
+    algo: str = "ppo"  # a key of controllers.algorithms.ALGORITHMS
     config: str = str(HERE / "hyperparams" / "ppo.yml")  # RL-Zoo hyper-parameter file
     # Top-level key of the config and Gymnasium id; the surge-limited task by default, so that a
     # new agent cannot win by sprinting at speeds a REMUS cannot reach (docs/results.md).
@@ -96,92 +100,6 @@ class TrainOptions:
     progress_bar: bool = True
     export: str | None = None  # copy the best agent here at the end (e.g. benchmarks/agents/x)
     verbose: int = 0
-
-
-@contextlib.contextmanager
-def thread_limit(threads: int) -> Iterator[None]:
-    """torch's intra-op and numba's threads set to ``threads`` inside the block, restored after.
-
-    One thread is the default: on a machine shared with other jobs, multi-threaded kernels
-    stall at their barriers (docs/design.md §4).
-    """
-    import numba
-    import torch
-
-    torch_before, numba_before = torch.get_num_threads(), numba.get_num_threads()
-    torch.set_num_threads(int(threads))
-    numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
-    try:
-        yield
-    finally:
-        torch.set_num_threads(torch_before)
-        numba.set_num_threads(numba_before)
-
-
-def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: str = "auto",
-                      env_id: str = ENV_ID, residual: ResidualSettings | None = None,
-                      threads: int | None = None) -> Any:  # fmt: skip
-    """An SB3 VecEnv of `n_envs` training environments.
-
-    "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
-    "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available. The native env
-    simulates every id of `auv_gym.VARIANTS` (its fixed keyword arguments, then `env_kwargs`).
-    With ``residual`` the native env is wrapped in `controllers.residual_env.ResidualVectorEnv`
-    (the residual agent's observation, action and chattering charge; native only).
-    ``threads``: numba threads of the native env's kernel (1: the serial kernel at every N;
-    None: `AUVPath3DVectorEnv`'s default).
-    """
-    if kind not in ("auto", "native", "dummy"):
-        raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
-    env_seed = TRAIN_SEED_BASE + 1000 * int(seed)
-    if residual is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
-        raise ValueError(f"a residual agent trains on the native vector env of "
-                         f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}")  # fmt: skip
-    if kind in ("auto", "native") and env_id in VARIANTS:
-        from stable_baselines3.common.vec_env import VecMonitor
-
-        from auv_gym.sb3 import make_sb3_vec_env
-
-        kwargs = {**VARIANTS[env_id], **env_kwargs}
-        if residual is not None:
-            from controllers.residual_env import make_residual_sb3_env
-
-            return VecMonitor(make_residual_sb3_env(n_envs, residual, seed=env_seed,
-                                                    threads=threads, **kwargs))  # fmt: skip
-        # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.sb3).
-        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, threads=threads,
-                                           infos="minimal", **kwargs))  # fmt: skip
-    if kind == "native":
-        raise ValueError(f"the native vector env simulates {sorted(VARIANTS)} only, not {env_id}")
-    from stable_baselines3.common.env_util import make_vec_env
-
-    return make_vec_env(env_id, n_envs=n_envs, seed=env_seed, env_kwargs=env_kwargs)
-
-
-def zero_correction_layer(model: Any) -> None:
-    """Zero the last layer of the actor's mean (PPO ``action_net``, SAC ``actor.mu``): the
-    untrained residual agent's deterministic correction is exactly 0, so it starts at the base
-    controller's performance; exploration comes from the policy's std (``log_std_init``)."""
-    policy = model.policy
-    layer = getattr(policy, "action_net", None)
-    if layer is None:
-        layer = getattr(getattr(policy, "actor", None), "mu", None)
-    if layer is None or not hasattr(layer, "weight"):
-        raise ValueError(f"cannot find the actor's last layer of {type(policy).__name__}")
-    import torch
-
-    with torch.no_grad():
-        layer.weight.zero_()
-        layer.bias.zero_()
-
-
-def _describe(venv: Any) -> str:
-    """The chain of VecEnv wrappers, outermost first ("VecNormalize<VecMonitor<SB3VecEnv>>")."""
-    names = []
-    while venv is not None:
-        names.append(type(venv).__name__)
-        venv = getattr(venv, "venv", None)
-    return "<".join(names) + ">" * (len(names) - 1)
 
 
 def check_options(opts: TrainOptions) -> None:
@@ -351,7 +269,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "eval_seeds": list(opts.eval_seeds), "obs_names": list(obs_names),
             "observation_shape": [len(obs_names)], "action_shape": [action_dim], **residual_meta,
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
-            "git_commit": git_commit(), "vec_env": _describe(venv),
+            "git_commit": git_commit(), "vec_env": describe_env(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
             "best": best, "auv_gym_version": auv_gym.__version__, **extra,
         }  # fmt: skip

@@ -40,8 +40,8 @@ from gymnasium.vector.utils import batch_space
 
 from auv_gym.env import validate_actions
 from auv_gym.vector_env import AUVPath3DVectorEnv
+from benchmarks.training.residual import ResidualTraining
 from controllers.residual import (
-    ResidualSettings,
     agent_observation,
     residual_action,
     residual_observation_bounds,
@@ -58,21 +58,21 @@ class ResidualVectorEnv(VectorWrapper):
 
     Args:
         env: the vector env (its ``unwrapped`` must be an `AUVPath3DVectorEnv`).
-        settings: `ResidualSettings` (base controller, β, w_TV); default: their defaults.
+        settings: `ResidualTraining` (base controller, β, w_TV, w_P); default: their defaults.
 
     Info: the env's, plus ``reward_chattering`` (with its ``_`` mask; in ``final_info`` for the
     vehicles whose episode ended in SAME_STEP mode), ``base_action`` (n, 3), the base action of
     the returned observation.
     """
 
-    def __init__(self, env: Any, settings: ResidualSettings | None = None) -> None:
+    def __init__(self, env: Any, settings: ResidualTraining | None = None) -> None:
         core = getattr(env, "unwrapped", None)
         if not isinstance(core, AUVPath3DVectorEnv):
             raise ValueError(f"ResidualVectorEnv wraps an AUVPath3DVectorEnv, got "
                              f"{type(env).__name__}")  # fmt: skip
         super().__init__(env)
         self.core = core
-        self.settings = settings if settings is not None else ResidualSettings()
+        self.settings = settings if settings is not None else ResidualTraining()
         self.bound = np.asarray(self.settings.bound)
         dim = self.settings.action_dim  # 3 corrections, or 6 with the learned filter
         self.single_action_space = spaces.Box(-1.0, 1.0, (dim,), dtype=np.float32)
@@ -228,7 +228,7 @@ class ResidualVectorEnv(VectorWrapper):
 
 def make_residual_sb3_env(
     num_envs: int,
-    settings: ResidualSettings | None = None,
+    settings: ResidualTraining | None = None,
     *,
     seed: int | None = None,
     max_episode_steps: int | None = None,

@@ -1,0 +1,101 @@
+"""The Markdown of a suite evaluation's statistics (`benchmarks.suite_stats.write_stats`):
+interval tables per policy group, probability of improvement, the target table and verdicts."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from auv_gym import table_format
+from auv_gym.table_format import format_number
+from auv_gym.task import SURGE_LIMIT
+from benchmarks.analysis.smoothness_stats import column_chunks
+from benchmarks.analysis.stats import Interval, markdown_table
+
+__all__ = ["policy_group", "stats_markdown"]
+
+
+def _by_policy(table: Mapping[str, Mapping[str, Interval]]) -> dict[str, dict[str, Interval]]:
+    """{scope: {policy: x}} → {policy: {scope: x}} (rows = sets in the Markdown tables)."""
+    out: dict[str, dict[str, Interval]] = {}
+    for scope, row in table.items():
+        for policy, value in row.items():
+            out.setdefault(policy, {})[scope] = value
+    return out
+
+
+def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_ratio: float) -> str:
+    """The statistics as Markdown; ``max_ratio``: the target ratio of the report table."""
+    ref, ci = stats["reference"], f"{100 * stats['confidence']:g} %"
+    runs = ", ".join(f"{p}: {n}" for p, n in stats["n_runs"].items())
+    lines = [
+        "# Test-suite statistics\n",
+        f"`{stats['command']}`\n",
+        f"Score: RMS distance [m] over the metrics window; a failed episode scores its set's "
+        f"corridor ({', '.join(sorted({f'{v:g} m' for v in stats['failure_score_m'].values()}))})."
+        f" {ci} stratified bootstrap intervals ({stats['reps']} replicates, seed "
+        f"{stats['seed']}) over runs × episodes. Runs: {runs}.\n",
+    ]
+    kinds = stats.get("kinds", {})
+    for name, title in (("iqm", "IQM"), ("mean", "Mean")):
+        lines.append(f"## {title} RMS distance [m]\n")
+        lines += _split_tables(_by_policy(summary[name]), kinds)
+    for other, table in stats["improvement_tables"].items():
+        lines.append(f"## Probability of a smaller RMS distance than {other} (ties ½)\n")
+        lines += _split_tables(_by_policy(table), kinds)
+    lines += [
+        f"## Target: mean RMS distance within {max_ratio:g}× {ref}, no failed episode, max "
+        f"surge ≤ {SURGE_LIMIT:g} m/s\n",
+    ]
+    rows = []
+    for t in stats["target"]:
+        failed = f"{t['failed']}/{t['episodes']}" + (
+            f" ({', '.join(t['failures'])})" if t["failures"] else ""
+        )
+        rows.append([t["set"], t["policy"], format_number(t["mean_m"]),
+                     format_number(t["reference_mean_m"]), format_number(t["ratio"]), failed,
+                     format_number(t["max_surge_m_s"]),
+                     "pass" if t["passed"] else "**FAIL**"])  # fmt: skip
+    header = ["set", "policy", "mean [m]", f"{ref} mean [m]", "ratio", "failed",
+              "max surge [m/s]", "verdict"]  # fmt: skip
+    lines += [table_format.markdown_table(header, rows, ["l"] * len(header))]
+    for policy, verdict in stats["verdicts"].items():
+        failing = ", ".join(verdict["failing_sets"]) or "none"
+        lines.append(
+            f"- **{policy}**: passes {verdict['passed']} of {verdict['sets']} sets; "
+            f"failing: {failing}"
+        )
+    lines.append("")
+    for policy, note in stats["learning_curve_notes"].items():
+        lines.append(f"- learning curve of {policy}: {note}")
+    return "\n".join(lines) + "\n"
+
+
+# Policies per table: four interval columns keep a row within about 110 characters.
+_COLUMNS_PER_TABLE = 4
+_GROUP_TITLES = {"classical": "classical", "rl": "RL", "hybrid": "hybrid (classical + RL residual)"}
+
+
+def policy_group(name: str, kind: str) -> str:
+    """ "classical", "hybrid" (a residual agent on a classical controller) or "rl"."""
+    if kind == "classical":
+        return "classical"
+    return "hybrid" if "residual" in name else "rl"
+
+
+def _split_tables(
+    table: Mapping[str, Mapping[str, Interval]], kinds: Mapping[str, str]
+) -> list[str]:
+    """One markdown table per policy group, at most `_COLUMNS_PER_TABLE` policies each."""
+    groups: dict[str, list[str]] = {}
+    for policy in table:
+        groups.setdefault(policy_group(policy, kinds.get(policy, "agent")), []).append(policy)
+    out = []
+    for group in ("classical", "rl", "hybrid"):
+        names = groups.get(group, [])
+        for chunk in column_chunks(names, _COLUMNS_PER_TABLE):
+            out += [
+                f"{_GROUP_TITLES[group]}:\n",
+                markdown_table({p: table[p] for p in chunk}, corner="set"),
+            ]
+    return out

@@ -1,0 +1,163 @@
+"""Add the policies of a second suite evaluation to a committed one, once its episodes match.
+
+A committed test-suite evaluation (`benchmarks.evaluate_suite`, e.g. `benchmarks/results/suite`)
+takes hours to re-run for every policy; a new agent needs only its own rows. This command takes
+an evaluation of the new policies run *together with a reference policy already in the target*
+(FBSM, say) and appends the new policies' rows, after checking that the two evaluations are the
+same experiment:
+
+- the same test sets (names, seeds and env settings), episode duration and metrics window;
+- the shared policies' rows are equal cell for cell (the episodes and the code that ran them
+  give the same numbers), except cells whose relative difference is below ``--rtol`` (default
+  1e-12: the last digits that another machine's BLAS rounds differently on spline paths);
+- no policy to add is already in the target.
+
+Then OUT/episodes.csv gains the rows, OUT/suite.json the policies and an "additions" entry (the
+command, commit and versions of the second evaluation), both written atomically; re-run
+`python -m benchmarks.evaluate_suite --stats-only --out OUT` for the statistics.
+
+    python -m benchmarks.evaluate_suite --policies fbsm,NEW=DIR --out runs/suite_new --no-stats
+    python -m benchmarks.suite_merge --from runs/suite_new --into benchmarks/results/suite \\
+        --policies NEW
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import write_json, write_text
+
+__all__ = ["merge_suites"]
+
+_KEY = ("policy", "run", "set", "seed")
+
+
+def _read(folder: Path) -> tuple[dict[str, Any], list[str], list[dict[str, str]]]:
+    suite_file, rows_file = folder / "suite.json", folder / "episodes.csv"
+    for file in (suite_file, rows_file):
+        if not file.is_file():
+            raise FileNotFoundError(f"{file}: no such file (not a suite evaluation folder)")
+    suite = json.loads(suite_file.read_text())
+    with rows_file.open(newline="") as fh:
+        reader = csv.DictReader(fh)
+        rows = list(reader)
+        header = list(reader.fieldnames or [])
+    return suite, header, rows
+
+
+def _differs(a: str, b: str, rtol: float) -> bool:
+    if a == b:
+        return False
+    try:
+        x, y = float(a), float(b)
+    except ValueError:
+        return True
+    if math.isnan(x) and math.isnan(y):
+        return False
+    return not abs(x - y) <= rtol * max(abs(x), abs(y))
+
+
+def merge_suites(
+    source: Path, target: Path, policies: Sequence[str], rtol: float = 1e-12
+) -> dict[str, int]:
+    """Append ``policies``' rows of ``source`` to ``target`` (module doc); returns rows per policy.
+
+    ValueError, naming the difference, when the evaluations are not the same experiment.
+    """
+    if not policies:
+        raise ValueError("--policies: name at least one policy to add")
+    if not (rtol >= 0 and math.isfinite(rtol)):
+        raise ValueError(f"--rtol must be a finite number >= 0, got {rtol}")
+    source_suite, source_header, source_rows = _read(Path(source))
+    target_suite, target_header, target_rows = _read(Path(target))
+    for key in ("sets", "duration_s", "transient_s"):
+        if source_suite.get(key) != target_suite.get(key):
+            raise ValueError(f"{source} and {target} differ in {key!r}: not the same test suite")
+    if source_header != target_header:
+        raise ValueError(f"episodes.csv columns differ: {source_header} vs {target_header}")
+    source_policies = set(source_suite["policies"])
+    missing = [p for p in policies if p not in source_policies]
+    if missing:
+        raise ValueError(
+            f"--policies {missing}: not in {source} (it has {sorted(source_policies)})"
+        )
+    present = [p for p in policies if p in target_suite["policies"]]
+    if present:
+        raise ValueError(f"--policies {present}: already in {target}")
+    shared = sorted(source_policies & set(target_suite["policies"]))
+    if not shared:
+        raise ValueError(
+            f"{source} shares no policy with {target}: evaluate a reference policy (e.g. fbsm) "
+            "with the new ones, so that the episodes can be checked equal"
+        )
+    target_index = {tuple(r[k] for k in _KEY): r for r in target_rows}
+    compared = 0
+    for row in source_rows:
+        if row["policy"] not in shared:
+            continue
+        other = target_index.get(tuple(row[k] for k in _KEY))
+        if other is None:
+            raise ValueError(f"episode {dict((k, row[k]) for k in _KEY)} is not in {target}")
+        for column in source_header:
+            if _differs(row[column], other[column], rtol):
+                raise ValueError(
+                    f"{row['policy']} run {row['run']} set {row['set']} seed {row['seed']}: "
+                    f"{column} = {row[column]} here but {other[column]} in {target} "
+                    f"(relative tolerance {rtol:g}): not the same episodes or code"
+                )
+        compared += 1
+    added = [r for r in source_rows if r["policy"] in policies]
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=target_header, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows([*target_rows, *added])
+    suite = dict(target_suite)
+    suite["policies"] = {**target_suite["policies"],
+                         **{p: source_suite["policies"][p] for p in policies}}  # fmt: skip
+    suite["agents"] = {**target_suite.get("agents", {}), **source_suite.get("agents", {})}
+    suite["additions"] = [
+        *target_suite.get("additions", []),
+        {
+            "policies": list(policies),
+            "command": source_suite.get("command"),
+            "checked_equal": {"policies": shared, "episodes": compared, "rtol": rtol},
+            **{k: source_suite.get(k) for k in ("git_commit", "versions", "code")},
+        },
+    ]
+    write_text(Path(target) / "episodes.csv", buffer.getvalue())
+    write_json(Path(target) / "suite.json", suite, indent=1)
+    return {p: sum(r["policy"] == p for r in added) for p in policies}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.suite_merge",
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    parser.add_argument("--from", dest="source", required=True, help="evaluation to take rows from")
+    parser.add_argument("--into", dest="target", required=True, help="evaluation to add them to")
+    parser.add_argument("--policies", required=True, help="comma-separated policy names to add")
+    parser.add_argument("--rtol", type=float, default=1e-12,
+                        help="relative tolerance for the shared policies' cells")  # fmt: skip
+    args = parser.parse_args(argv)
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    try:
+        added = merge_suites(Path(args.source), Path(args.target), names, args.rtol)
+    except (ValueError, FileNotFoundError) as exc:
+        print(f"suite_merge: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"added to {args.target}: " + ", ".join(f"{p} ({n} rows)" for p, n in added.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

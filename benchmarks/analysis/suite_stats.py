@@ -1,0 +1,380 @@
+"""Statistics of a test-suite evaluation (`benchmarks.evaluate_suite`): stats.json, stats.md and
+figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliable).
+
+* **Score** of an episode: its RMS distance to the virtual point over the metrics window [m]. A
+  failed episode (termination_reason in `auv_gym.trajectory.FAILURE_REASONS`: corridor, pitch,
+  non_finite, envelope, overspeed) scores its set's corridor half-width (30 m by default,
+  docs/model.md §11.5), the distance at which the env declares the path lost: no episode that
+  keeps the path scores worse. `failed` counts them in every table.
+* **Per set and "aggregate"** (every set pooled, each set's episodes resampled within the set):
+  IQM and mean with 95 % stratified bootstrap CIs over runs × episodes (one run for a
+  controller: over episodes), `benchmarks.stats.summarize`; probability that a policy's score is
+  below the reference's on the same episode (the report table's reference, or ``--reference``;
+  also against its extra references that were evaluated); performance profiles (fraction of
+  scores below τ [m]).
+* **Target table**: per set, the ratio of a policy's mean score to the reference's;
+  a set passes when the ratio is ≤ the report's ``max_ratio``, no episode failed and the largest
+  surge speed of any episode is ≤ `auv_gym.task.SURGE_LIMIT` (2.0 m/s).
+* **Smoothness** (`benchmarks.smoothness_stats`): paired RMS-distance differences of the
+  report's (policy, base) pairs, and every policy's chattering (when episodes.csv has the
+  column).
+
+What is compared is data, the report table (`benchmarks.analysis.report_spec.ReportSpec`, default
+``benchmarks/report.toml``); this module names no policy.
+* **Learning curves** of the policies given as a multi-seed results directory (its
+  ``seed_<k>_learning_curve.csv`` per run; columns num_timesteps, wall_time_s,
+  rms_distance_mean, ...): IQM over the runs with CI band against env steps and against wall
+  time [s] (`benchmarks.stats.learning_curve`). Runs are cut to the evaluations every run has;
+  an evaluation without a finite rms_distance_mean (every episode terminated) scores the failure
+  score of the default corridor.
+
+Everything is written atomically; one bootstrap seed gives bit-identical output.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym.config import SimConfig
+from auv_gym.files import jsonable, write_json, write_text
+from auv_gym.task import SURGE_LIMIT
+from auv_gym.trajectory import FAILURE_REASONS
+from benchmarks.analysis.report_spec import ReportSpec
+from benchmarks.analysis.smoothness_stats import (
+    chattering_table,
+    metric_matrices,
+    paired_table,
+    smoothness_markdown,
+)
+from benchmarks.analysis.stats import (
+    AGGREGATE,
+    MIN_REPS,
+    Interval,
+    learning_curve,
+    probability_of_improvement,
+    summarize,
+)
+from benchmarks.analysis.suite_markdown import stats_markdown
+
+__all__ = [
+    "check_stats_options",
+    "episode_score",
+    "learning_curves",
+    "read_episodes",
+    "score_matrices",
+    "target_table",
+    "write_stats",
+]
+
+DEFAULT_FAILURE_SCORE_M = SimConfig.from_kwargs().limits.corridor
+CURVE_FILE = "seed_{}_learning_curve.csv"  # in a multi-seed results directory
+FIGURES = "figures"
+
+
+def check_stats_options(reps: int, seed: int) -> None:
+    """ValueError naming the flag for a bootstrap count below `MIN_REPS` or a negative seed."""
+    if reps < MIN_REPS:
+        raise ValueError(f"--reps must be an integer >= {MIN_REPS}, got {reps}")
+    if seed < 0:
+        raise ValueError(f"--bootstrap-seed must be an integer >= 0, got {seed}")
+
+
+def read_episodes(path: Path) -> list[dict[str, Any]]:
+    """The rows of an episodes.csv, numbers parsed (run, seed, window_samples as int)."""
+    with path.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    for row in rows:
+        for key in ("run", "seed", "window_samples"):
+            row[key] = int(row[key])
+        for key in (
+            "rms_distance",
+            "rms_x_e",
+            "rms_y_e",
+            "rms_z_e",
+            "max_distance",
+            "max_surge",
+            "overspeed_fraction",
+            "duration",
+        ):
+            row[key] = float(row[key])
+        for key in ("chattering", "saturation_fraction"):  # absent from older files
+            if key in row:
+                row[key] = float(row[key])
+    return rows
+
+
+def episode_score(row: Mapping[str, Any], failure_score: float) -> float:
+    """The score of an episode [m] (module doc); ValueError for an episode that did not fail
+    but has no RMS distance (its metrics window is empty)."""
+    if row["termination_reason"] in FAILURE_REASONS:
+        return failure_score
+    value = float(row["rms_distance"])
+    if not math.isfinite(value):
+        raise ValueError(
+            f"policy {row['policy']!r}, run {row['run']}, set {row['set']!r}, seed "
+            f"{row['seed']}: no rms_distance although the episode ended by "
+            f"{row['termination_reason']!r}; evaluate with a longer duration or a "
+            "shorter transient"
+        )
+    return value
+
+
+def failure_scores(suite: Mapping[str, Any]) -> dict[str, float]:
+    """Set → the score of a failed episode [m]: the corridor of the set's env."""
+    return {
+        name: SimConfig.from_kwargs(**entry["env"]).limits.corridor
+        for name, entry in suite["sets"].items()
+    }
+
+
+def score_matrices(
+    rows: Sequence[Mapping[str, Any]], sets: Sequence[str], failure: Mapping[str, float]
+) -> tuple[dict[str, np.ndarray], list[str], dict[str, list[int]]]:
+    """({policy: (n_runs, n_episodes) scores}, set of each episode column, {policy: runs}).
+
+    Columns are (set, seed) in the order of ``sets``, then seed; every run of every policy must
+    hold exactly these episodes (ValueError naming the first that does not)."""
+    cells: dict[str, dict[int, dict[tuple[int, int], float]]] = {}
+    order = {name: k for k, name in enumerate(sets)}
+    for row in rows:
+        if row["set"] not in order:
+            raise ValueError(f"episodes.csv: set {row['set']!r} is not in suite.json")
+        key = (order[row["set"]], row["seed"])
+        cell = cells.setdefault(row["policy"], {}).setdefault(row["run"], {})
+        if key in cell:
+            raise ValueError(
+                f"episodes.csv: policy {row['policy']!r}, run {row['run']} has set "
+                f"{row['set']!r} seed {row['seed']} twice"
+            )
+        cell[key] = episode_score(row, failure[row["set"]])
+    if not cells:
+        raise ValueError("episodes.csv holds no episode")
+    columns = sorted(next(iter(next(iter(cells.values())).values())))
+    scores, runs = {}, {}
+    for policy, by_run in cells.items():
+        for run, cell in by_run.items():
+            if sorted(cell) != columns:
+                raise ValueError(
+                    f"episodes.csv: policy {policy!r}, run {run} has other episodes "
+                    "than the first policy: evaluate every policy on the same "
+                    "sets"
+                )
+        runs[policy] = sorted(by_run)
+        scores[policy] = np.array([[by_run[r][c] for c in columns] for r in runs[policy]])
+    return scores, [sets[s] for s, _ in columns], runs
+
+
+def target_table(
+    rows: Sequence[Mapping[str, Any]],
+    scores: Mapping[str, np.ndarray],
+    groups: Sequence[str],
+    reference: str,
+    max_ratio: float,
+) -> list[dict[str, Any]]:
+    """One entry per (set, policy other than the reference): mean scores [m], their ratio,
+    failed episodes, largest surge [m/s] and whether the set passes: ratio ≤ ``max_ratio``,
+    no failed episode, surge ≤ `SURGE_LIMIT` (module doc)."""
+    labels = np.asarray(groups)
+    table = []
+    for name in dict.fromkeys(groups):
+        cols = labels == name
+        ref_mean = float(scores[reference][:, cols].mean())
+        for policy, x in scores.items():
+            if policy == reference:
+                continue
+            mine = [r for r in rows if r["policy"] == policy and r["set"] == name]
+            failed = sorted(
+                r["termination_reason"] for r in mine if r["termination_reason"] in FAILURE_REASONS
+            )
+            surge = max(r["max_surge"] for r in mine)
+            mean = float(x[:, cols].mean())
+            ratio = mean / ref_mean
+            table.append(
+                {
+                    "set": name,
+                    "policy": policy,
+                    "mean_m": mean,
+                    "reference_mean_m": ref_mean,
+                    "ratio": ratio,
+                    "failed": len(failed),
+                    "failures": sorted(set(failed)),
+                    "max_surge_m_s": surge,
+                    "episodes": len(mine),
+                    "passed": ratio <= max_ratio and not failed and surge <= SURGE_LIMIT,
+                }
+            )
+    return table
+
+
+def _read_curve(path: Path) -> dict[str, np.ndarray]:
+    with path.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        raise ValueError(f"{path}: no evaluation")
+    return {
+        key: np.array([float(r[key]) for r in rows])
+        for key in ("num_timesteps", "wall_time_s", "rms_distance_mean")
+    }
+
+
+def learning_curves(
+    results: Path, runs: Sequence[int], reps: int, seed: int
+) -> dict[str, dict[str, Any]]:
+    """{"env steps": curve, "wall time [s]": curve} of one multi-seed results directory
+    (`benchmarks.stats.learning_curve` outputs; module doc). FileNotFoundError naming a
+    missing learning-curve file."""
+    curves = []
+    for run in runs:
+        path = results / CURVE_FILE.format(run)
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} does not exist")
+        curves.append(_read_curve(path))
+    n = min(len(c["num_timesteps"]) for c in curves)
+    score = np.array([c["rms_distance_mean"][:n] for c in curves])
+    score = np.where(np.isfinite(score), score, DEFAULT_FAILURE_SCORE_M)
+    out = {}
+    for label, key in (("env steps", "num_timesteps"), ("wall time [s]", "wall_time_s")):
+        x = np.array([c[key][:n] for c in curves])
+        out[label] = learning_curve(x, score, reps=reps, seed=seed)
+    return out
+
+
+def _intervals(table: Mapping[str, Mapping[str, Interval]]) -> dict[str, Any]:
+    return {scope: {p: iv._asdict() for p, iv in row.items()} for scope, row in table.items()}
+
+
+def write_stats(
+    out: Path,
+    reference: str | None = None,
+    reps: int = 2000,
+    seed: int = 0,
+    figures: bool = True,
+    report: ReportSpec | None = None,
+) -> str:
+    """Statistics of OUT/episodes.csv (module doc) → OUT/stats.json, OUT/stats.md and, with
+    ``figures``, OUT/figures/*.png; returns the Markdown. ``report``: what to compare (None:
+    `ReportSpec.read()`, the shipped table); ``reference`` replaces its reference. ValueError
+    for a reference that was not evaluated or episodes that do not form complete score
+    matrices."""
+    report = (report or ReportSpec.read()).with_reference(reference)
+    reference = report.reference
+    out = Path(out)
+    suite = json.loads((out / "suite.json").read_text())
+    rows = read_episodes(out / "episodes.csv")
+    failure = failure_scores(suite)
+    scores, groups, runs = score_matrices(rows, list(suite["sets"]), failure)
+    if reference not in scores:
+        raise ValueError(f"--reference {reference!r} was not evaluated; policies: {list(scores)}")
+    summary = summarize(scores, groups, reference=reference, reps=reps, seed=seed)
+    improvement = {reference: summary["improvement"]}
+    for other in report.extra_references:
+        if other not in scores or other in improvement:
+            continue
+        labels = np.asarray(groups)
+        improvement[other] = {}
+        for scope in summary["scopes"]:
+            cols = np.ones(labels.size, bool) if scope == AGGREGATE else labels == scope
+            part = {p: a[:, cols] for p, a in scores.items()}
+            improvement[other][scope] = probability_of_improvement(
+                part, other, labels[cols], reps=reps, seed=seed
+            )
+    target = target_table(rows, scores, groups, reference, report.max_ratio)
+    verdicts = {}
+    for policy in scores:
+        mine = [t for t in target if t["policy"] == policy]
+        if mine:
+            verdicts[policy] = {
+                "sets": len(mine),
+                "passed": sum(t["passed"] for t in mine),
+                "failing_sets": [t["set"] for t in mine if not t["passed"]],
+            }
+    curves, notes = {}, {}
+    for name, entry in suite["policies"].items():
+        if entry.get("results") and name in runs:
+            try:
+                curves[name] = learning_curves(Path(entry["results"]), runs[name], reps, seed)
+                notes[name] = f"{curves[name]['env steps']['n_runs']} runs"
+            except (OSError, ValueError) as error:
+                notes[name] = f"not drawn: {error}"
+    stats = {
+        "command": suite["command"],
+        "reference": reference,
+        "reps": reps,
+        "seed": seed,
+        "confidence": summary["confidence"],
+        "failure_score_m": failure,
+        "n_runs": summary["n_runs"],
+        "runs": runs,
+        "scopes": summary["scopes"],
+        "iqm": _intervals(summary["iqm"]),
+        "mean": _intervals(summary["mean"]),
+        "improvement": {r: _intervals(t) for r, t in improvement.items()},
+        "profiles": summary["profiles"],
+        "target": target,
+        "verdicts": verdicts,
+        "learning_curves": curves,
+        "learning_curve_notes": notes,
+    }
+    if rows and "chattering" in rows[0]:
+        chattering = metric_matrices(rows, list(suite["sets"]), "chattering", runs)
+        stats["paired"] = paired_table(scores, groups, reps, seed, report.pairs,
+                                       report.worse_ratio)  # fmt: skip
+        stats["chattering"] = chattering_table(chattering, groups, reps, seed,
+                                               report.smoothness_reference)  # fmt: skip
+    kinds = {name: entry.get("kind", "agent") for name, entry in suite["policies"].items()}
+    text = stats_markdown({**stats, "improvement_tables": improvement, "kinds": kinds}, summary,
+                          report.max_ratio)  # fmt: skip
+    if "chattering" in stats:
+        text += "\n" + smoothness_markdown(
+            stats["paired"], stats["chattering"], report.smoothness_reference, report.worse_ratio
+        )
+    write_json(out / "stats.json", jsonable(stats), indent=1)
+    write_text(out / "stats.md", text)
+    if figures:
+        _figures(out / FIGURES, summary, improvement, curves, stats.get("chattering"),
+                 report.tradeoff_scopes)  # fmt: skip
+    return text
+
+
+def _figures(
+    folder: Path,
+    summary: Mapping[str, Any],
+    improvement: Mapping[str, Any],
+    curves: Mapping[str, Mapping[str, Any]],
+    chattering: Mapping[str, Any] | None = None,
+    tradeoff_scopes: Sequence[str] = (),
+) -> None:
+    from benchmarks.analysis.stats_figures import (
+        improvement_figure,
+        interval_figure,
+        learning_curve_figure,
+        profile_figure,
+        save_figure,
+        tradeoff_figure,
+    )
+
+    if chattering:  # accuracy against smoothness where the paper's noise acts
+        scopes = [s for s in tradeoff_scopes if s in chattering]
+        fig = tradeoff_figure(summary, chattering, scopes)
+        save_figure(fig, folder / "smoothness_tradeoff.png")
+
+    save_figure(interval_figure(summary), folder / "intervals.png")
+    for other, table in improvement.items() if len(summary["policies"]) > 1 else ():
+        fig = improvement_figure({**summary, "reference": other, "improvement": table})
+        save_figure(fig, folder / f"improvement_over_{other}.png")
+    for scope in summary["scopes"]:
+        name = scope.replace(":", "_")
+        save_figure(profile_figure(summary, scope), folder / f"profile_{name}.png")
+    if curves:
+        panels: dict[str, dict[str, Any]] = {}
+        for policy, by_x in curves.items():
+            for xlabel, curve in by_x.items():
+                panels.setdefault(xlabel, {})[policy] = curve
+        save_figure(learning_curve_figure(panels), folder / "learning_curves.png")

@@ -1,0 +1,170 @@
+"""Named task sets (`benchmarks/tasks.toml`): the training distribution, validation and test suite.
+
+A `TaskSet` is a role ("train", "validation", "test"), a half-open range of reset seeds and the
+`AUVPath3D-v0` keyword arguments of its episodes; the test suite also holds the benchmark
+scenarios (`benchmarks/scenarios.toml`) by name, one set per scenario ("scenario:<name>"). An
+episode is the pair (env keyword arguments, seed).
+
+`load_task_sets` validates the whole file before anything runs, each problem a one-line
+ValueError naming the set: unknown keys or roles, a bad seed range, env arguments the env refuses
+(an impossible generator range such as radius ≤ 0 or a climb beyond the vehicle's limits names the
+field), training or validation seeds that meet a test set's or each other's, and a `held_out`
+test set whose paths the training distribution could draw (`auv_gym.path_generator.overlaps`).
+
+    from benchmarks.catalog.tasks import load_task_sets, task_set
+    train = task_set("train")                   # .env, .seeds (a range)
+    env = gym.make_vec("AUVPath3D-v0", num_envs=16, **train.env)
+    env.reset(seed=train.seeds.start)
+    suite = test_suite()                         # every test set, scenarios expanded
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from itertools import combinations
+from pathlib import Path
+from typing import Any
+
+from auv_gym.config import SimConfig
+from auv_gym.path_generator import PathDistribution, overlaps
+from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
+
+__all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test_suite"]
+
+TASKS_FILE = Path(__file__).resolve().parents[1] / "tasks.toml"
+ROLES = ("train", "validation", "test")
+_KEYS = {"role", "description", "seeds", "env", "scenarios", "held_out"}
+MAX_SEED = 2**32 - 1  # numpy's SeedSequence accepts any, SB3 and Gymnasium pass 32-bit seeds
+
+
+@dataclass(frozen=True)
+class TaskSet:
+    """A named set of episodes: env keyword arguments on every seed of ``seeds``."""
+
+    name: str
+    role: str
+    description: str
+    seeds: range
+    env: dict[str, Any] = field(default_factory=dict)
+    controller: dict[str, Any] = field(default_factory=dict)  # a scenario's controller kwargs
+    held_out: str | None = None  # the training set whose distribution this one lies outside
+
+    def episodes(self) -> list[tuple[dict[str, Any], int]]:
+        """(env keyword arguments, seed) of every episode of the set."""
+        return [(dict(self.env), seed) for seed in self.seeds]
+
+
+def _seeds(where: str, spec: Any) -> range:
+    if not isinstance(spec, Mapping) or set(spec) != {"first", "count"}:
+        raise ValueError(f"{where}: seeds must be {{ first = <int>, count = <int> }}, got {spec!r}")
+    first, count = spec["first"], spec["count"]
+    for name, value in (("first", first), ("count", count)):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"{where}: seeds.{name} must be an integer, got {value!r}")
+    if first < 0 or count < 1 or first + count - 1 > MAX_SEED:
+        raise ValueError(f"{where}: seeds must satisfy first >= 0, count >= 1 and first + count "
+                         f"- 1 <= {MAX_SEED}, got first = {first}, count = {count}")  # fmt: skip
+    return range(first, first + count)
+
+
+def _check_env(where: str, env: dict[str, Any]) -> SimConfig:
+    try:
+        return SimConfig.from_kwargs(**env)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def load_task_sets(
+    path: Path = TASKS_FILE, scenarios_file: Path = SCENARIOS_FILE
+) -> dict[str, TaskSet]:
+    """Every task set of the file, validated (module docstring); scenario lists are expanded
+    into one set per scenario named "scenario:<name>"."""
+    with open(path, "rb") as fh:
+        raw = tomllib.load(fh)
+    sets: dict[str, TaskSet] = {}
+    configs: dict[str, SimConfig] = {}
+    scenarios = None
+    for name, table in raw.items():
+        where = f"{path.name}: task set {name!r}"
+        if not isinstance(table, Mapping):
+            raise ValueError(f"{where} must be a table")
+        unknown = sorted(set(table) - _KEYS)
+        if unknown:
+            raise ValueError(f"{where} has unknown keys {unknown}; valid: {sorted(_KEYS)}")
+        role = table.get("role")
+        if role not in ROLES:
+            raise ValueError(f"{where}: role must be one of {list(ROLES)}, got {role!r}")
+        seeds = _seeds(where, table.get("seeds"))
+        description = str(table.get("description", ""))
+        held_out = table.get("held_out")
+        if held_out is not None and role != "test":
+            raise ValueError(f"{where}: only a test set can be held_out, this one is {role!r}")
+        if "scenarios" in table:
+            if role != "test" or "env" in table or held_out is not None:
+                raise ValueError(f"{where}: scenarios belong to a test set without env/held_out")
+            scenarios = scenarios if scenarios is not None else load_scenarios(scenarios_file)
+            names = table["scenarios"]
+            missing = [n for n in names if n not in scenarios]
+            if missing:
+                raise ValueError(f"{where}: unknown scenarios {missing}; valid: "
+                                 f"{list(scenarios)}")  # fmt: skip
+            for n in names:
+                key = f"scenario:{n}"
+                sc = scenarios[n]
+                configs[key] = _check_env(f"{where}, scenario {n!r}", sc.env)
+                sets[key] = TaskSet(key, role, sc.description, seeds, dict(sc.env),
+                                    dict(sc.controller))  # fmt: skip
+            continue
+        env = dict(table.get("env", {}))
+        configs[name] = _check_env(where, env)
+        sets[name] = TaskSet(name, role, description, seeds, env, held_out=held_out)
+    _check_disjoint(path.name, sets)
+    _check_held_out(path.name, sets, configs)
+    return sets
+
+
+def _check_disjoint(file: str, sets: dict[str, TaskSet]) -> None:
+    """Training and validation seeds meet no test set's, nor each other's."""
+    for a, b in combinations(sets.values(), 2):
+        roles = {a.role, b.role}
+        if roles == {"test"} or (roles == {"train"}):
+            continue  # test sets may share seeds (different envs); so may training sets
+        lo, hi = max(a.seeds.start, b.seeds.start), min(a.seeds.stop, b.seeds.stop)
+        if lo < hi:
+            raise ValueError(f"{file}: {a.role} set {a.name!r} and {b.role} set {b.name!r} "
+                             f"share seeds [{lo}, {hi}): test episodes would leak")  # fmt: skip
+
+
+def _check_held_out(file: str, sets: dict[str, TaskSet], configs: dict[str, SimConfig]) -> None:
+    for s in sets.values():
+        if s.held_out is None:
+            continue
+        where = f"{file}: task set {s.name!r}"
+        train = sets.get(s.held_out)
+        if train is None or train.role != "train":
+            raise ValueError(f"{where}: held_out must name a training set, got {s.held_out!r}")
+        mine, theirs = configs[s.name].path, configs[train.name].path
+        if not (isinstance(mine, PathDistribution) and isinstance(theirs, PathDistribution)):
+            raise ValueError(f"{where}: held_out sets and their training set need random paths")
+        common = overlaps(mine, theirs)
+        if common:
+            raise ValueError(f"{where} is marked held_out but the training set {train.name!r} can "
+                             f"draw its {', '.join(common)} paths")  # fmt: skip
+
+
+def task_set(name: str, path: Path = TASKS_FILE) -> TaskSet:
+    """One task set by name; an unknown name raises ValueError listing the valid ones."""
+    sets = load_task_sets(path)
+    if name not in sets:
+        raise ValueError(f"unknown task set {name!r}; valid: {sorted(sets)}")
+    return sets[name]
+
+
+def test_suite(path: Path = TASKS_FILE) -> list[TaskSet]:
+    """Every test set, the benchmark scenarios included, in file order."""
+    return [s for s in load_task_sets(path).values() if s.role == "test"]
+
+
+test_suite.__test__ = False  # type: ignore[attr-defined]  # not a pytest test

@@ -1,0 +1,238 @@
+"""The draws of the fuzz run (`benchmarks.checks.fuzz`): a random valid configuration of the
+vector env across its documented argument space (paths of every kind, envs, integration steps,
+disturbances, uncertainty, actuators, starts, reward weights) and random and extreme actions."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from auv_gym import PREVIEW_ENV_ID, SPEED_LIMIT_ENV_ID, VARIANTS
+from auv_gym.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
+from auv_gym.disturbances import (
+    MAX_CURRENT_SPEED,
+    MAX_CURRENT_TIME_CONSTANT,
+    MAX_NOISE_AMPLITUDE,
+    CurrentConfig,
+    NoiseConfig,
+)
+from auv_gym.observation import ERROR_BOUND, PATH_RATE_BOUND, SPEED_BOUND
+from auv_gym.path_generator import (
+    FAMILIES,
+    LENGTH_RANGE,
+    MAX_FLIGHT_PATH_ANGLE_DEG,
+    MIN_TURN_RADIUS,
+    PathDistribution,
+)
+from auv_gym.paths import POSITION_BOUND, Helix, Path, Spline, StraightLine, fit_curve, make_path
+from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
+from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS
+from auv_gym.vehicle import remus100
+
+EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays in milliseconds
+VARIANT_IDS = ("AUVPath3D-v0", SPEED_LIMIT_ENV_ID, PREVIEW_ENV_ID)  # the envs fuzzed
+RANDOM_START_REACH = 2.0 * math.sqrt(3.0)  # [m] the largest random start offset (±2 m per axis)
+
+__all__ = ["EPISODE_PHYSICS", "PATH_KINDS", "RANDOM_START_REACH", "VARIANT_IDS", "draw_actions",
+           "draw_config", "draw_curve", "draw_distribution", "draw_path",
+           "log_uniform"]  # fmt: skip
+
+
+def log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
+    """A number spread evenly in log10 over [low, high]; the bounds themselves one time in 8."""
+    if rng.random() < 0.125:
+        return float(rng.choice([low, high]))
+    return float(min(max(10.0 ** rng.uniform(math.log10(low), math.log10(high)), low), high))
+
+
+PATH_KINDS = ("helix", "line", "waypoints", "Helix", "StraightLine", "Spline", "Reversal",
+              "FittedCurve", "random", "PathDistribution")  # fmt: skip
+
+
+def draw_distribution(rng: np.random.Generator) -> PathDistribution:
+    """A `PathDistribution` anywhere in its documented ranges (narrow ranges included: they
+    draw the same track shape every time)."""
+
+    def span(low: float, high: float, log: bool = False) -> tuple[float, float]:
+        a = log_uniform(rng, low, high) if log else float(rng.uniform(low, high))
+        if rng.random() < 0.3:
+            return a, a
+        b = log_uniform(rng, low, high) if log else float(rng.uniform(low, high))
+        return min(a, b), max(a, b)
+
+    families = [f for f in FAMILIES if rng.random() < 0.5] or [str(rng.choice(FAMILIES))]
+    return PathDistribution(
+        families=tuple(families),
+        radius=span(MIN_TURN_RADIUS, 1e4, log=True),
+        climb_angle_deg=span(0.0, MAX_FLIGHT_PATH_ANGLE_DEG),
+        piece_length=span(20.0, 1000.0, log=True),
+        leg_length=span(20.0, 1000.0, log=True),
+        length=round(float(rng.uniform(*LENGTH_RANGE)), 1) if rng.random() < 0.7
+        else round(float(rng.uniform(50.0, 400.0)), 1),
+    )  # fmt: skip
+
+
+def draw_curve(rng: np.random.Generator) -> Path:
+    """A user's curve p(s) fitted by `fit_curve` (raises ValueError if it refuses it)."""
+    shape = int(rng.integers(3))
+    a, b, c = (log_uniform(rng, 0.1, 100.0) for _ in range(3))
+    k = log_uniform(rng, 1e-3, 1.0)
+    s_end = log_uniform(rng, 1.0, 2000.0)
+    if shape == 0:  # a helix with an arbitrary parameterisation speed
+
+        def curve(s: float) -> tuple[float, float, float]:
+            return a * math.cos(k * s), a * math.sin(k * s), -b * k * s
+    elif shape == 1:  # a sinusoidal track
+
+        def curve(s: float) -> tuple[float, float, float]:
+            return s, a * math.sin(k * s), c * math.cos(0.5 * k * s)
+    else:  # a Lissajous figure: may stop or double back, then refused
+
+        def curve(s: float) -> tuple[float, float, float]:
+            return a * math.sin(k * s), b * math.sin(2 * k * s + 0.3), c * math.sin(3 * k * s)
+
+    return fit_curve(curve, s_end, tolerance=log_uniform(rng, 1e-3, 1.0))
+
+
+def draw_path(rng: np.random.Generator) -> Any:
+    """A path argument of any kind; ValueError when the kind's constructor refuses the draw
+    (waypoints that double back, a curve that stops): `run` counts those as refused."""
+    kind = str(rng.choice(PATH_KINDS))
+    if kind in ("helix", "line", "waypoints", "random"):
+        return kind
+    if kind == "PathDistribution":
+        return draw_distribution(rng)
+    if kind == "FittedCurve":
+        return draw_curve(rng)
+    if kind == "Reversal":  # an out-and-back line, optionally with a turn at the far end
+        length = log_uniform(rng, 1.0, 1000.0)
+        offset = 0.0 if rng.random() < 0.3 else log_uniform(rng, 1e-4, length)
+        turn = [(length + offset, offset, 0.0)] if rng.random() < 0.5 else []
+        return Spline([(0.0, 0.0, 0.0), (length, 0.0, 0.0), *turn,
+                       (float(rng.uniform(-length, length)), 2.0 * offset, 0.0)])  # fmt: skip
+    end = math.inf if rng.random() < 0.5 else log_uniform(rng, 1e-3, 1e4)
+    if kind == "Helix":
+        radius, omega = log_uniform(rng, 1e-3, 1e5), log_uniform(rng, 1e-4, 1e3)
+        climb = float(rng.uniform(-1e3, 1e3))
+        if math.hypot(radius * omega, climb) < 1e-5:  # below the documented |p'| >= 1e-6
+            climb = 1.0
+        center = tuple(rng.uniform(-POSITION_BOUND, POSITION_BOUND, 3))
+        return Helix(radius, omega, climb, center, s_end=end)
+    if kind == "StraightLine":
+        direction = rng.uniform(-1.0, 1.0, 3)
+        while np.linalg.norm(direction) <= 1e-3:
+            direction = rng.uniform(-1.0, 1.0, 3)
+        start = tuple(rng.uniform(-POSITION_BOUND, POSITION_BOUND, 3))
+        return StraightLine(start=start, direction=tuple(direction), length=end)
+    n = int(rng.integers(2, 9))
+    origin = rng.uniform(-POSITION_BOUND / 2, POSITION_BOUND / 2, 3)
+    steps = rng.uniform(-1.0, 1.0, (n - 1, 3))
+    steps[:, 0] = np.abs(steps[:, 0]) + 0.05  # distinct consecutive waypoints
+    scale = log_uniform(rng, 0.1, 1e3)
+    return Spline(origin + scale * np.vstack([np.zeros(3), np.cumsum(steps, axis=0)]))
+
+
+def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[str, Any], int]:
+    """Valid keyword arguments of `AUVPath3DEnv` across the documented ranges, and the number of
+    control steps to max_time, at most ``max_episode_steps`` and `EPISODE_PHYSICS` physics
+    steps (the space of tests/test_properties.py's `env_kwargs`)."""
+    kw: dict[str, Any] = {"path": draw_path(rng)}
+    physics_dt = log_uniform(rng, *PHYSICS_DT_RANGE)
+    # Half the configurations near the default (5 physics steps per control step), half over
+    # the whole range: the long run then spends its physics on many control steps.
+    few = rng.random() < 0.5
+    substeps = int(rng.integers(1, 11)) if few else int(log_uniform(rng, 1, MAX_SUBSTEPS))
+    control_dt = substeps * physics_dt
+    n_steps = int(rng.integers(1, max(1, min(max_episode_steps, EPISODE_PHYSICS // substeps)) + 1))
+    fraction = 1.0 if n_steps == 1 or rng.random() < 0.25 else float(rng.uniform(0.01, 1.0))
+    kw.update(physics_dt=physics_dt, control_dt=control_dt,
+              max_time=control_dt * (n_steps - 1 + fraction))  # fmt: skip
+    hold = int(rng.integers(1, 1001)) * physics_dt
+    amplitude = 0.0 if rng.random() < 0.2 else log_uniform(rng, 1e-3, MAX_NOISE_AMPLITUDE)
+    noise = int(rng.integers(4))
+    if noise == 0:
+        kw["disturbance"] = "paper"
+    elif noise == 1:
+        kw["disturbance"] = "none"
+    elif noise == 2:
+        kw.update(disturbance=amplitude, noise_hold=hold)
+    else:
+        kw["disturbance"] = NoiseConfig((amplitude,) * 5, hold)
+    if "noise_hold" not in kw and not isinstance(kw["disturbance"], NoiseConfig):
+        ratio = 0.01 / physics_dt
+        if abs(ratio - round(ratio)) >= 1e-9 * ratio or physics_dt > 0.01:
+            kw["noise_hold"] = hold  # the default hold 0.01 s is no whole number of RK4 steps
+    if rng.random() < 0.5:
+        kw["current"] = CurrentConfig(
+            mean=tuple(rng.uniform(-MAX_CURRENT_SPEED, MAX_CURRENT_SPEED, 3)),
+            std=tuple(rng.uniform(0.0, MAX_CURRENT_SPEED, 3)),
+            time_constant=log_uniform(rng, 1e-3, MAX_CURRENT_TIME_CONSTANT),
+        )
+    kw["param_uncertainty"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.0, 0.999))
+    kw["actuator"] = str(rng.choice(["paper", "fins", "random"]))
+    kw["randomize_start"] = bool(rng.random() < 0.5)
+    if rng.random() < 0.25:
+        kw["random_current"] = float(rng.uniform(0.0, MAX_RANDOM_CURRENT))
+    if rng.random() < 0.25:
+        kw["random_noise"] = float(rng.uniform(0.0, MAX_RANDOM_NOISE))
+    variant = str(rng.choice(list(VARIANT_IDS)))
+    kw.update(VARIANTS[variant])
+    random_path = isinstance(kw["path"], PathDistribution) or kw["path"] == "random"
+    if random_path:  # drawn paths turn within MAX_TURN_RATE: any u_desired fits
+        turn = 0.0
+    else:
+        path = make_path(kw["path"])
+        turn = max(path_turn_rates(path))
+    u_max = SPEED_BOUND if turn == 0 else min(SPEED_BOUND, PATH_RATE_BOUND / (2 * turn))
+    u_max *= 1 - 1e-12  # the env's check 2·u·turn <= bound must not fail by one rounding
+    if "surge_limit" in kw:  # u_desired < surge_limit
+        u_max = min(u_max, kw["surge_limit"] * (1.0 - 1e-9))
+    kw["u_desired"] = u_max * (1.0 if rng.random() < 0.2 else log_uniform(rng, 1e-4, 1.0))
+    kw["sigma"] = log_uniform(rng, 1e-6, 1e6)
+    kw["virtual_point_law"] = str(rng.choice(["corrected", "printed"]))
+    kw["corridor"] = log_uniform(rng, MIN_CORRIDOR, ERROR_BOUND)
+    kw["max_pitch"] = float(rng.uniform(0.01, math.pi / 2 - 1e-6))
+    if rng.random() < 0.5:
+        kw["reward_weights"] = {
+            t: 0.0 if rng.random() < 0.2 else log_uniform(rng, 1e-6, MAX_REWARD_WEIGHT)
+            for t in REWARD_TERMS
+        }
+    if rng.random() < 0.5 and not random_path:
+        kw["start_heading"] = float(rng.uniform(-2 * math.pi, 2 * math.pi))
+    if rng.random() < 0.5 and not random_path:  # anywhere the errors stay observable
+        offset = rng.uniform(-1.0, 1.0, 3)
+        reach = ERROR_BOUND - RANDOM_START_REACH - 1e-6
+        distance = rng.uniform(0.0, reach)
+        start = path.evaluate(0.0)[0] + offset / max(np.linalg.norm(offset), 1e-9) * distance
+        if np.abs(start).max() <= POSITION_BOUND:
+            kw["start_position"] = tuple(float(x) for x in start)
+    choice = rng.random()
+    if choice < 0.4:
+        kw["params"] = remus100().perturbed(rng, 0.5)
+    elif choice < 0.6:  # a positive added mass: param_uncertainty up to its documented limit
+        m = remus100().m
+        added = float(rng.uniform(0.0, 0.99 * m))
+        kw["params"] = {"X_udot": added, "Y_vdot": float(rng.uniform(-50.0, 0.99 * m))}
+        limit = min(m / max(added, kw["params"]["Y_vdot"]) - 1.0, 0.999)
+        kw["param_uncertainty"] = float(rng.uniform(0.0, limit)) * (1.0 - 1e-9)
+    return kw, n_steps
+
+
+def draw_actions(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 3) actions: per vehicle one of uniform [−1, 1], saturating [−3, 3], corners ±1,
+    zeros, huge finite (|a| up to the float64 maximum) or denormal magnitudes."""
+    kind = rng.choice(6, size=(n, 1), p=[0.4, 0.2, 0.2, 0.05, 0.1, 0.05])
+    sign = rng.choice([-1.0, 1.0], size=(n, 3))
+    largest = np.finfo(np.float64).max
+    huge = np.where(rng.random((n, 3)) < 0.1, largest, 10.0 ** rng.uniform(0.0, 308.0, (n, 3)))
+    options = (
+        rng.uniform(-1.0, 1.0, (n, 3)),
+        rng.uniform(-3.0, 3.0, (n, 3)),
+        sign,
+        np.zeros((n, 3)),
+        sign * huge,
+        sign * 5e-324 * rng.integers(1, 1000, (n, 3)),
+    )
+    return np.choose(kind, options)

@@ -1,0 +1,196 @@
+"""Re-run the committed benchmark results and compare them with the committed files, exactly.
+
+A refactoring that must not change behaviour passes only if every committed metric is
+reproduced to the last bit:
+
+1. `benchmarks/results/full/episodes.csv`: the command recorded in `episodes.json` is re-run into
+   a temporary folder; every cell of every (scenario, policy, seed) row is compared as text (the
+   CSV holds full-precision floats, so equal text is equal bits).
+2. `benchmarks/results/paper/metrics.json`: `benchmarks.paper_figures` is re-run with the
+   recorded seed and duration; every metric value is compared (wall times and versions excepted).
+3. With `--agents`, each shipped agent's `held_out_evaluation.json` is re-evaluated and compared
+   value by value (bit-identical on the machine that trained it; elsewhere BLAS may round
+   differently, so this check is opt-in).
+
+    python -m benchmarks.check_reproduction                # 1 + 2, about 4 minutes on 2 cores
+    python -m benchmarks.check_reproduction --agents       # 1 + 2 + 3
+
+Rows or columns present on one side only are listed; they are an error unless
+`--allow-new` is given (a benchmark that gained a policy, scenario or metric on purpose must
+still reproduce every committed cell it shares with the new run). Exit status 0: reproduced.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import shlex
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from benchmarks.arguments import writable_location
+
+RESULTS = Path(__file__).resolve().parents[1] / "results"
+AGENTS = Path(__file__).resolve().parents[1] / "agents"
+UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # differ by design
+
+
+def _run(module: str, args: Sequence[str]) -> None:
+    command = [sys.executable, "-m", module, *args]
+    print("$", shlex.join(command[1:]), flush=True)
+    subprocess.run(command, check=True)
+
+
+def _rerun_arguments(recorded_command: str, out: Path, workers: int) -> list[str]:
+    """The recorded compare command's arguments with --out and --workers replaced."""
+    words = shlex.split(recorded_command)
+    args = words[words.index("benchmarks.compare") + 1 :]
+    kept: list[str] = []
+    skip = False
+    for word in args:
+        if skip:
+            skip = False
+            continue
+        if word in ("--out", "--workers"):
+            skip = True
+            continue
+        if word.startswith(("--out=", "--workers=")):
+            continue
+        kept.append(word)
+    return [*kept, "--out", str(out), "--workers", str(workers)]
+
+
+def _rows(path: Path) -> dict[tuple[str, str, str], dict[str, str]]:
+    with path.open(newline="") as f:
+        return {(r["scenario"], r["policy"], r["seed"]): r for r in csv.DictReader(f)}
+
+
+def _flatten(value: Any, prefix: str = "") -> Iterator[tuple[str, Any]]:
+    if isinstance(value, dict):
+        for key, item in value.items():
+            yield from _flatten(item, f"{prefix}/{key}")
+    elif isinstance(value, list):
+        for index, item in enumerate(value):
+            yield from _flatten(item, f"{prefix}[{index}]")
+    else:
+        yield prefix, value
+
+
+def _compared(key: str) -> bool:
+    return not any(word in key for word in UNCOMPARED_KEYS)
+
+
+class Report:
+    """Counts differences and prints the first few of each check."""
+
+    def __init__(self, allow_new: bool, shown: int = 20) -> None:
+        self.allow_new, self.shown, self.failures = allow_new, shown, 0
+
+    def differences(self, label: str, diffs: list[str], compared: int) -> None:
+        print(f"{label}: {compared} values compared, {len(diffs)} differ")
+        for line in diffs[: self.shown]:
+            print("  DIFF", line)
+        self.failures += len(diffs)
+
+    def one_sided(self, label: str, items: Sequence[Any]) -> None:
+        if not items:
+            return
+        verdict = "allowed (--allow-new)" if self.allow_new else "ERROR"
+        print(f"{label}: {len(items)} {verdict}: {list(items)[: self.shown]}")
+        if not self.allow_new:
+            self.failures += len(items)
+
+
+def compare_episodes(reference: Path, fresh: Path, report: Report) -> None:
+    """Cell-by-cell comparison of two episodes.csv files."""
+    old, new = _rows(reference), _rows(fresh)
+    report.one_sided("episode rows only in the committed file", sorted(set(old) - set(new)))
+    report.one_sided("episode rows only in the new run", sorted(set(new) - set(old)))
+    diffs, compared = [], 0
+    columns_old = set(next(iter(old.values()), {}))
+    columns_new = set(next(iter(new.values()), {}))
+    report.one_sided("columns only in the committed file", sorted(columns_old - columns_new))
+    report.one_sided("columns only in the new run", sorted(columns_new - columns_old))
+    for key in sorted(set(old) & set(new)):
+        for column in sorted(columns_old & columns_new):
+            compared += 1
+            if old[key][column] != new[key][column]:
+                diffs.append(f"{key} {column}: {old[key][column]} -> {new[key][column]}")
+    report.differences("episodes.csv", diffs, compared)
+
+
+def compare_json(label: str, reference: Path, fresh: Path, report: Report) -> None:
+    """Value-by-value comparison of two JSON files (run-dependent keys excepted)."""
+    old = {k: v for k, v in _flatten(json.loads(reference.read_text())) if _compared(k)}
+    new = {k: v for k, v in _flatten(json.loads(fresh.read_text())) if _compared(k)}
+    report.one_sided(f"{label}: values only in the committed file", sorted(set(old) - set(new)))
+    report.one_sided(f"{label}: values only in the new run", sorted(set(new) - set(old)))
+    shared = sorted(set(old) & set(new))
+    diffs = [f"{k}: {old[k]!r} -> {new[k]!r}" for k in shared if old[k] != new[k]]
+    report.differences(label, diffs, len(shared))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    parser.add_argument("--results", type=Path, default=RESULTS, help="committed results folder")
+    parser.add_argument("--workers", type=int, default=2, help="benchmark worker processes")
+    parser.add_argument("--agents", action="store_true", help="also re-evaluate shipped agents")
+    parser.add_argument(
+        "--allow-new", action="store_true", help="rows/columns on one side only are not errors"
+    )
+    parser.add_argument("--keep", type=Path, default=None, help="write the re-run here (kept)")
+    args = parser.parse_args(argv)
+    if args.workers < 1:
+        parser.error(f"--workers must be ≥ 1, got {args.workers}")
+    if args.keep is not None:  # refused now, not after the first re-run has finished
+        try:
+            writable_location(args.keep, "--keep")
+        except OSError as error:
+            parser.error(str(error))
+    episodes_json = args.results / "full" / "episodes.json"
+    paper_json = args.results / "paper" / "metrics.json"
+    for required in (episodes_json, paper_json):
+        if not required.is_file():
+            parser.error(f"committed result {required} not found")
+
+    report = Report(args.allow_new)
+    with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
+        out = args.keep if args.keep is not None else Path(scratch)
+        recorded = json.loads(episodes_json.read_text())["config"]["command"]
+        _run("benchmarks.compare", _rerun_arguments(recorded, out / "full", args.workers))
+        compare_episodes(args.results / "full" / "episodes.csv", out / "full/episodes.csv", report)
+
+        paper = json.loads(paper_json.read_text())
+        _run(
+            "benchmarks.paper_figures",
+            ["--out", str(out / "paper"), "--seed", str(paper["seed"]),
+             "--duration", str(paper["duration"]), "--transient", str(paper["transient"])],
+        )  # fmt: skip
+        compare_json("paper metrics.json", paper_json, out / "paper/metrics.json", report)
+
+        if args.agents:
+            from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
+
+            for recorded_file in sorted(AGENTS.glob(f"*/{HELD_OUT_FILE}")):
+                committed = json.loads(recorded_file.read_text())
+                fresh = held_out_evaluation(recorded_file.parent, committed["duration_s"])
+                fresh_file = out / f"{recorded_file.parent.name}_{HELD_OUT_FILE}"
+                fresh_file.write_text(json.dumps(fresh, default=float))
+                compare_json(f"{recorded_file.parent.name} held-out", recorded_file, fresh_file,
+                             report)  # fmt: skip
+
+    verdict = "REPRODUCED bit for bit" if report.failures == 0 else f"{report.failures} problems"
+    print(verdict)
+    return 0 if report.failures == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Figures and videos of recorded episodes: the paper's figures, an episode's MP4."""

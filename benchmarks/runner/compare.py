@@ -1,0 +1,176 @@
+"""FBSM vs backstepping vs PPO (and any Policy) on the same seeded scenarios.
+
+    python -m benchmarks.compare --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos \\
+        --scenarios all --seeds 10 --duration 300 --workers 2 --out benchmarks/results/full
+
+Jobs are (policy, scenario, seed) episodes (`benchmarks.jobs`): each finished episode is stored
+under ``OUT/episodes/`` with a fingerprint of everything that determines it, so an interrupted
+run restarted with the same arguments reuses finished episodes, and results do not depend on
+the number of workers or the backend. Policies: `benchmarks.policies`; scenarios:
+`benchmarks/scenarios.toml`; tables: `benchmarks.tables`; figures: `benchmarks.figures`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from auv_gym.config import SimConfig
+from auv_gym.files import replace_outputs
+from auv_gym.metrics import check_window
+from benchmarks.arguments import (
+    ArgumentParser,
+    add_episode_arguments,
+    check_episode_arguments,
+    comma_names,
+    locked_folder,
+    program_name,
+    usage_errors,
+    writable_folder,
+)
+from benchmarks.catalog.policies import (
+    PolicySpec,
+    build_policy,
+    check_policy_spec,
+    policy_env_id,
+    policy_label,
+    policy_names,
+)
+from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
+from benchmarks.cli import HelpFormatter
+from benchmarks.runner.jobs import Job, run_jobs
+from benchmarks.tables import write_tables
+
+MAX_SEEDS = 100_000  # seeds per scenario
+TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.tables.write_tables`
+MAX_EPISODES = 1_000_000  # episodes of one run: each is a job held in memory and on disk
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = ArgumentParser(
+        prog=program_name("benchmarks.compare"),
+        description=__doc__.split("\n\n")[0],
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument(
+        "--policies",
+        default="fbsm,backstepping,ppo",
+        help=f"comma-separated: {', '.join(policy_names())}, ppo:PATH, module:attribute",
+    )
+    parser.add_argument("--scenarios", default="all",
+                        help="comma-separated names of --scenario-file or 'all'; the shipped "
+                        f"file has: {', '.join(load_scenarios())}")  # fmt: skip
+    parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
+                        help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
+    parser.add_argument("--seeds", type=int, default=10,
+                        help=f"seeds 0..N-1 per scenario, 1 <= N <= {MAX_SEEDS}")  # fmt: skip
+    add_episode_arguments(parser)
+    parser.add_argument("--out", type=Path, default=Path("out/compare"),
+                        help="output folder; a rerun with the same arguments resumes")  # fmt: skip
+    parser.add_argument("--no-figures", action="store_true", help="tables only")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    return parser
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The arguments, every one checked before any episode runs (a bad one exits with code 2
+    and a one-line message). Adds ``jobs``, ``scenario_table`` (name → Scenario) and
+    ``transient`` (resolved)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    with usage_errors(parser):
+        check_args(args)
+    return args
+
+
+def check_args(args: argparse.Namespace) -> None:
+    """Validate ``args`` and resolve them into jobs; ValueError/OSError naming the argument."""
+    try:
+        scenarios = load_scenarios(args.scenario_file)
+    except OSError as error:
+        raise OSError(f"--scenario-file {str(args.scenario_file)!r}: {error.strerror}") from None
+    names = select(args.scenarios, list(scenarios), "scenario")
+    policies = comma_names(args.policies, "--policies")
+    labels: dict[str, str] = {}
+    env_ids: dict[str, str] = {}
+    for spec in policies:
+        check_policy_spec(spec)
+        env_ids[spec] = policy_env_id(spec)
+        label = policy_label(spec)
+        if label in labels:  # both would write OUT/episodes/<scenario>/<label>/
+            raise ValueError(f"--policies {labels[label]!r} and {spec!r} share the label {label!r}")
+        labels[label] = spec
+    if not 1 <= args.seeds <= MAX_SEEDS:
+        raise ValueError(f"--seeds must be an integer in [1, {MAX_SEEDS}], got {args.seeds}")
+    episodes = args.seeds * len(names) * len(policies)
+    if episodes > MAX_EPISODES:  # refused before the jobs are listed: no memory, no silence
+        raise ValueError(f"--seeds {args.seeds} × {len(names)} scenarios × {len(policies)} "
+                         f"policies = {episodes} episodes, more than {MAX_EPISODES}")  # fmt: skip
+    check_episode_arguments(args)
+    for name in names:
+        scenario = scenarios[name]
+        env_kwargs = {**scenario.env, "max_time": args.duration}
+        try:
+            SimConfig.from_kwargs(**env_kwargs)
+            control_dt = float(env_kwargs.get("control_dt", 0.05))
+            # one metrics-window rule (docs/design.md §3.9); it must hold a metric everywhere
+            transient = check_window(args.duration, args.transient, control_dt)
+            for spec in policies:
+                if PolicySpec.parse(spec).kind == "classical":
+                    build_policy(spec, control_dt, scenario.controller)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"scenario {name!r}: {error}") from None
+    writable_folder(args.out)  # last: a bad argument above creates no folder
+    args.transient = transient
+    args.policy_list = policies
+    args.env_ids = env_ids
+    args.scenario_table = {n: scenarios[n] for n in names}
+    args.jobs = [
+        Job(policy, scenarios[name], seed, args.duration, args.transient, env_ids[policy])
+        for name in names
+        for policy in policies
+        for seed in range(args.seeds)
+    ]
+
+
+def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
+    args = parse_args(argv)
+    scenarios = args.scenario_table
+    config = {
+        "policies": args.policy_list,
+        "env_ids": args.env_ids,  # an agent runs under its training env
+        "scenarios": {n: asdict(s) for n, s in scenarios.items()},
+        "seeds": args.seeds,
+        "duration": args.duration,
+        "transient": args.transient,
+        "command": " ".join(
+            [
+                Path(sys.executable).name,
+                "-m",
+                "benchmarks.compare",
+                *(argv if argv is not None else sys.argv[1:]),
+            ]
+        ),
+    }
+    # One run per folder: a second one is refused, a killed one's temporary files removed.
+    with locked_folder(program_name("benchmarks.compare"), args.out):
+        records = run_jobs(
+            args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
+        )
+        summary = write_tables(records, args.out, config)
+        written = [args.out / name for name in TABLES]
+        if not args.no_figures:
+            from benchmarks.figures import comparison_figures
+
+            written += comparison_figures(records, args.out, scenarios=scenarios)
+        replace_outputs(args.out, written)  # no figure of an earlier run beside these tables
+    print(summary)
+    return records
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,337 @@
+"""Every policy and every training seed on the whole test suite: episodes.csv, then statistics.
+
+    python -m benchmarks.evaluate_suite --workers 2 --out benchmarks/results/suite \\
+        --policies fbsm,fbsm_colos,ppo_generalist=runs/ppo_generalist/results
+    python -m benchmarks.evaluate_suite --stats-only --out benchmarks/results/suite
+
+Policies (``--policies``, comma-separated):
+
+* classical controllers and their presets by name, as `benchmarks.compare` takes them; on a
+  scenario set the scenario's controller keyword arguments apply, exactly as in compare;
+* shipped agents by name (`benchmarks.policies.SHIPPED_AGENTS`), "ppo:PATH", "module:attribute";
+* NAME=DIR: DIR is one agent directory (one run, named by the training seed its metadata.json
+  records) or a multi-seed results directory (``benchmarks.train_seeds --results``) holding one
+  agent per training seed, ``DIR/agent_seed_<k>/`` (model.zip, vecnormalize.npz,
+  metadata.json): one run per seed; its ``seed_<k>_learning_curve.csv`` files give the learning
+  curves of the statistics.
+
+Episodes: every test set of the tasks file (`benchmarks.tasks.test_suite`: the test
+distribution, the held-out families, one set per benchmark scenario), each on its seeds, for
+``--duration`` seconds. An agent runs under the env id its metadata.json records (the fixed
+arguments of `auv_gym.VARIANTS`, e.g. AUVPath3DSpeedLimit-v0's 2.0 m/s surge limit, under which
+a faster agent terminates "overspeed"), every other policy under AUVPath3D-v0, the benchmark's
+env; the ``env_id`` column says which.
+
+The work is split in chunks (policy, run, set): the set's episodes in one batched
+`auv_gym.rollout.evaluate` call. A finished chunk is stored atomically under ``OUT/chunks/``
+with a fingerprint of everything that determines it (the agent's files and the simulator and
+controller sources included, `benchmarks.jobs`), so a killed run continued with the same command
+keeps its finished chunks. Results depend neither on ``--workers`` nor on the order of chunks.
+
+Outputs in OUT: ``episodes.csv`` (one row per policy × run × set × episode seed, metrics at full
+precision), ``suite.json`` (command, configuration, agents, versions), then the statistics of
+`benchmarks.suite_stats` (stats.json, stats.md, figures/), which ``--stats-only`` recomputes
+from episodes.csv and suite.json without simulating.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from auv_gym.config import SimConfig
+from auv_gym.files import (
+    environment,
+    replace_outputs,
+    write_json,
+    write_text,
+)
+from auv_gym.metrics import check_window
+from benchmarks.analysis.report_spec import DEFAULT_REPORT, ReportSpec
+from benchmarks.arguments import (
+    ArgumentParser,
+    add_episode_arguments,
+    check_episode_arguments,
+    comma_names,
+    locked_folder,
+    program_name,
+    usage_errors,
+    writable_folder,
+)
+from benchmarks.catalog.policies import (
+    PolicySpec,
+    build_policy,
+    policy_label,
+)
+from benchmarks.catalog.scenarios import select
+from benchmarks.catalog.tasks import TASKS_FILE, TaskSet, test_suite
+from benchmarks.cli import HelpFormatter
+from benchmarks.runner.cache import run_resumable
+from benchmarks.runner.jobs import agent_digest, code_digest
+from benchmarks.runner.suite_chunks import (  # the unit of work; importable from here too
+    CHUNKS,
+    METRICS,
+    Chunk,
+    Run,
+    SuitePolicy,
+    episodes_csv,
+    resolve_policy,
+    run_chunk,
+)
+
+__all__ = [
+    "EPISODES_FILE",
+    "METRICS",
+    "SUITE_FILE",
+    "Chunk",
+    "Run",
+    "SuitePolicy",
+    "main",
+    "resolve_policy",
+    "run_chunk",
+]
+
+EPISODES_FILE = "episodes.csv"
+SUITE_FILE = "suite.json"
+DEFAULT_POLICIES = "fbsm,backstepping,ppo"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = ArgumentParser(
+        prog=program_name("benchmarks.evaluate_suite"),
+        description=__doc__.split("\n\n")[0],
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument(
+        "--policies",
+        default=DEFAULT_POLICIES,
+        help="comma-separated: controller or shipped agent names (as compare), "
+        "ppo:PATH, module:attribute, NAME=DIR (an agent or a multi-seed results "
+        "directory of agent_seed_<k>/ folders)",
+    )
+    parser.add_argument(
+        "--sets", default="all", help="comma-separated test sets of --tasks-file, or 'all'"
+    )
+    parser.add_argument(
+        "--tasks-file",
+        type=Path,
+        default=TASKS_FILE,
+        help="TOML file of named task sets (benchmarks.tasks)",
+    )
+    add_episode_arguments(parser)
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/suite"),
+        help="output folder; a rerun with the same arguments resumes (the committed results: "
+        "benchmarks/results/suite)",
+    )
+    parser.add_argument(
+        "--stats-only",
+        action="store_true",
+        help="recompute the statistics from OUT/episodes.csv, no simulation "
+        "(the evaluation options above are not used)",
+    )
+    parser.add_argument("--no-stats", action="store_true", help="episodes.csv only")
+    parser.add_argument("--no-figures", action="store_true", help="statistics without figures")
+    parser.add_argument(
+        "--report",
+        type=Path,
+        default=DEFAULT_REPORT,
+        help="TOML report table: references, target ratio, (policy, base) pairs of the statistics",
+    )
+    parser.add_argument(
+        "--reference",
+        default=None,
+        help="policy the probability of improvement and the target ratio refer to (default: the "
+        "report table's)",
+    )
+    parser.add_argument("--reps", type=int, default=2000, help="bootstrap replicates")
+    parser.add_argument(
+        "--bootstrap-seed",
+        type=int,
+        default=0,
+        help="seed of the bootstrap (one seed: bit-identical intervals)",
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    return parser
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The arguments, every one checked before any episode runs (a bad one exits with code 2
+    and a one-line message). Adds ``policy_list`` (SuitePolicy), ``set_list`` (TaskSet),
+    ``chunks`` and ``transient`` (resolved)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    with usage_errors(parser):
+        check_args(args)
+    return args
+
+
+def check_args(args: argparse.Namespace) -> None:
+    """Validate ``args`` and resolve them into chunks; ValueError/OSError naming the argument."""
+    if args.stats_only and args.no_stats:
+        raise ValueError("--stats-only and --no-stats exclude each other")
+    if not args.no_stats:  # the statistics need the stats extra (rliable); --no-stats does not
+        from benchmarks.analysis.suite_stats import check_stats_options
+
+        check_stats_options(args.reps, args.bootstrap_seed)
+        args.report_spec = ReportSpec.read(args.report).with_reference(args.reference)
+        args.reference = args.report_spec.reference
+    if args.stats_only:
+        for name in (EPISODES_FILE, SUITE_FILE):
+            if not (args.out / name).is_file():
+                raise FileNotFoundError(
+                    f"--stats-only: {args.out / name} does not exist; run the evaluation first"
+                )
+        writable_folder(args.out)
+        return
+    try:
+        suite = test_suite(args.tasks_file)
+    except OSError as error:
+        raise OSError(f"--tasks-file {str(args.tasks_file)!r}: {error.strerror}") from None
+    if not suite:
+        raise ValueError(f"--tasks-file {str(args.tasks_file)!r} has no test set")
+    by_name = {s.name: s for s in suite}
+    sets = [by_name[n] for n in select(args.sets, list(by_name), "set")]
+    names = comma_names(args.policies, "--policies")
+    policies = [resolve_policy(spec) for spec in names]
+    labels: dict[str, str] = {}
+    for policy in policies:
+        label = policy_label(policy.name)
+        if label in labels:  # both would write OUT/chunks/<label>/
+            raise ValueError(
+                f"--policies {labels[label]!r} and {policy.name!r} share the label {label!r}"
+            )
+        labels[label] = policy.name
+    if not args.no_stats and args.reference not in [p.name for p in policies]:
+        raise ValueError(
+            f"--reference {args.reference!r} is not among --policies "
+            f"{[p.name for p in policies]} (or pass --no-stats)"
+        )
+    check_episode_arguments(args)
+    chunks = []
+    transient = args.transient
+    for task in sets:
+        for policy in policies:
+            for run in policy.runs:
+                chunk = Chunk(policy.name, run, task, args.duration, 0.0)
+                try:
+                    SimConfig.from_kwargs(**chunk.env_kwargs)
+                    control_dt = float(chunk.env_kwargs.get("control_dt", 0.05))
+                    transient = check_window(args.duration, args.transient, control_dt)
+                    if PolicySpec.parse(run.spec).kind == "classical":
+                        build_policy(run.spec, control_dt, task.controller)
+                except (TypeError, ValueError) as error:
+                    raise ValueError(
+                        f"task set {task.name!r}, policy {policy.name!r}: {error}"
+                    ) from None
+                chunks.append(chunk)
+    writable_folder(args.out)  # last: a bad argument above creates no folder
+    args.transient = transient
+    args.policy_list, args.set_list = policies, sets
+    args.chunks = [
+        Chunk(c.policy, c.run, c.task, c.duration, transient)
+        for c in sorted(chunks, key=lambda c: _order(c, policies, sets))
+    ]
+
+
+def _order(chunk: Chunk, policies: list[SuitePolicy], sets: list[TaskSet]) -> tuple[int, int, int]:
+    """Row order of episodes.csv: policy as given, run, set as in the tasks file."""
+    p = next(i for i, policy in enumerate(policies) if policy.name == chunk.policy)
+    s = next(i for i, task in enumerate(sets) if task.name == chunk.task.name)
+    return p, chunk.run.run, s
+
+
+def _set_entry(task: TaskSet) -> dict[str, Any]:
+    entry = asdict(task)
+    entry["seeds"] = {"first": task.seeds.start, "count": len(task.seeds)}
+    entry["kind"] = (
+        "scenario"
+        if task.name.startswith("scenario:")
+        else "held_out"
+        if task.held_out
+        else "distribution"
+    )
+    return entry
+
+
+def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict[str, Any]]:
+    """Evaluate every chunk, then write episodes.csv and suite.json (atomically)."""
+    records = run_resumable(
+        args.chunks, args.out, args.out / CHUNKS, run_chunk, workers=args.workers,
+        backend=args.backend, address=args.address, progress=not args.quiet,
+        desc="suite episodes", sizes=[len(c.task.seeds) for c in args.chunks],
+    )  # fmt: skip
+    command = [
+        Path(sys.executable).name,
+        "-m",
+        "benchmarks.evaluate_suite",
+        *(argv if argv is not None else sys.argv[1:]),
+    ]
+    suite = {
+        "command": " ".join(command),
+        "duration_s": args.duration,
+        "transient_s": args.transient,
+        "tasks_file": str(args.tasks_file),
+        "policies": {p.name: asdict(p) for p in args.policy_list},
+        "agents": {
+            r.spec: agent_digest(PolicySpec.parse(r.spec).agent)
+            for p in args.policy_list
+            for r in p.runs
+            if p.kind == "agent"
+        },
+        "sets": {s.name: _set_entry(s) for s in args.set_list},
+        "code": code_digest(),
+        "chunk_wall_time_s": {
+            f"{r['policy']}|{r['run']}|{r['set']}": r["wall_time_s"] for r in records
+        },
+        **environment(),
+    }
+    write_text(args.out / EPISODES_FILE, episodes_csv(records))
+    write_json(args.out / SUITE_FILE, suite, indent=1)
+    return records
+
+
+STATS_FILES = ("stats.json", "stats.md")  # `benchmarks.suite_stats.write_stats`, with figures/
+
+
+def _files(folder: Path) -> dict[Path, int]:
+    """file → inode of the files in ``folder`` (none if it does not exist)."""
+    return {f: f.stat().st_ino for f in folder.iterdir() if f.is_file()} if folder.is_dir() else {}
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = parse_args(argv)
+    # One run per folder: a second one is refused, a killed one's temporary files removed.
+    with locked_folder(program_name("benchmarks.evaluate_suite"), args.out):
+        before = _files(args.out / "figures")
+        if not args.stats_only:
+            run_suite(args, argv)
+        written = [args.out / EPISODES_FILE, args.out / SUITE_FILE]
+        if not args.no_stats:
+            from benchmarks.analysis.suite_stats import FIGURES, write_stats
+
+            text = write_stats(
+                args.out,
+                reps=args.reps,
+                seed=args.bootstrap_seed,
+                figures=not args.no_figures,
+                report=args.report_spec,
+            )
+            written += [args.out / name for name in STATS_FILES]
+            after = _files(args.out / FIGURES)  # written atomically: a new inode each
+            written += [f for f, inode in after.items() if before.get(f) != inode]
+        # Statistics and figures of an earlier run (other policies, or stats of other
+        # episodes) do not stay beside this run's episodes.csv.
+        replace_outputs(args.out, written)
+    if not args.no_stats:
+        print(text)
+
+
+if __name__ == "__main__":
+    main()

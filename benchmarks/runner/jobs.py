@@ -1,0 +1,164 @@
+"""Benchmark episodes as jobs: (policy, scenario, seed, duration), fingerprinted, resumable.
+
+An agent's episode runs under the env id its metadata.json records (e.g. AUVPath3DSpeedLimit-v0's
+2.0 m/s surge limit, under which a faster agent terminates "overspeed"), everything else under
+AUVPath3D-v0; the record says which (``env_id``).
+
+Each finished episode is written atomically to ``OUT/episodes/<scenario>/<policy>/seed_<k>.json``
+(metrics) and ``.npz`` (time series) with a fingerprint of everything that determines it, so a
+run restarted with the same arguments reuses finished episodes. Results do not depend on the
+number of workers or the backend: every episode is a pure function of the job.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import auv_gym
+import controllers
+from auv_gym import ENV_ID, VARIANTS
+from auv_gym.files import jsonable, write_json
+from auv_gym.metrics import compute_metrics
+from auv_gym.numba_cache import sources_digest
+from auv_gym.rollout import rollout
+from benchmarks.catalog.policies import PolicySpec, build_policy, policy_label
+from benchmarks.catalog.scenarios import Scenario
+from benchmarks.runner.cache import run_resumable, stored_record
+
+# The pool functions lived here first; they stay importable from this module.
+from benchmarks.runner.pool import (
+    RAY_PROBE_TIMEOUT_S,
+    check_ray_address,
+    die_with_parent,
+    parallel_map,
+)
+
+__all__ = [
+    "RAY_PROBE_TIMEOUT_S",
+    "Job",
+    "agent_digest",
+    "check_ray_address",
+    "code_digest",
+    "die_with_parent",
+    "finished",
+    "parallel_map",
+    "run_job",
+    "run_jobs",
+]
+
+
+@dataclass(frozen=True)
+class Job:
+    """One episode: a policy on a scenario with a seed, for `duration` seconds."""
+
+    policy: str
+    scenario: Scenario
+    seed: int
+    duration: float
+    transient: float
+    env_id: str = ENV_ID  # an agent's training env (`benchmarks.policies.policy_env_id`)
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """The env: the env id's fixed arguments, the scenario's, the duration [s]."""
+        return {**VARIANTS[self.env_id], **self.scenario.env, "max_time": self.duration}
+
+    def fingerprint(self) -> str:
+        """Hash of everything that determines the episode: the job, the agent file if any, and
+        the source code of `auv_gym` and `controllers`."""
+        payload = {
+            "policy": self.policy,
+            "scenario": asdict(self.scenario),
+            "seed": self.seed,
+            "duration": self.duration,
+            "transient": self.transient,
+            "agent": agent_digest(PolicySpec.parse(self.policy).agent),
+            "code": code_digest(),
+        }
+        if self.env_id != ENV_ID:  # the default keeps the fingerprints of earlier runs
+            payload["env_id"] = self.env_id
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+    def path(self, out: Path) -> Path:
+        return (
+            out / "episodes" / self.scenario.name / policy_label(self.policy) / f"seed_{self.seed}"
+        )
+
+    def record_file(self, out: Path) -> Path:
+        """The episode's metrics record (`benchmarks.runner.cache`)."""
+        return self.path(out).with_suffix(".json")
+
+    def files(self, out: Path) -> tuple[Path, Path]:
+        """Everything the episode writes: its record and its time series (.npz)."""
+        return self.record_file(out), self.path(out).with_suffix(".npz")
+
+
+@functools.cache
+def code_digest() -> str:
+    """Hash of the simulator and controller sources: a code change invalidates cached episodes."""
+    packages = (Path(auv_gym.__file__).parent, Path(controllers.__file__).parent)
+    return sources_digest(*packages)[:16]
+
+
+def agent_digest(agent: Path | None) -> str:
+    """Hash of an agent's files (a directory's, sorted by path, or one model zip); "" for None."""
+    if agent is None:
+        return ""
+    digest = hashlib.sha256()
+    for file in sorted(p for p in agent.rglob("*") if p.is_file()) if agent.is_dir() else [agent]:
+        digest.update(file.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def finished(job: Job, out: Path) -> dict[str, Any] | None:
+    """The stored record of a finished episode with a matching fingerprint, else None."""
+    return stored_record(job, out)
+
+
+def run_job(job: Job, out: Path) -> dict[str, Any]:
+    """Run one episode, store its time series and metrics atomically, return the record.
+
+    Non-finite metrics (a settling time never reached, a window never entered) are stored as
+    null.
+    """
+    start = time.perf_counter()
+    control_dt = float(job.env_kwargs.get("control_dt", 0.05))
+    policy = build_policy(job.policy, control_dt, job.scenario.controller)
+    trajectory = rollout(policy, job.seed, **job.env_kwargs)
+    metrics = compute_metrics(trajectory, transient=job.transient)
+    record = {
+        "policy": job.policy,
+        "scenario": job.scenario.name,
+        "env_id": job.env_id,
+        "seed": job.seed,
+        "duration": job.duration,
+        "transient": job.transient,
+        "fingerprint": job.fingerprint(),
+        "wall_time_s": time.perf_counter() - start,
+        "metrics": jsonable(metrics),
+        "trajectory": str(job.path(out).with_suffix(".npz").relative_to(out)),
+    }
+    base = job.path(out)
+    trajectory.save(base.with_suffix(".npz"))  # atomic
+    write_json(base.with_suffix(".json"), record, indent=None)
+    return record
+
+
+def run_jobs(
+    jobs: list[Job],
+    out: Path,
+    workers: int,
+    backend: str,
+    address: str | None,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """Run the jobs that are not finished yet; return the records of all jobs, in job order
+    (`benchmarks.runner.cache.run_resumable` on the pool of `benchmarks.runner.pool`)."""
+    return run_resumable(jobs, out, out / "episodes", run_job, workers=workers, backend=backend,
+                         address=address, progress=progress, desc="episodes")  # fmt: skip

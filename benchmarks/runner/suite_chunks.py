@@ -1,0 +1,193 @@
+"""The suite's unit of work: one chunk (policy, run, task set) of batched episodes, its
+fingerprint and record (`benchmarks.runner.cache`), the policies and runs of ``--policies``, and
+the episodes.csv rows of the records (`benchmarks.runner.evaluate_suite`)."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from auv_gym import ENV_ID, VARIANTS
+from auv_gym.files import json_default, write_json
+from auv_gym.rollout import evaluate
+from benchmarks.catalog.policies import (
+    PolicySpec,
+    agent_run,
+    build_policy,
+    check_policy_spec,
+    policy_label,
+)
+from benchmarks.catalog.tasks import TaskSet
+from benchmarks.runner.jobs import agent_digest, code_digest
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
+
+__all__ = [
+    "CHUNKS",
+    "COLUMNS",
+    "METRICS",
+    "Chunk",
+    "Run",
+    "SuitePolicy",
+    "episodes_csv",
+    "resolve_policy",
+    "run_chunk",
+]
+
+CHUNKS = "chunks"  # OUT/chunks/<policy>/run_<k>/<set>.json
+AGENT_SEED = re.compile(
+    re.escape(SEED_AGENT_PREFIX) + r"(\d+)"
+)  # DIR/agent_seed_<k>/ (train_seeds)
+# episodes.csv metric column → key of `auv_gym.metrics.compute_metrics` (units: m, m/s, -, 1/s, s).
+METRICS = {
+    "rms_distance": "rms_distance",
+    "rms_x_e": "rms_x_e",
+    "rms_y_e": "rms_y_e",
+    "rms_z_e": "rms_z_e",
+    "max_distance": "max_distance_window",
+    "max_surge": "max_surge",
+    "overspeed_fraction": "overspeed_fraction",
+    "chattering": "chattering",  # [1/s]
+    "saturation_fraction": "saturation_fraction",
+    "termination_reason": "termination_reason",
+    "window_samples": "window_samples",
+    "duration": "duration",
+}
+COLUMNS = ("policy", "run", "set", "seed", "env_id", *METRICS)
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a policy: the training seed of an agent (0 for a controller), its env id."""
+
+    run: int
+    env_id: str
+    spec: str  # what `benchmarks.policies.build_policy` builds: a name or "ppo:<agent dir>"
+
+
+@dataclass(frozen=True)
+class SuitePolicy:
+    """A policy of the suite with its runs; ``results``: a multi-seed results directory."""
+
+    name: str
+    kind: str  # "classical", "agent" or "import"
+    runs: tuple[Run, ...]
+    results: str | None = None
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """The episodes of one task set for one run of one policy."""
+
+    policy: str
+    run: Run
+    task: TaskSet
+    duration: float  # [s]
+    transient: float  # [s] metrics window start
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        return {**VARIANTS[self.run.env_id], **self.task.env, "max_time": self.duration}
+
+    def fingerprint(self) -> str:
+        """Hash of everything that determines the chunk's episodes."""
+        parsed = PolicySpec.parse(self.run.spec)
+        payload = {
+            "policy": "agent" if parsed.agent is not None else self.run.spec,
+            "agent": agent_digest(parsed.agent),
+            "env": self.env_kwargs,
+            "controller": self.task.controller if parsed.agent is None else {},
+            "seeds": [self.task.seeds.start, self.task.seeds.stop],
+            "transient": self.transient,
+            "code": code_digest(),
+        }
+        text = json.dumps(payload, sort_keys=True, default=json_default)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def path(self, out: Path) -> Path:
+        run = f"run_{self.run.run}"
+        return (
+            out / CHUNKS / policy_label(self.policy) / run / f"{policy_label(self.task.name)}.json"
+        )
+
+    def record_file(self, out: Path) -> Path:
+        """The chunk's record (`benchmarks.runner.cache`): its episodes' metrics."""
+        return self.path(out)
+
+    def files(self, out: Path) -> tuple[Path]:
+        return (self.path(out),)
+
+
+def resolve_policy(spec: str) -> SuitePolicy:
+    """The policy of one ``--policies`` entry, its agents checked (`controllers.agent.check_agent`);
+    ValueError / FileNotFoundError naming the entry otherwise."""
+    if "=" not in spec:
+        parsed = check_policy_spec(spec)
+        if parsed.agent is None:
+            return SuitePolicy(spec, parsed.kind, (Run(0, ENV_ID, spec),))
+        seed, env_id = agent_run(f"policy {spec!r}", parsed.agent)
+        return SuitePolicy(spec, "agent", (Run(seed, env_id, f"ppo:{parsed.agent}"),))
+    name, _, folder = spec.partition("=")
+    where = f"--policies {spec!r}"
+    if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]*", name):
+        raise ValueError(f"{where}: NAME {name!r} must be letters, digits, '_', '.', '-'")
+    directory = Path(folder)
+    if not folder or not directory.is_dir():
+        raise FileNotFoundError(f"{where}: agent directory {folder!r} does not exist")
+    if (directory / "model.zip").is_file():
+        seed, env_id = agent_run(where, directory)
+        return SuitePolicy(name, "agent", (Run(seed, env_id, f"ppo:{directory}"),))
+    seeds = sorted(int(m[1]) for p in directory.iterdir() if (m := AGENT_SEED.fullmatch(p.name)))
+    if not seeds:
+        raise ValueError(
+            f"{where}: {folder} holds neither an agent (model.zip) nor agent_seed_<k>/ "
+            "folders of a multi-seed results directory"
+        )
+    runs = []
+    for seed in seeds:
+        agent = directory / f"{SEED_AGENT_PREFIX}{seed}"
+        _, env_id = agent_run(where, agent)
+        runs.append(Run(seed, env_id, f"ppo:{agent}"))
+    return SuitePolicy(name, "agent", tuple(runs), str(directory))
+
+
+def run_chunk(chunk: Chunk, out: Path) -> dict[str, Any]:
+    """Evaluate one chunk (batched, `auv_gym.rollout.evaluate`), store it atomically, return it."""
+    start = time.perf_counter()
+    env_kwargs = chunk.env_kwargs
+    control_dt = float(env_kwargs.get("control_dt", 0.05))
+    policy = build_policy(chunk.run.spec, control_dt, chunk.task.controller)
+    results = evaluate(policy, list(chunk.task.seeds), transient=chunk.transient, **env_kwargs)
+    record = {
+        "policy": chunk.policy,
+        "run": chunk.run.run,
+        "set": chunk.task.name,
+        "env_id": chunk.run.env_id,
+        "fingerprint": chunk.fingerprint(),
+        "wall_time_s": time.perf_counter() - start,
+        "episodes": [
+            {"seed": int(r["seed"]), **{col: r[key] for col, key in METRICS.items()}}
+            for r in results
+        ],
+    }
+    write_json(chunk.path(out), record, indent=None)  # atomic: NaN stays NaN
+    return record
+
+
+def episodes_csv(records: list[dict[str, Any]]) -> str:
+    """episodes.csv of chunk records: floats as Python's repr (full precision, 'nan')."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(COLUMNS)
+    for r in records:
+        for e in r["episodes"]:
+            writer.writerow(
+                [r["policy"], r["run"], r["set"], e["seed"], r["env_id"], *(e[m] for m in METRICS)]
+            )
+    return buffer.getvalue()

@@ -1,0 +1,345 @@
+"""PPO training speed on the generalist configuration, this tree against a baseline, side by side.
+
+For each number of vehicles N (default 32, 128, 512) PPO trains on the generalist configuration
+(`benchmarks/hyperparams/ppo_generalist.yml`: AUVPath3DSpeedLimit-v0 with the [train] task
+distribution,
+VecMonitor and VecNormalize, MlpPolicy [64, 64], batch 2048, 10 epochs) as
+`benchmarks.training.train` builds it, once with this tree's code and once with the code of a
+baseline git ref (default `b8de6c4`), each in a fresh subprocess whose ``PYTHONPATH`` points at
+its tree. Old and new runs alternate so that a change in the machine's load hits both. Every run
+first trains `--warmup` rollouts (kernel loading, torch's first calls; not timed), then times
+`--rollouts` rollouts and prints, in env steps per wall-clock second:
+
+- collection: `collect_rollouts` (policy forward, env step, VecMonitor, VecNormalize, buffer);
+- update: `PPO.train` (n_epochs passes of minibatch gradient steps over the rollout);
+- total: env steps over collection + update time, the training rate.
+
+The rollout holds 8192 env steps at every N (n_steps = 8192 / N: 256, 64, 16), so the update
+does the same work per env step as the shipped configuration; `--n-steps` and `--batch-size`
+override the configuration for other trade-offs. torch and numba run on one thread as in the
+trainer (`--update-threads 2` also times the update on two torch threads, for both trees).
+
+    auv-gym speed training                      # about 3-5 minutes on 2 cores
+    auv-gym speed training --quick              # smoke test
+    python -m benchmarks.speed_training --n-envs 512 --baseline main --rollouts 8
+
+The baseline's files come from ``git archive REF`` into a cache folder kept between runs (its
+compiled kernels too); `--baseline none` times this tree only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import inspect
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import write_json
+from benchmarks.arguments import usage_errors, writable_location
+from benchmarks.cli import HelpFormatter
+
+DEFAULT_BASELINE = "b8de6c4"
+N_ENVS = (32, 128, 512)
+ROLLOUT_STEPS = 8192  # env steps per rollout of the generalist configuration (32 × 256)
+CONFIG = "benchmarks/hyperparams/ppo_generalist.yml"
+ENV_ID = "AUVPath3DSpeedLimit-v0"
+LEGACY_ENV_ID = "AUVPath3D-v1"  # the same env's id in trees before the rename
+HERE = Path(__file__).resolve()
+# (side, N, update threads, batch size) → the runs of that tree and setting
+Results = dict[tuple[str, int, int, int], list[dict[str, Any]]]
+TREE = HERE.parents[2]  # this tree's root
+
+
+def measure(spec: dict[str, Any]) -> dict[str, Any]:
+    """Time PPO on the importable tree's trainer (run in a subprocess per tree).
+
+    ``spec``: n_envs, n_steps, batch_size, rollouts, warmup, update_threads, seed. Uses only
+    what every version of the harness has (`read_zoo_config`, `make_training_env`,
+    `thread_limit`), so the same function times old and new code.
+    """
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    import auv_gym
+    from benchmarks.training.config import read_zoo_config
+
+    trainer = importlib.import_module("benchmarks.training.train")  # the package hides the name
+    env_id = ENV_ID if ENV_ID in auv_gym.VARIANTS else LEGACY_ENV_ID  # the tree's name for it
+    cfg = read_zoo_config(Path(trainer.__file__).parents[2] / CONFIG, env_id, "ppo")
+    n_envs, n_steps = int(spec["n_envs"]), int(spec["n_steps"])
+    phases: list[tuple[float, float, float]] = []  # (start, collected, updated) per rollout
+
+    class TimedPPO(PPO):
+        """PPO that stamps the start of each rollout, its end and the end of its update."""
+
+        def collect_rollouts(self, *args: Any, **kwargs: Any) -> bool:
+            start = time.perf_counter()
+            more = super().collect_rollouts(*args, **kwargs)
+            phases.append((start, time.perf_counter(), float("nan")))
+            return more
+
+        def train(self) -> None:
+            threads = torch.get_num_threads()
+            torch.set_num_threads(int(spec["update_threads"]))
+            try:
+                super().train()
+            finally:
+                torch.set_num_threads(threads)
+            start, collected, _ = phases[-1]
+            phases[-1] = (start, collected, time.perf_counter())
+
+    with trainer.thread_limit(1):
+        # As `train._train` with threads=1 builds it: the trees that can pass the kernel's
+        # thread count to the env pass 1 (the serial kernel at every N).
+        serial = "threads" in inspect.signature(trainer.make_training_env).parameters
+        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto", env_id,
+                                         **({"threads": 1} if serial else {}))  # fmt: skip
+        venv = VecNormalize(venv, **cfg.normalize)
+        kwargs = {
+            **cfg.model_kwargs(),
+            "n_steps": n_steps,
+            "batch_size": int(spec["batch_size"]),
+        }
+        model = TimedPPO(
+            cfg.policy,
+            venv,
+            policy_kwargs=cfg.policy_kwargs,
+            seed=int(spec["seed"]),
+            device="cpu",
+            verbose=0,
+            **kwargs,
+        )
+        rollouts = int(spec["warmup"]) + int(spec["rollouts"])
+        model.learn(rollouts * n_envs * n_steps)
+    timed = phases[int(spec["warmup"]) :]
+    steps = len(timed) * n_envs * n_steps
+    collect = sum(c - s for s, c, _ in timed)
+    update = sum(u - c for _, c, u in timed)
+    return {
+        **spec,
+        "steps": steps,
+        "collect_s": collect,
+        "update_s": update,
+        "collect_per_s": steps / collect,
+        "update_per_s": steps / update,
+        "total_per_s": steps / (collect + update),
+        "load_average": os.getloadavg()[0],
+    }
+
+
+def extract(ref: str, cache: Path) -> Path:
+    """The tree of git ``ref`` (a commit-ish of this repository) in ``cache``/<commit>."""
+    commit = subprocess.run(
+        ["git", "rev-parse", "--verify", f"{ref}^{{commit}}"],
+        cwd=TREE,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    folder = cache / commit
+    if not (folder / "auv_gym" / "__init__.py").is_file():
+        partial = Path(tempfile.mkdtemp(prefix=f"{commit[:12]}.", dir=cache))
+        with tempfile.TemporaryFile() as archive:
+            subprocess.run(
+                ["git", "archive", "--format=tar", commit], cwd=TREE, stdout=archive, check=True
+            )
+            archive.seek(0)
+            with tarfile.open(fileobj=archive) as tar:
+                tar.extractall(partial, filter="data")
+        partial.rename(folder)  # complete trees only
+    return folder
+
+
+def run_in(tree: Path, spec: dict[str, Any]) -> dict[str, Any]:
+    """`measure(spec)` in a fresh interpreter that imports ``tree``'s auv_gym and benchmarks."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    code = (
+        "import json, sys, runpy\n"
+        f"m = runpy.run_path({str(HERE)!r})\n"
+        "print(json.dumps(m['measure'](json.loads(sys.argv[1]))))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(spec)],
+        cwd=tree,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    if out.returncode != 0:
+        raise RuntimeError(f"benchmark run in {tree} failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _median(runs: list[dict[str, Any]], key: str) -> float:
+    return statistics.median(r[key] for r in runs)
+
+
+def table(results: Results, sides: list[str]) -> str:
+    """One row per setting (N, update threads, batch): each side's median rates and the
+    new/old ratios."""
+    head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'upd thr':>7}"
+    for side in sides:
+        head += f" | {side + ' total':>12} {'collect':>9} {'update':>8}"
+    if len(sides) == 2:
+        head += f" | {'ratio total':>11} {'collect':>8} {'update':>7}"
+    lines = [head, "-" * len(head)]
+    for setting in sorted({key[1:] for key in results}):
+        runs = {side: results[(side, *setting)] for side in sides}
+        n, t, b = setting
+        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {b:>6} {t:>7}"
+        for side in sides:
+            line += (
+                f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
+                f"{_median(runs[side], 'collect_per_s'):>9,.0f} "
+                f"{_median(runs[side], 'update_per_s'):>8,.0f}"
+            )
+        if len(sides) == 2:
+            old, new = runs[sides[0]], runs[sides[1]]
+            ratios = [
+                _median(new, k) / _median(old, k)
+                for k in ("total_per_s", "collect_per_s", "update_per_s")
+            ]
+            line += f" | {ratios[0]:>10.2f}× {ratios[1]:>7.2f}× {ratios[2]:>6.2f}×"
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def versus_shipped(results: Results) -> str:
+    """Every new total against the old one of the first setting (the shipped configuration:
+    N = 32, batch 2048, one thread, with the defaults): code and settings together."""
+    first = min(key[1:] for key in results if key[0] == "old")
+    ref = _median(results[("old", *first)], "total_per_s")
+    cells = [f"N={n} b={b} thr={t}: {_median(runs, 'total_per_s') / ref:.2f}×"
+             for (side, n, t, b), runs in sorted(results.items()) if side == "new"]  # fmt: skip
+    n, t, b = first
+    return f"new total / old total at N={n} b={b} thr={t}: " + ", ".join(cells)
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser.add_argument(
+        "--n-envs",
+        type=int,
+        nargs="+",
+        default=list(N_ENVS),
+        help="numbers of vehicles (training envs)",
+    )
+    parser.add_argument(
+        "--baseline",
+        default=DEFAULT_BASELINE,
+        help="git ref of the code to compare with; 'none': this tree only",
+    )
+    parser.add_argument("--rollouts", type=int, default=4, help="timed rollouts per run")
+    parser.add_argument("--warmup", type=int, default=1, help="untimed rollouts first")
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=2,
+        help="runs per tree and setting (alternating; medians are printed)",
+    )
+    parser.add_argument(
+        "--n-steps",
+        type=int,
+        default=None,
+        help=f"steps per env and rollout (default {ROLLOUT_STEPS} / N)",
+    )
+    parser.add_argument(
+        "--batch-size",
+        type=int,
+        nargs="+",
+        default=[2048],
+        help="minibatch sizes (the configuration's: 2048); one row each",
+    )
+    parser.add_argument(
+        "--update-threads",
+        type=int,
+        nargs="+",
+        default=[1],
+        help="torch threads of the update (collection: one); one row each",
+    )
+    parser.add_argument(
+        "--cache",
+        default=os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
+        help="folder of the extracted baseline trees",
+    )
+    parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
+    parser.add_argument("--json", help="also write every run to this file")
+    args = parser.parse_args(argv)
+    if args.json:  # written after the benchmark: refused now, not after minutes of timing
+        with usage_errors(parser):
+            writable_location(args.json, "--json", folder=False)
+    if args.quick:
+        args.n_envs, args.rollouts, args.repeats, args.n_steps = [8], 1, 1, 16
+        args.batch_size = [64]
+    if min(args.n_envs) < 1 or args.rollouts < 1 or args.repeats < 1 or args.warmup < 0:
+        parser.error("--n-envs, --rollouts and --repeats must be >= 1, --warmup >= 0")
+
+    from tqdm import tqdm
+
+    trees = {"new": TREE}
+    if args.baseline.lower() != "none":
+        cache = Path(args.cache)
+        cache.mkdir(parents=True, exist_ok=True)
+        try:
+            trees = {"old": extract(args.baseline, cache), **trees}
+        except (OSError, subprocess.CalledProcessError) as error:  # no git, not a checkout
+            print(f"baseline {args.baseline!r} unavailable ({error}); timing this tree only")
+    sides = list(trees)
+    specs = [
+        {
+            "n_envs": n,
+            "n_steps": args.n_steps or max(1, ROLLOUT_STEPS // n),
+            "batch_size": b,
+            "rollouts": args.rollouts,
+            "warmup": args.warmup,
+            "update_threads": t,
+            "seed": 0,
+        }
+        for b in args.batch_size
+        for t in args.update_threads
+        for n in args.n_envs
+    ]
+    plan = []
+    for repeat in range(args.repeats):
+        for k, spec in enumerate(specs):  # alternate which side goes first
+            order = sides if (repeat + k) % 2 == 0 else sides[::-1]
+            plan += [(side, spec) for side in order]
+    print(
+        f"PPO on {CONFIG} ({ENV_ID}); new = {TREE}"
+        + (f", old = {args.baseline} ({trees['old'].name[:12]})" if "old" in trees else "")
+        + f"; {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at start\n",
+        flush=True,
+    )
+    results: Results = {}
+    for side in tqdm(sides, desc="loading kernels", leave=False):  # compile once per tree
+        run_in(
+            trees[side],
+            {**specs[0], "n_envs": 2, "n_steps": 8, "batch_size": 16, "rollouts": 1, "warmup": 0},
+        )
+    for side, spec in tqdm(plan, desc="training runs"):
+        r = {"side": side, **run_in(trees[side], spec)}
+        key = (side, spec["n_envs"], spec["update_threads"], spec["batch_size"])
+        results.setdefault(key, []).append(r)
+    print("\nenv steps/s (medians of the runs); ratio = new / old, measured in this run")
+    print(table(results, sides))
+    if "old" in trees:
+        print(versus_shipped(results))
+    print(f"load average {os.getloadavg()[0]:.2f} at the end")
+    out = {"baseline": args.baseline, "runs": [r for rs in results.values() for r in rs]}
+    if args.json:
+        write_json(args.json, out, indent=2)
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,229 @@
+"""Train an RL agent (PPO by default; ``--algo`` any algorithm of `controllers.algorithms`) from
+an RL-Zoo hyper-parameter file (default: the paper helix under the 2.0 m/s surge limit,
+`AUVPath3DSpeedLimit-v0`).
+
+The shipped agent `benchmarks/agents/ppo_helix` (the paper's unlimited `AUVPath3D-v0`) was
+produced by::
+
+    python -m benchmarks.train_ppo --config benchmarks/hyperparams/ppo.yml --seed 1 \\
+        --env-id AUVPath3D-v0 --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
+        --curve benchmarks/results/ppo_learning_curve
+
+An interrupted run continues from its newest checkpoint (step counter intact) with the same
+command plus ``--resume``. Watch it with ``tensorboard --logdir runs/ppo_helix/tb``. The learning
+curve of a run (evaluation rms distance against env steps and wall time) is plotted with::
+
+    python -m benchmarks.train_ppo --out runs/ppo_helix --plot-only \\
+        --curve benchmarks/results/ppo_learning_curve
+
+and an agent is evaluated on the paper scenario over the held-out seeds 0-9 (300 s; the result
+goes to AGENT/held_out_evaluation.json, which ``--export`` also writes) with::
+
+    python -m benchmarks.train_ppo --evaluate benchmarks/agents/ppo_helix
+
+The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
+
+    python -m rl_zoo3.train --algo ppo --env AUVPath3D-v0 --gym-packages auv_gym \\
+        -conf benchmarks/hyperparams/ppo.yml
+
+Outputs and file formats: see `benchmarks.training`; the agents load with
+``controllers.make("agent", path=...)``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import typing
+from collections.abc import Sequence
+from dataclasses import MISSING, fields
+from pathlib import Path
+
+from benchmarks.arguments import (
+    ArgumentParser,
+    exit_with_usage_error,
+    locked_folder,
+    program_name,
+    writable_location,
+)
+from benchmarks.cli import HelpFormatter
+from benchmarks.figures import plot_learning_curve
+from benchmarks.training import TrainOptions, train, write_held_out_evaluation
+from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.seeds import MAX_SEED
+from benchmarks.training.train import HERE, check_options
+from controllers.agent import METADATA_FILE
+from controllers.algorithms import ALGORITHMS
+
+VEC_ENVS = ("auto", "native", "dummy")  # `benchmarks.training.train.make_training_env`
+FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
+# One-line help per option (the TrainOptions field comments, for the CLI).
+HELP = {
+    "algo": "RL algorithm (the saved agent records it; every one loads as controllers.make("
+    "'agent', path=...))",
+    "config": "RL-Zoo hyper-parameter YAML (top-level key = env id; default: "
+    "benchmarks/hyperparams/<algo>.yml)",
+    "env_id": "Gymnasium id and YAML key (AUVPath3D-v0: the paper's task without a speed limit)",
+    "out": "run directory (checkpoints, best/, final/, evaluations.csv, tb/)",
+    "seed": "seed of torch, numpy and the training environments",
+    "n_timesteps": "override the config's n_timesteps",
+    "stop_at": "pause at the first rollout start at or after this many env steps (PPO: a "
+    "multiple of n_steps x n_envs); schedules still run over n_timesteps; a later --resume "
+    "continues bit for bit as if never paused",
+    "resume": "continue from the newest checkpoint in --out; exact (same weights and "
+    "evaluations as an uninterrupted run) after a pause or a kill",
+    "checkpoint_freq": "env steps between checkpoints (a kill loses at most this many)",
+    "keep_checkpoints": "number of newest checkpoints kept on disk",
+    "eval_freq": "env steps between paper-scenario evaluations (0: none)",
+    "eval_seeds": "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
+    "eval_duration": "evaluation episode length [s]",
+    "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
+    "threads": "torch and numba threads during training, restored after (1 is fastest on 2 "
+    "shared cores, docs/design.md §4)",
+    "update_threads": "torch threads of the gradient updates between rollouts (0: --threads); 2 "
+    "speeds PPO's update up about 1.4x on an idle 2-core machine, slows it down on loaded cores",
+    "adaptive_threads": "time the updates on --threads and on max(2, --update-threads) torch "
+    "threads, keep the faster and probe the other now and then (the same weights up to float "
+    "rounding; bit for bit only where torch's kernels reduce alike on 1 and 2 threads)",
+    "progress_bar": "show the progress bar (tqdm + rich)",
+    "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
+    "verbose": "SB3 verbosity; 1 also prints every evaluation",
+}
+
+
+def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argparse.Namespace]:
+    """TrainOptions (every dataclass field is an option) and the plotting options."""
+    parser = ArgumentParser(prog=program_name("benchmarks.train_ppo"),
+                            description=__doc__.split("\n\n")[0],
+                            formatter_class=HelpFormatter)  # fmt: skip
+    parser.add_argument(
+        "--curve",
+        default=None,
+        help="write the learning curve to CURVE.csv and CURVE.png at the end",
+    )
+    parser.add_argument(
+        "--plot-only",
+        action="store_true",
+        help="only plot the learning curve of --out (needs --curve)",
+    )
+    parser.add_argument("--evaluate", default=None, metavar="AGENT",
+                        help="only evaluate AGENT on the held-out seeds 0-9 (paper scenario) "
+                             "and write AGENT/held_out_evaluation.json")  # fmt: skip
+    hints = typing.get_type_hints(TrainOptions)
+    for f in fields(TrainOptions):
+        if f.name in FIXED:
+            continue
+        flag = "--" + f.name.replace("_", "-")
+        default = f.default if f.default is not MISSING else f.default_factory()  # type: ignore[misc]
+        if hints[f.name] is bool:
+            parser.add_argument(flag, action=argparse.BooleanOptionalAction, default=default,
+                                help=HELP[f.name])  # fmt: skip
+        elif f.name == "eval_seeds":
+            parser.add_argument(flag, default=",".join(map(str, default)), help=HELP[f.name])
+        elif f.name in ("n_timesteps", "stop_at"):
+            parser.add_argument(flag, type=lambda v: int(float(v)), default=None,
+                                help=HELP[f.name])  # fmt: skip
+        elif f.name == "export":
+            parser.add_argument(flag, default=None, help=HELP[f.name])
+        elif f.name == "algo":
+            parser.add_argument(flag, choices=sorted(ALGORITHMS), default=default,
+                                help=HELP[f.name])  # fmt: skip
+        elif f.name == "config":  # the algorithm's file unless given
+            parser.add_argument(flag, default=None, help=HELP[f.name])
+        else:
+            parser.add_argument(flag, type=type(default), default=default, help=HELP[f.name])
+    ns = vars(parser.parse_args(argv))
+    if ns["config"] is None:
+        ns["config"] = str(HERE / "hyperparams" / f"{ns['algo']}.yml")
+    extra = argparse.Namespace(curve=ns.pop("curve"), plot_only=ns.pop("plot_only"),
+                               evaluate=ns.pop("evaluate"))  # fmt: skip
+    if extra.plot_only and not extra.curve:
+        parser.error("--plot-only needs --curve")
+    try:
+        ns["eval_seeds"] = tuple(int(s) for s in str(ns["eval_seeds"]).split(",") if s.strip())
+    except ValueError as exc:
+        parser.error(f"--eval-seeds must be comma-separated integers: {exc}")
+    return TrainOptions(**ns, **FIXED), extra
+
+
+def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
+    """Everything this command will write or read later, checked before the first training
+    step: the run folder, the export folder, the learning-curve files (which need
+    evaluations), the agent to evaluate. OSError / ValueError naming the option otherwise."""
+    if extra.evaluate:
+        from controllers.agent import check_agent
+
+        check_agent(Path(extra.evaluate))
+        writable_location(extra.evaluate, "--evaluate")  # AGENT/held_out_evaluation.json
+        return
+    if opts.vec_env not in VEC_ENVS:
+        raise ValueError(f"--vec-env must be one of {list(VEC_ENVS)}, got {opts.vec_env!r}")
+    if not MAX_SEED >= opts.seed >= 0:
+        raise ValueError(f"--seed must be an integer in [0, {MAX_SEED}], got {opts.seed}")
+    if extra.plot_only:
+        if not (Path(opts.out) / EVAL_FILE).is_file():
+            raise FileNotFoundError(f"--plot-only: {Path(opts.out) / EVAL_FILE} does not exist")
+    else:
+        writable_location(opts.out, "--out")
+        if opts.export:
+            writable_location(opts.export, "--export")
+        if extra.curve and opts.eval_freq == 0:
+            raise ValueError("--curve plots the evaluations, and --eval-freq 0 makes none")
+    if extra.curve:
+        for suffix in (".csv", ".png"):
+            writable_location(Path(extra.curve).with_suffix(suffix), "--curve", folder=False)
+
+
+def training_report(out: Path, export: str | None = None) -> str:
+    """One summary line of a finished (or paused) run: the best evaluation, its step, score and
+    terminations, and where the agent went; a loud warning when the best agent is the untrained
+    network of step 0 (every later evaluation scored worse), which an export would ship."""
+    best_file = Path(out) / "best" / METADATA_FILE
+    if not best_file.is_file():
+        return (f"training: no evaluation ran (--eval-freq 0); the final agent is {out}/final"
+                + (f", exported to {export}" if export else ""))  # fmt: skip
+    best = json.loads(best_file.read_text()).get("best", {})
+    summary, step = best.get("summary", {}), int(best.get("num_timesteps", 0))
+    line = (
+        f"training: best evaluation at step {step:,}: mean RMS distance "
+        f"{summary.get('rms_distance_mean', float('nan')):.4g} m, "
+        f"{summary.get('n_terminated', '?')} of {summary.get('n_episodes', '?')} episodes "
+        f"ended early; " + (f"exported to {export}" if export else f"agent in {out}/best")
+    )
+    if step == 0:
+        line += (
+            "\nWARNING: the best agent is the UNTRAINED network of step 0 (no later evaluation "
+            "scored better)"
+            + (f"; {export} holds it" if export else "")
+            + ". Train longer, or check the reward and the evaluation episodes."
+        )
+    return line
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = list(sys.argv[1:] if argv is None else argv)
+    opts, extra = parse_args(args)
+    prog = program_name("benchmarks.train_ppo")
+    try:  # bad options: one line and exit code 2, before any training starts
+        check_outputs(opts, extra)
+        if not extra.plot_only and not extra.evaluate:
+            check_options(opts)
+    except (ValueError, OSError) as exc:
+        exit_with_usage_error(prog, exc)
+    if extra.evaluate:
+        report = write_held_out_evaluation(extra.evaluate, opts.eval_duration)
+        print(json.dumps(report["summary"], indent=2))
+        return
+    if not extra.plot_only:
+        # One run per folder: a second one is refused, a killed one's temporary files removed.
+        with locked_folder(prog, Path(opts.out)):
+            out = train(opts, argv=["benchmarks/train_ppo.py", *args])
+        print(f"run directory: {out}")
+        print(training_report(out, opts.export), file=sys.stderr)
+    if extra.curve:
+        plot_learning_curve(Path(opts.out), Path(extra.curve))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,395 @@
+"""A trained stable-baselines3 agent (PPO, SAC, any algorithm of `controllers.algorithms`) as a
+Policy: the saved files, their checks and the actor.
+
+An agent directory holds::
+
+    model.zip          the SB3 model (`PPO.save`, `SAC.save`, ...)
+    vecnormalize.npz   observation mean/var/clip/epsilon and obs_names: all a loaded agent needs
+    vecnormalize.pkl   the full pickled `VecNormalize` (optional: for resuming and for RL Zoo)
+    metadata.json      how it was trained (optional; "algo" names the algorithm, default "ppo";
+                       `obs_names` is checked when present)
+
+`check_agent` validates the files without torch; `load_actor` returns an `AgentPolicy`, which
+applies the saved observation normalisation itself and follows the Policy protocol
+(`controllers.base`). An agent whose metadata holds a "residual" section was trained on the
+21-value residual observation; `controllers.loader.load_policy` (``controllers.make("agent",
+path=...)``) wraps its actor in a `controllers.residual.ResidualPolicy`. Training, checkpoints and
+export live on the benchmarks side (`benchmarks.training`). Nothing here changes process-wide
+state: the torch thread count a policy predicts with is set for each `predict` call and restored
+after it. torch and SB3 are imported lazily: `import controllers.agent` works without the rl
+extra.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import zipfile
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym import __version__
+from auv_gym.observation import OBS_DIM, OBS_NAMES, ObservationConfig
+from controllers.algorithms import ALGORITHMS, algorithm_of
+from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
+
+ACTION_DIM = 3  # normalised (X, M, N) commands in [-1, 1]
+
+__all__ = [
+    "METADATA_FILE",
+    "MODEL_FILE",
+    "STATS_FILE",
+    "VECNORM_FILE",
+    "AgentFiles",
+    "AgentPolicy",
+    "PPOPolicy",
+    "check_agent",
+    "load_actor",
+]
+
+MODEL_FILE = "model.zip"
+STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent needs
+VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
+METADATA_FILE = "metadata.json"
+STATS_KEYS = ("mean", "var", "clip_obs", "epsilon")
+
+
+class AgentPolicy:
+    """A trained actor (PPO, SAC, ...) with its observation normalisation: the Policy protocol
+    (docs/design.md §3).
+
+    `predict` normalises like `VecNormalize` — clip((o − μ)/√(σ² + ε), −c, c) — then runs the
+    SB3 actor with torch on `num_threads` intra-op threads (set for the call, then restored;
+    None: torch's current setting). Stateless: `state` is returned unchanged, `episode_start`
+    is ignored.
+    """
+
+    def __init__(
+        self,
+        sb3_policy: Any,
+        obs_mean: np.ndarray,
+        obs_var: np.ndarray,
+        clip_obs: float,
+        epsilon: float,
+        metadata: dict[str, Any] | None = None,
+        path: str | None = None,
+        num_threads: int | None = None,
+    ) -> None:
+        if num_threads is not None and not (isinstance(num_threads, int) and num_threads >= 1):
+            raise ValueError(f"num_threads must be a positive integer or None, got {num_threads!r}")
+        self.sb3_policy = sb3_policy
+        self.obs_mean = np.asarray(obs_mean, dtype=np.float64)
+        self.obs_var = np.asarray(obs_var, dtype=np.float64)
+        self.clip_obs = float(clip_obs)
+        self.epsilon = float(epsilon)
+        self.metadata = dict(metadata or {})
+        self.path = path
+        self.num_threads = num_threads
+        self.observation_space = sb3_policy.observation_space
+        self.action_space = sb3_policy.action_space
+        self.obs_dim = int(self.obs_mean.shape[0])  # 15, or 21 for a residual agent's actor
+        sb3_policy.set_training_mode(False)
+
+    def normalize(self, observation: np.ndarray) -> np.ndarray:
+        """VecNormalize's observation transform with the saved statistics."""
+        return np.clip(
+            (observation - self.obs_mean) / np.sqrt(self.obs_var + self.epsilon),
+            -self.clip_obs,
+            self.clip_obs,
+        )
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """Actions in [−1, 1]³ for observations (15,) or (n, 15) (layout `auv_gym.OBS_NAMES`;
+        a residual agent's actor: 21 values, `controllers.residual.RESIDUAL_OBS_NAMES`)."""
+        obs = np.asarray(observation, dtype=np.float32)
+        dim = self.obs_dim
+        if obs.ndim not in (1, 2) or obs.shape[-1] != dim:
+            raise ValueError(f"observation must have shape ({dim},) or (n, {dim}), got {obs.shape}")
+        single = obs.ndim == 1
+        normed = self.normalize(obs.reshape(-1, dim)).astype(np.float32)
+        with _torch_threads(self.num_threads):
+            action, _ = self.sb3_policy.predict(normed, deterministic=deterministic)
+        return (action[0] if single else action), state
+
+    def __repr__(self) -> str:
+        return f"AgentPolicy(path={self.path!r})"
+
+
+PPOPolicy = AgentPolicy  # the name before the loader took any algorithm
+
+
+@contextlib.contextmanager
+def _torch_threads(n: int | None) -> Iterator[None]:
+    """torch on ``n`` intra-op threads inside the block, its previous setting after it."""
+    if n is None:
+        yield
+        return
+    import torch
+
+    previous = torch.get_num_threads()
+    if previous != n:
+        torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        if previous != n:
+            torch.set_num_threads(previous)
+
+
+def _locate(path: Path) -> tuple[Path, Path | None, Path | None]:
+    """(model zip, statistics file, metadata file) for an agent directory or a model zip.
+
+    Directories hold `model.zip`; a zip is looked up with its statistics beside it
+    (`vecnormalize.npz`, else `vecnormalize.pkl`, else RL Zoo's `<stem>/vecnormalize.pkl`).
+    """
+    if path.is_dir():
+        model = path / MODEL_FILE
+        if not model.is_file():
+            raise FileNotFoundError(f"agent directory {path} has no {MODEL_FILE}")
+    elif path.is_file():
+        model = path
+    else:
+        raise FileNotFoundError(f"agent {path} does not exist")
+    folder = model.parent
+    stats = None
+    for candidate in (
+        folder / STATS_FILE,
+        folder / VECNORM_FILE,
+        folder / model.stem / VECNORM_FILE,
+    ):
+        if candidate.is_file():
+            stats = candidate
+            break
+    meta = folder / METADATA_FILE
+    return model, stats, (meta if meta.is_file() else None)
+
+
+@dataclass(frozen=True)
+class AgentFiles:
+    """An agent's files, checked (`check_agent`): where they are and what they hold."""
+
+    model: Path
+    stats: Path
+    metadata_file: Path | None
+    obs_mean: np.ndarray  # (15,) finite; (21,) for a residual agent
+    obs_var: np.ndarray  # (15,) finite, >= 0; (21,) for a residual agent
+    clip_obs: float  # finite, > 0
+    epsilon: float  # finite, > 0
+    metadata: dict[str, Any]
+    residual: ResidualSettings | None = None  # metadata "residual": a residual agent
+    algo: str = "ppo"  # the key of `controllers.algorithms.ALGORITHMS` it was trained with
+
+    @property
+    def label(self) -> str:
+        """How errors name the model: its algorithm's class ("PPO model", "SAC model")."""
+        return f"{ALGORITHMS[self.algo].class_name} model"
+
+
+def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:
+    """The observation names an agent was trained on: the env's 15, the agent observation of
+    its "observation" section (`auv_gym.ObservationConfig`), or the residual 21."""
+    if "residual" in metadata:
+        return RESIDUAL_OBS_NAMES
+    return ObservationConfig.from_spec(metadata.get("observation")).names
+
+
+def check_agent(path: str | os.PathLike) -> AgentFiles:
+    """Validate a saved agent completely, without torch (except for a pickled VecNormalize,
+    whose classes need stable-baselines3): every problem raises an error naming the file.
+
+    FileNotFoundError: the agent, its model.zip or its statistics are missing. ValueError:
+    model.zip is not a zip, fails its CRC check, lacks SB3's ``data``/``policy.pth`` or was saved
+    for another observation/action shape; the statistics are unreadable, lack a key, have the
+    wrong shape, or are not finite with var >= 0, clip_obs > 0, epsilon > 0; metadata.json is not
+    a JSON object or names another algorithm, observation layout or shape, action shape, or
+    auv-gym major version, or has an invalid "residual" section. The expected observation is
+    the env's 15 values, or the residual 21 when the metadata has a "residual" section.
+    """
+    model, stats, meta = _locate(Path(path))
+    metadata = _read_metadata(meta) if meta is not None else {}
+    algo = algorithm_of(metadata, str(meta))
+    if stats is None:
+        raise FileNotFoundError(
+            f"{algo.class_name} agent {model}: normalisation statistics missing (expected "
+            f"{model.parent / STATS_FILE} or {model.parent / VECNORM_FILE})"
+        )
+    residual = None
+    if "residual" in metadata:  # the training keys it also records are the training side's
+        residual = ResidualSettings.from_dict(
+            metadata["residual"], f"{meta}: residual", strict=False
+        )
+    action_dim = ACTION_DIM if residual is None else residual.action_dim
+    if "action_shape" in metadata and metadata["action_shape"] != [action_dim]:
+        raise ValueError(f"{meta}: action_shape is {metadata['action_shape']!r}, "
+                         f"expected {[action_dim]!r}")  # fmt: skip
+    names = observation_layout(metadata)
+    _check_model_zip(model, len(names), action_dim, f"{algo.class_name} model")
+    mean, var, clip_obs, epsilon = _read_stats(stats, names)
+    return AgentFiles(model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual,
+                      algo.name)  # fmt: skip
+
+
+def _read_metadata(meta: Path) -> dict[str, Any]:
+    try:
+        metadata = json.loads(meta.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"agent metadata {meta} is unreadable: {exc}") from exc
+    if not isinstance(metadata, dict):
+        kind = type(metadata).__name__
+        raise ValueError(f"agent metadata {meta} must be a JSON object, got a {kind}")
+    try:
+        layout = observation_layout(metadata)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{meta}: invalid observation section: {exc}") from None
+    names = metadata.get("obs_names")
+    if names is not None and (not isinstance(names, list) or tuple(names) != layout):
+        raise ValueError(
+            f"{meta}: agent trained for observation layout {names!r}, this auv_gym has "
+            f"{list(layout)}"
+        )
+    algorithm_of(metadata, str(meta))
+    expected = [len(layout)]  # the action shape depends on the residual section (check_agent)
+    if "observation_shape" in metadata and metadata["observation_shape"] != expected:
+        raise ValueError(f"{meta}: observation_shape is {metadata['observation_shape']!r}, "
+                         f"expected {expected!r}")  # fmt: skip
+    version = metadata.get("auv_gym_version")
+    if version is not None:
+        major = str(version).split(".")[0]
+        if not (isinstance(version, str) and major.isdigit()):
+            raise ValueError(f"{meta}: auv_gym_version {version!r} is not a version number")
+        if major != __version__.split(".")[0]:
+            raise ValueError(
+                f"{meta}: agent trained with auv-gym {version}, this is auv-gym {__version__} "
+                "(another major version: its observations may differ)"
+            )
+    return metadata
+
+
+def _check_model_zip(model: Path, obs_dim: int = OBS_DIM, action_dim: int = ACTION_DIM,
+                     label: str = "PPO model") -> None:  # fmt: skip
+    """SB3's zip: intact (CRC), with its parameters and an (obs_dim,) → (action_dim,) Box
+    policy (3 actions; a residual agent with a learned filter: 6). Errors begin with ``label``
+    (the algorithm's model, e.g. "SAC model")."""
+    if not zipfile.is_zipfile(model):
+        raise ValueError(f"{label} {model} is not a valid zip file (corrupt or truncated)")
+    try:
+        with zipfile.ZipFile(model) as archive:
+            members = archive.namelist()
+            for name in members:  # reading a member checks its CRC-32
+                try:
+                    archive.read(name)
+                except (zipfile.BadZipFile, zlib.error, EOFError) as exc:
+                    problem = f"member {name!r}: {exc}"
+                    raise ValueError(f"{label} {model} is damaged: {problem}") from exc
+            missing = sorted({"data", "policy.pth"} - set(members))
+            if missing:
+                raise ValueError(
+                    f"{label} {model} is damaged (truncated, or not an SB3 model): no {missing}"
+                )
+            data = json.loads(archive.read("data"))
+    except (zipfile.BadZipFile, OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{label} {model} cannot be read (corrupt or truncated): {exc}") from exc
+    for key, expected in (("observation_space", (obs_dim,)), ("action_space", (action_dim,))):
+        space = data.get(key) if isinstance(data, dict) else None
+        shape = space.get("_shape") if isinstance(space, dict) else None
+        if shape is not None and tuple(shape) != expected:
+            what = key.replace("_", " ")
+            layout = RESIDUAL_OBS_NAMES if obs_dim == len(RESIDUAL_OBS_NAMES) else OBS_NAMES
+            raise ValueError(
+                f"{label} {model}: {what} shape {tuple(shape)}, expected {expected}"
+                + (f" (layout {list(layout)})" if key == "observation_space" else "")
+            )
+
+
+def _read_stats(
+    stats: Path, names: tuple[str, ...] = OBS_NAMES
+) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """(mean, var, clip_obs, epsilon) from a .npz or a pickled VecNormalize, checked: shapes
+    (d,), (d,), (), () for the d = len(names) observation values; all finite; var >= 0;
+    clip_obs > 0; epsilon > 0."""
+    shapes = {"mean": (len(names),), "var": (len(names),), "clip_obs": (), "epsilon": ()}
+    try:
+        if stats.suffix == ".npz":
+            with np.load(stats, allow_pickle=False) as data:
+                values = {key: data[key] for key in data.files}
+        else:
+            import pickle
+
+            with stats.open("rb") as f:
+                vec_normalize = pickle.load(f)
+            rms = vec_normalize.obs_rms
+            values = {"mean": rms.mean, "var": rms.var, "clip_obs": vec_normalize.clip_obs,
+                      "epsilon": vec_normalize.epsilon}  # fmt: skip
+    except Exception as exc:
+        raise ValueError(f"normalisation statistics {stats} are unreadable: {exc}") from exc
+    missing = [key for key in STATS_KEYS if key not in values]
+    if missing:
+        raise ValueError(f"{stats}: missing statistics {missing}")
+    if "obs_names" in values:
+        saved = tuple(str(n) for n in np.atleast_1d(values["obs_names"]))
+        if saved != names:
+            raise ValueError(
+                f"{stats}: statistics for observation layout {list(saved)}, this auv_gym has "
+                f"{list(names)}"
+            )
+    arrays = {key: np.asarray(values[key]) for key in STATS_KEYS}
+    for key, shape in shapes.items():
+        a = arrays[key]
+        if a.dtype.kind not in "iuf":
+            raise ValueError(f"{stats}: {key} must hold real numbers, got dtype {a.dtype}")
+        if a.shape != shape:
+            raise ValueError(f"{stats}: statistics of shape {a.shape} for {key}, expected {shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{stats}: {key} is not finite: {a.tolist()}")
+    mean, var = arrays["mean"].astype(np.float64), arrays["var"].astype(np.float64)
+    clip_obs, epsilon = float(arrays["clip_obs"]), float(arrays["epsilon"])
+    if np.any(var < 0):
+        raise ValueError(f"{stats}: var must be >= 0, got {var.tolist()}")
+    if clip_obs <= 0:
+        raise ValueError(f"{stats}: clip_obs must be > 0, got {clip_obs}")
+    if epsilon <= 0:
+        raise ValueError(f"{stats}: epsilon must be > 0, got {epsilon}")
+    return mean, var, clip_obs, epsilon
+
+
+def load_actor(
+    files: AgentFiles, *, device: str = "cpu", num_threads: int | None = 1
+) -> AgentPolicy:
+    """The actor of checked agent files (`check_agent`) with its normalisation, loaded with the
+    algorithm its metadata names (`controllers.algorithms`). A residual agent's actor takes
+    the 21-value residual observation; `controllers.loader.load_policy` adds its base.
+
+    `num_threads`: torch's intra-op threads while the policy predicts (1 suits these small
+    networks, docs/design.md §4; None: torch's setting); loading itself leaves torch's
+    settings alone. ValueError naming the model when SB3 cannot load it.
+    """
+    algorithm = ALGORITHMS[files.algo].sb3_class()
+    # Schedules are not needed for inference; replacing them avoids unpickling closures.
+    custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
+    try:
+        model = algorithm.load(files.model, device=device, custom_objects=custom)
+    except Exception as exc:
+        raise ValueError(f"{files.label} {files.model} cannot be loaded: {exc}") from exc
+    layout = observation_layout(files.metadata)
+    shape = tuple(model.observation_space.shape or ())
+    if shape != (len(layout),):
+        raise ValueError(
+            f"{files.label} {files.model}: observation space shape {shape}, expected "
+            f"({len(layout)},) (layout {list(layout)})"
+        )
+    return AgentPolicy(
+        model.policy, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon,
+        files.metadata, str(files.model), num_threads,
+    )  # fmt: skip

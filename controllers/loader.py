@@ -1,0 +1,80 @@
+"""Saved agents as policies: the one loader, dispatching plain vs residual agents.
+
+`load_policy` checks an agent's files (`controllers.agent.check_agent`), loads its actor with the
+algorithm its metadata names (`controllers.algorithms`) and, for a residual agent (metadata
+"residual"), puts the actor on top of its base controller (`controllers.residual`). It is what
+``controllers.make("agent", path=...)`` (alias "ppo") and ``controllers.make("residual",
+agent=PATH)`` call.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from controllers.agent import AgentPolicy, check_agent, load_actor
+from controllers.residual import ResidualPolicy, check_bound
+from controllers.residual import make_residual as residual_of_policy
+
+__all__ = ["load_policy", "make_residual"]
+
+
+def load_policy(
+    path: str | os.PathLike,
+    *,
+    device: str = "cpu",
+    num_threads: int | None = 1,
+    base_kwargs: dict[str, Any] | None = None,
+    algo: str | None = None,
+) -> AgentPolicy | ResidualPolicy:
+    """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
+    as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
+    `ResidualPolicy` of its base controller, built with the recorded settings and
+    ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for other
+    agents), and its actor.
+
+    ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
+    otherwise. The files are validated first, before torch is imported (FileNotFoundError when
+    the model or its statistics are missing, ValueError naming the file and the problem
+    otherwise). `num_threads`: torch's intra-op threads while the policy predicts (None:
+    torch's setting); loading itself leaves torch's settings alone.
+    """
+    files = check_agent(path)
+    if algo is not None and files.algo != algo:
+        raise ValueError(f"agent {files.model} was trained with {files.algo!r}, not {algo!r}")
+    actor = load_actor(files, device=device, num_threads=num_threads)
+    if files.residual is None:
+        return actor
+    base = files.residual.make_base(**(base_kwargs or {}))
+    return ResidualPolicy(base, actor, files.residual.bound, files.residual)
+
+
+def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
+                  filter_max: float | None = None, **base_kwargs: Any
+                  ) -> ResidualPolicy:  # fmt: skip
+    """``controllers.make("residual", ...)``: a `ResidualPolicy`.
+
+    ``agent`` is a Policy of the 21-value observation (`controllers.residual.make_residual`),
+    or the directory of a saved residual agent (its recorded base and β are used; a ``base``,
+    ``bound`` or ``filter_max`` given here must equal them).
+    """
+    if agent is None:
+        raise ValueError("controllers.make('residual') needs agent=<Policy or saved residual "
+                         "agent directory>")  # fmt: skip
+    if callable(getattr(agent, "predict", None)):
+        return residual_of_policy(agent, base, bound, filter_max, **base_kwargs)
+    policy = load_policy(agent, base_kwargs=base_kwargs)
+    if not isinstance(policy, ResidualPolicy):
+        raise ValueError(f"agent {agent!r} is not a residual agent (its metadata.json has no "
+                         "'residual' section)")  # fmt: skip
+    recorded = policy.settings
+    assert recorded is not None
+    if base is not None and base != recorded.base:
+        raise ValueError(f"agent {agent!r} was trained on base {recorded.base!r}, not {base!r}")
+    if bound is not None and check_bound(bound) != recorded.bound:
+        raise ValueError(f"agent {agent!r} was trained with bound {list(recorded.bound)}, "
+                         f"not {list(check_bound(bound))}")  # fmt: skip
+    if filter_max is not None and filter_max != recorded.filter_max:
+        raise ValueError(f"agent {agent!r} was trained with filter_max {recorded.filter_max}, "
+                         f"not {filter_max!r}")  # fmt: skip
+    return policy

@@ -1,0 +1,66 @@
+"""The classical controllers by name: the paper's FBSM and backstepping, the PID + LOS autopilot
+and their named variants (`PRESETS`). The learned policies (saved agents, residual and low-pass
+policies) are built on top of these by `controllers.make`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from controllers.backstepping import Backstepping
+from controllers.fbsm import FBSM
+from controllers.lowpass import DEFAULT_ALPHA, LowPassPolicy
+from controllers.pid import PIDLOS
+
+__all__ = ["CLASSICAL", "PRESETS", "UNFILTERED", "make_classical", "make_lowpass"]
+
+# Named variants of the classical controllers (not in the paper), against ocean currents; see
+# `ControllerGains` and README "Results". Integral LOS in the horizontal plane, σ_y = 3. Current-
+# observer LOS (`controllers.alos`, docs/model.md §3.7): observer ω_o = 3 rad/s, crab angles over
+# ground, speed over ground; backstepping adds the gated ALOS trims (γ = 0.01 rad/(m·s)) that
+# remove the bias its fixed nominal model leaves (the FBSM adapts that bias away itself).
+_COLOS = {"current_observer": 3.0, "speed_over_ground": True}
+PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
+    "fbsm_ilos": ("fbsm", {"ilos_y": 3.0}),
+    "backstepping_ilos": ("backstepping", {"ilos_y": 3.0}),
+    "fbsm_colos": ("fbsm", _COLOS),
+    "backstepping_colos": ("backstepping", {**_COLOS, "alos_y": 0.01, "alos_z": 0.01}),
+    # The current-robust FBSM through a first-order low-pass (`controllers.lowpass`, α = 0.5):
+    # the classical answer to chattering, which a residual agent must beat (docs/design.md §3.11).
+    "fbsm_colos_lowpass": ("lowpass", {"base": "fbsm_colos"}),
+    # The textbook baseline (`controllers.pid`, docs/model.md §4.9) with the same guidance options.
+    "pid_ilos": ("pid_los", {"ilos_y": 3.0}),
+    "pid_colos": ("pid_los", _COLOS),
+}
+CLASSICAL = ("fbsm", "backstepping", "pid_los", *PRESETS)
+UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] != "lowpass")
+
+
+def make_classical(name: str, **kwargs: Any) -> Any:
+    """The classical controller ``name`` (a name of `CLASSICAL`); keyword arguments override
+    its preset's (see `controllers.make`)."""
+    if name in PRESETS:
+        base, preset = PRESETS[name]
+        return make_classical(base, **{**preset, **kwargs})
+    if name == "fbsm":
+        return FBSM(**kwargs)
+    if name == "backstepping":
+        return Backstepping(**kwargs)
+    if name == "pid_los":
+        return PIDLOS(**kwargs)
+    if name == "lowpass":  # a preset's low-pass over an unfiltered classical base
+        return make_lowpass(**kwargs)
+    raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")
+
+
+def make_lowpass(base: str = "fbsm_colos", alpha: float = DEFAULT_ALPHA, **kwargs: Any
+                 ) -> LowPassPolicy:  # fmt: skip
+    """`controllers.lowpass.LowPassPolicy` over the classical controller ``base`` (a name of
+    `CLASSICAL` other than a filtered one) built with ``kwargs`` (gains, actuator,
+    control_dt, ...)."""
+    if base not in UNFILTERED:
+        raise ValueError(
+            f"lowpass base {base!r} is not an unfiltered classical controller; "
+            f"valid: {[n for n in CLASSICAL if 'lowpass' not in n]}"
+        )
+    return LowPassPolicy(make_classical(base, **kwargs), alpha)

@@ -1,0 +1,80 @@
+"""One agent loader: `controllers.make("agent", path=...)` loads a saved agent of any algorithm of
+the one table training shares (`controllers.algorithms`), plain or residual; "ppo" is an alias;
+errors name the algorithm found; `auv-gym train --algo` chooses the algorithm and its file."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import controllers
+from controllers.agent import check_agent
+from controllers.algorithms import ALGORITHMS
+
+ROOT = Path(__file__).resolve().parent.parent
+AGENTS = ROOT / "benchmarks" / "agents"
+
+
+def test_training_and_loading_share_one_algorithm_table():
+    from benchmarks.training import ALGORITHMS as TRAINED
+    from benchmarks.training.config import ALGORITHMS as READ
+
+    assert TRAINED is ALGORITHMS and READ is ALGORITHMS
+    assert {name: a.class_name for name, a in ALGORITHMS.items()} == {"ppo": "PPO", "sac": "SAC"}
+    assert controllers.AGENT_NAMES == ("agent", "ppo", "sac")
+
+
+def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
+    assert check_agent(AGENTS / "sac_generalist").algo == "sac"
+    assert check_agent(AGENTS / "ppo_helix").algo == "ppo"  # metadata without "algo": ppo
+    agent = tmp_path / "sac"
+    shutil.copytree(AGENTS / "sac_generalist", agent)
+    (agent / "model.zip").write_bytes(b"not a zip")
+    with pytest.raises(ValueError, match=r"^SAC model .*model.zip is not a valid zip file"):
+        check_agent(agent)
+    for stats in ("vecnormalize.npz", "vecnormalize.pkl"):
+        (agent / stats).unlink(missing_ok=True)
+    with pytest.raises(FileNotFoundError, match=r"^SAC agent .*normalisation statistics missing"):
+        check_agent(agent)
+    with pytest.raises(FileNotFoundError, match=r"^agent .*missing does not exist"):
+        check_agent(tmp_path / "missing")
+
+
+def test_make_needs_a_path_and_knows_the_names():
+    with pytest.raises(ValueError, match=r"controllers.make\('agent'\) needs path="):
+        controllers.make("agent")
+    with pytest.raises(ValueError, match=r"valid: \[.*'agent', 'ppo', 'sac', 'residual'"):
+        controllers.make("dqn", path="x")
+
+
+@pytest.mark.rl
+def test_agent_ppo_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
+    obs = np.linspace(-0.5, 0.5, 15, dtype=np.float32)
+    path = str(AGENTS / "sac_generalist")
+    actions = [
+        controllers.make(name, path=path).predict(obs)[0] for name in controllers.AGENT_NAMES
+    ]
+    assert type(controllers.make("agent", path=path)).__name__ == "AgentPolicy"
+    for action in actions[1:]:
+        np.testing.assert_array_equal(action, actions[0])
+    with pytest.raises(ValueError, match=r"ppo_helix/model.zip was trained with 'ppo', not 'sac'"):
+        controllers.make("sac", path=str(AGENTS / "ppo_helix"))
+    residual = controllers.make("agent", path=str(AGENTS / "ppo_residual"))
+    assert type(residual).__name__ == "ResidualPolicy" and residual.filter_max == 0.8
+
+
+def test_train_takes_the_algorithm_and_its_default_file():
+    from benchmarks.train_ppo import parse_args
+    from benchmarks.training import TrainOptions
+
+    opts, _ = parse_args([])
+    assert (opts.algo, opts.config) == ("ppo", TrainOptions().config)
+    opts, _ = parse_args(["--algo", "sac"])
+    assert opts.algo == "sac" and opts.config == str(ROOT / "benchmarks/hyperparams/sac.yml")
+    opts, _ = parse_args(["--algo", "sac", "--config", "x.yml"])
+    assert opts.config == "x.yml"
+    with pytest.raises(SystemExit):
+        parse_args(["--algo", "dqn"])
