@@ -60,7 +60,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
 SPEED: dict[str, tuple[str, str]] = {
     "all": ("benchmarks.speed.throughput", "every section below, in one run"),
     "env": ("benchmarks.speed.env", "single env through gym.make, against the JIT-off reference"),
-    "vector": ("benchmarks.speed_vector", "native vector env, peak memory, SB3 data collection"),
+    "vector": ("benchmarks.speed.vector", "native vector env, peak memory, SB3 data collection"),
     "controllers": ("benchmarks.speed.controllers", "FBSM and backstepping predict cost"),
     "render": ("benchmarks.speed.render", "rgb_array frames per second, fast and full redraw"),
     "training": ("benchmarks.speed.training", "PPO training env steps/s, against a baseline ref"),

@@ -7,7 +7,8 @@ Jobs are (policy, scenario, seed) episodes (`benchmarks.jobs`): each finished ep
 under ``OUT/episodes/`` with a fingerprint of everything that determines it, so an interrupted
 run restarted with the same arguments reuses finished episodes, and results do not depend on
 the number of workers or the backend. Policies: `benchmarks.policies`; scenarios:
-`benchmarks/scenarios.toml`; tables: `benchmarks.tables`; figures: `benchmarks.figures`.
+`benchmarks/scenarios.toml`; tables: `benchmarks.reports.tables`; figures:
+`benchmarks.reports.figures`.
 """
 
 from __future__ import annotations
@@ -42,11 +43,11 @@ from benchmarks.catalog.policies import (
 )
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
+from benchmarks.reports.tables import write_tables
 from benchmarks.runner.jobs import Job, run_jobs
-from benchmarks.tables import write_tables
 
 MAX_SEEDS = 100_000  # seeds per scenario
-TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.tables.write_tables`
+TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.reports.tables.write_tables`
 MAX_EPISODES = 1_000_000  # episodes of one run: each is a job held in memory and on disk
 
 
@@ -164,7 +165,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         summary = write_tables(records, args.out, config)
         written = [args.out / name for name in TABLES]
         if not args.no_figures:
-            from benchmarks.figures import comparison_figures
+            from benchmarks.reports.figures import comparison_figures
 
             written += comparison_figures(records, args.out, scenarios=scenarios)
         replace_outputs(args.out, written)  # no figure of an earlier run beside these tables

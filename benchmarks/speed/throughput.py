@@ -4,8 +4,8 @@ tables.
     auv-gym speed all [--sections env,vector,controllers,render,training]
     python -m benchmarks.throughput [--sections …]
 
-Each section lives in its own module (speed_env, speed_vector, speed_controllers, speed_render,
-speed_training: this tree against the default baseline ref) and runs alone with
+Each section lives in its own module (env, vector, controllers, render,
+training: this tree against the default baseline ref) and runs alone with
 `auv-gym speed <name>` or `python -m benchmarks.speed_<name>`.
 """
 
@@ -20,7 +20,7 @@ import numpy as np
 
 from benchmarks.cli import HelpFormatter
 
-SECTIONS = {"env": "benchmarks.speed.env", "vector": "benchmarks.speed_vector",
+SECTIONS = {"env": "benchmarks.speed.env", "vector": "benchmarks.speed.vector",
             "controllers": "benchmarks.speed.controllers",
             "render": "benchmarks.speed.render",
             "training": "benchmarks.speed.training"}  # fmt: skip

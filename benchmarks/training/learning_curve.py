@@ -4,7 +4,7 @@ Columns: env steps, training wall time [s] (summed over resumed sessions), and t
 max rms distance [m], the number of terminated episodes and the largest surge speed [m/s]
 over the evaluation seeds. Rows are
 appended and flushed to disk one by one; a resumed run first drops the rows past the checkpoint
-it restarts from. `benchmarks.figures.plot_learning_curve` draws it.
+it restarts from. `benchmarks.reports.figures.plot_learning_curve` draws it.
 """
 
 from __future__ import annotations

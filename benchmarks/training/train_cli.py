@@ -48,7 +48,7 @@ from benchmarks.arguments import (
     writable_location,
 )
 from benchmarks.cli import HelpFormatter
-from benchmarks.figures import plot_learning_curve
+from benchmarks.reports.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seeds import MAX_SEED

@@ -1,0 +1,135 @@
+"""The tables of a benchmark run: episodes.csv, episodes.json and the markdown summary."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import environment, write_json, write_text
+from auv_gym.table_format import (
+    FAILURE_CONVENTION,
+    METRIC_INFO,
+    Cell,
+    display_scale,
+    mark_best,
+    markdown_table,
+)
+from auv_gym.trajectory import FAILURE_REASONS
+
+__all__ = ["SUMMARY_GROUPS", "SUMMARY_METRICS", "aggregate", "summarise", "write_tables"]
+
+# Metrics in the summary table, with the direction that is better, in the column groups that
+# keep each table's rows within a screen: tracking, speed, effort, safety.
+SUMMARY_GROUPS: dict[str, tuple[str, ...]] = {
+    "tracking": ("rms_distance", "rms_y_e", "rms_z_e", "iae_distance", "settling_time_0p5"),
+    "speed": ("surge_overshoot", "rms_speed_error", "max_surge", "overspeed_fraction"),
+    "effort": ("control_effort", "chattering", "saturation_fraction"),
+    "safety": ("episode_cost",),
+}
+SUMMARY_METRICS = {m: METRIC_INFO[m][2] for group in SUMMARY_GROUPS.values() for m in group}
+# Short column headers (the long labels are in `auv_gym.table_format.METRIC_INFO`).
+_HEADERS = {
+    "rms_distance": "RMS d",
+    "rms_y_e": "RMS y_e",
+    "rms_z_e": "RMS z_e",
+    "iae_distance": "IAE d",
+    "settling_time_0p5": "settle 0.5 m",
+    "surge_overshoot": "overshoot",
+    "rms_speed_error": "RMS(u − u_D)",
+    "max_surge": "max u",
+    "overspeed_fraction": "time u > 2 m/s",
+    "control_effort": "effort",
+    "chattering": "chattering",
+    "saturation_fraction": "saturated",
+    "episode_cost": "episode cost",
+}
+
+
+def write_tables(records: list[dict[str, Any]], out: Path, config: dict[str, Any]) -> str:
+    """episodes.csv, episodes.json and summary.md; returns the markdown summary."""
+    metric_names = sorted({k for r in records for k in r["metrics"]})
+    header = ["scenario", "policy", "seed", *metric_names]
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(header)
+    for r in records:
+        writer.writerow(
+            [r["scenario"], r["policy"], r["seed"], *(r["metrics"].get(m) for m in metric_names)]
+        )
+    write_text(out / "episodes.csv", buffer.getvalue())
+    payload = {"config": config, **environment(), "episodes": records}
+    write_json(out / "episodes.json", payload, indent=1)
+    summary = summarise(records, config)
+    write_text(out / "summary.md", summary)
+    return summary
+
+
+def aggregate(records: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, Cell]]:
+    """(scenario, policy) → metric → `Cell`: the finished episodes' values and the failures."""
+    table: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in records:
+        table.setdefault((r["scenario"], r["policy"]), []).append(r["metrics"])
+    cells = {}
+    for key, episodes in table.items():
+        finished = [m for m in episodes if m.get("termination_reason") not in FAILURE_REASONS]
+        failed = len(episodes) - len(finished)
+        cells[key] = {
+            metric: Cell(tuple(_value(m.get(metric)) for m in finished), failed)
+            for metric in SUMMARY_METRICS
+        }
+    return cells
+
+
+def _value(value: Any) -> float:
+    return math.nan if value is None else float(value)
+
+
+def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
+    """Markdown: per scenario, one row per policy, mean ± std over the finished episodes.
+
+    Four tables per scenario (tracking, speed, effort, safety), each with the failed-episode count;
+    the conventions are `auv_gym.table_format`'s.
+    """
+    cells = aggregate(records)
+    policies = list(dict.fromkeys(r["policy"] for r in records))
+    scenarios = list(dict.fromkeys(r["scenario"] for r in records))
+    lines = [
+        "# Benchmark summary",
+        "",
+        f"Seeds per cell: {config['seeds']}; duration {config['duration']} s; metrics over "
+        f"t ≥ {config['transient']} s where windowed (IAE and settling time: the whole "
+        "episode). Mean ± std over seeds. " + FAILURE_CONVENTION,
+    ]
+    for scenario in scenarios:
+        lines += ["", f"## {scenario}"]
+        for group, metrics in SUMMARY_GROUPS.items():
+            table = _group_table(cells, scenario, policies, metrics).rstrip()
+            lines += ["", f"{group}:", "", table]
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _group_table(
+    cells: dict[tuple[str, str], dict[str, Cell]],
+    scenario: str,
+    policies: list[str],
+    metrics: tuple[str, ...],
+) -> str:
+    present = [p for p in policies if (scenario, p) in cells]
+    first = {p: cells[(scenario, p)][metrics[0]] for p in present}
+    columns = [["failed", *(f"{first[p].failed}/{first[p].episodes}" for p in present)]]
+    eligible = [first[p].failed == 0 for p in present]
+    for metric in metrics:
+        _, unit, better = METRIC_INFO[metric]
+        row = [cells[(scenario, p)][metric] for p in present]
+        means = [c.mean() for c in row]
+        unit, scale = display_scale(unit, means)
+        texts = [c.text(metric, scale) for c in row]
+        header = f"{_HEADERS[metric]} [{unit}]" if unit != "-" else _HEADERS[metric]
+        columns.append([header, *mark_best(texts, means, eligible, better)])
+    header = ["policy", *(c[0] for c in columns)]
+    rows = [[p, *(c[i + 1] for c in columns)] for i, p in enumerate(present)]
+    return markdown_table(header, rows)

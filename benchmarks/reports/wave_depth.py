@@ -1,0 +1,100 @@
+"""How deep do waves stop mattering to a controller? RMS distance against path depth.
+
+Runs one classical controller (default FBSM + CO-LOS) on a path at several depths below the
+surface z = 0 (docs/model.md §13.1), with a sea state and without waves, on the same seeds, and
+prints the mean RMS distance over the metrics window with 95 % bootstrap intervals:
+
+    circle  the paper's helix made level (climb 0): R = 20 m, centre (10, 0, D), start
+            (15, 5, D + 8) m, ψ = 0 — the paper's start relative to the path, at depth D
+    helix   the paper's helix moved down so that its shallowest point in the episode
+            (s ≈ 97 at 300 s) lies at depth D: it spans D to D + 97 m
+
+    python -m benchmarks.reports.wave_depth --depths 2 5 10 20 40 --seeds 8
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+import numpy as np
+
+from auv_gym.files import write_json
+from auv_gym.paths import Helix
+from auv_gym.table_format import markdown_table
+from auv_gym.trajectory import FAILURE_REASONS
+from benchmarks.arguments import usage_errors, writable_location
+from benchmarks.cli import HelpFormatter
+from benchmarks.stats import mean_interval
+
+PAPER_CLIMB_SPAN = 97.0  # [m] the paper helix's climb in a 300-s episode (docs/model.md §13.1)
+
+
+def path_at(kind: str, depth: float) -> dict[str, Any]:
+    """Env keyword arguments of the path ``kind`` ("circle" or "helix") at ``depth`` [m]."""
+    if kind == "circle":
+        return {"path": Helix(climb=0.0, center=(10.0, 0.0, depth)),
+                "start_position": (15.0, 5.0, depth + 8.0), "start_heading": 0.0}  # fmt: skip
+    shift = depth + PAPER_CLIMB_SPAN
+    return {"path": Helix(center=(10.0, 0.0, -8.0 + shift)),
+            "start_position": (15.0, 5.0, shift), "start_heading": 0.0}  # fmt: skip
+
+
+def measure(policy_name: str, kind: str, depth: float, waves: Any, seeds: list[int],
+            max_time: float) -> dict[str, Any]:  # fmt: skip
+    """Mean RMS distance [m] with its 95 % interval, and the episodes that failed."""
+    import controllers
+    from auv_gym.rollout import evaluate
+
+    policy = controllers.make(policy_name, control_dt=0.05)
+    results = evaluate(policy, seeds, waves=waves, max_time=max_time, **path_at(kind, depth))
+    rms = np.array([[r["rms_distance"] for r in results]])
+    ci = mean_interval(rms, key=f"{kind}|{depth}|{waves}")
+    failed = sum(r["termination_reason"] in FAILURE_REASONS for r in results)
+    return {"depth": depth, "waves": waves, "rms_distance": ci.value, "low": ci.low,
+            "high": ci.high, "failed": failed, "episodes": len(results)}  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser.add_argument("--depths", type=float, nargs="+", default=[2.0, 5.0, 10.0, 20.0, 40.0],
+                        help="path depths D below the surface [m]")  # fmt: skip
+    parser.add_argument("--path", choices=("circle", "helix"), default="circle",
+                        help="the path placed at each depth (module docstring)")  # fmt: skip
+    parser.add_argument("--sea-state", default="sea_state_4", help="a waves preset")
+    parser.add_argument("--policy", default="fbsm_colos", help="a classical controller")
+    parser.add_argument("--seeds", type=int, default=8, help="episodes per depth (seeds 0…)")
+    parser.add_argument("--max-time", type=float, default=300.0, help="episode length [s]")
+    parser.add_argument("--json", help="also write the rows to this file")
+    args = parser.parse_args(argv)
+    with usage_errors(parser):
+        if args.json:
+            writable_location(args.json, "--json", folder=False)
+        if min(args.depths) < 0.0 or not all(map(math.isfinite, args.depths)):
+            raise ValueError(f"--depths must be finite and >= 0 m, got {args.depths}")
+    seeds = list(range(args.seeds))
+    rows = []
+    for depth in args.depths:
+        for waves in (args.sea_state, None):
+            rows.append(measure(args.policy, args.path, depth, waves, seeds, args.max_time))
+    header = ["depth [m]", f"RMS distance, {args.sea_state} [m]", "RMS distance, no waves [m]",
+              "failed (waves / none)"]  # fmt: skip
+    cells = []
+    for wavy, calm in zip(rows[::2], rows[1::2], strict=True):
+        cells.append([f"{wavy['depth']:g}",
+                      f"{wavy['rms_distance']:.3f} [{wavy['low']:.3f}, {wavy['high']:.3f}]",
+                      f"{calm['rms_distance']:.3f} [{calm['low']:.3f}, {calm['high']:.3f}]",
+                      f"{wavy['failed']} / {calm['failed']} of {wavy['episodes']}"])  # fmt: skip
+    print(
+        f"{args.policy} on the {args.path} path, {args.seeds} seeds, {args.max_time:g}-s "
+        "episodes, mean of the per-episode RMS distance with its 95 % bootstrap interval"
+    )
+    print(markdown_table(header, cells))
+    if args.json:
+        write_json(args.json, rows, indent=2)
+    return rows
+
+
+if __name__ == "__main__":
+    main()

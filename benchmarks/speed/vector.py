@@ -1,0 +1,336 @@
+"""Vector-env speed: vehicle-steps/s and real-time factor, peak memory, SB3 PPO data collection.
+
+1. `AUVPath3DVectorEnv` with default physics (RK4 at 0.01 s, 5 physics steps per 0.05 s control
+   step) and the paper's white noise, N ∈ {1, 64, 1024, 4096, 16384} vehicles, random actions and
+   a short `max_time` so that NEXT_STEP autoresets happen throughout the timed loop.
+   Physics vehicle-steps/s = control vehicle-steps/s × 5; aggregate real-time factor =
+   simulated seconds of all vehicles per wall-clock second. Each size runs once per actuator
+   model of ``--actuators``, side by side ("realistic": propeller and fin dynamics,
+   docs/model.md §2.6).
+2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
+   growth of `ru_maxrss` over the same process after imports and compilation.
+3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
+   `auv_gym.sb3` adapter, against SB3's DummyVecEnv over single envs, each in a fresh process.
+
+    python -m benchmarks.speed.vector             # full run (about 2 minutes)
+    python -m benchmarks.speed.vector --quick     # smoke test
+
+Wall-clock numbers depend on the load of the machine; the load average is printed with them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import resource
+import subprocess
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+from auv_gym.files import write_json
+from benchmarks.arguments import usage_errors, writable_location
+from benchmarks.cli import HelpFormatter
+
+SIZES = (1, 64, 1024, 4096, 16384)
+MEMORY_N = 65_536
+
+
+def _actions(n: int, count: int, seed: int) -> np.ndarray:
+    """A bank of random action batches (count, n, 3), moderate like tests/test_env.py's."""
+    a = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(count, n, 3)).astype(np.float32)
+    a[..., 0] = 0.2 + 0.3 * np.abs(a[..., 0])
+    a[..., 1:] *= 0.3
+    return a
+
+
+def measure_vector(
+    n: int,
+    seconds: float,
+    max_time: float,
+    threads: int | None = None,
+    seed: int = 0,
+    actuator: str = "paper",
+    env_kwargs: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Time `AUVPath3DVectorEnv.step` for `seconds` of wall clock, compilation excluded.
+
+    The loop runs at least 1.25 episodes so that every vehicle goes through a NEXT_STEP
+    autoreset; the time spent inside the compiled kernel is recorded separately (the rest is
+    the env's Python glue: validation, truncation, infos, resets).
+    """
+    from auv_gym.vector_env import AUVPath3DVectorEnv
+
+    # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
+    env = AUVPath3DVectorEnv(
+        n, max_time=max_time, threads=threads, actuator=actuator, **(env_kwargs or {})
+    )
+    bank = _actions(n, 16, seed)
+    env.reset(seed=seed)
+    env.step(bank[0])  # compile / load the kernel outside the timed loop
+    kernel_step, kernel_time = env.sim.step, [0.0]
+
+    def timed_kernel(actions: np.ndarray) -> None:
+        t0 = time.perf_counter()
+        kernel_step(actions)
+        kernel_time[0] += time.perf_counter() - t0
+
+    env.sim.step = timed_kernel
+    min_steps = math.ceil(1.25 * env.config.max_steps)
+    steps, resets, ended = 0, 0, np.zeros(n, dtype=bool)
+    start = time.perf_counter()
+    while True:
+        for a in bank:
+            _, _, terminated, truncated, _ = env.step(a)
+            resets += int(ended.sum())  # NEXT_STEP: rows that ended last step reset now
+            ended = terminated | truncated
+        steps += len(bank)
+        wall = time.perf_counter() - start
+        if wall >= seconds and steps >= min_steps:
+            break
+    cfg = env.config
+    vehicle_steps = steps * n
+    return {
+        "n": n,
+        "actuator": actuator,
+        "threads": env.threads,
+        "batch_steps": steps,
+        "vehicle_steps_per_s": vehicle_steps / wall,
+        "physics_steps_per_s": vehicle_steps * cfg.substeps / wall,
+        "real_time_factor": vehicle_steps * cfg.control_dt / wall,
+        "ms_per_batch_step": 1e3 * wall / steps,
+        "glue_fraction": 1.0 - kernel_time[0] / wall,
+        "autoresets": resets,
+        "sensors": env.config.sensors.preset,
+    }
+
+
+def _sensor_rows(args: argparse.Namespace) -> list[dict[str, float]]:
+    """Physics rate with "ideal" and "typical" sensors, measured alternately in this process
+    (same load), and their ratio; printed as a table."""
+    print("\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
+          "estimate ('typical'), side by side")  # fmt: skip
+    print(f"{'N':>7} {'threads':>7} {'ideal':>14} {'typical':>14} {'ratio':>7}")
+    rows = []
+    for threads, n in ((t, n) for t in args.threads for n in args.sensor_sizes):
+        ideal, typical = (measure_vector(n, args.seconds, args.max_time, threads,
+                                         env_kwargs={"sensors": name})
+                          for name in ("ideal", "typical"))  # fmt: skip
+        ratio = typical["physics_steps_per_s"] / ideal["physics_steps_per_s"]
+        rows.append({"n": n, "threads": ideal["threads"], "ratio": ratio,
+                     "ideal": ideal, "typical": typical})  # fmt: skip
+        print(f"{n:>7} {ideal['threads']:>7} {ideal['physics_steps_per_s']:>14,.0f} "
+              f"{typical['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}")  # fmt: skip
+    return rows
+
+
+def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
+    """Peak RSS of n vehicles: run in this process (call it in a fresh one, see `main`)."""
+    from auv_gym.vector_env import AUVPath3DVectorEnv
+
+    warm = AUVPath3DVectorEnv(2)
+    warm.reset(seed=0)
+    warm.step(np.zeros((2, 3)))  # imports and compiled kernels are part of the baseline
+    del warm
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux: KiB
+    start = time.perf_counter()
+    env = AUVPath3DVectorEnv(n, max_time=5.0)
+    env.reset(seed=0)
+    reset_s = time.perf_counter() - start
+    bank = _actions(n, 4, 1)
+    start = time.perf_counter()
+    for k in range(steps):
+        env.step(bank[k % len(bank)])
+    step_s = (time.perf_counter() - start) / steps
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    return {
+        "n": n,
+        "baseline_bytes": before,
+        "peak_bytes": peak,
+        "growth_bytes": peak - before,
+        "reset_s": reset_s,
+        "step_s": step_s,
+    }
+
+
+def _fresh_process(call: str) -> Any:
+    """Evaluate ``call`` (an expression over this module) in a new interpreter; JSON result.
+
+    Memory needs its own process for `ru_maxrss`; PPO collection one where numba's OpenMP
+    pool was never started by the threaded throughput runs (its spinning slows torch).
+    """
+    code = f"import json; import benchmarks.speed.vector as m; print(json.dumps(m.{call}))"
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=root)  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def measure_ppo_collection(
+    n_envs: int, n_steps: int, repeats: int, backend: str, seed: int = 0
+) -> dict[str, float]:
+    """Timesteps/s of PPO's `collect_rollouts` (policy forward + env step + buffer)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from auv_gym import AUVPath3DEnv
+    from auv_gym.sb3 import make_sb3_vec_env
+
+    torch.set_num_threads(1)  # docs/design.md §4: one thread is as fast for these small networks
+    kwargs = {"max_time": 30.0, "randomize_start": True}
+    if backend == "adapter":
+        env = make_sb3_vec_env(n_envs, seed=seed, **kwargs)
+    else:
+        env = DummyVecEnv([lambda: AUVPath3DEnv(**kwargs) for _ in range(n_envs)])
+        env.seed(seed)
+    model = PPO("MlpPolicy", env, n_steps=n_steps, batch_size=n_envs * n_steps, seed=seed,
+                device="cpu", verbose=0)  # fmt: skip
+    _, callback = model._setup_learn(n_envs * n_steps * (repeats + 1), None)
+    callback.on_training_start(locals(), globals())
+    model.collect_rollouts(env, callback, model.rollout_buffer, n_rollout_steps=n_steps)  # warm-up
+    start = time.perf_counter()
+    for _ in range(repeats):
+        model.collect_rollouts(env, callback, model.rollout_buffer, n_rollout_steps=n_steps)
+    wall = time.perf_counter() - start
+    return {"backend": backend, "n_envs": n_envs,
+            "timesteps_per_s": repeats * n_envs * n_steps / wall}  # fmt: skip
+
+
+def machine() -> dict[str, Any]:
+    import numba
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if "model name" in line)
+    except (OSError, StopIteration):
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "numba_threads": numba.get_num_threads(),
+        "python": platform.python_version(),
+        "numba": numba.__version__,
+        "load_average_1min": os.getloadavg()[0],
+    }
+
+
+def _waves_rows(args: argparse.Namespace, results: dict[str, Any]) -> None:
+    """The same N with and without waves, back to back per thread count: the ratio of the
+    two physics rates is measured under one machine load."""
+    from auv_gym.waves import WaveConfig
+
+    waves = WaveConfig()  # sea state 4, default components and update interval
+    print(
+        f"\nWaves: sea state 4 ({waves.spectrum}, {waves.components} components, field "
+        f"refreshed every {waves.update_interval:g} s) beside no waves, N = {args.waves_n}"
+    )
+    print(f"{'threads':>7} {'no waves steps/s':>17} {'waves steps/s':>14} {'ratio':>6}")
+    results["waves"] = []
+    for threads in args.threads:
+        calm = measure_vector(args.waves_n, args.seconds, args.max_time, threads)
+        wavy = measure_vector(args.waves_n, args.seconds, args.max_time, threads,
+                              env_kwargs={"waves": waves})  # fmt: skip
+        ratio = wavy["physics_steps_per_s"] / calm["physics_steps_per_s"]
+        results["waves"].append({"threads": calm["threads"], "no_waves": calm, "waves": wavy,
+                                 "ratio": ratio})  # fmt: skip
+        print(f"{calm['threads']:>7} {calm['physics_steps_per_s']:>17,.0f} "
+              f"{wavy['physics_steps_per_s']:>14,.0f} {ratio:>6.1%}")  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES),
+                        help="numbers of vehicles of the throughput table")  # fmt: skip
+    parser.add_argument("--seconds", type=float, default=4.0, help="timed wall clock per size")
+    parser.add_argument("--max-time", type=float, default=10.0,
+                        help="episode length [s]; short so that autoresets happen")  # fmt: skip
+    parser.add_argument("--waves-n", type=int, default=4096,
+                        help="vehicles of the side-by-side run with waves (sea state 4, "
+                             "default components); 0 skips it")  # fmt: skip
+    parser.add_argument("--memory-n", type=int, default=MEMORY_N,
+                        help="vehicles of the peak-memory run; 0 skips it")  # fmt: skip
+    parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64],
+                        help="n_envs of the SB3 collection runs; none skips them")  # fmt: skip
+    parser.add_argument("--ppo-steps", type=int, default=128, help="n_steps per rollout")
+    parser.add_argument("--ppo-repeats", type=int, default=3,
+                        help="timed collect_rollouts calls per run")  # fmt: skip
+    parser.add_argument("--threads", type=int, nargs="+", default=[2, 1],
+                        help="numba thread counts of the throughput table")  # fmt: skip
+    parser.add_argument("--actuators", nargs="+", default=["paper", "realistic"],
+                        choices=["paper", "fins", "realistic"],
+                        help="actuator models of the throughput table, side by side")  # fmt: skip
+    parser.add_argument("--sensor-sizes", type=int, nargs="*", default=[4096],
+                        help="N of the side-by-side rows without and with the 'typical' sensor "
+                             "model (docs/model.md §14); none skips them")  # fmt: skip
+    parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
+    parser.add_argument("--json", help="also write the results to this file")
+    args = parser.parse_args(argv)
+    if args.json:  # written after the benchmark: refused now, not after minutes of timing
+        with usage_errors(parser):
+            writable_location(args.json, "--json", folder=False)
+    if args.quick:
+        args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
+        args.waves_n = 64
+        args.threads, args.sensor_sizes = [1], [64]
+        args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
+
+    info = machine()
+    print(f"{info['cpu']}, {info['cores']} cores, numba threads ≤ {info['numba_threads']}, "
+          f"load average {info['load_average_1min']:.2f} at start")  # fmt: skip
+    results: dict[str, Any] = {"machine": info, "vector": [], "ppo": []}
+
+    print(f"\nAUVPath3DVectorEnv, default physics, white noise ±35, NEXT_STEP autoreset "
+          f"(max_time {args.max_time:g} s)")  # fmt: skip
+    print(f"{'N':>7} {'actuator':>9} {'threads':>7} {'physics steps/s':>16} "
+          f"{'control steps/s':>16} {'real-time ×':>12} {'ms/step':>9} {'glue':>6} "
+          f"{'resets':>7}")  # fmt: skip
+    runs = ((t, n, a) for t in args.threads for n in args.sizes for a in args.actuators)
+    for threads, n, actuator in runs:
+        r = measure_vector(n, args.seconds, args.max_time, threads, actuator=actuator)
+        results["vector"].append(r)
+        print(f"{n:>7} {actuator:>9} {r['threads']:>7} {r['physics_steps_per_s']:>16,.0f} "
+              f"{r['vehicle_steps_per_s']:>16,.0f} "
+              f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
+              f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
+
+    if args.waves_n > 0:
+        _waves_rows(args, results)
+    if args.sensor_sizes:
+        results["sensors"] = _sensor_rows(args)
+
+    if args.memory_n > 0:
+        mem = _fresh_process(f"measure_memory({args.memory_n})")
+        results["memory"] = mem
+        mib = 2.0**20
+        print(
+            f"\nN = {mem['n']:,}: peak RSS {mem['peak_bytes'] / mib:,.0f} MiB, growth over "
+            f"the imported+compiled process {mem['growth_bytes'] / mib:,.0f} MiB (target < "
+            f"1024); reset {mem['reset_s']:.2f} s, step {1e3 * mem['step_s']:.1f} ms"
+        )
+
+    if args.ppo_envs:
+        print(f"\nSB3 PPO collect_rollouts (MlpPolicy, torch 1 thread, n_steps {args.ppo_steps})")
+        print(f"{'backend':<12} {'n_envs':>7} {'timesteps/s':>12}")
+        for n_envs in args.ppo_envs:
+            for backend in ("adapter", "DummyVecEnv"):
+                r = _fresh_process(
+                    f"measure_ppo_collection({n_envs}, {args.ppo_steps}, "
+                    f"{args.ppo_repeats}, {backend!r})"
+                )
+                results["ppo"].append(r)
+                print(f"{backend:<12} {n_envs:>7} {r['timesteps_per_s']:>12,.0f}")
+    results["machine"]["load_average_1min_end"] = os.getloadavg()[0]
+    if args.json:
+        write_json(args.json, results, indent=2)
+    return results
+
+
+if __name__ == "__main__":
+    main()
