@@ -170,12 +170,17 @@ def test_scenario_file_documents_every_scenario():
         "deep_helix",
         "deep_survey",
         "coastal_no_waves",
+        "coastal",
+        "near_surface_waves",
         "realistic_actuators",
         "realistic_sensors",
+        "realistic",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
     assert scenarios["realistic_actuators"].controller == {"actuator": "realistic"}
+    assert scenarios["realistic"].controller == {"actuator": "realistic"}
+    assert scenarios["near_surface_waves"].env["waves"] == "sea_state_4"
     assert select("all", list(scenarios), "scenario") == list(scenarios)
 
 
