@@ -273,12 +273,14 @@ def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
     out = tmp_path / "depth.json"
     root = Path(__file__).resolve().parents[1]
     subprocess.run([sys.executable, "-m", "benchmarks.wave_depth", "--depths", "3", "--seeds", "2",
-                    "--max-time", "4", "--json", str(out)], cwd=root, check=True,
+                    "--max-time", "4", "--json", str(out), "--figure", str(tmp_path / "depth.png")],
+                   cwd=root, check=True,
                    capture_output=True, text=True)  # fmt: skip
     rows = json.loads(out.read_text())
     assert [(r["depth"], r["waves"]) for r in rows] == [(3.0, "sea_state_4"), (3.0, None)]
     assert all(r["episodes"] == 2 and r["low"] <= r["rms_distance"] <= r["high"] for r in rows)
     assert rows[0]["rms_distance"] != rows[1]["rms_distance"]  # the waves moved the vehicle
+    assert (tmp_path / "depth.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_snapshots_carry_the_sea_and_older_snapshots_had_a_flat_one():

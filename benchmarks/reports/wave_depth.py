@@ -67,10 +67,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser.add_argument("--seeds", type=int, default=8, help="episodes per depth (seeds 0…)")
     parser.add_argument("--max-time", type=float, default=300.0, help="episode length [s]")
     parser.add_argument("--json", help="also write the rows to this file")
+    parser.add_argument("--figure", help="also plot RMS distance against depth to this PNG")
     args = parser.parse_args(argv)
     with usage_errors(parser):
-        if args.json:
-            writable_location(args.json, "--json", folder=False)
+        for flag in ("json", "figure"):
+            if getattr(args, flag):
+                writable_location(getattr(args, flag), f"--{flag}", folder=False)
         if min(args.depths) < 0.0 or not all(map(math.isfinite, args.depths)):
             raise ValueError(f"--depths must be finite and >= 0 m, got {args.depths}")
     seeds = list(range(args.seeds))
@@ -93,7 +95,30 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     print(markdown_table(header, cells))
     if args.json:
         write_json(args.json, rows, indent=2)
+    if args.figure:
+        plot_depth(rows, args.figure, f"{args.policy} on the {args.path} path, {args.seeds} seeds")
     return rows
+
+
+def plot_depth(rows: list[dict[str, Any]], file: str, title: str) -> None:
+    """RMS distance [m] (log scale, 95 % intervals shaded) against path depth [m], with and
+    without waves, written to ``file``."""
+    from auv_gym.plotting import new_figure, save_figure
+
+    fig = new_figure(6.0, 4.0, layout="constrained")
+    ax = fig.add_subplot()
+    for label, group, colour in (("waves", rows[::2], "tab:blue"), ("no waves", rows[1::2], "0.4")):
+        depth = [r["depth"] for r in group]
+        if group[0]["waves"]:
+            label = group[0]["waves"].replace("_", " ")
+        ax.plot(depth, [r["rms_distance"] for r in group], "o-", color=colour, label=label)
+        ax.fill_between(depth, [r["low"] for r in group], [r["high"] for r in group],
+                        color=colour, alpha=0.2, linewidth=0)  # fmt: skip
+    ax.set(xlabel="path depth below the surface [m]", ylabel="RMS distance [m]", yscale="log",
+           title=title)  # fmt: skip
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    save_figure(fig, file)
 
 
 if __name__ == "__main__":
