@@ -110,3 +110,16 @@ def test_a_field_without_help_is_refused_by_name():
         add_options(argparse.ArgumentParser(), _Demo, ["nope"])
     assert dataclasses.fields(_Demo)[-1].metadata == {}
 
+
+def test_the_episode_runners_take_their_options_from_episode_options():
+    from benchmarks.arguments import EpisodeOptions
+    from benchmarks.runner import compare
+
+    parser = compare.build_parser()
+    defaults = parser.parse_args([])
+    for field in fields(EpisodeOptions):
+        (action,) = _actions(parser, field.name)
+        assert action.help == field.metadata["help"]
+        assert getattr(defaults, field.name) == field.default
+    assert defaults.duration == 300.0 and defaults.transient is None
+    assert parser.parse_args(["--transient", "50"]).transient == 50.0
