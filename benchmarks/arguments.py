@@ -14,13 +14,16 @@ import os
 import sys
 import tempfile
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import NoReturn
 
 from auv_gym.files import output_lock
+from benchmarks.options import add_options, option
 
 __all__ = [
     "ArgumentParser",
+    "EpisodeOptions",
     "comma_names",
     "exit_with_usage_error",
     "finite_number",
@@ -152,22 +155,29 @@ def locked_folder(prog: str, folder: Path, flag: str = "--out") -> Iterator[Path
         yield held
 
 
-def add_episode_arguments(parser: argparse.ArgumentParser, duration: float = 300.0) -> None:
-    """The options of every episode runner (compare, the suite): ``--duration``,
-    ``--transient`` and the pool's ``--workers``, ``--backend``, ``--address``
-    (`benchmarks.runner.pool`); checked by `check_episode_arguments`."""
-    parser.add_argument("--duration", type=float, default=duration, help="episode length [s]")
-    parser.add_argument(
-        "--transient",
-        type=float,
-        default=None,
-        help="metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)",
+@dataclass
+class EpisodeOptions:
+    """The options of every episode runner (compare, the suite); `add_episode_arguments` makes
+    them command-line options, `check_episode_arguments` checks them."""
+
+    duration: float = option(300.0, "episode length [s]")
+    transient: float | None = option(
+        None, "metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)"
     )
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                        help="local worker processes (results do not depend on it)")  # fmt: skip
-    parser.add_argument("--backend", choices=("local", "ray"), default="local",
-                        help="run the episodes in local processes or on a Ray cluster")  # fmt: skip
-    parser.add_argument("--address", default=None, help="Ray cluster address to join")
+    workers: int = option(os.cpu_count() or 1,
+                          "local worker processes (results do not depend on it)")  # fmt: skip
+    backend: str = option("local", "run the episodes in local processes or on a Ray cluster",
+                          choices=("local", "ray"))  # fmt: skip
+    address: str | None = option(None, "Ray cluster address to join")
+
+
+def add_episode_arguments(parser: argparse.ArgumentParser, duration: float = 300.0) -> None:
+    """The options of every episode runner, `EpisodeOptions`: ``--duration``, ``--transient``
+    and the pool's ``--workers``, ``--backend``, ``--address`` (`benchmarks.runner.pool`);
+    ``duration`` another default episode length."""
+    add_options(parser, EpisodeOptions)
+    if duration != EpisodeOptions.duration:
+        parser.set_defaults(duration=duration)
 
 
 def check_episode_arguments(args: argparse.Namespace) -> None:

@@ -32,7 +32,7 @@ import math
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -52,9 +52,18 @@ from benchmarks.training.seed_workers import (
     seed_progress,
     seed_status,
 )
-from benchmarks.training.train import TrainOptions, check_options, target_timesteps
+from benchmarks.training.seeds_options import (  # the options, importable from here too
+    DEFAULT_EVAL_EPISODES,
+    MAX_SEED,
+    MAX_SEEDS,
+    TASK_SETS,
+    SeedsOptions,
+    parse_seeds,
+)
+from benchmarks.training.train import check_options, target_timesteps
 
 __all__ = [
+    "DEFAULT_EVAL_EPISODES",
     "MAX_SEED",
     "MAX_SEEDS",
     "PLAN_FILE",
@@ -71,83 +80,9 @@ __all__ = [
 
 PLAN_FILE = "train_seeds.json"
 SUMMARY_FILE = "summary.json"
-# Validation episodes (model selection): "paper", the paper scenario (helix, white noise
-# ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
-# arguments on its first `eval_episodes` seeds, or on the given eval seeds, which must lie in its
-# range). The per-seed test report is the paper scenario on `HELD_OUT_SEEDS` either way; the whole
-# test suite is `benchmarks.evaluate_suite`. The training distribution is the config's env_kwargs.
-TASK_SETS = {"paper": "paper scenario: validation seeds 100-104, test seeds 0-9"}
-DEFAULT_EVAL_EPISODES = 32  # validation episodes drawn from a task set
-MAX_SEEDS = 1000  # training runs of one command
-MAX_SEED = 2**32 - 1  # np.random.seed (SB3's set_random_seed) takes seeds below 2**32
 # Plan entries that must match when a run is resumed (the rest may change: workers, backend).
 PLAN_KEYS = ("algo", "env_id", "config", "n_timesteps", "eval_seeds", "eval_duration",
              "eval_freq", "checkpoint_freq", "task_set", "eval_env", "vec_env")  # fmt: skip
-
-
-@dataclass
-class SeedsOptions:
-    """Arguments of `train_seeds` (CLI `python -m benchmarks.train_seeds`)."""
-
-    train: TrainOptions  # the per-seed options; `out` and `seed` are set per seed
-    seeds: tuple[int, ...] = (0,)
-    out: str = "runs/seeds"
-    workers: int = 2  # local processes at once
-    backend: str = "local"  # "local" or "ray"
-    address: str | None = None  # Ray cluster address; None: a local Ray instance
-    resume: bool = False
-    task_set: str = "paper"  # "paper" or a validation set of benchmarks/tasks.toml
-    eval_episodes: int = DEFAULT_EVAL_EPISODES  # validation seeds taken from a task set
-    export: str | None = None  # copy the selected agent here
-    results: str | None = None  # per-seed test results and learning curves, for committing
-    progress: bool = True
-    poll_s: float = 5.0  # [s] between progress updates
-
-
-def parse_seeds(text: str) -> tuple[int, ...]:
-    """ "N" (N ≥ 1 seeds 0…N−1, as `benchmarks.compare --seeds`), "a-b" (inclusive) or "a,b,c";
-    at most `MAX_SEEDS` seeds, each at most `MAX_SEED` (the count is checked before the seeds
-    are listed: a typo like 1e9 costs no memory)."""
-    text = str(text).strip()
-    try:
-        if "," in text:
-            seeds = tuple(int(s) for s in text.split(",") if s.strip())
-        elif "-" in text[1:]:
-            low, high = (int(s) for s in text.split("-", 1))
-            if high < low:
-                raise ValueError(f"range {text!r} is empty (high {high} < low {low})")
-            _check_count(high - low + 1, text)
-            seeds = tuple(range(low, high + 1))
-        else:
-            count = int(text)
-            if count < 1:
-                raise ValueError(f"a seed count must be at least 1, got {count}")
-            _check_count(count, text)
-            seeds = tuple(range(count))
-    except ValueError as exc:
-        if str(exc).startswith("--seeds"):
-            raise
-        raise ValueError(
-            f"--seeds {text!r}: {exc}; use a count N >= 1 (seeds 0..N-1), a range a-b or a "
-            "list a,b,c of non-negative integers"
-        ) from None
-    if not seeds:
-        raise ValueError(f"--seeds {text!r} selects no seed")
-    _check_count(len(seeds), text)
-    if min(seeds) < 0:
-        raise ValueError(f"--seeds {text!r}: seeds must be non-negative, got {min(seeds)}")
-    if max(seeds) > MAX_SEED:
-        raise ValueError(f"--seeds {text!r}: seeds must be at most {MAX_SEED} (numpy's seed "
-                         f"range), got {max(seeds)}")  # fmt: skip
-    if len(set(seeds)) != len(seeds):
-        raise ValueError(f"--seeds {text!r} repeats a seed")
-    return seeds
-
-
-def _check_count(count: int, text: str) -> None:
-    if count > MAX_SEEDS:
-        raise ValueError(f"--seeds {text!r} selects {count} seeds, more than {MAX_SEEDS}: "
-                         "every seed is a whole training run")  # fmt: skip
 
 
 def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:

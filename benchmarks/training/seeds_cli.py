@@ -16,112 +16,48 @@ from __future__ import annotations
 
 import argparse
 import sys
-import typing
 from collections.abc import Sequence
 from pathlib import Path
 
-from benchmarks.training.config import ALGORITHMS
-from benchmarks.training.evaluation import EVAL_SEEDS
-from benchmarks.training.seeds import (
-    DEFAULT_EVAL_EPISODES,
-    TASK_SETS,
-    SeedsOptions,
-    parse_seeds,
-    train_seeds,
-)
+from benchmarks.arguments import ArgumentParser
+from benchmarks.options import add_options, from_args
+from benchmarks.training.seeds import SeedsOptions, train_seeds
 from benchmarks.training.train import TrainOptions
 
 HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
-
-
-def _number(text: str) -> int:
-    """Integers, also written as floats ("2e6"); fractions are an error, not truncated."""
-    value = float(text)
-    if value != int(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number")
-    return int(value)
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> typing.NoReturn:
-        """One line and exit code 2 (argparse prints the usage too)."""
-        self.exit(2, f"{self.prog}: error: {message}\n")
+# The options of each dataclass, in the order --help lists them.
+TRAIN_FIRST = ("algo", "config", "env_id")
+SEEDS_FIRST = ("seeds", "workers", "backend", "address", "out", "resume")
+TRAIN_BUDGET = ("n_timesteps", "stop_at", "eval_seeds", "eval_duration", "eval_freq",
+                "checkpoint_freq", "keep_checkpoints")  # fmt: skip
+SEEDS_EVALUATION = ("task_set", "eval_episodes")
+TRAIN_ENVS = ("vec_env", "threads")
+SEEDS_OUTPUTS = ("export", "results", "progress")
 
 
 def build_parser() -> argparse.ArgumentParser:
     from benchmarks.arguments import program_name
     from benchmarks.cli import HelpFormatter
 
-    p = _Parser(prog=program_name("benchmarks.train_seeds"), description=__doc__.split("\n\n")[0],
-                formatter_class=HelpFormatter)  # fmt: skip
-    p.add_argument("--algo", choices=sorted(ALGORITHMS), default="ppo", help="RL algorithm")
-    p.add_argument("--config", default=None,
-                   help="RL-Zoo YAML (default benchmarks/hyperparams/<algo>.yml)")  # fmt: skip
-    p.add_argument("--env-id", default="AUVPath3DSpeedLimit-v0",
-                   help="Gymnasium id and YAML key (default: the 2.0 m/s surge limit)")  # fmt: skip
-    p.add_argument("--seeds", required=True, help="count N, range a-b or list a,b,c")
-    p.add_argument("--workers", type=int, default=2, help="seeds trained at once")
-    p.add_argument("--backend", choices=("local", "ray"), default="local",
-                   help="local processes or a Ray cluster")  # fmt: skip
-    p.add_argument("--address", default=None, help="Ray cluster address (host:port)")
-    p.add_argument("--out", required=True, help="multi-seed run directory")
-    p.add_argument("--resume", action="store_true", help="continue every unfinished seed")
-    p.add_argument("--n-timesteps", type=_number, default=None,
-                   help="env steps per seed (default: the config's)")  # fmt: skip
-    p.add_argument("--stop-at", type=_number, default=None,
-                   help="pause every seed at the first rollout start at or after this many "
-                   "env steps; schedules still run over --n-timesteps, and a later --resume "
-                   "continues them bit for bit as if never paused")  # fmt: skip
-    p.add_argument("--eval-seeds", default=",".join(map(str, EVAL_SEEDS)),
-                   help="validation seeds (disjoint from the test seeds 0-9)")  # fmt: skip
-    p.add_argument("--eval-duration", type=float, default=300.0, help="evaluation episode [s]")
-    p.add_argument("--eval-freq", type=_number, default=100_000, help="env steps between evals")
-    p.add_argument(
-        "--checkpoint-freq",
-        type=_number,
-        default=100_000,
-        help="env steps between checkpoints (a kill loses at most this many)",
-    )
-    p.add_argument("--keep-checkpoints", type=int, default=2,
-                   help="newest checkpoints kept per seed")  # fmt: skip
-    p.add_argument("--task-set", default="paper",
-                   help=f"validation episodes: {sorted(TASK_SETS)} or a validation set of "
-                   "benchmarks/tasks.toml (e.g. 'validation')")  # fmt: skip
-    p.add_argument("--eval-episodes", type=int, default=DEFAULT_EVAL_EPISODES,
-                   help="validation episodes taken from a task set (its first seeds)")  # fmt: skip
-    p.add_argument("--vec-env", default="auto", choices=("auto", "native", "dummy"),
-                   help="training envs: native vector env, SB3 DummyVecEnv, or auto")  # fmt: skip
-    p.add_argument("--threads", type=int, default=1, help="torch/numba threads per seed")
-    p.add_argument("--export", default=None, help="copy the selected agent here")
-    p.add_argument(
-        "--results", default=None, help="write every seed's test evaluation and learning curve here"
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p = ArgumentParser(prog=program_name("benchmarks.train_seeds"),
+                       description=__doc__.split("\n\n")[0],
+                       formatter_class=HelpFormatter)  # fmt: skip
+    for cls, names in ((TrainOptions, TRAIN_FIRST), (SeedsOptions, SEEDS_FIRST),
+                       (TrainOptions, TRAIN_BUDGET), (SeedsOptions, SEEDS_EVALUATION),
+                       (TrainOptions, TRAIN_ENVS), (SeedsOptions, SEEDS_OUTPUTS)):  # fmt: skip
+        add_options(p, cls, names, negatable=False)
     return p
 
 
 def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
     """SeedsOptions from the command line; bad input exits with code 2 and one line."""
-    parser = build_parser()
-    ns = parser.parse_args(argv)
-    try:
-        seeds = parse_seeds(ns.seeds)
-        eval_seeds = tuple(int(s) for s in ns.eval_seeds.split(",") if s.strip())
-    except ValueError as exc:
-        parser.exit(2, f"{parser.prog}: error: {exc}\n")
-    config = ns.config or str(HYPERPARAMS / f"{ns.algo}.yml")
-    train = TrainOptions(
-        algo=ns.algo, config=config, env_id=ns.env_id, n_timesteps=ns.n_timesteps,
-        stop_at=ns.stop_at, checkpoint_freq=ns.checkpoint_freq,
-        keep_checkpoints=ns.keep_checkpoints,
-        eval_freq=ns.eval_freq, eval_seeds=eval_seeds, eval_duration=ns.eval_duration,
-        vec_env=ns.vec_env, threads=ns.threads, progress_bar=False,
-    )  # fmt: skip
-    return SeedsOptions(
-        train=train, seeds=seeds, out=ns.out, workers=ns.workers, backend=ns.backend,
-        address=ns.address, resume=ns.resume, task_set=ns.task_set, export=ns.export,
-        eval_episodes=ns.eval_episodes, results=ns.results, progress=not ns.quiet,
-    )  # fmt: skip
+    ns = build_parser().parse_args(argv)
+    if ns.config is None:
+        ns.config = str(HYPERPARAMS / f"{ns.algo}.yml")
+    train_names = TRAIN_FIRST + TRAIN_BUDGET + TRAIN_ENVS
+    train = from_args(TrainOptions, ns, train_names, progress_bar=False)
+    return from_args(SeedsOptions, ns, SEEDS_FIRST + SEEDS_EVALUATION + SEEDS_OUTPUTS,
+                     train=train)  # fmt: skip
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -16,6 +16,7 @@ import auv_gym
 from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
+from benchmarks.options import comma_integers, option, whole_number
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
     capture_training_state,
@@ -54,52 +55,110 @@ __all__ = [
 ]
 
 HERE = Path(__file__).resolve().parent.parent  # benchmarks/
+VEC_ENVS = ("auto", "native", "dummy")  # `envs.make_training_env`
 
 
 @dataclass
 class TrainOptions:
-    """Arguments of `train` (and of the CLI `benchmarks/train_ppo.py`)."""
+    """Arguments of `train`; the CLIs `auv-gym train` / `train-seeds` are generated from the
+    fields (`benchmarks.options`), so each default and its help is written here only."""
 
-    algo: str = "ppo"  # a key of controllers.algorithms.ALGORITHMS
-    config: str = str(HERE / "hyperparams" / "ppo.yml")  # RL-Zoo hyper-parameter file
+    algo: str = option(
+        "ppo",
+        "RL algorithm (the saved agent records it; every one loads as "
+        "controllers.make('agent', path=...))",
+        choices=sorted(ALGORITHMS),
+    )
+    # The command line's default None stands for the algorithm's file.
+    config: str = option(
+        str(HERE / "hyperparams" / "ppo.yml"),
+        "RL-Zoo hyper-parameter YAML "
+        "(top-level key = env id; default: benchmarks/hyperparams/<algo>.yml)",
+        cli_default=None,
+    )
     # Top-level key of the config and Gymnasium id; the surge-limited task by default, so that a
     # new agent cannot win by sprinting at speeds a REMUS cannot reach (docs/results.md).
-    env_id: str = SPEED_LIMIT_ENV_ID
-    out: str = "runs/ppo_helix"  # run directory
-    seed: int = 0  # seeds torch, numpy and the training environments
-    n_timesteps: int | None = None  # override the config's n_timesteps
+    env_id: str = option(
+        SPEED_LIMIT_ENV_ID,
+        "Gymnasium id and YAML key (AUVPath3D-v0: the paper's task without a speed limit)",
+    )
+    out: str = option(
+        "runs/ppo_helix", "run directory (checkpoints, best/, final/, evaluations.csv, tb/)"
+    )
+    seed: int = option(0, "seed of torch, numpy and the training environments")
+    n_timesteps: int | None = option(None, "override the config's n_timesteps", parse=whole_number)
     # Pause at the first rollout start at or after this many env steps (None: train to
     # n_timesteps); SB3 collects whole rollouts (PPO: n_steps x n_envs env steps, SAC:
     # train_freq x n_envs), so the pause is up to one rollout later. The schedules (learning
     # rate, clip range) still run over n_timesteps, and the pause writes a checkpoint with the
     # whole training state, so a later --resume (with a larger stop_at or none) continues bit for
     # bit as if the run had never paused (`checkpoints` module doc).
-    stop_at: int | None = None
+    stop_at: int | None = option(
+        None,
+        "pause at the first rollout start at or after this many "
+        "env steps (PPO: a multiple of n_steps x n_envs); schedules "
+        "still run over n_timesteps; a later --resume continues bit "
+        "for bit as if never paused",
+        parse=whole_number,
+    )
     # Continue from the newest checkpoint in `out`: exactly (weights, evaluations, checkpoints) for
     # a pause or a checkpoint of the same settings, e.g. after a kill; a larger n_timesteps
     # continues with schedules over the new budget instead.
-    resume: bool = False
-    checkpoint_freq: int = 100_000  # [env steps] between checkpoints
-    keep_checkpoints: int = 3  # newest checkpoints kept on disk
-    eval_freq: int = 100_000  # [env steps] between evaluations; 0 disables
-    eval_seeds: tuple[int, ...] = EVAL_SEEDS  # seeds of the evaluation episodes
-    eval_duration: float = 300.0  # [s] evaluation episode length
+    resume: bool = option(
+        False,
+        "continue from the newest checkpoint in --out; exact (same "
+        "weights and evaluations as an uninterrupted run) after a pause or "
+        "a kill",
+    )
+    checkpoint_freq: int = option(
+        100_000,
+        "env steps between checkpoints (a kill loses at most this many)",
+        parse=whole_number,
+    )
+    keep_checkpoints: int = option(3, "number of newest checkpoints kept on disk")
+    eval_freq: int = option(100_000, "env steps between evaluations (0: none)", parse=whole_number)
+    eval_seeds: tuple[int, ...] = option(
+        EVAL_SEEDS,
+        "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
+        parse=comma_integers,
+    )
+    eval_duration: float = option(300.0, "evaluation episode length [s]")
     # Env keyword arguments of the evaluation episodes on top of the id's fixed ones; empty: the
     # paper scenario. A validation task set of benchmarks/tasks.toml fills it (train_seeds).
-    eval_env: dict[str, Any] = field(default_factory=dict)
-    vec_env: str = "auto"  # "auto" (native batched if available), "native" or "dummy"
-    threads: int = 1  # torch intra-op and numba threads during training (restored after)
-    # torch threads of the gradient updates between rollouts (0: `threads`). On an idle machine
-    # two make PPO's update about 1.4x faster (the env waits then); on cores loaded by other jobs
-    # 15-50x slower. The trained weights are the same up to float rounding; bit for bit only
-    # where torch's kernels sum alike on 1 and 2 threads (tests/test_sb3_infos.py).
-    update_threads: int = 0
-    # Time the updates on `threads` and on max(2, update_threads) threads and keep the faster,
-    # probing the other now and then (`callbacks.AdaptiveUpdateThreads`).
-    adaptive_threads: bool = False
-    progress_bar: bool = True
-    export: str | None = None  # copy the best agent here at the end (e.g. benchmarks/agents/x)
-    verbose: int = 0
+    eval_env: dict[str, Any] = field(default_factory=dict)  # no command-line option
+    vec_env: str = option(
+        "auto",
+        "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
+        choices=VEC_ENVS,
+    )
+    threads: int = option(
+        1,
+        "torch and numba threads during training, restored after (1 is "
+        "fastest on 2 shared cores, docs/design.md §4)",
+    )
+    # On cores loaded by other jobs two update threads are 15-50x slower. The trained weights are
+    # the same up to float rounding; bit for bit only where torch's kernels sum alike on 1 and 2
+    # threads (tests/test_sb3_infos.py).
+    update_threads: int = option(
+        0,
+        "torch threads of the gradient updates between rollouts (0: "
+        "--threads); 2 speeds PPO's update up about 1.4x on an idle "
+        "2-core machine, slows it down on loaded cores",
+    )
+    # `callbacks.AdaptiveUpdateThreads`.
+    adaptive_threads: bool = option(
+        False,
+        "time the updates on --threads and on max(2, "
+        "--update-threads) torch threads, keep the faster and probe "
+        "the other now and then (the same weights up to float "
+        "rounding; bit for bit only where torch's kernels reduce "
+        "alike on 1 and 2 threads)",
+    )
+    progress_bar: bool = option(True, "show the progress bar (tqdm + rich)")
+    export: str | None = option(
+        None, "copy the best agent (model, statistics, metadata) to this directory at the end"
+    )
+    verbose: int = option(0, "SB3 verbosity; 1 also prints every evaluation")
 
 
 def check_options(opts: TrainOptions) -> None:

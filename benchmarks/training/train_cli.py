@@ -35,9 +35,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import typing
 from collections.abc import Sequence
-from dataclasses import MISSING, fields
 from pathlib import Path
 
 from benchmarks.arguments import (
@@ -48,52 +46,19 @@ from benchmarks.arguments import (
     writable_location,
 )
 from benchmarks.cli import HelpFormatter
+from benchmarks.options import add_options, from_args
 from benchmarks.reports.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seeds import MAX_SEED
 from benchmarks.training.train import HERE, check_options
 from controllers.agent import METADATA_FILE
-from controllers.algorithms import ALGORITHMS
 
-VEC_ENVS = ("auto", "native", "dummy")  # `benchmarks.training.train.make_training_env`
 FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
-# One-line help per option (the TrainOptions field comments, for the CLI).
-HELP = {
-    "algo": "RL algorithm (the saved agent records it; every one loads as controllers.make("
-    "'agent', path=...))",
-    "config": "RL-Zoo hyper-parameter YAML (top-level key = env id; default: "
-    "benchmarks/hyperparams/<algo>.yml)",
-    "env_id": "Gymnasium id and YAML key (AUVPath3D-v0: the paper's task without a speed limit)",
-    "out": "run directory (checkpoints, best/, final/, evaluations.csv, tb/)",
-    "seed": "seed of torch, numpy and the training environments",
-    "n_timesteps": "override the config's n_timesteps",
-    "stop_at": "pause at the first rollout start at or after this many env steps (PPO: a "
-    "multiple of n_steps x n_envs); schedules still run over n_timesteps; a later --resume "
-    "continues bit for bit as if never paused",
-    "resume": "continue from the newest checkpoint in --out; exact (same weights and "
-    "evaluations as an uninterrupted run) after a pause or a kill",
-    "checkpoint_freq": "env steps between checkpoints (a kill loses at most this many)",
-    "keep_checkpoints": "number of newest checkpoints kept on disk",
-    "eval_freq": "env steps between paper-scenario evaluations (0: none)",
-    "eval_seeds": "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
-    "eval_duration": "evaluation episode length [s]",
-    "vec_env": "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
-    "threads": "torch and numba threads during training, restored after (1 is fastest on 2 "
-    "shared cores, docs/design.md §4)",
-    "update_threads": "torch threads of the gradient updates between rollouts (0: --threads); 2 "
-    "speeds PPO's update up about 1.4x on an idle 2-core machine, slows it down on loaded cores",
-    "adaptive_threads": "time the updates on --threads and on max(2, --update-threads) torch "
-    "threads, keep the faster and probe the other now and then (the same weights up to float "
-    "rounding; bit for bit only where torch's kernels reduce alike on 1 and 2 threads)",
-    "progress_bar": "show the progress bar (tqdm + rich)",
-    "export": "copy the best agent (model, statistics, metadata) to this directory at the end",
-    "verbose": "SB3 verbosity; 1 also prints every evaluation",
-}
 
 
 def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argparse.Namespace]:
-    """TrainOptions (every dataclass field is an option) and the plotting options."""
+    """TrainOptions (every field the dataclass offers is an option) and the plotting options."""
     parser = ArgumentParser(prog=program_name("benchmarks.train_ppo"),
                             description=__doc__.split("\n\n")[0],
                             formatter_class=HelpFormatter)  # fmt: skip
@@ -110,41 +75,14 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argpars
     parser.add_argument("--evaluate", default=None, metavar="AGENT",
                         help="only evaluate AGENT on the held-out seeds 0-9 (paper scenario) "
                              "and write AGENT/held_out_evaluation.json")  # fmt: skip
-    hints = typing.get_type_hints(TrainOptions)
-    for f in fields(TrainOptions):
-        if f.name in FIXED:
-            continue
-        flag = "--" + f.name.replace("_", "-")
-        default = f.default if f.default is not MISSING else f.default_factory()  # type: ignore[misc]
-        if hints[f.name] is bool:
-            parser.add_argument(flag, action=argparse.BooleanOptionalAction, default=default,
-                                help=HELP[f.name])  # fmt: skip
-        elif f.name == "eval_seeds":
-            parser.add_argument(flag, default=",".join(map(str, default)), help=HELP[f.name])
-        elif f.name in ("n_timesteps", "stop_at"):
-            parser.add_argument(flag, type=lambda v: int(float(v)), default=None,
-                                help=HELP[f.name])  # fmt: skip
-        elif f.name == "export":
-            parser.add_argument(flag, default=None, help=HELP[f.name])
-        elif f.name == "algo":
-            parser.add_argument(flag, choices=sorted(ALGORITHMS), default=default,
-                                help=HELP[f.name])  # fmt: skip
-        elif f.name == "config":  # the algorithm's file unless given
-            parser.add_argument(flag, default=None, help=HELP[f.name])
-        else:
-            parser.add_argument(flag, type=type(default), default=default, help=HELP[f.name])
-    ns = vars(parser.parse_args(argv))
-    if ns["config"] is None:
-        ns["config"] = str(HERE / "hyperparams" / f"{ns['algo']}.yml")
-    extra = argparse.Namespace(curve=ns.pop("curve"), plot_only=ns.pop("plot_only"),
-                               evaluate=ns.pop("evaluate"))  # fmt: skip
+    names = add_options(parser, TrainOptions)
+    ns = parser.parse_args(argv)
+    if ns.config is None:
+        ns.config = str(HERE / "hyperparams" / f"{ns.algo}.yml")
+    extra = argparse.Namespace(curve=ns.curve, plot_only=ns.plot_only, evaluate=ns.evaluate)
     if extra.plot_only and not extra.curve:
         parser.error("--plot-only needs --curve")
-    try:
-        ns["eval_seeds"] = tuple(int(s) for s in str(ns["eval_seeds"]).split(",") if s.strip())
-    except ValueError as exc:
-        parser.error(f"--eval-seeds must be comma-separated integers: {exc}")
-    return TrainOptions(**ns, **FIXED), extra
+    return from_args(TrainOptions, ns, names, **FIXED), extra
 
 
 def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
@@ -157,8 +95,6 @@ def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
         check_agent(Path(extra.evaluate))
         writable_location(extra.evaluate, "--evaluate")  # AGENT/held_out_evaluation.json
         return
-    if opts.vec_env not in VEC_ENVS:
-        raise ValueError(f"--vec-env must be one of {list(VEC_ENVS)}, got {opts.vec_env!r}")
     if not MAX_SEED >= opts.seed >= 0:
         raise ValueError(f"--seed must be an integer in [0, {MAX_SEED}], got {opts.seed}")
     if extra.plot_only:
