@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from auv_gym.path_bounds import min_tangent_squared
+from auv_gym.guidance import path_angles
+from auv_gym.path_bounds import Bound, min_tangent_squared, spline_turn_rates
 from auv_gym.validation import ArgumentTypeError, choice, integer, is_real, real, vector
 
 __all__ = [
@@ -29,6 +30,7 @@ __all__ = [
     "make_path",
     "path_eval",
     "path_third_derivative",
+    "path_turn_rates",
 ]
 
 HELIX, LINE, SPLINE = 0, 1, 2
@@ -138,6 +140,27 @@ class Path:
         """n points along the path for plotting, shape (n, 3) [m]."""
         end = self.s_end if math.isfinite(self.s_end) else (s_max if s_max is not None else 100.0)
         return self.evaluate(np.linspace(0.0, end, n))[0]
+
+    def check_kernel_data(self) -> None:
+        """The kernel description is complete and finite (the kernels do not bounds-check)."""
+        data = getattr(self, "data", None)
+        ok = (
+            isinstance(data, np.ndarray) and data.dtype == np.float64 and data.ndim == 1
+            and self.kind in KERNEL_KINDS and data.size >= 6 and np.all(np.isfinite(data))
+        )  # fmt: skip
+        if not (ok and KERNEL_KINDS[self.kind].fits(data)):
+            raise ValueError(
+                f"path {type(self).__name__} has no valid kernel data (kind, data); "
+                "build paths with Helix, StraightLine, Spline or make_path"
+            )
+
+    def turn_rate_bounds(self, accept_below: float = -math.inf) -> tuple[Bound, Bound]:
+        """`path_turn_rates` with where each maximum lies (`path_bounds.Bound`)."""
+        return KERNEL_KINDS[self.kind].turn_rate_bounds(self, accept_below)
+
+    def turn_location(self, bound: Bound) -> str:
+        """Where a turn-rate maximum lies, for an error message: "" or " (near s = …)"."""
+        return KERNEL_KINDS[self.kind].location(self, bound)
 
 
 class Helix(Path):
@@ -341,6 +364,94 @@ def _clamped_cubic_coefficients(
     A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
     rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
     return _cubic_coefficients(knots, pts, np.linalg.solve(A, rhs))
+
+
+class KernelKind:
+    """The Python side of a kernel path kind whose p' and p'' have constant norms and turn
+    rates (helix, line): a data vector of 6 floats, turn rates from samples (exact), and the
+    point a translation moves at ``data[origin : origin + 3]`` (helix centre, line start)."""
+
+    def __init__(self, origin: int) -> None:
+        self.origin = origin
+
+    def fits(self, data: np.ndarray) -> bool:
+        return data.size == 6
+
+    def shifted(self, data: np.ndarray, offset: np.ndarray) -> np.ndarray:
+        """The data vector of p(s) + offset [m]."""
+        out = data.copy()
+        out[self.origin : self.origin + 3] += offset
+        return out
+
+    def turn_rate_bounds(self, path: Path, accept_below: float) -> tuple[Bound, Bound]:
+        samples = np.linspace(0.0, 100.0, 9)
+        rates = np.empty((len(samples), 2))
+        for k, s in enumerate(samples):
+            _, _, _, dx, dy, dz, ddx, ddy, ddz = path_eval(path.kind, path.data, float(s))
+            _, _, dpsi_ds, dtheta_ds, speed = path_angles(dx, dy, dz, ddx, ddy, ddz)
+            rates[k] = abs(dpsi_ds) / speed, abs(dtheta_ds) / speed
+        if not np.all(np.isfinite(rates)):
+            raise ValueError(f"path {type(path).__name__}: p'(s) or p''(s) is not finite or zero")
+        psi_rate, theta_rate = rates.max(axis=0)
+        return Bound(float(psi_rate), float(psi_rate), 0, 0.0), Bound(
+            float(theta_rate), float(theta_rate), 0, 0.0
+        )
+
+    def location(self, path: Path, bound: Bound) -> str:
+        return ""
+
+
+class SplineKind(KernelKind):
+    """The cubic-spline kind: [n_seg, knots (n_seg + 1), 12 coefficients per segment]; proven
+    turn-rate bounds per segment (`path_bounds.spline_turn_rates`); no single origin (a
+    translation moves every segment's a0)."""
+
+    def fits(self, data: np.ndarray) -> bool:
+        n_seg = data[0]
+        return bool(n_seg >= 1 and n_seg == int(n_seg) and data.size == 2 + 13 * int(n_seg))
+
+    def shifted(self, data: np.ndarray, offset: np.ndarray) -> np.ndarray:
+        """The constant coefficient a0 of every segment's x, y, z cubic moves (`path_eval`)."""
+        out = data.copy()
+        n_seg = int(data[0])
+        base = 1 + (n_seg + 1) + 12 * np.arange(n_seg)
+        for axis in range(3):
+            out[base + 4 * axis] += offset[axis]
+        return out
+
+    def turn_rate_bounds(self, path: Path, accept_below: float) -> tuple[Bound, Bound]:
+        bounds = spline_turn_rates(path.data, accept_below)
+        if not all(math.isfinite(b.upper) for b in bounds):
+            raise ValueError(f"path {type(path).__name__}: p'(s) is zero at s = "
+                             f"{bounds[0].s:.6g}, where its heading is undefined")  # fmt: skip
+        return bounds
+
+    def location(self, path: Path, bound: Bound) -> str:
+        knots = path.data[1 : int(path.data[0]) + 2]
+        k = bound.segment + int(bound.s - knots[bound.segment]
+                                > knots[bound.segment + 1] - bound.s)  # fmt: skip
+        if isinstance(path, Spline):
+            return f" (near s = {bound.s:.6g}, waypoint {k})"
+        return f" (near s = {bound.s:.6g})"
+
+
+# One entry per kernel path kind (`path_eval`): what the checks know of its data vector.
+KERNEL_KINDS: dict[int, KernelKind] = {
+    HELIX: KernelKind(origin=3),
+    LINE: KernelKind(origin=0),
+    SPLINE: SplineKind(origin=0),
+}
+
+
+def path_turn_rates(path: Path, accept_below: float = -math.inf) -> tuple[float, float]:
+    """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
+
+    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (docs/model.md §3.1, §3.3), so ψ̇_F = this rate × u_p.
+    Exact for the helix (constant in s) and the line (0); for a spline a proven upper bound at
+    most 0.1 % above the maximum (`path_bounds.spline_turn_rates`), or, with ``accept_below``,
+    a bound at most that limit whenever the maximum is. A path whose p'(s) vanishes raises.
+    """
+    return tuple(b.upper for b in path.turn_rate_bounds(accept_below))  # type: ignore[return-value]
 
 
 # fit_curve: the check points inside each segment and the finite-difference steps.
