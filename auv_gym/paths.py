@@ -13,10 +13,19 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from auv_gym.guidance import path_angles
 from auv_gym.path_bounds import Bound, min_tangent_squared, spline_turn_rates
+from auv_gym.path_kernels import (
+    HELIX,
+    LINE,
+    SPLINE,
+    clamped_cubic_coefficients,
+    natural_cubic_coefficients,
+    path_eval,
+    path_third_derivative,
+    spline_data,
+)
 from auv_gym.validation import ArgumentTypeError, choice, integer, is_real, real, vector
 
 __all__ = [
@@ -33,7 +42,6 @@ __all__ = [
     "path_turn_rates",
 ]
 
-HELIX, LINE, SPLINE = 0, 1, 2
 # Documented ranges of the path arguments: they keep every evaluation of p, p', p'' finite.
 POSITION_BOUND = 1e6  # [m] |coordinate| of centres, starts and waypoints (1000 km)
 SCALE_BOUND = 1e5  # [m] helix radius, |climb| per unit s
@@ -50,69 +58,6 @@ def _s_end(owner: str, value: float) -> float:
     if not float(value) > 0:
         raise ValueError(f"{owner} must be a positive real number or inf, got {value!r}")
     return float(value)
-
-
-@njit(cache=True, inline="always")
-def _cubic(data, i, ds):
-    """Value, first and second derivative of a0 + a1·ds + a2·ds² + a3·ds³, a = data[i:i + 4]."""
-    a0, a1, a2, a3 = data[i], data[i + 1], data[i + 2], data[i + 3]
-    return (
-        a0 + ds * (a1 + ds * (a2 + ds * a3)),
-        a1 + ds * (2.0 * a2 + 3.0 * ds * a3),
-        2.0 * a2 + 6.0 * ds * a3,
-    )
-
-
-@njit(cache=True, inline="always")
-def _spline_segment(data, s):
-    """(offset of the segment's x coefficients in ``data``, s − its knot) of the spline segment
-    holding s, by binary search, clamped to the end segments."""
-    n_seg = int(data[0])
-    lo, hi = 0, n_seg - 1
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if data[1 + mid] <= s:
-            lo = mid
-        else:
-            hi = mid - 1
-    return 1 + (n_seg + 1) + lo * 12, s - data[1 + lo]
-
-
-@njit(cache=True, inline="always")  # inlined into the RK4 stages: ~7% faster kernel
-def path_eval(kind, data, s):
-    """(x, y, z, x', y', z', x'', y'', z'') of the path at parameter s [m, m/unit s, ...]."""
-    if kind == HELIX:
-        radius, omega, climb, x0, y0, z0 = data[0], data[1], data[2], data[3], data[4], data[5]
-        c, sn = math.cos(omega * s), math.sin(omega * s)
-        return (
-            radius * c + x0, radius * sn + y0, z0 - climb * s,
-            -radius * omega * sn, radius * omega * c, -climb,
-            -radius * omega * omega * c, -radius * omega * omega * sn, 0.0,
-        )  # fmt: skip
-    if kind == LINE:
-        return (
-            data[0] + s * data[3], data[1] + s * data[4], data[2] + s * data[5],
-            data[3], data[4], data[5], 0.0, 0.0, 0.0,
-        )  # fmt: skip
-    # SPLINE: data = [n_seg, knots[0..n_seg], coeffs[n_seg, 3 axes, 4]]; cubic in (s − knot_k)
-    base, ds = _spline_segment(data, s)
-    x, dx, ddx = _cubic(data, base, ds)
-    y, dy, ddy = _cubic(data, base + 4, ds)
-    z, dz, ddz = _cubic(data, base + 8, ds)
-    return x, y, z, dx, dy, dz, ddx, ddy, ddz
-
-
-@njit(cache=True, inline="always")
-def path_third_derivative(kind, data, s):
-    """p‴(s) = (x‴, y‴, z‴) [m per unit s³], for the torsion of the path preview."""
-    if kind == HELIX:
-        radius, omega = data[0], data[1]
-        w3 = radius * omega * omega * omega
-        return w3 * math.sin(omega * s), -w3 * math.cos(omega * s), 0.0
-    if kind == LINE:
-        return 0.0, 0.0, 0.0
-    base, _ = _spline_segment(data, s)
-    return 6.0 * data[base + 3], 6.0 * data[base + 7], 6.0 * data[base + 11]
 
 
 class Path:
@@ -258,7 +203,7 @@ class Spline(Path):
             raise ValueError("Spline: consecutive waypoints must be distinct")
         knots = np.r_[0.0, np.cumsum(chords)]
         if end_tangents is None:
-            coeffs = _natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
+            coeffs = natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
         else:
             if isinstance(end_tangents, (str, bytes)) or len(end_tangents) != 2:
                 raise ArgumentTypeError(f"Spline end_tangents must be two (x, y, z) vectors, "
@@ -266,12 +211,12 @@ class Spline(Path):
             slopes = [np.array(vector(f"Spline end_tangents[{k}]", v, 3, -SCALE_BOUND,
                                       SCALE_BOUND, "m per unit s"))
                       for k, v in enumerate(end_tangents)]  # fmt: skip
-            coeffs = _clamped_cubic_coefficients(knots, pts, *slopes)
+            coeffs = clamped_cubic_coefficients(knots, pts, *slopes)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("Spline: the waypoints give a spline with non-finite coefficients")
         self.waypoints = pts
         self.s_end = float(knots[-1])
-        self.data = _spline_data(knots, coeffs)
+        self.data = spline_data(knots, coeffs)
         check_tangent("Spline", self.data, knots)
 
 
@@ -314,56 +259,6 @@ def _waypoint_array(waypoints: object) -> np.ndarray:
         raise ValueError(f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, "
                          f"{POSITION_BOUND:g}] m")  # fmt: skip
     return pts
-
-
-def _spline_data(knots: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
-    """The SPLINE kernel vector [n_seg, knots, coeffs (n_seg, 3, 4) flattened]."""
-    return np.r_[float(len(knots) - 1), knots, coeffs.ravel()]
-
-
-def _natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Per-segment cubic coefficients (a0..a3) of the natural spline, shape (n_seg, 3, 4)."""
-    n = len(knots)
-    h = np.diff(knots)
-    # Second derivatives m_i solve a tridiagonal system; natural ends m_0 = m_{n−1} = 0.
-    A = np.zeros((n, n))
-    rhs = np.zeros((n, 3))
-    A[0, 0] = A[-1, -1] = 1.0
-    i = np.arange(1, n - 1)  # element-wise the same operations as a loop over the rows
-    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
-    m = np.linalg.solve(A, rhs)
-    return _cubic_coefficients(knots, pts, m)
-
-
-def _cubic_coefficients(knots: np.ndarray, pts: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """(a0..a3) per segment, shape (n_seg, 3, 4), of the cubic spline with knot values ``pts``
-    and second derivatives ``m``."""
-    h = np.diff(knots)
-    a0 = pts[:-1]
-    a1 = (pts[1:] - pts[:-1]) / h[:, None] - h[:, None] * (2.0 * m[:-1] + m[1:]) / 6.0
-    a2 = m[:-1] / 2.0
-    a3 = (m[1:] - m[:-1]) / (6.0 * h[:, None])
-    return np.stack([a0, a1, a2, a3], axis=-1)
-
-
-def _clamped_cubic_coefficients(
-    knots: np.ndarray, pts: np.ndarray, slope0: np.ndarray, slope1: np.ndarray
-) -> np.ndarray:
-    """Coefficients (n_seg, 3, 4) of the cubic spline with end slopes p'(s_0), p'(s_n) given:
-    fourth-order accurate up to the ends (a natural spline's p'' = 0 there is only second)."""
-    n = len(knots)
-    h = np.diff(knots)
-    A = np.zeros((n, n))
-    rhs = np.zeros((n, 3))
-    A[0, 0], A[0, 1] = 2.0 * h[0], h[0]
-    rhs[0] = 6.0 * ((pts[1] - pts[0]) / h[0] - slope0)
-    A[-1, -2], A[-1, -1] = h[-1], 2.0 * h[-1]
-    rhs[-1] = 6.0 * (slope1 - (pts[-1] - pts[-2]) / h[-1])
-    i = np.arange(1, n - 1)
-    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
-    return _cubic_coefficients(knots, pts, np.linalg.solve(A, rhs))
 
 
 class KernelKind:
@@ -474,7 +369,7 @@ class FittedCurve(Path):
     def __init__(self, knots: np.ndarray, coeffs: np.ndarray, position_error: float,
                  tangent_error: float) -> None:  # fmt: skip
         self.s_end = float(knots[-1])
-        self.data = _spline_data(knots, coeffs)
+        self.data = spline_data(knots, coeffs)
         self.position_error = position_error
         self.tangent_error = tangent_error
         self.segments = len(knots) - 1
@@ -525,7 +420,7 @@ def fit_curve(
         w = np.array([-25.0, 48.0, -36.0, 16.0, -3.0]) / (12.0 * d)
         slope0 = w[0] * pts[0] + w[1:] @ ahead
         slope1 = -(w[0] * pts[-1] + w[1:] @ behind)
-        coeffs = _clamped_cubic_coefficients(knots, pts, slope0, slope1)
+        coeffs = clamped_cubic_coefficients(knots, pts, slope0, slope1)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("fit_curve: the curve's samples give non-finite coefficients")
         fitted = FittedCurve(knots, coeffs, math.nan, math.nan)
