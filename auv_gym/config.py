@@ -69,8 +69,8 @@ __all__ = [
     "path_turn_rates",
 ]
 
-# "paper" mode limits (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
-ACTUATOR_LIMITS = (50.0, 10.0, 10.0)
+# "paper" mode limits of REMUS 100 (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
+ACTUATOR_LIMITS = AUVParams().actuator_limits
 VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
 _SUBSTEP_TOL = 1e-9
 # Documented ranges of the timing and start arguments (AUVPath3DEnv docstring, "Arguments").
@@ -96,7 +96,8 @@ class SimConfig:
     actuator_params: ActuatorParams = field(default_factory=ActuatorParams)
     random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
     random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
-    actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS  # [N, N·m, N·m]
+    # [N, N·m, N·m]; None: the vehicle's (`params`: X_max, M_max, N_max), the one source.
+    actuator_limits: tuple[float, float, float] | None = None
     control_dt: float = 0.05  # [s]
     physics_dt: float = 0.01  # [s]
     max_time: float = 300.0  # [s]
@@ -238,10 +239,17 @@ class SimConfig:
         put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
                                       high_open=True))  # fmt: skip
         self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
+        if self.actuator_limits is None:
+            put("actuator_limits", self.params.actuator_limits)
         put("actuator_limits", vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6,
                                       "N, N·m"))  # fmt: skip
         if min(self.actuator_limits) <= 0.0:
             raise ValueError(f"actuator_limits must be positive, got {self.actuator_limits}")
+        if self.actuator_limits != self.params.actuator_limits:
+            raise ValueError(
+                f"actuator_limits {self.actuator_limits} conflicts with params (X_max, M_max, "
+                f"N_max) = {self.params.actuator_limits}: give the limits once, in params"
+            )
         put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
         most = MAX_SUBSTEPS * self.physics_dt
         put("control_dt", real("control_dt", self.control_dt, 0.0, most, low_open=True,

@@ -207,7 +207,7 @@ class AUVPath3DEnv(gym.Env):
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
     | `surge_limit` | inf | u_max [m/s]: overspeed penalty and termination (Rewards) |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
-    | `params` | REMUS 100 | `AUVParams` of the true vehicle, or a dict: fields, `scale` factors |
+    | `params` | REMUS 100 | `AUVParams` of the true vehicle (limits X_max …), or a dict, `scale` |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
