@@ -78,7 +78,8 @@ PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
 MAX_SUBSTEPS = 10_000  # physics steps per control step: bounds the cost of one step()
 MAX_EPISODE_TIME = 1e6  # [s] max_time (11.6 days)
 HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
-START_JITTER = 2.0 * math.sqrt(3.0)  # [m] largest offset of a random start near the start point
+START_OFFSET = 2.0  # [m] per axis: a random start near the start point (`Simulator`) moves
+START_JITTER = START_OFFSET * math.sqrt(3.0)  # [m] so far at most from the start point
 
 
 @dataclass(frozen=True)
