@@ -15,16 +15,20 @@ from typing import Any
 import numpy as np
 
 from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
+from auv_gym.config_args import (
+    DISTURBANCE_PRESETS,
+    noise_from,
+    path_from,
+    path_is_random,
+    reward_from,
+)
 from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope, check_path_depths
 from auv_gym.disturbances import (
-    MAX_NOISE_AMPLITUDE,
-    MAX_NOISE_HOLD,
     CurrentConfig,
     NoiseConfig,
     gauss_markov_coefficients,
 )
-from auv_gym.guidance import path_angles
 from auv_gym.integrator import (
     ACTUATORS,
     CONFIG_FIELDS,
@@ -35,29 +39,22 @@ from auv_gym.observation import (
     SPEED_BOUND,
     ObservationConfig,
 )
-from auv_gym.path_bounds import Bound, spline_turn_rates
 from auv_gym.path_generator import PathDistribution
 from auv_gym.path_offset import shift_path
 from auv_gym.paths import (
-    HELIX,
-    LINE,
-    PATHS,
     POSITION_BOUND,
-    SPLINE,
     Path,
-    Spline,
     make_path,
-    path_eval,
+    path_turn_rates,
 )
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.safety_cost import SafetyCost
 from auv_gym.sensors import SENSOR_PRESETS, SensorConfig
 from auv_gym.task import (
-    REWARD_TERMS,
     RewardWeights,
     TaskLimits,
 )
-from auv_gym.validation import ArgumentTypeError, choice, flag, is_real, keys_within, real, vector
+from auv_gym.validation import ArgumentTypeError, choice, flag, real, vector
 from auv_gym.vehicle import AUVParams, params_from_spec, remus100
 from auv_gym.waves import WaveConfig
 
@@ -72,129 +69,17 @@ __all__ = [
     "path_turn_rates",
 ]
 
-# "paper" mode limits (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
-ACTUATOR_LIMITS = (50.0, 10.0, 10.0)
-DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
+# "paper" mode limits of REMUS 100 (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
+ACTUATOR_LIMITS = AUVParams().actuator_limits
 VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
 _SUBSTEP_TOL = 1e-9
 # Documented ranges of the timing and start arguments (AUVPath3DEnv docstring, "Arguments").
 PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
 MAX_SUBSTEPS = 10_000  # physics steps per control step: bounds the cost of one step()
 MAX_EPISODE_TIME = 1e6  # [s] max_time (11.6 days)
-DEFAULT_NOISE_HOLD = 0.01  # [s]
 HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
-START_JITTER = 2.0 * math.sqrt(3.0)  # [m] largest offset of a random start near the start point
-
-
-def _noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None) -> NoiseConfig:
-    """The white noise of the `disturbance` and `noise_hold` arguments; a conflict is an error."""
-    hold = DEFAULT_NOISE_HOLD
-    if noise_hold is not None:
-        hold = real("noise_hold", noise_hold, 0.0, MAX_NOISE_HOLD, low_open=True, unit="s")
-    if isinstance(disturbance, NoiseConfig):
-        if noise_hold is not None and hold != disturbance.hold:
-            raise ValueError(
-                f"noise_hold = {noise_hold!r} s conflicts with disturbance = {disturbance!r}: "
-                "give the hold once (NoiseConfig.hold or noise_hold)"
-            )
-        return disturbance
-    if isinstance(disturbance, str) and disturbance in DISTURBANCE_PRESETS:
-        return NoiseConfig((DISTURBANCE_PRESETS[disturbance],) * 5, hold)
-    if is_real(disturbance):
-        amplitude = real("disturbance (noise amplitude)", disturbance, 0.0, MAX_NOISE_AMPLITUDE,
-                         unit="N or N·m")  # fmt: skip
-        return NoiseConfig((amplitude,) * 5, hold)
-    error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
-    raise error(
-        f"unknown disturbance {disturbance!r:.80}; valid: {sorted(DISTURBANCE_PRESETS)}, "
-        f"a NoiseConfig or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
-    )
-
-
-def _reward_from(reward_weights: RewardWeights | dict | None) -> RewardWeights:
-    if reward_weights is None:
-        return RewardWeights()
-    if isinstance(reward_weights, RewardWeights):
-        return reward_weights
-    if not isinstance(reward_weights, Mapping):
-        raise ArgumentTypeError(
-            f"reward_weights must be None, a RewardWeights or a dict with keys among "
-            f"{list(REWARD_TERMS)}, got {reward_weights!r:.80}"
-        )
-    return RewardWeights(**keys_within("reward_weights", reward_weights, REWARD_TERMS))
-
-
-def path_is_random(path: object) -> bool:
-    """True for the name "random"."""
-    return isinstance(path, str) and path == "random"
-
-
-def _path_from(path: object) -> Path | PathDistribution:
-    """The `path` argument: a name, "random", a `Path`, a `PathDistribution`, a dict of its
-    fields, a dict {"kind": name, **arguments} of one fixed path, or a list of (x, y, z)
-    waypoints."""
-    fixed = isinstance(path, Mapping) and "kind" in path
-    if not fixed and (isinstance(path, (PathDistribution, Mapping)) or path_is_random(path)):
-        return PathDistribution.from_spec(path)  # type: ignore[arg-type]
-    try:
-        return make_path(path)  # type: ignore[arg-type]
-    except ValueError as error:
-        if isinstance(path, str):  # the env also takes "random": list it with the others
-            names, with_random = str(sorted(PATHS)), str(sorted([*PATHS, "random"]))
-            raise ValueError(str(error).replace(names, with_random, 1)) from None
-        raise
-
-
-def _check_path(path: Path) -> None:
-    """The path's kernel description is complete and finite (the kernels do not bounds-check)."""
-    if not isinstance(path, Path):
-        raise ArgumentTypeError(f"path must be a Path, got {path!r:.80}")
-    data = getattr(path, "data", None)
-    ok = (
-        isinstance(data, np.ndarray) and data.dtype == np.float64 and data.ndim == 1
-        and path.kind in (HELIX, LINE, SPLINE) and data.size >= 6 and np.all(np.isfinite(data))
-    )  # fmt: skip
-    if ok and path.kind == SPLINE:
-        n_seg = data[0]
-        ok = n_seg >= 1 and n_seg == int(n_seg) and data.size == 2 + 13 * int(n_seg)
-    elif ok:
-        ok = data.size == 6
-    if not ok:
-        raise ValueError(f"path {type(path).__name__} has no valid kernel data (kind, data); "
-                         "build paths with Helix, StraightLine, Spline or make_path")  # fmt: skip
-
-
-def path_turn_rates(path: Path, accept_below: float = -math.inf) -> tuple[float, float]:
-    """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
-
-    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (docs/model.md §3.1, §3.3), so ψ̇_F = this rate × u_p.
-    Exact for the helix (constant in s) and the line (0); for a spline a proven upper bound at
-    most 0.1 % above the maximum (`path_bounds.spline_turn_rates`), or, with ``accept_below``,
-    a bound at most that limit whenever the maximum is. A path whose p'(s) vanishes raises.
-    """
-    return tuple(b.upper for b in _turn_rate_bounds(path, accept_below))  # type: ignore[return-value]
-
-
-def _turn_rate_bounds(path: Path, accept_below: float = -math.inf) -> tuple[Bound, Bound]:
-    """`path_turn_rates` with where each maximum lies (`path_bounds.Bound`)."""
-    if path.kind == SPLINE:
-        bounds = spline_turn_rates(path.data, accept_below)
-        if not all(math.isfinite(b.upper) for b in bounds):
-            raise ValueError(f"path {type(path).__name__}: p'(s) is zero at s = "
-                             f"{bounds[0].s:.6g}, where its heading is undefined")  # fmt: skip
-        return bounds
-    samples = np.linspace(0.0, 100.0, 9)
-    rates = np.empty((len(samples), 2))
-    for k, s in enumerate(samples):
-        _, _, _, dx, dy, dz, ddx, ddy, ddz = path_eval(path.kind, path.data, float(s))
-        _, _, dpsi_ds, dtheta_ds, speed = path_angles(dx, dy, dz, ddx, ddy, ddz)
-        rates[k] = abs(dpsi_ds) / speed, abs(dtheta_ds) / speed
-    if not np.all(np.isfinite(rates)):
-        raise ValueError(f"path {type(path).__name__}: p'(s) or p''(s) is not finite or zero")
-    psi_rate, theta_rate = rates.max(axis=0)
-    return Bound(float(psi_rate), float(psi_rate), 0, 0.0), Bound(
-        float(theta_rate), float(theta_rate), 0, 0.0
-    )
+START_OFFSET = 2.0  # [m] per axis: a random start near the start point (`Simulator`) moves
+START_JITTER = START_OFFSET * math.sqrt(3.0)  # [m] so far at most from the start point
 
 
 @dataclass(frozen=True)
@@ -212,7 +97,8 @@ class SimConfig:
     actuator_params: ActuatorParams = field(default_factory=ActuatorParams)
     random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
     random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
-    actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS  # [N, N·m, N·m]
+    # [N, N·m, N·m]; None: the vehicle's (`params`: X_max, M_max, N_max), the one source.
+    actuator_limits: tuple[float, float, float] | None = None
     control_dt: float = 0.05  # [s]
     physics_dt: float = 0.01  # [s]
     max_time: float = 300.0  # [s]
@@ -274,7 +160,7 @@ class SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
         argument, its value and the allowed range."""
-        the_path = _path_from(path)
+        the_path = path_from(path)
         offset = (0.0, 0.0, 0.0)
         if path_offset is not None:
             offset = vector("path_offset", path_offset, 3, -POSITION_BOUND, POSITION_BOUND, "m")
@@ -284,7 +170,7 @@ class SimConfig:
         return cls(
             path=the_path,
             params=params_from_spec(params),
-            noise=_noise_from(disturbance, noise_hold),
+            noise=noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
             param_uncertainty=param_uncertainty,
             actuator=actuator,
@@ -300,7 +186,7 @@ class SimConfig:
             randomize_start=randomize_start,
             start_position=start_position,
             start_heading=start_heading,
-            reward=_reward_from(reward_weights),
+            reward=reward_from(reward_weights),
             limits=TaskLimits(
                 corridor=corridor,
                 max_pitch=max_pitch,
@@ -321,7 +207,9 @@ class SimConfig:
             object.__setattr__(self, name, value)
 
         if not isinstance(self.path, PathDistribution):
-            _check_path(self.path)
+            if not isinstance(self.path, Path):
+                raise ArgumentTypeError(f"path must be a Path, got {self.path!r:.80}")
+            self.path.check_kernel_data()
         for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
                            ("current", CurrentConfig), ("reward", RewardWeights),
                            ("limits", TaskLimits), ("actuator_params", ActuatorParams),
@@ -352,10 +240,17 @@ class SimConfig:
         put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
                                       high_open=True))  # fmt: skip
         self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
+        if self.actuator_limits is None:
+            put("actuator_limits", self.params.actuator_limits)
         put("actuator_limits", vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6,
                                       "N, N·m"))  # fmt: skip
         if min(self.actuator_limits) <= 0.0:
             raise ValueError(f"actuator_limits must be positive, got {self.actuator_limits}")
+        if self.actuator_limits != self.params.actuator_limits:
+            raise ValueError(
+                f"actuator_limits {self.actuator_limits} conflicts with params (X_max, M_max, "
+                f"N_max) = {self.params.actuator_limits}: give the limits once, in params"
+            )
         put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
         most = MAX_SUBSTEPS * self.physics_dt
         put("control_dt", real("control_dt", self.control_dt, 0.0, most, low_open=True,
@@ -431,17 +326,10 @@ class SimConfig:
         """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D: a proven bound
         on the whole path, so no start or s later in an episode can leave the bounds."""
         limit = PATH_RATE_BOUND / (2.0 * self.u_desired)
-        bounds = _turn_rate_bounds(self.path, accept_below=limit)
-        bound = max(bounds, key=lambda b: b.upper)
+        bound = max(self.path.turn_rate_bounds(accept_below=limit), key=lambda b: b.upper)
         rate = bound.upper
         if rate > limit and 2.0 * self.u_desired * rate > PATH_RATE_BOUND:
-            where = ""
-            if self.path.kind == SPLINE:
-                knots = self.path.data[1 : int(self.path.data[0]) + 2]
-                k = bound.segment + int(bound.s - knots[bound.segment]
-                                        > knots[bound.segment + 1] - bound.s)  # fmt: skip
-                where = f" (near s = {bound.s:.6g}, waypoint {k})" if isinstance(
-                    self.path, Spline) else f" (near s = {bound.s:.6g})"  # fmt: skip
+            where = self.path.turn_location(bound)
             raise ValueError(
                 f"path turns at up to {rate:.4g} rad/m{where}: with u_desired = "
                 f"{self.u_desired} m/s the virtual point (u_p <= 2 u_D) turns at up to "

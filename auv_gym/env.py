@@ -17,22 +17,20 @@ from auv_gym.config import SimConfig
 from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope
 from auv_gym.disturbances import CurrentConfig, NoiseConfig
-from auv_gym.observation import GUIDANCE_FIELDS, ObservationConfig
+from auv_gym.env_info import single_info, track_point
+from auv_gym.observation import ObservationConfig
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import Path
 from auv_gym.rendering import EpisodeRenderer
 from auv_gym.safety_cost import SafetyCost
 from auv_gym.sensors import SensorConfig
 from auv_gym.simulator import Simulator
-from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS, RewardWeights
+from auv_gym.task import NON_FINITE, RewardWeights
 from auv_gym.validation import ArgumentTypeError
 from auv_gym.vehicle import AUVParams
 from auv_gym.waves import WaveConfig
 
 __all__ = ["AUVPath3DEnv", "check_reset_observations", "validate_actions"]
-
-_UP = GUIDANCE_FIELDS.index("u_p")
-_REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
 
 
 def validate_actions(action: Any, shape: tuple[int, ...]) -> np.ndarray:
@@ -209,7 +207,7 @@ class AUVPath3DEnv(gym.Env):
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
     | `surge_limit` | inf | u_max [m/s]: overspeed penalty and termination (Rewards) |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
-    | `params` | REMUS 100 | `AUVParams` of the true vehicle, or a dict: fields, `scale` factors |
+    | `params` | REMUS 100 | `AUVParams` of the true vehicle (limits X_max …), or a dict, `scale` |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
     | `render_mode` | None | "rgb_array": 3-D track and errors over time (`auv_gym.rendering`) |
     | `observation` | "paper" | "paper" (15 entries), "preview" (above), {points, spacing} |
@@ -397,10 +395,8 @@ class AUVPath3DEnv(gym.Env):
         )
         self._last_obs[:] = obs
         if self._renderer is not None:
-            sim = self.sim
-            self._renderer.reset(sim.state[0, 0:3], sim.guid[0, 0:3], sim.state[0, 10],
-                                 path=sim.paths[0])  # fmt: skip
-        return obs, self._info(0, reset=True)
+            self._renderer.reset(*track_point(self.sim, 0), path=self.sim.paths[0])
+        return obs, single_info(self.sim, self.config.physics_dt, 0, reset=True)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         sim = self.sim
@@ -415,27 +411,9 @@ class AUVPath3DEnv(gym.Env):
             self._last_obs[:] = obs
         if self._renderer is not None:
             t = int(sim.step_index[0]) * self.config.physics_dt
-            self._renderer.append(sim.state[0, 0:3], sim.guid[0, 0:3], sim.state[0, 10], t)
-        info = self._info(code)
+            self._renderer.append(*track_point(sim, 0), t)
+        info = single_info(sim, self.config.physics_dt, code, reset=False)
         return obs, float(sim.reward[0]), code != 0, truncated, info
-
-    def _info(self, code: int, reset: bool = False) -> dict[str, Any]:
-        sim = self.sim
-        g = sim.guid[0]
-        x_e, y_e, z_e, distance = g[:4].tolist()
-        record = sim.record[0]
-        info: dict[str, Any] = {
-            "x_e": x_e, "y_e": y_e, "z_e": z_e, "distance": distance,
-            "s": float(sim.state[0, 10]), "u_p": float(g[_UP]),
-            "t": int(sim.step_index[0]) * self.config.physics_dt,
-            "tau": record[0:3].copy(), "disturbance": record[3:8].copy(),
-        }  # fmt: skip
-        if not reset:
-            info.update(zip(_REWARD_KEYS, sim.terms[0].tolist(), strict=True))
-            info["cost"] = float(sim.cost[0])
-        if code:
-            info["termination_reason"] = TERMINATION_REASONS[code]
-        return info
 
     @property
     def state(self) -> np.ndarray:

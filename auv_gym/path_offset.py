@@ -11,27 +11,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from auv_gym.paths import HELIX, LINE, SPLINE, Path
+from auv_gym.paths import KERNEL_KINDS, Path
 
 __all__ = ["ShiftedPath", "shift_path"]
 
 
 def _shifted_data(kind: int, data: np.ndarray, offset: np.ndarray) -> np.ndarray:
-    """The kernel vector of p(s) + offset: the helix centre, the line start, or the constant
-    coefficient a0 of every spline segment's x, y, z cubic (`paths.path_eval`)."""
-    out = data.copy()
-    if kind == HELIX:
-        out[3:6] += offset
-    elif kind == LINE:
-        out[0:3] += offset
-    elif kind == SPLINE:
-        n_seg = int(data[0])
-        base = 1 + (n_seg + 1) + 12 * np.arange(n_seg)
-        for axis in range(3):
-            out[base + 4 * axis] += offset[axis]
-    else:
+    """The kernel vector of p(s) + offset (`paths.KernelKind.shifted`)."""
+    if kind not in KERNEL_KINDS:
         raise ValueError(f"path kind {kind} cannot be shifted")
-    return out
+    return KERNEL_KINDS[kind].shifted(data, offset)
 
 
 class ShiftedPath(Path):

@@ -13,9 +13,19 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from numba import njit
 
-from auv_gym.path_bounds import min_tangent_squared
+from auv_gym.guidance import path_angles
+from auv_gym.path_bounds import Bound, min_tangent_squared, spline_turn_rates
+from auv_gym.path_kernels import (
+    HELIX,
+    LINE,
+    SPLINE,
+    clamped_cubic_coefficients,
+    natural_cubic_coefficients,
+    path_eval,
+    path_third_derivative,
+    spline_data,
+)
 from auv_gym.validation import ArgumentTypeError, choice, integer, is_real, real, vector
 
 __all__ = [
@@ -29,9 +39,9 @@ __all__ = [
     "make_path",
     "path_eval",
     "path_third_derivative",
+    "path_turn_rates",
 ]
 
-HELIX, LINE, SPLINE = 0, 1, 2
 # Documented ranges of the path arguments: they keep every evaluation of p, p', p'' finite.
 POSITION_BOUND = 1e6  # [m] |coordinate| of centres, starts and waypoints (1000 km)
 SCALE_BOUND = 1e5  # [m] helix radius, |climb| per unit s
@@ -48,69 +58,6 @@ def _s_end(owner: str, value: float) -> float:
     if not float(value) > 0:
         raise ValueError(f"{owner} must be a positive real number or inf, got {value!r}")
     return float(value)
-
-
-@njit(cache=True, inline="always")
-def _cubic(data, i, ds):
-    """Value, first and second derivative of a0 + a1·ds + a2·ds² + a3·ds³, a = data[i:i + 4]."""
-    a0, a1, a2, a3 = data[i], data[i + 1], data[i + 2], data[i + 3]
-    return (
-        a0 + ds * (a1 + ds * (a2 + ds * a3)),
-        a1 + ds * (2.0 * a2 + 3.0 * ds * a3),
-        2.0 * a2 + 6.0 * ds * a3,
-    )
-
-
-@njit(cache=True, inline="always")
-def _spline_segment(data, s):
-    """(offset of the segment's x coefficients in ``data``, s − its knot) of the spline segment
-    holding s, by binary search, clamped to the end segments."""
-    n_seg = int(data[0])
-    lo, hi = 0, n_seg - 1
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if data[1 + mid] <= s:
-            lo = mid
-        else:
-            hi = mid - 1
-    return 1 + (n_seg + 1) + lo * 12, s - data[1 + lo]
-
-
-@njit(cache=True, inline="always")  # inlined into the RK4 stages: ~7% faster kernel
-def path_eval(kind, data, s):
-    """(x, y, z, x', y', z', x'', y'', z'') of the path at parameter s [m, m/unit s, ...]."""
-    if kind == HELIX:
-        radius, omega, climb, x0, y0, z0 = data[0], data[1], data[2], data[3], data[4], data[5]
-        c, sn = math.cos(omega * s), math.sin(omega * s)
-        return (
-            radius * c + x0, radius * sn + y0, z0 - climb * s,
-            -radius * omega * sn, radius * omega * c, -climb,
-            -radius * omega * omega * c, -radius * omega * omega * sn, 0.0,
-        )  # fmt: skip
-    if kind == LINE:
-        return (
-            data[0] + s * data[3], data[1] + s * data[4], data[2] + s * data[5],
-            data[3], data[4], data[5], 0.0, 0.0, 0.0,
-        )  # fmt: skip
-    # SPLINE: data = [n_seg, knots[0..n_seg], coeffs[n_seg, 3 axes, 4]]; cubic in (s − knot_k)
-    base, ds = _spline_segment(data, s)
-    x, dx, ddx = _cubic(data, base, ds)
-    y, dy, ddy = _cubic(data, base + 4, ds)
-    z, dz, ddz = _cubic(data, base + 8, ds)
-    return x, y, z, dx, dy, dz, ddx, ddy, ddz
-
-
-@njit(cache=True, inline="always")
-def path_third_derivative(kind, data, s):
-    """p‴(s) = (x‴, y‴, z‴) [m per unit s³], for the torsion of the path preview."""
-    if kind == HELIX:
-        radius, omega = data[0], data[1]
-        w3 = radius * omega * omega * omega
-        return w3 * math.sin(omega * s), -w3 * math.cos(omega * s), 0.0
-    if kind == LINE:
-        return 0.0, 0.0, 0.0
-    base, _ = _spline_segment(data, s)
-    return 6.0 * data[base + 3], 6.0 * data[base + 7], 6.0 * data[base + 11]
 
 
 class Path:
@@ -138,6 +85,27 @@ class Path:
         """n points along the path for plotting, shape (n, 3) [m]."""
         end = self.s_end if math.isfinite(self.s_end) else (s_max if s_max is not None else 100.0)
         return self.evaluate(np.linspace(0.0, end, n))[0]
+
+    def check_kernel_data(self) -> None:
+        """The kernel description is complete and finite (the kernels do not bounds-check)."""
+        data = getattr(self, "data", None)
+        ok = (
+            isinstance(data, np.ndarray) and data.dtype == np.float64 and data.ndim == 1
+            and self.kind in KERNEL_KINDS and data.size >= 6 and np.all(np.isfinite(data))
+        )  # fmt: skip
+        if not (ok and KERNEL_KINDS[self.kind].fits(data)):
+            raise ValueError(
+                f"path {type(self).__name__} has no valid kernel data (kind, data); "
+                "build paths with Helix, StraightLine, Spline or make_path"
+            )
+
+    def turn_rate_bounds(self, accept_below: float = -math.inf) -> tuple[Bound, Bound]:
+        """`path_turn_rates` with where each maximum lies (`path_bounds.Bound`)."""
+        return KERNEL_KINDS[self.kind].turn_rate_bounds(self, accept_below)
+
+    def turn_location(self, bound: Bound) -> str:
+        """Where a turn-rate maximum lies, for an error message: "" or " (near s = …)"."""
+        return KERNEL_KINDS[self.kind].location(self, bound)
 
 
 class Helix(Path):
@@ -235,7 +203,7 @@ class Spline(Path):
             raise ValueError("Spline: consecutive waypoints must be distinct")
         knots = np.r_[0.0, np.cumsum(chords)]
         if end_tangents is None:
-            coeffs = _natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
+            coeffs = natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
         else:
             if isinstance(end_tangents, (str, bytes)) or len(end_tangents) != 2:
                 raise ArgumentTypeError(f"Spline end_tangents must be two (x, y, z) vectors, "
@@ -243,12 +211,12 @@ class Spline(Path):
             slopes = [np.array(vector(f"Spline end_tangents[{k}]", v, 3, -SCALE_BOUND,
                                       SCALE_BOUND, "m per unit s"))
                       for k, v in enumerate(end_tangents)]  # fmt: skip
-            coeffs = _clamped_cubic_coefficients(knots, pts, *slopes)
+            coeffs = clamped_cubic_coefficients(knots, pts, *slopes)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("Spline: the waypoints give a spline with non-finite coefficients")
         self.waypoints = pts
         self.s_end = float(knots[-1])
-        self.data = _spline_data(knots, coeffs)
+        self.data = spline_data(knots, coeffs)
         check_tangent("Spline", self.data, knots)
 
 
@@ -293,54 +261,92 @@ def _waypoint_array(waypoints: object) -> np.ndarray:
     return pts
 
 
-def _spline_data(knots: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
-    """The SPLINE kernel vector [n_seg, knots, coeffs (n_seg, 3, 4) flattened]."""
-    return np.r_[float(len(knots) - 1), knots, coeffs.ravel()]
+class KernelKind:
+    """The Python side of a kernel path kind whose p' and p'' have constant norms and turn
+    rates (helix, line): a data vector of 6 floats, turn rates from samples (exact), and the
+    point a translation moves at ``data[origin : origin + 3]`` (helix centre, line start)."""
+
+    def __init__(self, origin: int) -> None:
+        self.origin = origin
+
+    def fits(self, data: np.ndarray) -> bool:
+        return data.size == 6
+
+    def shifted(self, data: np.ndarray, offset: np.ndarray) -> np.ndarray:
+        """The data vector of p(s) + offset [m]."""
+        out = data.copy()
+        out[self.origin : self.origin + 3] += offset
+        return out
+
+    def turn_rate_bounds(self, path: Path, accept_below: float) -> tuple[Bound, Bound]:
+        samples = np.linspace(0.0, 100.0, 9)
+        rates = np.empty((len(samples), 2))
+        for k, s in enumerate(samples):
+            _, _, _, dx, dy, dz, ddx, ddy, ddz = path_eval(path.kind, path.data, float(s))
+            _, _, dpsi_ds, dtheta_ds, speed = path_angles(dx, dy, dz, ddx, ddy, ddz)
+            rates[k] = abs(dpsi_ds) / speed, abs(dtheta_ds) / speed
+        if not np.all(np.isfinite(rates)):
+            raise ValueError(f"path {type(path).__name__}: p'(s) or p''(s) is not finite or zero")
+        psi_rate, theta_rate = rates.max(axis=0)
+        return Bound(float(psi_rate), float(psi_rate), 0, 0.0), Bound(
+            float(theta_rate), float(theta_rate), 0, 0.0
+        )
+
+    def location(self, path: Path, bound: Bound) -> str:
+        return ""
 
 
-def _natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Per-segment cubic coefficients (a0..a3) of the natural spline, shape (n_seg, 3, 4)."""
-    n = len(knots)
-    h = np.diff(knots)
-    # Second derivatives m_i solve a tridiagonal system; natural ends m_0 = m_{n−1} = 0.
-    A = np.zeros((n, n))
-    rhs = np.zeros((n, 3))
-    A[0, 0] = A[-1, -1] = 1.0
-    i = np.arange(1, n - 1)  # element-wise the same operations as a loop over the rows
-    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
-    m = np.linalg.solve(A, rhs)
-    return _cubic_coefficients(knots, pts, m)
+class SplineKind(KernelKind):
+    """The cubic-spline kind: [n_seg, knots (n_seg + 1), 12 coefficients per segment]; proven
+    turn-rate bounds per segment (`path_bounds.spline_turn_rates`); no single origin (a
+    translation moves every segment's a0)."""
+
+    def fits(self, data: np.ndarray) -> bool:
+        n_seg = data[0]
+        return bool(n_seg >= 1 and n_seg == int(n_seg) and data.size == 2 + 13 * int(n_seg))
+
+    def shifted(self, data: np.ndarray, offset: np.ndarray) -> np.ndarray:
+        """The constant coefficient a0 of every segment's x, y, z cubic moves (`path_eval`)."""
+        out = data.copy()
+        n_seg = int(data[0])
+        base = 1 + (n_seg + 1) + 12 * np.arange(n_seg)
+        for axis in range(3):
+            out[base + 4 * axis] += offset[axis]
+        return out
+
+    def turn_rate_bounds(self, path: Path, accept_below: float) -> tuple[Bound, Bound]:
+        bounds = spline_turn_rates(path.data, accept_below)
+        if not all(math.isfinite(b.upper) for b in bounds):
+            raise ValueError(f"path {type(path).__name__}: p'(s) is zero at s = "
+                             f"{bounds[0].s:.6g}, where its heading is undefined")  # fmt: skip
+        return bounds
+
+    def location(self, path: Path, bound: Bound) -> str:
+        knots = path.data[1 : int(path.data[0]) + 2]
+        k = bound.segment + int(bound.s - knots[bound.segment]
+                                > knots[bound.segment + 1] - bound.s)  # fmt: skip
+        if isinstance(path, Spline):
+            return f" (near s = {bound.s:.6g}, waypoint {k})"
+        return f" (near s = {bound.s:.6g})"
 
 
-def _cubic_coefficients(knots: np.ndarray, pts: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """(a0..a3) per segment, shape (n_seg, 3, 4), of the cubic spline with knot values ``pts``
-    and second derivatives ``m``."""
-    h = np.diff(knots)
-    a0 = pts[:-1]
-    a1 = (pts[1:] - pts[:-1]) / h[:, None] - h[:, None] * (2.0 * m[:-1] + m[1:]) / 6.0
-    a2 = m[:-1] / 2.0
-    a3 = (m[1:] - m[:-1]) / (6.0 * h[:, None])
-    return np.stack([a0, a1, a2, a3], axis=-1)
+# One entry per kernel path kind (`path_eval`): what the checks know of its data vector.
+KERNEL_KINDS: dict[int, KernelKind] = {
+    HELIX: KernelKind(origin=3),
+    LINE: KernelKind(origin=0),
+    SPLINE: SplineKind(origin=0),
+}
 
 
-def _clamped_cubic_coefficients(
-    knots: np.ndarray, pts: np.ndarray, slope0: np.ndarray, slope1: np.ndarray
-) -> np.ndarray:
-    """Coefficients (n_seg, 3, 4) of the cubic spline with end slopes p'(s_0), p'(s_n) given:
-    fourth-order accurate up to the ends (a natural spline's p'' = 0 there is only second)."""
-    n = len(knots)
-    h = np.diff(knots)
-    A = np.zeros((n, n))
-    rhs = np.zeros((n, 3))
-    A[0, 0], A[0, 1] = 2.0 * h[0], h[0]
-    rhs[0] = 6.0 * ((pts[1] - pts[0]) / h[0] - slope0)
-    A[-1, -2], A[-1, -1] = h[-1], 2.0 * h[-1]
-    rhs[-1] = 6.0 * (slope1 - (pts[-1] - pts[-2]) / h[-1])
-    i = np.arange(1, n - 1)
-    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
-    return _cubic_coefficients(knots, pts, np.linalg.solve(A, rhs))
+def path_turn_rates(path: Path, accept_below: float = -math.inf) -> tuple[float, float]:
+    """Largest |dψ_F/ds|/|p'(s)| and |dθ_F/ds|/|p'(s)| along the path [rad/m].
+
+    ψ̇_F = dψ_F/ds · ṡ with ṡ = u_p/|p'| (docs/model.md §3.1, §3.3), so ψ̇_F = this rate × u_p.
+    Exact for the helix (constant in s) and the line (0); for a spline a proven upper bound at
+    most 0.1 % above the maximum (`path_bounds.spline_turn_rates`), or, with ``accept_below``,
+    a bound at most that limit whenever the maximum is. A path whose p'(s) vanishes raises.
+    """
+    return tuple(b.upper for b in path.turn_rate_bounds(accept_below))  # type: ignore[return-value]
 
 
 # fit_curve: the check points inside each segment and the finite-difference steps.
@@ -363,7 +369,7 @@ class FittedCurve(Path):
     def __init__(self, knots: np.ndarray, coeffs: np.ndarray, position_error: float,
                  tangent_error: float) -> None:  # fmt: skip
         self.s_end = float(knots[-1])
-        self.data = _spline_data(knots, coeffs)
+        self.data = spline_data(knots, coeffs)
         self.position_error = position_error
         self.tangent_error = tangent_error
         self.segments = len(knots) - 1
@@ -414,7 +420,7 @@ def fit_curve(
         w = np.array([-25.0, 48.0, -36.0, 16.0, -3.0]) / (12.0 * d)
         slope0 = w[0] * pts[0] + w[1:] @ ahead
         slope1 = -(w[0] * pts[-1] + w[1:] @ behind)
-        coeffs = _clamped_cubic_coefficients(knots, pts, slope0, slope1)
+        coeffs = clamped_cubic_coefficients(knots, pts, slope0, slope1)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("fit_curve: the curve's samples give non-finite coefficients")
         fitted = FittedCurve(knots, coeffs, math.nan, math.nan)

@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit, prange
 
 from auv_gym.actuators import ACTUATOR_STATE_DIM, check_commands
-from auv_gym.config import SimConfig
+from auv_gym.config import START_OFFSET, SimConfig
 from auv_gym.disturbances import (
     KEY,
     draw_keys,
@@ -363,7 +363,7 @@ class Simulator:
         # first turn of the path, with a random heading error and speed.
         draws = rng.uniform(-1.0, 1.0, size=7)
         if draws[0] < 0.0:
-            return position + 2.0 * draws[1:4], heading + 0.2 * draws[4], 0.0, 0.0
+            return position + START_OFFSET * draws[1:4], heading + 0.2 * draws[4], 0.0, 0.0
         s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
         s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
         p, dp, _ = path.evaluate(s0)

@@ -24,17 +24,14 @@ from gymnasium.vector.utils import batch_space
 
 from auv_gym.config import SimConfig
 from auv_gym.env import check_reset_observations, validate_actions
-from auv_gym.observation import GUIDANCE_FIELDS
+from auv_gym.env_info import REASONS, STEP_KEYS, info_columns, track_point
 from auv_gym.rendering import EpisodeRenderer
 from auv_gym.simulator import Simulator
-from auv_gym.task import NON_FINITE, REWARD_TERMS, TERMINATION_REASONS
+from auv_gym.task import NON_FINITE
 from auv_gym.validation import ArgumentTypeError, integer
 
 __all__ = ["PARALLEL_MIN_VEHICLES", "AUVPath3DVectorEnv", "parse_autoreset_mode"]
 
-_UP = GUIDANCE_FIELDS.index("u_p")
-_REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
-_REASONS = np.array([None, *TERMINATION_REASONS[1:]], dtype=object)  # code 0: no reason
 _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
 # Below this many vehicles the kernel runs on one thread unless told otherwise: a step costs
 # < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
@@ -304,7 +301,7 @@ class AUVPath3DVectorEnv(VectorEnv):
         if self._renderer is not None:
             v = self._render_vehicle
             t = int(sim.step_index[v]) * self.config.physics_dt
-            self._renderer.append(sim.state[v, 0:3], sim.guid[v, 0:3], sim.state[v, 10], t)
+            self._renderer.append(*track_point(sim, v), t)
 
         mode = self.autoreset_mode
         infos: dict[str, Any] = {}
@@ -357,25 +354,16 @@ class AUVPath3DVectorEnv(VectorEnv):
         unmarked vehicles are zeroed as SyncVectorEnv leaves them.
         """
         sim = self.sim
-        g = sim.guid
-        columns: dict[str, np.ndarray] = {
-            "x_e": g[:, 0], "y_e": g[:, 1], "z_e": g[:, 2], "distance": g[:, 3],
-            "s": sim.state[:, 10], "u_p": g[:, _UP],
-            "t": sim.step_index * self.config.physics_dt,
-            "tau": sim.record[:, 0:3], "disturbance": sim.record[:, 3:8],
-        }  # fmt: skip
-        if stepped.any():
-            columns.update(zip(_REWARD_KEYS, sim.terms.T, strict=True))
-            columns["cost"] = sim.cost
+        columns = info_columns(sim, self.config.physics_dt, bool(stepped.any()))
         for key, values in columns.items():
-            mask = stepped if key.startswith("reward_") or key == "cost" else base
+            mask = stepped if key in STEP_KEYS else base
             if fill and not mask.all():
                 values = np.where(mask.reshape(-1, *([1] * (values.ndim - 1))), values, 0.0)
             infos[key] = np.array(values, dtype=np.float64)
             infos[f"_{key}"] = mask.copy()
         reason_mask = stepped & (sim.code != 0)
         if reason_mask.any():
-            infos["termination_reason"] = np.where(reason_mask, _REASONS[sim.code], None)
+            infos["termination_reason"] = np.where(reason_mask, REASONS[sim.code], None)
             infos["_termination_reason"] = reason_mask
 
     # ------------------------------------------------------------------------ snapshots
@@ -440,8 +428,7 @@ class AUVPath3DVectorEnv(VectorEnv):
         if self._renderer is not None:
             v, sim = self._render_vehicle, self.sim
             t = int(sim.step_index[v]) * self.config.physics_dt
-            self._renderer.reset(sim.state[v, 0:3], sim.guid[v, 0:3], sim.state[v, 10], t,
-                                 path=sim.paths[v])  # fmt: skip
+            self._renderer.reset(*track_point(sim, v), t, path=sim.paths[v])
 
     def render(self) -> np.ndarray | None:
         """RGB image (H, W, 3) of vehicle `render_vehicle`'s track since its last reset."""

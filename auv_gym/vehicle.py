@@ -78,13 +78,19 @@ class AUVParams:
     N_rr: float = -94.0  # [kg m²/rad²] N_r|r|, lost in the paper's OCR (docs/model.md §2.1 d)
     fin_moment_coeff: float = 6.15  # [kg/rad] |M_uuδs| = |N_uuδr|, fin moment per u² per rad
     fin_max: float = math.pi / 6.0  # [rad] fin deflection limit ±30°
+    # Actuator limits (docs/model.md §2.3): |X| <= X_max; |M| <= M_max, |N| <= N_max for the
+    # "paper" model ("fins" bounds M, N by the fin authority instead). Plant and controllers
+    # read them from here (`SimConfig.actuator_limits`, `controllers.base.actuator_vector`).
+    X_max: float = 50.0  # [N]
+    M_max: float = 10.0  # [N·m]
+    N_max: float = 10.0  # [N·m]
     surge_coriolis: bool = True  # include (X_vr + m) v r + (X_wq − m) w q (docs/model.md §2.1 c)
 
     def __post_init__(self) -> None:
         for f in fields(self):
             check = flag if f.name == "surge_coriolis" else real  # True is no mass
             check(f"AUVParams.{f.name}", getattr(self, f.name))
-        for name in ("m", "W", "B", "I_y", "I_z", "fin_max"):
+        for name in ("m", "W", "B", "I_y", "I_z", "fin_max", "X_max", "M_max", "N_max"):
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"AUVParams.{name} must be positive, got {getattr(self, name)}")
         for name, value in (
@@ -125,6 +131,11 @@ class AUVParams:
     def I66(self) -> float:
         """Yaw inertia I_z − N_ṙ [kg m²]."""
         return self.I_z - self.N_rdot
+
+    @property
+    def actuator_limits(self) -> tuple[float, float, float]:
+        """(X_max [N], M_max [N·m], N_max [N·m])."""
+        return self.X_max, self.M_max, self.N_max
 
     def replace(self, **changes: float) -> AUVParams:
         """A copy with some fields changed (validated again)."""

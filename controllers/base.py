@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
-from auv_gym.config import ACTUATOR_LIMITS
 from auv_gym.observation import OBS_DIM, OBS_INDEX
 from auv_gym.rollout import Policy  # the one definition, shared with the rollouts
 from auv_gym.vehicle import AUVParams, remus100
@@ -35,7 +34,8 @@ def actuator_vector(
 ) -> tuple[float, float, float, float, float]:
     """(fins flag, fin gain K·δ_max [kg], X_max [N], M_max [N·m], N_max [N·m]) of an actuator model.
 
-    "paper": constant limits (50 N, 10 N·m, 10 N·m); "fins": M, N limited by K·δ_max·u|u|
+    "paper": the vehicle's constant limits ``params.actuator_limits`` (REMUS 100: 50 N, 10 N·m,
+    10 N·m); "fins": M, N limited by K·δ_max·u|u|
     (docs/model.md §2.3), evaluated by the controller at the observed surge speed;
     "realistic": the same law with the fins' K·δ_max of ``actuator_params``, its τ then
     allocated to shaft speed and fin angles (`controllers.allocation`, docs/model.md §2.7).
@@ -43,9 +43,9 @@ def actuator_vector(
     if actuator not in ("paper", "fins", "realistic"):
         raise ValueError(f"unknown actuator {actuator!r}; valid: ['fins', 'paper', 'realistic']")
     if actuator == "realistic":
-        return (1.0, fin_gain(actuator_params or ActuatorParams()), *ACTUATOR_LIMITS)
+        return (1.0, fin_gain(actuator_params or ActuatorParams()), *params.actuator_limits)
     fins = 1.0 if actuator == "fins" else 0.0
-    return (fins, params.fin_moment_coeff * params.fin_max, *ACTUATOR_LIMITS)
+    return (fins, params.fin_moment_coeff * params.fin_max, *params.actuator_limits)
 
 
 class BatchedController:

@@ -153,10 +153,10 @@ def test_an_accepted_waypoint_path_resets_for_every_seed(steps, scale, u_desired
 
 def _natural(points: np.ndarray) -> np.ndarray:
     """The SPLINE kernel vector of the natural spline through ``points``, unchecked."""
-    from auv_gym.paths import _natural_cubic_coefficients, _spline_data
+    from auv_gym.path_kernels import natural_cubic_coefficients, spline_data
 
     knots = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))]
-    return _spline_data(knots, _natural_cubic_coefficients(knots, points))
+    return spline_data(knots, natural_cubic_coefficients(knots, points))
 
 
 def test_the_bound_of_the_default_waypoints_is_exact_to_the_tolerance():

@@ -350,3 +350,32 @@ def test_fbsm_follows_generated_paths():
     assert [r["termination_reason"] for r in results] == ["time_limit"] * len(seeds)
     rms = np.array([r["rms_distance"] for r in results])
     assert rms.max() < 0.1, rms
+
+
+# ------------------------------------------------------------------------ path kinds' own checks
+
+
+def test_a_path_checks_its_kernel_data_and_bounds_its_turn_rates():
+    from auv_gym.path_offset import ShiftedPath
+    from auv_gym.paths import path_turn_rates
+
+    broken = Spline(WAYPOINTS)
+    broken.data = broken.data[:-1].copy()  # one coefficient short of 1 + 4 knots + 3·12
+    text = (r"^path Spline has no valid kernel data \(kind, data\); build paths with Helix, "
+            r"StraightLine, Spline or make_path$")  # fmt: skip
+    with pytest.raises(ValueError, match=text):
+        broken.check_kernel_data()
+    with pytest.raises(ValueError, match=text):
+        SimConfig(path=broken)
+    helix = Helix()  # dψ_F/ds = ω, |p'| = sqrt(R²ω² + c²): 0.0476 rad/m; θ_F constant
+    psi, theta = helix.turn_rate_bounds()
+    expected = (math.pi / 20) / math.hypot(20 * math.pi / 20, 1.0)
+    assert psi.upper == pytest.approx(expected, rel=1e-12) and theta.upper < 1e-15
+    assert path_turn_rates(helix) == (psi.upper, theta.upper)
+    spline = Spline(WAYPOINTS)
+    bound = max(spline.turn_rate_bounds(), key=lambda b: b.upper)
+    assert spline.turn_location(bound).startswith(f" (near s = {bound.s:.6g}, waypoint ")
+    shifted = ShiftedPath(spline, (0.0, 0.0, 100.0))  # a translation keeps the rates
+    assert shifted.turn_rate_bounds() == spline.turn_rate_bounds()
+    assert shifted.turn_location(bound) == f" (near s = {bound.s:.6g})"
+    assert np.array_equal(shifted.evaluate(3.0)[0], spline.evaluate(3.0)[0] + [0, 0, 100])

@@ -1,0 +1,137 @@
+"""The kernel side of the paths: each kind's evaluation p(s), p'(s), p''(s) (`path_eval`, one
+numba function inlined into the step kernels) and the cubic-spline coefficients the SPLINE kind
+stores (docs/model.md §3.1, §3.5). `auv_gym.paths` builds and checks the (kind, data) pairs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "HELIX",
+    "LINE",
+    "SPLINE",
+    "clamped_cubic_coefficients",
+    "natural_cubic_coefficients",
+    "path_eval",
+    "path_third_derivative",
+    "spline_data",
+]
+
+HELIX, LINE, SPLINE = 0, 1, 2
+
+
+@njit(cache=True, inline="always")
+def _cubic(data, i, ds):
+    """Value, first and second derivative of a0 + a1·ds + a2·ds² + a3·ds³, a = data[i:i + 4]."""
+    a0, a1, a2, a3 = data[i], data[i + 1], data[i + 2], data[i + 3]
+    return (
+        a0 + ds * (a1 + ds * (a2 + ds * a3)),
+        a1 + ds * (2.0 * a2 + 3.0 * ds * a3),
+        2.0 * a2 + 6.0 * ds * a3,
+    )
+
+
+@njit(cache=True, inline="always")
+def _spline_segment(data, s):
+    """(offset of the segment's x coefficients in ``data``, s − its knot) of the spline segment
+    holding s, by binary search, clamped to the end segments."""
+    n_seg = int(data[0])
+    lo, hi = 0, n_seg - 1
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if data[1 + mid] <= s:
+            lo = mid
+        else:
+            hi = mid - 1
+    return 1 + (n_seg + 1) + lo * 12, s - data[1 + lo]
+
+
+@njit(cache=True, inline="always")  # inlined into the RK4 stages: ~7% faster kernel
+def path_eval(kind, data, s):
+    """(x, y, z, x', y', z', x'', y'', z'') of the path at parameter s [m, m/unit s, ...]."""
+    if kind == HELIX:
+        radius, omega, climb, x0, y0, z0 = data[0], data[1], data[2], data[3], data[4], data[5]
+        c, sn = math.cos(omega * s), math.sin(omega * s)
+        return (
+            radius * c + x0, radius * sn + y0, z0 - climb * s,
+            -radius * omega * sn, radius * omega * c, -climb,
+            -radius * omega * omega * c, -radius * omega * omega * sn, 0.0,
+        )  # fmt: skip
+    if kind == LINE:
+        return (
+            data[0] + s * data[3], data[1] + s * data[4], data[2] + s * data[5],
+            data[3], data[4], data[5], 0.0, 0.0, 0.0,
+        )  # fmt: skip
+    # SPLINE: data = [n_seg, knots[0..n_seg], coeffs[n_seg, 3 axes, 4]]; cubic in (s − knot_k)
+    base, ds = _spline_segment(data, s)
+    x, dx, ddx = _cubic(data, base, ds)
+    y, dy, ddy = _cubic(data, base + 4, ds)
+    z, dz, ddz = _cubic(data, base + 8, ds)
+    return x, y, z, dx, dy, dz, ddx, ddy, ddz
+
+
+@njit(cache=True, inline="always")
+def path_third_derivative(kind, data, s):
+    """p‴(s) = (x‴, y‴, z‴) [m per unit s³], for the torsion of the path preview."""
+    if kind == HELIX:
+        radius, omega = data[0], data[1]
+        w3 = radius * omega * omega * omega
+        return w3 * math.sin(omega * s), -w3 * math.cos(omega * s), 0.0
+    if kind == LINE:
+        return 0.0, 0.0, 0.0
+    base, _ = _spline_segment(data, s)
+    return 6.0 * data[base + 3], 6.0 * data[base + 7], 6.0 * data[base + 11]
+
+
+def spline_data(knots: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
+    """The SPLINE kernel vector [n_seg, knots, coeffs (n_seg, 3, 4) flattened]."""
+    return np.r_[float(len(knots) - 1), knots, coeffs.ravel()]
+
+
+def natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Per-segment cubic coefficients (a0..a3) of the natural spline, shape (n_seg, 3, 4)."""
+    n = len(knots)
+    h = np.diff(knots)
+    # Second derivatives m_i solve a tridiagonal system; natural ends m_0 = m_{n−1} = 0.
+    A = np.zeros((n, n))
+    rhs = np.zeros((n, 3))
+    A[0, 0] = A[-1, -1] = 1.0
+    i = np.arange(1, n - 1)  # element-wise the same operations as a loop over the rows
+    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
+    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
+    m = np.linalg.solve(A, rhs)
+    return _cubic_coefficients(knots, pts, m)
+
+
+def _cubic_coefficients(knots: np.ndarray, pts: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """(a0..a3) per segment, shape (n_seg, 3, 4), of the cubic spline with knot values ``pts``
+    and second derivatives ``m``."""
+    h = np.diff(knots)
+    a0 = pts[:-1]
+    a1 = (pts[1:] - pts[:-1]) / h[:, None] - h[:, None] * (2.0 * m[:-1] + m[1:]) / 6.0
+    a2 = m[:-1] / 2.0
+    a3 = (m[1:] - m[:-1]) / (6.0 * h[:, None])
+    return np.stack([a0, a1, a2, a3], axis=-1)
+
+
+def clamped_cubic_coefficients(
+    knots: np.ndarray, pts: np.ndarray, slope0: np.ndarray, slope1: np.ndarray
+) -> np.ndarray:
+    """Coefficients (n_seg, 3, 4) of the cubic spline with end slopes p'(s_0), p'(s_n) given:
+    fourth-order accurate up to the ends (a natural spline's p'' = 0 there is only second)."""
+    n = len(knots)
+    h = np.diff(knots)
+    A = np.zeros((n, n))
+    rhs = np.zeros((n, 3))
+    A[0, 0], A[0, 1] = 2.0 * h[0], h[0]
+    rhs[0] = 6.0 * ((pts[1] - pts[0]) / h[0] - slope0)
+    A[-1, -2], A[-1, -1] = h[-1], 2.0 * h[-1]
+    rhs[-1] = 6.0 * (slope1 - (pts[-1] - pts[-2]) / h[-1])
+    i = np.arange(1, n - 1)
+    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
+    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
+    return _cubic_coefficients(knots, pts, np.linalg.solve(A, rhs))
