@@ -18,7 +18,7 @@ from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS
 if TYPE_CHECKING:
     from auv_gym.simulator import Simulator
 
-__all__ = ["REASONS", "STEP_KEYS", "info_columns", "single_info", "track_point"]
+__all__ = ["REASONS", "STEP_KEYS", "add_vector_infos", "info_columns", "single_info", "track_point"]
 
 REWARD_KEYS = tuple(f"reward_{name}" for name in REWARD_TERMS)
 STEP_KEYS = frozenset((*REWARD_KEYS, "cost"))  # reported only by vehicles that stepped
@@ -61,3 +61,31 @@ def track_point(sim: Simulator, v: int) -> tuple[np.ndarray, np.ndarray, float]:
     """Vehicle ``v``'s position [m], path errors (x_e, y_e, z_e) [m] and s: what the renderer
     draws."""
     return sim.state[v, _POSITION], sim.guid[v, _ERRORS], sim.state[v, STATE.s]
+
+
+def add_vector_infos(
+    infos: dict[str, Any],
+    sim: Simulator,
+    physics_dt: float,
+    base: np.ndarray,
+    stepped: np.ndarray,
+    fill: bool = False,
+) -> None:
+    """Add the single env's info keys to the vector env's ``infos`` as arrays with ``_key``
+    masks (SyncVectorEnv layout).
+
+    ``base`` marks vehicles reporting the keys every info has, ``stepped`` those that also
+    report the reward terms and, if terminated, the reason. With ``fill`` the values of
+    unmarked vehicles are zeroed as SyncVectorEnv leaves them.
+    """
+    columns = info_columns(sim, physics_dt, bool(stepped.any()))
+    for key, values in columns.items():
+        mask = stepped if key in STEP_KEYS else base
+        if fill and not mask.all():
+            values = np.where(mask.reshape(-1, *([1] * (values.ndim - 1))), values, 0.0)
+        infos[key] = np.array(values, dtype=np.float64)
+        infos[f"_{key}"] = mask.copy()
+    reason_mask = stepped & (sim.code != 0)
+    if reason_mask.any():
+        infos["termination_reason"] = np.where(reason_mask, REASONS[sim.code], None)
+        infos["_termination_reason"] = reason_mask

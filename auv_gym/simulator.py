@@ -15,12 +15,13 @@ import numpy as np
 from numba import njit, prange
 
 from auv_gym.actuators import ACTUATOR_STATE_DIM, check_commands
-from auv_gym.config import START_OFFSET, SimConfig
+from auv_gym.config import SimConfig
 from auv_gym.disturbances import (
     KEY,
     draw_keys,
 )
 from auv_gym.dynamics import STATE, STATE_DIM
+from auv_gym.episode_start import draw_start
 from auv_gym.integrator import (
     ACTUATORS,
     CONFIG_FIELDS,
@@ -330,7 +331,7 @@ class Simulator:
             self.params[i] = cfg.params.perturbed(rng, cfg.param_uncertainty).to_vector()
         else:
             self.params[i] = self._nominal
-        position, heading, s0, u0 = self._start(rng, self.paths[i])
+        position, heading, s0, u0 = draw_start(cfg, rng, self.paths[i])
         self.state[i] = 0.0
         self.state[i, [STATE.x, STATE.y, STATE.z]] = position
         self.state[i, STATE.psi] = heading
@@ -347,29 +348,6 @@ class Simulator:
         self.reward[i] = 0.0
         self.code[i] = 0
         self.cost[i] = 0.0
-
-    def _start(
-        self, rng: np.random.Generator, path: Path
-    ) -> tuple[np.ndarray, float, float, float]:
-        cfg = self.config
-        position, heading = path.default_start()
-        if cfg.start_position is not None:
-            position = np.asarray(cfg.start_position)
-        if cfg.start_heading is not None:
-            heading = float(cfg.start_heading)
-        if not cfg.randomize_start:
-            return position, heading, 0.0, 0.0
-        # Training distribution: half the episodes near the paper's start, half anywhere on the
-        # first turn of the path, with a random heading error and speed.
-        draws = rng.uniform(-1.0, 1.0, size=7)
-        if draws[0] < 0.0:
-            return position + START_OFFSET * draws[1:4], heading + 0.2 * draws[4], 0.0, 0.0
-        s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
-        s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
-        p, dp, _ = path.evaluate(s0)
-        offset = 8.0 * rng.uniform(-1.0, 1.0, size=3)
-        path_heading = math.atan2(dp[1], dp[0])
-        return p + offset, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
 
     def step(self, actions: np.ndarray) -> None:
         """Advance all vehicles one control step with actions in [−1, 1], shape (n, 3).

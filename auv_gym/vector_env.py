@@ -11,7 +11,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import inspect
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numba
@@ -23,12 +23,13 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from auv_gym.config import SimConfig
-from auv_gym.env import check_reset_observations, validate_actions
-from auv_gym.env_info import REASONS, STEP_KEYS, info_columns, track_point
+from auv_gym.env_checks import check_reset_observations, validate_actions
+from auv_gym.env_info import add_vector_infos, track_point
 from auv_gym.rendering import EpisodeRenderer
 from auv_gym.simulator import Simulator
 from auv_gym.task import NON_FINITE
-from auv_gym.validation import ArgumentTypeError, integer
+from auv_gym.validation import integer
+from auv_gym.vector_reset import parse_autoreset_mode, reset_mask, seed_list
 
 __all__ = ["PARALLEL_MIN_VEHICLES", "AUVPath3DVectorEnv", "parse_autoreset_mode"]
 
@@ -37,18 +38,6 @@ _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
 # < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
 PARALLEL_MIN_VEHICLES = 256
 MAX_VEHICLES = 2**24  # about 60 GB of state: a bound that names the argument before numpy fails
-
-
-def parse_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
-    """An `AutoresetMode` from the enum, its value ("NextStep") or its name ("next_step")."""
-    if isinstance(mode, AutoresetMode):
-        return mode
-    if isinstance(mode, str):
-        for candidate in AutoresetMode:
-            if mode in (candidate.value, candidate.name) or mode.upper() == candidate.name:
-                return candidate
-    valid = [m.value for m in AutoresetMode]
-    raise ValueError(f"unknown autoreset_mode {mode!r}; valid: {valid} or an AutoresetMode")
 
 
 class AUVPath3DVectorEnv(VectorEnv):
@@ -214,8 +203,8 @@ class AUVPath3DVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Reset all vehicles, or those of ``options["reset_mask"]``; see the class docstring."""
         n = self.num_envs
-        seeds = self._seed_list(seed)
-        mask = self._reset_mask(options)
+        seeds = seed_list(seed, n)
+        mask = reset_mask(options, n)
         if not (self._ever_reset or mask.all()):
             raise ValueError("the first reset must reset every vehicle (no reset_mask)")
         super().reset(seed=seed if isinstance(seed, int) else None)
@@ -229,42 +218,6 @@ class AUVPath3DVectorEnv(VectorEnv):
         infos: dict[str, Any] = {}
         self._add_infos(infos, mask, np.zeros(n, dtype=bool), fill=True)
         return self._observations(), infos
-
-    def _seed_list(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
-        n = self.num_envs
-        if seed is None:
-            return [None] * n
-        if isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
-            first = integer("seed", seed, 0)
-            return [first + i for i in range(n)]
-        if isinstance(seed, (str, bytes, Mapping)) or not isinstance(seed, Sequence | np.ndarray):
-            raise ArgumentTypeError(
-                f"seed must be None, an integer >= 0 or a list of num_envs = {n} integers or "
-                f"None, got {seed!r:.80}"
-            )
-        seeds = list(seed)
-        if len(seeds) != n:
-            raise ValueError(f"a list of seeds must have num_envs = {n} entries, got {len(seeds)}")
-        return [None if s is None else integer(f"seed[{i}]", s, 0) for i, s in enumerate(seeds)]
-
-    def _reset_mask(self, options: dict[str, Any] | None) -> np.ndarray:
-        if options is not None and not isinstance(options, Mapping):
-            raise ArgumentTypeError(f"options must be None or a dict, got {options!r:.80}")
-        unknown = sorted(map(str, set(options or ()) - {"reset_mask"}))
-        if unknown:
-            raise ValueError(f"unknown reset option(s) {unknown}; valid: ['reset_mask']")
-        if not options or "reset_mask" not in options:
-            return self._all.copy()
-        mask = options["reset_mask"]
-        if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
-            raise ValueError(f"options['reset_mask'] must be a numpy bool array, got {mask!r}")
-        if mask.shape != (self.num_envs,):
-            raise ValueError(
-                f"options['reset_mask'] must have shape ({self.num_envs},), got {mask.shape}"
-            )
-        if not mask.any():
-            raise ValueError("options['reset_mask'] must select at least one vehicle")
-        return mask.copy()
 
     def _reset_rows(self, rows: np.ndarray) -> None:
         """New episodes for `rows`, each drawn from its vehicle's generator (single-env order)."""
@@ -347,24 +300,7 @@ class AUVPath3DVectorEnv(VectorEnv):
     def _add_infos(
         self, infos: dict[str, Any], base: np.ndarray, stepped: np.ndarray, fill: bool = False
     ) -> None:
-        """The single env's info keys as arrays with ``_key`` masks (SyncVectorEnv layout).
-
-        ``base`` marks vehicles reporting the keys every info has, ``stepped`` those that also
-        report the reward terms and, if terminated, the reason. With ``fill`` the values of
-        unmarked vehicles are zeroed as SyncVectorEnv leaves them.
-        """
-        sim = self.sim
-        columns = info_columns(sim, self.config.physics_dt, bool(stepped.any()))
-        for key, values in columns.items():
-            mask = stepped if key in STEP_KEYS else base
-            if fill and not mask.all():
-                values = np.where(mask.reshape(-1, *([1] * (values.ndim - 1))), values, 0.0)
-            infos[key] = np.array(values, dtype=np.float64)
-            infos[f"_{key}"] = mask.copy()
-        reason_mask = stepped & (sim.code != 0)
-        if reason_mask.any():
-            infos["termination_reason"] = np.where(reason_mask, REASONS[sim.code], None)
-            infos["_termination_reason"] = reason_mask
+        add_vector_infos(infos, self.sim, self.config.physics_dt, base, stepped, fill)
 
     # ------------------------------------------------------------------------ snapshots
     def snapshot(self) -> dict[str, Any]:

@@ -1,0 +1,37 @@
+"""A vehicle's start at a reset: the configured or the path's default start, or a draw from the
+training distribution (``randomize_start``), from the vehicle's reset generator in fixed order."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from auv_gym.config import START_OFFSET, SimConfig
+from auv_gym.paths import Path
+
+__all__ = ["draw_start"]
+
+
+def draw_start(
+    cfg: SimConfig, rng: np.random.Generator, path: Path
+) -> tuple[np.ndarray, float, float, float]:
+    """Start position [m], heading ψ [rad], path parameter s0 and surge speed u0 [m/s]."""
+    position, heading = path.default_start()
+    if cfg.start_position is not None:
+        position = np.asarray(cfg.start_position)
+    if cfg.start_heading is not None:
+        heading = float(cfg.start_heading)
+    if not cfg.randomize_start:
+        return position, heading, 0.0, 0.0
+    # Training distribution: half the episodes near the paper's start, half anywhere on the
+    # first turn of the path, with a random heading error and speed.
+    draws = rng.uniform(-1.0, 1.0, size=7)
+    if draws[0] < 0.0:
+        return position + START_OFFSET * draws[1:4], heading + 0.2 * draws[4], 0.0, 0.0
+    s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
+    s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
+    p, dp, _ = path.evaluate(s0)
+    offset = 8.0 * rng.uniform(-1.0, 1.0, size=3)
+    path_heading = math.atan2(dp[1], dp[0])
+    return p + offset, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
