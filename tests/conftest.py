@@ -31,6 +31,31 @@ def _assert_same_episodes(a, b) -> None:
             np.testing.assert_array_equal(x.intervals[name], y.intervals[name], err_msg=name)
 
 
+def _single_env_observations(kwargs: dict, seed: int, actions: np.ndarray):
+    """(observations, env) of one `AUVPath3DEnv` reset with ``seed`` and stepped with
+    ``actions`` (steps, 3), resetting without a seed after an episode ends: what a vector env's
+    NEXT_STEP autoreset gives its vehicle (the reset step's action is ignored)."""
+    from auv_gym.env import AUVPath3DEnv
+
+    env = AUVPath3DEnv(**kwargs)
+    single, done = [env.reset(seed=seed)[0]], False
+    for a in actions:
+        if done:
+            obs, _ = env.reset()
+            done = False
+        else:
+            obs, _, terminated, truncated, _ = env.step(a)
+            done = terminated or truncated
+        single.append(obs)
+    return np.array(single), env
+
+
+@pytest.fixture
+def single_env_observations():
+    """`_single_env_observations`: one vehicle of a NEXT_STEP vector env, run alone."""
+    return _single_env_observations
+
+
 @pytest.fixture
 def assert_same_episodes():
     """`_assert_same_episodes`: bit-for-bit equality of two episode lists."""

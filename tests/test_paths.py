@@ -258,7 +258,7 @@ def test_domain_randomisation_draws_within_its_ranges():
     assert cfg["actuator"] == {"paper": 0.0, "fins": 1.0}[task.actuator]
 
 
-def test_batched_random_tasks_equal_single_envs_bit_for_bit():
+def test_batched_random_tasks_equal_single_envs_bit_for_bit(single_env_observations):
     kwargs = {"path": "random", "random_current": 0.3, "random_noise": 0.5,
               "actuator": "random", "param_uncertainty": 0.2, "max_time": 3.0}  # fmt: skip
     n, steps = 4, 80  # 60 control steps per episode: every vehicle autoresets once
@@ -266,19 +266,8 @@ def test_batched_random_tasks_equal_single_envs_bit_for_bit():
     actions = np.random.default_rng(0).uniform(-0.5, 0.5, size=(steps, n, 3))
     batched = [venv.reset(seed=10)[0]] + [venv.step(a)[0] for a in actions]
     for i in range(n):
-        env = AUVPath3DEnv(**kwargs)
-        obs, _ = env.reset(seed=10 + i)
-        single = [obs]
-        done = False
-        for a in actions:
-            if done:  # NEXT_STEP autoreset of the vector env: a reset without a seed
-                obs, _ = env.reset()
-                done = False
-            else:
-                obs, _, terminated, truncated, _ = env.step(a[i])
-                done = terminated or truncated
-            single.append(obs)
-        assert np.array_equal(np.array(single), np.array(batched)[:, i])
+        single, env = single_env_observations(kwargs, 10 + i, actions[:, i])
+        assert np.array_equal(single, np.array(batched)[:, i])
         assert np.array_equal(env.sim.paths[0].data, venv.sim.paths[i].data)
 
 

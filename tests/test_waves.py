@@ -170,7 +170,7 @@ def test_same_seed_gives_identical_wavy_episodes():
     assert np.array_equal(*runs)
 
 
-def test_batched_wavy_episodes_equal_single_envs_bit_for_bit():
+def test_batched_wavy_episodes_equal_single_envs_bit_for_bit(single_env_observations):
     kwargs = {"waves": {"sea_state": 4, "components": 8},
               "current_profile": {"surface_speed": 0.3, "reference_depth": 40.0,
                                   "drift_amplitude": 0.2, "drift_period": 300.0},
@@ -180,17 +180,8 @@ def test_batched_wavy_episodes_equal_single_envs_bit_for_bit():
     actions = np.random.default_rng(0).uniform(-0.5, 0.5, size=(steps, n, 3))
     batched = [venv.reset(seed=20)[0]] + [venv.step(a)[0] for a in actions]
     for i in range(n):
-        env = AUVPath3DEnv(**kwargs)
-        single, done = [env.reset(seed=20 + i)[0]], False
-        for a in actions:
-            if done:
-                obs, _ = env.reset()
-                done = False
-            else:
-                obs, _, terminated, truncated, _ = env.step(a[i])
-                done = terminated or truncated
-            single.append(obs)
-        assert np.array_equal(np.array(single), np.array(batched)[:, i])
+        single, _ = single_env_observations(kwargs, 20 + i, actions[:, i])
+        assert np.array_equal(single, np.array(batched)[:, i])
 
 
 def test_no_waves_no_profile_leaves_the_ocean_row_inactive():
