@@ -110,23 +110,30 @@ def measure_vector(
     }
 
 
-def _sensor_rows(args: argparse.Namespace) -> list[dict[str, float]]:
-    """Physics rate with "ideal" and "typical" sensors, measured alternately in this process
-    (same load), and their ratio; printed as a table."""
+def _side_by_side(
+    args: argparse.Namespace, sizes: list[int], variant: dict[str, Any], labels: tuple[str, str]
+) -> list[dict[str, Any]]:
+    """Physics rate without and with ``variant`` (env keyword arguments), measured back to back
+    per (threads, N) so that their ratio is taken under one machine load; printed as a table
+    and returned as rows {n, threads, ratio, <labels[0]>, <labels[1]>}."""
+    print(f"{'N':>7} {'threads':>7} {labels[0]:>14} {labels[1]:>14} {'ratio':>7}")
+    rows = []
+    for threads, n in ((t, n) for t in args.threads for n in sizes):
+        base = measure_vector(n, args.seconds, args.max_time, threads)
+        other = measure_vector(n, args.seconds, args.max_time, threads, env_kwargs=variant)
+        ratio = other["physics_steps_per_s"] / base["physics_steps_per_s"]
+        rows.append({"n": n, "threads": base["threads"], "ratio": ratio,
+                     labels[0]: base, labels[1]: other})  # fmt: skip
+        print(f"{n:>7} {base['threads']:>7} {base['physics_steps_per_s']:>14,.0f} "
+              f"{other['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}")  # fmt: skip
+    return rows
+
+
+def _sensor_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Physics rate with "ideal" and "typical" sensors, side by side (`_side_by_side`)."""
     print("\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
           "estimate ('typical'), side by side")  # fmt: skip
-    print(f"{'N':>7} {'threads':>7} {'ideal':>14} {'typical':>14} {'ratio':>7}")
-    rows = []
-    for threads, n in ((t, n) for t in args.threads for n in args.sensor_sizes):
-        ideal, typical = (measure_vector(n, args.seconds, args.max_time, threads,
-                                         env_kwargs={"sensors": name})
-                          for name in ("ideal", "typical"))  # fmt: skip
-        ratio = typical["physics_steps_per_s"] / ideal["physics_steps_per_s"]
-        rows.append({"n": n, "threads": ideal["threads"], "ratio": ratio,
-                     "ideal": ideal, "typical": typical})  # fmt: skip
-        print(f"{n:>7} {ideal['threads']:>7} {ideal['physics_steps_per_s']:>14,.0f} "
-              f"{typical['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}")  # fmt: skip
-    return rows
+    return _side_by_side(args, args.sensor_sizes, {"sensors": "typical"}, ("ideal", "typical"))
 
 
 def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
@@ -221,27 +228,16 @@ def machine() -> dict[str, Any]:
     }
 
 
-def _waves_rows(args: argparse.Namespace, results: dict[str, Any]) -> None:
-    """The same N with and without waves, back to back per thread count: the ratio of the
-    two physics rates is measured under one machine load."""
+def _waves_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Physics rate without and with waves, side by side (`_side_by_side`)."""
     from auv_gym.waves import WaveConfig
 
     waves = WaveConfig()  # sea state 4, default components and update interval
     print(
         f"\nWaves: sea state 4 ({waves.spectrum}, {waves.components} components, field "
-        f"refreshed every {waves.update_interval:g} s) beside no waves, N = {args.waves_n}"
+        f"refreshed every {waves.update_interval:g} s) beside no waves"
     )
-    print(f"{'threads':>7} {'no waves steps/s':>17} {'waves steps/s':>14} {'ratio':>6}")
-    results["waves"] = []
-    for threads in args.threads:
-        calm = measure_vector(args.waves_n, args.seconds, args.max_time, threads)
-        wavy = measure_vector(args.waves_n, args.seconds, args.max_time, threads,
-                              env_kwargs={"waves": waves})  # fmt: skip
-        ratio = wavy["physics_steps_per_s"] / calm["physics_steps_per_s"]
-        results["waves"].append({"threads": calm["threads"], "no_waves": calm, "waves": wavy,
-                                 "ratio": ratio})  # fmt: skip
-        print(f"{calm['threads']:>7} {calm['physics_steps_per_s']:>17,.0f} "
-              f"{wavy['physics_steps_per_s']:>14,.0f} {ratio:>6.1%}")  # fmt: skip
+    return _side_by_side(args, [args.waves_n], {"waves": waves}, ("no_waves", "waves"))
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -301,7 +297,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
 
     if args.waves_n > 0:
-        _waves_rows(args, results)
+        results["waves"] = _waves_rows(args)
     if args.sensor_sizes:
         results["sensors"] = _sensor_rows(args)
 
