@@ -68,6 +68,7 @@ ZOO_KEYS = frozenset(
         "env_kwargs",
         "residual",
         "action_bounds",
+        "obs_scales",
     }
 )
 
@@ -92,6 +93,7 @@ class ZooConfig:
     raw: dict[str, Any] = field(default_factory=dict)
     residual: ResidualTraining | None = None
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
+    obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -163,6 +165,11 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         if residual is not None:
             raise ValueError(f"{path}: action_bounds and residual exclude each other")
         action_bounds = _action_bounds(section["action_bounds"], path)
+    obs_scales = None
+    if "obs_scales" in section:
+        from benchmarks.training.normalization import parse_obs_scales
+
+        obs_scales = parse_obs_scales(section["obs_scales"], f"{path}: {env_id}")
     # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
     # the first training step, not at the model's construction or in its first update.
     where = f"{path}: {env_id}"
@@ -174,6 +181,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
         algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
+        obs_scales=obs_scales,
     )  # fmt: skip
 
 

@@ -295,6 +295,12 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         truncate_rows(out / EVAL_FILE, model.num_timesteps)
     else:
         venv = VecNormalize(venv, **cfg.normalize)
+        if cfg.obs_scales is not None:
+            from benchmarks.training.normalization import pin_observation_scales
+
+            layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
+            names = layout.names if residual is None else RESIDUAL_OBS_NAMES
+            pin_observation_scales(venv, names, cfg.obs_scales)
         model = algorithm(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, seed=opts.seed,
                           device="cpu", tensorboard_log=str(out / "tb"), verbose=opts.verbose,
                           **cfg.model_kwargs())  # fmt: skip
