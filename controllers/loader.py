@@ -12,7 +12,8 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from controllers.agent import AgentPolicy, check_agent, load_actor
+from controllers.action_increment import IncrementPolicy, check_increment, prev_action_index
+from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
 
@@ -26,12 +27,13 @@ def load_policy(
     num_threads: int | None = 1,
     base_kwargs: dict[str, Any] | None = None,
     algo: str | None = None,
-) -> AgentPolicy | ResidualPolicy:
+) -> AgentPolicy | IncrementPolicy | ResidualPolicy:
     """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
     as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
     `ResidualPolicy` of its base controller, built with the recorded settings and
     ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for other
-    agents), and its actor.
+    agents), and its actor; for an incremental agent (metadata "action_increment") an
+    `IncrementPolicy` (`controllers.action_increment`).
 
     ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
     otherwise. The files are validated first, before torch is imported (FileNotFoundError when
@@ -42,7 +44,17 @@ def load_policy(
     files = check_agent(path)
     if algo is not None and files.algo != algo:
         raise ValueError(f"agent {files.model} was trained with {files.algo!r}, not {algo!r}")
+    increment = files.metadata.get("action_increment")
+    if increment is not None:  # checked before torch loads anything
+        where = f"{files.metadata_file}"
+        increment = check_increment(increment, where)
+        try:
+            prev_action_index(observation_layout(files.metadata))
+        except ValueError as error:
+            raise ValueError(f"{where}: {error}") from None
     actor = load_actor(files, device=device, num_threads=num_threads)
+    if increment is not None:
+        return IncrementPolicy(actor, increment, observation_layout(files.metadata))
     if files.residual is None:
         return actor
     base = files.residual.make_base(**(base_kwargs or {}))

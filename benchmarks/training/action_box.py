@@ -8,13 +8,16 @@ its commands to that box, and the space is saved in the model, so a loaded agent
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
-__all__ = ["ActionBox"]
+__all__ = ["ActionBox", "parse_action_bounds"]
 
 
 class ActionBox(VecEnvWrapper):
@@ -43,3 +46,21 @@ class ActionBox(VecEnvWrapper):
 
     def step_wait(self):  # SB3 VecEnvStepReturn
         return self.venv.step_wait()
+
+
+def parse_action_bounds(value: Any, path: Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """[[low × 3], [high × 3]] inside [−1, 1] with low < high per axis, or a named error."""
+    try:
+        low, high = (tuple(float(v) for v in side) for side in value)
+        ok = len(low) == len(high) == 3 and all(
+            math.isfinite(a) and math.isfinite(b) and -1.0 <= a < b <= 1.0
+            for a, b in zip(low, high, strict=True)
+        )
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ValueError(
+            f"{path}: action_bounds must be [[low_X, low_M, low_N], [high_X, high_M, high_N]] "
+            f"with -1 <= low < high <= 1 per axis, got {value!r}"
+        )
+    return low, high

@@ -45,6 +45,7 @@ from typing import Any
 
 from auv_gym import ENV_ID
 from benchmarks.training.residual import ResidualTraining
+from controllers.action_increment import check_increment
 from controllers.algorithms import ALGORITHMS, Algorithm
 
 __all__ = [
@@ -69,6 +70,7 @@ ZOO_KEYS = frozenset(
         "residual",
         "action_bounds",
         "obs_scales",
+        "action_increment",
     }
 )
 
@@ -94,6 +96,7 @@ class ZooConfig:
     residual: ResidualTraining | None = None
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
+    action_increment: float | None = None  # δ (`controllers.action_increment`)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -164,12 +167,19 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     if "action_bounds" in section:
         if residual is not None:
             raise ValueError(f"{path}: action_bounds and residual exclude each other")
-        action_bounds = _action_bounds(section["action_bounds"], path)
+        from benchmarks.training.action_box import parse_action_bounds
+
+        action_bounds = parse_action_bounds(section["action_bounds"], path)
     obs_scales = None
     if "obs_scales" in section:
         from benchmarks.training.normalization import parse_obs_scales
 
         obs_scales = parse_obs_scales(section["obs_scales"], f"{path}: {env_id}")
+    action_increment = None
+    if "action_increment" in section:
+        if residual is not None or action_bounds is not None:
+            raise ValueError(f"{path}: action_increment excludes residual and action_bounds")
+        action_increment = check_increment(section["action_increment"], f"{path}: {env_id}")
     # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
     # the first training step, not at the model's construction or in its first update.
     where = f"{path}: {env_id}"
@@ -181,7 +191,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
         algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
-        obs_scales=obs_scales,
+        obs_scales=obs_scales, action_increment=action_increment,
     )  # fmt: skip
 
 
@@ -352,26 +362,6 @@ def _check_env_kwargs(env_id: str, env_kwargs: Mapping[str, Any], where: str) ->
         SimConfig.from_kwargs(**{**VARIANTS[env_id], **env_kwargs})
     except (TypeError, ValueError) as error:
         raise ValueError(f"{where}: env_kwargs: {error}") from None
-
-
-def _action_bounds(value: Any, path: Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """[[low × 3], [high × 3]] inside [−1, 1] with low < high per axis, or a named error."""
-    import math
-
-    try:
-        low, high = (tuple(float(v) for v in side) for side in value)
-        ok = len(low) == len(high) == 3 and all(
-            math.isfinite(a) and math.isfinite(b) and -1.0 <= a < b <= 1.0
-            for a, b in zip(low, high, strict=True)
-        )
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise ValueError(
-            f"{path}: action_bounds must be [[low_X, low_M, low_N], [high_X, high_M, high_N]] "
-            f"with -1 <= low < high <= 1 per axis, got {value!r}"
-        )
-    return low, high
 
 
 def _eval_kwargs(text: str, path: Path, key: str) -> dict[str, Any]:

@@ -266,6 +266,12 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         from benchmarks.training.action_box import ActionBox
 
         venv = ActionBox(venv, *cfg.action_bounds)
+    increment = None
+    if cfg.action_increment is not None:
+        from benchmarks.training.action_increment import IncrementalActions
+
+        increment = (cfg.action_increment, observation_layout_of(opts.env_id, cfg.env_kwargs).names)
+        venv = IncrementalActions(venv, *increment)
 
     previous: dict[str, Any] = {}
     checkpoint = latest_checkpoint(out) if opts.resume else None
@@ -333,6 +339,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "env_kwargs": cfg.env_kwargs, "eval_env_kwargs": eval_kwargs,
             "eval_seeds": list(opts.eval_seeds), "obs_names": list(obs_names),
             "observation_shape": [len(obs_names)], "action_shape": [action_dim], **residual_meta,
+            **({} if increment is None else {"action_increment": increment[0]}),
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": describe_env(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
@@ -352,7 +359,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if opts.eval_freq > 0:
         evaluation = PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
                                         metadata, start_wall, best, opts.verbose, residual,
-                                        next_eval=schedules.get("next_eval"))  # fmt: skip
+                                        next_eval=schedules.get("next_eval"),
+                                        increment=increment)  # fmt: skip
         callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)
 
