@@ -55,8 +55,8 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
 
 
 def check_args(args: argparse.Namespace) -> None:
-    """Validate ``args``; adds ``env_kwargs`` and ``policy_object`` (built for the scenario).
-    ValueError / OSError naming the argument."""
+    """Validate ``args``; adds ``env_kwargs``, ``control_dt`` and ``policy_object`` (built for
+    the scenario). ValueError / OSError naming the argument."""
     if not (0 < args.duration <= 1e5):
         raise ValueError(f"--duration must be in (0, 1e5] s, got {args.duration}")
     if not (1 <= args.every <= 10_000 and 1 <= args.fps <= 240):
@@ -79,11 +79,11 @@ def check_args(args: argparse.Namespace) -> None:
     # An agent runs under the env id it records, as in `compare` and the suite.
     args.env_id = policy_env_id(args.policy)
     try:
-        SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
+        config = SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
     except (TypeError, ValueError) as error:
         raise ValueError(f"scenario {names[0]!r}: {error}") from None
-    control_dt = float(args.env_kwargs.get("control_dt", 0.05))
-    args.policy_object = build_policy(args.policy, control_dt, scenario.controller)
+    args.control_dt = config.control_dt
+    args.policy_object = build_policy(args.policy, config, scenario.controller)
     writable_location(args.out, "--out", folder=False)
 
 
@@ -176,8 +176,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     remove_stale_videos(args.out)
     result = record(args.policy_object, args.env_kwargs, args.out, args.seed, args.every,
                     args.fps, progress=not args.quiet, env_id=args.env_id)  # fmt: skip
-    control_dt = float(args.env_kwargs.get("control_dt", 0.05))
-    speedup = args.every * control_dt * args.fps
+    speedup = args.every * args.control_dt * args.fps
     print(f"wrote {args.out}: {result['frames']} frames at {args.fps} fps "
           f"({result['frames'] / args.fps:.1f} s of video, {speedup:g}× the episode's pace) "
           f"of a {result['episode_s']:g}-s episode ({result['end']}) "

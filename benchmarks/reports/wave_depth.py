@@ -47,8 +47,9 @@ def measure(policy_name: str, kind: str, depth: float, waves: Any, seeds: list[i
     import controllers
     from auv_gym.rollout import evaluate
 
-    policy = controllers.make(policy_name, control_dt=0.05)
-    results = evaluate(policy, seeds, waves=waves, max_time=max_time, **path_at(kind, depth))
+    env_kwargs = {"waves": waves, "max_time": max_time, **path_at(kind, depth)}
+    policy = controllers.make(policy_name, env=env_kwargs)
+    results = evaluate(policy, seeds, **env_kwargs)
     rms = np.array([[r["rms_distance"] for r in results]])
     ci = mean_interval(rms, key=f"{kind}|{depth}|{waves}")
     failed = sum(r["termination_reason"] in FAILURE_REASONS for r in results)

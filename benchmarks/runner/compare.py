@@ -116,13 +116,12 @@ def check_args(args: argparse.Namespace) -> None:
         scenario = scenarios[name]
         env_kwargs = {**scenario.env, "max_time": args.duration}
         try:
-            SimConfig.from_kwargs(**env_kwargs)
-            control_dt = float(env_kwargs.get("control_dt", 0.05))
+            config = SimConfig.from_kwargs(**env_kwargs)
             # one metrics-window rule (docs/design.md §3.9); it must hold a metric everywhere
-            transient = check_window(args.duration, args.transient, control_dt)
+            transient = check_window(args.duration, args.transient, config.control_dt)
             for spec in policies:
                 if PolicySpec.parse(spec).kind == "classical":
-                    build_policy(spec, control_dt, scenario.controller)
+                    build_policy(spec, config, scenario.controller)
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
     writable_folder(args.out)  # last: a bad argument above creates no folder

@@ -221,11 +221,10 @@ def check_args(args: argparse.Namespace) -> None:
             for run in policy.runs:
                 chunk = Chunk(policy.name, run, task, args.duration, 0.0)
                 try:
-                    SimConfig.from_kwargs(**chunk.env_kwargs)
-                    control_dt = float(chunk.env_kwargs.get("control_dt", 0.05))
-                    transient = check_window(args.duration, args.transient, control_dt)
+                    config = SimConfig.from_kwargs(**chunk.env_kwargs)
+                    transient = check_window(args.duration, args.transient, config.control_dt)
                     if PolicySpec.parse(run.spec).kind == "classical":
-                        build_policy(run.spec, control_dt, task.controller)
+                        build_policy(run.spec, config, task.controller)
                 except (TypeError, ValueError) as error:
                     raise ValueError(
                         f"task set {task.name!r}, policy {policy.name!r}: {error}"
