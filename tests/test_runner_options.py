@@ -1,0 +1,57 @@
+"""The episode runners' command lines (`auv-gym compare`, `auv-gym suite`) generated from their
+option dataclasses: each default and help written once, in the dataclass."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from benchmarks.options import flag_of, from_args
+from benchmarks.runner import compare, evaluate_suite
+
+CLIS = [(compare, compare.CompareOptions), (evaluate_suite, evaluate_suite.SuiteOptions)]
+
+
+@pytest.mark.parametrize(("module", "options"), CLIS, ids=["compare", "suite"])
+def test_parsed_defaults_are_the_dataclass_defaults(module, options) -> None:
+    parser = module.build_parser()
+    names = [f.name for f in dataclasses.fields(options)]
+    assert from_args(options, parser.parse_args([]), names) == options()
+    flags = {flag_of(f): f.metadata["help"] for f in dataclasses.fields(options)}
+    by_flag = {a.option_strings[0]: a.help for a in parser._actions if a.option_strings}
+    assert {k: by_flag[k] for k in flags} == flags  # one flag per field, with its help
+
+
+def test_the_flags_of_before_stay() -> None:
+    """Every former flag, its destination and default (scripts and the docs use them)."""
+    ns = compare.build_parser().parse_args([])
+    assert (ns.policies, ns.scenarios, ns.seeds, str(ns.out)) == (
+        "fbsm,backstepping,ppo", "all", 10, "out/compare")  # fmt: skip
+    assert (ns.no_figures, ns.quiet, ns.duration, ns.transient) == (False, False, 300.0, None)
+    ns = compare.build_parser().parse_args(["--no-figures", "--quiet", "--seeds", "3"])
+    assert (ns.no_figures, ns.quiet, ns.seeds) == (True, True, 3)
+    ns = evaluate_suite.build_parser().parse_args([])
+    assert (ns.sets, str(ns.out), ns.reps, ns.bootstrap_seed, ns.reference) == (
+        "all", "out/suite", 2000, 0, None)  # fmt: skip
+    assert (ns.stats_only, ns.no_stats, ns.no_figures, ns.quiet) == (False,) * 4
+    ns = evaluate_suite.build_parser().parse_args(["--stats-only", "--no-figures", "--reps", "9"])
+    assert (ns.stats_only, ns.no_figures, ns.reps) == (True, True, 9)
+    assert from_args(evaluate_suite.SuiteOptions, ns, ["figures", "stats"]) == (
+        evaluate_suite.SuiteOptions(figures=False))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("module", "argv", "message"),
+    [
+        (compare, ["--seeds", "ten"], "argument --seeds: invalid int value: 'ten'"),
+        (compare, ["--backend", "slurm"], "argument --backend: invalid choice: 'slurm'"),
+        (evaluate_suite, ["--reps", "1.5"], "argument --reps: invalid int value: '1.5'"),
+        (evaluate_suite, ["--duration", "x"], "argument --duration: invalid float value: 'x'"),
+    ],
+)
+def test_a_bad_value_is_one_line_exit_2(capsys, module, argv, message) -> None:
+    with pytest.raises(SystemExit) as stop:
+        module.build_parser().parse_args(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and message in err and err.count("\n") == 1
