@@ -349,8 +349,9 @@ class AUVPath3DEnv(gym.Env):
         self.sim.reset_row(0, self.np_random)
         obs = self.sim.observations()[0]
         check_reset_observations(
-            obs[None], [0], self.config.observation, self.config.current_speed_bound
-        )
+            obs[None], [0], self.config.observation, self.config.current_speed_bound,
+            self.sim.speed_bound,
+        )  # fmt: skip
         self._last_obs[:] = obs
         if self._renderer is not None:
             self._renderer.reset(*track_point(self.sim, 0), path=self.sim.paths[0])

@@ -85,7 +85,8 @@ class AUVParams:
     M_max: float = 10.0  # [N·m]
     N_max: float = 10.0  # [N·m]
     # Top speed u_max [m/s]: the default surge limit of the speed-limited env ids
-    # (`surge_limit="vehicle"`, `auv_gym.task`); below REMUS 100's ~2.3-2.5 m/s at full thrust.
+    # (`surge_limit="vehicle"`, `auv_gym.task`) and the observation's speed scale
+    # (`observation.vehicle_speed_bound`); below REMUS 100's ~2.3-2.5 m/s at full thrust.
     max_surge: float = 2.0  # [m/s]
     surge_coriolis: bool = True  # include (X_vr + m) v r + (X_wq − m) w q (docs/model.md §2.1 c)
 
