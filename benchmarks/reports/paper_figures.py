@@ -59,7 +59,7 @@ class Args:
     duration: float = 300.0  # episode length [s]
     seed: int = 0  # reset seed shared by the controllers (same noise for both)
     policies: tuple[str, ...] = DEFAULT_POLICIES  # names for controllers.make
-    control_dt: float = 0.05  # control period [s]
+    control_dt: float = SimConfig.control_dt  # control period [s], the env's default
     transient: float | None = None  # metrics window start [s]; default min(100, duration/2)
     dpi: int = 150  # figure resolution
     env: dict[str, Any] = field(default_factory=dict)  # extra env keyword arguments
