@@ -1,5 +1,5 @@
-"""The episode runners' command lines (`auv-gym compare`, `auv-gym suite`) generated from their
-option dataclasses: each default and help written once, in the dataclass."""
+"""The episode runners' command lines (`auv-gym compare`, `auv-gym suite`, `auv-gym video`)
+generated from their option dataclasses: each default and help written once, in the dataclass."""
 
 from __future__ import annotations
 
@@ -8,12 +8,14 @@ import dataclasses
 import pytest
 
 from benchmarks.options import flag_of, from_args
+from benchmarks.reports import video
 from benchmarks.runner import compare, evaluate_suite
 
-CLIS = [(compare, compare.CompareOptions), (evaluate_suite, evaluate_suite.SuiteOptions)]
+CLIS = [(compare, compare.CompareOptions), (evaluate_suite, evaluate_suite.SuiteOptions),
+        (video, video.VideoOptions)]  # fmt: skip
 
 
-@pytest.mark.parametrize(("module", "options"), CLIS, ids=["compare", "suite"])
+@pytest.mark.parametrize(("module", "options"), CLIS, ids=["compare", "suite", "video"])
 def test_parsed_defaults_are_the_dataclass_defaults(module, options) -> None:
     parser = module.build_parser()
     names = [f.name for f in dataclasses.fields(options)]
@@ -39,6 +41,9 @@ def test_the_flags_of_before_stay() -> None:
     assert (ns.stats_only, ns.no_figures, ns.reps) == (True, True, 9)
     assert from_args(evaluate_suite.SuiteOptions, ns, ["figures", "stats"]) == (
         evaluate_suite.SuiteOptions(figures=False))  # fmt: skip
+    ns = video.build_parser().parse_args(["--quiet"])
+    assert (ns.policy, ns.scenario, ns.seed, ns.every, ns.fps, str(ns.out), ns.quiet) == (
+        "fbsm", "paper", 0, 5, 20, "run.mp4", True)  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -48,6 +53,7 @@ def test_the_flags_of_before_stay() -> None:
         (compare, ["--backend", "slurm"], "argument --backend: invalid choice: 'slurm'"),
         (evaluate_suite, ["--reps", "1.5"], "argument --reps: invalid int value: '1.5'"),
         (evaluate_suite, ["--duration", "x"], "argument --duration: invalid float value: 'x'"),
+        (video, ["--fps", "fast"], "argument --fps: invalid int value: 'fast'"),
     ],
 )
 def test_a_bad_value_is_one_line_exit_2(capsys, module, argv, message) -> None:
