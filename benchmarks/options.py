@@ -36,7 +36,6 @@ __all__ = [
     "flag_of",
     "from_args",
     "option",
-    "parse_options",
     "whole_number",
 ]
 
@@ -185,17 +184,3 @@ def from_args(cls: type, namespace: argparse.Namespace | dict[str, Any], names: 
         else:
             kwargs[name] = values[name]
     return cls(**kwargs, **fixed)
-
-
-def parse_options(cls: type, argv: Sequence[str] | None, prog: str, description: str | None,
-                  *, negatable: bool = True) -> tuple[Any, argparse.ArgumentParser]:  # fmt: skip
-    """(``cls`` from the command line ``argv``, its parser): every `option` field of ``cls`` is
-    an option (`add_options`); a bad value exits like `benchmarks.arguments.ArgumentParser`,
-    on one line with code 2. The parser is returned for checks across options
-    (``parser.error``)."""
-    from benchmarks.arguments import ArgumentParser
-    from benchmarks.cli import HelpFormatter
-
-    parser = ArgumentParser(prog=prog, description=description, formatter_class=HelpFormatter)
-    names = add_options(parser, cls, negatable=negatable)
-    return from_args(cls, parser.parse_args(argv), names), parser

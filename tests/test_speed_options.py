@@ -8,8 +8,8 @@ import importlib
 
 import pytest
 
+from benchmarks.arguments import parse_options
 from benchmarks.cli import SPEED
-from benchmarks.options import parse_options
 
 MODULES = sorted({module for module, _ in SPEED.values()} | {"benchmarks.speed.residual"})
 

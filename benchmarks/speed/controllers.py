@@ -24,8 +24,8 @@ import numpy as np
 import controllers
 from auv_gym.config import SimConfig
 from auv_gym.simulator import Simulator
-from benchmarks.arguments import program_name
-from benchmarks.options import option, parse_options
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 
 def closed_loop(name: str, n: int, steps: int, threads: int, warmup: int = 100) -> dict[str, float]:

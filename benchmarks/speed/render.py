@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from benchmarks.arguments import program_name
-from benchmarks.options import option, parse_options
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 
 def measure(frames: int, every: int, fast: bool) -> dict[str, float]:

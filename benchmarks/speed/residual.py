@@ -26,8 +26,8 @@ from gymnasium.vector import AutoresetMode
 
 from auv_gym import VARIANTS
 from auv_gym.vector_env import AUVPath3DVectorEnv
-from benchmarks.arguments import program_name
-from benchmarks.options import option, parse_options
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.residual_env import ResidualVectorEnv
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from benchmarks.arguments import program_name
-from benchmarks.options import option, parse_options
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 SECTIONS = {"env": "benchmarks.speed.env", "vector": "benchmarks.speed.vector",
             "controllers": "benchmarks.speed.controllers",

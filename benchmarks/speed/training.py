@@ -44,8 +44,8 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.files import write_json
-from benchmarks.arguments import program_name, usage_errors, writable_location
-from benchmarks.options import option, parse_options
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
 
 DEFAULT_BASELINE = "b8de6c4"
 N_ENVS = (32, 128, 512)

@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 
 from auv_gym.files import write_json
-from benchmarks.arguments import program_name, usage_errors, writable_location
-from benchmarks.options import option, parse_options
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
 
 SIZES = (1, 64, 1024, 4096, 16384)
 MEMORY_N = 65_536
