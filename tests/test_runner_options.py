@@ -61,3 +61,21 @@ def test_a_bad_value_is_one_line_exit_2(capsys, module, argv, message) -> None:
         module.build_parser().parse_args(argv)
     err = capsys.readouterr().err
     assert stop.value.code == 2 and message in err and err.count("\n") == 1
+
+
+def test_wave_depth_options_are_its_dataclass(capsys) -> None:
+    from benchmarks.arguments import parse_options
+    from benchmarks.reports import wave_depth
+
+    parsed, _ = parse_options(wave_depth.Options, [], "prog", None)
+    assert parsed == wave_depth.Options() and parsed.depths == (2.0, 5.0, 10.0, 20.0, 40.0)
+    parsed, _ = parse_options(wave_depth.Options, ["--depths", "3", "7.5"], "prog", None)
+    assert parsed.depths == (3.0, 7.5)
+    for argv, message in (
+        (["--path", "spiral"], "argument --path: invalid choice: 'spiral'"),
+        (["--depths", "-1"], "--depths must be finite and >= 0 m, got [-1.0]"),
+    ):
+        with pytest.raises(SystemExit) as stop:
+            wave_depth.main(argv)
+        err = capsys.readouterr().err
+        assert stop.value.code == 2 and message in err and err.count("\n") == 1
