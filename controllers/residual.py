@@ -107,9 +107,10 @@ def check_number(name: str, value: Any, low: float, high: float, unit: str = "")
 class ResidualSettings:
     """What makes an agent residual at inference: the base controller (a name of
     `controllers.CLASSICAL` and its keyword arguments other than the env-owned
-    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β, and the learned filter's largest coefficient α_max (0: none;
-    docs/design.md §3.10). The reward terms training adds are the training side's
-    (`benchmarks.training.residual.ResidualTraining`, a subclass)."""
+    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β, and the learned
+    filter's largest coefficient α_max (0: none; docs/design.md §3.10). The reward terms
+    training adds are the training side's (`benchmarks.training.residual.ResidualTraining`, a
+    subclass)."""
 
     base: str = DEFAULT_BASE
     bound: tuple[float, float, float] = DEFAULT_BOUND
