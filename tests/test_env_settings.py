@@ -64,3 +64,22 @@ def test_explicit_keywords_override_the_env_and_a_random_actuator_is_not_passed(
 def test_a_bad_env_is_one_line_naming_its_type() -> None:
     with pytest.raises(TypeError, match=r"^env must be an AUVPath3D env .* got list$"):
         controllers.make("fbsm", env=[0.05])
+
+
+class _ZeroAgent:
+    """A residual agent that never corrects its base."""
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return np.zeros((np.shape(observation)[0], 3), dtype=np.float32), state
+
+
+def test_a_residual_policys_base_takes_the_env_settings_without_recording_them() -> None:
+    from controllers.residual import ResidualSettings
+
+    env = {"control_dt": 0.1, "actuator": "fins", "params": _VEHICLE}
+    policy = controllers.make("residual", agent=_ZeroAgent(), env=env, k_y=0.2)
+    assert (policy.base.control_dt, policy.base.actuator, policy.base.params) == (
+        0.1, "fins", _VEHICLE)  # fmt: skip
+    assert policy.settings.base_kwargs == {"k_y": 0.2}  # the env's settings are not the agent's
+    with pytest.raises(ValueError, match=r"^base_kwargs must not set \['params'\]: the env"):
+        ResidualSettings(base_kwargs={"params": _VEHICLE})
