@@ -8,7 +8,7 @@ Importing the package registers these ids with Gymnasium (idempotently); each is
 | `AUVPath3D-v0`           | the paper's scenario: helix, ±35 white noise, 15-entry observation |
 | `AUVPath3DNominal-v0`    | v0 without disturbances                                          |
 | `AUVPath3DFins-v0`       | v0 with fin actuators (moment authority ∝ u²)                    |
-| `AUVPath3DSpeedLimit-v0` | v0 with the 2.0 m/s surge limit (`task.SURGE_LIMIT`); was v1     |
+| `AUVPath3DSpeedLimit-v0` | v0 limited to the vehicle's top speed (REMUS 100: 2.0 m/s); was v1 |
 | `AUVPath3DPreview-v0`    | the RL task: the surge limit and the agent observation (path     |
 |                          | preview, velocity over ground, previous action; `observation`)  |
 
@@ -37,7 +37,7 @@ from auv_gym.observation import (
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import FittedCurve, Helix, Path, Spline, StraightLine, fit_curve, make_path
 from auv_gym.sensors import SensorConfig
-from auv_gym.task import SURGE_LIMIT
+from auv_gym.task import SURGE_LIMIT, VEHICLE_TOP_SPEED  # noqa: F401  (SURGE_LIMIT: former name)
 from auv_gym.vehicle import AUVParams, remus100
 
 __all__ = [
@@ -76,8 +76,8 @@ VARIANTS: dict[str, dict] = {
     "AUVPath3DNominal-v0": {"disturbance": "none"},
     "AUVPath3DFins-v0": {"actuator": "fins"},
     # the default reward changed: overspeed term and termination above 2.0 m/s (env docstring)
-    SPEED_LIMIT_ENV_ID: {"surge_limit": SURGE_LIMIT},
-    PREVIEW_ENV_ID: {"surge_limit": SURGE_LIMIT, "observation": "preview"},
+    SPEED_LIMIT_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED},
+    PREVIEW_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED, "observation": "preview"},
 }
 # Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium
 # call v0 "out of date" on every `gym.make("AUVPath3D-v0")`.

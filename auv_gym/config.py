@@ -51,6 +51,7 @@ from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.safety_cost import SafetyCost
 from auv_gym.sensors import SENSOR_PRESETS, SensorConfig
 from auv_gym.task import (
+    VEHICLE_TOP_SPEED,
     RewardWeights,
     TaskLimits,
 )
@@ -141,7 +142,7 @@ class SimConfig:
         virtual_point_law: str = "corrected",
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
-        surge_limit: float = math.inf,
+        surge_limit: float | str = math.inf,
         params: AUVParams | Mapping[str, Any] | None = None,
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
@@ -167,9 +168,15 @@ class SimConfig:
         if isinstance(the_path, Path):
             the_path, offset = shift_path(the_path, offset), (0.0, 0.0, 0.0)
         s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
+        vehicle = params_from_spec(params)
+        if isinstance(surge_limit, str):  # the one name: the vehicle record's top speed
+            if surge_limit != VEHICLE_TOP_SPEED:
+                raise ValueError(f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
+                                 f" (params.max_surge), got {surge_limit!r:.80}")  # fmt: skip
+            surge_limit = vehicle.max_surge
         return cls(
             path=the_path,
-            params=params_from_spec(params),
+            params=vehicle,
             noise=noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
             param_uncertainty=param_uncertainty,

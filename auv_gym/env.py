@@ -162,7 +162,7 @@ class AUVPath3DEnv(gym.Env):
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
     | `virtual_point_law` | "corrected" | "printed" restores the paper's unstable 1 − tanh |
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
-    | `surge_limit` | inf | u_max [m/s]: overspeed penalty and termination (Rewards) |
+    | `surge_limit` | inf | u_max [m/s], "vehicle": `params.max_surge`; overspeed term (Rewards) |
     | `reward_weights` | defaults | `RewardWeights` or dict of the weights above |
     | `params` | REMUS 100 | `AUVParams` of the true vehicle (limits X_max …), or a dict, `scale` |
     | `start_position`, `start_heading` | None | override the start [m], [rad] |
@@ -182,7 +182,7 @@ class AUVPath3DEnv(gym.Env):
     - `noise_hold` a whole multiple of `physics_dt`, ≤ 1e6 s; given together with a `NoiseConfig`
       it must equal that config's `hold` (no silent override). Amplitudes in [0, 1e4] N or N·m.
     - `current`: mean and std per axis within ±10 m/s (std ≥ 0), time constant in (0, 1e6] s.
-    - `surge_limit` in (u_desired, 10] m/s or inf.
+    - `surge_limit` in (u_desired, 10] m/s, inf or "vehicle" (`params.max_surge`).
     - `param_uncertainty` in [0, 1); `u_desired` in (0, 10] m/s, so that u_D and u_p ≤ 2u_D stay
       inside their observation bounds; `sigma` > 0 m.
     - `corridor` in [0.01, 500] m, inside the ±500 m bounds of the observed errors; `max_pitch`
@@ -242,7 +242,8 @@ class AUVPath3DEnv(gym.Env):
       §2.6).
     * `AUVPath3DSpeedLimit-v0` (registered as `AUVPath3D-v1` until the ids were renamed, so that
       v0 is not reported "out of date"): realistic speed — the v0 environment with
-      `surge_limit` = 2.0 m/s by default: the overspeed reward term and the "overspeed"
+      `surge_limit` = "vehicle" by default, the vehicle record's top speed
+      (`AUVParams.max_surge`, 2.0 m/s for REMUS 100): the overspeed reward term and the "overspeed"
       termination (docs/design.md §3). Everything else, including every other default, is v0's.
     * `AUVPath3DPreview-v0`: the RL task — the speed limit and ``observation="preview"``.
 
@@ -269,7 +270,7 @@ class AUVPath3DEnv(gym.Env):
         virtual_point_law: str = "corrected",
         corridor: float = 30.0,
         max_pitch: float = math.radians(60.0),
-        surge_limit: float = math.inf,
+        surge_limit: float | str = math.inf,
         reward_weights: RewardWeights | dict | None = None,
         params: AUVParams | Mapping[str, Any] | None = None,
         start_position: Sequence[float] | None = None,
@@ -348,8 +349,9 @@ class AUVPath3DEnv(gym.Env):
         self.sim.reset_row(0, self.np_random)
         obs = self.sim.observations()[0]
         check_reset_observations(
-            obs[None], [0], self.config.observation, self.config.current_speed_bound
-        )
+            obs[None], [0], self.config.observation, self.config.current_speed_bound,
+            self.sim.speed_bound,
+        )  # fmt: skip
         self._last_obs[:] = obs
         if self._renderer is not None:
             self._renderer.reset(*track_point(self.sim, 0), path=self.sim.paths[0])

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.observation import ObservationConfig
+from auv_gym.observation import SPEED_BOUND, ObservationConfig
 from auv_gym.validation import ArgumentTypeError
 
 __all__ = ["check_reset_observations", "validate_actions"]
@@ -41,13 +41,15 @@ def check_reset_observations(
     rows: Sequence[int] | np.ndarray,
     layout: ObservationConfig | None = None,
     current_speed: float = 0.0,
+    speed_bound: float = SPEED_BOUND,
 ) -> None:
     """Raise ValueError, naming the component, if a reset observation (float32, one row per
-    vehicle, ``layout`` default: the paper's) lies outside the observation space; the
+    vehicle, ``layout`` default: the paper's; ``current_speed``, ``speed_bound``: see
+    `ObservationConfig.bounds`) lies outside the observation space; the
     configuration checks make this unreachable for the built-in paths, so it guards what they
     cannot see (a spline between its samples)."""
     layout = layout or ObservationConfig()
-    low, high = layout.bounds(current_speed)
+    low, high = layout.bounds(current_speed, speed_bound)
     outside = ~((obs >= low) & (obs <= high))  # NaN counts as outside
     if outside.any():
         i, j = np.argwhere(outside)[0]

@@ -68,28 +68,36 @@ __all__ = [
 ]
 
 ERROR_BOUND = 500.0  # [m] far beyond any corridor; a vehicle outside it is terminated
-SPEED_BOUND = 10.0  # [m/s] 4× REMUS's maximum speed
+# [m/s] the speed entries' bound for REMUS 100 (5× its 2.0 m/s top speed), and the range of the
+# speed arguments (u_desired, surge_limit); a faster vehicle's is `vehicle_speed_bound`.
+SPEED_BOUND = 10.0
+OBS_SPEED_MARGIN = 5.0  # speed bound / the vehicle's top speed `AUVParams.max_surge`
 RATE_BOUND = 2.0 * math.pi  # [rad/s]
 PATH_RATE_BOUND = 10.0  # [rad/s]
 
-_TABLE = (
-    # name, unit, low, high
-    ("x_e", "m", -ERROR_BOUND, ERROR_BOUND),
-    ("y_e", "m", -ERROR_BOUND, ERROR_BOUND),
-    ("z_e", "m", -ERROR_BOUND, ERROR_BOUND),
-    ("psi_error", "rad", -math.pi, math.pi),
-    ("theta", "rad", -math.pi / 2, math.pi / 2),
-    ("theta_F", "rad", -math.pi / 2, math.pi / 2),
-    ("u", "m/s", -SPEED_BOUND, SPEED_BOUND),
-    ("v", "m/s", -SPEED_BOUND, SPEED_BOUND),
-    ("w", "m/s", -SPEED_BOUND, SPEED_BOUND),
-    ("q", "rad/s", -RATE_BOUND, RATE_BOUND),
-    ("r", "rad/s", -RATE_BOUND, RATE_BOUND),
-    ("u_D", "m/s", 0.0, SPEED_BOUND),
-    ("u_p", "m/s", 0.0, 2.0 * SPEED_BOUND),
-    ("psi_F_dot", "rad/s", -PATH_RATE_BOUND, PATH_RATE_BOUND),
-    ("theta_F_dot", "rad/s", -PATH_RATE_BOUND, PATH_RATE_BOUND),
-)
+
+def _table(speed: float) -> tuple[tuple[str, str, float, float], ...]:
+    """(name, unit, low, high) of the paper's entries, with ``speed`` [m/s] the speed bound."""
+    return (
+        ("x_e", "m", -ERROR_BOUND, ERROR_BOUND),
+        ("y_e", "m", -ERROR_BOUND, ERROR_BOUND),
+        ("z_e", "m", -ERROR_BOUND, ERROR_BOUND),
+        ("psi_error", "rad", -math.pi, math.pi),
+        ("theta", "rad", -math.pi / 2, math.pi / 2),
+        ("theta_F", "rad", -math.pi / 2, math.pi / 2),
+        ("u", "m/s", -speed, speed),
+        ("v", "m/s", -speed, speed),
+        ("w", "m/s", -speed, speed),
+        ("q", "rad/s", -RATE_BOUND, RATE_BOUND),
+        ("r", "rad/s", -RATE_BOUND, RATE_BOUND),
+        ("u_D", "m/s", 0.0, speed),
+        ("u_p", "m/s", 0.0, 2.0 * speed),
+        ("psi_F_dot", "rad/s", -PATH_RATE_BOUND, PATH_RATE_BOUND),
+        ("theta_F_dot", "rad/s", -PATH_RATE_BOUND, PATH_RATE_BOUND),
+    )
+
+
+_TABLE = _table(SPEED_BOUND)
 
 OBS_NAMES: tuple[str, ...] = tuple(row[0] for row in _TABLE)
 OBS_UNITS: dict[str, str] = {row[0]: row[1] for row in _TABLE}
@@ -97,6 +105,23 @@ OBS_INDEX: dict[str, int] = {name: i for i, name in enumerate(OBS_NAMES)}
 OBS_LOW = np.array([row[2] for row in _TABLE], dtype=np.float32)
 OBS_HIGH = np.array([row[3] for row in _TABLE], dtype=np.float32)
 OBS_DIM = len(OBS_NAMES)
+
+
+def vehicle_speed_bound(max_surge: float) -> float:
+    """The speed entries' bound [m/s] (|u|, |v|, |w|, u_D; 2× for u_p) for a vehicle of top speed
+    ``max_surge`` [m/s] (`AUVParams.max_surge`): `OBS_SPEED_MARGIN` times it, and never below
+    `SPEED_BOUND`, so that every u_desired and surge_limit the env accepts stays observable.
+    REMUS 100 (2.0 m/s): `SPEED_BOUND`, the paper's bounds `OBS_LOW`, `OBS_HIGH`."""
+    return max(SPEED_BOUND, OBS_SPEED_MARGIN * max_surge)
+
+
+def paper_bounds(speed_bound: float = SPEED_BOUND) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) float32 of the paper's entries for the speed bound ``speed_bound`` [m/s]
+    (`vehicle_speed_bound`); `OBS_LOW`, `OBS_HIGH` for `SPEED_BOUND`."""
+    rows = _table(speed_bound)
+    return (np.array([row[2] for row in rows], dtype=np.float32),
+            np.array([row[3] for row in rows], dtype=np.float32))  # fmt: skip
+
 
 # Guidance quantities computed by the simulator kernel, one row per vehicle [m, rad, rad/s, m/s].
 GUIDANCE_FIELDS = (
@@ -153,11 +178,13 @@ DEFAULT_PREVIEW_SPACING = 2.0  # [m] Δs: K·Δs = 10 m, 10 s of travel at u_D =
 MAX_PREVIEW_POINTS = 64
 MAX_PREVIEW_LENGTH = ERROR_BOUND  # [m] K·Δs
 CURVATURE_BOUND = 1.0  # [1/m] κ and |τ| saturate here: 8× sharper than the vehicle can turn
-GROUND_SPEED_BOUND = 30.0  # [m/s] |ν + R_Bᵀ v_c| per axis: SPEED_BOUND plus a 10 m/s current, ×1.5
+# |ν + R_Bᵀ v_c| per axis: the speed bound plus a 10 m/s current, ×1.5 (30 m/s for REMUS 100).
 # A configuration whose current can exceed 10 m/s (`SimConfig.current_speed_bound`: the mean,
 # a random current and 8 stationary standard deviations of the Gauss–Markov part) widens the
-# ground-speed bound to 1.5·(SPEED_BOUND + that speed).
+# ground-speed bound to 1.5·(speed bound + that speed).
 _GROUND_MARGIN = 1.5
+_GROUND_CURRENT = 10.0  # [m/s]
+GROUND_SPEED_BOUND = _GROUND_MARGIN * (SPEED_BOUND + _GROUND_CURRENT)  # [m/s]
 # Vehicle to a preview point: at most the distance to the virtual point (bounded per axis by
 # ERROR_BOUND, so √3·ERROR_BOUND in all) plus K chords of at most 1.5 Δs each: the margin
 # covers the midpoint march's arc-length error on splines, and the march halves any step whose
@@ -254,16 +281,19 @@ class ObservationConfig:
             extra[name] = "m·s" if name in INTEGRAL_NAMES else units[name.split("_", 1)[1]]
         return {**OBS_UNITS, **(extra if self.kind != "paper" else {})}
 
-    def bounds(self, current_speed: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, current_speed: float = 0.0, speed_bound: float = SPEED_BOUND
+               ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """(low, high) float32 arrays of the observation space; ``current_speed`` [m/s] is the
-        largest current the configuration can draw (`SimConfig.current_speed_bound`)."""
+        largest current the configuration can draw (`SimConfig.current_speed_bound`),
+        ``speed_bound`` [m/s] the vehicle's (`vehicle_speed_bound`)."""
+        low, high = paper_bounds(speed_bound)
         if self.kind == "paper":
-            return OBS_LOW.copy(), OBS_HIGH.copy()
-        ground = max(GROUND_SPEED_BOUND, _GROUND_MARGIN * (SPEED_BOUND + current_speed))
+            return low, high
+        ground = _GROUND_MARGIN * (speed_bound + max(_GROUND_CURRENT, current_speed))
         reach = math.sqrt(3.0) * ERROR_BOUND + PREVIEW_MARGIN * self.points * self.spacing
         point = (reach, reach, reach, CURVATURE_BOUND, CURVATURE_BOUND)
         integral = (ERROR_BOUND * self.integral_time,) * self.integrals  # |e| ≤ 500 m: |I| ≤ 500 T
-        high = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points,
-                         *integral])  # fmt: skip
-        return (np.concatenate([OBS_LOW, -high.astype(np.float32)]),
-                np.concatenate([OBS_HIGH, high.astype(np.float32)]))  # fmt: skip
+        extra = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points,
+                          *integral])  # fmt: skip
+        return (np.concatenate([low, -extra.astype(np.float32)]),
+                np.concatenate([high, extra.astype(np.float32)]))  # fmt: skip

@@ -33,10 +33,9 @@ from auv_gym.navigation import Navigation
 from auv_gym.observation import (
     GUIDANCE_DIM,
     OBS_DIM,
-    OBS_HIGH,
-    OBS_LOW,
     build_observation,
     guidance_row,
+    vehicle_speed_bound,
 )
 from auv_gym.ocean import ocean_row, ocean_width
 from auv_gym.paths import Path
@@ -195,7 +194,11 @@ class Simulator:
         self.ocean = np.zeros((n, ocean_width(config.waves)))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
         self.layout = config.observation
-        self.obs_low, self.obs_high = self.layout.bounds(config.current_speed_bound)
+        self.speed_bound = vehicle_speed_bound(config.params.max_surge)  # [m/s]
+        self.obs_low, self.obs_high = self.layout.bounds(config.current_speed_bound,
+                                                         self.speed_bound)  # fmt: skip
+        # The paper entries' bounds, which the step kernel's termination check reads.
+        self._paper_bounds = (self.obs_low[:OBS_DIM].copy(), self.obs_high[:OBS_DIM].copy())
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
         # Leaky error integrals (y_e, z_e) [m·s] (`ObservationConfig.integral_time`): the last
@@ -362,7 +365,7 @@ class Simulator:
         bad_row = self._kernel(self.state, self.current, self.actuator_state, self._actions,
                      self.params, self.keys, self.step_index, self._row, self._kind, self._pdata,
                      self._cfg, self._task,
-                     OBS_LOW, OBS_HIGH, self.guid, self.obs, self.record, self.terms,
+                     *self._paper_bounds, self.guid, self.obs, self.record, self.terms,
                      self.reward, self.code, self.cost, self.ocean)  # fmt: skip
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")

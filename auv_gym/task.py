@@ -22,7 +22,8 @@ near 2.3-2.5 m/s). With a finite u_max the overspeed term grows from 0 at u_D to
 u_max and u > u_max ends the episode as "overspeed", a failure (docs/design.md §3). With
 u_max = inf (the `AUVPath3D-v0` default) the term is exactly −0.0 and nothing terminates, so v0
 rewards are unchanged bit for bit; `AUVPath3DSpeedLimit-v0` (and `AUVPath3DPreview-v0`) set
-u_max = `SURGE_LIMIT` = 2.0 m/s.
+``surge_limit="vehicle"`` (`VEHICLE_TOP_SPEED`): u_max is the vehicle record's top speed
+`AUVParams.max_surge`, 2.0 m/s for REMUS 100 (`SURGE_LIMIT`).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from auv_gym.observation import ERROR_BOUND, GUIDE, OBS, OBS_DIM
 from auv_gym.records import field_indices, fixed_tuple, record_type
 from auv_gym.safety_cost import SAFETY_FIELDS, SafetyCost, safety_cost, safety_vector
 from auv_gym.validation import is_real, real
+from auv_gym.vehicle import AUVParams
 
 __all__ = [
     "REWARD_TERMS",
@@ -77,8 +79,10 @@ TRACKING_SCALE = 1.0  # [m] d_0 of the tracking bonus
 # [m] d_P of the precision bonus: the tracking bonus's slope at d = 5 cm is only 0.1 w_tracking
 # per metre; this one's is 3.9 w_precision per metre (docs/design.md §3.12)
 PRECISION_SCALE = 0.1
-# [m/s] u_max of AUVPath3DSpeedLimit-v0: below REMUS 100's top speed of ~2.3-2.5 m/s
-SURGE_LIMIT = 2.0
+# The `surge_limit` argument that means "the vehicle's top speed" (`AUVParams.max_surge`).
+VEHICLE_TOP_SPEED = "vehicle"
+# [m/s] u_max of AUVPath3DSpeedLimit-v0 with REMUS 100, the default vehicle
+SURGE_LIMIT = AUVParams().max_surge
 # Documented ranges. Bounded weights and a corridor of at least 1 cm keep every reward finite
 # (the observation is bounded by the float32 range or the episode ends as "non_finite"); a
 # corridor inside the observation's ±ERROR_BOUND keeps a running vehicle's errors in bounds.

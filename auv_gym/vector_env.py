@@ -224,8 +224,9 @@ class AUVPath3DVectorEnv(VectorEnv):
         self.sim.reset_rows(rows, [self._rngs[i] for i in rows])
         first = self.sim.observations(rows)
         check_reset_observations(
-            first, rows, self.config.observation, self.config.current_speed_bound
-        )
+            first, rows, self.config.observation, self.config.current_speed_bound,
+            self.sim.speed_bound,
+        )  # fmt: skip
         self._last_obs[rows] = first
         if self._render_vehicle in rows:
             self._restart_rendering()

@@ -84,13 +84,18 @@ class AUVParams:
     X_max: float = 50.0  # [N]
     M_max: float = 10.0  # [N·m]
     N_max: float = 10.0  # [N·m]
+    # Top speed u_max [m/s]: the default surge limit of the speed-limited env ids
+    # (`surge_limit="vehicle"`, `auv_gym.task`) and the observation's speed scale
+    # (`observation.vehicle_speed_bound`); below REMUS 100's ~2.3-2.5 m/s at full thrust.
+    max_surge: float = 2.0  # [m/s]
     surge_coriolis: bool = True  # include (X_vr + m) v r + (X_wq − m) w q (docs/model.md §2.1 c)
 
     def __post_init__(self) -> None:
         for f in fields(self):
             check = flag if f.name == "surge_coriolis" else real  # True is no mass
             check(f"AUVParams.{f.name}", getattr(self, f.name))
-        for name in ("m", "W", "B", "I_y", "I_z", "fin_max", "X_max", "M_max", "N_max"):
+        for name in ("m", "W", "B", "I_y", "I_z", "fin_max", "X_max", "M_max", "N_max",
+                     "max_surge"):  # fmt: skip
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"AUVParams.{name} must be positive, got {getattr(self, name)}")
         for name, value in (

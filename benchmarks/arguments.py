@@ -13,13 +13,13 @@ import math
 import os
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from auv_gym.files import output_lock
-from benchmarks.options import add_options, option
+from benchmarks.options import add_options, from_args, option
 
 __all__ = [
     "ArgumentParser",
@@ -28,6 +28,7 @@ __all__ = [
     "exit_with_usage_error",
     "finite_number",
     "locked_folder",
+    "parse_options",
     "program_name",
     "usage_errors",
     "writable_folder",
@@ -190,3 +191,15 @@ def check_episode_arguments(args: argparse.Namespace) -> None:
     if args.transient is not None:
         finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
     check_pool_options(args.workers, args.backend, args.address)
+
+
+def parse_options(cls: type, argv: Sequence[str] | None, prog: str, description: str | None,
+                  *, negatable: bool = True) -> tuple[Any, argparse.ArgumentParser]:  # fmt: skip
+    """(``cls`` from the command line ``argv``, its parser): every `option` field of ``cls`` is
+    an option (`benchmarks.options.add_options`); a bad value exits like `ArgumentParser`, on
+    one line with code 2. The parser is returned for checks across options (``parser.error``)."""
+    from benchmarks.cli import HelpFormatter
+
+    parser = ArgumentParser(prog=prog, description=description, formatter_class=HelpFormatter)
+    names = add_options(parser, cls, negatable=negatable)
+    return from_args(cls, parser.parse_args(argv), names), parser

@@ -17,7 +17,9 @@ How a field's type becomes an option: ``bool`` a switch (``--x`` / ``--no-x``, o
 with ``negatable=False``; ``invert=True`` names a switch that turns a default-on field off, such
 as ``--quiet`` for ``progress``); a ``parse`` function reads the text (a tuple default is shown
 comma-separated and parsed like a given value); otherwise the default's type (``int``,
-``float``, ``str``), and for a None default the hint's (``float | None`` reads a float).
+``float``, ``str``), and for a None default the hint's (``float | None`` reads a float). With
+``nargs`` ("+", "*") the option takes several values, each read like one value (the type of the
+tuple default's items), and the dataclass receives them as a tuple.
 """
 
 from __future__ import annotations
@@ -28,7 +30,14 @@ import typing
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
-__all__ = ["add_options", "comma_integers", "flag_of", "from_args", "option", "whole_number"]
+__all__ = [
+    "add_options",
+    "comma_integers",
+    "flag_of",
+    "from_args",
+    "option",
+    "whole_number",
+]
 
 _UNSET: Any = dataclasses.MISSING
 
@@ -36,7 +45,7 @@ _UNSET: Any = dataclasses.MISSING
 def option(default: Any, help: str, *, choices: Sequence[str] | None = None,
            parse: Callable[[str], Any] | None = None, flag: str | None = None,
            invert: bool = False, cli_default: Any = _UNSET, required: bool = False,
-           metavar: str | None = None) -> Any:  # fmt: skip
+           metavar: str | None = None, nargs: str | None = None) -> Any:  # fmt: skip
     """A dataclass field with its command-line description (a plain `dataclasses.field` is
     offered by no command line).
 
@@ -45,11 +54,11 @@ def option(default: Any, help: str, *, choices: Sequence[str] | None = None,
     ``invert`` a switch that stores ``not default``; ``cli_default`` the command line's default
     where the caller derives the value later (e.g. None: "the algorithm's file"); ``required``
     an option without default on the command line (the dataclass default serves programmatic
-    callers).
+    callers); ``nargs`` ("+" or "*") an option of several values (a tuple default).
     """
     metadata = {"help": help, "choices": choices, "parse": parse, "flag": flag,
                 "invert": invert, "cli_default": cli_default, "required": required,
-                "metavar": metavar}  # fmt: skip
+                "metavar": metavar, "nargs": nargs}  # fmt: skip
     return dataclasses.field(default=default, metadata=metadata)
 
 
@@ -134,7 +143,12 @@ def add_options(parser: argparse.ArgumentParser, cls: type, names: Iterable[str]
             else:
                 kwargs.update(action="store_true", default=default)
         else:
-            if meta["parse"] is not None:
+            if meta.get("nargs") is not None:  # several values, each read like one
+                kwargs["nargs"] = meta["nargs"]
+                item = meta["parse"] or (type(default[0]) if default else str)
+                kwargs["type"] = _text_type(item, flag) if meta["parse"] else item
+                default = list(default)
+            elif meta["parse"] is not None:
                 kwargs["type"] = _text_type(meta["parse"], flag)
                 if isinstance(default, tuple):  # shown as typed; argparse parses it
                     default = ",".join(map(str, default))
@@ -165,6 +179,8 @@ def from_args(cls: type, namespace: argparse.Namespace | dict[str, Any], names: 
         f = by_name[name]
         if f.metadata.get("invert"):
             kwargs[name] = not values[flag_of(f).lstrip("-").replace("-", "_")]
+        elif f.metadata.get("nargs") is not None:
+            kwargs[name] = tuple(values[name])
         else:
             kwargs[name] = values[name]
     return cls(**kwargs, **fixed)

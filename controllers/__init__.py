@@ -21,6 +21,7 @@ register_package(Path(__file__).parent, Path(auv_gym.__file__).parent)
 from controllers.algorithms import ALGORITHMS  # noqa: E402
 from controllers.backstepping import Backstepping  # noqa: E402
 from controllers.base import BatchedController, Policy  # noqa: E402
+from controllers.env_settings import policy_settings  # noqa: E402
 from controllers.fbsm import FBSM  # noqa: E402
 from controllers.gains import ControllerGains, MembershipSet  # noqa: E402
 from controllers.pid import PIDLOS, PIDGains  # noqa: E402
@@ -49,8 +50,14 @@ AGENT_NAMES = ("agent", *ALGORITHMS)
 REGISTRY = (*CLASSICAL, "ppo")  # policy names of the benchmark CLIs (a residual agent: ppo:PATH)
 
 
-def make(name: str, **kwargs: Any) -> Any:
-    """A policy by name, configured for the default env; keyword arguments override.
+def make(name: str, env: Any = None, **kwargs: Any) -> Any:
+    """A policy by name, configured for ``env`` (default: the default env); keyword arguments
+    override.
+
+    ``env`` (an env, a vector env, either wrapped, a `SimConfig` or env keyword arguments)
+    supplies what the policy must know of the plant: its control period, vehicle record and
+    actuator model (`controllers.env_settings.policy_settings`); for a saved agent they configure
+    a residual agent's base controller (``base_kwargs``). Explicit keywords win.
 
     "fbsm" and "backstepping" (and their `PRESETS`) accept `gains`, `params` (the nominal model),
     `control_dt`, `actuator` and individual gain names. "pid_los" (and its `PRESETS`;
@@ -69,6 +76,8 @@ def make(name: str, **kwargs: Any) -> Any:
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
     """
+    if env is not None:
+        kwargs = _with_env_settings(name, policy_settings(env), kwargs)
     if name in CLASSICAL:
         return make_classical(name, **kwargs)
     if name in AGENT_NAMES:
@@ -88,6 +97,14 @@ def make(name: str, **kwargs: Any) -> Any:
         return make_lowpass(**kwargs)
     valid = [*CLASSICAL, *AGENT_NAMES, "residual", "lowpass"]
     raise ValueError(f"unknown controller {name!r}; valid: {valid}")
+
+
+def _with_env_settings(name: str, settings: dict[str, Any], kwargs: dict[str, Any]
+                       ) -> dict[str, Any]:  # fmt: skip
+    """``kwargs`` with the env's ``settings`` beneath them (an agent: beneath its base's)."""
+    if name in AGENT_NAMES:
+        return {**kwargs, "base_kwargs": {**settings, **(kwargs.get("base_kwargs") or {})}}
+    return {**settings, **kwargs}
 
 
 def import_policy(spec: str, instantiate: bool = True, **factory_kwargs: Any) -> Any:

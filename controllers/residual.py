@@ -78,8 +78,8 @@ DEFAULT_FILTER_MAX = 0.0
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
-# Set by the env (the scenario), never by the residual settings.
-ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt")
+# Set by the env (the scenario; `controllers.env_settings`), never by the residual settings.
+ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt", "params", "actuator_params")
 
 
 def check_bound(bound: Any) -> tuple[float, float, float]:
@@ -107,9 +107,10 @@ def check_number(name: str, value: Any, low: float, high: float, unit: str = "")
 class ResidualSettings:
     """What makes an agent residual at inference: the base controller (a name of
     `controllers.CLASSICAL` and its keyword arguments other than the env-owned
-    ``actuator``/``control_dt``), β, and the learned filter's largest coefficient α_max (0: none;
-    docs/design.md §3.10). The reward terms training adds are the training side's
-    (`benchmarks.training.residual.ResidualTraining`, a subclass)."""
+    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β, and the learned
+    filter's largest coefficient α_max (0: none; docs/design.md §3.10). The reward terms
+    training adds are the training side's (`benchmarks.training.residual.ResidualTraining`, a
+    subclass)."""
 
     base: str = DEFAULT_BASE
     bound: tuple[float, float, float] = DEFAULT_BOUND

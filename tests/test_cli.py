@@ -126,7 +126,7 @@ def test_paper_figures_run_each_policy_under_its_env_id(tmp_path):
 
     plain = Trajectory.load(tmp_path / "trajectories" / "plain.npz")
     limited = Trajectory.load(tmp_path / "trajectories" / "limited.npz")
-    assert limited.metadata["env_kwargs"]["surge_limit"] == 2.0
+    assert limited.metadata["env_kwargs"]["surge_limit"] == "vehicle"  # REMUS 100: 2.0 m/s
     assert plain.metadata["env_kwargs"].get("surge_limit", float("inf")) == float("inf")
 
 

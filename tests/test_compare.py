@@ -413,7 +413,7 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
     assert policy_env_id("fbsm") == policy_env_id("ppo") == "AUVPath3D-v0"
     assert policy_env_id("ppo_generalist") == "AUVPath3DSpeedLimit-v0"
     v1 = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3DSpeedLimit-v0")
-    assert v1.env_kwargs["surge_limit"] == 2.0
+    assert v1.env_kwargs["surge_limit"] == "vehicle"  # REMUS 100's top speed, 2.0 m/s
     assert "surge_limit" not in Job("fbsm", scenario, 0, 10.0, 5.0).env_kwargs
     same = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v0")
     assert v1.fingerprint() != same.fingerprint()

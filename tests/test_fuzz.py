@@ -38,7 +38,7 @@ def test_drawn_configurations_are_valid_and_span_the_ranges():
     assert kinds == {"helix", "line", "waypoints", "Helix", "StraightLine", "Spline",
                      "FittedCurve", "random", "PathDistribution"}  # fmt: skip
     assert {(kw.get("surge_limit"), kw.get("observation")) for kw, _ in drawn} == {
-        (None, None), (2.0, None), (2.0, "preview")}  # fmt: skip
+        (None, None), ("vehicle", None), ("vehicle", "preview")}  # fmt: skip
     limited = [kw for kw, _ in drawn if isinstance(kw.get("params"), dict)]
     assert limited and all(kw["param_uncertainty"] > 0 for kw in limited)
     corridors = [kw["corridor"] for kw, _ in drawn]

@@ -214,7 +214,8 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
         warnings.simplefilter("error")
         for env_id in auv_gym.VARIANTS:
             gym.make(env_id).close()
-    assert gym.spec("AUVPath3DPreview-v0").kwargs == {"surge_limit": 2.0, "observation": "preview"}
+    assert gym.spec("AUVPath3DPreview-v0").kwargs == {"surge_limit": "vehicle",
+                                                      "observation": "preview"}  # fmt: skip
     assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
     with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
         auv_gym.resolve_env_id("AUVPath3D-v9")

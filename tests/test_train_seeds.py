@@ -220,7 +220,7 @@ def test_validation_on_a_task_set(tmp_path):
     assert plan["eval_seeds"] == [100_000, 100_001, 100_002]
     meta = json.loads((tmp_path / "run" / "seed_0" / "final" / "metadata.json").read_text())
     assert meta["eval_env_kwargs"]["path"] == validation.env["path"]
-    assert meta["eval_env_kwargs"]["surge_limit"] == 2.0  # AUVPath3DSpeedLimit-v0's fixed argument
+    assert meta["eval_env_kwargs"]["surge_limit"] == "vehicle"  # the id's: REMUS 100, 2.0 m/s
     entry = _summary(tmp_path / "run")["seeds"][0]
     assert entry["validation_summary"]["n_episodes"] == 3
     assert entry["test_summary"]["n_episodes"] == 10

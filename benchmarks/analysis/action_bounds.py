@@ -59,7 +59,7 @@ class UniformPolicy:
 
 def command_percentiles(env_kwargs: dict[str, Any], seeds: list[int]) -> dict[str, list[float]]:
     """Percentiles (`PERCENTILES`) of FBSM + CO-LOS's saturated |commands| per axis."""
-    policy = controllers.make("fbsm_colos", control_dt=0.05)
+    policy = controllers.make("fbsm_colos", env=env_kwargs)
     trajectories = rollouts(policy, seeds, **env_kwargs)
     actions = np.concatenate([np.clip(np.abs(t.actions), 0.0, 1.0) for t in trajectories])
     return {

@@ -128,18 +128,17 @@ def check_policy_spec(spec: str) -> PolicySpec:
     return parsed
 
 
-def build_policy(
-    spec: str, control_dt: float, controller_kwargs: dict[str, Any] | None = None
-) -> Any:
-    """The Policy named by ``spec``, configured for a scenario (control period [s], controller
-    keyword arguments; an agent takes neither, a residual agent's base controller both)."""
+def build_policy(spec: str, env: Any, controller_kwargs: dict[str, Any] | None = None) -> Any:
+    """The Policy named by ``spec``, configured for a scenario: its env (a `SimConfig` or env
+    keyword arguments: control period, vehicle and actuator model reach a classical controller
+    and a residual agent's base, `controllers.env_settings`) and its controller keyword
+    arguments (they win; an imported policy's factory takes only these)."""
     parsed = PolicySpec.parse(spec)
     kwargs = dict(controller_kwargs or {})
     if parsed.kind == "classical":
-        return controllers.make(spec, control_dt=control_dt, **kwargs)
+        return controllers.make(spec, env=env, **kwargs)
     if parsed.kind == "agent":  # a residual agent's base is configured like a classical one
-        base_kwargs = {"control_dt": control_dt, **kwargs}
-        return controllers.make("agent", path=str(parsed.agent), base_kwargs=base_kwargs)
+        return controllers.make("agent", env=env, path=str(parsed.agent), base_kwargs=kwargs)
     return controllers.import_policy(spec, **kwargs)
 
 

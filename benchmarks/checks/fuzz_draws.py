@@ -28,7 +28,7 @@ from auv_gym.path_generator import (
 )
 from auv_gym.paths import POSITION_BOUND, Helix, Path, Spline, StraightLine, fit_curve, make_path
 from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
-from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS
+from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, VEHICLE_TOP_SPEED
 from auv_gym.vehicle import remus100
 
 EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays in milliseconds
@@ -187,8 +187,10 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
         turn = max(path_turn_rates(path))
     u_max = SPEED_BOUND if turn == 0 else min(SPEED_BOUND, PATH_RATE_BOUND / (2 * turn))
     u_max *= 1 - 1e-12  # the env's check 2·u·turn <= bound must not fail by one rounding
-    if "surge_limit" in kw:  # u_desired < surge_limit
-        u_max = min(u_max, kw["surge_limit"] * (1.0 - 1e-9))
+    if "surge_limit" in kw:  # u_desired < surge_limit; every drawn vehicle keeps REMUS's top speed
+        limit = kw["surge_limit"]
+        limit = remus100().max_surge if limit == VEHICLE_TOP_SPEED else limit
+        u_max = min(u_max, limit * (1.0 - 1e-9))
     kw["u_desired"] = u_max * (1.0 if rng.random() < 0.2 else log_uniform(rng, 1e-4, 1.0))
     kw["sigma"] = log_uniform(rng, 1e-6, 1e6)
     kw["virtual_point_law"] = str(rng.choice(["corrected", "printed"]))

@@ -59,7 +59,7 @@ class Args:
     duration: float = 300.0  # episode length [s]
     seed: int = 0  # reset seed shared by the controllers (same noise for both)
     policies: tuple[str, ...] = DEFAULT_POLICIES  # names for controllers.make
-    control_dt: float = 0.05  # control period [s]
+    control_dt: float = SimConfig.control_dt  # control period [s], the env's default
     transient: float | None = None  # metrics window start [s]; default min(100, duration/2)
     dpi: int = 150  # figure resolution
     env: dict[str, Any] = field(default_factory=dict)  # extra env keyword arguments
@@ -140,9 +140,10 @@ def validate(args: Args) -> None:
         labels[label] = spec
 
 
-def build_policies(names: Sequence[str], control_dt: float) -> dict[str, Any]:
+def build_policies(names: Sequence[str], env: Any) -> dict[str, Any]:
     """label → policy for each spec (`benchmarks.policies`: "fbsm", "backstepping", any other
-    `controllers.make` name, "ppo", "ppo:PATH" or "module:attribute"), built for ``control_dt``.
+    `controllers.make` name, "ppo", "ppo:PATH" or "module:attribute"), built for ``env`` (a
+    `SimConfig` or env keyword arguments: control period, vehicle, actuator model).
 
     Classical controllers are labelled as in the paper ("FBSM"), an imported object by its
     `policy_name`, an agent by its spec.
@@ -150,7 +151,7 @@ def build_policies(names: Sequence[str], control_dt: float) -> dict[str, Any]:
     policies: dict[str, Any] = {}
     for spec in names:
         kind = check_policy_spec(spec).kind
-        policy = build_policy(spec, control_dt)
+        policy = build_policy(spec, env)
         label = policy_name(policy) if kind == "import" else LABELS.get(spec, spec)
         if policy_label(label) in {policy_label(other) for other in policies}:
             raise ValueError(f"--policies: two policies share the label {label!r}")
@@ -188,7 +189,7 @@ def make_figures(
         raise ValueError("make_figures needs at least one policy")
     out = Path(out)
     (out / "trajectories").mkdir(parents=True, exist_ok=True)
-    window = check_window(duration, transient, env_kwargs.get("control_dt", 0.05))
+    window = check_window(duration, transient, env_kwargs.get("control_dt", SimConfig.control_dt))
     trajectories, metrics, wall = {}, {}, {}
     for label, policy in policies.items():
         start = time.perf_counter()
@@ -229,7 +230,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     args = parse_args(argv)
     start = time.perf_counter()
     try:  # agents are loaded here, before any episode: a corrupt one is a usage error
-        policies = build_policies(args.policies, args.control_dt)
+        policies = build_policies(args.policies, {**args.env, "control_dt": args.control_dt})
         env_ids = {label: policy_env_id(spec)
                    for spec, label in zip(args.policies, policies, strict=True)}  # fmt: skip
     except (ValueError, TypeError, OSError) as error:

@@ -19,6 +19,7 @@ import os
 import re
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,25 +30,39 @@ from benchmarks.arguments import ArgumentParser, program_name, usage_errors, wri
 from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env_id
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
+from benchmarks.options import add_options, option
+
+
+@dataclass
+class VideoOptions:
+    """The options of `auv-gym video`."""
+
+    policy: str = option(
+        "fbsm", "policy spec: a controllers.make name, ppo, ppo:PATH or module:attribute"
+    )
+    scenario: str = option("paper", "scenario name in --scenario-file")
+    # A Path is immutable: one shared default is safe.
+    scenario_file: Path = option(SCENARIOS_FILE, "TOML file of named scenarios")  # noqa: RUF009
+    seed: int = option(0, "reset seed of the episode")
+    duration: float = option(300.0, "episode length [s]")
+    every: int = option(5, "control steps between frames")
+    fps: int = option(20, "frames per second of the video")
+    out: Path = option(Path("run.mp4"), "video file (.mp4)")  # noqa: RUF009
+    progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of `VideoOptions` (each option's default and help from its field)."""
+    parser = ArgumentParser(prog=program_name("benchmarks.video"), description=__doc__,
+                            formatter_class=HelpFormatter)  # fmt: skip
+    add_options(parser, VideoOptions)
+    return parser
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     """The arguments, every one checked before the episode runs (a bad one exits with code 2
     and a one-line message): ranges, the scenario, the policy, the video file's folder."""
-    parser = ArgumentParser(prog=program_name("benchmarks.video"), description=__doc__,
-                            formatter_class=HelpFormatter)  # fmt: skip
-    parser.add_argument("--policy", default="fbsm",
-                        help="policy spec: a controllers.make name, ppo, ppo:PATH or "
-                        "module:attribute")  # fmt: skip
-    parser.add_argument("--scenario", default="paper", help="scenario name in --scenario-file")
-    parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
-                        help="TOML file of named scenarios")  # fmt: skip
-    parser.add_argument("--seed", type=int, default=0, help="reset seed of the episode")
-    parser.add_argument("--duration", type=float, default=300.0, help="episode length [s]")
-    parser.add_argument("--every", type=int, default=5, help="control steps between frames")
-    parser.add_argument("--fps", type=int, default=20, help="frames per second of the video")
-    parser.add_argument("--out", type=Path, default=Path("run.mp4"), help="video file (.mp4)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser = build_parser()
     args = parser.parse_args(argv)
     with usage_errors(parser):
         check_args(args)
@@ -55,8 +70,8 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
 
 
 def check_args(args: argparse.Namespace) -> None:
-    """Validate ``args``; adds ``env_kwargs`` and ``policy_object`` (built for the scenario).
-    ValueError / OSError naming the argument."""
+    """Validate ``args``; adds ``env_kwargs``, ``control_dt`` and ``policy_object`` (built for
+    the scenario). ValueError / OSError naming the argument."""
     if not (0 < args.duration <= 1e5):
         raise ValueError(f"--duration must be in (0, 1e5] s, got {args.duration}")
     if not (1 <= args.every <= 10_000 and 1 <= args.fps <= 240):
@@ -79,11 +94,11 @@ def check_args(args: argparse.Namespace) -> None:
     # An agent runs under the env id it records, as in `compare` and the suite.
     args.env_id = policy_env_id(args.policy)
     try:
-        SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
+        config = SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
     except (TypeError, ValueError) as error:
         raise ValueError(f"scenario {names[0]!r}: {error}") from None
-    control_dt = float(args.env_kwargs.get("control_dt", 0.05))
-    args.policy_object = build_policy(args.policy, control_dt, scenario.controller)
+    args.control_dt = config.control_dt
+    args.policy_object = build_policy(args.policy, config, scenario.controller)
     writable_location(args.out, "--out", folder=False)
 
 
@@ -176,8 +191,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     remove_stale_videos(args.out)
     result = record(args.policy_object, args.env_kwargs, args.out, args.seed, args.every,
                     args.fps, progress=not args.quiet, env_id=args.env_id)  # fmt: skip
-    control_dt = float(args.env_kwargs.get("control_dt", 0.05))
-    speedup = args.every * control_dt * args.fps
+    speedup = args.every * args.control_dt * args.fps
     print(f"wrote {args.out}: {result['frames']} frames at {args.fps} fps "
           f"({result['frames'] / args.fps:.1f} s of video, {speedup:g}× the episode's pace) "
           f"of a {result['episode_s']:g}-s episode ({result['end']}) "

@@ -14,8 +14,8 @@ prints the mean RMS distance over the metrics window with 95 % bootstrap interva
 
 from __future__ import annotations
 
-import argparse
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -24,8 +24,8 @@ from auv_gym.files import write_json
 from auv_gym.paths import Helix
 from auv_gym.table_format import markdown_table
 from auv_gym.trajectory import FAILURE_REASONS
-from benchmarks.arguments import usage_errors, writable_location
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
 from benchmarks.stats import mean_interval
 
 PAPER_CLIMB_SPAN = 97.0  # [m] the paper helix's climb in a 300-s episode (docs/model.md §13.1)
@@ -47,8 +47,9 @@ def measure(policy_name: str, kind: str, depth: float, waves: Any, seeds: list[i
     import controllers
     from auv_gym.rollout import evaluate
 
-    policy = controllers.make(policy_name, control_dt=0.05)
-    results = evaluate(policy, seeds, waves=waves, max_time=max_time, **path_at(kind, depth))
+    env_kwargs = {"waves": waves, "max_time": max_time, **path_at(kind, depth)}
+    policy = controllers.make(policy_name, env=env_kwargs)
+    results = evaluate(policy, seeds, **env_kwargs)
     rms = np.array([[r["rms_distance"] for r in results]])
     ci = mean_interval(rms, key=f"{kind}|{depth}|{waves}")
     failed = sum(r["termination_reason"] in FAILURE_REASONS for r in results)
@@ -56,25 +57,32 @@ def measure(policy_name: str, kind: str, depth: float, waves: Any, seeds: list[i
             "high": ci.high, "failed": failed, "episodes": len(results)}  # fmt: skip
 
 
+@dataclass
+class Options:
+    """The command line of `python -m benchmarks.reports.wave_depth`."""
+
+    depths: tuple[float, ...] = option(
+        (2.0, 5.0, 10.0, 20.0, 40.0), "path depths D below the surface [m]", nargs="+"
+    )
+    path: str = option("circle", "the path placed at each depth (module docstring)",
+                       choices=("circle", "helix"))  # fmt: skip
+    sea_state: str = option("sea_state_4", "a waves preset")
+    policy: str = option("fbsm_colos", "a classical controller")
+    seeds: int = option(8, "episodes per depth (seeds 0…)")
+    max_time: float = option(300.0, "episode length [s]")
+    json: str | None = option(None, "also write the rows to this file")
+    figure: str | None = option(None, "also plot RMS distance against depth to this PNG")
+
+
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--depths", type=float, nargs="+", default=[2.0, 5.0, 10.0, 20.0, 40.0],
-                        help="path depths D below the surface [m]")  # fmt: skip
-    parser.add_argument("--path", choices=("circle", "helix"), default="circle",
-                        help="the path placed at each depth (module docstring)")  # fmt: skip
-    parser.add_argument("--sea-state", default="sea_state_4", help="a waves preset")
-    parser.add_argument("--policy", default="fbsm_colos", help="a classical controller")
-    parser.add_argument("--seeds", type=int, default=8, help="episodes per depth (seeds 0…)")
-    parser.add_argument("--max-time", type=float, default=300.0, help="episode length [s]")
-    parser.add_argument("--json", help="also write the rows to this file")
-    parser.add_argument("--figure", help="also plot RMS distance against depth to this PNG")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.reports.wave_depth"),
+                                 __doc__)  # fmt: skip
     with usage_errors(parser):
         for flag in ("json", "figure"):
             if getattr(args, flag):
                 writable_location(getattr(args, flag), f"--{flag}", folder=False)
         if min(args.depths) < 0.0 or not all(map(math.isfinite, args.depths)):
-            raise ValueError(f"--depths must be finite and >= 0 m, got {args.depths}")
+            raise ValueError(f"--depths must be finite and >= 0 m, got {list(args.depths)}")
     seeds = list(range(args.seeds))
     rows = []
     for depth in args.depths:

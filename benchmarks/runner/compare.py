@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +25,7 @@ from auv_gym.files import replace_outputs
 from auv_gym.metrics import check_window
 from benchmarks.arguments import (
     ArgumentParser,
-    add_episode_arguments,
+    EpisodeOptions,
     check_episode_arguments,
     comma_names,
     locked_folder,
@@ -43,6 +43,7 @@ from benchmarks.catalog.policies import (
 )
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
+from benchmarks.options import add_options, option
 from benchmarks.reports.tables import write_tables
 from benchmarks.runner.jobs import Job, run_jobs
 
@@ -51,29 +52,34 @@ TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.reports.
 MAX_EPISODES = 1_000_000  # episodes of one run: each is a job held in memory and on disk
 
 
+@dataclass
+class CompareOptions(EpisodeOptions):
+    """The options of `auv-gym compare` (and the episode runner's, `EpisodeOptions`)."""
+
+    policies: str = option("fbsm,backstepping,ppo", "comma-separated: "
+                           f"{', '.join(policy_names())}, ppo:PATH, module:attribute")  # fmt: skip
+    scenarios: str = option("all", "comma-separated names of --scenario-file or 'all'")
+    # A Path is immutable: one shared default is safe.
+    scenario_file: Path = option(  # noqa: RUF009
+        SCENARIOS_FILE, "TOML file of named scenarios (env keyword arguments)"
+    )
+    seeds: int = option(10, f"seeds 0..N-1 per scenario, 1 <= N <= {MAX_SEEDS}")
+    out: Path = option(  # noqa: RUF009
+        Path("out/compare"), "output folder; a rerun with the same arguments resumes"
+    )
+    figures: bool = option(True, "tables only", flag="--no-figures", invert=True)
+    progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
+
+
 def build_parser() -> argparse.ArgumentParser:
+    """The parser of `CompareOptions` (each option's default and help from its field)."""
     parser = ArgumentParser(
         prog=program_name("benchmarks.compare"),
         description=__doc__.split("\n\n")[0],
+        epilog=f"scenarios of the shipped --scenario-file: {', '.join(load_scenarios())}",
         formatter_class=HelpFormatter,
     )
-    parser.add_argument(
-        "--policies",
-        default="fbsm,backstepping,ppo",
-        help=f"comma-separated: {', '.join(policy_names())}, ppo:PATH, module:attribute",
-    )
-    parser.add_argument("--scenarios", default="all",
-                        help="comma-separated names of --scenario-file or 'all'; the shipped "
-                        f"file has: {', '.join(load_scenarios())}")  # fmt: skip
-    parser.add_argument("--scenario-file", type=Path, default=SCENARIOS_FILE,
-                        help="TOML file of named scenarios (env keyword arguments)")  # fmt: skip
-    parser.add_argument("--seeds", type=int, default=10,
-                        help=f"seeds 0..N-1 per scenario, 1 <= N <= {MAX_SEEDS}")  # fmt: skip
-    add_episode_arguments(parser)
-    parser.add_argument("--out", type=Path, default=Path("out/compare"),
-                        help="output folder; a rerun with the same arguments resumes")  # fmt: skip
-    parser.add_argument("--no-figures", action="store_true", help="tables only")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_options(parser, CompareOptions)
     return parser
 
 
@@ -116,13 +122,12 @@ def check_args(args: argparse.Namespace) -> None:
         scenario = scenarios[name]
         env_kwargs = {**scenario.env, "max_time": args.duration}
         try:
-            SimConfig.from_kwargs(**env_kwargs)
-            control_dt = float(env_kwargs.get("control_dt", 0.05))
+            config = SimConfig.from_kwargs(**env_kwargs)
             # one metrics-window rule (docs/design.md §3.9); it must hold a metric everywhere
-            transient = check_window(args.duration, args.transient, control_dt)
+            transient = check_window(args.duration, args.transient, config.control_dt)
             for spec in policies:
                 if PolicySpec.parse(spec).kind == "classical":
-                    build_policy(spec, control_dt, scenario.controller)
+                    build_policy(spec, config, scenario.controller)
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
     writable_folder(args.out)  # last: a bad argument above creates no folder

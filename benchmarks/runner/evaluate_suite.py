@@ -39,7 +39,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +54,7 @@ from auv_gym.metrics import check_window
 from benchmarks.analysis.report_spec import DEFAULT_REPORT, ReportSpec
 from benchmarks.arguments import (
     ArgumentParser,
-    add_episode_arguments,
+    EpisodeOptions,
     check_episode_arguments,
     comma_names,
     locked_folder,
@@ -70,6 +70,7 @@ from benchmarks.catalog.policies import (
 from benchmarks.catalog.scenarios import select
 from benchmarks.catalog.tasks import TASKS_FILE, TaskSet, test_suite
 from benchmarks.cli import HelpFormatter
+from benchmarks.options import add_options, option
 from benchmarks.runner.cache import run_resumable
 from benchmarks.runner.jobs import agent_digest, code_digest
 from benchmarks.runner.suite_chunks import (  # the unit of work; importable from here too
@@ -100,64 +101,55 @@ SUITE_FILE = "suite.json"
 DEFAULT_POLICIES = "fbsm,backstepping,ppo"
 
 
+@dataclass
+class SuiteOptions(EpisodeOptions):
+    """The options of `auv-gym suite` (and the episode runner's, `EpisodeOptions`)."""
+
+    policies: str = option(
+        DEFAULT_POLICIES,
+        "comma-separated: controller or shipped agent names (as compare), ppo:PATH, "
+        "module:attribute, NAME=DIR (an agent or a multi-seed results directory of "
+        "agent_seed_<k>/ folders)",
+    )
+    sets: str = option("all", "comma-separated test sets of --tasks-file, or 'all'")
+    # A Path is immutable: one shared default is safe.
+    tasks_file: Path = option(  # noqa: RUF009
+        TASKS_FILE, "TOML file of named task sets (benchmarks.tasks)"
+    )
+    out: Path = option(  # noqa: RUF009
+        Path("out/suite"),
+        "output folder; a rerun with the same arguments resumes (the committed results: "
+        "benchmarks/results/suite)",
+    )
+    stats_only: bool = option(
+        False,
+        "recompute the statistics from OUT/episodes.csv, no simulation (the evaluation options "
+        "above are not used)",
+    )
+    stats: bool = option(True, "episodes.csv only", flag="--no-stats", invert=True)
+    figures: bool = option(True, "statistics without figures", flag="--no-figures", invert=True)
+    report: Path = option(  # noqa: RUF009
+        DEFAULT_REPORT,
+        "TOML report table: references, target ratio, (policy, base) pairs of the statistics",
+    )
+    reference: str | None = option(
+        None,
+        "policy the probability of improvement and the target ratio refer to (default: the "
+        "report table's)",
+    )
+    reps: int = option(2000, "bootstrap replicates")
+    bootstrap_seed: int = option(0, "seed of the bootstrap (one seed: bit-identical intervals)")
+    progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
+
+
 def build_parser() -> argparse.ArgumentParser:
+    """The parser of `SuiteOptions` (each option's default and help from its field)."""
     parser = ArgumentParser(
         prog=program_name("benchmarks.evaluate_suite"),
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )
-    parser.add_argument(
-        "--policies",
-        default=DEFAULT_POLICIES,
-        help="comma-separated: controller or shipped agent names (as compare), "
-        "ppo:PATH, module:attribute, NAME=DIR (an agent or a multi-seed results "
-        "directory of agent_seed_<k>/ folders)",
-    )
-    parser.add_argument(
-        "--sets", default="all", help="comma-separated test sets of --tasks-file, or 'all'"
-    )
-    parser.add_argument(
-        "--tasks-file",
-        type=Path,
-        default=TASKS_FILE,
-        help="TOML file of named task sets (benchmarks.tasks)",
-    )
-    add_episode_arguments(parser)
-    parser.add_argument(
-        "--out",
-        type=Path,
-        default=Path("out/suite"),
-        help="output folder; a rerun with the same arguments resumes (the committed results: "
-        "benchmarks/results/suite)",
-    )
-    parser.add_argument(
-        "--stats-only",
-        action="store_true",
-        help="recompute the statistics from OUT/episodes.csv, no simulation "
-        "(the evaluation options above are not used)",
-    )
-    parser.add_argument("--no-stats", action="store_true", help="episodes.csv only")
-    parser.add_argument("--no-figures", action="store_true", help="statistics without figures")
-    parser.add_argument(
-        "--report",
-        type=Path,
-        default=DEFAULT_REPORT,
-        help="TOML report table: references, target ratio, (policy, base) pairs of the statistics",
-    )
-    parser.add_argument(
-        "--reference",
-        default=None,
-        help="policy the probability of improvement and the target ratio refer to (default: the "
-        "report table's)",
-    )
-    parser.add_argument("--reps", type=int, default=2000, help="bootstrap replicates")
-    parser.add_argument(
-        "--bootstrap-seed",
-        type=int,
-        default=0,
-        help="seed of the bootstrap (one seed: bit-identical intervals)",
-    )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_options(parser, SuiteOptions, negatable=False)
     return parser
 
 
@@ -221,11 +213,10 @@ def check_args(args: argparse.Namespace) -> None:
             for run in policy.runs:
                 chunk = Chunk(policy.name, run, task, args.duration, 0.0)
                 try:
-                    SimConfig.from_kwargs(**chunk.env_kwargs)
-                    control_dt = float(chunk.env_kwargs.get("control_dt", 0.05))
-                    transient = check_window(args.duration, args.transient, control_dt)
+                    config = SimConfig.from_kwargs(**chunk.env_kwargs)
+                    transient = check_window(args.duration, args.transient, config.control_dt)
                     if PolicySpec.parse(run.spec).kind == "classical":
-                        build_policy(run.spec, control_dt, task.controller)
+                        build_policy(run.spec, config, task.controller)
                 except (TypeError, ValueError) as error:
                     raise ValueError(
                         f"task set {task.name!r}, policy {policy.name!r}: {error}"

@@ -128,8 +128,7 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
     null.
     """
     start = time.perf_counter()
-    control_dt = float(job.env_kwargs.get("control_dt", 0.05))
-    policy = build_policy(job.policy, control_dt, job.scenario.controller)
+    policy = build_policy(job.policy, job.env_kwargs, job.scenario.controller)
     trajectory = rollout(policy, job.seed, **job.env_kwargs)
     metrics = compute_metrics(trajectory, transient=job.transient)
     record = {

@@ -161,8 +161,7 @@ def run_chunk(chunk: Chunk, out: Path) -> dict[str, Any]:
     """Evaluate one chunk (batched, `auv_gym.rollout.evaluate`), store it atomically, return it."""
     start = time.perf_counter()
     env_kwargs = chunk.env_kwargs
-    control_dt = float(env_kwargs.get("control_dt", 0.05))
-    policy = build_policy(chunk.run.spec, control_dt, chunk.task.controller)
+    policy = build_policy(chunk.run.spec, env_kwargs, chunk.task.controller)
     results = evaluate(policy, list(chunk.task.seeds), transient=chunk.transient, **env_kwargs)
     record = {
         "policy": chunk.policy,

@@ -15,8 +15,8 @@ read and written once per control step, so 1024 vehicles stream ~300 MB per step
 
 from __future__ import annotations
 
-import argparse
 import time
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -24,7 +24,8 @@ import numpy as np
 import controllers
 from auv_gym.config import SimConfig
 from auv_gym.simulator import Simulator
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 
 def closed_loop(name: str, n: int, steps: int, threads: int, warmup: int = 100) -> dict[str, float]:
@@ -81,13 +82,20 @@ def episode_wall_time(name: str = "fbsm") -> float:
         numba.set_num_threads(previous)
 
 
+@dataclass
+class Options:
+    """The command line of `auv-gym speed controllers`."""
+
+    steps: int = option(200, "timed control steps")
+    vehicles: int = option(1024, "batch size")
+
+
 def main(argv: list[str] | None = None) -> dict[str, float]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--steps", type=int, default=200, help="timed control steps")
-    parser.add_argument("--vehicles", type=int, default=1024, help="batch size")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.speed.controllers"), __doc__
+    )
     if args.steps < 1 or args.vehicles < 1:
-        raise SystemExit("--steps and --vehicles must be positive")
+        parser.error("--steps and --vehicles must be positive")
     results = {}
     print("\nController cost in closed loop, ±35 noise (predict only; vehicle-control-steps/s)")
     print(f"{'controller':<14} {'N':>6} {'threads':>8} {'steps/s':>12} {'µs/vehicle-step':>16} "

@@ -6,16 +6,17 @@ identical equations as plain Python/numpy, in a subprocess of the same run.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 
 def measure(steps: int, seed: int = 0) -> dict[str, float]:
@@ -61,12 +62,16 @@ def measure_reference(steps: int) -> dict[str, float]:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@dataclass
+class Options:
+    """The command line of `auv-gym speed env`."""
+
+    steps: int = option(60_000, "control steps to time")
+    reference_steps: int = option(400, "control steps of the JIT-off (plain Python) reference")
+
+
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--steps", type=int, default=60_000, help="control steps to time")
-    parser.add_argument("--reference-steps", type=int, default=400,
-                        help="control steps of the JIT-off (plain Python) reference")  # fmt: skip
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.env"), __doc__)
     if args.steps < 1 or args.reference_steps < 1:  # a rate of no steps is no figure
         parser.error("--steps and --reference-steps must be >= 1")
     results = {"numba (gym.make)": measure(args.steps),

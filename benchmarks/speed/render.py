@@ -10,12 +10,13 @@ timed on the same episode for comparison. Target: ≥ 50 frames/s on the fast pa
 
 from __future__ import annotations
 
-import argparse
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 
 def measure(frames: int, every: int, fast: bool) -> dict[str, float]:
@@ -47,13 +48,17 @@ def measure(frames: int, every: int, fast: bool) -> dict[str, float]:
     return {"frames": drawn, "frames_per_s": drawn / spent, "ms_per_frame": 1e3 * spent / drawn}
 
 
+@dataclass
+class Options:
+    """The command line of `auv-gym speed render`."""
+
+    frames: int = option(300, "timed frames of the fast path")
+    every: int = option(1, "control steps between frames")
+    reference_frames: int = option(20, "timed frames of the full-redraw reference; 0 skips it")
+
+
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--frames", type=int, default=300, help="timed frames of the fast path")
-    parser.add_argument("--every", type=int, default=1, help="control steps between frames")
-    parser.add_argument("--reference-frames", type=int, default=20,
-                        help="timed frames of the full-redraw reference; 0 skips it")  # fmt: skip
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.render"), __doc__)
     if args.frames < 1 or args.every < 1 or args.reference_frames < 0:
         parser.error("--frames and --every must be >= 1, --reference-frames >= 0")
     results = {"fast": measure(args.frames, args.every, fast=True)}

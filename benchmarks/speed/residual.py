@@ -15,10 +15,10 @@ vehicles, ``actuator="random"``, one thread):
 
 from __future__ import annotations
 
-import argparse
 import json
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +26,8 @@ from gymnasium.vector import AutoresetMode
 
 from auv_gym import VARIANTS
 from auv_gym.vector_env import AUVPath3DVectorEnv
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.residual_env import ResidualVectorEnv
 
@@ -95,13 +96,18 @@ def training_rate(n_timesteps: int) -> float:
     return steps / elapsed
 
 
+@dataclass
+class Options:
+    """The command line of `python -m benchmarks.speed.residual`."""
+
+    steps: int = option(2000, "control steps of parts 1-2")
+    train_steps: int = option(100_000, "PPO env steps")
+
+
 def main(argv: list[str] | None = None) -> dict[str, float]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--steps", type=int, default=2000, help="control steps of parts 1-2")
-    parser.add_argument("--train-steps", type=int, default=100_000, help="PPO env steps")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.residual"), __doc__)
     if args.steps < 1 or args.train_steps < 1:
-        raise SystemExit("--steps and --train-steps must be positive")
+        parser.error("--steps and --train-steps must be positive")
     n, _ = _env_kwargs()
     out: dict[str, float] = {}
     env_rate(10)  # compile the kernels outside the timers

@@ -11,14 +11,15 @@ training: this tree against the default baseline ref) and runs alone with
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import platform
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
 SECTIONS = {"env": "benchmarks.speed.env", "vector": "benchmarks.speed.vector",
             "controllers": "benchmarks.speed.controllers",
@@ -37,11 +38,17 @@ def machine() -> str:
     )
 
 
+@dataclass
+class Options:
+    """The command line of `auv-gym speed all`."""
+
+    sections: str = option(",".join(SECTIONS), f"comma-separated subset of {', '.join(SECTIONS)}")
+
+
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--sections", default=",".join(SECTIONS),
-                        help=f"comma-separated subset of {', '.join(SECTIONS)}")  # fmt: skip
-    args = parser.parse_args(argv)
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.speed.throughput"), __doc__
+    )
     names = [name.strip() for name in args.sections.split(",")]
     unknown = [name for name in names if name not in SECTIONS]
     if unknown or not names:

@@ -29,7 +29,6 @@ compiled kernels too); `--baseline none` times this tree only.
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import inspect
 import json
@@ -40,12 +39,13 @@ import sys
 import tarfile
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from auv_gym.files import write_json
-from benchmarks.arguments import usage_errors, writable_location
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
 
 DEFAULT_BASELINE = "b8de6c4"
 N_ENVS = (32, 128, 512)
@@ -225,62 +225,39 @@ def versus_shipped(results: Results) -> str:
     return f"new total / old total at N={n} b={b} thr={t}: " + ", ".join(cells)
 
 
+@dataclass
+class Options:
+    """The command line of `auv-gym speed training`."""
+
+    n_envs: tuple[int, ...] = option(N_ENVS, "numbers of vehicles (training envs)", nargs="+")
+    baseline: str = option(
+        DEFAULT_BASELINE, "git ref of the code to compare with; 'none': this tree only"
+    )
+    rollouts: int = option(4, "timed rollouts per run")
+    warmup: int = option(1, "untimed rollouts first")
+    repeats: int = option(2, "runs per tree and setting (alternating; medians are printed)")
+    n_steps: int | None = option(None, f"steps per env and rollout (default {ROLLOUT_STEPS} / N)")
+    batch_size: tuple[int, ...] = option(
+        (2048,), "minibatch sizes (the configuration's: 2048); one row each", nargs="+"
+    )
+    update_threads: tuple[int, ...] = option(
+        (1,), "torch threads of the update (collection: one); one row each", nargs="+"
+    )
+    cache: str = option(os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
+                        "folder of the extracted baseline trees")  # fmt: skip
+    quick: bool = option(False, "tiny budget (smoke test)")
+    json: str | None = option(None, "also write every run to this file")
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument(
-        "--n-envs",
-        type=int,
-        nargs="+",
-        default=list(N_ENVS),
-        help="numbers of vehicles (training envs)",
-    )
-    parser.add_argument(
-        "--baseline",
-        default=DEFAULT_BASELINE,
-        help="git ref of the code to compare with; 'none': this tree only",
-    )
-    parser.add_argument("--rollouts", type=int, default=4, help="timed rollouts per run")
-    parser.add_argument("--warmup", type=int, default=1, help="untimed rollouts first")
-    parser.add_argument(
-        "--repeats",
-        type=int,
-        default=2,
-        help="runs per tree and setting (alternating; medians are printed)",
-    )
-    parser.add_argument(
-        "--n-steps",
-        type=int,
-        default=None,
-        help=f"steps per env and rollout (default {ROLLOUT_STEPS} / N)",
-    )
-    parser.add_argument(
-        "--batch-size",
-        type=int,
-        nargs="+",
-        default=[2048],
-        help="minibatch sizes (the configuration's: 2048); one row each",
-    )
-    parser.add_argument(
-        "--update-threads",
-        type=int,
-        nargs="+",
-        default=[1],
-        help="torch threads of the update (collection: one); one row each",
-    )
-    parser.add_argument(
-        "--cache",
-        default=os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
-        help="folder of the extracted baseline trees",
-    )
-    parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
-    parser.add_argument("--json", help="also write every run to this file")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.training"),
+                                 __doc__, negatable=False)  # fmt: skip
     if args.json:  # written after the benchmark: refused now, not after minutes of timing
         with usage_errors(parser):
             writable_location(args.json, "--json", folder=False)
     if args.quick:
-        args.n_envs, args.rollouts, args.repeats, args.n_steps = [8], 1, 1, 16
-        args.batch_size = [64]
+        args.n_envs, args.rollouts, args.repeats, args.n_steps = (8,), 1, 1, 16
+        args.batch_size = (64,)
     if min(args.n_envs) < 1 or args.rollouts < 1 or args.repeats < 1 or args.warmup < 0:
         parser.error("--n-envs, --rollouts and --repeats must be >= 1, --warmup >= 0")
 

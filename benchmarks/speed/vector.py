@@ -20,7 +20,6 @@ Wall-clock numbers depend on the load of the machine; the load average is printe
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -29,13 +28,14 @@ import resource
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from auv_gym.files import write_json
-from benchmarks.arguments import usage_errors, writable_location
-from benchmarks.cli import HelpFormatter
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
 
 SIZES = (1, 64, 1024, 4096, 16384)
 MEMORY_N = 65_536
@@ -111,7 +111,7 @@ def measure_vector(
 
 
 def _side_by_side(
-    args: argparse.Namespace, sizes: list[int], variant: dict[str, Any], labels: tuple[str, str]
+    args: Options, sizes: list[int], variant: dict[str, Any], labels: tuple[str, str]
 ) -> list[dict[str, Any]]:
     """Physics rate without and with ``variant`` (env keyword arguments), measured back to back
     per (threads, N) so that their ratio is taken under one machine load; printed as a table
@@ -129,7 +129,7 @@ def _side_by_side(
     return rows
 
 
-def _sensor_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
+def _sensor_rows(args: Options) -> list[dict[str, Any]]:
     """Physics rate with "ideal" and "typical" sensors, side by side (`_side_by_side`)."""
     print("\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
           "estimate ('typical'), side by side")  # fmt: skip
@@ -228,7 +228,7 @@ def machine() -> dict[str, Any]:
     }
 
 
-def _waves_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
+def _waves_rows(args: Options) -> list[dict[str, Any]]:
     """Physics rate without and with waves, side by side (`_side_by_side`)."""
     from auv_gym.waves import WaveConfig
 
@@ -240,42 +240,46 @@ def _waves_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
     return _side_by_side(args, [args.waves_n], {"waves": waves}, ("no_waves", "waves"))
 
 
+@dataclass
+class Options:
+    """The command line of `auv-gym speed vector`."""
+
+    sizes: tuple[int, ...] = option(SIZES, "numbers of vehicles of the throughput table",
+                                    nargs="+")  # fmt: skip
+    seconds: float = option(4.0, "timed wall clock per size")
+    max_time: float = option(10.0, "episode length [s]; short so that autoresets happen")
+    waves_n: int = option(4096, "vehicles of the side-by-side run with waves (sea state 4, "
+                          "default components); 0 skips it")  # fmt: skip
+    memory_n: int = option(MEMORY_N, "vehicles of the peak-memory run; 0 skips it")
+    ppo_envs: tuple[int, ...] = option((64,), "n_envs of the SB3 collection runs; none skips "
+                                       "them", nargs="*")  # fmt: skip
+    ppo_steps: int = option(128, "n_steps per rollout")
+    ppo_repeats: int = option(3, "timed collect_rollouts calls per run")
+    threads: tuple[int, ...] = option((2, 1), "numba thread counts of the throughput table",
+                                      nargs="+")  # fmt: skip
+    actuators: tuple[str, ...] = option(
+        ("paper", "realistic"), "actuator models of the throughput table, side by side",
+        choices=("paper", "fins", "realistic"), nargs="+",
+    )  # fmt: skip
+    sensor_sizes: tuple[int, ...] = option(
+        (4096,), "N of the side-by-side rows without and with the 'typical' sensor model "
+        "(docs/model.md §14); none skips them", nargs="*",
+    )  # fmt: skip
+    quick: bool = option(False, "tiny budget (smoke test)")
+    json: str | None = option(None, "also write the results to this file")
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES),
-                        help="numbers of vehicles of the throughput table")  # fmt: skip
-    parser.add_argument("--seconds", type=float, default=4.0, help="timed wall clock per size")
-    parser.add_argument("--max-time", type=float, default=10.0,
-                        help="episode length [s]; short so that autoresets happen")  # fmt: skip
-    parser.add_argument("--waves-n", type=int, default=4096,
-                        help="vehicles of the side-by-side run with waves (sea state 4, "
-                             "default components); 0 skips it")  # fmt: skip
-    parser.add_argument("--memory-n", type=int, default=MEMORY_N,
-                        help="vehicles of the peak-memory run; 0 skips it")  # fmt: skip
-    parser.add_argument("--ppo-envs", type=int, nargs="*", default=[64],
-                        help="n_envs of the SB3 collection runs; none skips them")  # fmt: skip
-    parser.add_argument("--ppo-steps", type=int, default=128, help="n_steps per rollout")
-    parser.add_argument("--ppo-repeats", type=int, default=3,
-                        help="timed collect_rollouts calls per run")  # fmt: skip
-    parser.add_argument("--threads", type=int, nargs="+", default=[2, 1],
-                        help="numba thread counts of the throughput table")  # fmt: skip
-    parser.add_argument("--actuators", nargs="+", default=["paper", "realistic"],
-                        choices=["paper", "fins", "realistic"],
-                        help="actuator models of the throughput table, side by side")  # fmt: skip
-    parser.add_argument("--sensor-sizes", type=int, nargs="*", default=[4096],
-                        help="N of the side-by-side rows without and with the 'typical' sensor "
-                             "model (docs/model.md §14); none skips them")  # fmt: skip
-    parser.add_argument("--quick", action="store_true", help="tiny budget (smoke test)")
-    parser.add_argument("--json", help="also write the results to this file")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.vector"),
+                                 __doc__, negatable=False)  # fmt: skip
     if args.json:  # written after the benchmark: refused now, not after minutes of timing
         with usage_errors(parser):
             writable_location(args.json, "--json", folder=False)
     if args.quick:
-        args.sizes, args.seconds, args.memory_n, args.max_time = [1, 64], 0.05, 1024, 0.5
+        args.sizes, args.seconds, args.memory_n, args.max_time = (1, 64), 0.05, 1024, 0.5
         args.waves_n = 64
-        args.threads, args.sensor_sizes = [1], [64]
-        args.ppo_envs, args.ppo_steps, args.ppo_repeats = [4], 8, 1
+        args.threads, args.sensor_sizes = (1,), (64,)
+        args.ppo_envs, args.ppo_steps, args.ppo_repeats = (4,), 8, 1
 
     info = machine()
     print(f"{info['cpu']}, {info['cores']} cores, numba threads ≤ {info['numba_threads']}, "
