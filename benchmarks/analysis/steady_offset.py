@@ -1,0 +1,146 @@
+"""Where a policy holds the path: its steady error on the paper's helix, and how stiffly.
+
+For each policy, on the paper's helix (start, path and 300-s episodes of the paper scenario):
+
+    calm      no disturbance, seed 0: the mean of x_e, y_e, z_e over t ≥ `transient` [m] (a
+              static policy's offset is constant there: its standard deviation is 0)
+    noisy     the paper's white noise, seeds 0…n−1: mean and standard deviation of the errors
+              over the window, RMS distance, failures
+    max pitch the largest |θ| over all episodes [deg] (the episode ends beyond 60°)
+    stiffness with ``--bias b``: the calm run again with b added to the normalised pitch
+              command; Δz̄_e / b [m per unit command] says how far the policy lets a constant
+              pitch moment push it (a controller with integral action: 0)
+
+An agent runs under the env its metadata names (its observation and surge limit); a classical
+controller under ``AUVPath3DPreview-v0`` too, whose first 15 entries are the paper's
+(docs/results.md, "Where the remaining error sits").
+
+    python -m benchmarks.analysis.steady_offset \\
+        --policies fbsm,net256=benchmarks/agents/ppo_preview_net256 --seeds 4 --bias 0.05
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from auv_gym.files import write_json
+from auv_gym.table_format import markdown_table
+from auv_gym.trajectory import FAILURE_REASONS
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
+
+CLASSICAL_ENV_ID = "AUVPath3DPreview-v0"
+ERRORS = ("x_e", "y_e", "z_e")
+
+
+class PitchBias:
+    """``policy`` with a constant ``bias`` added to its normalised pitch command (saturated)."""
+
+    def __init__(self, policy: Any, bias: float) -> None:
+        self.policy, self.bias = policy, np.float32(bias)
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+        action, state = self.policy.predict(observation, state, episode_start, deterministic)
+        action = np.array(action, dtype=np.float32, copy=True)
+        action[..., 1] = np.clip(action[..., 1] + self.bias, -1.0, 1.0)
+        return action, state
+
+
+def policy_and_env(spec: str) -> tuple[str, Any, dict[str, Any]]:
+    """(label, policy, env keyword arguments) of ``name=agent-folder`` or a classical name."""
+    import controllers
+    from auv_gym import VARIANTS
+    from benchmarks.catalog.policies import agent_run
+
+    label, _, path = spec.partition("=")
+    if path:
+        from pathlib import Path
+
+        _, env_id = agent_run(f"--policies {label}", Path(path))
+        policy = controllers.make("agent", path=path)
+        return label, policy, dict(VARIANTS[env_id])
+    env_kwargs = dict(VARIANTS[CLASSICAL_ENV_ID])
+    return label, controllers.make(label, env=env_kwargs), env_kwargs
+
+
+def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: float,
+            bias: float | None) -> dict[str, Any]:  # fmt: skip
+    """The module docstring's quantities for one policy."""
+    from auv_gym.rollout import rollouts
+
+    def window(traj: Any) -> np.ndarray:
+        keep = traj.t >= transient
+        return np.stack([traj.samples[name][keep] for name in ERRORS], axis=1)
+
+    calm = rollouts(policy, [0], **{**env_kwargs, "disturbance": "none"})[0]
+    noisy = rollouts(policy, list(range(seeds)), **{**env_kwargs, "disturbance": "paper"})
+    row: dict[str, Any] = {"calm_failed": calm.termination_reason in FAILURE_REASONS}
+    row["calm_mean"] = window(calm).mean(axis=0).tolist() if not row["calm_failed"] else None
+    kept = [window(t) for t in noisy if t.termination_reason not in FAILURE_REASONS]
+    row["noisy_failed"] = len(noisy) - len(kept)
+    if kept:
+        errors = np.concatenate(kept)
+        row["noisy_mean"] = errors.mean(axis=0).tolist()
+        row["noisy_std"] = errors.std(axis=0).tolist()
+        row["rms_distance"] = float(np.mean([np.sqrt((w**2).sum(1).mean()) for w in kept]))
+    row["max_pitch_deg"] = math.degrees(
+        max(np.abs(t.samples["theta"]).max() for t in [calm, *noisy])
+    )
+    if bias is not None and row["calm_mean"] is not None:
+        shifted = rollouts(PitchBias(policy, bias), [0], **{**env_kwargs, "disturbance": "none"})
+        if shifted[0].termination_reason not in FAILURE_REASONS:
+            row["stiffness_z"] = (window(shifted[0]).mean(axis=0)[2] - row["calm_mean"][2]) / bias
+    return row
+
+
+@dataclass
+class Options:
+    """The command line of `python -m benchmarks.analysis.steady_offset`."""
+
+    policies: str = option("fbsm", "comma-separated classical names or label=agent-folder")
+    seeds: int = option(4, "noisy episodes per policy (seeds 0…)")
+    transient: float = option(100.0, "the window starts here [s]")
+    bias: float | None = option(None, "pitch-command bias for the stiffness (normalised)")
+    json: str | None = option(None, "also write the rows to this file")
+
+
+def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
+    prog = program_name("benchmarks.analysis.steady_offset")
+    args, parser = parse_options(Options, argv, prog, __doc__)
+    with usage_errors(parser):
+        if args.json:
+            writable_location(args.json, "--json", folder=False)
+        if args.seeds < 1 or not (0.0 <= args.transient < 300.0):
+            raise ValueError("--seeds must be >= 1 and --transient in [0, 300) s")
+        if args.bias is not None and not (math.isfinite(args.bias) and 0 < abs(args.bias) <= 1):
+            raise ValueError(f"--bias must be finite with 0 < |b| <= 1, got {args.bias}")
+        specs = [s for s in args.policies.split(",") if s]
+        built = [policy_and_env(spec) for spec in specs]
+    rows = {label: measure(policy, env, args.seeds, args.transient, args.bias)
+            for label, policy, env in built}  # fmt: skip
+
+    def triple(values: Any) -> str:
+        return "n/a" if values is None else ", ".join(f"{v:+.3f}" for v in values)
+
+    header = ["policy", "calm mean (x_e, y_e, z_e) [m]", "noisy mean [m]", "noisy std [m]",
+              "RMS distance [m]", "failed", "largest pitch [deg]", "Δz̄_e/bias [m]"]  # fmt: skip
+    cells = [[label, triple(r["calm_mean"]), triple(r.get("noisy_mean")),
+              triple(r.get("noisy_std")), f"{r.get('rms_distance', math.nan):.3f}",
+              f"{r['noisy_failed']} of {args.seeds}", f"{r['max_pitch_deg']:.1f}",
+              f"{r['stiffness_z']:+.2f}" if "stiffness_z" in r else "n/a"]
+             for label, r in rows.items()]  # fmt: skip
+    print(f"The paper's helix, 300-s episodes, window t >= {args.transient:g} s; noisy: the "
+          f"paper's white noise, seeds 0-{args.seeds - 1}")  # fmt: skip
+    print(markdown_table(header, cells))
+    if args.json:
+        write_json(args.json, {"options": vars(args), "rows": rows}, indent=2)
+    return rows
+
+
+if __name__ == "__main__":
+    main()
