@@ -9,7 +9,9 @@ For each policy, on the paper's helix (start, path and 300-s episodes of the pap
     max pitch the largest |θ| over all episodes [deg] (the episode ends beyond 60°)
     stiffness with ``--bias b``: the calm run again with b added to the normalised pitch
               command; Δz̄_e / b [m per unit command] says how far the policy lets a constant
-              pitch moment push it (a controller with integral action: 0)
+              pitch moment push it (a controller with integral action: 0). Not measured for an
+              incremental agent (`controllers.action_increment`): the bias would enter the
+              previous command it observes and accumulate
 
 An agent runs under the env its metadata names (its observation and surge limit); a classical
 controller under ``AUVPath3DPreview-v0`` too, whose first 15 entries are the paper's
@@ -91,7 +93,8 @@ def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: floa
     row["max_pitch_deg"] = math.degrees(
         max(np.abs(t.samples["theta"]).max() for t in [calm, *noisy])
     )
-    if bias is not None and row["calm_mean"] is not None:
+    incremental = hasattr(policy, "increment")
+    if bias is not None and row["calm_mean"] is not None and not incremental:
         shifted = rollouts(PitchBias(policy, bias), [0], **{**env_kwargs, "disturbance": "none"})
         if shifted[0].termination_reason not in FAILURE_REASONS:
             row["stiffness_z"] = (window(shifted[0]).mean(axis=0)[2] - row["calm_mean"][2]) / bias
