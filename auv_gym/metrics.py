@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.task import SURGE_LIMIT
 from auv_gym.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 
 __all__ = [
@@ -123,7 +122,8 @@ def compute_metrics(
       rms_speed_error — √mean((u − u_D)²) over the window;
       max_surge — max_k u over the episode (realistic speed: REMUS 100 tops out near
       2.3-2.5 m/s); overspeed_fraction — fraction of the episode's control intervals
-      [t_k, t_{k+1}) whose end sample has u > `SURGE_LIMIT` (2.0 m/s) [-].
+      [t_k, t_{k+1}) whose end sample has u > the vehicle's top speed `Trajectory.top_speed`
+      (`AUVParams.max_surge`, 2.0 m/s for REMUS 100) [-].
     Actuation:
       control_effort — Σ_k Σ_j τ̄_j² Δt over the episode, i.e. ∫ of the squared normalised τ [s];
       chattering — Σ_k Σ_j abs(τ̄_j(t_{k+1}) − τ̄_j(t_k)) / window length, the total variation
@@ -186,7 +186,8 @@ def compute_metrics(
     metrics["rms_speed_error"] = _window_rms(t, speed_error, transient)
     surge = tr["u"]
     metrics["max_surge"] = float(surge.max())
-    metrics["overspeed_fraction"] = float((surge[1:] > SURGE_LIMIT).mean()) if tr.steps else 0.0
+    overspeed = surge[1:] > tr.top_speed
+    metrics["overspeed_fraction"] = float(overspeed.mean()) if tr.steps else 0.0
     per_channel_effort = (tau_norm**2).sum(axis=0) * dt
     metrics["control_effort"] = float(per_channel_effort.sum())
     # Chattering: total variation inside the window, per second of window.

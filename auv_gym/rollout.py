@@ -262,6 +262,7 @@ def _run_batch(
                 control_dt=config.control_dt,
                 u_desired=config.u_desired,
                 actuator_limits=config.actuator_limits,
+                top_speed=config.params.max_surge,
                 metadata={**base_meta, "seed": seed},
             )
         )

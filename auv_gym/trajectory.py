@@ -35,7 +35,7 @@ from auv_gym.config import ACTUATOR_LIMITS
 from auv_gym.dynamics import STATE_NAMES
 from auv_gym.files import json_default, write_atomic
 from auv_gym.observation import GUIDANCE_FIELDS
-from auv_gym.task import PATH_END, REWARD_TERMS, TERMINATION_REASONS
+from auv_gym.task import PATH_END, REWARD_TERMS, SURGE_LIMIT, TERMINATION_REASONS
 
 __all__ = [
     "EPISODE_ENDS",
@@ -97,6 +97,8 @@ class Trajectory:
         u_desired: desired surge speed u_D [m/s].
         actuator_limits: (X, M, N) normalisation of τ in the metrics [N, N·m, N·m].
         metadata: JSON-serialisable facts: seed, policy, env_kwargs, versions.
+        top_speed: the vehicle's top speed u_max [m/s] (`AUVParams.max_surge`; REMUS 100's
+            2.0 m/s by default), the threshold of the overspeed metric.
 
     Items are read with ``trajectory["x_e"]`` (samples, intervals or extras).
     """
@@ -110,6 +112,7 @@ class Trajectory:
     u_desired: float = 1.0
     actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS
     metadata: dict[str, Any] = field(default_factory=dict)
+    top_speed: float = SURGE_LIMIT
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.float64)
@@ -149,6 +152,8 @@ class Trajectory:
         if len(limits) != 3 or not all(math.isfinite(v) and v > 0 for v in limits):
             raise ValueError(f"actuator_limits must be 3 positive numbers, got {limits}")
         self.actuator_limits = limits  # type: ignore[assignment]
+        if not (math.isfinite(self.top_speed) and self.top_speed > 0):
+            raise ValueError(f"top_speed must be a positive speed in m/s, got {self.top_speed}")
 
     def __getitem__(self, name: str) -> np.ndarray:
         for table in (self.samples, self.intervals, self.extras):
@@ -197,7 +202,8 @@ class Trajectory:
         """Write a .npz atomically (`auv_gym.files.write_atomic`).
 
         Keys: "t", every sample and interval name, "extra.<name>" and "metadata" (a JSON
-        string with termination_reason, control_dt, u_desired, actuator_limits and `metadata`).
+        string with termination_reason, control_dt, u_desired, actuator_limits and `metadata`,
+        and top_speed when it is not REMUS 100's, so a REMUS episode's file is as before).
         """
         arrays: dict[str, np.ndarray] = {"t": self.t, **self.samples, **self.intervals}
         arrays.update({f"extra.{k}": v for k, v in self.extras.items()})
@@ -208,6 +214,8 @@ class Trajectory:
             "actuator_limits": list(self.actuator_limits),
             "metadata": self.metadata,
         }
+        if self.top_speed != SURGE_LIMIT:
+            meta["top_speed"] = self.top_speed
         arrays["metadata"] = np.array(json.dumps(meta, default=json_default))
         saver = np.savez_compressed if compress else np.savez
         # Through a file object, so numpy appends no ".npz" to a name that lacks it.
@@ -235,4 +243,5 @@ class Trajectory:
                 u_desired=float(meta["u_desired"]),
                 actuator_limits=tuple(meta["actuator_limits"]),
                 metadata=meta["metadata"],
+                top_speed=float(meta.get("top_speed", SURGE_LIMIT)),
             )

@@ -158,8 +158,8 @@ def locked_folder(prog: str, folder: Path, flag: str = "--out") -> Iterator[Path
 
 @dataclass
 class EpisodeOptions:
-    """The options of every episode runner (compare, the suite); `add_episode_arguments` makes
-    them command-line options, `check_episode_arguments` checks them."""
+    """The options of every episode runner (compare, the suite), inherited by their option
+    dataclasses; `check_episode_arguments` checks them."""
 
     duration: float = option(300.0, "episode length [s]")
     transient: float | None = option(
@@ -170,15 +170,6 @@ class EpisodeOptions:
     backend: str = option("local", "run the episodes in local processes or on a Ray cluster",
                           choices=("local", "ray"))  # fmt: skip
     address: str | None = option(None, "Ray cluster address to join")
-
-
-def add_episode_arguments(parser: argparse.ArgumentParser, duration: float = 300.0) -> None:
-    """The options of every episode runner, `EpisodeOptions`: ``--duration``, ``--transient``
-    and the pool's ``--workers``, ``--backend``, ``--address`` (`benchmarks.runner.pool`);
-    ``duration`` another default episode length."""
-    add_options(parser, EpisodeOptions)
-    if duration != EpisodeOptions.duration:
-        parser.set_defaults(duration=duration)
 
 
 def check_episode_arguments(args: argparse.Namespace) -> None:

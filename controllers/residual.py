@@ -48,7 +48,8 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
+from auv_gym.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
+from auv_gym.task import SURGE_LIMIT
 from controllers.registry import CLASSICAL, make_classical
 
 __all__ = [
@@ -186,10 +187,13 @@ def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def residual_observation_bounds() -> tuple[np.ndarray, np.ndarray]:
-    """(low, high) of the agent's observation: the env's bounds, then ±1 for b and a_{k−1}."""
+def residual_observation_bounds(max_surge: float = SURGE_LIMIT) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) of the agent's observation: the env's bounds for a vehicle of top speed
+    ``max_surge`` [m/s] (`AUVParams.max_surge`; REMUS 100's: `OBS_LOW`, `OBS_HIGH`), then ±1
+    for b and a_{k−1}."""
+    low, high = paper_bounds(vehicle_speed_bound(max_surge))
     ones = np.ones(len(RESIDUAL_FEATURES), dtype=np.float32)
-    return np.concatenate([OBS_LOW, -ones]), np.concatenate([OBS_HIGH, ones])
+    return np.concatenate([low, -ones]), np.concatenate([high, ones])
 
 
 def agent_observation(obs: np.ndarray, base_action: np.ndarray, previous: np.ndarray) -> np.ndarray:

@@ -21,9 +21,9 @@ sets its box with the ``action_bounds`` key of its RL-Zoo file (`benchmarks.trai
 
 from __future__ import annotations
 
-import argparse
 import collections
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -33,8 +33,9 @@ import controllers
 from auv_gym import PREVIEW_ENV_ID, VARIANTS
 from auv_gym.files import write_json
 from auv_gym.rollout import rollouts
+from benchmarks.arguments import parse_options, program_name
 from benchmarks.catalog.tasks import task_set
-from benchmarks.cli import HelpFormatter
+from benchmarks.options import option
 
 PERCENTILES = (50.0, 95.0, 99.0, 99.9)
 AXES = ("a_X", "a_M", "a_N")
@@ -105,12 +106,17 @@ def boxes(percentiles: dict[str, list[float]]) -> dict[str, Box]:
     }
 
 
+@dataclass
+class Options:
+    """The options of ``python -m benchmarks.action_bounds``."""
+
+    episodes: int = option(32, "validation episodes")
+    duration: float = option(100.0, "episode length [s]")
+    out: str | None = option(None, "write the figures to this JSON file")
+
+
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
-    parser.add_argument("--episodes", type=int, default=32, help="validation episodes")
-    parser.add_argument("--duration", type=float, default=100.0, help="episode length [s]")
-    parser.add_argument("--out", help="write the figures to this JSON file")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(Options, argv, program_name("benchmarks.action_bounds"), __doc__)
     if args.episodes < 1 or not args.duration > 0:
         parser.error("--episodes must be >= 1 and --duration > 0")
     validation = task_set("validation_paper_actuator")

@@ -24,8 +24,10 @@ def _by_policy(table: Mapping[str, Mapping[str, Interval]]) -> dict[str, dict[st
     return out
 
 
-def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_ratio: float) -> str:
-    """The statistics as Markdown; ``max_ratio``: the target ratio of the report table."""
+def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_ratio: float,
+                   speeds: Mapping[str, float] | None = None) -> str:  # fmt: skip
+    """The statistics as Markdown; ``max_ratio``: the target ratio of the report table;
+    ``speeds``: set → its vehicle's top speed [m/s], the surge target (None: REMUS 100's)."""
     ref, ci = stats["reference"], f"{100 * stats['confidence']:g} %"
     runs = ", ".join(f"{p}: {n}" for p, n in stats["n_runs"].items())
     lines = [
@@ -43,9 +45,12 @@ def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_rat
     for other, table in stats["improvement_tables"].items():
         lines.append(f"## Probability of a smaller RMS distance than {other} (ties ½)\n")
         lines += _split_tables(_by_policy(table), kinds)
+    distinct = set((speeds or {}).values()) or {SURGE_LIMIT}
+    surge = (f"{distinct.pop():g} m/s" if len(distinct) == 1
+             else "the top speed of the set's vehicle")  # fmt: skip
     lines += [
         f"## Target: mean RMS distance within {max_ratio:g}× {ref}, no failed episode, max "
-        f"surge ≤ {SURGE_LIMIT:g} m/s\n",
+        f"surge ≤ {surge}\n",
     ]
     rows = []
     for t in stats["target"]:

@@ -23,21 +23,35 @@ command, commit and versions of the second evaluation), both written atomically;
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import json
 import math
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from auv_gym.files import write_json, write_text
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
 
-__all__ = ["merge_suites"]
+__all__ = ["MergeOptions", "main", "merge_suites"]
 
 _KEY = ("policy", "run", "set", "seed")
+
+
+@dataclass
+class MergeOptions:
+    """The options of ``python -m benchmarks.suite_merge``; the folders and policies have no
+    default on the command line."""
+
+    source: str | None = option(None, "evaluation to take rows from", flag="--from",
+                                required=True)  # fmt: skip
+    target: str | None = option(None, "evaluation to add them to", flag="--into", required=True)
+    policies: str = option("", "comma-separated policy names to add", required=True)
+    rtol: float = option(1e-12, "relative tolerance for the shared policies' cells")
 
 
 def _read(folder: Path) -> tuple[dict[str, Any], list[str], list[dict[str, str]]]:
@@ -66,7 +80,7 @@ def _differs(a: str, b: str, rtol: float) -> bool:
 
 
 def merge_suites(
-    source: Path, target: Path, policies: Sequence[str], rtol: float = 1e-12
+    source: Path, target: Path, policies: Sequence[str], rtol: float = MergeOptions.rtol
 ) -> dict[str, int]:
     """Append ``policies``' rows of ``source`` to ``target`` (module doc); returns rows per policy.
 
@@ -138,17 +152,8 @@ def merge_suites(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m benchmarks.suite_merge",
-        description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
-    parser.add_argument("--from", dest="source", required=True, help="evaluation to take rows from")
-    parser.add_argument("--into", dest="target", required=True, help="evaluation to add them to")
-    parser.add_argument("--policies", required=True, help="comma-separated policy names to add")
-    parser.add_argument("--rtol", type=float, default=1e-12,
-                        help="relative tolerance for the shared policies' cells")  # fmt: skip
-    args = parser.parse_args(argv)
+    args, _ = parse_options(MergeOptions, argv, program_name("benchmarks.suite_merge"),
+                            __doc__.split("\n\n")[0])  # fmt: skip
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     try:
         added = merge_suites(Path(args.source), Path(args.target), names, args.rtol)

@@ -14,7 +14,8 @@ figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliab
   scores below τ [m]).
 * **Target table**: per set, the ratio of a policy's mean score to the reference's;
   a set passes when the ratio is ≤ the report's ``max_ratio``, no episode failed and the largest
-  surge speed of any episode is ≤ `auv_gym.task.SURGE_LIMIT` (2.0 m/s).
+  surge speed of any episode is ≤ the top speed of the set's vehicle (`AUVParams.max_surge`,
+  2.0 m/s for REMUS 100).
 * **Smoothness** (`benchmarks.smoothness_stats`): paired RMS-distance differences of the
   report's (policy, base) pairs, and every policy's chattering (when episodes.csv has the
   column).
@@ -70,6 +71,7 @@ __all__ = [
     "read_episodes",
     "score_matrices",
     "target_table",
+    "top_speeds",
     "write_stats",
 ]
 
@@ -134,6 +136,14 @@ def failure_scores(suite: Mapping[str, Any]) -> dict[str, float]:
     }
 
 
+def top_speeds(suite: Mapping[str, Any]) -> dict[str, float]:
+    """Set → the top speed [m/s] of the set's vehicle (`AUVParams.max_surge` of its env)."""
+    return {
+        name: SimConfig.from_kwargs(**entry["env"]).params.max_surge
+        for name, entry in suite["sets"].items()
+    }
+
+
 def score_matrices(
     rows: Sequence[Mapping[str, Any]], sets: Sequence[str], failure: Mapping[str, float]
 ) -> tuple[dict[str, np.ndarray], list[str], dict[str, list[int]]]:
@@ -177,14 +187,17 @@ def target_table(
     groups: Sequence[str],
     reference: str,
     max_ratio: float,
+    speeds: Mapping[str, float] | None = None,
 ) -> list[dict[str, Any]]:
     """One entry per (set, policy other than the reference): mean scores [m], their ratio,
     failed episodes, largest surge [m/s] and whether the set passes: ratio ≤ ``max_ratio``,
-    no failed episode, surge ≤ `SURGE_LIMIT` (module doc)."""
+    no failed episode, surge ≤ the set's top speed in ``speeds`` [m/s] (`top_speeds`; a set
+    it lacks: REMUS 100's `SURGE_LIMIT`) (module doc)."""
     labels = np.asarray(groups)
     table = []
     for name in dict.fromkeys(groups):
         cols = labels == name
+        top_speed = (speeds or {}).get(name, SURGE_LIMIT)
         ref_mean = float(scores[reference][:, cols].mean())
         for policy, x in scores.items():
             if policy == reference:
@@ -207,7 +220,7 @@ def target_table(
                     "failures": sorted(set(failed)),
                     "max_surge_m_s": surge,
                     "episodes": len(mine),
-                    "passed": ratio <= max_ratio and not failed and surge <= SURGE_LIMIT,
+                    "passed": ratio <= max_ratio and not failed and surge <= top_speed,
                 }
             )
     return table
@@ -285,7 +298,8 @@ def write_stats(
             improvement[other][scope] = probability_of_improvement(
                 part, other, labels[cols], reps=reps, seed=seed
             )
-    target = target_table(rows, scores, groups, reference, report.max_ratio)
+    speeds = top_speeds(suite)
+    target = target_table(rows, scores, groups, reference, report.max_ratio, speeds)
     verdicts = {}
     for policy in scores:
         mine = [t for t in target if t["policy"] == policy]
@@ -330,7 +344,7 @@ def write_stats(
                                                report.smoothness_reference)  # fmt: skip
     kinds = {name: entry.get("kind", "agent") for name, entry in suite["policies"].items()}
     text = stats_markdown({**stats, "improvement_tables": improvement, "kinds": kinds}, summary,
-                          report.max_ratio)  # fmt: skip
+                          report.max_ratio, speeds)  # fmt: skip
     if "chattering" in stats:
         text += "\n" + smoothness_markdown(
             stats["paired"], stats["chattering"], report.smoothness_reference, report.worse_ratio

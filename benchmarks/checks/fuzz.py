@@ -33,7 +33,6 @@ physics steps per control step contribute fewer control steps.
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from collections.abc import Sequence
@@ -45,11 +44,12 @@ import numpy as np
 from auv_gym.config import SimConfig
 from auv_gym.path_generator import PathDistribution
 from auv_gym.task import TERMINATION_REASONS
-from benchmarks.arguments import ArgumentParser, finite_number, usage_errors
+from benchmarks.arguments import finite_number, parse_options, program_name, usage_errors
 from benchmarks.checks.fuzz_draws import EPISODE_PHYSICS, draw_actions, draw_config
+from benchmarks.options import option
 
-__all__ = ["EPISODE_PHYSICS", "Tally", "draw_actions", "draw_config", "fuzz_configuration", "main",
-           "report", "run"]  # fmt: skip
+__all__ = ["EPISODE_PHYSICS", "FuzzOptions", "Tally", "draw_actions", "draw_config",
+           "fuzz_configuration", "main", "report", "run"]  # fmt: skip
 
 FAILURES = frozenset({"corridor", "pitch", "envelope", "non_finite"})  # may leave the space
 COUNTERS = ("nan_observations", "non_finite_rewards", "exceptions", "wrong_truncations",
@@ -85,6 +85,26 @@ class Tally:
     @property
     def violations(self) -> int:
         return sum(self.counts.values())
+
+
+@dataclass
+class FuzzOptions:
+    """The options of ``python -m benchmarks.fuzz`` (`run`'s arguments)."""
+
+    steps: float = option(1e7, "vehicle-steps to run, >= 1")
+    seed: int = option(0, "seed of the fuzz")
+    physics_budget: float = option(2e6, "physics vehicle-steps per configuration")
+    max_vehicles: int = option(512, "vehicles per configuration, at most")
+    progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
+
+    def check(self) -> None:
+        """ValueError naming the option that is out of its range."""
+        finite_number("--steps", self.steps, 1.0, 1e12)
+        finite_number("--physics-budget", self.physics_budget, 1e3, 1e10)
+        if self.seed < 0:
+            raise ValueError(f"--seed must be non-negative, got {self.seed}")
+        if not 1 <= self.max_vehicles <= 65_536:
+            raise ValueError(f"--max-vehicles must be in [1, 65536], got {self.max_vehicles}")
 
 
 def fuzz_configuration(
@@ -167,8 +187,8 @@ def fuzz_configuration(
 def run(
     total_steps: int,
     seed: int = 0,
-    physics_budget: int = 2_000_000,
-    max_vehicles: int = 512,
+    physics_budget: int = int(FuzzOptions.physics_budget),
+    max_vehicles: int = FuzzOptions.max_vehicles,
     max_episode_steps: int = 1000,
     progress: bool = True,
 ) -> Tally:
@@ -243,30 +263,13 @@ def report(tally: Tally, seconds: float) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> Tally:
-    parser = ArgumentParser(
-        prog="python -m benchmarks.fuzz",
-        description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    parser.add_argument("--steps", type=float, default=1e7,
-                        help="vehicle-steps to run, >= 1 (default 1e7)")  # fmt: skip
-    parser.add_argument("--seed", type=int, default=0, help="seed of the fuzz (default 0)")
-    parser.add_argument("--physics-budget", type=float, default=2e6,
-                        help="physics vehicle-steps per configuration (default 2e6)")  # fmt: skip
-    parser.add_argument("--max-vehicles", type=int, default=512,
-                        help="vehicles per configuration, at most (default 512)")  # fmt: skip
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(FuzzOptions, argv, program_name("benchmarks.fuzz"),
+                                 __doc__.split("\n\n")[0])  # fmt: skip
     with usage_errors(parser):
-        finite_number("--steps", args.steps, 1.0, 1e12)
-        finite_number("--physics-budget", args.physics_budget, 1e3, 1e10)
-        if args.seed < 0:
-            raise ValueError(f"--seed must be non-negative, got {args.seed}")
-        if not 1 <= args.max_vehicles <= 65_536:
-            raise ValueError(f"--max-vehicles must be in [1, 65536], got {args.max_vehicles}")
+        args.check()
     start = time.perf_counter()
     tally = run(int(args.steps), args.seed, int(args.physics_budget), args.max_vehicles,
-                progress=not args.quiet)  # fmt: skip
+                progress=args.progress)  # fmt: skip
     print(report(tally, time.perf_counter() - start))
     if tally.violations:
         sys.exit(1)

@@ -22,7 +22,6 @@ still reproduce every committed cell it shares with the new run). Exit status 0:
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import shlex
@@ -30,10 +29,12 @@ import subprocess
 import sys
 import tempfile
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.arguments import writable_location
+from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.options import option
 
 RESULTS = Path(__file__).resolve().parents[1] / "results"
 AGENTS = Path(__file__).resolve().parents[1] / "agents"
@@ -135,26 +136,27 @@ def compare_json(label: str, reference: Path, fresh: Path, report: Report) -> No
     report.differences(label, diffs, len(shared))
 
 
+@dataclass
+class ReproductionOptions:
+    """The options of ``python -m benchmarks.check_reproduction``."""
+
+    # A Path is immutable: one shared default is safe.
+    results: Path = option(RESULTS, "committed results folder")  # noqa: RUF009
+    workers: int = option(2, "benchmark worker processes")
+    agents: bool = option(False, "also re-evaluate shipped agents")
+    allow_new: bool = option(False, "rows/columns on one side only are not errors")
+    keep: Path | None = option(None, "write the re-run here (kept)", parse=Path)  # noqa: RUF009
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
-    parser.add_argument("--results", type=Path, default=RESULTS, help="committed results folder")
-    parser.add_argument("--workers", type=int, default=2, help="benchmark worker processes")
-    parser.add_argument("--agents", action="store_true", help="also re-evaluate shipped agents")
-    parser.add_argument(
-        "--allow-new", action="store_true", help="rows/columns on one side only are not errors"
-    )
-    parser.add_argument("--keep", type=Path, default=None, help="write the re-run here (kept)")
-    args = parser.parse_args(argv)
+    args, parser = parse_options(ReproductionOptions, argv,
+                                 program_name("benchmarks.check_reproduction"),
+                                 __doc__.split("\n\n")[0], negatable=False)  # fmt: skip
     if args.workers < 1:
         parser.error(f"--workers must be ≥ 1, got {args.workers}")
     if args.keep is not None:  # refused now, not after the first re-run has finished
-        try:
+        with usage_errors(parser):
             writable_location(args.keep, "--keep")
-        except OSError as error:
-            parser.error(str(error))
     episodes_json = args.results / "full" / "episodes.json"
     paper_json = args.results / "paper" / "metrics.json"
     for required in (episodes_json, paper_json):

@@ -34,82 +34,58 @@ from auv_gym.config import MAX_EPISODE_TIME, SimConfig
 from auv_gym.files import environment, jsonable, replace_outputs, write_json, write_text
 from auv_gym.rollout import policy_name
 from benchmarks.arguments import (
-    ArgumentParser,
     comma_names,
     exit_with_usage_error,
     finite_number,
     locked_folder,
+    parse_options,
     program_name,
     usage_errors,
     writable_folder,
 )
 from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env_id, policy_label
-from benchmarks.cli import HelpFormatter
+from benchmarks.options import option
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
 DPI_RANGE = (20, 1200)  # figure resolution [dots per inch]
 LABELS = {"fbsm": "FBSM", "backstepping": "backstepping"}
 
 
+def _policy_specs(text: str) -> tuple[str, ...]:
+    """The specs of ``--policies`` ("fbsm,backstepping"): ValueError for none, an empty one or
+    one given twice."""
+    return tuple(comma_names(text, "--policies"))
+
+
 @dataclass
 class Args:
-    """Command-line arguments."""
+    """The options of ``python -m benchmarks.paper_figures`` (``env``: extra env keyword
+    arguments for programmatic callers, no option)."""
 
-    out: Path = Path("out/paper_figures")  # output folder
-    duration: float = 300.0  # episode length [s]
-    seed: int = 0  # reset seed shared by the controllers (same noise for both)
-    policies: tuple[str, ...] = DEFAULT_POLICIES  # names for controllers.make
-    control_dt: float = SimConfig.control_dt  # control period [s], the env's default
-    transient: float | None = None  # metrics window start [s]; default min(100, duration/2)
-    dpi: int = 150  # figure resolution
-    env: dict[str, Any] = field(default_factory=dict)  # extra env keyword arguments
+    out: Path = option(Path("out/paper_figures"), "output folder")  # noqa: RUF009
+    duration: float = option(300.0, "episode length [s]")
+    seed: int = option(0, "reset seed shared by the policies (same noise)")
+    policies: tuple[str, ...] = option(
+        DEFAULT_POLICIES,
+        "comma-separated specs: controllers.make names, ppo, ppo:PATH, module:attribute",
+        parse=_policy_specs,
+    )
+    control_dt: float = option(SimConfig.control_dt, "control period [s]")
+    transient: float | None = option(
+        None,
+        "metrics window start [s] in [0, duration); None: min(100, duration/2) "
+        "(docs/design.md §3.9)",
+    )
+    dpi: int = option(150, f"figure resolution [dots/in], in {list(DPI_RANGE)}")
+    env: dict[str, Any] = field(default_factory=dict)
 
 
 def parse_args(argv: Sequence[str] | None = None) -> Args:
     """The arguments, every one checked before any episode runs (a bad one exits with code 2
     and a one-line message)."""
-    defaults = Args()
-    parser = ArgumentParser(
-        prog=program_name("benchmarks.paper_figures"),
-        description=__doc__.split("\n\n")[0],
-        formatter_class=HelpFormatter,
-    )
-    parser.add_argument("--out", type=Path, default=defaults.out, help="output folder")
-    parser.add_argument("--duration", type=float, default=defaults.duration,
-                        help="episode length [s]")  # fmt: skip
-    parser.add_argument("--seed", type=int, default=defaults.seed,
-                        help="reset seed shared by the policies (same noise)")  # fmt: skip
-    parser.add_argument(
-        "--policies",
-        default=",".join(defaults.policies),
-        help="comma-separated specs: controllers.make names, ppo, ppo:PATH, module:attribute",
-    )
-    parser.add_argument(
-        "--control-dt",
-        type=float,
-        default=defaults.control_dt,
-        help="control period [s]",
-    )
-    parser.add_argument(
-        "--transient",
-        type=float,
-        default=None,
-        help="metrics window start [s] in [0, duration); None: min(100, duration/2) "
-        "(docs/design.md §3.9)",
-    )
-    parser.add_argument("--dpi", type=int, default=defaults.dpi,
-                        help=f"figure resolution [dots/in], in {list(DPI_RANGE)}")  # fmt: skip
-    ns = parser.parse_args(argv)
+    args, parser = parse_options(Args, argv, program_name("benchmarks.paper_figures"),
+                                 __doc__.split("\n\n")[0])  # fmt: skip
     with usage_errors(parser):
-        args = Args(
-            out=ns.out,
-            duration=ns.duration,
-            seed=ns.seed,
-            policies=tuple(comma_names(ns.policies, "--policies")),
-            control_dt=ns.control_dt,
-            transient=ns.transient,
-            dpi=ns.dpi,
-        )
         validate(args)
         writable_folder(args.out)  # last: a bad argument above creates no folder
     return args
@@ -162,10 +138,10 @@ def build_policies(names: Sequence[str], env: Any) -> dict[str, Any]:
 def make_figures(
     policies: Mapping[str, Any],
     out: str | os.PathLike,
-    duration: float = 300.0,
-    seed: int = 0,
+    duration: float = Args.duration,
+    seed: int = Args.seed,
     transient: float | None = None,
-    dpi: int = 150,
+    dpi: int = Args.dpi,
     env_ids: Mapping[str, str] | None = None,
     **env_kwargs: Any,
 ) -> dict[str, Any]:

@@ -56,9 +56,10 @@ def evaluate_policy_on_seeds(
     t ≥ transient (None: the shared rule min(100 s, max_time/2), docs/design.md §3.9),
     max_distance [m] over that window, window_samples (0 when the episode ended before the
     window: then the rms values are NaN), duration [s], max_surge [m/s] and overspeed_fraction
-    (time with u > 2.0 m/s) over the episode, and termination_reason in the env's spelling (""
-    when the episode ran to max_time, `auv_gym.trajectory.env_termination_reason`), then the
-    `auv_gym.metrics` named in ``extra_metrics`` (e.g. "chattering" [1/s]) as floats.
+    (time with u above the vehicle's top speed) over the episode, and termination_reason in the
+    env's spelling ("" when the episode ran to max_time,
+    `auv_gym.trajectory.env_termination_reason`), then the `auv_gym.metrics` named in
+    ``extra_metrics`` (e.g. "chattering" [1/s]) as floats.
     """
     results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)
     return [

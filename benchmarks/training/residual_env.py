@@ -84,7 +84,7 @@ class ResidualVectorEnv(VectorWrapper):
             for name in names
         }
         self._states: dict[str, Any] = dict.fromkeys(names)
-        low, high = residual_observation_bounds()
+        low, high = residual_observation_bounds(config.params.max_surge)
         self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs

@@ -32,10 +32,10 @@ Outputs and file formats: see `benchmarks.training`; the agents load with
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks.arguments import (
@@ -46,7 +46,7 @@ from benchmarks.arguments import (
     writable_location,
 )
 from benchmarks.cli import HelpFormatter
-from benchmarks.options import add_options, from_args
+from benchmarks.options import add_options, from_args, option
 from benchmarks.reports.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
@@ -57,35 +57,35 @@ from controllers.agent import METADATA_FILE
 FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 
 
-def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, argparse.Namespace]:
+@dataclass
+class CommandOptions:
+    """The options of this command beside `TrainOptions`: plotting and held-out evaluation."""
+
+    curve: str | None = option(None, "write the learning curve to CURVE.csv and CURVE.png at "
+                               "the end")  # fmt: skip
+    plot_only: bool = option(False, "only plot the learning curve of --out (needs --curve)")
+    evaluate: str | None = option(None, "only evaluate AGENT on the held-out seeds 0-9 (paper "
+                                  "scenario) and write AGENT/held_out_evaluation.json",
+                                  metavar="AGENT")  # fmt: skip
+
+
+def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, CommandOptions]:
     """TrainOptions (every field the dataclass offers is an option) and the plotting options."""
     parser = ArgumentParser(prog=program_name("benchmarks.train_ppo"),
                             description=__doc__.split("\n\n")[0],
                             formatter_class=HelpFormatter)  # fmt: skip
-    parser.add_argument(
-        "--curve",
-        default=None,
-        help="write the learning curve to CURVE.csv and CURVE.png at the end",
-    )
-    parser.add_argument(
-        "--plot-only",
-        action="store_true",
-        help="only plot the learning curve of --out (needs --curve)",
-    )
-    parser.add_argument("--evaluate", default=None, metavar="AGENT",
-                        help="only evaluate AGENT on the held-out seeds 0-9 (paper scenario) "
-                             "and write AGENT/held_out_evaluation.json")  # fmt: skip
+    command = add_options(parser, CommandOptions, negatable=False)
     names = add_options(parser, TrainOptions)
     ns = parser.parse_args(argv)
     if ns.config is None:
         ns.config = str(HERE / "hyperparams" / f"{ns.algo}.yml")
-    extra = argparse.Namespace(curve=ns.curve, plot_only=ns.plot_only, evaluate=ns.evaluate)
+    extra = from_args(CommandOptions, ns, command)
     if extra.plot_only and not extra.curve:
         parser.error("--plot-only needs --curve")
     return from_args(TrainOptions, ns, names, **FIXED), extra
 
 
-def check_outputs(opts: TrainOptions, extra: argparse.Namespace) -> None:
+def check_outputs(opts: TrainOptions, extra: CommandOptions) -> None:
     """Everything this command will write or read later, checked before the first training
     step: the run folder, the export folder, the learning-curve files (which need
     evaluations), the agent to evaluate. OSError / ValueError naming the option otherwise."""

@@ -1,0 +1,122 @@
+"""The vehicle's top speed (`AUVParams.max_surge`) reaches the overspeed metric, the suite's
+surge target and the residual agent's observation bounds; REMUS 100's 2.0 m/s gives the former
+numbers, and every shipped agent's observation space is still its env's."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from auv_gym import resolve_env_id
+from auv_gym.metrics import compute_metrics
+from auv_gym.observation import OBS_HIGH, OBS_LOW
+from auv_gym.rollout import rollout
+from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
+from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.vehicle import remus100
+from benchmarks.analysis.suite_markdown import stats_markdown
+from benchmarks.analysis.suite_stats import target_table, top_speeds
+from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.residual_env import ResidualVectorEnv
+from controllers.agent import check_agent, load_actor
+from controllers.pid import PIDLOS
+from controllers.residual import residual_observation_bounds
+
+AGENTS = Path(__file__).resolve().parents[1] / "benchmarks" / "agents"
+
+
+def _trajectory(u: np.ndarray, **kwargs) -> Trajectory:
+    samples = {name: np.zeros(u.size) for name in SAMPLE_FIELDS}
+    samples["u"] = u
+    intervals = {name: np.zeros(u.size - 1) for name in INTERVAL_FIELDS}
+    return Trajectory(t=0.5 * np.arange(u.size), samples=samples, intervals=intervals,
+                      control_dt=0.5, **kwargs)  # fmt: skip
+
+
+def test_overspeed_counts_above_the_vehicles_top_speed(tmp_path: Path) -> None:
+    u = np.array([0.0, 1.0, 2.5, 2.0, 1.6, 1.5, 1.0])  # end samples above 1.5: 2.5, 2.0, 1.6
+    remus = _trajectory(u)
+    assert remus.top_speed == 2.0
+    assert compute_metrics(remus, transient=0.0)["overspeed_fraction"] == 1 / 6
+    slow = _trajectory(u, top_speed=1.5)
+    assert compute_metrics(slow, transient=0.0)["overspeed_fraction"] == 3 / 6
+    remus.save(tmp_path / "remus.npz")
+    slow.save(tmp_path / "slow.npz")
+    with np.load(tmp_path / "remus.npz") as data:  # a REMUS file as before: no new key
+        assert "top_speed" not in json.loads(str(data["metadata"]))
+    assert Trajectory.load(tmp_path / "remus.npz").top_speed == 2.0
+    assert Trajectory.load(tmp_path / "slow.npz").top_speed == 1.5
+    with pytest.raises(ValueError, match=r"top_speed must be a positive speed in m/s, got 0\.0"):
+        _trajectory(u, top_speed=0.0)
+
+
+def test_a_rollout_records_its_vehicles_top_speed() -> None:
+    kwargs = {"max_time": 2.0}
+    assert rollout(PIDLOS(), 0, **kwargs).top_speed == 2.0
+    fast = rollout(PIDLOS(), 0, params=remus100().replace(max_surge=3.0), **kwargs)
+    assert fast.top_speed == 3.0
+
+
+def test_the_suite_target_is_each_sets_top_speed() -> None:
+    suite = {"sets": {"remus": {"env": {}}, "slow": {"env": {"params": {"max_surge": 1.5}}}}}
+    speeds = top_speeds(suite)
+    assert speeds == {"remus": 2.0, "slow": 1.5}
+    rows = [{"policy": p, "set": s, "termination_reason": "", "max_surge": 1.8}
+            for p in ("ref", "new") for s in ("remus", "slow")]  # fmt: skip
+    scores = {"ref": np.ones((1, 2)), "new": np.ones((1, 2))}
+    table = target_table(rows, scores, ["remus", "slow"], "ref", 2.0, speeds)
+    assert [(t["set"], t["passed"]) for t in table] == [("remus", True), ("slow", False)]
+    former = target_table(rows, scores, ["remus", "slow"], "ref", 2.0)  # REMUS 100's 2.0 m/s
+    assert [t["passed"] for t in former] == [True, True]
+
+
+def _markdown_target_line(speeds) -> str:
+    stats = {"reference": "ref", "confidence": 0.95, "n_runs": {}, "failure_score_m": {},
+             "reps": 10, "seed": 0, "command": "c", "improvement_tables": {}, "target": [],
+             "verdicts": {}, "learning_curve_notes": {}}  # fmt: skip
+    text = stats_markdown(stats, {"iqm": {}, "mean": {}}, 2.0, speeds)
+    return next(line for line in text.splitlines() if line.startswith("## Target"))
+
+
+def test_the_suite_markdown_names_the_surge_target() -> None:
+    former = "## Target: mean RMS distance within 2× ref, no failed episode, max surge ≤ 2 m/s"
+    assert _markdown_target_line(None) == former
+    assert _markdown_target_line({"a": 2.0, "b": 2.0}) == former
+    assert _markdown_target_line({"a": 1.5}).endswith("max surge ≤ 1.5 m/s")
+    assert _markdown_target_line({"a": 1.5, "b": 2.0}).endswith(
+        "max surge ≤ the top speed of the set's vehicle")  # fmt: skip
+
+
+def test_residual_bounds_are_the_envs_for_its_vehicle() -> None:
+    ones = np.ones(6, np.float32)
+    low, high = residual_observation_bounds()
+    np.testing.assert_array_equal(low, np.concatenate([OBS_LOW, -ones]))  # bit for bit
+    np.testing.assert_array_equal(high, np.concatenate([OBS_HIGH, ones]))
+    assert low.dtype == high.dtype == np.float32
+    fast = remus100().replace(max_surge=3.0)  # speed bound 5 × 3 = 15 m/s, above REMUS's 10
+    core = AUVPath3DVectorEnv(2, params=fast, max_time=2.0)
+    env = ResidualVectorEnv(core, ResidualTraining())
+    space, core_space = env.single_observation_space, core.single_observation_space
+    np.testing.assert_array_equal(space.low[:15], core_space.low)
+    np.testing.assert_array_equal(space.high[:15], core_space.high)
+    assert space.high[6] == 15.0 and OBS_HIGH[6] == 10.0  # u
+    np.testing.assert_array_equal(space.low, residual_observation_bounds(3.0)[0])
+    env.close()
+
+
+@pytest.mark.parametrize("name", sorted(p.parent.name for p in AGENTS.glob("*/model.zip")))
+def test_shipped_agents_load_with_their_envs_observation_space(name: str) -> None:
+    pytest.importorskip("stable_baselines3")
+    files = check_agent(AGENTS / name)
+    actor = load_actor(files)
+    env = gym.make(resolve_env_id(files.metadata["env_id"]), **files.metadata.get("env_kwargs", {}))
+    low, high = env.observation_space.low, env.observation_space.high
+    if "residual" in files.metadata:
+        low, high = residual_observation_bounds(env.unwrapped.config.params.max_surge)
+    np.testing.assert_array_equal(actor.observation_space.low, low)
+    np.testing.assert_array_equal(actor.observation_space.high, high)
+    env.close()
