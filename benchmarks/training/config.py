@@ -71,6 +71,7 @@ ZOO_KEYS = frozenset(
         "action_bounds",
         "obs_scales",
         "action_increment",
+        "action_std_schedule",
     }
 )
 
@@ -97,6 +98,7 @@ class ZooConfig:
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
     action_increment: float | None = None  # δ (`controllers.action_increment`)
+    action_std_schedule: Any = None  # `training.noise_schedule.StdSchedule`
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -180,6 +182,11 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         if residual is not None or action_bounds is not None:
             raise ValueError(f"{path}: action_increment excludes residual and action_bounds")
         action_increment = check_increment(section["action_increment"], f"{path}: {env_id}")
+    std_schedule = None
+    if "action_std_schedule" in section:
+        from benchmarks.training.noise_schedule import parse_std_schedule
+
+        std_schedule = parse_std_schedule(section["action_std_schedule"], f"{path}: {env_id}")
     # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
     # the first training step, not at the model's construction or in its first update.
     where = f"{path}: {env_id}"
@@ -192,6 +199,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
         algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
         obs_scales=obs_scales, action_increment=action_increment,
+        action_std_schedule=std_schedule,
     )  # fmt: skip
 
 

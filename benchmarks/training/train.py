@@ -17,6 +17,7 @@ from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.options import comma_integers, option, whole_number
+from benchmarks.training.agent_interface import interface_callbacks, pin_scales, wrap_actions
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
     capture_training_state,
@@ -262,16 +263,9 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     # One thread: the serial kernel at every N (numba's pool would run it on one thread anyway).
     venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id,
                              residual, threads=1 if opts.threads == 1 else None)  # fmt: skip
-    if cfg.action_bounds is not None:
-        from benchmarks.training.action_box import ActionBox
-
-        venv = ActionBox(venv, *cfg.action_bounds)
-    increment = None
-    if cfg.action_increment is not None:
-        from benchmarks.training.action_increment import IncrementalActions
-
-        increment = (cfg.action_increment, observation_layout_of(opts.env_id, cfg.env_kwargs).names)
-        venv = IncrementalActions(venv, *increment)
+    layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
+    obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
+    venv, increment = wrap_actions(venv, cfg, obs_names)
 
     previous: dict[str, Any] = {}
     checkpoint = latest_checkpoint(out) if opts.resume else None
@@ -301,12 +295,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         truncate_rows(out / EVAL_FILE, model.num_timesteps)
     else:
         venv = VecNormalize(venv, **cfg.normalize)
-        if cfg.obs_scales is not None:
-            from benchmarks.training.normalization import pin_observation_scales
-
-            layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
-            names = layout.names if residual is None else RESIDUAL_OBS_NAMES
-            pin_observation_scales(venv, names, cfg.obs_scales)
+        pin_scales(venv, cfg, obs_names)
         model = algorithm(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, seed=opts.seed,
                           device="cpu", tensorboard_log=str(out / "tb"), verbose=opts.verbose,
                           **cfg.model_kwargs())  # fmt: skip
@@ -322,8 +311,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         "start_timesteps": int(model.num_timesteps),
     }]  # fmt: skip
     t0 = time.monotonic()
-    layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
-    obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
     if residual is None:  # the held-out evaluation and the benchmark build its env from this
         residual_meta["observation"] = layout.to_dict()
@@ -375,6 +362,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
                                      stop_at=target if target < n_timesteps else None,
                                      next_checkpoint=schedules.get("next_checkpoint"))  # fmt: skip
     callbacks.append(checkpoints)
+    callbacks.extend(interface_callbacks(cfg, n_timesteps))
     if opts.progress_bar:  # ours, to close it at a pause too
         callbacks.append(ProgressBarCallback())
     remaining = n_timesteps - int(model.num_timesteps)
