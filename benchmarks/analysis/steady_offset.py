@@ -13,9 +13,9 @@ For each policy, on the paper's helix (start, path and 300-s episodes of the pap
               incremental agent (`controllers.action_increment`): the bias would enter the
               previous command it observes and accumulate
 
-An agent runs under the env its metadata names (its observation and surge limit); a classical
-controller under ``AUVPath3DPreview-v0`` too, whose first 15 entries are the paper's
-(docs/results.md, "Where the remaining error sits").
+Each policy runs under the benchmark's env id for it (`benchmarks.catalog.policies`): an agent
+under the env its metadata names (its observation and surge limit), a classical controller
+under ``AUVPath3D-v0`` (docs/results.md, "Where the remaining error sits").
 
     python -m benchmarks.analysis.steady_offset \\
         --policies fbsm,net256=benchmarks/agents/ppo_preview_net256 --seeds 4 --bias 0.05
@@ -33,9 +33,14 @@ from auv_gym.files import write_json
 from auv_gym.table_format import markdown_table
 from auv_gym.trajectory import FAILURE_REASONS
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
+from benchmarks.catalog.policies import (
+    AGENT_PREFIX,
+    build_policy,
+    check_policy_spec,
+    policy_env_id,
+)
 from benchmarks.options import option
 
-CLASSICAL_ENV_ID = "AUVPath3DPreview-v0"
 ERRORS = ("x_e", "y_e", "z_e")
 
 
@@ -53,21 +58,16 @@ class PitchBias:
         return action, state
 
 
-def policy_and_env(spec: str) -> tuple[str, Any, dict[str, Any]]:
-    """(label, policy, env keyword arguments) of ``name=agent-folder`` or a classical name."""
-    import controllers
+def policy_and_env(text: str) -> tuple[str, Any, dict[str, Any]]:
+    """(label, policy, env keyword arguments) of ``label=agent-folder`` or a benchmark policy
+    spec (`benchmarks.catalog.policies`), run under its env id (an agent's training env)."""
     from auv_gym import VARIANTS
-    from benchmarks.catalog.policies import agent_run
 
-    label, _, path = spec.partition("=")
-    if path:
-        from pathlib import Path
-
-        _, env_id = agent_run(f"--policies {label}", Path(path))
-        policy = controllers.make("agent", path=path)
-        return label, policy, dict(VARIANTS[env_id])
-    env_kwargs = dict(VARIANTS[CLASSICAL_ENV_ID])
-    return label, controllers.make(label, env=env_kwargs), env_kwargs
+    label, _, path = text.partition("=")
+    spec = f"{AGENT_PREFIX}{path}" if path else label
+    check_policy_spec(spec)
+    env_kwargs = dict(VARIANTS[policy_env_id(spec)])
+    return label, build_policy(spec, env_kwargs), env_kwargs
 
 
 def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: float,
