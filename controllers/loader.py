@@ -48,13 +48,14 @@ def load_policy(
     if increment is not None:  # checked before torch loads anything
         where = f"{files.metadata_file}"
         increment = check_increment(increment, where)
+        names = observation_layout(files.metadata)
         try:
-            prev_action_index(observation_layout(files.metadata))
+            prev_action_index(names)
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
     actor = load_actor(files, device=device, num_threads=num_threads)
     if increment is not None:
-        return IncrementPolicy(actor, increment, observation_layout(files.metadata))
+        return IncrementPolicy(actor, increment, names)
     if files.residual is None:
         return actor
     base = files.residual.make_base(**(base_kwargs or {}))
