@@ -88,3 +88,31 @@ def save_tiny_residual_agent():
         return model, venv
 
     return _save
+
+
+def _train_tiny_preview_agent(tmp_path, **keys):
+    """One seed of a tiny PPO run on AUVPath3DPreview-v0 with the extra hyper-parameter
+    ``keys``, through `benchmarks.train_seeds`; returns the exported agent's folder."""
+    import yaml
+
+    from benchmarks.train_seeds import main
+
+    section = {
+        "n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True,
+        "n_steps": 64, "batch_size": 128, "n_epochs": 1, "policy_kwargs": "dict(net_arch=[16])",
+        "env_kwargs": {"randomize_start": True, "max_time": 20.0}, **keys,
+    }  # fmt: skip
+    config = tmp_path / "tiny.yml"
+    config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
+    agent = tmp_path / "agent"
+    assert main(["--algo", "ppo", "--config", str(config), "--out", str(tmp_path / "run"),
+                 "--env-id", "AUVPath3DPreview-v0", "--seeds", "0-0", "--workers", "1",
+                 "--eval-seeds", "100", "--eval-freq", "256", "--eval-duration", "110",
+                 "--quiet", "--export", str(agent)]) == 0  # fmt: skip
+    return agent
+
+
+@pytest.fixture
+def train_tiny_preview_agent():
+    """`_train_tiny_preview_agent(tmp_path, **keys)`: a tiny exported agent (rl tests only)."""
+    return _train_tiny_preview_agent

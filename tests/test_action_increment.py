@@ -66,24 +66,13 @@ def test_the_training_wrapper_integrates_and_restarts_at_zero_after_an_autoreset
 
 
 @pytest.mark.rl
-def test_a_loaded_incremental_agent_commands_what_training_applied(tmp_path):
-    import yaml
-
-    from benchmarks.train_seeds import main
+def test_a_loaded_incremental_agent_commands_what_training_applied(
+    tmp_path, train_tiny_preview_agent
+):
     from controllers.action_increment import IncrementPolicy
     from controllers.ppo import load_policy
 
-    section = {
-        "n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True,
-        "n_steps": 64, "batch_size": 128, "n_epochs": 1, "policy_kwargs": "dict(net_arch=[16])",
-        "action_increment": 0.2, "env_kwargs": {"randomize_start": True, "max_time": 20.0},
-    }  # fmt: skip
-    config = tmp_path / "increment.yml"
-    config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
-    assert main(["--algo", "ppo", "--config", str(config), "--out", str(tmp_path / "run"),
-                 "--env-id", "AUVPath3DPreview-v0", "--seeds", "0-0", "--workers", "1",
-                 "--eval-seeds", "100", "--eval-freq", "256", "--eval-duration", "110",
-                 "--quiet", "--export", str(tmp_path / "agent")]) == 0  # fmt: skip
+    train_tiny_preview_agent(tmp_path, action_increment=0.2)
     policy = load_policy(tmp_path / "agent")
     assert isinstance(policy, IncrementPolicy) and policy.increment == 0.2
     rng = np.random.default_rng(1)

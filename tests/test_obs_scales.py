@@ -8,7 +8,6 @@ import json
 
 import numpy as np
 import pytest
-import yaml
 
 pytest.importorskip("stable_baselines3")
 
@@ -61,24 +60,14 @@ def test_unknown_entries_are_named_with_the_valid_ones():
 
 
 @pytest.mark.rl
-def test_a_trained_agent_normalises_its_errors_by_the_fixed_scale(tmp_path):
+def test_a_trained_agent_normalises_its_errors_by_the_fixed_scale(
+    tmp_path, train_tiny_preview_agent
+):
     """A tiny PPO run with x_e, z_e at 0.5 m: the exported statistics hold mean 0, variance 0.25
     there, and the loaded agent feeds its network x_e/0.5 m."""
-    from benchmarks.train_seeds import main
     from controllers.ppo import load_policy
 
-    section = {
-        "n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True,
-        "n_steps": 64, "batch_size": 128, "n_epochs": 1, "policy_kwargs": "dict(net_arch=[16])",
-        "obs_scales": {"x_e": 0.5, "z_e": 0.5},
-        "env_kwargs": {"randomize_start": True, "max_time": 20.0},
-    }  # fmt: skip
-    config = tmp_path / "scaled.yml"
-    config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
-    assert main(["--algo", "ppo", "--config", str(config), "--out", str(tmp_path / "run"),
-                 "--env-id", "AUVPath3DPreview-v0", "--seeds", "0-0", "--workers", "1",
-                 "--eval-seeds", "100", "--eval-freq", "256", "--eval-duration", "110",
-                 "--quiet", "--export", str(tmp_path / "agent")]) == 0  # fmt: skip
+    train_tiny_preview_agent(tmp_path, obs_scales={"x_e": 0.5, "z_e": 0.5})
     stats = np.load(tmp_path / "agent" / "vecnormalize.npz")
     names = list(stats["obs_names"])
     for name in ("x_e", "z_e"):
