@@ -13,7 +13,7 @@ import math
 import os
 import sys
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
@@ -182,6 +182,17 @@ def check_episode_arguments(args: argparse.Namespace) -> None:
     if args.transient is not None:
         finite_number("--transient", args.transient, 0.0, args.duration, high_open=True, unit="s")
     check_pool_options(args.workers, args.backend, args.address)
+
+
+def parse_checked(parser: argparse.ArgumentParser, argv: Sequence[str] | None,
+                  check: Callable[[argparse.Namespace], None]) -> argparse.Namespace:  # fmt: skip
+    """``parser``'s arguments from ``argv``, then ``check(args)`` (which may add resolved
+    values) inside `usage_errors`: every argument is checked before any work, a bad one exits
+    with code 2 and one line."""
+    args = parser.parse_args(argv)
+    with usage_errors(parser):
+        check(args)
+    return args
 
 
 def parse_options(cls: type, argv: Sequence[str] | None, prog: str, description: str | None,

@@ -26,7 +26,12 @@ import numpy as np
 
 from auv_gym import VARIANTS
 from auv_gym.config import SimConfig
-from benchmarks.arguments import ArgumentParser, program_name, usage_errors, writable_location
+from benchmarks.arguments import (
+    ArgumentParser,
+    parse_checked,
+    program_name,
+    writable_location,
+)
 from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env_id
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
@@ -62,11 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     """The arguments, every one checked before the episode runs (a bad one exits with code 2
     and a one-line message): ranges, the scenario, the policy, the video file's folder."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    with usage_errors(parser):
-        check_args(args)
-    return args
+    return parse_checked(build_parser(), argv, check_args)
 
 
 def check_args(args: argparse.Namespace) -> None:

@@ -58,8 +58,8 @@ from benchmarks.arguments import (
     check_episode_arguments,
     comma_names,
     locked_folder,
+    parse_checked,
     program_name,
-    usage_errors,
     writable_folder,
 )
 from benchmarks.catalog.policies import (
@@ -157,11 +157,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     """The arguments, every one checked before any episode runs (a bad one exits with code 2
     and a one-line message). Adds ``policy_list`` (SuitePolicy), ``set_list`` (TaskSet),
     ``chunks`` and ``transient`` (resolved)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    with usage_errors(parser):
-        check_args(args)
-    return args
+    return parse_checked(build_parser(), argv, check_args)
 
 
 def check_args(args: argparse.Namespace) -> None:
