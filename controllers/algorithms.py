@@ -1,11 +1,12 @@
 """The reinforcement-learning algorithms a saved agent may come from: one table for training
 (`benchmarks.training`) and loading (`controllers.agent`).
 
-An entry names the stable-baselines3 class and the constructor arguments a hyper-parameter file
-may set. A saved agent's ``metadata.json`` records its entry's key under ``"algo"`` (no key:
-"ppo", the agents saved before the key existed). Another algorithm is one more entry here: the
-training harness then trains it and `controllers.make("agent", path=...)` loads what it saved.
-Nothing here imports stable-baselines3 until `Algorithm.sb3_class` is called.
+An entry names the stable-baselines3 class (or sb3-contrib's: TQC, CrossQ) and the constructor
+arguments a hyper-parameter file may set. A saved agent's ``metadata.json`` records its entry's
+key under ``"algo"`` (no key: "ppo", the agents saved before the key existed). Another algorithm
+is one more entry here: the training harness then trains it and `controllers.make("agent",
+path=...)` loads what it saved.
+Nothing here imports stable-baselines3 or sb3-contrib until `Algorithm.sb3_class` is called.
 """
 
 from __future__ import annotations
@@ -18,21 +19,37 @@ __all__ = ["ALGORITHMS", "DEFAULT_ALGORITHM", "Algorithm", "algorithm_of"]
 
 @dataclass(frozen=True)
 class Algorithm:
-    """An SB3 algorithm: its class in `stable_baselines3` and the constructor arguments a
-    hyper-parameter file may set (`schedules`: those that may be "lin_<x>" schedules;
-    `off_policy`: checkpoints also hold the replay buffer)."""
+    """An SB3 algorithm: its class in `package` (`stable_baselines3` or `sb3_contrib`) and the
+    constructor arguments a hyper-parameter file may set (`schedules`: those that may be
+    "lin_<x>" schedules; `off_policy`: checkpoints also hold the replay buffer, and
+    ``ent_coef`` may be "auto")."""
 
     name: str
     class_name: str
     hyperparameters: frozenset[str]
     schedules: tuple[str, ...] = ()
     off_policy: bool = False
+    package: str = "stable_baselines3"
 
     def sb3_class(self) -> Any:
-        """The SB3 class (imports stable_baselines3)."""
-        import stable_baselines3
+        """The SB3 class (imports its package; ImportError naming the extra when missing)."""
+        import importlib
 
-        return getattr(stable_baselines3, self.class_name)
+        try:
+            module = importlib.import_module(self.package)
+        except ImportError as exc:
+            raise ImportError(f"{self.class_name} needs the {self.package} package (pip install "
+                              f"-e '.[rl]'): {exc}") from exc  # fmt: skip
+        return getattr(module, self.class_name)
+
+
+# What SAC and its sb3-contrib relatives share (TQC adds quantile truncation; CrossQ has no target
+# networks, so no tau or target_update_interval, and delays its actor updates).
+_ENTROPY_OFF_POLICY = frozenset({
+    "learning_rate", "buffer_size", "learning_starts", "batch_size", "gamma", "train_freq",
+    "gradient_steps", "optimize_memory_usage", "ent_coef", "target_entropy", "use_sde",
+    "sde_sample_freq", "use_sde_at_warmup", "stats_window_size", "n_steps",
+})  # fmt: skip
 
 
 ALGORITHMS: dict[str, Algorithm] = {
@@ -49,14 +66,25 @@ ALGORITHMS: dict[str, Algorithm] = {
     "sac": Algorithm(
         "sac",
         "SAC",
-        frozenset({
-            "learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma",
-            "train_freq", "gradient_steps", "optimize_memory_usage", "ent_coef",
-            "target_update_interval", "target_entropy", "use_sde", "sde_sample_freq",
-            "use_sde_at_warmup", "stats_window_size", "n_steps",
-        }),
+        _ENTROPY_OFF_POLICY | {"tau", "target_update_interval"},
         schedules=("learning_rate",),
         off_policy=True,
+    ),
+    "tqc": Algorithm(
+        "tqc",
+        "TQC",
+        _ENTROPY_OFF_POLICY | {"tau", "target_update_interval", "top_quantiles_to_drop_per_net"},
+        schedules=("learning_rate",),
+        off_policy=True,
+        package="sb3_contrib",
+    ),
+    "crossq": Algorithm(
+        "crossq",
+        "CrossQ",
+        _ENTROPY_OFF_POLICY | {"policy_delay"},
+        schedules=("learning_rate",),
+        off_policy=True,
+        package="sb3_contrib",
     ),
 }  # fmt: skip
 DEFAULT_ALGORITHM = "ppo"  # what an agent's metadata without an "algo" key was trained with

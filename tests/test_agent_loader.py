@@ -23,8 +23,12 @@ def test_training_and_loading_share_one_algorithm_table():
     from benchmarks.training.config import ALGORITHMS as READ
 
     assert TRAINED is ALGORITHMS and READ is ALGORITHMS
-    assert {name: a.class_name for name, a in ALGORITHMS.items()} == {"ppo": "PPO", "sac": "SAC"}
-    assert controllers.AGENT_NAMES == ("agent", "ppo", "sac")
+    assert {name: (a.package, a.class_name) for name, a in ALGORITHMS.items()} == {
+        "ppo": ("stable_baselines3", "PPO"), "sac": ("stable_baselines3", "SAC"),
+        "tqc": ("sb3_contrib", "TQC"), "crossq": ("sb3_contrib", "CrossQ")}  # fmt: skip
+    assert controllers.AGENT_NAMES == ("agent", "ppo", "sac", "tqc", "crossq")
+    assert "tau" not in ALGORITHMS["crossq"].hyperparameters  # no target networks
+    assert "top_quantiles_to_drop_per_net" in ALGORITHMS["tqc"].hyperparameters
 
 
 def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
@@ -46,7 +50,9 @@ def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
 def test_make_needs_a_path_and_knows_the_names():
     with pytest.raises(ValueError, match=r"controllers.make\('agent'\) needs path="):
         controllers.make("agent")
-    with pytest.raises(ValueError, match=r"valid: \[.*'agent', 'ppo', 'sac', 'residual'"):
+    with pytest.raises(
+        ValueError, match=r"valid: \[.*'agent', 'ppo', 'sac', 'tqc', 'crossq', 'residual'"
+    ):
         controllers.make("dqn", path="x")
 
 
@@ -55,13 +61,17 @@ def test_agent_ppo_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
     obs = np.linspace(-0.5, 0.5, 15, dtype=np.float32)
     path = str(AGENTS / "sac_generalist")
     actions = [
-        controllers.make(name, path=path).predict(obs)[0] for name in controllers.AGENT_NAMES
+        controllers.make(name, path=path).predict(obs)[0] for name in ("agent", "ppo", "sac")
     ]
     assert type(controllers.make("agent", path=path)).__name__ == "AgentPolicy"
     for action in actions[1:]:
         np.testing.assert_array_equal(action, actions[0])
     with pytest.raises(ValueError, match=r"ppo_helix/model.zip was trained with 'ppo', not 'sac'"):
         controllers.make("sac", path=str(AGENTS / "ppo_helix"))
+    with pytest.raises(
+        ValueError, match=r"sac_generalist/model.zip was trained with 'sac', not 'tqc'"
+    ):
+        controllers.make("tqc", path=path)
     residual = controllers.make("agent", path=str(AGENTS / "ppo_residual"))
     assert type(residual).__name__ == "ResidualPolicy" and residual.filter_max == 0.8
 

@@ -29,6 +29,10 @@ TINY = {
             "learning_starts": 64, "batch_size": 64, "train_freq": 1, "gradient_steps": 1,
             "policy_kwargs": "dict(net_arch=[16, 16])"},
 }  # fmt: skip
+# sb3-contrib's off-policy learners: SAC's tiny file, CrossQ without target networks.
+TINY["tqc"] = {**TINY["sac"], "top_quantiles_to_drop_per_net": 1}
+TINY["crossq"] = {key: value for key, value in TINY["sac"].items() if key != "policy_kwargs"}
+TINY["crossq"].update(policy_delay=2, policy_kwargs="dict(net_arch=dict(pi=[16, 16], qf=[32, 32]))")
 
 
 def _shortest_eval_duration() -> float:
@@ -130,7 +134,7 @@ def _summary(out: Path) -> dict:
 
 
 @pytest.mark.rl
-@pytest.mark.parametrize("algo", ["ppo", "sac"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "tqc", "crossq"])
 def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
     """2 seeds, 256 env steps each, as two local processes: per-seed run directories, test
     evaluations and learning curves, the selection on validation, the exported agent."""

@@ -22,7 +22,7 @@ thread, same machine and package versions), after a pause (`stop_at`) or a kill.
 most one checkpoint interval of compute, never exactness. The agents load with
 `controllers.loader.load_policy` (``controllers.make("agent", path=...)``).
 
-Modules: `config` (YAML files; `ALGORITHMS`, PPO and SAC, is the loader's table,
+Modules: `config` (YAML files; `ALGORITHMS`, PPO, SAC, TQC and CrossQ, is the loader's table,
 `controllers.algorithms`), `residual` and `residual_env` (a residual agent's training settings
 and env wrapper), `train` (`TrainOptions`, `train`: one algorithm, one seed, one run directory),
 `seeds` (`train_seeds`: N seeds, one run directory each, as local processes or Ray tasks; CLI

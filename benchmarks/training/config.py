@@ -11,10 +11,10 @@ A file has one top-level section per env id, in rl_zoo3 2.x format::
       ...
 
 The keys an algorithm accepts are listed in its `Algorithm` entry of
-`controllers.algorithms.ALGORITHMS` (PPO, SAC), the table the agent loader reads too; another
-algorithm is one more entry there, read with the same `read_zoo_config`. Off-policy algorithms
-(`Algorithm.off_policy`) also save their replay buffer in checkpoints, so a resumed run continues
-with the samples it had.
+`controllers.algorithms.ALGORITHMS` (PPO, SAC; TQC, CrossQ from sb3-contrib), the table the
+agent loader reads too; another algorithm is one more entry there, read with the same
+`read_zoo_config`. Off-policy algorithms (`Algorithm.off_policy`) also save their replay buffer in
+checkpoints, so a resumed run continues with the samples it had.
 
 An optional ``residual`` section trains a residual agent (docs/design.md §3.10): the harness
 wraps the training env in `benchmarks.training.residual_env.ResidualVectorEnv` with these
@@ -218,7 +218,8 @@ _RANGES: dict[str, tuple[float, float, bool, bool]] = {
 }
 # Integer hyper-parameters and their smallest value.
 _INTEGERS = {"n_epochs": 1, "stats_window_size": 1, "sde_sample_freq": -1, "buffer_size": 1,
-             "learning_starts": 0, "target_update_interval": 1, "n_steps": 1}  # fmt: skip
+             "learning_starts": 0, "target_update_interval": 1, "n_steps": 1, "policy_delay": 1,
+             "top_quantiles_to_drop_per_net": 0}  # fmt: skip
 _BOOLEANS = ("normalize_advantage", "use_sde", "optimize_memory_usage", "use_sde_at_warmup")
 _OPTIONAL = ("clip_range_vf", "target_kl")  # None (null) switches them off
 # VecNormalize keyword arguments a config may set, with their checks.
@@ -261,7 +262,7 @@ def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: 
             if not (math.isfinite(start) and start > 0):
                 raise ValueError(f"{where}: {key} {value!r} must be a positive number or "
                                  "'lin_<x>' with x > 0")  # fmt: skip
-        elif key == "ent_coef" and algo == "sac" and isinstance(value, str):
+        elif key == "ent_coef" and ALGORITHMS[algo].off_policy and isinstance(value, str):
             match = re.fullmatch(r"auto(?:_([0-9.eE+-]+))?", value)
             try:
                 ok = bool(match) and (match.group(1) is None or float(match.group(1)) > 0)
