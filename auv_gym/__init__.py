@@ -11,6 +11,8 @@ Importing the package registers these ids with Gymnasium (idempotently); each is
 | `AUVPath3DSpeedLimit-v0` | v0 limited to the vehicle's top speed (REMUS 100: 2.0 m/s); was v1 |
 | `AUVPath3DPreview-v0`    | the RL task: the surge limit and the agent observation (path     |
 |                          | preview, velocity over ground, previous action; `observation`)  |
+| `AUVPath3DPreviewIntegral-v0` | the RL task with leaky integrals of y_e, z_e (T = 10 s) added |
+|                          | to the agent observation (`ObservationConfig.integral_time`)    |
 
 The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
 no "out of date" warning. `LEGACY_ENV_IDS` maps ids that agents' metadata may still record
@@ -69,6 +71,7 @@ ENV_ID = "AUVPath3D-v0"
 
 SPEED_LIMIT_ENV_ID = "AUVPath3DSpeedLimit-v0"
 PREVIEW_ENV_ID = "AUVPath3DPreview-v0"
+PREVIEW_INTEGRAL_ENV_ID = "AUVPath3DPreviewIntegral-v0"
 
 # Variants are separate ids with fixed keyword arguments (docs/design.md §3, Registration).
 VARIANTS: dict[str, dict] = {
@@ -78,6 +81,11 @@ VARIANTS: dict[str, dict] = {
     # the default reward changed: overspeed term and termination above 2.0 m/s (env docstring)
     SPEED_LIMIT_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED},
     PREVIEW_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED, "observation": "preview"},
+    # integral action for a static policy: what the third-generation generalist observes
+    PREVIEW_INTEGRAL_ENV_ID: {
+        "surge_limit": VEHICLE_TOP_SPEED,
+        "observation": {"kind": "preview", "integral_time": 10.0},
+    },
 }
 # Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium
 # call v0 "out of date" on every `gym.make("AUVPath3D-v0")`.
