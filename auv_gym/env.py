@@ -246,6 +246,8 @@ class AUVPath3DEnv(gym.Env):
       (`AUVParams.max_surge`, 2.0 m/s for REMUS 100): the overspeed reward term and the "overspeed"
       termination (docs/design.md §3). Everything else, including every other default, is v0's.
     * `AUVPath3DPreview-v0`: the RL task — the speed limit and ``observation="preview"``.
+    * `AUVPath3DPreviewIntegral-v0`: the RL task with ``observation={"kind": "preview",
+      "integral_time": 10.0}``: leaky integrals of y_e and z_e [m·s] after the preview entries.
 
     Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8); an
     agent's metadata naming `AUVPath3D-v1` is read as `AUVPath3DSpeedLimit-v0`.

@@ -216,6 +216,18 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
             gym.make(env_id).close()
     assert gym.spec("AUVPath3DPreview-v0").kwargs == {"surge_limit": "vehicle",
                                                       "observation": "preview"}  # fmt: skip
+    # The integral id: the preview observation and the two leaky error integrals after it.
+    integral = gym.make("AUVPath3DPreviewIntegral-v0")
+    preview = gym.make("AUVPath3DPreview-v0")
+    assert integral.observation_space.shape == (preview.observation_space.shape[0] + 2,) == (48,)
+    obs, _ = integral.reset(seed=3)
+    reference, _ = preview.reset(seed=3)
+    np.testing.assert_array_equal(obs[:-2], reference)
+    action = np.float32([0.1, -0.2, 0.3])
+    obs, *_ = integral.step(action)
+    reference, *_ = preview.step(action)
+    decay = math.exp(-0.05 / 10.0)  # T = 10 s, the paper's 0.05-s control period
+    np.testing.assert_allclose(obs[-2:], 10.0 * (1.0 - decay) * reference[1:3], rtol=1e-6)
     assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
     with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
         auv_gym.resolve_env_id("AUVPath3D-v9")

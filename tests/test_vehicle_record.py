@@ -19,7 +19,11 @@ from controllers.pid import PIDLOS
 
 def test_the_speed_limited_ids_take_the_vehicles_top_speed() -> None:
     assert remus100().max_surge == SURGE_LIMIT == 2.0
-    for env_id in (auv_gym.SPEED_LIMIT_ENV_ID, auv_gym.PREVIEW_ENV_ID):
+    for env_id in (
+        auv_gym.SPEED_LIMIT_ENV_ID,
+        auv_gym.PREVIEW_ENV_ID,
+        auv_gym.PREVIEW_INTEGRAL_ENV_ID,
+    ):
         assert auv_gym.VARIANTS[env_id]["surge_limit"] == VEHICLE_TOP_SPEED == "vehicle"
         env = gym.make(env_id)
         assert env.unwrapped.config.limits.surge_limit == 2.0
