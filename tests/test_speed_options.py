@@ -51,6 +51,8 @@ def test_the_former_flags_and_several_values_stay() -> None:
         ("residual", ["--train-steps", "0"], "--steps and --train-steps must be positive"),
         ("throughput", ["--sections", "gpu"], "--sections: unknown ['gpu']"),
         ("training", ["--warmup", "-1"], "--warmup >= 0"),
+        ("off_policy", ["--replay-ratio", "0"], "--replay-ratio must be > 0, got 0.0"),
+        ("off_policy", ["--algos", "ddpg"], "argument --algos: invalid choice: 'ddpg'"),
         ("vector", ["--actuators", "jet"], "argument --actuators: invalid choice: 'jet'"),
     ],
 )
@@ -59,3 +61,16 @@ def test_a_bad_value_is_one_line_exit_2(name: str, argv: list[str], message: str
         importlib.import_module(f"benchmarks.speed.{name}").main(argv)
     err = capsys.readouterr().err
     assert stop.value.code == 2 and message in err and err.count("\n") == 1, err
+
+
+@pytest.mark.rl
+def test_off_policy_cost_builds_each_learner_as_the_trainer_does() -> None:
+    """CrossQ from the SAC file: no tau, the critic width asked for, the file's replay ratio
+    (2 gradient steps per vector step of 8 vehicles); the rate follows from the two costs."""
+    from benchmarks.speed import off_policy
+
+    argv = ["--algos", "crossq", "--warmup", "64", "--gradient-steps", "2", "--critic", "32"]
+    (row,) = off_policy.main(argv)
+    assert row["critic"] == {"pi": [128, 128], "qf": [32, 32]} and row["replay_ratio"] == 0.25
+    expected = 1.0 / (1.0 / row["collection_steps_per_s"] + 0.25e-3 * row["gradient_step_ms"])
+    assert row["training_steps_per_s"] == pytest.approx(expected, rel=1e-12)

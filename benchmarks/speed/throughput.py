@@ -5,8 +5,8 @@ tables.
     python -m benchmarks.throughput [--sections …]
 
 Each section lives in its own module (env, vector, controllers, render,
-training: this tree against the default baseline ref) and runs alone with
-`auv-gym speed <name>` or `python -m benchmarks.speed_<name>`.
+training: this tree against the default baseline ref; off-policy: SAC, TQC and CrossQ) and runs
+alone with `auv-gym speed <name>` or `python -m benchmarks.speed.<module>`.
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ from benchmarks.options import option
 SECTIONS = {"env": "benchmarks.speed.env", "vector": "benchmarks.speed.vector",
             "controllers": "benchmarks.speed.controllers",
             "render": "benchmarks.speed.render",
-            "training": "benchmarks.speed.training"}  # fmt: skip
+            "training": "benchmarks.speed.training",
+            "off-policy": "benchmarks.speed.off_policy"}  # fmt: skip
 
 
 def machine() -> str:
