@@ -1,18 +1,47 @@
-"""What a hyper-parameter file changes about the agent's interface to the env, applied in one
-place: the action box (``action_bounds``, `action_box`), incremental commands
+"""What a hyper-parameter file changes about the agent's interface to the env, read and applied
+in one place: the action box (``action_bounds``, `action_box`), incremental commands
 (``action_increment``, `action_increment`), fixed observation scales (``obs_scales``,
-`normalization`) and the exploration-noise schedule (``action_std_schedule``,
-`noise_schedule`). Each is opt-in; a file without these keys trains as before."""
+`normalization`), the exploration-noise schedule (``action_std_schedule``, `noise_schedule`)
+and the safety cost charged in the reward (``cost_penalty``, `cost_penalty`). Each is opt-in; a
+file without these keys trains as before."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from benchmarks.training.config import ZooConfig
+from controllers.action_increment import check_increment
 
-__all__ = ["interface_callbacks", "pin_scales", "wrap_actions"]
+if TYPE_CHECKING:
+    from benchmarks.training.config import ZooConfig
+
+__all__ = ["interface_callbacks", "parse_interface", "pin_scales", "wrap_actions", "wrap_rewards"]
+
+
+def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: Any,
+                    action_bounds: Any) -> dict[str, Any]:  # fmt: skip
+    """The `ZooConfig` fields of a file's interface keys (``action_bounds`` is read before:
+    incremental commands exclude it and a residual agent); errors name ``path`` and ``env_id``."""
+    where = f"{path}: {env_id}"
+    fields: dict[str, Any] = {}
+    if "obs_scales" in section:
+        from benchmarks.training.normalization import parse_obs_scales
+
+        fields["obs_scales"] = parse_obs_scales(section["obs_scales"], where)
+    if "action_increment" in section:
+        if residual is not None or action_bounds is not None:
+            raise ValueError(f"{path}: action_increment excludes residual and action_bounds")
+        fields["action_increment"] = check_increment(section["action_increment"], where)
+    if "action_std_schedule" in section:
+        from benchmarks.training.noise_schedule import parse_std_schedule
+
+        fields["action_std_schedule"] = parse_std_schedule(section["action_std_schedule"], where)
+    if "cost_penalty" in section:
+        from benchmarks.training.cost_penalty import check_cost_penalty
+
+        fields["cost_penalty"] = check_cost_penalty(section["cost_penalty"], where)
+    return fields
 
 
 def wrap_actions(venv: Any, cfg: ZooConfig, obs_names: Sequence[str]
@@ -29,6 +58,15 @@ def wrap_actions(venv: Any, cfg: ZooConfig, obs_names: Sequence[str]
 
     increment = (cfg.action_increment, tuple(obs_names))
     return IncrementalActions(venv, *increment), increment
+
+
+def wrap_rewards(venv: Any, cfg: ZooConfig) -> Any:
+    """``venv`` with the file's safety-cost charge in its rewards (unchanged without one)."""
+    if not cfg.cost_penalty:
+        return venv
+    from benchmarks.training.cost_penalty import CostPenalty
+
+    return CostPenalty(venv, cfg.cost_penalty)
 
 
 def pin_scales(vec_normalize: Any, cfg: ZooConfig, obs_names: Sequence[str]) -> None:

@@ -45,7 +45,6 @@ from typing import Any
 
 from auv_gym import ENV_ID
 from benchmarks.training.residual import ResidualTraining
-from controllers.action_increment import check_increment
 from controllers.algorithms import ALGORITHMS, Algorithm
 
 __all__ = [
@@ -72,6 +71,7 @@ ZOO_KEYS = frozenset(
         "obs_scales",
         "action_increment",
         "action_std_schedule",
+        "cost_penalty",
     }
 )
 
@@ -99,6 +99,7 @@ class ZooConfig:
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
     action_increment: float | None = None  # δ (`controllers.action_increment`)
     action_std_schedule: Any = None  # `training.noise_schedule.StdSchedule`
+    cost_penalty: float | None = None  # w of r − w·cost (`training.cost_penalty`)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -172,21 +173,9 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         from benchmarks.training.action_box import parse_action_bounds
 
         action_bounds = parse_action_bounds(section["action_bounds"], path)
-    obs_scales = None
-    if "obs_scales" in section:
-        from benchmarks.training.normalization import parse_obs_scales
+    from benchmarks.training.agent_interface import parse_interface
 
-        obs_scales = parse_obs_scales(section["obs_scales"], f"{path}: {env_id}")
-    action_increment = None
-    if "action_increment" in section:
-        if residual is not None or action_bounds is not None:
-            raise ValueError(f"{path}: action_increment excludes residual and action_bounds")
-        action_increment = check_increment(section["action_increment"], f"{path}: {env_id}")
-    std_schedule = None
-    if "action_std_schedule" in section:
-        from benchmarks.training.noise_schedule import parse_std_schedule
-
-        std_schedule = parse_std_schedule(section["action_std_schedule"], f"{path}: {env_id}")
+    interface = parse_interface(section, path, env_id, residual, action_bounds)
     # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
     # the first training step, not at the model's construction or in its first update.
     where = f"{path}: {env_id}"
@@ -198,8 +187,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
         algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
-        obs_scales=obs_scales, action_increment=action_increment,
-        action_std_schedule=std_schedule,
+        **interface,
     )  # fmt: skip
 
 

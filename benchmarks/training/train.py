@@ -17,7 +17,12 @@ from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.options import comma_integers, option, whole_number
-from benchmarks.training.agent_interface import interface_callbacks, pin_scales, wrap_actions
+from benchmarks.training.agent_interface import (
+    interface_callbacks,
+    pin_scales,
+    wrap_actions,
+    wrap_rewards,
+)
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
     capture_training_state,
@@ -266,6 +271,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
     venv, increment = wrap_actions(venv, cfg, obs_names)
+    venv = wrap_rewards(venv, cfg)
 
     previous: dict[str, Any] = {}
     checkpoint = latest_checkpoint(out) if opts.resume else None

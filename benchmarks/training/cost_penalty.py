@@ -1,0 +1,48 @@
+"""`CostPenalty`: the env's safety cost charged in the training reward (``cost_penalty`` w).
+
+Each vehicle's reward becomes r − w·c, with c its per-step safety cost ``info["cost"]``
+(`auv_gym.safety_cost`, docs/model.md §12: pitch beyond 45°, surge above 2 m/s, intrusion into a
+depth margin; 0 inside every soft limit). The episode ends at 60° of pitch and, on the
+surge-limited ids, at 2 m/s: the termination penalty says so once, when it is too late to
+recover, while the cost grows from the soft limit on, so the policy meets a slope before the
+cliff. The wrapper sits under `VecNormalize` (which then normalises the charged reward); it
+changes training only: the env's own reward, its metrics and a loaded agent are unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+
+__all__ = ["MAX_COST_PENALTY", "CostPenalty", "check_cost_penalty"]
+
+MAX_COST_PENALTY = 1e6
+
+
+def check_cost_penalty(value: Any, where: str) -> float:
+    """w as a float in [0, 1e6]; ValueError naming ``where`` and the value otherwise."""
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not (number and math.isfinite(value) and 0.0 <= value <= MAX_COST_PENALTY):
+        raise ValueError(f"{where}: cost_penalty must be a number in [0, {MAX_COST_PENALTY:g}] "
+                         f"(reward charged per unit of safety cost), got {value!r}")  # fmt: skip
+    return float(value)
+
+
+class CostPenalty(VecEnvWrapper):
+    """``venv`` whose rewards are charged ``weight`` per unit of the safety cost."""
+
+    def __init__(self, venv: VecEnv, weight: float) -> None:
+        self.weight = check_cost_penalty(weight, "CostPenalty")
+        super().__init__(venv)
+
+    def reset(self) -> np.ndarray:
+        return self.venv.reset()
+
+    def step_wait(self):  # SB3 VecEnvStepReturn
+        obs, rewards, dones, infos = self.venv.step_wait()
+        cost = np.array([info["cost"] for info in infos], dtype=np.float64)
+        charged = (rewards - self.weight * cost).astype(rewards.dtype, copy=False)
+        return obs, charged, dones, infos
