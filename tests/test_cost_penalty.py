@@ -28,7 +28,7 @@ def test_rewards_are_charged_the_safety_cost_and_nothing_else_changes():
     costly = 0
     for _ in range(400):
         obs, rewards, dones, infos = plain.step(actions)
-        obs2, rewards2, dones2, infos2 = charged.step(actions)
+        obs2, rewards2, dones2, _ = charged.step(actions)
         cost = np.array([info["cost"] for info in infos])
         np.testing.assert_array_equal(obs2, obs)
         np.testing.assert_array_equal(dones2, dones)
