@@ -37,6 +37,17 @@ INFO_MODES = ("full", "minimal")
 _PER_VEHICLE = ("state", "np_random", "observation_space", "action_space")
 
 
+def _step_cost(info: dict[str, Any], dones: np.ndarray) -> np.ndarray:
+    """The step's safety cost per vehicle [-]: the vector env's, the ended vehicles' from their
+    final info (their reset info has none)."""
+    cost = np.zeros(dones.shape[0])
+    if "cost" in info:
+        cost[:] = info["cost"]
+    if dones.any():
+        cost[dones] = np.asarray(info["final_info"]["cost"])[dones]
+    return cost
+
+
 class SB3VecEnv(VecEnv):
     """SB3's `VecEnv` interface over an `AUVPath3DVectorEnv` in SAME_STEP autoreset mode.
 
@@ -84,6 +95,9 @@ class SB3VecEnv(VecEnv):
         self.metadata = {**self.metadata, "render_fps": venv.metadata["render_fps"]}
         self._actions: np.ndarray | None = None
         self.info_mode = infos
+        # Each vehicle's safety cost of the last step (an ended vehicle's: its final step's),
+        # for training wrappers that read it without per-vehicle dicts (``infos="minimal"``).
+        self.step_cost = np.zeros(self.num_envs)
 
     # ------------------------------------------------------------------------------- stepping
     def reset(self) -> np.ndarray:
@@ -104,6 +118,7 @@ class SB3VecEnv(VecEnv):
         obs, reward, terminated, truncated, info = self.venv.step(actions)
         dones = terminated | truncated
         time_limit = (truncated & ~terminated).tolist()
+        self.step_cost = _step_cost(info, dones)
         infos = self._dicts(info)
         if dones.any():
             # Ended vehicles report their last step's info; the reset info goes to reset_infos.

@@ -10,10 +10,10 @@ import yaml
 pytestmark = pytest.mark.rl
 
 
-def _pitching_envs():
+def _pitching_envs(infos: str = "full"):
     from auv_gym.sb3 import make_sb3_vec_env
 
-    return make_sb3_vec_env(4, seed=3, max_time=30.0, observation="preview")
+    return make_sb3_vec_env(4, seed=3, max_time=30.0, observation="preview", infos=infos)
 
 
 def test_rewards_are_charged_the_safety_cost_and_nothing_else_changes():
@@ -21,12 +21,13 @@ def test_rewards_are_charged_the_safety_cost_and_nothing_else_changes():
     charged reward is r − 2.5·c exactly (float32), observations and dones are the env's."""
     from benchmarks.training.cost_penalty import CostPenalty
 
-    plain, charged = _pitching_envs(), CostPenalty(_pitching_envs(), 2.5)
+    plain, charged = _pitching_envs(), CostPenalty(_pitching_envs("minimal"), 2.5)
     plain.reset()
     charged.reset()
     actions = np.tile(np.float32([0.3, -1.0, 0.0]), (4, 1))
     costly = 0
-    for _ in range(400):
+    ended = 0
+    for _ in range(700):
         obs, rewards, dones, infos = plain.step(actions)
         obs2, rewards2, dones2, _ = charged.step(actions)
         cost = np.array([info["cost"] for info in infos])
@@ -34,7 +35,8 @@ def test_rewards_are_charged_the_safety_cost_and_nothing_else_changes():
         np.testing.assert_array_equal(dones2, dones)
         np.testing.assert_array_equal(rewards2, (rewards - 2.5 * cost).astype(np.float32))
         costly += int((cost > 0).sum())
-    assert costly > 0  # the soft limit was crossed: the charge was exercised
+        ended += int(dones.sum())
+    assert costly > 0 and ended > 0  # the soft limit was crossed, and episodes ended
 
 
 @pytest.mark.parametrize("value", [-1.0, float("nan"), "high", True, 2e6])

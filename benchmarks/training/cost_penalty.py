@@ -43,6 +43,9 @@ class CostPenalty(VecEnvWrapper):
 
     def step_wait(self):  # SB3 VecEnvStepReturn
         obs, rewards, dones, infos = self.venv.step_wait()
-        cost = np.array([info["cost"] for info in infos], dtype=np.float64)
+        try:  # the native env (`auv_gym.sb3`) keeps it as an array, whatever its info dicts
+            cost = np.asarray(self.venv.step_cost, dtype=np.float64)
+        except AttributeError:  # SB3's own VecEnvs: the single envs' info dicts
+            cost = np.array([info["cost"] for info in infos], dtype=np.float64)
         charged = (rewards - self.weight * cost).astype(rewards.dtype, copy=False)
         return obs, charged, dones, infos
