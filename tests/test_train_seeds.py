@@ -344,6 +344,8 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
     ("ppo_preview.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
     ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("ppo_preview_net256.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("ppo_integral.yml", "ppo", "AUVPath3DPreviewIntegral-v0", 0.995, 3.0),
 ]
 
 
@@ -371,6 +373,11 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
     if cfg.action_bounds is not None:
         venv = ActionBox(venv, *cfg.action_bounds)
     venv = VecNormalize(venv, **cfg.normalize)
+    if cfg.obs_scales is not None:  # the names it pins exist in the id's observation
+        from benchmarks.training.agent_interface import pin_scales
+        from benchmarks.training.train import observation_layout_of
+
+        pin_scales(venv, cfg, observation_layout_of(env_id, cfg.env_kwargs).names)
     model = ALGORITHMS[algo].sb3_class()(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs,
                                          device="cpu", **kwargs)  # fmt: skip
     assert model.gamma == gamma
