@@ -37,17 +37,6 @@ INFO_MODES = ("full", "minimal")
 _PER_VEHICLE = ("state", "np_random", "observation_space", "action_space")
 
 
-def _step_cost(info: dict[str, Any], dones: np.ndarray) -> np.ndarray:
-    """The step's safety cost per vehicle [-]: the vector env's, the ended vehicles' from their
-    final info (their reset info has none)."""
-    cost = np.zeros(dones.shape[0])
-    if "cost" in info:
-        cost[:] = info["cost"]
-    if dones.any():
-        cost[dones] = np.asarray(info["final_info"]["cost"])[dones]
-    return cost
-
-
 class SB3VecEnv(VecEnv):
     """SB3's `VecEnv` interface over an `AUVPath3DVectorEnv` in SAME_STEP autoreset mode.
 
@@ -95,9 +84,8 @@ class SB3VecEnv(VecEnv):
         self.metadata = {**self.metadata, "render_fps": venv.metadata["render_fps"]}
         self._actions: np.ndarray | None = None
         self.info_mode = infos
-        # Each vehicle's safety cost of the last step (an ended vehicle's: its final step's),
-        # for training wrappers that read it without per-vehicle dicts (``infos="minimal"``).
-        self.step_cost = np.zeros(self.num_envs)
+        # The last step's vector info and dones, for `step_cost` (computed when read).
+        self._last_step: tuple[dict[str, Any], np.ndarray] | None = None
 
     # ------------------------------------------------------------------------------- stepping
     def reset(self) -> np.ndarray:
@@ -118,7 +106,7 @@ class SB3VecEnv(VecEnv):
         obs, reward, terminated, truncated, info = self.venv.step(actions)
         dones = terminated | truncated
         time_limit = (truncated & ~terminated).tolist()
-        self.step_cost = _step_cost(info, dones)
+        self._last_step = (info, dones)
         infos = self._dicts(info)
         if dones.any():
             # Ended vehicles report their last step's info; the reset info goes to reset_infos.
@@ -130,6 +118,21 @@ class SB3VecEnv(VecEnv):
         for row, flag in zip(infos, time_limit, strict=True):
             row["TimeLimit.truncated"] = flag
         return obs, reward.astype(np.float32), dones, infos
+
+    @property
+    def step_cost(self) -> np.ndarray:
+        """Each vehicle's safety cost of the last step [-] (an ended vehicle's: its final
+        step's; zeros before any step), for training wrappers that read it without per-vehicle
+        dicts (``infos="minimal"``)."""
+        cost = np.zeros(self.num_envs)
+        if self._last_step is None:
+            return cost
+        info, dones = self._last_step
+        if "cost" in info:
+            cost[:] = info["cost"]
+        if dones.any():
+            cost[dones] = np.asarray(info["final_info"]["cost"])[dones]
+        return cost
 
     def _dicts(self, info: dict[str, Any]) -> list[dict[str, Any]]:
         """One info dict per vehicle: the vector env's (``infos="full"``) or empty ones."""

@@ -11,11 +11,12 @@ changes training only: the env's own reward, its metrics and a loaded agent are 
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+
+from auv_gym.validation import real
 
 __all__ = ["MAX_COST_PENALTY", "CostPenalty", "check_cost_penalty"]
 
@@ -23,12 +24,10 @@ MAX_COST_PENALTY = 1e6
 
 
 def check_cost_penalty(value: Any, where: str) -> float:
-    """w as a float in [0, 1e6]; ValueError naming ``where`` and the value otherwise."""
-    number = isinstance(value, (int, float)) and not isinstance(value, bool)
-    if not (number and math.isfinite(value) and 0.0 <= value <= MAX_COST_PENALTY):
-        raise ValueError(f"{where}: cost_penalty must be a number in [0, {MAX_COST_PENALTY:g}] "
-                         f"(reward charged per unit of safety cost), got {value!r}")  # fmt: skip
-    return float(value)
+    """w as a float in [0, 1e6]; an error naming ``where`` and the value otherwise
+    (`auv_gym.validation.real`)."""
+    return real(f"{where}: cost_penalty", value, 0.0, MAX_COST_PENALTY,
+                unit="(reward per unit of safety cost)")  # fmt: skip
 
 
 class CostPenalty(VecEnvWrapper):
