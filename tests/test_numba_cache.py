@@ -101,7 +101,16 @@ def test_an_edit_in_a_package_inlined_from_recompiles_the_dependent_kernel(tmp_p
 
 def test_import_is_lazy_and_touches_no_cache_file(tmp_path: Path) -> None:
     """Importing computes no digest and deletes or rewrites nothing; the first kernel call
-    computes the digest once."""
+    computes the digest once.
+
+    On a private copy of the packages with a cache written beforehand: other test workers
+    compile into the real packages' caches at the same time."""
+    for package in (AUV_DIR, CTL_DIR):
+        shutil.copytree(package, tmp_path / package.name,
+                        ignore=shutil.ignore_patterns("__pycache__"))  # fmt: skip
+    _run("from auv_gym.guidance import wrap_angle\nwrap_angle(1.0)\n", tmp_path)
+    folders = {"AUV_DIR": str(tmp_path / "auv_gym"), "CTL_DIR": str(tmp_path / "controllers")}
+    assert list((tmp_path / "auv_gym" / "__pycache__").glob("guidance.*.nbi"))
     code = """
 import json, os
 from pathlib import Path
@@ -119,7 +128,7 @@ from auv_gym.guidance import wrap_angle
 wrap_angle(4.0)
 print(json.dumps([*after_import, len(numba_cache._DIGESTS)]))
 """
-    out = _run(code, tmp_path, {"AUV_DIR": str(AUV_DIR), "CTL_DIR": str(CTL_DIR)})
+    out = _run(code, tmp_path, folders)
     assert json.loads(out.stdout.strip().splitlines()[-1]) == [0, True, 1]
 
 
