@@ -34,6 +34,7 @@ last tangent (a straight line, κ = τ = 0). With an integral time T > 0 (``inte
 entries follow: y_e_integral, z_e_integral [m·s], leaky integrals
 I ← e^(−Δt/T)·I + T(1 − e^(−Δt/T))·e of the cross- and vertical-track errors at each control
 step (0 after a reset): the memory a controller's integral term keeps, here for the agent.
+With ``integral_errors="xyz"`` three: x_e_integral (the along-track error's) comes first.
 """
 
 from __future__ import annotations
@@ -192,7 +193,8 @@ GROUND_SPEED_BOUND = _GROUND_MARGIN * (SPEED_BOUND + _GROUND_CURRENT)  # [m/s]
 PREVIEW_MARGIN = 1.5
 PREVIEW_FEATURES = ("x", "y", "z", "curvature", "torsion")
 EXTRA_HEAD = ("u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_prev")
-INTEGRAL_NAMES = ("y_e_integral", "z_e_integral")
+INTEGRAL_NAMES = ("x_e_integral", "y_e_integral", "z_e_integral")
+INTEGRAL_ERRORS = ("yz", "xyz")  # which tracking errors are integrated
 MAX_INTEGRAL_TIME = 1e4  # [s]
 
 
@@ -206,6 +208,7 @@ class ObservationConfig:
     points: int = DEFAULT_PREVIEW_POINTS  # K
     spacing: float = DEFAULT_PREVIEW_SPACING  # [m] Δs
     integral_time: float = 0.0  # [s] T of the error integrals; 0: none
+    integral_errors: str = "yz"  # "yz": y_e, z_e; "xyz": x_e too
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
@@ -218,11 +221,13 @@ class ObservationConfig:
         integral_time = real("observation integral_time", self.integral_time, 0.0,
                              MAX_INTEGRAL_TIME, unit="s (0: no error integrals)")  # fmt: skip
         object.__setattr__(self, "integral_time", integral_time)
+        object.__setattr__(self, "integral_errors", choice(
+            "observation integral_errors", self.integral_errors, INTEGRAL_ERRORS))  # fmt: skip
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
         """From None or "paper", "preview" (default K and Δs), a dict {"kind", "points",
-        "spacing", "integral_time"} or an `ObservationConfig`."""
+        "spacing", "integral_time", "integral_errors"} or an `ObservationConfig`."""
         if spec is None:
             return cls()
         if isinstance(spec, ObservationConfig):
@@ -231,11 +236,12 @@ class ObservationConfig:
             return cls(kind=spec)
         if isinstance(spec, Mapping):
             fields = keys_within("observation", spec,
-                                 ("kind", "points", "spacing", "integral_time"))  # fmt: skip
+                                 ("kind", "points", "spacing", "integral_time",
+                                  "integral_errors"))  # fmt: skip
             return cls(**{"kind": "preview", **fields})
         raise ArgumentTypeError(
             f"observation must be one of {list(OBSERVATION_KINDS)}, a dict with keys kind, "
-            f"points, spacing, integral_time or an ObservationConfig, got {spec!r:.80}"
+            f"points, spacing, integral_time, integral_errors or an ObservationConfig, got {spec!r:.80}"
         )
 
     def to_dict(self) -> dict:
@@ -245,12 +251,22 @@ class ObservationConfig:
         fields = {"kind": self.kind, "points": self.points, "spacing": self.spacing}
         if self.integral_time > 0.0:
             fields["integral_time"] = self.integral_time
+            if self.integral_errors != "yz":  # the default stays out: older metadata matches
+                fields["integral_errors"] = self.integral_errors
         return fields
 
     @property
     def integrals(self) -> int:
-        """Number of error-integral entries: 2 with an integral time, else 0."""
-        return len(INTEGRAL_NAMES) if self.kind != "paper" and self.integral_time > 0.0 else 0
+        """Number of error-integral entries: one per integrated error with an integral time,
+        else 0."""
+        if self.kind == "paper" or self.integral_time <= 0.0:
+            return 0
+        return len(self.integral_errors)
+
+    @property
+    def integrated_columns(self) -> slice:
+        """The integrated errors' columns in (x_e, y_e, z_e)."""
+        return slice(3 - len(self.integral_errors), 3)
 
     @property
     def extra_dim(self) -> int:
@@ -269,7 +285,8 @@ class ObservationConfig:
             for k in range(1, self.points + 1)
             for feature in PREVIEW_FEATURES
         )
-        return (*OBS_NAMES, *EXTRA_HEAD, *preview, *INTEGRAL_NAMES[: self.integrals])
+        integrals = INTEGRAL_NAMES[self.integrated_columns] if self.integrals else ()
+        return (*OBS_NAMES, *EXTRA_HEAD, *preview, *integrals)
 
     @property
     def units(self) -> dict[str, str]:

@@ -201,7 +201,7 @@ class Simulator:
         self._paper_bounds = (self.obs_low[:OBS_DIM].copy(), self.obs_high[:OBS_DIM].copy())
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
-        # Leaky error integrals (y_e, z_e) [m·s] (`ObservationConfig.integral_time`): the last
+        # Leaky error integrals (y_e, z_e; x_e too with "xyz") [m·s] (`ObservationConfig.integral_time`): the last
         # columns of `extra`, which `extend_rows` leaves alone, updated in place.
         self.error_integral = self.extra[:, self.extra.shape[1] - self.layout.integrals :]
         if self.layout.integrals:
@@ -376,7 +376,7 @@ class Simulator:
             if self.layout.integrals:  # exact for an error held over the control period
                 decay, gain = self._integral_gain
                 self.error_integral *= decay
-                self.error_integral += gain * self._observed_guid[:, 1:3]
+                self.error_integral += gain * self._observed_guid[:, self.layout.integrated_columns]
             self._extend(self._every_row)
             self._end_outside_extra_bounds()
 
