@@ -294,6 +294,39 @@ def test_error_integrals_are_leaky_integrals_of_the_track_errors():
         ObservationConfig("preview", integral_time=-1.0)
 
 
+def test_along_track_integral_comes_first_and_the_default_layout_is_unchanged():
+    """integral_errors "xyz": x_e_integral, y_e_integral, z_e_integral, the same leaky law on
+    (x_e, y_e, z_e); the y/z integrals equal those of the default "yz" layout bit for bit."""
+    xyz = ObservationConfig("preview", points=2, spacing=3.0, integral_time=30.0,
+                            integral_errors="xyz")  # fmt: skip
+    yz = ObservationConfig("preview", points=2, spacing=3.0, integral_time=30.0)
+    assert xyz.names[-3:] == ("x_e_integral", "y_e_integral", "z_e_integral")
+    assert xyz.extra_dim == yz.extra_dim + 1 and xyz.integrals == 3
+    assert xyz.to_dict()["integral_errors"] == "xyz" and "integral_errors" not in yz.to_dict()
+    assert ObservationConfig.from_spec(xyz.to_dict()) == xyz
+    env, plain = AUVPath3DEnv(observation=xyz, max_time=10.0), AUVPath3DEnv(observation=yz,
+                                                                           max_time=10.0)  # fmt: skip
+    obs, _ = env.reset(seed=3)
+    reference, _ = plain.reset(seed=3)
+    assert np.all(obs[-3:] == 0.0)
+    decay = math.exp(-0.05 / 30.0)
+    integral = np.zeros(3)
+    rng = np.random.default_rng(4)
+    for _ in range(60):
+        action = rng.uniform(-0.5, 0.5, size=3)
+        obs, *_ = env.step(action)
+        reference, *_ = plain.step(action)
+        integral = decay * integral + 30.0 * (1.0 - decay) * obs[:3].astype(float)
+        np.testing.assert_array_equal(obs[:-3], reference[:-2])
+        np.testing.assert_array_equal(obs[-2:], reference[-2:])
+        np.testing.assert_allclose(obs[-3:], integral, rtol=1e-5, atol=1e-6)
+    assert abs(obs[-3]) > 0.1  # the along-track error was integrated, not left at 0
+    with pytest.raises(ValueError, match="observation integral_errors 'xy'"):
+        ObservationConfig("preview", integral_time=10.0, integral_errors="xy")
+    with pytest.raises(ValueError, match=r"unknown key\(s\) \['integral_axes'\]"):
+        ObservationConfig.from_spec({"integral_axes": "xyz"})
+
+
 def test_ground_speed_bound_covers_every_current_the_config_can_draw():
     """A Gauss–Markov current is unbounded; the bound covers 8 stationary standard deviations
     (an accepted configuration with mean 10 m/s and std 10 m/s raised at 19 of 300 resets
