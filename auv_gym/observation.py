@@ -34,7 +34,9 @@ last tangent (a straight line, κ = τ = 0). With an integral time T > 0 (``inte
 entries follow: y_e_integral, z_e_integral [m·s], leaky integrals
 I ← e^(−Δt/T)·I + T(1 − e^(−Δt/T))·e of the cross- and vertical-track errors at each control
 step (0 after a reset): the memory a controller's integral term keeps, here for the agent.
-With ``integral_errors="xyz"`` three: x_e_integral (the along-track error's) comes first.
+With ``integral_errors="xyz"`` three: x_e_integral (the along-track error's) comes first. With
+``integral_limit`` L > 0 each integral is clipped to [−L, L] after every update (anti-windup: the
+metres of an approach cannot charge it beyond what the path needs).
 """
 
 from __future__ import annotations
@@ -209,6 +211,7 @@ class ObservationConfig:
     spacing: float = DEFAULT_PREVIEW_SPACING  # [m] Δs
     integral_time: float = 0.0  # [s] T of the error integrals; 0: none
     integral_errors: str = "yz"  # "yz": y_e, z_e; "xyz": x_e too
+    integral_limit: float = 0.0  # [m·s] anti-windup clip of each integral; 0: none
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
@@ -223,11 +226,15 @@ class ObservationConfig:
         object.__setattr__(self, "integral_time", integral_time)
         object.__setattr__(self, "integral_errors", choice(
             "observation integral_errors", self.integral_errors, INTEGRAL_ERRORS))  # fmt: skip
+        integral_limit = real("observation integral_limit", self.integral_limit, 0.0,
+                              ERROR_BOUND * MAX_INTEGRAL_TIME, unit="m·s (0: no clip)")  # fmt: skip
+        object.__setattr__(self, "integral_limit", integral_limit)
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
         """From None or "paper", "preview" (default K and Δs), a dict {"kind", "points",
-        "spacing", "integral_time", "integral_errors"} or an `ObservationConfig`."""
+        "spacing", "integral_time", "integral_errors", "integral_limit"} or an
+        `ObservationConfig`."""
         if spec is None:
             return cls()
         if isinstance(spec, ObservationConfig):
@@ -237,11 +244,12 @@ class ObservationConfig:
         if isinstance(spec, Mapping):
             fields = keys_within("observation", spec,
                                  ("kind", "points", "spacing", "integral_time",
-                                  "integral_errors"))  # fmt: skip
+                                  "integral_errors", "integral_limit"))  # fmt: skip
             return cls(**{"kind": "preview", **fields})
         raise ArgumentTypeError(
             f"observation must be one of {list(OBSERVATION_KINDS)}, a dict with keys kind, "
-            f"points, spacing, integral_time, integral_errors or an ObservationConfig, got {spec!r:.80}"
+            f"points, spacing, integral_time, integral_errors, integral_limit or an "
+            f"ObservationConfig, got {spec!r:.80}"
         )
 
     def to_dict(self) -> dict:
@@ -251,8 +259,10 @@ class ObservationConfig:
         fields = {"kind": self.kind, "points": self.points, "spacing": self.spacing}
         if self.integral_time > 0.0:
             fields["integral_time"] = self.integral_time
-            if self.integral_errors != "yz":  # the default stays out: older metadata matches
+            if self.integral_errors != "yz":  # defaults stay out: older metadata matches
                 fields["integral_errors"] = self.integral_errors
+            if self.integral_limit > 0.0:
+                fields["integral_limit"] = self.integral_limit
         return fields
 
     @property
@@ -309,7 +319,10 @@ class ObservationConfig:
         ground = _GROUND_MARGIN * (speed_bound + max(_GROUND_CURRENT, current_speed))
         reach = math.sqrt(3.0) * ERROR_BOUND + PREVIEW_MARGIN * self.points * self.spacing
         point = (reach, reach, reach, CURVATURE_BOUND, CURVATURE_BOUND)
-        integral = (ERROR_BOUND * self.integral_time,) * self.integrals  # |e| ≤ 500 m: |I| ≤ 500 T
+        largest = ERROR_BOUND * self.integral_time  # |e| ≤ 500 m: |I| ≤ 500 T
+        if self.integral_limit > 0.0:
+            largest = min(largest, self.integral_limit)
+        integral = (largest,) * self.integrals
         extra = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points,
                           *integral])  # fmt: skip
         return (np.concatenate([low, -extra.astype(np.float32)]),

@@ -201,8 +201,9 @@ class Simulator:
         self._paper_bounds = (self.obs_low[:OBS_DIM].copy(), self.obs_high[:OBS_DIM].copy())
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
-        # Leaky error integrals (y_e, z_e; x_e too with "xyz") [m·s] (`ObservationConfig.integral_time`): the last
-        # columns of `extra`, which `extend_rows` leaves alone, updated in place.
+        # Leaky error integrals (y_e, z_e; x_e too with "xyz") [m·s] (`ObservationConfig`
+        # integral_time, integral_limit): the last columns of `extra`, which `extend_rows` leaves
+        # alone, updated in place.
         self.error_integral = self.extra[:, self.extra.shape[1] - self.layout.integrals :]
         if self.layout.integrals:
             decay = math.exp(-config.control_dt / self.layout.integral_time)
@@ -377,6 +378,9 @@ class Simulator:
                 decay, gain = self._integral_gain
                 self.error_integral *= decay
                 self.error_integral += gain * self._observed_guid[:, self.layout.integrated_columns]
+                if self.layout.integral_limit > 0.0:  # anti-windup: the approach cannot charge it
+                    limit = self.layout.integral_limit
+                    np.clip(self.error_integral, -limit, limit, out=self.error_integral)
             self._extend(self._every_row)
             self._end_outside_extra_bounds()
 

@@ -327,6 +327,32 @@ def test_along_track_integral_comes_first_and_the_default_layout_is_unchanged():
         ObservationConfig.from_spec({"integral_axes": "xyz"})
 
 
+def test_integral_limit_clips_each_integral_after_every_update():
+    """integral_limit L: I ← clip(e^(−Δt/T) I + T(1 − e^(−Δt/T)) e, −L, L); the bound is L; the
+    approach from the paper's start (x_e = −15 m) saturates x_e's integral at −L."""
+    limit = 0.5
+    clipped = ObservationConfig("preview", points=2, spacing=3.0, integral_time=30.0,
+                                integral_errors="xyz", integral_limit=limit)  # fmt: skip
+    assert clipped.bounds()[1][-3:].tolist() == [limit] * 3
+    assert clipped.to_dict()["integral_limit"] == limit
+    assert ObservationConfig.from_spec(clipped.to_dict()) == clipped
+    env = AUVPath3DEnv(observation=clipped, max_time=10.0)
+    obs, _ = env.reset(seed=3)
+    decay = math.exp(-0.05 / 30.0)
+    integral = np.zeros(3)
+    saturated = 0
+    rng = np.random.default_rng(4)
+    for _ in range(100):
+        obs, *_ = env.step(rng.uniform(-0.5, 0.5, size=3))
+        integral = np.clip(decay * integral + 30.0 * (1.0 - decay) * obs[:3].astype(float),
+                           -limit, limit)  # fmt: skip
+        np.testing.assert_allclose(obs[-3:], integral, rtol=1e-5, atol=1e-6)
+        saturated += bool(np.isclose(obs[-3], -limit))
+    assert saturated > 50  # x_e ≈ −15 m charges −0.5 m·s in 0.7 s, then stays clipped
+    with pytest.raises(ValueError, match="observation integral_limit"):
+        ObservationConfig("preview", integral_time=10.0, integral_limit=-1.0)
+
+
 def test_ground_speed_bound_covers_every_current_the_config_can_draw():
     """A Gauss–Markov current is unbounded; the bound covers 8 stationary standard deviations
     (an accepted configuration with mean 10 m/s and std 10 m/s raised at 19 of 300 resets
