@@ -13,6 +13,8 @@ Importing the package registers these ids with Gymnasium (idempotently); each is
 |                          | preview, velocity over ground, previous action; `observation`)  |
 | `AUVPath3DPreviewIntegral-v0` | the RL task with leaky integrals of y_e, z_e (T = 10 s) added |
 |                          | to the agent observation (`ObservationConfig.integral_time`)    |
+| `AUVPath3DPreviewAntiWindup-v0` | the RL task with integrals of x_e, y_e, z_e (T = 10 s), each |
+|                          | clipped to ±1 m·s (`integral_errors`, `integral_limit`)         |
 
 The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
 no "out of date" warning. `LEGACY_ENV_IDS` maps ids that agents' metadata may still record
@@ -72,6 +74,7 @@ ENV_ID = "AUVPath3D-v0"
 SPEED_LIMIT_ENV_ID = "AUVPath3DSpeedLimit-v0"
 PREVIEW_ENV_ID = "AUVPath3DPreview-v0"
 PREVIEW_INTEGRAL_ENV_ID = "AUVPath3DPreviewIntegral-v0"
+PREVIEW_ANTIWINDUP_ENV_ID = "AUVPath3DPreviewAntiWindup-v0"
 
 # Variants are separate ids with fixed keyword arguments (docs/design.md §3, Registration).
 VARIANTS: dict[str, dict] = {
@@ -85,6 +88,12 @@ VARIANTS: dict[str, dict] = {
     PREVIEW_INTEGRAL_ENV_ID: {
         "surge_limit": VEHICLE_TOP_SPEED,
         "observation": {"kind": "preview", "integral_time": 10.0},
+    },
+    # the along-track error integrated too, every integral clipped: the fourth generation's
+    PREVIEW_ANTIWINDUP_ENV_ID: {
+        "surge_limit": VEHICLE_TOP_SPEED,
+        "observation": {"kind": "preview", "integral_time": 10.0, "integral_errors": "xyz",
+                        "integral_limit": 1.0},  # fmt: skip
     },
 }
 # Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium
