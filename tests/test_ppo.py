@@ -267,6 +267,10 @@ def test_zoo_config_errors(tmp_path: Path) -> None:
         read_zoo_config(bad)
     with pytest.raises(ValueError, match="no top-level key 'Other-v0'"):
         read_zoo_config(bad, "Other-v0")
+    bad.write_text("AUVPath3D-v0: a comment that lost its hash\n")  # a section that is a string
+    with pytest.raises(ValueError, match="AUVPath3D-v0 must be a mapping of hyper-parameters, "
+                                         "got str 'a comment"):  # fmt: skip
+        read_zoo_config(bad)
     with pytest.raises(FileNotFoundError, match=r"missing\.yml"):
         read_zoo_config(tmp_path / "missing.yml")
 

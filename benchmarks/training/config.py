@@ -125,6 +125,9 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         data = yaml.safe_load(f)
     if not isinstance(data, dict) or env_id not in data:
         raise ValueError(f"{path}: no top-level key {env_id!r}")
+    if not isinstance(data[env_id], dict):
+        raise ValueError(f"{path}: {env_id} must be a mapping of hyper-parameters, got "
+                         f"{type(data[env_id]).__name__} {data[env_id]!r:.60}")  # fmt: skip
     section = dict(data[env_id])
     accepted = ALGORITHMS[algo].hyperparameters
     unknown = set(section) - ZOO_KEYS - accepted
