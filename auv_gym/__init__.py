@@ -92,8 +92,12 @@ VARIANTS: dict[str, dict] = {
     # the along-track error integrated too, every integral clipped: the fourth generation's
     PREVIEW_ANTIWINDUP_ENV_ID: {
         "surge_limit": VEHICLE_TOP_SPEED,
-        "observation": {"kind": "preview", "integral_time": 10.0, "integral_errors": "xyz",
-                        "integral_limit": 1.0},  # fmt: skip
+        "observation": {
+            "kind": "preview",
+            "integral_time": 10.0,
+            "integral_errors": "xyz",
+            "integral_limit": 1.0,
+        },
     },
 }
 # Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium

@@ -248,6 +248,8 @@ class AUVPath3DEnv(gym.Env):
     * `AUVPath3DPreview-v0`: the RL task — the speed limit and ``observation="preview"``.
     * `AUVPath3DPreviewIntegral-v0`: the RL task with ``observation={"kind": "preview",
       "integral_time": 10.0}``: leaky integrals of y_e and z_e [m·s] after the preview entries.
+    * `AUVPath3DPreviewAntiWindup-v0`: the RL task with the integrals of x_e, y_e and z_e
+      (``"integral_errors": "xyz"``), each clipped to ±1 m·s (``"integral_limit": 1.0``).
 
     Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8); an
     agent's metadata naming `AUVPath3D-v1` is read as `AUVPath3DSpeedLimit-v0`.

@@ -228,6 +228,16 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
     reference, *_ = preview.step(action)
     decay = math.exp(-0.05 / 10.0)  # T = 10 s, the paper's 0.05-s control period
     np.testing.assert_allclose(obs[-2:], 10.0 * (1.0 - decay) * reference[1:3], rtol=1e-6)
+    # The anti-windup id: x_e, y_e, z_e integrated, each clipped to ±1 m·s.
+    antiwindup = gym.make("AUVPath3DPreviewAntiWindup-v0")
+    assert antiwindup.observation_space.shape == (49,)
+    assert antiwindup.observation_space.high[-3:].tolist() == [1.0, 1.0, 1.0]
+    obs, _ = antiwindup.reset(seed=3)
+    np.testing.assert_array_equal(obs[:-3], preview.reset(seed=3)[0])
+    obs, *_ = antiwindup.step(action)
+    reference, *_ = preview.step(action)
+    np.testing.assert_allclose(obs[-3:], np.clip(10.0 * (1.0 - decay) * reference[:3], -1, 1),
+                               rtol=1e-6)  # fmt: skip
     assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
     with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
         auv_gym.resolve_env_id("AUVPath3D-v9")
@@ -304,8 +314,8 @@ def test_along_track_integral_comes_first_and_the_default_layout_is_unchanged():
     assert xyz.extra_dim == yz.extra_dim + 1 and xyz.integrals == 3
     assert xyz.to_dict()["integral_errors"] == "xyz" and "integral_errors" not in yz.to_dict()
     assert ObservationConfig.from_spec(xyz.to_dict()) == xyz
-    env, plain = AUVPath3DEnv(observation=xyz, max_time=10.0), AUVPath3DEnv(observation=yz,
-                                                                           max_time=10.0)  # fmt: skip
+    env = AUVPath3DEnv(observation=xyz, max_time=10.0)
+    plain = AUVPath3DEnv(observation=yz, max_time=10.0)
     obs, _ = env.reset(seed=3)
     reference, _ = plain.reset(seed=3)
     assert np.all(obs[-3:] == 0.0)

@@ -346,6 +346,7 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
     ("ppo_preview_net256.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
     ("ppo_integral.yml", "ppo", "AUVPath3DPreviewIntegral-v0", 0.995, 3.0),
+    ("ppo_antiwindup.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 
 

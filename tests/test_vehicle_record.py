@@ -23,6 +23,7 @@ def test_the_speed_limited_ids_take_the_vehicles_top_speed() -> None:
         auv_gym.SPEED_LIMIT_ENV_ID,
         auv_gym.PREVIEW_ENV_ID,
         auv_gym.PREVIEW_INTEGRAL_ENV_ID,
+        auv_gym.PREVIEW_ANTIWINDUP_ENV_ID,
     ):
         assert auv_gym.VARIANTS[env_id]["surge_limit"] == VEHICLE_TOP_SPEED == "vehicle"
         env = gym.make(env_id)
