@@ -53,3 +53,19 @@ def test_bad_input_is_one_line(argv, message, capsys):
         main(argv)
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_agent_env_kwargs_are_the_ids_arguments_plus_the_recorded_observation():
+    from auv_gym import VARIANTS
+    from benchmarks.training.evaluation import agent_env_kwargs
+
+    policy = load_policy(AGENT)
+    plain = agent_env_kwargs("AUVPath3DSpeedLimit-v0", {"num_timesteps": 5})
+    assert plain == dict(VARIANTS["AUVPath3DSpeedLimit-v0"]) and "observation" not in plain
+    plain["extra"] = 1  # a copy: the registry's arguments stay as they are
+    assert "extra" not in VARIANTS["AUVPath3DSpeedLimit-v0"]
+    with_obs = agent_env_kwargs(policy.metadata["env_id"], policy.metadata)
+    assert with_obs["observation"] == policy.metadata["observation"]
+    assert with_obs["surge_limit"] == "vehicle"
+    with pytest.raises(ValueError, match="AUVPath3DNoSuch-v0"):
+        agent_env_kwargs("AUVPath3DNoSuch-v0", {})

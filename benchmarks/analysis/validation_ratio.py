@@ -33,8 +33,9 @@ from benchmarks.options import option
 def policy_and_env(text: str) -> tuple[str, Any, dict[str, Any], dict[str, Any]]:
     """(label, policy, env keyword arguments, training record) of ``label=agent-folder`` or a
     classical policy name; an agent's env is its training id's plus its recorded observation."""
-    from auv_gym import ENV_ID, VARIANTS, resolve_env_id
+    from auv_gym import ENV_ID, VARIANTS
     from benchmarks.catalog.policies import build_policy, check_policy_spec
+    from benchmarks.training.evaluation import agent_env_kwargs
     from controllers.loader import load_policy
 
     label, _, path = text.partition("=")
@@ -44,9 +45,7 @@ def policy_and_env(text: str) -> tuple[str, Any, dict[str, Any], dict[str, Any]]
         return label, build_policy(label, env_kwargs), env_kwargs, {}
     policy = load_policy(path)
     metadata = policy.metadata
-    env_kwargs = dict(VARIANTS[resolve_env_id(metadata.get("env_id", ENV_ID))])
-    if metadata.get("observation") is not None:
-        env_kwargs["observation"] = metadata["observation"]
+    env_kwargs = agent_env_kwargs(metadata.get("env_id", ENV_ID), metadata)
     record = {"num_timesteps": metadata.get("num_timesteps"),
               "wall_time_s": metadata.get("wall_time_s")}  # fmt: skip
     return label, policy, env_kwargs, record

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -124,6 +124,16 @@ def chattering_mean(results: Sequence[dict[str, Any]]) -> float:
     return float(values.mean()) if values.size else math.nan
 
 
+def agent_env_kwargs(env_id: str, metadata: Mapping[str, Any]) -> dict[str, Any]:
+    """The fixed env arguments an agent is evaluated under: those of ``env_id`` (a key or alias
+    of `auv_gym.VARIANTS`) plus the observation recorded in the agent's ``metadata``, for an
+    agent trained on another observation than its id's default."""
+    fixed = dict(VARIANTS[resolve_env_id(env_id)])
+    if metadata.get("observation") is not None:
+        fixed["observation"] = metadata["observation"]
+    return fixed
+
+
 def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
                         env_id: str = ENV_ID) -> dict[str, Any]:  # fmt: skip
     """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results.
@@ -131,11 +141,8 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
-    fixed = VARIANTS[resolve_env_id(env_id)]
-    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(fixed))  # a residual agent's base
-    observation = policy.metadata.get("observation")
-    if observation is not None:  # an agent trained on another preview than its id's default
-        fixed = {**fixed, "observation": observation}
+    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[resolve_env_id(env_id)]))
+    fixed = agent_env_kwargs(env_id, policy.metadata)
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
         "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",
