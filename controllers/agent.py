@@ -377,7 +377,10 @@ def load_actor(
     """
     algorithm = ALGORITHMS[files.algo].sb3_class()
     # Schedules are not needed for inference; replacing them avoids unpickling closures.
-    custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
+    # An off-policy model saved with n-step returns names SB3's NStepReplayBuffer, which SB3
+    # then warns makes `n_steps` "ignored"; no buffer is built for inference, so drop the name.
+    custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0,
+              "replay_buffer_class": None, "replay_buffer_kwargs": {}}  # fmt: skip
     try:
         model = algorithm.load(files.model, device=device, custom_objects=custom)
     except Exception as exc:

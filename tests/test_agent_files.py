@@ -207,3 +207,21 @@ def test_checking_an_agent_does_not_import_torch(tmp_path: Path) -> None:
                           check=True, timeout=300)  # fmt: skip
     lines = done.stdout.splitlines()
     assert "epsilon must be > 0" in lines[0] and lines[1] == "False"
+
+
+def test_an_off_policy_agent_with_n_step_returns_loads_without_warnings() -> None:
+    """SAC saved with `n_steps` 3 names SB3's NStepReplayBuffer; loading it for inference used
+    to warn that `n_steps` "is ignored" (no buffer is built), on every load."""
+    import warnings
+
+    from controllers.agent import observation_layout
+    from controllers.loader import load_policy
+
+    agent = ROOT / "benchmarks" / "results" / "seeds" / "sac_helix_gsde" / "agent_seed_0"
+    assert json.loads((agent / META).read_text())["algo"] == "sac"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        policy = load_policy(agent)
+    observation = np.zeros((2, len(observation_layout(policy.metadata))), np.float32)
+    action, _ = policy.predict(observation, deterministic=True)
+    assert action.shape == (2, 3) and np.all(np.isfinite(action))
