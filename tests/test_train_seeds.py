@@ -347,6 +347,8 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo_preview_net256.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
     ("ppo_integral.yml", "ppo", "AUVPath3DPreviewIntegral-v0", 0.995, 3.0),
     ("ppo_antiwindup.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("sac_helix_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_antiwindup_safety.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 
 
