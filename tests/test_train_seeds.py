@@ -349,6 +349,7 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo_antiwindup.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("sac_helix_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_antiwindup_safety.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("sac_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 
 
