@@ -71,8 +71,11 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_generalist": "#ff7f0e",
     "ppo_preview": "#9467bd",
     "ppo_preview_net256": "#e377c2",
+    "ppo_integral": "#9e9ac8",
+    "ppo_antiwindup": "#e7ba52",
     "sac_generalist": "#8c564b",
-    "sac_helix": "#c49c94",
+    "sac_helix": "#393b79",
+    "sac_antiwindup": "#637939",
     "ppo_residual": "#7f7f7f",
     "ppo_residual_v2": "#c7c7c7",
 }

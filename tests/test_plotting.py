@@ -300,3 +300,15 @@ def test_a_policy_has_one_colour_in_every_figure():
     }
     for name in names:
         assert track_colours[name] == curve_colours[name] == to_hex(colours[name])
+
+
+def test_every_shipped_policy_has_a_fixed_colour_of_its_own():
+    """A shipped name without a fixed colour takes one by hash, which can sit next to a
+    look-alike (sac_antiwindup drew in ppo_generalist's orange in the suite's learning curves)."""
+    from auv_gym.plotting import POLICY_COLOURS
+    from benchmarks.catalog.policies import SHIPPED_AGENTS
+    from controllers import CLASSICAL
+
+    names = [*CLASSICAL, *SHIPPED_AGENTS, "sac_antiwindup"]
+    assert [n for n in names if n not in POLICY_COLOURS] == []
+    assert len({POLICY_COLOURS[n] for n in names}) == len(names)
