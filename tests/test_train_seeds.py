@@ -350,6 +350,7 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("sac_helix_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_antiwindup_safety.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("sac_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_pitch_margin.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 
 
@@ -390,6 +391,29 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
         np.testing.assert_array_equal(model.action_space.low, np.float32(cfg.action_bounds[0]))
         model.learn(64)  # acts inside the box (ActionBox refuses anything else)
     venv.close()
+
+
+@pytest.mark.rl
+def test_pitch_margin_config_ends_training_at_50_degrees_and_validates_at_60():
+    """ppo_pitch_margin.yml trains with the episode ending past 50° of pitch; its validation
+    episodes keep the env id's 60° (the limit every policy is tested under)."""
+    import math
+
+    import gymnasium as gym
+
+    from benchmarks.training.config import read_zoo_config
+    from benchmarks.training.train import TrainOptions, _eval_kwargs
+
+    env_id = "AUVPath3DPreviewAntiWindup-v0"
+    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo_pitch_margin.yml", env_id,
+                          "ppo")  # fmt: skip
+    assert cfg.env_kwargs["max_pitch"] == pytest.approx(math.radians(50.0), abs=1e-15)
+    training = gym.make(env_id, **cfg.env_kwargs)
+    assert training.unwrapped.config.limits.max_pitch == pytest.approx(math.radians(50.0))
+    evaluation = _eval_kwargs(TrainOptions(env_id=env_id), cfg.env_kwargs)
+    assert "max_pitch" not in evaluation
+    validation = gym.make(env_id, **evaluation)
+    assert validation.unwrapped.config.limits.max_pitch == pytest.approx(math.radians(60.0))
 
 
 @pytest.mark.rl
