@@ -350,7 +350,7 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("sac_helix_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_antiwindup_safety.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("sac_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_pitch_margin.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_margins.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 
 
@@ -394,9 +394,10 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
 
 
 @pytest.mark.rl
-def test_pitch_margin_config_ends_training_at_50_degrees_and_validates_at_60():
-    """ppo_pitch_margin.yml trains with the episode ending past 50° of pitch; its validation
-    episodes keep the env id's 60° (the limit every policy is tested under)."""
+def test_margins_config_trains_inside_tighter_limits_and_validates_at_the_ids():
+    """ppo_margins.yml ends training episodes past 50° of pitch and 1.8 m/s of surge; its
+    validation episodes keep the env id's 60° and 2.0 m/s (the limits every policy is tested
+    under)."""
     import math
 
     import gymnasium as gym
@@ -405,15 +406,13 @@ def test_pitch_margin_config_ends_training_at_50_degrees_and_validates_at_60():
     from benchmarks.training.train import TrainOptions, _eval_kwargs
 
     env_id = "AUVPath3DPreviewAntiWindup-v0"
-    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo_pitch_margin.yml", env_id,
-                          "ppo")  # fmt: skip
-    assert cfg.env_kwargs["max_pitch"] == pytest.approx(math.radians(50.0), abs=1e-15)
-    training = gym.make(env_id, **cfg.env_kwargs)
-    assert training.unwrapped.config.limits.max_pitch == pytest.approx(math.radians(50.0))
+    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo_margins.yml", env_id, "ppo")
+    limits = gym.make(env_id, **cfg.env_kwargs).unwrapped.config.limits
+    assert (limits.max_pitch, limits.surge_limit) == pytest.approx((math.radians(50.0), 1.8))
     evaluation = _eval_kwargs(TrainOptions(env_id=env_id), cfg.env_kwargs)
-    assert "max_pitch" not in evaluation
-    validation = gym.make(env_id, **evaluation)
-    assert validation.unwrapped.config.limits.max_pitch == pytest.approx(math.radians(60.0))
+    assert "max_pitch" not in evaluation and evaluation["surge_limit"] == "vehicle"
+    limits = gym.make(env_id, **evaluation).unwrapped.config.limits
+    assert (limits.max_pitch, limits.surge_limit) == pytest.approx((math.radians(60.0), 2.0))
 
 
 @pytest.mark.rl
