@@ -13,6 +13,7 @@ import os
 from typing import Any
 
 from controllers.action_increment import IncrementPolicy, check_increment, prev_action_index
+from controllers.action_scale import ScaledPolicy, check_action_scale
 from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
@@ -27,13 +28,14 @@ def load_policy(
     num_threads: int | None = 1,
     base_kwargs: dict[str, Any] | None = None,
     algo: str | None = None,
-) -> AgentPolicy | IncrementPolicy | ResidualPolicy:
+) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy:
     """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
     as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
     `ResidualPolicy` of its base controller, built with the recorded settings and
     ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for other
     agents), and its actor; for an incremental agent (metadata "action_increment") an
-    `IncrementPolicy` (`controllers.action_increment`).
+    `IncrementPolicy` (`controllers.action_increment`); for a scaled agent (metadata
+    "action_scale") a `ScaledPolicy` (`controllers.action_scale`).
 
     ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
     otherwise. The files are validated first, before torch is imported (FileNotFoundError when
@@ -53,9 +55,17 @@ def load_policy(
             prev_action_index(names)
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
+    scale = files.metadata.get("action_scale")
+    if scale is not None:
+        scale = check_action_scale(scale, f"{files.metadata_file}")
+        if increment is not None or files.residual is not None:
+            raise ValueError(f"{files.metadata_file}: action_scale excludes action_increment "
+                             "and residual")  # fmt: skip
     actor = load_actor(files, device=device, num_threads=num_threads)
     if increment is not None:
         return IncrementPolicy(actor, increment, names)
+    if scale is not None:
+        return ScaledPolicy(actor, scale)
     if files.residual is None:
         return actor
     base = files.residual.make_base(**(base_kwargs or {}))

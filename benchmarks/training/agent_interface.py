@@ -1,6 +1,7 @@
 """What a hyper-parameter file changes about the agent's interface to the env, read and applied
 in one place: the action box (``action_bounds``, `action_box`), incremental commands
-(``action_increment``, `action_increment`), fixed observation scales (``obs_scales``,
+(``action_increment``, `action_increment`), scaled commands (``action_scale``, `action_scale`),
+fixed observation scales (``obs_scales``,
 `normalization`), the exploration-noise schedule (``action_std_schedule``, `noise_schedule`)
 and the safety cost charged in the reward (``cost_penalty``, `cost_penalty`). Each is opt-in; a
 file without these keys trains as before."""
@@ -12,6 +13,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from controllers.action_increment import check_increment
+from controllers.action_scale import check_action_scale
 
 if TYPE_CHECKING:
     from benchmarks.training.config import ZooConfig
@@ -22,7 +24,8 @@ __all__ = ["interface_callbacks", "parse_interface", "pin_scales", "wrap_actions
 def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: Any,
                     action_bounds: Any) -> dict[str, Any]:  # fmt: skip
     """The `ZooConfig` fields of a file's interface keys (``action_bounds`` is read before:
-    incremental commands exclude it and a residual agent); errors name ``path`` and ``env_id``."""
+    incremental and scaled commands exclude it, a residual agent and each other); errors name
+    ``path`` and ``env_id``."""
     where = f"{path}: {env_id}"
     fields: dict[str, Any] = {}
     if "obs_scales" in section:
@@ -33,6 +36,11 @@ def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: A
         if residual is not None or action_bounds is not None:
             raise ValueError(f"{path}: action_increment excludes residual and action_bounds")
         fields["action_increment"] = check_increment(section["action_increment"], where)
+    if "action_scale" in section:
+        if residual is not None or action_bounds is not None or "action_increment" in section:
+            raise ValueError(f"{path}: action_scale excludes residual, action_bounds and "
+                             "action_increment")  # fmt: skip
+        fields["action_scale"] = check_action_scale(section["action_scale"], where)
     if "action_std_schedule" in section:
         from benchmarks.training.noise_schedule import parse_std_schedule
 
@@ -46,12 +54,16 @@ def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: A
 
 def wrap_actions(venv: Any, cfg: ZooConfig, obs_names: Sequence[str]
                  ) -> tuple[Any, tuple[float, Sequence[str]] | None]:  # fmt: skip
-    """``venv`` under the file's action box or incremental commands, and (δ, names) of the
-    latter (None without)."""
+    """``venv`` under the file's action box, scaled or incremental commands, and (δ, names) of
+    the latter (None without)."""
     if cfg.action_bounds is not None:
         from benchmarks.training.action_box import ActionBox
 
         venv = ActionBox(venv, *cfg.action_bounds)
+    if cfg.action_scale is not None:
+        from benchmarks.training.action_scale import ScaledActions
+
+        venv = ScaledActions(venv, cfg.action_scale)
     if cfg.action_increment is None:
         return venv, None
     from benchmarks.training.action_increment import IncrementalActions

@@ -26,6 +26,7 @@ from benchmarks.training.evaluation import (
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from benchmarks.training.residual import ResidualTraining
 from controllers.action_increment import IncrementPolicy
+from controllers.action_scale import ScaledPolicy
 from controllers.agent import AgentPolicy
 from controllers.residual import ResidualPolicy, base_kwargs_for_env
 
@@ -51,16 +52,20 @@ def policy_from_model(
     residual: ResidualTraining | None = None,
     env_kwargs: dict[str, Any] | None = None,
     increment: tuple[float, Sequence[str]] | None = None,
-) -> AgentPolicy | IncrementPolicy | ResidualPolicy:
+    scale: tuple[float, float, float] | None = None,
+) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy:
     """The Policy of a model in training, with a snapshot of the current statistics (torch's
     thread setting is the training's); with ``residual``, the `ResidualPolicy` of its base
     controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`); with
-    ``increment`` (δ, observation names), the `IncrementPolicy` of an incremental agent."""
+    ``increment`` (δ, observation names), the `IncrementPolicy` of an incremental agent; with
+    ``scale`` (k_X, k_M, k_N), the `ScaledPolicy` of a scaled one."""
     rms = vec_normalize.obs_rms
     actor = AgentPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
                         vec_normalize.epsilon)  # fmt: skip
     if increment is not None:
         return IncrementPolicy(actor, *increment)
+    if scale is not None:
+        return ScaledPolicy(actor, scale)
     if residual is None:
         return actor
     base = residual.make_base(**base_kwargs_for_env(env_kwargs or {}))
@@ -77,7 +82,8 @@ class PeriodicEvaluation(BaseCallback):
 
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
     A residual agent (``residual``) is evaluated as its `ResidualPolicy`, an incremental one
-    (``increment``: δ and the observation names) as its `IncrementPolicy`. ``next_eval``: the
+    (``increment``: δ and the observation names) as its `IncrementPolicy`, a scaled one
+    (``scale``) as its `ScaledPolicy`. ``next_eval``: the
     schedule of a resumed run (its checkpoint's), else the first multiple of `every` ahead.
     """
 
@@ -85,9 +91,10 @@ class PeriodicEvaluation(BaseCallback):
                  metadata: MetadataFn, start_wall: float, best: dict[str, Any],
                  verbose: int = 0, residual: ResidualTraining | None = None,
                  next_eval: int | None = None,
-                 increment: tuple[float, Sequence[str]] | None = None) -> None:  # fmt: skip
+                 increment: tuple[float, Sequence[str]] | None = None,
+                 scale: tuple[float, float, float] | None = None) -> None:  # fmt: skip
         super().__init__(verbose)
-        self.residual, self.increment = residual, increment
+        self.residual, self.increment, self.scale = residual, increment, scale
         self.out, self.every, self.seeds = out, every, tuple(seeds)
         self.eval_kwargs, self.metadata = eval_kwargs, metadata
         self.start_wall, self.best = start_wall, best
@@ -114,7 +121,7 @@ class PeriodicEvaluation(BaseCallback):
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
         policy = policy_from_model(self.model, vec_normalize, self.residual, self.eval_kwargs,
-                                   self.increment)  # fmt: skip
+                                   self.increment, self.scale)  # fmt: skip
         extra = () if self.residual is None else ("chattering",)
         results = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra,
                                            **self.eval_kwargs)  # fmt: skip

@@ -70,6 +70,7 @@ ZOO_KEYS = frozenset(
         "action_bounds",
         "obs_scales",
         "action_increment",
+        "action_scale",
         "action_std_schedule",
         "cost_penalty",
     }
@@ -98,6 +99,7 @@ class ZooConfig:
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
     action_increment: float | None = None  # δ (`controllers.action_increment`)
+    action_scale: tuple[float, float, float] | None = None  # k (`controllers.action_scale`)
     action_std_schedule: Any = None  # `training.noise_schedule.StdSchedule`
     cost_penalty: float | None = None  # w of r − w·cost (`training.cost_penalty`)
 

@@ -333,6 +333,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "eval_seeds": list(opts.eval_seeds), "obs_names": list(obs_names),
             "observation_shape": [len(obs_names)], "action_shape": [action_dim], **residual_meta,
             **({} if increment is None else {"action_increment": increment[0]}),
+            **({} if cfg.action_scale is None else {"action_scale": list(cfg.action_scale)}),
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": describe_env(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
@@ -353,7 +354,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         evaluation = PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
                                         metadata, start_wall, best, opts.verbose, residual,
                                         next_eval=schedules.get("next_eval"),
-                                        increment=increment)  # fmt: skip
+                                        increment=increment, scale=cfg.action_scale)  # fmt: skip
         callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)
 
