@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from controllers.actor_wrapper import ActorWrapper
+
 __all__ = ["PREV_ACTION_NAMES", "IncrementPolicy", "apply_increment", "check_increment",
            "prev_action_index"]  # fmt: skip
 
@@ -58,14 +60,13 @@ def apply_increment(observation: np.ndarray, delta: np.ndarray, increment: float
     return np.clip(prev + step, np.float32(-1.0), np.float32(1.0))
 
 
-class IncrementPolicy:
+class IncrementPolicy(ActorWrapper):
     """A Policy whose actor outputs increments: the command a_prev + δ·Δ, saturated."""
 
     def __init__(self, actor: Any, increment: float, obs_names: Sequence[str]) -> None:
-        self.actor = actor
+        super().__init__(actor)
         self.increment = check_increment(increment, "IncrementPolicy")
         self.index = prev_action_index(obs_names)
-        self.path = getattr(actor, "path", None)
 
     def predict(self, observation: np.ndarray, state: Any = None,
                 episode_start: np.ndarray | None = None,
@@ -73,11 +74,6 @@ class IncrementPolicy:
         """Commands in [−1, 1]³ for observations (d,) or (n, d) of the agent's layout."""
         delta, state = self.actor.predict(observation, state, episode_start, deterministic)
         return apply_increment(observation, delta, self.increment, self.index), state
-
-    def __getattr__(self, name: str) -> Any:  # metadata, label, num_threads... of the actor
-        if name == "actor":
-            raise AttributeError(name)
-        return getattr(self.actor, name)
 
     def __repr__(self) -> str:
         return f"IncrementPolicy(path={self.path!r}, increment={self.increment})"

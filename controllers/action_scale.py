@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from controllers.actor_wrapper import ActorWrapper
+
 __all__ = ["ScaledPolicy", "apply_scale", "check_action_scale"]
 
 
@@ -47,13 +49,12 @@ def apply_scale(action: np.ndarray, scale: tuple[float, float, float]) -> np.nda
     return y * np.asarray(scale, dtype=np.float32)
 
 
-class ScaledPolicy:
+class ScaledPolicy(ActorWrapper):
     """A Policy whose actor's outputs are scaled per axis: the command k ⊙ clip(y, −1, 1)."""
 
     def __init__(self, actor: Any, scale: Any) -> None:
-        self.actor = actor
+        super().__init__(actor)
         self.scale = check_action_scale(scale, "ScaledPolicy")
-        self.path = getattr(actor, "path", None)
 
     def predict(self, observation: np.ndarray, state: Any = None,
                 episode_start: np.ndarray | None = None,
@@ -61,11 +62,6 @@ class ScaledPolicy:
         """Commands in [−k, k] for observations (d,) or (n, d) of the agent's layout."""
         output, state = self.actor.predict(observation, state, episode_start, deterministic)
         return apply_scale(output, self.scale), state
-
-    def __getattr__(self, name: str) -> Any:  # metadata, label, num_threads... of the actor
-        if name == "actor":
-            raise AttributeError(name)
-        return getattr(self.actor, name)
 
     def __repr__(self) -> str:
         return f"ScaledPolicy(path={self.path!r}, scale={list(self.scale)})"
