@@ -73,6 +73,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_preview_net256": "#e377c2",
     "ppo_integral": "#9e9ac8",
     "ppo_antiwindup": "#e7ba52",
+    "ppo_paper_actuator": "#7b4173",
     "sac_generalist": "#8c564b",
     "sac_helix": "#393b79",
     "sac_antiwindup": "#637939",

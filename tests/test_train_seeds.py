@@ -353,7 +353,9 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo_margins.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_scaled.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_paper_actuator.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_failure_charge.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
+FAILURE_CHARGE = {"ppo_failure_charge.yml": 1000.0}  # w_termination; the others charge 300
 
 
 @pytest.mark.rl
@@ -369,7 +371,7 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
     from benchmarks.training.train import make_training_env
 
     cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / file, env_id, algo)
-    weights = {"distance": 3.0, "termination": 300.0, "tracking": 3.0}
+    weights = {"distance": 3.0, "termination": FAILURE_CHARGE.get(file, 300.0), "tracking": 3.0}
     if precision is not None:
         weights["precision"] = precision
     assert cfg.env_kwargs["reward_weights"] == weights
