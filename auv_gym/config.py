@@ -109,6 +109,9 @@ class SimConfig:
     # u_D(1 − tanh(x_e/σ)), unstable, kept only for the sign-regression tests (docs/model.md §8.9).
     virtual_point_law: str = "corrected"
     randomize_start: bool = False
+    # [rad] half-width of the heading error of `randomize_start`'s near-start draws (its other
+    # half draws ±π/3 anywhere on the first turn); π/2 covers the paper's start, 90° off the path
+    start_heading_spread: float = 0.2
     start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default
     start_heading: float | None = None  # [rad]
     reward: RewardWeights = field(default_factory=RewardWeights)
@@ -148,6 +151,7 @@ class SimConfig:
         start_heading: float | None = None,
         reward_weights: RewardWeights | dict | None = None,
         random_current: float = 0.0,
+        start_heading_spread: float = 0.2,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
         path_offset: Sequence[float] | None = None,
@@ -191,6 +195,7 @@ class SimConfig:
             sigma=sigma,
             virtual_point_law=virtual_point_law,
             randomize_start=randomize_start,
+            start_heading_spread=start_heading_spread,
             start_position=start_position,
             start_heading=start_heading,
             reward=reward_from(reward_weights),
@@ -275,6 +280,8 @@ class SimConfig:
             )
         self.sensors.fix_steps(self.control_dt)  # the fix interval: whole control steps
         put("randomize_start", flag("randomize_start", self.randomize_start))
+        put("start_heading_spread", real("start_heading_spread", self.start_heading_spread, 0.0,
+                                         math.pi, unit="rad"))  # fmt: skip
         if self.start_position is not None:
             put("start_position", vector("start_position", self.start_position, 3,
                                          -POSITION_BOUND, POSITION_BOUND, "m"))  # fmt: skip

@@ -110,8 +110,10 @@ class AUVPath3DEnv(gym.Env):
 
     ## Starting State
     The path's default start (paper: (15, 5, 0) m, ψ = θ = 0, ν = 0, s = 0). With
-    `randomize_start=True`, half of the episodes start within ±2 m of it, the rest anywhere on
-    the first turn of the path with up to 8 m offset, ±60° heading error and 0–1.5 m/s surge.
+    `randomize_start=True`, half of the episodes start within ±2 m of it with a heading error
+    of up to ±`start_heading_spread` (0.2 rad; the paper's own start is π/2 off the path), the
+    rest anywhere on the first turn of the path with up to 8 m offset, ±60° heading error and
+    0–1.5 m/s surge.
     The arguments' ranges (below) keep every reset observation inside the observation space;
     `reset` raises ValueError, naming the component, if a start still falls outside it.
     `reset` takes no `options` (None or an empty dict).
@@ -159,6 +161,7 @@ class AUVPath3DEnv(gym.Env):
     | `noise_hold` | None | white-noise hold [s]; None: the `NoiseConfig`'s, else 0.01 s |
     | `max_time` | 300.0 | truncation time [s] |
     | `randomize_start` | False | random initial offset (training) |
+    | `start_heading_spread` | 0.2 | heading error [rad] of `randomize_start`'s near-start half |
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
     | `virtual_point_law` | "corrected" | "printed" restores the paper's unstable 1 − tanh |
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
@@ -188,7 +191,8 @@ class AUVPath3DEnv(gym.Env):
     - `corridor` in [0.01, 500] m, inside the ±500 m bounds of the observed errors; `max_pitch`
       in (0, π/2) rad; reward weights in [0, 1e6] (the formula gives each term its sign).
     - `start_position` within 500 m of the path's start p(0) (496.5 m with `randomize_start`),
-      so that the reset errors are observable; `start_heading` in [−2π, 2π] rad.
+      so that the reset errors are observable; `start_heading` in [−2π, 2π] rad;
+      `start_heading_spread` in [0, π] rad.
     - `randomize_start` a bool; `params` an `AUVParams` (finite fields, positive inertias) or a
       dict of its field values and an optional `scale` dict of factors, e.g. ``{"m": 32.0,
       "scale": {"X_uu": 1.2}}`` (an unknown name is an error naming it).
@@ -279,6 +283,7 @@ class AUVPath3DEnv(gym.Env):
         params: AUVParams | Mapping[str, Any] | None = None,
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
+        start_heading_spread: float = 0.2,
         render_mode: str | None = None,
         random_current: float = 0.0,
         random_noise: float = 0.0,
@@ -299,10 +304,11 @@ class AUVPath3DEnv(gym.Env):
             virtual_point_law=virtual_point_law,
             corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
             start_position=start_position, start_heading=start_heading,
-            reward_weights=reward_weights, random_current=random_current,
-            random_noise=random_noise, observation=observation, path_offset=path_offset,
-            depth_envelope=depth_envelope, safety_cost=safety_cost, waves=waves,
-            current_profile=current_profile, actuator_params=actuator_params, sensors=sensors,
+            start_heading_spread=start_heading_spread, reward_weights=reward_weights,
+            random_current=random_current, random_noise=random_noise, observation=observation,
+            path_offset=path_offset, depth_envelope=depth_envelope, safety_cost=safety_cost,
+            waves=waves, current_profile=current_profile, actuator_params=actuator_params,
+            sensors=sensors,
         )  # fmt: skip
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

@@ -24,11 +24,13 @@ def draw_start(
         heading = float(cfg.start_heading)
     if not cfg.randomize_start:
         return position, heading, 0.0, 0.0
-    # Training distribution: half the episodes near the paper's start, half anywhere on the
-    # first turn of the path, with a random heading error and speed.
+    # Training distribution: half the episodes near the path's default start (heading error
+    # within ±start_heading_spread), half anywhere on the first turn of the path, with a
+    # random heading error and speed.
     draws = rng.uniform(-1.0, 1.0, size=7)
     if draws[0] < 0.0:
-        return position + START_OFFSET * draws[1:4], heading + 0.2 * draws[4], 0.0, 0.0
+        spread = cfg.start_heading_spread
+        return position + START_OFFSET * draws[1:4], heading + spread * draws[4], 0.0, 0.0
     s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
     s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
     p, dp, _ = path.evaluate(s0)
