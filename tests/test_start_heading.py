@@ -35,7 +35,7 @@ def test_fbsm_survives_every_start_heading_and_current_direction(tmp_path, capsy
 @pytest.mark.rl
 def test_the_seed_that_pitches_over_in_a_current_is_caught() -> None:
     """ppo_paper_actuator's seed 3 fails every `current` episode of the suite; from the paper's
-    start it pitches over in a 0.3 m/s current from +x but not from −x (measured: 3 of 3, 0)."""
+    start it pitches over in a 0.3 m/s current flowing toward +x, not toward −x (10 of 10, 0)."""
     pytest.importorskip("stable_baselines3")
     rows = main(["--policies", f"s3={SEED_3}", "--seeds", "2", "--duration", "30",
                  "--headings", "90", "--directions", "0,180"])  # fmt: skip

@@ -1,14 +1,15 @@
 """Which starts a policy survives in a current: failed episodes against the start's heading error.
 
 For each policy, on the paper's helix from the paper's start position (8 m below the path, 15 m
-behind, 5 m to the side), in a steady current of ``--current-speed`` from
+behind, 5 m to the side), in a steady current of ``--current-speed`` flowing toward
 ``--current-direction`` (earth frame, Gauss–Markov variation of 0.05 m/s, τ = 60 s, no white
 noise: the `current` scenario's by default) and ``--duration``-s episodes, seeds 0…n−1:
 
     heading   failed episodes when the vehicle starts ``h`` degrees off the path's heading
               (the paper's start: h = 90°, ψ = 0 against the path's π/2), for each ``--headings``
     direction with ``--directions``: failed episodes at the paper's start heading for currents
-              from each of those directions [deg, 0 = +x (north), 90 = +y (east)]
+              flowing toward each of those directions [deg, 0 = +x (north, the paper's start
+              heading), 90 = +y (east, the path's heading at s = 0)]
 
 Training starts draw heading errors within ±`start_heading_spread` (0.2 rad by default) near
 the path's start, so a policy's failures at large ``h`` only are starts it never trained from
@@ -43,7 +44,7 @@ def path_heading() -> float:
 
 
 def current(speed: float, direction_deg: float) -> dict[str, Any]:
-    """The env's `current` argument: ``speed`` [m/s] from ``direction_deg`` plus variation."""
+    """The env's `current` argument: ``speed`` [m/s] toward ``direction_deg`` plus variation."""
     angle = math.radians(direction_deg)
     return {"mean": [speed * math.cos(angle), speed * math.sin(angle), 0.0],
             "std": list(CURRENT_STD), "time_constant": CURRENT_TIME_CONSTANT}  # fmt: skip
@@ -68,7 +69,7 @@ class Options:
     headings: str = option("0,30,45,60,90", "start heading errors [deg], comma-separated")
     directions: str | None = option(None, "current directions [deg] at the paper's heading")
     current_speed: float = option(0.3, "current speed [m/s]")
-    current_direction: float = option(90.0, "current direction [deg] of the heading sweep")
+    current_direction: float = option(90.0, "direction the current flows toward [deg]")
     seeds: int = option(10, "episodes per cell (seeds 0…)")
     duration: float = option(60.0, "episode length [s] (the pitch-overs come in the first 20 s)")
     json: str | None = option(None, "also write the rows to this file")
@@ -111,12 +112,13 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
                                 for d in directions}  # fmt: skip
         rows[label] = row
     print(f"Failed of {args.seeds} episodes ({args.duration:g} s) from the paper's start in a "
-          f"{args.current_speed:g} m/s current, by start heading error [deg] (current from "
+          f"{args.current_speed:g} m/s current, by start heading error [deg] (current toward "
           f"{args.current_direction:g}°):")  # fmt: skip
     cells = [[label, *map(str, r["heading"].values())] for label, r in rows.items()]
     print(markdown_table(["policy", *(f"{h:g}°" for h in headings)], cells))
     if directions:
-        print("\nBy current direction [deg], at the paper's start heading (90° off the path):")
+        print("\nBy the direction the current flows toward [deg], at the paper's start heading "
+              "(90° off the path):")
         print(markdown_table(["policy", *(f"{d:g}°" for d in directions)],
                              [[label, *map(str, r["direction"].values())]
                               for label, r in rows.items()]))  # fmt: skip
