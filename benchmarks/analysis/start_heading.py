@@ -117,8 +117,10 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
     cells = [[label, *map(str, r["heading"].values())] for label, r in rows.items()]
     print(markdown_table(["policy", *(f"{h:g}°" for h in headings)], cells))
     if directions:
-        print("\nBy the direction the current flows toward [deg], at the paper's start heading "
-              "(90° off the path):")
+        print(
+            "\nBy the direction the current flows toward [deg], at the paper's start heading "
+            "(90° off the path):"
+        )
         print(markdown_table(["policy", *(f"{d:g}°" for d in directions)],
                              [[label, *map(str, r["direction"].values())]
                               for label, r in rows.items()]))  # fmt: skip
