@@ -3,8 +3,8 @@
 # episodes; a few minutes on 2 cores) -> out/quick/{summary.md,figures/}: the paper's FBSM and
 # backstepping, a textbook PID + LOS autopilot, their integral-LOS and current-observer-LOS
 # variants, FBSM + CO-LOS through a low-pass filter, the PPO specialist, the generalist PPO
-# (four generations, and the fourth trained on the paper's actuator) and SAC (generalist, and the helix specialist with error integrals), and the
-# residual PPO on top of FBSM + CO-LOS.
+# (four generations, and the fourth trained on the paper's actuator) and SAC (generalist, and
+# the helix specialist with error integrals), and the residual PPO on top of FBSM + CO-LOS.
 # The full-size runs that produced benchmarks/results/ are in docs/results.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."

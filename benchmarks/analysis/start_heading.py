@@ -51,8 +51,9 @@ def current(speed: float, direction_deg: float) -> dict[str, Any]:
 
 
 def failures(policy: Any, env_kwargs: dict[str, Any], seeds: int, duration: float,
-             heading: float, flow: dict[str, Any]) -> int:  # fmt: skip
-    """Failed episodes of seeds 0…n−1 from the paper's start with heading ``heading`` [rad]."""
+             heading: float | None, flow: dict[str, Any]) -> int:  # fmt: skip
+    """Failed episodes of seeds 0…n−1 from the paper's start position with heading ``heading``
+    [rad] (None: the paper's start heading, ψ = 0)."""
     from auv_gym.rollout import rollouts
 
     runs = rollouts(policy, list(range(seeds)), **{
@@ -101,13 +102,13 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
         built = [policy_and_env(spec) for spec in args.policies.split(",") if spec]
     psi_f = path_heading()
     rows: dict[str, dict[str, Any]] = {}
+    flow = current(args.current_speed, args.current_direction)
     for label, policy, env in built:
-        flow = current(args.current_speed, args.current_direction)
         row = {"heading": {f"{h:g}": failures(policy, env, args.seeds, args.duration,
                                               psi_f - math.radians(h), flow)
                            for h in headings}}  # fmt: skip
         if directions:
-            row["direction"] = {f"{d:g}": failures(policy, env, args.seeds, args.duration, 0.0,
+            row["direction"] = {f"{d:g}": failures(policy, env, args.seeds, args.duration, None,
                                                    current(args.current_speed, d))
                                 for d in directions}  # fmt: skip
         rows[label] = row
