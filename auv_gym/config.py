@@ -112,6 +112,9 @@ class SimConfig:
     # [rad] half-width of the heading error of `randomize_start`'s near-start draws (its other
     # half draws ±π/3 anywhere on the first turn); π/2 covers the paper's start, 90° off the path
     start_heading_spread: float = 0.2
+    # [rad] turns the start (its position about p(0), and its heading) about the vertical before
+    # any random draw: −π/2 gives every path the paper helix's start geometry (docs/model.md §3.5)
+    start_rotation: float = 0.0
     start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default
     start_heading: float | None = None  # [rad]
     reward: RewardWeights = field(default_factory=RewardWeights)
@@ -152,6 +155,7 @@ class SimConfig:
         reward_weights: RewardWeights | dict | None = None,
         random_current: float = 0.0,
         start_heading_spread: float = 0.2,
+        start_rotation: float = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
         path_offset: Sequence[float] | None = None,
@@ -196,6 +200,7 @@ class SimConfig:
             virtual_point_law=virtual_point_law,
             randomize_start=randomize_start,
             start_heading_spread=start_heading_spread,
+            start_rotation=start_rotation,
             start_position=start_position,
             start_heading=start_heading,
             reward=reward_from(reward_weights),
@@ -282,6 +287,8 @@ class SimConfig:
         put("randomize_start", flag("randomize_start", self.randomize_start))
         put("start_heading_spread", real("start_heading_spread", self.start_heading_spread, 0.0,
                                          math.pi, unit="rad"))  # fmt: skip
+        put("start_rotation", real("start_rotation", self.start_rotation,
+                                         -math.pi, math.pi, unit="rad"))  # fmt: skip
         if self.start_position is not None:
             put("start_position", vector("start_position", self.start_position, 3,
                                          -POSITION_BOUND, POSITION_BOUND, "m"))  # fmt: skip

@@ -22,6 +22,9 @@ def draw_start(
         position = np.asarray(cfg.start_position)
     if cfg.start_heading is not None:
         heading = float(cfg.start_heading)
+    rotation = cfg.start_rotation  # [rad]; 0.0 is skipped: earlier episodes stay bit for bit
+    if rotation != 0.0:
+        position, heading = _rotated(position, heading, rotation, path.evaluate(0.0)[0])
     if not cfg.randomize_start:
         return position, heading, 0.0, 0.0
     # Training distribution: half the episodes near the path's default start (heading error
@@ -34,6 +37,20 @@ def draw_start(
     s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
     s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
     p, dp, _ = path.evaluate(s0)
-    offset = 8.0 * rng.uniform(-1.0, 1.0, size=3)
     path_heading = math.atan2(dp[1], dp[0])
-    return p + offset, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
+    if rotation != 0.0:
+        path_heading = path_heading + rotation
+    position = p + 8.0 * rng.uniform(-1.0, 1.0, size=3)
+    return position, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
+
+
+def _rotated(
+    position: np.ndarray, heading: float, angle: float, pivot: np.ndarray
+) -> tuple[np.ndarray, float]:
+    """The start turned by ``angle`` [rad] about the vertical through ``pivot`` [m]: its
+    horizontal offset from the pivot and its heading, so that its geometry relative to the path
+    turns with it (the depth is unchanged)."""
+    c, s = math.cos(angle), math.sin(angle)
+    dx, dy = position[0] - pivot[0], position[1] - pivot[1]
+    turned = np.array([pivot[0] + c * dx - s * dy, pivot[1] + s * dx + c * dy, position[2]])
+    return turned, heading + angle
