@@ -1,6 +1,7 @@
 """The training start distribution (`randomize_start`) and its heading spread
 (`start_heading_spread`): the near-start half draws its heading error within ±spread, the
-default (0.2 rad) keeps every earlier episode bit for bit, and bad spreads are named errors."""
+default (0.2 rad) keeps every earlier episode bit for bit, and bad spreads are named errors.
+`start_rotation` turns the start about p(0): −π/2 is the paper helix's start on any path."""
 
 from __future__ import annotations
 
@@ -65,3 +66,80 @@ def test_a_wide_spread_scales_only_the_near_start_heading_error() -> None:
 def test_bad_spread_is_named(bad: float) -> None:
     with pytest.raises(ValueError, match="start_heading_spread"):
         gym.make("AUVPath3D-v0", start_heading_spread=bad)
+
+
+# ---- start_rotation: the start turned about the vertical through p(0) ------------------------
+
+
+def _reset(**kwargs) -> tuple[np.ndarray, np.ndarray]:
+    env = gym.make("AUVPath3D-v0", **kwargs)
+    obs, _ = env.reset(seed=3)
+    state = env.unwrapped.state.copy()
+    env.close()
+    return obs, state
+
+
+def test_a_quarter_turn_gives_a_line_the_paper_helix_start_geometry() -> None:
+    # The paper's helix starts with ε(0) = (−15, 5, 8) m in the body frame and ψ − ψ_F = −π/2
+    # (ψ = 0, ψ_F = π/2); the line's default start has the same ε(0) but heads along the line.
+    paper_obs, _ = _reset()
+    line = {"kind": "line", "direction": [0.6, 0.8, 0.0]}  # ψ_F = atan2(0.8, 0.6) = 0.9273 rad
+    straight_obs, straight = _reset(path=line)
+    turned_obs, turned = _reset(path=line, start_rotation=-math.pi / 2)
+    assert straight_obs[OBS.psi_error] == pytest.approx(0.0, abs=1e-12)
+    assert turned_obs[OBS.psi_error] == pytest.approx(-math.pi / 2, abs=1e-12)
+    assert paper_obs[OBS.psi_error] == pytest.approx(-math.pi / 2, abs=1e-12)
+    # Hand computation: p(0) = 0, the default offset R_z(ψ_F)(−15, 5) = (−13, −9) m, turned by
+    # −90° to (−9, 13) m, 8 m deep; heading 0.9273 − π/2.
+    np.testing.assert_allclose(straight[:3], [-13.0, -9.0, 8.0], atol=1e-12)
+    np.testing.assert_allclose(turned[:3], [-9.0, 13.0, 8.0], atol=1e-12)
+    assert turned[STATE.psi] == pytest.approx(math.atan2(0.8, 0.6) - math.pi / 2, abs=1e-15)
+    # The body-frame errors turn with the vehicle: the paper's (−15, 5, 8) m in every case.
+    for obs in (paper_obs, straight_obs, turned_obs):
+        np.testing.assert_allclose(obs[[OBS.x_e, OBS.y_e, OBS.z_e]], [-15.0, 5.0, 8.0], atol=1e-9)
+
+
+def test_zero_rotation_is_the_earlier_start_bit_for_bit() -> None:
+    for kwargs in ({}, {"path": LINE, "randomize_start": True}):
+        for seed in range(6):
+            a = gym.make("AUVPath3D-v0", **kwargs)
+            b = gym.make("AUVPath3D-v0", start_rotation=0.0, **kwargs)
+            obs_a, _ = a.reset(seed=seed)
+            obs_b, _ = b.reset(seed=seed)
+            np.testing.assert_array_equal(obs_a, obs_b)
+            np.testing.assert_array_equal(a.unwrapped.state, b.unwrapped.state)
+
+
+def test_rotation_turns_random_starts_and_keeps_their_distance() -> None:
+    plain = _starts(None, range(30))
+    env = gym.make("AUVPath3D-v0", path=LINE, randomize_start=True, start_rotation=math.pi / 3)
+    for seed, (obs_p, state_p) in enumerate(plain):
+        obs_r, _ = env.reset(seed=seed)
+        state_r = env.unwrapped.state
+        # Same draws: the heading turns by π/3 in both halves, s and u are unchanged.
+        assert state_r[STATE.psi] == pytest.approx(state_p[STATE.psi] + math.pi / 3, abs=1e-12)
+        assert (state_r[STATE.s], state_r[STATE.u]) == (state_p[STATE.s], state_p[STATE.u])
+        if _near_start(state_p):  # the near half turns about p(0) = 0: the same distance
+            assert np.linalg.norm(state_r[:3]) == pytest.approx(np.linalg.norm(state_p[:3]))
+            np.testing.assert_allclose(obs_r[[OBS.x_e, OBS.y_e, OBS.z_e]],
+                                       obs_p[[OBS.x_e, OBS.y_e, OBS.z_e]], atol=1e-9)  # fmt: skip
+
+
+def test_batched_rotated_starts_equal_single_ones() -> None:
+    from auv_gym.vector_env import AUVPath3DVectorEnv
+
+    kwargs = {"path": "random", "start_rotation": -math.pi / 2}  # validation_paper_start's
+    vec = AUVPath3DVectorEnv(4, **kwargs)
+    vec_obs, _ = vec.reset(seed=11)  # vehicle i is the single env reset with seed 11 + i
+    for i in range(4):
+        single = gym.make("AUVPath3D-v0", **kwargs)
+        obs, _ = single.reset(seed=11 + i)
+        np.testing.assert_array_equal(vec_obs[i], obs)
+        np.testing.assert_array_equal(vec.state[i], single.unwrapped.state)
+        assert abs(obs[OBS.psi_error] + math.pi / 2) < 1e-6  # every drawn path: 90° across
+
+
+@pytest.mark.parametrize("bad", [-3.2, 3.2, math.nan, math.inf, "quarter"])
+def test_bad_rotation_is_named(bad: object) -> None:
+    with pytest.raises(ValueError, match="start_rotation"):
+        gym.make("AUVPath3D-v0", start_rotation=bad)
