@@ -22,6 +22,7 @@ trainer (`--update-threads 2` also times the update on two torch threads, for bo
     auv-gym speed training                      # about 3-5 minutes on 2 cores
     auv-gym speed training --quick              # smoke test
     python -m benchmarks.speed_training --n-envs 512 --baseline main --rollouts 8
+    auv-gym speed training --n-envs 32 512 --batch-size 2048 8192 --update-dtype float32 bfloat16
 
 The baseline's files come from ``git archive REF`` into a cache folder kept between runs (its
 compiled kernels too); `--baseline none` times this tree only.
@@ -54,17 +55,19 @@ CONFIG = "benchmarks/hyperparams/ppo_generalist.yml"
 ENV_ID = "AUVPath3DSpeedLimit-v0"
 LEGACY_ENV_ID = "AUVPath3D-v1"  # the same env's id in trees before the rename
 HERE = Path(__file__).resolve()
-# (side, N, update threads, batch size) → the runs of that tree and setting
-Results = dict[tuple[str, int, int, int], list[dict[str, Any]]]
+# (side, N, update threads, batch size, update dtype) → the runs of that tree and setting
+Results = dict[tuple[str, int, int, int, str], list[dict[str, Any]]]
 TREE = HERE.parents[2]  # this tree's root
 
 
 def measure(spec: dict[str, Any]) -> dict[str, Any]:
     """Time PPO on the importable tree's trainer (run in a subprocess per tree).
 
-    ``spec``: n_envs, n_steps, batch_size, rollouts, warmup, update_threads, seed. Uses only
-    what every version of the harness has (`read_zoo_config`, `make_training_env`,
-    `thread_limit`), so the same function times old and new code.
+    ``spec``: n_envs, n_steps, batch_size, rollouts, warmup, update_threads, update_dtype,
+    seed. Uses only what every version of the harness has (`read_zoo_config`,
+    `make_training_env`, `thread_limit`), so the same function times old and new code; the
+    bfloat16 update is applied here (as `training.update_precision` does), so it times either
+    tree's learner in that precision.
     """
     import torch
     from stable_baselines3 import PPO
@@ -77,6 +80,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     env_id = ENV_ID if ENV_ID in auv_gym.VARIANTS else LEGACY_ENV_ID  # the tree's name for it
     cfg = read_zoo_config(Path(trainer.__file__).parents[2] / CONFIG, env_id, "ppo")
     n_envs, n_steps = int(spec["n_envs"]), int(spec["n_steps"])
+    bfloat16 = spec.get("update_dtype", "float32") == "bfloat16"
     phases: list[tuple[float, float, float]] = []  # (start, collected, updated) per rollout
 
     class TimedPPO(PPO):
@@ -92,7 +96,8 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
             threads = torch.get_num_threads()
             torch.set_num_threads(int(spec["update_threads"]))
             try:
-                super().train()
+                with torch.autocast("cpu", dtype=torch.bfloat16, enabled=bfloat16):
+                    super().train()
             finally:
                 torch.set_num_threads(threads)
             start, collected, _ = phases[-1]
@@ -187,7 +192,7 @@ def _median(runs: list[dict[str, Any]], key: str) -> float:
 def table(results: Results, sides: list[str]) -> str:
     """One row per setting (N, update threads, batch): each side's median rates and the
     new/old ratios."""
-    head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'upd thr':>7}"
+    head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'upd thr':>7} {'dtype':>8}"
     for side in sides:
         head += f" | {side + ' total':>12} {'collect':>9} {'update':>8}"
     if len(sides) == 2:
@@ -195,8 +200,8 @@ def table(results: Results, sides: list[str]) -> str:
     lines = [head, "-" * len(head)]
     for setting in sorted({key[1:] for key in results}):
         runs = {side: results[(side, *setting)] for side in sides}
-        n, t, b = setting
-        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {b:>6} {t:>7}"
+        n, t, b, d = setting
+        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {b:>6} {t:>7} {d:>8}"
         for side in sides:
             line += (
                 f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
@@ -216,13 +221,13 @@ def table(results: Results, sides: list[str]) -> str:
 
 def versus_shipped(results: Results) -> str:
     """Every new total against the old one of the first setting (the shipped configuration:
-    N = 32, batch 2048, one thread, with the defaults): code and settings together."""
-    first = min(key[1:] for key in results if key[0] == "old")
+    N = 32, batch 2048, one thread, float32, with the defaults): code and settings together."""
+    first = min(key[1:] for key in results if key[0] == "old" and key[4] == "float32")
     ref = _median(results[("old", *first)], "total_per_s")
-    cells = [f"N={n} b={b} thr={t}: {_median(runs, 'total_per_s') / ref:.2f}×"
-             for (side, n, t, b), runs in sorted(results.items()) if side == "new"]  # fmt: skip
-    n, t, b = first
-    return f"new total / old total at N={n} b={b} thr={t}: " + ", ".join(cells)
+    cells = [f"N={n} b={b} thr={t} {d}: {_median(runs, 'total_per_s') / ref:.2f}×"
+             for (side, n, t, b, d), runs in sorted(results.items()) if side == "new"]  # fmt: skip
+    n, t, b, d = first
+    return f"new total / old total at N={n} b={b} thr={t} {d}: " + ", ".join(cells)
 
 
 @dataclass
@@ -243,6 +248,12 @@ class Options:
     update_threads: tuple[int, ...] = option(
         (1,), "torch threads of the update (collection: one); one row each", nargs="+"
     )
+    update_dtype: tuple[str, ...] = option(
+        ("float32",),
+        "precision of the update's matrix products (float32, bfloat16: "
+        "`training.update_precision`); one row each",
+        nargs="+",
+    )
     cache: str = option(os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
                         "folder of the extracted baseline trees")  # fmt: skip
     quick: bool = option(False, "tiny budget (smoke test)")
@@ -260,6 +271,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         args.batch_size = (64,)
     if min(args.n_envs) < 1 or args.rollouts < 1 or args.repeats < 1 or args.warmup < 0:
         parser.error("--n-envs, --rollouts and --repeats must be >= 1, --warmup >= 0")
+    unknown = sorted(set(args.update_dtype) - {"float32", "bfloat16"})
+    if unknown:
+        parser.error(f"--update-dtype must be float32 or bfloat16, got {unknown}")
 
     from tqdm import tqdm
 
@@ -280,8 +294,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "rollouts": args.rollouts,
             "warmup": args.warmup,
             "update_threads": t,
+            "update_dtype": d,
             "seed": 0,
         }
+        for d in args.update_dtype
         for b in args.batch_size
         for t in args.update_threads
         for n in args.n_envs
@@ -305,7 +321,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         )
     for side, spec in tqdm(plan, desc="training runs"):
         r = {"side": side, **run_in(trees[side], spec)}
-        key = (side, spec["n_envs"], spec["update_threads"], spec["batch_size"])
+        key = (
+            side,
+            spec["n_envs"],
+            spec["update_threads"],
+            spec["batch_size"],
+            spec["update_dtype"],
+        )
         results.setdefault(key, []).append(r)
     print("\nenv steps/s (medians of the runs); ratio = new / old, measured in this run")
     print(table(results, sides))
