@@ -21,6 +21,7 @@ from auv_gym.config_args import (
     path_from,
     path_is_random,
     reward_from,
+    start_rotation_from,
 )
 from auv_gym.current_profile import CurrentProfile
 from auv_gym.depth_envelope import DepthEnvelope, check_path_depths
@@ -114,7 +115,7 @@ class SimConfig:
     start_heading_spread: float = 0.2
     # [rad] turns the start (its position about p(0), and its heading) about the vertical before
     # any random draw: −π/2 gives every path the paper helix's start geometry (docs/model.md §3.5)
-    start_rotation: float = 0.0
+    start_rotation: float | tuple[float, float] = 0.0  # or (low, high): drawn per episode
     start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default
     start_heading: float | None = None  # [rad]
     reward: RewardWeights = field(default_factory=RewardWeights)
@@ -155,7 +156,7 @@ class SimConfig:
         reward_weights: RewardWeights | dict | None = None,
         random_current: float = 0.0,
         start_heading_spread: float = 0.2,
-        start_rotation: float = 0.0,
+        start_rotation: float | Sequence[float] = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
         path_offset: Sequence[float] | None = None,
@@ -287,8 +288,7 @@ class SimConfig:
         put("randomize_start", flag("randomize_start", self.randomize_start))
         put("start_heading_spread", real("start_heading_spread", self.start_heading_spread, 0.0,
                                          math.pi, unit="rad"))  # fmt: skip
-        put("start_rotation", real("start_rotation", self.start_rotation,
-                                         -math.pi, math.pi, unit="rad"))  # fmt: skip
+        put("start_rotation", start_rotation_from(self.start_rotation))
         if self.start_position is not None:
             put("start_position", vector("start_position", self.start_position, 3,
                                          -POSITION_BOUND, POSITION_BOUND, "m"))  # fmt: skip

@@ -5,13 +5,14 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from auv_gym.disturbances import MAX_NOISE_AMPLITUDE, MAX_NOISE_HOLD, NoiseConfig
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import PATHS, Path, make_path
 from auv_gym.task import REWARD_TERMS, RewardWeights
-from auv_gym.validation import ArgumentTypeError, is_real, keys_within, real
+from auv_gym.validation import ArgumentTypeError, is_real, keys_within, real, vector
 
 __all__ = [
     "DEFAULT_NOISE_HOLD",
@@ -20,6 +21,7 @@ __all__ = [
     "path_from",
     "path_is_random",
     "reward_from",
+    "start_rotation_from",
 ]
 
 DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
@@ -83,3 +85,15 @@ def path_from(path: object) -> Path | PathDistribution:
             names, with_random = str(sorted(PATHS)), str(sorted([*PATHS, "random"]))
             raise ValueError(str(error).replace(names, with_random, 1)) from None
         raise
+
+
+def start_rotation_from(value: object) -> float | tuple[float, float]:
+    """`start_rotation` [rad] as a float in [−π, π], or a (low, high) range in it with
+    low ≤ high (drawn per episode); else a one-line error naming it."""
+    if is_real(value):
+        return real("start_rotation", value, -math.pi, math.pi, unit="rad")
+    low, high = vector("start_rotation", value, 2, -math.pi, math.pi, "rad")
+    if low > high:
+        raise ValueError(f"start_rotation must be a number or (low, high) with low <= high "
+                         f"[rad], got {(low, high)}")  # fmt: skip
+    return (low, high)

@@ -163,7 +163,7 @@ class AUVPath3DEnv(gym.Env):
     | `max_time` | 300.0 | truncation time [s] |
     | `randomize_start` | False | random initial offset (training) |
     | `start_heading_spread` | 0.2 | heading error [rad] of `randomize_start`'s near-start half |
-    | `start_rotation` | 0.0 | [rad] turns the start about p(0); −π/2: the paper helix's geometry |
+    | `start_rotation` | 0.0 | [rad] turns the start about p(0); (low, high): drawn per episode |
     | `u_desired`, `sigma` | 1.0, 0.5 | u_D [m/s] and σ [m] of the virtual-point law |
     | `virtual_point_law` | "corrected" | "printed" restores the paper's unstable 1 − tanh |
     | `corridor`, `max_pitch` | 30.0, 60° | termination limits [m], [rad] |
@@ -194,7 +194,7 @@ class AUVPath3DEnv(gym.Env):
       in (0, π/2) rad; reward weights in [0, 1e6] (the formula gives each term its sign).
     - `start_position` within 500 m of the path's start p(0) (496.5 m with `randomize_start`),
       so that the reset errors are observable; `start_heading` in [−2π, 2π] rad;
-      `start_heading_spread` in [0, π] rad; `start_rotation` in [−π, π] rad.
+      `start_heading_spread` in [0, π] rad; `start_rotation` in [−π, π] rad (a range: low ≤ high).
     - `randomize_start` a bool; `params` an `AUVParams` (finite fields, positive inertias) or a
       dict of its field values and an optional `scale` dict of factors, e.g. ``{"m": 32.0,
       "scale": {"X_uu": 1.2}}`` (an unknown name is an error naming it).
@@ -286,7 +286,7 @@ class AUVPath3DEnv(gym.Env):
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
         start_heading_spread: float = 0.2,
-        start_rotation: float = 0.0,
+        start_rotation: float | Sequence[float] = 0.0,
         render_mode: str | None = None,
         random_current: float = 0.0,
         random_noise: float = 0.0,

@@ -22,18 +22,19 @@ def draw_start(
         position = np.asarray(cfg.start_position)
     if cfg.start_heading is not None:
         heading = float(cfg.start_heading)
-    rotation = cfg.start_rotation  # [rad]; 0.0 is skipped: earlier episodes stay bit for bit
     if not cfg.randomize_start:
-        if rotation != 0.0:
+        rotation = _rotation(cfg, rng)
+        if rotation != 0.0:  # 0.0 is skipped: earlier episodes stay bit for bit
             position, heading = _rotated(position, heading, rotation, path.evaluate(0.0)[0])
         return position, heading, 0.0, 0.0
     # Training distribution: half the episodes near the path's default start (heading error
     # within ±start_heading_spread), half anywhere on the first turn of the path, with a
-    # random heading error and speed.
+    # random heading error and speed. A drawn rotation comes after every other draw.
     draws = rng.uniform(-1.0, 1.0, size=7)
     if draws[0] < 0.0:
         spread = cfg.start_heading_spread
         position, heading = position + START_OFFSET * draws[1:4], heading + spread * draws[4]
+        rotation = _rotation(cfg, rng)
         if rotation != 0.0:  # the whole near-start draw turns about p(0)
             position, heading = _rotated(position, heading, rotation, path.evaluate(0.0)[0])
         return position, heading, 0.0, 0.0
@@ -41,10 +42,20 @@ def draw_start(
     s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
     p, dp, _ = path.evaluate(s0)
     path_heading = math.atan2(dp[1], dp[0])
+    position = p + 8.0 * rng.uniform(-1.0, 1.0, size=3)
+    rotation = _rotation(cfg, rng)
     if rotation != 0.0:  # on the path itself: only the heading error turns
         path_heading = path_heading + rotation
-    position = p + 8.0 * rng.uniform(-1.0, 1.0, size=3)
     return position, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
+
+
+def _rotation(cfg: SimConfig, rng: np.random.Generator) -> float:
+    """The episode's start rotation [rad]: `start_rotation`, or a uniform draw from its
+    (low, high) range (the generator is only drawn from for a range)."""
+    rotation = cfg.start_rotation
+    if isinstance(rotation, tuple):
+        return float(rng.uniform(rotation[0], rotation[1]))
+    return rotation
 
 
 def _rotated(

@@ -143,3 +143,28 @@ def test_batched_rotated_starts_equal_single_ones() -> None:
 def test_bad_rotation_is_named(bad: object) -> None:
     with pytest.raises(ValueError, match="start_rotation"):
         gym.make("AUVPath3D-v0", start_rotation=bad)
+
+
+def test_a_rotation_range_draws_each_episode_its_own_rotation() -> None:
+    line = {"kind": "line", "direction": [1.0, 0.0, 0.0]}
+    env = gym.make("AUVPath3D-v0", path=line, start_rotation=[-math.pi / 2, math.pi / 4])
+    drawn = []
+    for seed in range(200):
+        obs, _ = env.reset(seed=seed)
+        drawn.append(float(obs[OBS.psi_error]))  # fixed start on the line: ψ − ψ_F = rotation
+        np.testing.assert_allclose(obs[[OBS.x_e, OBS.y_e, OBS.z_e]], [-15.0, 5.0, 8.0],
+                                   atol=1e-9)  # fmt: skip
+    drawn = np.array(drawn)
+    assert drawn.min() >= -math.pi / 2 - 1e-6 and drawn.max() <= math.pi / 4 + 1e-6
+    # Uniform over 3π/4 rad: mean −π/8, quarters all populated.
+    assert abs(drawn.mean() + math.pi / 8) < 0.15
+    assert np.histogram(drawn, bins=4)[0].min() > 30
+    # The same seed draws the same rotation; JSON's list and a tuple are the same argument.
+    again = gym.make("AUVPath3D-v0", path=line, start_rotation=(-math.pi / 2, math.pi / 4))
+    assert float(again.reset(seed=7)[0][OBS.psi_error]) == drawn[7]
+
+
+@pytest.mark.parametrize("bad", [(0.5, -0.5), (-4.0, 0.0), (0.0, 1.0, 2.0), (0.0, math.nan)])
+def test_a_bad_rotation_range_is_named(bad: tuple) -> None:
+    with pytest.raises(ValueError, match="start_rotation"):
+        gym.make("AUVPath3D-v0", start_rotation=bad)
