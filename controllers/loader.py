@@ -15,6 +15,7 @@ from typing import Any
 from controllers.action_increment import IncrementPolicy, check_increment, prev_action_index
 from controllers.action_scale import ScaledPolicy, check_action_scale
 from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
+from controllers.envelope_guard import GuardedPolicy, check_envelope_guard
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
 
@@ -28,14 +29,15 @@ def load_policy(
     num_threads: int | None = 1,
     base_kwargs: dict[str, Any] | None = None,
     algo: str | None = None,
-) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy:
+) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy | GuardedPolicy:
     """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
     as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
     `ResidualPolicy` of its base controller, built with the recorded settings and
     ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for other
     agents), and its actor; for an incremental agent (metadata "action_increment") an
     `IncrementPolicy` (`controllers.action_increment`); for a scaled agent (metadata
-    "action_scale") a `ScaledPolicy` (`controllers.action_scale`).
+    "action_scale") a `ScaledPolicy` (`controllers.action_scale`); with metadata
+    "envelope_guard", that policy inside a `GuardedPolicy` (`controllers.envelope_guard`).
 
     ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
     otherwise. The files are validated first, before torch is imported (FileNotFoundError when
@@ -61,9 +63,23 @@ def load_policy(
         if increment is not None or files.residual is not None:
             raise ValueError(f"{files.metadata_file}: action_scale excludes action_increment "
                              "and residual")  # fmt: skip
-    actor = load_actor(files, device=device, num_threads=num_threads)
+    guard = files.metadata.get("envelope_guard")
+    if guard is not None:
+        guard = check_envelope_guard(guard, f"{files.metadata_file}")
+        if files.residual is not None:
+            raise ValueError(f"{files.metadata_file}: envelope_guard excludes residual")
+    policy = _unguarded(files, load_actor(files, device=device, num_threads=num_threads),
+                        increment, scale, base_kwargs)  # fmt: skip
+    if guard is None:
+        return policy
+    return GuardedPolicy(policy, guard, observation_layout(files.metadata))
+
+
+def _unguarded(files: Any, actor: AgentPolicy, increment: float | None,
+               scale: tuple[float, float, float] | None,
+               base_kwargs: dict[str, Any] | None) -> Any:  # fmt: skip
     if increment is not None:
-        return IncrementPolicy(actor, increment, names)
+        return IncrementPolicy(actor, increment, observation_layout(files.metadata))
     if scale is not None:
         return ScaledPolicy(actor, scale)
     if files.residual is None:

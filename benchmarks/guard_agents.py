@@ -1,0 +1,98 @@
+"""Copies of saved agents with an envelope guard (`controllers.envelope_guard`) in their metadata.
+
+The guard limits the pitch and surge commands near the vehicle's limits and is the identity
+inside them; recorded in an agent's ``metadata.json`` it is part of the agent: every loader,
+the benchmark and the test suite evaluate the guarded agent. ``--from`` is one agent folder or a
+multi-seed results folder (``agent_seed_<k>/`` as `benchmarks.train_seeds --results` writes);
+``--out`` receives the same layout: the agents' files copied unchanged (git stores identical
+files once) and each metadata.json with ``envelope_guard`` added, written atomically. The seeds'
+learning curves and test evaluations are not copied: they belong to the unguarded agents.
+
+    python -m benchmarks.guard_agents --from benchmarks/results/seeds/ppo_paper_actuator \\
+        --out benchmarks/results/seeds/ppo_paper_actuator_guard
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import write_json
+from benchmarks.arguments import parse_options, program_name, usage_errors
+from benchmarks.options import option
+from controllers.agent import check_agent
+from controllers.envelope_guard import EnvelopeGuard, check_envelope_guard
+
+__all__ = ["guard_agent", "main"]
+
+AGENT_FILES = ("model.zip", "vecnormalize.npz", "vecnormalize.pkl")
+
+
+def agent_folders(source: Path) -> list[tuple[Path, str]]:
+    """(agent folder, its name under --out) for one agent or a multi-seed results folder."""
+    if (source / "model.zip").is_file():
+        return [(source, "")]
+    seeds = sorted(p for p in source.glob("agent_seed_*") if p.is_dir())
+    if not seeds:
+        raise ValueError(f"--from {source} holds neither an agent (model.zip) nor "
+                         "agent_seed_<k>/ folders")  # fmt: skip
+    return [(p, p.name) for p in seeds]
+
+
+def guard_agent(source: Path, target: Path, guard: EnvelopeGuard) -> Path:
+    """Copy the agent ``source`` to ``target`` with ``guard`` recorded; returns ``target``."""
+    files = check_agent(source)  # a corrupt agent is refused before anything is written
+    metadata: dict[str, Any] = dict(files.metadata)
+    if files.residual is not None:
+        raise ValueError(f"{source}: a residual agent cannot take an envelope guard")
+    if "envelope_guard" in metadata:
+        raise ValueError(f"{source}: the agent already has an envelope guard "
+                         f"{metadata['envelope_guard']}")  # fmt: skip
+    metadata["envelope_guard"] = guard.to_dict()
+    metadata["guarded_from"] = str(source)
+    target.mkdir(parents=True, exist_ok=True)
+    for name in AGENT_FILES:
+        if (source / name).is_file():
+            shutil.copyfile(source / name, target / name)
+    write_json(target / "metadata.json", metadata, indent=1)
+    return target
+
+
+@dataclass
+class Options:
+    """The command line of `python -m benchmarks.guard_agents`."""
+
+    source: str = option(None, "agent folder or multi-seed results folder", flag="--from",
+                         required=True)  # fmt: skip
+    out: str = option(None, "folder to write the guarded copies to", required=True)
+    pitch_soft_deg: float = option(EnvelopeGuard.pitch_soft_deg, "pitch where the guard starts "
+                                   "taking authority away [deg]")  # fmt: skip
+    pitch_hard_deg: float = option(EnvelopeGuard.pitch_hard_deg, "pitch of full counter-moment "
+                                   "[deg]")  # fmt: skip
+    lookahead_s: float = option(EnvelopeGuard.lookahead_s, "pitch prediction θ + T·q, T [s]")
+    surge_soft: float = option(EnvelopeGuard.surge_soft, "surge where thrust is cut [m/s]")
+    surge_hard: float = option(EnvelopeGuard.surge_hard, "surge of full astern [m/s]")
+
+
+def main(argv: list[str] | None = None) -> list[Path]:
+    args, parser = parse_options(Options, argv, program_name("benchmarks.guard_agents"), __doc__)
+    with usage_errors(parser):
+        settings = {name: getattr(args, name) for name in EnvelopeGuard.__dataclass_fields__}
+        guard = check_envelope_guard(settings, "options")
+        source, out = Path(args.source), Path(args.out)
+        if not source.is_dir():
+            raise ValueError(f"--from {source} is not a folder")
+        folders = agent_folders(source)
+        if out.resolve() == source.resolve():
+            raise ValueError("--out must differ from --from")
+        written = [guard_agent(folder, out / name if name else out, guard)
+                   for folder, name in folders]  # fmt: skip
+    print(f"{len(written)} guarded agent(s) in {out}: {json.dumps(guard.to_dict())}")
+    return written
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,132 @@
+"""An envelope guard for agents: pitch and surge commands limited near the vehicle's limits.
+
+An autopilot's envelope protection, as fly-by-wire aircraft and AUV autopilots carry it: the
+agent commands what it likes inside the envelope, and near its edge the guard takes away the
+command that would push the vehicle further out. With θ_p = θ + T·q the pitch predicted T
+seconds ahead (rad), the nose-up moment command a_M is capped by
+
+    a_M ≤ 1 − 2·clip((θ_p − θ_soft)/(θ_hard − θ_soft), 0, 1)
+
+(full authority below θ_soft, full nose-down at θ_hard) and, mirrored, the nose-down command
+by the same ramp in −θ_p; the surge command a_X is capped by the same ramp in the surge speed
+u between u_soft and u_hard (full astern at u_hard). The yaw command is never touched. Inside
+the soft limits the guard is the identity, so an agent that stays there acts as trained.
+
+The guard reads θ, q and u from the agent's own observation (what the vehicle's attitude and
+velocity sensors give; every agent observation names them) and acts on the command the env
+receives, after an agent's incremental or scaled transform. It is part of an agent when its
+metadata holds ``envelope_guard`` (`controllers.loader.load_policy` wraps it), like
+``action_scale``. The defaults keep margins below the env's limits: the episode ends at 60° of
+pitch and, on the surge-limited ids, at 2.0 m/s (docs/design.md §3.15).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from auv_gym.validation import real
+from controllers.actor_wrapper import ActorWrapper
+
+__all__ = ["EnvelopeGuard", "GuardedPolicy", "check_envelope_guard", "guard_commands"]
+
+GUARD_INPUTS = ("theta", "q", "u")  # observation entries the guard reads [rad, rad/s, m/s]
+
+
+@dataclass(frozen=True)
+class EnvelopeGuard:
+    """The guard's limits: pitch ramp [deg], pitch look-ahead [s], surge ramp [m/s]."""
+
+    pitch_soft_deg: float = 35.0
+    pitch_hard_deg: float = 50.0
+    lookahead_s: float = 1.0
+    surge_soft: float = 1.8
+    surge_hard: float = 1.95
+
+    def __post_init__(self) -> None:
+        where = "envelope_guard"
+        soft = real(f"{where}.pitch_soft_deg", self.pitch_soft_deg, 0.0, 90.0, low_open=True,
+                    unit="deg")  # fmt: skip
+        hard = real(f"{where}.pitch_hard_deg", self.pitch_hard_deg, 0.0, 90.0, low_open=True,
+                    unit="deg")  # fmt: skip
+        real(f"{where}.lookahead_s", self.lookahead_s, 0.0, 10.0, unit="s")
+        u_soft = real(f"{where}.surge_soft", self.surge_soft, 0.0, 10.0, low_open=True,
+                      unit="m/s")  # fmt: skip
+        u_hard = real(f"{where}.surge_hard", self.surge_hard, 0.0, 10.0, low_open=True,
+                      unit="m/s")  # fmt: skip
+        if not (soft < hard and u_soft < u_hard):
+            raise ValueError(f"{where}: each soft limit must lie below its hard limit, got pitch "
+                             f"{soft:g}/{hard:g} deg, surge {u_soft:g}/{u_hard:g} m/s")  # fmt: skip
+
+    def to_dict(self) -> dict[str, float]:
+        """The settings as metadata.json records them."""
+        return {k: float(v) for k, v in asdict(self).items()}
+
+
+def check_envelope_guard(value: Any, where: str) -> EnvelopeGuard:
+    """An `EnvelopeGuard` from a mapping of its fields (missing ones: the defaults), True (the
+    defaults) or a guard; a one-line error naming ``where`` otherwise."""
+    if isinstance(value, EnvelopeGuard):
+        return value
+    if value is True:
+        return EnvelopeGuard()
+    fields = sorted(EnvelopeGuard.__dataclass_fields__)
+    if not isinstance(value, Mapping):
+        raise ValueError(f"{where}: envelope_guard must be true or a mapping of {fields}, got "
+                         f"{value!r}")  # fmt: skip
+    unknown = sorted(set(value) - set(fields))
+    if unknown:
+        raise ValueError(f"{where}: envelope_guard has unknown keys {unknown}; valid: {fields}")
+    try:
+        return EnvelopeGuard(**value)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{where}: {error}") from None
+
+
+def _authority(x: np.ndarray, soft: float, hard: float) -> np.ndarray:
+    """1 below ``soft``, −1 from ``hard`` on, linear between."""
+    return 1.0 - 2.0 * np.clip((x - soft) / (hard - soft), 0.0, 1.0)
+
+
+def guard_commands(commands: np.ndarray, observation: np.ndarray, index: Sequence[int],
+                   guard: EnvelopeGuard) -> np.ndarray:  # fmt: skip
+    """The guarded commands (float32, the shape of ``commands``: (3,) or (n, 3)) for raw
+    observations of the same batch shape; ``index``: the positions of θ, q, u in them."""
+    obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
+    out = np.array(commands, dtype=np.float32, copy=True)
+    rows = out.reshape(-1, 3)
+    theta, q, u = (obs[:, i] for i in index)
+    predicted = theta + guard.lookahead_s * q  # [rad]
+    soft, hard = math.radians(guard.pitch_soft_deg), math.radians(guard.pitch_hard_deg)
+    nose_up = _authority(predicted, soft, hard)
+    nose_down = _authority(-predicted, soft, hard)
+    rows[:, 1] = np.clip(rows[:, 1], -nose_down, nose_up)
+    rows[:, 0] = np.minimum(rows[:, 0], _authority(u, guard.surge_soft, guard.surge_hard))
+    return out
+
+
+class GuardedPolicy(ActorWrapper):
+    """A Policy whose commands pass an `EnvelopeGuard` (the yaw command untouched)."""
+
+    def __init__(self, actor: Any, guard: Any, obs_names: Sequence[str]) -> None:
+        super().__init__(actor)
+        self.guard = check_envelope_guard(guard, "GuardedPolicy")
+        missing = [name for name in GUARD_INPUTS if name not in obs_names]
+        if missing:
+            raise ValueError(f"envelope_guard reads {list(GUARD_INPUTS)} from the agent's "
+                             f"observation, which lacks {missing}")  # fmt: skip
+        self.index = tuple(list(obs_names).index(name) for name in GUARD_INPUTS)
+
+    def predict(self, observation: np.ndarray, state: Any = None,
+                episode_start: np.ndarray | None = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+        """The actor's commands, guarded, for observations (d,) or (n, d) of its layout."""
+        commands, state = self.actor.predict(observation, state, episode_start, deterministic)
+        return guard_commands(commands, observation, self.index, self.guard), state
+
+    def __repr__(self) -> str:
+        return f"GuardedPolicy(path={self.path!r}, guard={self.guard.to_dict()})"

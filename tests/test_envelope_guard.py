@@ -1,0 +1,123 @@
+"""The envelope guard (`controllers.envelope_guard`, `benchmarks.guard_agents`): hand-computed
+commands near the pitch and surge limits, the identity inside them, a guarded agent loaded from
+its metadata, the pitch-over it prevents in a current, and bad settings named."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+import pytest
+
+from controllers.envelope_guard import (
+    EnvelopeGuard,
+    GuardedPolicy,
+    check_envelope_guard,
+    guard_commands,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+SEEDS = ROOT / "benchmarks" / "results" / "seeds" / "ppo_paper_actuator"
+INDEX = (0, 1, 2)  # θ, q, u in the hand-made observations below
+GUARD = EnvelopeGuard()  # pitch 35°–50°, T = 1 s, surge 1.8–1.95 m/s
+
+
+def _obs(theta_deg: float, q_deg_s: float, u: float) -> np.ndarray:
+    return np.array([math.radians(theta_deg), math.radians(q_deg_s), u])
+
+
+def test_inside_the_soft_limits_the_guard_is_the_identity():
+    commands = np.float32([[0.7, 1.0, -0.4], [-1.0, -1.0, 1.0]])
+    obs = np.stack([_obs(20.0, 10.0, 1.2), _obs(-30.0, 4.0, 1.79)])  # θ + T·q = 30°, −26°
+    np.testing.assert_array_equal(guard_commands(commands, obs, INDEX, GUARD), commands)
+
+
+def test_hand_computed_guarded_commands():
+    cases = [  # (θ [deg], q [deg/s], u [m/s], command, guarded)
+        (42.5, 0.0, 1.0, [0.5, 1.0, 0.3], [0.5, 0.0, 0.3]),  # half way: nose-up capped at 0
+        (30.0, 10.0, 1.0, [0.5, 1.0, 0.3], [0.5, 1.0 / 3.0, 0.3]),  # θ_p = 40°: 1 − 2·5/15
+        (55.0, 0.0, 1.0, [0.5, 0.2, 0.3], [0.5, -1.0, 0.3]),  # past the hard limit: nose down
+        (42.5, 0.0, 1.0, [0.5, -0.6, 0.3], [0.5, -0.6, 0.3]),  # nose-down stays allowed
+        (-50.0, 0.0, 1.0, [0.5, -1.0, -1.0], [0.5, 1.0, -1.0]),  # mirrored: full nose up
+        (0.0, 0.0, 1.875, [0.5, 0.1, 0.0], [0.0, 0.1, 0.0]),  # surge half way: thrust capped
+        (0.0, 0.0, 1.875, [-0.3, 0.1, 0.0], [-0.3, 0.1, 0.0]),  # astern stays allowed
+        (0.0, 0.0, 2.1, [1.0, 0.1, 0.0], [-1.0, 0.1, 0.0]),  # past u_hard: full astern
+    ]
+    for theta, q, u, command, expected in cases:
+        single = guard_commands(np.float32(command), _obs(theta, q, u), INDEX, GUARD)
+        assert single.shape == (3,) and single.dtype == np.float32
+        np.testing.assert_allclose(single, expected, atol=1e-6)
+    batch = guard_commands(np.float32([c[3] for c in cases]),
+                           np.stack([_obs(*c[:3]) for c in cases]), INDEX, GUARD)  # fmt: skip
+    np.testing.assert_allclose(batch, [c[4] for c in cases], atol=1e-6)
+
+
+class _Constant:
+    """A Policy that always commands full nose-up and thrust."""
+
+    path = None
+    metadata: ClassVar[dict] = {}
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        n = np.atleast_2d(observation).shape[0]
+        out = np.tile(np.float32([1.0, 1.0, 0.5]), (n, 1))
+        return (out if np.ndim(observation) == 2 else out[0]), state
+
+
+def test_a_guarded_policy_reads_its_inputs_by_name():
+    names = ["x_e", "u", "theta", "q"]
+    policy = GuardedPolicy(_Constant(), {"pitch_soft_deg": 30.0}, names)
+    obs = np.array([0.0, 1.0, math.radians(40.0), 0.0])  # θ_p = 40° of 30°–50°: cap 0
+    command, _ = policy.predict(obs)
+    np.testing.assert_allclose(command, [1.0, 0.0, 0.5], atol=1e-6)
+    with pytest.raises(ValueError, match=r"lacks \['q'\]"):
+        GuardedPolicy(_Constant(), True, ["theta", "u"])
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ({"pitch_soft_deg": 50.0, "pitch_hard_deg": 40.0}, "soft limit must lie below"),
+        ({"surge_soft": 2.0}, "soft limit must lie below"),
+        ({"pitch_hard_deg": math.nan}, "pitch_hard_deg must be"),
+        ({"lookahead_s": -1.0}, "lookahead_s must be"),
+        ({"pitch": 40.0}, r"unknown keys \['pitch'\]"),
+        ("yes", "must be true or a mapping"),
+    ],
+)
+def test_bad_guards_are_named(value, message):
+    with pytest.raises(ValueError, match=f"here: .*{message}"):
+        check_envelope_guard(value, "here")
+
+
+@pytest.mark.rl
+def test_the_guard_stops_a_recorded_pitch_over(tmp_path):
+    """Seed 3 of the paper-actuator generalist pitches over from the paper's start in the
+    `current` scenario (test seed 0, docs/results.md); its guarded copy, made by
+    `benchmarks.guard_agents`, reaches the path and keeps its pitch below 50°."""
+    from auv_gym.rollout import rollouts
+    from auv_gym.trajectory import TIME_LIMIT
+    from benchmarks.guard_agents import main
+    from benchmarks.training.evaluation import agent_env_kwargs
+    from controllers.loader import load_policy
+
+    written = main(["--from", str(SEEDS / "agent_seed_3"), "--out", str(tmp_path / "guarded")])
+    metadata = json.loads((written[0] / "metadata.json").read_text())
+    assert metadata["envelope_guard"] == GUARD.to_dict()
+    plain, guarded = load_policy(SEEDS / "agent_seed_3"), load_policy(written[0])
+    assert isinstance(guarded, GuardedPolicy)
+    env = {**agent_env_kwargs(plain.metadata["env_id"], plain.metadata), "disturbance": "none",
+           "current": {"mean": [0.0, 0.3, 0.0], "std": [0.05, 0.05, 0.0],
+                       "time_constant": 60.0}, "max_time": 60.0}  # fmt: skip
+    (before,) = rollouts(plain, [0], **env)
+    (after,) = rollouts(guarded, [0], **env)
+    assert before.termination_reason == "pitch" and before.t[-1] < 40.0
+    assert after.termination_reason == TIME_LIMIT and after.t[-1] == pytest.approx(60.0)
+    assert np.degrees(np.abs(after["theta"])).max() < 50.0
+    assert after["distance"][-1] < 1.0  # on the path after 60 s
+    with pytest.raises(SystemExit):  # already guarded: a usage error, nothing written
+        main(["--from", str(written[0]), "--out", str(tmp_path / "twice")])
+    assert not (tmp_path / "twice").exists()
