@@ -121,3 +121,54 @@ def test_the_guard_stops_a_recorded_pitch_over(tmp_path):
     with pytest.raises(SystemExit):  # already guarded: a usage error, nothing written
         main(["--from", str(written[0]), "--out", str(tmp_path / "twice")])
     assert not (tmp_path / "twice").exists()
+
+
+@pytest.mark.rl
+def test_the_training_wrapper_guards_the_env_commands():
+    """Full nose-up from rest: the wrapper lets it through until θ + T·q passes 35°, then the
+    applied moment M (info "tau", N·m) falls to the ramp's value and the pitch stays below 50°."""
+    from auv_gym.observation import ObservationConfig
+    from benchmarks.training.envelope_guard import GuardedActions
+    from benchmarks.training.train import make_training_env
+
+    names = ObservationConfig.from_spec("preview").names
+    venv = GuardedActions(make_training_env(2, 0, {"disturbance": "none", "max_time": 60.0},
+                                            kind="dummy", env_id="AUVPath3DPreview-v0"),
+                          GUARD, names)  # fmt: skip
+    obs = venv.reset()
+    it, iq = names.index("theta"), names.index("q")
+    pitch, capped = [], 0
+    for _ in range(600):
+        predicted = obs[:, it] + obs[:, iq]  # θ + 1 s · q of the observation the guard reads
+        obs, _, dones, infos = venv.step(np.float32([[0.05, 1.0, 0.0]] * 2))
+        moment = np.array([info["tau"][1] for info in infos]) / 10.0  # normalised M
+        expected = 1.0 - 2.0 * np.clip((predicted - math.radians(35.0)) / math.radians(15.0), 0, 1)
+        np.testing.assert_allclose(moment, expected, atol=1e-5)
+        capped += int((expected < 1.0).sum())
+        pitch.append(np.degrees(obs[:, it]).max())
+        assert not dones.any()
+    assert capped > 100 and 35.0 < max(pitch) < 50.0
+    venv.close()
+
+
+@pytest.mark.rl
+def test_a_file_trains_a_guarded_agent_that_loads_guarded(tmp_path, train_tiny_preview_agent):
+    from controllers.loader import load_policy
+
+    guard = {"pitch_soft_deg": 30.0, "pitch_hard_deg": 45.0}
+    agent = train_tiny_preview_agent(tmp_path, envelope_guard=guard)
+    recorded = json.loads((agent / "metadata.json").read_text())["envelope_guard"]
+    assert recorded == EnvelopeGuard(**guard).to_dict()
+    policy = load_policy(agent)
+    assert isinstance(policy, GuardedPolicy) and policy.guard == EnvelopeGuard(**guard)
+    import yaml
+
+    from benchmarks.training.config import read_zoo_config
+
+    config = tmp_path / "bad.yml"
+    config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": {
+        "n_envs": 2, "n_timesteps": 64, "policy": "MlpPolicy", "normalize": True,
+        "envelope_guard": {"surge_soft": 3.0}}}))  # fmt: skip
+    with pytest.raises(ValueError, match=r"bad.yml: AUVPath3DPreview-v0: envelope_guard: each "
+                                         r"soft limit must lie below its hard limit"):  # fmt: skip
+        read_zoo_config(config, "AUVPath3DPreview-v0", "ppo")

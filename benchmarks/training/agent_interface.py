@@ -3,8 +3,9 @@ in one place: the action box (``action_bounds``, `action_box`), incremental comm
 (``action_increment``, `action_increment`), scaled commands (``action_scale``, `action_scale`),
 fixed observation scales (``obs_scales``,
 `normalization`), the exploration-noise schedule (``action_std_schedule``, `noise_schedule`)
-and the safety cost charged in the reward (``cost_penalty``, `cost_penalty`). Each is opt-in; a
-file without these keys trains as before."""
+the safety cost charged in the reward (``cost_penalty``, `cost_penalty`) and the envelope guard
+of the commands (``envelope_guard``, `envelope_guard`). Each is opt-in; a file without these
+keys trains as before."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from controllers.action_increment import check_increment
 from controllers.action_scale import check_action_scale
+from controllers.envelope_guard import check_envelope_guard
 
 if TYPE_CHECKING:
     from benchmarks.training.config import ZooConfig
@@ -49,13 +51,21 @@ def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: A
         from benchmarks.training.cost_penalty import check_cost_penalty
 
         fields["cost_penalty"] = check_cost_penalty(section["cost_penalty"], where)
+    if "envelope_guard" in section:
+        if residual is not None:
+            raise ValueError(f"{path}: envelope_guard excludes residual")
+        fields["envelope_guard"] = check_envelope_guard(section["envelope_guard"], where)
     return fields
 
 
 def wrap_actions(venv: Any, cfg: ZooConfig, obs_names: Sequence[str]
                  ) -> tuple[Any, tuple[float, Sequence[str]] | None]:  # fmt: skip
-    """``venv`` under the file's action box, scaled or incremental commands, and (δ, names) of
-    the latter (None without)."""
+    """``venv`` under the file's envelope guard (innermost: it limits the env's command), action
+    box, scaled or incremental commands, and (δ, names) of the latter (None without)."""
+    if cfg.envelope_guard is not None:
+        from benchmarks.training.envelope_guard import GuardedActions
+
+        venv = GuardedActions(venv, cfg.envelope_guard, obs_names)
     if cfg.action_bounds is not None:
         from benchmarks.training.action_box import ActionBox
 

@@ -28,6 +28,7 @@ from benchmarks.training.residual import ResidualTraining
 from controllers.action_increment import IncrementPolicy
 from controllers.action_scale import ScaledPolicy
 from controllers.agent import AgentPolicy
+from controllers.envelope_guard import EnvelopeGuard, GuardedPolicy
 from controllers.residual import ResidualPolicy, base_kwargs_for_env
 
 __all__ = [
@@ -53,12 +54,22 @@ def policy_from_model(
     env_kwargs: dict[str, Any] | None = None,
     increment: tuple[float, Sequence[str]] | None = None,
     scale: tuple[float, float, float] | None = None,
-) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy:
+    guard: tuple[EnvelopeGuard, Sequence[str]] | None = None,
+) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy | GuardedPolicy:
     """The Policy of a model in training, with a snapshot of the current statistics (torch's
     thread setting is the training's); with ``residual``, the `ResidualPolicy` of its base
     controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`); with
     ``increment`` (δ, observation names), the `IncrementPolicy` of an incremental agent; with
-    ``scale`` (k_X, k_M, k_N), the `ScaledPolicy` of a scaled one."""
+    ``scale`` (k_X, k_M, k_N), the `ScaledPolicy` of a scaled one; with ``guard`` (the guard,
+    observation names), that policy inside its `GuardedPolicy`."""
+    policy = _unguarded(model, vec_normalize, residual, env_kwargs, increment, scale)
+    return policy if guard is None else GuardedPolicy(policy, *guard)
+
+
+def _unguarded(model: Any, vec_normalize: Any, residual: ResidualTraining | None,
+               env_kwargs: dict[str, Any] | None,
+               increment: tuple[float, Sequence[str]] | None,
+               scale: tuple[float, float, float] | None) -> Any:  # fmt: skip
     rms = vec_normalize.obs_rms
     actor = AgentPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
                         vec_normalize.epsilon)  # fmt: skip
@@ -83,7 +94,8 @@ class PeriodicEvaluation(BaseCallback):
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
     A residual agent (``residual``) is evaluated as its `ResidualPolicy`, an incremental one
     (``increment``: δ and the observation names) as its `IncrementPolicy`, a scaled one
-    (``scale``) as its `ScaledPolicy`. ``next_eval``: the
+    (``scale``) as its `ScaledPolicy`, a guarded one (``guard``) inside its `GuardedPolicy`.
+    ``next_eval``: the
     schedule of a resumed run (its checkpoint's), else the first multiple of `every` ahead.
     """
 
@@ -92,9 +104,11 @@ class PeriodicEvaluation(BaseCallback):
                  verbose: int = 0, residual: ResidualTraining | None = None,
                  next_eval: int | None = None,
                  increment: tuple[float, Sequence[str]] | None = None,
-                 scale: tuple[float, float, float] | None = None) -> None:  # fmt: skip
+                 scale: tuple[float, float, float] | None = None,
+                 guard: tuple[EnvelopeGuard, Sequence[str]] | None = None) -> None:  # fmt: skip
         super().__init__(verbose)
         self.residual, self.increment, self.scale = residual, increment, scale
+        self.guard = guard
         self.out, self.every, self.seeds = out, every, tuple(seeds)
         self.eval_kwargs, self.metadata = eval_kwargs, metadata
         self.start_wall, self.best = start_wall, best
@@ -121,7 +135,7 @@ class PeriodicEvaluation(BaseCallback):
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
         policy = policy_from_model(self.model, vec_normalize, self.residual, self.eval_kwargs,
-                                   self.increment, self.scale)  # fmt: skip
+                                   self.increment, self.scale, self.guard)  # fmt: skip
         extra = () if self.residual is None else ("chattering",)
         results = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra,
                                            **self.eval_kwargs)  # fmt: skip

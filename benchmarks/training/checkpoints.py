@@ -179,6 +179,7 @@ _WRAPPER_ATTRIBUTES = {
     "VecNormalize": ("returns", "old_obs", "old_reward", "obs_rms", "ret_rms"),
     "VecMonitor": ("episode_returns", "episode_lengths", "episode_count"),
     "IncrementalActions": ("last_obs",),
+    "GuardedActions": ("last_obs",),
 }
 
 

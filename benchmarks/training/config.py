@@ -74,6 +74,7 @@ ZOO_KEYS = frozenset(
         "action_std_schedule",
         "cost_penalty",
         "update_dtype",
+        "envelope_guard",
     }
 )
 
@@ -103,6 +104,7 @@ class ZooConfig:
     action_scale: tuple[float, float, float] | None = None  # k (`controllers.action_scale`)
     action_std_schedule: Any = None  # `training.noise_schedule.StdSchedule`
     cost_penalty: float | None = None  # w of r − w·cost (`training.cost_penalty`)
+    envelope_guard: Any = None  # `controllers.envelope_guard.EnvelopeGuard` of the commands
     update_dtype: str = "float32"  # the learner's matrix products (`training.update_precision`)
 
     def model_kwargs(self) -> dict[str, Any]:

@@ -336,6 +336,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "observation_shape": [len(obs_names)], "action_shape": [action_dim], **residual_meta,
             **({} if increment is None else {"action_increment": increment[0]}),
             **({} if cfg.action_scale is None else {"action_scale": list(cfg.action_scale)}),
+            **({} if cfg.envelope_guard is None
+               else {"envelope_guard": cfg.envelope_guard.to_dict()}),
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": describe_env(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
@@ -357,7 +359,9 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         evaluation = PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
                                         metadata, start_wall, best, opts.verbose, residual,
                                         next_eval=schedules.get("next_eval"),
-                                        increment=increment, scale=cfg.action_scale)  # fmt: skip
+                                        increment=increment, scale=cfg.action_scale,
+                                        guard=None if cfg.envelope_guard is None
+                                        else (cfg.envelope_guard, obs_names))  # fmt: skip
         callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)
 
