@@ -74,6 +74,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_integral": "#9e9ac8",
     "ppo_antiwindup": "#e7ba52",
     "ppo_paper_actuator": "#7b4173",
+    "ppo_paper_actuator_guard": "#ce6dbd",
     "sac_generalist": "#8c564b",
     "sac_helix": "#393b79",
     "sac_antiwindup": "#637939",

@@ -4,7 +4,8 @@
   `controllers.make` for the scenario's control period and controller keyword arguments;
 * a name of `SHIPPED_AGENTS` ("ppo", "ppo_helix_v1", "ppo_generalist", "sac_generalist",
   "ppo_residual", "ppo_preview", "ppo_preview_net256", "ppo_integral", "ppo_antiwindup",
-  "ppo_paper_actuator", "sac_helix"): the
+  "ppo_paper_actuator", "ppo_paper_actuator_guard" (the same agent inside its envelope guard,
+  `controllers.envelope_guard`), "sac_helix"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
   (`controllers.loader.load_policy`, any algorithm of `controllers.algorithms`); a residual
@@ -53,6 +54,7 @@ SHIPPED_AGENTS = {
     "ppo_integral": "ppo_integral",
     "ppo_antiwindup": "ppo_antiwindup",
     "ppo_paper_actuator": "ppo_paper_actuator",
+    "ppo_paper_actuator_guard": "ppo_paper_actuator_guard",
     "sac_helix": "sac_helix",
 }
 DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
