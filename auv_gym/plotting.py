@@ -75,6 +75,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_antiwindup": "#e7ba52",
     "ppo_paper_actuator": "#7b4173",
     "ppo_paper_actuator_guard": "#ce6dbd",
+    "ppo_paper_start_guard": "#3182bd",
     "sac_generalist": "#8c564b",
     "sac_helix": "#393b79",
     "sac_antiwindup": "#637939",

@@ -5,7 +5,8 @@
 * a name of `SHIPPED_AGENTS` ("ppo", "ppo_helix_v1", "ppo_generalist", "sac_generalist",
   "ppo_residual", "ppo_preview", "ppo_preview_net256", "ppo_integral", "ppo_antiwindup",
   "ppo_paper_actuator", "ppo_paper_actuator_guard" (the same agent inside its envelope guard,
-  `controllers.envelope_guard`), "sac_helix"): the
+  `controllers.envelope_guard`), "ppo_paper_start_guard" (the same training for 8M env steps,
+  guarded), "sac_helix"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
   (`controllers.loader.load_policy`, any algorithm of `controllers.algorithms`); a residual
@@ -55,6 +56,7 @@ SHIPPED_AGENTS = {
     "ppo_antiwindup": "ppo_antiwindup",
     "ppo_paper_actuator": "ppo_paper_actuator",
     "ppo_paper_actuator_guard": "ppo_paper_actuator_guard",
+    "ppo_paper_start_guard": "ppo_paper_start_guard",
     "sac_helix": "sac_helix",
 }
 DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]

@@ -30,8 +30,6 @@ compiled kernels too); `--baseline none` times this tree only.
 
 from __future__ import annotations
 
-import importlib
-import inspect
 import json
 import os
 import statistics
@@ -39,7 +37,6 @@ import subprocess
 import sys
 import tarfile
 import tempfile
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,99 +44,16 @@ from typing import Any
 from auv_gym.files import write_json
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.options import option
+from benchmarks.speed.training_run import CONFIG, ENV_ID
 
 DEFAULT_BASELINE = "b8de6c4"
 N_ENVS = (32, 128, 512)
 ROLLOUT_STEPS = 8192  # env steps per rollout of the generalist configuration (32 × 256)
-CONFIG = "benchmarks/hyperparams/ppo_generalist.yml"
-ENV_ID = "AUVPath3DSpeedLimit-v0"
-LEGACY_ENV_ID = "AUVPath3D-v1"  # the same env's id in trees before the rename
 HERE = Path(__file__).resolve()
+RUN_FILE = HERE.with_name("training_run.py")  # `measure`, run in each tree
 # (side, N, update threads, batch size, update dtype) → the runs of that tree and setting
 Results = dict[tuple[str, int, int, int, str], list[dict[str, Any]]]
 TREE = HERE.parents[2]  # this tree's root
-
-
-def measure(spec: dict[str, Any]) -> dict[str, Any]:
-    """Time PPO on the importable tree's trainer (run in a subprocess per tree).
-
-    ``spec``: n_envs, n_steps, batch_size, rollouts, warmup, update_threads, update_dtype,
-    seed. Uses only what every version of the harness has (`read_zoo_config`,
-    `make_training_env`, `thread_limit`), so the same function times old and new code; the
-    bfloat16 update is applied here (as `training.update_precision` does), so it times either
-    tree's learner in that precision.
-    """
-    import torch
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecNormalize
-
-    import auv_gym
-    from benchmarks.training.config import read_zoo_config
-
-    trainer = importlib.import_module("benchmarks.training.train")  # the package hides the name
-    env_id = ENV_ID if ENV_ID in auv_gym.VARIANTS else LEGACY_ENV_ID  # the tree's name for it
-    cfg = read_zoo_config(Path(trainer.__file__).parents[2] / CONFIG, env_id, "ppo")
-    n_envs, n_steps = int(spec["n_envs"]), int(spec["n_steps"])
-    bfloat16 = spec.get("update_dtype", "float32") == "bfloat16"
-    phases: list[tuple[float, float, float]] = []  # (start, collected, updated) per rollout
-
-    class TimedPPO(PPO):
-        """PPO that stamps the start of each rollout, its end and the end of its update."""
-
-        def collect_rollouts(self, *args: Any, **kwargs: Any) -> bool:
-            start = time.perf_counter()
-            more = super().collect_rollouts(*args, **kwargs)
-            phases.append((start, time.perf_counter(), float("nan")))
-            return more
-
-        def train(self) -> None:
-            threads = torch.get_num_threads()
-            torch.set_num_threads(int(spec["update_threads"]))
-            try:
-                with torch.autocast("cpu", dtype=torch.bfloat16, enabled=bfloat16):
-                    super().train()
-            finally:
-                torch.set_num_threads(threads)
-            start, collected, _ = phases[-1]
-            phases[-1] = (start, collected, time.perf_counter())
-
-    with trainer.thread_limit(1):
-        # As `train._train` with threads=1 builds it: the trees that can pass the kernel's
-        # thread count to the env pass 1 (the serial kernel at every N).
-        serial = "threads" in inspect.signature(trainer.make_training_env).parameters
-        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto", env_id,
-                                         **({"threads": 1} if serial else {}))  # fmt: skip
-        venv = VecNormalize(venv, **cfg.normalize)
-        kwargs = {
-            **cfg.model_kwargs(),
-            "n_steps": n_steps,
-            "batch_size": int(spec["batch_size"]),
-        }
-        model = TimedPPO(
-            cfg.policy,
-            venv,
-            policy_kwargs=cfg.policy_kwargs,
-            seed=int(spec["seed"]),
-            device="cpu",
-            verbose=0,
-            **kwargs,
-        )
-        rollouts = int(spec["warmup"]) + int(spec["rollouts"])
-        model.learn(rollouts * n_envs * n_steps)
-    timed = phases[int(spec["warmup"]) :]
-    steps = len(timed) * n_envs * n_steps
-    collect = sum(c - s for s, c, _ in timed)
-    update = sum(u - c for _, c, u in timed)
-    return {
-        **spec,
-        "steps": steps,
-        "collect_s": collect,
-        "update_s": update,
-        "collect_per_s": steps / collect,
-        "update_per_s": steps / update,
-        "total_per_s": steps / (collect + update),
-        "load_average": os.getloadavg()[0],
-    }
 
 
 def extract(ref: str, cache: Path) -> Path:
@@ -170,7 +84,7 @@ def run_in(tree: Path, spec: dict[str, Any]) -> dict[str, Any]:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     code = (
         "import json, sys, runpy\n"
-        f"m = runpy.run_path({str(HERE)!r})\n"
+        f"m = runpy.run_path({str(RUN_FILE)!r})\n"
         "print(json.dumps(m['measure'](json.loads(sys.argv[1]))))\n"
     )
     out = subprocess.run(
@@ -248,6 +162,9 @@ class Options:
     update_threads: tuple[int, ...] = option(
         (1,), "torch threads of the update (collection: one); one row each", nargs="+"
     )
+    net_arch: tuple[int, ...] = option(
+        (), "hidden-layer widths of both networks (default: the configuration's 64 64)", nargs="+"
+    )
     update_dtype: tuple[str, ...] = option(
         ("float32",),
         "precision of the update's matrix products (float32, bfloat16: "
@@ -271,6 +188,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         args.batch_size = (64,)
     if min(args.n_envs) < 1 or args.rollouts < 1 or args.repeats < 1 or args.warmup < 0:
         parser.error("--n-envs, --rollouts and --repeats must be >= 1, --warmup >= 0")
+    try:
+        args.net_arch = tuple(int(width) for width in args.net_arch)
+    except ValueError:
+        parser.error(f"--net-arch takes whole numbers, got {list(args.net_arch)}")
+    if any(width < 1 for width in args.net_arch):
+        parser.error(f"--net-arch widths must be >= 1, got {list(args.net_arch)}")
     unknown = sorted(set(args.update_dtype) - {"float32", "bfloat16"})
     if unknown:
         parser.error(f"--update-dtype must be float32 or bfloat16, got {unknown}")
@@ -295,6 +218,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "warmup": args.warmup,
             "update_threads": t,
             "update_dtype": d,
+            "net_arch": list(args.net_arch),
             "seed": 0,
         }
         for d in args.update_dtype
@@ -308,7 +232,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             order = sides if (repeat + k) % 2 == 0 else sides[::-1]
             plan += [(side, spec) for side in order]
     print(
-        f"PPO on {CONFIG} ({ENV_ID}); new = {TREE}"
+        f"PPO on {CONFIG} ({ENV_ID}"
+        + (f", networks {list(args.net_arch)}" if args.net_arch else "")
+        + f"); new = {TREE}"
         + (f", old = {args.baseline} ({trees['old'].name[:12]})" if "old" in trees else "")
         + f"; {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at start\n",
         flush=True,
