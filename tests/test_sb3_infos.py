@@ -210,3 +210,23 @@ def test_adaptive_update_threads_keeps_the_faster_count_and_backs_off_its_probes
     # probe loses, so the interval doubles; the next would come after 40).
     assert [k for k, threads in enumerate(used) if threads == other][1:] == [11, 31]
     assert used[2:11] == [best] * 9 and callback.probe_every == 40
+
+
+def test_speed_training_runs_the_baseline_commit_of_its_default(tmp_path):
+    """The default baseline (b8de6c4) predates `benchmarks.options` and `parse_options`: the
+    timed run must import nothing of the project at module level to run in it."""
+    import json
+
+    from benchmarks.speed.training import DEFAULT_BASELINE
+
+    known = subprocess.run(["git", "cat-file", "-e", f"{DEFAULT_BASELINE}^{{commit}}"], cwd=ROOT,
+                           capture_output=True)  # fmt: skip
+    if known.returncode != 0:
+        pytest.skip(f"{DEFAULT_BASELINE} is not in this clone's history")
+    out = tmp_path / "speed.json"
+    subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick", "--cache",
+                    str(tmp_path / "cache"), "--json", str(out)], cwd=ROOT, check=True,
+                   capture_output=True, text=True)  # fmt: skip
+    runs = json.loads(out.read_text())["runs"]
+    assert sorted(r["side"] for r in runs) == ["new", "old"]
+    assert all(r["steps"] == 8 * 16 and r["total_per_s"] > 0 for r in runs)
