@@ -83,3 +83,16 @@ def test_a_bad_update_dtype_is_one_line_naming_it(tmp_path, value):
     del section["update_dtype"]
     path.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
     assert read_zoo_config(path, "AUVPath3DPreview-v0", "ppo").update_dtype == "float32"
+
+
+def test_a_bfloat16_run_saves_and_exports_a_float32_agent(tmp_path, train_tiny_preview_agent):
+    import json
+
+    import torch
+
+    from controllers.loader import load_policy
+
+    agent = train_tiny_preview_agent(tmp_path, update_dtype="bfloat16")
+    assert json.loads((agent / "metadata.json").read_text())["update_dtype"] == "bfloat16"
+    policy = load_policy(agent)
+    assert all(p.dtype == torch.float32 for p in policy.sb3_policy.parameters())

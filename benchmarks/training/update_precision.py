@@ -36,11 +36,17 @@ def use_update_dtype(model: Any, dtype: str) -> None:
         return
     import torch
 
-    update = model.train
+    algorithm = type(model)
+    update = algorithm.train
 
     @functools.wraps(update)
-    def mixed_precision_update(*args: Any, **kwargs: Any) -> Any:
+    def mixed_precision_update(self: Any, *args: Any, **kwargs: Any) -> Any:
         with torch.autocast("cpu", dtype=torch.bfloat16):
-            return update(*args, **kwargs)
+            return update(self, *args, **kwargs)
 
-    model.train = mixed_precision_update
+    # A subclass, not an instance attribute: SB3 saves the instance's __dict__ (a closure there
+    # would be pickled with the model), never its class; a loaded model is plain again, and the
+    # trainer applies the precision to it afresh.
+    model.__class__ = type(
+        algorithm.__name__, (algorithm,), {"train": mixed_precision_update, "__module__": __name__}
+    )
