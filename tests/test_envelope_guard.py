@@ -1,6 +1,6 @@
-"""The envelope guard (`controllers.envelope_guard`, `benchmarks.guard_agents`): hand-computed
-commands near the pitch and surge limits, the identity inside them, a guarded agent loaded from
-its metadata, the pitch-over it prevents in a current, and bad settings named."""
+"""The envelope guard (`controllers.envelope_guard`, `benchmarks.training.guard_agents`):
+hand-computed commands near the pitch and surge limits, the identity inside them, a guarded agent
+loaded from its metadata, the pitch-over it prevents in a current, and bad settings named."""
 
 from __future__ import annotations
 
@@ -97,11 +97,11 @@ def test_bad_guards_are_named(value, message):
 def test_the_guard_stops_a_recorded_pitch_over(tmp_path):
     """Seed 3 of the paper-actuator generalist pitches over from the paper's start in the
     `current` scenario (test seed 0, docs/results.md); its guarded copy, made by
-    `benchmarks.guard_agents`, reaches the path and keeps its pitch below 50°."""
+    `benchmarks.training.guard_agents`, reaches the path and keeps its pitch below 50°."""
     from auv_gym.rollout import rollouts
     from auv_gym.trajectory import TIME_LIMIT
-    from benchmarks.guard_agents import main
     from benchmarks.training.evaluation import agent_env_kwargs
+    from benchmarks.training.guard_agents import main
     from controllers.loader import load_policy
 
     written = main(["--from", str(SEEDS / "agent_seed_3"), "--out", str(tmp_path / "guarded")])

@@ -357,8 +357,6 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("sac_paper_actuator.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_heading_spread.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_paper_start.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_paper_rotation.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_paper_guard.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 FAILURE_CHARGE = {"ppo_failure_charge.yml": 1000.0}  # w_termination; the others charge 300
 

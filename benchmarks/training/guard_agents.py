@@ -8,7 +8,7 @@ multi-seed results folder (``agent_seed_<k>/`` as `benchmarks.train_seeds --resu
 files once) and each metadata.json with ``envelope_guard`` added, written atomically. The seeds'
 learning curves and test evaluations are not copied: they belong to the unguarded agents.
 
-    python -m benchmarks.guard_agents --from benchmarks/results/seeds/ppo_paper_actuator \\
+    python -m benchmarks.training.guard_agents --from benchmarks/results/seeds/ppo_paper_actuator \\
         --out benchmarks/results/seeds/ppo_paper_actuator_guard
 """
 
@@ -63,7 +63,7 @@ def guard_agent(source: Path, target: Path, guard: EnvelopeGuard) -> Path:
 
 @dataclass
 class Options:
-    """The command line of `python -m benchmarks.guard_agents`."""
+    """The command line of `python -m benchmarks.training.guard_agents`."""
 
     source: str = option(None, "agent folder or multi-seed results folder", flag="--from",
                          required=True)  # fmt: skip
@@ -78,7 +78,9 @@ class Options:
 
 
 def main(argv: list[str] | None = None) -> list[Path]:
-    args, parser = parse_options(Options, argv, program_name("benchmarks.guard_agents"), __doc__)
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.training.guard_agents"), __doc__
+    )
     with usage_errors(parser):
         settings = {name: getattr(args, name) for name in EnvelopeGuard.__dataclass_fields__}
         guard = check_envelope_guard(settings, "options")
