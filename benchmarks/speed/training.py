@@ -167,8 +167,8 @@ class Options:
     )
     update_dtype: tuple[str, ...] = option(
         ("float32",),
-        "precision of the update's matrix products (float32, bfloat16: "
-        "`training.update_precision`); one row each",
+        "precision of the update's matrix products (float32, bfloat16: torch.autocast; timed "
+        "only, PPO does not learn with it, docs/performance.md); one row each",
         nargs="+",
     )
     cache: str = option(os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),

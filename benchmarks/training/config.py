@@ -73,7 +73,6 @@ ZOO_KEYS = frozenset(
         "action_scale",
         "action_std_schedule",
         "cost_penalty",
-        "update_dtype",
         "envelope_guard",
     }
 )
@@ -105,7 +104,6 @@ class ZooConfig:
     action_std_schedule: Any = None  # `training.noise_schedule.StdSchedule`
     cost_penalty: float | None = None  # w of r − w·cost (`training.cost_penalty`)
     envelope_guard: Any = None  # `controllers.envelope_guard.EnvelopeGuard` of the commands
-    update_dtype: str = "float32"  # the learner's matrix products (`training.update_precision`)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -185,9 +183,6 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     from benchmarks.training.agent_interface import parse_interface
 
     interface = parse_interface(section, path, env_id, residual, action_bounds)
-    from benchmarks.training.update_precision import check_update_dtype
-
-    update_dtype = check_update_dtype(section.get("update_dtype", "float32"), f"{path}: {env_id}")
     # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
     # the first training step, not at the model's construction or in its first update.
     where = f"{path}: {env_id}"
@@ -199,7 +194,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
         normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
         algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
-        update_dtype=update_dtype, **interface,
+        **interface,
     )  # fmt: skip
 
 

@@ -48,7 +48,6 @@ from benchmarks.training.evaluation import (
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
-from benchmarks.training.update_precision import use_update_dtype
 from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
 from controllers.residual import RESIDUAL_OBS_NAMES
 
@@ -308,7 +307,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
                           **cfg.model_kwargs())  # fmt: skip
         if residual is not None:
             zero_correction_layer(model)
-    use_update_dtype(model, cfg.update_dtype)  # a loaded model too: the file states the choice
     start_wall = float(previous.get("wall_time_s", 0.0))
     best: dict[str, Any] = dict(previous.get("best", {}))
     sessions = [*previous.get("sessions", []), {
@@ -341,7 +339,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": describe_env(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
-            "update_dtype": cfg.update_dtype,
             "best": best, "auv_gym_version": auv_gym.__version__, **extra,
         }  # fmt: skip
 
