@@ -12,31 +12,21 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+from stable_baselines3.common.vec_env import VecEnv
 
+from benchmarks.training.observed_actions import ObservedActions
 from controllers.action_increment import apply_increment, check_increment, prev_action_index
 
 __all__ = ["IncrementalActions"]
 
 
-class IncrementalActions(VecEnvWrapper):
+class IncrementalActions(ObservedActions):
     """``venv`` whose actions are increments δ·Δ of the previous command (δ = `increment`)."""
 
     def __init__(self, venv: VecEnv, increment: float, obs_names: Sequence[str]) -> None:
         self.increment = check_increment(increment, "IncrementalActions")
         self.index = prev_action_index(obs_names)
-        super().__init__(venv)
-        self.last_obs = np.zeros((venv.num_envs, len(obs_names)), np.float32)
+        super().__init__(venv, obs_names)
 
     def step_async(self, actions: np.ndarray) -> None:
         self.venv.step_async(apply_increment(self.last_obs, actions, self.increment, self.index))
-
-    def reset(self) -> np.ndarray:
-        obs = self.venv.reset()
-        self.last_obs = np.array(obs, dtype=np.float32)
-        return obs
-
-    def step_wait(self):  # SB3 VecEnvStepReturn
-        obs, rewards, dones, infos = self.venv.step_wait()
-        self.last_obs = np.array(obs, dtype=np.float32)
-        return obs, rewards, dones, infos

@@ -178,8 +178,7 @@ _MODEL_ATTRIBUTES = ("_last_obs", "_last_episode_starts", "_last_original_obs", 
 _WRAPPER_ATTRIBUTES = {
     "VecNormalize": ("returns", "old_obs", "old_reward", "obs_rms", "ret_rms"),
     "VecMonitor": ("episode_returns", "episode_lengths", "episode_count"),
-    "IncrementalActions": ("last_obs",),
-    "GuardedActions": ("last_obs",),
+    "ObservedActions": ("last_obs",),  # IncrementalActions, GuardedActions
 }
 
 

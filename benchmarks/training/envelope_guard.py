@@ -12,14 +12,15 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+from stable_baselines3.common.vec_env import VecEnv
 
+from benchmarks.training.observed_actions import ObservedActions
 from controllers.envelope_guard import GUARD_INPUTS, EnvelopeGuard, guard_commands
 
 __all__ = ["GuardedActions"]
 
 
-class GuardedActions(VecEnvWrapper):
+class GuardedActions(ObservedActions):
     """``venv`` whose commands are limited by ``guard`` near the pitch and surge limits."""
 
     def __init__(self, venv: VecEnv, guard: EnvelopeGuard, obs_names: Sequence[str]) -> None:
@@ -29,18 +30,7 @@ class GuardedActions(VecEnvWrapper):
                              f"which lacks {missing}")  # fmt: skip
         self.guard = guard
         self.index = tuple(list(obs_names).index(name) for name in GUARD_INPUTS)
-        super().__init__(venv)
-        self.last_obs = np.zeros((venv.num_envs, len(obs_names)), np.float32)
+        super().__init__(venv, obs_names)
 
     def step_async(self, actions: np.ndarray) -> None:
         self.venv.step_async(guard_commands(actions, self.last_obs, self.index, self.guard))
-
-    def reset(self) -> np.ndarray:
-        obs = self.venv.reset()
-        self.last_obs = np.array(obs, dtype=np.float32)
-        return obs
-
-    def step_wait(self):  # SB3 VecEnvStepReturn
-        obs, rewards, dones, infos = self.venv.step_wait()
-        self.last_obs = np.array(obs, dtype=np.float32)
-        return obs, rewards, dones, infos
