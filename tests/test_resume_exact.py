@@ -32,7 +32,12 @@ PPO = {**COMMON, "n_steps": 32, "batch_size": 64, "n_epochs": 2, "gamma": 0.99,
 SAC = {**COMMON, "learning_rate": 3e-4, "buffer_size": 5000, "learning_starts": 200,
        "batch_size": 32, "train_freq": 1, "gradient_steps": 1, "ent_coef": "auto",
        "use_sde": True, "sde_sample_freq": 8}  # fmt: skip
-CASES = {"ppo": ("AUVPath3D-v0", PPO, 768, 300), "sac": ("AUVPath3DSpeedLimit-v0", SAC, 512, 100)}
+# PPO inside an envelope guard tight enough to act in 5-s episodes: its wrapper's last
+# observations are part of what a resume restores.
+GUARDED = {**PPO, "envelope_guard": {"pitch_soft_deg": 2.0, "pitch_hard_deg": 6.0,
+                                     "surge_soft": 0.3, "surge_hard": 0.6}}  # fmt: skip
+CASES = {"ppo": ("AUVPath3D-v0", PPO, 768, 300), "sac": ("AUVPath3DSpeedLimit-v0", SAC, 512, 100),
+         "ppo_guard": ("AUVPath3D-v0", GUARDED, 768, 300)}  # fmt: skip
 
 
 def _options(tmp_path: Path, algo: str, out: str, **extra: Any):
@@ -41,7 +46,8 @@ def _options(tmp_path: Path, algo: str, out: str, **extra: Any):
     env_id, section, n_timesteps, _ = CASES[algo]
     config = tmp_path / f"{algo}.yml"
     config.write_text(yaml.safe_dump({env_id: {**section, "n_timesteps": n_timesteps}}))
-    return TrainOptions(algo=algo, config=str(config), env_id=env_id, out=str(tmp_path / out),
+    return TrainOptions(algo=algo.split("_")[0], config=str(config), env_id=env_id,
+                        out=str(tmp_path / out),
                         seed=3, eval_freq=256, checkpoint_freq=256, eval_seeds=(100, 101),
                         eval_duration=2.0, progress_bar=False, **extra)  # fmt: skip
 
@@ -94,19 +100,19 @@ def _curve(run: Path) -> list[list[str]]:
         return [row[:1] + row[2:] for row in csv.reader(f)]
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "ppo_guard"])
 def test_paused_and_killed_runs_resume_bit_for_bit(tmp_path: Path, algo: str) -> None:
     from benchmarks.training.train import train
 
     _, _, n_timesteps, stop_at = CASES[algo]
-    export = {"export": str(tmp_path / "agent_a")} if algo == "ppo" else {}
+    export = {"export": str(tmp_path / "agent_a")} if algo.startswith("ppo") else {}
     train(_options(tmp_path, algo, "a", **export))  # never stopped
     paused = _options(tmp_path, algo, "b", stop_at=stop_at)
     train(paused)
     meta = json.loads((tmp_path / "b" / "metadata.json").read_text())
     # PPO pauses at the first rollout start at or after 300 (3 × 128 steps); SAC at 100.
-    assert meta["num_timesteps"] == (384 if algo == "ppo" else 100)
-    export = {"export": str(tmp_path / "agent_b")} if algo == "ppo" else {}
+    assert meta["num_timesteps"] == (384 if algo.startswith("ppo") else 100)
+    export = {"export": str(tmp_path / "agent_b")} if algo.startswith("ppo") else {}
     resumed = _options(tmp_path, algo, "b", resume=True, **export)
     train(resumed)
     assert json.loads((tmp_path / "b" / "metadata.json").read_text())["sessions"][1]["exact_resume"]
@@ -115,8 +121,11 @@ def test_paused_and_killed_runs_resume_bit_for_bit(tmp_path: Path, algo: str) ->
     assert _curve(tmp_path / "b") == rows
     for folder in ("final", "best"):
         _assert_same_agent(tmp_path / "a" / folder, tmp_path / "b" / folder)
-    if algo == "ppo":
+    if algo.startswith("ppo"):
         _assert_same_agent(tmp_path / "agent_a", tmp_path / "agent_b")
+    if algo == "ppo_guard":  # the exported agent carries its guard
+        guard = json.loads((tmp_path / "agent_b" / "metadata.json").read_text())["envelope_guard"]
+        assert guard["pitch_hard_deg"] == 6.0
     # The pause left its checkpoint; the later ones are those of the run that never stopped.
     for step in range(512, n_timesteps + 1, 256):
         name = f"checkpoints/step_{step:010d}"
