@@ -172,3 +172,22 @@ def test_a_file_trains_a_guarded_agent_that_loads_guarded(tmp_path, train_tiny_p
     with pytest.raises(ValueError, match=r"bad.yml: AUVPath3DPreview-v0: envelope_guard: each "
                                          r"soft limit must lie below its hard limit"):  # fmt: skip
         read_zoo_config(config, "AUVPath3DPreview-v0", "ppo")
+
+
+def test_guarding_a_results_folder_copies_its_curves_not_its_test_evaluations(tmp_path):
+    import shutil
+
+    from benchmarks.training.guard_agents import main
+
+    source = tmp_path / "seeds"
+    shutil.copytree(SEEDS / "agent_seed_1", source / "agent_seed_1")
+    shutil.copyfile(SEEDS / "seed_1_learning_curve.csv", source / "seed_1_learning_curve.csv")
+    shutil.copyfile(SEEDS / "seed_1_test_evaluation.json", source / "seed_1_test_evaluation.json")
+    main(["--from", str(source), "--out", str(tmp_path / "guarded")])
+    names = sorted(p.name for p in (tmp_path / "guarded").iterdir())
+    assert names == ["agent_seed_1", "seed_1_learning_curve.csv"]
+    for name in ("model.zip", "vecnormalize.npz"):  # the network and statistics byte for byte
+        assert (tmp_path / "guarded" / "agent_seed_1" / name).read_bytes() == (
+            source / "agent_seed_1" / name).read_bytes()  # fmt: skip
+    with pytest.raises(SystemExit):
+        main(["--from", str(tmp_path / "empty"), "--out", str(tmp_path / "x")])

@@ -5,8 +5,10 @@ inside them; recorded in an agent's ``metadata.json`` it is part of the agent: e
 the benchmark and the test suite evaluate the guarded agent. ``--from`` is one agent folder or a
 multi-seed results folder (``agent_seed_<k>/`` as `benchmarks.train_seeds --results` writes);
 ``--out`` receives the same layout: the agents' files copied unchanged (git stores identical
-files once) and each metadata.json with ``envelope_guard`` added, written atomically. The seeds'
-learning curves and test evaluations are not copied: they belong to the unguarded agents.
+files once) and each metadata.json with ``envelope_guard`` added, written atomically. A results
+folder's learning curves (``seed_<k>_learning_curve.csv``: the networks' training, evaluated
+without the guard) are copied too, so that the suite's statistics draw them; its test
+evaluations are not: they belong to the unguarded agents.
 
     python -m benchmarks.training.guard_agents --from benchmarks/results/seeds/ppo_paper_actuator \\
         --out benchmarks/results/seeds/ppo_paper_actuator_guard
@@ -92,6 +94,8 @@ def main(argv: list[str] | None = None) -> list[Path]:
             raise ValueError("--out must differ from --from")
         written = [guard_agent(folder, out / name if name else out, guard)
                    for folder, name in folders]  # fmt: skip
+        for curve in sorted(source.glob("seed_*_learning_curve.csv")) if folders[0][1] else ():
+            shutil.copyfile(curve, out / curve.name)
     print(f"{len(written)} guarded agent(s) in {out}: {json.dumps(guard.to_dict())}")
     return written
 
