@@ -191,3 +191,17 @@ def test_guarding_a_results_folder_copies_its_curves_not_its_test_evaluations(tm
             source / "agent_seed_1" / name).read_bytes()  # fmt: skip
     with pytest.raises(SystemExit):
         main(["--from", str(tmp_path / "empty"), "--out", str(tmp_path / "x")])
+
+
+def test_a_corrupt_guard_in_metadata_is_named_by_the_loader(tmp_path):
+    import shutil
+
+    from controllers.loader import load_policy
+
+    agent = tmp_path / "agent"
+    shutil.copytree(SEEDS / "agent_seed_1", agent)
+    meta = json.loads((agent / "metadata.json").read_text())
+    meta["envelope_guard"] = {"pitch_soft_deg": 60.0, "pitch_hard_deg": 50.0}
+    (agent / "metadata.json").write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match=r"metadata.json: envelope_guard: each soft limit"):
+        load_policy(agent)
