@@ -22,29 +22,33 @@ def draw_start(
         position = np.asarray(cfg.start_position)
     if cfg.start_heading is not None:
         heading = float(cfg.start_heading)
-    if not cfg.randomize_start:
-        rotation = _rotation(cfg, rng)
-        if rotation != 0.0:  # 0.0 is skipped: earlier episodes stay bit for bit
-            position, heading = _rotated(position, heading, rotation, path.evaluate(0.0)[0])
-        return position, heading, 0.0, 0.0
-    # Training distribution: half the episodes near the path's default start (heading error
-    # within ±start_heading_spread), half anywhere on the first turn of the path, with a
-    # random heading error and speed. A drawn rotation comes after every other draw.
-    draws = rng.uniform(-1.0, 1.0, size=7)
-    if draws[0] < 0.0:
-        spread = cfg.start_heading_spread
-        position, heading = position + START_OFFSET * draws[1:4], heading + spread * draws[4]
-        rotation = _rotation(cfg, rng)
-        if rotation != 0.0:  # the whole near-start draw turns about p(0)
-            position, heading = _rotated(position, heading, rotation, path.evaluate(0.0)[0])
-        return position, heading, 0.0, 0.0
+    if cfg.randomize_start:
+        # Training distribution: half the episodes near the path's default start (heading error
+        # within ±start_heading_spread), half anywhere on the first turn of the path, with a
+        # random heading error and speed. A drawn rotation comes after every other draw.
+        draws = rng.uniform(-1.0, 1.0, size=7)
+        if draws[0] >= 0.0:
+            return _on_the_first_turn(cfg, rng, path, draws)
+        position = position + START_OFFSET * draws[1:4]
+        heading = heading + cfg.start_heading_spread * draws[4]
+    rotation = _rotation(cfg, rng)
+    if rotation != 0.0:  # the whole start turns about p(0); 0.0 keeps earlier starts bit for bit
+        position, heading = _rotated(position, heading, rotation, path.evaluate(0.0)[0])
+    return position, heading, 0.0, 0.0
+
+
+def _on_the_first_turn(
+    cfg: SimConfig, rng: np.random.Generator, path: Path, draws: np.ndarray
+) -> tuple[np.ndarray, float, float, float]:
+    """A start anywhere on the first turn: up to 8 m off the path, ±60° of heading error and
+    0–1.5 m/s of surge; a rotation turns only its heading (it lies along the path)."""
     s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
     s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
     p, dp, _ = path.evaluate(s0)
     path_heading = math.atan2(dp[1], dp[0])
     position = p + 8.0 * rng.uniform(-1.0, 1.0, size=3)
     rotation = _rotation(cfg, rng)
-    if rotation != 0.0:  # on the path itself: only the heading error turns
+    if rotation != 0.0:
         path_heading = path_heading + rotation
     return position, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
 
