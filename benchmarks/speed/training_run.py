@@ -25,9 +25,8 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     ``spec``: n_envs, n_steps, batch_size, rollouts, warmup, update_threads, update_dtype,
     net_arch (empty: the configuration's networks), seed. Uses only what every version of the
     harness has (`read_zoo_config`, `make_training_env`, `thread_limit`), so the same function
-    times old and new code; the
-    bfloat16 update (``update_dtype``: `PPO.train` under `torch.autocast`) is applied here, so it
-    times either tree's learner in that precision.
+    times old and new code; the bfloat16 update (``update_dtype``: `PPO.train` under
+    `torch.autocast`) is applied here, so it times either tree's learner in that precision.
     """
     import torch
     from stable_baselines3 import PPO

@@ -94,9 +94,10 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
     write_folder_atomic(folder, fill)
 
 
-def export_agent(source: Path, target: Path) -> None:
+def export_agent(source: Path, target: Path, metadata: dict[str, Any] | None = None) -> None:
     """Copy an agent directory (model.zip, vecnormalize.npz, metadata.json and, when the run
-    wrote it, vecnormalize.pkl) atomically.
+    wrote it, vecnormalize.pkl) atomically; with ``metadata``, that is written as the copy's
+    metadata.json instead of the source's (e.g. an agent given an envelope guard).
 
     `controllers.loader.load_policy` needs only the .npz statistics; the pickled VecNormalize is
     what SB3's `VecNormalize.load` and RL Zoo's `enjoy` read, so the exported folder works with
@@ -104,8 +105,12 @@ def export_agent(source: Path, target: Path) -> None:
     """
 
     def fill(tmp: Path) -> None:
-        for name in (MODEL_FILE, STATS_FILE, METADATA_FILE):
+        for name in (MODEL_FILE, STATS_FILE):
             shutil.copy2(source / name, tmp / name)
+        if metadata is None:
+            shutil.copy2(source / METADATA_FILE, tmp / METADATA_FILE)
+        else:
+            write_metadata(tmp / METADATA_FILE, metadata)
         if (source / VECNORM_FILE).is_file():
             shutil.copy2(source / VECNORM_FILE, tmp / VECNORM_FILE)
 

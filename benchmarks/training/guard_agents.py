@@ -4,11 +4,11 @@ The guard limits the pitch and surge commands near the vehicle's limits and is t
 inside them; recorded in an agent's ``metadata.json`` it is part of the agent: every loader,
 the benchmark and the test suite evaluate the guarded agent. ``--from`` is one agent folder or a
 multi-seed results folder (``agent_seed_<k>/`` as `benchmarks.train_seeds --results` writes);
-``--out`` receives the same layout: the agents' files copied unchanged (git stores identical
-files once) and each metadata.json with ``envelope_guard`` added, written atomically. A results
-folder's learning curves (``seed_<k>_learning_curve.csv``: the networks' training, evaluated
-without the guard) are copied too, so that the suite's statistics draw them; its test
-evaluations are not: they belong to the unguarded agents.
+``--out`` receives the same layout: each agent copied atomically (`checkpoints.export_agent`),
+its model and statistics unchanged (git stores identical files once) and its metadata.json with
+``envelope_guard`` added. A results folder's learning curves (``seed_<k>_learning_curve.csv``:
+the networks' training, evaluated without the guard) are copied too, so that the suite's
+statistics draw them; its test evaluations are not: they belong to the unguarded agents.
 
     python -m benchmarks.training.guard_agents --from benchmarks/results/seeds/ppo_paper_actuator \\
         --out benchmarks/results/seeds/ppo_paper_actuator_guard
@@ -17,27 +17,25 @@ evaluations are not: they belong to the unguarded agents.
 from __future__ import annotations
 
 import json
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import write_json
+from auv_gym.files import write_text
 from benchmarks.arguments import parse_options, program_name, usage_errors
 from benchmarks.options import option
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from controllers.agent import check_agent
 from controllers.envelope_guard import EnvelopeGuard, check_envelope_guard
 
 __all__ = ["guard_agent", "main"]
-
-AGENT_FILES = ("model.zip", "vecnormalize.npz", "vecnormalize.pkl")
 
 
 def agent_folders(source: Path) -> list[tuple[Path, str]]:
     """(agent folder, its name under --out) for one agent or a multi-seed results folder."""
     if (source / "model.zip").is_file():
         return [(source, "")]
-    seeds = sorted(p for p in source.glob("agent_seed_*") if p.is_dir())
+    seeds = sorted(p for p in source.glob(f"{SEED_AGENT_PREFIX}*") if p.is_dir())
     if not seeds:
         raise ValueError(f"--from {source} holds neither an agent (model.zip) nor "
                          "agent_seed_<k>/ folders")  # fmt: skip
@@ -55,11 +53,7 @@ def guard_agent(source: Path, target: Path, guard: EnvelopeGuard) -> Path:
                          f"{metadata['envelope_guard']}")  # fmt: skip
     metadata["envelope_guard"] = guard.to_dict()
     metadata["guarded_from"] = str(source)
-    target.mkdir(parents=True, exist_ok=True)
-    for name in AGENT_FILES:
-        if (source / name).is_file():
-            shutil.copyfile(source / name, target / name)
-    write_json(target / "metadata.json", metadata, indent=1)
+    export_agent(source, target, metadata)
     return target
 
 
@@ -95,7 +89,7 @@ def main(argv: list[str] | None = None) -> list[Path]:
         written = [guard_agent(folder, out / name if name else out, guard)
                    for folder, name in folders]  # fmt: skip
         for curve in sorted(source.glob("seed_*_learning_curve.csv")) if folders[0][1] else ():
-            shutil.copyfile(curve, out / curve.name)
+            write_text(out / curve.name, curve.read_text())
     print(f"{len(written)} guarded agent(s) in {out}: {json.dumps(guard.to_dict())}")
     return written
 
