@@ -76,6 +76,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_paper_actuator": "#7b4173",
     "ppo_paper_actuator_guard": "#ce6dbd",
     "ppo_paper_start_guard": "#3182bd",
+    "ppo_paper_start_guard_alloc": "#6baed6",
     "sac_generalist": "#8c564b",
     "sac_helix": "#393b79",
     "sac_antiwindup": "#637939",

@@ -14,6 +14,11 @@ from typing import Any
 
 from controllers.action_increment import IncrementPolicy, check_increment, prev_action_index
 from controllers.action_scale import ScaledPolicy, check_action_scale
+from controllers.actuator_allocation import (
+    ALLOCATED_ACTUATORS,
+    AllocatedPolicy,
+    check_actuator_allocation,
+)
 from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
 from controllers.envelope_guard import GuardedPolicy, check_envelope_guard
 from controllers.residual import ResidualPolicy, check_bound
@@ -29,7 +34,9 @@ def load_policy(
     num_threads: int | None = 1,
     base_kwargs: dict[str, Any] | None = None,
     algo: str | None = None,
-) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy | GuardedPolicy:
+) -> (
+    AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy | GuardedPolicy | AllocatedPolicy
+):
     """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
     as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
     `ResidualPolicy` of its base controller, built with the recorded settings and
@@ -37,7 +44,9 @@ def load_policy(
     agents), and its actor; for an incremental agent (metadata "action_increment") an
     `IncrementPolicy` (`controllers.action_increment`); for a scaled agent (metadata
     "action_scale") a `ScaledPolicy` (`controllers.action_scale`); with metadata
-    "envelope_guard", that policy inside a `GuardedPolicy` (`controllers.envelope_guard`).
+    "envelope_guard", that policy inside a `GuardedPolicy` (`controllers.envelope_guard`); with
+    metadata "actuator_allocation" and a ``base_kwargs`` actuator "fins" or "realistic", the
+    whole inside an `AllocatedPolicy` (`controllers.actuator_allocation`) for that actuator.
 
     ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
     otherwise. The files are validated first, before torch is imported (FileNotFoundError when
@@ -68,11 +77,21 @@ def load_policy(
         guard = check_envelope_guard(guard, f"{files.metadata_file}")
         if files.residual is not None:
             raise ValueError(f"{files.metadata_file}: envelope_guard excludes residual")
+    allocation = files.metadata.get("actuator_allocation")
+    if allocation is not None:
+        check_actuator_allocation(allocation, f"{files.metadata_file}")
+        if files.residual is not None:
+            raise ValueError(f"{files.metadata_file}: actuator_allocation excludes residual")
     policy = _unguarded(files, load_actor(files, device=device, num_threads=num_threads),
                         increment, scale, base_kwargs)  # fmt: skip
-    if guard is None:
+    names = observation_layout(files.metadata)
+    if guard is not None:
+        policy = GuardedPolicy(policy, guard, names)
+    actuator = (base_kwargs or {}).get("actuator")
+    if allocation is None or actuator not in ALLOCATED_ACTUATORS:
         return policy
-    return GuardedPolicy(policy, guard, observation_layout(files.metadata))
+    return AllocatedPolicy(policy, names, actuator, (base_kwargs or {}).get("params"),
+                           (base_kwargs or {}).get("actuator_params"))  # fmt: skip
 
 
 def _unguarded(files: Any, actor: AgentPolicy, increment: float | None,

@@ -1,4 +1,5 @@
-"""Copies of saved agents with an envelope guard (`controllers.envelope_guard`) in their metadata.
+"""Copies of saved agents with an envelope guard (`controllers.envelope_guard`) and, with
+``--allocation``, an actuator allocation (`controllers.actuator_allocation`) in their metadata.
 
 The guard limits the pitch and surge commands near the vehicle's limits and is the identity
 inside them; recorded in an agent's ``metadata.json`` it is part of the agent: every loader,
@@ -9,6 +10,9 @@ its model and statistics unchanged (git stores identical files once) and its met
 ``envelope_guard`` added. A results folder's learning curves (``seed_<k>_learning_curve.csv``:
 the networks' training, evaluated without the guard) are copied too, so that the suite's
 statistics draw them; its test evaluations are not: they belong to the unguarded agents.
+``--allocation`` records ``actuator_allocation: "paper"`` (the agent, trained on the paper's
+actuator, commands its normalised τ; on "fins" or "realistic" the loader allocates it);
+``--no-guard`` leaves the guard out (an agent guarded already keeps its own).
 
     python -m benchmarks.training.guard_agents --from benchmarks/results/seeds/ppo_paper_actuator \\
         --out benchmarks/results/seeds/ppo_paper_actuator_guard
@@ -25,6 +29,7 @@ from auv_gym.files import write_text
 from benchmarks.arguments import parse_options, program_name, usage_errors
 from benchmarks.options import option
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
+from controllers.actuator_allocation import COMMANDED_ACTUATOR
 from controllers.agent import check_agent
 from controllers.envelope_guard import EnvelopeGuard, check_envelope_guard
 
@@ -42,17 +47,29 @@ def agent_folders(source: Path) -> list[tuple[Path, str]]:
     return [(p, p.name) for p in seeds]
 
 
-def guard_agent(source: Path, target: Path, guard: EnvelopeGuard) -> Path:
-    """Copy the agent ``source`` to ``target`` with ``guard`` recorded; returns ``target``."""
+def guard_agent(source: Path, target: Path, guard: EnvelopeGuard | None,
+                allocation: bool = False) -> Path:  # fmt: skip
+    """Copy the agent ``source`` to ``target`` with ``guard`` (None: none added) and, with
+    ``allocation``, the paper actuator's allocation recorded; returns ``target``."""
     files = check_agent(source)  # a corrupt agent is refused before anything is written
     metadata: dict[str, Any] = dict(files.metadata)
     if files.residual is not None:
-        raise ValueError(f"{source}: a residual agent cannot take an envelope guard")
-    if "envelope_guard" in metadata:
-        raise ValueError(f"{source}: the agent already has an envelope guard "
-                         f"{metadata['envelope_guard']}")  # fmt: skip
-    metadata["envelope_guard"] = guard.to_dict()
-    metadata["guarded_from"] = str(source)
+        raise ValueError(f"{source}: a residual agent cannot take an envelope guard or an "
+                         "actuator allocation")  # fmt: skip
+    if guard is not None:
+        if "envelope_guard" in metadata:
+            raise ValueError(f"{source}: the agent already has an envelope guard "
+                             f"{metadata['envelope_guard']}")  # fmt: skip
+        metadata["envelope_guard"] = guard.to_dict()
+        metadata["guarded_from"] = str(source)
+    if allocation:
+        trained_on = (metadata.get("env_kwargs") or {}).get("actuator")
+        if trained_on != COMMANDED_ACTUATOR:
+            raise ValueError(f"{source}: actuator allocation needs an agent trained on the "
+                             f"{COMMANDED_ACTUATOR!r} actuator, this one: "
+                             f"{trained_on!r}")  # fmt: skip
+        metadata["actuator_allocation"] = COMMANDED_ACTUATOR
+        metadata["allocated_from"] = str(source)
     export_agent(source, target, metadata)
     return target
 
@@ -71,6 +88,9 @@ class Options:
     lookahead_s: float = option(EnvelopeGuard.lookahead_s, "pitch prediction θ + T·q, T [s]")
     surge_soft: float = option(EnvelopeGuard.surge_soft, "surge where thrust is cut [m/s]")
     surge_hard: float = option(EnvelopeGuard.surge_hard, "surge of full astern [m/s]")
+    guard: bool = option(True, "record the envelope guard (--no-guard: leave it out)")
+    allocation: bool = option(False, "record the actuator allocation (agents trained on the "
+                              "paper actuator)")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> list[Path]:
@@ -79,18 +99,22 @@ def main(argv: list[str] | None = None) -> list[Path]:
     )
     with usage_errors(parser):
         settings = {name: getattr(args, name) for name in EnvelopeGuard.__dataclass_fields__}
-        guard = check_envelope_guard(settings, "options")
+        guard = check_envelope_guard(settings, "options") if args.guard else None
+        if guard is None and not args.allocation:
+            raise ValueError("--no-guard without --allocation records nothing")
         source, out = Path(args.source), Path(args.out)
         if not source.is_dir():
             raise ValueError(f"--from {source} is not a folder")
         folders = agent_folders(source)
         if out.resolve() == source.resolve():
             raise ValueError("--out must differ from --from")
-        written = [guard_agent(folder, out / name if name else out, guard)
+        written = [guard_agent(folder, out / name if name else out, guard, args.allocation)
                    for folder, name in folders]  # fmt: skip
         for curve in sorted(source.glob("seed_*_learning_curve.csv")) if folders[0][1] else ():
             write_text(out / curve.name, curve.read_text())
-    print(f"{len(written)} guarded agent(s) in {out}: {json.dumps(guard.to_dict())}")
+    added = {"envelope_guard": guard.to_dict() if guard else None,
+             "actuator_allocation": COMMANDED_ACTUATOR if args.allocation else None}  # fmt: skip
+    print(f"{len(written)} agent(s) in {out}: {json.dumps(added)}")
     return written
 
 

@@ -1,0 +1,129 @@
+"""Actuator allocation for agents: an agent's moment commands flown on fins or propeller and fins.
+
+An agent trained on the paper's actuator commands generalised forces: a = τ/τ_max with
+τ_max = (X_max, M_max, N_max) the vehicle's limits (REMUS 100: 50 N, 10 N·m, 10 N·m). On
+another actuator the same numbers mean something else: with the fin-limited moments ("fins",
+docs/model.md §2.3) a_M is a fin deflection whose moment is K·δ_max·u|u|·a_M (3.2 N·m at
+1 m/s), with the realistic propeller and fins ("realistic", §2.6) a shaft speed and two fin
+angles. A classical controller is told its vehicle's actuator and allocates its τ_d to it
+(`controllers.base.BatchedController._allocate`); `AllocatedPolicy` does the same for an agent:
+
+    τ_d = a·τ_max                                            (the agent's command, N and N·m)
+    fins:      a'_M = clip(M_d / (K·δ_max·u|u|), −1, 1), a'_N alike; the sign at u ≤ 0
+    realistic: (n, δ_s, δ_r) = `controllers.allocation.allocate` of τ_d with M_d, N_d clipped
+               to ±K·δ_max·u|u|, at the observed (u, v, w)
+
+and feeds the agent, in its previous-action entries (a_X_prev, a_M_prev, a_N_prev), the command
+it gave as far as the actuator could deliver it, a_prev = (a_X, clip(a_M, ±K·δ_max·u|u|/M_max),
+clip(a_N, ±K·δ_max·u|u|/N_max)), instead of the fin or shaft commands it has never seen: the
+agent then meets the vehicle it was trained on with less moment authority. On the paper's
+actuator the allocation is the identity and the loader does not add it.
+
+It is part of an agent when its metadata holds ``actuator_allocation: "paper"`` (the actuator
+whose normalised τ it commands); `controllers.loader.load_policy` wraps it with the scenario's
+actuator (``base_kwargs``). An env that draws the actuator per episode (``actuator="random"``)
+tells no actuator, and the agent runs unallocated there (docs/design.md §3.16).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
+from auv_gym.vehicle import AUVParams, remus100
+from controllers.action_increment import prev_action_index
+from controllers.actor_wrapper import ActorWrapper
+from controllers.allocation import allocate
+from controllers.base import actuator_vector
+
+__all__ = ["ALLOCATED_ACTUATORS", "AllocatedPolicy", "AllocationState",
+           "check_actuator_allocation"]  # fmt: skip
+
+COMMANDED_ACTUATOR = "paper"  # the one actuator whose normalised τ an agent may command
+ALLOCATED_ACTUATORS = ("fins", "realistic")  # the actuators `AllocatedPolicy` allocates to
+VELOCITY_INPUTS = ("u", "v", "w")  # [m/s] the observation entries the allocation reads
+
+
+def check_actuator_allocation(value: Any, where: str) -> str:
+    """The commanded actuator of an agent's ``actuator_allocation`` ("paper"), or a one-line
+    error naming ``where``."""
+    if value != COMMANDED_ACTUATOR:
+        raise ValueError(f"{where}: actuator_allocation must be {COMMANDED_ACTUATOR!r} (the "
+                         f"actuator whose normalised τ the agent commands), "
+                         f"got {value!r}")  # fmt: skip
+    return value
+
+
+@dataclass
+class AllocationState:
+    """The wrapped actor's recurrent state and each row's previous delivered command (n, 3)."""
+
+    inner: Any
+    previous: np.ndarray
+
+
+class AllocatedPolicy(ActorWrapper):
+    """A Policy whose commands (the paper actuator's normalised τ) are allocated to ``actuator``
+    ("fins" or "realistic"; module docstring)."""
+
+    def __init__(self, actor: Any, obs_names: Sequence[str], actuator: str,
+                 params: AUVParams | None = None,
+                 actuator_params: ActuatorParams | dict | None = None) -> None:  # fmt: skip
+        super().__init__(actor)
+        if actuator not in ALLOCATED_ACTUATORS:
+            raise ValueError(f"AllocatedPolicy allocates to {list(ALLOCATED_ACTUATORS)}, got "
+                             f"actuator {actuator!r}")  # fmt: skip
+        names = list(obs_names)
+        missing = [name for name in VELOCITY_INPUTS if name not in names]
+        if missing:
+            raise ValueError(f"actuator_allocation reads {list(VELOCITY_INPUTS)} from the "
+                             f"agent's observation, which lacks {missing}")  # fmt: skip
+        self.velocity_index = np.array([names.index(n) for n in VELOCITY_INPUTS])
+        self.previous_index = prev_action_index(names)
+        self.actuator = actuator
+        self.vehicle = params if params is not None else remus100()
+        self.actuator_params = actuator_params_from_spec(actuator_params)
+        _, self.fin_gain, *limits = actuator_vector(actuator, self.vehicle, self.actuator_params)
+        self.limits = np.array(limits, dtype=np.float64)  # (X_max [N], M_max, N_max [N·m])
+
+    def predict(self, observation: np.ndarray, state: AllocationState | None = None,
+                episode_start: np.ndarray | None = None,
+                deterministic: bool = True) -> tuple[np.ndarray, AllocationState]:  # fmt: skip
+        """The allocated commands (float32, (3,) or (n, 3)) for observations (d,) or (n, d)."""
+        single = np.ndim(observation) == 1
+        obs = np.array(np.atleast_2d(observation), dtype=np.float32, copy=True)
+        n = obs.shape[0]
+        if state is None or state.previous.shape[0] != n:
+            state = AllocationState(None, np.zeros((n, 3), dtype=np.float32))
+        if episode_start is not None:
+            state.previous[np.asarray(episode_start, dtype=bool).reshape(n)] = 0.0
+        obs[:, self.previous_index] = state.previous
+        commands, inner = self.actor.predict(obs[0] if single else obs, state.inner,
+                                             episode_start, deterministic)  # fmt: skip
+        a = np.clip(np.atleast_2d(np.asarray(commands, dtype=np.float64)), -1.0, 1.0)
+        velocity = obs[:, self.velocity_index].astype(np.float64)
+        u = velocity[:, 0]
+        authority = self.fin_gain * np.maximum(u * np.abs(u), 0.0)  # [N·m] fin moment limit
+        moments = a[:, 1:] * self.limits[1:]  # [N·m] M_d, N_d
+        delivered = np.clip(moments, -authority[:, None], authority[:, None])
+        previous = np.column_stack([a[:, 0], delivered / self.limits[1:]])
+        state = AllocationState(inner, previous.astype(np.float32))
+        if self.actuator == "fins":
+            out = np.empty_like(a)
+            out[:, 0] = a[:, 0]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = moments / authority[:, None]
+            out[:, 1:] = np.where(authority[:, None] > 0.0, np.clip(ratio, -1.0, 1.0),
+                                  np.sign(moments))  # fmt: skip
+        else:
+            tau = np.column_stack([a[:, 0] * self.limits[0], delivered])
+            out = allocate(tau, velocity, self.actuator_params)
+        out = out.astype(np.float32)
+        return (out[0] if single else out), state
+
+    def __repr__(self) -> str:
+        return f"AllocatedPolicy(path={self.path!r}, actuator={self.actuator!r})"
