@@ -78,6 +78,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_paper_start_guard": "#3182bd",
     "ppo_paper_start_guard_alloc": "#6baed6",
     "sac_generalist": "#8c564b",
+    "sac_paper_actuator_guard_alloc": "#c49c94",
     "sac_helix": "#393b79",
     "sac_antiwindup": "#637939",
     "ppo_residual": "#7f7f7f",

@@ -7,7 +7,8 @@
   "ppo_paper_actuator", "ppo_paper_actuator_guard" (the same agent inside its envelope guard,
   `controllers.envelope_guard`), "ppo_paper_start_guard" (the same training for 8M env steps,
   guarded), "ppo_paper_start_guard_alloc" (that agent with its moments allocated to the
-  scenario's actuator, `controllers.actuator_allocation`), "sac_helix"): the
+  scenario's actuator, `controllers.actuator_allocation`), "sac_paper_actuator_guard_alloc"
+  (the SAC generalist trained inside the envelope guard, allocated likewise), "sac_helix"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
   (`controllers.loader.load_policy`, any algorithm of `controllers.algorithms`); a residual
@@ -59,6 +60,7 @@ SHIPPED_AGENTS = {
     "ppo_paper_actuator_guard": "ppo_paper_actuator_guard",
     "ppo_paper_start_guard": "ppo_paper_start_guard",
     "ppo_paper_start_guard_alloc": "ppo_paper_start_guard_alloc",
+    "sac_paper_actuator_guard_alloc": "sac_paper_actuator_guard_alloc",
     "sac_helix": "sac_helix",
 }
 DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
