@@ -37,10 +37,10 @@ from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.vehicle import AUVParams, remus100
 from controllers.action_increment import prev_action_index
 from controllers.actor_wrapper import ActorWrapper
-from controllers.allocation import allocate
+from controllers.allocation import allocate, fin_angle, fin_authority
 from controllers.base import actuator_vector
 
-__all__ = ["ALLOCATED_ACTUATORS", "AllocatedPolicy", "AllocationState",
+__all__ = ["ALLOCATED_ACTUATORS", "COMMANDED_ACTUATOR", "AllocatedPolicy", "AllocationState",
            "check_actuator_allocation"]  # fmt: skip
 
 COMMANDED_ACTUATOR = "paper"  # the one actuator whose normalised τ an agent may command
@@ -85,9 +85,9 @@ class AllocatedPolicy(ActorWrapper):
         self.velocity_index = np.array([names.index(n) for n in VELOCITY_INPUTS])
         self.previous_index = prev_action_index(names)
         self.actuator = actuator
-        self.vehicle = params if params is not None else remus100()
         self.actuator_params = actuator_params_from_spec(actuator_params)
-        _, self.fin_gain, *limits = actuator_vector(actuator, self.vehicle, self.actuator_params)
+        vehicle = params if params is not None else remus100()
+        _, self.fin_gain, *limits = actuator_vector(actuator, vehicle, self.actuator_params)
         self.limits = np.array(limits, dtype=np.float64)  # (X_max [N], M_max, N_max [N·m])
 
     def predict(self, observation: np.ndarray, state: AllocationState | None = None,
@@ -106,19 +106,13 @@ class AllocatedPolicy(ActorWrapper):
                                              episode_start, deterministic)  # fmt: skip
         a = np.clip(np.atleast_2d(np.asarray(commands, dtype=np.float64)), -1.0, 1.0)
         velocity = obs[:, self.velocity_index].astype(np.float64)
-        u = velocity[:, 0]
-        authority = self.fin_gain * np.maximum(u * np.abs(u), 0.0)  # [N·m] fin moment limit
+        authority = fin_authority(self.fin_gain, velocity[:, 0])  # [N·m]
         moments = a[:, 1:] * self.limits[1:]  # [N·m] M_d, N_d
         delivered = np.clip(moments, -authority[:, None], authority[:, None])
         previous = np.column_stack([a[:, 0], delivered / self.limits[1:]])
         state = AllocationState(inner, previous.astype(np.float32))
-        if self.actuator == "fins":
-            out = np.empty_like(a)
-            out[:, 0] = a[:, 0]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio = moments / authority[:, None]
-            out[:, 1:] = np.where(authority[:, None] > 0.0, np.clip(ratio, -1.0, 1.0),
-                                  np.sign(moments))  # fmt: skip
+        if self.actuator == "fins":  # a normalised deflection; the sign where there is no flow
+            out = np.column_stack([a[:, 0], fin_angle(moments, authority[:, None], 1.0, 1.0)])
         else:
             tau = np.column_stack([a[:, 0] * self.limits[0], delivered])
             out = allocate(tau, velocity, self.actuator_params)

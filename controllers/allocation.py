@@ -27,7 +27,7 @@ import numpy as np
 
 from auv_gym.actuators import ActuatorParams
 
-__all__ = ["allocate", "fin_gain"]
+__all__ = ["allocate", "fin_angle", "fin_authority", "fin_gain"]
 
 
 def fin_gain(params: ActuatorParams) -> float:
@@ -37,7 +37,14 @@ def fin_gain(params: ActuatorParams) -> float:
     return min(stern * params.delta_max_stern, rudder * params.delta_max_rudder)
 
 
-def _fin_angle(moment: np.ndarray, gain: np.ndarray, direction: float, limit: float) -> np.ndarray:
+def fin_authority(gain: float, u: np.ndarray) -> np.ndarray:
+    """The fin-limited moment bound K·δ_max·max(u|u|, 0) [N·m] at surge speeds ``u`` [m/s] for
+    the fin gain ``gain`` = K·δ_max [kg] (vectorised `controllers.fbsm.moment_limits`)."""
+    u = np.asarray(u, dtype=np.float64)
+    return gain * np.maximum(u * np.abs(u), 0.0)
+
+
+def fin_angle(moment: np.ndarray, gain: np.ndarray, direction: float, limit: float) -> np.ndarray:
     """moment / gain clipped to ±limit; where gain = 0 (no flow), full deflection towards the
     moment with the sign ``direction`` the gain has under flow."""
     safe = np.where(gain != 0.0, gain, 1.0)
@@ -57,8 +64,8 @@ def allocate(tau: np.ndarray, nu: np.ndarray, params: ActuatorParams) -> np.ndar
     k_r = half_rho * (u * u + v * v) * p.fin_area_rudder * p.lift_coeff_rudder
     stern_gain = p.x_stern * k_s  # M = x_s k_s δ_s
     rudder_gain = -p.x_rudder * k_r  # N = −x_r k_r δ_r
-    delta_s = _fin_angle(tau[:, 1], stern_gain, np.sign(p.x_stern), p.delta_max_stern)
-    delta_r = _fin_angle(tau[:, 2], rudder_gain, -np.sign(p.x_rudder), p.delta_max_rudder)
+    delta_s = fin_angle(tau[:, 1], stern_gain, np.sign(p.x_stern), p.delta_max_stern)
+    delta_r = fin_angle(tau[:, 2], rudder_gain, -np.sign(p.x_rudder), p.delta_max_rudder)
     fin_drag = -k_r * delta_r * delta_r - k_s * delta_s * delta_s
     thrust = (tau[:, 0] - fin_drag) / (1.0 - p.thrust_deduction)
     d = p.prop_diameter

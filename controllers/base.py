@@ -21,7 +21,7 @@ from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.observation import OBS_DIM, OBS_INDEX
 from auv_gym.rollout import Policy  # the one definition, shared with the rollouts
 from auv_gym.vehicle import AUVParams, remus100
-from controllers.allocation import allocate, fin_gain
+from controllers.allocation import allocate, fin_authority, fin_gain
 from controllers.gains import ControllerGains
 
 __all__ = ["BatchedController", "Policy", "actuator_vector"]
@@ -98,7 +98,7 @@ class BatchedController:
     def _allocate(self, obs: np.ndarray, actions: np.ndarray) -> np.ndarray:
         """The law's normalised τ → its τ_d at the observed u → shaft speed and fin angles."""
         u = obs[:, _U]
-        authority = self._actuator[1] * np.maximum(u * np.abs(u), 0.0)  # `fbsm.moment_limits`
+        authority = fin_authority(self._actuator[1], u)
         tau = actions * np.stack([np.full_like(u, self._actuator[2]), authority, authority], 1)
         return allocate(tau, obs[:, [_U, _V, _W]], self.actuator_params)
 

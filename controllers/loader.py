@@ -87,11 +87,11 @@ def load_policy(
     names = observation_layout(files.metadata)
     if guard is not None:
         policy = GuardedPolicy(policy, guard, names)
-    actuator = (base_kwargs or {}).get("actuator")
-    if allocation is None or actuator not in ALLOCATED_ACTUATORS:
+    settings = base_kwargs or {}
+    if allocation is None or settings.get("actuator") not in ALLOCATED_ACTUATORS:
         return policy
-    return AllocatedPolicy(policy, names, actuator, (base_kwargs or {}).get("params"),
-                           (base_kwargs or {}).get("actuator_params"))  # fmt: skip
+    return AllocatedPolicy(policy, names, settings["actuator"], settings.get("params"),
+                           settings.get("actuator_params"))  # fmt: skip
 
 
 def _unguarded(files: Any, actor: AgentPolicy, increment: float | None,

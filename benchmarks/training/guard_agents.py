@@ -30,7 +30,7 @@ from benchmarks.arguments import parse_options, program_name, usage_errors
 from benchmarks.options import option
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from controllers.actuator_allocation import COMMANDED_ACTUATOR
-from controllers.agent import check_agent
+from controllers.agent import MODEL_FILE, check_agent
 from controllers.envelope_guard import EnvelopeGuard, check_envelope_guard
 
 __all__ = ["guard_agent", "main"]
@@ -38,7 +38,7 @@ __all__ = ["guard_agent", "main"]
 
 def agent_folders(source: Path) -> list[tuple[Path, str]]:
     """(agent folder, its name under --out) for one agent or a multi-seed results folder."""
-    if (source / "model.zip").is_file():
+    if (source / MODEL_FILE).is_file():
         return [(source, "")]
     seeds = sorted(p for p in source.glob(f"{SEED_AGENT_PREFIX}*") if p.is_dir())
     if not seeds:
