@@ -54,7 +54,7 @@ FAMILIES = ("helix", "line", "spline", "lawnmower")
 FAMILY_RANGES = {
     "helix": ("radius", "climb_angle_deg"),
     "line": ("climb_angle_deg",),
-    "spline": ("radius", "climb_angle_deg", "piece_length"),
+    "spline": ("spline_radius", "climb_angle_deg", "piece_length"),
     "lawnmower": ("radius", "climb_angle_deg", "leg_length"),
 }
 # Vehicle limits (docs/model.md §3.8). At u = 1 m/s full yaw authority turns the REMUS 100 on a
@@ -100,8 +100,11 @@ class PathDistribution:
     apply to it):
 
     - ``families``: the families drawn, with equal probability, among `FAMILIES`.
-    - ``radius`` [m]: helix radius; turn radius of the spline pieces and lawnmower turns.
-      low ≥ `MIN_TURN_RADIUS` (8 m), high ≤ 1e4.
+    - ``radius`` [m]: helix radius; turn radius of the lawnmower turns and (unless
+      ``spline_radius`` is given) of the spline pieces. low ≥ `MIN_TURN_RADIUS` (8 m), high ≤ 1e4.
+    - ``spline_radius`` [m]: turn radius of the spline pieces, the same limits; None (default):
+      ``radius``. A family of its own lets a distribution draw tight splines while its helices
+      stay wide (a test set of tight helices then stays held out, `overlaps`).
     - ``climb_angle_deg`` [deg]: |γ| of helices, lines, lawnmower legs and the spline's
       flight-path-angle profile (sign drawn: ascending or descending); high ≤
       `MAX_FLIGHT_PATH_ANGLE_DEG` (25°).
@@ -113,6 +116,7 @@ class PathDistribution:
 
     families: tuple[str, ...] = FAMILIES
     radius: tuple[float, float] = (15.0, 40.0)
+    spline_radius: tuple[float, float] | None = None
     climb_angle_deg: tuple[float, float] = (0.0, 20.0)
     piece_length: tuple[float, float] = (30.0, 80.0)
     leg_length: tuple[float, float] = (60.0, 150.0)
@@ -127,15 +131,9 @@ class PathDistribution:
         if unknown or not families or len(set(families)) != len(families):
             raise ValueError(f"PathDistribution families must be distinct names among "
                              f"{list(FAMILIES)}, got {list(families)!r:.80}")  # fmt: skip
-        radius = vector("PathDistribution radius", self.radius, 2, unit="m")
-        if radius[0] <= 0.0:
-            raise ValueError(f"PathDistribution radius must be positive, got {radius} m")
-        if radius[0] < MIN_TURN_RADIUS:
-            raise ValueError(
-                f"PathDistribution radius {radius} m starts below the vehicle's smallest "
-                f"followable turn radius {MIN_TURN_RADIUS:g} m (docs/model.md §3.8)"
-            )
-        radius = _range("PathDistribution radius", radius, MIN_TURN_RADIUS, MAX_RADIUS, "m")
+        radius = _turn_radius("radius", self.radius)
+        spline_radius = (radius if self.spline_radius is None
+                         else _turn_radius("spline_radius", self.spline_radius))  # fmt: skip
         angle = vector("PathDistribution climb_angle_deg", self.climb_angle_deg, 2, unit="deg")
         if max(abs(angle[0]), abs(angle[1])) > MAX_FLIGHT_PATH_ANGLE_DEG:
             raise ValueError(
@@ -148,7 +146,7 @@ class PathDistribution:
         leg = _range("PathDistribution leg_length", self.leg_length, MIN_PIECE, 1000.0, "m")
         length = real("PathDistribution length", self.length, *LENGTH_RANGE, unit="m")
         for name, value in (("families", tuple(families)), ("radius", radius),
-                            ("climb_angle_deg", angle), ("piece_length", piece),
+                            ("spline_radius", spline_radius), ("climb_angle_deg", angle), ("piece_length", piece),
                             ("leg_length", leg), ("length", length)):  # fmt: skip
             object.__setattr__(self, name, value)
 
@@ -166,8 +164,10 @@ class PathDistribution:
     @property
     def spacing(self) -> float:
         """Waypoint spacing of the spline and lawnmower families [m]: `SAMPLE_SPACING`, or a
-        third of the smallest radius if that is shorter, rounded down to the integration step."""
-        wanted = min(SAMPLE_SPACING, self.radius[0] / MIN_SAMPLES_PER_RADIUS)
+        third of the smallest radius (of either) if that is shorter, rounded down to the
+        integration step."""
+        smallest = min(self.radius[0], self.spline_radius[0])
+        wanted = min(SAMPLE_SPACING, smallest / MIN_SAMPLES_PER_RADIUS)
         return max(1, math.floor(wanted / _INTEGRATION_STEP)) * _INTEGRATION_STEP
 
     @property
@@ -193,7 +193,7 @@ class PathDistribution:
         tracks = []
         for _ in range(_MAX_REDRAWS):
             track, ends = self._spline_track(rng) if family == "spline" else self._lawnmower(rng)
-            path = self._within_limits(track)
+            path = self._within_limits(track, family)
             if path is not None:
                 path.family = family
                 return path
@@ -204,7 +204,7 @@ class PathDistribution:
         # track's own tangents follows the turn; only draws that failed every natural attempt
         # come here, so the paths drawn before are unchanged.
         for track, ends in tracks:
-            path = self._within_limits(track, ends)
+            path = self._within_limits(track, family, ends)
             if path is not None:
                 path.family = family
                 return path
@@ -212,10 +212,11 @@ class PathDistribution:
                            f"{_MAX_REDRAWS} draws: {self}")  # fmt: skip
 
     def _within_limits(
-        self, track: np.ndarray, ends: tuple[np.ndarray, np.ndarray] | None = None
+        self, track: np.ndarray, family: str, ends: tuple[np.ndarray, np.ndarray] | None = None
     ) -> Spline | None:
         """The spline through ``track`` (natural, or with end slopes ``ends``) if it keeps the
-        distribution's limits (curvature and flight-path angle, sampled as documented) and the
+        limits of the distribution's ``family`` (curvature and flight-path angle, sampled as
+        documented) and the
         proven ones every environment needs (|p'| >= `paths.MIN_TANGENT`, turn rates <=
         `MAX_TURN_RATE`); else None."""
         try:
@@ -223,7 +224,8 @@ class PathDistribution:
         except ValueError:  # |p'| below the minimum somewhere
             return None
         kappa, gamma = curvature_and_angle(path)
-        if kappa > CURVATURE_SLACK / self.radius[0] or gamma > math.radians(
+        smallest = (self.spline_radius if family == "spline" else self.radius)[0]
+        if kappa > CURVATURE_SLACK / smallest or gamma > math.radians(
             self.climb_angle_deg[1] + 0.5
         ):
             return None
@@ -259,13 +261,13 @@ class PathDistribution:
         lengths, curvatures, angles = [], [], [self._angle(rng)]
         # The climb may change at most VERTICAL_SHARE/R_low per metre, the heading turns at
         # most HORIZONTAL_SHARE/R: together a curvature of at most 1/R (shares squared sum to 1).
-        pitch_rate = VERTICAL_SHARE / self.radius[0]
+        pitch_rate = VERTICAL_SHARE / self.spline_radius[0]
         total = 0.0
         while total < self.length:
             lengths.append(rng.uniform(*self.piece_length))
             turning = rng.random() < 2.0 / 3.0
             side = 1.0 if rng.random() < 0.5 else -1.0
-            curvatures.append(HORIZONTAL_SHARE * side / rng.uniform(*self.radius) if turning
+            curvatures.append(HORIZONTAL_SHARE * side / rng.uniform(*self.spline_radius) if turning
                               else 0.0)  # fmt: skip
             step = pitch_rate * lengths[-1]
             angles.append(min(max(self._angle(rng), angles[-1] - step), angles[-1] + step))
@@ -290,6 +292,19 @@ class PathDistribution:
             k += 1
         angles = [gamma] * (len(lengths) + 1)
         return _integrate(lengths, curvatures, angles, heading0, self.length, self.spacing)
+
+
+def _turn_radius(name: str, value: Any) -> tuple[float, float]:
+    """A (low, high) turn-radius range [m] within [`MIN_TURN_RADIUS`, `MAX_RADIUS`]."""
+    radius = vector(f"PathDistribution {name}", value, 2, unit="m")
+    if radius[0] <= 0.0:
+        raise ValueError(f"PathDistribution {name} must be positive, got {radius} m")
+    if radius[0] < MIN_TURN_RADIUS:
+        raise ValueError(
+            f"PathDistribution {name} {radius} m starts below the vehicle's smallest "
+            f"followable turn radius {MIN_TURN_RADIUS:g} m (docs/model.md §3.8)"
+        )
+    return _range(f"PathDistribution {name}", radius, MIN_TURN_RADIUS, MAX_RADIUS, "m")
 
 
 def _integrate(
