@@ -146,8 +146,9 @@ class PathDistribution:
         leg = _range("PathDistribution leg_length", self.leg_length, MIN_PIECE, 1000.0, "m")
         length = real("PathDistribution length", self.length, *LENGTH_RANGE, unit="m")
         for name, value in (("families", tuple(families)), ("radius", radius),
-                            ("spline_radius", spline_radius), ("climb_angle_deg", angle), ("piece_length", piece),
-                            ("leg_length", leg), ("length", length)):  # fmt: skip
+                            ("spline_radius", spline_radius), ("climb_angle_deg", angle),
+                            ("piece_length", piece), ("leg_length", leg),
+                            ("length", length)):  # fmt: skip
             object.__setattr__(self, name, value)
 
     @classmethod

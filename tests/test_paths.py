@@ -16,11 +16,13 @@ from auv_gym.dynamics import STATE, STATE_DIM
 from auv_gym.env import AUVPath3DEnv
 from auv_gym.integrator import rk4_step
 from auv_gym.path_generator import (
+    CURVATURE_SLACK,
     FAMILIES,
     MAX_FLIGHT_PATH_ANGLE_DEG,
     MIN_TURN_RADIUS,
     PathDistribution,
     curvature_and_angle,
+    overlaps,
 )
 from auv_gym.paths import HELIX, Helix, Spline, fit_curve, make_path
 from auv_gym.randomization import task_for_seed
@@ -301,6 +303,9 @@ def test_fixed_paths_share_one_table_row():
         ({"families": ()}, r"families must be distinct names among"),
         ({"length": 10.0}, r"PathDistribution length"),
         ({"piece_length": (10.0, 50.0)}, r"piece_length must lie in \[20, 1000\]"),
+        ({"spline_radius": (5.0, 10.0)}, r"spline_radius \(5\.0, 10\.0\) m starts below the"),
+        ({"spline_radius": (20.0, 10.0)}, r"spline_radius must be \(low, high\) with low <= high"),
+        ({"spline_radius": (8.0, math.nan)}, r"spline_radius"),
     ],
 )
 def test_impossible_generator_ranges_raise_one_line_errors(kwargs, match):
@@ -368,3 +373,20 @@ def test_a_path_checks_its_kernel_data_and_bounds_its_turn_rates():
     assert shifted.turn_rate_bounds() == spline.turn_rate_bounds()
     assert shifted.turn_location(bound) == f" (near s = {bound.s:.6g})"
     assert np.array_equal(shifted.evaluate(3.0)[0], spline.evaluate(3.0)[0] + [0, 0, 100])
+
+
+def test_spline_radius_bends_the_splines_alone():
+    tight = PathDistribution(radius=(15.0, 40.0), spline_radius=(8.0, 9.0), length=200.0)
+    assert PathDistribution(radius=(9.0, 12.0)).spline_radius == (9.0, 12.0)  # default: radius
+    assert tight.spacing == 2.5  # a third of the smaller radius, rounded down to 0.5 m
+    by_family: dict[str, list[float]] = {}
+    for seed in range(60):
+        path = tight.draw(np.random.default_rng(seed))
+        by_family.setdefault(path.family, []).append(curvature_and_angle(path)[0])
+    assert set(by_family) == set(FAMILIES)
+    # splines turn between 1/15 and 1.05/8 1/m; helix and lawnmower turns stay within 1.05/15
+    assert 1.0 / 15.0 < max(by_family["spline"]) <= CURVATURE_SLACK / 8.0
+    assert max(by_family["helix"] + by_family["lawnmower"]) <= CURVATURE_SLACK / 15.0
+    tight_helices = PathDistribution(families=("helix",), radius=(10.0, 13.0))
+    tight_splines = PathDistribution(families=("spline",), radius=(8.5, 13.0))
+    assert overlaps(tight_helices, tight) == [] and overlaps(tight_splines, tight) == ["spline"]
