@@ -14,7 +14,8 @@ def test_the_shipped_table_is_the_shipped_experiment():
     assert spec == ReportSpec(
         reference="fbsm",
         extra_references=("fbsm_colos",),
-        max_ratio=2.0,
+        max_ratio=1.5,
+        target_references=("fbsm", "fbsm_colos"),
         smoothness_reference="fbsm",
         worse_ratio=0.10,
         pairs=(("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
@@ -25,6 +26,7 @@ def test_the_shipped_table_is_the_shipped_experiment():
     # --reference replaces the reference only; chattering ratios keep theirs
     other = spec.with_reference("backstepping")
     assert (other.reference, other.smoothness_reference) == ("backstepping", "fbsm")
+    assert other.target_references == ()  # the target then refers to --reference alone
     assert spec.with_reference(None) is spec
 
 
@@ -46,6 +48,8 @@ def test_a_minimal_table_takes_defaults_and_its_reference_for_smoothness(tmp_pat
         ('reference = "fbsm"\n[smoothness]\npairs = [["a"]]\n',
          r"smoothness.pairs must be a list of \[policy, base\]"),
         ('reference = "fbsm"\n[smoothness]\nparis = []\n', r"\[smoothness\] unknown keys"),
+        ('reference = "fbsm"\n[target]\nreferences = "fbsm"\n',
+         "target.references must be a list of names"),
         ("reference = ", "is unreadable"),
     ],
 )  # fmt: skip

@@ -74,6 +74,20 @@ def test_the_suite_target_is_each_sets_top_speed() -> None:
     assert [t["passed"] for t in former] == [True, True]
 
 
+def test_the_target_takes_each_sets_best_reference() -> None:
+    rows = [{"policy": p, "set": s, "termination_reason": "", "max_surge": 1.5}
+            for p in ("fbsm", "colos", "agent") for s in ("calm", "current")]  # fmt: skip
+    scores = {"fbsm": np.array([[0.10, 0.60]]), "colos": np.array([[0.12, 0.20]]),
+              "agent": np.array([[0.14, 0.32]])}  # fmt: skip
+    table = target_table(rows, scores, ["calm", "current"], ["fbsm", "colos", "absent"], 1.5)
+    assert [(t["set"], t["policy"], t["reference"]) for t in table] == [
+        ("calm", "agent", "fbsm"), ("current", "agent", "colos")]  # fmt: skip
+    assert [round(t["ratio"], 12) for t in table] == [1.4, 1.6]
+    assert [t["passed"] for t in table] == [True, False]
+    with pytest.raises(ValueError, match=r"target references \['x'\]: none was evaluated"):
+        target_table(rows, scores, ["calm", "current"], ["x"], 1.5)
+
+
 def _markdown_target_line(speeds) -> str:
     stats = {"reference": "ref", "confidence": 0.95, "n_runs": {}, "failure_score_m": {},
              "reps": 10, "seed": 0, "command": "c", "improvement_tables": {}, "target": [],

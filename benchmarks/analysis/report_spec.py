@@ -18,7 +18,7 @@ __all__ = ["DEFAULT_REPORT", "ReportSpec"]
 
 DEFAULT_REPORT = Path(__file__).resolve().parents[1] / "report.toml"
 _KEYS = {"": {"reference", "extra_references", "target", "smoothness"},
-         "target": {"max_ratio"},
+         "target": {"max_ratio", "references"},
          "smoothness": {"reference", "worse_ratio", "pairs", "tradeoff_scopes"}}  # fmt: skip
 
 
@@ -29,6 +29,8 @@ class ReportSpec:
     reference: str  # probability of improvement and the target ratio refer to it
     extra_references: tuple[str, ...] = ()  # probability of improvement also against these
     max_ratio: float = 2.0  # target: mean score at most this × the reference's
+    # target: each set's reference is the best (lowest mean) of these; () → `reference`
+    target_references: tuple[str, ...] = ()
     smoothness_reference: str = "fbsm"  # chattering ratios refer to it
     worse_ratio: float = 0.10  # a pair is "worse" above this relative difference
     pairs: tuple[tuple[str, str], ...] = ()  # (policy, base) paired differences
@@ -67,6 +69,7 @@ class ReportSpec:
             reference=reference,
             extra_references=_names("extra_references", data.get("extra_references", [])),
             max_ratio=_positive("target.max_ratio", target.get("max_ratio", 2.0)),
+            target_references=_names("target.references", target.get("references", [])),
             smoothness_reference=_name("smoothness.reference", smooth.get("reference", reference)),
             worse_ratio=_positive("smoothness.worse_ratio", smooth.get("worse_ratio", 0.10)),
             pairs=tuple((_name("pair policy", p), _name("pair base", b)) for p, b in pairs),
@@ -74,8 +77,11 @@ class ReportSpec:
         )
 
     def with_reference(self, reference: str | None) -> ReportSpec:
-        """This table with another reference (None: unchanged); the smoothness reference stays."""
-        return self if reference is None else replace(self, reference=reference)
+        """This table with another reference (None: unchanged), the target's too; the
+        smoothness reference stays."""
+        if reference is None:
+            return self
+        return replace(self, reference=reference, target_references=())
 
 
 def _name(key: str, value: Any) -> str:

@@ -48,8 +48,11 @@ def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_rat
     distinct = set((speeds or {}).values()) or {SURGE_LIMIT}
     surge = (f"{distinct.pop():g} m/s" if len(distinct) == 1
              else "the top speed of the set's vehicle")  # fmt: skip
+    target_refs = stats.get("target_references") or [ref]
+    best = (f"{target_refs[0]}" if len(target_refs) == 1
+            else f"the best of {', '.join(target_refs)} on each set")  # fmt: skip
     lines += [
-        f"## Target: mean RMS distance within {max_ratio:g}× {ref}, no failed episode, max "
+        f"## Target: mean RMS distance within {max_ratio:g}× {best}, no failed episode, max "
         f"surge ≤ {surge}\n",
     ]
     rows = []
@@ -57,11 +60,14 @@ def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_rat
         failed = f"{t['failed']}/{t['episodes']}" + (
             f" ({', '.join(t['failures'])})" if t["failures"] else ""
         )
-        rows.append([t["set"], t["policy"], format_number(t["mean_m"]),
+        reference = [] if len(target_refs) == 1 else [t.get("reference", ref)]
+        rows.append([t["set"], t["policy"], format_number(t["mean_m"]), *reference,
                      format_number(t["reference_mean_m"]), format_number(t["ratio"]), failed,
                      format_number(t["max_surge_m_s"]),
                      "pass" if t["passed"] else "**FAIL**"])  # fmt: skip
-    header = ["set", "policy", "mean [m]", f"{ref} mean [m]", "ratio", "failed",
+    ref_columns = ([f"{target_refs[0]} mean [m]"] if len(target_refs) == 1
+                   else ["reference", "its mean [m]"])  # fmt: skip
+    header = ["set", "policy", "mean [m]", *ref_columns, "ratio", "failed",
               "max surge [m/s]", "verdict"]  # fmt: skip
     lines += [table_format.markdown_table(header, rows, ["l"] * len(header))]
     for policy, verdict in stats["verdicts"].items():

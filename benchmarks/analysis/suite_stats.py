@@ -185,22 +185,29 @@ def target_table(
     rows: Sequence[Mapping[str, Any]],
     scores: Mapping[str, np.ndarray],
     groups: Sequence[str],
-    reference: str,
+    reference: str | Sequence[str],
     max_ratio: float,
     speeds: Mapping[str, float] | None = None,
 ) -> list[dict[str, Any]]:
-    """One entry per (set, policy other than the reference): mean scores [m], their ratio,
-    failed episodes, largest surge [m/s] and whether the set passes: ratio ≤ ``max_ratio``,
-    no failed episode, surge ≤ the set's top speed in ``speeds`` [m/s] (`top_speeds`; a set
-    it lacks: REMUS 100's `SURGE_LIMIT`) (module doc)."""
+    """One entry per (set, policy other than the references): mean scores [m], their ratio to
+    the best reference of the set, failed episodes, largest surge [m/s] and whether the set
+    passes: ratio ≤ ``max_ratio``, no failed episode, surge ≤ the set's top speed in ``speeds``
+    [m/s] (`top_speeds`; a set it lacks: REMUS 100's `SURGE_LIMIT`) (module doc).
+    ``reference``: a policy, or several (those evaluated count), of which each set takes the
+    one with the lowest mean ("the best classical policy")."""
+    names = [reference] if isinstance(reference, str) else list(reference)
+    names = [r for r in names if r in scores]
+    if not names:
+        raise ValueError(f"target references {reference!r}: none was evaluated")
     labels = np.asarray(groups)
     table = []
     for name in dict.fromkeys(groups):
         cols = labels == name
         top_speed = (speeds or {}).get(name, SURGE_LIMIT)
-        ref_mean = float(scores[reference][:, cols].mean())
+        ref_means = {r: float(scores[r][:, cols].mean()) for r in names}
+        best = min(ref_means, key=ref_means.__getitem__)
         for policy, x in scores.items():
-            if policy == reference:
+            if policy in names:
                 continue
             mine = [r for r in rows if r["policy"] == policy and r["set"] == name]
             failed = sorted(
@@ -208,13 +215,14 @@ def target_table(
             )
             surge = max(r["max_surge"] for r in mine)
             mean = float(x[:, cols].mean())
-            ratio = mean / ref_mean
+            ratio = mean / ref_means[best]
             table.append(
                 {
                     "set": name,
                     "policy": policy,
                     "mean_m": mean,
-                    "reference_mean_m": ref_mean,
+                    "reference": best,
+                    "reference_mean_m": ref_means[best],
                     "ratio": ratio,
                     "failed": len(failed),
                     "failures": sorted(set(failed)),
@@ -299,7 +307,8 @@ def write_stats(
                 part, other, labels[cols], reps=reps, seed=seed
             )
     speeds = top_speeds(suite)
-    target = target_table(rows, scores, groups, reference, report.max_ratio, speeds)
+    target_refs = report.target_references or (reference,)
+    target = target_table(rows, scores, groups, target_refs, report.max_ratio, speeds)
     verdicts = {}
     for policy in scores:
         mine = [t for t in target if t["policy"] == policy]
@@ -331,6 +340,7 @@ def write_stats(
         "mean": _intervals(summary["mean"]),
         "improvement": {r: _intervals(t) for r, t in improvement.items()},
         "profiles": summary["profiles"],
+        "target_references": [r for r in target_refs if r in scores],
         "target": target,
         "verdicts": verdicts,
         "learning_curves": curves,
