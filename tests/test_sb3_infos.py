@@ -3,6 +3,7 @@ full path, the keys SB3 reads on every autoreset, and the training-speed benchma
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -154,6 +155,7 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     r = runs[0]
     assert r["total_per_s"] == pytest.approx(r["steps"] / (r["collect_s"] + r["update_s"]))
     assert 0 < r["total_per_s"] < min(r["collect_per_s"], r["update_per_s"])
+    assert math.isfinite(r["floor_update_per_s"]) and r["floor_update_per_s"] > 0
 
 
 def test_update_threads_train_the_same_weights_up_to_float_rounding():
@@ -230,3 +232,4 @@ def test_speed_training_runs_the_baseline_commit_of_its_default(tmp_path):
     runs = json.loads(out.read_text())["runs"]
     assert sorted(r["side"] for r in runs) == ["new", "old"]
     assert all(r["steps"] == 8 * 16 and r["total_per_s"] > 0 for r in runs)
+    assert all(r["floor_update_per_s"] > 0 for r in runs)  # timed in the old tree's code too

@@ -12,7 +12,11 @@ first trains `--warmup` rollouts (kernel loading, torch's first calls; not timed
 
 - collection: `collect_rollouts` (policy forward, env step, VecMonitor, VecNormalize, buffer);
 - update: `PPO.train` (n_epochs passes of minibatch gradient steps over the rollout);
-- total: env steps over collection + update time, the training rate.
+- total: env steps over collection + update time, the training rate;
+- floor: the update's bare arithmetic (`training_run.bare_update_seconds`: forward, backward,
+  clipping and Adam on random minibatches, as many as the update takes; no SB3 bookkeeping),
+  the ceiling of the update rate at this width, batch and precision. An update near its floor
+  is bound by the networks' arithmetic: faster only with fewer or cheaper gradient steps.
 
 The rollout holds 8192 env steps at every N (n_steps = 8192 / N: 256, 64, 16), so the update
 does the same work per env step as the shipped configuration; `--n-steps` and `--batch-size`
@@ -103,12 +107,18 @@ def _median(runs: list[dict[str, Any]], key: str) -> float:
     return statistics.median(r[key] for r in runs)
 
 
+def _floor(runs: list[dict[str, Any]]) -> str:
+    """The median bare-update rate [env steps/s], or "-" for runs made before it was timed."""
+    floors = [r["floor_update_per_s"] for r in runs if "floor_update_per_s" in r]
+    return f"{statistics.median(floors):,.0f}" if floors else "-"
+
+
 def table(results: Results, sides: list[str]) -> str:
     """One row per setting (N, update threads, batch): each side's median rates and the
     new/old ratios."""
     head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'upd thr':>7} {'dtype':>8}"
     for side in sides:
-        head += f" | {side + ' total':>12} {'collect':>9} {'update':>8}"
+        head += f" | {side + ' total':>12} {'collect':>9} {'update':>8} {'floor':>8}"
     if len(sides) == 2:
         head += f" | {'ratio total':>11} {'collect':>8} {'update':>7}"
     lines = [head, "-" * len(head)]
@@ -120,7 +130,8 @@ def table(results: Results, sides: list[str]) -> str:
             line += (
                 f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
                 f"{_median(runs[side], 'collect_per_s'):>9,.0f} "
-                f"{_median(runs[side], 'update_per_s'):>8,.0f}"
+                f"{_median(runs[side], 'update_per_s'):>8,.0f} "
+                f"{_floor(runs[side]):>8}"
             )
         if len(sides) == 2:
             old, new = runs[sides[0]], runs[sides[1]]

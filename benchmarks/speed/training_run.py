@@ -92,6 +92,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     steps = len(timed) * n_envs * n_steps
     collect = sum(c - s for s, c, _ in timed)
     update = sum(u - c for _, c, u in timed)
+    floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]), bfloat16)
     return {
         **spec,
         "steps": steps,
@@ -100,5 +101,41 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         "collect_per_s": steps / collect,
         "update_per_s": steps / update,
         "total_per_s": steps / (collect + update),
+        "floor_update_per_s": n_envs * n_steps / floor,
         "load_average": os.getloadavg()[0],
     }
+
+
+def bare_update_seconds(model: Any, rollout: int, threads: int, bfloat16: bool) -> float:
+    """Wall time [s] of the arithmetic one rollout's update cannot avoid: as many minibatch
+    steps as `PPO.train` takes (n_epochs × rollout / batch_size), each the policy's forward
+    (`evaluate_actions`), a loss of its outputs, backward, gradient clipping and an Adam step,
+    on random tensors of the minibatch's shape; none of SB3's buffer, statistics or logging.
+    Median of three rollouts' worth; the update rate's ceiling at this width and batch."""
+    import numpy as np
+    import torch
+
+    policy, batch = model.policy, int(model.batch_size)
+    steps = int(model.n_epochs) * max(1, rollout // batch)
+    obs = torch.randn(batch, *model.observation_space.shape)
+    actions = torch.randn(batch, *model.action_space.shape)
+    threads_before = torch.get_num_threads()
+    torch.set_num_threads(threads)
+    times = []
+    try:
+        for _ in range(3):
+            start = time.perf_counter()
+            for _ in range(steps):
+                with torch.autocast("cpu", dtype=torch.bfloat16, enabled=bfloat16):
+                    values, log_prob, entropy = policy.evaluate_actions(obs, actions)
+                    loss = values.float().mean() + log_prob.float().mean()
+                    if entropy is not None:
+                        loss = loss + entropy.float().mean()
+                policy.optimizer.zero_grad()
+                loss.backward()
+                torch.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
+                policy.optimizer.step()
+            times.append(time.perf_counter() - start)
+    finally:
+        torch.set_num_threads(threads_before)
+    return float(np.median(times))
