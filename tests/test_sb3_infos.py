@@ -233,3 +233,32 @@ def test_speed_training_runs_the_baseline_commit_of_its_default(tmp_path):
     assert sorted(r["side"] for r in runs) == ["new", "old"]
     assert all(r["steps"] == 8 * 16 and r["total_per_s"] > 0 for r in runs)
     assert all(r["floor_update_per_s"] > 0 for r in runs)  # timed in the old tree's code too
+
+
+def test_the_thread_limit_reaches_numpys_blas():
+    """Resets solve spline systems through numpy's BLAS: its threads are limited with torch's
+    and numba's, and restored after."""
+    import numba
+    import torch
+    from threadpoolctl import threadpool_info
+
+    from benchmarks.training.envs import thread_limit
+
+    def blas_threads() -> list[int]:
+        return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+
+    # torch and numba may share one OpenMP runtime: start from the same count in both
+    start = (torch.get_num_threads(), numba.get_num_threads())
+    two = min(2, numba.config.NUMBA_NUM_THREADS)
+    torch.set_num_threads(two)
+    numba.set_num_threads(two)
+    try:
+        blas = blas_threads()
+        with thread_limit(1):
+            assert blas and set(blas_threads()) == {1}
+            assert torch.get_num_threads() == 1 and numba.get_num_threads() == 1
+        after = (blas_threads(), torch.get_num_threads(), numba.get_num_threads())
+        assert after == (blas, two, two)
+    finally:
+        numba.set_num_threads(start[1])
+        torch.set_num_threads(start[0])

@@ -17,22 +17,30 @@ __all__ = ["describe_env", "make_training_env", "thread_limit", "zero_correction
 
 @contextlib.contextmanager
 def thread_limit(threads: int) -> Iterator[None]:
-    """torch's intra-op and numba's threads set to ``threads`` inside the block, restored after.
+    """torch's intra-op, numba's and numpy's BLAS threads set to ``threads`` inside the block,
+    restored after.
 
     One thread is the default: on a machine shared with other jobs, multi-threaded kernels
-    stall at their barriers (docs/design.md §4).
+    stall at their barriers (docs/design.md §4). The BLAS limit matters at resets: a drawn
+    spline's coefficients come from `numpy.linalg.solve`, whose OpenBLAS threads spin on a busy
+    machine (a 161-waypoint spline: 20 ms on one thread, 136 ms on two beside five training
+    processes; the same bits either way).
     """
     import numba
     import torch
+    from threadpoolctl import threadpool_limits
 
     torch_before, numba_before = torch.get_num_threads(), numba.get_num_threads()
     torch.set_num_threads(int(threads))
     numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
     try:
-        yield
+        with threadpool_limits(limits=int(threads), user_api="blas"):
+            yield
     finally:
-        torch.set_num_threads(torch_before)
+        # numba's OpenMP layer may share torch's libgomp: numba first, so that torch's count
+        # is the one left (the other order handed torch numba's count).
         numba.set_num_threads(numba_before)
+        torch.set_num_threads(torch_before)
 
 
 def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: str = "auto",
