@@ -139,18 +139,25 @@ def profile_figure(summary: Mapping[str, Any], scope: str = AGGREGATE, unit: str
 def learning_curve_figure(
     panels: Mapping[str, Mapping[str, Mapping[str, Any]]], ylabel: str = "IQM RMS distance [m]"
 ) -> Figure:
-    """One panel per x label ({x label: {policy: `learning_curve` output}}), shared log y."""
+    """One panel per x label ({x label: {policy: `learning_curve` output}}), shared log y; one
+    legend for all panels, below them, so that no curve hides behind it."""
     fig, axes = _panels(len(panels), 4.5, 3.6, sharey=True)
+    labels: dict[str, Any] = {}
     for ax, (xlabel, curves) in zip(axes, panels.items(), strict=True):
         colours = policy_colours(list(curves))
         for policy, c in curves.items():
             colour = colours[policy]
-            ax.plot(c["x"], c["iqm"], color=colour, label=f"{policy} ({c['n_runs']} runs)")
+            label = f"{policy} ({c['n_runs']} runs)"
+            (labels[label],) = ax.plot(c["x"], c["iqm"], color=colour, label=label)
             ax.fill_between(c["x"], c["low"], c["high"], color=colour, alpha=0.2)
         _scale(ax, "y", np.concatenate([np.r_[c["low"], c["high"]] for c in curves.values()]))
         ax.set(xlabel=xlabel, ylabel=ylabel)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+    columns = max(1, min(len(labels), 3))
+    fig.legend(list(labels.values()), list(labels), loc="outside lower center", ncols=columns,
+               fontsize=7)  # fmt: skip
+    if len(labels) > columns:  # room for the legend's rows below the panels
+        fig.set_figheight(fig.get_figheight() + 0.18 * -(-len(labels) // columns))
     return fig
 
 
