@@ -227,6 +227,7 @@ distributions = st.builds(
     PathDistribution,
     families=st.lists(st.sampled_from(FAMILIES), min_size=1, max_size=4, unique=True).map(tuple),
     radius=_span(8.0, 200.0),
+    spline_radius=st.one_of(st.none(), _span(8.0, 200.0)),
     climb_angle_deg=_span(0.0, 25.0),
     piece_length=_span(20.0, 300.0),
     leg_length=_span(20.0, 300.0),
@@ -241,7 +242,8 @@ def test_an_accepted_distribution_draws_a_valid_path_for_every_seed(distribution
         path = distribution.draw(np.random.default_rng([seed, k]))
         if path.kind == 2:
             kappa, gamma = curvature_and_angle(path)
-            assert kappa <= CURVATURE_SLACK / distribution.radius[0]
+            radius = distribution.spline_radius if path.family == "spline" else distribution.radius
+            assert kappa <= CURVATURE_SLACK / radius[0]
             assert gamma <= math.radians(distribution.climb_angle_deg[1] + 0.5)
             assert -min_tangent_squared(path.data, MIN_TANGENT**2).upper >= MIN_TANGENT**2
         psi, theta = path_turn_rates(path, accept_below=MAX_TURN_RATE)
