@@ -133,7 +133,7 @@ def bare_update_seconds(model: Any, rollout: int, threads: int, bfloat16: bool) 
                         loss = loss + entropy.float().mean()
                 policy.optimizer.zero_grad()
                 loss.backward()
-                torch.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
+                torch.nn.utils.clip_grad_norm_(policy.parameters(), model.max_grad_norm)
                 policy.optimizer.step()
             times.append(time.perf_counter() - start)
     finally:
