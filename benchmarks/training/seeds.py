@@ -61,6 +61,7 @@ from benchmarks.training.seeds_options import (  # the options, importable from 
     parse_seeds,
 )
 from benchmarks.training.train import check_options, target_timesteps
+from benchmarks.training.warm_start import agent_for_seed, check_warm_start
 
 __all__ = [
     "DEFAULT_EVAL_EPISODES",
@@ -101,11 +102,13 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     if opts.backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {opts.backend!r}")
     train = opts.train
-    check_options(train)
+    check_options(replace(train, init_from=None))  # each seed's agent is checked below
     if train.eval_freq < 1:
         raise ValueError("eval_freq must be positive: the shipped agent is selected on the "
                          "validation evaluations")  # fmt: skip
     check_evaluation_window(train.eval_duration)
+    for seed in opts.seeds if train.init_from else ():
+        check_warm_start(agent_for_seed(train.init_from, seed), train.algo)
     if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.runner.pool`)
         check_pool_options(1, opts.backend, opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
@@ -119,7 +122,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         "eval_seeds": list(train.eval_seeds), "eval_duration": float(train.eval_duration),
         "eval_freq": train.eval_freq, "checkpoint_freq": train.checkpoint_freq,
         "task_set": opts.task_set, "eval_env": train.eval_env, "vec_env": train.vec_env,
-        "seeds": list(opts.seeds),
+        "seeds": list(opts.seeds), "init_from": train.init_from,
     }  # fmt: skip
     out = Path(opts.out)
     plan_file = out / PLAN_FILE

@@ -26,7 +26,7 @@ from benchmarks.training.train import TrainOptions
 
 HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
 # The options of each dataclass, in the order --help lists them.
-TRAIN_FIRST = ("algo", "config", "env_id")
+TRAIN_FIRST = ("algo", "config", "env_id", "init_from")
 SEEDS_FIRST = ("seeds", "workers", "backend", "address", "out", "resume")
 TRAIN_BUDGET = ("n_timesteps", "stop_at", "eval_seeds", "eval_duration", "eval_freq",
                 "checkpoint_freq", "keep_checkpoints")  # fmt: skip

@@ -48,6 +48,7 @@ from benchmarks.training.evaluation import (
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
+from benchmarks.training.warm_start import agent_for_seed, check_warm_start, warm_start
 from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
 from controllers.residual import RESIDUAL_OBS_NAMES
 
@@ -160,6 +161,14 @@ class TrainOptions:
         "rounding; bit for bit only where torch's kernels reduce "
         "alike on 1 and 2 threads)",
     )
+    # A curriculum's later phase: a new run (own budget and schedules) from a saved agent
+    # (`warm_start`); a multi-seed run replaces "{seed}" by each seed's number.
+    init_from: str | None = option(
+        None,
+        "start from this saved agent's weights and normalisation statistics instead of random "
+        "weights (same algorithm and observation); '{seed}' in the path is replaced by the "
+        "seed",
+    )
     progress_bar: bool = option(True, "show the progress bar (tqdm + rich)")
     export: str | None = option(
         None, "copy the best agent (model, statistics, metadata) to this directory at the end"
@@ -203,6 +212,8 @@ def check_options(opts: TrainOptions) -> None:
     if not (opts.eval_duration > 0 and opts.eval_duration < float("inf")):
         raise ValueError(f"eval_duration must be a positive time in s, got {opts.eval_duration}")
     read_zoo_config(opts.config, opts.env_id, opts.algo)
+    if opts.init_from:
+        check_warm_start(agent_for_seed(opts.init_from, opts.seed), opts.algo)
 
 
 def target_timesteps(n_timesteps: int, stop_at: int | None) -> int:
@@ -274,12 +285,14 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     venv = wrap_rewards(venv, cfg)
 
     previous: dict[str, Any] = {}
+    warm: dict[str, Any] | None = None
     checkpoint = latest_checkpoint(out) if opts.resume else None
     if opts.resume and checkpoint is None:
         raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
     state: dict[str, Any] | None = None
     if checkpoint is not None:
         previous = json.loads((checkpoint / METADATA_FILE).read_text())
+        warm = previous.get("warm_start")
         venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
         venv.training = True
         model = algorithm.load(checkpoint / MODEL_FILE, env=venv, device="cpu",
@@ -307,6 +320,9 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
                           **cfg.model_kwargs())  # fmt: skip
         if residual is not None:
             zero_correction_layer(model)
+        if opts.init_from:
+            warm = warm_start(model, venv, agent_for_seed(opts.init_from, opts.seed), opts.algo,
+                              obs_names)  # fmt: skip
     start_wall = float(previous.get("wall_time_s", 0.0))
     best: dict[str, Any] = dict(previous.get("best", {}))
     sessions = [*previous.get("sessions", []), {
@@ -339,7 +355,8 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "versions": versions(), "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(), "vec_env": describe_env(venv),
             "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
-            "best": best, "auv_gym_version": auv_gym.__version__, **extra,
+            "best": best, "auv_gym_version": auv_gym.__version__,
+            **({} if warm is None else {"warm_start": warm}), **extra,
         }  # fmt: skip
 
     schedules = {} if state is None else state["schedules"]

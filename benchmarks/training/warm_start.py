@@ -1,0 +1,103 @@
+"""Warm start: a new run that begins from a saved agent's weights and observation statistics.
+
+A curriculum's later phase (for instance a precision phase with less exploration noise on top of
+a trained generalist) is a run of its own: its own configuration, budget, learning-rate schedule
+and validation, starting from the earlier agent instead of random weights. `warm_start` loads
+into a freshly built model and `VecNormalize`:
+
+    model.zip          every parameter of the policy and its optimiser state (`set_parameters`,
+                       exact match: the same network, observation and action shapes)
+    vecnormalize.pkl   the running observation and return statistics; entries the new
+                       configuration pins (`obs_scales`) stay pinned at its scales
+
+The agent's inference wrappers (an envelope guard, an actuator allocation: `metadata.json`) are
+not training state and are not carried over: re-apply them to the new run's agents
+(`benchmarks.training.guard_agents`). The agent must have been trained with the same algorithm
+on the same observation layout; anything else is a ValueError naming the difference.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
+
+__all__ = ["SEED_FIELD", "agent_for_seed", "check_warm_start", "warm_start"]
+
+SEED_FIELD = "{seed}"  # replaced by each seed's number in a multi-seed run's --init-from
+
+
+def agent_for_seed(template: str, seed: int) -> str:
+    """The agent directory of ``seed``: ``template`` with `SEED_FIELD` replaced."""
+    return template.replace(SEED_FIELD, str(int(seed)))
+
+
+def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | None = None) -> dict:
+    """The agent's metadata, checked to start a run of ``algo`` on ``obs_names`` (None: not
+    compared); ValueError naming a missing file, another algorithm or another layout."""
+    folder = Path(agent)
+    for name in (MODEL_FILE, VECNORM_FILE, METADATA_FILE):
+        if not (folder / name).is_file():
+            raise ValueError(f"init_from {str(folder)!r}: {name} is missing (a saved agent "
+                             f"directory holds {MODEL_FILE}, {VECNORM_FILE} and "
+                             f"{METADATA_FILE})")  # fmt: skip
+    try:
+        meta = json.loads((folder / METADATA_FILE).read_text())
+    except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"init_from {str(folder)!r}: {METADATA_FILE} is unreadable: "
+                         f"{exc}") from None  # fmt: skip
+    if not isinstance(meta, dict):
+        raise ValueError(f"init_from {str(folder)!r}: {METADATA_FILE} is not a JSON object")
+    if meta.get("algo") != algo:
+        raise ValueError(f"init_from {str(folder)!r}: the agent was trained with "
+                         f"{meta.get('algo')!r}, this run uses {algo!r}")  # fmt: skip
+    saved = meta.get("obs_names")
+    if obs_names is not None and list(saved or ()) != list(obs_names):
+        raise ValueError(f"init_from {str(folder)!r}: the agent observes {saved}, this run's "
+                         f"observation is {list(obs_names)}")  # fmt: skip
+    return meta
+
+
+def warm_start(model: Any, vec_normalize: Any, agent: str | Path, algo: str,
+               obs_names: Sequence[str]) -> dict[str, Any]:  # fmt: skip
+    """Load ``agent``'s weights into ``model`` and its statistics into ``vec_normalize`` (module
+    doc); returns the record for the new run's metadata."""
+    folder = Path(agent)
+    meta = check_warm_start(folder, algo, obs_names)
+    try:
+        model.set_parameters(str(folder / MODEL_FILE), exact_match=True, device="cpu")
+    except (RuntimeError, ValueError, KeyError) as exc:  # torch: size mismatch, missing keys
+        raise ValueError(f"init_from {str(folder)!r}: its weights do not fit this run's network "
+                         f"({exc})") from None  # fmt: skip
+    try:
+        with (folder / VECNORM_FILE).open("rb") as f:
+            saved = pickle.load(f)
+        obs_rms, ret_rms = saved.obs_rms, saved.ret_rms
+    except Exception as exc:
+        raise ValueError(f"init_from {str(folder)!r}: {VECNORM_FILE} is unreadable: "
+                         f"{exc}") from None  # fmt: skip
+    target = vec_normalize.obs_rms
+    if np.shape(obs_rms.mean) != np.shape(target.mean):
+        raise ValueError(f"init_from {str(folder)!r}: observation statistics of shape "
+                         f"{np.shape(obs_rms.mean)}, this run's are "
+                         f"{np.shape(target.mean)}")  # fmt: skip
+    target.mean = np.array(obs_rms.mean, dtype=np.float64)
+    target.var = np.array(obs_rms.var, dtype=np.float64)
+    target.count = float(obs_rms.count)
+    if hasattr(target, "_pin"):  # this configuration's fixed scales win
+        target._pin()
+    vec_normalize.ret_rms.mean = np.array(ret_rms.mean, dtype=np.float64)
+    vec_normalize.ret_rms.var = np.array(ret_rms.var, dtype=np.float64)
+    vec_normalize.ret_rms.count = float(ret_rms.count)
+    return {
+        "init_from": str(folder),
+        "num_timesteps": meta.get("num_timesteps"),
+        "git_commit": meta.get("git_commit"),
+        "config_file": meta.get("config_file"),
+    }
