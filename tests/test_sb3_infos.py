@@ -158,6 +158,22 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     assert math.isfinite(r["floor_update_per_s"]) and r["floor_update_per_s"] > 0
 
 
+def test_speed_training_times_each_number_of_epochs_it_is_given(tmp_path):
+    import json
+
+    out = tmp_path / "speed.json"
+    subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick", "--baseline",
+                    "none", "--n-epochs", "1", "3", "--json", str(out)], cwd=ROOT, check=True,
+                   capture_output=True, text=True)  # fmt: skip
+    runs = json.loads(out.read_text())["runs"]
+    # --quick: one warm-up and one timed rollout, each followed by an update of n_epochs epochs
+    assert sorted((r["n_epochs"], r["epochs_run"]) for r in runs) == [(1, 2), (3, 6)]
+    bad = subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick",
+                          "--baseline", "none", "--n-epochs", "0"], cwd=ROOT,
+                         capture_output=True, text=True)  # fmt: skip
+    assert bad.returncode == 2 and "--n-epochs must be >= 1, got [0]" in bad.stderr
+
+
 def test_update_threads_train_the_same_weights_up_to_float_rounding():
     """Bit for bit on some CPUs, not on all (torch's 2-thread kernels may sum in another
     order): the training is the same, its float rounding may differ."""

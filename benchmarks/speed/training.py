@@ -19,9 +19,9 @@ first trains `--warmup` rollouts (kernel loading, torch's first calls; not timed
   is bound by the networks' arithmetic: faster only with fewer or cheaper gradient steps.
 
 The rollout holds 8192 env steps at every N (n_steps = 8192 / N: 256, 64, 16), so the update
-does the same work per env step as the shipped configuration; `--n-steps` and `--batch-size`
-override the configuration for other trade-offs. torch and numba run on one thread as in the
-trainer (`--update-threads 2` also times the update on two torch threads, for both trees).
+does the same work per env step as the shipped configuration; `--n-steps`, `--batch-size` and
+`--n-epochs` override the configuration for other trade-offs. torch and numba run on one thread
+as in the trainer (`--update-threads 2` also times the update on two torch threads, for both trees).
 
     auv-gym speed training                      # about 3-5 minutes on 2 cores
     auv-gym speed training --quick              # smoke test
@@ -55,8 +55,9 @@ N_ENVS = (32, 128, 512)
 ROLLOUT_STEPS = 8192  # env steps per rollout of the generalist configuration (32 × 256)
 HERE = Path(__file__).resolve()
 RUN_FILE = HERE.with_name("training_run.py")  # `measure`, run in each tree
-# (side, N, update threads, batch size, update dtype) → the runs of that tree and setting
-Results = dict[tuple[str, int, int, int, str], list[dict[str, Any]]]
+SHIPPED_EPOCHS = 10  # PPO epochs per update of the generalist configuration
+# (side, N, update threads, batch size, update dtype, epochs) → the runs of that tree and setting
+Results = dict[tuple[str, int, int, int, str, int], list[dict[str, Any]]]
 TREE = HERE.parents[2]  # this tree's root
 
 
@@ -116,7 +117,7 @@ def _floor(runs: list[dict[str, Any]]) -> str:
 def table(results: Results, sides: list[str]) -> str:
     """One row per setting (N, update threads, batch): each side's median rates and the
     new/old ratios."""
-    head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'upd thr':>7} {'dtype':>8}"
+    head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'epochs':>6} {'upd thr':>7} {'dtype':>8}"
     for side in sides:
         head += f" | {side + ' total':>12} {'collect':>9} {'update':>8} {'floor':>8}"
     if len(sides) == 2:
@@ -124,8 +125,8 @@ def table(results: Results, sides: list[str]) -> str:
     lines = [head, "-" * len(head)]
     for setting in sorted({key[1:] for key in results}):
         runs = {side: results[(side, *setting)] for side in sides}
-        n, t, b, d = setting
-        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {b:>6} {t:>7} {d:>8}"
+        n, t, b, d, e = setting
+        line = f"{n:>5} {runs[sides[-1]][0]['n_steps']:>7} {b:>6} {e:>6} {t:>7} {d:>8}"
         for side in sides:
             line += (
                 f" | {_median(runs[side], 'total_per_s'):>12,.0f} "
@@ -147,12 +148,16 @@ def table(results: Results, sides: list[str]) -> str:
 def versus_shipped(results: Results) -> str:
     """Every new total against the old one of the first setting (the shipped configuration:
     N = 32, batch 2048, one thread, float32, with the defaults): code and settings together."""
-    first = min(key[1:] for key in results if key[0] == "old" and key[4] == "float32")
+    olds = [key[1:] for key in results if key[0] == "old" and key[4] == "float32"]
+    first = min([k for k in olds if k[4] == SHIPPED_EPOCHS] or olds)
     ref = _median(results[("old", *first)], "total_per_s")
-    cells = [f"N={n} b={b} thr={t} {d}: {_median(runs, 'total_per_s') / ref:.2f}×"
-             for (side, n, t, b, d), runs in sorted(results.items()) if side == "new"]  # fmt: skip
-    n, t, b, d = first
-    return f"new total / old total at N={n} b={b} thr={t} {d}: " + ", ".join(cells)
+    cells = [
+        f"N={n} b={b} ep={e} thr={t} {d}: {_median(runs, 'total_per_s') / ref:.2f}×"
+        for (side, n, t, b, d, e), runs in sorted(results.items())
+        if side == "new"
+    ]
+    n, t, b, d, e = first
+    return f"new total / old total at N={n} b={b} ep={e} thr={t} {d}: " + ", ".join(cells)
 
 
 @dataclass
@@ -175,6 +180,13 @@ class Options:
     )
     net_arch: tuple[int, ...] = option(
         (), "hidden-layer widths of both networks (default: the configuration's 64 64)", nargs="+"
+    )
+    # Fewer epochs are fewer gradient steps per env step: a change of the algorithm, whose
+    # learning has to be measured beside its rate (docs/performance.md).
+    n_epochs: tuple[int, ...] = option(
+        (SHIPPED_EPOCHS,),
+        "PPO epochs per update (the configuration's: 10); one row each",
+        nargs="+",
     )
     update_dtype: tuple[str, ...] = option(
         ("float32",),
@@ -199,6 +211,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         args.batch_size = (64,)
     if min(args.n_envs) < 1 or args.rollouts < 1 or args.repeats < 1 or args.warmup < 0:
         parser.error("--n-envs, --rollouts and --repeats must be >= 1, --warmup >= 0")
+    if min(args.n_epochs) < 1:
+        parser.error(f"--n-epochs must be >= 1, got {list(args.n_epochs)}")
     try:
         args.net_arch = tuple(int(width) for width in args.net_arch)
     except ValueError:
@@ -229,9 +243,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "warmup": args.warmup,
             "update_threads": t,
             "update_dtype": d,
+            "n_epochs": e,
             "net_arch": list(args.net_arch),
             "seed": 0,
         }
+        for e in args.n_epochs
         for d in args.update_dtype
         for b in args.batch_size
         for t in args.update_threads
@@ -264,6 +280,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             spec["update_threads"],
             spec["batch_size"],
             spec["update_dtype"],
+            spec["n_epochs"],
         )
         results.setdefault(key, []).append(r)
     print("\nenv steps/s (medians of the runs); ratio = new / old, measured in this run")

@@ -22,11 +22,12 @@ LEGACY_ENV_ID = "AUVPath3D-v1"  # the same env's id in trees before the rename
 def measure(spec: dict[str, Any]) -> dict[str, Any]:
     """Time PPO on the importable tree's trainer (run in a subprocess per tree).
 
-    ``spec``: n_envs, n_steps, batch_size, rollouts, warmup, update_threads, update_dtype,
-    net_arch (empty: the configuration's networks), seed. Uses only what every version of the
-    harness has (`read_zoo_config`, `make_training_env`, `thread_limit`), so the same function
-    times old and new code; the bfloat16 update (``update_dtype``: `PPO.train` under
-    `torch.autocast`) is applied here, so it times either tree's learner in that precision.
+    ``spec``: n_envs, n_steps, batch_size, n_epochs, rollouts, warmup, update_threads,
+    update_dtype, net_arch (empty: the configuration's networks), seed. Uses only what every
+    version of the harness has (`read_zoo_config`, `make_training_env`, `thread_limit`), so
+    the same function times old and new code; the bfloat16 update (``update_dtype``:
+    `PPO.train` under `torch.autocast`) is applied here, so it times either tree's learner in
+    that precision.
     """
     import torch
     from stable_baselines3 import PPO
@@ -73,6 +74,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
             **cfg.model_kwargs(),
             "n_steps": n_steps,
             "batch_size": int(spec["batch_size"]),
+            "n_epochs": int(spec.get("n_epochs", cfg.model_kwargs().get("n_epochs", 10))),
         }
         policy_kwargs = dict(cfg.policy_kwargs)
         if spec.get("net_arch"):
@@ -102,6 +104,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         "update_per_s": steps / update,
         "total_per_s": steps / (collect + update),
         "floor_update_per_s": n_envs * n_steps / floor,
+        "epochs_run": int(model._n_updates),  # SB3 counts epochs: rollouts × n_epochs
         "load_average": os.getloadavg()[0],
     }
 
