@@ -115,8 +115,8 @@ def _floor(runs: list[dict[str, Any]]) -> str:
 
 
 def table(results: Results, sides: list[str]) -> str:
-    """One row per setting (N, update threads, batch): each side's median rates and the
-    new/old ratios."""
+    """One row per setting (N, update threads, batch, dtype, epochs): each side's median rates
+    and the new/old ratios."""
     head = f"{'N':>5} {'n_steps':>7} {'batch':>6} {'epochs':>6} {'upd thr':>7} {'dtype':>8}"
     for side in sides:
         head += f" | {side + ' total':>12} {'collect':>9} {'update':>8} {'floor':>8}"

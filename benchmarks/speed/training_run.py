@@ -74,7 +74,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
             **cfg.model_kwargs(),
             "n_steps": n_steps,
             "batch_size": int(spec["batch_size"]),
-            "n_epochs": int(spec.get("n_epochs", cfg.model_kwargs().get("n_epochs", 10))),
+            **({"n_epochs": int(spec["n_epochs"])} if "n_epochs" in spec else {}),
         }
         policy_kwargs = dict(cfg.policy_kwargs)
         if spec.get("net_arch"):
