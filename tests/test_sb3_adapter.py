@@ -208,6 +208,10 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
         assert r["autoresets"] >= r["n"]  # every vehicle went through a NEXT_STEP autoreset
     assert results["memory"]["n"] == 1024 and results["memory"]["peak_bytes"] > 0
     assert [r["waves"]["n"] for r in results["waves"]] == [64]  # waves beside no waves
-    assert 0 < results["waves"][0]["ratio"] < 2
+    # The ratio is the row's own two rates (how fast waves are is a benchmark figure, not a
+    # unit test's: a 0.2-s budget on shared cores put it at 2.6 once)
+    row = results["waves"][0]
+    rates = [row[label]["physics_steps_per_s"] for label in ("no_waves", "waves")]
+    assert min(rates) > 0 and row["ratio"] == pytest.approx(rates[1] / rates[0])
     assert {r["backend"] for r in results["ppo"]} == {"adapter", "DummyVecEnv"}
     assert all(r["timesteps_per_s"] > 0 for r in results["ppo"])
