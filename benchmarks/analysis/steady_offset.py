@@ -12,13 +12,20 @@ For each policy, on the paper's helix (start, path and 300-s episodes of the pap
               pitch moment push it (a controller with integral action: 0). Not measured for an
               incremental agent (`controllers.action_increment`): the bias would enter the
               previous command it observes and accumulate
+    surge     with ``--surge-bias b``: the calm run again with b added to the normalised thrust
+              command; Δū / b [m/s per unit command] and Δx̄_e / b [m per unit command]. A
+              policy that holds a wrong speed because its thrust is mis-calibrated moves with
+              the bias; one whose feedback holds u at a speed of its own choosing (u = u_p, the
+              virtual point's, whatever x_e) hardly does (docs/results.md, "What is left on
+              `fins`")
 
 Each policy runs under the benchmark's env id for it (`benchmarks.catalog.policies`): an agent
 under the env its metadata names (its observation and surge limit), a classical controller
 under ``AUVPath3D-v0`` (docs/results.md, "Where the remaining error sits").
 
     python -m benchmarks.analysis.steady_offset \\
-        --policies fbsm,net256=benchmarks/agents/ppo_preview_net256 --seeds 4 --bias 0.05
+        --policies fbsm,net256=benchmarks/agents/ppo_preview_net256 --seeds 4 --bias 0.05 \
+        --surge-bias 0.05
 """
 
 from __future__ import annotations
@@ -44,17 +51,20 @@ from benchmarks.options import option
 ERRORS = ("x_e", "y_e", "z_e")
 
 
-class PitchBias:
-    """``policy`` with a constant ``bias`` added to its normalised pitch command (saturated)."""
+PITCH, SURGE = 1, 0  # action channels: (X, M, N) normalised
 
-    def __init__(self, policy: Any, bias: float) -> None:
-        self.policy, self.bias = policy, np.float32(bias)
+
+class CommandBias:
+    """``policy`` with a constant ``bias`` added to one normalised command (saturated)."""
+
+    def __init__(self, policy: Any, bias: float, channel: int = PITCH) -> None:
+        self.policy, self.bias, self.channel = policy, np.float32(bias), channel
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
         action, state = self.policy.predict(observation, state, episode_start, deterministic)
         action = np.array(action, dtype=np.float32, copy=True)
-        action[..., 1] = np.clip(action[..., 1] + self.bias, -1.0, 1.0)
+        action[..., self.channel] = np.clip(action[..., self.channel] + self.bias, -1.0, 1.0)
         return action, state
 
 
@@ -71,19 +81,23 @@ def policy_and_env(text: str) -> tuple[str, Any, dict[str, Any]]:
 
 
 def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: float,
-            bias: float | None) -> dict[str, Any]:  # fmt: skip
+            bias: float | None, surge_bias: float | None = None) -> dict[str, Any]:  # fmt: skip
     """The module docstring's quantities for one policy."""
     from auv_gym.rollout import rollouts
 
     def window(traj: Any) -> np.ndarray:
         keep = traj.t >= transient
-        return np.stack([traj.samples[name][keep] for name in ERRORS], axis=1)
+        return np.stack([traj.samples[name][keep] for name in (*ERRORS, "u")], axis=1)
 
-    calm = rollouts(policy, [0], **{**env_kwargs, "disturbance": "none"})[0]
+    calm_env = {**env_kwargs, "disturbance": "none"}
+
+    calm = rollouts(policy, [0], **calm_env)[0]
     noisy = rollouts(policy, list(range(seeds)), **{**env_kwargs, "disturbance": "paper"})
     row: dict[str, Any] = {"calm_failed": calm.termination_reason in FAILURE_REASONS}
-    row["calm_mean"] = window(calm).mean(axis=0).tolist() if not row["calm_failed"] else None
-    kept = [window(t) for t in noisy if t.termination_reason not in FAILURE_REASONS]
+    calm_window = None if row["calm_failed"] else window(calm).mean(axis=0)
+    row["calm_mean"] = None if calm_window is None else calm_window[:3].tolist()
+    row["calm_surge"] = None if calm_window is None else float(calm_window[3])
+    kept = [window(t)[:, :3] for t in noisy if t.termination_reason not in FAILURE_REASONS]
     row["noisy_failed"] = len(noisy) - len(kept)
     if kept:
         errors = np.concatenate(kept)
@@ -95,9 +109,14 @@ def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: floa
     )
     incremental = hasattr(policy, "increment")
     if bias is not None and row["calm_mean"] is not None and not incremental:
-        shifted = rollouts(PitchBias(policy, bias), [0], **{**env_kwargs, "disturbance": "none"})
-        if shifted[0].termination_reason not in FAILURE_REASONS:
-            row["stiffness_z"] = (window(shifted[0]).mean(axis=0)[2] - row["calm_mean"][2]) / bias
+        shifted = rollouts(CommandBias(policy, bias), [0], **calm_env)[0]
+        if shifted.termination_reason not in FAILURE_REASONS:
+            row["stiffness_z"] = (window(shifted).mean(axis=0)[2] - calm_window[2]) / bias
+    if surge_bias is not None and calm_window is not None and not incremental:
+        shifted = rollouts(CommandBias(policy, surge_bias, SURGE), [0], **calm_env)[0]
+        if shifted.termination_reason not in FAILURE_REASONS:
+            change = (window(shifted).mean(axis=0) - calm_window) / surge_bias
+            row["surge_u"], row["surge_x"] = float(change[3]), float(change[0])
     return row
 
 
@@ -109,6 +128,7 @@ class Options:
     seeds: int = option(4, "noisy episodes per policy (seeds 0…)")
     transient: float = option(100.0, "the window starts here [s]")
     bias: float | None = option(None, "pitch-command bias for the stiffness (normalised)")
+    surge_bias: float | None = option(None, "thrust-command bias for the surge response (normed)")
     json: str | None = option(None, "also write the rows to this file")
 
 
@@ -120,22 +140,27 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
             writable_location(args.json, "--json", folder=False)
         if args.seeds < 1 or not (0.0 <= args.transient < 300.0):
             raise ValueError("--seeds must be >= 1 and --transient in [0, 300) s")
-        if args.bias is not None and not (math.isfinite(args.bias) and 0 < abs(args.bias) <= 1):
-            raise ValueError(f"--bias must be finite with 0 < |b| <= 1, got {args.bias}")
+        for flag, value in (("--bias", args.bias), ("--surge-bias", args.surge_bias)):
+            if value is not None and not (math.isfinite(value) and 0 < abs(value) <= 1):
+                raise ValueError(f"{flag} must be finite with 0 < |b| <= 1, got {value}")
         specs = [s for s in args.policies.split(",") if s]
         built = [policy_and_env(spec) for spec in specs]
-    rows = {label: measure(policy, env, args.seeds, args.transient, args.bias)
+    rows = {label: measure(policy, env, args.seeds, args.transient, args.bias, args.surge_bias)
             for label, policy, env in built}  # fmt: skip
 
     def triple(values: Any) -> str:
         return "n/a" if values is None else ", ".join(f"{v:+.3f}" for v in values)
 
     header = ["policy", "calm mean (x_e, y_e, z_e) [m]", "noisy mean [m]", "noisy std [m]",
-              "RMS distance [m]", "failed", "largest pitch [deg]", "Δz̄_e/bias [m]"]  # fmt: skip
+              "RMS distance [m]", "failed", "largest pitch [deg]", "Δz̄_e/bias [m]",
+              "calm ū [m/s]", "Δū/surge bias [m/s]", "Δx̄_e/surge bias [m]"]  # fmt: skip
     cells = [[label, triple(r["calm_mean"]), triple(r.get("noisy_mean")),
               triple(r.get("noisy_std")), f"{r.get('rms_distance', math.nan):.3f}",
               f"{r['noisy_failed']} of {args.seeds}", f"{r['max_pitch_deg']:.1f}",
-              f"{r['stiffness_z']:+.2f}" if "stiffness_z" in r else "n/a"]
+              f"{r['stiffness_z']:+.2f}" if "stiffness_z" in r else "n/a",
+              "n/a" if r["calm_surge"] is None else f"{r['calm_surge']:.4f}",
+              f"{r['surge_u']:+.3f}" if "surge_u" in r else "n/a",
+              f"{r['surge_x']:+.3f}" if "surge_x" in r else "n/a"]
              for label, r in rows.items()]  # fmt: skip
     print(f"The paper's helix, 300-s episodes, window t >= {args.transient:g} s; noisy: the "
           f"paper's white noise, seeds 0-{args.seeds - 1}")  # fmt: skip
