@@ -14,10 +14,9 @@ For each policy, on the paper's helix (start, path and 300-s episodes of the pap
               previous command it observes and accumulate
     surge     with ``--surge-bias b``: the calm run again with b added to the normalised thrust
               command; Δū / b [m/s per unit command] and Δx̄_e / b [m per unit command]. A
-              policy that holds a wrong speed because its thrust is mis-calibrated moves with
-              the bias; one whose feedback holds u at a speed of its own choosing (u = u_p, the
-              virtual point's, whatever x_e) hardly does (docs/results.md, "What is left on
-              `fins`")
+              policy that flies a wrong speed because its thrust is mis-calibrated moves with
+              the bias; one whose feedback holds u at a set-point of its own hardly does (the
+              gen. 4 agents: 1.07 m/s; docs/results.md, "What is left on `fins`")
 
 Each policy runs under the benchmark's env id for it (`benchmarks.catalog.policies`): an agent
 under the env its metadata names (its observation and surge limit), a classical controller
