@@ -7,7 +7,9 @@
   "ppo_paper_actuator", "ppo_paper_actuator_guard" (the same agent inside its envelope guard,
   `controllers.envelope_guard`), "ppo_paper_start_guard" (the same training for 8M env steps,
   guarded), "ppo_paper_start_guard_alloc" (that agent with its moments allocated to the
-  scenario's actuator, `controllers.actuator_allocation`), "sac_paper_actuator_guard_alloc"
+  scenario's actuator, `controllers.actuator_allocation`), "ppo_along_track_guard_alloc" (that
+  agent trained on for 2M env steps with its along-track error at a finer scale, guarded and
+  allocated likewise), "sac_paper_actuator_guard_alloc"
   (the SAC generalist trained inside the envelope guard, allocated likewise), "sac_helix"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
@@ -60,6 +62,7 @@ SHIPPED_AGENTS = {
     "ppo_paper_actuator_guard": "ppo_paper_actuator_guard",
     "ppo_paper_start_guard": "ppo_paper_start_guard",
     "ppo_paper_start_guard_alloc": "ppo_paper_start_guard_alloc",
+    "ppo_along_track_guard_alloc": "ppo_along_track_guard_alloc",
     "sac_paper_actuator_guard_alloc": "sac_paper_actuator_guard_alloc",
     "sac_helix": "sac_helix",
 }
