@@ -16,14 +16,14 @@ For each policy, on the paper's helix (start, path and 300-s episodes of the pap
               command; Δū / b [m/s per unit command] and Δx̄_e / b [m per unit command]. A
               policy that flies a wrong speed because its thrust is mis-calibrated moves with
               the bias; one whose feedback holds u at a set-point of its own hardly does (the
-              gen. 4 agents: 1.07 m/s; docs/results.md, "What is left on `fins`")
+              gen. 4 agents: 1.03-1.07 m/s; docs/results.md, "The along-track phase")
 
 Each policy runs under the benchmark's env id for it (`benchmarks.catalog.policies`): an agent
 under the env its metadata names (its observation and surge limit), a classical controller
 under ``AUVPath3D-v0`` (docs/results.md, "Where the remaining error sits").
 
     python -m benchmarks.analysis.steady_offset \\
-        --policies fbsm,net256=benchmarks/agents/ppo_preview_net256 --seeds 4 --bias 0.05 \
+        --policies fbsm,net256=benchmarks/agents/ppo_preview_net256 --seeds 4 --bias 0.05 \\
         --surge-bias 0.05
 """
 
