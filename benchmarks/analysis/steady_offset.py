@@ -106,15 +106,18 @@ def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: floa
     row["max_pitch_deg"] = math.degrees(
         max(np.abs(t.samples["theta"]).max() for t in [calm, *noisy])
     )
-    incremental = hasattr(policy, "increment")
-    if bias is not None and row["calm_mean"] is not None and not incremental:
-        shifted = rollouts(CommandBias(policy, bias), [0], **calm_env)[0]
-        if shifted.termination_reason not in FAILURE_REASONS:
-            row["stiffness_z"] = (window(shifted).mean(axis=0)[2] - calm_window[2]) / bias
-    if surge_bias is not None and calm_window is not None and not incremental:
-        shifted = rollouts(CommandBias(policy, surge_bias, SURGE), [0], **calm_env)[0]
-        if shifted.termination_reason not in FAILURE_REASONS:
-            change = (window(shifted).mean(axis=0) - calm_window) / surge_bias
+
+    def response(value: float, channel: int) -> np.ndarray | None:
+        """Change of the calm window's mean (x_e, y_e, z_e, u) per unit bias on ``channel``."""
+        shifted = rollouts(CommandBias(policy, value, channel), [0], **calm_env)[0]
+        if shifted.termination_reason in FAILURE_REASONS:
+            return None
+        return (window(shifted).mean(axis=0) - calm_window) / value
+
+    if calm_window is not None and not hasattr(policy, "increment"):
+        if bias is not None and (change := response(bias, PITCH)) is not None:
+            row["stiffness_z"] = float(change[2])
+        if surge_bias is not None and (change := response(surge_bias, SURGE)) is not None:
             row["surge_u"], row["surge_x"] = float(change[3]), float(change[0])
     return row
 
