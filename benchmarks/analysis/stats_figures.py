@@ -117,7 +117,8 @@ def improvement_figure(summary: Mapping[str, Any]) -> Figure:
 
 
 def profile_figure(summary: Mapping[str, Any], scope: str = AGGREGATE, unit: str = "m") -> Figure:
-    """Performance profiles of one scope: fraction of episodes below τ with CI bands."""
+    """Performance profiles of one scope: fraction of episodes below τ with CI bands; the legend
+    beside the axes."""
     if scope not in summary["profiles"]:
         raise ValueError(f"scope={scope!r}: not among {list(summary['profiles'])}")
     fig = Figure(figsize=(6.0, 4.0), layout="constrained")
@@ -132,7 +133,11 @@ def profile_figure(summary: Mapping[str, Any], scope: str = AGGREGATE, unit: str
     ax.set(xlabel=f"threshold τ: RMS distance [{unit}]", ylabel="fraction of episodes < τ",
            ylim=(-0.02, 1.02), title=title)  # fmt: skip
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    # Beside the axes: with twenty-odd policies a legend inside covers the curves it names.
+    policies = len(summary["profiles"][scope])
+    columns = 1 if policies <= 24 else 2
+    fig.legend(loc="outside right upper", fontsize=7, ncols=columns)
+    fig.set_figwidth(fig.get_figwidth() + 1.9 * columns)
     return fig
 
 
