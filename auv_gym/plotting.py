@@ -78,6 +78,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_paper_start_guard": "#3182bd",
     "ppo_paper_start_guard_alloc": "#6baed6",
     "ppo_along_track_guard_alloc": "#08519c",
+    "ppo_cross_track_guard_alloc": "#08306b",
     "sac_generalist": "#8c564b",
     "sac_paper_actuator_guard_alloc": "#c49c94",
     "sac_helix": "#393b79",

@@ -357,6 +357,9 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("sac_paper_actuator.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_heading_spread.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
     ("ppo_paper_start.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_along_track.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_cross_track.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_cross_track_bends.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
 ]
 FAILURE_CHARGE = {"ppo_failure_charge.yml": 1000.0}  # w_termination; the others charge 300
 
@@ -398,6 +401,30 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
         np.testing.assert_array_equal(model.action_space.low, np.float32(cfg.action_bounds[0]))
         model.learn(64)  # acts inside the box (ActionBox refuses anything else)
     venv.close()
+
+
+def test_phase_configs_change_only_what_their_comments_say():
+    """The curriculum's phases (warm-started from the previous phase's agents): the cross-track
+    phase differs from the along-track phase only in the pinned y_e, z_e scales (2 -> 0.5 m,
+    integrals 2 -> 1 m·s); its ablation only in the spline family's turns and pieces on top."""
+    import dataclasses
+
+    from benchmarks.training.config import read_zoo_config
+
+    env_id = "AUVPath3DPreviewAntiWindup-v0"
+    along, cross, bends = (
+        dataclasses.asdict(read_zoo_config(ROOT / "benchmarks" / "hyperparams" / f, env_id, "ppo"))
+        for f in ("ppo_along_track.yml", "ppo_cross_track.yml", "ppo_cross_track_bends.yml")
+    )
+    for config in (along, cross, bends):
+        config.pop("raw")  # the file as read; the parsed fields below are what training uses
+    changed = {"y_e": 0.5, "z_e": 0.5, "y_e_integral": 1.0, "z_e_integral": 1.0}
+    assert {k: along["obs_scales"][k] for k in changed} == dict.fromkeys(changed, 2.0)
+    assert cross["obs_scales"] == {**along["obs_scales"], **changed}
+    assert {**cross, "obs_scales": along["obs_scales"]} == along
+    path = {**cross["env_kwargs"]["path"], "spline_radius": [8.0, 40.0],
+            "piece_length": [20.0, 80.0]}  # fmt: skip
+    assert bends == {**cross, "env_kwargs": {**cross["env_kwargs"], "path": path}}
 
 
 @pytest.mark.rl

@@ -9,7 +9,9 @@
   guarded), "ppo_paper_start_guard_alloc" (that agent with its moments allocated to the
   scenario's actuator, `controllers.actuator_allocation`), "ppo_along_track_guard_alloc" (that
   agent trained on for 2M env steps with its along-track error at a finer scale, guarded and
-  allocated likewise), "sac_paper_actuator_guard_alloc"
+  allocated likewise), "ppo_cross_track_guard_alloc" (that one trained on for 2M more with its
+  cross-track and depth errors at a finer scale and on tighter splines, likewise),
+  "sac_paper_actuator_guard_alloc"
   (the SAC generalist trained inside the envelope guard, allocated likewise), "sac_helix"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
   one-line error saying so); "ppo:PATH": any saved agent directory or model zip
@@ -63,6 +65,7 @@ SHIPPED_AGENTS = {
     "ppo_paper_start_guard": "ppo_paper_start_guard",
     "ppo_paper_start_guard_alloc": "ppo_paper_start_guard_alloc",
     "ppo_along_track_guard_alloc": "ppo_along_track_guard_alloc",
+    "ppo_cross_track_guard_alloc": "ppo_cross_track_guard_alloc",
     "sac_paper_actuator_guard_alloc": "sac_paper_actuator_guard_alloc",
     "sac_helix": "sac_helix",
 }
