@@ -10,7 +10,7 @@
   scenario's actuator, `controllers.actuator_allocation`), "ppo_along_track_guard_alloc" (that
   agent trained on for 2M env steps with its along-track error at a finer scale, guarded and
   allocated likewise), "ppo_cross_track_guard_alloc" (that one trained on for 2M more with its
-  cross-track and depth errors at a finer scale and on tighter splines, likewise),
+  cross-track and depth errors at a finer scale, likewise),
   "sac_paper_actuator_guard_alloc"
   (the SAC generalist trained inside the envelope guard, allocated likewise), "sac_helix"): the
   agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
