@@ -23,15 +23,26 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     """Time PPO on the importable tree's trainer (run in a subprocess per tree).
 
     ``spec``: n_envs, n_steps, batch_size, n_epochs, rollouts, warmup, update_threads,
-    update_dtype, net_arch (empty: the configuration's networks), seed. Uses only what every
+    update_dtype, net_arch (empty: the configuration's networks), seed, and optionally learner:
+    "sb3" (default, torch) or "sbx" (SBX's PPO in JAX, `benchmarks.speed.learners`: the same
+    algorithm, hyper-parameters, networks and rollout buffer; XLA on one thread; neither
+    ``update_threads`` nor ``update_dtype`` nor the torch floor applies). Uses only what every
     version of the harness has (`read_zoo_config`, `make_training_env`, `thread_limit`), so
     the same function times old and new code; the bfloat16 update (``update_dtype``:
     `PPO.train` under `torch.autocast`) is applied here, so it times either tree's learner in
     that precision.
     """
     import torch
-    from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
+
+    jax_learner = spec.get("learner", "sb3") == "sbx"
+    if jax_learner:
+        # one XLA thread, as torch's: set before jax is first imported
+        os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false "
+                              "intra_op_parallelism_threads=1")  # fmt: skip
+        from sbx import PPO
+    else:
+        from stable_baselines3 import PPO
 
     import auv_gym
     from benchmarks.training.config import read_zoo_config
@@ -53,6 +64,11 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
             return more
 
         def train(self) -> None:
+            if jax_learner:  # SBX's update waits for each minibatch's result (its KL, .item())
+                super().train()
+                start, collected, _ = phases[-1]
+                phases[-1] = (start, collected, time.perf_counter())
+                return
             threads = torch.get_num_threads()
             torch.set_num_threads(int(spec["update_threads"]))
             try:
@@ -79,13 +95,16 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         policy_kwargs = dict(cfg.policy_kwargs)
         if spec.get("net_arch"):
             policy_kwargs["net_arch"] = [int(width) for width in spec["net_arch"]]
+        if jax_learner:  # SBX takes SB3's keywords but torch's device and module classes
+            kwargs.pop("device", None)
+            policy_kwargs.pop("activation_fn", None)  # both default to tanh
         model = TimedPPO(
             cfg.policy,
             venv,
             policy_kwargs=policy_kwargs,
             seed=int(spec["seed"]),
-            device="cpu",
             verbose=0,
+            **({} if jax_learner else {"device": "cpu"}),
             **kwargs,
         )
         rollouts = int(spec["warmup"]) + int(spec["rollouts"])
@@ -94,7 +113,10 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     steps = len(timed) * n_envs * n_steps
     collect = sum(c - s for s, c, _ in timed)
     update = sum(u - c for _, c, u in timed)
-    floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]), bfloat16)
+    floor = None
+    if not jax_learner:
+        floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]),
+                                    bfloat16)  # fmt: skip
     return {
         **spec,
         "steps": steps,
@@ -103,7 +125,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         "collect_per_s": steps / collect,
         "update_per_s": steps / update,
         "total_per_s": steps / (collect + update),
-        "floor_update_per_s": n_envs * n_steps / floor,
+        **({"floor_update_per_s": n_envs * n_steps / floor} if floor else {}),
         "epochs_run": int(model._n_updates),  # SB3 counts epochs: rollouts × n_epochs
         "load_average": os.getloadavg()[0],
     }
