@@ -95,9 +95,11 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         policy_kwargs = dict(cfg.policy_kwargs)
         if spec.get("net_arch"):
             policy_kwargs["net_arch"] = [int(width) for width in spec["net_arch"]]
-        if jax_learner:  # SBX takes SB3's keywords but torch's device and module classes
+        if jax_learner:  # SBX takes SB3's keywords, but not torch's device or module classes
             kwargs.pop("device", None)
-            policy_kwargs.pop("activation_fn", None)  # both default to tanh
+            if "activation_fn" in policy_kwargs:
+                raise ValueError("learner 'sbx': the configuration names a torch activation; "
+                                 "only the default (tanh in both) is compared")  # fmt: skip
         model = TimedPPO(
             cfg.policy,
             venv,
