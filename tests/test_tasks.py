@@ -106,6 +106,11 @@ TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { p
         ('[x]\nrole = "test"\nseed = { first = 0, count = 5 }\n', r"unknown keys \['seed'\]"),
         ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["papr"]\n',
          r"unknown scenarios \['papr'\]"),
+        ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\ncontroller = "fins"\n',
+         r"task set 'x': controller must be a table, got 'fins'"),
+        ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["fins"]\n'
+         'controller = { actuator = "fins" }\n',
+         r"scenarios belong to a test set without env/controller/held_out"),
     ],
 )  # fmt: skip
 def test_bad_task_files_raise_one_line_errors(tmp_path, text, match):

@@ -74,20 +74,21 @@ def test_agent_env_kwargs_are_the_ids_arguments_plus_the_recorded_observation():
 def test_a_fixed_actuator_is_told_to_every_policy_as_a_scenario_does():
     """Was: on `validation_fins_start` FBSM was built for the paper's actuator and the agents
     ran without their allocation, so both flew the fins with a third of the moment asked for."""
-    from benchmarks.analysis.validation_ratio import policy_and_env, told_actuator
+    from benchmarks.analysis.validation_ratio import policy_and_env
     from benchmarks.catalog.tasks import load_task_sets
     from controllers.actuator_allocation import AllocatedPolicy
 
     sets = load_task_sets()
-    assert told_actuator(sets["validation_fins_start"].env) == {"actuator": "fins"}
-    assert told_actuator(sets["validation_paper_start"].env) == {}
-    assert told_actuator(sets["validation"].env) == {}  # drawn per episode: tells none
-    fins = dict(sets["validation_fins_start"].env)
+    assert sets["validation_fins_start"].controller == {"actuator": "fins"}
+    assert sets["validation_fins_start"].env["actuator"] == "fins"
+    assert sets["validation_paper_start"].controller == {}
+    assert sets["validation"].controller == {}  # drawn per episode: tells none
+    fins = sets["validation_fins_start"].controller
     _, fbsm, _, _ = policy_and_env("fbsm", fins)
     assert fbsm.actuator == "fins"
-    assert policy_and_env("fbsm", dict(sets["validation_paper_start"].env))[1].actuator == "paper"
+    assert policy_and_env("fbsm", sets["validation_paper_start"].controller)[1].actuator == "paper"
     agent = "benchmarks/results/seeds/ppo_cross_track_guard_alloc/agent_seed_3"
     _, allocated, _, _ = policy_and_env(f"a={agent}", fins)
     assert isinstance(allocated, AllocatedPolicy)
-    _, plain, _, _ = policy_and_env(f"a={agent}", dict(sets["validation_paper_start"].env))
+    _, plain, _, _ = policy_and_env(f"a={agent}", sets["validation_paper_start"].controller)
     assert not isinstance(plain, AllocatedPolicy)

@@ -13,9 +13,9 @@ env steps and wall time [s] of training its metadata records.
 Each policy runs under the benchmark's env id for it, as in the test suite: a classical
 controller under ``AUVPath3D-v0``, an agent under its training env id with the observation
 its metadata records (so an ablation agent trained with an ``observation`` keyword runs too).
-A set with a fixed actuator other than the paper's (``validation_fins_start``) tells it to
-every policy, as the `fins` scenario does: classical controllers allocate to it, and agents
-recorded with an actuator allocation fly through it (`told_actuator`).
+A set's ``controller`` arguments reach every policy as a scenario's do: ``validation_fins_start``
+tells its actuator, as the `fins` scenario does, so classical controllers allocate to the fins
+and agents recorded with an actuator allocation fly through it.
 
     python -m benchmarks.analysis.validation_ratio --task-set validation_paper_actuator \\
         --policies fbsm_colos,gen3=benchmarks/results/seeds/ppo_integral/agent_seed_0
@@ -33,33 +33,23 @@ from benchmarks.arguments import parse_options, program_name, usage_errors, writ
 from benchmarks.options import option
 
 
-def told_actuator(task_env: dict[str, Any]) -> dict[str, Any]:
-    """The actuator a validation set tells its policies, as a scenario does: ``{"actuator":
-    name}`` for a fixed actuator other than the paper's (classical controllers allocate to it,
-    agents recorded with an actuator allocation are wrapped for it); ``{}`` for the paper's
-    (every policy's own) and for one drawn per episode ("random": training's selection
-    tells none)."""
-    actuator = task_env.get("actuator", "paper")
-    return {} if actuator in ("paper", "random") else {"actuator": actuator}
-
-
-def policy_and_env(text: str, task_env: dict[str, Any] | None = None
+def policy_and_env(text: str, controller: dict[str, Any] | None = None
                    ) -> tuple[str, Any, dict[str, Any], dict[str, Any]]:  # fmt: skip
     """(label, policy, env keyword arguments, training record) of ``label=agent-folder`` or a
-    classical policy name, told the actuator of ``task_env`` (`told_actuator`); an agent's env
-    is its training id's plus its recorded observation."""
+    classical policy name, told a task set's ``controller`` keyword arguments as a scenario's
+    are (a classical controller's, an agent's ``base_kwargs``); an agent's env is its training
+    id's plus its recorded observation."""
     from auv_gym import ENV_ID, VARIANTS
     from benchmarks.catalog.policies import build_policy, check_policy_spec
     from benchmarks.training.evaluation import agent_env_kwargs
     from controllers.loader import load_policy
 
-    told = told_actuator(task_env or {})
     label, _, path = text.partition("=")
     if not path:
         check_policy_spec(label)
         env_kwargs = dict(VARIANTS[ENV_ID])
-        return label, build_policy(label, {**env_kwargs, **told}), env_kwargs, {}
-    policy = load_policy(path, base_kwargs=told or None)
+        return label, build_policy(label, env_kwargs, controller), env_kwargs, {}
+    policy = load_policy(path, base_kwargs=dict(controller or {}) or None)
     metadata = policy.metadata
     env_kwargs = agent_env_kwargs(metadata.get("env_id", ENV_ID), metadata)
     record = {"num_timesteps": metadata.get("num_timesteps"),
@@ -116,7 +106,7 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
         labels = [s.partition("=")[0] for s in specs]
         if args.reference not in labels:
             raise ValueError(f"--reference {args.reference!r} is not among --policies {labels}")
-        built = [policy_and_env(spec, dict(chosen.env)) for spec in specs]
+        built = [policy_and_env(spec, chosen.controller) for spec in specs]
     seeds = list(chosen.seeds[: args.episodes])
     rows: dict[str, dict[str, Any]] = {}
     for label, policy, env_kwargs, record in built:

@@ -1,9 +1,10 @@
 """Named task sets (`benchmarks/tasks.toml`): the training distribution, validation and test suite.
 
 A `TaskSet` is a role ("train", "validation", "test"), a half-open range of reset seeds and the
-`AUVPath3D-v0` keyword arguments of its episodes; the test suite also holds the benchmark
-scenarios (`benchmarks/scenarios.toml`) by name, one set per scenario ("scenario:<name>"). An
-episode is the pair (env keyword arguments, seed).
+`AUVPath3D-v0` keyword arguments of its episodes, with the controller keyword arguments its
+policies are told (``controller``, as a scenario's: e.g. the actuator); the test suite also
+holds the benchmark scenarios (`benchmarks/scenarios.toml`) by name, one set per scenario
+("scenario:<name>"). An episode is the pair (env keyword arguments, seed).
 
 `load_task_sets` validates the whole file before anything runs, each problem a one-line
 ValueError naming the set: unknown keys or roles, a bad seed range, env arguments the env refuses
@@ -35,7 +36,7 @@ __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test
 
 TASKS_FILE = Path(__file__).resolve().parents[1] / "tasks.toml"
 ROLES = ("train", "validation", "test")
-_KEYS = {"role", "description", "seeds", "env", "scenarios", "held_out"}
+_KEYS = {"role", "description", "seeds", "env", "controller", "scenarios", "held_out"}
 MAX_SEED = 2**32 - 1  # numpy's SeedSequence accepts any, SB3 and Gymnasium pass 32-bit seeds
 
 
@@ -102,8 +103,9 @@ def load_task_sets(
         if held_out is not None and role != "test":
             raise ValueError(f"{where}: only a test set can be held_out, this one is {role!r}")
         if "scenarios" in table:
-            if role != "test" or "env" in table or held_out is not None:
-                raise ValueError(f"{where}: scenarios belong to a test set without env/held_out")
+            if role != "test" or {"env", "controller"} & set(table) or held_out is not None:
+                raise ValueError(f"{where}: scenarios belong to a test set without "
+                                 "env/controller/held_out")  # fmt: skip
             scenarios = scenarios if scenarios is not None else load_scenarios(scenarios_file)
             names = table["scenarios"]
             missing = [n for n in names if n not in scenarios]
@@ -119,7 +121,11 @@ def load_task_sets(
             continue
         env = dict(table.get("env", {}))
         configs[name] = _check_env(where, env)
-        sets[name] = TaskSet(name, role, description, seeds, env, held_out=held_out)
+        controller = table.get("controller", {})
+        if not isinstance(controller, Mapping):
+            raise ValueError(f"{where}: controller must be a table, got {controller!r}")
+        sets[name] = TaskSet(name, role, description, seeds, env, dict(controller),
+                             held_out=held_out)  # fmt: skip
     _check_disjoint(path.name, sets)
     _check_held_out(path.name, sets, configs)
     return sets
