@@ -42,6 +42,7 @@ from benchmarks.training.guard_agents import guard_agent
 from benchmarks.training.learning_curve import EVAL_FILE, EVAL_HEADER
 from benchmarks.training.seed_workers import seed_dir
 from benchmarks.training.seeds import PLAN_FILE, SUMMARY_FILE, select
+from controllers.agent import METADATA_FILE, check_agent
 from controllers.envelope_guard import EnvelopeGuard
 
 __all__ = ["main", "publish_phase"]
@@ -90,20 +91,20 @@ def _curve_text(rows: list[list[str]]) -> str:
     return buffer.getvalue()
 
 
-def history_end(history: Path, seed: int) -> tuple[int, float]:
-    """(env steps, wall time [s]) of the whole history at the end of seed ``seed``'s agent in
-    ``history``: its own run's curve (the phase curve if the history is itself a phase) ends
-    where the agent's ``num_timesteps`` and its training's ``wall_time_s`` are reached."""
-    whole = _read_curve(history / LEARNING_CURVE.format(seed=seed))[-1]
+def history_end(history: Path, seed: int, whole: list[list[str]]) -> tuple[int, float]:
+    """(env steps, wall time [s]) of the whole history ``whole`` (seed ``seed``'s learning-curve
+    rows in ``history``) at the end of its agent: its own run's curve (the phase curve if the
+    history is itself a phase) ends where the agent's ``num_timesteps`` and its training's
+    ``wall_time_s`` are reached."""
     own_file = history / PHASE_CURVE.format(seed=seed)
-    own = _read_curve(own_file)[-1] if own_file.is_file() else whole
+    own = _read_curve(own_file)[-1] if own_file.is_file() else whole[-1]
     agent = history / f"{SEED_AGENT_PREFIX}{seed}"
-    metadata = _read_json(agent / "metadata.json", "the history agent's metadata")
+    metadata = check_agent(agent).metadata  # a corrupt agent is named, as everywhere
     missing = [k for k in ("num_timesteps", "wall_time_s") if k not in metadata]
     if missing:
-        raise ValueError(f"{agent / 'metadata.json'} records no {' or '.join(missing)}")
-    step_offset = int(whole[0]) - int(own[0])
-    wall_offset = float(whole[1]) - float(own[1])
+        raise ValueError(f"{agent / METADATA_FILE} records no {' or '.join(missing)}")
+    step_offset = int(whole[-1][0]) - int(own[0])
+    wall_offset = float(whole[-1][1]) - float(own[1])
     return step_offset + int(metadata["num_timesteps"]), wall_offset + metadata["wall_time_s"]
 
 
@@ -153,28 +154,27 @@ def publish_phase(folders: tuple[str, ...], out: Path, guard: EnvelopeGuard | No
         raise ValueError(f"--out {out} is not empty")
     if out.resolve() == history.resolve():
         raise ValueError("--out must differ from the history folder")
-    entries, invocations = [], []
+    entries = sorted((e for _, summary in runs for e in summary["seeds"]),
+                     key=lambda e: e["seed"])  # fmt: skip
+    invocations = [{"folder": str(run), "seeds": summary["plan"]["seeds"],
+                    "session_wall_time_s": summary["session_wall_time_s"]}
+                   for run, summary in runs]  # fmt: skip
+    merged = {
+        "plan": {**plan, "seeds": [e["seed"] for e in entries]},
+        "seeds": entries,
+        "selected_seed": select(entries)["seed"],
+        "selection": runs[0][1]["selection"],
+        "history": str(history),
+        "runs": invocations,
+        "session_wall_time_s": sum(r["session_wall_time_s"] for r in invocations),
+    }  # fmt: skip
 
     def fill(folder: Path) -> None:
         for run, summary in runs:
             for entry in summary["seeds"]:
                 _publish_seed(run, entry["seed"], history, folder, guard, allocation)
-                entries.append(entry)
-            invocations.append({"folder": str(run), "seeds": summary["plan"]["seeds"],
-                                "session_wall_time_s": summary["session_wall_time_s"]})  # fmt: skip
-        entries.sort(key=lambda e: e["seed"])
-        merged.update({
-            "plan": {**plan, "seeds": [e["seed"] for e in entries]},
-            "seeds": entries,
-            "selected_seed": select(entries)["seed"],
-            "selection": runs[0][1]["selection"],
-            "history": str(history),
-            "runs": invocations,
-            "session_wall_time_s": sum(r["session_wall_time_s"] for r in invocations),
-        })  # fmt: skip
         write_json(folder / SUMMARY_FILE, merged, indent=2, sort_keys=True)
 
-    merged: dict[str, Any] = {}
     write_folder_atomic(out, fill)  # the folder appears whole or not at all
     return merged
 
@@ -183,9 +183,9 @@ def _publish_seed(run: Path, seed: int, history: Path, out: Path, guard: Envelop
                   allocation: bool) -> None:  # fmt: skip
     """The agent and the two curves of one seed of ``run`` in ``out``."""
     final = seed_dir(run, seed) / "final"
-    steps, wall = history_end(history, seed)
-    phase = _read_curve(seed_dir(run, seed) / EVAL_FILE)
     whole = _read_curve(history / LEARNING_CURVE.format(seed=seed))
+    steps, wall = history_end(history, seed, whole[1:])
+    phase = _read_curve(seed_dir(run, seed) / EVAL_FILE)
     # an agent chosen before its run ended (a best one) has no history after it
     whole = whole[:1] + [r for r in whole[1:] if int(r[0]) <= steps]
     shifted = [[str(int(r[0]) + steps), f"{float(r[1]) + wall:.1f}", *r[2:]] for r in phase[1:]]
