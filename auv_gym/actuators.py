@@ -104,8 +104,9 @@ class ActuatorParams:
             elif f.name == "thrust_deduction":
                 object.__setattr__(self, f.name, real(name, value, 0.0, 1.0, high_open=True))
             elif f.name.startswith("delta_max"):
-                object.__setattr__(self, f.name, real(name, value, 0.0, math.pi / 2,
-                                                      low_open=True, unit="rad"))  # fmt: skip
+                object.__setattr__(
+                    self, f.name, real(name, value, 0.0, math.pi / 2, low_open=True, unit="rad")
+                )
             else:
                 object.__setattr__(self, f.name, real(name, value, 0.0, low_open=True))
 
@@ -113,9 +114,15 @@ class ActuatorParams:
     def pvs_remus100(cls) -> ActuatorParams:
         """The reference's own fins: C_Ls = 0.7, C_Lr = 0.5, x = −0.8 m (half its 1.6-m hull),
         ±15°; servo rate unlimited. The cross-check runs on this set."""
-        return cls(lift_coeff_stern=0.7, lift_coeff_rudder=0.5, x_stern=-0.8, x_rudder=-0.8,
-                   delta_max_stern=math.radians(15.0), delta_max_rudder=math.radians(15.0),
-                   fin_rate_max=math.inf)  # fmt: skip
+        return cls(
+            lift_coeff_stern=0.7,
+            lift_coeff_rudder=0.5,
+            x_stern=-0.8,
+            x_rudder=-0.8,
+            delta_max_stern=math.radians(15.0),
+            delta_max_rudder=math.radians(15.0),
+            fin_rate_max=math.inf,
+        )
 
     def replace(self, **changes: float) -> ActuatorParams:
         """A copy with some fields changed (validated again)."""
@@ -144,8 +151,11 @@ def _lag_factor(dt: float, time_constant: float) -> float:
 
 
 ACTUATOR_CONFIG_FIELDS: tuple[str, ...] = (
-    *(f.name for f in fields(ActuatorParams)), "motor_alpha", "fin_alpha", "fin_rate_step",
-)  # fmt: skip
+    *(f.name for f in fields(ActuatorParams)),
+    "motor_alpha",
+    "fin_alpha",
+    "fin_rate_step",
+)
 # The record `actuator_forces` reads outside the simulator (tests, allocation): the same names.
 ActuatorRecord = record_type("ActuatorRecord", ACTUATOR_CONFIG_FIELDS, __name__)
 
@@ -181,8 +191,10 @@ def actuator_params_from_spec(spec: ActuatorParams | Mapping[str, Any] | None) -
     if isinstance(spec, ActuatorParams):
         return spec
     if not isinstance(spec, Mapping):
-        raise ArgumentTypeError(f"actuator_params must be None, an ActuatorParams or a dict of "
-                                f"its fields, got {spec!r:.80}")  # fmt: skip
+        raise ArgumentTypeError(
+            f"actuator_params must be None, an ActuatorParams or a dict of "
+            f"its fields, got {spec!r:.80}"
+        )
     values = keys_within("actuator_params", spec, [f.name for f in fields(ActuatorParams)])
     return ActuatorParams(**values)
 
@@ -194,9 +206,11 @@ def check_commands(commands: np.ndarray) -> None:
     outside = np.abs(commands) > 1.0
     if outside.any():
         i, j = np.argwhere(outside)[0]
-        raise ValueError(f"actuator='realistic' takes commands (rpm, delta_s, delta_r) normalised "
-                         f"to [-1, 1]; got {ACTUATOR_COMMANDS[j]} = {float(commands[i, j])!r} "
-                         f"(row {i})")  # fmt: skip
+        raise ValueError(
+            f"actuator='realistic' takes commands (rpm, delta_s, delta_r) normalised "
+            f"to [-1, 1]; got {ACTUATOR_COMMANDS[j]} = {float(commands[i, j])!r} "
+            f"(row {i})"
+        )
 
 
 @njit(cache=True, inline="always")
@@ -207,9 +221,14 @@ def propeller_thrust(n_rpm, speed, a):
     d = a.prop_diameter
     v_a = a.advance_speed_ratio * speed
     if n_rps > 0.0:  # ahead: ρD⁴(K_T0 n|n| + (K_Tmax − K_T0)/J_max · (V_a/D)|n|)
-        return a.water_density * d**4 * (a.kt_0 * abs(n_rps) * n_rps
-                                         + (a.kt_max - a.kt_0) / a.advance_max * (v_a / d)
-                                         * abs(n_rps))  # fmt: skip
+        return (
+            a.water_density
+            * d**4
+            * (
+                a.kt_0 * abs(n_rps) * n_rps
+                + (a.kt_max - a.kt_0) / a.advance_max * (v_a / d) * abs(n_rps)
+            )
+        )
     return a.water_density * d**4 * a.kt_0 * abs(n_rps) * n_rps  # astern (braking)
 
 
@@ -220,9 +239,14 @@ def propeller_torque(n_rpm, speed, a):
     d = a.prop_diameter
     v_a = a.advance_speed_ratio * speed
     if n_rps > 0.0:
-        return a.water_density * d**5 * (a.kq_0 * abs(n_rps) * n_rps
-                                         + (a.kq_max - a.kq_0) / a.advance_max * (v_a / d)
-                                         * abs(n_rps))  # fmt: skip
+        return (
+            a.water_density
+            * d**5
+            * (
+                a.kq_0 * abs(n_rps) * n_rps
+                + (a.kq_max - a.kq_0) / a.advance_max * (v_a / d) * abs(n_rps)
+            )
+        )
     return a.water_density * d**5 * a.kq_0 * abs(n_rps) * n_rps
 
 
@@ -269,8 +293,10 @@ def actuator_step(n_rpm, delta_s, delta_r, a_n, a_s, a_r, a):
     n_c = a_n * a.rpm_max
     n_new = n_c if a.motor_alpha == 1.0 else n_rpm + a.motor_alpha * (n_c - n_rpm)
     n_new = min(max(n_new, -a.rpm_max), a.rpm_max)
-    s_new, s_lim = _servo(delta_s, a_s * a.delta_max_stern, a.fin_alpha, a.fin_rate_step,
-                          a.delta_max_stern)  # fmt: skip
-    r_new, r_lim = _servo(delta_r, a_r * a.delta_max_rudder, a.fin_alpha, a.fin_rate_step,
-                          a.delta_max_rudder)  # fmt: skip
+    s_new, s_lim = _servo(
+        delta_s, a_s * a.delta_max_stern, a.fin_alpha, a.fin_rate_step, a.delta_max_stern
+    )
+    r_new, r_lim = _servo(
+        delta_r, a_r * a.delta_max_rudder, a.fin_alpha, a.fin_rate_step, a.delta_max_rudder
+    )
     return n_new, s_new, r_new, s_lim or r_lim

@@ -180,8 +180,10 @@ class SimConfig:
         vehicle = params_from_spec(params)
         if isinstance(surge_limit, str):  # the one name: the vehicle record's top speed
             if surge_limit != VEHICLE_TOP_SPEED:
-                raise ValueError(f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
-                                 f" (params.max_surge), got {surge_limit!r:.80}")  # fmt: skip
+                raise ValueError(
+                    f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
+                    f" (params.max_surge), got {surge_limit!r:.80}"
+                )
             surge_limit = vehicle.max_surge
         return cls(
             path=the_path,
@@ -228,40 +230,60 @@ class SimConfig:
             if not isinstance(self.path, Path):
                 raise ArgumentTypeError(f"path must be a Path, got {self.path!r:.80}")
             self.path.check_kernel_data()
-        for name, kind in (("params", AUVParams), ("noise", NoiseConfig),
-                           ("current", CurrentConfig), ("reward", RewardWeights),
-                           ("limits", TaskLimits), ("actuator_params", ActuatorParams),
-                           ("observation", ObservationConfig),
-                           ("safety_cost", SafetyCost), ("sensors", SensorConfig)):  # fmt: skip
+        for name, kind in (
+            ("params", AUVParams),
+            ("noise", NoiseConfig),
+            ("current", CurrentConfig),
+            ("reward", RewardWeights),
+            ("limits", TaskLimits),
+            ("actuator_params", ActuatorParams),
+            ("observation", ObservationConfig),
+            ("safety_cost", SafetyCost),
+            ("sensors", SensorConfig),
+        ):
             if not isinstance(getattr(self, name), kind):
-                raise ArgumentTypeError(f"{name} must be an {kind.__name__}, "
-                                        f"got {getattr(self, name)!r:.80}")  # fmt: skip
+                raise ArgumentTypeError(
+                    f"{name} must be an {kind.__name__}, got {getattr(self, name)!r:.80}"
+                )
         if not isinstance(self.depth_envelope, DepthEnvelope | None):
-            raise ArgumentTypeError(f"depth_envelope must be a DepthEnvelope or None, "
-                                    f"got {self.depth_envelope!r:.80}")  # fmt: skip
-        put("path_offset", vector("path_offset", self.path_offset, 3, -POSITION_BOUND,
-                                  POSITION_BOUND, "m"))  # fmt: skip
+            raise ArgumentTypeError(
+                f"depth_envelope must be a DepthEnvelope or None, got {self.depth_envelope!r:.80}"
+            )
+        put(
+            "path_offset",
+            vector("path_offset", self.path_offset, 3, -POSITION_BOUND, POSITION_BOUND, "m"),
+        )
         if any(self.path_offset) and not isinstance(self.path, PathDistribution):
-            raise ValueError(f"path_offset {self.path_offset} m moves drawn paths here; a fixed "
-                             "path is moved by from_kwargs (the env argument) or ShiftedPath"
-                             )  # fmt: skip
+            raise ValueError(
+                f"path_offset {self.path_offset} m moves drawn paths here; a fixed "
+                "path is moved by from_kwargs (the env argument) or ShiftedPath"
+            )
         for name, kind in (("waves", WaveConfig), ("current_profile", CurrentProfile)):
             if not isinstance(getattr(self, name), (kind, type(None))):
-                raise ArgumentTypeError(f"{name} must be None or a {kind.__name__}, "
-                                        f"got {getattr(self, name)!r:.80}")  # fmt: skip
+                raise ArgumentTypeError(
+                    f"{name} must be None or a {kind.__name__}, got {getattr(self, name)!r:.80}"
+                )
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
-        put("random_current", real("random_current", self.random_current, 0.0,
-                                   MAX_RANDOM_CURRENT, unit="m/s"))  # fmt: skip
+        put(
+            "random_current",
+            real("random_current", self.random_current, 0.0, MAX_RANDOM_CURRENT, unit="m/s"),
+        )
         put("random_noise", real("random_noise", self.random_noise, 0.0, MAX_RANDOM_NOISE))
-        put("virtual_point_law", choice("virtual_point_law", self.virtual_point_law,
-                                        VIRTUAL_POINT_LAWS))  # fmt: skip
-        put("param_uncertainty", real("param_uncertainty", self.param_uncertainty, 0.0, 1.0,
-                                      high_open=True))  # fmt: skip
+        put(
+            "virtual_point_law",
+            choice("virtual_point_law", self.virtual_point_law, VIRTUAL_POINT_LAWS),
+        )
+        put(
+            "param_uncertainty",
+            real("param_uncertainty", self.param_uncertainty, 0.0, 1.0, high_open=True),
+        )
         self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
         if self.actuator_limits is None:
             put("actuator_limits", self.params.actuator_limits)
-        put("actuator_limits", vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6,
-                                      "N, N·m"))  # fmt: skip
+        put(
+            "actuator_limits",
+            vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6, "N, N·m"),
+        )
         if min(self.actuator_limits) <= 0.0:
             raise ValueError(f"actuator_limits must be positive, got {self.actuator_limits}")
         if self.actuator_limits != self.params.actuator_limits:
@@ -271,12 +293,38 @@ class SimConfig:
             )
         put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
         most = MAX_SUBSTEPS * self.physics_dt
-        put("control_dt", real("control_dt", self.control_dt, 0.0, most, low_open=True,
-                               unit=f"s (<= {MAX_SUBSTEPS} physics steps)"))  # fmt: skip
-        put("max_time", real("max_time", self.max_time, self.control_dt, MAX_EPISODE_TIME,
-                             unit="s (at least one control_dt)"))  # fmt: skip
-        put("u_desired", real("u_desired", self.u_desired, 0.0, SPEED_BOUND, low_open=True,
-                              unit="m/s, the observation's bound on u_D"))  # fmt: skip
+        put(
+            "control_dt",
+            real(
+                "control_dt",
+                self.control_dt,
+                0.0,
+                most,
+                low_open=True,
+                unit=f"s (<= {MAX_SUBSTEPS} physics steps)",
+            ),
+        )
+        put(
+            "max_time",
+            real(
+                "max_time",
+                self.max_time,
+                self.control_dt,
+                MAX_EPISODE_TIME,
+                unit="s (at least one control_dt)",
+            ),
+        )
+        put(
+            "u_desired",
+            real(
+                "u_desired",
+                self.u_desired,
+                0.0,
+                SPEED_BOUND,
+                low_open=True,
+                unit="m/s, the observation's bound on u_D",
+            ),
+        )
         put("sigma", real("sigma", self.sigma, 0.0, math.inf, low_open=True, unit="m"))
         surge_limit = self.limits.surge_limit
         if not (self.u_desired < surge_limit <= SPEED_BOUND or surge_limit == math.inf):
@@ -286,18 +334,33 @@ class SimConfig:
             )
         self.sensors.fix_steps(self.control_dt)  # the fix interval: whole control steps
         put("randomize_start", flag("randomize_start", self.randomize_start))
-        put("start_heading_spread", real("start_heading_spread", self.start_heading_spread, 0.0,
-                                         math.pi, unit="rad"))  # fmt: skip
+        put(
+            "start_heading_spread",
+            real("start_heading_spread", self.start_heading_spread, 0.0, math.pi, unit="rad"),
+        )
         put("start_rotation", start_rotation_from(self.start_rotation))
         if self.start_position is not None:
-            put("start_position", vector("start_position", self.start_position, 3,
-                                         -POSITION_BOUND, POSITION_BOUND, "m"))  # fmt: skip
+            put(
+                "start_position",
+                vector(
+                    "start_position", self.start_position, 3, -POSITION_BOUND, POSITION_BOUND, "m"
+                ),
+            )
         if self.start_heading is not None:
-            put("start_heading", real("start_heading", self.start_heading, -HEADING_BOUND,
-                                      HEADING_BOUND, unit="rad (±2π)"))  # fmt: skip
-        for name, value in (("control_dt", self.control_dt),
-                            ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)",
-                             self.noise.hold)):  # fmt: skip
+            put(
+                "start_heading",
+                real(
+                    "start_heading",
+                    self.start_heading,
+                    -HEADING_BOUND,
+                    HEADING_BOUND,
+                    unit="rad (±2π)",
+                ),
+            )
+        for name, value in (
+            ("control_dt", self.control_dt),
+            ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)", self.noise.hold),
+        ):
             ratio = value / self.physics_dt
             if abs(ratio - round(ratio)) > _SUBSTEP_TOL * ratio or round(ratio) < 1:
                 raise ValueError(
@@ -309,9 +372,11 @@ class SimConfig:
             # be meaningless (docs/model.md §3.8); their turn rates (≤ 1/8 m) always fit.
             for name in ("start_position", "start_heading"):
                 if getattr(self, name) is not None:
-                    raise ValueError(f"{name} cannot be given with a random path (path = "
-                                     "'random' or a PathDistribution): each episode starts at "
-                                     "its own path's default start")  # fmt: skip
+                    raise ValueError(
+                        f"{name} cannot be given with a random path (path = "
+                        "'random' or a PathDistribution): each episode starts at "
+                        "its own path's default start"
+                    )
         else:
             self._check_path_fits_the_observation()
             self._check_start_fits_the_observation()
@@ -324,24 +389,36 @@ class SimConfig:
             return
         given = self.start_position is not None and not drawn
         start = self.start_position if given else path.default_start()[0]
-        check_path_depths(path, self.depth_envelope, start_z=float(start[2]),
-                          u_desired=self.u_desired, max_time=self.max_time,
-                          randomize_start=self.randomize_start, drawn=drawn)  # fmt: skip
+        check_path_depths(
+            path,
+            self.depth_envelope,
+            start_z=float(start[2]),
+            u_desired=self.u_desired,
+            max_time=self.max_time,
+            randomize_start=self.randomize_start,
+            drawn=drawn,
+        )
 
     @property
     def current_speed_bound(self) -> float:
         """Largest current speed [m/s] an episode can meet: per axis |mean| + the random current
         + 8 stationary standard deviations of the Gauss–Markov part (exceeded with probability
         about 1e-15 per draw), combined over the three axes."""
-        axes = [abs(m) + self.random_current + 8.0 * s
-                for m, s in zip(self.current.mean, self.current.std, strict=True)]  # fmt: skip
+        axes = [
+            abs(m) + self.random_current + 8.0 * s
+            for m, s in zip(self.current.mean, self.current.std, strict=True)
+        ]
         return math.sqrt(sum(a * a for a in axes))
 
     @property
     def randomized(self) -> bool:
         """True if episodes draw their own path, current, noise amplitude or actuator."""
-        return (isinstance(self.path, PathDistribution) or self.random_current > 0.0
-                or self.random_noise > 0.0 or self.actuator == "random")  # fmt: skip
+        return (
+            isinstance(self.path, PathDistribution)
+            or self.random_current > 0.0
+            or self.random_noise > 0.0
+            or self.actuator == "random"
+        )
 
     def _check_path_fits_the_observation(self) -> None:
         """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D: a proven bound

@@ -43,8 +43,9 @@ def noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None)
     if isinstance(disturbance, str) and disturbance in DISTURBANCE_PRESETS:
         return NoiseConfig((DISTURBANCE_PRESETS[disturbance],) * 5, hold)
     if is_real(disturbance):
-        amplitude = real("disturbance (noise amplitude)", disturbance, 0.0, MAX_NOISE_AMPLITUDE,
-                         unit="N or N·m")  # fmt: skip
+        amplitude = real(
+            "disturbance (noise amplitude)", disturbance, 0.0, MAX_NOISE_AMPLITUDE, unit="N or N·m"
+        )
         return NoiseConfig((amplitude,) * 5, hold)
     error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
     raise error(
@@ -94,6 +95,8 @@ def start_rotation_from(value: object) -> float | tuple[float, float]:
         return real("start_rotation", value, -math.pi, math.pi, unit="rad")
     low, high = vector("start_rotation", value, 2, -math.pi, math.pi, "rad")
     if low > high:
-        raise ValueError(f"start_rotation must be a number or (low, high) with low <= high "
-                         f"[rad], got {(low, high)}")  # fmt: skip
+        raise ValueError(
+            f"start_rotation must be a number or (low, high) with low <= high "
+            f"[rad], got {(low, high)}"
+        )
     return (low, high)

@@ -45,8 +45,7 @@ class CurrentProfile:
 
     def __post_init__(self) -> None:
         def put(name: str, low: float, high: float, unit: str = "", **kw: bool) -> None:
-            value = real(f"current_profile {name}", getattr(self, name), low, high, unit=unit,
-                         **kw)  # fmt: skip
+            value = real(f"current_profile {name}", getattr(self, name), low, high, unit=unit, **kw)
             object.__setattr__(self, name, value)
 
         put("surface_speed", 0.0, MAX_CURRENT_SPEED, "m/s")
@@ -73,13 +72,25 @@ class CurrentProfile:
                 if name not in given:
                     raise ValueError(f"current_profile needs {name}, got keys {sorted(given)}")
             return cls(**given)
-        raise ArgumentTypeError(f"current_profile must be None, a dict of CurrentProfile "
-                                f"fields or a CurrentProfile, got {spec!r:.80}")  # fmt: skip
+        raise ArgumentTypeError(
+            f"current_profile must be None, a dict of CurrentProfile "
+            f"fields or a CurrentProfile, got {spec!r:.80}"
+        )
 
 
 @njit(cache=True, inline="always")
-def profile_velocity(u_surface, u_reference, depth_ref, exponent, direction, drift_amplitude,
-                     drift_omega, drift_phase, depth, t):  # fmt: skip
+def profile_velocity(
+    u_surface,
+    u_reference,
+    depth_ref,
+    exponent,
+    direction,
+    drift_amplitude,
+    drift_omega,
+    drift_phase,
+    depth,
+    t,
+):
     """v_p = U(d) (cos χ(t), sin χ(t), 0) [m/s] of the module docstring at ``depth`` [m] and
     time t [s]; ``drift_omega`` = 2π/T [rad/s]."""
     d = min(max(depth, 0.0), depth_ref)

@@ -41,16 +41,21 @@ class DepthEnvelope:
     margin: float = 2.0  # [m]
 
     def __post_init__(self) -> None:
-        margin = real("depth_envelope margin", self.margin, 0.0, MAX_MARGIN, low_open=True,
-                      unit="m")  # fmt: skip
+        margin = real(
+            "depth_envelope margin", self.margin, 0.0, MAX_MARGIN, low_open=True, unit="m"
+        )
         object.__setattr__(self, "margin", margin)
         if self.seabed_depth is not None:
             # Both margins must leave water between them: a seabed above the surface or within
             # twice the margin of it leaves no depth a vehicle could hold at zero cost.
-            depth = real("depth_envelope seabed_depth", self.seabed_depth, 2.0 * margin,
-                         MAX_DEPTH, low_open=True,
-                         unit=f"m (below the surface z = 0 by more than twice the margin "
-                              f"{margin:g} m)")  # fmt: skip
+            depth = real(
+                "depth_envelope seabed_depth",
+                self.seabed_depth,
+                2.0 * margin,
+                MAX_DEPTH,
+                low_open=True,
+                unit=f"m (below the surface z = 0 by more than twice the margin {margin:g} m)",
+            )
             object.__setattr__(self, "seabed_depth", depth)
 
     @classmethod
@@ -100,9 +105,9 @@ def path_depth_range(path: Path, s_max: float) -> tuple[float, float]:
     with np.errstate(divide="ignore", invalid="ignore"):
         roots = [(-2.0 * a2 + sign * np.sqrt(disc)) / (6.0 * a3) for sign in (-1.0, 1.0)]
         roots.append(-a1 / (2.0 * a2))  # the quadratic's extremum where a3 = 0
-    candidates = [np.zeros_like(h), h] + [np.clip(np.nan_to_num(r, nan=0.0, posinf=0.0,
-                                                                neginf=0.0), 0.0, h)
-                                          for r in roots]  # fmt: skip
+    candidates = [np.zeros_like(h), h] + [
+        np.clip(np.nan_to_num(r, nan=0.0, posinf=0.0, neginf=0.0), 0.0, h) for r in roots
+    ]
     z = np.concatenate([a0 + ds * (a1 + ds * (a2 + ds * a3)) for ds in candidates])
     return float(z.min()), float(z.max())
 

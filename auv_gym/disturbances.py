@@ -80,10 +80,12 @@ def white_noise(amplitude, key, step, hold_steps):
     """
     block = (step // hold_steps) * N_CHANNELS
     return (
-        _bounded_noise(amplitude[0], key, block), _bounded_noise(amplitude[1], key, block + 1),
-        _bounded_noise(amplitude[2], key, block + 2), _bounded_noise(amplitude[3], key, block + 3),
+        _bounded_noise(amplitude[0], key, block),
+        _bounded_noise(amplitude[1], key, block + 1),
+        _bounded_noise(amplitude[2], key, block + 2),
+        _bounded_noise(amplitude[3], key, block + 3),
         _bounded_noise(amplitude[4], key, block + 4),
-    )  # fmt: skip
+    )
 
 
 @njit(cache=True, inline="always")
@@ -147,8 +149,14 @@ class CurrentConfig:
         limit = MAX_CURRENT_SPEED
         object.__setattr__(self, "mean", vector("current mean", self.mean, 3, -limit, limit, "m/s"))
         object.__setattr__(self, "std", vector("current std", self.std, 3, 0.0, limit, "m/s"))
-        tau = real("current time_constant", self.time_constant, 0.0, MAX_CURRENT_TIME_CONSTANT,
-                   low_open=True, unit="s")  # fmt: skip
+        tau = real(
+            "current time_constant",
+            self.time_constant,
+            0.0,
+            MAX_CURRENT_TIME_CONSTANT,
+            low_open=True,
+            unit="s",
+        )
         object.__setattr__(self, "time_constant", tau)
 
     @classmethod

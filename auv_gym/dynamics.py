@@ -78,29 +78,45 @@ def generalized_forces(nu, sin_theta, tau, f, p):
     f_u, f_v, f_w, f_q, f_r = f
     m = p.m
     restoring = (p.z_g * p.W - p.z_b * p.B) * sin_theta  # g_q(θ), docs/model.md §2.1 f
-    # fmt: off
-    surge = (X + f_u
-             + p.X_uu * u * abs(u) + p.X_vv * v * v + p.X_ww * w * w        # damping
-             + (p.X_qq * q * q + p.X_rr * r * r)                              # centripetal
-             + p.surge_coriolis * ((p.X_vr + m) * v * r + (p.X_wq - m) * w * q))  # Coriolis
-    sway = (f_v
-            - (m - p.Y_ur) * u * r                                            # Coriolis
-            + p.Y_uv * u * v + p.Y_vv * v * abs(v))                           # lift, drag
-    heave = (f_w
-             + (m + p.Z_uq) * u * q                                           # Coriolis
-             + p.Z_uw * u * w + p.Z_ww * w * abs(w)                           # lift, drag
-             + m * p.z_g * q * q)                                             # Coriolis
+    surge = (
+        X
+        + f_u
+        + p.X_uu * u * abs(u)
+        + p.X_vv * v * v
+        + p.X_ww * w * w  # damping
+        + (p.X_qq * q * q + p.X_rr * r * r)  # centripetal
+        + p.surge_coriolis * ((p.X_vr + m) * v * r + (p.X_wq - m) * w * q)
+    )  # Coriolis
+    sway = (
+        f_v
+        - (m - p.Y_ur) * u * r  # Coriolis
+        + p.Y_uv * u * v
+        + p.Y_vv * v * abs(v)
+    )  # lift, drag
+    heave = (
+        f_w
+        + (m + p.Z_uq) * u * q  # Coriolis
+        + p.Z_uw * u * w
+        + p.Z_ww * w * abs(w)  # lift, drag
+        + m * p.z_g * q * q
+    )  # Coriolis
     # The last bracket of the pitch row is one partial sum (see the module docstring).
-    pitch = (M + f_q
-             + p.M_qq * q * abs(q)                                            # damping
-             + p.M_uq * u * q + p.M_uw * u * w                                # Coriolis
-             + (p.M_ww * w * abs(w) - restoring - m * p.z_g * (w * q - v * r)))
-    yaw = (N + f_r
-           + p.N_uv * u * v                                                   # Coriolis
-           + p.N_vv * v * abs(v)                                              # damping
-           + p.N_ur * u * r                                                   # Coriolis
-           + p.N_rr * r * abs(r))                                             # damping
-    # fmt: on
+    pitch = (
+        M
+        + f_q
+        + p.M_qq * q * abs(q)  # damping
+        + p.M_uq * u * q
+        + p.M_uw * u * w  # Coriolis
+        + (p.M_ww * w * abs(w) - restoring - m * p.z_g * (w * q - v * r))
+    )
+    yaw = (
+        N
+        + f_r
+        + p.N_uv * u * v  # Coriolis
+        + p.N_vv * v * abs(v)  # damping
+        + p.N_ur * u * r  # Coriolis
+        + p.N_rr * r * abs(r)
+    )  # damping
     return surge, sway, heave, pitch, yaw
 
 
@@ -146,8 +162,9 @@ def state_derivative(st, tau, f, current, p, kind, pdata, u_d, sigma):
     du, dv, dw, dq, dr = nu_dot_sin(nu, sin_theta, tau, f, p)
     dx, dy, dz, dtheta, dpsi = eta_dot(nu, cos_theta, sin_theta, cos_psi, sin_psi)
     px, py, pz, dpx, dpy, dpz, _, _, _ = path_eval(kind, pdata, st[STATE.s])
-    x_e, _, _ = body_errors_trig(st[STATE.x] - px, st[STATE.y] - py, st[STATE.z] - pz,
-                                 cos_theta, sin_theta, cos_psi, sin_psi)  # fmt: skip
+    x_e, _, _ = body_errors_trig(
+        st[STATE.x] - px, st[STATE.y] - py, st[STATE.z] - pz, cos_theta, sin_theta, cos_psi, sin_psi
+    )
     s_dot = virtual_point_speed(x_e, u_d, sigma) / math.sqrt(dpx * dpx + dpy * dpy + dpz * dpz)
     c_x, c_y, c_z = current
     return (dx + c_x, dy + c_y, dz + c_z, dtheta, dpsi, du, dv, dw, dq, dr, s_dot)

@@ -300,20 +300,39 @@ class AUVPath3DEnv(gym.Env):
         sensors: str | Mapping | SensorConfig | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
-            path=path, disturbance=disturbance, current=current,
-            param_uncertainty=param_uncertainty, actuator=actuator, control_dt=control_dt,
-            physics_dt=physics_dt, noise_hold=noise_hold, max_time=max_time,
-            randomize_start=randomize_start, u_desired=u_desired, sigma=sigma,
+            path=path,
+            disturbance=disturbance,
+            current=current,
+            param_uncertainty=param_uncertainty,
+            actuator=actuator,
+            control_dt=control_dt,
+            physics_dt=physics_dt,
+            noise_hold=noise_hold,
+            max_time=max_time,
+            randomize_start=randomize_start,
+            u_desired=u_desired,
+            sigma=sigma,
             virtual_point_law=virtual_point_law,
-            corridor=corridor, max_pitch=max_pitch, surge_limit=surge_limit, params=params,
-            start_position=start_position, start_heading=start_heading,
+            corridor=corridor,
+            max_pitch=max_pitch,
+            surge_limit=surge_limit,
+            params=params,
+            start_position=start_position,
+            start_heading=start_heading,
             start_heading_spread=start_heading_spread,
-            start_rotation=start_rotation, reward_weights=reward_weights,
-            random_current=random_current, random_noise=random_noise, observation=observation,
-            path_offset=path_offset, depth_envelope=depth_envelope, safety_cost=safety_cost,
-            waves=waves, current_profile=current_profile, actuator_params=actuator_params,
+            start_rotation=start_rotation,
+            reward_weights=reward_weights,
+            random_current=random_current,
+            random_noise=random_noise,
+            observation=observation,
+            path_offset=path_offset,
+            depth_envelope=depth_envelope,
+            safety_cost=safety_cost,
+            waves=waves,
+            current_profile=current_profile,
+            actuator_params=actuator_params,
             sensors=sensors,
-        )  # fmt: skip
+        )
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be None or one of {self.metadata['render_modes']}, "
@@ -357,15 +376,19 @@ class AUVPath3DEnv(gym.Env):
         if options is not None and not isinstance(options, Mapping):
             raise ArgumentTypeError(f"options must be None or a dict, got {options!r:.80}")
         if options:
-            raise ValueError(f"AUVPath3DEnv.reset takes no options, got {sorted(map(str, options))}"
-                             )  # fmt: skip
+            raise ValueError(
+                f"AUVPath3DEnv.reset takes no options, got {sorted(map(str, options))}"
+            )
         super().reset(seed=seed)
         self.sim.reset_row(0, self.np_random)
         obs = self.sim.observations()[0]
         check_reset_observations(
-            obs[None], [0], self.config.observation, self.config.current_speed_bound,
+            obs[None],
+            [0],
+            self.config.observation,
+            self.config.current_speed_bound,
             self.sim.speed_bound,
-        )  # fmt: skip
+        )
         self._last_obs[:] = obs
         if self._renderer is not None:
             self._renderer.reset(*track_point(self.sim, 0), path=self.sim.paths[0])

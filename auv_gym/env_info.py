@@ -34,11 +34,16 @@ def info_columns(sim: Simulator, physics_dt: float, stepped: bool) -> dict[str, 
     rows, except ``t``); with ``stepped`` also the reward terms and the safety cost."""
     g, record = sim.guid, sim.record
     columns: dict[str, np.ndarray] = {
-        "x_e": g[:, GUIDE.x_e], "y_e": g[:, GUIDE.y_e], "z_e": g[:, GUIDE.z_e],
-        "distance": g[:, GUIDE.distance], "s": sim.state[:, STATE.s], "u_p": g[:, GUIDE.u_p],
+        "x_e": g[:, GUIDE.x_e],
+        "y_e": g[:, GUIDE.y_e],
+        "z_e": g[:, GUIDE.z_e],
+        "distance": g[:, GUIDE.distance],
+        "s": sim.state[:, STATE.s],
+        "u_p": g[:, GUIDE.u_p],
         "t": sim.step_index * physics_dt,
-        "tau": record[:, _TAU], "disturbance": record[:, _DISTURBANCE],
-    }  # fmt: skip
+        "tau": record[:, _TAU],
+        "disturbance": record[:, _DISTURBANCE],
+    }
     if stepped:
         columns.update(zip(REWARD_KEYS, sim.terms.T, strict=True))
         columns["cost"] = sim.cost

@@ -66,8 +66,14 @@ def draw_boundaries_3d(
 
     artists = []
     for z, (label, colour, alpha) in _boundaries(envelope):
-        poly = Poly3DCollection(_rectangle(lo, hi, z), facecolor=colour, alpha=alpha,
-                                edgecolor=colour, label=label, **kwargs)  # fmt: skip
+        poly = Poly3DCollection(
+            _rectangle(lo, hi, z),
+            facecolor=colour,
+            alpha=alpha,
+            edgecolor=colour,
+            label=label,
+            **kwargs,
+        )
         ax.add_collection3d(poly)
         artists.append(poly)
     return artists

@@ -71,9 +71,14 @@ def virtual_point_speed(x_e, u_d, sigma):
 
 
 def error_rates(
-    eps: np.ndarray, nu: np.ndarray, theta: float, psi: float, psi_f: float, theta_f: float,
+    eps: np.ndarray,
+    nu: np.ndarray,
+    theta: float,
+    psi: float,
+    psi_f: float,
+    theta_f: float,
     u_p: float,
-) -> np.ndarray:  # fmt: skip
+) -> np.ndarray:
     """Exact ε̇ = −ω_b × ε + (u, v, w) − (R_Bᵀ R_F e1) u_p (docs/model.md §3.2) [m/s].
 
     ``nu`` is (u, v, w, q, r); ω_b = (−r tanθ, q, r) since roll is held at zero.
@@ -81,9 +86,12 @@ def error_rates(
     u, v, w, q, r = nu
     omega_b = np.array([-r * math.tan(theta), q, r])
     tangent = np.array(
-        [math.cos(psi_f) * math.cos(theta_f), math.sin(psi_f) * math.cos(theta_f),
-         -math.sin(theta_f)]
-    )  # fmt: skip
+        [
+            math.cos(psi_f) * math.cos(theta_f),
+            math.sin(psi_f) * math.cos(theta_f),
+            -math.sin(theta_f),
+        ]
+    )
     cps, sps, cth, sth = math.cos(psi), math.sin(psi), math.cos(theta), math.sin(theta)
     r_b = np.array([[cps * cth, -sps, cps * sth], [sps * cth, cps, sps * sth], [-sth, 0.0, cth]])
     return -np.cross(omega_b, eps) + np.array([u, v, w]) - (r_b.T @ tangent) * u_p

@@ -53,11 +53,28 @@ ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR, "realistic": REALIST
 # reads as a record, then the realistic actuators' parameters, read only in that mode (a wider
 # record costs the default kernel a third of its speed).
 _RECORD_FIELDS = (
-    "n_sub", "physics_dt", "hold_steps", "u_d", "sigma", "actuator", "gm_a",
-    "noise_f_u", "noise_f_v", "noise_f_w", "noise_f_q", "noise_f_r",
-    "limit_X", "limit_M", "limit_N", "current_x", "current_y", "current_z",
-    "gm_b_x", "gm_b_y", "gm_b_z",
-)  # fmt: skip
+    "n_sub",
+    "physics_dt",
+    "hold_steps",
+    "u_d",
+    "sigma",
+    "actuator",
+    "gm_a",
+    "noise_f_u",
+    "noise_f_v",
+    "noise_f_w",
+    "noise_f_q",
+    "noise_f_r",
+    "limit_X",
+    "limit_M",
+    "limit_N",
+    "current_x",
+    "current_y",
+    "current_z",
+    "gm_b_x",
+    "gm_b_y",
+    "gm_b_z",
+)
 CONFIG_FIELDS = (*_RECORD_FIELDS, *ACTUATOR_CONFIG_FIELDS)
 CONFIG_DIM = len(_RECORD_FIELDS)  # entries of `ConfigRecord`; the actuators' follow
 ConfigRecord = record_type("ConfigRecord", _RECORD_FIELDS, __name__)
@@ -79,23 +96,40 @@ def config_record(cfg):
 def _stage(st, h, k):
     """st + h·k."""
     return (
-        st[0] + h * k[0], st[1] + h * k[1], st[2] + h * k[2], st[3] + h * k[3],
-        st[4] + h * k[4], st[5] + h * k[5], st[6] + h * k[6], st[7] + h * k[7],
-        st[8] + h * k[8], st[9] + h * k[9], st[10] + h * k[10],
-    )  # fmt: skip
+        st[0] + h * k[0],
+        st[1] + h * k[1],
+        st[2] + h * k[2],
+        st[3] + h * k[3],
+        st[4] + h * k[4],
+        st[5] + h * k[5],
+        st[6] + h * k[6],
+        st[7] + h * k[7],
+        st[8] + h * k[8],
+        st[9] + h * k[9],
+        st[10] + h * k[10],
+    )
 
 
 @njit(cache=True, inline="always")
 def _rk4_combine(st, h, k1, k2, k3, k4):
     """st + h·(k1 + 2 k2 + 2 k3 + k4), with h = dt/6."""
-    return _stage(st, h, (
-        k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0], k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1],
-        k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2], k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3],
-        k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4], k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5],
-        k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6], k1[7] + 2.0 * k2[7] + 2.0 * k3[7] + k4[7],
-        k1[8] + 2.0 * k2[8] + 2.0 * k3[8] + k4[8], k1[9] + 2.0 * k2[9] + 2.0 * k3[9] + k4[9],
-        k1[10] + 2.0 * k2[10] + 2.0 * k3[10] + k4[10],
-    ))  # fmt: skip
+    return _stage(
+        st,
+        h,
+        (
+            k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0],
+            k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1],
+            k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2],
+            k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3],
+            k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4],
+            k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5],
+            k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6],
+            k1[7] + 2.0 * k2[7] + 2.0 * k3[7] + k4[7],
+            k1[8] + 2.0 * k2[8] + 2.0 * k3[8] + k4[8],
+            k1[9] + 2.0 * k2[9] + 2.0 * k3[9] + k4[9],
+            k1[10] + 2.0 * k2[10] + 2.0 * k3[10] + k4[10],
+        ),
+    )
 
 
 @njit(cache=True, inline="always")
@@ -113,8 +147,18 @@ def rk4(st, tau, f, current, p, kind, pdata, u_d, sigma, dt):
 def rk4_step(st, tau, f, current, p_array, kind, pdata, u_d, sigma, dt, out):
     """Array form of `rk4`: reads the state row ``st`` and the packed parameters ``p_array``
     (`AUVParams.to_vector`), writes the new state into ``out``."""
-    nxt = rk4(fixed_tuple(st, STATE_DIM), tau, f, current, params_record(p_array), kind, pdata,
-              u_d, sigma, dt)  # fmt: skip
+    nxt = rk4(
+        fixed_tuple(st, STATE_DIM),
+        tau,
+        f,
+        current,
+        params_record(p_array),
+        kind,
+        pdata,
+        u_d,
+        sigma,
+        dt,
+    )
     for i in range(STATE_DIM):
         out[i] = nxt[i]
 
@@ -132,8 +176,23 @@ def _actuation(a_X, a_M, a_N, cfg, fin_gain, u):
 
 
 @njit(cache=True, inline="always")
-def advance_vehicle(st, cur, act, action, p_array, noise_key, current_key, step_index, kind,
-                    pdata, cfg_array, guid, obs, record, ocean):  # fmt: skip
+def advance_vehicle(
+    st,
+    cur,
+    act,
+    action,
+    p_array,
+    noise_key,
+    current_key,
+    step_index,
+    kind,
+    pdata,
+    cfg_array,
+    guid,
+    obs,
+    record,
+    ocean,
+):
     """Advance one vehicle by one control period, in place; returns False on a non-finite state.
 
     ``st`` (layout `dynamics.STATE`), ``cur`` (Gauss–Markov current deviation (x, y, z)
@@ -177,20 +236,23 @@ def advance_vehicle(st, cur, act, action, p_array, noise_key, current_key, step_
         if realistic:
             shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, a)
             rate_limited += limited
-            X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w],
-                                            a)  # fmt: skip
+            X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w], a)
             f_in = (f[0], f[1] + Y, f[2] + Z, f[3], f[4])
         else:
             X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
             f_in = f
-        nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma,
-                  cfg.physics_dt)  # fmt: skip
+        nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
         dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
         sum_X += X
         sum_M += M
         sum_N += N
-        sum_f = (sum_f[0] + f[0], sum_f[1] + f[1], sum_f[2] + f[2], sum_f[3] + f[3],
-                 sum_f[4] + f[4])  # fmt: skip
+        sum_f = (
+            sum_f[0] + f[0],
+            sum_f[1] + f[1],
+            sum_f[2] + f[2],
+            sum_f[3] + f[3],
+            sum_f[4] + f[4],
+        )
         for j in range(STATE_DIM):
             if not math.isfinite(nxt[j]):
                 finite = False
@@ -198,9 +260,18 @@ def advance_vehicle(st, cur, act, action, p_array, noise_key, current_key, step_
             x = nxt
             break
         x = (  # the state with ψ wrapped to (−π, π]
-            nxt[0], nxt[1], nxt[2], nxt[3], wrap_angle(nxt[STATE.psi]), nxt[5], nxt[6], nxt[7],
-            nxt[8], nxt[9], nxt[10],
-        )  # fmt: skip
+            nxt[0],
+            nxt[1],
+            nxt[2],
+            nxt[3],
+            wrap_angle(nxt[STATE.psi]),
+            nxt[5],
+            nxt[6],
+            nxt[7],
+            nxt[8],
+            nxt[9],
+            nxt[10],
+        )
     for j in range(STATE_DIM):
         st[j] = x[j]
     cur[0], cur[1], cur[2] = dc

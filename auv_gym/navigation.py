@@ -38,10 +38,28 @@ __all__ = ["MEAS", "MEAS_FIELDS", "NAV", "NAV_FIELDS", "STRIDE", "Navigation"]
 # Per-vehicle navigation state: per-episode biases and scale factors, the dead-reckoned
 # position [m] and its rate [m/s], the last valid DVL sample through the water and over ground.
 NAV_FIELDS = (
-    "b_u", "b_v", "b_w", "k_u", "k_v", "k_w", "b_theta", "b_psi", "b_q", "b_r", "b_z",
-    "x_hat", "y_hat", "x_dot_hat", "y_dot_hat", "dvl_u", "dvl_v", "dvl_w", "dvl_ground_u",
-    "dvl_ground_v", "dvl_ground_w",
-)  # fmt: skip
+    "b_u",
+    "b_v",
+    "b_w",
+    "k_u",
+    "k_v",
+    "k_w",
+    "b_theta",
+    "b_psi",
+    "b_q",
+    "b_r",
+    "b_z",
+    "x_hat",
+    "y_hat",
+    "x_dot_hat",
+    "y_dot_hat",
+    "dvl_u",
+    "dvl_v",
+    "dvl_w",
+    "dvl_ground_u",
+    "dvl_ground_v",
+    "dvl_ground_w",
+)
 NAV = field_indices("NavIndex", NAV_FIELDS, __name__)
 NAV_DIM = len(NAV_FIELDS)
 # One measurement: the entries of the state the observation reads, estimated.
@@ -102,8 +120,27 @@ def _sample_dvl(s, st, c_x, c_y, c_z, key, block, nv):
 
 
 @njit(cache=True, inline="always")
-def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cfgs, s, keys, nav,
-               buffer, estimate, nav_guid, obs, obs_low, obs_high):  # fmt: skip
+def _sense_row(
+    i,
+    reset,
+    state,
+    current,
+    step_index,
+    code,
+    row,
+    kinds,
+    pdata,
+    cfgs,
+    s,
+    keys,
+    nav,
+    buffer,
+    estimate,
+    nav_guid,
+    obs,
+    obs_low,
+    obs_high,
+):
     """Measure vehicle i, update its navigation state and write its observation (module
     docstring); ``reset`` starts an episode (biases, a start fix, a full delay ring)."""
     if code[i] == NON_FINITE:  # the state is not finite: the last observation stays
@@ -117,8 +154,16 @@ def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cf
         _draw_biases(s, keys[i, 1], nv)
     dropped = not reset and uniform01(key, 2 * (block + CH_DROP)) < s.dvl_dropout
     if not dropped:  # a lost ping leaves the last valid sample in `nv`
-        _sample_dvl(s, st, cfg.current_x + current[i, 0], cfg.current_y + current[i, 1],
-                    cfg.current_z + current[i, 2], key, block, nv)  # fmt: skip
+        _sample_dvl(
+            s,
+            st,
+            cfg.current_x + current[i, 0],
+            cfg.current_y + current[i, 1],
+            cfg.current_z + current[i, 2],
+            key,
+            block,
+            nv,
+        )
     theta = _add(st[STATE.theta], nv[NAV.b_theta] + _normal(s.pitch_noise, key, block + CH_PITCH))
     psi_error = nv[NAV.b_psi] + _normal(s.heading_noise, key, block + CH_HEADING)
     psi = st[STATE.psi] if psi_error == 0.0 else wrap_angle(st[STATE.psi] + psi_error)
@@ -128,8 +173,9 @@ def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cf
     # Dead reckoning: paper (2) on the measured velocity over ground and attitude, integrated
     # by the trapezoidal rule over the control period (docs/model.md §14.2).
     ground = (nv[NAV.dvl_ground_u], nv[NAV.dvl_ground_v], nv[NAV.dvl_ground_w], q, r_rate)
-    dx, dy, _, _, _ = eta_dot(ground, math.cos(theta), math.sin(theta), math.cos(psi),
-                              math.sin(psi))  # fmt: skip
+    dx, dy, _, _, _ = eta_dot(
+        ground, math.cos(theta), math.sin(theta), math.cos(psi), math.sin(psi)
+    )
     fix_steps = int(s.fix_steps)
     if reset or (fix_steps > 0 and t % fix_steps == 0):  # a fix: p̂ = p + σ_fix n
         nv[NAV.x_hat] = _add(st[STATE.x], _normal(s.fix_noise, key, block + CH_FIX))
@@ -167,12 +213,50 @@ def _sense_row(i, reset, state, current, step_index, code, row, kinds, pdata, cf
 # reference counting (`_nrt=False`, as `simulator._step_one`). A threaded pass was slower: the
 # reference counts of its row views are atomic updates the threads contend for.
 @njit(cache=True, _nrt=False)
-def _sense(rows, reset, state, current, step_index, code, row, kinds, pdata, cfgs, scfg, keys,
-           nav, buffer, estimate, nav_guid, obs, obs_low, obs_high):  # fmt: skip
+def _sense(
+    rows,
+    reset,
+    state,
+    current,
+    step_index,
+    code,
+    row,
+    kinds,
+    pdata,
+    cfgs,
+    scfg,
+    keys,
+    nav,
+    buffer,
+    estimate,
+    nav_guid,
+    obs,
+    obs_low,
+    obs_high,
+):
     s = SensorRecord(*fixed_tuple(scfg, _SENSOR_DIM))
     for n in range(rows.shape[0]):
-        _sense_row(rows[n], reset, state, current, step_index, code, row, kinds, pdata, cfgs, s,
-                   keys, nav, buffer, estimate, nav_guid, obs, obs_low, obs_high)  # fmt: skip
+        _sense_row(
+            rows[n],
+            reset,
+            state,
+            current,
+            step_index,
+            code,
+            row,
+            kinds,
+            pdata,
+            cfgs,
+            s,
+            keys,
+            nav,
+            buffer,
+            estimate,
+            nav_guid,
+            obs,
+            obs_low,
+            obs_high,
+        )
 
 
 class Navigation:
@@ -198,7 +282,24 @@ class Navigation:
             noise_keys = sim.keys[rows, KEY.noise]
             self.keys[rows, 0] = sensor_key(noise_keys, 0)
             self.keys[rows, 1] = sensor_key(noise_keys, 1)
-        _sense(rows, reset, sim.state, sim.current, sim.step_index, sim.code, sim._row,
-                     sim._kind, sim._pdata, sim._cfg, self._packed, self.keys, self.nav,
-                     self.buffer, self.estimate, self.guid, sim.obs, sim.obs_low,
-                     sim.obs_high)  # fmt: skip
+        _sense(
+            rows,
+            reset,
+            sim.state,
+            sim.current,
+            sim.step_index,
+            sim.code,
+            sim._row,
+            sim._kind,
+            sim._pdata,
+            sim._cfg,
+            self._packed,
+            self.keys,
+            self.nav,
+            self.buffer,
+            self.estimate,
+            self.guid,
+            sim.obs,
+            sim.obs_low,
+            sim.obs_high,
+        )

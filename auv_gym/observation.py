@@ -122,14 +122,25 @@ def paper_bounds(speed_bound: float = SPEED_BOUND) -> tuple[np.ndarray, np.ndarr
     """(low, high) float32 of the paper's entries for the speed bound ``speed_bound`` [m/s]
     (`vehicle_speed_bound`); `OBS_LOW`, `OBS_HIGH` for `SPEED_BOUND`."""
     rows = _table(speed_bound)
-    return (np.array([row[2] for row in rows], dtype=np.float32),
-            np.array([row[3] for row in rows], dtype=np.float32))  # fmt: skip
+    return (
+        np.array([row[2] for row in rows], dtype=np.float32),
+        np.array([row[3] for row in rows], dtype=np.float32),
+    )
 
 
 # Guidance quantities computed by the simulator kernel, one row per vehicle [m, rad, rad/s, m/s].
 GUIDANCE_FIELDS = (
-    "x_e", "y_e", "z_e", "distance", "psi_F", "theta_F", "psi_F_dot", "theta_F_dot", "u_p", "s_dot",
-)  # fmt: skip
+    "x_e",
+    "y_e",
+    "z_e",
+    "distance",
+    "psi_F",
+    "theta_F",
+    "psi_F_dot",
+    "theta_F_dot",
+    "u_p",
+    "s_dot",
+)
 GUIDANCE_DIM = len(GUIDANCE_FIELDS)
 GUIDE = field_indices("GuidanceIndex", GUIDANCE_FIELDS, __name__)
 OBS = field_indices("ObservationIndex", OBS_NAMES, __name__)
@@ -141,8 +152,9 @@ def guidance_row(st, kind, pdata, u_d, sigma, out):
     `dynamics.STATE`): errors, distance, path angles and their rates, u_p and ṡ
     (docs/model.md §3)."""
     px, py, pz, dpx, dpy, dpz, ddx, ddy, ddz = path_eval(kind, pdata, st[STATE.s])
-    x_e, y_e, z_e = body_errors(st[STATE.x], st[STATE.y], st[STATE.z], st[STATE.theta],
-                                st[STATE.psi], px, py, pz)  # fmt: skip
+    x_e, y_e, z_e = body_errors(
+        st[STATE.x], st[STATE.y], st[STATE.z], st[STATE.theta], st[STATE.psi], px, py, pz
+    )
     psi_f, theta_f, dpsi_ds, dtheta_ds, speed = path_angles(dpx, dpy, dpz, ddx, ddy, ddz)
     u_p = virtual_point_speed(x_e, u_d, sigma)
     s_dot = u_p / speed
@@ -216,18 +228,36 @@ class ObservationConfig:
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
         points = integer("observation points (preview K)", self.points, 1, MAX_PREVIEW_POINTS)
-        spacing = real("observation spacing (preview Δs)", self.spacing, 0.0,
-                       MAX_PREVIEW_LENGTH / points, low_open=True,
-                       unit=f"m (K·Δs <= {MAX_PREVIEW_LENGTH:g} m)")  # fmt: skip
+        spacing = real(
+            "observation spacing (preview Δs)",
+            self.spacing,
+            0.0,
+            MAX_PREVIEW_LENGTH / points,
+            low_open=True,
+            unit=f"m (K·Δs <= {MAX_PREVIEW_LENGTH:g} m)",
+        )
         object.__setattr__(self, "points", points)
         object.__setattr__(self, "spacing", spacing)
-        integral_time = real("observation integral_time", self.integral_time, 0.0,
-                             MAX_INTEGRAL_TIME, unit="s (0: no error integrals)")  # fmt: skip
+        integral_time = real(
+            "observation integral_time",
+            self.integral_time,
+            0.0,
+            MAX_INTEGRAL_TIME,
+            unit="s (0: no error integrals)",
+        )
         object.__setattr__(self, "integral_time", integral_time)
-        object.__setattr__(self, "integral_errors", choice(
-            "observation integral_errors", self.integral_errors, INTEGRAL_ERRORS))  # fmt: skip
-        integral_limit = real("observation integral_limit", self.integral_limit, 0.0,
-                              ERROR_BOUND * MAX_INTEGRAL_TIME, unit="m·s (0: no clip)")  # fmt: skip
+        object.__setattr__(
+            self,
+            "integral_errors",
+            choice("observation integral_errors", self.integral_errors, INTEGRAL_ERRORS),
+        )
+        integral_limit = real(
+            "observation integral_limit",
+            self.integral_limit,
+            0.0,
+            ERROR_BOUND * MAX_INTEGRAL_TIME,
+            unit="m·s (0: no clip)",
+        )
         object.__setattr__(self, "integral_limit", integral_limit)
 
     @classmethod
@@ -242,9 +272,11 @@ class ObservationConfig:
         if isinstance(spec, str):
             return cls(kind=spec)
         if isinstance(spec, Mapping):
-            fields = keys_within("observation", spec,
-                                 ("kind", "points", "spacing", "integral_time",
-                                  "integral_errors", "integral_limit"))  # fmt: skip
+            fields = keys_within(
+                "observation",
+                spec,
+                ("kind", "points", "spacing", "integral_time", "integral_errors", "integral_limit"),
+            )
             return cls(**{"kind": "preview", **fields})
         raise ArgumentTypeError(
             f"observation must be one of {list(OBSERVATION_KINDS)}, a dict with keys kind, "
@@ -301,15 +333,22 @@ class ObservationConfig:
     @property
     def units(self) -> dict[str, str]:
         """Unit of every entry, by name."""
-        extra = {"u_ground": "m/s", "v_ground": "m/s", "w_ground": "m/s", "a_X_prev": "-",
-                 "a_M_prev": "-", "a_N_prev": "-"}  # fmt: skip
+        extra = {
+            "u_ground": "m/s",
+            "v_ground": "m/s",
+            "w_ground": "m/s",
+            "a_X_prev": "-",
+            "a_M_prev": "-",
+            "a_N_prev": "-",
+        }
         units = {"x": "m", "y": "m", "z": "m", "curvature": "1/m", "torsion": "1/m"}
         for name in self.names[OBS_DIM + len(EXTRA_HEAD) :]:
             extra[name] = "m·s" if name in INTEGRAL_NAMES else units[name.split("_", 1)[1]]
         return {**OBS_UNITS, **(extra if self.kind != "paper" else {})}
 
-    def bounds(self, current_speed: float = 0.0, speed_bound: float = SPEED_BOUND
-               ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def bounds(
+        self, current_speed: float = 0.0, speed_bound: float = SPEED_BOUND
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(low, high) float32 arrays of the observation space; ``current_speed`` [m/s] is the
         largest current the configuration can draw (`SimConfig.current_speed_bound`),
         ``speed_bound`` [m/s] the vehicle's (`vehicle_speed_bound`)."""
@@ -323,7 +362,8 @@ class ObservationConfig:
         if self.integral_limit > 0.0:
             largest = min(largest, self.integral_limit)
         integral = (largest,) * self.integrals
-        extra = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points,
-                          *integral])  # fmt: skip
-        return (np.concatenate([low, -extra.astype(np.float32)]),
-                np.concatenate([high, extra.astype(np.float32)]))  # fmt: skip
+        extra = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points, *integral])
+        return (
+            np.concatenate([low, -extra.astype(np.float32)]),
+            np.concatenate([high, extra.astype(np.float32)]),
+        )

@@ -21,13 +21,30 @@ from auv_gym.current_profile import CurrentProfile, profile_velocity
 from auv_gym.records import field_indices
 from auv_gym.waves import COMPONENT_DIM, WaveConfig, draw_components, wave_kinematics
 
-__all__ = ["NO_WAVE", "OCEAN", "OCEAN_FIELDS", "ocean_forcing", "ocean_row", "ocean_width",
-           "refresh_waves"]  # fmt: skip
+__all__ = [
+    "NO_WAVE",
+    "OCEAN",
+    "OCEAN_FIELDS",
+    "ocean_forcing",
+    "ocean_row",
+    "ocean_width",
+    "refresh_waves",
+]
 
 OCEAN_FIELDS = (
-    "active", "wave_components", "wave_every", "profile", "surface_speed", "reference_speed",
-    "reference_depth", "exponent", "direction", "drift_amplitude", "drift_omega", "drift_phase",
-)  # fmt: skip
+    "active",
+    "wave_components",
+    "wave_every",
+    "profile",
+    "surface_speed",
+    "reference_speed",
+    "reference_depth",
+    "exponent",
+    "direction",
+    "drift_amplitude",
+    "drift_omega",
+    "drift_phase",
+)
 OCEAN_HEADER = len(OCEAN_FIELDS)
 OCEAN = field_indices("OceanIndex", OCEAN_FIELDS, __name__)
 # A stream id mixed with the episode keys: the ocean draws touch no other random sequence.
@@ -41,8 +58,9 @@ def ocean_width(waves: WaveConfig | None) -> int:
     return OCEAN_HEADER + (waves.components * COMPONENT_DIM if waves is not None else 0)
 
 
-def ocean_row(waves: WaveConfig | None, profile: CurrentProfile | None, keys: np.ndarray,
-              physics_dt: float) -> np.ndarray:  # fmt: skip
+def ocean_row(
+    waves: WaveConfig | None, profile: CurrentProfile | None, keys: np.ndarray, physics_dt: float
+) -> np.ndarray:
     """An episode's ocean row from its two 64-bit keys (`disturbances.draw_keys`): a function
     of the seed only, so batched and single envs draw the same sea."""
     row = np.zeros(ocean_width(waves))
@@ -102,17 +120,26 @@ def ocean_forcing(ocean, st, t, wave, current, f, p):
             cos_psi, sin_psi = math.cos(st[4]), math.sin(st[4])
             ax, ay, az = wave[3], wave[4], wave[5]
             horizontal = cos_psi * ax + sin_psi * ay  # along the heading
-            f = (f[0] + gain * (cos_theta * horizontal - sin_theta * az),
-                 f[1] + gain * (cos_psi * ay - sin_psi * ax),
-                 f[2] + gain * (sin_theta * horizontal + cos_theta * az),
-                 f[3], f[4])  # fmt: skip
+            f = (
+                f[0] + gain * (cos_theta * horizontal - sin_theta * az),
+                f[1] + gain * (cos_psi * ay - sin_psi * ax),
+                f[2] + gain * (sin_theta * horizontal + cos_theta * az),
+                f[3],
+                f[4],
+            )
     if ocean[OCEAN.profile] != 0.0:
         px, py, pz = profile_velocity(
-            ocean[OCEAN.surface_speed], ocean[OCEAN.reference_speed],
-            ocean[OCEAN.reference_depth], ocean[OCEAN.exponent], ocean[OCEAN.direction],
-            ocean[OCEAN.drift_amplitude], ocean[OCEAN.drift_omega], ocean[OCEAN.drift_phase],
-            st[2], t,
-        )  # fmt: skip
+            ocean[OCEAN.surface_speed],
+            ocean[OCEAN.reference_speed],
+            ocean[OCEAN.reference_depth],
+            ocean[OCEAN.exponent],
+            ocean[OCEAN.direction],
+            ocean[OCEAN.drift_amplitude],
+            ocean[OCEAN.drift_omega],
+            ocean[OCEAN.drift_phase],
+            st[2],
+            t,
+        )
         cx += px
         cy += py
         cz += pz

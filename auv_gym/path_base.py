@@ -71,9 +71,13 @@ class Path:
         """The kernel description is complete and finite (the kernels do not bounds-check)."""
         data = getattr(self, "data", None)
         ok = (
-            isinstance(data, np.ndarray) and data.dtype == np.float64 and data.ndim == 1
-            and self.kind in KERNEL_KINDS and data.size >= 6 and np.all(np.isfinite(data))
-        )  # fmt: skip
+            isinstance(data, np.ndarray)
+            and data.dtype == np.float64
+            and data.ndim == 1
+            and self.kind in KERNEL_KINDS
+            and data.size >= 6
+            and np.all(np.isfinite(data))
+        )
         if not (ok and KERNEL_KINDS[self.kind].fits(data)):
             raise ValueError(
                 f"path {type(self).__name__} has no valid kernel data (kind, data); "
@@ -166,14 +170,15 @@ class SplineKind(KernelKind):
     def turn_rate_bounds(self, path: Path, accept_below: float) -> tuple[Bound, Bound]:
         bounds = spline_turn_rates(path.data, accept_below)
         if not all(math.isfinite(b.upper) for b in bounds):
-            raise ValueError(f"path {type(path).__name__}: p'(s) is zero at s = "
-                             f"{bounds[0].s:.6g}, where its heading is undefined")  # fmt: skip
+            raise ValueError(
+                f"path {type(path).__name__}: p'(s) is zero at s = "
+                f"{bounds[0].s:.6g}, where its heading is undefined"
+            )
         return bounds
 
     def location(self, path: Path, bound: Bound) -> str:
         knots = path.data[1 : int(path.data[0]) + 2]
-        k = bound.segment + int(bound.s - knots[bound.segment]
-                                > knots[bound.segment + 1] - bound.s)  # fmt: skip
+        k = bound.segment + int(bound.s - knots[bound.segment] > knots[bound.segment + 1] - bound.s)
         if path.knots_are_waypoints:
             return f" (near s = {bound.s:.6g}, waypoint {k})"
         return f" (near s = {bound.s:.6g})"

@@ -71,8 +71,10 @@ def _polynomials(data: np.ndarray, tangent_only: bool = False) -> dict[str, np.n
     h = np.diff(knots)[:, None]
     one = np.ones_like(h)
     # p′ = a1 + 2 a2 (h u) + 3 a3 (h u)², p″ = 2 a2 + 6 a3 (h u), each (n_seg, 3) polynomials
-    d = [np.concatenate([a[:, k, 1:2], 2.0 * a[:, k, 2:3] * h, 3.0 * a[:, k, 3:4] * h * h], 1)
-         for k in range(3)]  # fmt: skip
+    d = [
+        np.concatenate([a[:, k, 1:2], 2.0 * a[:, k, 2:3] * h, 3.0 * a[:, k, 3:4] * h * h], 1)
+        for k in range(3)
+    ]
     dd = [np.concatenate([2.0 * a[:, k, 2:3] * one, 6.0 * a[:, k, 3:4] * h], 1) for k in range(3)]
     dx, dy, dz = d
     ddx, ddy, ddz = dd
@@ -85,8 +87,13 @@ def _polynomials(data: np.ndarray, tangent_only: bool = False) -> dict[str, np.n
     n_theta = _mul(ddz, horizontal) - _pad(_mul(dz, g), 6)
     cx, cy = _mul(dy, ddz) - _mul(dz, ddy), _mul(dz, ddx) - _mul(dx, ddz)
     cross2 = _mul(cx, cx) + _mul(cy, cy) + _mul(n_psi, n_psi)
-    return {"speed2": speed2, "horizontal": horizontal, "n_psi": n_psi, "n_theta": n_theta,
-            "cross2": cross2}  # fmt: skip
+    return {
+        "speed2": speed2,
+        "horizontal": horizontal,
+        "n_psi": n_psi,
+        "n_theta": n_theta,
+        "cross2": cross2,
+    }
 
 
 @functools.cache
@@ -110,8 +117,9 @@ def _bernstein(coeffs: np.ndarray, u0: np.ndarray, w: np.ndarray) -> np.ndarray:
     return taylor @ to_bernstein.T
 
 
-def _enclosure(poly: np.ndarray, seg: np.ndarray, u0: np.ndarray, w: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _enclosure(
+    poly: np.ndarray, seg: np.ndarray, u0: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     b = _bernstein(poly[seg], u0, w)
     return b.min(axis=1), b.max(axis=1)
 
@@ -127,8 +135,9 @@ def _ratio(numerator: np.ndarray, denominator: np.ndarray) -> np.ndarray:
     return np.where(numerator == 0.0, 0.0, out)
 
 
-def _kernel_rates(data: np.ndarray, seg: np.ndarray, u: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+def _kernel_rates(
+    data: np.ndarray, seg: np.ndarray, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """|dψ_F/ds|/|p′|, |dθ_F/ds|/|p′| [rad/m] and |p′|² as `guidance.path_angles` computes them,
     at the points u of segments seg (inf where p′ = 0)."""
     knots, a = _segments(data)
@@ -198,8 +207,9 @@ def _maximise(
     return Bound(max(settled, float(upper(seg, u0, w).max()), reached), reached, *where)
 
 
-def spline_turn_rates(data: np.ndarray, accept_below: float = -math.inf, rtol: float = 1e-3
-                      ) -> tuple[Bound, Bound]:  # fmt: skip
+def spline_turn_rates(
+    data: np.ndarray, accept_below: float = -math.inf, rtol: float = 1e-3
+) -> tuple[Bound, Bound]:
     """Proven upper bounds of |dψ_F/ds|/|p′| and |dθ_F/ds|/|p′| [rad/m] over a SPLINE kernel
     vector ``data``: each ``upper`` is at most ``rtol`` (relative) above the true maximum, or
     at most ``accept_below`` (refinement stops there: a yes/no check against a limit)."""
@@ -217,21 +227,20 @@ def spline_turn_rates(data: np.ndarray, accept_below: float = -math.inf, rtol: f
         n = _abs_max(polys["n_theta"], seg, u0, w)
         _, c_hi = _enclosure(polys["cross2"], seg, u0, w)
         s_pos = np.maximum(s_lo, 0.0)
-        by_angle = _ratio(n, np.where(s_lo > 0.0, np.sqrt(h_lo) * s_pos**1.5,
-                                      -1.0))  # fmt: skip
-        curvature = _ratio(np.sqrt(np.maximum(c_hi, 0.0)),
-                           np.where(s_lo > 0.0, s_pos**1.5, -1.0))  # fmt: skip
+        by_angle = _ratio(n, np.where(s_lo > 0.0, np.sqrt(h_lo) * s_pos**1.5, -1.0))
+        curvature = _ratio(np.sqrt(np.maximum(c_hi, 0.0)), np.where(s_lo > 0.0, s_pos**1.5, -1.0))
         return np.minimum(by_angle, curvature)
 
-    psi = _maximise(data, psi_upper, lambda s, u: _kernel_rates(data, s, u)[0], accept_below,
-                    rtol)  # fmt: skip
-    theta = _maximise(data, theta_upper, lambda s, u: _kernel_rates(data, s, u)[1],
-                      accept_below, rtol)  # fmt: skip
+    psi = _maximise(data, psi_upper, lambda s, u: _kernel_rates(data, s, u)[0], accept_below, rtol)
+    theta = _maximise(
+        data, theta_upper, lambda s, u: _kernel_rates(data, s, u)[1], accept_below, rtol
+    )
     return psi, theta
 
 
-def min_tangent_squared(data: np.ndarray, accept_above: float = math.inf, rtol: float = 1e-6
-                        ) -> Bound:  # fmt: skip
+def min_tangent_squared(
+    data: np.ndarray, accept_above: float = math.inf, rtol: float = 1e-6
+) -> Bound:
     """A proven LOWER bound of |p′(s)|² [m² per unit s²] over a SPLINE kernel vector, as a
     `Bound` of −|p′|² (``-upper`` is the lower bound, ``-reached`` the smallest value met and
     where): refined until within ``rtol`` of the minimum or at least ``accept_above``."""
@@ -240,5 +249,4 @@ def min_tangent_squared(data: np.ndarray, accept_above: float = math.inf, rtol: 
     def upper(seg: np.ndarray, u0: np.ndarray, w: np.ndarray) -> np.ndarray:
         return -_enclosure(speed2, seg, u0, w)[0]
 
-    return _maximise(data, upper, lambda s, u: -_kernel_rates(data, s, u)[2], -accept_above,
-                     rtol)  # fmt: skip
+    return _maximise(data, upper, lambda s, u: -_kernel_rates(data, s, u)[2], -accept_above, rtol)

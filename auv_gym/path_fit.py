@@ -35,8 +35,9 @@ class FittedCurve(Path):
 
     kind = SPLINE
 
-    def __init__(self, knots: np.ndarray, coeffs: np.ndarray, position_error: float,
-                 tangent_error: float) -> None:  # fmt: skip
+    def __init__(
+        self, knots: np.ndarray, coeffs: np.ndarray, position_error: float, tangent_error: float
+    ) -> None:
         self.s_end = float(knots[-1])
         self.data = spline_data(knots, coeffs)
         self.position_error = position_error
@@ -47,8 +48,9 @@ class FittedCurve(Path):
 def _curve_points(curve: Callable[[float], Sequence[float]], s: np.ndarray) -> np.ndarray:
     out = np.empty((len(s), 3))
     for k, x in enumerate(s):
-        out[k] = vector(f"curve(s) at s = {x:.6g}", curve(float(x)), 3, -POSITION_BOUND,
-                        POSITION_BOUND, "m")  # fmt: skip
+        out[k] = vector(
+            f"curve(s) at s = {x:.6g}", curve(float(x)), 3, -POSITION_BOUND, POSITION_BOUND, "m"
+        )
     return out
 
 
@@ -75,8 +77,9 @@ def fit_curve(
         raise ArgumentTypeError(f"curve must be a callable s -> (x, y, z), got {curve!r:.80}")
     s_end = real("fit_curve s_end", s_end, 0.0, POSITION_BOUND, low_open=True, unit="unit s")
     tolerance = real("fit_curve tolerance", tolerance, 0.0, math.inf, low_open=True, unit="m")
-    max_segments = integer("fit_curve max_segments", max_segments, MIN_FIT_SEGMENTS,
-                           MAX_WAYPOINTS - 1)  # fmt: skip
+    max_segments = integer(
+        "fit_curve max_segments", max_segments, MIN_FIT_SEGMENTS, MAX_WAYPOINTS - 1
+    )
     n = MIN_FIT_SEGMENTS
     while True:
         knots = np.linspace(0.0, s_end, n + 1)
@@ -106,8 +109,10 @@ def fit_curve(
         )
     check_tangent("fit_curve", fitted.data)  # the path the kernels follow, everywhere
     step = 1e-4 * h
-    dp_true = (_curve_points(curve, np.minimum(check + step, s_end))
-               - _curve_points(curve, np.maximum(check - step, 0.0))) / (2 * step)  # fmt: skip
+    dp_true = (
+        _curve_points(curve, np.minimum(check + step, s_end))
+        - _curve_points(curve, np.maximum(check - step, 0.0))
+    ) / (2 * step)
     norms = np.linalg.norm(dp_true, axis=1) * np.linalg.norm(dp_fit, axis=1)
     if not np.all(norms >= MIN_TANGENT * MIN_TANGENT):
         raise ValueError(f"fit_curve: |p'(s)| must be >= {MIN_TANGENT} m per unit s everywhere")

@@ -125,30 +125,43 @@ class PathDistribution:
     def __post_init__(self) -> None:
         families = self.families
         if isinstance(families, str) or not isinstance(families, Sequence):
-            raise ArgumentTypeError(f"PathDistribution families must be a list among "
-                                    f"{list(FAMILIES)}, got {families!r:.80}")  # fmt: skip
+            raise ArgumentTypeError(
+                f"PathDistribution families must be a list among "
+                f"{list(FAMILIES)}, got {families!r:.80}"
+            )
         unknown = [f for f in families if f not in FAMILIES]
         if unknown or not families or len(set(families)) != len(families):
-            raise ValueError(f"PathDistribution families must be distinct names among "
-                             f"{list(FAMILIES)}, got {list(families)!r:.80}")  # fmt: skip
+            raise ValueError(
+                f"PathDistribution families must be distinct names among "
+                f"{list(FAMILIES)}, got {list(families)!r:.80}"
+            )
         radius = _turn_radius("radius", self.radius)
-        spline_radius = (radius if self.spline_radius is None
-                         else _turn_radius("spline_radius", self.spline_radius))  # fmt: skip
+        spline_radius = (
+            radius
+            if self.spline_radius is None
+            else _turn_radius("spline_radius", self.spline_radius)
+        )
         angle = vector("PathDistribution climb_angle_deg", self.climb_angle_deg, 2, unit="deg")
         if max(abs(angle[0]), abs(angle[1])) > MAX_FLIGHT_PATH_ANGLE_DEG:
             raise ValueError(
                 f"PathDistribution climb_angle_deg {angle} exceeds the vehicle's largest "
                 f"followable flight-path angle {MAX_FLIGHT_PATH_ANGLE_DEG:g}° (docs/model.md §3.8)"
             )
-        angle = _range("PathDistribution climb_angle_deg", angle, 0.0, MAX_FLIGHT_PATH_ANGLE_DEG,
-                       "deg")  # fmt: skip
+        angle = _range(
+            "PathDistribution climb_angle_deg", angle, 0.0, MAX_FLIGHT_PATH_ANGLE_DEG, "deg"
+        )
         piece = _range("PathDistribution piece_length", self.piece_length, MIN_PIECE, 1000.0, "m")
         leg = _range("PathDistribution leg_length", self.leg_length, MIN_PIECE, 1000.0, "m")
         length = real("PathDistribution length", self.length, *LENGTH_RANGE, unit="m")
-        for name, value in (("families", tuple(families)), ("radius", radius),
-                            ("spline_radius", spline_radius), ("climb_angle_deg", angle),
-                            ("piece_length", piece), ("leg_length", leg),
-                            ("length", length)):  # fmt: skip
+        for name, value in (
+            ("families", tuple(families)),
+            ("radius", radius),
+            ("spline_radius", spline_radius),
+            ("climb_angle_deg", angle),
+            ("piece_length", piece),
+            ("leg_length", leg),
+            ("length", length),
+        ):
             object.__setattr__(self, name, value)
 
     @classmethod
@@ -159,8 +172,12 @@ class PathDistribution:
         if spec == "random":
             return cls()
         names = [f.name for f in fields(cls)]
-        return cls(**{k: (tuple(v) if isinstance(v, list) else v)
-                      for k, v in keys_within("path", spec, names).items()})  # fmt: skip
+        return cls(
+            **{
+                k: (tuple(v) if isinstance(v, list) else v)
+                for k, v in keys_within("path", spec, names).items()
+            }
+        )
 
     @property
     def spacing(self) -> float:
@@ -209,8 +226,10 @@ class PathDistribution:
             if path is not None:
                 path.family = family
                 return path
-        raise RuntimeError(f"PathDistribution: no {family} path within the limits after "
-                           f"{_MAX_REDRAWS} draws: {self}")  # fmt: skip
+        raise RuntimeError(
+            f"PathDistribution: no {family} path within the limits after "
+            f"{_MAX_REDRAWS} draws: {self}"
+        )
 
     def _within_limits(
         self, track: np.ndarray, family: str, ends: tuple[np.ndarray, np.ndarray] | None = None
@@ -250,8 +269,11 @@ class PathDistribution:
     def _line(self, rng: np.random.Generator) -> Path:
         heading = rng.uniform(-math.pi, math.pi)
         gamma = self._angle(rng)
-        direction = (math.cos(gamma) * math.cos(heading), math.cos(gamma) * math.sin(heading),
-                     -math.sin(gamma))  # fmt: skip
+        direction = (
+            math.cos(gamma) * math.cos(heading),
+            math.cos(gamma) * math.sin(heading),
+            -math.sin(gamma),
+        )
         path = StraightLine((0.0, 0.0, 0.0), direction)
         path.family = "line"
         return path
@@ -268,8 +290,9 @@ class PathDistribution:
             lengths.append(rng.uniform(*self.piece_length))
             turning = rng.random() < 2.0 / 3.0
             side = 1.0 if rng.random() < 0.5 else -1.0
-            curvatures.append(HORIZONTAL_SHARE * side / rng.uniform(*self.spline_radius) if turning
-                              else 0.0)  # fmt: skip
+            curvatures.append(
+                HORIZONTAL_SHARE * side / rng.uniform(*self.spline_radius) if turning else 0.0
+            )
             step = pitch_rate * lengths[-1]
             angles.append(min(max(self._angle(rng), angles[-1] - step), angles[-1] + step))
             total += lengths[-1]
@@ -309,9 +332,13 @@ def _turn_radius(name: str, value: Any) -> tuple[float, float]:
 
 
 def _integrate(
-    lengths: list[float], curvatures: list[float], angles: list[float], heading0: float,
-    total: float, spacing: float,
-) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:  # fmt: skip
+    lengths: list[float],
+    curvatures: list[float],
+    angles: list[float],
+    heading0: float,
+    total: float,
+    spacing: float,
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """Waypoints every ``spacing`` m (a multiple of the integration step) of arc length along
     a track whose heading turns at the given horizontal curvature per piece [1/m] and whose
     flight-path angle goes linearly between the given values [rad]; starts at the origin with
@@ -330,8 +357,9 @@ def _integrate(
     heading = heading0 + np.r_[0.0, np.cumsum(0.5 * (kappa[1:] + kappa[:-1]))] * _INTEGRATION_STEP
     a = np.asarray(angles)
     gamma = a[piece] + (a[piece + 1] - a[piece]) * into / np.asarray(lengths)[piece]
-    tangent = np.stack([np.cos(gamma) * np.cos(heading), np.cos(gamma) * np.sin(heading),
-                        -np.sin(gamma)], axis=1)  # fmt: skip
+    tangent = np.stack(
+        [np.cos(gamma) * np.cos(heading), np.cos(gamma) * np.sin(heading), -np.sin(gamma)], axis=1
+    )
     # Trapezoidal integration of the unit tangent.
     steps = 0.5 * (tangent[1:] + tangent[:-1]) * _INTEGRATION_STEP
     points = np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
@@ -361,8 +389,9 @@ def _spline_derivatives(data: np.ndarray, per_segment: int) -> tuple[np.ndarray,
     coeffs = data[n_seg + 2 :].reshape(n_seg, 3, 4)
     fractions = np.arange(per_segment) / per_segment
     segment = np.r_[np.repeat(np.arange(n_seg), per_segment), n_seg - 1]
-    ds = np.r_[np.tile(fractions, n_seg) * np.repeat(np.diff(knots), per_segment),
-               knots[-1] - knots[-2]]  # fmt: skip
+    ds = np.r_[
+        np.tile(fractions, n_seg) * np.repeat(np.diff(knots), per_segment), knots[-1] - knots[-2]
+    ]
     a = coeffs[segment]  # (points, 3 axes, 4)
     d = ds[:, None]
     dp = a[..., 1] + d * (2.0 * a[..., 2] + 3.0 * d * a[..., 3])

@@ -57,15 +57,28 @@ def path_eval(kind, data, s):
         radius, omega, climb, x0, y0, z0 = data[0], data[1], data[2], data[3], data[4], data[5]
         c, sn = math.cos(omega * s), math.sin(omega * s)
         return (
-            radius * c + x0, radius * sn + y0, z0 - climb * s,
-            -radius * omega * sn, radius * omega * c, -climb,
-            -radius * omega * omega * c, -radius * omega * omega * sn, 0.0,
-        )  # fmt: skip
+            radius * c + x0,
+            radius * sn + y0,
+            z0 - climb * s,
+            -radius * omega * sn,
+            radius * omega * c,
+            -climb,
+            -radius * omega * omega * c,
+            -radius * omega * omega * sn,
+            0.0,
+        )
     if kind == LINE:
         return (
-            data[0] + s * data[3], data[1] + s * data[4], data[2] + s * data[5],
-            data[3], data[4], data[5], 0.0, 0.0, 0.0,
-        )  # fmt: skip
+            data[0] + s * data[3],
+            data[1] + s * data[4],
+            data[2] + s * data[5],
+            data[3],
+            data[4],
+            data[5],
+            0.0,
+            0.0,
+            0.0,
+        )
     # SPLINE: data = [n_seg, knots[0..n_seg], coeffs[n_seg, 3 axes, 4]]; cubic in (s − knot_k)
     base, ds = _spline_segment(data, s)
     x, dx, ddx = _cubic(data, base, ds)

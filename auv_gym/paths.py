@@ -93,9 +93,10 @@ class Helix(Path):
         radius = real("Helix radius", radius, 0.0, SCALE_BOUND, low_open=True, unit="m")
         omega = real("Helix omega", omega, -MAX_OMEGA, MAX_OMEGA, unit="rad per unit s")
         if omega == 0.0:
-            raise ValueError("Helix omega must be non-zero (> 0: starboard turn, < 0: port turn), "
-                             f"in [-{MAX_OMEGA:g}, {MAX_OMEGA:g}] rad per unit s, got {omega!r}"
-                             )  # fmt: skip
+            raise ValueError(
+                "Helix omega must be non-zero (> 0: starboard turn, < 0: port turn), "
+                f"in [-{MAX_OMEGA:g}, {MAX_OMEGA:g}] rad per unit s, got {omega!r}"
+            )
         climb = real("Helix climb", climb, -SCALE_BOUND, SCALE_BOUND, unit="m per unit s")
         center = vector("Helix center", center, 3, -POSITION_BOUND, POSITION_BOUND, "m")
         if math.hypot(radius * omega, climb) < MIN_TANGENT:
@@ -110,8 +111,12 @@ class Helix(Path):
 
     def default_start(self) -> tuple[np.ndarray, float]:
         """The paper's initial condition: (15, 5, 0) m, ψ = 0 (Section 6)."""
-        if (self.radius, self.omega, self.climb, self.center) == (20.0, math.pi / 20, 1.0,
-                                                                  (10.0, 0.0, -8.0)):  # fmt: skip
+        if (self.radius, self.omega, self.climb, self.center) == (
+            20.0,
+            math.pi / 20,
+            1.0,
+            (10.0, 0.0, -8.0),
+        ):
             return np.array([15.0, 5.0, 0.0]), 0.0
         return super().default_start()
 
@@ -131,8 +136,9 @@ class StraightLine(Path):
         d = np.array(vector("StraightLine direction", direction, 3, -SCALE_BOUND, SCALE_BOUND))
         norm = float(np.linalg.norm(d))
         if norm < MIN_TANGENT:
-            raise ValueError(f"StraightLine: direction must be non-zero (norm >= {MIN_TANGENT}), "
-                             f"got {tuple(d)}")  # fmt: skip
+            raise ValueError(
+                f"StraightLine: direction must be non-zero (norm >= {MIN_TANGENT}), got {tuple(d)}"
+            )
         self.s_end = _s_end("StraightLine length", length)
         self.data = np.r_[p0, d / norm]
 
@@ -170,11 +176,17 @@ class Spline(Path):
             coeffs = natural_cubic_coefficients(knots, pts)  # (n_seg, 3, 4)
         else:
             if isinstance(end_tangents, (str, bytes)) or len(end_tangents) != 2:
-                raise ArgumentTypeError(f"Spline end_tangents must be two (x, y, z) vectors, "
-                                        f"got {end_tangents!r:.80}")  # fmt: skip
-            slopes = [np.array(vector(f"Spline end_tangents[{k}]", v, 3, -SCALE_BOUND,
-                                      SCALE_BOUND, "m per unit s"))
-                      for k, v in enumerate(end_tangents)]  # fmt: skip
+                raise ArgumentTypeError(
+                    f"Spline end_tangents must be two (x, y, z) vectors, got {end_tangents!r:.80}"
+                )
+            slopes = [
+                np.array(
+                    vector(
+                        f"Spline end_tangents[{k}]", v, 3, -SCALE_BOUND, SCALE_BOUND, "m per unit s"
+                    )
+                )
+                for k, v in enumerate(end_tangents)
+            ]
             coeffs = clamped_cubic_coefficients(knots, pts, *slopes)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("Spline: the waypoints give a spline with non-finite coefficients")
@@ -186,29 +198,40 @@ class Spline(Path):
 
 def _waypoint_array(waypoints: object) -> np.ndarray:
     """Waypoints as a float64 (n, 3) array [m], or a named error."""
-    shape = f"(n, 3) with 2 <= n <= {MAX_WAYPOINTS}, coordinates in [-{POSITION_BOUND:g}, " \
-        f"{POSITION_BOUND:g}] m"  # fmt: skip
+    shape = (
+        f"(n, 3) with 2 <= n <= {MAX_WAYPOINTS}, coordinates in [-{POSITION_BOUND:g}, "
+        f"{POSITION_BOUND:g}] m"
+    )
     try:
         pts = np.asarray(waypoints)
     except (TypeError, ValueError):  # ragged nesting
         pts = np.asarray(None)
     if pts.dtype.kind not in "iuf":
-        raise ArgumentTypeError(f"Spline waypoints must be real numbers of shape {shape}, "
-                                f"got {waypoints!r:.80}")  # fmt: skip
+        raise ArgumentTypeError(
+            f"Spline waypoints must be real numbers of shape {shape}, got {waypoints!r:.80}"
+        )
     pts = pts.astype(np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3 or not 2 <= pts.shape[0] <= MAX_WAYPOINTS:
         raise ValueError(f"Spline: waypoints must have shape {shape}, got {pts.shape}")
     if not np.all(np.isfinite(pts)) or np.abs(pts).max() > POSITION_BOUND:
-        raise ValueError(f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, "
-                         f"{POSITION_BOUND:g}] m")  # fmt: skip
+        raise ValueError(
+            f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, {POSITION_BOUND:g}] m"
+        )
     return pts
 
 
 DEFAULT_WAYPOINTS = (
-    (30.0, 0.0, -8.0), (60.0, 15.0, -14.0), (90.0, -10.0, -20.0), (120.0, 10.0, -16.0),
-    (150.0, 0.0, -24.0), (180.0, 25.0, -30.0), (210.0, 5.0, -26.0), (240.0, -15.0, -34.0),
-    (270.0, 5.0, -40.0), (300.0, 10.0, -36.0),
-)  # fmt: skip
+    (30.0, 0.0, -8.0),
+    (60.0, 15.0, -14.0),
+    (90.0, -10.0, -20.0),
+    (120.0, 10.0, -16.0),
+    (150.0, 0.0, -24.0),
+    (180.0, 25.0, -30.0),
+    (210.0, 5.0, -26.0),
+    (240.0, -15.0, -34.0),
+    (270.0, 5.0, -40.0),
+    (300.0, 10.0, -36.0),
+)
 
 PATHS = {
     "helix": Helix,

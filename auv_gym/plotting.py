@@ -87,10 +87,27 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_residual_v2": "#c7c7c7",
 }
 _HASH_PALETTE = (
-    "#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
-    "#756bb1", "#636363", "#6baed6", "#fd8d3c", "#74c476", "#9e9ac8", "#969696", "#e7ba52",
-    "#ad494a", "#a55194", "#5254a3", "#b5cf6b",
-)  # fmt: skip
+    "#393b79",
+    "#637939",
+    "#8c6d31",
+    "#843c39",
+    "#7b4173",
+    "#3182bd",
+    "#e6550d",
+    "#31a354",
+    "#756bb1",
+    "#636363",
+    "#6baed6",
+    "#fd8d3c",
+    "#74c476",
+    "#9e9ac8",
+    "#969696",
+    "#e7ba52",
+    "#ad494a",
+    "#a55194",
+    "#5254a3",
+    "#b5cf6b",
+)
 
 
 def policy_colours(names: Sequence[str]) -> dict[str, str]:
@@ -139,9 +156,12 @@ def save_figure(fig: Figure, file: str | os.PathLike, dpi: int | None = None) ->
 
 
 def plot_track(
-    fig, path: Path, tracks: dict[str, np.ndarray], s_max: float,
+    fig,
+    path: Path,
+    tracks: dict[str, np.ndarray],
+    s_max: float,
     envelope: DepthEnvelope | None = None,
-) -> None:  # fmt: skip
+) -> None:
     """Draw the path and tracks (name → (T, 3) NED positions [m]) in 3D plus x–y and x–z views,
     with the sea surface and seabed of ``envelope`` if given.
 
@@ -170,8 +190,9 @@ def plot_track(
     for ax in (ax_xy, ax_xz):
         ax.grid(True, alpha=0.3)
     handles, labels = ax3d.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8,
-               frameon=False)  # fmt: skip
+    fig.legend(
+        handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8, frameon=False
+    )
 
 
 def metrics_table(

@@ -64,8 +64,21 @@ def _tangent_norm(kind, data, s, s_end):
 
 
 @njit(cache=True)
-def extend_rows(rows, state, current, last_action, row, kinds, pdata, cfgs, tasks, s_end_column,
-                points, spacing, out):  # fmt: skip
+def extend_rows(
+    rows,
+    state,
+    current,
+    last_action,
+    row,
+    kinds,
+    pdata,
+    cfgs,
+    tasks,
+    s_end_column,
+    points,
+    spacing,
+    out,
+):
     """Write the extra entries of vehicles ``rows`` into ``out`` (n, 6 + 5K).
 
     ``state`` (layout `dynamics.STATE`), ``current`` the Gauss–Markov deviation (x, y, z) [m/s]
@@ -103,8 +116,9 @@ def extend_rows(rows, state, current, last_action, row, kinds, pdata, cfgs, task
                 p = extended_path(kind, data, s + step, end)
             s = s + step
             prev = p
-            ex, ey, ez = body_errors_trig(p[0] - st[STATE.x], p[1] - st[STATE.y],
-                                          p[2] - st[STATE.z], cth, sth, cps, sps)  # fmt: skip
+            ex, ey, ez = body_errors_trig(
+                p[0] - st[STATE.x], p[1] - st[STATE.y], p[2] - st[STATE.z], cth, sth, cps, sps
+            )
             kappa, tau = curvature_torsion(p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
             j = _HEAD + _PER_POINT * k
             o[j], o[j + 1], o[j + 2], o[j + 3], o[j + 4] = ex, ey, ez, kappa, tau

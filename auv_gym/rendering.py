@@ -102,9 +102,13 @@ class EpisodeRenderer:
 
     # ----------------------------------------------------------------------------- episode data
     def reset(
-        self, position: np.ndarray, errors: np.ndarray, s: float, t: float = 0.0,
+        self,
+        position: np.ndarray,
+        errors: np.ndarray,
+        s: float,
+        t: float = 0.0,
         path: Path | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """Start a new episode at ``position`` (x, y, z) [m] with errors (x_e, y_e, z_e) [m];
         ``path``: the episode's path when it changes per episode (``path="random"``)."""
         if path is not None and path is not self.path:
@@ -209,8 +213,7 @@ class EpisodeRenderer:
         # Round caps and joins: a line drawn in stretches then matches the line drawn whole.
         style = {"solid_capstyle": "round", "solid_joinstyle": "round", "animated": animated}
         (self._track_line,) = ax3d.plot([], [], [], color="C1", lw=1.3, zorder=3, **style)
-        (self._vehicle,) = ax3d.plot([], [], [], "o", color="C1", ms=4, zorder=4,
-                                     animated=animated)  # fmt: skip
+        (self._vehicle,) = ax3d.plot([], [], [], "o", color="C1", ms=4, zorder=4, animated=animated)
         self._error_lines = [
             ax_err.plot([], [], color=color, lw=1.0, label=name, **style)[0]
             for color, name in zip(_ERROR_COLORS, ("x_e", "y_e", "z_e"), strict=True)
@@ -218,12 +221,19 @@ class EpisodeRenderer:
         # The legend above the plot, where no line passes (the fast path draws lines last).
         # No text changes from frame to frame: glyphs cost more than all the lines together;
         # the time is where the error lines end.
-        ax_err.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=7, ncol=3,
-                      frameon=False, borderaxespad=0.2)  # fmt: skip
+        ax_err.legend(
+            loc="lower right",
+            bbox_to_anchor=(1.0, 1.0),
+            fontsize=7,
+            ncol=3,
+            frameon=False,
+            borderaxespad=0.2,
+        )
         ax_err.set_title("body-frame errors, vehicle − virtual point", loc="left", fontsize=8)
         self._growing = [self._track_line, *self._error_lines]
-        self._boundaries = draw_boundaries_3d(ax3d, self.envelope, np.zeros(3), np.ones(3),
-                                              zorder=0)  # fmt: skip
+        self._boundaries = draw_boundaries_3d(
+            ax3d, self.envelope, np.zeros(3), np.ones(3), zorder=0
+        )
         self._figure, self._ax3d = fig, ax3d
 
     def _update_view(self) -> None:

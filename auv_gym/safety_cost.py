@@ -34,9 +34,15 @@ MAX_COST_WEIGHT = 1e6
 MAX_SPEED_LIMIT = 10.0  # [m/s] the observation's speed bound
 # Task-row fields of the envelope and the cost (`task.TASK_FIELDS` ends with them).
 SAFETY_FIELDS = (
-    "surface_z", "seabed_z", "depth_margin", "cost_w_depth", "cost_w_speed", "cost_w_pitch",
-    "cost_speed_limit", "cost_pitch_limit",
-)  # fmt: skip
+    "surface_z",
+    "seabed_z",
+    "depth_margin",
+    "cost_w_depth",
+    "cost_w_speed",
+    "cost_w_pitch",
+    "cost_speed_limit",
+    "cost_pitch_limit",
+)
 
 
 @dataclass(frozen=True)
@@ -53,12 +59,31 @@ class SafetyCost:
         for name in ("depth", "speed", "pitch"):
             value = real(f"safety_cost {name}", getattr(self, name), 0.0, MAX_COST_WEIGHT)
             object.__setattr__(self, name, value)
-        object.__setattr__(self, "speed_limit", real(
-            "safety_cost speed_limit", self.speed_limit, 0.0, MAX_SPEED_LIMIT, low_open=True,
-            unit="m/s"))  # fmt: skip
-        object.__setattr__(self, "pitch_limit", real(
-            "safety_cost pitch_limit", self.pitch_limit, 0.0, math.pi / 2, low_open=True,
-            high_open=True, unit="rad"))  # fmt: skip
+        object.__setattr__(
+            self,
+            "speed_limit",
+            real(
+                "safety_cost speed_limit",
+                self.speed_limit,
+                0.0,
+                MAX_SPEED_LIMIT,
+                low_open=True,
+                unit="m/s",
+            ),
+        )
+        object.__setattr__(
+            self,
+            "pitch_limit",
+            real(
+                "safety_cost pitch_limit",
+                self.pitch_limit,
+                0.0,
+                math.pi / 2,
+                low_open=True,
+                high_open=True,
+                unit="rad",
+            ),
+        )
 
     @classmethod
     def from_spec(cls, spec: SafetyCost | Mapping | None) -> SafetyCost:
@@ -82,13 +107,22 @@ def safety_vector(envelope: DepthEnvelope | None, cost: SafetyCost) -> np.ndarra
         surface, seabed, margin = -math.inf, math.inf, 1.0
     else:
         surface, seabed, margin = SURFACE_Z, envelope.seabed_z, envelope.margin
-    return np.array([surface, seabed, margin, cost.depth, cost.speed, cost.pitch,
-                     cost.speed_limit, cost.pitch_limit])  # fmt: skip
+    return np.array(
+        [
+            surface,
+            seabed,
+            margin,
+            cost.depth,
+            cost.speed,
+            cost.pitch,
+            cost.speed_limit,
+            cost.pitch_limit,
+        ]
+    )
 
 
 @njit(cache=True, inline="always")
-def safety_cost(z, u, theta, surface_z, seabed_z, margin, w_depth, w_speed, w_pitch, u_c,
-                theta_c):  # fmt: skip
+def safety_cost(z, u, theta, surface_z, seabed_z, margin, w_depth, w_speed, w_pitch, u_c, theta_c):
     """The cost c of the module docstring [-] for depth z [m], surge u [m/s], pitch θ [rad]."""
     if not (math.isfinite(z) and math.isfinite(u) and math.isfinite(theta)):
         return w_depth + w_speed + w_pitch

@@ -150,10 +150,15 @@ class SB3VecEnv(VecEnv):
         states and previous actions), and the seeds and options of the next `reset`."""
         wrapper = None
         if self.venv is not self.core:
-            wrapper = copy.deepcopy({k: v for k, v in vars(self.venv).items()
-                                     if k not in ("env", "core")})  # fmt: skip
-        return {"core": self.core.snapshot(), "wrapper": wrapper,
-                "seeds": list(self._seeds), "options": copy.deepcopy(self._options)}  # fmt: skip
+            wrapper = copy.deepcopy(
+                {k: v for k, v in vars(self.venv).items() if k not in ("env", "core")}
+            )
+        return {
+            "core": self.core.snapshot(),
+            "wrapper": wrapper,
+            "seeds": list(self._seeds),
+            "options": copy.deepcopy(self._options),
+        }
 
     def restore(self, snapshot: dict[str, Any]) -> None:
         """Continue from a `snapshot` of an SB3VecEnv built with the same arguments."""

@@ -68,27 +68,36 @@ class SensorConfig:
 
     def __post_init__(self) -> None:
         ranges = {
-            "dvl_noise": (MAX_SPEED_ERROR, "m/s"), "dvl_bias": (MAX_SPEED_ERROR, "m/s"),
-            "dvl_scale": (MAX_SCALE_ERROR, ""), "dvl_dropout": (MAX_DROPOUT, ""),
-            "pitch_noise": (MAX_ANGLE_ERROR, "rad"), "pitch_bias": (MAX_ANGLE_ERROR, "rad"),
-            "heading_noise": (MAX_ANGLE_ERROR, "rad"), "heading_bias": (MAX_ANGLE_ERROR, "rad"),
-            "rate_noise": (MAX_RATE_ERROR, "rad/s"), "rate_bias": (MAX_RATE_ERROR, "rad/s"),
-            "depth_noise": (MAX_DEPTH_ERROR, "m"), "depth_bias": (MAX_DEPTH_ERROR, "m"),
+            "dvl_noise": (MAX_SPEED_ERROR, "m/s"),
+            "dvl_bias": (MAX_SPEED_ERROR, "m/s"),
+            "dvl_scale": (MAX_SCALE_ERROR, ""),
+            "dvl_dropout": (MAX_DROPOUT, ""),
+            "pitch_noise": (MAX_ANGLE_ERROR, "rad"),
+            "pitch_bias": (MAX_ANGLE_ERROR, "rad"),
+            "heading_noise": (MAX_ANGLE_ERROR, "rad"),
+            "heading_bias": (MAX_ANGLE_ERROR, "rad"),
+            "rate_noise": (MAX_RATE_ERROR, "rad/s"),
+            "rate_bias": (MAX_RATE_ERROR, "rad/s"),
+            "depth_noise": (MAX_DEPTH_ERROR, "m"),
+            "depth_bias": (MAX_DEPTH_ERROR, "m"),
             "fix_noise": (MAX_FIX_NOISE, "m"),
-        }  # fmt: skip
+        }
         for name, (high, unit) in ranges.items():
             value = real(f"sensors {name}", getattr(self, name), 0.0, high, unit=unit)
             object.__setattr__(self, name, value)
         if self.fix_interval is not None:
             unit = "s (0: a fix every control step; None: dead reckoning)"
-            interval = real("sensors fix_interval", self.fix_interval, 0.0, MAX_FIX_INTERVAL,
-                            unit=unit)  # fmt: skip
+            interval = real(
+                "sensors fix_interval", self.fix_interval, 0.0, MAX_FIX_INTERVAL, unit=unit
+            )
             object.__setattr__(self, "fix_interval", interval)
         object.__setattr__(self, "delay", integer("sensors delay", self.delay, 0, MAX_DELAY))
         choice("sensors preset", self.preset, [*PRESET_NAMES, "custom"])
         if self.preset == "ideal" and replace(self, preset="custom") != SensorConfig():
-            raise ValueError("sensors preset 'ideal' means exact sensors: give its errors with "
-                             "preset='custom' (or a dict {'preset': 'ideal', ...})")  # fmt: skip
+            raise ValueError(
+                "sensors preset 'ideal' means exact sensors: give its errors with "
+                "preset='custom' (or a dict {'preset': 'ideal', ...})"
+            )
 
     @property
     def ideal(self) -> bool:
@@ -108,8 +117,9 @@ class SensorConfig:
         if isinstance(spec, Mapping):
             names = [f.name for f in fields(cls)]
             given = keys_within("sensors", spec, names)
-            base = SENSOR_PRESETS[choice("sensors preset", given.pop("preset", "ideal"),
-                                         SENSOR_PRESETS)]  # fmt: skip
+            base = SENSOR_PRESETS[
+                choice("sensors preset", given.pop("preset", "ideal"), SENSOR_PRESETS)
+            ]
             return replace(base, **given, preset="custom") if given else base
         raise ArgumentTypeError(
             f"sensors must be None, one of {sorted(SENSOR_PRESETS)}, a dict of SensorConfig "
@@ -129,8 +139,10 @@ class SensorConfig:
             return 1
         ratio = self.fix_interval / control_dt
         if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
-            raise ValueError(f"sensors fix_interval = {self.fix_interval} s must be a whole "
-                             f"multiple of control_dt = {control_dt} s")  # fmt: skip
+            raise ValueError(
+                f"sensors fix_interval = {self.fix_interval} s must be a whole "
+                f"multiple of control_dt = {control_dt} s"
+            )
         return round(ratio)
 
     def packed(self, control_dt: float) -> np.ndarray:
@@ -144,10 +156,23 @@ class SensorConfig:
 
 # Layout of `SensorConfig.packed`.
 SENSOR_FIELDS = (
-    "dvl_noise", "dvl_bias", "dvl_scale", "dvl_dropout", "pitch_noise", "pitch_bias",
-    "heading_noise", "heading_bias", "rate_noise", "rate_bias", "depth_noise", "depth_bias",
-    "fix_noise", "fix_steps", "delay", "control_dt",
-)  # fmt: skip
+    "dvl_noise",
+    "dvl_bias",
+    "dvl_scale",
+    "dvl_dropout",
+    "pitch_noise",
+    "pitch_bias",
+    "heading_noise",
+    "heading_bias",
+    "rate_noise",
+    "rate_bias",
+    "depth_noise",
+    "depth_bias",
+    "fix_noise",
+    "fix_steps",
+    "delay",
+    "control_dt",
+)
 
 _DEG = math.pi / 180.0
 SENSOR_PRESETS: dict[str, SensorConfig] = {

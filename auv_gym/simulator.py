@@ -57,9 +57,31 @@ __all__ = ["Simulator"]
 
 
 @njit(cache=True, inline="always")
-def _step_row(i, state, current, act, actions, params, keys, step_index, row, kinds, pdata, cfgs,
-              tasks, obs_low, obs_high, guid, obs, record, terms, reward, code, cost,
-              ocean):  # fmt: skip
+def _step_row(
+    i,
+    state,
+    current,
+    act,
+    actions,
+    params,
+    keys,
+    step_index,
+    row,
+    kinds,
+    pdata,
+    cfgs,
+    tasks,
+    obs_low,
+    obs_high,
+    guid,
+    obs,
+    record,
+    terms,
+    reward,
+    code,
+    cost,
+    ocean,
+):
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
     config and task are row ``row[i]`` of the episode table (`Simulator`)."""
     a = actions[i]
@@ -67,12 +89,27 @@ def _step_row(i, state, current, act, actions, params, keys, step_index, row, ki
         a[j] = min(max(a[j], -1.0), 1.0)
     r = row[i]
     cfg = cfgs[r]
-    advance_vehicle(state[i], current[i], act[i], a, params[i], keys[i, KEY.noise],
-                    keys[i, KEY.current], step_index[i], kinds[r], pdata[r], cfg, guid[i], obs[i],
-                    record[i], ocean[i])  # fmt: skip
+    advance_vehicle(
+        state[i],
+        current[i],
+        act[i],
+        a,
+        params[i],
+        keys[i, KEY.noise],
+        keys[i, KEY.current],
+        step_index[i],
+        kinds[r],
+        pdata[r],
+        cfg,
+        guid[i],
+        obs[i],
+        record[i],
+        ocean[i],
+    )
     step_index[i] += int(config_record(cfg).n_sub)
-    reward[i], code[i] = task_row(state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r],
-                                  terms[i])  # fmt: skip
+    reward[i], code[i] = task_row(
+        state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r], terms[i]
+    )
     cost[i] = task_cost(state[i], tasks[r])
 
 
@@ -91,28 +128,114 @@ def _first_non_finite_row(actions):
 # runs without numba's reference counting (`_nrt=False`): the row views of its loop otherwise
 # cost two atomic updates each, a quarter of its time (the threaded kernel's loop has none).
 @njit(cache=True, _nrt=False)
-def _step_one(state, current, act, actions, params, keys, step_index, row, kinds, pdata, cfgs,
-              tasks, obs_low, obs_high, guid, obs, record, terms, reward, code, cost,
-              ocean):  # fmt: skip
+def _step_one(
+    state,
+    current,
+    act,
+    actions,
+    params,
+    keys,
+    step_index,
+    row,
+    kinds,
+    pdata,
+    cfgs,
+    tasks,
+    obs_low,
+    obs_high,
+    guid,
+    obs,
+    record,
+    terms,
+    reward,
+    code,
+    cost,
+    ocean,
+):
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in range(state.shape[0]):
-            _step_row(i, state, current, act, actions, params, keys, step_index, row, kinds,
-                      pdata, cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
-                      code, cost, ocean)  # fmt: skip
+            _step_row(
+                i,
+                state,
+                current,
+                act,
+                actions,
+                params,
+                keys,
+                step_index,
+                row,
+                kinds,
+                pdata,
+                cfgs,
+                tasks,
+                obs_low,
+                obs_high,
+                guid,
+                obs,
+                record,
+                terms,
+                reward,
+                code,
+                cost,
+                ocean,
+            )
     return bad
 
 
 @njit(cache=True, parallel=True)
-def _step_all(state, current, act, actions, params, keys, step_index, row, kinds, pdata, cfgs,
-              tasks, obs_low, obs_high, guid, obs, record, terms, reward, code, cost,
-              ocean):  # fmt: skip
+def _step_all(
+    state,
+    current,
+    act,
+    actions,
+    params,
+    keys,
+    step_index,
+    row,
+    kinds,
+    pdata,
+    cfgs,
+    tasks,
+    obs_low,
+    obs_high,
+    guid,
+    obs,
+    record,
+    terms,
+    reward,
+    code,
+    cost,
+    ocean,
+):
     bad = _first_non_finite_row(actions)
     if bad < 0:
         for i in prange(state.shape[0]):
-            _step_row(i, state, current, act, actions, params, keys, step_index, row, kinds,
-                      pdata, cfgs, tasks, obs_low, obs_high, guid, obs, record, terms, reward,
-                      code, cost, ocean)  # fmt: skip
+            _step_row(
+                i,
+                state,
+                current,
+                act,
+                actions,
+                params,
+                keys,
+                step_index,
+                row,
+                kinds,
+                pdata,
+                cfgs,
+                tasks,
+                obs_low,
+                obs_high,
+                guid,
+                obs,
+                record,
+                terms,
+                reward,
+                code,
+                cost,
+                ocean,
+            )
     return bad
 
 
@@ -134,9 +257,29 @@ _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code
 
 # The arrays of a `Simulator` that change while stepping or at a reset (`Simulator.snapshot`);
 # the others are fixed at construction. `error_integral` is a view into `extra` and follows it.
-SNAPSHOT_ARRAYS = ("state", "current", "params", "keys", "step_index", "guid", "obs", "record",
-                   "terms", "reward", "code", "cost", "_actions", "extra", "last_action", "_cfg",
-                   "_task", "_pdata", "_kind", "ocean", "actuator_state")  # fmt: skip
+SNAPSHOT_ARRAYS = (
+    "state",
+    "current",
+    "params",
+    "keys",
+    "step_index",
+    "guid",
+    "obs",
+    "record",
+    "terms",
+    "reward",
+    "code",
+    "cost",
+    "_actions",
+    "extra",
+    "last_action",
+    "_cfg",
+    "_task",
+    "_pdata",
+    "_kind",
+    "ocean",
+    "actuator_state",
+)
 
 
 class Simulator:
@@ -195,8 +338,9 @@ class Simulator:
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
         self.layout = config.observation
         self.speed_bound = vehicle_speed_bound(config.params.max_surge)  # [m/s]
-        self.obs_low, self.obs_high = self.layout.bounds(config.current_speed_bound,
-                                                         self.speed_bound)  # fmt: skip
+        self.obs_low, self.obs_high = self.layout.bounds(
+            config.current_speed_bound, self.speed_bound
+        )
         # The paper entries' bounds, which the step kernel's termination check reads.
         self._paper_bounds = (self.obs_low[:OBS_DIM].copy(), self.obs_high[:OBS_DIM].copy())
         self.extra = np.zeros((n, self.layout.extra_dim))
@@ -211,8 +355,9 @@ class Simulator:
         self._every_row = np.arange(n, dtype=np.int64)
         assert self.params.shape[1] == N_PARAMS
         # The sensor model (`auv_gym.navigation`): None for ideal sensors, the exact state.
-        self.navigation = None if config.sensors.ideal else Navigation(
-            config.sensors, config.control_dt, self.n)  # fmt: skip
+        self.navigation = (
+            None if config.sensors.ideal else Navigation(config.sensors, config.control_dt, self.n)
+        )
 
     @property
     def steps(self) -> np.ndarray:
@@ -251,16 +396,21 @@ class Simulator:
         naming the first array whose shape differs (then nothing is changed)."""
         # A snapshot from before these arrays existed (a paused training run) had a flat sea,
         # the instantaneous actuators and no safety cost.
-        arrays = {"ocean": np.zeros((self.n, ocean_width(None))),
-                  "actuator_state": np.zeros_like(self.actuator_state),
-                  "cost": np.zeros(self.n), **snapshot["arrays"]}  # fmt: skip
+        arrays = {
+            "ocean": np.zeros((self.n, ocean_width(None))),
+            "actuator_state": np.zeros_like(self.actuator_state),
+            "cost": np.zeros(self.n),
+            **snapshot["arrays"],
+        }
         targets = self._snapshot_arrays()
         for name, target in targets.items():
             value = arrays.get(name)
             if value is None or target.shape != value.shape:
                 shape = None if value is None else value.shape
-                raise ValueError(f"snapshot array {name} has shape {shape}, this vector "
-                                 f"env's {target.shape}: built with other arguments")  # fmt: skip
+                raise ValueError(
+                    f"snapshot array {name} has shape {shape}, this vector "
+                    f"env's {target.shape}: built with other arguments"
+                )
         for name, target in targets.items():  # in place: views such as `error_integral` stay
             np.copyto(target, arrays[name])
         self.paths[:] = snapshot["paths"]
@@ -274,8 +424,9 @@ class Simulator:
         for i, rng in zip(rows, rngs, strict=True):
             self._draw_episode(int(i), rng)
         rows = np.asarray(rows, dtype=np.int64)
-        _observe_rows(rows, self.state, self._row, self._kind, self._pdata, self._cfg, self.guid,
-                      self.obs)  # fmt: skip
+        _observe_rows(
+            rows, self.state, self._row, self._kind, self._pdata, self._cfg, self.guid, self.obs
+        )
         if self.navigation is not None:
             self.navigation.sense(self, rows, reset=True)
         if self.extra.shape[1]:
@@ -304,9 +455,21 @@ class Simulator:
 
     def _extend(self, rows: np.ndarray) -> None:
         layout = self.layout
-        extend_rows(rows, self._observed_state, self.current, self.last_action, self._row,
-                    self._kind, self._pdata, self._cfg, self._task, _S_END, layout.points,
-                    layout.spacing, self.extra)  # fmt: skip
+        extend_rows(
+            rows,
+            self._observed_state,
+            self.current,
+            self.last_action,
+            self._row,
+            self._kind,
+            self._pdata,
+            self._cfg,
+            self._task,
+            _S_END,
+            layout.points,
+            layout.spacing,
+            self.extra,
+        )
 
     def _set_task(self, i: int, task: EpisodeTask) -> None:
         """Write vehicle i's drawn task into its row of the episode table."""
@@ -363,11 +526,29 @@ class Simulator:
         np.copyto(self._actions, actions)
         if self._command_box:
             check_commands(self._actions)
-        bad_row = self._kernel(self.state, self.current, self.actuator_state, self._actions,
-                     self.params, self.keys, self.step_index, self._row, self._kind, self._pdata,
-                     self._cfg, self._task,
-                     *self._paper_bounds, self.guid, self.obs, self.record, self.terms,
-                     self.reward, self.code, self.cost, self.ocean)  # fmt: skip
+        bad_row = self._kernel(
+            self.state,
+            self.current,
+            self.actuator_state,
+            self._actions,
+            self.params,
+            self.keys,
+            self.step_index,
+            self._row,
+            self._kind,
+            self._pdata,
+            self._cfg,
+            self._task,
+            *self._paper_bounds,
+            self.guid,
+            self.obs,
+            self.record,
+            self.terms,
+            self.reward,
+            self.code,
+            self.cost,
+            self.ocean,
+        )
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
         if self.navigation is not None:  # after scoring: the reward reads the true state

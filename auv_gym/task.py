@@ -54,8 +54,15 @@ __all__ = [
 ]
 
 REWARD_TERMS = (
-    "progress", "tracking", "distance", "speed", "overspeed", "effort", "precision", "termination",
-)  # fmt: skip
+    "progress",
+    "tracking",
+    "distance",
+    "speed",
+    "overspeed",
+    "effort",
+    "precision",
+    "termination",
+)
 N_TERMS = len(REWARD_TERMS)
 TERM = field_indices("RewardTermIndex", REWARD_TERMS, __name__)
 # Layout of `task_vector`: the weights w_<term>, then the episode limits [m, rad, -, m/s], then
@@ -71,8 +78,17 @@ TASK_FIELDS = (
 TASK_DIM = len(TASK_FIELDS)
 TaskRecord = record_type("TaskRecord", TASK_FIELDS, __name__)
 # Codes returned by `task_row`; 0 means "running".
-TERMINATION_REASONS = ("", "corridor", "pitch", "non_finite", "envelope", "path_end", "overspeed",
-                       "broached", "grounded")  # fmt: skip
+TERMINATION_REASONS = (
+    "",
+    "corridor",
+    "pitch",
+    "non_finite",
+    "envelope",
+    "path_end",
+    "overspeed",
+    "broached",
+    "grounded",
+)
 CORRIDOR, PITCH, NON_FINITE, ENVELOPE, PATH_END, OVERSPEED = 1, 2, 3, 4, 5, 6
 BROACHED, GROUNDED = 7, 8  # above the sea surface, below the seabed (`depth_envelope`)
 TRACKING_SCALE = 1.0  # [m] d_0 of the tracking bonus
@@ -122,16 +138,18 @@ class TaskLimits:
 
     def __post_init__(self) -> None:
         corridor = real("corridor", self.corridor, MIN_CORRIDOR, ERROR_BOUND, unit="m")
-        max_pitch = real("max_pitch", self.max_pitch, 0.0, math.pi / 2, low_open=True,
-                         high_open=True, unit="rad")  # fmt: skip
+        max_pitch = real(
+            "max_pitch", self.max_pitch, 0.0, math.pi / 2, low_open=True, high_open=True, unit="rad"
+        )
         if not (is_real(self.s_end) and self.s_end > 0):  # math.inf: an endless path
             raise ValueError(f"s_end must be a positive path parameter or inf, got {self.s_end!r}")
         object.__setattr__(self, "corridor", corridor)
         object.__setattr__(self, "max_pitch", max_pitch)
         object.__setattr__(self, "s_end", float(self.s_end))
         if not (is_real(self.surge_limit) and self.surge_limit > 0):
-            raise ValueError(f"surge_limit must be a positive speed in m/s or inf, got "
-                             f"{self.surge_limit!r:.80}")  # fmt: skip
+            raise ValueError(
+                f"surge_limit must be a positive speed in m/s or inf, got {self.surge_limit!r:.80}"
+            )
         object.__setattr__(self, "surge_limit", float(self.surge_limit))
 
 
@@ -142,8 +160,16 @@ def task_vector(
     the default cost) into the row `task_row` reads (layout `TASK_FIELDS`)."""
     if safety is None:
         safety = safety_vector(None, SafetyCost())
-    return np.array([*astuple(weights), limits.corridor, limits.max_pitch, limits.s_end,
-                     limits.surge_limit, *safety])  # fmt: skip
+    return np.array(
+        [
+            *astuple(weights),
+            limits.corridor,
+            limits.max_pitch,
+            limits.s_end,
+            limits.surge_limit,
+            *safety,
+        ]
+    )
 
 
 @njit(cache=True, inline="always")
@@ -217,6 +243,16 @@ def task_row(st, guid, obs, action, obs_low, obs_high, task, out_terms):
 def task_cost(st, task):
     """The safety cost of the state ``st`` after a step (`safety_cost.safety_cost`) [-]."""
     t = task_record(task)
-    return safety_cost(st[STATE.z], st[STATE.u], st[STATE.theta], t.surface_z, t.seabed_z,
-                       t.depth_margin, t.cost_w_depth, t.cost_w_speed, t.cost_w_pitch,
-                       t.cost_speed_limit, t.cost_pitch_limit)  # fmt: skip
+    return safety_cost(
+        st[STATE.z],
+        st[STATE.u],
+        st[STATE.theta],
+        t.surface_z,
+        t.seabed_z,
+        t.depth_margin,
+        t.cost_w_depth,
+        t.cost_w_speed,
+        t.cost_w_pitch,
+        t.cost_speed_limit,
+        t.cost_pitch_limit,
+    )

@@ -109,9 +109,13 @@ def choice(name: str, value: Any, options: Iterable[str]) -> str:
 
 
 def vector(
-    name: str, value: Any, length: int, low: float = -math.inf, high: float = math.inf,
+    name: str,
+    value: Any,
+    length: int,
+    low: float = -math.inf,
+    high: float = math.inf,
     unit: str = "",
-) -> tuple[float, ...]:  # fmt: skip
+) -> tuple[float, ...]:
     """``value`` as a tuple of ``length`` finite reals in [low, high]; else a named error."""
     allowed = f"{length} real numbers in {_interval(low, high, False, False, unit)}"
     if isinstance(value, np.ndarray):
@@ -135,8 +139,9 @@ def keys_within(name: str, value: Any, allowed: Iterable[str]) -> dict[str, Any]
     """``value`` as a dict if it is a mapping whose keys are among ``allowed``."""
     valid = sorted(allowed)
     if not isinstance(value, Mapping):
-        raise ArgumentTypeError(f"{name} must be a mapping with keys among {valid}, "
-                                f"got {_show(value)}")  # fmt: skip
+        raise ArgumentTypeError(
+            f"{name} must be a mapping with keys among {valid}, got {_show(value)}"
+        )
     unknown = sorted(map(str, set(value) - set(valid)))
     if unknown:
         raise ValueError(f"{name} has unknown key(s) {unknown}; valid: {valid}")

@@ -155,8 +155,9 @@ class AUVPath3DVectorEnv(VectorEnv):
 
         # One thread: the serial kernel, which leaves numba's thread pool alone.
         self.sim = Simulator(self.config, self.num_envs, parallel=self.threads != 1)
-        self.single_observation_space = spaces.Box(self.sim.obs_low, self.sim.obs_high,
-                                                   dtype=np.float32)  # fmt: skip
+        self.single_observation_space = spaces.Box(
+            self.sim.obs_low, self.sim.obs_high, dtype=np.float32
+        )
         self.single_action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -224,9 +225,12 @@ class AUVPath3DVectorEnv(VectorEnv):
         self.sim.reset_rows(rows, [self._rngs[i] for i in rows])
         first = self.sim.observations(rows)
         check_reset_observations(
-            first, rows, self.config.observation, self.config.current_speed_bound,
+            first,
+            rows,
+            self.config.observation,
+            self.config.current_speed_bound,
             self.sim.speed_bound,
-        )  # fmt: skip
+        )
         self._last_obs[rows] = first
         if self._render_vehicle in rows:
             self._restart_rendering()
@@ -326,8 +330,10 @@ class AUVPath3DVectorEnv(VectorEnv):
         """Continue from a `snapshot` of a vector env built with the same arguments; ValueError
         if its number of vehicles or array shapes differ."""
         if snapshot.get("num_envs") != self.num_envs:
-            raise ValueError(f"snapshot of {snapshot.get('num_envs')} vehicles, this vector env "
-                             f"has {self.num_envs}")  # fmt: skip
+            raise ValueError(
+                f"snapshot of {snapshot.get('num_envs')} vehicles, this vector env "
+                f"has {self.num_envs}"
+            )
         self.sim.restore(snapshot["sim"])
         self._rngs = copy.deepcopy(snapshot["rngs"])
         self._np_random, self._np_random_seed = copy.deepcopy(snapshot["np_random"])

@@ -94,8 +94,18 @@ class AUVParams:
         for f in fields(self):
             check = flag if f.name == "surge_coriolis" else real  # True is no mass
             check(f"AUVParams.{f.name}", getattr(self, f.name))
-        for name in ("m", "W", "B", "I_y", "I_z", "fin_max", "X_max", "M_max", "N_max",
-                     "max_surge"):  # fmt: skip
+        for name in (
+            "m",
+            "W",
+            "B",
+            "I_y",
+            "I_z",
+            "fin_max",
+            "X_max",
+            "M_max",
+            "N_max",
+            "max_surge",
+        ):
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"AUVParams.{name} must be positive, got {getattr(self, name)}")
         for name, value in (
@@ -179,11 +189,17 @@ class AUVParams:
         most = 1.0 + epsilon
         for name in HYDRODYNAMIC_FIELDS:
             if not math.isfinite(getattr(self, name) * most):
-                raise ValueError(f"param_uncertainty = {epsilon:g} can scale AUVParams.{name} = "
-                                 f"{getattr(self, name):g} beyond the float range")  # fmt: skip
-        for inertia, rigid, added in (("m11", "m", "X_udot"), ("m22", "m", "Y_vdot"),
-                                      ("m33", "m", "Z_wdot"), ("I55", "I_y", "M_qdot"),
-                                      ("I66", "I_z", "N_rdot")):  # fmt: skip
+                raise ValueError(
+                    f"param_uncertainty = {epsilon:g} can scale AUVParams.{name} = "
+                    f"{getattr(self, name):g} beyond the float range"
+                )
+        for inertia, rigid, added in (
+            ("m11", "m", "X_udot"),
+            ("m22", "m", "Y_vdot"),
+            ("m33", "m", "Z_wdot"),
+            ("I55", "I_y", "M_qdot"),
+            ("I66", "I_z", "N_rdot"),
+        ):
             body, coefficient = getattr(self, rigid), getattr(self, added)
             worst = body - coefficient * most
             if coefficient > 0.0 and not worst > 0.0:
@@ -200,10 +216,34 @@ class AUVParams:
 
 
 HYDRODYNAMIC_FIELDS: tuple[str, ...] = (
-    "z_g", "X_udot", "Y_vdot", "Z_wdot", "M_qdot", "N_rdot", "X_uu", "X_vv", "X_ww", "X_qq",
-    "X_rr", "X_vr", "X_wq", "Y_ur", "Y_uv", "Y_vv", "Z_uq", "Z_uw", "Z_ww", "M_qq", "M_uq",
-    "M_uw", "M_ww", "N_uv", "N_vv", "N_ur", "N_rr",
-)  # fmt: skip
+    "z_g",
+    "X_udot",
+    "Y_vdot",
+    "Z_wdot",
+    "M_qdot",
+    "N_rdot",
+    "X_uu",
+    "X_vv",
+    "X_ww",
+    "X_qq",
+    "X_rr",
+    "X_vr",
+    "X_wq",
+    "Y_ur",
+    "Y_uv",
+    "Y_vv",
+    "Z_uq",
+    "Z_uw",
+    "Z_ww",
+    "M_qq",
+    "M_uq",
+    "M_uw",
+    "M_ww",
+    "N_uv",
+    "N_vv",
+    "N_ur",
+    "N_rr",
+)
 
 # The diagonal of M = M_RB + M_A, packed after the fields so that the kernels divide by the
 # values `AUVParams` derives instead of recomputing them.
@@ -225,8 +265,10 @@ def params_from_spec(spec: AUVParams | Mapping[str, Any] | None) -> AUVParams:
         return spec
     names = [f.name for f in fields(AUVParams)]
     if not isinstance(spec, Mapping):
-        raise ArgumentTypeError(f"params must be None, an AUVParams or a dict of its fields "
-                                f"(and 'scale'), got {spec!r:.80}")  # fmt: skip
+        raise ArgumentTypeError(
+            f"params must be None, an AUVParams or a dict of its fields "
+            f"(and 'scale'), got {spec!r:.80}"
+        )
     values = keys_within("params", spec, [*names, "scale"])
     scale = values.pop("scale", {})
     scale = keys_within("params scale", scale, names)

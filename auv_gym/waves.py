@@ -62,8 +62,9 @@ COMPONENT_DIM = len(COMPONENT_FIELDS)
 COMPONENT = field_indices("ComponentIndex", COMPONENT_FIELDS, __name__)
 
 
-def spectral_density(omega: np.ndarray, height: float, period: float, spectrum: str,
-                     gamma: float = 3.3) -> np.ndarray:  # fmt: skip
+def spectral_density(
+    omega: np.ndarray, height: float, period: float, spectrum: str, gamma: float = 3.3
+) -> np.ndarray:
     """One-sided wave spectrum S(ω) [m²·s/rad] (DNV-RP-C205, section 3.5.5):
 
     Pierson–Moskowitz  S_PM(ω) = 5/16 H_s² ω_p⁴ ω⁻⁵ exp(−5/4 (ω_p/ω)⁴),  ω_p = 2π/T_p
@@ -122,17 +123,30 @@ class WaveConfig:
         def put(name: str, value: object) -> None:
             object.__setattr__(self, name, value)
 
-        put("significant_height", real("waves significant_height", self.significant_height,
-                                       0.0, MAX_HEIGHT, low_open=True, unit="m"))  # fmt: skip
+        put(
+            "significant_height",
+            real(
+                "waves significant_height",
+                self.significant_height,
+                0.0,
+                MAX_HEIGHT,
+                low_open=True,
+                unit="m",
+            ),
+        )
         put("peak_period", real("waves peak_period", self.peak_period, *PERIOD_RANGE, unit="s"))
         put("spectrum", choice("waves spectrum", self.spectrum, SPECTRA))
         put("gamma", real("waves gamma", self.gamma, 1.0, 7.0))
         put("components", integer("waves components", self.components, 1, MAX_COMPONENTS))
         put("spreading", real("waves spreading", self.spreading, 0.0, MAX_SPREADING))
-        put("direction", real("waves direction", self.direction, -2 * math.pi, 2 * math.pi,
-                              unit="rad"))  # fmt: skip
-        put("update_interval", real("waves update_interval", self.update_interval, 0.0, 1.0,
-                                    low_open=True, unit="s"))  # fmt: skip
+        put(
+            "direction",
+            real("waves direction", self.direction, -2 * math.pi, 2 * math.pi, unit="rad"),
+        )
+        put(
+            "update_interval",
+            real("waves update_interval", self.update_interval, 0.0, 1.0, low_open=True, unit="s"),
+        )
 
     @classmethod
     def from_spec(cls, spec: WaveConfig | str | int | Mapping | None) -> WaveConfig | None:
@@ -150,8 +164,10 @@ class WaveConfig:
         if isinstance(spec, (str, int)) and not isinstance(spec, bool):
             height, period = _sea_state(spec)
             return cls(significant_height=height, peak_period=period)
-        raise ArgumentTypeError(f"waves must be None, a sea state {_PRESETS}, a dict of "
-                                f"WaveConfig fields or a WaveConfig, got {spec!r:.80}")  # fmt: skip
+        raise ArgumentTypeError(
+            f"waves must be None, a sea state {_PRESETS}, a dict of "
+            f"WaveConfig fields or a WaveConfig, got {spec!r:.80}"
+        )
 
 
 _PRESETS = sorted(f"sea_state_{code}" for code in SEA_STATES)
@@ -162,8 +178,9 @@ def _sea_state(name: object) -> tuple[float, float]:
     if isinstance(name, str):
         code = int(name[10:]) if name.startswith("sea_state_") and name[10:].isdigit() else -1
     if isinstance(code, bool) or code not in SEA_STATES:
-        raise ValueError(f"unknown waves sea state {name!r}; valid: {_PRESETS} or "
-                         f"{sorted(SEA_STATES)}")  # fmt: skip
+        raise ValueError(
+            f"unknown waves sea state {name!r}; valid: {_PRESETS} or {sorted(SEA_STATES)}"
+        )
     return SEA_STATES[code]
 
 

@@ -83,9 +83,15 @@ def comma_names(text: str, flag: str) -> list[str]:
 
 
 def finite_number(
-    flag: str, value: float, low: float, high: float = math.inf, *, low_open: bool = False,
-    high_open: bool = False, unit: str = "",
-) -> float:  # fmt: skip
+    flag: str,
+    value: float,
+    low: float,
+    high: float = math.inf,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str = "",
+) -> float:
     """``value`` if it is finite and within the bounds; else ValueError naming the flag."""
     below = value <= low if low_open else value < low
     above = value >= high if high_open else value > high
@@ -165,10 +171,12 @@ class EpisodeOptions:
     transient: float | None = option(
         None, "metrics window start [s]; None: min(100, duration/2) (docs/design.md §3.9)"
     )
-    workers: int = option(os.cpu_count() or 1,
-                          "local worker processes (results do not depend on it)")  # fmt: skip
-    backend: str = option("local", "run the episodes in local processes or on a Ray cluster",
-                          choices=("local", "ray"))  # fmt: skip
+    workers: int = option(
+        os.cpu_count() or 1, "local worker processes (results do not depend on it)"
+    )
+    backend: str = option(
+        "local", "run the episodes in local processes or on a Ray cluster", choices=("local", "ray")
+    )
     address: str | None = option(None, "Ray cluster address to join")
 
 
@@ -184,8 +192,11 @@ def check_episode_arguments(args: argparse.Namespace) -> None:
     check_pool_options(args.workers, args.backend, args.address)
 
 
-def parse_checked(parser: argparse.ArgumentParser, argv: Sequence[str] | None,
-                  check: Callable[[argparse.Namespace], None]) -> argparse.Namespace:  # fmt: skip
+def parse_checked(
+    parser: argparse.ArgumentParser,
+    argv: Sequence[str] | None,
+    check: Callable[[argparse.Namespace], None],
+) -> argparse.Namespace:
     """``parser``'s arguments from ``argv``, then ``check(args)`` (which may add resolved
     values) inside `usage_errors`: every argument is checked before any work, a bad one exits
     with code 2 and one line."""
@@ -195,8 +206,14 @@ def parse_checked(parser: argparse.ArgumentParser, argv: Sequence[str] | None,
     return args
 
 
-def parse_options(cls: type, argv: Sequence[str] | None, prog: str, description: str | None,
-                  *, negatable: bool = True) -> tuple[Any, argparse.ArgumentParser]:  # fmt: skip
+def parse_options(
+    cls: type,
+    argv: Sequence[str] | None,
+    prog: str,
+    description: str | None,
+    *,
+    negatable: bool = True,
+) -> tuple[Any, argparse.ArgumentParser]:
     """(``cls`` from the command line ``argv``, its parser): every `option` field of ``cls`` is
     an option (`benchmarks.options.add_options`); a bad value exits like `ArgumentParser`, on
     one line with code 2. The parser is returned for checks across options (``parser.error``)."""

@@ -68,9 +68,19 @@ SPEED: dict[str, tuple[str, str]] = {
     "off-policy": ("benchmarks.speed.off_policy", "SAC, TQC and CrossQ gradient-step cost"),
 }
 # Modules of the optional extras: a missing one is named with the extra that installs it.
-EXTRAS = {"stable_baselines3": "rl", "torch": "rl", "yaml": "rl", "rich": "rl",
-          "tensorboard": "rl", "moviepy": "video", "imageio_ffmpeg": "video", "ray": "ray",
-          "rliable": "stats", "arch": "stats", "pandas": "stats"}  # fmt: skip
+EXTRAS = {
+    "stable_baselines3": "rl",
+    "torch": "rl",
+    "yaml": "rl",
+    "rich": "rl",
+    "tensorboard": "rl",
+    "moviepy": "video",
+    "imageio_ffmpeg": "video",
+    "ray": "ray",
+    "rliable": "stats",
+    "arch": "stats",
+    "pandas": "stats",
+}
 
 
 def _table(entries: dict[str, tuple[str, str]]) -> str:
@@ -131,8 +141,11 @@ def _docs(argv: list[str]) -> int:
     parser.parse_args(argv)
     folder = docs_folder()
     if folder is None:
-        print("auv-gym docs: error: no manual found (expected share/doc/auv-gym/docs under "
-              f"{sys.prefix}, or docs/ in the source tree)", file=sys.stderr)  # fmt: skip
+        print(
+            "auv-gym docs: error: no manual found (expected share/doc/auv-gym/docs under "
+            f"{sys.prefix}, or docs/ in the source tree)",
+            file=sys.stderr,
+        )
         return 2
     print(folder)
     for page in sorted(folder.glob("*.md")):
@@ -162,8 +175,9 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"auv-gym {_version()}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands",
-                                     required=True)  # fmt: skip
+    commands = parser.add_subparsers(
+        dest="command", metavar="COMMAND", title="commands", required=True
+    )
     for name, (_, text) in COMMANDS.items():
         # Each command parses its own options (its module's main): the subparser only names it.
         commands.add_parser(name, help=text, add_help=False)
@@ -178,8 +192,10 @@ def _compile_notice() -> Path | None:
     packages = (Path(auv_gym.__file__).parent, Path(controllers.__file__).parent)
     if kernels_are_cached(*packages):
         return None
-    notice = ("auv-gym: compiling the simulation kernels (first run after an install or an "
-              "edit of the physics, about 20-60 s; cached afterwards)")  # fmt: skip
+    notice = (
+        "auv-gym: compiling the simulation kernels (first run after an install or an "
+        "edit of the physics, about 20-60 s; cached afterwards)"
+    )
     print(notice, file=sys.stderr, flush=True)
     return packages
 
@@ -204,8 +220,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         extra = EXTRAS.get((error.name or "").split(".")[0])
         if extra is None:
             raise
-        print(f"auv-gym {command}: needs {error.name}, from the {extra!r} extra: "
-              f"pip install 'auv-gym[{extra}]'", file=sys.stderr)  # fmt: skip
+        print(
+            f"auv-gym {command}: needs {error.name}, from the {extra!r} extra: "
+            f"pip install 'auv-gym[{extra}]'",
+            file=sys.stderr,
+        )
         return 2
     except (ValueError, FileNotFoundError) as error:
         print(f"auv-gym {command}: error: {error}", file=sys.stderr)

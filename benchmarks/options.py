@@ -42,10 +42,19 @@ __all__ = [
 _UNSET: Any = dataclasses.MISSING
 
 
-def option(default: Any, help: str, *, choices: Sequence[str] | None = None,
-           parse: Callable[[str], Any] | None = None, flag: str | None = None,
-           invert: bool = False, cli_default: Any = _UNSET, required: bool = False,
-           metavar: str | None = None, nargs: str | None = None) -> Any:  # fmt: skip
+def option(
+    default: Any,
+    help: str,
+    *,
+    choices: Sequence[str] | None = None,
+    parse: Callable[[str], Any] | None = None,
+    flag: str | None = None,
+    invert: bool = False,
+    cli_default: Any = _UNSET,
+    required: bool = False,
+    metavar: str | None = None,
+    nargs: str | None = None,
+) -> Any:
     """A dataclass field with its command-line description (a plain `dataclasses.field` is
     offered by no command line).
 
@@ -56,9 +65,17 @@ def option(default: Any, help: str, *, choices: Sequence[str] | None = None,
     an option without default on the command line (the dataclass default serves programmatic
     callers); ``nargs`` ("+" or "*") an option of several values (a tuple default).
     """
-    metadata = {"help": help, "choices": choices, "parse": parse, "flag": flag,
-                "invert": invert, "cli_default": cli_default, "required": required,
-                "metavar": metavar, "nargs": nargs}  # fmt: skip
+    metadata = {
+        "help": help,
+        "choices": choices,
+        "parse": parse,
+        "flag": flag,
+        "invert": invert,
+        "cli_default": cli_default,
+        "required": required,
+        "metavar": metavar,
+        "nargs": nargs,
+    }
     return dataclasses.field(default=default, metadata=metadata)
 
 
@@ -120,8 +137,13 @@ def _fields(cls: type, names: Iterable[str] | None) -> list[dataclasses.Field]:
     return [by_name[n] for n in names]
 
 
-def add_options(parser: argparse.ArgumentParser, cls: type, names: Iterable[str] | None = None,
-                *, negatable: bool = True) -> list[str]:  # fmt: skip
+def add_options(
+    parser: argparse.ArgumentParser,
+    cls: type,
+    names: Iterable[str] | None = None,
+    *,
+    negatable: bool = True,
+) -> list[str]:
     """Add an option for each field of the dataclass ``cls`` declared with `option` (or for
     ``names`` only, in that order); returns the field names added, for `from_args`."""
     hints = typing.get_type_hints(cls)
@@ -136,8 +158,11 @@ def add_options(parser: argparse.ArgumentParser, cls: type, names: Iterable[str]
         kwargs: dict[str, Any] = {"help": meta["help"], "dest": f.name}
         if hints[f.name] is bool:
             if meta["invert"]:
-                kwargs.update(action="store_true", default=not default,
-                              dest=flag.lstrip("-").replace("-", "_"))  # fmt: skip
+                kwargs.update(
+                    action="store_true",
+                    default=not default,
+                    dest=flag.lstrip("-").replace("-", "_"),
+                )
             elif negatable:
                 kwargs.update(action=argparse.BooleanOptionalAction, default=default)
             else:
@@ -169,8 +194,9 @@ def add_options(parser: argparse.ArgumentParser, cls: type, names: Iterable[str]
     return added
 
 
-def from_args(cls: type, namespace: argparse.Namespace | dict[str, Any], names: Iterable[str],
-              **fixed: Any) -> Any:  # fmt: skip
+def from_args(
+    cls: type, namespace: argparse.Namespace | dict[str, Any], names: Iterable[str], **fixed: Any
+) -> Any:
     """``cls(**values)`` from the options `add_options` added for ``names``, plus ``fixed``."""
     values = vars(namespace) if isinstance(namespace, argparse.Namespace) else dict(namespace)
     by_name = {f.name: f for f in dataclasses.fields(cls)}

@@ -99,8 +99,9 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     raise ValueError(f"unknown controller {name!r}; valid: {valid}")
 
 
-def _with_env_settings(name: str, settings: dict[str, Any], kwargs: dict[str, Any]
-                       ) -> dict[str, Any]:  # fmt: skip
+def _with_env_settings(
+    name: str, settings: dict[str, Any], kwargs: dict[str, Any]
+) -> dict[str, Any]:
     """``kwargs`` with the env's ``settings`` beneath them (an agent: beneath its base's)."""
     if name in AGENT_NAMES:
         return {**kwargs, "base_kwargs": {**settings, **(kwargs.get("base_kwargs") or {})}}

@@ -24,8 +24,13 @@ import numpy as np
 
 from controllers.actor_wrapper import ActorWrapper
 
-__all__ = ["PREV_ACTION_NAMES", "IncrementPolicy", "apply_increment", "check_increment",
-           "prev_action_index"]  # fmt: skip
+__all__ = [
+    "PREV_ACTION_NAMES",
+    "IncrementPolicy",
+    "apply_increment",
+    "check_increment",
+    "prev_action_index",
+]
 
 PREV_ACTION_NAMES = ("a_X_prev", "a_M_prev", "a_N_prev")
 
@@ -46,14 +51,17 @@ def prev_action_index(obs_names: Sequence[str]) -> np.ndarray:
     names = list(obs_names)
     missing = [n for n in PREV_ACTION_NAMES if n not in names]
     if missing:
-        raise ValueError(f"action_increment needs the previous action in the observation "
-                         f"({list(PREV_ACTION_NAMES)}; the agent observation, "
-                         f"observation='preview'), missing {missing}")  # fmt: skip
+        raise ValueError(
+            f"action_increment needs the previous action in the observation "
+            f"({list(PREV_ACTION_NAMES)}; the agent observation, "
+            f"observation='preview'), missing {missing}"
+        )
     return np.array([names.index(n) for n in PREV_ACTION_NAMES], dtype=np.intp)
 
 
-def apply_increment(observation: np.ndarray, delta: np.ndarray, increment: float,
-                    index: np.ndarray) -> np.ndarray:  # fmt: skip
+def apply_increment(
+    observation: np.ndarray, delta: np.ndarray, increment: float, index: np.ndarray
+) -> np.ndarray:
     """clip(a_prev + δ·Δ, −1, 1) as float32, for one observation (d,) or a batch (n, d)."""
     prev = np.asarray(observation, dtype=np.float32)[..., index]
     step = np.float32(increment) * np.asarray(delta, dtype=np.float32)
@@ -68,9 +76,13 @@ class IncrementPolicy(ActorWrapper):
         self.increment = check_increment(increment, "IncrementPolicy")
         self.index = prev_action_index(obs_names)
 
-    def predict(self, observation: np.ndarray, state: Any = None,
-                episode_start: np.ndarray | None = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         """Commands in [−1, 1]³ for observations (d,) or (n, d) of the agent's layout."""
         delta, state = self.actor.predict(observation, state, episode_start, deterministic)
         return apply_increment(observation, delta, self.increment, self.index), state

@@ -29,10 +29,12 @@ def check_action_scale(value: Any, where: str) -> tuple[float, float, float]:
     try:
         scale = tuple(value)
         ok = len(scale) == 3 and all(
-            isinstance(k, (int, float)) and not isinstance(k, bool) and math.isfinite(k)
+            isinstance(k, (int, float))
+            and not isinstance(k, bool)
+            and math.isfinite(k)
             and 0.0 < k <= 1.0
             for k in scale
-        )  # fmt: skip
+        )
     except TypeError:
         ok = False
     if not ok:
@@ -56,9 +58,13 @@ class ScaledPolicy(ActorWrapper):
         super().__init__(actor)
         self.scale = check_action_scale(scale, "ScaledPolicy")
 
-    def predict(self, observation: np.ndarray, state: Any = None,
-                episode_start: np.ndarray | None = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         """Commands in [−k, k] for observations (d,) or (n, d) of the agent's layout."""
         output, state = self.actor.predict(observation, state, episode_start, deterministic)
         return apply_scale(output, self.scale), state

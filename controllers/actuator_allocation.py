@@ -40,8 +40,13 @@ from controllers.actor_wrapper import ActorWrapper
 from controllers.allocation import allocate, fin_angle, fin_authority
 from controllers.base import actuator_vector
 
-__all__ = ["ALLOCATED_ACTUATORS", "COMMANDED_ACTUATOR", "AllocatedPolicy", "AllocationState",
-           "check_actuator_allocation"]  # fmt: skip
+__all__ = [
+    "ALLOCATED_ACTUATORS",
+    "COMMANDED_ACTUATOR",
+    "AllocatedPolicy",
+    "AllocationState",
+    "check_actuator_allocation",
+]
 
 COMMANDED_ACTUATOR = "paper"  # the one actuator whose normalised τ an agent may command
 ALLOCATED_ACTUATORS = ("fins", "realistic")  # the actuators `AllocatedPolicy` allocates to
@@ -52,9 +57,11 @@ def check_actuator_allocation(value: Any, where: str) -> str:
     """The commanded actuator of an agent's ``actuator_allocation`` ("paper"), or a one-line
     error naming ``where``."""
     if value != COMMANDED_ACTUATOR:
-        raise ValueError(f"{where}: actuator_allocation must be {COMMANDED_ACTUATOR!r} (the "
-                         f"actuator whose normalised τ the agent commands), "
-                         f"got {value!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: actuator_allocation must be {COMMANDED_ACTUATOR!r} (the "
+            f"actuator whose normalised τ the agent commands), "
+            f"got {value!r}"
+        )
     return value
 
 
@@ -70,18 +77,27 @@ class AllocatedPolicy(ActorWrapper):
     """A Policy whose commands (the paper actuator's normalised τ) are allocated to ``actuator``
     ("fins" or "realistic"; module docstring)."""
 
-    def __init__(self, actor: Any, obs_names: Sequence[str], actuator: str,
-                 params: AUVParams | None = None,
-                 actuator_params: ActuatorParams | dict | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        actor: Any,
+        obs_names: Sequence[str],
+        actuator: str,
+        params: AUVParams | None = None,
+        actuator_params: ActuatorParams | dict | None = None,
+    ) -> None:
         super().__init__(actor)
         if actuator not in ALLOCATED_ACTUATORS:
-            raise ValueError(f"AllocatedPolicy allocates to {list(ALLOCATED_ACTUATORS)}, got "
-                             f"actuator {actuator!r}")  # fmt: skip
+            raise ValueError(
+                f"AllocatedPolicy allocates to {list(ALLOCATED_ACTUATORS)}, got "
+                f"actuator {actuator!r}"
+            )
         names = list(obs_names)
         missing = [name for name in VELOCITY_INPUTS if name not in names]
         if missing:
-            raise ValueError(f"actuator_allocation reads {list(VELOCITY_INPUTS)} from the "
-                             f"agent's observation, which lacks {missing}")  # fmt: skip
+            raise ValueError(
+                f"actuator_allocation reads {list(VELOCITY_INPUTS)} from the "
+                f"agent's observation, which lacks {missing}"
+            )
         self.velocity_index = np.array([names.index(n) for n in VELOCITY_INPUTS])
         self.previous_index = prev_action_index(names)
         self.actuator = actuator
@@ -90,9 +106,13 @@ class AllocatedPolicy(ActorWrapper):
         _, self.fin_gain, *limits = actuator_vector(actuator, vehicle, self.actuator_params)
         self.limits = np.array(limits, dtype=np.float64)  # (X_max [N], M_max, N_max [N·m])
 
-    def predict(self, observation: np.ndarray, state: AllocationState | None = None,
-                episode_start: np.ndarray | None = None,
-                deterministic: bool = True) -> tuple[np.ndarray, AllocationState]:  # fmt: skip
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: AllocationState | None = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, AllocationState]:
         """The allocated commands (float32, (3,) or (n, 3)) for observations (d,) or (n, d)."""
         single = np.ndim(observation) == 1
         obs = np.array(np.atleast_2d(observation), dtype=np.float32, copy=True)
@@ -102,8 +122,9 @@ class AllocatedPolicy(ActorWrapper):
         if episode_start is not None:
             state.previous[np.asarray(episode_start, dtype=bool).reshape(n)] = 0.0
         obs[:, self.previous_index] = state.previous
-        commands, inner = self.actor.predict(obs[0] if single else obs, state.inner,
-                                             episode_start, deterministic)  # fmt: skip
+        commands, inner = self.actor.predict(
+            obs[0] if single else obs, state.inner, episode_start, deterministic
+        )
         a = np.clip(np.atleast_2d(np.asarray(commands, dtype=np.float64)), -1.0, 1.0)
         velocity = obs[:, self.velocity_index].astype(np.float64)
         authority = fin_authority(self.fin_gain, velocity[:, 0])  # [N·m]

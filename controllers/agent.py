@@ -232,13 +232,15 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
         )
     action_dim = ACTION_DIM if residual is None else residual.action_dim
     if "action_shape" in metadata and metadata["action_shape"] != [action_dim]:
-        raise ValueError(f"{meta}: action_shape is {metadata['action_shape']!r}, "
-                         f"expected {[action_dim]!r}")  # fmt: skip
+        raise ValueError(
+            f"{meta}: action_shape is {metadata['action_shape']!r}, expected {[action_dim]!r}"
+        )
     names = observation_layout(metadata)
     _check_model_zip(model, len(names), action_dim, f"{algo.class_name} model")
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
-    return AgentFiles(model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual,
-                      algo.name)  # fmt: skip
+    return AgentFiles(
+        model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual, algo.name
+    )
 
 
 def _read_metadata(meta: Path) -> dict[str, Any]:
@@ -262,8 +264,9 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     algorithm_of(metadata, str(meta))
     expected = [len(layout)]  # the action shape depends on the residual section (check_agent)
     if "observation_shape" in metadata and metadata["observation_shape"] != expected:
-        raise ValueError(f"{meta}: observation_shape is {metadata['observation_shape']!r}, "
-                         f"expected {expected!r}")  # fmt: skip
+        raise ValueError(
+            f"{meta}: observation_shape is {metadata['observation_shape']!r}, expected {expected!r}"
+        )
     version = metadata.get("auv_gym_version")
     if version is not None:
         major = str(version).split(".")[0]
@@ -277,8 +280,9 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
     return metadata
 
 
-def _check_model_zip(model: Path, obs_dim: int = OBS_DIM, action_dim: int = ACTION_DIM,
-                     label: str = "PPO model") -> None:  # fmt: skip
+def _check_model_zip(
+    model: Path, obs_dim: int = OBS_DIM, action_dim: int = ACTION_DIM, label: str = "PPO model"
+) -> None:
     """SB3's zip: intact (CRC), with its parameters and an (obs_dim,) → (action_dim,) Box
     policy (3 actions; a residual agent with a learned filter: 6). Errors begin with ``label``
     (the algorithm's model, e.g. "SAC model")."""
@@ -330,8 +334,12 @@ def _read_stats(
             with stats.open("rb") as f:
                 vec_normalize = pickle.load(f)
             rms = vec_normalize.obs_rms
-            values = {"mean": rms.mean, "var": rms.var, "clip_obs": vec_normalize.clip_obs,
-                      "epsilon": vec_normalize.epsilon}  # fmt: skip
+            values = {
+                "mean": rms.mean,
+                "var": rms.var,
+                "clip_obs": vec_normalize.clip_obs,
+                "epsilon": vec_normalize.epsilon,
+            }
     except Exception as exc:
         raise ValueError(f"normalisation statistics {stats} are unreadable: {exc}") from exc
     missing = [key for key in STATS_KEYS if key not in values]
@@ -379,8 +387,13 @@ def load_actor(
     # Schedules are not needed for inference; replacing them avoids unpickling closures.
     # An off-policy model saved with n-step returns names SB3's NStepReplayBuffer, which SB3
     # then warns makes `n_steps` "ignored"; no buffer is built for inference, so drop the name.
-    custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0,
-              "replay_buffer_class": None, "replay_buffer_kwargs": {}}  # fmt: skip
+    custom = {
+        "learning_rate": 0.0,
+        "lr_schedule": lambda _: 0.0,
+        "clip_range": lambda _: 0.0,
+        "replay_buffer_class": None,
+        "replay_buffer_kwargs": {},
+    }
     try:
         model = algorithm.load(files.model, device=device, custom_objects=custom)
     except Exception as exc:
@@ -393,6 +406,12 @@ def load_actor(
             f"({len(layout)},) (layout {list(layout)})"
         )
     return AgentPolicy(
-        model.policy, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon,
-        files.metadata, str(files.model), num_threads,
-    )  # fmt: skip
+        model.policy,
+        files.obs_mean,
+        files.obs_var,
+        files.clip_obs,
+        files.epsilon,
+        files.metadata,
+        str(files.model),
+        num_threads,
+    )

@@ -38,29 +38,60 @@ class Algorithm:
         try:
             module = importlib.import_module(self.package)
         except ImportError as exc:
-            raise ImportError(f"{self.class_name} needs the {self.package} package (pip install "
-                              f"-e '.[rl]'): {exc}") from exc  # fmt: skip
+            raise ImportError(
+                f"{self.class_name} needs the {self.package} package (pip install "
+                f"-e '.[rl]'): {exc}"
+            ) from exc
         return getattr(module, self.class_name)
 
 
 # What SAC and its sb3-contrib relatives share (TQC adds quantile truncation; CrossQ has no target
 # networks, so no tau or target_update_interval, and delays its actor updates).
-_ENTROPY_OFF_POLICY = frozenset({
-    "learning_rate", "buffer_size", "learning_starts", "batch_size", "gamma", "train_freq",
-    "gradient_steps", "optimize_memory_usage", "ent_coef", "target_entropy", "use_sde",
-    "sde_sample_freq", "use_sde_at_warmup", "stats_window_size", "n_steps",
-})  # fmt: skip
+_ENTROPY_OFF_POLICY = frozenset(
+    {
+        "learning_rate",
+        "buffer_size",
+        "learning_starts",
+        "batch_size",
+        "gamma",
+        "train_freq",
+        "gradient_steps",
+        "optimize_memory_usage",
+        "ent_coef",
+        "target_entropy",
+        "use_sde",
+        "sde_sample_freq",
+        "use_sde_at_warmup",
+        "stats_window_size",
+        "n_steps",
+    }
+)
 
 
 ALGORITHMS: dict[str, Algorithm] = {
     "ppo": Algorithm(
         "ppo",
         "PPO",
-        frozenset({
-            "learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda",
-            "clip_range", "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef",
-            "max_grad_norm", "use_sde", "sde_sample_freq", "target_kl", "stats_window_size",
-        }),
+        frozenset(
+            {
+                "learning_rate",
+                "n_steps",
+                "batch_size",
+                "n_epochs",
+                "gamma",
+                "gae_lambda",
+                "clip_range",
+                "clip_range_vf",
+                "normalize_advantage",
+                "ent_coef",
+                "vf_coef",
+                "max_grad_norm",
+                "use_sde",
+                "sde_sample_freq",
+                "target_kl",
+                "stats_window_size",
+            }
+        ),
         schedules=("learning_rate", "clip_range"),
     ),
     "sac": Algorithm(
@@ -86,7 +117,7 @@ ALGORITHMS: dict[str, Algorithm] = {
         off_policy=True,
         package="sb3_contrib",
     ),
-}  # fmt: skip
+}
 DEFAULT_ALGORITHM = "ppo"  # what an agent's metadata without an "algo" key was trained with
 
 

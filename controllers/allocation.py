@@ -75,6 +75,7 @@ def allocate(tau: np.ndarray, nu: np.ndarray, params: ActuatorParams) -> np.ndar
     ahead = (-b + np.sqrt(np.maximum(b * b + 4.0 * p.kt_0 * t_coeff, 0.0))) / (2.0 * p.kt_0)
     astern = -np.sqrt(np.maximum(-t_coeff, 0.0) / p.kt_0)
     rpm = 60.0 * np.where(t_coeff >= 0.0, ahead, astern)
-    commands = np.stack([rpm / p.rpm_max, delta_s / p.delta_max_stern,
-                         delta_r / p.delta_max_rudder], axis=1)  # fmt: skip
+    commands = np.stack(
+        [rpm / p.rpm_max, delta_s / p.delta_max_stern, delta_r / p.delta_max_rudder], axis=1
+    )
     return np.clip(commands, -1.0, 1.0)

@@ -66,8 +66,9 @@ def _backstepping_row(o, g, p, filt, started, action, diag, errors):
     z1, z2, _, _, da1, z3, z4, _, _, da2 = errors[:10]
     u, theta = o[_U], o[_TH]
     nu = (u, o[_V], o[_W], o[_Q], o[_R])
-    f1, _, _, f5, f6 = nu_dot(nu, theta, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0),
-                              params_record(p))  # fmt: skip
+    f1, _, _, f5, f6 = nu_dot(
+        nu, theta, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0), params_record(p)
+    )
     k_u = g[H1] + g[LAM1]
     k_q = g[C1] + g[H2] + g[LAM2]
     k_r = g[C2] + g[H3] + g[LAM3]
@@ -107,9 +108,15 @@ class Backstepping(BatchedController):
 
     name = "backstepping"
 
-    def __init__(self, gains: ControllerGains | None = None, params: AUVParams | None = None,
-                 control_dt: float = 0.05, actuator: str = "paper", threads: str = "auto",
-                 **gain_overrides: float) -> None:  # fmt: skip
+    def __init__(
+        self,
+        gains: ControllerGains | None = None,
+        params: AUVParams | None = None,
+        control_dt: float = 0.05,
+        actuator: str = "paper",
+        threads: str = "auto",
+        **gain_overrides: float,
+    ) -> None:
         super().__init__(gains, params, control_dt, actuator, gain_overrides, threads)
         p = self.params
         self._p = p.to_vector()
@@ -117,8 +124,11 @@ class Backstepping(BatchedController):
         self._g = pack_gains(self.gains, self.control_dt, b, self._actuator)
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
-        return {"filter": np.zeros((n, FILTER_DIM)), "started": np.zeros(n, dtype=bool),
-                "diag": np.zeros((n, 5))}  # fmt: skip
+        return {
+            "filter": np.zeros((n, FILTER_DIM)),
+            "started": np.zeros(n, dtype=bool),
+            "diag": np.zeros((n, 5)),
+        }
 
     def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
         kernel = _bs_parallel if (self.threads == "auto" and obs.shape[0] >= 64) else _bs_serial

@@ -121,9 +121,10 @@ class BatchedController:
         single = obs.ndim == 1
         obs = obs[None] if single else obs
         if obs.ndim != 2 or obs.shape[1] < OBS_DIM:
-            raise ValueError(f"observation must have shape (n, d) or (d,) with d >= {OBS_DIM} "
-                             f"(layout auv_gym.OBS_NAMES first), got {np.shape(observation)}"
-                             )  # fmt: skip
+            raise ValueError(
+                f"observation must have shape (n, d) or (d,) with d >= {OBS_DIM} "
+                f"(layout auv_gym.OBS_NAMES first), got {np.shape(observation)}"
+            )
         obs = np.ascontiguousarray(obs[:, :OBS_DIM])
         if not np.isfinite(obs).all():
             raise ValueError("observation must be finite")
@@ -131,8 +132,9 @@ class BatchedController:
         if state is None:
             state = self.init_state(n)
         elif state["started"].shape[0] != n:
-            raise ValueError(f"state is for {state['started'].shape[0]} vehicles, "
-                             f"observation for {n}")  # fmt: skip
+            raise ValueError(
+                f"state is for {state['started'].shape[0]} vehicles, observation for {n}"
+            )
         if episode_start is not None:
             reset = np.asarray(episode_start, dtype=bool).reshape(-1)
             if reset.shape[0] != n:

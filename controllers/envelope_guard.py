@@ -49,18 +49,20 @@ class EnvelopeGuard:
 
     def __post_init__(self) -> None:
         where = "envelope_guard"
-        soft = real(f"{where}.pitch_soft_deg", self.pitch_soft_deg, 0.0, 90.0, low_open=True,
-                    unit="deg")  # fmt: skip
-        hard = real(f"{where}.pitch_hard_deg", self.pitch_hard_deg, 0.0, 90.0, low_open=True,
-                    unit="deg")  # fmt: skip
+        soft = real(
+            f"{where}.pitch_soft_deg", self.pitch_soft_deg, 0.0, 90.0, low_open=True, unit="deg"
+        )
+        hard = real(
+            f"{where}.pitch_hard_deg", self.pitch_hard_deg, 0.0, 90.0, low_open=True, unit="deg"
+        )
         real(f"{where}.lookahead_s", self.lookahead_s, 0.0, 10.0, unit="s")
-        u_soft = real(f"{where}.surge_soft", self.surge_soft, 0.0, 10.0, low_open=True,
-                      unit="m/s")  # fmt: skip
-        u_hard = real(f"{where}.surge_hard", self.surge_hard, 0.0, 10.0, low_open=True,
-                      unit="m/s")  # fmt: skip
+        u_soft = real(f"{where}.surge_soft", self.surge_soft, 0.0, 10.0, low_open=True, unit="m/s")
+        u_hard = real(f"{where}.surge_hard", self.surge_hard, 0.0, 10.0, low_open=True, unit="m/s")
         if not (soft < hard and u_soft < u_hard):
-            raise ValueError(f"{where}: each soft limit must lie below its hard limit, got pitch "
-                             f"{soft:g}/{hard:g} deg, surge {u_soft:g}/{u_hard:g} m/s")  # fmt: skip
+            raise ValueError(
+                f"{where}: each soft limit must lie below its hard limit, got pitch "
+                f"{soft:g}/{hard:g} deg, surge {u_soft:g}/{u_hard:g} m/s"
+            )
 
     def to_dict(self) -> dict[str, float]:
         """The settings as metadata.json records them."""
@@ -76,8 +78,9 @@ def check_envelope_guard(value: Any, where: str) -> EnvelopeGuard:
         return EnvelopeGuard()
     fields = sorted(EnvelopeGuard.__dataclass_fields__)
     if not isinstance(value, Mapping):
-        raise ValueError(f"{where}: envelope_guard must be true or a mapping of {fields}, got "
-                         f"{value!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: envelope_guard must be true or a mapping of {fields}, got {value!r}"
+        )
     unknown = sorted(set(value) - set(fields))
     if unknown:
         raise ValueError(f"{where}: envelope_guard has unknown keys {unknown}; valid: {fields}")
@@ -92,8 +95,9 @@ def _authority(x: np.ndarray, soft: float, hard: float) -> np.ndarray:
     return 1.0 - 2.0 * np.clip((x - soft) / (hard - soft), 0.0, 1.0)
 
 
-def guard_commands(commands: np.ndarray, observation: np.ndarray, index: Sequence[int],
-                   guard: EnvelopeGuard) -> np.ndarray:  # fmt: skip
+def guard_commands(
+    commands: np.ndarray, observation: np.ndarray, index: Sequence[int], guard: EnvelopeGuard
+) -> np.ndarray:
     """The guarded commands (float32, the shape of ``commands``: (3,) or (n, 3)) for raw
     observations of the same batch shape; ``index``: the positions of θ, q, u in them."""
     obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
@@ -117,13 +121,19 @@ class GuardedPolicy(ActorWrapper):
         self.guard = check_envelope_guard(guard, "GuardedPolicy")
         missing = [name for name in GUARD_INPUTS if name not in obs_names]
         if missing:
-            raise ValueError(f"envelope_guard reads {list(GUARD_INPUTS)} from the agent's "
-                             f"observation, which lacks {missing}")  # fmt: skip
+            raise ValueError(
+                f"envelope_guard reads {list(GUARD_INPUTS)} from the agent's "
+                f"observation, which lacks {missing}"
+            )
         self.index = tuple(list(obs_names).index(name) for name in GUARD_INPUTS)
 
-    def predict(self, observation: np.ndarray, state: Any = None,
-                episode_start: np.ndarray | None = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         """The actor's commands, guarded, for observations (d,) or (n, d) of its layout."""
         commands, state = self.actor.predict(observation, state, episode_start, deterministic)
         return guard_commands(commands, observation, self.index, self.guard), state

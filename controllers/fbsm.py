@@ -84,12 +84,37 @@ def _fbsm_row(o, g, theta_f, theta_b, theta_d, filt, started, action, diag, erro
     rest1 = -h1 * S1
     if g[SPEED_OVER_GROUND] > 0.0:
         rest1 += errors[13]
-    action[0] = adaptive_loop(0, v_in, S1, rest1, g[X_MAX], g[B1], theta_f[0], theta_b[0],
-                              theta_d[0], g, work, diag[0:3])  # fmt: skip
-    action[1] = adaptive_loop(1, v_in, S2, -g[C1] * dz1 + da1 - h2 * S2, m_max, g[B5],
-                              theta_f[1], theta_b[1], theta_d[1], g, work, diag[3:6])  # fmt: skip
-    action[2] = adaptive_loop(2, v_in, S3, -g[C2] * dz3 + da2 - h3 * S3, n_max, g[B6],
-                              theta_f[2], theta_b[2], theta_d[2], g, work, diag[6:9])  # fmt: skip
+    action[0] = adaptive_loop(
+        0, v_in, S1, rest1, g[X_MAX], g[B1], theta_f[0], theta_b[0], theta_d[0], g, work, diag[0:3]
+    )
+    action[1] = adaptive_loop(
+        1,
+        v_in,
+        S2,
+        -g[C1] * dz1 + da1 - h2 * S2,
+        m_max,
+        g[B5],
+        theta_f[1],
+        theta_b[1],
+        theta_d[1],
+        g,
+        work,
+        diag[3:6],
+    )
+    action[2] = adaptive_loop(
+        2,
+        v_in,
+        S3,
+        -g[C2] * dz3 + da2 - h3 * S3,
+        n_max,
+        g[B6],
+        theta_f[2],
+        theta_b[2],
+        theta_d[2],
+        g,
+        work,
+        diag[6:9],
+    )
     diag[9], diag[10] = errors[10], errors[11]
 
 
@@ -98,8 +123,20 @@ def _fbsm_rows(obs, g, theta_f, theta_b, theta_d, filt, started, actions, diag):
         errors = np.empty(LOOP_DIM)
         work = np.empty(WORK_DIM)
         v_in = np.empty(5)
-        _fbsm_row(obs[i], g, theta_f[i], theta_b[i], theta_d[i], filt[i], started[i], actions[i],
-                  diag[i], errors, work, v_in)  # fmt: skip
+        _fbsm_row(
+            obs[i],
+            g,
+            theta_f[i],
+            theta_b[i],
+            theta_d[i],
+            filt[i],
+            started[i],
+            actions[i],
+            diag[i],
+            errors,
+            work,
+            v_in,
+        )
         started[i] = True
 
 
@@ -126,9 +163,15 @@ class FBSM(BatchedController):
 
     name = "fbsm"
 
-    def __init__(self, gains: ControllerGains | None = None, params: AUVParams | None = None,
-                 control_dt: float = 0.05, actuator: str = "paper", threads: str = "auto",
-                 **gain_overrides: float) -> None:  # fmt: skip
+    def __init__(
+        self,
+        gains: ControllerGains | None = None,
+        params: AUVParams | None = None,
+        control_dt: float = 0.05,
+        actuator: str = "paper",
+        threads: str = "auto",
+        **gain_overrides: float,
+    ) -> None:
         super().__init__(gains, params, control_dt, actuator, gain_overrides, threads)
         p = self.params
         self.b_nominal = (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66)
@@ -148,8 +191,17 @@ class FBSM(BatchedController):
 
     def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
         kernel = _fbsm_parallel if (self.threads == "auto" and obs.shape[0] >= 64) else _fbsm_serial
-        kernel(obs, self._g, state["theta_f"], state["theta_b"], state["theta_d"],
-               state["filter"], state["started"], actions, state["diag"])  # fmt: skip
+        kernel(
+            obs,
+            self._g,
+            state["theta_f"],
+            state["theta_b"],
+            state["theta_d"],
+            state["filter"],
+            state["started"],
+            actions,
+            state["diag"],
+        )
 
     def diagnostics(self, state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """Desired angles, adaptive-parameter norms and the current-guidance states

@@ -108,8 +108,7 @@ WORK_DIM = _ACC + 2 * _N_CDE
 
 
 @njit(cache=True)
-def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta_d, g, work,
-                  diag):  # fmt: skip
+def adaptive_loop(loop, v_in, S, rest, limit, b_nominal, theta_f, theta_b, theta_d, g, work, diag):
     """One FBSM loop (29)–(30): τ = (−f̂ − d̂(S) + rest)/b̂, saturated; adapts; returns τ/limit.
 
     ``rest`` is the model-free part of the law (e.g. −c1ż1 + α̇1 − (h + λ)S for pitch),

@@ -100,18 +100,28 @@ class ControllerGains:
     speed_over_ground: bool = False  # surge reference for u_D over ground (needs the observer)
     separate_b_basis: bool = False  # False: b̂ shares f̂'s basis (σ_b = σ), as the prototype
     surge_mf: MembershipSet = MembershipSet(1.0, 0.5, 1.0, 0.1, 1.0)
-    pitch_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, math.pi / 6, math.pi / 24,
-                                            math.pi / 12)  # fmt: skip
+    pitch_mf: MembershipSet = MembershipSet(
+        math.pi / 3, math.pi / 6, math.pi / 6, math.pi / 24, math.pi / 12
+    )
     yaw_mf: MembershipSet = MembershipSet(math.pi / 3, math.pi / 6, 1 / 3, math.pi / 12, 1 / 6)
 
     def __post_init__(self) -> None:
         for name, (low, high, low_open, high_open, unit) in GUIDANCE_RANGES.items():
-            real(f"ControllerGains.{name}", getattr(self, name), low, high, low_open=low_open,
-                 high_open=high_open, unit=unit)  # fmt: skip
+            real(
+                f"ControllerGains.{name}",
+                getattr(self, name),
+                low,
+                high,
+                low_open=low_open,
+                high_open=high_open,
+                unit=unit,
+            )
         flag("ControllerGains.speed_over_ground", self.speed_over_ground)
         if self.speed_over_ground and self.current_observer == 0.0:
-            raise ValueError("ControllerGains.speed_over_ground=True needs current_observer > 0 "
-                             "(the speed over ground comes from the current estimate)")  # fmt: skip
+            raise ValueError(
+                "ControllerGains.speed_over_ground=True needs current_observer > 0 "
+                "(the speed over ground comes from the current estimate)"
+            )
         for f in fields(self):
             value = getattr(self, f.name)
             if isinstance(value, (bool, MembershipSet)) or f.name in GUIDANCE_RANGES:
@@ -129,36 +139,150 @@ class ControllerGains:
 
 # Packed layout read by the numba kernels; extra entries are filled by the controller.
 GAIN_LAYOUT = (
-    "h1", "lam1", "h2", "lam2", "h3", "lam3", "k1", "c1", "k2", "c2", "k_y", "k_z", "theta_max",
-    "filter_wn", "filter_zeta", "u_guard", "sideslip_3d", "printed_pitch_los", "alpha_f",
-    "alpha_b", "alpha_d", "sigma_leak", "separate_b_basis", "ilos_y", "ilos_z",
-    "current_observer", "alos_y", "alos_z", "alos_radius", "alos_max", "speed_over_ground",
-    "mf1_c0", "mf1_dc", "mf1_s", "mf1_sb", "mf1_sd",
-    "mf2_c0", "mf2_dc", "mf2_s", "mf2_sb", "mf2_sd",
-    "mf3_c0", "mf3_dc", "mf3_s", "mf3_sb", "mf3_sd",
-    "dt", "b1", "b5", "b6", "fins", "fin_gain", "X_max", "M_max", "N_max",
-)  # fmt: skip
-(H1, LAM1, H2, LAM2, H3, LAM3, K1, C1, K2, C2, KY, KZ, THETA_MAX, WN, ZETA, U_GUARD, BETA_3D,
- PRINTED_PITCH, ALPHA_F, ALPHA_B, ALPHA_D, SIGMA_LEAK, SEPARATE_B, ILOS_Y, ILOS_Z,
- OBSERVER_WN, ALOS_Y, ALOS_Z, ALOS_RADIUS, ALOS_MAX, SPEED_OVER_GROUND,
- MF1, _m1b, _m1c, _m1d, _m1e,
- MF2, _m2b, _m2c, _m2d, _m2e, MF3, _m3b, _m3c, _m3d, _m3e, DT, B1, B5, B6, FINS, FIN_GAIN,
- X_MAX, M_MAX, N_MAX) = range(len(GAIN_LAYOUT))  # fmt: skip
+    "h1",
+    "lam1",
+    "h2",
+    "lam2",
+    "h3",
+    "lam3",
+    "k1",
+    "c1",
+    "k2",
+    "c2",
+    "k_y",
+    "k_z",
+    "theta_max",
+    "filter_wn",
+    "filter_zeta",
+    "u_guard",
+    "sideslip_3d",
+    "printed_pitch_los",
+    "alpha_f",
+    "alpha_b",
+    "alpha_d",
+    "sigma_leak",
+    "separate_b_basis",
+    "ilos_y",
+    "ilos_z",
+    "current_observer",
+    "alos_y",
+    "alos_z",
+    "alos_radius",
+    "alos_max",
+    "speed_over_ground",
+    "mf1_c0",
+    "mf1_dc",
+    "mf1_s",
+    "mf1_sb",
+    "mf1_sd",
+    "mf2_c0",
+    "mf2_dc",
+    "mf2_s",
+    "mf2_sb",
+    "mf2_sd",
+    "mf3_c0",
+    "mf3_dc",
+    "mf3_s",
+    "mf3_sb",
+    "mf3_sd",
+    "dt",
+    "b1",
+    "b5",
+    "b6",
+    "fins",
+    "fin_gain",
+    "X_max",
+    "M_max",
+    "N_max",
+)
+(
+    H1,
+    LAM1,
+    H2,
+    LAM2,
+    H3,
+    LAM3,
+    K1,
+    C1,
+    K2,
+    C2,
+    KY,
+    KZ,
+    THETA_MAX,
+    WN,
+    ZETA,
+    U_GUARD,
+    BETA_3D,
+    PRINTED_PITCH,
+    ALPHA_F,
+    ALPHA_B,
+    ALPHA_D,
+    SIGMA_LEAK,
+    SEPARATE_B,
+    ILOS_Y,
+    ILOS_Z,
+    OBSERVER_WN,
+    ALOS_Y,
+    ALOS_Z,
+    ALOS_RADIUS,
+    ALOS_MAX,
+    SPEED_OVER_GROUND,
+    MF1,
+    _m1b,
+    _m1c,
+    _m1d,
+    _m1e,
+    MF2,
+    _m2b,
+    _m2c,
+    _m2d,
+    _m2e,
+    MF3,
+    _m3b,
+    _m3c,
+    _m3d,
+    _m3e,
+    DT,
+    B1,
+    B5,
+    B6,
+    FINS,
+    FIN_GAIN,
+    X_MAX,
+    M_MAX,
+    N_MAX,
+) = range(len(GAIN_LAYOUT))
 
 
-def pack_gains(gains: ControllerGains, dt: float, b: tuple[float, float, float],
-               actuator: tuple[float, float, float, float, float]) -> np.ndarray:  # fmt: skip
+def pack_gains(
+    gains: ControllerGains,
+    dt: float,
+    b: tuple[float, float, float],
+    actuator: tuple[float, float, float, float, float],
+) -> np.ndarray:
     """The float64 vector of `GAIN_LAYOUT` for the kernels (dt [s]: the control period)."""
     # the discretised current observer is stable for ω_o Δt < 2√2 − 2 (controllers.alos, 1)
     if gains.current_observer * dt >= OBSERVER_STEP_LIMIT:
-        raise ValueError(f"ControllerGains.current_observer × control_dt must be below "
-                         f"{OBSERVER_STEP_LIMIT:.3f}, got {gains.current_observer} rad/s × "
-                         f"{dt} s")  # fmt: skip
-    values = {f.name: float(getattr(gains, f.name)) for f in fields(gains)
-              if not isinstance(getattr(gains, f.name), MembershipSet)}  # fmt: skip
+        raise ValueError(
+            f"ControllerGains.current_observer × control_dt must be below "
+            f"{OBSERVER_STEP_LIMIT:.3f}, got {gains.current_observer} rad/s × "
+            f"{dt} s"
+        )
+    values = {
+        f.name: float(getattr(gains, f.name))
+        for f in fields(gains)
+        if not isinstance(getattr(gains, f.name), MembershipSet)
+    }
     for k, mf in enumerate((gains.surge_mf, gains.pitch_mf, gains.yaw_mf), start=1):
-        values.update({f"mf{k}_c0": -mf.p, f"mf{k}_dc": mf.q_mf, f"mf{k}_s": mf.sigma,
-                       f"mf{k}_sb": mf.sigma_b, f"mf{k}_sd": mf.sigma_d})  # fmt: skip
+        values.update(
+            {
+                f"mf{k}_c0": -mf.p,
+                f"mf{k}_dc": mf.q_mf,
+                f"mf{k}_s": mf.sigma,
+                f"mf{k}_sb": mf.sigma_b,
+                f"mf{k}_sd": mf.sigma_d,
+            }
+        )
     values.update(dt=dt, b1=b[0], b5=b[1], b6=b[2])
     values.update(zip(("fins", "fin_gain", "X_max", "M_max", "N_max"), actuator, strict=True))
     return np.array([values[name] for name in GAIN_LAYOUT])

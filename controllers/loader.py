@@ -70,8 +70,9 @@ def load_policy(
     if scale is not None:
         scale = check_action_scale(scale, f"{files.metadata_file}")
         if increment is not None or files.residual is not None:
-            raise ValueError(f"{files.metadata_file}: action_scale excludes action_increment "
-                             "and residual")  # fmt: skip
+            raise ValueError(
+                f"{files.metadata_file}: action_scale excludes action_increment and residual"
+            )
     guard = files.metadata.get("envelope_guard")
     if guard is not None:
         guard = check_envelope_guard(guard, f"{files.metadata_file}")
@@ -82,21 +83,31 @@ def load_policy(
         check_actuator_allocation(allocation, f"{files.metadata_file}")
         if files.residual is not None:
             raise ValueError(f"{files.metadata_file}: actuator_allocation excludes residual")
-    policy = _unguarded(files, load_actor(files, device=device, num_threads=num_threads),
-                        increment, scale, base_kwargs)  # fmt: skip
+    policy = _unguarded(
+        files,
+        load_actor(files, device=device, num_threads=num_threads),
+        increment,
+        scale,
+        base_kwargs,
+    )
     names = observation_layout(files.metadata)
     if guard is not None:
         policy = GuardedPolicy(policy, guard, names)
     settings = base_kwargs or {}
     if allocation is None or settings.get("actuator") not in ALLOCATED_ACTUATORS:
         return policy
-    return AllocatedPolicy(policy, names, settings["actuator"], settings.get("params"),
-                           settings.get("actuator_params"))  # fmt: skip
+    return AllocatedPolicy(
+        policy, names, settings["actuator"], settings.get("params"), settings.get("actuator_params")
+    )
 
 
-def _unguarded(files: Any, actor: AgentPolicy, increment: float | None,
-               scale: tuple[float, float, float] | None,
-               base_kwargs: dict[str, Any] | None) -> Any:  # fmt: skip
+def _unguarded(
+    files: Any,
+    actor: AgentPolicy,
+    increment: float | None,
+    scale: tuple[float, float, float] | None,
+    base_kwargs: dict[str, Any] | None,
+) -> Any:
     if increment is not None:
         return IncrementPolicy(actor, increment, observation_layout(files.metadata))
     if scale is not None:
@@ -107,9 +118,13 @@ def _unguarded(files: Any, actor: AgentPolicy, increment: float | None,
     return ResidualPolicy(base, actor, files.residual.bound, files.residual)
 
 
-def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
-                  filter_max: float | None = None, **base_kwargs: Any
-                  ) -> ResidualPolicy:  # fmt: skip
+def make_residual(
+    agent: Any = None,
+    base: str | None = None,
+    bound: Any = None,
+    filter_max: float | None = None,
+    **base_kwargs: Any,
+) -> ResidualPolicy:
     """``controllers.make("residual", ...)``: a `ResidualPolicy`.
 
     ``agent`` is a Policy of the 21-value observation (`controllers.residual.make_residual`),
@@ -117,22 +132,27 @@ def make_residual(agent: Any = None, base: str | None = None, bound: Any = None,
     ``bound`` or ``filter_max`` given here must equal them).
     """
     if agent is None:
-        raise ValueError("controllers.make('residual') needs agent=<Policy or saved residual "
-                         "agent directory>")  # fmt: skip
+        raise ValueError(
+            "controllers.make('residual') needs agent=<Policy or saved residual agent directory>"
+        )
     if callable(getattr(agent, "predict", None)):
         return residual_of_policy(agent, base, bound, filter_max, **base_kwargs)
     policy = load_policy(agent, base_kwargs=base_kwargs)
     if not isinstance(policy, ResidualPolicy):
-        raise ValueError(f"agent {agent!r} is not a residual agent (its metadata.json has no "
-                         "'residual' section)")  # fmt: skip
+        raise ValueError(
+            f"agent {agent!r} is not a residual agent (its metadata.json has no 'residual' section)"
+        )
     recorded = policy.settings
     assert recorded is not None
     if base is not None and base != recorded.base:
         raise ValueError(f"agent {agent!r} was trained on base {recorded.base!r}, not {base!r}")
     if bound is not None and check_bound(bound) != recorded.bound:
-        raise ValueError(f"agent {agent!r} was trained with bound {list(recorded.bound)}, "
-                         f"not {list(check_bound(bound))}")  # fmt: skip
+        raise ValueError(
+            f"agent {agent!r} was trained with bound {list(recorded.bound)}, "
+            f"not {list(check_bound(bound))}"
+        )
     if filter_max is not None and filter_max != recorded.filter_max:
-        raise ValueError(f"agent {agent!r} was trained with filter_max {recorded.filter_max}, "
-                         f"not {filter_max!r}")  # fmt: skip
+        raise ValueError(
+            f"agent {agent!r} was trained with filter_max {recorded.filter_max}, not {filter_max!r}"
+        )
     return policy

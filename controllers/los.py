@@ -102,11 +102,29 @@ def loop_errors(o, g, filt, started, out):
     if observer:
         t0, t1, t2 = path_tangent(o[_PSIE], theta, theta_f)
         cx, cy, cz = filt[C_HAT], filt[C_HAT + 1], filt[C_HAT + 2]
-        observe_current(x_e, y_e, z_e, u, v, w, q, r, theta, t0, t1, t2, o[_UP], g[OBSERVER_WN],
-                        dt, started, filt)  # fmt: skip
+        observe_current(
+            x_e,
+            y_e,
+            z_e,
+            u,
+            v,
+            w,
+            q,
+            r,
+            theta,
+            t0,
+            t1,
+            t2,
+            o[_UP],
+            g[OBSERVER_WN],
+            dt,
+            started,
+            filt,
+        )
         if u >= g[U_GUARD]:
-            beta, alpha = crab_angles(u + filt[C_HAT], v + filt[C_HAT + 1], w + filt[C_HAT + 2],
-                                      theta)  # fmt: skip
+            beta, alpha = crab_angles(
+                u + filt[C_HAT], v + filt[C_HAT + 1], w + filt[C_HAT + 2], theta
+            )
             # the part of their rate that the turning estimate ĉ causes (ν, θ held)
             beta0, alpha0 = crab_angles(u + cx, v + cy, w + cz, theta)
             dc_y, dc_z = -(beta - beta0) / dt, (alpha - alpha0) / dt
@@ -122,8 +140,9 @@ def loop_errors(o, g, filt, started, out):
         beta_hat, alpha_hat = filt[BETA_HAT], filt[ALPHA_HAT]
         c_y -= beta_hat
         theta_d_raw += alpha_hat
-        adapt_trims(x_e, y_e, z_e, k_y, k_z, g[ALOS_Y], g[ALOS_Z], g[ALOS_RADIUS], g[ALOS_MAX],
-                    dt, filt)  # fmt: skip
+        adapt_trims(
+            x_e, y_e, z_e, k_y, k_z, g[ALOS_Y], g[ALOS_Z], g[ALOS_RADIUS], g[ALOS_MAX], dt, filt
+        )
         dc_y -= (filt[BETA_HAT] - beta_hat) / dt
         dc_z += (filt[ALPHA_HAT] - alpha_hat) / dt
     c_z = min(max(theta_d_raw, -g[THETA_MAX]), g[THETA_MAX]) - theta_f

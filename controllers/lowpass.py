@@ -31,8 +31,9 @@ def check_alpha(alpha: Any) -> float:
     if isinstance(alpha, bool) or not isinstance(alpha, (int, float)):
         raise ValueError(f"alpha must be a number in [0, 1), got {alpha!r}")
     if not (math.isfinite(alpha) and 0.0 <= alpha < 1.0):
-        raise ValueError(f"alpha must be a number in [0, 1) (1 would freeze the action), "
-                         f"got {alpha!r}")  # fmt: skip
+        raise ValueError(
+            f"alpha must be a number in [0, 1) (1 would freeze the action), got {alpha!r}"
+        )
     return float(alpha)
 
 
@@ -81,12 +82,13 @@ class LowPassPolicy:
             base_state = {k: v for k, v in state.items() if k != PREVIOUS_KEY} or None
             previous = state[PREVIOUS_KEY]
             if previous.shape[0] != n:
-                raise ValueError(f"state is for {previous.shape[0]} vehicles, "
-                                 f"observation for {n}")  # fmt: skip
+                raise ValueError(f"state is for {previous.shape[0]} vehicles, observation for {n}")
         action, base_state = self.base.predict(
-            observation, state=base_state, episode_start=episode_start,
+            observation,
+            state=base_state,
+            episode_start=episode_start,
             deterministic=deterministic,
-        )  # fmt: skip
+        )
         b = np.asarray(action, np.float32).reshape(n, 3)
         start = np.full(n, fresh)
         if episode_start is not None:

@@ -74,10 +74,23 @@ _U, _Q, _R = (OBS_INDEX[k] for k in ("u", "q", "r"))
 # The `ControllerGains` fields that the LOS guidance reads; the FBSM's h, λ, k, c, α and fuzzy
 # sets have no meaning for the PID autopilot, so they are refused by name.
 GUIDANCE_GAINS = (
-    "k_y", "k_z", "theta_max", "filter_wn", "filter_zeta", "u_guard", "sideslip_3d",
-    "printed_pitch_los", "ilos_y", "ilos_z", "current_observer", "alos_y", "alos_z",
-    "alos_radius", "alos_max", "speed_over_ground",
-)  # fmt: skip
+    "k_y",
+    "k_z",
+    "theta_max",
+    "filter_wn",
+    "filter_zeta",
+    "u_guard",
+    "sideslip_3d",
+    "printed_pitch_los",
+    "ilos_y",
+    "ilos_z",
+    "current_observer",
+    "alos_y",
+    "alos_z",
+    "alos_radius",
+    "alos_max",
+    "speed_over_ground",
+)
 # The guidance defaults: the paper's LOS, with a faster command filter. The PID needs no θ̇_d, ψ̇_d,
 # so the filter only smooths, and at the paper's ω_n = 2 rad/s its 2ζ/ω_n = 1 s lag inside the
 # depth loop (lookahead 1/k_z = 2 m) makes it hunt: RMS z_e 0.13 m instead of 0.0001 m over
@@ -109,8 +122,14 @@ class PIDGains:
     anti_windup: bool = True  # conditional integration and |K_i I| ≤ τ_max (module docstring)
 
     def __post_init__(self) -> None:
-        positive = {"surge_wn": "rad/s", "pitch_wn": "rad/s", "pitch_zeta": "",
-                    "yaw_wn": "rad/s", "yaw_zeta": "", "design_speed": "m/s"}  # fmt: skip
+        positive = {
+            "surge_wn": "rad/s",
+            "pitch_wn": "rad/s",
+            "pitch_zeta": "",
+            "yaw_wn": "rad/s",
+            "yaw_zeta": "",
+            "design_speed": "m/s",
+        }
         for name, unit in positive.items():
             real(f"PIDGains.{name}", getattr(self, name), 0.0, low_open=True, unit=unit)
         real("PIDGains.integral_ratio", self.integral_ratio, 0.0)
@@ -136,26 +155,32 @@ class PIDTuning:
 
     def vector(self, anti_windup: bool) -> np.ndarray:
         """The float64 vector of the kernels: the fields in order, then the anti-windup flag."""
-        return np.array([*(float(getattr(self, f.name)) for f in fields(self)),
-                         1.0 if anti_windup else 0.0])  # fmt: skip
+        return np.array(
+            [*(float(getattr(self, f.name)) for f in fields(self)), 1.0 if anti_windup else 0.0]
+        )
 
 
 (KP_U, KI_U, KP_TH, KD_TH, KI_TH, KP_PSI, KD_PSI, KI_PSI, DRAG, M11, ANTI_WINDUP) = range(11)
 
 
-def _placed(loop: str, wn_name: str, m: float, d: float, k: float, wn: float, zeta: float,
-            ratio: float) -> tuple[float, float, float]:  # fmt: skip
+def _placed(
+    loop: str, wn_name: str, m: float, d: float, k: float, wn: float, zeta: float, ratio: float
+) -> tuple[float, float, float]:
     """(K_p, K_d, K_i) of Fossen's pole placement; ValueError when ω_n is too low to place."""
     kp = m * wn * wn - k
     kd = 2.0 * zeta * wn * m - d
     if kp <= 0.0:
-        raise ValueError(f"PIDGains.{wn_name} = {wn} rad/s gives the {loop} loop K_p = "
-                         f"m ω_n² − k = {kp:.3g} ≤ 0; it must exceed √(k/m) = "
-                         f"{math.sqrt(max(k, 0.0) / m):.3g} rad/s")  # fmt: skip
+        raise ValueError(
+            f"PIDGains.{wn_name} = {wn} rad/s gives the {loop} loop K_p = "
+            f"m ω_n² − k = {kp:.3g} ≤ 0; it must exceed √(k/m) = "
+            f"{math.sqrt(max(k, 0.0) / m):.3g} rad/s"
+        )
     if kd < 0.0:
-        raise ValueError(f"PIDGains.{wn_name} = {wn} rad/s gives the {loop} loop K_d = "
-                         f"2ζω_n m − d = {kd:.3g} < 0; raise ω_n or ζ above the open-loop "
-                         "damping")  # fmt: skip
+        raise ValueError(
+            f"PIDGains.{wn_name} = {wn} rad/s gives the {loop} loop K_d = "
+            f"2ζω_n m − d = {kd:.3g} < 0; raise ω_n or ζ above the open-loop "
+            "damping"
+        )
     return kp, kd, ratio * wn * kp
 
 
@@ -165,17 +190,43 @@ def pid_tuning(params: AUVParams, pid: PIDGains) -> PIDTuning:
     d_u = -2.0 * params.X_uu * u0
     kp_u = params.m11 * pid.surge_wn - d_u
     if kp_u <= 0.0:
-        raise ValueError(f"PIDGains.surge_wn = {pid.surge_wn} rad/s gives K_p,u = m11 ω_u − d = "
-                         f"{kp_u:.3g} ≤ 0; it must exceed d/m11 = {d_u / params.m11:.3g} rad/s"
-                         )  # fmt: skip
+        raise ValueError(
+            f"PIDGains.surge_wn = {pid.surge_wn} rad/s gives K_p,u = m11 ω_u − d = "
+            f"{kp_u:.3g} ≤ 0; it must exceed d/m11 = {d_u / params.m11:.3g} rad/s"
+        )
     restoring = params.z_g * params.W - params.z_b * params.B
-    kp_th, kd_th, ki_th = _placed("pitch", "pitch_wn", params.I55, -params.M_uq * u0, restoring,
-                                  pid.pitch_wn, pid.pitch_zeta, pid.integral_ratio)  # fmt: skip
-    kp_psi, kd_psi, ki_psi = _placed("yaw", "yaw_wn", params.I66, -params.N_ur * u0, 0.0,
-                                     pid.yaw_wn, pid.yaw_zeta, pid.integral_ratio)  # fmt: skip
-    return PIDTuning(kp_u=kp_u, ki_u=pid.integral_ratio * pid.surge_wn * kp_u, kp_theta=kp_th,
-                     kd_theta=kd_th, ki_theta=ki_th, kp_psi=kp_psi, kd_psi=kd_psi, ki_psi=ki_psi,
-                     drag=-params.X_uu, m11=params.m11)  # fmt: skip
+    kp_th, kd_th, ki_th = _placed(
+        "pitch",
+        "pitch_wn",
+        params.I55,
+        -params.M_uq * u0,
+        restoring,
+        pid.pitch_wn,
+        pid.pitch_zeta,
+        pid.integral_ratio,
+    )
+    kp_psi, kd_psi, ki_psi = _placed(
+        "yaw",
+        "yaw_wn",
+        params.I66,
+        -params.N_ur * u0,
+        0.0,
+        pid.yaw_wn,
+        pid.yaw_zeta,
+        pid.integral_ratio,
+    )
+    return PIDTuning(
+        kp_u=kp_u,
+        ki_u=pid.integral_ratio * pid.surge_wn * kp_u,
+        kp_theta=kp_th,
+        kd_theta=kd_th,
+        ki_theta=ki_th,
+        kp_psi=kp_psi,
+        kd_psi=kd_psi,
+        ki_psi=ki_psi,
+        drag=-params.X_uu,
+        m11=params.m11,
+    )
 
 
 @njit(cache=True, inline="always")
@@ -207,8 +258,7 @@ def _pid_row(o, g, k, filt, integral, started, action, diag, errors):
     theta_err, psi_err = errors[0], errors[5]  # θ − θ_d; wrap(ψ − ψ_d)
     u_ref, du_ref = errors[12], errors[13]  # u_D (or the speed-over-ground reference), its rate
     speed_err = u - u_ref
-    X = (k[DRAG] * u_ref * abs(u_ref) + k[M11] * du_ref
-         - k[KP_U] * speed_err - k[KI_U] * integral[0])  # fmt: skip
+    X = k[DRAG] * u_ref * abs(u_ref) + k[M11] * du_ref - k[KP_U] * speed_err - k[KI_U] * integral[0]
     M = -k[KP_TH] * theta_err - k[KD_TH] * q - k[KI_TH] * integral[1]
     N = -k[KP_PSI] * psi_err - k[KD_PSI] * r - k[KI_PSI] * integral[2]
     m_max, n_max = moment_limits(u, g)
@@ -247,45 +297,71 @@ class PIDLOS(BatchedController):
 
     name = "pid_los"
 
-    def __init__(self, pid: PIDGains | None = None, gains: ControllerGains | None = None,
-                 params: AUVParams | None = None, control_dt: float = 0.05,
-                 actuator: str = "paper", threads: str = "auto",
-                 **overrides: Any) -> None:  # fmt: skip
+    def __init__(
+        self,
+        pid: PIDGains | None = None,
+        gains: ControllerGains | None = None,
+        params: AUVParams | None = None,
+        control_dt: float = 0.05,
+        actuator: str = "paper",
+        threads: str = "auto",
+        **overrides: Any,
+    ) -> None:
         pid = pid if pid is not None else PIDGains()
         if not isinstance(pid, PIDGains):
             raise ValueError(f"pid must be a PIDGains, got {type(pid).__name__}")
         pid_names = {f.name for f in fields(PIDGains)}
         unknown = sorted(set(overrides) - pid_names - {*GUIDANCE_GAINS, "actuator_params"})
         if unknown:
-            raise ValueError(f"unknown pid_los gains {unknown}; valid: the fields of PIDGains "
-                             f"and {list(GUIDANCE_GAINS)}")  # fmt: skip
+            raise ValueError(
+                f"unknown pid_los gains {unknown}; valid: the fields of PIDGains "
+                f"and {list(GUIDANCE_GAINS)}"
+            )
         pid_overrides = {n: v for n, v in overrides.items() if n in pid_names}
         guidance = {n: v for n, v in overrides.items() if n not in pid_names}
         gains = gains if gains is not None else PID_GUIDANCE
         super().__init__(gains, params, control_dt, actuator, guidance, threads)
         # the Euler-discretised command filter has the double pole 1 − ω_n Δt_c (ζ = 1)
         if self.gains.filter_wn * self.control_dt >= 1.0:
-            raise ValueError(f"pid_los: filter_wn × control_dt must be below 1, got "
-                             f"{self.gains.filter_wn} rad/s × {self.control_dt} s")  # fmt: skip
+            raise ValueError(
+                f"pid_los: filter_wn × control_dt must be below 1, got "
+                f"{self.gains.filter_wn} rad/s × {self.control_dt} s"
+            )
         self.pid = dataclasses.replace(pid, **pid_overrides) if pid_overrides else pid
         p = self.params
         self.tuning = pid_tuning(p, self.pid)
-        self._g = pack_gains(self.gains, self.control_dt, (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66),
-                             self._actuator)  # fmt: skip
+        self._g = pack_gains(
+            self.gains, self.control_dt, (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66), self._actuator
+        )
         self._k = self.tuning.vector(self.pid.anti_windup)
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
-        return {"filter": np.zeros((n, FILTER_DIM)), "integral": np.zeros((n, 3)),
-                "started": np.zeros(n, dtype=bool), "diag": np.zeros((n, DIAG_DIM))}  # fmt: skip
+        return {
+            "filter": np.zeros((n, FILTER_DIM)),
+            "integral": np.zeros((n, 3)),
+            "started": np.zeros(n, dtype=bool),
+            "diag": np.zeros((n, DIAG_DIM)),
+        }
 
     def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
         kernel = _pid_parallel if (self.threads == "auto" and obs.shape[0] >= 64) else _pid_serial
-        kernel(obs, self._g, self._k, state["filter"], state["integral"], state["started"],
-               actions, state["diag"])  # fmt: skip
+        kernel(
+            obs,
+            self._g,
+            self._k,
+            state["filter"],
+            state["integral"],
+            state["started"],
+            actions,
+            state["diag"],
+        )
 
     def diagnostics(self, state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """Desired angles, the integrators (``integral``, (n, 3): I_u [m], I_θ, I_ψ [rad·s]) and
         the current-guidance states (`controllers.alos.guidance_diagnostics`) (extras)."""
-        out = {"theta_d": state["diag"][:, 0].copy(), "psi_d_rel": state["diag"][:, 1].copy(),
-               "integral": state["integral"].copy()}  # fmt: skip
+        out = {
+            "theta_d": state["diag"][:, 0].copy(),
+            "psi_d_rel": state["diag"][:, 1].copy(),
+            "integral": state["integral"].copy(),
+        }
         return {**out, **guidance_diagnostics(self.gains, state["filter"])}

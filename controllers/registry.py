@@ -53,8 +53,9 @@ def make_classical(name: str, **kwargs: Any) -> Any:
     raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")
 
 
-def make_lowpass(base: str = "fbsm_colos", alpha: float = DEFAULT_ALPHA, **kwargs: Any
-                 ) -> LowPassPolicy:  # fmt: skip
+def make_lowpass(
+    base: str = "fbsm_colos", alpha: float = DEFAULT_ALPHA, **kwargs: Any
+) -> LowPassPolicy:
     """`controllers.lowpass.LowPassPolicy` over the classical controller ``base`` (a name of
     `CLASSICAL` other than a filtered one) built with ``kwargs`` (gains, actuator,
     control_dt, ...)."""

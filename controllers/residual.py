@@ -98,8 +98,7 @@ def check_bound(bound: Any) -> tuple[float, float, float]:
 
 def check_number(name: str, value: Any, low: float, high: float, unit: str = "") -> float:
     """``value`` as a float in [low, high]; ValueError naming ``name`` (bools are refused)."""
-    if (isinstance(value, bool) or not isinstance(value, (int, float))
-            or not low <= value <= high):  # fmt: skip
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
         raise ValueError(f"{name} must be a number in [{low:g}, {high:g}]{unit}, got {value!r}")
     return float(value)
 
@@ -120,11 +119,14 @@ class ResidualSettings:
 
     def __post_init__(self) -> None:
         if self.base not in CLASSICAL:
-            raise ValueError(f"residual base {self.base!r} is not a classical controller; "
-                             f"valid: {list(CLASSICAL)}")  # fmt: skip
+            raise ValueError(
+                f"residual base {self.base!r} is not a classical controller; "
+                f"valid: {list(CLASSICAL)}"
+            )
         object.__setattr__(self, "bound", check_bound(self.bound))
-        filter_max = check_number("filter_max", self.filter_max, 0.0, MAX_FILTER,
-                                  " (1 would freeze the action)")  # fmt: skip
+        filter_max = check_number(
+            "filter_max", self.filter_max, 0.0, MAX_FILTER, " (1 would freeze the action)"
+        )
         object.__setattr__(self, "filter_max", filter_max)
         if not isinstance(self.base_kwargs, Mapping):
             raise ValueError(f"base_kwargs must be a mapping, got {self.base_kwargs!r}")
@@ -157,8 +159,12 @@ class ResidualSettings:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form recorded in an agent's metadata."""
-        return {"base": self.base, "bound": list(self.bound), "filter_max": self.filter_max,
-                "base_kwargs": dict(self.base_kwargs)}  # fmt: skip
+        return {
+            "base": self.base,
+            "bound": list(self.bound),
+            "filter_max": self.filter_max,
+            "base_kwargs": dict(self.base_kwargs),
+        }
 
     def inference(self) -> ResidualSettings:
         """The settings a `ResidualPolicy` needs (these, without any training terms)."""
@@ -199,9 +205,13 @@ def residual_observation_bounds(max_surge: float = SURGE_LIMIT) -> tuple[np.ndar
 def agent_observation(obs: np.ndarray, base_action: np.ndarray, previous: np.ndarray) -> np.ndarray:
     """The agent's float32 observation (n, 21): env observation, base action, previous action."""
     return np.concatenate(
-        [np.asarray(obs, np.float32), np.asarray(base_action, np.float32),
-         np.asarray(previous, np.float32)], axis=1,
-    )  # fmt: skip
+        [
+            np.asarray(obs, np.float32),
+            np.asarray(base_action, np.float32),
+            np.asarray(previous, np.float32),
+        ],
+        axis=1,
+    )
 
 
 def agent_action_dim(filter_max: float) -> int:
@@ -209,9 +219,14 @@ def agent_action_dim(filter_max: float) -> int:
     return 6 if filter_max > 0.0 else 3
 
 
-def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[float],
-                    filter_max: float = 0.0, previous: np.ndarray | None = None,
-                    started: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+def residual_action(
+    base_action: np.ndarray,
+    correction: Any,
+    bound: Sequence[float],
+    filter_max: float = 0.0,
+    previous: np.ndarray | None = None,
+    started: np.ndarray | None = None,
+) -> np.ndarray:
     """The applied action as float32 (n, 3) (module doc): a = clip(b + β ⊙ clip(c, −1, 1), −1, 1),
     then with ``filter_max`` α_max > 0 (``correction`` (n, 6) = (c, g)) the learned low-pass
     a = α ⊙ a_prev + (1 − α) ⊙ a, α = α_max·clip(g, 0, 1), 0 on rows not ``started``.
@@ -225,8 +240,9 @@ def residual_action(base_action: np.ndarray, correction: Any, bound: Sequence[fl
         ) from None
     expected = (b.shape[0], agent_action_dim(filter_max))
     if c.shape != expected:
-        raise ValueError(f"residual agent returned a correction of shape {c.shape}, "
-                         f"expected {expected}")  # fmt: skip
+        raise ValueError(
+            f"residual agent returned a correction of shape {c.shape}, expected {expected}"
+        )
     finite = np.isfinite(c)
     if not finite.all():
         row = int(np.argwhere(~finite)[0][0])
@@ -273,12 +289,18 @@ class ResidualPolicy:
 
     name = "residual"
 
-    def __init__(self, base: Any, agent: Any, bound: Any = DEFAULT_BOUND,
-                 settings: ResidualSettings | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        base: Any,
+        agent: Any,
+        bound: Any = DEFAULT_BOUND,
+        settings: ResidualSettings | None = None,
+    ) -> None:
         for role, policy in (("base", base), ("agent", agent)):
             if not callable(getattr(policy, "predict", None)):
-                raise ValueError(f"residual {role} must have predict(...), got "
-                                 f"{type(policy).__name__}")  # fmt: skip
+                raise ValueError(
+                    f"residual {role} must have predict(...), got {type(policy).__name__}"
+                )
         self.base = base
         self.agent = agent
         self.bound = check_bound(bound)
@@ -288,9 +310,13 @@ class ResidualPolicy:
         self.metadata = dict(getattr(agent, "metadata", {}) or {})
 
     def init_state(self, n: int) -> dict[str, Any]:
-        return {"base": None, "previous": np.zeros((n, 3), np.float32),
-                "started": np.zeros(n, dtype=bool), "correction": np.zeros((n, 3), np.float32),
-                "filter": np.zeros((n, 3), np.float32)}  # fmt: skip
+        return {
+            "base": None,
+            "previous": np.zeros((n, 3), np.float32),
+            "started": np.zeros(n, dtype=bool),
+            "correction": np.zeros((n, 3), np.float32),
+            "filter": np.zeros((n, 3), np.float32),
+        }
 
     def predict(
         self,
@@ -303,20 +329,24 @@ class ResidualPolicy:
         obs = np.asarray(observation)
         single = obs.ndim == 1
         if obs.ndim not in (1, 2) or obs.shape[-1] != OBS_DIM:
-            raise ValueError(f"observation must have shape (n, {OBS_DIM}) or ({OBS_DIM},), "
-                             f"got {obs.shape}")  # fmt: skip
+            raise ValueError(
+                f"observation must have shape (n, {OBS_DIM}) or ({OBS_DIM},), got {obs.shape}"
+            )
         batch = obs[None] if single else obs
         n = batch.shape[0]
         if state is None:
             state = self.init_state(n)
         elif state["previous"].shape[0] != n:
-            raise ValueError(f"state is for {state['previous'].shape[0]} vehicles, "
-                             f"observation for {n}")  # fmt: skip
+            raise ValueError(
+                f"state is for {state['previous'].shape[0]} vehicles, observation for {n}"
+            )
         # The base sees exactly what it would see alone (the caller's arrays, unchanged).
         base_action, state["base"] = self.base.predict(
-            observation, state=state["base"], episode_start=episode_start,
+            observation,
+            state=state["base"],
+            episode_start=episode_start,
             deterministic=deterministic,
-        )  # fmt: skip
+        )
         base_action = np.asarray(base_action, np.float32).reshape(n, 3)
         if episode_start is not None:
             start = np.asarray(episode_start, dtype=bool).reshape(-1)
@@ -326,8 +356,14 @@ class ResidualPolicy:
         correction, _ = self.agent.predict(features, deterministic=deterministic)
         if np.size(correction) == self.action_dim * n:  # an agent may return (k,) for one row
             correction = np.reshape(correction, (n, self.action_dim))
-        applied = residual_action(base_action, correction, self.bound, self.filter_max,
-                                  state["previous"], state["started"])  # fmt: skip
+        applied = residual_action(
+            base_action,
+            correction,
+            self.bound,
+            self.filter_max,
+            state["previous"],
+            state["started"],
+        )
         if self.filter_max > 0.0:
             g = np.asarray(correction, np.float64)[:, 3:]
             state["filter"][:] = filter_coefficient(g, self.filter_max, state["started"])
@@ -350,9 +386,13 @@ class ResidualPolicy:
         return f"ResidualPolicy(base={self.base!r}, agent={self.agent!r}, bound={self.bound})"
 
 
-def make_residual(agent: Any, base: str | None = None, bound: Any = None,
-                  filter_max: float | None = None, **base_kwargs: Any
-                  ) -> ResidualPolicy:  # fmt: skip
+def make_residual(
+    agent: Any,
+    base: str | None = None,
+    bound: Any = None,
+    filter_max: float | None = None,
+    **base_kwargs: Any,
+) -> ResidualPolicy:
     """A `ResidualPolicy` of the Policy ``agent`` (21-value observations): ``base`` (default
     "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``, gains) build the base
     controller; ``bound`` is β (X, M, N); ``filter_max`` α_max > 0 gives the learned filter (an
@@ -361,7 +401,8 @@ def make_residual(agent: Any, base: str | None = None, bound: Any = None,
     owned = {k: base_kwargs.pop(k) for k in ENV_OWNED_BASE_KWARGS if k in base_kwargs}
     settings = ResidualSettings(
         base=DEFAULT_BASE if base is None else base,
-        bound=DEFAULT_BOUND if bound is None else bound, base_kwargs=base_kwargs,
+        bound=DEFAULT_BOUND if bound is None else bound,
+        base_kwargs=base_kwargs,
         filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
-    )  # fmt: skip
+    )
     return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)

@@ -78,12 +78,24 @@ def save_tiny_residual_agent():
         from controllers.residual import RESIDUAL_OBS_DIM, RESIDUAL_OBS_NAMES
 
         venv = VecNormalize(make_residual_sb3_env(4, settings, seed=seed, **env))
-        model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0,
-                    device="cpu", policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
+        model = PPO(
+            "MlpPolicy",
+            venv,
+            n_steps=32,
+            batch_size=64,
+            n_epochs=1,
+            seed=0,
+            device="cpu",
+            policy_kwargs={"net_arch": [16, 16]},
+        )
         model.learn(128)
-        meta = {"algo": "ppo", "obs_names": list(RESIDUAL_OBS_NAMES),
-                "observation_shape": [RESIDUAL_OBS_DIM], "action_shape": [settings.action_dim],
-                "residual": settings.to_dict()}  # fmt: skip
+        meta = {
+            "algo": "ppo",
+            "obs_names": list(RESIDUAL_OBS_NAMES),
+            "observation_shape": [RESIDUAL_OBS_DIM],
+            "action_shape": [settings.action_dim],
+            "residual": settings.to_dict(),
+        }
         save_agent(model, venv, directory, meta)
         return model, venv
 
@@ -98,17 +110,48 @@ def _train_tiny_preview_agent(tmp_path, **keys):
     from benchmarks.train_seeds import main
 
     section = {
-        "n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True,
-        "n_steps": 64, "batch_size": 128, "n_epochs": 1, "policy_kwargs": "dict(net_arch=[16])",
-        "env_kwargs": {"randomize_start": True, "max_time": 20.0}, **keys,
-    }  # fmt: skip
+        "n_envs": 4,
+        "n_timesteps": 256,
+        "policy": "MlpPolicy",
+        "normalize": True,
+        "n_steps": 64,
+        "batch_size": 128,
+        "n_epochs": 1,
+        "policy_kwargs": "dict(net_arch=[16])",
+        "env_kwargs": {"randomize_start": True, "max_time": 20.0},
+        **keys,
+    }
     config = tmp_path / "tiny.yml"
     config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
     agent = tmp_path / "agent"
-    assert main(["--algo", "ppo", "--config", str(config), "--out", str(tmp_path / "run"),
-                 "--env-id", "AUVPath3DPreview-v0", "--seeds", "0-0", "--workers", "1",
-                 "--eval-seeds", "100", "--eval-freq", "256", "--eval-duration", "110",
-                 "--quiet", "--export", str(agent)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "--algo",
+                "ppo",
+                "--config",
+                str(config),
+                "--out",
+                str(tmp_path / "run"),
+                "--env-id",
+                "AUVPath3DPreview-v0",
+                "--seeds",
+                "0-0",
+                "--workers",
+                "1",
+                "--eval-seeds",
+                "100",
+                "--eval-freq",
+                "256",
+                "--eval-duration",
+                "110",
+                "--quiet",
+                "--export",
+                str(agent),
+            ]
+        )
+        == 0
+    )
     return agent
 
 

@@ -26,14 +26,19 @@ NOISE_SEEDS = (0, 1, 2)
 
 
 @cache
-def run(policy: str, control_dt: float, seeds: tuple[int, ...] = (0,), max_time: float = 300.0,
-        model_error: float = 0.0, **env_kwargs):  # fmt: skip
+def run(
+    policy: str,
+    control_dt: float,
+    seeds: tuple[int, ...] = (0,),
+    max_time: float = 300.0,
+    model_error: float = 0.0,
+    **env_kwargs,
+):
     params = None
     if model_error:
         params = remus100().scaled({k: 1.0 + model_error for k in HYDRODYNAMIC_FIELDS})
     policy_obj = controllers.make(policy, control_dt=control_dt, params=params)
-    return rollouts(policy_obj, list(seeds), control_dt=control_dt, max_time=max_time,
-                    **env_kwargs)  # fmt: skip
+    return rollouts(policy_obj, list(seeds), control_dt=control_dt, max_time=max_time, **env_kwargs)
 
 
 def window(tr, name, start, end=math.inf):
@@ -119,8 +124,9 @@ def test_check8_bounded_and_safe_over_1000_s(dt):
 @pytest.mark.parametrize("name", ["fbsm", "backstepping"])
 def test_fin_limited_actuator_still_converges_without_noise(name):
     """docs/model.md §2.3 "realistic mode": |M|, |N| ≤ 6.15·u²·π/6; prototype: < 0.5 m from 41 s."""
-    (tr,) = rollouts(controllers.make(name, actuator="fins"), [0], actuator="fins",
-                     disturbance="none")  # fmt: skip
+    (tr,) = rollouts(
+        controllers.make(name, actuator="fins"), [0], actuator="fins", disturbance="none"
+    )
     assert tr.termination_reason == "time_limit"
     assert window(tr, "distance", 80.0).max() < 0.5
     assert window(tr, "distance", 150.0).max() < 0.1

@@ -19,8 +19,9 @@ SURGE_SCALE = (0.15, 1.0, 1.0)
 def speed_for_thrust(command: float, seconds: float = 80.0) -> float:
     """Surge speed [m/s] after ``seconds`` of a constant normalised surge command, calm water,
     no moments (the vehicle's top speed for that thrust)."""
-    env = gym.make("AUVPath3DPreview-v0", disturbance="none", max_time=seconds + 1.0,
-                   corridor=500.0)  # fmt: skip
+    env = gym.make(
+        "AUVPath3DPreview-v0", disturbance="none", max_time=seconds + 1.0, corridor=500.0
+    )
     env.reset(seed=0)
     for _ in range(round(seconds / 0.05)):
         env.step(np.array([command, 0.0, 0.0]))
@@ -45,9 +46,17 @@ def test_hand_computed_scaled_commands_clip_the_output_first():
 
 @pytest.mark.parametrize(
     "value",
-    [(0.0, 1.0, 1.0), (1.5, 1.0, 1.0), (float("nan"), 1.0, 1.0), (0.1, 1.0), (True, 1.0, 1.0),
-     "0.1", 0.1, None],
-)  # fmt: skip
+    [
+        (0.0, 1.0, 1.0),
+        (1.5, 1.0, 1.0),
+        (float("nan"), 1.0, 1.0),
+        (0.1, 1.0),
+        (True, 1.0, 1.0),
+        "0.1",
+        0.1,
+        None,
+    ],
+)
 def test_bad_scales_are_named(value):
     with pytest.raises(ValueError, match=r"cfg: action_scale must be three numbers in \(0, 1\]"):
         check_action_scale(value, "cfg")
@@ -58,8 +67,12 @@ def test_the_training_wrapper_applies_the_scale_to_the_env_commands():
     from benchmarks.training.action_scale import ScaledActions
     from benchmarks.training.train import make_training_env
 
-    venv = ScaledActions(make_training_env(2, 0, {"disturbance": "none"}, kind="dummy",
-                                           env_id="AUVPath3DPreview-v0"), SURGE_SCALE)  # fmt: skip
+    venv = ScaledActions(
+        make_training_env(
+            2, 0, {"disturbance": "none"}, kind="dummy", env_id="AUVPath3DPreview-v0"
+        ),
+        SURGE_SCALE,
+    )
     venv.reset()
     _, _, _, infos = venv.step(np.float32([[1.0, 0.5, -2.0], [-0.2, 0.0, 0.3]]))
     tau = np.array([info["tau"] for info in infos])  # the applied (X [N], M, N [N·m])
@@ -75,12 +88,16 @@ def test_a_file_refuses_a_scale_with_a_box_an_increment_or_a_bad_value(tmp_path)
 
     base = {"n_envs": 2, "n_timesteps": 64, "policy": "MlpPolicy", "normalize": True}
     for extra, message in [
-        ({"action_scale": [0.15, 1, 1], "action_bounds": [[-1, -1, -1], [1, 1, 1]]},
-         "action_scale excludes residual, action_bounds and action_increment"),
-        ({"action_scale": [0.15, 1, 1], "action_increment": 0.1},
-         "action_scale excludes residual, action_bounds and action_increment"),
+        (
+            {"action_scale": [0.15, 1, 1], "action_bounds": [[-1, -1, -1], [1, 1, 1]]},
+            "action_scale excludes residual, action_bounds and action_increment",
+        ),
+        (
+            {"action_scale": [0.15, 1, 1], "action_increment": 0.1},
+            "action_scale excludes residual, action_bounds and action_increment",
+        ),
         ({"action_scale": [0.15, 1]}, "action_scale must be three numbers"),
-    ]:  # fmt: skip
+    ]:
         config = tmp_path / "cfg.yml"
         config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": {**base, **extra}}))
         with pytest.raises(ValueError, match=message):
@@ -98,8 +115,11 @@ def test_a_loaded_scaled_agent_commands_what_training_applied(tmp_path, train_ti
     assert json.loads(meta_file.read_text())["action_scale"] == list(SURGE_SCALE)
     policy = load_policy(tmp_path / "agent")
     assert isinstance(policy, ScaledPolicy) and policy.scale == SURGE_SCALE
-    obs = np.random.default_rng(1).normal(0.0, 1.0, (64, len(
-        ObservationConfig.from_spec("preview").names))).astype(np.float32)  # fmt: skip
+    obs = (
+        np.random.default_rng(1)
+        .normal(0.0, 1.0, (64, len(ObservationConfig.from_spec("preview").names)))
+        .astype(np.float32)
+    )
     output, _ = policy.actor.predict(obs)
     command, _ = policy.predict(obs)
     np.testing.assert_array_equal(command, np.clip(output, -1, 1) * np.float32(SURGE_SCALE))

@@ -52,14 +52,17 @@ def test_fin_commands_and_previous_moments_by_hand():
     obs = np.stack([_obs(1.0), _obs(2.0), _obs(0.0), _obs(-0.3)])
     first, state = policy.predict(obs, episode_start=np.ones(4, dtype=bool))
     authority = FIN_GAIN * np.array([1.0, 4.0, 0.0, 0.0])  # K·δ_max·max(u|u|, 0) [N·m]
-    np.testing.assert_allclose(first[:2], [[0.2, 1.0 / authority[0], -1.0],
-                                           [0.2, 1.0 / authority[1], -5.0 / authority[1]]],
-                               rtol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        first[:2],
+        [[0.2, 1.0 / authority[0], -1.0], [0.2, 1.0 / authority[1], -5.0 / authority[1]]],
+        rtol=1e-6,
+    )
     np.testing.assert_array_equal(first[2:], np.float32([[0.2, 1.0, -1.0]] * 2))  # no flow: sign
     np.testing.assert_array_equal(actor.seen[0][:, PREV], np.zeros((4, 3)))  # after a reset
     policy.predict(obs, state, episode_start=np.array([False, False, False, True]))
-    delivered = np.array([[0.2, 0.1, -authority[0] / 10.0], [0.2, 0.1, -0.5],
-                          [0.2, 0.0, 0.0], [0.0, 0.0, 0.0]])  # fmt: skip
+    delivered = np.array(
+        [[0.2, 0.1, -authority[0] / 10.0], [0.2, 0.1, -0.5], [0.2, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    )
     np.testing.assert_allclose(actor.seen[1][:, PREV], delivered, rtol=1e-6)
     single, _ = policy.predict(_obs(1.0))
     assert single.shape == (3,) and single[1] == pytest.approx(1.0 / authority[0], rel=1e-6)
@@ -107,8 +110,12 @@ def test_an_allocated_agent_flies_the_fins_closer_to_the_path(tmp_path):
     assert isinstance(load_policy(written, base_kwargs={"actuator": "paper"}), GuardedPolicy)
     allocated = load_policy(written, base_kwargs={"actuator": "fins"})
     assert isinstance(allocated, AllocatedPolicy) and allocated.actuator == "fins"
-    env = {**agent_env_kwargs(metadata["env_id"], metadata), "disturbance": "none",
-           "actuator": "fins", "max_time": 200.0}  # fmt: skip
+    env = {
+        **agent_env_kwargs(metadata["env_id"], metadata),
+        "disturbance": "none",
+        "actuator": "fins",
+        "max_time": 200.0,
+    }
     before, after = (compute_metrics(rollouts(p, [0], **env)[0]) for p in (plain, allocated))
     assert before["termination_reason"] == after["termination_reason"] == "time_limit"
     assert after["rms_distance"] < 0.6 * before["rms_distance"]

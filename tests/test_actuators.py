@@ -41,10 +41,16 @@ def test_forces_equal_the_reference_implementation_on_its_grid() -> None:
     rows = np.array(data["rows"])
     assert rows.shape == (360, 13)
     a = actuator_record(ActuatorParams.pvs_remus100())
-    got = np.array([[*actuator_forces(r[3], r[4], r[5], r[0], r[1], r[2], a),
-                     propeller_thrust(r[3], math.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2), a),
-                     propeller_torque(r[3], math.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2), a)]
-                    for r in rows])  # fmt: skip
+    got = np.array(
+        [
+            [
+                *actuator_forces(r[3], r[4], r[5], r[0], r[1], r[2], a),
+                propeller_thrust(r[3], math.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2), a),
+                propeller_torque(r[3], math.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2), a),
+            ]
+            for r in rows
+        ]
+    )
     np.testing.assert_allclose(got, rows[:, 6:], rtol=1e-13, atol=1e-13)
     assert np.abs(rows[:, 6:11]).max() > 100.0  # the grid spans the full thrust range
 
@@ -57,8 +63,9 @@ def test_default_fins_give_the_paper_vehicles_fin_moment() -> None:
     assert p.delta_max_stern == p.delta_max_rudder == vehicle.fin_max
     a = actuator_record(p)
     for u, act in ((0.5, 0.3), (1.0, -1.0), (1.7, 0.8)):
-        _, _, _, m, n = actuator_forces(0.0, -act * p.delta_max_stern, act * p.delta_max_rudder,
-                                        u, 0.0, 0.0, a)  # fmt: skip
+        _, _, _, m, n = actuator_forces(
+            0.0, -act * p.delta_max_stern, act * p.delta_max_rudder, u, 0.0, 0.0, a
+        )
         fins = act * vehicle.fin_moment_coeff * vehicle.fin_max * u * abs(u)
         assert m == pytest.approx(fins, rel=1e-13) and n == pytest.approx(fins, rel=1e-13)
 
@@ -77,10 +84,20 @@ def _ideal_reference(seed: int, commands: np.ndarray) -> np.ndarray:
     for c in commands:
         n_rpm, d_s, d_r = c * limits
         for _ in range(env.config.substeps):
-            X, Y, Z, M, N = actuator_forces(n_rpm, d_s, d_r, x[STATE.u], x[STATE.v],
-                                            x[STATE.w], a)  # fmt: skip
-            rk4_step(x, (X, M, N), (0.0, Y, Z, 0.0, 0.0), (0.0, 0.0, 0.0), params, path.kind,
-                     path.data, 1.0, env.config.kernel_sigma, dt, nxt)  # fmt: skip
+            X, Y, Z, M, N = actuator_forces(n_rpm, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w], a)
+            rk4_step(
+                x,
+                (X, M, N),
+                (0.0, Y, Z, 0.0, 0.0),
+                (0.0, 0.0, 0.0),
+                params,
+                path.kind,
+                path.data,
+                1.0,
+                env.config.kernel_sigma,
+                dt,
+                nxt,
+            )
             x = nxt.copy()
             x[STATE.psi] = wrap_angle(x[STATE.psi])
         out.append(x.copy())
@@ -103,8 +120,9 @@ def test_zero_lag_and_infinite_rate_reproduce_an_instantaneous_actuator() -> Non
         assert act[ACTUATOR_STATE.delta_r] == c[2] * p.delta_max_rudder
         assert act[ACTUATOR_STATE.rate_limited] == 0.0
         states.append(env.sim.state[0].copy())
-    np.testing.assert_allclose(np.array(states), _ideal_reference(2, commands), rtol=1e-12,
-                               atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        np.array(states), _ideal_reference(2, commands), rtol=1e-12, atol=1e-12
+    )
 
 
 @settings(max_examples=60, deadline=None)
@@ -115,17 +133,21 @@ def test_zero_lag_and_infinite_rate_reproduce_an_instantaneous_actuator() -> Non
     dt=st.sampled_from([0.001, 0.01, 0.05]),
     start=st.tuples(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0), st.floats(-1.0, 1.0)),
 )
-def test_rate_and_angle_limits_hold_for_any_command_sequence(commands, rate, time_constant, dt,
-                                                             start) -> None:  # fmt: skip
-    p = ActuatorParams(fin_rate_max=rate, fin_time_constant=time_constant,
-                       motor_time_constant=time_constant)  # fmt: skip
+def test_rate_and_angle_limits_hold_for_any_command_sequence(
+    commands, rate, time_constant, dt, start
+) -> None:
+    p = ActuatorParams(
+        fin_rate_max=rate, fin_time_constant=time_constant, motor_time_constant=time_constant
+    )
     a = actuator_record(p, dt)
     n, d_s, d_r = start[0] * p.rpm_max, start[1] * p.delta_max_stern, start[2] * p.delta_max_rudder
     for c in commands:
         for _ in range(3):
             n1, s1, r1, _ = actuator_step(n, d_s, d_r, c[0], c[1], c[2], a)
-            for before, after, limit in ((d_s, s1, p.delta_max_stern),
-                                         (d_r, r1, p.delta_max_rudder)):  # fmt: skip
+            for before, after, limit in (
+                (d_s, s1, p.delta_max_stern),
+                (d_r, r1, p.delta_max_rudder),
+            ):
                 assert abs(after - before) <= rate * dt * (1 + 1e-12)
                 assert abs(after) <= limit
             assert abs(n1) <= p.rpm_max
@@ -189,21 +211,33 @@ def test_snapshot_restore_continues_the_actuator_state(make_sim) -> None:
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"fin_time_constant": -0.1}, "ActuatorParams.fin_time_constant must be a finite number "
-         "in [0, ∞) s, got -0.1"),
-        ({"motor_time_constant": math.inf}, "ActuatorParams.motor_time_constant must be a "
-         "finite number in [0, ∞) s, got inf"),
-        ({"fin_rate_max": math.nan}, "ActuatorParams.fin_rate_max must be a finite number in "
-         "(0, ∞), got nan"),
-        ({"fin_rate_max": -1.0}, "ActuatorParams.fin_rate_max must be a finite number in "
-         "(0, ∞), got -1.0"),
+        (
+            {"fin_time_constant": -0.1},
+            "ActuatorParams.fin_time_constant must be a finite number in [0, ∞) s, got -0.1",
+        ),
+        (
+            {"motor_time_constant": math.inf},
+            "ActuatorParams.motor_time_constant must be a finite number in [0, ∞) s, got inf",
+        ),
+        (
+            {"fin_rate_max": math.nan},
+            "ActuatorParams.fin_rate_max must be a finite number in (0, ∞), got nan",
+        ),
+        (
+            {"fin_rate_max": -1.0},
+            "ActuatorParams.fin_rate_max must be a finite number in (0, ∞), got -1.0",
+        ),
         ({"rpm_max": 0.0}, "ActuatorParams.rpm_max must be a finite number in (0, ∞), got 0.0"),
-        ({"delta_max_stern": 2.0}, "ActuatorParams.delta_max_stern must be a finite number in "
-         "(0, 1.5708] rad, got 2.0"),
-        ({"thrust_deduction": 1.0}, "ActuatorParams.thrust_deduction must be a finite number in "
-         "[0, 1), got 1.0"),
+        (
+            {"delta_max_stern": 2.0},
+            "ActuatorParams.delta_max_stern must be a finite number in (0, 1.5708] rad, got 2.0",
+        ),
+        (
+            {"thrust_deduction": 1.0},
+            "ActuatorParams.thrust_deduction must be a finite number in [0, 1), got 1.0",
+        ),
     ],
-)  # fmt: skip
+)
 def test_bad_actuator_params_raise_naming_the_field(kwargs, message) -> None:
     with pytest.raises(ValueError) as info:
         AUVPath3DEnv(actuator="realistic", actuator_params=kwargs)
@@ -215,8 +249,10 @@ def test_bad_commands_raise_named_errors() -> None:
     env.reset(seed=0)
     with pytest.raises(ValueError) as info:
         env.step(np.array([0.5, -1.5, 0.0]))
-    assert str(info.value) == ("actuator='realistic' takes commands (rpm, delta_s, delta_r) "
-                               "normalised to [-1, 1]; got delta_s = -1.5 (row 0)")  # fmt: skip
+    assert str(info.value) == (
+        "actuator='realistic' takes commands (rpm, delta_s, delta_r) "
+        "normalised to [-1, 1]; got delta_s = -1.5 (row 0)"
+    )
     with pytest.raises(ValueError, match="action must be finite"):
         env.step(np.array([np.nan, 0.0, 0.0]))
     with pytest.raises(ValueError, match=r"actuator_params has unknown key\(s\) \[.rpm.\]"):

@@ -55,8 +55,11 @@ def test_a_pickle_rebuilt_from_the_stats_normalises_like_the_loader():
     assert pickle.is_file()  # shipped: every agent folder loads in SB3 and RL Zoo as it is
     venv = VecNormalize.load(str(pickle), DummyVecEnv([lambda: gym.make("AUVPath3DPreview-v0")]))
     obs = venv.venv.reset()
-    expected = np.clip((obs - stats["mean"]) / np.sqrt(stats["var"] + stats["epsilon"]),
-                       -stats["clip_obs"], stats["clip_obs"])  # fmt: skip
+    expected = np.clip(
+        (obs - stats["mean"]) / np.sqrt(stats["var"] + stats["epsilon"]),
+        -stats["clip_obs"],
+        stats["clip_obs"],
+    )
     np.testing.assert_allclose(venv.normalize_obs(obs), expected, rtol=1e-6, atol=1e-6)
     assert not venv.training and not venv.norm_reward
 

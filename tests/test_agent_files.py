@@ -80,8 +80,10 @@ def flip_a_byte_of_policy(agent: Path) -> None:
     with zipfile.ZipFile(agent / MODEL) as archive:
         info = archive.getinfo("policy.pth")
     raw = bytearray((agent / MODEL).read_bytes())
-    name_len, extra_len = (int.from_bytes(raw[info.header_offset + k : info.header_offset + k + 2],
-                                          "little") for k in (26, 28))  # fmt: skip
+    name_len, extra_len = (
+        int.from_bytes(raw[info.header_offset + k : info.header_offset + k + 2], "little")
+        for k in (26, 28)
+    )
     start = info.header_offset + 30 + name_len + extra_len
     raw[start + info.compress_size // 2] ^= 0xFF
     (agent / MODEL).write_bytes(bytes(raw))
@@ -100,49 +102,88 @@ DAMAGES = {
     "epsilon < 0": (edit_stats(epsilon=-1e-8), STATS, r"epsilon must be > 0, got -1e-08"),
     "epsilon 0": (edit_stats(epsilon=0.0), STATS, r"epsilon must be > 0, got 0.0"),
     "epsilon NaN": (edit_stats(epsilon=nan), STATS, r"epsilon is not finite"),
-    "epsilon array": (edit_stats(epsilon=[1e-8, 1e-8]), STATS,
-                      r"statistics of shape \(2,\) for epsilon, expected \(\)"),
-    "mean (14,)": (edit_stats(mean=np.zeros(14)), STATS,
-                   r"statistics of shape \(14,\) for mean, expected \(15,\)"),
+    "epsilon array": (
+        edit_stats(epsilon=[1e-8, 1e-8]),
+        STATS,
+        r"statistics of shape \(2,\) for epsilon, expected \(\)",
+    ),
+    "mean (14,)": (
+        edit_stats(mean=np.zeros(14)),
+        STATS,
+        r"statistics of shape \(14,\) for mean, expected \(15,\)",
+    ),
     "var (15, 1)": (edit_stats(var=np.ones((15, 1))), STATS, r"shape \(15, 1\) for var"),
     "mean NaN": (edit_stats(mean=[nan] + [0.0] * 14), STATS, r"mean is not finite"),
     "var inf": (edit_stats(var=[inf] + [1.0] * 14), STATS, r"var is not finite"),
     "var < 0": (edit_stats(var=[-1.0] + [1.0] * 14), STATS, r"var must be >= 0"),
     "mean text": (edit_stats(mean=np.array(["a"] * 15)), STATS, r"mean must hold real numbers"),
     "no epsilon": (edit_stats(epsilon=None), STATS, r"missing statistics \['epsilon'\]"),
-    "no mean, var": (edit_stats(mean=None, var=None), STATS,
-                     r"missing statistics \['mean', 'var'\]"),
-    "other obs_names": (edit_stats(obs_names=np.array([*OBS_NAMES[:-1], "depth"])), STATS,
-                        r"statistics for observation layout"),
+    "no mean, var": (
+        edit_stats(mean=None, var=None),
+        STATS,
+        r"missing statistics \['mean', 'var'\]",
+    ),
+    "other obs_names": (
+        edit_stats(obs_names=np.array([*OBS_NAMES[:-1], "depth"])),
+        STATS,
+        r"statistics for observation layout",
+    ),
     "stats garbage": (write_bytes(STATS, lambda b: b"garbage" * 50), STATS, r"are unreadable"),
     "stats truncated": (write_bytes(STATS, lambda b: b[: len(b) // 2]), STATS, r"are unreadable"),
-    "model garbage": (write_bytes(MODEL, lambda b: b"not a zip" * 100), MODEL,
-                      r"not a valid zip file \(corrupt or truncated\)"),
-    "model truncated": (write_bytes(MODEL, lambda b: b[: len(b) // 2]), MODEL,
-                        r"damaged \(truncated, or not an SB3 model\): no \['data', 'policy.pth'\]"),
-    "model cut short": (write_bytes(MODEL, lambda b: b[:-30]), MODEL,
-                        r"damaged \(truncated, or not an SB3 model\)"),
+    "model garbage": (
+        write_bytes(MODEL, lambda b: b"not a zip" * 100),
+        MODEL,
+        r"not a valid zip file \(corrupt or truncated\)",
+    ),
+    "model truncated": (
+        write_bytes(MODEL, lambda b: b[: len(b) // 2]),
+        MODEL,
+        r"damaged \(truncated, or not an SB3 model\): no \['data', 'policy.pth'\]",
+    ),
+    "model cut short": (
+        write_bytes(MODEL, lambda b: b[:-30]),
+        MODEL,
+        r"damaged \(truncated, or not an SB3 model\)",
+    ),
     "model empty": (write_bytes(MODEL, lambda b: b""), MODEL, r"not a valid zip file"),
     "model bit flip": (flip_a_byte_of_policy, MODEL, r"policy\.pth"),
     "model no policy": (rezip(drop="policy.pth"), MODEL, r"no \['policy.pth'\]"),
     "model no data": (rezip(drop="data"), MODEL, r"no \['data'\]"),
-    "model obs (14,)": (rezip(data=shape_14), MODEL,
-                        r"observation space shape \(14,\), expected \(15,\)"),
+    "model obs (14,)": (
+        rezip(data=shape_14),
+        MODEL,
+        r"observation space shape \(14,\), expected \(15,\)",
+    ),
     "meta garbage": (write_bytes(META, lambda b: b"{not json"), META, r"is unreadable"),
     "meta truncated": (write_bytes(META, lambda b: b[: len(b) // 2]), META, r"is unreadable"),
-    "meta list": (write_bytes(META, lambda b: b"[1, 2]"), META,
-                  r"must be a JSON object, got a list"),
-    "meta obs size": (edit_meta(observation_shape=[16]), META,
-                      r"observation_shape is \[16\], expected \[15\]"),
-    "meta action size": (edit_meta(action_shape=[4]), META,
-                         r"action_shape is \[4\], expected \[3\]"),
-    "meta algo": (edit_meta(algo="dqn"), META,
-                  r"algo is 'dqn', expected one of \['crossq', 'ppo', 'sac', 'tqc'\]"),
-    "meta version": (edit_meta(auv_gym_version="1.0.0"), META,
-                     r"trained with auv-gym 1.0.0, this is auv-gym 0\.\d+\.\d+"),
+    "meta list": (
+        write_bytes(META, lambda b: b"[1, 2]"),
+        META,
+        r"must be a JSON object, got a list",
+    ),
+    "meta obs size": (
+        edit_meta(observation_shape=[16]),
+        META,
+        r"observation_shape is \[16\], expected \[15\]",
+    ),
+    "meta action size": (
+        edit_meta(action_shape=[4]),
+        META,
+        r"action_shape is \[4\], expected \[3\]",
+    ),
+    "meta algo": (
+        edit_meta(algo="dqn"),
+        META,
+        r"algo is 'dqn', expected one of \['crossq', 'ppo', 'sac', 'tqc'\]",
+    ),
+    "meta version": (
+        edit_meta(auv_gym_version="1.0.0"),
+        META,
+        r"trained with auv-gym 1.0.0, this is auv-gym 0\.\d+\.\d+",
+    ),
     "meta bad version": (edit_meta(auv_gym_version="abc"), META, r"'abc' is not a version"),
     "meta obs_names": (edit_meta(obs_names=list(OBS_NAMES[::-1])), META, r"observation layout"),
-}  # fmt: skip
+}
 
 
 @pytest.fixture
@@ -203,8 +244,14 @@ def test_checking_an_agent_does_not_import_torch(tmp_path: Path) -> None:
         "print('torch' in sys.modules)\n"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                          check=True, timeout=300)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=300,
+    )
     lines = done.stdout.splitlines()
     assert "epsilon must be > 0" in lines[0] and lines[1] == "False"
 

@@ -24,8 +24,11 @@ def test_training_and_loading_share_one_algorithm_table():
 
     assert TRAINED is ALGORITHMS and READ is ALGORITHMS
     assert {name: (a.package, a.class_name) for name, a in ALGORITHMS.items()} == {
-        "ppo": ("stable_baselines3", "PPO"), "sac": ("stable_baselines3", "SAC"),
-        "tqc": ("sb3_contrib", "TQC"), "crossq": ("sb3_contrib", "CrossQ")}  # fmt: skip
+        "ppo": ("stable_baselines3", "PPO"),
+        "sac": ("stable_baselines3", "SAC"),
+        "tqc": ("sb3_contrib", "TQC"),
+        "crossq": ("sb3_contrib", "CrossQ"),
+    }
     assert controllers.AGENT_NAMES == ("agent", "ppo", "sac", "tqc", "crossq")
     assert "tau" not in ALGORITHMS["crossq"].hyperparameters  # no target networks
     assert "top_quantiles_to_drop_per_net" in ALGORITHMS["tqc"].hyperparameters

@@ -38,8 +38,13 @@ def test_allocation_then_actuators_give_back_a_reachable_tau(u, v, w, x, a_m, a_
     """τ_d = (X, M, N) within the fins' authority at this speed and within the propeller's
     thrust: the actuator model at the allocated (n, δ_s, δ_r) reproduces it (relative 1e-9)."""
     stern, rudder = P.fin_moment_coeff()
-    tau = np.array([x, a_m * stern * P.delta_max_stern * (u * u + w * w),
-                    a_n * rudder * P.delta_max_rudder * (u * u + v * v)])  # fmt: skip
+    tau = np.array(
+        [
+            x,
+            a_m * stern * P.delta_max_stern * (u * u + w * w),
+            a_n * rudder * P.delta_max_rudder * (u * u + v * v),
+        ]
+    )
     commands = allocate(tau, (u, v, w), P)[0]
     assume(np.abs(commands).max() < 1.0)  # reachable: no command at its limit
     got = _forces(commands, (u, v, w))
@@ -60,14 +65,18 @@ def test_round_trip_covers_ahead_astern_and_both_fins() -> None:
 
 
 def test_unreachable_tau_saturates_towards_it() -> None:
-    commands = allocate(np.array([[500.0, 50.0, -50.0], [-500.0, -50.0, 50.0]]),
-                        np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), P)  # fmt: skip
+    commands = allocate(
+        np.array([[500.0, 50.0, -50.0], [-500.0, -50.0, 50.0]]),
+        np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
+        P,
+    )
     np.testing.assert_array_equal(commands, [[1.0, -1.0, -1.0], [-1.0, 1.0, 1.0]])
     m = _forces(commands[0], (1.0, 0.0, 0.0))[3]
     assert m == pytest.approx(fin_gain(P))  # the largest pitch moment, with the demanded sign
     # no flow over the fins: full deflection towards the demanded moment, zero for none
-    np.testing.assert_array_equal(allocate(np.array([[0.0, 1.0, 0.0]]), (0.0, 0.0, 0.0), P),
-                                  [[0.0, -1.0, 0.0]])  # fmt: skip
+    np.testing.assert_array_equal(
+        allocate(np.array([[0.0, 1.0, 0.0]]), (0.0, 0.0, 0.0), P), [[0.0, -1.0, 0.0]]
+    )
 
 
 def test_controllers_allocate_the_fin_limited_law() -> None:
@@ -89,8 +98,13 @@ def test_controllers_allocate_the_fin_limited_law() -> None:
 
 
 def test_pid_los_follows_the_helix_on_realistic_actuators_with_noise() -> None:
-    (tr,) = rollouts(controllers.make("pid_los", actuator="realistic"), [0],
-                     actuator="realistic", disturbance="paper", max_time=120.0)  # fmt: skip
+    (tr,) = rollouts(
+        controllers.make("pid_los", actuator="realistic"),
+        [0],
+        actuator="realistic",
+        disturbance="paper",
+        max_time=120.0,
+    )
     assert tr.termination_reason == "time_limit"
     assert tr["distance"][-200:].max() < 2.0
     assert abs(tr["u"][-200:].mean() - 1.0) < 0.1
@@ -109,8 +123,9 @@ def test_controllers_take_the_actuator_params_of_the_env() -> None:
     authority = fin_gain(small) * u * u
     for name in ("fbsm", "backstepping", "pid_los"):
         fins, _ = controllers.make(name, actuator="fins", params=weak).predict(obs)
-        real, _ = controllers.make(name, actuator="realistic", params=weak,
-                                   actuator_params=small).predict(obs)  # fmt: skip
+        real, _ = controllers.make(
+            name, actuator="realistic", params=weak, actuator_params=small
+        ).predict(obs)
         tau = fins.astype(np.float64) * np.stack([np.full(2, 50.0), authority, authority], 1)
         want = allocate(tau, obs[:, [OBS_NAMES.index(k) for k in "uvw"]], small)
         np.testing.assert_allclose(real, want, rtol=1e-5, atol=1e-6, err_msg=name)

@@ -23,8 +23,10 @@ def _csv(path: Path, rows: list[str]) -> Path:
 
 
 def test_rerun_arguments_replace_out_and_workers_only() -> None:
-    recorded = ("python -m benchmarks.compare --policies fbsm,ppo --scenarios all --seeds 10 "
-                "--duration 300 --workers 2 --out benchmarks/results/full --quiet")  # fmt: skip
+    recorded = (
+        "python -m benchmarks.compare --policies fbsm,ppo --scenarios all --seeds 10 "
+        "--duration 300 --workers 2 --out benchmarks/results/full --quiet"
+    )
     args = _rerun_arguments(recorded, Path("/tmp/x"), 1)
     assert (
         args
@@ -44,8 +46,10 @@ def test_compare_episodes_counts_cells_and_one_sided_rows(tmp_path: Path, capsys
     assert "10 values compared, 0 differ" in capsys.readouterr().out
 
     # one differing last digit, and one extra row in the new run
-    changed = _csv(tmp_path / "c.csv", ["paper,fbsm,0,0.0641,31.5", "paper,fbsm,1,0.0650,30.0",
-                                        "paper,ppo,0,0.5,40.0"])  # fmt: skip
+    changed = _csv(
+        tmp_path / "c.csv",
+        ["paper,fbsm,0,0.0641,31.5", "paper,fbsm,1,0.0650,30.0", "paper,ppo,0,0.5,40.0"],
+    )
     strict = Report(allow_new=False)
     compare_episodes(old, changed, strict)
     assert strict.failures == 2
@@ -76,5 +80,7 @@ def test_a_keep_folder_it_could_not_write_is_refused_before_any_rerun(tmp_path: 
     with pytest.raises(SystemExit) as stop:
         main(["--keep", str(blocker)])
     assert stop.value.code == 2
-    assert (f"--keep '{blocker}' cannot be written as a folder: it is a file, not a folder"
-            in capsys.readouterr().err)  # fmt: skip
+    assert (
+        f"--keep '{blocker}' cannot be written as a folder: it is a file, not a folder"
+        in capsys.readouterr().err
+    )

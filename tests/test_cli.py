@@ -91,8 +91,19 @@ def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, t
     monkeypatch.setattr(compare, "run_jobs", lambda *a, **k: pytest.fail("an episode ran"))
     with pytest.raises(policies.MissingExtraError, match=r"pip install 'auv-gym\[rl\]'"):
         policies.check_policy_spec("ppo")
-    code = cli.main(["compare", "--policies", "fbsm,ppo", "--scenarios", "paper",
-                     "--seeds", "1", "--out", str(tmp_path / "out")])  # fmt: skip
+    code = cli.main(
+        [
+            "compare",
+            "--policies",
+            "fbsm,ppo",
+            "--scenarios",
+            "paper",
+            "--seeds",
+            "1",
+            "--out",
+            str(tmp_path / "out"),
+        ]
+    )
     assert code == 2
     assert "running an agent needs torch, from the 'rl' extra" in capsys.readouterr().err
     assert policies.check_policy_spec("fbsm").kind == "classical"  # classical ones still run

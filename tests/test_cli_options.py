@@ -26,8 +26,9 @@ def _actions(parser: argparse.ArgumentParser, dest: str) -> list[argparse.Action
     return [a for a in parser._actions if a.dest == dest]
 
 
-@pytest.mark.parametrize("field", [f for f in fields(TrainOptions) if f.name != "eval_env"],
-                         ids=lambda f: f.name)  # fmt: skip
+@pytest.mark.parametrize(
+    "field", [f for f in fields(TrainOptions) if f.name != "eval_env"], ids=lambda f: f.name
+)
 def test_every_train_option_has_one_flag_with_the_dataclass_default_and_help(field):
     parser = _train_parser()
     (action,) = _actions(parser, field.name)
@@ -72,11 +73,13 @@ def test_step_counts_read_scientific_notation_in_both_clis(argv, value):
     ("argv", "message"),
     [
         (["--n-timesteps", "1.5"], "argument --n-timesteps: '1.5' is not a whole number"),
-        (["--eval-seeds", "1,x"], "argument --eval-seeds: expected comma-separated integers, "
-                                  "got '1,x'"),
+        (
+            ["--eval-seeds", "1,x"],
+            "argument --eval-seeds: expected comma-separated integers, got '1,x'",
+        ),
         (["--vec-env", "fast"], "argument --vec-env: invalid choice: 'fast'"),
     ],
-)  # fmt: skip
+)
 def test_bad_values_are_one_line_exit_2(capsys, argv, message):
     with pytest.raises(SystemExit) as stop:
         train_cli.parse_args(argv)

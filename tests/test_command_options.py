@@ -38,7 +38,12 @@ def test_fuzz_options(capsys) -> None:
     _helps(fuzz.FuzzOptions, parser)
     ns = parser.parse_args(["--quiet", "--physics-budget", "1e4", "--max-vehicles", "8"])
     assert (ns.quiet, ns.physics_budget, ns.max_vehicles, ns.steps, ns.seed) == (
-        True, 1e4, 8, 1e7, 0)  # fmt: skip
+        True,
+        1e4,
+        8,
+        1e7,
+        0,
+    )
     _usage_error(capsys, fuzz.main, ["--steps", "x"], "argument --steps: invalid float value")
     _usage_error(capsys, fuzz.main, ["--max-vehicles", "0"], "--max-vehicles must be in [1, 65536]")
 
@@ -49,11 +54,16 @@ def test_check_reproduction_options(capsys, tmp_path: Path) -> None:
     assert parsed == options() and (parsed.workers, parsed.keep) == (2, None)
     assert parsed.results == reproduction.RESULTS and not parsed.agents and not parsed.allow_new
     _helps(options, parser)
-    parsed, _ = parse_options(options, ["--agents", "--allow-new", "--keep", str(tmp_path)],
-                              "prog", None, negatable=False)  # fmt: skip
+    parsed, _ = parse_options(
+        options, ["--agents", "--allow-new", "--keep", str(tmp_path)], "prog", None, negatable=False
+    )
     assert (parsed.agents, parsed.allow_new, parsed.keep) == (True, True, tmp_path)
-    _usage_error(capsys, reproduction.main, ["--workers", "two"],
-                 "argument --workers: invalid int value: 'two'")  # fmt: skip
+    _usage_error(
+        capsys,
+        reproduction.main,
+        ["--workers", "two"],
+        "argument --workers: invalid int value: 'two'",
+    )
     _usage_error(capsys, reproduction.main, ["--workers", "0"], "--workers must be ≥ 1, got 0")
 
 
@@ -63,10 +73,18 @@ def test_suite_merge_options(capsys) -> None:
     parsed, parser = parse_options(options, argv, "prog", None)
     assert parsed == options(source="a", target="b", policies="x,y") and parsed.rtol == 1e-12
     _helps(options, parser)
-    _usage_error(capsys, suite_merge.main, ["--from", "a"],
-                 "the following arguments are required: --into, --policies")  # fmt: skip
-    _usage_error(capsys, suite_merge.main, [*argv, "--rtol", "tiny"],
-                 "argument --rtol: invalid float value: 'tiny'")  # fmt: skip
+    _usage_error(
+        capsys,
+        suite_merge.main,
+        ["--from", "a"],
+        "the following arguments are required: --into, --policies",
+    )
+    _usage_error(
+        capsys,
+        suite_merge.main,
+        [*argv, "--rtol", "tiny"],
+        "argument --rtol: invalid float value: 'tiny'",
+    )
 
 
 def test_paper_figures_options(capsys, tmp_path: Path) -> None:
@@ -74,24 +92,46 @@ def test_paper_figures_options(capsys, tmp_path: Path) -> None:
     args = paper_figures.parse_args(["--out", str(out)])
     assert args == paper_figures.Args(out=out)
     assert (args.duration, args.seed, args.policies, args.control_dt, args.transient, args.dpi) == (
-        300.0, 0, ("fbsm", "backstepping"), 0.05, None, 150)  # fmt: skip
+        300.0,
+        0,
+        ("fbsm", "backstepping"),
+        0.05,
+        None,
+        150,
+    )
     _helps(paper_figures.Args, parse_options(paper_figures.Args, [], "prog", None)[1])
     args = paper_figures.parse_args(["--out", str(out), "--policies", "fbsm, backstepping_ilos"])
     assert args.policies == ("fbsm", "backstepping_ilos")
-    _usage_error(capsys, paper_figures.main, ["--out", str(out), "--dpi", "high"],
-                 "argument --dpi: invalid int value: 'high'")  # fmt: skip
-    _usage_error(capsys, paper_figures.main, ["--out", str(out), "--policies", "fbsm,fbsm"],
-                 "--policies names ['fbsm'] more than once")  # fmt: skip
+    _usage_error(
+        capsys,
+        paper_figures.main,
+        ["--out", str(out), "--dpi", "high"],
+        "argument --dpi: invalid int value: 'high'",
+    )
+    _usage_error(
+        capsys,
+        paper_figures.main,
+        ["--out", str(out), "--policies", "fbsm,fbsm"],
+        "--policies names ['fbsm'] more than once",
+    )
 
 
 def test_action_bounds_options(capsys) -> None:
     parsed, parser = parse_options(action_bounds.Options, [], "prog", None)
     assert parsed == action_bounds.Options() == action_bounds.Options(32, 100.0, None)
     _helps(action_bounds.Options, parser)
-    _usage_error(capsys, action_bounds.main, ["--episodes", "0"],
-                 "--episodes must be >= 1 and --duration > 0")  # fmt: skip
-    _usage_error(capsys, action_bounds.main, ["--duration", "long"],
-                 "argument --duration: invalid float value: 'long'")  # fmt: skip
+    _usage_error(
+        capsys,
+        action_bounds.main,
+        ["--episodes", "0"],
+        "--episodes must be >= 1 and --duration > 0",
+    )
+    _usage_error(
+        capsys,
+        action_bounds.main,
+        ["--duration", "long"],
+        "argument --duration: invalid float value: 'long'",
+    )
 
 
 def test_train_command_options(capsys) -> None:
@@ -100,5 +140,6 @@ def test_train_command_options(capsys) -> None:
     _, extra = train_cli.parse_args(["--curve", "c", "--plot-only", "--evaluate", "agent"])
     assert extra == train_cli.CommandOptions("c", True, "agent")
     _usage_error(capsys, train_cli.parse_args, ["--plot-only"], "--plot-only needs --curve")
-    _usage_error(capsys, train_cli.parse_args, ["--no-plot-only"],
-                 "unrecognized arguments: --no-plot-only")  # fmt: skip
+    _usage_error(
+        capsys, train_cli.parse_args, ["--no-plot-only"], "unrecognized arguments: --no-plot-only"
+    )

@@ -223,23 +223,25 @@ def usage_error(capsys, main_function, argv: list[str]) -> str:
 
 @pytest.mark.parametrize(
     ("argv", "message"),
-    [(["--policies", ""], "--policies must name at least one, got ''"),
-     (["--policies", " , "], "--policies has an empty name"),
-     (["--policies", "fbsm,,backstepping"], "--policies has an empty name"),
-     (["--policies", f"{USER},fbsm,{USER}"], f"--policies names ['{USER}'] more than once"),
-     (["--scenarios", "hurricane"], "unknown scenario ['hurricane']"),
-     (["--scenarios", ""], "--scenarios must name at least one"),
-     (["--scenarios", "paper,paper"], "--scenarios names ['paper'] more than once"),
-     (["--seeds", "0"], "--seeds must be an integer in [1, 100000], got 0"),
-     (["--seeds", "x"], "argument --seeds: invalid int value: 'x'"),
-     (["--duration", "nan"], "--duration must be a finite number in (0, 1e+06] s, got nan"),
-     (["--duration", "-5"], "--duration must be"),
-     (["--transient", "30"], "--transient must be a finite number in [0, 20) s, got 30.0"),
-     (["--workers", "0"], "--workers must be an integer in [1, 1024], got 0"),
-     (["--address", "auto"], "--address needs --backend ray"),
-     (["--scenario-file", "/nonexistent.toml"], "--scenario-file '/nonexistent.toml': No such"),
-     (["--policies", "lqr"], "unknown policy 'lqr'")],
-)  # fmt: skip
+    [
+        (["--policies", ""], "--policies must name at least one, got ''"),
+        (["--policies", " , "], "--policies has an empty name"),
+        (["--policies", "fbsm,,backstepping"], "--policies has an empty name"),
+        (["--policies", f"{USER},fbsm,{USER}"], f"--policies names ['{USER}'] more than once"),
+        (["--scenarios", "hurricane"], "unknown scenario ['hurricane']"),
+        (["--scenarios", ""], "--scenarios must name at least one"),
+        (["--scenarios", "paper,paper"], "--scenarios names ['paper'] more than once"),
+        (["--seeds", "0"], "--seeds must be an integer in [1, 100000], got 0"),
+        (["--seeds", "x"], "argument --seeds: invalid int value: 'x'"),
+        (["--duration", "nan"], "--duration must be a finite number in (0, 1e+06] s, got nan"),
+        (["--duration", "-5"], "--duration must be"),
+        (["--transient", "30"], "--transient must be a finite number in [0, 20) s, got 30.0"),
+        (["--workers", "0"], "--workers must be an integer in [1, 1024], got 0"),
+        (["--address", "auto"], "--address needs --backend ray"),
+        (["--scenario-file", "/nonexistent.toml"], "--scenario-file '/nonexistent.toml': No such"),
+        (["--policies", "lqr"], "unknown policy 'lqr'"),
+    ],
+)
 def test_bad_arguments_exit_2_with_one_line_before_any_work(argv, message, tmp_path, capsys):
     """Was: `--policies ""` exited 0 with an empty summary, duplicated names wrote duplicated
     rows, and errors were tracebacks or exit code 1."""
@@ -263,15 +265,30 @@ def test_unwritable_out_is_refused_before_the_first_episode(where, tmp_path, cap
         raise AssertionError("an episode ran")
 
     monkeypatch.setattr(benchmarks.compare, "run_jobs", no_episodes)
-    err = usage_error(capsys, main, ["--policies", USER, "--scenarios", "nominal", "--seeds", "1",
-                                     "--duration", "20", "--out", str(out[where])])  # fmt: skip
+    err = usage_error(
+        capsys,
+        main,
+        [
+            "--policies",
+            USER,
+            "--scenarios",
+            "nominal",
+            "--seeds",
+            "1",
+            "--duration",
+            "20",
+            "--out",
+            str(out[where]),
+        ],
+    )
     assert f"--out '{out[where]}' is not a writable folder" in err
 
 
 def test_unwritable_out_in_a_subprocess_is_one_line_without_traceback(tmp_path):
     (tmp_path / "file.txt").write_text("")
-    bad = run_cli("--policies", USER, *TINY, "--out", str(tmp_path / "file.txt" / "out"),
-                  check=False)  # fmt: skip
+    bad = run_cli(
+        "--policies", USER, *TINY, "--out", str(tmp_path / "file.txt" / "out"), check=False
+    )
     assert bad.returncode == 2 and bad.stdout == ""
     assert bad.stderr.splitlines() == [
         f"python -m benchmarks.compare: error: --out '{tmp_path / 'file.txt' / 'out'}' is not "
@@ -299,16 +316,18 @@ def test_a_damaged_agent_is_refused_before_the_first_episode(tmp_path, capsys):
 
 @pytest.mark.parametrize(
     ("argv", "message"),
-    [(["--policies", ""], "--policies must name at least one"),
-     (["--policies", "fbsm,fbsm"], "--policies names ['fbsm'] more than once"),
-     (["--policies", "fbsm,,backstepping"], "--policies has an empty name"),
-     (["--control-dt", "0.015"], "control_dt = 0.015 s must be a whole multiple"),
-     (["--duration", "0"], "--duration must be a finite number in (0, 1e+06] s, got 0.0"),
-     (["--transient", "60"], "--transient must be a finite number in [0, 60) s"),
-     (["--dpi", "5"], "--dpi must be an integer in [20, 1200], got 5"),
-     (["--seed", "-1"], "--seed must be non-negative, got -1"),
-     (["--policies", "ppo:/nonexistent"], "agent /nonexistent does not exist")],
-)  # fmt: skip
+    [
+        (["--policies", ""], "--policies must name at least one"),
+        (["--policies", "fbsm,fbsm"], "--policies names ['fbsm'] more than once"),
+        (["--policies", "fbsm,,backstepping"], "--policies has an empty name"),
+        (["--control-dt", "0.015"], "control_dt = 0.015 s must be a whole multiple"),
+        (["--duration", "0"], "--duration must be a finite number in (0, 1e+06] s, got 0.0"),
+        (["--transient", "60"], "--transient must be a finite number in [0, 60) s"),
+        (["--dpi", "5"], "--dpi must be an integer in [20, 1200], got 5"),
+        (["--seed", "-1"], "--seed must be non-negative, got -1"),
+        (["--policies", "ppo:/nonexistent"], "agent /nonexistent does not exist"),
+    ],
+)
 def test_paper_figures_refuses_bad_arguments_in_one_line(argv, message, tmp_path, capsys):
     from benchmarks.paper_figures import main as paper_main
 
@@ -362,11 +381,30 @@ def test_a_killed_compare_leaves_no_worker_running(tmp_path):
     """Was: after SIGKILL of `compare --workers 2` the workers ran on (their episodes and the
     queued ones). Now they get SIGKILL with their parent (prctl PR_SET_PDEATHSIG)."""
     proc = subprocess.Popen(
-        [sys.executable, "-m", "benchmarks.compare", "--policies", USER, "--scenarios", "paper",
-         "--seeds", "8", "--duration", "6000", "--workers", "2", "--quiet", "--no-figures",
-         "--out", str(tmp_path)],
-        cwd=ROOT, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.compare",
+            "--policies",
+            USER,
+            "--scenarios",
+            "paper",
+            "--seeds",
+            "8",
+            "--duration",
+            "6000",
+            "--workers",
+            "2",
+            "--quiet",
+            "--no-figures",
+            "--out",
+            str(tmp_path),
+        ],
+        cwd=ROOT,
+        env=ENV,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         deadline = time.time() + 120
         workers: set[int] = set()
@@ -388,11 +426,13 @@ def test_a_killed_compare_leaves_no_worker_running(tmp_path):
 
 def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys):
     scenarios = tmp_path / "scenarios.toml"
-    scenarios.write_text('[ok]\ndescription = "fine"\n\n[bad]\ndescription = "no"\n'
-                         "env = { control_dt = 0.015 }\n")  # fmt: skip
+    scenarios.write_text(
+        '[ok]\ndescription = "fine"\n\n[bad]\ndescription = "no"\nenv = { control_dt = 0.015 }\n'
+    )
     out = tmp_path / "out"
-    err = usage_error(capsys, main, ["--policies", "fbsm", "--scenario-file", str(scenarios),
-                                     "--out", str(out)])  # fmt: skip
+    err = usage_error(
+        capsys, main, ["--policies", "fbsm", "--scenario-file", str(scenarios), "--out", str(out)]
+    )
     assert "scenario 'bad': control_dt = 0.015 s must be a whole multiple" in err
     assert not out.exists()
     scenarios.write_text("[bad]\nenv = 3\n")
@@ -417,11 +457,25 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
     assert "surge_limit" not in Job("fbsm", scenario, 0, 10.0, 5.0).env_kwargs
     same = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v0")
     assert v1.fingerprint() != same.fingerprint()
-    argv = ["--policies", "fbsm,ppo_generalist", "--scenarios", "paper", "--seeds", "1",
-            "--duration", "10", "--quiet", "--no-figures", "--out", str(tmp_path)]  # fmt: skip
+    argv = [
+        "--policies",
+        "fbsm,ppo_generalist",
+        "--scenarios",
+        "paper",
+        "--seeds",
+        "1",
+        "--duration",
+        "10",
+        "--quiet",
+        "--no-figures",
+        "--out",
+        str(tmp_path),
+    ]
     records = main(argv)
     assert {r["policy"]: r["env_id"] for r in records} == {
-        "fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}  # fmt: skip
+        "fbsm": "AUVPath3D-v0",
+        "ppo_generalist": "AUVPath3DSpeedLimit-v0",
+    }
     config = json.loads((tmp_path / "episodes.json").read_text())["config"]
     assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}
 
@@ -431,9 +485,13 @@ def test_a_run_of_too_many_episodes_is_refused_before_the_jobs_are_listed(tmp_pa
     first word; now refused at once, naming the product."""
     n = len(load_scenarios())
     t0 = time.monotonic()
-    err = usage_error(capsys, main, ["--seeds", "100000", "--policies", "fbsm,backstepping",
-                                     "--out", str(tmp_path / "out")])  # fmt: skip
+    err = usage_error(
+        capsys,
+        main,
+        ["--seeds", "100000", "--policies", "fbsm,backstepping", "--out", str(tmp_path / "out")],
+    )
     assert time.monotonic() - t0 < 5.0
-    assert (f"--seeds 100000 × {n} scenarios × 2 policies = {200_000 * n} episodes, more "
-            "than 1000000") in err  # fmt: skip
+    assert (
+        f"--seeds 100000 × {n} scenarios × 2 policies = {200_000 * n} episodes, more than 1000000"
+    ) in err
     assert not (tmp_path / "out").exists()

@@ -32,11 +32,21 @@ NAMES = [
 def observations(n, seed=0):
     rng = np.random.default_rng(seed)
     obs = np.zeros((n, OBS_DIM), dtype=np.float32)
-    for name, (lo, hi) in {"x_e": (-5, 5), "y_e": (-5, 5), "z_e": (-5, 5),
-                           "psi_error": (-3, 3), "theta": (-0.4, 0.4), "theta_F": (0.2, 0.4),
-                           "u": (0.0, 1.5), "v": (-0.2, 0.2), "w": (-0.2, 0.2),
-                           "q": (-0.2, 0.2), "r": (-0.2, 0.2), "u_p": (0, 2),
-                           "psi_F_dot": (0.0, 0.2)}.items():  # fmt: skip
+    for name, (lo, hi) in {
+        "x_e": (-5, 5),
+        "y_e": (-5, 5),
+        "z_e": (-5, 5),
+        "psi_error": (-3, 3),
+        "theta": (-0.4, 0.4),
+        "theta_F": (0.2, 0.4),
+        "u": (0.0, 1.5),
+        "v": (-0.2, 0.2),
+        "w": (-0.2, 0.2),
+        "q": (-0.2, 0.2),
+        "r": (-0.2, 0.2),
+        "u_p": (0, 2),
+        "psi_F_dot": (0.0, 0.2),
+    }.items():
         obs[:, OBS_INDEX[name]] = rng.uniform(lo, hi, n)
     obs[:, OBS_INDEX["u_D"]] = 1.0
     return obs
@@ -151,20 +161,23 @@ def test_fuzzy_kernel_matches_the_reference_basis_and_adaptive_laws(leak, separa
     assert abs(tau) < limit
 
     new_f, new_b, new_d, diag = theta_f.copy(), theta_b.copy(), theta_d.copy(), np.empty(3)
-    action = adaptive_loop(1, v_in, S, rest, limit, b_n, new_f, new_b, new_d, g,
-                           np.empty(WORK_DIM), diag)  # fmt: skip
+    action = adaptive_loop(
+        1, v_in, S, rest, limit, b_n, new_f, new_b, new_d, g, np.empty(WORK_DIM), diag
+    )
     np.testing.assert_allclose(diag, [f_hat, b_hat, d_hat], rtol=1e-12)
     assert action == pytest.approx(tau / limit, rel=1e-12)
     a_f, a_b, a_d = gains.alpha_f, gains.alpha_b, gains.alpha_d
-    np.testing.assert_allclose(new_f, theta_f + dt * a_f * (S * xi - leak * theta_f),
-                               rtol=1e-12, atol=1e-15)  # fmt: skip
+    np.testing.assert_allclose(
+        new_f, theta_f + dt * a_f * (S * xi - leak * theta_f), rtol=1e-12, atol=1e-15
+    )
     expected_b = theta_b + dt * a_b * (S * xi_b * tau - leak * (theta_b - b_n))
     np.testing.assert_allclose(new_b, np.clip(expected_b, 0.5 * b_n, 2.0 * b_n), rtol=1e-12)
     np.testing.assert_allclose(new_d, theta_d + dt * a_d * (S * xi_d - leak * theta_d), rtol=1e-12)
 
     frozen_f, frozen_b, frozen_d = theta_f.copy(), theta_b.copy(), theta_d.copy()
-    action = adaptive_loop(1, v_in, S, 1e3, limit, b_n, frozen_f, frozen_b, frozen_d, g,
-                           np.empty(WORK_DIM), diag)  # fmt: skip
+    action = adaptive_loop(
+        1, v_in, S, 1e3, limit, b_n, frozen_f, frozen_b, frozen_d, g, np.empty(WORK_DIM), diag
+    )
     assert action == 1.0  # saturated: no adaptation
     np.testing.assert_array_equal(frozen_f, theta_f)
     np.testing.assert_array_equal(frozen_b, theta_b)
@@ -236,23 +249,29 @@ def test_fins_actuator_normalises_by_speed_dependent_authority():
 
 @pytest.mark.parametrize(
     ("kwargs", "error"),
-    [({"control_dt": -0.05}, "control_dt"), ({"actuator": "jets"}, "actuator"),
-     ({"k1": -1.0}, "k1"), ({"bogus_gain": 1.0}, "unknown controller gains"),
-     ({"params": "remus"}, "AUVParams"), ({"threads": 2}, "threads"),
-     ({"ilos_y": -1.0}, "ilos_y must be >= 0"), ({"ilos_z": math.nan}, "ilos_z"),
-     ({"current_observer": -1.0}, r"current_observer must be a finite number in \[0, ∞\) rad/s"),
-     ({"current_observer": math.nan}, "current_observer must be a finite number"),
-     ({"current_observer": "3"}, "current_observer must be a real number"),
-     ({"alos_y": -0.01}, r"alos_y must be a finite number in \[0, ∞\)"),
-     ({"alos_z": math.inf}, "alos_z must be a finite number"),
-     ({"alos_radius": 0.0}, r"alos_radius must be a finite number in \(0, ∞\) m, got 0.0"),
-     ({"alos_radius": math.nan}, "alos_radius must be a finite number"),
-     ({"alos_max": -0.1}, "alos_max must be a finite number in"),
-     ({"alos_max": 2.0}, r"alos_max must be a finite number in \(0, 1.5708\) rad, got 2.0"),
-     ({"speed_over_ground": "yes"}, "speed_over_ground must be True or False"),
-     ({"current_observer": 20.0}, "current_observer × control_dt must be below 0.828"),
-     ({"speed_over_ground": True}, "speed_over_ground=True needs current_observer > 0")],
-)  # fmt: skip
+    [
+        ({"control_dt": -0.05}, "control_dt"),
+        ({"actuator": "jets"}, "actuator"),
+        ({"k1": -1.0}, "k1"),
+        ({"bogus_gain": 1.0}, "unknown controller gains"),
+        ({"params": "remus"}, "AUVParams"),
+        ({"threads": 2}, "threads"),
+        ({"ilos_y": -1.0}, "ilos_y must be >= 0"),
+        ({"ilos_z": math.nan}, "ilos_z"),
+        ({"current_observer": -1.0}, r"current_observer must be a finite number in \[0, ∞\) rad/s"),
+        ({"current_observer": math.nan}, "current_observer must be a finite number"),
+        ({"current_observer": "3"}, "current_observer must be a real number"),
+        ({"alos_y": -0.01}, r"alos_y must be a finite number in \[0, ∞\)"),
+        ({"alos_z": math.inf}, "alos_z must be a finite number"),
+        ({"alos_radius": 0.0}, r"alos_radius must be a finite number in \(0, ∞\) m, got 0.0"),
+        ({"alos_radius": math.nan}, "alos_radius must be a finite number"),
+        ({"alos_max": -0.1}, "alos_max must be a finite number in"),
+        ({"alos_max": 2.0}, r"alos_max must be a finite number in \(0, 1.5708\) rad, got 2.0"),
+        ({"speed_over_ground": "yes"}, "speed_over_ground must be True or False"),
+        ({"current_observer": 20.0}, "current_observer × control_dt must be below 0.828"),
+        ({"speed_over_ground": True}, "speed_over_ground=True needs current_observer > 0"),
+    ],
+)
 def test_bad_configuration_raises(kwargs, error):
     with pytest.raises(ValueError, match=error):
         controllers.make("fbsm", **kwargs)
@@ -286,8 +305,13 @@ def test_integral_los_removes_the_offset_a_constant_current_leaves(name, control
     at a constant cross-track offset; integral LOS (`<name>_ilos`, σ_y = 3) drives it to zero."""
     from auv_gym.rollout import rollouts
 
-    env = {"path": "line", "disturbance": "none", "current": {"mean": (0.0, 0.3, 0.0)},
-           "max_time": 300.0, "control_dt": control_dt}  # fmt: skip
+    env = {
+        "path": "line",
+        "disturbance": "none",
+        "current": {"mean": (0.0, 0.3, 0.0)},
+        "max_time": 300.0,
+        "control_dt": control_dt,
+    }
     (los,) = rollouts(controllers.make(name, control_dt=control_dt), [0], **env)
     (ilos,) = rollouts(controllers.make(f"{name}_ilos", control_dt=control_dt), [0], **env)
     late = los.t >= 200.0

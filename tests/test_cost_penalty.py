@@ -43,8 +43,15 @@ def test_rewards_are_charged_the_safety_cost_and_nothing_else_changes():
 def test_a_bad_cost_penalty_is_one_line_naming_it(tmp_path, value):
     from benchmarks.training.config import read_zoo_config
 
-    section = {"n_envs": 2, "n_timesteps": 64, "policy": "MlpPolicy", "normalize": True,
-               "n_steps": 32, "batch_size": 32, "cost_penalty": value}  # fmt: skip
+    section = {
+        "n_envs": 2,
+        "n_timesteps": 64,
+        "policy": "MlpPolicy",
+        "normalize": True,
+        "n_steps": 32,
+        "batch_size": 32,
+        "cost_penalty": value,
+    }
     path = tmp_path / "c.yml"
     path.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
     with pytest.raises(

@@ -20,8 +20,9 @@ def body_current(tr, mean):
     psi, theta = tr["psi"], tr["theta"]
     cps, sps, cth, sth = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta)
     a = cps * mean[0] + sps * mean[1]
-    return np.column_stack([cth * a - sth * mean[2], -sps * mean[0] + cps * mean[1],
-                            sth * a + cth * mean[2]])  # fmt: skip
+    return np.column_stack(
+        [cth * a - sth * mean[2], -sps * mean[0] + cps * mean[1], sth * a + cth * mean[2]]
+    )
 
 
 def test_crab_angles_reduce_to_the_papers_attack_angle_in_still_water():
@@ -51,8 +52,14 @@ def test_observer_estimates_the_current_in_body_axes_without_measuring_it():
     """Helix, constant current with a vertical component: ĉ converges to R_Bᵀ v_c although the
     controller sees only the observation (position errors, attitude, velocity through water)."""
     mean = (0.1, 0.25, 0.05)
-    (tr,) = rollouts(controllers.make("backstepping_colos"), [0], path="helix",
-                     disturbance="none", current={"mean": mean}, max_time=60.0)  # fmt: skip
+    (tr,) = rollouts(
+        controllers.make("backstepping_colos"),
+        [0],
+        path="helix",
+        disturbance="none",
+        current={"mean": mean},
+        max_time=60.0,
+    )
     estimate = tr["current_hat"]  # ĉ updated with the observation at sample k
     truth = body_current(tr, mean)[:-1]
     error = np.abs(estimate - truth).max(axis=1)
@@ -66,8 +73,12 @@ def test_straight_line_in_a_constant_current_errors_go_to_zero(name):
     """A descending line in a 0.3 m/s cross current with a 0.05 m/s vertical component: the
     paper's LOS keeps constant cross- and vertical-track offsets; the new guidance removes
     them (< 1 cm) and keeps the virtual point from lagging (speed over ground)."""
-    env = {"path": {"kind": "line", "direction": [1.0, 0.0, 0.25]}, "disturbance": "none",
-           "current": {"mean": (0.0, 0.3, 0.05)}, "max_time": 300.0}  # fmt: skip
+    env = {
+        "path": {"kind": "line", "direction": [1.0, 0.0, 0.25]},
+        "disturbance": "none",
+        "current": {"mean": (0.0, 0.3, 0.05)},
+        "max_time": 300.0,
+    }
     base = name.split("_")[0]
     (plain,) = rollouts(controllers.make(base), [0], **env)
     (new,) = rollouts(controllers.make(name), [0], **env)
@@ -84,8 +95,9 @@ def test_straight_line_in_a_constant_current_errors_go_to_zero(name):
 def test_helix_in_a_constant_current_settles_below_the_target(name, bound):
     """The helix turns the current through 360° in the path frame every 132 s; RMS distance
     over t ≥ 100 s stays below the issue's 0.10 m (ILOS: 0.56 m, paper's LOS: 2.3 m)."""
-    (tr,) = rollouts(controllers.make(name), [0], disturbance="none",
-                     current={"mean": (0.0, 0.3, 0.0)})  # fmt: skip
+    (tr,) = rollouts(
+        controllers.make(name), [0], disturbance="none", current={"mean": (0.0, 0.3, 0.0)}
+    )
     metrics = compute_metrics(tr, transient=100.0)
     assert metrics["rms_distance"] < bound  # measured 0.053 (FBSM), 0.018 m (backstepping)
     assert metrics["max_distance_window"] < 0.25  # measured 0.12, 0.04 m
@@ -130,8 +142,12 @@ def test_the_capture_gate_keeps_alos_from_winding_up_on_the_approach():
 
 
 def test_alos_trims_respect_the_projection_bound():
-    (tr,) = rollouts(controllers.make("backstepping", alos_y=1.0, alos_z=1.0, alos_radius=1e6,
-                                      alos_max=0.05), [0], disturbance="none",
-                     current={"mean": (0.0, 0.3, 0.0)}, max_time=60.0)  # fmt: skip
+    (tr,) = rollouts(
+        controllers.make("backstepping", alos_y=1.0, alos_z=1.0, alos_radius=1e6, alos_max=0.05),
+        [0],
+        disturbance="none",
+        current={"mean": (0.0, 0.3, 0.0)},
+        max_time=60.0,
+    )
     assert np.abs(tr["beta_hat"]).max() == pytest.approx(0.05)
     assert np.abs(tr["alpha_hat"]).max() <= 0.05

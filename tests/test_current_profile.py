@@ -14,15 +14,26 @@ from auv_gym.ocean import OCEAN
 
 def _speed(profile: CurrentProfile, depth: float) -> float:
     p = profile
-    vx, vy, vz = profile_velocity(p.surface_speed, p.reference_speed, p.reference_depth,
-                                  p.exponent, p.direction, 0.0, 1.0, 0.0, depth, 0.0)  # fmt: skip
+    vx, vy, vz = profile_velocity(
+        p.surface_speed,
+        p.reference_speed,
+        p.reference_depth,
+        p.exponent,
+        p.direction,
+        0.0,
+        1.0,
+        0.0,
+        depth,
+        0.0,
+    )
     assert vz == 0.0
     return math.hypot(vx, vy)
 
 
 def test_linear_shear_layer_and_power_law_speeds():
-    shear = CurrentProfile(surface_speed=0.6, reference_depth=40.0, reference_speed=0.2,
-                           exponent=1.0)  # fmt: skip
+    shear = CurrentProfile(
+        surface_speed=0.6, reference_depth=40.0, reference_speed=0.2, exponent=1.0
+    )
     speeds = [_speed(shear, d) for d in (-5.0, 0.0, 10.0, 20.0, 40.0, 100.0)]
     np.testing.assert_allclose(speeds, [0.6, 0.6, 0.5, 0.4, 0.2, 0.2], rtol=1e-12)
     power = CurrentProfile(surface_speed=1.0, reference_depth=30.0)  # 1/7 law, zero at the bed
@@ -41,10 +52,19 @@ def test_heading_drift_turns_the_current_sinusoidally():
 
 
 def test_a_vehicle_at_rest_drifts_with_the_current_at_its_depth(make_sim):
-    profile = {"surface_speed": 0.5, "reference_depth": 40.0, "reference_speed": 0.1,
-               "exponent": 1.0, "direction": math.pi / 2}  # fmt: skip
-    sim = make_sim(disturbance="none", current_profile=profile, current=(0.1, 0.0, 0.0),
-                   start_position=(0.0, 0.0, 10.0))  # fmt: skip
+    profile = {
+        "surface_speed": 0.5,
+        "reference_depth": 40.0,
+        "reference_speed": 0.1,
+        "exponent": 1.0,
+        "direction": math.pi / 2,
+    }
+    sim = make_sim(
+        disturbance="none",
+        current_profile=profile,
+        current=(0.1, 0.0, 0.0),
+        start_position=(0.0, 0.0, 10.0),
+    )
     p0 = sim.state[0, :3].copy()
     for _ in range(200):  # 10 s
         sim.step(np.zeros((1, 3)))
@@ -54,10 +74,18 @@ def test_a_vehicle_at_rest_drifts_with_the_current_at_its_depth(make_sim):
 
 
 def test_the_drift_phase_is_drawn_per_episode_and_the_track_follows_it(make_sim):
-    profile = {"surface_speed": 0.5, "reference_depth": 40.0, "drift_amplitude": 1.0,
-               "drift_period": 20.0}  # fmt: skip
-    sims = [make_sim(seed=s, disturbance="none", current_profile=profile,
-                     start_position=(0.0, 0.0, 0.0)) for s in (0, 1)]  # fmt: skip
+    profile = {
+        "surface_speed": 0.5,
+        "reference_depth": 40.0,
+        "drift_amplitude": 1.0,
+        "drift_period": 20.0,
+    }
+    sims = [
+        make_sim(
+            seed=s, disturbance="none", current_profile=profile, start_position=(0.0, 0.0, 0.0)
+        )
+        for s in (0, 1)
+    ]
     phases = [s.ocean[0, OCEAN.drift_phase] for s in sims]
     assert phases[0] != phases[1]
     sim, phase = sims[0], phases[0]
@@ -72,26 +100,42 @@ def test_the_drift_phase_is_drawn_per_episode_and_the_track_follows_it(make_sim)
 @pytest.mark.parametrize(
     ("profile", "message"),
     [
-        ({"surface_speed": -0.1, "reference_depth": 10.0},
-         r"current_profile surface_speed must be a finite number in \[0, 10\] m/s, got -0.1"),
-        ({"surface_speed": 0.5, "reference_depth": 0.0},
-         r"current_profile reference_depth must be a finite number in \(0, 11000\] m, got 0.0"),
-        ({"surface_speed": 0.5, "reference_depth": math.inf},
-         "current_profile reference_depth must be a finite number"),
-        ({"surface_speed": 0.5, "reference_depth": 10.0, "reference_speed": 20.0},
-         r"current_profile reference_speed must be a finite number in \[0, 10\] m/s"),
-        ({"surface_speed": 0.5, "reference_depth": 10.0, "exponent": 0.0},
-         r"current_profile exponent must be a finite number in \(0, 10\], got 0.0"),
-        ({"surface_speed": 0.5, "reference_depth": 10.0, "drift_amplitude": 4.0},
-         r"current_profile drift_amplitude must be a finite number in \[0, 3.14159\] rad"),
-        ({"surface_speed": 0.5, "reference_depth": 10.0, "drift_period": -1.0},
-         r"current_profile drift_period must be a finite number in \(0, 1e\+06\] s"),
+        (
+            {"surface_speed": -0.1, "reference_depth": 10.0},
+            r"current_profile surface_speed must be a finite number in \[0, 10\] m/s, got -0.1",
+        ),
+        (
+            {"surface_speed": 0.5, "reference_depth": 0.0},
+            r"current_profile reference_depth must be a finite number in \(0, 11000\] m, got 0.0",
+        ),
+        (
+            {"surface_speed": 0.5, "reference_depth": math.inf},
+            "current_profile reference_depth must be a finite number",
+        ),
+        (
+            {"surface_speed": 0.5, "reference_depth": 10.0, "reference_speed": 20.0},
+            r"current_profile reference_speed must be a finite number in \[0, 10\] m/s",
+        ),
+        (
+            {"surface_speed": 0.5, "reference_depth": 10.0, "exponent": 0.0},
+            r"current_profile exponent must be a finite number in \(0, 10\], got 0.0",
+        ),
+        (
+            {"surface_speed": 0.5, "reference_depth": 10.0, "drift_amplitude": 4.0},
+            r"current_profile drift_amplitude must be a finite number in \[0, 3.14159\] rad",
+        ),
+        (
+            {"surface_speed": 0.5, "reference_depth": 10.0, "drift_period": -1.0},
+            r"current_profile drift_period must be a finite number in \(0, 1e\+06\] s",
+        ),
         ({"surface_speed": 0.5}, "current_profile needs reference_depth"),
-        ({"surface_speed": 0.5, "reference_depth": 10.0, "depth": 3.0},
-         r"current_profile has unknown key\(s\) \['depth'\]"),
+        (
+            {"surface_speed": 0.5, "reference_depth": 10.0, "depth": 3.0},
+            r"current_profile has unknown key\(s\) \['depth'\]",
+        ),
         ("shear", "current_profile must be None, a dict of CurrentProfile fields"),
     ],
-)  # fmt: skip
+)
 def test_bad_profile_arguments_name_the_argument(profile, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(current_profile=profile)

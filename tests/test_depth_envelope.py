@@ -20,21 +20,27 @@ from auv_gym.vector_env import AUVPath3DVectorEnv
 # A level line 10 m deep; the default start is 8 m below p(0), at 18 m.
 LEVEL = {"kind": "line", "start": [0.0, 0.0, 10.0], "direction": [1.0, 0.0, 0.0]}
 ENVELOPE = {
-    "path": LEVEL, "disturbance": "none", "corridor": 100.0, "max_pitch": 1.4,
+    "path": LEVEL,
+    "disturbance": "none",
+    "corridor": 100.0,
+    "max_pitch": 1.4,
     "depth_envelope": {"seabed_depth": 25.0, "margin": 2.0},
-}  # fmt: skip
+}
 
 
-def _expected_cost(z: float, u: float, theta: float, envelope: DepthEnvelope,
-                   cost: SafetyCost) -> float:  # fmt: skip
+def _expected_cost(
+    z: float, u: float, theta: float, envelope: DepthEnvelope, cost: SafetyCost
+) -> float:
     """The documented formula (auv_gym.safety_cost), written out independently."""
     m = envelope.margin
     seabed = math.inf if envelope.seabed_depth is None else envelope.seabed_depth
     intrusion = max(m - z, z - (seabed - m), 0.0)
     u_c, theta_c = cost.speed_limit, cost.pitch_limit
-    return (cost.depth * min(intrusion / m, 1.0)
-            + cost.speed * min(max(u - u_c, 0.0) / u_c, 1.0)
-            + cost.pitch * min(max(abs(theta) - theta_c, 0.0) / theta_c, 1.0))  # fmt: skip
+    return (
+        cost.depth * min(intrusion / m, 1.0)
+        + cost.speed * min(max(u - u_c, 0.0) / u_c, 1.0)
+        + cost.pitch * min(max(abs(theta) - theta_c, 0.0) / theta_c, 1.0)
+    )
 
 
 def _hold_pitch(state: np.ndarray, theta_ref: float) -> np.ndarray:
@@ -69,8 +75,9 @@ def test_a_vehicle_driven_up_broaches_and_one_driven_down_grounds(theta_ref, rea
     # Every step's cost is the formula of the state after it; it grows inside the margin.
     envelope, cost = DepthEnvelope(25.0, 2.0), SafetyCost()
     for state, step_info in history:
-        expected = _expected_cost(state[STATE.z], state[STATE.u], state[STATE.theta], envelope,
-                                  cost)  # fmt: skip
+        expected = _expected_cost(
+            state[STATE.z], state[STATE.u], state[STATE.theta], envelope, cost
+        )
         assert step_info["cost"] == pytest.approx(expected, abs=1e-12)
     assert history[0][1]["cost"] == 0.0
     assert info["cost"] >= 1.0  # beyond the boundary the depth term is its full weight
@@ -144,34 +151,61 @@ def test_the_spline_depth_range_is_exact():
 @pytest.mark.parametrize(
     ("kwargs", "error", "message"),
     [
-        ({"depth_envelope": {"seabed_depth": -5.0}}, ValueError,
-         r"depth_envelope seabed_depth must be a finite number in \(4, 11000\] m .*got -5.0"),
-        ({"depth_envelope": {"seabed_depth": 3.0, "margin": 2.0}}, ValueError,
-         r"seabed_depth must be a finite number in \(4, 11000\]"),
-        ({"depth_envelope": {"seabed_depth": 4.0, "margin": 2.0}}, ValueError,
-         r"seabed_depth must be a finite number in \(4, 11000\]"),
-        ({"depth_envelope": {"margin": math.nan}}, ValueError,
-         r"depth_envelope margin must be a finite number in \(0, 1000\] m, got nan"),
+        (
+            {"depth_envelope": {"seabed_depth": -5.0}},
+            ValueError,
+            r"depth_envelope seabed_depth must be a finite number in \(4, 11000\] m .*got -5.0",
+        ),
+        (
+            {"depth_envelope": {"seabed_depth": 3.0, "margin": 2.0}},
+            ValueError,
+            r"seabed_depth must be a finite number in \(4, 11000\]",
+        ),
+        (
+            {"depth_envelope": {"seabed_depth": 4.0, "margin": 2.0}},
+            ValueError,
+            r"seabed_depth must be a finite number in \(4, 11000\]",
+        ),
+        (
+            {"depth_envelope": {"margin": math.nan}},
+            ValueError,
+            r"depth_envelope margin must be a finite number in \(0, 1000\] m, got nan",
+        ),
         ({"depth_envelope": {"seabed_depth": math.inf}}, ValueError, r"seabed_depth .*got inf"),
-        ({"depth_envelope": {"depth": 5.0}}, ValueError,
-         r"depth_envelope has unknown key\(s\) \['depth'\]"),
+        (
+            {"depth_envelope": {"depth": 5.0}},
+            ValueError,
+            r"depth_envelope has unknown key\(s\) \['depth'\]",
+        ),
         ({"depth_envelope": "surface"}, TypeError, r"depth_envelope must be None, True"),
         ({"path_offset": (0.0, 0.0, math.nan)}, ValueError, r"path_offset must be 3 real"),
-        ({"safety_cost": {"speed_limit": 0.0}}, ValueError,
-         r"safety_cost speed_limit must be a finite number in \(0, 10\] m/s, got 0.0"),
+        (
+            {"safety_cost": {"speed_limit": 0.0}},
+            ValueError,
+            r"safety_cost speed_limit must be a finite number in \(0, 10\] m/s, got 0.0",
+        ),
         ({"safety_cost": {"pitch": -1.0}}, ValueError, r"safety_cost pitch must be a finite"),
         ({"safety_cost": 3}, TypeError, r"safety_cost must be None, a dict"),
         # The paper's helix climbs to z = -99 m within the 300 m of an episode on schedule.
-        ({"depth_envelope": True}, ValueError,
-         r"the path and the start reach z = -98.99 m over the 300 m .*add \(0, 0, 101\) to "
-         r"path_offset"),
-        ({"depth_envelope": True, "path_offset": (0, 0, 100)}, ValueError,
-         r"z = 1.006 m .*add \(0, 0, 1\) to path_offset"),
-        ({"depth_envelope": {"seabed_depth": 100.0}, "path_offset": (0, 0, 110)}, ValueError,
-         r"reach z = 110 m .*below the depth_envelope's safe band z <= 98 m"),
+        (
+            {"depth_envelope": True},
+            ValueError,
+            r"the path and the start reach z = -98.99 m over the 300 m .*add \(0, 0, 101\) to "
+            r"path_offset",
+        ),
+        (
+            {"depth_envelope": True, "path_offset": (0, 0, 100)},
+            ValueError,
+            r"z = 1.006 m .*add \(0, 0, 1\) to path_offset",
+        ),
+        (
+            {"depth_envelope": {"seabed_depth": 100.0}, "path_offset": (0, 0, 110)},
+            ValueError,
+            r"reach z = 110 m .*below the depth_envelope's safe band z <= 98 m",
+        ),
         ({**ENVELOPE, "start_position": (0.0, 0.0, 1.0)}, ValueError, r"reach z = 1 m"),
     ],
-)  # fmt: skip
+)
 def test_bad_input_is_a_named_error(kwargs, error, message):
     with pytest.raises(error, match=message):
         AUVPath3DEnv(**kwargs)
@@ -186,8 +220,11 @@ def test_a_config_built_directly_refuses_an_offset_it_would_not_apply():
 
 def test_a_drawn_path_that_crosses_the_envelope_is_refused_at_reset():
     # Helices climbing 10-20° from 20 m: within 300 m they rise 52-103 m, through the surface.
-    env = AUVPath3DEnv(path={"families": ["helix"], "climb_angle_deg": [10.0, 20.0]},
-                       path_offset=(0.0, 0.0, 20.0), depth_envelope=True)  # fmt: skip
+    env = AUVPath3DEnv(
+        path={"families": ["helix"], "climb_angle_deg": [10.0, 20.0]},
+        path_offset=(0.0, 0.0, 20.0),
+        depth_envelope=True,
+    )
     with pytest.raises(ValueError, match=r"the path drawn at this reset .*path_offset"):
         for seed in range(4):  # half of them climb, half descend
             env.reset(seed=seed)
@@ -205,8 +242,9 @@ def test_episodes_are_deterministic_per_seed_and_batched_equals_single():
     ended = np.zeros(n, bool)
     reasons: list[str | None] = [None] * n
     for _ in range(1200):
-        actions = np.array([_hold_pitch(env.state, r) for env, r in zip(singles, refs,
-                                                                        strict=True)])  # fmt: skip
+        actions = np.array(
+            [_hold_pitch(env.state, r) for env, r in zip(singles, refs, strict=True)]
+        )
         _, rewards, _, _, infos = vec.step(actions)
         for i, env in enumerate(singles):
             if ended[i]:
@@ -264,14 +302,21 @@ def test_the_episode_figures_draw_the_surface_and_the_seabed():
     from auv_gym.rollout import rollouts
 
     (tr,) = rollouts(controllers.make("fbsm"), [0], max_time=5.0, **DEEP)
-    lines = {line.get_label(): line.get_ydata()[0] for line in
-             figure_vertical({"fbsm": tr}).axes[0].get_lines()}  # fmt: skip
+    lines = {
+        line.get_label(): line.get_ydata()[0]
+        for line in figure_vertical({"fbsm": tr}).axes[0].get_lines()
+    }
     assert lines["sea surface"] == 0.0 and lines["seabed"] == -130.0
     planes = figure_path_3d({"fbsm": tr}).axes[0].collections
     assert {p.get_label() for p in planes} >= {"sea surface", "seabed"}
     fig = new_figure(13.0, 4.4)
-    plot_track(fig, tr_path := AUVPath3DEnv(**DEEP).config.path, {"fbsm": tr.position}, 5.0,
-               envelope=DepthEnvelope(130.0))  # fmt: skip
+    plot_track(
+        fig,
+        tr_path := AUVPath3DEnv(**DEEP).config.path,
+        {"fbsm": tr.position},
+        5.0,
+        envelope=DepthEnvelope(130.0),
+    )
     assert tr_path.offset == (0.0, 0.0, 110.0)
     xz = {line.get_label(): line.get_ydata()[0] for line in fig.axes[2].get_lines()}
     assert xz["sea surface"] == 0.0 and xz["seabed"] == -130.0
@@ -281,12 +326,20 @@ def test_the_compare_summary_has_an_episode_cost_column():
     from benchmarks.tables import summarise
 
     records = [
-        {"scenario": "deep", "policy": "p", "seed": seed,
-         "metrics": {"episode_cost": cost, "termination_reason": end}}
-        for seed, cost, end in [(0, 1.5, "time_limit"), (1, 2.5, "time_limit"),
-                                (2, 9.0, "broached")]
-    ]  # fmt: skip
+        {
+            "scenario": "deep",
+            "policy": "p",
+            "seed": seed,
+            "metrics": {"episode_cost": cost, "termination_reason": end},
+        }
+        for seed, cost, end in [
+            (0, 1.5, "time_limit"),
+            (1, 2.5, "time_limit"),
+            (2, 9.0, "broached"),
+        ]
+    ]
     summary = summarise(records, {"seeds": 3, "duration": 300.0, "transient": 100.0})
     # the broached episode is a failure: counted, and excluded from the mean
-    assert summary.endswith("| policy | failed | episode cost |\n|---|---:|---:|\n"
-                            "| p | 1/3 | 2.00 ± 0.50 |\n")  # fmt: skip
+    assert summary.endswith(
+        "| policy | failed | episode cost |\n|---|---:|---:|\n| p | 1/3 | 2.00 ± 0.50 |\n"
+    )

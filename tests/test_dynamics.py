@@ -28,8 +28,9 @@ def test_actuation_and_disturbance_enter_their_rows_alone():
 def test_restoring_moment_is_the_only_term_at_rest():
     """g: pitch −(z_g W − z_b B) sin θ = −5.8604 sin θ N·m; no force (B = W)."""
     forces = _forces((0.0,) * 5, theta=0.3)
-    np.testing.assert_allclose(forces, [0.0, 0.0, 0.0, -0.0196 * 299.0 * math.sin(0.3), 0.0],
-                               rtol=1e-15, atol=0.0)  # fmt: skip
+    np.testing.assert_allclose(
+        forces, [0.0, 0.0, 0.0, -0.0196 * 299.0 * math.sin(0.3), 0.0], rtol=1e-15, atol=0.0
+    )
     lifted = _forces((0.0,) * 5, theta=0.3, params=remus100(z_b=-0.01))
     assert lifted[3] == pytest.approx(-(0.0196 * 299.0 + 0.01 * 299.0) * math.sin(0.3), rel=1e-15)
 
@@ -38,9 +39,12 @@ def test_damping_and_centripetal_terms_of_single_velocities():
     # u = 1 m/s: axial drag X_u|u| = −1.62 N only.
     np.testing.assert_allclose(_forces((1.0, 0.0, 0.0, 0.0, 0.0)), [-1.62, 0, 0, 0, 0], atol=1e-15)
     # q = 0.1 rad/s: X_qq q², m z_g q² (heave) and M_q|q| q|q|.
-    np.testing.assert_allclose(_forces((0.0, 0.0, 0.0, 0.1, 0.0)),
-                               [-1.93 * 0.01, 0.0, M_ZG * 0.01, -188.0 * 0.01, 0.0],
-                               rtol=1e-14, atol=1e-15)  # fmt: skip
+    np.testing.assert_allclose(
+        _forces((0.0, 0.0, 0.0, 0.1, 0.0)),
+        [-1.93 * 0.01, 0.0, M_ZG * 0.01, -188.0 * 0.01, 0.0],
+        rtol=1e-14,
+        atol=1e-15,
+    )
     # w = −0.2 m/s: Z_w|w| w|w| (M_w|w| = 0 for REMUS).
     heave_only = [0.0, 0.0, 131.0 * 0.04, 0.0, 0.0]
     np.testing.assert_allclose(_forces((0.0, 0.0, -0.2, 0.0, 0.0)), heave_only, rtol=1e-14)
@@ -49,11 +53,13 @@ def test_damping_and_centripetal_terms_of_single_velocities():
 def test_coriolis_terms_and_their_switch():
     """v = 0.1 m/s, r = 0.2 rad/s: surge X_rr r² + (X_vr + m) v r, pitch −m z_g(w q − v r)."""
     nu = (0.0, 0.1, 0.0, 0.0, 0.2)
-    expected = [-1.93 * 0.04 + (35.5 + 30.48) * 0.02,  # surge: centripetal + Coriolis
-                -131.0 * 0.01,  # sway: Y_v|v| v|v| (the Coriolis term has u = 0)
-                0.0,
-                M_ZG * 0.02,  # pitch
-                -3.18 * 0.01 - 94.0 * 0.04]  # yaw: N_v|v| v|v| + N_r|r| r|r|  # fmt: skip
+    expected = [
+        -1.93 * 0.04 + (35.5 + 30.48) * 0.02,  # surge: centripetal + Coriolis
+        -131.0 * 0.01,  # sway: Y_v|v| v|v| (the Coriolis term has u = 0)
+        0.0,
+        M_ZG * 0.02,  # pitch
+        -3.18 * 0.01 - 94.0 * 0.04,
+    ]  # yaw: N_v|v| v|v| + N_r|r| r|r|
     np.testing.assert_allclose(_forces(nu), expected, rtol=1e-13, atol=1e-15)
     without = _forces(nu, params=remus100(surge_coriolis=False))
     assert without[0] == pytest.approx(-1.93 * 0.04, rel=1e-14)

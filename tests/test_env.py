@@ -111,8 +111,9 @@ def test_same_seed_gives_bit_identical_rollouts():
 
 
 def test_disturbance_sequence_does_not_depend_on_actions():
-    env = AUVPath3DEnv(current={"mean": (0.1, 0.3, 0.0), "std": (0.1, 0.1, 0.0)},
-                       param_uncertainty=0.3)  # fmt: skip
+    env = AUVPath3DEnv(
+        current={"mean": (0.1, 0.3, 0.0), "std": (0.1, 0.1, 0.0)}, param_uncertainty=0.3
+    )
     a = rollout(env, 3, random_actions(1, 300))
     params_a = env.sim.params.copy()
     b = rollout(env, 3, random_actions(2, 300))
@@ -160,9 +161,11 @@ def test_constant_current_drifts_a_vehicle_at_rest(make_sim):
 
 
 def test_gauss_markov_current_has_its_stationary_spread(make_sim):
-    sim = make_sim(n=2000, disturbance="none",
-                   current={"mean": (0.2, 0.0, 0.0), "std": (0.1, 0.05, 0.0),
-                            "time_constant": 20.0})  # fmt: skip
+    sim = make_sim(
+        n=2000,
+        disturbance="none",
+        current={"mean": (0.2, 0.0, 0.0), "std": (0.1, 0.05, 0.0), "time_constant": 20.0},
+    )
     for _ in range(400):  # 20 s = one time constant
         sim.step(np.zeros((2000, 3)))
     np.testing.assert_allclose(sim.current.std(axis=0), [0.1, 0.05, 0.0], rtol=0.1, atol=1e-12)
@@ -195,11 +198,13 @@ def test_pickle_round_trip_continues_identically():
 
 
 def test_reward_prefers_following_over_idling():
-    idle = rollout(AUVPath3DEnv(disturbance="none", max_time=60.0),
-                   0, np.zeros((1200, 3), np.float32))  # fmt: skip
+    idle = rollout(
+        AUVPath3DEnv(disturbance="none", max_time=60.0), 0, np.zeros((1200, 3), np.float32)
+    )
     assert idle["reward"].mean() < -1.0
-    follow = AUVPath3DEnv(disturbance="none", start_position=(30.0, 0.0, -8.0),
-                          start_heading=math.pi / 2)  # fmt: skip
+    follow = AUVPath3DEnv(
+        disturbance="none", start_position=(30.0, 0.0, -8.0), start_heading=math.pi / 2
+    )
     _, info = follow.reset(seed=0)
     assert info["distance"] == pytest.approx(0.0, abs=1e-12)
     _, reward, *_ = follow.step(np.array([1.62 / 50, 0, 0], np.float32))
@@ -223,8 +228,12 @@ def test_truncation_at_max_time_and_termination_reasons():
     assert terminated and info["termination_reason"] == "corridor"
     assert info["reward_termination"] == -100.0
 
-    line = AUVPath3DEnv(path=StraightLine(length=5.0), disturbance="none",
-                        start_position=(0, 0, 0), start_heading=math.atan2(0.5, 1.0))  # fmt: skip
+    line = AUVPath3DEnv(
+        path=StraightLine(length=5.0),
+        disturbance="none",
+        start_position=(0, 0, 0),
+        start_heading=math.atan2(0.5, 1.0),
+    )
     line.reset(seed=0)
     for _ in range(400):
         _, _, terminated, _, info = line.step(np.array([1.62 / 50 * 2, 0, 0], np.float32))
@@ -247,9 +256,14 @@ def test_non_finite_state_terminates_with_last_finite_observation():
 
 @pytest.mark.parametrize(
     ("action", "match"),
-    [([np.nan, 0, 0], "finite"), ([0, np.inf, 0], "finite"), ([0, 0], "shape"),
-     (np.zeros((1, 3)), "shape"), ("abc", "real numbers")],
-)  # fmt: skip
+    [
+        ([np.nan, 0, 0], "finite"),
+        ([0, np.inf, 0], "finite"),
+        ([0, 0], "shape"),
+        (np.zeros((1, 3)), "shape"),
+        ("abc", "real numbers"),
+    ],
+)
 def test_bad_actions_raise(action, match):
     env = AUVPath3DEnv()
     env.reset(seed=0)
@@ -277,13 +291,21 @@ def test_fin_actuator_authority_scales_with_speed_squared():
 
 @pytest.mark.parametrize(
     ("kwargs", "match"),
-    [({"path": "spiral"}, "unknown path"), ({"disturbance": "storm"}, "unknown disturbance"),
-     ({"actuator": "jets"}, "unknown actuator"), ({"control_dt": 0.015}, "whole multiple"),
-     ({"noise_hold": 0.005}, "whole multiple"), ({"physics_dt": -0.01}, "physics_dt"),
-     ({"param_uncertainty": 1.2}, "param_uncertainty"), ({"corridor": 0.0}, "corridor"),
-     ({"current": (0.1, 0.2)}, "current mean"), ({"disturbance": -5.0}, "amplitude"),
-     ({"render_mode": "human"}, "render_mode"), ({"max_time": float("nan")}, "max_time")],
-)  # fmt: skip
+    [
+        ({"path": "spiral"}, "unknown path"),
+        ({"disturbance": "storm"}, "unknown disturbance"),
+        ({"actuator": "jets"}, "unknown actuator"),
+        ({"control_dt": 0.015}, "whole multiple"),
+        ({"noise_hold": 0.005}, "whole multiple"),
+        ({"physics_dt": -0.01}, "physics_dt"),
+        ({"param_uncertainty": 1.2}, "param_uncertainty"),
+        ({"corridor": 0.0}, "corridor"),
+        ({"current": (0.1, 0.2)}, "current mean"),
+        ({"disturbance": -5.0}, "amplitude"),
+        ({"render_mode": "human"}, "render_mode"),
+        ({"max_time": float("nan")}, "max_time"),
+    ],
+)
 def test_impossible_arguments_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         AUVPath3DEnv(**kwargs)
@@ -328,8 +350,13 @@ def test_the_kernels_run_as_plain_python_with_the_jit_off_and_agree() -> None:
     runs = []
     for jit_off in ("0", "1"):
         env = {**os.environ, "NUMBA_DISABLE_JIT": jit_off}
-        out = subprocess.run([sys.executable, "-c", _JIT_PARITY_SCRIPT], env=env,
-                             capture_output=True, text=True, check=True)  # fmt: skip
+        out = subprocess.run(
+            [sys.executable, "-c", _JIT_PARITY_SCRIPT],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         runs.append(np.array(json.loads(out.stdout.strip().splitlines()[-1])))
     compiled, python = runs
     assert compiled.shape == (60, len(OBS_NAMES) + 1)

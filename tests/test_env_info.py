@@ -63,8 +63,13 @@ def _single_digest() -> tuple[str, set[str]]:
 
 def _vector_digest(mode: AutoresetMode) -> tuple[str, set[str]]:
     digest, keys = hashlib.sha256(), set()
-    env = gym.make_vec("AUVPath3D-v0", num_envs=4, vectorization_mode="vector_entry_point",
-                       autoreset_mode=mode, **SHORT)  # fmt: skip
+    env = gym.make_vec(
+        "AUVPath3D-v0",
+        num_envs=4,
+        vectorization_mode="vector_entry_point",
+        autoreset_mode=mode,
+        **SHORT,
+    )
     _, infos = env.reset(seed=5)
     _feed(digest, infos)
     for a in _actions(1, 25, 4):

@@ -26,10 +26,16 @@ _ACTUATORS = ActuatorParams(fin_rate_max=0.9)
 def test_a_policy_made_with_env_equals_one_made_with_the_explicit_arguments(
     name: str, actuator: str, control_dt: float, assert_same_episodes
 ) -> None:
-    kwargs = {"actuator": actuator, "control_dt": control_dt, "params": _VEHICLE,
-              "actuator_params": _ACTUATORS, "max_time": 300 * control_dt}  # fmt: skip
-    explicit = controllers.make(name, control_dt=control_dt, actuator=actuator,
-                                params=_VEHICLE, actuator_params=_ACTUATORS)  # fmt: skip
+    kwargs = {
+        "actuator": actuator,
+        "control_dt": control_dt,
+        "params": _VEHICLE,
+        "actuator_params": _ACTUATORS,
+        "max_time": 300 * control_dt,
+    }
+    explicit = controllers.make(
+        name, control_dt=control_dt, actuator=actuator, params=_VEHICLE, actuator_params=_ACTUATORS
+    )
     from_env = controllers.make(name, env=SimConfig.from_kwargs(**kwargs))
     assert (from_env.control_dt, from_env.actuator) == (control_dt, actuator)
     assert from_env.params == _VEHICLE and from_env.actuator_params == _ACTUATORS
@@ -42,8 +48,12 @@ def test_env_settings_come_from_an_env_a_vector_env_a_config_or_kwargs() -> None
     kwargs = {"control_dt": 0.1, "actuator": "fins"}
     env = gym.make("AUVPath3D-v0", **kwargs)  # wrapped: TimeLimit, OrderEnforcing, ...
     vector = AUVPath3DVectorEnv(2, **kwargs)
-    expected = {"control_dt": 0.1, "params": remus100(), "actuator": "fins",
-                "actuator_params": ActuatorParams()}  # fmt: skip
+    expected = {
+        "control_dt": 0.1,
+        "params": remus100(),
+        "actuator": "fins",
+        "actuator_params": ActuatorParams(),
+    }
     for source in (env, env.unwrapped, vector, SimConfig.from_kwargs(**kwargs), kwargs):
         assert policy_settings(source) == expected
     assert env_config(env) is env.unwrapped.config
@@ -52,8 +62,9 @@ def test_env_settings_come_from_an_env_a_vector_env_a_config_or_kwargs() -> None
 
 
 def test_explicit_keywords_override_the_env_and_a_random_actuator_is_not_passed() -> None:
-    policy = controllers.make("fbsm_colos", env={"control_dt": 0.1, "actuator": "fins"},
-                              actuator="paper")  # fmt: skip
+    policy = controllers.make(
+        "fbsm_colos", env={"control_dt": 0.1, "actuator": "fins"}, actuator="paper"
+    )
     assert (policy.control_dt, policy.actuator) == (0.1, "paper")
     assert policy.gains.current_observer == 3.0  # the preset's
     assert "actuator" not in policy_settings({"actuator": "random"})
@@ -79,7 +90,10 @@ def test_a_residual_policys_base_takes_the_env_settings_without_recording_them()
     env = {"control_dt": 0.1, "actuator": "fins", "params": _VEHICLE}
     policy = controllers.make("residual", agent=_ZeroAgent(), env=env, k_y=0.2)
     assert (policy.base.control_dt, policy.base.actuator, policy.base.params) == (
-        0.1, "fins", _VEHICLE)  # fmt: skip
+        0.1,
+        "fins",
+        _VEHICLE,
+    )
     assert policy.settings.base_kwargs == {"k_y": 0.2}  # the env's settings are not the agent's
     with pytest.raises(ValueError, match=r"^base_kwargs must not set \['params'\]: the env"):
         ResidualSettings(base_kwargs={"params": _VEHICLE})

@@ -50,8 +50,9 @@ def test_hand_computed_guarded_commands():
         single = guard_commands(np.float32(command), _obs(theta, q, u), INDEX, GUARD)
         assert single.shape == (3,) and single.dtype == np.float32
         np.testing.assert_allclose(single, expected, atol=1e-6)
-    batch = guard_commands(np.float32([c[3] for c in cases]),
-                           np.stack([_obs(*c[:3]) for c in cases]), INDEX, GUARD)  # fmt: skip
+    batch = guard_commands(
+        np.float32([c[3] for c in cases]), np.stack([_obs(*c[:3]) for c in cases]), INDEX, GUARD
+    )
     np.testing.assert_allclose(batch, [c[4] for c in cases], atol=1e-6)
 
 
@@ -109,9 +110,12 @@ def test_the_guard_stops_a_recorded_pitch_over(tmp_path):
     assert metadata["envelope_guard"] == GUARD.to_dict()
     plain, guarded = load_policy(SEEDS / "agent_seed_3"), load_policy(written[0])
     assert isinstance(guarded, GuardedPolicy)
-    env = {**agent_env_kwargs(plain.metadata["env_id"], plain.metadata), "disturbance": "none",
-           "current": {"mean": [0.0, 0.3, 0.0], "std": [0.05, 0.05, 0.0],
-                       "time_constant": 60.0}, "max_time": 60.0}  # fmt: skip
+    env = {
+        **agent_env_kwargs(plain.metadata["env_id"], plain.metadata),
+        "disturbance": "none",
+        "current": {"mean": [0.0, 0.3, 0.0], "std": [0.05, 0.05, 0.0], "time_constant": 60.0},
+        "max_time": 60.0,
+    }
     (before,) = rollouts(plain, [0], **env)
     (after,) = rollouts(guarded, [0], **env)
     assert before.termination_reason == "pitch" and before.t[-1] < 40.0
@@ -132,9 +136,17 @@ def test_the_training_wrapper_guards_the_env_commands():
     from benchmarks.training.train import make_training_env
 
     names = ObservationConfig.from_spec("preview").names
-    venv = GuardedActions(make_training_env(2, 0, {"disturbance": "none", "max_time": 60.0},
-                                            kind="dummy", env_id="AUVPath3DPreview-v0"),
-                          GUARD, names)  # fmt: skip
+    venv = GuardedActions(
+        make_training_env(
+            2,
+            0,
+            {"disturbance": "none", "max_time": 60.0},
+            kind="dummy",
+            env_id="AUVPath3DPreview-v0",
+        ),
+        GUARD,
+        names,
+    )
     obs = venv.reset()
     it, iq = names.index("theta"), names.index("q")
     pitch, capped = [], 0
@@ -166,11 +178,24 @@ def test_a_file_trains_a_guarded_agent_that_loads_guarded(tmp_path, train_tiny_p
     from benchmarks.training.config import read_zoo_config
 
     config = tmp_path / "bad.yml"
-    config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": {
-        "n_envs": 2, "n_timesteps": 64, "policy": "MlpPolicy", "normalize": True,
-        "envelope_guard": {"surge_soft": 3.0}}}))  # fmt: skip
-    with pytest.raises(ValueError, match=r"bad.yml: AUVPath3DPreview-v0: envelope_guard: each "
-                                         r"soft limit must lie below its hard limit"):  # fmt: skip
+    config.write_text(
+        yaml.safe_dump(
+            {
+                "AUVPath3DPreview-v0": {
+                    "n_envs": 2,
+                    "n_timesteps": 64,
+                    "policy": "MlpPolicy",
+                    "normalize": True,
+                    "envelope_guard": {"surge_soft": 3.0},
+                }
+            }
+        )
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"bad.yml: AUVPath3DPreview-v0: envelope_guard: each "
+        r"soft limit must lie below its hard limit",
+    ):
         read_zoo_config(config, "AUVPath3DPreview-v0", "ppo")
 
 
@@ -188,7 +213,8 @@ def test_guarding_a_results_folder_copies_its_curves_not_its_test_evaluations(tm
     assert names == ["agent_seed_1", "seed_1_learning_curve.csv"]
     for name in ("model.zip", "vecnormalize.npz"):  # the network and statistics byte for byte
         assert (tmp_path / "guarded" / "agent_seed_1" / name).read_bytes() == (
-            source / "agent_seed_1" / name).read_bytes()  # fmt: skip
+            source / "agent_seed_1" / name
+        ).read_bytes()
     with pytest.raises(SystemExit):
         main(["--from", str(tmp_path / "empty"), "--out", str(tmp_path / "x")])
 

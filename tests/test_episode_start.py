@@ -121,8 +121,9 @@ def test_rotation_turns_random_starts_and_keeps_their_distance() -> None:
         assert (state_r[STATE.s], state_r[STATE.u]) == (state_p[STATE.s], state_p[STATE.u])
         if _near_start(state_p):  # the near half turns about p(0) = 0: the same distance
             assert np.linalg.norm(state_r[:3]) == pytest.approx(np.linalg.norm(state_p[:3]))
-            np.testing.assert_allclose(obs_r[[OBS.x_e, OBS.y_e, OBS.z_e]],
-                                       obs_p[[OBS.x_e, OBS.y_e, OBS.z_e]], atol=1e-9)  # fmt: skip
+            np.testing.assert_allclose(
+                obs_r[[OBS.x_e, OBS.y_e, OBS.z_e]], obs_p[[OBS.x_e, OBS.y_e, OBS.z_e]], atol=1e-9
+            )
 
 
 def test_batched_rotated_starts_equal_single_ones() -> None:
@@ -152,8 +153,7 @@ def test_a_rotation_range_draws_each_episode_its_own_rotation() -> None:
     for seed in range(200):
         obs, _ = env.reset(seed=seed)
         drawn.append(float(obs[OBS.psi_error]))  # fixed start on the line: ψ − ψ_F = rotation
-        np.testing.assert_allclose(obs[[OBS.x_e, OBS.y_e, OBS.z_e]], [-15.0, 5.0, 8.0],
-                                   atol=1e-9)  # fmt: skip
+        np.testing.assert_allclose(obs[[OBS.x_e, OBS.y_e, OBS.z_e]], [-15.0, 5.0, 8.0], atol=1e-9)
     drawn = np.array(drawn)
     assert drawn.min() >= -math.pi / 2 - 1e-6 and drawn.max() <= math.pi / 4 + 1e-6
     # Uniform over 3π/4 rad: mean −π/8, quarters all populated.

@@ -317,8 +317,13 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
     curves = stats["learning_curves"]["gen"]
     assert curves["env steps"]["x"] == [0.0, 1000.0, 2000.0]
     assert curves["env steps"]["iqm"] == [5.0, 2.5, 1.5]  # mean of two runs (IQM of 2 = mean)
-    for name in ("intervals", "improvement_over_fbsm", "profile_aggregate", "learning_curves",
-                 "smoothness_tradeoff"):  # fmt: skip
+    for name in (
+        "intervals",
+        "improvement_over_fbsm",
+        "profile_aggregate",
+        "learning_curves",
+        "smoothness_tradeoff",
+    ):
         assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
     md = (out / "stats.md").read_text()
     assert "| scenario:fins | gen |" in md and "## IQM RMS distance [m]" in md
@@ -333,15 +338,25 @@ def test_paired_table_by_hand():
     from benchmarks.smoothness_stats import paired_table
 
     base = np.array([[0.10, 0.10, 0.20, 0.20]])
-    scores = {"fbsm_colos": base, "ppo_residual": np.vstack([base - 0.01, base - 0.03]),
-              "fbsm_colos_lowpass": base * 1.2}  # fmt: skip
-    pairs = [("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
-             ("fbsm_colos_lowpass", "fbsm_colos"),
-             ("ppo_residual", "fbsm_colos_lowpass")]  # fmt: skip
-    table = paired_table(scores, ["a", "a", "b", "b"], reps=200, seed=0, pairs=pairs,
-                         worse_ratio=0.1)  # fmt: skip
-    assert list(table) == ["ppo_residual−fbsm_colos", "fbsm_colos_lowpass−fbsm_colos",
-                           "ppo_residual−fbsm_colos_lowpass"]  # fmt: skip
+    scores = {
+        "fbsm_colos": base,
+        "ppo_residual": np.vstack([base - 0.01, base - 0.03]),
+        "fbsm_colos_lowpass": base * 1.2,
+    }
+    pairs = [
+        ("ppo_residual", "fbsm_colos"),
+        ("ppo_residual_v2", "fbsm_colos"),
+        ("fbsm_colos_lowpass", "fbsm_colos"),
+        ("ppo_residual", "fbsm_colos_lowpass"),
+    ]
+    table = paired_table(
+        scores, ["a", "a", "b", "b"], reps=200, seed=0, pairs=pairs, worse_ratio=0.1
+    )
+    assert list(table) == [
+        "ppo_residual−fbsm_colos",
+        "fbsm_colos_lowpass−fbsm_colos",
+        "ppo_residual−fbsm_colos_lowpass",
+    ]
     res = table["ppo_residual−fbsm_colos"]["aggregate"]
     assert res["difference"]["value"] == pytest.approx(-0.02) and res["win"] and not res["worse"]
     assert res["relative"]["value"] == pytest.approx(-0.02 / 0.15)

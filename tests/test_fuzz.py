@@ -33,12 +33,26 @@ def test_drawn_configurations_are_valid_and_span_the_ranges():
     assert all(
         n * s <= fuzz.EPISODE_PHYSICS or n == 1 for n, s in zip(steps, substeps, strict=True)
     )
-    kinds = {type(kw["path"]).__name__ if not isinstance(kw["path"], str) else kw["path"]
-             for kw, _ in drawn}  # fmt: skip
-    assert kinds == {"helix", "line", "waypoints", "Helix", "StraightLine", "Spline",
-                     "FittedCurve", "random", "PathDistribution"}  # fmt: skip
+    kinds = {
+        type(kw["path"]).__name__ if not isinstance(kw["path"], str) else kw["path"]
+        for kw, _ in drawn
+    }
+    assert kinds == {
+        "helix",
+        "line",
+        "waypoints",
+        "Helix",
+        "StraightLine",
+        "Spline",
+        "FittedCurve",
+        "random",
+        "PathDistribution",
+    }
     assert {(kw.get("surge_limit"), kw.get("observation")) for kw, _ in drawn} == {
-        (None, None), ("vehicle", None), ("vehicle", "preview")}  # fmt: skip
+        (None, None),
+        ("vehicle", None),
+        ("vehicle", "preview"),
+    }
     limited = [kw for kw, _ in drawn if isinstance(kw.get("params"), dict)]
     assert limited and all(kw["param_uncertainty"] > 0 for kw in limited)
     corridors = [kw["corridor"] for kw, _ in drawn]
@@ -83,9 +97,13 @@ def corrupt_step(kind: str):
 
 @pytest.mark.parametrize(
     ("kind", "counter"),
-    [("nan", "nan_observations"), ("reward", "non_finite_rewards"),
-     ("truncation", "wrong_truncations"), ("outside", "out_of_space_observations")],
-)  # fmt: skip
+    [
+        ("nan", "nan_observations"),
+        ("reward", "non_finite_rewards"),
+        ("truncation", "wrong_truncations"),
+        ("outside", "out_of_space_observations"),
+    ],
+)
 def test_the_checks_catch_a_misbehaving_env(kind, counter, monkeypatch):
     monkeypatch.setattr(AUVPath3DVectorEnv, "step", corrupt_step(kind))
     tally = fuzz.Tally()

@@ -82,10 +82,14 @@ def test_a_mapping_names_a_path_with_arguments():
 
 @pytest.mark.parametrize(
     "build",
-    [lambda: Helix(radius=-1.0), lambda: Helix(omega=float("nan")),
-     lambda: StraightLine(direction=(0, 0, 0)), lambda: Spline([(0, 0, 0)]),
-     lambda: Spline([(0, 0, 0), (0, 0, 0), (1, 1, 1)])],
-)  # fmt: skip
+    [
+        lambda: Helix(radius=-1.0),
+        lambda: Helix(omega=float("nan")),
+        lambda: StraightLine(direction=(0, 0, 0)),
+        lambda: Spline([(0, 0, 0)]),
+        lambda: Spline([(0, 0, 0), (0, 0, 0), (1, 1, 1)]),
+    ],
+)
 def test_impossible_paths_raise(build):
     with pytest.raises(ValueError):
         build()
@@ -98,11 +102,28 @@ def test_error_model_matches_finite_differences():
     params = params_record(remus100().to_vector())
     zeros = np.zeros(5)
     for _ in range(50):
-        st = np.r_[rng.uniform(-20, 20, 3), rng.uniform(-0.6, 0.6), rng.uniform(-3, 3),
-                   rng.uniform(0, 1.5), rng.uniform(-0.3, 0.3, 2), rng.uniform(-0.3, 0.3, 2),
-                   rng.uniform(0, 30)]  # fmt: skip
-        deriv = np.array(state_derivative(st, (10.0, 1.0, -1.0), zeros, (0.0, 0.0, 0.0), params,
-                                          path.kind, path.data, 1.0, 0.5))  # fmt: skip
+        st = np.r_[
+            rng.uniform(-20, 20, 3),
+            rng.uniform(-0.6, 0.6),
+            rng.uniform(-3, 3),
+            rng.uniform(0, 1.5),
+            rng.uniform(-0.3, 0.3, 2),
+            rng.uniform(-0.3, 0.3, 2),
+            rng.uniform(0, 30),
+        ]
+        deriv = np.array(
+            state_derivative(
+                st,
+                (10.0, 1.0, -1.0),
+                zeros,
+                (0.0, 0.0, 0.0),
+                params,
+                path.kind,
+                path.data,
+                1.0,
+                0.5,
+            )
+        )
 
         def eps_at(h, st=st, deriv=deriv):
             x = st + h * deriv  # first-order flow; the central difference cancels the rest
@@ -147,9 +168,16 @@ def test_virtual_point_sanity_along_an_episode(make_sim):
 
 @pytest.mark.parametrize(
     ("angle", "wrapped"),
-    [(0.0, 0.0), (math.pi, math.pi), (-math.pi, math.pi), (3 * math.pi, math.pi),
-     (2 * math.pi + 0.1, 0.1), (-2 * math.pi - 0.1, -0.1), (7.0, 7.0 - 2 * math.pi)],
-)  # fmt: skip
+    [
+        (0.0, 0.0),
+        (math.pi, math.pi),
+        (-math.pi, math.pi),
+        (3 * math.pi, math.pi),
+        (2 * math.pi + 0.1, 0.1),
+        (-2 * math.pi - 0.1, -0.1),
+        (7.0, 7.0 - 2 * math.pi),
+    ],
+)
 def test_wrap_angle_to_half_open_interval(angle, wrapped):
     assert wrap_angle(angle) == pytest.approx(wrapped, abs=1e-12)
 

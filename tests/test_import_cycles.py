@@ -22,17 +22,28 @@ def test_deferred_and_parent_imports_count_and_type_checking_does_not(tmp_path: 
     (pkg / "__init__.py").write_text("from pkg.a import A\n")
     (pkg / "a.py").write_text("A = 1\n\ndef f():\n    from pkg.b import B\n")
     (pkg / "b.py").write_text("from pkg import a\nB = 2\n")
-    (pkg / "c.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
-                              "    from pkg.d import D\n")  # fmt: skip
+    (pkg / "c.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.d import D\n"
+    )
     (pkg / "d.py").write_text("from . import c\nD = 3\n")
     graph = import_graph(tmp_path, ["pkg"])
-    assert graph == {"pkg": {"pkg.a"}, "pkg.a": {"pkg.b"}, "pkg.b": {"pkg.a"},
-                     "pkg.c": set(), "pkg.d": {"pkg.c"}}  # fmt: skip
+    assert graph == {
+        "pkg": {"pkg.a"},
+        "pkg.a": {"pkg.b"},
+        "pkg.b": {"pkg.a"},
+        "pkg.c": set(),
+        "pkg.d": {"pkg.c"},
+    }
     assert find_cycles(graph) == [["pkg.a", "pkg.b"]]
 
 
 def test_the_command_line_reports_no_cycles():
-    done = subprocess.run([sys.executable, "-m", "benchmarks.checks.import_cycles"],
-                          capture_output=True, text=True, cwd=ROOT, check=False)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "benchmarks.checks.import_cycles"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "0 cycles" in done.stdout

@@ -45,8 +45,18 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str,
     """(the venv's bin folder, environment) after installing a copy of the repository."""
     base = tmp_path_factory.mktemp("install")
     source = base / "source"
-    skip = shutil.ignore_patterns(".git", ".venv", "out", "runs", "build", "*.egg-info",
-                                  "__pycache__", ".*_cache", "results", ".hypothesis")  # fmt: skip
+    skip = shutil.ignore_patterns(
+        ".git",
+        ".venv",
+        "out",
+        "runs",
+        "build",
+        "*.egg-info",
+        "__pycache__",
+        ".*_cache",
+        "results",
+        ".hypothesis",
+    )
     shutil.copytree(ROOT, source, ignore=skip)
     venv = base / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
@@ -59,8 +69,23 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str,
     shared = {sysconfig.get_path("purelib"), sysconfig.get_path("platlib")}
     (site / "zz_shared_site_packages.pth").write_text("\n".join(sorted(shared)) + "\n")
     # This interpreter's pip and setuptools install into the venv (``pip --python``).
-    pip = _run([sys.executable, "-m", "pip", "--python", python, "install", "-q", "--no-deps",
-                "--no-build-isolation", "--no-index", str(source)], base, env)  # fmt: skip
+    pip = _run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "--python",
+            python,
+            "install",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            str(source),
+        ],
+        base,
+        env,
+    )
     assert pip.returncode == 0, pip.stderr[-3000:]
     shutil.rmtree(source)  # the installed package must not lean on the source tree
     (site / "_block_extras.py").write_text(BLOCKER)
@@ -104,8 +129,9 @@ def test_help_lists_every_command_with_defaults(installed, tmp_path: Path) -> No
     help_train = _run([str(bin_dir / "auv-gym"), "train", "--help"], tmp_path, env)
     assert help_train.returncode == 0 and "--eval-duration" in help_train.stdout
     # Training itself needs the rl extra: one line that names it, not a traceback.
-    train = _run([str(bin_dir / "auv-gym"), "train", "--out", "run", "--n-timesteps", "64"],
-                 tmp_path, env)  # fmt: skip
+    train = _run(
+        [str(bin_dir / "auv-gym"), "train", "--out", "run", "--n-timesteps", "64"], tmp_path, env
+    )
     assert train.returncode == 2 and "pip install 'auv-gym[rl]'" in train.stderr
     assert "Traceback" not in train.stderr and not (tmp_path / "run").exists()
 
@@ -113,9 +139,23 @@ def test_help_lists_every_command_with_defaults(installed, tmp_path: Path) -> No
 @pytest.mark.slow  # compiles the numba kernels of the fresh install (30-90 s)
 def test_compare_runs_from_another_folder_on_the_base_install(installed, tmp_path: Path) -> None:
     bin_dir, env = installed
-    args = [str(bin_dir / "auv-gym"), "compare", "--policies", "backstepping", "--scenarios",
-            "nominal", "--seeds", "1", "--duration", "4", "--workers", "1", "--out", "run",
-            "--no-figures"]  # fmt: skip
+    args = [
+        str(bin_dir / "auv-gym"),
+        "compare",
+        "--policies",
+        "backstepping",
+        "--scenarios",
+        "nominal",
+        "--seeds",
+        "1",
+        "--duration",
+        "4",
+        "--workers",
+        "1",
+        "--out",
+        "run",
+        "--no-figures",
+    ]
     result = _run(args, tmp_path, env)
     assert result.returncode == 0, result.stderr[-3000:]
     with open(tmp_path / "run" / "episodes.csv", newline="") as fh:
@@ -128,8 +168,15 @@ def test_compare_runs_from_another_folder_on_the_base_install(installed, tmp_pat
     assert len(bad.stderr.strip().splitlines()) == 1
 
 
-HELP_COMMANDS = [["compare"], ["suite"], ["paper-figures"], ["train"], ["train-seeds"],
-                 *(["speed", name] for name in SPEED), ["video"]]  # fmt: skip
+HELP_COMMANDS = [
+    ["compare"],
+    ["suite"],
+    ["paper-figures"],
+    ["train"],
+    ["train-seeds"],
+    *(["speed", name] for name in SPEED),
+    ["video"],
+]
 
 
 @pytest.mark.parametrize("argv", HELP_COMMANDS, ids=" ".join)
@@ -153,8 +200,20 @@ def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
     installed, tmp_path: Path
 ) -> None:
     bin_dir, env = installed
-    args = [str(bin_dir / "auv-gym"), "compare", "--policies", "fbsm,ppo", "--scenarios",
-            "paper", "--seeds", "1", "--duration", "4", "--out", "run"]  # fmt: skip
+    args = [
+        str(bin_dir / "auv-gym"),
+        "compare",
+        "--policies",
+        "fbsm,ppo",
+        "--scenarios",
+        "paper",
+        "--seeds",
+        "1",
+        "--duration",
+        "4",
+        "--out",
+        "run",
+    ]
     result = _run(args, tmp_path, env)
     assert result.returncode == 2, result.stderr[-2000:]
     assert "from the 'rl' extra: pip install 'auv-gym[rl]'" in result.stderr

@@ -35,8 +35,11 @@ def test_filter_equation_and_restart_on_the_base_actions():
     for k in range(6):
         b, base_state = base.predict(obs[k], state=base_state, episode_start=starts[k])
         a, state = policy.predict(obs[k], state=state, episode_start=starts[k])
-        expected = b.astype(np.float32) if previous is None else (
-            0.6 * previous + 0.4 * b).astype(np.float32)  # fmt: skip
+        expected = (
+            b.astype(np.float32)
+            if previous is None
+            else (0.6 * previous + 0.4 * b).astype(np.float32)
+        )
         expected[starts[k]] = b[starts[k]]
         np.testing.assert_array_equal(a, expected)
         assert np.all(np.abs(a) <= 1.0)

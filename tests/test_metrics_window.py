@@ -22,22 +22,29 @@ from auv_gym.rollout import rollout
 
 @pytest.mark.parametrize(
     ("duration", "transient", "expected"),
-    [(300.0, None, 100.0), (200.0, None, 100.0), (20.0, None, 10.0), (20.0, 3.0, 3.0),
-     (300.0, 0.0, 0.0)],
-)  # fmt: skip
+    [
+        (300.0, None, 100.0),
+        (200.0, None, 100.0),
+        (20.0, None, 10.0),
+        (20.0, 3.0, 3.0),
+        (300.0, 0.0, 0.0),
+    ],
+)
 def test_window_start_rule(duration, transient, expected):
     assert window_start(duration, transient) == expected
 
 
 @pytest.mark.parametrize(
     ("duration", "transient", "control_dt", "message"),
-    [(20.0, 20.0, 0.05, "fewer than two samples"),
-     (20.0, 19.99, 0.05, "transient ≤ 19.95 s"),
-     (0.05, None, 0.05, "fewer than two samples"),
-     (0.0, None, 0.05, "duration must be a positive"),
-     (20.0, -1.0, 0.05, "transient must be a non-negative"),
-     (20.0, math.nan, 0.05, "transient must be a non-negative")],
-)  # fmt: skip
+    [
+        (20.0, 20.0, 0.05, "fewer than two samples"),
+        (20.0, 19.99, 0.05, "transient ≤ 19.95 s"),
+        (0.05, None, 0.05, "fewer than two samples"),
+        (0.0, None, 0.05, "duration must be a positive"),
+        (20.0, -1.0, 0.05, "transient must be a non-negative"),
+        (20.0, math.nan, 0.05, "transient must be a non-negative"),
+    ],
+)
 def test_check_window_refuses_windows_without_a_metric(duration, transient, control_dt, message):
     with pytest.raises(ValueError, match=message):
         check_window(duration, transient, control_dt)
@@ -90,9 +97,24 @@ def test_compare_refuses_a_transient_beyond_the_episode(tmp_path, capsys):
     from benchmarks import compare
 
     with pytest.raises(SystemExit) as exit_info:  # a usage error: one line, exit code 2
-        compare.main(["--policies", "backstepping", "--scenarios", "nominal", "--seeds", "1",
-                      "--duration", "10", "--transient", "9.99", "--out", str(tmp_path / "c"),
-                      "--quiet", "--no-figures"])  # fmt: skip
+        compare.main(
+            [
+                "--policies",
+                "backstepping",
+                "--scenarios",
+                "nominal",
+                "--seeds",
+                "1",
+                "--duration",
+                "10",
+                "--transient",
+                "9.99",
+                "--out",
+                str(tmp_path / "c"),
+                "--quiet",
+                "--no-figures",
+            ]
+        )
     assert exit_info.value.code == 2
     assert "fewer than two samples" in capsys.readouterr().err
     assert not (tmp_path / "c").exists()

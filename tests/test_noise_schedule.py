@@ -23,9 +23,15 @@ def test_the_cap_is_geometric_from_the_initial_sigma_to_the_final_one():
 
 @pytest.mark.parametrize(
     "value",
-    [{"start": 1.0, "final": 0.1}, {"start": 0.5, "final": 0.0}, {"start": 0.5},
-     {"start": 0.5, "final": 2.0}, {"start": True, "final": 0.1}, [0.5, 0.1]],
-)  # fmt: skip
+    [
+        {"start": 1.0, "final": 0.1},
+        {"start": 0.5, "final": 0.0},
+        {"start": 0.5},
+        {"start": 0.5, "final": 2.0},
+        {"start": True, "final": 0.1},
+        [0.5, 0.1],
+    ],
+)
 def test_bad_schedules_are_named(value):
     with pytest.raises(ValueError, match=r"cfg: action_std_schedule must be \{start"):
         parse_std_schedule(value, "cfg")
@@ -41,8 +47,17 @@ def test_a_ppo_run_is_capped_before_each_rollout_from_the_start_on():
 
     venv = VecNormalize(make_training_env(2, 0, {"max_time": 5.0}))
     policy_kwargs = {"net_arch": [8], "log_std_init": -1.0}
-    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=1, learning_rate=0.0,
-                policy_kwargs=policy_kwargs, device="cpu", seed=0)  # fmt: skip
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=64,
+        batch_size=64,
+        n_epochs=1,
+        learning_rate=0.0,
+        policy_kwargs=policy_kwargs,
+        device="cpu",
+        seed=0,
+    )
     seen = []
 
     class Record(AnnealActionStd):

@@ -42,8 +42,14 @@ def _run(code: str, cwd: Path, env: dict[str, str] | None = None, user: list[str
     environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(cwd), str(AUV_DIR.parent)])}
     environment.pop("NUMBA_CACHE_DIR", None)
     environment.update(env or {})
-    out = subprocess.run([*(user or []), sys.executable, "-c", code], cwd=cwd, env=environment,
-                         capture_output=True, text=True, timeout=600)  # fmt: skip
+    out = subprocess.run(
+        [*(user or []), sys.executable, "-c", code],
+        cwd=cwd,
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr
     return out
 
@@ -62,13 +68,17 @@ def _package(root: Path, name: str, register: str, files: dict[str, str]) -> Pat
 
 
 def _helper(value: float) -> str:
-    return (f"from numba import njit\n\n@njit(cache=True, inline='always')\n"
-            f"def value():\n    return {value}\n")  # fmt: skip
+    return (
+        f"from numba import njit\n\n@njit(cache=True, inline='always')\n"
+        f"def value():\n    return {value}\n"
+    )
 
 
 def test_an_edit_of_an_inlined_module_recompiles_the_kernel(tmp_path: Path) -> None:
-    kernels = ("from numba import njit\nfrom pkg.helpers import value\n\n"
-               "@njit(cache=True)\ndef kernel(x):\n    return x + value()\n")  # fmt: skip
+    kernels = (
+        "from numba import njit\nfrom pkg.helpers import value\n\n"
+        "@njit(cache=True)\ndef kernel(x):\n    return x + value()\n"
+    )
     files = {"helpers.py": _helper(1.0), "kernels.py": kernels, "notes.py": "X = 1\n"}
     pkg = _package(tmp_path, "pkg", "register_package(Path(__file__).parent)", files)
 
@@ -86,12 +96,19 @@ def test_an_edit_of_an_inlined_module_recompiles_the_kernel(tmp_path: Path) -> N
 
 
 def test_an_edit_in_a_package_inlined_from_recompiles_the_dependent_kernel(tmp_path: Path) -> None:
-    base = _package(tmp_path, "base", "register_package(Path(__file__).parent)",
-                    {"helpers.py": _helper(1.0)})  # fmt: skip
-    kernels = ("from numba import njit\nfrom base.helpers import value\n\n"
-               "@njit(cache=True)\ndef kernel(x):\n    return 10.0 * x + value()\n")  # fmt: skip
-    _package(tmp_path, "user", "import base\nregister_package(Path(__file__).parent, "
-             "Path(base.__file__).parent)", {"kernels.py": kernels})  # fmt: skip
+    base = _package(
+        tmp_path, "base", "register_package(Path(__file__).parent)", {"helpers.py": _helper(1.0)}
+    )
+    kernels = (
+        "from numba import njit\nfrom base.helpers import value\n\n"
+        "@njit(cache=True)\ndef kernel(x):\n    return 10.0 * x + value()\n"
+    )
+    _package(
+        tmp_path,
+        "user",
+        "import base\nregister_package(Path(__file__).parent, Path(base.__file__).parent)",
+        {"kernels.py": kernels},
+    )
 
     assert _kernel_call(tmp_path, "user.kernels")["result"] == 11.0
     assert _kernel_call(tmp_path, "user.kernels")["hits"] == 1
@@ -106,8 +123,9 @@ def test_import_is_lazy_and_touches_no_cache_file(tmp_path: Path) -> None:
     On a private copy of the packages with a cache written beforehand: other test workers
     compile into the real packages' caches at the same time."""
     for package in (AUV_DIR, CTL_DIR):
-        shutil.copytree(package, tmp_path / package.name,
-                        ignore=shutil.ignore_patterns("__pycache__"))  # fmt: skip
+        shutil.copytree(
+            package, tmp_path / package.name, ignore=shutil.ignore_patterns("__pycache__")
+        )
     _run("from auv_gym.guidance import wrap_angle\nwrap_angle(1.0)\n", tmp_path)
     folders = {"AUV_DIR": str(tmp_path / "auv_gym"), "CTL_DIR": str(tmp_path / "controllers")}
     assert list((tmp_path / "auv_gym" / "__pycache__").glob("guidance.*.nbi"))
@@ -162,11 +180,16 @@ def _read_only_copy() -> tuple[Path, list[str]]:
         if setpriv is None:
             pytest.skip("running as root without setpriv: cannot drop the right to write")
         user = [setpriv, "--reuid=65534", "--regid=65534", "--clear-groups"]
-        probe = subprocess.run([*user, sys.executable, "-c", "import numba, gymnasium"],
-                               capture_output=True, text=True, timeout=300)  # fmt: skip
+        probe = subprocess.run(
+            [*user, sys.executable, "-c", "import numba, gymnasium"],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         if probe.returncode != 0:  # e.g. a virtual environment inside a folder only root reads
-            pytest.skip(f"user nobody cannot import this interpreter's packages: "
-                        f"{probe.stderr[-200:]}")  # fmt: skip
+            pytest.skip(
+                f"user nobody cannot import this interpreter's packages: {probe.stderr[-200:]}"
+            )
     else:
         user = []
     root = Path(tempfile.mkdtemp(prefix="auv_gym-read-only-"))
@@ -185,8 +208,13 @@ def _run_read_only(code: str) -> tuple[subprocess.CompletedProcess, Path]:
     root, user = _read_only_copy()
     try:
         home = str(root / "home")  # numba's per-user cache folder is not writable either
-        env = {"HOME": home, "XDG_CACHE_HOME": home, "TMPDIR": tempfile.gettempdir(),
-               "MPLCONFIGDIR": tempfile.gettempdir(), "PYTHONPATH": str(root)}  # fmt: skip
+        env = {
+            "HOME": home,
+            "XDG_CACHE_HOME": home,
+            "TMPDIR": tempfile.gettempdir(),
+            "MPLCONFIGDIR": tempfile.gettempdir(),
+            "PYTHONPATH": str(root),
+        }
         out = _run(code, root, env, user)
         written = [p for p in root.rglob("*") if p.name == "__pycache__" or p.suffix == ".nbi"]
     finally:

@@ -29,8 +29,9 @@ from auv_gym.path_generator import (
 from auv_gym.paths import MIN_TANGENT, Spline, fit_curve, path_eval
 from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, remus100
 
-CI = settings(deadline=None, derandomize=True, database=None,
-              suppress_health_check=[HealthCheck.too_slow])  # fmt: skip
+CI = settings(
+    deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.too_slow]
+)
 
 
 def dense_rates(path, per_segment: int = 2000) -> tuple[float, float, float]:
@@ -58,8 +59,11 @@ def test_an_out_and_back_line_is_refused_naming_the_waypoint():
 
 
 def test_an_out_and_back_survey_with_a_turn_waypoint_is_followable():
-    env = gym.make("AUVPath3D-v0", path=[(0, 0, 0), (100, 0, 0), (110, 10, 0), (100, 20, 0),
-                                         (0, 20, 0)], randomize_start=True)  # fmt: skip
+    env = gym.make(
+        "AUVPath3D-v0",
+        path=[(0, 0, 0), (100, 0, 0), (110, 10, 0), (100, 20, 0), (0, 20, 0)],
+        randomize_start=True,
+    )
     psi, theta = path_turn_rates(env.unwrapped.config.path)
     assert 0.2 < psi < 0.3 and theta == 0.0  # a turn of about 4 m radius at the far end
     for seed in range(50):
@@ -112,8 +116,10 @@ def test_the_preview_stays_in_its_bounds_at_a_near_reversal():
 
 
 waypoint_steps = st.lists(
-    st.tuples(*[st.floats(-1.0, 1.0, allow_nan=False)] * 3).filter(
-        lambda d: math.hypot(*d) > 1e-2), min_size=1, max_size=6)  # fmt: skip
+    st.tuples(*[st.floats(-1.0, 1.0, allow_nan=False)] * 3).filter(lambda d: math.hypot(*d) > 1e-2),
+    min_size=1,
+    max_size=6,
+)
 
 
 @settings(CI, max_examples=150)
@@ -141,8 +147,13 @@ def test_the_bounds_enclose_every_value_the_kernels_compute(steps, scale):
 def test_an_accepted_waypoint_path_resets_for_every_seed(steps, scale, u_desired):
     points = scale * np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
     try:
-        env = gym.make("AUVPath3D-v0", path=points, u_desired=u_desired, randomize_start=True,
-                       disturbance="none")  # fmt: skip
+        env = gym.make(
+            "AUVPath3D-v0",
+            path=points,
+            u_desired=u_desired,
+            randomize_start=True,
+            disturbance="none",
+        )
     except ValueError as error:  # doubles back or turns too fast: refused when built
         assert "doubles back at waypoint" in str(error) or "path turns at up to" in str(error)
         return
@@ -185,8 +196,9 @@ def test_fit_curve_checks_the_tangent_everywhere_not_at_three_points():
 def test_a_lawnmower_that_ends_in_a_turn_draws_for_every_seed():
     # Before: "no lawnmower path within the limits after 20 draws" at every reset: every track
     # ends inside a turn, where the natural spline's p'' = 0 overshoots the curvature limit.
-    narrow = PathDistribution(families=("lawnmower",), radius=(15.0, 15.0),
-                              leg_length=(20.0, 20.0), length=64.6)  # fmt: skip
+    narrow = PathDistribution(
+        families=("lawnmower",), radius=(15.0, 15.0), leg_length=(20.0, 20.0), length=64.6
+    )
     for seed in range(200):
         path = narrow.draw(np.random.default_rng(seed))
         kappa, _ = curvature_and_angle(path)
@@ -207,9 +219,10 @@ def test_end_tangents_clamp_a_spline_that_ends_inside_a_turn():
 
 def test_successful_draws_are_unchanged():
     digest = hashlib.sha256()
-    for distribution in (PathDistribution(),
-                         PathDistribution(families=("spline", "lawnmower"), radius=(8.0, 12.0),
-                                          length=150.0)):  # fmt: skip
+    for distribution in (
+        PathDistribution(),
+        PathDistribution(families=("spline", "lawnmower"), radius=(8.0, 12.0), length=150.0),
+    ):
         for seed in range(40):
             digest.update(distribution.draw(np.random.default_rng(seed)).data.tobytes())
     # the draws of the code before the fallback and the proven checks were added
@@ -251,10 +264,18 @@ def test_an_accepted_distribution_draws_a_valid_path_for_every_seed(distribution
 
 
 def test_a_random_path_vector_env_resets_for_every_seed():
-    env = gym.make_vec("AUVPath3D-v0", num_envs=8, vectorization_mode="vector_entry_point",
-                       path={"families": ["lawnmower", "spline"], "radius": [15.0, 15.0],
-                             "leg_length": [20.0, 20.0], "length": 64.6},
-                       randomize_start=True)  # fmt: skip
+    env = gym.make_vec(
+        "AUVPath3D-v0",
+        num_envs=8,
+        vectorization_mode="vector_entry_point",
+        path={
+            "families": ["lawnmower", "spline"],
+            "radius": [15.0, 15.0],
+            "leg_length": [20.0, 20.0],
+            "length": 64.6,
+        },
+        randomize_start=True,
+    )
     for seed in range(0, 256, 8):  # before: every reset raised
         obs, _ = env.reset(seed=seed)
         assert np.all(np.isfinite(obs))
@@ -285,8 +306,10 @@ def test_a_coefficient_the_draw_could_overflow_is_refused():
 
 
 @settings(CI, max_examples=80)
-@given(st.dictionaries(st.sampled_from(HYDRODYNAMIC_FIELDS), st.floats(-100.0, 100.0),
-                       max_size=6), st.floats(0.0, 0.999))  # fmt: skip
+@given(
+    st.dictionaries(st.sampled_from(HYDRODYNAMIC_FIELDS), st.floats(-100.0, 100.0), max_size=6),
+    st.floats(0.0, 0.999),
+)
 def test_accepted_parameter_ranges_draw_valid_vehicles_for_every_seed(values, epsilon):
     try:
         params = remus100(**values)

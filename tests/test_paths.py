@@ -61,8 +61,15 @@ def test_a_fitted_curve_runs_in_the_env_like_the_analytic_path():
     fitted = fit_curve(lambda s: helix.evaluate(s)[0], 200.0, tolerance=1e-5)
     fbsm = controllers.make("fbsm")
     exact = evaluate(fbsm, [0], path=helix, max_time=60.0, transient=20.0)[0]
-    approx = evaluate(fbsm, [0], path=fitted, max_time=60.0, transient=20.0,
-                      start_position=(15.0, 5.0, 0.0), start_heading=0.0)[0]  # fmt: skip
+    approx = evaluate(
+        fbsm,
+        [0],
+        path=fitted,
+        max_time=60.0,
+        transient=20.0,
+        start_position=(15.0, 5.0, 0.0),
+        start_heading=0.0,
+    )[0]
     assert approx["termination_reason"] == "time_limit"
     assert abs(approx["rms_distance"] - exact["rms_distance"]) < 1e-3
 
@@ -82,8 +89,11 @@ def test_waypoint_lists_are_accepted_by_make_and_make_vec():
     assert state[STATE.psi] == pytest.approx(psi)
     offset = state[:3] - p0
     c, s = math.cos(psi), math.sin(psi)
-    assert [c * offset[0] + s * offset[1], -s * offset[0] + c * offset[1], offset[2]] == \
-        pytest.approx([-15.0, 5.0, 8.0])  # fmt: skip
+    assert [
+        c * offset[0] + s * offset[1],
+        -s * offset[0] + c * offset[1],
+        offset[2],
+    ] == pytest.approx([-15.0, 5.0, 8.0])
 
 
 def test_helices_turn_both_ways():
@@ -142,15 +152,21 @@ def test_scenario_files_take_waypoints_and_params(tmp_path):
         (lambda: make_path([(0, 0, 0)]), ValueError, r"path as a list of .* waypoints: Spline"),
         (lambda: fit_curve("helix", 10.0), ArgumentTypeError, r"curve must be a callable"),
         (lambda: fit_curve(lambda s: (s, 0, 0), 0.0), ValueError, r"fit_curve s_end"),
-        (lambda: fit_curve(lambda s: (s, 0, 0), 10.0, tolerance=-1.0), ValueError,
-         r"fit_curve tolerance"),
+        (
+            lambda: fit_curve(lambda s: (s, 0, 0), 10.0, tolerance=-1.0),
+            ValueError,
+            r"fit_curve tolerance",
+        ),
         (lambda: fit_curve(lambda s: (s, 0), 10.0), ValueError, r"curve\(s\) at s = 0"),
         (lambda: fit_curve(lambda s: (s, math.nan, 0), 10.0), ValueError, r"curve\(s\) at s"),
-        (lambda: fit_curve(lambda s: (math.sin(1e3 * s), 0, 0), 10.0, max_segments=16),
-         ValueError, r"16 segments fit the curve to .* above tolerance"),
+        (
+            lambda: fit_curve(lambda s: (math.sin(1e3 * s), 0, 0), 10.0, max_segments=16),
+            ValueError,
+            r"16 segments fit the curve to .* above tolerance",
+        ),
         (lambda: fit_curve(lambda s: (0.0, 0.0, 0.0), 10.0), ValueError, r"\|p'\(s\)\| must be"),
     ],
-)  # fmt: skip
+)
 def test_bad_user_paths_raise_named_errors(make, error, match):
     with pytest.raises(error, match=match):
         make()
@@ -228,19 +244,22 @@ def test_the_generator_is_a_function_of_the_seed():
     assert len({a.data.tobytes() for a in first}) == 12
     # The path of a seed does not depend on the other randomised parts.
     plain = SimConfig.from_kwargs(path="random")
-    busy = SimConfig.from_kwargs(path="random", random_current=0.5, random_noise=0.5,
-                                 actuator="random", disturbance="none")  # fmt: skip
+    busy = SimConfig.from_kwargs(
+        path="random", random_current=0.5, random_noise=0.5, actuator="random", disturbance="none"
+    )
     for seed in range(5):
-        assert np.array_equal(task_for_seed(plain, seed).path.data,
-                              task_for_seed(busy, seed).path.data)  # fmt: skip
+        assert np.array_equal(
+            task_for_seed(plain, seed).path.data, task_for_seed(busy, seed).path.data
+        )
         env = AUVPath3DEnv(path="random")
         env.reset(seed=seed)
         assert np.array_equal(env.sim.paths[0].data, task_for_seed(plain, seed).path.data)
 
 
 def test_domain_randomisation_draws_within_its_ranges():
-    config = SimConfig.from_kwargs(path="random", random_current=0.4, random_noise=0.5,
-                                   actuator="random")  # fmt: skip
+    config = SimConfig.from_kwargs(
+        path="random", random_current=0.4, random_noise=0.5, actuator="random"
+    )
     tasks = [task_for_seed(config, seed) for seed in range(200)]
     speeds = np.array([math.hypot(*t.current[:2]) for t in tasks])
     assert all(t.current[2] == 0.0 for t in tasks)
@@ -261,8 +280,14 @@ def test_domain_randomisation_draws_within_its_ranges():
 
 
 def test_batched_random_tasks_equal_single_envs_bit_for_bit(single_env_observations):
-    kwargs = {"path": "random", "random_current": 0.3, "random_noise": 0.5,
-              "actuator": "random", "param_uncertainty": 0.2, "max_time": 3.0}  # fmt: skip
+    kwargs = {
+        "path": "random",
+        "random_current": 0.3,
+        "random_noise": 0.5,
+        "actuator": "random",
+        "param_uncertainty": 0.2,
+        "max_time": 3.0,
+    }
     n, steps = 4, 80  # 60 control steps per episode: every vehicle autoresets once
     venv = AUVPath3DVectorEnv(n, **kwargs)
     actions = np.random.default_rng(0).uniform(-0.5, 0.5, size=(steps, n, 3))
@@ -355,8 +380,10 @@ def test_a_path_checks_its_kernel_data_and_bounds_its_turn_rates():
 
     broken = Spline(WAYPOINTS)
     broken.data = broken.data[:-1].copy()  # one coefficient short of 1 + 4 knots + 3·12
-    text = (r"^path Spline has no valid kernel data \(kind, data\); build paths with Helix, "
-            r"StraightLine, Spline or make_path$")  # fmt: skip
+    text = (
+        r"^path Spline has no valid kernel data \(kind, data\); build paths with Helix, "
+        r"StraightLine, Spline or make_path$"
+    )
     with pytest.raises(ValueError, match=text):
         broken.check_kernel_data()
     with pytest.raises(ValueError, match=text):

@@ -31,12 +31,15 @@ def test_pole_placement_gives_the_chosen_closed_loop_poles():
     assert t.kp_psi == pytest.approx(8.33 * 6.25, rel=1e-12)
     assert t.kp_u == pytest.approx(31.41 - 3.24, rel=1e-12)
     assert t.ki_u == pytest.approx(0.1 * t.kp_u, rel=1e-12)
-    for m, d, k, kp, kd, wn in ((p.I55, 2.0, 0.0196 * 299.0, t.kp_theta, t.kd_theta, 3.0),
-                                (p.I66, 2.0, 0.0, t.kp_psi, t.kd_psi, 2.5)):  # fmt: skip
+    for m, d, k, kp, kd, wn in (
+        (p.I55, 2.0, 0.0196 * 299.0, t.kp_theta, t.kd_theta, 3.0),
+        (p.I66, 2.0, 0.0, t.kp_psi, t.kd_psi, 2.5),
+    ):
         np.testing.assert_allclose(np.roots([m, d + kd, k + kp]), [-wn, -wn], rtol=1e-6)
     assert (-3.24 - t.kp_u) / p.m11 == pytest.approx(-1.0, rel=1e-12)
     assert controllers.make("pid_los", pitch_wn=2.0).tuning.kp_theta == pytest.approx(
-        8.33 * 4.0 - 0.0196 * 299.0, rel=1e-12)  # fmt: skip
+        8.33 * 4.0 - 0.0196 * 299.0, rel=1e-12
+    )
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -120,8 +123,7 @@ def test_anti_windup_keeps_the_fin_limited_vehicle_on_the_path():
     env = {"disturbance": "none", "actuator": "fins", "max_time": 150.0}
     clamped = controllers.make("pid_los", actuator="fins")
     (tr,) = rollouts(clamped, [0], **env)
-    (wound,) = rollouts(controllers.make("pid_los", actuator="fins", anti_windup=False), [0],
-                        **env)  # fmt: skip
+    (wound,) = rollouts(controllers.make("pid_los", actuator="fins", anti_windup=False), [0], **env)
     m, m_wound = compute_metrics(tr, transient=100.0), compute_metrics(wound, transient=100.0)
     assert m["rms_distance"] < 0.02  # measured 0.0177 m
     assert m_wound["rms_distance"] > 0.8  # measured 1.08 m
@@ -134,23 +136,31 @@ def test_anti_windup_keeps_the_fin_limited_vehicle_on_the_path():
 
 @pytest.mark.parametrize(
     ("kwargs", "error"),
-    [({"pitch_wn": -1.0}, r"PIDGains.pitch_wn must be a finite number in \(0, ∞\) rad/s, got -1.0"),
-     ({"yaw_wn": math.nan}, "PIDGains.yaw_wn must be a finite number"),
-     ({"surge_wn": math.inf}, "PIDGains.surge_wn must be a finite number"),
-     ({"yaw_zeta": 0.0}, r"PIDGains.yaw_zeta must be a finite number in \(0, ∞\), got 0.0"),
-     ({"integral_ratio": -0.1}, r"PIDGains.integral_ratio must be a finite number in \[0, ∞\)"),
-     ({"design_speed": "1"}, "PIDGains.design_speed must be a real number"),
-     ({"anti_windup": "yes"}, "PIDGains.anti_windup must be True or False"),
-     ({"pitch_wn": 0.5}, r"PIDGains.pitch_wn = 0.5 rad/s gives the pitch loop K_p = m ω_n² − k = "
-                         r"-3.78 ≤ 0; it must exceed √\(k/m\) = 0.839 rad/s"),
-     ({"yaw_wn": 0.1}, "PIDGains.yaw_wn = 0.1 rad/s gives the yaw loop K_d = 2ζω_n m − d"),
-     ({"surge_wn": 0.05}, "PIDGains.surge_wn = 0.05 rad/s gives K_p,u"),
-     ({"k1": 5.0}, r"unknown pid_los gains \['k1'\]"),
-     ({"k_y": -0.1}, "ControllerGains.k_y must be positive"),
-     ({"filter_wn": 30.0}, r"filter_wn × control_dt must be below 1, got 30.0 rad/s × 0.05 s"),
-     ({"pid": "fast"}, "pid must be a PIDGains, got str"),
-     ({"control_dt": 0.0}, "control_dt must be a positive time")],
-)  # fmt: skip
+    [
+        (
+            {"pitch_wn": -1.0},
+            r"PIDGains.pitch_wn must be a finite number in \(0, ∞\) rad/s, got -1.0",
+        ),
+        ({"yaw_wn": math.nan}, "PIDGains.yaw_wn must be a finite number"),
+        ({"surge_wn": math.inf}, "PIDGains.surge_wn must be a finite number"),
+        ({"yaw_zeta": 0.0}, r"PIDGains.yaw_zeta must be a finite number in \(0, ∞\), got 0.0"),
+        ({"integral_ratio": -0.1}, r"PIDGains.integral_ratio must be a finite number in \[0, ∞\)"),
+        ({"design_speed": "1"}, "PIDGains.design_speed must be a real number"),
+        ({"anti_windup": "yes"}, "PIDGains.anti_windup must be True or False"),
+        (
+            {"pitch_wn": 0.5},
+            r"PIDGains.pitch_wn = 0.5 rad/s gives the pitch loop K_p = m ω_n² − k = "
+            r"-3.78 ≤ 0; it must exceed √\(k/m\) = 0.839 rad/s",
+        ),
+        ({"yaw_wn": 0.1}, "PIDGains.yaw_wn = 0.1 rad/s gives the yaw loop K_d = 2ζω_n m − d"),
+        ({"surge_wn": 0.05}, "PIDGains.surge_wn = 0.05 rad/s gives K_p,u"),
+        ({"k1": 5.0}, r"unknown pid_los gains \['k1'\]"),
+        ({"k_y": -0.1}, "ControllerGains.k_y must be positive"),
+        ({"filter_wn": 30.0}, r"filter_wn × control_dt must be below 1, got 30.0 rad/s × 0.05 s"),
+        ({"pid": "fast"}, "pid must be a PIDGains, got str"),
+        ({"control_dt": 0.0}, "control_dt must be a positive time"),
+    ],
+)
 def test_bad_gains_raise_one_named_error(kwargs, error):
     with pytest.raises(ValueError, match=error):
         controllers.make("pid_los", **kwargs)

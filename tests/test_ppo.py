@@ -47,12 +47,27 @@ def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.run(
         [sys.executable, "-m", "benchmarks.train_ppo", *args],
-        cwd=cwd, env=env, capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
 
 
-TINY_ARGS = ("--n-timesteps", "256", "--checkpoint-freq", "128", "--eval-freq", "128",
-             "--eval-seeds", "100,101", "--eval-duration", "2", "--no-progress-bar")  # fmt: skip
+TINY_ARGS = (
+    "--n-timesteps",
+    "256",
+    "--checkpoint-freq",
+    "128",
+    "--eval-freq",
+    "128",
+    "--eval-seeds",
+    "100,101",
+    "--eval-duration",
+    "2",
+    "--no-progress-bar",
+)
 
 
 @pytest.fixture(scope="module")
@@ -64,8 +79,19 @@ def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     first = run_cli("--config", "tiny.yml", "--out", str(out), "--seed", "3", *TINY_ARGS, cwd=work)
     assert first.returncode == 0, first.stderr
     (work / "first_metadata.json").write_text((out / "metadata.json").read_text())
-    second = run_cli("--config", "tiny.yml", "--out", str(out), "--seed", "3", *TINY_ARGS[2:],
-                     "--n-timesteps", "512", "--resume", cwd=work)  # fmt: skip
+    second = run_cli(
+        "--config",
+        "tiny.yml",
+        "--out",
+        str(out),
+        "--seed",
+        "3",
+        *TINY_ARGS[2:],
+        "--n-timesteps",
+        "512",
+        "--resume",
+        cwd=work,
+    )
     assert second.returncode == 0, second.stderr
     return out
 
@@ -117,8 +143,9 @@ def test_cli_refuses_to_overwrite_and_to_resume_nothing(tiny_run: Path, tmp_path
     (tmp_path / "tiny.yml").write_text(TINY_YAML)
     again = run_cli("--config", "tiny.yml", "--out", str(tiny_run), *TINY_ARGS, cwd=tmp_path)
     assert again.returncode != 0 and "is not empty" in again.stderr
-    empty = run_cli("--config", "tiny.yml", "--out", str(tmp_path / "new"), "--resume", *TINY_ARGS,
-                    cwd=tmp_path)  # fmt: skip
+    empty = run_cli(
+        "--config", "tiny.yml", "--out", str(tmp_path / "new"), "--resume", *TINY_ARGS, cwd=tmp_path
+    )
     assert empty.returncode != 0 and "no complete checkpoint" in empty.stderr
 
 
@@ -130,8 +157,16 @@ def _tiny_model(seed: int = 0):
 
     kwargs = {"randomize_start": True, "max_time": 5.0}
     venv = VecNormalize(make_vec_env("AUVPath3D-v0", n_envs=2, seed=seed, env_kwargs=kwargs))
-    model = PPO("MlpPolicy", venv, n_steps=32, batch_size=32, n_epochs=1, seed=seed,
-                policy_kwargs={"net_arch": [16, 16]}, device="cpu")  # fmt: skip
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=32,
+        batch_size=32,
+        n_epochs=1,
+        seed=seed,
+        policy_kwargs={"net_arch": [16, 16]},
+        device="cpu",
+    )
     model.learn(64)
     return model, venv
 
@@ -268,8 +303,9 @@ def test_zoo_config_errors(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="no top-level key 'Other-v0'"):
         read_zoo_config(bad, "Other-v0")
     bad.write_text("AUVPath3D-v0: a comment that lost its hash\n")  # a section that is a string
-    with pytest.raises(ValueError, match="AUVPath3D-v0 must be a mapping of hyper-parameters, "
-                                         "got str 'a comment"):  # fmt: skip
+    with pytest.raises(
+        ValueError, match="AUVPath3D-v0 must be a mapping of hyper-parameters, got str 'a comment"
+    ):
         read_zoo_config(bad)
     with pytest.raises(FileNotFoundError, match=r"missing\.yml"):
         read_zoo_config(tmp_path / "missing.yml")

@@ -47,8 +47,14 @@ def test_layout_names_units_and_bounds():
     assert names[:OBS_DIM] == OBS_NAMES
     assert len(names) == OBS_DIM + HEAD + 5 * 4 == 41
     assert names[OBS_DIM : OBS_DIM + 7] == (
-        "u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_prev", "preview1_x",
-    )  # fmt: skip
+        "u_ground",
+        "v_ground",
+        "w_ground",
+        "a_X_prev",
+        "a_M_prev",
+        "a_N_prev",
+        "preview1_x",
+    )
     assert names[-1] == "preview4_torsion" and PREVIEW.units["preview4_torsion"] == "1/m"
     assert PREVIEW.units["u_ground"] == "m/s" and PREVIEW.units["preview2_z"] == "m"
     low, high = PREVIEW.bounds()
@@ -81,15 +87,25 @@ def test_hand_computed_case_level_vehicle_on_a_line():
     # Vehicle at rest at the origin heading north, path along +x from (10, 0, 0): the virtual
     # point starts at s = 0, so preview point k is (10 + 3k, 0, 0) m ahead, κ = τ = 0.
     line = StraightLine(start=(10.0, 0.0, 0.0), direction=(2.0, 0.0, 0.0))
-    env = AUVPath3DEnv(path=line, observation=PREVIEW, disturbance="none",
-                       start_position=(0.0, 0.0, 0.0), start_heading=0.0)  # fmt: skip
+    env = AUVPath3DEnv(
+        path=line,
+        observation=PREVIEW,
+        disturbance="none",
+        start_position=(0.0, 0.0, 0.0),
+        start_heading=0.0,
+    )
     obs, _ = env.reset(seed=0)
     np.testing.assert_array_equal(obs[OBS_DIM : OBS_DIM + HEAD], np.zeros(HEAD))
     expected = [[10.0 + 3.0 * k, 0.0, 0.0, 0.0, 0.0] for k in range(1, 5)]
     np.testing.assert_allclose(preview_points(obs, 4), expected, atol=1e-12)
     # heading east instead: the same points lie to port (body y < 0)
-    env = AUVPath3DEnv(path=line, observation=PREVIEW, disturbance="none",
-                       start_position=(0.0, 0.0, 0.0), start_heading=math.pi / 2)  # fmt: skip
+    env = AUVPath3DEnv(
+        path=line,
+        observation=PREVIEW,
+        disturbance="none",
+        start_position=(0.0, 0.0, 0.0),
+        start_heading=math.pi / 2,
+    )
     obs, _ = env.reset(seed=0)
     expected = [[0.0, -(10.0 + 3.0 * k), 0.0, 0.0, 0.0] for k in range(1, 5)]
     np.testing.assert_allclose(preview_points(obs, 4), expected, atol=1e-5)
@@ -115,8 +131,7 @@ def test_spline_points_are_the_spline_at_arc_steps():
 
 def test_preview_past_the_end_continues_along_the_last_tangent():
     spline = Spline([(0, 0, 5), (30, 0, 5), (60, 10, 5)])
-    env = AUVPath3DEnv(path=spline, observation={"points": 6, "spacing": 10.0},
-                       disturbance="none")  # fmt: skip
+    env = AUVPath3DEnv(path=spline, observation={"points": 6, "spacing": 10.0}, disturbance="none")
     env.reset(seed=0)
     sim = env.unwrapped.sim
     sim.state[0, 10] = spline.s_end - 5.0  # the virtual point 5 m of parameter before the end
@@ -151,8 +166,9 @@ def test_ground_velocity_reveals_the_current_and_previous_action_is_the_saturate
     velocity = np.array([st[5], st[6], st[7]])
     np.testing.assert_allclose(
         obs[OBS_DIM : OBS_DIM + 3],
-        velocity + body_frame(st[3], st[4]).T @ np.array(current), atol=1e-6,
-    )  # fmt: skip
+        velocity + body_frame(st[3], st[4]).T @ np.array(current),
+        atol=1e-6,
+    )
     obs, _ = env.reset(seed=2)
     assert np.all(obs[OBS_DIM + 3 : OBS_DIM + 6] == 0.0)
 
@@ -175,8 +191,9 @@ def test_paper_entries_and_classical_controllers_are_unchanged_by_the_preview():
         assert r1 == r2
 
 
-@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP],
-                         ids=lambda m: m.name)  # fmt: skip
+@pytest.mark.parametrize(
+    "mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP], ids=lambda m: m.name
+)
 def test_batched_equals_single_bit_for_bit_with_autoresets(mode):
     counts = run_parity(5, mode, steps=110, seed=3, observation=PREVIEW, **DISTURBED)
     assert counts["terminated"] >= 1 and counts["truncated"] >= 1
@@ -186,8 +203,13 @@ def test_batched_equals_single_bit_for_bit_with_autoresets(mode):
 
 
 def test_observations_stay_inside_the_space_on_random_paths():
-    env = gym.make_vec("AUVPath3DPreview-v0", num_envs=16, path="random", random_current=0.5,
-                       current={"std": (0.1, 0.1, 0.03), "time_constant": 60.0})  # fmt: skip
+    env = gym.make_vec(
+        "AUVPath3DPreview-v0",
+        num_envs=16,
+        path="random",
+        random_current=0.5,
+        current={"std": (0.1, 0.1, 0.03), "time_constant": 60.0},
+    )
     space = env.single_observation_space
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(1)
@@ -196,12 +218,19 @@ def test_observations_stay_inside_the_space_on_random_paths():
         obs, *_ = env.step(rng.uniform(-1, 1, size=(16, 3)))
 
 
-@pytest.mark.parametrize("bad, message", [
-    ({"points": 0}, "observation points"), ({"points": 2.5}, "observation points"),
-    ({"spacing": 0.0}, "observation spacing"), ({"spacing": math.nan}, "observation spacing"),
-    ({"spacing": math.inf}, "observation spacing"), ({"points": 64, "spacing": 10.0}, "K·Δs"),
-    ({"kind": "future"}, "observation kind"), ({"depth": 3}, "observation"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        ({"points": 0}, "observation points"),
+        ({"points": 2.5}, "observation points"),
+        ({"spacing": 0.0}, "observation spacing"),
+        ({"spacing": math.nan}, "observation spacing"),
+        ({"spacing": math.inf}, "observation spacing"),
+        ({"points": 64, "spacing": 10.0}, "K·Δs"),
+        ({"kind": "future"}, "observation kind"),
+        ({"depth": 3}, "observation"),
+    ],
+)
 def test_bad_preview_arguments_name_the_argument(bad, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(observation=bad)
@@ -214,8 +243,10 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
         warnings.simplefilter("error")
         for env_id in auv_gym.VARIANTS:
             gym.make(env_id).close()
-    assert gym.spec("AUVPath3DPreview-v0").kwargs == {"surge_limit": "vehicle",
-                                                      "observation": "preview"}  # fmt: skip
+    assert gym.spec("AUVPath3DPreview-v0").kwargs == {
+        "surge_limit": "vehicle",
+        "observation": "preview",
+    }
     # The integral id: the preview observation and the two leaky error integrals after it.
     integral = gym.make("AUVPath3DPreviewIntegral-v0")
     preview = gym.make("AUVPath3DPreview-v0")
@@ -236,8 +267,9 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
     np.testing.assert_array_equal(obs[:-3], preview.reset(seed=3)[0])
     obs, *_ = antiwindup.step(action)
     reference, *_ = preview.step(action)
-    np.testing.assert_allclose(obs[-3:], np.clip(10.0 * (1.0 - decay) * reference[:3], -1, 1),
-                               rtol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        obs[-3:], np.clip(10.0 * (1.0 - decay) * reference[:3], -1, 1), rtol=1e-6
+    )
     assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
     with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
         auv_gym.resolve_env_id("AUVPath3D-v9")
@@ -307,8 +339,9 @@ def test_error_integrals_are_leaky_integrals_of_the_track_errors():
 def test_along_track_integral_comes_first_and_the_default_layout_is_unchanged():
     """integral_errors "xyz": x_e_integral, y_e_integral, z_e_integral, the same leaky law on
     (x_e, y_e, z_e); the y/z integrals equal those of the default "yz" layout bit for bit."""
-    xyz = ObservationConfig("preview", points=2, spacing=3.0, integral_time=30.0,
-                            integral_errors="xyz")  # fmt: skip
+    xyz = ObservationConfig(
+        "preview", points=2, spacing=3.0, integral_time=30.0, integral_errors="xyz"
+    )
     yz = ObservationConfig("preview", points=2, spacing=3.0, integral_time=30.0)
     assert xyz.names[-3:] == ("x_e_integral", "y_e_integral", "z_e_integral")
     assert xyz.extra_dim == yz.extra_dim + 1 and xyz.integrals == 3
@@ -341,8 +374,14 @@ def test_integral_limit_clips_each_integral_after_every_update():
     """integral_limit L: I ← clip(e^(−Δt/T) I + T(1 − e^(−Δt/T)) e, −L, L); the bound is L; the
     approach from the paper's start (x_e = −15 m) saturates x_e's integral at −L."""
     limit = 0.5
-    clipped = ObservationConfig("preview", points=2, spacing=3.0, integral_time=30.0,
-                                integral_errors="xyz", integral_limit=limit)  # fmt: skip
+    clipped = ObservationConfig(
+        "preview",
+        points=2,
+        spacing=3.0,
+        integral_time=30.0,
+        integral_errors="xyz",
+        integral_limit=limit,
+    )
     assert clipped.bounds()[1][-3:].tolist() == [limit] * 3
     assert clipped.to_dict()["integral_limit"] == limit
     assert ObservationConfig.from_spec(clipped.to_dict()) == clipped
@@ -354,8 +393,9 @@ def test_integral_limit_clips_each_integral_after_every_update():
     rng = np.random.default_rng(4)
     for _ in range(100):
         obs, *_ = env.step(rng.uniform(-0.5, 0.5, size=3))
-        integral = np.clip(decay * integral + 30.0 * (1.0 - decay) * obs[:3].astype(float),
-                           -limit, limit)  # fmt: skip
+        integral = np.clip(
+            decay * integral + 30.0 * (1.0 - decay) * obs[:3].astype(float), -limit, limit
+        )
         np.testing.assert_allclose(obs[-3:], integral, rtol=1e-5, atol=1e-6)
         saturated += bool(np.isclose(obs[-3], -limit))
     assert saturated > 50  # x_e ≈ −15 m charges −0.5 m·s in 0.7 s, then stays clipped

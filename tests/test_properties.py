@@ -100,15 +100,17 @@ def env_kwargs(draw):
     control_dt = substeps * physics_dt
     n_steps = draw(st.integers(1, max(1, min(60, PHYSICS_STEPS_PER_EXAMPLE // substeps))))
     fraction = 1.0 if n_steps == 1 else draw(st.floats(0.01, 1.0))
-    kw.update(physics_dt=physics_dt, control_dt=control_dt,
-              max_time=control_dt * (n_steps - 1 + fraction))  # fmt: skip
+    kw.update(
+        physics_dt=physics_dt, control_dt=control_dt, max_time=control_dt * (n_steps - 1 + fraction)
+    )
     hold = draw(st.integers(1, 1000)) * physics_dt
     amplitude = draw(st.one_of(st.just(0.0), log_uniform(1e-3, MAX_NOISE_AMPLITUDE)))
     noises = [
-        {"disturbance": "paper"}, {"disturbance": "none"},
+        {"disturbance": "paper"},
+        {"disturbance": "none"},
         {"disturbance": amplitude, "noise_hold": hold},
         {"disturbance": NoiseConfig((amplitude,) * 5, hold)},
-    ]  # fmt: skip
+    ]
     kw.update(draw(st.sampled_from(noises)))
     if "noise_hold" not in kw and not isinstance(kw["disturbance"], NoiseConfig):
         whole = abs(0.01 / physics_dt - round(0.01 / physics_dt)) < 1e-9 * (0.01 / physics_dt)
@@ -169,8 +171,9 @@ def checked_step(env, action):
         if OUT_OF_SPACE in str(warning.message):
             assert result[2] and reason in FAILURES, (reason, result[0])
         else:
-            warnings.warn_explicit(warning.message, warning.category, warning.filename,
-                                   warning.lineno)  # fmt: skip
+            warnings.warn_explicit(
+                warning.message, warning.category, warning.filename, warning.lineno
+            )
     return result
 
 

@@ -18,9 +18,17 @@ from benchmarks.training.publish_phase import main
 pytestmark = pytest.mark.rl
 
 ENV_ID = "AUVPath3DPreview-v0"
-TINY = {"n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True, "n_steps": 64,
-        "batch_size": 128, "n_epochs": 1, "policy_kwargs": "dict(net_arch=[16])",
-        "env_kwargs": {"randomize_start": True, "max_time": 20.0, "actuator": "paper"}}  # fmt: skip
+TINY = {
+    "n_envs": 4,
+    "n_timesteps": 256,
+    "policy": "MlpPolicy",
+    "normalize": True,
+    "n_steps": 64,
+    "batch_size": 128,
+    "n_epochs": 1,
+    "policy_kwargs": "dict(net_arch=[16])",
+    "env_kwargs": {"randomize_start": True, "max_time": 20.0, "actuator": "paper"},
+}
 
 
 def _train(folder, out, seeds, *extra):
@@ -29,10 +37,33 @@ def _train(folder, out, seeds, *extra):
     config = folder / "tiny.yml"
     if not config.exists():
         config.write_text(yaml.safe_dump({ENV_ID: TINY}))
-    assert train_seeds(["--algo", "ppo", "--config", str(config), "--env-id", ENV_ID,
-                        "--seeds", seeds, "--workers", "1", "--eval-seeds", "100",
-                        "--eval-freq", "256", "--eval-duration", "110", "--quiet",
-                        "--out", str(out), *extra]) == 0  # fmt: skip
+    assert (
+        train_seeds(
+            [
+                "--algo",
+                "ppo",
+                "--config",
+                str(config),
+                "--env-id",
+                ENV_ID,
+                "--seeds",
+                seeds,
+                "--workers",
+                "1",
+                "--eval-seeds",
+                "100",
+                "--eval-freq",
+                "256",
+                "--eval-duration",
+                "110",
+                "--quiet",
+                "--out",
+                str(out),
+                *extra,
+            ]
+        )
+        == 0
+    )
     return out
 
 
@@ -75,8 +106,11 @@ def test_a_phase_becomes_a_results_folder_with_whole_histories(phase, capsys):
         phase_rows = _rows(run / f"seed_{seed}" / "evaluations.csv")
         assert _rows(out / f"seed_{seed}_phase_curve.csv") == phase_rows
         start = json.loads((history / f"agent_seed_{seed}" / "metadata.json").read_text())
-        before = [r for r in _rows(history / f"seed_{seed}_learning_curve.csv")
-                  if r[0] <= start["num_timesteps"]]  # fmt: skip
+        before = [
+            r
+            for r in _rows(history / f"seed_{seed}_learning_curve.csv")
+            if r[0] <= start["num_timesteps"]
+        ]
         whole = _rows(out / f"seed_{seed}_learning_curve.csv")
         assert whole[: len(before)] == before
         shifted = whole[len(before) :]

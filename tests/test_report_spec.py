@@ -18,10 +18,14 @@ def test_the_shipped_table_is_the_shipped_experiment():
         target_references=("fbsm", "fbsm_colos"),
         smoothness_reference="fbsm",
         worse_ratio=0.10,
-        pairs=(("ppo_residual", "fbsm_colos"), ("ppo_residual_v2", "fbsm_colos"),
-               ("fbsm_colos_lowpass", "fbsm_colos"), ("ppo_residual", "fbsm_colos_lowpass")),
+        pairs=(
+            ("ppo_residual", "fbsm_colos"),
+            ("ppo_residual_v2", "fbsm_colos"),
+            ("fbsm_colos_lowpass", "fbsm_colos"),
+            ("ppo_residual", "fbsm_colos_lowpass"),
+        ),
         tradeoff_scopes=("scenario:paper", "test_distribution", "aggregate"),
-    )  # fmt: skip
+    )
     assert DEFAULT_REPORT.name == "report.toml"
     # --reference replaces the reference only; chattering ratios keep theirs
     other = spec.with_reference("backstepping")
@@ -43,16 +47,22 @@ def test_a_minimal_table_takes_defaults_and_its_reference_for_smoothness(tmp_pat
     [
         ('reference = "fbsm"\nrefrence = 1\n', r"unknown keys \['refrence'\]"),
         ("[target]\nmax_ratio = 2\n", "reference must be a policy name, got None"),
-        ('reference = "fbsm"\n[target]\nmax_ratio = -1\n',
-         "target.max_ratio must be a positive number, got -1"),
-        ('reference = "fbsm"\n[smoothness]\npairs = [["a"]]\n',
-         r"smoothness.pairs must be a list of \[policy, base\]"),
+        (
+            'reference = "fbsm"\n[target]\nmax_ratio = -1\n',
+            "target.max_ratio must be a positive number, got -1",
+        ),
+        (
+            'reference = "fbsm"\n[smoothness]\npairs = [["a"]]\n',
+            r"smoothness.pairs must be a list of \[policy, base\]",
+        ),
         ('reference = "fbsm"\n[smoothness]\nparis = []\n', r"\[smoothness\] unknown keys"),
-        ('reference = "fbsm"\n[target]\nreferences = "fbsm"\n',
-         "target.references must be a list of names"),
+        (
+            'reference = "fbsm"\n[target]\nreferences = "fbsm"\n',
+            "target.references must be a list of names",
+        ),
         ("reference = ", "is unreadable"),
     ],
-)  # fmt: skip
+)
 def test_bad_tables_are_one_line_naming_the_file_and_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(text)

@@ -167,12 +167,18 @@ def test_precision_bonus_is_a_gaussian_of_the_distance_after_each_step_across_re
         _, r0, term, trunc, info0 = plain.step(corrections[k])
         _, r1, _, _, info = shaped.step(corrections[k])
         done = term | trunc
-        d = np.where(done, info["final_info"]["distance"], info["distance"]) if done.any() else (
-            info["distance"])  # fmt: skip
+        d = (
+            np.where(done, info["final_info"]["distance"], info["distance"])
+            if done.any()
+            else (info["distance"])
+        )
         bonus = weight * np.exp(-((d / scale) ** 2))
         np.testing.assert_allclose(r1 - r0, bonus, rtol=1e-12, atol=1e-12)
-        got = np.where(done, info["final_info"][PRECISION_KEY], info[PRECISION_KEY]) if (
-            done.any()) else info[PRECISION_KEY]  # fmt: skip
+        got = (
+            np.where(done, info["final_info"][PRECISION_KEY], info[PRECISION_KEY])
+            if (done.any())
+            else info[PRECISION_KEY]
+        )
         np.testing.assert_array_equal(got, bonus)
         np.testing.assert_array_equal(info[CHATTERING_KEY], info0[CHATTERING_KEY])
         assert PRECISION_KEY not in info0  # no term without a weight
@@ -192,8 +198,11 @@ def test_selection_score_adds_the_weighted_chattering_and_selects_on_the_recorde
     assert score(summary, 0.0005) == (0, pytest.approx(0.06 + 0.0075, abs=1e-15))
     # seed 1 is closer to the path, seed 0 smoother: the recorded combined score decides
     smooth = {"seed": 0, "validation_summary": summary, "validation_score": [0, 0.0675]}
-    rough = {"seed": 1, "validation_summary": {**summary, "rms_distance_mean": 0.058},
-             "validation_score": [0, 0.078]}  # fmt: skip
+    rough = {
+        "seed": 1,
+        "validation_summary": {**summary, "rms_distance_mean": 0.058},
+        "validation_score": [0, 0.078],
+    }
     assert select([rough, smooth])["seed"] == 0
     legacy = [{**e, "validation_score": None} for e in (rough, smooth)]  # rms alone
     assert select(legacy)["seed"] == 1
@@ -314,9 +323,27 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     small = tmp_path / "ppo_residual.yml"
     small.write_text(yaml.safe_dump(config))
     out = tmp_path / "run"
-    code = main(["--config", str(small), "--seeds", "0-0", "--n-timesteps", "256",
-                 "--eval-freq", "256", "--checkpoint-freq", "256", "--eval-seeds", "100",
-                 "--eval-duration", "10", "--out", str(out), "--quiet"])  # fmt: skip
+    code = main(
+        [
+            "--config",
+            str(small),
+            "--seeds",
+            "0-0",
+            "--n-timesteps",
+            "256",
+            "--eval-freq",
+            "256",
+            "--checkpoint-freq",
+            "256",
+            "--eval-seeds",
+            "100",
+            "--eval-duration",
+            "10",
+            "--out",
+            str(out),
+            "--quiet",
+        ]
+    )
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["selected_seed"] == 0 and summary["seeds"][0]["num_timesteps"] == 256
@@ -348,8 +375,12 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3DSpeedLimit-v0")
     generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3DSpeedLimit-v0")
     assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
-    expected = {"tv_weight": 1.0, "precision_weight": 3.0, "selection_chattering": 0.0005,
-                "filter_max": 0.8}  # fmt: skip
+    expected = {
+        "tv_weight": 1.0,
+        "precision_weight": 3.0,
+        "selection_chattering": 0.0005,
+        "filter_max": 0.8,
+    }
     assert cfg.residual == ResidualTraining(**expected)
     assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.action_dim == 6
     assert cfg.residual.precision_scale == 0.1

@@ -122,8 +122,9 @@ def test_wrapper_with_filter_takes_six_values_and_matches_the_policy():
 
 
 @pytest.mark.rl
-def test_saved_filter_agent_reloads_with_six_actions(tmp_path, save_tiny_residual_agent,
-                                                     assert_same_episodes):  # fmt: skip
+def test_saved_filter_agent_reloads_with_six_actions(
+    tmp_path, save_tiny_residual_agent, assert_same_episodes
+):
     from benchmarks.training.callbacks import policy_from_model
     from controllers.ppo import check_agent, load_policy
 

@@ -19,25 +19,55 @@ import yaml
 
 pytestmark = pytest.mark.rl
 
-COMMON = {"policy": "MlpPolicy", "n_envs": 4,
-          "normalize": "dict(norm_obs=True, norm_reward=True)",
-          "policy_kwargs": "dict(net_arch=[16, 16])",
-          "env_kwargs": {"randomize_start": True, "max_time": 5.0}}  # fmt: skip
+COMMON = {
+    "policy": "MlpPolicy",
+    "n_envs": 4,
+    "normalize": "dict(norm_obs=True, norm_reward=True)",
+    "policy_kwargs": "dict(net_arch=[16, 16])",
+    "env_kwargs": {"randomize_start": True, "max_time": 5.0},
+}
 # PPO: rollouts of 4 × 32 = 128 env steps; gSDE noise redrawn every 4 steps.
-PPO = {**COMMON, "n_steps": 32, "batch_size": 64, "n_epochs": 2, "gamma": 0.99,
-       "learning_rate": "lin_3e-4", "clip_range": "lin_0.2", "use_sde": True,
-       "sde_sample_freq": 4}  # fmt: skip
+PPO = {
+    **COMMON,
+    "n_steps": 32,
+    "batch_size": 64,
+    "n_epochs": 2,
+    "gamma": 0.99,
+    "learning_rate": "lin_3e-4",
+    "clip_range": "lin_0.2",
+    "use_sde": True,
+    "sde_sample_freq": 4,
+}
 # SAC: one step of 4 vehicles per collection; random actions (the action space's generator)
 # for the first 200 steps.
-SAC = {**COMMON, "learning_rate": 3e-4, "buffer_size": 5000, "learning_starts": 200,
-       "batch_size": 32, "train_freq": 1, "gradient_steps": 1, "ent_coef": "auto",
-       "use_sde": True, "sde_sample_freq": 8}  # fmt: skip
+SAC = {
+    **COMMON,
+    "learning_rate": 3e-4,
+    "buffer_size": 5000,
+    "learning_starts": 200,
+    "batch_size": 32,
+    "train_freq": 1,
+    "gradient_steps": 1,
+    "ent_coef": "auto",
+    "use_sde": True,
+    "sde_sample_freq": 8,
+}
 # PPO inside an envelope guard tight enough to act in 5-s episodes: its wrapper's last
 # observations are part of what a resume restores.
-GUARDED = {**PPO, "envelope_guard": {"pitch_soft_deg": 2.0, "pitch_hard_deg": 6.0,
-                                     "surge_soft": 0.3, "surge_hard": 0.6}}  # fmt: skip
-CASES = {"ppo": ("AUVPath3D-v0", PPO, 768, 300), "sac": ("AUVPath3DSpeedLimit-v0", SAC, 512, 100),
-         "ppo_guard": ("AUVPath3D-v0", GUARDED, 768, 300)}  # fmt: skip
+GUARDED = {
+    **PPO,
+    "envelope_guard": {
+        "pitch_soft_deg": 2.0,
+        "pitch_hard_deg": 6.0,
+        "surge_soft": 0.3,
+        "surge_hard": 0.6,
+    },
+}
+CASES = {
+    "ppo": ("AUVPath3D-v0", PPO, 768, 300),
+    "sac": ("AUVPath3DSpeedLimit-v0", SAC, 512, 100),
+    "ppo_guard": ("AUVPath3D-v0", GUARDED, 768, 300),
+}
 
 
 def _options(tmp_path: Path, algo: str, out: str, **extra: Any):
@@ -46,10 +76,19 @@ def _options(tmp_path: Path, algo: str, out: str, **extra: Any):
     env_id, section, n_timesteps, _ = CASES[algo]
     config = tmp_path / f"{algo}.yml"
     config.write_text(yaml.safe_dump({env_id: {**section, "n_timesteps": n_timesteps}}))
-    return TrainOptions(algo=algo.split("_")[0], config=str(config), env_id=env_id,
-                        out=str(tmp_path / out),
-                        seed=3, eval_freq=256, checkpoint_freq=256, eval_seeds=(100, 101),
-                        eval_duration=2.0, progress_bar=False, **extra)  # fmt: skip
+    return TrainOptions(
+        algo=algo.split("_")[0],
+        config=str(config),
+        env_id=env_id,
+        out=str(tmp_path / out),
+        seed=3,
+        eval_freq=256,
+        checkpoint_freq=256,
+        eval_seeds=(100, 101),
+        eval_duration=2.0,
+        progress_bar=False,
+        **extra,
+    )
 
 
 def _model_tensors(folder: Path) -> dict[str, Any]:
@@ -149,8 +188,12 @@ def test_vector_env_snapshot_restores_mid_episode(tmp_path: Path) -> None:
     continues bit for bit (random tasks, per-vehicle generators, autoresets included)."""
     from auv_gym.sb3 import make_sb3_vec_env
 
-    kwargs = {"randomize_start": True, "max_time": 2.0, "param_uncertainty": 0.3,
-              "path": {"families": ["helix", "line", "spline"]}}  # fmt: skip
+    kwargs = {
+        "randomize_start": True,
+        "max_time": 2.0,
+        "param_uncertainty": 0.3,
+        "path": {"families": ["helix", "line", "spline"]},
+    }
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, size=(90, 3, 3)).astype(np.float32)
     env = make_sb3_vec_env(3, seed=7, **kwargs)

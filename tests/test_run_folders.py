@@ -23,8 +23,19 @@ from benchmarks.runner import pool
 from benchmarks.runner.pool import check_ray_address
 
 ROOT = Path(__file__).resolve().parents[1]
-TINY = ["--policies", "fbsm", "--seeds", "1", "--duration", "4", "--transient", "0", "--quiet",
-        "--workers", "1"]  # fmt: skip
+TINY = [
+    "--policies",
+    "fbsm",
+    "--seeds",
+    "1",
+    "--duration",
+    "4",
+    "--transient",
+    "0",
+    "--quiet",
+    "--workers",
+    "1",
+]
 
 
 @pytest.fixture
@@ -110,17 +121,26 @@ def test_compare_on_an_unreachable_ray_address_fails_fast_and_names_it(
     out = tmp_path / "out"
     address = f"127.0.0.1:{silent_listener}"
     t0 = time.monotonic()
-    err = one_line_exit_2(capsys, main, [*TINY, "--backend", "ray", "--address", address,
-                                         "--out", str(out)])  # fmt: skip
+    err = one_line_exit_2(
+        capsys, main, [*TINY, "--backend", "ray", "--address", address, "--out", str(out)]
+    )
     assert time.monotonic() - t0 < 10.0
     assert f"--address '{address}': no Ray cluster (GCS) answered the handshake" in err
     assert not out.exists()  # refused before the output folder
 
 
 def _seeds_config(tmp_path: Path, **overrides) -> Path:
-    section = {"n_envs": 4, "n_timesteps": 512, "policy": "MlpPolicy", "n_steps": 64,
-               "batch_size": 64, "n_epochs": 1, "normalize": True,
-               "env_kwargs": {"max_time": 20.0}, **overrides}  # fmt: skip
+    section = {
+        "n_envs": 4,
+        "n_timesteps": 512,
+        "policy": "MlpPolicy",
+        "n_steps": 64,
+        "batch_size": 64,
+        "n_epochs": 1,
+        "normalize": True,
+        "env_kwargs": {"max_time": 20.0},
+        **overrides,
+    }
     path = tmp_path / "ppo.yml"
     path.write_text(yaml.safe_dump({"AUVPath3DSpeedLimit-v0": section}))
     return path
@@ -143,9 +163,23 @@ def test_train_seeds_refuses_a_listener_that_is_no_ray_and_writes_no_plan(
     out = tmp_path / "run"
     address = f"127.0.0.1:{silent_listener}"
     t0 = time.monotonic()
-    err = one_line_exit_2(capsys, _seeds_main, ["--config", str(_seeds_config(tmp_path)),
-                          "--seeds", "2", "--out", str(out), "--backend", "ray", "--address",
-                          address, "--quiet"])  # fmt: skip
+    err = one_line_exit_2(
+        capsys,
+        _seeds_main,
+        [
+            "--config",
+            str(_seeds_config(tmp_path)),
+            "--seeds",
+            "2",
+            "--out",
+            str(out),
+            "--backend",
+            "ray",
+            "--address",
+            address,
+            "--quiet",
+        ],
+    )
     assert time.monotonic() - t0 < 10.0
     assert f"--address '{address}': no Ray cluster (GCS) answered the handshake" in err
     assert not (out / "train_seeds.json").exists()
@@ -158,12 +192,17 @@ def test_a_huge_seed_count_is_refused_at_once_without_memory():
 
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     t0 = time.monotonic()
-    for text, count in (("1000000000", 1_000_000_000), ("0-999999999", 1_000_000_000),
-                        ("1001", 1001)):  # fmt: skip
+    for text, count in (
+        ("1000000000", 1_000_000_000),
+        ("0-999999999", 1_000_000_000),
+        ("1001", 1001),
+    ):
         with pytest.raises(ValueError) as error:
             parse_seeds(text)
-        assert str(error.value) == (f"--seeds {text!r} selects {count} seeds, more than "
-                                    f"{MAX_SEEDS}: every seed is a whole training run")  # fmt: skip
+        assert str(error.value) == (
+            f"--seeds {text!r} selects {count} seeds, more than "
+            f"{MAX_SEEDS}: every seed is a whole training run"
+        )
     assert time.monotonic() - t0 < 0.5
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # [KiB]
     assert len(parse_seeds("1000")) == 1000
@@ -173,36 +212,45 @@ def test_a_huge_seed_count_is_refused_at_once_without_memory():
 
 @pytest.mark.parametrize(
     ("overrides", "message"),
-    [({"learning_rate": -3e-4}, "learning_rate must be a number in (0, inf), got -0.0003"),
-     ({"learning_rate": "lin_-1"}, "learning_rate 'lin_-1' must be a positive number or 'lin_<x>'"),
-     ({"batch_size": 0}, "batch_size must be an integer >= 2, got 0"),
-     ({"gamma": 1.5}, "gamma must be a number in [0, 1], got 1.5"),
-     ({"gae_lambda": -0.1}, "gae_lambda must be a number in [0, 1], got -0.1"),
-     ({"n_epochs": 0}, "n_epochs must be an integer >= 1, got 0"),
-     ({"n_steps": 2.5}, "n_steps must be an integer >= 1, got 2.5"),
-     ({"clip_range": 0}, "clip_range must be a number in (0, inf), got 0"),
-     ({"ent_coef": float("nan")}, "ent_coef must be a number in [0, inf), got nan"),
-     ({"max_grad_norm": 0}, "max_grad_norm must be a number in (0, inf), got 0"),
-     ({"target_kl": -1}, "target_kl must be a number in (0, inf), got -1"),
-     ({"normalize_advantage": "yes"}, "normalize_advantage must be true or false, got 'yes'"),
-     ({"n_envs": 0}, "n_envs must be an integer >= 1, got 0"),
-     ({"n_timesteps": "many"}, "n_timesteps must be a whole number >= 1, got 'many'"),
-     ({"normalize": {"clip_obs": -1}}, "normalize clip_obs must be a finite number > 0, got -1"),
-     ({"normalize": {"clip": 1}}, "normalize has unknown keys ['clip']"),
-     ({"policy": "CnnPolicy"}, "policy must be 'MlpPolicy' (the observation is a vector)"),
-     ({"policy_kwargs": {"net_arch": [64, 0]}}, "net_arch must be a list of layer sizes >= 1"),
-     ({"policy_kwargs": {"n_layers": 2}}, "policy_kwargs has keys ActorCriticPolicy does not take"),
-     ({"env_kwargs": {"max_time": -1.0}}, "env_kwargs: "),
-     ({"n_steps": 1, "n_envs": 1}, "n_steps × n_envs must be at least 2")],
-)  # fmt: skip
+    [
+        ({"learning_rate": -3e-4}, "learning_rate must be a number in (0, inf), got -0.0003"),
+        (
+            {"learning_rate": "lin_-1"},
+            "learning_rate 'lin_-1' must be a positive number or 'lin_<x>'",
+        ),
+        ({"batch_size": 0}, "batch_size must be an integer >= 2, got 0"),
+        ({"gamma": 1.5}, "gamma must be a number in [0, 1], got 1.5"),
+        ({"gae_lambda": -0.1}, "gae_lambda must be a number in [0, 1], got -0.1"),
+        ({"n_epochs": 0}, "n_epochs must be an integer >= 1, got 0"),
+        ({"n_steps": 2.5}, "n_steps must be an integer >= 1, got 2.5"),
+        ({"clip_range": 0}, "clip_range must be a number in (0, inf), got 0"),
+        ({"ent_coef": float("nan")}, "ent_coef must be a number in [0, inf), got nan"),
+        ({"max_grad_norm": 0}, "max_grad_norm must be a number in (0, inf), got 0"),
+        ({"target_kl": -1}, "target_kl must be a number in (0, inf), got -1"),
+        ({"normalize_advantage": "yes"}, "normalize_advantage must be true or false, got 'yes'"),
+        ({"n_envs": 0}, "n_envs must be an integer >= 1, got 0"),
+        ({"n_timesteps": "many"}, "n_timesteps must be a whole number >= 1, got 'many'"),
+        ({"normalize": {"clip_obs": -1}}, "normalize clip_obs must be a finite number > 0, got -1"),
+        ({"normalize": {"clip": 1}}, "normalize has unknown keys ['clip']"),
+        ({"policy": "CnnPolicy"}, "policy must be 'MlpPolicy' (the observation is a vector)"),
+        ({"policy_kwargs": {"net_arch": [64, 0]}}, "net_arch must be a list of layer sizes >= 1"),
+        (
+            {"policy_kwargs": {"n_layers": 2}},
+            "policy_kwargs has keys ActorCriticPolicy does not take",
+        ),
+        ({"env_kwargs": {"max_time": -1.0}}, "env_kwargs: "),
+        ({"n_steps": 1, "n_envs": 1}, "n_steps × n_envs must be at least 2"),
+    ],
+)
 def test_config_values_are_refused_before_any_training(tmp_path, capsys, overrides, message):
     """Was: SB3 (or torch) refused them when the model was built, after the plan file was
     written, or trained on (γ > 1) without a word."""
     pytest.importorskip("stable_baselines3")
     out = tmp_path / "run"
     config = _seeds_config(tmp_path, **overrides)
-    err = one_line_exit_2(capsys, _seeds_main, ["--config", str(config), "--seeds", "1",
-                          "--out", str(out), "--quiet"])  # fmt: skip
+    err = one_line_exit_2(
+        capsys, _seeds_main, ["--config", str(config), "--seeds", "1", "--out", str(out), "--quiet"]
+    )
     assert message in err and "AUVPath3DSpeedLimit-v0" in err
     assert not (out / "train_seeds.json").exists() and not (out / "seed_0").exists()
 
@@ -212,11 +260,13 @@ def test_sac_values_are_checked_too(tmp_path):
     from benchmarks.training.config import read_zoo_config
 
     base = {"n_timesteps": 512, "policy": "MlpPolicy", "normalize": True}
-    cases = (({"tau": 0}, "tau must be a number in (0, 1], got 0"),
-             ({"ent_coef": "autox"}, "ent_coef 'autox' must be a number >= 0"),
-             ({"train_freq": [1, "hour"]}, "train_freq must be an integer"),
-             ({"gradient_steps": 0}, "gradient_steps must be an integer >= 1"),
-             ({"buffer_size": -5}, "buffer_size must be an integer >= 1"))  # fmt: skip
+    cases = (
+        ({"tau": 0}, "tau must be a number in (0, 1], got 0"),
+        ({"ent_coef": "autox"}, "ent_coef 'autox' must be a number >= 0"),
+        ({"train_freq": [1, "hour"]}, "train_freq must be an integer"),
+        ({"gradient_steps": 0}, "gradient_steps must be an integer >= 1"),
+        ({"buffer_size": -5}, "buffer_size must be an integer >= 1"),
+    )
     for overrides, message in cases:
         path = tmp_path / "sac.yml"
         path.write_text(yaml.safe_dump({"AUVPath3D-v0": {**base, **overrides}}))
@@ -238,13 +288,27 @@ def test_train_seeds_refuses_output_folders_it_could_not_write_before_training(
     """Was: found out after every seed had trained, when the agent or results were copied."""
     pytest.importorskip("stable_baselines3")
     blocker = _in_a_file(tmp_path)
-    for where, reason in ((blocker, "it is a file, not a folder"),
-                          (blocker / "agent", f"{blocker} is a file, not a folder"),
-                          (Path("/proc/auv-gym-test"), "/proc is not writable")):  # fmt: skip
+    for where, reason in (
+        (blocker, "it is a file, not a folder"),
+        (blocker / "agent", f"{blocker} is a file, not a folder"),
+        (Path("/proc/auv-gym-test"), "/proc is not writable"),
+    ):
         out = tmp_path / "run"
-        err = one_line_exit_2(capsys, _seeds_main, ["--config", str(_seeds_config(tmp_path)),
-                              "--seeds", "1", "--out", str(out), "--quiet", flag,
-                              str(where)])  # fmt: skip
+        err = one_line_exit_2(
+            capsys,
+            _seeds_main,
+            [
+                "--config",
+                str(_seeds_config(tmp_path)),
+                "--seeds",
+                "1",
+                "--out",
+                str(out),
+                "--quiet",
+                flag,
+                str(where),
+            ],
+        )
         assert f"{flag} '{where}' cannot be written as a folder: {reason}" in err
         assert not (out / "train_seeds.json").exists()
 
@@ -276,15 +340,17 @@ def _train_main(argv: list[str]) -> None:
 
 @pytest.mark.parametrize(
     ("argv", "message"),
-    [(["--out", "{file}"], "--out '{file}' cannot be written as a folder: it is a file, not a"),
-     (["--export", "{file}/agent"], "--export '{file}/agent' cannot be written as a folder: "),
-     (["--curve", "{file}/curve"], "--curve '{file}/curve.csv' cannot be written as a file: "),
-     (["--curve", "{tmp}", "--eval-freq", "256"], "--curve '{tmp}.csv' cannot be written"),
-     (["--curve", "{tmp}/c", "--eval-freq", "0"], "--curve plots the evaluations, and --eval-f"),
-     (["--seed", "4294967296"], "--seed must be an integer in [0, 4294967295], got 4294967296"),
-     (["--plot-only", "--curve", "{tmp}/c"], "--plot-only: {tmp}/run/evaluations.csv does not"),
-     (["--evaluate", "{tmp}/nothing"], "{tmp}/nothing")],
-)  # fmt: skip
+    [
+        (["--out", "{file}"], "--out '{file}' cannot be written as a folder: it is a file, not a"),
+        (["--export", "{file}/agent"], "--export '{file}/agent' cannot be written as a folder: "),
+        (["--curve", "{file}/curve"], "--curve '{file}/curve.csv' cannot be written as a file: "),
+        (["--curve", "{tmp}", "--eval-freq", "256"], "--curve '{tmp}.csv' cannot be written"),
+        (["--curve", "{tmp}/c", "--eval-freq", "0"], "--curve plots the evaluations, and --eval-f"),
+        (["--seed", "4294967296"], "--seed must be an integer in [0, 4294967295], got 4294967296"),
+        (["--plot-only", "--curve", "{tmp}/c"], "--plot-only: {tmp}/run/evaluations.csv does not"),
+        (["--evaluate", "{tmp}/nothing"], "{tmp}/nothing"),
+    ],
+)
 def test_train_refuses_outputs_before_the_first_step(tmp_path, capsys, argv, message):
     """Was: a bad --curve or --export failed after the whole training."""
     pytest.importorskip("stable_baselines3")
@@ -297,8 +363,19 @@ def test_train_refuses_outputs_before_the_first_step(tmp_path, capsys, argv, mes
         message = message.replace("{tmp}", str(tmp_path / "folder"))
     config = _seeds_config(tmp_path)
     out = [] if "--out" in argv else ["--out", str(tmp_path / "run")]
-    err = one_line_exit_2(capsys, _train_main, ["--config", str(config), "--env-id",
-                          "AUVPath3DSpeedLimit-v0", *out, "--no-progress-bar", *argv])  # fmt: skip
+    err = one_line_exit_2(
+        capsys,
+        _train_main,
+        [
+            "--config",
+            str(config),
+            "--env-id",
+            "AUVPath3DSpeedLimit-v0",
+            *out,
+            "--no-progress-bar",
+            *argv,
+        ],
+    )
     assert message.format(**fill) in err
     assert not (tmp_path / "run").exists()
 
@@ -320,8 +397,12 @@ def test_a_killed_recording_leaves_no_temporary_video_behind(tmp_path):
     from benchmarks.video import remove_stale_videos
 
     out = tmp_path / "run.mp4"
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
     stale = tmp_path / f".run.mp4.{dead}.tmp.mp4"
     live = tmp_path / f".run.mp4.{os.getpid()}.tmp.mp4"
     other = tmp_path / f".other.mp4.{dead}.tmp.mp4"
@@ -339,14 +420,29 @@ def test_a_second_run_on_a_locked_folder_is_refused_with_the_holders_pid(tmp_pat
     from benchmarks.paper_figures import main as paper
 
     out = tmp_path / "out"
-    expected = (f"--out '{out}' is in use by another run (pid {os.getpid()}); wait for it to "
-                "end or choose another --out")  # fmt: skip
+    expected = (
+        f"--out '{out}' is in use by another run (pid {os.getpid()}); wait for it to "
+        "end or choose another --out"
+    )
     with output_lock(out):
-        for function, argv in ((compare, [*TINY, "--out", str(out)]),
-                               (paper, ["--duration", "4", "--out", str(out)]),
-                               (suite, ["--policies", "fbsm", "--no-stats", "--sets",
-                                        "scenario:nominal", "--duration", "4", "--out",
-                                        str(out)])):  # fmt: skip
+        for function, argv in (
+            (compare, [*TINY, "--out", str(out)]),
+            (paper, ["--duration", "4", "--out", str(out)]),
+            (
+                suite,
+                [
+                    "--policies",
+                    "fbsm",
+                    "--no-stats",
+                    "--sets",
+                    "scenario:nominal",
+                    "--duration",
+                    "4",
+                    "--out",
+                    str(out),
+                ],
+            ),
+        ):
             err = one_line_exit_2(capsys, function, argv)
             assert expected in err
         assert sorted(p.name for p in out.iterdir()) == [".lock"]  # nothing written
@@ -356,10 +452,13 @@ def test_a_second_run_on_a_locked_folder_is_refused_with_the_holders_pid(tmp_pat
 
 def test_the_lock_is_released_when_its_holder_is_killed(tmp_path):
     out = tmp_path / "out"
-    code = f"from auv_gym.files import output_lock\nwith output_lock({str(out)!r}):\n" \
-           "    print('held', flush=True)\n    import time; time.sleep(60)\n"  # fmt: skip
-    holder = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
-                              cwd=ROOT)  # fmt: skip
+    code = (
+        f"from auv_gym.files import output_lock\nwith output_lock({str(out)!r}):\n"
+        "    print('held', flush=True)\n    import time; time.sleep(60)\n"
+    )
+    holder = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, cwd=ROOT
+    )
     try:
         assert holder.stdout.readline().strip() == "held"
         with pytest.raises(OSError, match=rf"in use by another run \(pid {holder.pid}\)"):
@@ -374,10 +473,17 @@ def test_the_lock_is_released_when_its_holder_is_killed(tmp_path):
 
 def test_temporaries_of_killed_runs_are_removed_and_others_kept(tmp_path):
     out = tmp_path / "out"
-    stale = [out / ".episodes.csv.a1b2c3d4.tmp", out / "figures" / ".x.png.zz_9Yq0k.tmp",
-             out / "episodes" / "paper" / "fbsm" / ".seed_0.npz.abcdefgh.tmp"]  # fmt: skip
-    kept = [out / "summary.md", out / "figures" / "x.png", out / ".hidden.tmp",
-            out / "mine.abcdefgh.tmp"]  # fmt: skip
+    stale = [
+        out / ".episodes.csv.a1b2c3d4.tmp",
+        out / "figures" / ".x.png.zz_9Yq0k.tmp",
+        out / "episodes" / "paper" / "fbsm" / ".seed_0.npz.abcdefgh.tmp",
+    ]
+    kept = [
+        out / "summary.md",
+        out / "figures" / "x.png",
+        out / ".hidden.tmp",
+        out / "mine.abcdefgh.tmp",
+    ]
     for file in stale + kept:
         file.parent.mkdir(parents=True, exist_ok=True)
         file.write_text("")
@@ -394,8 +500,10 @@ def test_replace_outputs_removes_only_what_the_last_run_recorded(tmp_path):
     for name in ("a.png", "b.png", "user.png", "sub/c.png"):
         (tmp_path / name).parent.mkdir(exist_ok=True)
         (tmp_path / name).write_text("")
-    assert replace_outputs(tmp_path, [tmp_path / "a.png", tmp_path / "b.png",
-                                      tmp_path / "sub/c.png"]) == []  # fmt: skip
+    assert (
+        replace_outputs(tmp_path, [tmp_path / "a.png", tmp_path / "b.png", tmp_path / "sub/c.png"])
+        == []
+    )
     assert replace_outputs(tmp_path, [tmp_path / "a.png"]) == [
         tmp_path / "b.png",
         tmp_path / "sub/c.png",
@@ -442,9 +550,25 @@ def test_installed_command_imports_a_policy_from_the_current_folder(tmp_path):
         pytest.skip("auv-gym is not installed in this environment")
     shutil.copy(ROOT / "tests" / "user_policy.py", tmp_path / "mymod.py")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    done = subprocess.run([str(script), "compare", "--policies", "mymod:policy", "--scenarios",
-                           "nominal", *TINY[2:], "--no-figures", "--out", "out"], cwd=tmp_path,
-                          env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+    done = subprocess.run(
+        [
+            str(script),
+            "compare",
+            "--policies",
+            "mymod:policy",
+            "--scenarios",
+            "nominal",
+            *TINY[2:],
+            "--no-figures",
+            "--out",
+            "out",
+        ],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr
     rows = (tmp_path / "out" / "episodes.csv").read_text().splitlines()
     assert len(rows) == 2 and rows[1].startswith("nominal,mymod:policy,0,")
@@ -452,12 +576,18 @@ def test_installed_command_imports_a_policy_from_the_current_folder(tmp_path):
 
 @pytest.mark.parametrize(
     ("argv", "message"),
-    [(["env", "--steps", "0"], "--steps and --reference-steps must be >= 1"),
-     (["vector", "--quick", "--json", "{file}/x.json"], "--json '{file}/x.json' cannot be "
-      "written as a file: {file} is a file, not a folder"),
-     (["training", "--quick", "--json", "{file}/x.json"], "--json '{file}/x.json' cannot be "
-      "written as a file: {file} is a file, not a folder")],
-)  # fmt: skip
+    [
+        (["env", "--steps", "0"], "--steps and --reference-steps must be >= 1"),
+        (
+            ["vector", "--quick", "--json", "{file}/x.json"],
+            "--json '{file}/x.json' cannot be written as a file: {file} is a file, not a folder",
+        ),
+        (
+            ["training", "--quick", "--json", "{file}/x.json"],
+            "--json '{file}/x.json' cannot be written as a file: {file} is a file, not a folder",
+        ),
+    ],
+)
 def test_speed_benchmarks_refuse_options_before_timing(tmp_path, capsys, argv, message):
     """Was: `speed env --steps 0` ended in an IndexError traceback, and a bad --json was found
     after the whole benchmark had run."""
@@ -495,9 +625,16 @@ def test_results_of_a_run_with_other_seeds_are_replaced_not_mixed(tmp_path):
     (results / "my_notes.md").write_text("kept")
     _write_results(results, out, entries[:2], {"seeds": [0, 1]})
     assert sorted(p.name for p in results.iterdir()) == [
-        OUTPUTS_FILE, "agent_seed_0", "agent_seed_1", "my_notes.md", "seed_0_learning_curve.csv",
-        "seed_0_test_evaluation.json", "seed_1_learning_curve.csv",
-        "seed_1_test_evaluation.json", "summary.json"]  # fmt: skip
+        OUTPUTS_FILE,
+        "agent_seed_0",
+        "agent_seed_1",
+        "my_notes.md",
+        "seed_0_learning_curve.csv",
+        "seed_0_test_evaluation.json",
+        "seed_1_learning_curve.csv",
+        "seed_1_test_evaluation.json",
+        "summary.json",
+    ]
 
 
 def test_train_refuses_an_unknown_vec_env_and_an_unregistered_env_id(tmp_path, capsys):
@@ -505,11 +642,13 @@ def test_train_refuses_an_unknown_vec_env_and_an_unregistered_env_id(tmp_path, c
     pytest.importorskip("stable_baselines3")
     config = _seeds_config(tmp_path)
     base = ["--config", str(config), "--out", str(tmp_path / "run"), "--no-progress-bar"]
-    err = one_line_exit_2(capsys, _train_main, [*base, "--env-id", "AUVPath3DSpeedLimit-v0",
-                                                "--vec-env", "fast"])  # fmt: skip
+    err = one_line_exit_2(
+        capsys, _train_main, [*base, "--env-id", "AUVPath3DSpeedLimit-v0", "--vec-env", "fast"]
+    )
     assert "argument --vec-env: invalid choice: 'fast'" in err
-    config.write_text(yaml.safe_dump({"Nope-v0": yaml.safe_load(config.read_text())[
-        "AUVPath3DSpeedLimit-v0"]}))  # fmt: skip
+    config.write_text(
+        yaml.safe_dump({"Nope-v0": yaml.safe_load(config.read_text())["AUVPath3DSpeedLimit-v0"]})
+    )
     err = one_line_exit_2(capsys, _train_main, [*base, "--env-id", "Nope-v0"])
     assert f"{config}: Nope-v0: Environment `Nope` doesn't exist" in err
     assert not (tmp_path / "run").exists()

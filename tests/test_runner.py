@@ -47,8 +47,14 @@ def test_finished_units_are_reused_and_changed_or_damaged_ones_rerun(tmp_path):
     assert [r["square"] for r in first] == [9, 1, 4] and CALLS == [3, 1, 2]
     (tmp_path / "cache" / "2.json").write_text("{truncated")  # a damaged record
     (tmp_path / "cache" / ".2.json.a1b2c3d4.tmp").write_text("")  # a killed write
-    again = run_resumable([*units[:2], Square(2), Square(1, "2")], tmp_path, tmp_path / "cache",
-                          square, workers=1, progress=False)  # fmt: skip
+    again = run_resumable(
+        [*units[:2], Square(2), Square(1, "2")],
+        tmp_path,
+        tmp_path / "cache",
+        square,
+        workers=1,
+        progress=False,
+    )
     assert [r["square"] for r in again] == [9, 1, 4, 1]
     assert CALLS == [3, 1, 2, 2, 1]  # the damaged one and the one whose code changed
     assert not (tmp_path / "cache" / ".2.json.a1b2c3d4.tmp").exists()
@@ -78,6 +84,16 @@ def test_the_suite_takes_the_pool_options_of_compare(tmp_path):
     options = {a.dest for a in build_parser()._actions}
     assert {"workers", "backend", "address"} <= options
     with pytest.raises(SystemExit) as stop:
-        parse_args(["--policies", "fbsm", "--sets", "test_steep", "--address", "h:1",
-                    "--out", str(tmp_path / "o")])  # fmt: skip
+        parse_args(
+            [
+                "--policies",
+                "fbsm",
+                "--sets",
+                "test_steep",
+                "--address",
+                "h:1",
+                "--out",
+                str(tmp_path / "o"),
+            ]
+        )
     assert stop.value.code == 2

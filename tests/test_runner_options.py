@@ -11,8 +11,11 @@ from benchmarks.options import flag_of, from_args
 from benchmarks.reports import video
 from benchmarks.runner import compare, evaluate_suite
 
-CLIS = [(compare, compare.CompareOptions), (evaluate_suite, evaluate_suite.SuiteOptions),
-        (video, video.VideoOptions)]  # fmt: skip
+CLIS = [
+    (compare, compare.CompareOptions),
+    (evaluate_suite, evaluate_suite.SuiteOptions),
+    (video, video.VideoOptions),
+]
 
 
 @pytest.mark.parametrize(("module", "options"), CLIS, ids=["compare", "suite", "video"])
@@ -29,21 +32,38 @@ def test_the_flags_of_before_stay() -> None:
     """Every former flag, its destination and default (scripts and the docs use them)."""
     ns = compare.build_parser().parse_args([])
     assert (ns.policies, ns.scenarios, ns.seeds, str(ns.out)) == (
-        "fbsm,backstepping,ppo", "all", 10, "out/compare")  # fmt: skip
+        "fbsm,backstepping,ppo",
+        "all",
+        10,
+        "out/compare",
+    )
     assert (ns.no_figures, ns.quiet, ns.duration, ns.transient) == (False, False, 300.0, None)
     ns = compare.build_parser().parse_args(["--no-figures", "--quiet", "--seeds", "3"])
     assert (ns.no_figures, ns.quiet, ns.seeds) == (True, True, 3)
     ns = evaluate_suite.build_parser().parse_args([])
     assert (ns.sets, str(ns.out), ns.reps, ns.bootstrap_seed, ns.reference) == (
-        "all", "out/suite", 2000, 0, None)  # fmt: skip
+        "all",
+        "out/suite",
+        2000,
+        0,
+        None,
+    )
     assert (ns.stats_only, ns.no_stats, ns.no_figures, ns.quiet) == (False,) * 4
     ns = evaluate_suite.build_parser().parse_args(["--stats-only", "--no-figures", "--reps", "9"])
     assert (ns.stats_only, ns.no_figures, ns.reps) == (True, True, 9)
     assert from_args(evaluate_suite.SuiteOptions, ns, ["figures", "stats"]) == (
-        evaluate_suite.SuiteOptions(figures=False))  # fmt: skip
+        evaluate_suite.SuiteOptions(figures=False)
+    )
     ns = video.build_parser().parse_args(["--quiet"])
     assert (ns.policy, ns.scenario, ns.seed, ns.every, ns.fps, str(ns.out), ns.quiet) == (
-        "fbsm", "paper", 0, 5, 20, "run.mp4", True)  # fmt: skip
+        "fbsm",
+        "paper",
+        0,
+        5,
+        20,
+        "run.mp4",
+        True,
+    )
 
 
 @pytest.mark.parametrize(

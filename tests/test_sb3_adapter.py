@@ -47,9 +47,18 @@ def assert_info_equal(got: dict, want: dict, where: str) -> None:
             assert type(got[key]) is type(value) and got[key] == value, (where, key)
 
 
-@pytest.mark.parametrize("kwargs", [SHORT, {**SHORT, "param_uncertainty": 0.2,
-                                            "randomize_start": True,
-                                            "current": {"std": (0.1, 0.1, 0.0)}}])  # fmt: skip
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        SHORT,
+        {
+            **SHORT,
+            "param_uncertainty": 0.2,
+            "randomize_start": True,
+            "current": {"std": (0.1, 0.1, 0.0)},
+        },
+    ],
+)
 def test_step_semantics_match_dummy_vec_env(kwargs):
     n, steps = 4, 100
     native, ref = make_sb3_vec_env(n, **kwargs), dummy(n, **kwargs)
@@ -161,8 +170,9 @@ def test_ppo_learns_on_the_adapter_and_evaluate_policy_matches_dummy_vec_env():
     # 32 steps per vehicle, episodes of 20 steps: every vehicle finished one episode.
     assert len(model.ep_info_buffer) == n
     assert {info["l"] for info in model.ep_info_buffer} == {20}
-    changed = [not torch.equal(a, b) for a, b in zip(before, model.policy.parameters(),
-                                                      strict=True)]  # fmt: skip
+    changed = [
+        not torch.equal(a, b) for a, b in zip(before, model.policy.parameters(), strict=True)
+    ]
     assert any(changed)
 
     native, ref = make_sb3_vec_env(3, **kwargs), dummy(3, **kwargs)
@@ -197,11 +207,20 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
 
     out = tmp_path / "speed.json"
     root = Path(__file__).resolve().parents[1]
-    subprocess.run([sys.executable, "-m", "benchmarks.speed_vector", "--quick", "--json", str(out)],
-                   cwd=root, check=True, capture_output=True, text=True)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "benchmarks.speed_vector", "--quick", "--json", str(out)],
+        cwd=root,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     results = json.loads(out.read_text())
     assert [(r["n"], r["actuator"]) for r in results["vector"]] == [
-        (1, "paper"), (1, "realistic"), (64, "paper"), (64, "realistic")]  # fmt: skip
+        (1, "paper"),
+        (1, "realistic"),
+        (64, "paper"),
+        (64, "realistic"),
+    ]
     for r in results["vector"]:
         assert r["physics_steps_per_s"] == pytest.approx(5 * r["vehicle_steps_per_s"])
         assert r["real_time_factor"] == pytest.approx(0.05 * r["vehicle_steps_per_s"])

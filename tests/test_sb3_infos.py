@@ -20,8 +20,14 @@ from auv_gym.sb3 import SB3VecEnv, _info_dicts, make_sb3_vec_env  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 # Short episodes that end both ways: astern actions leave the corridor, the rest time out.
-SHORT = {"corridor": 18.0, "max_time": 2.5, "randomize_start": True, "random_current": 0.3,
-         "actuator": "random", "path": {"families": ["helix", "line", "spline"]}}  # fmt: skip
+SHORT = {
+    "corridor": 18.0,
+    "max_time": 2.5,
+    "randomize_start": True,
+    "random_current": 0.3,
+    "actuator": "random",
+    "path": {"families": ["helix", "line", "spline"]},
+}
 
 
 def random_actions(seed: int, steps: int, n: int) -> np.ndarray:
@@ -52,8 +58,9 @@ def test_minimal_infos_carry_the_full_infos_sb3_keys_on_every_step_and_autoreset
             assert type(m_info["TimeLimit.truncated"]) is bool
             assert m_info["TimeLimit.truncated"] == info["TimeLimit.truncated"]
             if dones[i]:
-                np.testing.assert_array_equal(m_info["terminal_observation"],
-                                              info["terminal_observation"])  # fmt: skip
+                np.testing.assert_array_equal(
+                    m_info["terminal_observation"], info["terminal_observation"]
+                )
                 assert m_info["terminal_observation"].dtype == np.float32
                 ended["truncated" if info["TimeLimit.truncated"] else "terminated"] += 1
                 assert minimal.reset_infos[i] == {}
@@ -63,8 +70,10 @@ def test_minimal_infos_carry_the_full_infos_sb3_keys_on_every_step_and_autoreset
 def test_vec_monitor_and_vec_normalize_see_the_same_episodes_with_minimal_infos():
     n, steps = 4, 80
     kwargs = {"max_time": 1.0, "randomize_start": True}
-    envs = [VecNormalize(VecMonitor(make_sb3_vec_env(n, seed=1, infos=mode, **kwargs)))
-            for mode in ("full", "minimal")]  # fmt: skip
+    envs = [
+        VecNormalize(VecMonitor(make_sb3_vec_env(n, seed=1, infos=mode, **kwargs)))
+        for mode in ("full", "minimal")
+    ]
     for env in envs:
         env.reset()
     episodes = 0
@@ -76,16 +85,22 @@ def test_vec_monitor_and_vec_normalize_see_the_same_episodes_with_minimal_infos(
         for i in np.flatnonzero(dones):
             assert m_infos[i]["episode"]["r"] == infos[i]["episode"]["r"]
             assert m_infos[i]["episode"]["l"] == infos[i]["episode"]["l"] == 20
-            np.testing.assert_array_equal(m_infos[i]["terminal_observation"],
-                                          infos[i]["terminal_observation"])  # fmt: skip
+            np.testing.assert_array_equal(
+                m_infos[i]["terminal_observation"], infos[i]["terminal_observation"]
+            )
             episodes += 1
     assert episodes == n * (steps // 20)
 
 
 def test_info_dicts_keep_the_masked_keys_in_order():
-    info = {"a": np.array([1.0, 2.0]), "_a": np.array([True, True]),
-            "b": np.array([[1, 2], [3, 4]]), "_b": np.array([False, True]),
-            "c": np.array(["x", None], dtype=object), "_c": np.array([True, False])}  # fmt: skip
+    info = {
+        "a": np.array([1.0, 2.0]),
+        "_a": np.array([True, True]),
+        "b": np.array([[1, 2], [3, 4]]),
+        "_b": np.array([False, True]),
+        "c": np.array(["x", None], dtype=object),
+        "_c": np.array([True, False]),
+    }
     rows = _info_dicts(info, 2)
     assert list(rows[0]) == ["a", "c"] and list(rows[1]) == ["a", "b"]
     assert rows[0] == {"a": 1.0, "c": "x"} and type(rows[0]["a"]) is float
@@ -142,14 +157,28 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     from benchmarks.speed_training import extract
 
     tree = extract("HEAD", tmp_path)
-    committed = subprocess.run(["git", "show", "HEAD:auv_gym/sb3.py"], cwd=ROOT, check=True,
-                               capture_output=True, text=True).stdout  # fmt: skip
+    committed = subprocess.run(
+        ["git", "show", "HEAD:auv_gym/sb3.py"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout
     assert (tree / "auv_gym" / "sb3.py").read_text() == committed
     assert extract("HEAD", tmp_path) == tree  # cached
     out = tmp_path / "speed.json"
-    subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick", "--baseline",
-                    "none", "--json", str(out)], cwd=ROOT, check=True, capture_output=True,
-                   text=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.speed_training",
+            "--quick",
+            "--baseline",
+            "none",
+            "--json",
+            str(out),
+        ],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     runs = json.loads(out.read_text())["runs"]
     assert [(r["side"], r["n_envs"], r["steps"]) for r in runs] == [("new", 8, 8 * 16)]
     r = runs[0]
@@ -162,15 +191,43 @@ def test_speed_training_times_each_number_of_epochs_it_is_given(tmp_path):
     import json
 
     out = tmp_path / "speed.json"
-    subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick", "--baseline",
-                    "none", "--n-epochs", "1", "3", "--json", str(out)], cwd=ROOT, check=True,
-                   capture_output=True, text=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.speed_training",
+            "--quick",
+            "--baseline",
+            "none",
+            "--n-epochs",
+            "1",
+            "3",
+            "--json",
+            str(out),
+        ],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     runs = json.loads(out.read_text())["runs"]
     # --quick: one warm-up and one timed rollout, each followed by an update of n_epochs epochs
     assert sorted((r["n_epochs"], r["epochs_run"]) for r in runs) == [(1, 2), (3, 6)]
-    bad = subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick",
-                          "--baseline", "none", "--n-epochs", "0"], cwd=ROOT,
-                         capture_output=True, text=True)  # fmt: skip
+    bad = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.speed_training",
+            "--quick",
+            "--baseline",
+            "none",
+            "--n-epochs",
+            "0",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
     assert bad.returncode == 2 and "--n-epochs must be >= 1, got [0]" in bad.stderr
 
 
@@ -188,8 +245,16 @@ def test_update_threads_train_the_same_weights_up_to_float_rounding():
         for update in (1, 2):
             torch.set_num_threads(1)
             env = VecNormalize(make_sb3_vec_env(32, seed=0, infos="minimal", **SHORT))
-            model = PPO("MlpPolicy", env, n_steps=64, batch_size=2048, n_epochs=2, seed=0,
-                        device="cpu", policy_kwargs={"net_arch": [64, 64]})  # fmt: skip
+            model = PPO(
+                "MlpPolicy",
+                env,
+                n_steps=64,
+                batch_size=2048,
+                n_epochs=2,
+                seed=0,
+                device="cpu",
+                policy_kwargs={"net_arch": [64, 64]},
+            )
             model.learn(2 * 32 * 64, callback=UpdateThreads(1, update))
             assert torch.get_num_threads() == 1
             weights.append([p.detach().clone() for p in model.policy.parameters()])
@@ -237,14 +302,28 @@ def test_speed_training_runs_the_baseline_commit_of_its_default(tmp_path):
 
     from benchmarks.speed.training import DEFAULT_BASELINE
 
-    known = subprocess.run(["git", "cat-file", "-e", f"{DEFAULT_BASELINE}^{{commit}}"], cwd=ROOT,
-                           capture_output=True)  # fmt: skip
+    known = subprocess.run(
+        ["git", "cat-file", "-e", f"{DEFAULT_BASELINE}^{{commit}}"], cwd=ROOT, capture_output=True
+    )
     if known.returncode != 0:
         pytest.skip(f"{DEFAULT_BASELINE} is not in this clone's history")
     out = tmp_path / "speed.json"
-    subprocess.run([sys.executable, "-m", "benchmarks.speed_training", "--quick", "--cache",
-                    str(tmp_path / "cache"), "--json", str(out)], cwd=ROOT, check=True,
-                   capture_output=True, text=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.speed_training",
+            "--quick",
+            "--cache",
+            str(tmp_path / "cache"),
+            "--json",
+            str(out),
+        ],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     runs = json.loads(out.read_text())["runs"]
     assert sorted(r["side"] for r in runs) == ["new", "old"]
     assert all(r["steps"] == 8 * 16 and r["total_per_s"] > 0 for r in runs)

@@ -19,8 +19,18 @@ from auv_gym.simulator import Simulator
 from auv_gym.vector_env import AUVPath3DVectorEnv
 
 # The measured entries of the state and the navigation estimate, in this order.
-MEASURED = (STATE.x, STATE.y, STATE.z, STATE.theta, STATE.psi, STATE.u, STATE.v, STATE.w,
-            STATE.q, STATE.r)  # fmt: skip
+MEASURED = (
+    STATE.x,
+    STATE.y,
+    STATE.z,
+    STATE.theta,
+    STATE.psi,
+    STATE.u,
+    STATE.v,
+    STATE.w,
+    STATE.q,
+    STATE.r,
+)
 CRUISE = np.array([[0.4, 0.0, 0.05]])  # a steady, slowly turning vehicle: no terminations
 
 
@@ -46,11 +56,23 @@ def errors(states: np.ndarray, estimates: np.ndarray) -> np.ndarray:
     return e
 
 
-SIGMAS = {"dvl_noise": 0.01, "pitch_noise": 0.002, "heading_noise": 0.004,
-          "rate_noise": 0.001, "depth_noise": 0.02, "fix_noise": 0.5}  # fmt: skip
+SIGMAS = {
+    "dvl_noise": 0.01,
+    "pitch_noise": 0.002,
+    "heading_noise": 0.004,
+    "rate_noise": 0.001,
+    "depth_noise": 0.02,
+    "fix_noise": 0.5,
+}
 # Error columns of each σ (position fixes every step: the fix noise is the x, y error).
-COLUMNS = {"dvl_noise": (5, 6, 7), "pitch_noise": (3,), "heading_noise": (4,),
-           "rate_noise": (8, 9), "depth_noise": (2,), "fix_noise": (0, 1)}  # fmt: skip
+COLUMNS = {
+    "dvl_noise": (5, 6, 7),
+    "pitch_noise": (3,),
+    "heading_noise": (4,),
+    "rate_noise": (8, 9),
+    "depth_noise": (2,),
+    "fix_noise": (0, 1),
+}
 
 
 def test_noise_standard_deviations_within_5_percent_of_the_configured_ones():
@@ -62,8 +84,13 @@ def test_noise_standard_deviations_within_5_percent_of_the_configured_ones():
         assert abs(e[..., list(COLUMNS[name])].mean()) < 0.05 * sigma, name  # zero mean
 
 
-BIASES = {"dvl_bias": 0.002, "pitch_bias": 0.005, "heading_bias": 0.017, "rate_bias": 5e-5,
-          "depth_bias": 0.05}  # fmt: skip
+BIASES = {
+    "dvl_bias": 0.002,
+    "pitch_bias": 0.005,
+    "heading_bias": 0.017,
+    "rate_bias": 5e-5,
+    "depth_bias": 0.05,
+}
 
 
 def test_turn_on_biases_are_constant_per_episode_with_the_configured_spread():
@@ -72,8 +99,13 @@ def test_turn_on_biases_are_constant_per_episode_with_the_configured_spread():
     DVL's scale-factor errors."""
     states, estimates, _ = run(BIASES, n=3000, steps=3)
     e = errors(states, estimates)
-    for name, cols in (("dvl_bias", (6, 7)), ("pitch_bias", (3,)), ("heading_bias", (4,)),
-                       ("rate_bias", (8, 9)), ("depth_bias", (2,))):  # fmt: skip
+    for name, cols in (
+        ("dvl_bias", (6, 7)),
+        ("pitch_bias", (3,)),
+        ("heading_bias", (4,)),
+        ("rate_bias", (8, 9)),
+        ("depth_bias", (2,)),
+    ):
         per_episode = e[..., list(cols)]
         np.testing.assert_allclose(per_episode, per_episode[:1].repeat(4, 0), atol=1e-12)
         spread = per_episode[0].std()
@@ -94,8 +126,11 @@ def test_dvl_dropout_rate_and_hold():
 
 
 def test_sensor_errors_depend_on_the_seed_only_not_on_the_actions():
-    sensors = {k: v for k, v in SENSOR_PRESETS["typical"].to_dict().items()
-               if k not in ("preset", "dvl_scale", "fix_interval")}  # fmt: skip
+    sensors = {
+        k: v
+        for k, v in SENSOR_PRESETS["typical"].to_dict().items()
+        if k not in ("preset", "dvl_scale", "fix_interval")
+    }
     # errors independent of the trajectory, b + σn: fixes every step, no held DVL samples
     sensors["fix_interval"], sensors["dvl_dropout"] = 0.0, 0.0
     other = np.random.default_rng(9).uniform(-0.5, 0.5, size=(300, 3))
@@ -144,8 +179,7 @@ def test_reward_and_termination_read_the_true_state():
 def test_delay_returns_the_measurements_of_k_steps_before():
     states, estimates, _ = run({"delay": 3}, n=2, steps=40)
     np.testing.assert_array_equal(estimates[3:, :, MEASURED], states[:-3, :, MEASURED])
-    np.testing.assert_array_equal(estimates[:4, :, MEASURED],
-                                  states[:1, :, MEASURED].repeat(4, 0))  # fmt: skip
+    np.testing.assert_array_equal(estimates[:4, :, MEASURED], states[:1, :, MEASURED].repeat(4, 0))
     np.testing.assert_array_equal(estimates[..., STATE.s], states[..., STATE.s])  # s: no delay
 
 
@@ -190,8 +224,9 @@ def test_batched_equals_single_and_snapshots_resume_exactly():
 
 def test_heading_estimate_stays_wrapped():
     assert wrap_angle(math.pi + 0.1) == pytest.approx(-math.pi + 0.1)
-    _, estimates, _ = run({"heading_bias": 0.3}, n=20, steps=200,
-                          actions=np.array([[0.5, 0.0, 1.0]]))  # fmt: skip
+    _, estimates, _ = run(
+        {"heading_bias": 0.3}, n=20, steps=200, actions=np.array([[0.5, 0.0, 1.0]])
+    )
     assert np.all(np.abs(estimates[..., STATE.psi]) <= math.pi)
 
 
@@ -207,8 +242,10 @@ _FINITE = "must be a finite number in"
         ({"dvl_dropout": 1.0}, rf"sensors dvl_dropout {_FINITE} \[0, 0.99\], got 1.0"),
         ({"fix_interval": -1.0}, rf"sensors fix_interval {_FINITE} \[0, 1e\+06\] s"),
         ({"fix_interval": math.inf}, rf"sensors fix_interval {_FINITE} .* got inf"),
-        ({"fix_interval": 0.07},
-         r"sensors fix_interval = 0.07 s must be a whole multiple of control_dt = 0.05 s"),
+        (
+            {"fix_interval": 0.07},
+            r"sensors fix_interval = 0.07 s must be a whole multiple of control_dt = 0.05 s",
+        ),
         ({"delay": -1}, r"sensors delay must be an integer in \[0, 1000\], got -1"),
         ({"delay": 1.5}, r"sensors delay must be an integer in \[0, 1000\], got 1.5"),
         ("perfect", r"unknown sensors preset 'perfect'; valid: \['ideal', 'typical'\]"),
@@ -216,7 +253,7 @@ _FINITE = "must be a finite number in"
         ({"gps": 1.0}, r"sensors has unknown key\(s\) \['gps'\]"),
         (3, r"sensors must be None, one of \['ideal', 'typical'\], a dict"),
     ],
-)  # fmt: skip
+)
 def test_bad_sensor_arguments_raise_one_named_line(sensors, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(sensors=sensors)

@@ -26,8 +26,9 @@ def test_paper_actuator_agent_reproduces_its_recorded_paper_episodes() -> None:
     env_id = policy.metadata["env_id"]
     assert env_id == "AUVPath3DPreviewAntiWindup-v0"
     assert policy.metadata["env_kwargs"]["actuator"] == "paper"
-    fresh = evaluate_policy_on_seeds(policy, [0, 1], max_time=recorded["duration_s"],
-                                     **agent_env_kwargs(env_id, policy.metadata))  # fmt: skip
+    fresh = evaluate_policy_on_seeds(
+        policy, [0, 1], max_time=recorded["duration_s"], **agent_env_kwargs(env_id, policy.metadata)
+    )
     assert [r["termination_reason"] for r in fresh] == ["", ""]  # 200 s at the time limit
     # Bit-identical where it was trained; BLAS rounding elsewhere may perturb the closed loop.
     expected = [r["rms_distance"] for r in recorded["results"][:2]]

@@ -39,8 +39,10 @@ def test_v0_has_no_surge_limit_and_its_reward_is_the_sum_without_the_overspeed_t
     assert all(info.get("termination_reason") != "overspeed" for info in infos)
     for reward, info in zip(rewards, infos, strict=True):
         assert info["reward_overspeed"] == 0.0 and math.copysign(1, info["reward_overspeed"]) < 0
-        terms = [info[f"reward_{t}"] for t in ("progress", "tracking", "distance", "speed",
-                                                "effort", "termination")]  # fmt: skip
+        terms = [
+            info[f"reward_{t}"]
+            for t in ("progress", "tracking", "distance", "speed", "effort", "termination")
+        ]
         assert reward == sum(terms)  # the v0 formula, bit for bit (adding −0.0 changes nothing)
 
 
@@ -98,6 +100,9 @@ def test_speed_metrics_by_hand():
     m = compute_metrics(tr, transient=0.0)
     assert m["max_surge"] == 2.5
     assert m["overspeed_fraction"] == pytest.approx(2 / 6)
-    tr0 = Trajectory(t=np.zeros(1), samples={n: np.zeros(1) for n in SAMPLE_FIELDS},
-                     intervals={n: np.zeros(0) for n in INTERVAL_FIELDS})  # fmt: skip
+    tr0 = Trajectory(
+        t=np.zeros(1),
+        samples={n: np.zeros(1) for n in SAMPLE_FIELDS},
+        intervals={n: np.zeros(0) for n in INTERVAL_FIELDS},
+    )
     assert compute_metrics(tr0, transient=0.0)["overspeed_fraction"] == 0.0

@@ -83,8 +83,9 @@ def test_the_learner_comparison_names_a_missing_sbx(monkeypatch, capsys) -> None
     from benchmarks.speed import learners
 
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",
-                        lambda name, *a: None if name == "sbx" else real(name, *a))  # fmt: skip
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "sbx" else real(name, *a)
+    )
     with pytest.raises(SystemExit) as stop:
         learners.main([])
     err = capsys.readouterr().err
@@ -96,12 +97,21 @@ def test_the_learner_table_prints_medians_and_their_ratios() -> None:
     from benchmarks.speed.learners import table
 
     def run(total, collect, update):
-        return {"n_steps": 64, "total_per_s": total, "collect_per_s": collect,
-                "update_per_s": update}  # fmt: skip
+        return {
+            "n_steps": 64,
+            "total_per_s": total,
+            "collect_per_s": collect,
+            "update_per_s": update,
+        }
 
-    results = {(128, "sb3"): [run(20_000, 60_000, 30_000), run(22_000, 58_000, 32_000),
-                              run(18_000, 62_000, 28_000)],
-               (128, "sbx"): [run(22_000, 40_000, 54_000)]}  # fmt: skip
+    results = {
+        (128, "sb3"): [
+            run(20_000, 60_000, 30_000),
+            run(22_000, 58_000, 32_000),
+            run(18_000, 62_000, 28_000),
+        ],
+        (128, "sbx"): [run(22_000, 40_000, 54_000)],
+    }
     row = table(results).splitlines()[-1]
     assert row.split("|")[1].split() == ["20,000", "60,000", "30,000"]  # medians
     assert row.split("|")[3].split() == ["1.10×", "0.67×", "1.80×"]
@@ -114,9 +124,19 @@ def test_the_jax_learner_trains_through_the_same_measure() -> None:
     pytest.importorskip("sbx")
     from benchmarks.speed.training_run import measure
 
-    spec = {"n_envs": 4, "n_steps": 16, "batch_size": 32, "n_epochs": 2, "rollouts": 2,
-            "warmup": 1, "update_threads": 1, "update_dtype": "float32", "net_arch": [],
-            "seed": 0, "learner": "sbx"}  # fmt: skip
+    spec = {
+        "n_envs": 4,
+        "n_steps": 16,
+        "batch_size": 32,
+        "n_epochs": 2,
+        "rollouts": 2,
+        "warmup": 1,
+        "update_threads": 1,
+        "update_dtype": "float32",
+        "net_arch": [],
+        "seed": 0,
+        "learner": "sbx",
+    }
     result = measure(spec)
     assert result["steps"] == 2 * 4 * 16 and result["epochs_run"] == 3 * 2
     assert result["update_per_s"] > 0 and "floor_update_per_s" not in result

@@ -12,8 +12,14 @@ import pytest
 
 from benchmarks.analysis.start_heading import current, main, path_heading
 
-SEED_3 = (Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "seeds"
-          / "ppo_paper_actuator" / "agent_seed_3")  # fmt: skip
+SEED_3 = (
+    Path(__file__).resolve().parents[1]
+    / "benchmarks"
+    / "results"
+    / "seeds"
+    / "ppo_paper_actuator"
+    / "agent_seed_3"
+)
 
 
 def test_the_sweep_geometry() -> None:
@@ -25,8 +31,22 @@ def test_the_sweep_geometry() -> None:
 
 def test_fbsm_survives_every_start_heading_and_current_direction(tmp_path, capsys) -> None:
     out = tmp_path / "heading.json"
-    rows = main(["--policies", "fbsm", "--seeds", "1", "--duration", "30", "--headings", "0,90",
-                 "--directions", "0,180", "--json", str(out)])  # fmt: skip
+    rows = main(
+        [
+            "--policies",
+            "fbsm",
+            "--seeds",
+            "1",
+            "--duration",
+            "30",
+            "--headings",
+            "0,90",
+            "--directions",
+            "0,180",
+            "--json",
+            str(out),
+        ]
+    )
     assert rows["fbsm"] == {"heading": {"0": 0, "90": 0}, "direction": {"0": 0, "180": 0}}
     assert json.loads(out.read_text())["rows"] == rows
     assert "| fbsm | 0 | 0 |" in capsys.readouterr().out
@@ -37,8 +57,20 @@ def test_the_seed_that_pitches_over_in_a_current_is_caught() -> None:
     """ppo_paper_actuator's seed 3 fails every `current` episode of the suite; from the paper's
     start it pitches over in a 0.3 m/s current flowing toward +x, not toward −x (10 of 10, 0)."""
     pytest.importorskip("stable_baselines3")
-    rows = main(["--policies", f"s3={SEED_3}", "--seeds", "2", "--duration", "30",
-                 "--headings", "90", "--directions", "0,180"])  # fmt: skip
+    rows = main(
+        [
+            "--policies",
+            f"s3={SEED_3}",
+            "--seeds",
+            "2",
+            "--duration",
+            "30",
+            "--headings",
+            "90",
+            "--directions",
+            "0,180",
+        ]
+    )
     assert rows["s3"]["heading"]["90"] == 2
     assert rows["s3"]["direction"] == {"0": 2, "180": 0}
 

@@ -13,8 +13,20 @@ from benchmarks.analysis.steady_offset import main
 
 def test_fbsm_has_no_steady_offset_and_absorbs_a_pitch_and_a_thrust_bias(tmp_path, capsys):
     out = tmp_path / "offset.json"
-    rows = main(["--policies", "fbsm", "--seeds", "1", "--bias", "0.1", "--surge-bias", "-0.1",
-                 "--json", str(out)])  # fmt: skip
+    rows = main(
+        [
+            "--policies",
+            "fbsm",
+            "--seeds",
+            "1",
+            "--bias",
+            "0.1",
+            "--surge-bias",
+            "-0.1",
+            "--json",
+            str(out),
+        ]
+    )
     fbsm = rows["fbsm"]
     assert max(abs(v) for v in fbsm["calm_mean"]) < 0.03  # [m]
     assert abs(fbsm["stiffness_z"]) < 0.02  # [m per unit command]

@@ -12,8 +12,16 @@ from benchmarks.scenarios import load_scenarios
 from benchmarks.tasks import TASKS_FILE, load_task_sets, task_set
 from benchmarks.tasks import test_suite as the_test_suite
 
-BENCHMARK_SCENARIOS = ["nominal", "paper", "current", "uncertain", "fins", "line", "waypoints",
-                       "storm"]  # fmt: skip
+BENCHMARK_SCENARIOS = [
+    "nominal",
+    "paper",
+    "current",
+    "uncertain",
+    "fins",
+    "line",
+    "waypoints",
+    "storm",
+]
 
 
 def _helix_parameters(path):
@@ -34,8 +42,9 @@ def test_training_seeds_and_draws_never_meet_a_test_episode():
     train_dist = SimConfig.from_kwargs(**train.env).path
     held_out = [s for s in tests if s.held_out == "train"]
     assert len(held_out) >= 2
-    train_draws = [task_for_seed(SimConfig.from_kwargs(**train.env), seed).path
-                   for seed in train.seeds[:200]]  # fmt: skip
+    train_draws = [
+        task_for_seed(SimConfig.from_kwargs(**train.env), seed).path for seed in train.seeds[:200]
+    ]
     for s in held_out:
         config = SimConfig.from_kwargs(**s.env)
         dist = config.path
@@ -87,32 +96,49 @@ TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { p
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        (TRAIN + '[t]\nrole = "test"\nseeds = { first = 120, count = 5 }\nenv = {}\n',
-         r"train set 'train' and test set 't' share seeds \[120, 125\): test episodes would leak"),
-        (TRAIN + '[v]\nrole = "validation"\nseeds = { first = 0, count = 101 }\nenv = {}\n',
-         r"train set 'train' and validation set 'v' share seeds \[100, 101\)"),
-        (TRAIN + '[t]\nrole = "test"\nheld_out = "train"\nseeds = { first = 0, count = 5 }\n'
-         'env = { path = { families = ["helix"], radius = [15.0, 20.0] } }\n',
-         r"'t' is marked held_out but the training set 'train' can draw its helix paths"),
-        ('[train]\nrole = "train"\nseeds = { first = 0, count = 5 }\n'
-         "env = { path = { radius = [0.0, 20.0] } }\n",
-         r"task set 'train': PathDistribution radius must be positive"),
-        ('[train]\nrole = "train"\nseeds = { first = 0, count = 5 }\n'
-         "env = { path = { climb_angle_deg = [0.0, 40.0] } }\n",
-         r"task set 'train': PathDistribution climb_angle_deg .* exceeds the vehicle's largest"),
+        (
+            TRAIN + '[t]\nrole = "test"\nseeds = { first = 120, count = 5 }\nenv = {}\n',
+            r"train set 'train' and test set 't' share seeds \[120, 125\): "
+            "test episodes would leak",
+        ),
+        (
+            TRAIN + '[v]\nrole = "validation"\nseeds = { first = 0, count = 101 }\nenv = {}\n',
+            r"train set 'train' and validation set 'v' share seeds \[100, 101\)",
+        ),
+        (
+            TRAIN + '[t]\nrole = "test"\nheld_out = "train"\nseeds = { first = 0, count = 5 }\n'
+            'env = { path = { families = ["helix"], radius = [15.0, 20.0] } }\n',
+            r"'t' is marked held_out but the training set 'train' can draw its helix paths",
+        ),
+        (
+            '[train]\nrole = "train"\nseeds = { first = 0, count = 5 }\n'
+            "env = { path = { radius = [0.0, 20.0] } }\n",
+            r"task set 'train': PathDistribution radius must be positive",
+        ),
+        (
+            '[train]\nrole = "train"\nseeds = { first = 0, count = 5 }\n'
+            "env = { path = { climb_angle_deg = [0.0, 40.0] } }\n",
+            r"task set 'train': PathDistribution climb_angle_deg .* exceeds the vehicle's largest",
+        ),
         ('[x]\nrole = "exam"\nseeds = { first = 0, count = 5 }\n', r"role must be one of"),
         ('[x]\nrole = "test"\nseeds = { first = 0, count = 0 }\n', r"count >= 1"),
         ('[x]\nrole = "test"\nseeds = [0, 5]\n', r"seeds must be \{ first"),
         ('[x]\nrole = "test"\nseed = { first = 0, count = 5 }\n', r"unknown keys \['seed'\]"),
-        ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["papr"]\n',
-         r"unknown scenarios \['papr'\]"),
-        ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\ncontroller = "fins"\n',
-         r"task set 'x': controller must be a table, got 'fins'"),
-        ('[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["fins"]\n'
-         'controller = { actuator = "fins" }\n',
-         r"scenarios belong to a test set without env/controller/held_out"),
+        (
+            '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["papr"]\n',
+            r"unknown scenarios \['papr'\]",
+        ),
+        (
+            '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\ncontroller = "fins"\n',
+            r"task set 'x': controller must be a table, got 'fins'",
+        ),
+        (
+            '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["fins"]\n'
+            'controller = { actuator = "fins" }\n',
+            r"scenarios belong to a test set without env/controller/held_out",
+        ),
     ],
-)  # fmt: skip
+)
 def test_bad_task_files_raise_one_line_errors(tmp_path, text, match):
     with pytest.raises(ValueError, match=match) as caught:
         load_task_sets(_write(tmp_path, text))

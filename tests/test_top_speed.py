@@ -33,8 +33,9 @@ def _trajectory(u: np.ndarray, **kwargs) -> Trajectory:
     samples = {name: np.zeros(u.size) for name in SAMPLE_FIELDS}
     samples["u"] = u
     intervals = {name: np.zeros(u.size - 1) for name in INTERVAL_FIELDS}
-    return Trajectory(t=0.5 * np.arange(u.size), samples=samples, intervals=intervals,
-                      control_dt=0.5, **kwargs)  # fmt: skip
+    return Trajectory(
+        t=0.5 * np.arange(u.size), samples=samples, intervals=intervals, control_dt=0.5, **kwargs
+    )
 
 
 def test_overspeed_counts_above_the_vehicles_top_speed(tmp_path: Path) -> None:
@@ -65,8 +66,11 @@ def test_the_suite_target_is_each_sets_top_speed() -> None:
     suite = {"sets": {"remus": {"env": {}}, "slow": {"env": {"params": {"max_surge": 1.5}}}}}
     speeds = top_speeds(suite)
     assert speeds == {"remus": 2.0, "slow": 1.5}
-    rows = [{"policy": p, "set": s, "termination_reason": "", "max_surge": 1.8}
-            for p in ("ref", "new") for s in ("remus", "slow")]  # fmt: skip
+    rows = [
+        {"policy": p, "set": s, "termination_reason": "", "max_surge": 1.8}
+        for p in ("ref", "new")
+        for s in ("remus", "slow")
+    ]
     scores = {"ref": np.ones((1, 2)), "new": np.ones((1, 2))}
     table = target_table(rows, scores, ["remus", "slow"], "ref", 2.0, speeds)
     assert [(t["set"], t["passed"]) for t in table] == [("remus", True), ("slow", False)]
@@ -75,13 +79,21 @@ def test_the_suite_target_is_each_sets_top_speed() -> None:
 
 
 def test_the_target_takes_each_sets_best_reference() -> None:
-    rows = [{"policy": p, "set": s, "termination_reason": "", "max_surge": 1.5}
-            for p in ("fbsm", "colos", "agent") for s in ("calm", "current")]  # fmt: skip
-    scores = {"fbsm": np.array([[0.10, 0.60]]), "colos": np.array([[0.12, 0.20]]),
-              "agent": np.array([[0.14, 0.32]])}  # fmt: skip
+    rows = [
+        {"policy": p, "set": s, "termination_reason": "", "max_surge": 1.5}
+        for p in ("fbsm", "colos", "agent")
+        for s in ("calm", "current")
+    ]
+    scores = {
+        "fbsm": np.array([[0.10, 0.60]]),
+        "colos": np.array([[0.12, 0.20]]),
+        "agent": np.array([[0.14, 0.32]]),
+    }
     table = target_table(rows, scores, ["calm", "current"], ["fbsm", "colos", "absent"], 1.5)
     assert [(t["set"], t["policy"], t["reference"]) for t in table] == [
-        ("calm", "agent", "fbsm"), ("current", "agent", "colos")]  # fmt: skip
+        ("calm", "agent", "fbsm"),
+        ("current", "agent", "colos"),
+    ]
     assert [round(t["ratio"], 12) for t in table] == [1.4, 1.6]
     assert [t["passed"] for t in table] == [True, False]
     with pytest.raises(ValueError, match=r"target references \['x'\]: none was evaluated"):
@@ -89,9 +101,19 @@ def test_the_target_takes_each_sets_best_reference() -> None:
 
 
 def _markdown_target_line(speeds) -> str:
-    stats = {"reference": "ref", "confidence": 0.95, "n_runs": {}, "failure_score_m": {},
-             "reps": 10, "seed": 0, "command": "c", "improvement_tables": {}, "target": [],
-             "verdicts": {}, "learning_curve_notes": {}}  # fmt: skip
+    stats = {
+        "reference": "ref",
+        "confidence": 0.95,
+        "n_runs": {},
+        "failure_score_m": {},
+        "reps": 10,
+        "seed": 0,
+        "command": "c",
+        "improvement_tables": {},
+        "target": [],
+        "verdicts": {},
+        "learning_curve_notes": {},
+    }
     text = stats_markdown(stats, {"iqm": {}, "mean": {}}, 2.0, speeds)
     return next(line for line in text.splitlines() if line.startswith("## Target"))
 
@@ -102,7 +124,8 @@ def test_the_suite_markdown_names_the_surge_target() -> None:
     assert _markdown_target_line({"a": 2.0, "b": 2.0}) == former
     assert _markdown_target_line({"a": 1.5}).endswith("max surge ≤ 1.5 m/s")
     assert _markdown_target_line({"a": 1.5, "b": 2.0}).endswith(
-        "max surge ≤ the top speed of the set's vehicle")  # fmt: skip
+        "max surge ≤ the top speed of the set's vehicle"
+    )
 
 
 def test_residual_bounds_are_the_envs_for_its_vehicle() -> None:

@@ -21,14 +21,29 @@ from benchmarks.training.seeds import check_evaluation_window, parse_seeds
 
 ROOT = Path(__file__).resolve().parent.parent
 TINY = {
-    "ppo": {"n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy", "normalize": True,
-            "n_steps": 64, "batch_size": 128, "n_epochs": 1,
-            "policy_kwargs": "dict(net_arch=[16, 16])"},
-    "sac": {"n_envs": 4, "n_timesteps": 256, "policy": "MlpPolicy",
-            "normalize": "dict(norm_obs=True, norm_reward=False)", "buffer_size": 2000,
-            "learning_starts": 64, "batch_size": 64, "train_freq": 1, "gradient_steps": 1,
-            "policy_kwargs": "dict(net_arch=[16, 16])"},
-}  # fmt: skip
+    "ppo": {
+        "n_envs": 4,
+        "n_timesteps": 256,
+        "policy": "MlpPolicy",
+        "normalize": True,
+        "n_steps": 64,
+        "batch_size": 128,
+        "n_epochs": 1,
+        "policy_kwargs": "dict(net_arch=[16, 16])",
+    },
+    "sac": {
+        "n_envs": 4,
+        "n_timesteps": 256,
+        "policy": "MlpPolicy",
+        "normalize": "dict(norm_obs=True, norm_reward=False)",
+        "buffer_size": 2000,
+        "learning_starts": 64,
+        "batch_size": 64,
+        "train_freq": 1,
+        "gradient_steps": 1,
+        "policy_kwargs": "dict(net_arch=[16, 16])",
+    },
+}
 # sb3-contrib's off-policy learners: SAC's tiny file, CrossQ without target networks.
 TINY["tqc"] = {**TINY["sac"], "top_quantiles_to_drop_per_net": 1}
 TINY["crossq"] = {key: value for key, value in TINY["sac"].items() if key != "policy_kwargs"}
@@ -54,9 +69,24 @@ def _config(tmp_path: Path, algo: str) -> Path:
 
 
 def _args(tmp_path: Path, algo: str, out: str, *extra: str) -> list[str]:
-    return ["--algo", algo, "--config", str(_config(tmp_path, algo)), "--out", str(tmp_path / out),
-            "--eval-seeds", "100", "--eval-freq", "256", "--checkpoint-freq", "128",
-            "--eval-duration", str(_shortest_eval_duration()), "--quiet", *extra]  # fmt: skip
+    return [
+        "--algo",
+        algo,
+        "--config",
+        str(_config(tmp_path, algo)),
+        "--out",
+        str(tmp_path / out),
+        "--eval-seeds",
+        "100",
+        "--eval-freq",
+        "256",
+        "--checkpoint-freq",
+        "128",
+        "--eval-duration",
+        str(_shortest_eval_duration()),
+        "--quiet",
+        *extra,
+    ]
 
 
 @pytest.mark.parametrize(
@@ -117,8 +147,9 @@ def test_unreachable_ray_address_and_occupied_output_are_refused(tmp_path, capsy
     config = str(_config(tmp_path, "ppo"))
     base = ["--config", config, "--seeds", "2", "--quiet"]
     t0 = time.monotonic()
-    code = main([*base, "--out", str(tmp_path / "a"), "--backend", "ray",
-                 "--address", "127.0.0.1:9"])  # fmt: skip
+    code = main(
+        [*base, "--out", str(tmp_path / "a"), "--backend", "ray", "--address", "127.0.0.1:9"]
+    )
     assert code == 2 and time.monotonic() - t0 < 10
     assert "--address '127.0.0.1:9': no Ray cluster (GCS) answered" in capsys.readouterr().err
     (tmp_path / "b").mkdir()
@@ -152,8 +183,9 @@ def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
         assert [line.split(",")[0] for line in curve.splitlines()] == ["num_timesteps", "0", "256"]
         test = json.loads((tmp_path / "results" / f"seed_{seed}_test_evaluation.json").read_text())
         assert test["seeds"] == list(range(10))
-        seed_agent = json.loads((tmp_path / "results" / f"agent_seed_{seed}" / "metadata.json")
-                                .read_text())  # fmt: skip
+        seed_agent = json.loads(
+            (tmp_path / "results" / f"agent_seed_{seed}" / "metadata.json").read_text()
+        )
         assert seed_agent["seed"] == seed
         assert seed_agent["num_timesteps"] == entry["validation_num_timesteps"]  # its best
     scores = {e["seed"]: e["validation_score"] for e in summary["seeds"]}
@@ -189,8 +221,17 @@ def test_smoke_on_the_agent_observation(tmp_path):
     }
     config = tmp_path / "preview.yml"
     config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": section}))
-    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1",
-                 "--export", str(tmp_path / "agent"))  # fmt: skip
+    args = _args(
+        tmp_path,
+        "ppo",
+        "run",
+        "--seeds",
+        "0-0",
+        "--workers",
+        "1",
+        "--export",
+        str(tmp_path / "agent"),
+    )
     args[args.index("--config") + 1] = str(config)
     assert main([*args, "--env-id", "AUVPath3DPreview-v0"]) == 0
     meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
@@ -239,8 +280,7 @@ def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path, caps
     continues the same run to the new target."""
     from stable_baselines3 import PPO
 
-    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1", "--n-timesteps",
-                 "768")  # fmt: skip
+    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1", "--n-timesteps", "768")
     assert main([*args, "--stop-at", "384"]) == 0
     paused = _summary(tmp_path / "run")["seeds"][0]
     # SB3 collects whole rollouts of 4 × 64 steps: the pause comes at the first rollout start
@@ -264,10 +304,16 @@ def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path, caps
 def test_sac_resume_restores_the_replay_buffer(tmp_path):
     from benchmarks.training.train import TrainOptions, train
 
-    opts = TrainOptions(algo="sac", config=str(_config(tmp_path, "sac")),
-                        env_id="AUVPath3DSpeedLimit-v0", out=str(tmp_path / "run"),
-                        n_timesteps=128, checkpoint_freq=128, eval_freq=0,
-                        progress_bar=False)  # fmt: skip
+    opts = TrainOptions(
+        algo="sac",
+        config=str(_config(tmp_path, "sac")),
+        env_id="AUVPath3DSpeedLimit-v0",
+        out=str(tmp_path / "run"),
+        n_timesteps=128,
+        checkpoint_freq=128,
+        eval_freq=0,
+        progress_bar=False,
+    )
     train(opts)
     train(TrainOptions(**{**opts.__dict__, "n_timesteps": 256, "resume": True}))
     last = tmp_path / "run" / "checkpoints" / "step_0000000256" / "replay_buffer.pkl"
@@ -287,17 +333,18 @@ def test_killed_run_resumes_every_unfinished_seed(tmp_path):
     first however fast the machine (a CI run once saw a 2048-step seed end before the other's
     first checkpoint); the resume pauses a little past the newest checkpoint instead."""
     budget = 1_000_000
-    args = _args(tmp_path, "ppo", "run", "--seeds", "2", "--workers", "2",
-                 "--n-timesteps", str(budget))  # fmt: skip
+    args = _args(
+        tmp_path, "ppo", "run", "--seeds", "2", "--workers", "2", "--n-timesteps", str(budget)
+    )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     command = [sys.executable, "-m", "benchmarks.train_seeds", *args]
-    proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)  # fmt: skip
+    proc = subprocess.Popen(
+        command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     run = tmp_path / "run"
     deadline = time.monotonic() + 240
     while time.monotonic() < deadline:
-        if all(len(list((run / f"seed_{s}" / "checkpoints").glob("step_*"))) >= 1
-               for s in (0, 1)):  # fmt: skip
+        if all(len(list((run / f"seed_{s}" / "checkpoints").glob("step_*"))) >= 1 for s in (0, 1)):
             break
         time.sleep(0.2)
     children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
@@ -400,8 +447,9 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
         from benchmarks.training.train import observation_layout_of
 
         pin_scales(venv, cfg, observation_layout_of(env_id, cfg.env_kwargs).names)
-    model = ALGORITHMS[algo].sb3_class()(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs,
-                                         device="cpu", **kwargs)  # fmt: skip
+    model = ALGORITHMS[algo].sb3_class()(
+        cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, device="cpu", **kwargs
+    )
     assert model.gamma == gamma
     assert model.observation_space.shape == venv.observation_space.shape
     if cfg.action_bounds is not None:
@@ -429,8 +477,11 @@ def test_phase_configs_change_only_what_their_comments_say():
     assert {k: along["obs_scales"][k] for k in changed} == dict.fromkeys(changed, 2.0)
     assert cross["obs_scales"] == {**along["obs_scales"], **changed}
     assert {**cross, "obs_scales": along["obs_scales"]} == along
-    path = {**cross["env_kwargs"]["path"], "spline_radius": [8.0, 40.0],
-            "piece_length": [20.0, 80.0]}  # fmt: skip
+    path = {
+        **cross["env_kwargs"]["path"],
+        "spline_radius": [8.0, 40.0],
+        "piece_length": [20.0, 80.0],
+    }
     assert bends == {**cross, "env_kwargs": {**cross["env_kwargs"], "path": path}}
 
 

@@ -52,8 +52,9 @@ def test_gym_make_truncates_at_a_long_max_time():
 
 
 def test_make_vec_truncates_at_max_time_and_its_spec_says_so():
-    env = gym.make_vec("AUVPath3D-v0", num_envs=2, control_dt=0.01, max_time=60.5,
-                       disturbance="none")  # fmt: skip
+    env = gym.make_vec(
+        "AUVPath3D-v0", num_envs=2, control_dt=0.01, max_time=60.5, disturbance="none"
+    )
     assert env.spec.max_episode_steps == 6050
     env.reset(seed=0)
     ends = [env.step(np.zeros((2, 3)))[3].copy() for _ in range(6060)]
@@ -96,15 +97,17 @@ def test_truncation_is_the_first_step_at_or_after_max_time(control_dt, max_time,
 # -------------------------------------------------------------- timing arguments (item 1)
 @pytest.mark.parametrize(
     ("kwargs", "match"),
-    [({"control_dt": 1e20}, r"control_dt .*\(0, 100\] s"),  # substeps overflowed int64
-     ({"physics_dt": 1e-300}, r"physics_dt .*\[1e-06, 0.1\] s.*1e-300"),
-     ({"physics_dt": 1e-12}, r"physics_dt .*1e-12"),  # one step() ran for minutes
-     ({"physics_dt": 1e-5, "control_dt": 0.10001}, r"control_dt .*10000 physics steps"),
-     ({"max_time": 1e300}, r"max_time .*1e\+06"),
-     ({"max_time": 1e-300}, r"max_time .*at least one control_dt"),
-     ({"max_time": True}, r"max_time must be a real number"),
-     ({"noise_hold": 0.02, "disturbance": NoiseConfig(hold=0.03)}, r"noise_hold .*conflicts")],
-)  # fmt: skip
+    [
+        ({"control_dt": 1e20}, r"control_dt .*\(0, 100\] s"),  # substeps overflowed int64
+        ({"physics_dt": 1e-300}, r"physics_dt .*\[1e-06, 0.1\] s.*1e-300"),
+        ({"physics_dt": 1e-12}, r"physics_dt .*1e-12"),  # one step() ran for minutes
+        ({"physics_dt": 1e-5, "control_dt": 0.10001}, r"control_dt .*10000 physics steps"),
+        ({"max_time": 1e300}, r"max_time .*1e\+06"),
+        ({"max_time": 1e-300}, r"max_time .*at least one control_dt"),
+        ({"max_time": True}, r"max_time must be a real number"),
+        ({"noise_hold": 0.02, "disturbance": NoiseConfig(hold=0.03)}, r"noise_hold .*conflicts"),
+    ],
+)
 def test_timing_arguments_out_of_range_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         SimConfig.from_kwargs(**kwargs)
@@ -167,9 +170,11 @@ def test_far_start_position_is_refused_at_construction():
 
 @pytest.mark.parametrize(
     "path",
-    [Helix(radius=0.01, omega=100.0),  # a tiny, fast-turning helix
-     Spline([(0, 0, 0), (0.01, 0.0, 0.0), (0.01, 0.01, 0.0), (0.0, 0.01, 0.01)])],
-)  # fmt: skip
+    [
+        Helix(radius=0.01, omega=100.0),  # a tiny, fast-turning helix
+        Spline([(0, 0, 0), (0.01, 0.0, 0.0), (0.01, 0.01, 0.0), (0.0, 0.01, 0.01)]),
+    ],
+)
 def test_tiny_paths_that_turn_beyond_the_observation_are_refused(path):
     """Was: with randomize_start, reset returned psi_F_dot outside observation_space."""
     with pytest.raises(ValueError, match=r"path turns at up to .* rad/s, beyond the observation"):
@@ -207,13 +212,18 @@ def test_a_non_finite_observation_of_a_finite_state_is_non_finite(bad):
     obs = sim.obs[0].copy()
     obs[OBS_INDEX["psi_F_dot"]] = bad  # the state stays finite
     terms = np.zeros(len(REWARD_TERMS))
-    reward, code = task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH,
-                            sim._task[0], terms)  # fmt: skip
+    reward, code = task_row(
+        sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task[0], terms
+    )
     assert TERMINATION_REASONS[code] == "non_finite"
     assert reward == -100.0 and terms.tolist() == [0] * (len(REWARD_TERMS) - 1) + [-100.0]
     obs[OBS_INDEX["psi_F_dot"]] = 9.0  # inside: the same call runs on
-    assert task_row(sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task[0],
-                    terms)[1] == 0  # fmt: skip
+    assert (
+        task_row(
+            sim.state[0], sim.guid[0], obs, np.zeros(3), OBS_LOW, OBS_HIGH, sim._task[0], terms
+        )[1]
+        == 0
+    )
 
 
 def test_an_observation_beyond_float32_ends_the_episode_as_non_finite():
@@ -236,8 +246,9 @@ def test_an_observation_beyond_float32_ends_the_episode_as_non_finite():
 
 
 def test_rewards_stay_finite_at_the_extremes_of_the_ranges():
-    env = AUVPath3DEnv(corridor=0.01, reward_weights=dict.fromkeys(RewardWeights().__dict__, 1e6),
-                       u_desired=1e-9)  # fmt: skip
+    env = AUVPath3DEnv(
+        corridor=0.01, reward_weights=dict.fromkeys(RewardWeights().__dict__, 1e6), u_desired=1e-9
+    )
     env.reset(seed=0)
     env.sim.state[0, 0:3] = 3e38  # the largest errors that are still float32-finite
     _, reward, terminated, *_ = env.step(STILL)
@@ -246,21 +257,46 @@ def test_rewards_stay_finite_at_the_extremes_of_the_ranges():
 
 # ------------------------------------------------------------ types and coercion (item 1)
 BAD_TYPES = [
-    ("path", ["helix"]), ("path", {"kind"}), ("path", 3),
-    ("disturbance", [1, 2, 3, 4, 5]), ("disturbance", True), ("disturbance", 1j),
-    ("current", "0.3"), ("current", 0.3), ("current", {"mean": "abc"}),
-    ("param_uncertainty", "0.1"), ("param_uncertainty", None),
-    ("actuator", ["paper"]), ("actuator", 0),
-    ("control_dt", "0.05"), ("control_dt", None), ("control_dt", [0.05]),
-    ("physics_dt", "0.01"), ("noise_hold", "0.01"), ("max_time", True), ("max_time", "300"),
-    ("randomize_start", "False"), ("randomize_start", 0), ("randomize_start", None),
-    ("u_desired", "1"), ("u_desired", 1 + 0j), ("sigma", b"0.5"),
-    ("virtual_point_law", ["corrected"]), ("corridor", "30"), ("max_pitch", "1.0"),
-    ("reward_weights", 5), ("reward_weights", [1.0]), ("reward_weights", {"progress": "1"}),
-    ("params", ["m", 30.0]), ("params", "remus100"),
-    ("start_position", "abc"), ("start_position", (1, 2, "3")), ("start_position", 5.0),
-    ("start_heading", "0.5"), ("start_heading", [0.5]),
-]  # fmt: skip
+    ("path", ["helix"]),
+    ("path", {"kind"}),
+    ("path", 3),
+    ("disturbance", [1, 2, 3, 4, 5]),
+    ("disturbance", True),
+    ("disturbance", 1j),
+    ("current", "0.3"),
+    ("current", 0.3),
+    ("current", {"mean": "abc"}),
+    ("param_uncertainty", "0.1"),
+    ("param_uncertainty", None),
+    ("actuator", ["paper"]),
+    ("actuator", 0),
+    ("control_dt", "0.05"),
+    ("control_dt", None),
+    ("control_dt", [0.05]),
+    ("physics_dt", "0.01"),
+    ("noise_hold", "0.01"),
+    ("max_time", True),
+    ("max_time", "300"),
+    ("randomize_start", "False"),
+    ("randomize_start", 0),
+    ("randomize_start", None),
+    ("u_desired", "1"),
+    ("u_desired", 1 + 0j),
+    ("sigma", b"0.5"),
+    ("virtual_point_law", ["corrected"]),
+    ("corridor", "30"),
+    ("max_pitch", "1.0"),
+    ("reward_weights", 5),
+    ("reward_weights", [1.0]),
+    ("reward_weights", {"progress": "1"}),
+    ("params", ["m", 30.0]),
+    ("params", "remus100"),
+    ("start_position", "abc"),
+    ("start_position", (1, 2, "3")),
+    ("start_position", 5.0),
+    ("start_heading", "0.5"),
+    ("start_heading", [0.5]),
+]
 
 
 @pytest.mark.parametrize(("name", "value"), BAD_TYPES, ids=lambda v: repr(v)[:20])
@@ -276,20 +312,48 @@ def test_wrong_types_raise_a_type_error_naming_the_argument(name, value):
 
 
 BAD_VALUES = [
-    ("disturbance", -5.0), ("disturbance", math.nan), ("disturbance", 1e5),
-    ("current", (0.1, 0.2)), ("current", (20.0, 0.0, 0.0)), ("current", {"std": (-1, 0, 0)}),
-    ("current", {"time_constant": 0.0}), ("current", {"speed": 1.0}),
-    ("param_uncertainty", 1.0), ("param_uncertainty", -0.1), ("param_uncertainty", math.nan),
-    ("actuator", "jets"), ("control_dt", 0.0), ("control_dt", -0.05), ("control_dt", math.inf),
-    ("control_dt", 0.015), ("physics_dt", 0.0), ("physics_dt", 0.5), ("noise_hold", 0.005),
-    ("noise_hold", -0.01), ("max_time", math.nan), ("max_time", 0.0), ("u_desired", 0.0),
-    ("u_desired", -1.0), ("sigma", 0.0), ("sigma", math.inf), ("virtual_point_law", "other"),
-    ("corridor", 0.0), ("corridor", 0.001), ("corridor", 501.0), ("max_pitch", math.pi / 2),
-    ("max_pitch", 0.0), ("reward_weights", {"speed": -1.0}), ("reward_weights", {"x": 1.0}),
-    ("reward_weights", {"termination": math.inf}), ("reward_weights", {"effort": 1e7}),
-    ("start_position", (0.0, 0.0)), ("start_position", (math.nan, 0.0, 0.0)),
-    ("start_position", (1e7, 0.0, 0.0)), ("start_heading", -7.0), ("max_time", 10**400),
-]  # fmt: skip
+    ("disturbance", -5.0),
+    ("disturbance", math.nan),
+    ("disturbance", 1e5),
+    ("current", (0.1, 0.2)),
+    ("current", (20.0, 0.0, 0.0)),
+    ("current", {"std": (-1, 0, 0)}),
+    ("current", {"time_constant": 0.0}),
+    ("current", {"speed": 1.0}),
+    ("param_uncertainty", 1.0),
+    ("param_uncertainty", -0.1),
+    ("param_uncertainty", math.nan),
+    ("actuator", "jets"),
+    ("control_dt", 0.0),
+    ("control_dt", -0.05),
+    ("control_dt", math.inf),
+    ("control_dt", 0.015),
+    ("physics_dt", 0.0),
+    ("physics_dt", 0.5),
+    ("noise_hold", 0.005),
+    ("noise_hold", -0.01),
+    ("max_time", math.nan),
+    ("max_time", 0.0),
+    ("u_desired", 0.0),
+    ("u_desired", -1.0),
+    ("sigma", 0.0),
+    ("sigma", math.inf),
+    ("virtual_point_law", "other"),
+    ("corridor", 0.0),
+    ("corridor", 0.001),
+    ("corridor", 501.0),
+    ("max_pitch", math.pi / 2),
+    ("max_pitch", 0.0),
+    ("reward_weights", {"speed": -1.0}),
+    ("reward_weights", {"x": 1.0}),
+    ("reward_weights", {"termination": math.inf}),
+    ("reward_weights", {"effort": 1e7}),
+    ("start_position", (0.0, 0.0)),
+    ("start_position", (math.nan, 0.0, 0.0)),
+    ("start_position", (1e7, 0.0, 0.0)),
+    ("start_heading", -7.0),
+    ("max_time", 10**400),
+]
 
 
 @pytest.mark.parametrize(("name", "value"), BAD_VALUES, ids=lambda v: repr(v)[:20])
@@ -303,37 +367,48 @@ def test_out_of_range_values_raise_a_value_error_naming_argument_and_range(name,
 
 @pytest.mark.parametrize(
     ("build", "match"),
-    [(lambda: NoiseConfig(hold=0.0), r"NoiseConfig.hold .*\(0, 1e\+06\] s"),
-     (lambda: NoiseConfig(amplitude="35"), r"NoiseConfig.amplitude"),
-     (lambda: NoiseConfig(amplitude=(1, 2)), r"NoiseConfig.amplitude must be 5 real"),
-     (lambda: CurrentConfig(mean=(0, 0, math.inf)), r"current mean"),
-     (lambda: CurrentConfig(time_constant="60"), r"current time_constant"),
-     (lambda: RewardWeights(progress=True), r"reward weight progress"),
-     (lambda: TaskLimits(s_end=0.0), r"s_end"), (lambda: TaskLimits(max_pitch=2.0), "max_pitch"),
-     (lambda: Helix(radius=1e300), r"Helix radius .*\(0, 100000\] m"),
-     (lambda: Helix(omega=1e300), r"Helix omega"), (lambda: Helix(center="abc"), "Helix center"),
-     (lambda: Helix(radius=1e-300, omega=1e-300, climb=0.0), r"\|p'\(s\)\|"),
-     (lambda: Helix(s_end="10"), "Helix s_end"), (lambda: Helix(s_end=-1.0), "Helix s_end"),
-     (lambda: StraightLine(start=(1e300, 0, 0)), "StraightLine start"),
-     (lambda: StraightLine(direction=(1e-300, 0, 0)), "StraightLine: direction"),
-     (lambda: StraightLine(length=math.nan), "StraightLine length"),
-     (lambda: Spline("abc"), "Spline waypoints"), (lambda: Spline([[0, 0, 0], [1, 1]]), "Spline"),
-     (lambda: Spline(np.zeros((1001, 3)) + np.arange(1001)[:, None]), "1000"),
-     (lambda: Spline([(0, 0, 0), (1e300, 0, 0)]), "Spline"),
-     (lambda: AUVParams(m=True), r"AUVParams.m "), (lambda: AUVParams(X_uu="1"), "AUVParams.X_uu"),
-     (lambda: AUVParams(surge_coriolis="yes"), "AUVParams.surge_coriolis"),
-     (lambda: AUVParams(fin_max=4.0), "AUVParams.fin_max"),
-     (lambda: AUVParams(X_uu=10**400), "AUVParams.X_uu")],
-)  # fmt: skip
+    [
+        (lambda: NoiseConfig(hold=0.0), r"NoiseConfig.hold .*\(0, 1e\+06\] s"),
+        (lambda: NoiseConfig(amplitude="35"), r"NoiseConfig.amplitude"),
+        (lambda: NoiseConfig(amplitude=(1, 2)), r"NoiseConfig.amplitude must be 5 real"),
+        (lambda: CurrentConfig(mean=(0, 0, math.inf)), r"current mean"),
+        (lambda: CurrentConfig(time_constant="60"), r"current time_constant"),
+        (lambda: RewardWeights(progress=True), r"reward weight progress"),
+        (lambda: TaskLimits(s_end=0.0), r"s_end"),
+        (lambda: TaskLimits(max_pitch=2.0), "max_pitch"),
+        (lambda: Helix(radius=1e300), r"Helix radius .*\(0, 100000\] m"),
+        (lambda: Helix(omega=1e300), r"Helix omega"),
+        (lambda: Helix(center="abc"), "Helix center"),
+        (lambda: Helix(radius=1e-300, omega=1e-300, climb=0.0), r"\|p'\(s\)\|"),
+        (lambda: Helix(s_end="10"), "Helix s_end"),
+        (lambda: Helix(s_end=-1.0), "Helix s_end"),
+        (lambda: StraightLine(start=(1e300, 0, 0)), "StraightLine start"),
+        (lambda: StraightLine(direction=(1e-300, 0, 0)), "StraightLine: direction"),
+        (lambda: StraightLine(length=math.nan), "StraightLine length"),
+        (lambda: Spline("abc"), "Spline waypoints"),
+        (lambda: Spline([[0, 0, 0], [1, 1]]), "Spline"),
+        (lambda: Spline(np.zeros((1001, 3)) + np.arange(1001)[:, None]), "1000"),
+        (lambda: Spline([(0, 0, 0), (1e300, 0, 0)]), "Spline"),
+        (lambda: AUVParams(m=True), r"AUVParams.m "),
+        (lambda: AUVParams(X_uu="1"), "AUVParams.X_uu"),
+        (lambda: AUVParams(surge_coriolis="yes"), "AUVParams.surge_coriolis"),
+        (lambda: AUVParams(fin_max=4.0), "AUVParams.fin_max"),
+        (lambda: AUVParams(X_uu=10**400), "AUVParams.X_uu"),
+    ],
+)
 def test_dataclasses_and_paths_check_their_fields(build, match):
     with pytest.raises(ValueError, match=match):
         build()
 
 
 def test_accepted_numbers_are_canonical_floats():
-    config = SimConfig.from_kwargs(max_time=300, control_dt=np.float64(0.05),
-                                   u_desired=np.int64(1), start_position=np.array([15, 5, 0]),
-                                   start_heading=0)  # fmt: skip
+    config = SimConfig.from_kwargs(
+        max_time=300,
+        control_dt=np.float64(0.05),
+        u_desired=np.int64(1),
+        start_position=np.array([15, 5, 0]),
+        start_heading=0,
+    )
     assert type(config.max_time) is float and config.max_time == 300.0
     assert type(config.u_desired) is float and config.start_position == (15.0, 5.0, 0.0)
     assert type(config.start_heading) is float
@@ -344,9 +419,15 @@ def test_accepted_numbers_are_canonical_floats():
 # ---------------------------------------------------------------------- actions and reset
 @pytest.mark.parametrize(
     "action",
-    [["0.1", "0", "0"], np.array([0.1 + 1j, 0, 0]), [True, False, True], [None, 0, 0],
-     np.array(["a", "b", "c"]), [0.1, [0], 0]],
-)  # fmt: skip
+    [
+        ["0.1", "0", "0"],
+        np.array([0.1 + 1j, 0, 0]),
+        [True, False, True],
+        [None, 0, 0],
+        np.array(["a", "b", "c"]),
+        [0.1, [0], 0],
+    ],
+)
 def test_non_numeric_actions_raise_type_error(action):
     """Was: strings and complex numbers were converted and stepped."""
     env = AUVPath3DEnv()
@@ -381,9 +462,15 @@ def test_reset_options_and_seeds_are_checked():
     venv.reset(seed=0, options={})
     with pytest.raises(ValueError, match=r"unknown reset option\(s\) \['mask'\]"):
         venv.reset(options={"mask": np.ones(2, bool)})
-    for seed, match in ((1.5, "seed must be"), ("1", "seed must be"), (True, "seed must be"),
-                        (-1, "seed must be an integer"), ([0, "1"], r"seed\[1\]"),
-                        ([0, -2], r"seed\[1\]"), ([0, 1.0], r"seed\[1\]")):  # fmt: skip
+    for seed, match in (
+        (1.5, "seed must be"),
+        ("1", "seed must be"),
+        (True, "seed must be"),
+        (-1, "seed must be an integer"),
+        ([0, "1"], r"seed\[1\]"),
+        ([0, -2], r"seed\[1\]"),
+        ([0, 1.0], r"seed\[1\]"),
+    ):
         with pytest.raises(ValueError, match=match):
             venv.reset(seed=seed)
     venv.reset(seed=[3, None])
@@ -391,10 +478,12 @@ def test_reset_options_and_seeds_are_checked():
 
 
 def test_vector_env_integer_arguments_name_themselves():
-    for kwargs, match in (({"num_envs": 2**70}, r"num_envs .*16777216"),
-                          ({"max_episode_steps": 1.5}, "max_episode_steps"),
-                          ({"threads": "2"}, "threads"),
-                          ({"num_envs": "4"}, "num_envs")):  # fmt: skip
+    for kwargs, match in (
+        ({"num_envs": 2**70}, r"num_envs .*16777216"),
+        ({"max_episode_steps": 1.5}, "max_episode_steps"),
+        ({"threads": "2"}, "threads"),
+        ({"num_envs": "4"}, "num_envs"),
+    ):
         with pytest.raises(ValueError, match=match):
             AUVPath3DVectorEnv(**kwargs)
     env = AUVPath3DVectorEnv(2, max_episode_steps=10**30, max_time=0.5, disturbance="none")
@@ -436,10 +525,15 @@ def test_observation_bounds_are_what_the_ranges_assume():
 # ------------------------------------------------- the same checks in evaluation (item 1)
 @pytest.mark.parametrize(
     ("kwargs", "match"),
-    [({"control_dt": 1e20}, "control_dt"), ({"start_heading": math.nan}, "start_heading"),
-     ({"randomize_start": "False"}, "randomize_start"), ({"u_desired": 10.5}, "u_desired"),
-     ({"actuator": ["paper"]}, "actuator"), ({"reward_weights": 5}, "reward")],
-)  # fmt: skip
+    [
+        ({"control_dt": 1e20}, "control_dt"),
+        ({"start_heading": math.nan}, "start_heading"),
+        ({"randomize_start": "False"}, "randomize_start"),
+        ({"u_desired": 10.5}, "u_desired"),
+        ({"actuator": ["paper"]}, "actuator"),
+        ({"reward_weights": 5}, "reward"),
+    ],
+)
 def test_rollouts_and_evaluate_refuse_what_the_env_refuses(kwargs, match):
     """The evaluation entry points build their `SimConfig` through the same validation layer."""
     from auv_gym.rollout import evaluate, rollouts

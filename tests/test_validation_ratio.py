@@ -16,8 +16,18 @@ AGENT = "benchmarks/results/seeds/ppo_integral/agent_seed_0"
 
 def test_ratios_are_to_the_reference_and_agents_run_under_their_training_env(tmp_path, capsys):
     out = tmp_path / "ratio.json"
-    rows = main(["--policies", f"fbsm_colos,fbsm,gen3={AGENT}", "--episodes", "2",
-                 "--duration", "30", "--json", str(out)])  # fmt: skip
+    rows = main(
+        [
+            "--policies",
+            f"fbsm_colos,fbsm,gen3={AGENT}",
+            "--episodes",
+            "2",
+            "--duration",
+            "30",
+            "--json",
+            str(out),
+        ]
+    )
     assert rows["fbsm_colos"]["ratio"] == 1.0
     for label in ("fbsm", "gen3"):
         row = rows[label]
@@ -30,8 +40,12 @@ def test_ratios_are_to_the_reference_and_agents_run_under_their_training_env(tmp
     from benchmarks.catalog.tasks import load_task_sets
 
     chosen = load_task_sets()["validation_paper_actuator"]
-    env = {**dict(chosen.env), "max_time": 30.0, "surge_limit": "vehicle",
-           "observation": policy.metadata["observation"]}  # fmt: skip
+    env = {
+        **dict(chosen.env),
+        "max_time": 30.0,
+        "surge_limit": "vehicle",
+        "observation": policy.metadata["observation"],
+    }
     by_hand = evaluate_policy_on_seeds(policy, list(chosen.seeds[:2]), **env)
     assert rows["gen3"]["rms_distance"] == [r["rms_distance"] for r in by_hand]
     assert json.loads(out.read_text())["seeds"] == [100_100, 100_101]

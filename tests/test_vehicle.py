@@ -16,16 +16,21 @@ from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, AUVParams, remus100
 
 def test_derived_inertias_match_model_md():
     p = remus100()
-    np.testing.assert_allclose([p.m11, p.m22, p.m33, p.I55, p.I66],
-                               [31.41, 65.98, 65.98, 8.33, 8.33], atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        [p.m11, p.m22, p.m33, p.I55, p.I66], [31.41, 65.98, 65.98, 8.33, 8.33], atol=1e-9
+    )
 
 
 @pytest.mark.parametrize(
     ("field", "value", "match"),
-    [("m", -1.0, "m must be positive"), ("I_y", 0.0, "I_y must be positive"),
-     ("X_uu", float("nan"), "X_uu must be a finite"), ("I_z", float("inf"), "I_z must be a finite"),
-     ("X_udot", 40.0, "m11")],
-)  # fmt: skip
+    [
+        ("m", -1.0, "m must be positive"),
+        ("I_y", 0.0, "I_y must be positive"),
+        ("X_uu", float("nan"), "X_uu must be a finite"),
+        ("I_z", float("inf"), "I_z must be a finite"),
+        ("X_udot", 40.0, "m11"),
+    ],
+)
 def test_impossible_parameters_raise(field, value, match):
     with pytest.raises(ValueError, match=match):
         AUVParams(**{field: value})
@@ -41,8 +46,11 @@ def test_perturbed_scales_only_hydrodynamic_coefficients_within_bounds():
     perturbed = nominal.perturbed(np.random.default_rng(3), 0.3)
     for name in ("m", "W", "B", "I_y", "I_z", "fin_moment_coeff"):
         assert getattr(perturbed, name) == getattr(nominal, name)
-    ratios = [getattr(perturbed, k) / getattr(nominal, k) for k in HYDRODYNAMIC_FIELDS
-              if getattr(nominal, k) != 0.0]  # fmt: skip
+    ratios = [
+        getattr(perturbed, k) / getattr(nominal, k)
+        for k in HYDRODYNAMIC_FIELDS
+        if getattr(nominal, k) != 0.0
+    ]
     assert all(0.7 <= r <= 1.3 for r in ratios)
     assert np.std(ratios) > 0.05  # each coefficient draws its own δ
     same = nominal.perturbed(np.random.default_rng(3), 0.3)
@@ -85,8 +93,9 @@ def _integrate(dt: float, t_end: float = 2.0) -> np.ndarray:
     out = np.empty(STATE_DIM)
     f = np.array([3.0, -2.0, 1.0, 0.5, -0.5])
     for _ in range(round(t_end / dt)):
-        rk4_step(st, (20.0, 2.0, -3.0), f, (0.1, -0.2, 0.0), p, path.kind, path.data, 1.0, 0.5, dt,
-                 out)  # fmt: skip
+        rk4_step(
+            st, (20.0, 2.0, -3.0), f, (0.1, -0.2, 0.0), p, path.kind, path.data, 1.0, 0.5, dt, out
+        )
         st = out.copy()
     return st
 
@@ -100,8 +109,11 @@ def test_rk4_is_fourth_order():
 
 
 def test_batched_equals_stacked_single_rows(make_sim):
-    kwargs = dict(disturbance="paper", param_uncertainty=0.2, current={"mean": (0.1, 0.2, 0.0),
-                  "std": (0.05, 0.05, 0.0)})  # fmt: skip
+    kwargs = dict(
+        disturbance="paper",
+        param_uncertainty=0.2,
+        current={"mean": (0.1, 0.2, 0.0), "std": (0.05, 0.05, 0.0)},
+    )
     batch = make_sim(n=5, seed=10, **kwargs)
     singles = [make_sim(n=1, seed=10 + i, **kwargs) for i in range(5)]
     actions = np.random.default_rng(0).uniform(-1, 1, size=(200, 5, 3))
@@ -132,7 +144,10 @@ def test_actuator_limits_come_from_the_vehicle_record():
     assert info["tau"][0] == 60.0 and info["tau"][2] == -12.0
     with pytest.raises(ValueError, match=r"^AUVParams.M_max must be positive, got 0.0$"):
         AUVParams(M_max=0.0)
-    with pytest.raises(ValueError, match=r"^actuator_limits \(50.0, 10.0, 10.0\) conflicts with "
-                       r"params \(X_max, M_max, N_max\) = \(60.0, 10.0, 12.0\): give the limits "
-                       r"once, in params$"):  # fmt: skip
+    with pytest.raises(
+        ValueError,
+        match=r"^actuator_limits \(50.0, 10.0, 10.0\) conflicts with "
+        r"params \(X_max, M_max, N_max\) = \(60.0, 10.0, 12.0\): give the limits "
+        r"once, in params$",
+    ):
         SimConfig(params=strong, actuator_limits=(50.0, 10.0, 10.0))

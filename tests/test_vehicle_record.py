@@ -50,14 +50,20 @@ def test_vehicle_is_the_same_episode_as_the_former_number(assert_same_episodes) 
 @pytest.mark.parametrize(
     ("kwargs", "error", "message"),
     [
-        ({"surge_limit": "fast"}, ValueError,
-         r"^surge_limit must be a speed in m/s, inf or 'vehicle' \(params.max_surge\), "
-         r"got 'fast'$"),
+        (
+            {"surge_limit": "fast"},
+            ValueError,
+            r"^surge_limit must be a speed in m/s, inf or 'vehicle' \(params.max_surge\), "
+            r"got 'fast'$",
+        ),
         ({"params": {"max_surge": 0.0}}, ValueError, r"^AUVParams.max_surge must be positive"),
-        ({"surge_limit": "vehicle", "params": {"max_surge": 0.9}}, ValueError,
-         r"^surge_limit must be above u_desired = 1.0 m/s"),
+        (
+            {"surge_limit": "vehicle", "params": {"max_surge": 0.9}},
+            ValueError,
+            r"^surge_limit must be above u_desired = 1.0 m/s",
+        ),
     ],
-)  # fmt: skip
+)
 def test_a_bad_top_speed_is_one_line(kwargs, error, message) -> None:
     with pytest.raises(error, match=message):
         SimConfig.from_kwargs(**kwargs)
@@ -117,8 +123,9 @@ def test_a_faster_vehicle_is_observed_within_its_own_speed_bound() -> None:
     speeds, reasons = {}, {}
     for top in (2.0, 3.0):
         vehicle = remus100().replace(X_max=300.0, max_surge=top)
-        env = AUVPath3DEnv(path="line", u_desired=8.0, disturbance="none", max_time=12.0,
-                           params=vehicle)  # fmt: skip
+        env = AUVPath3DEnv(
+            path="line", u_desired=8.0, disturbance="none", max_time=12.0, params=vehicle
+        )
         assert env.observation_space.high[6] == 5.0 * max(top, 2.0)
         env.reset(seed=0)
         u, info, done = [], {}, False

@@ -22,8 +22,27 @@ def _frames(file: Path) -> tuple[dict, list[np.ndarray]]:
 
 def test_video_command_writes_every_kth_frame(tmp_path: Path, capsys) -> None:
     out = tmp_path / "videos" / "run.mp4"
-    assert main(["video", "--policy", "backstepping", "--scenario", "nominal", "--duration", "4",
-                 "--every", "4", "--fps", "10", "--out", str(out), "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "video",
+                "--policy",
+                "backstepping",
+                "--scenario",
+                "nominal",
+                "--duration",
+                "4",
+                "--every",
+                "4",
+                "--fps",
+                "10",
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     meta, frames = _frames(out)
     assert meta["size"] == (960, 320) and meta["fps"] == 10
     assert len(frames) == 1 + 80 // 4  # the reset frame, then every 4th of 80 control steps
@@ -33,9 +52,11 @@ def test_video_command_writes_every_kth_frame(tmp_path: Path, capsys) -> None:
 
 
 def test_video_command_names_bad_arguments(tmp_path: Path, capsys) -> None:
-    for args, message in ((["--out", str(tmp_path / "x.gif")], "--out must name an .mp4"),
-                          (["--every", "0"], "--every must be in"),
-                          (["--scenario", "nowhere"], "unknown scenario")):  # fmt: skip
+    for args, message in (
+        (["--out", str(tmp_path / "x.gif")], "--out must name an .mp4"),
+        (["--every", "0"], "--every must be in"),
+        (["--scenario", "nowhere"], "unknown scenario"),
+    ):
         assert main(["video", *args]) == 2
         assert message in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
@@ -49,8 +70,9 @@ def test_record_video_wrapper_works_on_the_env(tmp_path: Path) -> None:
     import auv_gym  # noqa: F401
 
     env = gym.make("AUVPath3D-v0", render_mode="rgb_array", max_time=1.0, disturbance="none")
-    env = RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda episode: True,
-                      disable_logger=True)  # fmt: skip
+    env = RecordVideo(
+        env, str(tmp_path / "videos"), episode_trigger=lambda episode: True, disable_logger=True
+    )
     env.reset(seed=0)
     done = False
     while not done:

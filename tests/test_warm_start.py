@@ -34,10 +34,19 @@ def _fresh_model(agent_dir, seed):
     from benchmarks.training.envs import make_training_env
 
     meta = json.loads((agent_dir / "metadata.json").read_text())
-    venv = VecNormalize(make_training_env(4, seed, dict(meta["env_kwargs"]), "auto",
-                                          meta["env_id"], None))  # fmt: skip
-    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=128, n_epochs=1, seed=seed,
-                device="cpu", policy_kwargs={"net_arch": [16]})  # fmt: skip
+    venv = VecNormalize(
+        make_training_env(4, seed, dict(meta["env_kwargs"]), "auto", meta["env_id"], None)
+    )
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=64,
+        batch_size=128,
+        n_epochs=1,
+        seed=seed,
+        device="cpu",
+        policy_kwargs={"net_arch": [16]},
+    )
     return model, venv, meta
 
 
@@ -74,11 +83,36 @@ def test_a_multi_seed_run_starts_each_seed_from_its_agent_and_records_it(agent, 
     from benchmarks.train_seeds import main
 
     shutil.copytree(agent, tmp_path / "agent_3")
-    assert main(["--algo", "ppo", "--config", _tiny_config(agent, tmp_path),
-                 "--env-id", "AUVPath3DPreview-v0", "--seeds", "3-3", "--workers", "1",
-                 "--init-from", str(tmp_path / "agent_{seed}"), "--out", str(tmp_path / "run"),
-                 "--n-timesteps", "256", "--eval-seeds", "100", "--eval-freq", "256",
-                 "--eval-duration", "110", "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "--algo",
+                "ppo",
+                "--config",
+                _tiny_config(agent, tmp_path),
+                "--env-id",
+                "AUVPath3DPreview-v0",
+                "--seeds",
+                "3-3",
+                "--workers",
+                "1",
+                "--init-from",
+                str(tmp_path / "agent_{seed}"),
+                "--out",
+                str(tmp_path / "run"),
+                "--n-timesteps",
+                "256",
+                "--eval-seeds",
+                "100",
+                "--eval-freq",
+                "256",
+                "--eval-duration",
+                "110",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     final = json.loads((tmp_path / "run" / "seed_3" / "final" / "metadata.json").read_text())
     assert final["warm_start"]["init_from"] == str(tmp_path / "agent_3")
     assert final["num_timesteps"] == 256  # a new run: its own budget and schedules
@@ -88,10 +122,30 @@ def test_a_missing_seed_agent_is_refused_before_training(agent, tmp_path, capsys
     from benchmarks.train_seeds import main
 
     shutil.copytree(agent, tmp_path / "agent_0")
-    assert main(["--algo", "ppo", "--config", _tiny_config(agent, tmp_path),
-                 "--env-id", "AUVPath3DPreview-v0", "--seeds", "0-1",
-                 "--init-from", str(tmp_path / "agent_{seed}"), "--out", str(tmp_path / "run"),
-                 "--eval-seeds", "100", "--eval-duration", "110", "--quiet"]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                "--algo",
+                "ppo",
+                "--config",
+                _tiny_config(agent, tmp_path),
+                "--env-id",
+                "AUVPath3DPreview-v0",
+                "--seeds",
+                "0-1",
+                "--init-from",
+                str(tmp_path / "agent_{seed}"),
+                "--out",
+                str(tmp_path / "run"),
+                "--eval-seeds",
+                "100",
+                "--eval-duration",
+                "110",
+                "--quiet",
+            ]
+        )
+        == 2
+    )
     assert f"init_from '{tmp_path / 'agent_1'}': model.zip is missing" in capsys.readouterr().err
     assert not (tmp_path / "run" / "seed_0").exists()
 

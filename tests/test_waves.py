@@ -171,10 +171,17 @@ def test_same_seed_gives_identical_wavy_episodes():
 
 
 def test_batched_wavy_episodes_equal_single_envs_bit_for_bit(single_env_observations):
-    kwargs = {"waves": {"sea_state": 4, "components": 8},
-              "current_profile": {"surface_speed": 0.3, "reference_depth": 40.0,
-                                  "drift_amplitude": 0.2, "drift_period": 300.0},
-              "start_position": (0.0, 0.0, 5.0), "max_time": 2.0}  # fmt: skip
+    kwargs = {
+        "waves": {"sea_state": 4, "components": 8},
+        "current_profile": {
+            "surface_speed": 0.3,
+            "reference_depth": 40.0,
+            "drift_amplitude": 0.2,
+            "drift_period": 300.0,
+        },
+        "start_position": (0.0, 0.0, 5.0),
+        "max_time": 2.0,
+    }
     n, steps = 3, 50  # 40 control steps per episode: every vehicle autoresets once
     venv = AUVPath3DVectorEnv(n, **kwargs)
     actions = np.random.default_rng(0).uniform(-0.5, 0.5, size=(steps, n, 3))
@@ -196,8 +203,11 @@ def test_no_waves_no_profile_leaves_the_ocean_row_inactive():
 @pytest.mark.parametrize(
     ("waves", "message"),
     [
-        ({"significant_height": -1.0}, r"waves significant_height must be a finite number in "
-                                       r"\(0, 30\] m, got -1.0"),
+        (
+            {"significant_height": -1.0},
+            r"waves significant_height must be a finite number in "
+            r"\(0, 30\] m, got -1.0",
+        ),
         ({"significant_height": math.nan}, "waves significant_height must be a finite number"),
         ({"peak_period": math.inf}, r"waves peak_period must be a finite number in \[1, 30\] s"),
         ({"peak_period": -8.0}, r"waves peak_period must be a finite number in \[1, 30\] s"),
@@ -205,15 +215,18 @@ def test_no_waves_no_profile_leaves_the_ocean_row_inactive():
         ({"spreading": math.nan}, "waves spreading must be a finite number"),
         ({"components": 0}, r"waves components must be an integer in \[1, 1024\], got 0"),
         ({"components": -3}, r"waves components must be an integer in \[1, 1024\], got -3"),
-        ({"spectrum": "bretschneider"}, "unknown waves spectrum 'bretschneider'; valid: "
-                                        r"\['jonswap', 'pierson_moskowitz'\]"),
+        (
+            {"spectrum": "bretschneider"},
+            "unknown waves spectrum 'bretschneider'; valid: "
+            r"\['jonswap', 'pierson_moskowitz'\]",
+        ),
         ({"gamma": 0.5}, r"waves gamma must be a finite number in \[1, 7\]"),
         ({"update_interval": 0.0}, r"waves update_interval must be a finite number in \(0, 1\]"),
         ({"height": 2.0}, r"waves has unknown key\(s\) \['height'\]"),
         ("sea_state_9", r"unknown waves sea state 'sea_state_9'; valid: \['sea_state_3'"),
         (2.5, "waves must be None, a sea state"),
     ],
-)  # fmt: skip
+)
 def test_bad_wave_arguments_name_the_argument(waves, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(waves=waves)
@@ -231,8 +244,13 @@ def test_bad_wave_arguments_name_the_argument(waves, message):
 def test_every_valid_sea_carries_its_energy_in_its_band(
     height, period, spectrum, components, spreading, seed
 ):
-    config = WaveConfig(significant_height=height, peak_period=period, spectrum=spectrum,
-                        components=components, spreading=spreading)  # fmt: skip
+    config = WaveConfig(
+        significant_height=height,
+        peak_period=period,
+        spectrum=spectrum,
+        components=components,
+        spreading=spreading,
+    )
     c = draw_components(config, np.random.default_rng(seed))
     amplitude = c[:, COMPONENT.a_omega] / c[:, COMPONENT.omega]
     assert 4.0 * math.sqrt(np.sum(amplitude**2) / 2.0) == pytest.approx(height, rel=1e-9)
@@ -246,9 +264,11 @@ def test_every_valid_sea_carries_its_energy_in_its_band(
 
 
 def test_threaded_kernel_equals_the_serial_one_with_waves():
-    config = SimConfig.from_kwargs(waves={"sea_state": 5, "components": 6},
-                                   current_profile={"surface_speed": 0.3, "reference_depth": 20.0},
-                                   start_position=(15.0, 5.0, 6.0))  # fmt: skip
+    config = SimConfig.from_kwargs(
+        waves={"sea_state": 5, "components": 6},
+        current_profile={"surface_speed": 0.3, "reference_depth": 20.0},
+        start_position=(15.0, 5.0, 6.0),
+    )
     runs = []
     for parallel in (False, True):
         sim = Simulator(config, 4, parallel=parallel)
@@ -263,10 +283,27 @@ def test_threaded_kernel_equals_the_serial_one_with_waves():
 def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
     out = tmp_path / "depth.json"
     root = Path(__file__).resolve().parents[1]
-    subprocess.run([sys.executable, "-m", "benchmarks.wave_depth", "--depths", "3", "--seeds", "2",
-                    "--max-time", "4", "--json", str(out), "--figure", str(tmp_path / "depth.png")],
-                   cwd=root, check=True,
-                   capture_output=True, text=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.wave_depth",
+            "--depths",
+            "3",
+            "--seeds",
+            "2",
+            "--max-time",
+            "4",
+            "--json",
+            str(out),
+            "--figure",
+            str(tmp_path / "depth.png"),
+        ],
+        cwd=root,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     rows = json.loads(out.read_text())
     assert [(r["depth"], r["waves"]) for r in rows] == [(3.0, "sea_state_4"), (3.0, None)]
     assert all(r["episodes"] == 2 and r["low"] <= r["rms_distance"] <= r["high"] for r in rows)

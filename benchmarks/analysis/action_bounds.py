@@ -52,8 +52,13 @@ class UniformPolicy:
         self.low, self.high = (np.asarray(b, dtype=np.float64) for b in box)
         self.rng = np.random.default_rng(seed)
 
-    def predict(self, observation: np.ndarray, state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         n = np.asarray(observation).shape[0]
         return self.rng.uniform(self.low, self.high, size=(n, 3)), state
 
@@ -131,8 +136,10 @@ def main(argv: list[str] | None = None) -> None:
         random_runs[name] = random_episodes(env_kwargs, seeds, box)
         steps.update()
     steps.close()
-    print(f"\nFBSM + CO-LOS |commands| on {len(seeds)} validation episodes of "
-          f"{args.duration:g} s ({PREVIEW_ENV_ID}, paper actuators)")  # fmt: skip
+    print(
+        f"\nFBSM + CO-LOS |commands| on {len(seeds)} validation episodes of "
+        f"{args.duration:g} s ({PREVIEW_ENV_ID}, paper actuators)"
+    )
     print("axis  " + "  ".join(f"p{p:g}".rjust(7) for p in PERCENTILES))
     for axis, values in percentiles.items():
         print(f"{axis:5} " + "  ".join(f"{v:7.3f}" for v in values))
@@ -140,13 +147,23 @@ def main(argv: list[str] | None = None) -> None:
     print("box                   a_X          mean length  median  reach the limit  endings")
     for name, run in random_runs.items():
         x = f"{run['low'][0]:.3g}..{run['high'][0]:.3g}"
-        print(f"{name:21} {x:12} {run['mean_duration_s']:9.1f} s {run['median_duration_s']:6.1f} s "
-              f"{100 * run['time_limit_fraction']:14.0f} %  {run['endings']}")  # fmt: skip
+        print(
+            f"{name:21} {x:12} {run['mean_duration_s']:9.1f} s {run['median_duration_s']:6.1f} s "
+            f"{100 * run['time_limit_fraction']:14.0f} %  {run['endings']}"
+        )
     if args.out:
-        write_json(args.out, {"episodes": len(seeds), "duration_s": args.duration,
-                              "env_id": PREVIEW_ENV_ID, "command_percentiles": percentiles,
-                              "percentiles": list(PERCENTILES), "random": random_runs},
-                   indent=2)  # fmt: skip
+        write_json(
+            args.out,
+            {
+                "episodes": len(seeds),
+                "duration_s": args.duration,
+                "env_id": PREVIEW_ENV_ID,
+                "command_percentiles": percentiles,
+                "percentiles": list(PERCENTILES),
+                "random": random_runs,
+            },
+            indent=2,
+        )
 
 
 if __name__ == "__main__":

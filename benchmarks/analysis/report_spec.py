@@ -17,9 +17,11 @@ from typing import Any
 __all__ = ["DEFAULT_REPORT", "ReportSpec"]
 
 DEFAULT_REPORT = Path(__file__).resolve().parents[1] / "report.toml"
-_KEYS = {"": {"reference", "extra_references", "target", "smoothness"},
-         "target": {"max_ratio", "references"},
-         "smoothness": {"reference", "worse_ratio", "pairs", "tradeoff_scopes"}}  # fmt: skip
+_KEYS = {
+    "": {"reference", "extra_references", "target", "smoothness"},
+    "target": {"max_ratio", "references"},
+    "smoothness": {"reference", "worse_ratio", "pairs", "tradeoff_scopes"},
+}
 
 
 @dataclass(frozen=True)

@@ -32,8 +32,12 @@ __all__ = [
 ]
 
 
-def metric_matrices(rows: Sequence[Mapping[str, Any]], sets: Sequence[str], metric: str,
-                    runs: Mapping[str, Sequence[int]]) -> dict[str, np.ndarray]:  # fmt: skip
+def metric_matrices(
+    rows: Sequence[Mapping[str, Any]],
+    sets: Sequence[str],
+    metric: str,
+    runs: Mapping[str, Sequence[int]],
+) -> dict[str, np.ndarray]:
     """{policy: (n_runs, n_episodes)} of an episodes.csv ``metric`` (NaN where missing), in the
     column order of `benchmarks.suite_stats.score_matrices` ((set, seed) by ``sets``)."""
     order = {name: k for k, name in enumerate(sets)}
@@ -57,9 +61,14 @@ def _columns(labels: np.ndarray, scope: str) -> np.ndarray:
     return np.ones(labels.size, bool) if scope == AGGREGATE else labels == scope
 
 
-def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: int, seed: int,
-                 pairs: Sequence[tuple[str, str]], worse_ratio: float
-                 ) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
+def paired_table(
+    scores: Mapping[str, np.ndarray],
+    groups: Sequence[str],
+    reps: int,
+    seed: int,
+    pairs: Sequence[tuple[str, str]],
+    worse_ratio: float,
+) -> dict[str, dict[str, dict[str, Any]]]:
     """{"policy−base": {scope: {"difference", "relative" (Intervals as dicts), "win", "worse"}}}
     for every (policy, base) of ``pairs`` whose two policies were evaluated; "worse": the
     relative difference exceeds ``worse_ratio``."""
@@ -72,8 +81,14 @@ def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: 
         out[name] = {}
         for scope in _scopes(groups):
             cols = _columns(labels, scope)
-            iv = paired_difference(scores[policy][:, cols], scores[base][:, cols], labels[cols],
-                                   key=f"{name}|{scope}", reps=reps, seed=seed)  # fmt: skip
+            iv = paired_difference(
+                scores[policy][:, cols],
+                scores[base][:, cols],
+                labels[cols],
+                key=f"{name}|{scope}",
+                reps=reps,
+                seed=seed,
+            )
             out[name][scope] = {
                 "difference": iv["difference"]._asdict(),
                 "relative": iv["relative"]._asdict(),
@@ -83,9 +98,13 @@ def paired_table(scores: Mapping[str, np.ndarray], groups: Sequence[str], reps: 
     return out
 
 
-def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str], reps: int,
-                     seed: int, reference: str
-                     ) -> dict[str, dict[str, dict[str, Any]]]:  # fmt: skip
+def chattering_table(
+    chattering: Mapping[str, np.ndarray],
+    groups: Sequence[str],
+    reps: int,
+    seed: int,
+    reference: str,
+) -> dict[str, dict[str, dict[str, Any]]]:
     """{scope: {policy: {"value", "low", "high", "ratio"}}}: mean chattering [1/s] with CI and
     its ratio to ``reference``'s (NaN when that was not evaluated)."""
     labels = np.asarray(groups)
@@ -94,8 +113,9 @@ def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str]
         cols = _columns(labels, scope)
         row: dict[str, dict[str, Any]] = {}
         for policy, x in chattering.items():
-            iv = mean_interval(x[:, cols], labels[cols], key=f"chattering|{policy}|{scope}",
-                               reps=reps, seed=seed)  # fmt: skip
+            iv = mean_interval(
+                x[:, cols], labels[cols], key=f"chattering|{policy}|{scope}", reps=reps, seed=seed
+            )
             row[policy] = iv._asdict()
         ref = row.get(reference, {}).get("value", np.nan)
         for entry in row.values():
@@ -104,8 +124,9 @@ def chattering_table(chattering: Mapping[str, np.ndarray], groups: Sequence[str]
     return out
 
 
-def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any], reference: str,
-                        worse_ratio: float) -> str:  # fmt: skip
+def smoothness_markdown(
+    paired: Mapping[str, Any], chattering: Mapping[str, Any], reference: str, worse_ratio: float
+) -> str:
     """The two tables of the module doc as Markdown (rows = sets), three policies per table;
     ``reference`` and ``worse_ratio`` as given to `chattering_table` and `paired_table`."""
     lines: list[str] = []
@@ -122,8 +143,10 @@ def smoothness_markdown(paired: Mapping[str, Any], chattering: Mapping[str, Any]
                     e = paired[name][scope]
                     d, r = Interval(**e["difference"]), Interval(**e["relative"])
                     tag = " **win**" if e["win"] else (" **worse**" if e["worse"] else "")
-                    cells.append(f"{1e3 * d.value:+.2f} [{1e3 * d.low:+.2f}, {1e3 * d.high:+.2f}]"
-                                 f" ({100 * r.value:+.1f} %){tag}")  # fmt: skip
+                    cells.append(
+                        f"{1e3 * d.value:+.2f} [{1e3 * d.low:+.2f}, {1e3 * d.high:+.2f}]"
+                        f" ({100 * r.value:+.1f} %){tag}"
+                    )
                 rows.append([scope, *cells])
             lines += [markdown_table(["set", *names], rows)]
     if chattering:

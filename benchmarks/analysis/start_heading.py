@@ -46,19 +46,36 @@ def path_heading() -> float:
 def current(speed: float, direction_deg: float) -> dict[str, Any]:
     """The env's `current` argument: ``speed`` [m/s] toward ``direction_deg`` plus variation."""
     angle = math.radians(direction_deg)
-    return {"mean": [speed * math.cos(angle), speed * math.sin(angle), 0.0],
-            "std": list(CURRENT_STD), "time_constant": CURRENT_TIME_CONSTANT}  # fmt: skip
+    return {
+        "mean": [speed * math.cos(angle), speed * math.sin(angle), 0.0],
+        "std": list(CURRENT_STD),
+        "time_constant": CURRENT_TIME_CONSTANT,
+    }
 
 
-def failures(policy: Any, env_kwargs: dict[str, Any], seeds: int, duration: float,
-             heading: float | None, flow: dict[str, Any]) -> int:  # fmt: skip
+def failures(
+    policy: Any,
+    env_kwargs: dict[str, Any],
+    seeds: int,
+    duration: float,
+    heading: float | None,
+    flow: dict[str, Any],
+) -> int:
     """Failed episodes of seeds 0…n−1 from the paper's start position with heading ``heading``
     [rad] (None: the paper's start heading, ψ = 0)."""
     from auv_gym.rollout import rollouts
 
-    runs = rollouts(policy, list(range(seeds)), **{
-        **env_kwargs, "disturbance": "none", "current": flow, "start_heading": heading,
-        "max_time": duration})  # fmt: skip
+    runs = rollouts(
+        policy,
+        list(range(seeds)),
+        **{
+            **env_kwargs,
+            "disturbance": "none",
+            "current": flow,
+            "start_heading": heading,
+            "max_time": duration,
+        },
+    )
     return sum(t.termination_reason in FAILURE_REASONS for t in runs)
 
 
@@ -82,8 +99,9 @@ def _degrees(text: str | None, name: str) -> list[float]:
     except ValueError:
         values = []
     if not values or not all(math.isfinite(v) and -360.0 <= v <= 360.0 for v in values):
-        raise ValueError(f"{name} must be a comma-separated list of angles in [-360, 360] deg, "
-                         f"got {text!r}")  # fmt: skip
+        raise ValueError(
+            f"{name} must be a comma-separated list of angles in [-360, 360] deg, got {text!r}"
+        )
     return values
 
 
@@ -104,17 +122,27 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
     rows: dict[str, dict[str, Any]] = {}
     flow = current(args.current_speed, args.current_direction)
     for label, policy, env in built:
-        row = {"heading": {f"{h:g}": failures(policy, env, args.seeds, args.duration,
-                                              psi_f - math.radians(h), flow)
-                           for h in headings}}  # fmt: skip
+        row = {
+            "heading": {
+                f"{h:g}": failures(
+                    policy, env, args.seeds, args.duration, psi_f - math.radians(h), flow
+                )
+                for h in headings
+            }
+        }
         if directions:
-            row["direction"] = {f"{d:g}": failures(policy, env, args.seeds, args.duration, None,
-                                                   current(args.current_speed, d))
-                                for d in directions}  # fmt: skip
+            row["direction"] = {
+                f"{d:g}": failures(
+                    policy, env, args.seeds, args.duration, None, current(args.current_speed, d)
+                )
+                for d in directions
+            }
         rows[label] = row
-    print(f"Failed of {args.seeds} episodes ({args.duration:g} s) from the paper's start in a "
-          f"{args.current_speed:g} m/s current, by start heading error [deg] (current toward "
-          f"{args.current_direction:g}°):")  # fmt: skip
+    print(
+        f"Failed of {args.seeds} episodes ({args.duration:g} s) from the paper's start in a "
+        f"{args.current_speed:g} m/s current, by start heading error [deg] (current toward "
+        f"{args.current_direction:g}°):"
+    )
     cells = [[label, *map(str, r["heading"].values())] for label, r in rows.items()]
     print(markdown_table(["policy", *(f"{h:g}°" for h in headings)], cells))
     if directions:
@@ -122,9 +150,12 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
             "\nBy the direction the current flows toward [deg], at the paper's start heading "
             "(90° off the path):"
         )
-        print(markdown_table(["policy", *(f"{d:g}°" for d in directions)],
-                             [[label, *map(str, r["direction"].values())]
-                              for label, r in rows.items()]))  # fmt: skip
+        print(
+            markdown_table(
+                ["policy", *(f"{d:g}°" for d in directions)],
+                [[label, *map(str, r["direction"].values())] for label, r in rows.items()],
+            )
+        )
     if args.json:
         write_json(args.json, {"options": vars(args), "rows": rows}, indent=2)
     return rows

@@ -105,8 +105,10 @@ def _check_scores(
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     if not isinstance(scores, Mapping) or not scores:
         raise ValueError("scores: need a non-empty mapping policy -> (n_runs, n_episodes) array")
-    arrays = {p: _check_array(f"scores[{p!r}]", s, (2,), "(n_runs, n_episodes) array")
-              for p, s in scores.items()}  # fmt: skip
+    arrays = {
+        p: _check_array(f"scores[{p!r}]", s, (2,), "(n_runs, n_episodes) array")
+        for p, s in scores.items()
+    }
     widths = {p: a.shape[1] for p, a in arrays.items()}
     if len(set(widths.values())) > 1:
         raise ValueError(f"scores: policies have different numbers of episodes {widths}")
@@ -216,8 +218,10 @@ def paired_difference(
     a, b = arrays["x"], arrays["y"]
     low, high = _bootstrap(both, [a, b], strata, f"paired|{key}", reps, confidence, seed)
     value = both(a, b)
-    return {name: Interval(float(value[k]), float(low[k]), float(high[k]))
-            for k, name in enumerate(("difference", "relative"))}  # fmt: skip
+    return {
+        name: Interval(float(value[k]), float(low[k]), float(high[k]))
+        for k, name in enumerate(("difference", "relative"))
+    }
 
 
 def _probability_lower(x: np.ndarray, y: np.ndarray) -> float:
@@ -331,8 +335,10 @@ def _common_grid(x: np.ndarray, grid: Any, n_grid: int | None) -> np.ndarray | N
             raise ValueError(f"x: the runs share no span (latest start {lo} >= earliest end {hi})")
         return np.linspace(lo, hi, n_grid or x.shape[1])
     if grid.min() < lo or grid.max() > hi:
-        raise ValueError(f"grid: spans [{grid.min()}, {grid.max()}], every run covers only "
-                         f"[{lo}, {hi}] (no extrapolation)")  # fmt: skip
+        raise ValueError(
+            f"grid: spans [{grid.min()}, {grid.max()}], every run covers only "
+            f"[{lo}, {hi}] (no extrapolation)"
+        )
     return grid
 
 
@@ -370,8 +376,12 @@ def learning_curve(
     if points is None:
         points = xs[0].copy()
     else:
-        y = np.stack([np.stack([np.interp(points, xi, c) for c in yi.T], axis=1)
-                      for xi, yi in zip(xs, y, strict=True)])  # fmt: skip
+        y = np.stack(
+            [
+                np.stack([np.interp(points, xi, c) for c in yi.T], axis=1)
+                for xi, yi in zip(xs, y, strict=True)
+            ]
+        )
     tasks = np.swapaxes(y, 1, 2)  # rliable layout (n_runs, n_tasks, n_points)
 
     def iqm_per_point(s: np.ndarray) -> np.ndarray:

@@ -73,8 +73,7 @@ def interval_figure(summary: Mapping[str, Any], unit: str = "m") -> Figure:
     """One panel per scope in a grid: IQM (dots) and mean (squares) with CIs per policy."""
     scopes, policies = summary["scopes"], summary["policies"]
     columns = 5
-    fig, axes = _panels(len(scopes), 2.9, 0.22 * len(policies) + 1.0, sharey=True,
-                        columns=columns)  # fmt: skip
+    fig, axes = _panels(len(scopes), 2.9, 0.22 * len(policies) + 1.0, sharey=True, columns=columns)
     for ax, scope in zip(axes, scopes, strict=True):
         for k, (name, label, dy) in enumerate((("iqm", "IQM", -0.15), ("mean", "mean", 0.15))):
             bars = [summary[name][scope][p] for p in policies]
@@ -99,11 +98,11 @@ def improvement_figure(summary: Mapping[str, Any]) -> Figure:
         )
     policies = list(summary["improvement"][scopes[0]])
     columns = 5
-    fig, axes = _panels(len(scopes), 2.9, 0.22 * len(policies) + 1.0, sharey=True,
-                        columns=columns)  # fmt: skip
+    fig, axes = _panels(len(scopes), 2.9, 0.22 * len(policies) + 1.0, sharey=True, columns=columns)
     for ax, scope in zip(axes, scopes, strict=True):
-        _errorbars(ax, [summary["improvement"][scope][p] for p in policies], marker="o", ms=3,
-                   color="k")  # fmt: skip
+        _errorbars(
+            ax, [summary["improvement"][scope][p] for p in policies], marker="o", ms=3, color="k"
+        )
         ax.axvline(0.5, color="k", ls="--", lw=0.8)
         ax.set(xlim=(-0.02, 1.02))
         ax.set_title(scope, fontsize=9)
@@ -126,12 +125,15 @@ def profile_figure(summary: Mapping[str, Any], scope: str = AGGREGATE, unit: str
     colors = policy_colors(summary["profiles"][scope])
     for policy, prof in summary["profiles"][scope].items():
         ax.plot(prof["tau_m"], prof["fraction"], color=colors[policy], label=policy)
-        ax.fill_between(prof["tau_m"], prof["low"], prof["high"], color=colors[policy],
-                        alpha=0.2)  # fmt: skip
+        ax.fill_between(prof["tau_m"], prof["low"], prof["high"], color=colors[policy], alpha=0.2)
     _scale(ax, "x", np.concatenate([p["tau_m"] for p in summary["profiles"][scope].values()]))
     title = f"{scope}: performance profiles, {_ci(summary)} bands"
-    ax.set(xlabel=f"threshold τ: RMS distance [{unit}]", ylabel="fraction of episodes < τ",
-           ylim=(-0.02, 1.02), title=title)  # fmt: skip
+    ax.set(
+        xlabel=f"threshold τ: RMS distance [{unit}]",
+        ylabel="fraction of episodes < τ",
+        ylim=(-0.02, 1.02),
+        title=title,
+    )
     ax.grid(True, which="both", alpha=0.3)
     # Beside the axes: with twenty-odd policies a legend inside covers the curves it names.
     policies = len(summary["profiles"][scope])
@@ -159,8 +161,9 @@ def learning_curve_figure(
         ax.set(xlabel=xlabel, ylabel=ylabel)
         ax.grid(True, which="both", alpha=0.3)
     columns = max(1, min(len(labels), 3))
-    fig.legend(list(labels.values()), list(labels), loc="outside lower center", ncols=columns,
-               fontsize=7)  # fmt: skip
+    fig.legend(
+        list(labels.values()), list(labels), loc="outside lower center", ncols=columns, fontsize=7
+    )
     if len(labels) > columns:  # room for the legend's rows below the panels
         fig.set_figheight(fig.get_figheight() + 0.18 * -(-len(labels) // columns))
     return fig
@@ -188,9 +191,17 @@ def tradeoff_figure(
             x = np.array([chat["value"], chat["low"], chat["high"]])
             y = np.array([distance.value, distance.low, distance.high])
             heights.extend(y)
-            ax.errorbar(x[0], y[0], xerr=np.abs(x[1:, None] - x[0]),
-                        yerr=np.abs(y[1:, None] - y[0]), capsize=3, marker="o", ls="",
-                        label=policy, color=colors[policy])  # fmt: skip
+            ax.errorbar(
+                x[0],
+                y[0],
+                xerr=np.abs(x[1:, None] - x[0]),
+                yerr=np.abs(y[1:, None] - y[0]),
+                capsize=3,
+                marker="o",
+                ls="",
+                label=policy,
+                color=colors[policy],
+            )
         if heights:
             _scale(ax, "y", heights)
         ax.set_xlabel("chattering [1/s]")

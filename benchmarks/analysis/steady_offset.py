@@ -59,8 +59,13 @@ class CommandBias:
     def __init__(self, policy: Any, bias: float, channel: int = PITCH) -> None:
         self.policy, self.bias, self.channel = policy, np.float32(bias), channel
 
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         action, state = self.policy.predict(observation, state, episode_start, deterministic)
         action = np.array(action, dtype=np.float32, copy=True)
         action[..., self.channel] = np.clip(action[..., self.channel] + self.bias, -1.0, 1.0)
@@ -79,8 +84,14 @@ def policy_and_env(text: str) -> tuple[str, Any, dict[str, Any]]:
     return label, build_policy(spec, env_kwargs), env_kwargs
 
 
-def measure(policy: Any, env_kwargs: dict[str, Any], seeds: int, transient: float,
-            bias: float | None, surge_bias: float | None = None) -> dict[str, Any]:  # fmt: skip
+def measure(
+    policy: Any,
+    env_kwargs: dict[str, Any],
+    seeds: int,
+    transient: float,
+    bias: float | None,
+    surge_bias: float | None = None,
+) -> dict[str, Any]:
     """The module docstring's quantities for one policy."""
     from auv_gym.rollout import rollouts
 
@@ -147,25 +158,47 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
                 raise ValueError(f"{flag} must be finite with 0 < |b| <= 1, got {value}")
         specs = [s for s in args.policies.split(",") if s]
         built = [policy_and_env(spec) for spec in specs]
-    rows = {label: measure(policy, env, args.seeds, args.transient, args.bias, args.surge_bias)
-            for label, policy, env in built}  # fmt: skip
+    rows = {
+        label: measure(policy, env, args.seeds, args.transient, args.bias, args.surge_bias)
+        for label, policy, env in built
+    }
 
     def triple(values: Any) -> str:
         return "n/a" if values is None else ", ".join(f"{v:+.3f}" for v in values)
 
-    header = ["policy", "calm mean (x_e, y_e, z_e) [m]", "noisy mean [m]", "noisy std [m]",
-              "RMS distance [m]", "failed", "largest pitch [deg]", "Δz̄_e/bias [m]",
-              "calm ū [m/s]", "Δū/surge bias [m/s]", "Δx̄_e/surge bias [m]"]  # fmt: skip
-    cells = [[label, triple(r["calm_mean"]), triple(r.get("noisy_mean")),
-              triple(r.get("noisy_std")), f"{r.get('rms_distance', math.nan):.3f}",
-              f"{r['noisy_failed']} of {args.seeds}", f"{r['max_pitch_deg']:.1f}",
-              f"{r['stiffness_z']:+.2f}" if "stiffness_z" in r else "n/a",
-              "n/a" if r["calm_surge"] is None else f"{r['calm_surge']:.4f}",
-              f"{r['surge_u']:+.3f}" if "surge_u" in r else "n/a",
-              f"{r['surge_x']:+.3f}" if "surge_x" in r else "n/a"]
-             for label, r in rows.items()]  # fmt: skip
-    print(f"The paper's helix, 300-s episodes, window t >= {args.transient:g} s; noisy: the "
-          f"paper's white noise, seeds 0-{args.seeds - 1}")  # fmt: skip
+    header = [
+        "policy",
+        "calm mean (x_e, y_e, z_e) [m]",
+        "noisy mean [m]",
+        "noisy std [m]",
+        "RMS distance [m]",
+        "failed",
+        "largest pitch [deg]",
+        "Δz̄_e/bias [m]",
+        "calm ū [m/s]",
+        "Δū/surge bias [m/s]",
+        "Δx̄_e/surge bias [m]",
+    ]
+    cells = [
+        [
+            label,
+            triple(r["calm_mean"]),
+            triple(r.get("noisy_mean")),
+            triple(r.get("noisy_std")),
+            f"{r.get('rms_distance', math.nan):.3f}",
+            f"{r['noisy_failed']} of {args.seeds}",
+            f"{r['max_pitch_deg']:.1f}",
+            f"{r['stiffness_z']:+.2f}" if "stiffness_z" in r else "n/a",
+            "n/a" if r["calm_surge"] is None else f"{r['calm_surge']:.4f}",
+            f"{r['surge_u']:+.3f}" if "surge_u" in r else "n/a",
+            f"{r['surge_x']:+.3f}" if "surge_x" in r else "n/a",
+        ]
+        for label, r in rows.items()
+    ]
+    print(
+        f"The paper's helix, 300-s episodes, window t >= {args.transient:g} s; noisy: the "
+        f"paper's white noise, seeds 0-{args.seeds - 1}"
+    )
     print(markdown_table(header, cells))
     if args.json:
         write_json(args.json, {"options": vars(args), "rows": rows}, indent=2)

@@ -24,8 +24,12 @@ def _by_policy(table: Mapping[str, Mapping[str, Interval]]) -> dict[str, dict[st
     return out
 
 
-def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_ratio: float,
-                   speeds: Mapping[str, float] | None = None) -> str:  # fmt: skip
+def stats_markdown(
+    stats: Mapping[str, Any],
+    summary: Mapping[str, Any],
+    max_ratio: float,
+    speeds: Mapping[str, float] | None = None,
+) -> str:
     """The statistics as Markdown; ``max_ratio``: the target ratio of the report table;
     ``speeds``: set → its vehicle's top speed [m/s], the surge target (None: REMUS 100's)."""
     ref, ci = stats["reference"], f"{100 * stats['confidence']:g} %"
@@ -46,11 +50,15 @@ def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_rat
         lines.append(f"## Probability of a smaller RMS distance than {other} (ties ½)\n")
         lines += _split_tables(_by_policy(table), kinds)
     distinct = set((speeds or {}).values()) or {SURGE_LIMIT}
-    surge = (f"{distinct.pop():g} m/s" if len(distinct) == 1
-             else "the top speed of the set's vehicle")  # fmt: skip
+    surge = (
+        f"{distinct.pop():g} m/s" if len(distinct) == 1 else "the top speed of the set's vehicle"
+    )
     target_refs = stats.get("target_references") or [ref]
-    best = (f"{target_refs[0]}" if len(target_refs) == 1
-            else f"the best of {', '.join(target_refs)} on each set")  # fmt: skip
+    best = (
+        f"{target_refs[0]}"
+        if len(target_refs) == 1
+        else f"the best of {', '.join(target_refs)} on each set"
+    )
     lines += [
         f"## Target: mean RMS distance within {max_ratio:g}× {best}, no failed episode, max "
         f"surge ≤ {surge}\n",
@@ -61,14 +69,32 @@ def stats_markdown(stats: Mapping[str, Any], summary: Mapping[str, Any], max_rat
             f" ({', '.join(t['failures'])})" if t["failures"] else ""
         )
         reference = [] if len(target_refs) == 1 else [t.get("reference", ref)]
-        rows.append([t["set"], t["policy"], format_number(t["mean_m"]), *reference,
-                     format_number(t["reference_mean_m"]), format_number(t["ratio"]), failed,
-                     format_number(t["max_surge_m_s"]),
-                     "pass" if t["passed"] else "**FAIL**"])  # fmt: skip
-    ref_columns = ([f"{target_refs[0]} mean [m]"] if len(target_refs) == 1
-                   else ["reference", "its mean [m]"])  # fmt: skip
-    header = ["set", "policy", "mean [m]", *ref_columns, "ratio", "failed",
-              "max surge [m/s]", "verdict"]  # fmt: skip
+        rows.append(
+            [
+                t["set"],
+                t["policy"],
+                format_number(t["mean_m"]),
+                *reference,
+                format_number(t["reference_mean_m"]),
+                format_number(t["ratio"]),
+                failed,
+                format_number(t["max_surge_m_s"]),
+                "pass" if t["passed"] else "**FAIL**",
+            ]
+        )
+    ref_columns = (
+        [f"{target_refs[0]} mean [m]"] if len(target_refs) == 1 else ["reference", "its mean [m]"]
+    )
+    header = [
+        "set",
+        "policy",
+        "mean [m]",
+        *ref_columns,
+        "ratio",
+        "failed",
+        "max surge [m/s]",
+        "verdict",
+    ]
     lines += [table_format.markdown_table(header, rows, ["l"] * len(header))]
     for policy, verdict in stats["verdicts"].items():
         failing = ", ".join(verdict["failing_sets"]) or "none"

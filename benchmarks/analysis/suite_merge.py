@@ -47,8 +47,7 @@ class MergeOptions:
     """The options of ``python -m benchmarks.suite_merge``; the folders and policies have no
     default on the command line."""
 
-    source: str | None = option(None, "evaluation to take rows from", flag="--from",
-                                required=True)  # fmt: skip
+    source: str | None = option(None, "evaluation to take rows from", flag="--from", required=True)
     target: str | None = option(None, "evaluation to add them to", flag="--into", required=True)
     policies: str = option("", "comma-separated policy names to add", required=True)
     rtol: float = option(1e-12, "relative tolerance for the shared policies' cells")
@@ -134,8 +133,10 @@ def merge_suites(
     writer.writeheader()
     writer.writerows([*target_rows, *added])
     suite = dict(target_suite)
-    suite["policies"] = {**target_suite["policies"],
-                         **{p: source_suite["policies"][p] for p in policies}}  # fmt: skip
+    suite["policies"] = {
+        **target_suite["policies"],
+        **{p: source_suite["policies"][p] for p in policies},
+    }
     suite["agents"] = {**target_suite.get("agents", {}), **source_suite.get("agents", {})}
     suite["additions"] = [
         *target_suite.get("additions", []),
@@ -152,8 +153,9 @@ def merge_suites(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args, _ = parse_options(MergeOptions, argv, program_name("benchmarks.suite_merge"),
-                            __doc__.split("\n\n")[0])  # fmt: skip
+    args, _ = parse_options(
+        MergeOptions, argv, program_name("benchmarks.suite_merge"), __doc__.split("\n\n")[0]
+    )
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     try:
         added = merge_suites(Path(args.source), Path(args.target), names, args.rtol)

@@ -348,13 +348,17 @@ def write_stats(
     }
     if rows and "chattering" in rows[0]:
         chattering = metric_matrices(rows, list(suite["sets"]), "chattering", runs)
-        stats["paired"] = paired_table(scores, groups, reps, seed, report.pairs,
-                                       report.worse_ratio)  # fmt: skip
-        stats["chattering"] = chattering_table(chattering, groups, reps, seed,
-                                               report.smoothness_reference)  # fmt: skip
+        stats["paired"] = paired_table(scores, groups, reps, seed, report.pairs, report.worse_ratio)
+        stats["chattering"] = chattering_table(
+            chattering, groups, reps, seed, report.smoothness_reference
+        )
     kinds = {name: entry.get("kind", "agent") for name, entry in suite["policies"].items()}
-    text = stats_markdown({**stats, "improvement_tables": improvement, "kinds": kinds}, summary,
-                          report.max_ratio, speeds)  # fmt: skip
+    text = stats_markdown(
+        {**stats, "improvement_tables": improvement, "kinds": kinds},
+        summary,
+        report.max_ratio,
+        speeds,
+    )
     if "chattering" in stats:
         text += "\n" + smoothness_markdown(
             stats["paired"], stats["chattering"], report.smoothness_reference, report.worse_ratio
@@ -362,8 +366,14 @@ def write_stats(
     write_json(out / "stats.json", jsonable(stats), indent=1)
     write_text(out / "stats.md", text)
     if figures:
-        _figures(out / FIGURES, summary, improvement, curves, stats.get("chattering"),
-                 report.tradeoff_scopes)  # fmt: skip
+        _figures(
+            out / FIGURES,
+            summary,
+            improvement,
+            curves,
+            stats.get("chattering"),
+            report.tradeoff_scopes,
+        )
     return text
 
 

@@ -33,8 +33,9 @@ from benchmarks.arguments import parse_options, program_name, usage_errors, writ
 from benchmarks.options import option
 
 
-def policy_and_env(text: str, controller: dict[str, Any] | None = None
-                   ) -> tuple[str, Any, dict[str, Any], dict[str, Any]]:  # fmt: skip
+def policy_and_env(
+    text: str, controller: dict[str, Any] | None = None
+) -> tuple[str, Any, dict[str, Any], dict[str, Any]]:
     """(label, policy, env keyword arguments, training record) of ``label=agent-folder`` or a
     classical policy name, told a task set's ``controller`` keyword arguments as a scenario's
     are (a classical controller's, an agent's ``base_kwargs``); an agent's env is its training
@@ -52,23 +53,33 @@ def policy_and_env(text: str, controller: dict[str, Any] | None = None
     policy = load_policy(path, base_kwargs=dict(controller or {}) or None)
     metadata = policy.metadata
     env_kwargs = agent_env_kwargs(metadata.get("env_id", ENV_ID), metadata)
-    record = {"num_timesteps": metadata.get("num_timesteps"),
-              "wall_time_s": metadata.get("wall_time_s")}  # fmt: skip
+    record = {
+        "num_timesteps": metadata.get("num_timesteps"),
+        "wall_time_s": metadata.get("wall_time_s"),
+    }
     return label, policy, env_kwargs, record
 
 
-def measure(policy: Any, env_kwargs: dict[str, Any], task_env: dict[str, Any],
-            seeds: list[int], duration: float) -> dict[str, Any]:  # fmt: skip
+def measure(
+    policy: Any,
+    env_kwargs: dict[str, Any],
+    task_env: dict[str, Any],
+    seeds: list[int],
+    duration: float,
+) -> dict[str, Any]:
     """Mean RMS distance [m] (failed episodes count with their RMS up to the failure, as in
     training's selection) and the number of failures over ``seeds``."""
     from benchmarks.training.evaluation import evaluate_policy_on_seeds, summarize
 
-    results = evaluate_policy_on_seeds(policy, seeds, **{**env_kwargs, **task_env,
-                                                         "max_time": duration})  # fmt: skip
+    results = evaluate_policy_on_seeds(
+        policy, seeds, **{**env_kwargs, **task_env, "max_time": duration}
+    )
     summary = summarize(results)
-    return {"rms_distance_mean": summary["rms_distance_mean"],
-            "n_terminated": summary["n_terminated"],
-            "rms_distance": [r["rms_distance"] for r in results]}  # fmt: skip
+    return {
+        "rms_distance_mean": summary["rms_distance_mean"],
+        "n_terminated": summary["n_terminated"],
+        "rms_distance": [r["rms_distance"] for r in results],
+    }
 
 
 @dataclass
@@ -94,14 +105,16 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
         sets = load_task_sets()
         validation = sorted(name for name, s in sets.items() if s.role == "validation")
         if args.task_set not in validation:
-            raise ValueError(f"--task-set {args.task_set!r} is not a validation set; valid: "
-                             f"{validation}")  # fmt: skip
+            raise ValueError(
+                f"--task-set {args.task_set!r} is not a validation set; valid: {validation}"
+            )
         chosen = sets[args.task_set]
         if not 1 <= args.episodes <= len(chosen.seeds):
             raise ValueError(f"--episodes must be 1-{len(chosen.seeds)}, got {args.episodes}")
         if not (math.isfinite(args.duration) and args.duration > 0.0):
-            raise ValueError(f"--duration must be a positive number of seconds, got "
-                             f"{args.duration}")  # fmt: skip
+            raise ValueError(
+                f"--duration must be a positive number of seconds, got {args.duration}"
+            )
         specs = [s for s in args.policies.split(",") if s]
         labels = [s.partition("=")[0] for s in specs]
         if args.reference not in labels:
@@ -110,8 +123,10 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
     seeds = list(chosen.seeds[: args.episodes])
     rows: dict[str, dict[str, Any]] = {}
     for label, policy, env_kwargs, record in built:
-        rows[label] = {**measure(policy, env_kwargs, dict(chosen.env), seeds, args.duration),
-                       **record}  # fmt: skip
+        rows[label] = {
+            **measure(policy, env_kwargs, dict(chosen.env), seeds, args.duration),
+            **record,
+        }
         print(f"{label}: {rows[label]['rms_distance_mean']:.4f} m", flush=True)
     reference = rows[args.reference]["rms_distance_mean"]
     for row in rows.values():
@@ -120,11 +135,25 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, Any]]:
     def known(value: Any, fmt: str) -> str:
         return "–" if value is None else format(value, fmt)
 
-    header = ["policy", "mean RMS distance [m]", "failed", f"× {args.reference}",
-              "env steps", "training wall time [s]"]  # fmt: skip
-    cells = [[label, f"{r['rms_distance_mean']:.4f}", f"{r['n_terminated']} of {len(seeds)}",
-              f"{r['ratio']:.2f}", known(r.get("num_timesteps"), ","),
-              known(r.get("wall_time_s"), ".0f")] for label, r in rows.items()]  # fmt: skip
+    header = [
+        "policy",
+        "mean RMS distance [m]",
+        "failed",
+        f"× {args.reference}",
+        "env steps",
+        "training wall time [s]",
+    ]
+    cells = [
+        [
+            label,
+            f"{r['rms_distance_mean']:.4f}",
+            f"{r['n_terminated']} of {len(seeds)}",
+            f"{r['ratio']:.2f}",
+            known(r.get("num_timesteps"), ","),
+            known(r.get("wall_time_s"), ".0f"),
+        ]
+        for label, r in rows.items()
+    ]
     print(f"Task set {args.task_set}, seeds {seeds[0]}-{seeds[-1]}, {args.duration:g}-s episodes")
     print(markdown_table(header, cells))
     if args.json:

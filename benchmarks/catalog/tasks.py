@@ -65,8 +65,10 @@ def _seeds(where: str, spec: Any) -> range:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ValueError(f"{where}: seeds.{name} must be an integer, got {value!r}")
     if first < 0 or count < 1 or first + count - 1 > MAX_SEED:
-        raise ValueError(f"{where}: seeds must satisfy first >= 0, count >= 1 and first + count "
-                         f"- 1 <= {MAX_SEED}, got first = {first}, count = {count}")  # fmt: skip
+        raise ValueError(
+            f"{where}: seeds must satisfy first >= 0, count >= 1 and first + count "
+            f"- 1 <= {MAX_SEED}, got first = {first}, count = {count}"
+        )
     return range(first, first + count)
 
 
@@ -104,28 +106,30 @@ def load_task_sets(
             raise ValueError(f"{where}: only a test set can be held_out, this one is {role!r}")
         if "scenarios" in table:
             if role != "test" or {"env", "controller"} & set(table) or held_out is not None:
-                raise ValueError(f"{where}: scenarios belong to a test set without "
-                                 "env/controller/held_out")  # fmt: skip
+                raise ValueError(
+                    f"{where}: scenarios belong to a test set without env/controller/held_out"
+                )
             scenarios = scenarios if scenarios is not None else load_scenarios(scenarios_file)
             names = table["scenarios"]
             missing = [n for n in names if n not in scenarios]
             if missing:
-                raise ValueError(f"{where}: unknown scenarios {missing}; valid: "
-                                 f"{list(scenarios)}")  # fmt: skip
+                raise ValueError(f"{where}: unknown scenarios {missing}; valid: {list(scenarios)}")
             for n in names:
                 key = f"scenario:{n}"
                 sc = scenarios[n]
                 configs[key] = _check_env(f"{where}, scenario {n!r}", sc.env)
-                sets[key] = TaskSet(key, role, sc.description, seeds, dict(sc.env),
-                                    dict(sc.controller))  # fmt: skip
+                sets[key] = TaskSet(
+                    key, role, sc.description, seeds, dict(sc.env), dict(sc.controller)
+                )
             continue
         env = dict(table.get("env", {}))
         configs[name] = _check_env(where, env)
         controller = table.get("controller", {})
         if not isinstance(controller, Mapping):
             raise ValueError(f"{where}: controller must be a table, got {controller!r}")
-        sets[name] = TaskSet(name, role, description, seeds, env, dict(controller),
-                             held_out=held_out)  # fmt: skip
+        sets[name] = TaskSet(
+            name, role, description, seeds, env, dict(controller), held_out=held_out
+        )
     _check_disjoint(path.name, sets)
     _check_held_out(path.name, sets, configs)
     return sets
@@ -139,8 +143,10 @@ def _check_disjoint(file: str, sets: dict[str, TaskSet]) -> None:
             continue  # test sets may share seeds (different envs); so may training sets
         lo, hi = max(a.seeds.start, b.seeds.start), min(a.seeds.stop, b.seeds.stop)
         if lo < hi:
-            raise ValueError(f"{file}: {a.role} set {a.name!r} and {b.role} set {b.name!r} "
-                             f"share seeds [{lo}, {hi}): test episodes would leak")  # fmt: skip
+            raise ValueError(
+                f"{file}: {a.role} set {a.name!r} and {b.role} set {b.name!r} "
+                f"share seeds [{lo}, {hi}): test episodes would leak"
+            )
 
 
 def _check_held_out(file: str, sets: dict[str, TaskSet], configs: dict[str, SimConfig]) -> None:
@@ -156,8 +162,10 @@ def _check_held_out(file: str, sets: dict[str, TaskSet], configs: dict[str, SimC
             raise ValueError(f"{where}: held_out sets and their training set need random paths")
         common = overlaps(mine, theirs)
         if common:
-            raise ValueError(f"{where} is marked held_out but the training set {train.name!r} can "
-                             f"draw its {', '.join(common)} paths")  # fmt: skip
+            raise ValueError(
+                f"{where} is marked held_out but the training set {train.name!r} can "
+                f"draw its {', '.join(common)} paths"
+            )
 
 
 def task_set(name: str, path: Path = TASKS_FILE) -> TaskSet:

@@ -48,12 +48,28 @@ from benchmarks.arguments import finite_number, parse_options, program_name, usa
 from benchmarks.checks.fuzz_draws import EPISODE_PHYSICS, draw_actions, draw_config
 from benchmarks.options import option
 
-__all__ = ["EPISODE_PHYSICS", "FuzzOptions", "Tally", "draw_actions", "draw_config",
-           "fuzz_configuration", "main", "report", "run"]  # fmt: skip
+__all__ = [
+    "EPISODE_PHYSICS",
+    "FuzzOptions",
+    "Tally",
+    "draw_actions",
+    "draw_config",
+    "fuzz_configuration",
+    "main",
+    "report",
+    "run",
+]
 
 FAILURES = frozenset({"corridor", "pitch", "envelope", "non_finite"})  # may leave the space
-COUNTERS = ("nan_observations", "non_finite_rewards", "exceptions", "wrong_truncations",
-            "out_of_space_observations", "unknown_reasons", "inconsistent_infos")  # fmt: skip
+COUNTERS = (
+    "nan_observations",
+    "non_finite_rewards",
+    "exceptions",
+    "wrong_truncations",
+    "out_of_space_observations",
+    "unknown_reasons",
+    "inconsistent_infos",
+)
 # A vehicle reset (a new episode drawn in Python, `Simulator.reset_rows`: 0.1-0.3 ms) costs
 # about as much as this many physics steps: configurations whose episodes end at once (a
 # corridor narrower than the start's distance) stop early instead of spending the run on resets.
@@ -168,15 +184,23 @@ def fuzz_configuration(
         given = info["final_info"].get("termination_reason")  # absent when none terminated
         reasons = ["" if given is None else given[i] or "" for i in rows]
         ended = terminated[rows]
-        unknown = [(t and r not in documented) or (not t and r != "")
-                   for t, r in zip(ended, reasons, strict=True)]  # fmt: skip
+        unknown = [
+            (t and r not in documented) or (not t and r != "")
+            for t, r in zip(ended, reasons, strict=True)
+        ]
         tally.violation("unknown_reasons", sum(unknown), f"{where}, reasons {reasons}")
-        tally.violation("nan_observations", int((~np.isfinite(final_obs)).any(axis=1).sum()),
-                        f"final observation, {where}")  # fmt: skip
+        tally.violation(
+            "nan_observations",
+            int((~np.isfinite(final_obs)).any(axis=1).sum()),
+            f"final observation, {where}",
+        )
         inside = ((final_obs >= low) & (final_obs <= high)).all(axis=1)
         excused = np.array([t and r in FAILURES for t, r in zip(ended, reasons, strict=True)])
-        tally.violation("out_of_space_observations", int((~inside & ~excused).sum()),
-                        f"final observation, {where}")  # fmt: skip
+        tally.violation(
+            "out_of_space_observations",
+            int((~inside & ~excused).sum()),
+            f"final observation, {where}",
+        )
         for r in reasons:
             key = r or "time_limit"
             tally.reasons[key] = tally.reasons.get(key, 0) + 1
@@ -201,8 +225,9 @@ def run(
     from tqdm.auto import tqdm
 
     tally = Tally()
-    bar = tqdm(total=total_steps, unit="veh-step", unit_scale=True, disable=not progress,
-               desc="fuzz")  # fmt: skip
+    bar = tqdm(
+        total=total_steps, unit="veh-step", unit_scale=True, disable=not progress, desc="fuzz"
+    )
     while tally.steps < total_steps:
         index = tally.configurations
         rng = np.random.default_rng([seed, index])  # each configuration reproducible alone
@@ -220,8 +245,9 @@ def run(
             n_vehicles = min(n_vehicles, RANDOM_PATH_VEHICLES)  # resets of up to 0.2 s each
         before = tally.steps
         where = f"--seed {seed}, configuration {index}: {_brief(kw)}"
-        fuzz_configuration(kw, n_steps, n_vehicles, control_steps, physics_budget, rng, tally,
-                           where)  # fmt: skip
+        fuzz_configuration(
+            kw, n_steps, n_vehicles, control_steps, physics_budget, rng, tally, where
+        )
         bar.update(tally.steps - before)
         bar.set_postfix(configs=tally.configurations, violations=tally.violations, refresh=False)
     bar.close()
@@ -263,13 +289,19 @@ def report(tally: Tally, seconds: float) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> Tally:
-    args, parser = parse_options(FuzzOptions, argv, program_name("benchmarks.fuzz"),
-                                 __doc__.split("\n\n")[0])  # fmt: skip
+    args, parser = parse_options(
+        FuzzOptions, argv, program_name("benchmarks.fuzz"), __doc__.split("\n\n")[0]
+    )
     with usage_errors(parser):
         args.check()
     start = time.perf_counter()
-    tally = run(int(args.steps), args.seed, int(args.physics_budget), args.max_vehicles,
-                progress=args.progress)  # fmt: skip
+    tally = run(
+        int(args.steps),
+        args.seed,
+        int(args.physics_budget),
+        args.max_vehicles,
+        progress=args.progress,
+    )
     print(report(tally, time.perf_counter() - start))
     if tally.violations:
         sys.exit(1)

@@ -35,9 +35,18 @@ EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays 
 VARIANT_IDS = ("AUVPath3D-v0", SPEED_LIMIT_ENV_ID, PREVIEW_ENV_ID)  # the envs fuzzed
 RANDOM_START_REACH = 2.0 * math.sqrt(3.0)  # [m] the largest random start offset (±2 m per axis)
 
-__all__ = ["EPISODE_PHYSICS", "PATH_KINDS", "RANDOM_START_REACH", "VARIANT_IDS", "draw_actions",
-           "draw_config", "draw_curve", "draw_distribution", "draw_path",
-           "log_uniform"]  # fmt: skip
+__all__ = [
+    "EPISODE_PHYSICS",
+    "PATH_KINDS",
+    "RANDOM_START_REACH",
+    "VARIANT_IDS",
+    "draw_actions",
+    "draw_config",
+    "draw_curve",
+    "draw_distribution",
+    "draw_path",
+    "log_uniform",
+]
 
 
 def log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
@@ -47,8 +56,18 @@ def log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
     return float(min(max(10.0 ** rng.uniform(math.log10(low), math.log10(high)), low), high))
 
 
-PATH_KINDS = ("helix", "line", "waypoints", "Helix", "StraightLine", "Spline", "Reversal",
-              "FittedCurve", "random", "PathDistribution")  # fmt: skip
+PATH_KINDS = (
+    "helix",
+    "line",
+    "waypoints",
+    "Helix",
+    "StraightLine",
+    "Spline",
+    "Reversal",
+    "FittedCurve",
+    "random",
+    "PathDistribution",
+)
 
 
 def draw_distribution(rng: np.random.Generator) -> PathDistribution:
@@ -69,9 +88,10 @@ def draw_distribution(rng: np.random.Generator) -> PathDistribution:
         climb_angle_deg=span(0.0, MAX_FLIGHT_PATH_ANGLE_DEG),
         piece_length=span(20.0, 1000.0, log=True),
         leg_length=span(20.0, 1000.0, log=True),
-        length=round(float(rng.uniform(*LENGTH_RANGE)), 1) if rng.random() < 0.7
+        length=round(float(rng.uniform(*LENGTH_RANGE)), 1)
+        if rng.random() < 0.7
         else round(float(rng.uniform(50.0, 400.0)), 1),
-    )  # fmt: skip
+    )
 
 
 def draw_curve(rng: np.random.Generator) -> Path:
@@ -110,8 +130,14 @@ def draw_path(rng: np.random.Generator) -> Any:
         length = log_uniform(rng, 1.0, 1000.0)
         offset = 0.0 if rng.random() < 0.3 else log_uniform(rng, 1e-4, length)
         turn = [(length + offset, offset, 0.0)] if rng.random() < 0.5 else []
-        return Spline([(0.0, 0.0, 0.0), (length, 0.0, 0.0), *turn,
-                       (float(rng.uniform(-length, length)), 2.0 * offset, 0.0)])  # fmt: skip
+        return Spline(
+            [
+                (0.0, 0.0, 0.0),
+                (length, 0.0, 0.0),
+                *turn,
+                (float(rng.uniform(-length, length)), 2.0 * offset, 0.0),
+            ]
+        )
     end = math.inf if rng.random() < 0.5 else log_uniform(rng, 1e-3, 1e4)
     if kind == "Helix":
         radius, omega = log_uniform(rng, 1e-3, 1e5), log_uniform(rng, 1e-4, 1e3)
@@ -147,8 +173,9 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
     control_dt = substeps * physics_dt
     n_steps = int(rng.integers(1, max(1, min(max_episode_steps, EPISODE_PHYSICS // substeps)) + 1))
     fraction = 1.0 if n_steps == 1 or rng.random() < 0.25 else float(rng.uniform(0.01, 1.0))
-    kw.update(physics_dt=physics_dt, control_dt=control_dt,
-              max_time=control_dt * (n_steps - 1 + fraction))  # fmt: skip
+    kw.update(
+        physics_dt=physics_dt, control_dt=control_dt, max_time=control_dt * (n_steps - 1 + fraction)
+    )
     hold = int(rng.integers(1, 1001)) * physics_dt
     amplitude = 0.0 if rng.random() < 0.2 else log_uniform(rng, 1e-3, MAX_NOISE_AMPLITUDE)
     noise = int(rng.integers(4))

@@ -149,9 +149,13 @@ class ReproductionOptions:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args, parser = parse_options(ReproductionOptions, argv,
-                                 program_name("benchmarks.check_reproduction"),
-                                 __doc__.split("\n\n")[0], negatable=False)  # fmt: skip
+    args, parser = parse_options(
+        ReproductionOptions,
+        argv,
+        program_name("benchmarks.check_reproduction"),
+        __doc__.split("\n\n")[0],
+        negatable=False,
+    )
     if args.workers < 1:
         parser.error(f"--workers must be ≥ 1, got {args.workers}")
     if args.keep is not None:  # refused now, not after the first re-run has finished
@@ -173,9 +177,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         paper = json.loads(paper_json.read_text())
         _run(
             "benchmarks.paper_figures",
-            ["--out", str(out / "paper"), "--seed", str(paper["seed"]),
-             "--duration", str(paper["duration"]), "--transient", str(paper["transient"])],
-        )  # fmt: skip
+            [
+                "--out",
+                str(out / "paper"),
+                "--seed",
+                str(paper["seed"]),
+                "--duration",
+                str(paper["duration"]),
+                "--transient",
+                str(paper["transient"]),
+            ],
+        )
         compare_json("paper metrics.json", paper_json, out / "paper/metrics.json", report)
 
         if args.agents:
@@ -186,8 +198,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 fresh = held_out_evaluation(recorded_file.parent, committed["duration_s"])
                 fresh_file = out / f"{recorded_file.parent.name}_{HELD_OUT_FILE}"
                 fresh_file.write_text(json.dumps(fresh, default=float))
-                compare_json(f"{recorded_file.parent.name} held-out", recorded_file, fresh_file,
-                             report)  # fmt: skip
+                compare_json(
+                    f"{recorded_file.parent.name} held-out", recorded_file, fresh_file, report
+                )
 
     verdict = "REPRODUCED bit for bit" if report.failures == 0 else f"{report.failures} problems"
     print(verdict)

@@ -73,8 +73,13 @@ def _scenario_figures(
     s_max = max(float(np.nanmax(tr["s"])) for tr in trajectories.values())
     rows = -(-len(trajectories) // 6)  # legend rows below the panels
     fig = new_figure(13.0, 4.4 + 0.25 * rows, _COMPARISON_DPI)
-    plot_track(fig, path, {p: tr.position for p, tr in trajectories.items()}, s_max=s_max,
-               envelope=envelope_of(trajectories.values()))  # fmt: skip
+    plot_track(
+        fig,
+        path,
+        {p: tr.position for p, tr in trajectories.items()},
+        s_max=s_max,
+        envelope=envelope_of(trajectories.values()),
+    )
     fig.suptitle(f"{name}: tracks, seed {seed}")
     fig.tight_layout(rect=(0, 0.06 * rows, 1, 1))
     track = save_figure(fig, folder / f"track_{name}.png")
@@ -94,8 +99,9 @@ def _scenario_figures(
         ax.set(xlabel="t [s]", ylabel="distance to virtual point [m]")
         ax.grid(True, alpha=0.3)
     handles, labels = ax_lin.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8,
-               frameon=False)  # fmt: skip
+    fig.legend(
+        handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8, frameon=False
+    )
     fig.suptitle(f"{name}: distance to the virtual point, seed {seed} (× an episode that failed)")
     fig.tight_layout(rect=(0, 0.06 * rows, 1, 1))
     return [track, save_figure(fig, folder / f"distance_{name}.png")]
@@ -133,15 +139,28 @@ def _bar_chart(
             values, failed = bars[(policy, scenario)]
             xi = x[i] + offset
             if values.size:
-                ax.bar(xi, values.mean(), width, yerr=values.std(), capsize=2,
-                       color=colours[policy], label=policy if i == 0 else None)  # fmt: skip
+                ax.bar(
+                    xi,
+                    values.mean(),
+                    width,
+                    yerr=values.std(),
+                    capsize=2,
+                    color=colours[policy],
+                    label=policy if i == 0 else None,
+                )
             elif failed:
-                ax.bar(xi, top, width, fill=False, hatch="///", edgecolor=colours[policy],
-                       label=policy if i == 0 else None)  # fmt: skip
+                ax.bar(
+                    xi,
+                    top,
+                    width,
+                    fill=False,
+                    hatch="///",
+                    edgecolor=colours[policy],
+                    label=policy if i == 0 else None,
+                )
             if failed:
                 height = values.mean() + values.std() if values.size else top
-                ax.text(xi, height, f"✕{failed}", ha="center", va="bottom", fontsize=7,
-                        color="C3")  # fmt: skip
+                ax.text(xi, height, f"✕{failed}", ha="center", va="bottom", fontsize=7, color="C3")
     ax.set_xticks(x, names, rotation=20)
     ax.set_ylabel(label)
     ax.set_ylim(bottom=0)
@@ -184,8 +203,10 @@ def plot_learning_curve(run: Path, prefix: Path) -> None:
     axes = fig.subplots(1, 2, sharey=True)
     duration = settings.get("eval_duration")
     ran = f"every episode ran {duration:g} s" if duration else "no episode ended early"
-    for ax, x, label in ((axes[0], steps / 1e6, "env steps [millions]"),
-                         (axes[1], wall / 60.0, "training wall time [min]")):  # fmt: skip
+    for ax, x, label in (
+        (axes[0], steps / 1e6, "env steps [millions]"),
+        (axes[1], wall / 60.0, "training wall time [min]"),
+    ):
         ax.plot(x, shown, "-", color="0.6", lw=1)
         ax.plot(x[~failed], shown[~failed], "o", ms=4, label=ran)
         ax.plot(x[failed], shown[failed], "x", ms=6, color="C3", label="an episode ended early")

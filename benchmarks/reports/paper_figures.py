@@ -83,8 +83,9 @@ class Args:
 def parse_args(argv: Sequence[str] | None = None) -> Args:
     """The arguments, every one checked before any episode runs (a bad one exits with code 2
     and a one-line message)."""
-    args, parser = parse_options(Args, argv, program_name("benchmarks.paper_figures"),
-                                 __doc__.split("\n\n")[0])  # fmt: skip
+    args, parser = parse_options(
+        Args, argv, program_name("benchmarks.paper_figures"), __doc__.split("\n\n")[0]
+    )
     with usage_errors(parser):
         validate(args)
         writable_folder(args.out)  # last: a bad argument above creates no folder
@@ -170,8 +171,9 @@ def make_figures(
     for label, policy in policies.items():
         start = time.perf_counter()
         env_id = (env_ids or {}).get(label, ENV_ID)
-        tr = rollout(policy, seed, name=label, max_time=duration,
-                     **{**VARIANTS[env_id], **env_kwargs})  # fmt: skip
+        tr = rollout(
+            policy, seed, name=label, max_time=duration, **{**VARIANTS[env_id], **env_kwargs}
+        )
         wall[label] = time.perf_counter() - start
         trajectories[label] = tr
         metrics[label] = compute_metrics(tr, transient=window)
@@ -207,8 +209,9 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     start = time.perf_counter()
     try:  # agents are loaded here, before any episode: a corrupt one is a usage error
         policies = build_policies(args.policies, {**args.env, "control_dt": args.control_dt})
-        env_ids = {label: policy_env_id(spec)
-                   for spec, label in zip(args.policies, policies, strict=True)}  # fmt: skip
+        env_ids = {
+            label: policy_env_id(spec) for spec, label in zip(args.policies, policies, strict=True)
+        }
     except (ValueError, TypeError, OSError) as error:
         exit_with_usage_error(program_name("benchmarks.paper_figures"), error)
     # One run per folder: a second one is refused, a killed one's temporary files removed.

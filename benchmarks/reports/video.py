@@ -58,8 +58,9 @@ class VideoOptions:
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of `VideoOptions` (each option's default and help from its field)."""
-    parser = ArgumentParser(prog=program_name("benchmarks.video"), description=__doc__,
-                            formatter_class=HelpFormatter)  # fmt: skip
+    parser = ArgumentParser(
+        prog=program_name("benchmarks.video"), description=__doc__, formatter_class=HelpFormatter
+    )
     add_options(parser, VideoOptions)
     return parser
 
@@ -76,8 +77,9 @@ def check_args(args: argparse.Namespace) -> None:
     if not (0 < args.duration <= 1e5):
         raise ValueError(f"--duration must be in (0, 1e5] s, got {args.duration}")
     if not (1 <= args.every <= 10_000 and 1 <= args.fps <= 240):
-        raise ValueError(f"--every must be in [1, 10000] and --fps in [1, 240], got "
-                         f"{args.every} and {args.fps}")  # fmt: skip
+        raise ValueError(
+            f"--every must be in [1, 10000] and --fps in [1, 240], got {args.every} and {args.fps}"
+        )
     if args.seed < 0:
         raise ValueError(f"--seed must be non-negative, got {args.seed}")
     if args.out.suffix.lower() != ".mp4":
@@ -155,9 +157,15 @@ def record(
     first = env.render()
     height, width = first.shape[:2]
     writer = imageio_ffmpeg.write_frames(
-        str(tmp), (width, height), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
-        macro_block_size=16, quality=6, ffmpeg_log_level="error",
-    )  # fmt: skip
+        str(tmp),
+        (width, height),
+        fps=fps,
+        codec="libx264",
+        pix_fmt_out="yuv420p",
+        macro_block_size=16,
+        quality=6,
+        ffmpeg_log_level="error",
+    )
     frames, end = 0, "time_limit"
     try:
         writer.send(None)
@@ -183,20 +191,34 @@ def record(
     finally:
         writer.close()
         tmp.unlink(missing_ok=True)
-    return {"frames": frames, "episode_s": float(info["t"]), "wall_s": time.perf_counter() - began,
-            "end": end}  # fmt: skip
+    return {
+        "frames": frames,
+        "episode_s": float(info["t"]),
+        "wall_s": time.perf_counter() - began,
+        "end": end,
+    }
 
 
 def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     args = parse_args(argv)
     remove_stale_videos(args.out)
-    result = record(args.policy_object, args.env_kwargs, args.out, args.seed, args.every,
-                    args.fps, progress=not args.quiet, env_id=args.env_id)  # fmt: skip
+    result = record(
+        args.policy_object,
+        args.env_kwargs,
+        args.out,
+        args.seed,
+        args.every,
+        args.fps,
+        progress=not args.quiet,
+        env_id=args.env_id,
+    )
     speedup = args.every * args.control_dt * args.fps
-    print(f"wrote {args.out}: {result['frames']} frames at {args.fps} fps "
-          f"({result['frames'] / args.fps:.1f} s of video, {speedup:g}× the episode's pace) "
-          f"of a {result['episode_s']:g}-s episode ({result['end']}) "
-          f"in {result['wall_s']:.1f} s")  # fmt: skip
+    print(
+        f"wrote {args.out}: {result['frames']} frames at {args.fps} fps "
+        f"({result['frames'] / args.fps:.1f} s of video, {speedup:g}× the episode's pace) "
+        f"of a {result['episode_s']:g}-s episode ({result['end']}) "
+        f"in {result['wall_s']:.1f} s"
+    )
     return result
 
 

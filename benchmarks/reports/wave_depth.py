@@ -34,15 +34,22 @@ PAPER_CLIMB_SPAN = 97.0  # [m] the paper helix's climb in a 300-s episode (docs/
 def path_at(kind: str, depth: float) -> dict[str, Any]:
     """Env keyword arguments of the path ``kind`` ("circle" or "helix") at ``depth`` [m]."""
     if kind == "circle":
-        return {"path": Helix(climb=0.0, center=(10.0, 0.0, depth)),
-                "start_position": (15.0, 5.0, depth + 8.0), "start_heading": 0.0}  # fmt: skip
+        return {
+            "path": Helix(climb=0.0, center=(10.0, 0.0, depth)),
+            "start_position": (15.0, 5.0, depth + 8.0),
+            "start_heading": 0.0,
+        }
     shift = depth + PAPER_CLIMB_SPAN
-    return {"path": Helix(center=(10.0, 0.0, -8.0 + shift)),
-            "start_position": (15.0, 5.0, shift), "start_heading": 0.0}  # fmt: skip
+    return {
+        "path": Helix(center=(10.0, 0.0, -8.0 + shift)),
+        "start_position": (15.0, 5.0, shift),
+        "start_heading": 0.0,
+    }
 
 
-def measure(policy_name: str, kind: str, depth: float, waves: Any, seeds: list[int],
-            max_time: float) -> dict[str, Any]:  # fmt: skip
+def measure(
+    policy_name: str, kind: str, depth: float, waves: Any, seeds: list[int], max_time: float
+) -> dict[str, Any]:
     """Mean RMS distance [m] with its 95 % interval, and the episodes that failed."""
     import controllers
     from auv_gym.rollout import evaluate
@@ -53,8 +60,15 @@ def measure(policy_name: str, kind: str, depth: float, waves: Any, seeds: list[i
     rms = np.array([[r["rms_distance"] for r in results]])
     ci = mean_interval(rms, key=f"{kind}|{depth}|{waves}")
     failed = sum(r["termination_reason"] in FAILURE_REASONS for r in results)
-    return {"depth": depth, "waves": waves, "rms_distance": ci.value, "low": ci.low,
-            "high": ci.high, "failed": failed, "episodes": len(results)}  # fmt: skip
+    return {
+        "depth": depth,
+        "waves": waves,
+        "rms_distance": ci.value,
+        "low": ci.low,
+        "high": ci.high,
+        "failed": failed,
+        "episodes": len(results),
+    }
 
 
 @dataclass
@@ -64,8 +78,9 @@ class Options:
     depths: tuple[float, ...] = option(
         (2.0, 5.0, 10.0, 20.0, 40.0), "path depths D below the surface [m]", nargs="+"
     )
-    path: str = option("circle", "the path placed at each depth (module docstring)",
-                       choices=("circle", "helix"))  # fmt: skip
+    path: str = option(
+        "circle", "the path placed at each depth (module docstring)", choices=("circle", "helix")
+    )
     sea_state: str = option("sea_state_4", "a waves preset")
     policy: str = option("fbsm_colos", "a classical controller")
     seeds: int = option(8, "episodes per depth (seeds 0…)")
@@ -75,8 +90,9 @@ class Options:
 
 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
-    args, parser = parse_options(Options, argv, program_name("benchmarks.reports.wave_depth"),
-                                 __doc__)  # fmt: skip
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.reports.wave_depth"), __doc__
+    )
     with usage_errors(parser):
         for flag in ("json", "figure"):
             if getattr(args, flag):
@@ -88,14 +104,22 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     for depth in args.depths:
         for waves in (args.sea_state, None):
             rows.append(measure(args.policy, args.path, depth, waves, seeds, args.max_time))
-    header = ["depth [m]", f"RMS distance, {args.sea_state} [m]", "RMS distance, no waves [m]",
-              "failed (waves / none)"]  # fmt: skip
+    header = [
+        "depth [m]",
+        f"RMS distance, {args.sea_state} [m]",
+        "RMS distance, no waves [m]",
+        "failed (waves / none)",
+    ]
     cells = []
     for wavy, calm in zip(rows[::2], rows[1::2], strict=True):
-        cells.append([f"{wavy['depth']:g}",
-                      f"{wavy['rms_distance']:.3f} [{wavy['low']:.3f}, {wavy['high']:.3f}]",
-                      f"{calm['rms_distance']:.3f} [{calm['low']:.3f}, {calm['high']:.3f}]",
-                      f"{wavy['failed']} / {calm['failed']} of {wavy['episodes']}"])  # fmt: skip
+        cells.append(
+            [
+                f"{wavy['depth']:g}",
+                f"{wavy['rms_distance']:.3f} [{wavy['low']:.3f}, {wavy['high']:.3f}]",
+                f"{calm['rms_distance']:.3f} [{calm['low']:.3f}, {calm['high']:.3f}]",
+                f"{wavy['failed']} / {calm['failed']} of {wavy['episodes']}",
+            ]
+        )
     print(
         f"{args.policy} on the {args.path} path, {args.seeds} seeds, {args.max_time:g}-s "
         "episodes, mean of the per-episode RMS distance with its 95 % bootstrap interval"
@@ -120,10 +144,20 @@ def plot_depth(rows: list[dict[str, Any]], file: str, title: str) -> None:
         if group[0]["waves"]:
             label = group[0]["waves"].replace("_", " ")
         ax.plot(depth, [r["rms_distance"] for r in group], "o-", color=colour, label=label)
-        ax.fill_between(depth, [r["low"] for r in group], [r["high"] for r in group],
-                        color=colour, alpha=0.2, linewidth=0)  # fmt: skip
-    ax.set(xlabel="path depth below the surface [m]", ylabel="RMS distance [m]", yscale="log",
-           title=title)  # fmt: skip
+        ax.fill_between(
+            depth,
+            [r["low"] for r in group],
+            [r["high"] for r in group],
+            color=colour,
+            alpha=0.2,
+            linewidth=0,
+        )
+    ax.set(
+        xlabel="path depth below the surface [m]",
+        ylabel="RMS distance [m]",
+        yscale="log",
+        title=title,
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     save_figure(fig, file)

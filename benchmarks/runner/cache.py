@@ -76,10 +76,16 @@ def run_resumable(
         if done is not None:
             records[index] = done
     todo = [i for i in range(len(units)) if i not in records]
-    bar = tqdm(total=sum(sizes), initial=sum(sizes[i] for i in records), desc=desc, unit="ep",
-               disable=not progress)  # fmt: skip
-    for index, record in execute(function, [units[i] for i in todo], todo, out, workers, backend,
-                                 address):  # fmt: skip
+    bar = tqdm(
+        total=sum(sizes),
+        initial=sum(sizes[i] for i in records),
+        desc=desc,
+        unit="ep",
+        disable=not progress,
+    )
+    for index, record in execute(
+        function, [units[i] for i in todo], todo, out, workers, backend, address
+    ):
         records[index] = record
         bar.update(sizes[index])
     bar.close()

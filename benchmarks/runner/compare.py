@@ -56,8 +56,10 @@ MAX_EPISODES = 1_000_000  # episodes of one run: each is a job held in memory an
 class CompareOptions(EpisodeOptions):
     """The options of `auv-gym compare` (and the episode runner's, `EpisodeOptions`)."""
 
-    policies: str = option("fbsm,backstepping,ppo", "comma-separated: "
-                           f"{', '.join(policy_names())}, ppo:PATH, module:attribute")  # fmt: skip
+    policies: str = option(
+        "fbsm,backstepping,ppo",
+        f"comma-separated: {', '.join(policy_names())}, ppo:PATH, module:attribute",
+    )
     scenarios: str = option("all", "comma-separated names of --scenario-file or 'all'")
     # A Path is immutable: one shared default is safe.
     scenario_file: Path = option(  # noqa: RUF009
@@ -111,8 +113,10 @@ def check_args(args: argparse.Namespace) -> None:
         raise ValueError(f"--seeds must be an integer in [1, {MAX_SEEDS}], got {args.seeds}")
     episodes = args.seeds * len(names) * len(policies)
     if episodes > MAX_EPISODES:  # refused before the jobs are listed: no memory, no silence
-        raise ValueError(f"--seeds {args.seeds} × {len(names)} scenarios × {len(policies)} "
-                         f"policies = {episodes} episodes, more than {MAX_EPISODES}")  # fmt: skip
+        raise ValueError(
+            f"--seeds {args.seeds} × {len(names)} scenarios × {len(policies)} "
+            f"policies = {episodes} episodes, more than {MAX_EPISODES}"
+        )
     check_episode_arguments(args)
     for name in names:
         scenario = scenarios[name]

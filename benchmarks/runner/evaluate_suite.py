@@ -250,10 +250,17 @@ def _set_entry(task: TaskSet) -> dict[str, Any]:
 def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict[str, Any]]:
     """Evaluate every chunk, then write episodes.csv and suite.json (atomically)."""
     records = run_resumable(
-        args.chunks, args.out, args.out / CHUNKS, run_chunk, workers=args.workers,
-        backend=args.backend, address=args.address, progress=not args.quiet,
-        desc="suite episodes", sizes=[len(c.task.seeds) for c in args.chunks],
-    )  # fmt: skip
+        args.chunks,
+        args.out,
+        args.out / CHUNKS,
+        run_chunk,
+        workers=args.workers,
+        backend=args.backend,
+        address=args.address,
+        progress=not args.quiet,
+        desc="suite episodes",
+        sizes=[len(c.task.seeds) for c in args.chunks],
+    )
     command = [
         Path(sys.executable).name,
         "-m",

@@ -159,5 +159,14 @@ def run_jobs(
 ) -> list[dict[str, Any]]:
     """Run the jobs that are not finished yet; return the records of all jobs, in job order
     (`benchmarks.runner.cache.run_resumable` on the pool of `benchmarks.runner.pool`)."""
-    return run_resumable(jobs, out, out / "episodes", run_job, workers=workers, backend=backend,
-                         address=address, progress=progress, desc="episodes")  # fmt: skip
+    return run_resumable(
+        jobs,
+        out,
+        out / "episodes",
+        run_job,
+        workers=workers,
+        backend=backend,
+        address=address,
+        progress=progress,
+        desc="episodes",
+    )

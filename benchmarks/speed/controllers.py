@@ -98,8 +98,10 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         parser.error("--steps and --vehicles must be positive")
     results = {}
     print("\nController cost in closed loop, ±35 noise (predict only; vehicle-control-steps/s)")
-    print(f"{'controller':<14} {'N':>6} {'threads':>8} {'steps/s':>12} {'µs/vehicle-step':>16} "
-          f"{'saturated':>10}")  # fmt: skip
+    print(
+        f"{'controller':<14} {'N':>6} {'threads':>8} {'steps/s':>12} {'µs/vehicle-step':>16} "
+        f"{'saturated':>10}"
+    )
     max_threads = numba.config.NUMBA_NUM_THREADS
     for name in ("fbsm", "backstepping", "pid_los"):
         sizes = ((1, 1), (64, 1), (args.vehicles, 1), (args.vehicles, min(2, max_threads)))
@@ -107,8 +109,10 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
             steps = args.steps * (10 if n == 1 else 1 if n > 64 else 3)
             out = closed_loop(name, n, steps, threads)
             results[f"{name}_n{n}_t{threads}"] = out["rate"]
-            print(f"{name:<14} {n:>6} {threads:>8} {out['rate']:>12,.0f} "
-                  f"{1e6 / out['rate']:>16.2f} {out['saturated']:>10.1%}")  # fmt: skip
+            print(
+                f"{name:<14} {n:>6} {threads:>8} {out['rate']:>12,.0f} "
+                f"{1e6 / out['rate']:>16.2f} {out['saturated']:>10.1%}"
+            )
     for name in ("fbsm", "backstepping", "pid_los"):
         wall = episode_wall_time(name)
         results[f"{name}_episode_s"] = wall

@@ -57,8 +57,9 @@ def measure_reference(steps: int) -> dict[str, float]:
         f"from benchmarks.speed_env import measure; print(json.dumps(measure({steps})))"
     )
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         check=True)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -74,13 +75,17 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
     args, parser = parse_options(Options, argv, program_name("benchmarks.speed.env"), __doc__)
     if args.steps < 1 or args.reference_steps < 1:  # a rate of no steps is no figure
         parser.error("--steps and --reference-steps must be >= 1")
-    results = {"numba (gym.make)": measure(args.steps),
-               "plain Python/numpy (JIT off)": measure_reference(args.reference_steps)}  # fmt: skip
+    results = {
+        "numba (gym.make)": measure(args.steps),
+        "plain Python/numpy (JIT off)": measure_reference(args.reference_steps),
+    }
     print("\nSingle env, default settings (helix, white noise ±35, control 0.05 s, RK4 0.01 s)")
     print(f"{'implementation':<30} {'env steps/s':>12} {'RK4 steps/s':>12} {'real-time ×':>12}")
     for name, r in results.items():
-        print(f"{name:<30} {r['env_steps_per_s']:>12,.0f} {r['physics_steps_per_s']:>12,.0f} "
-              f"{r['real_time_factor']:>12,.0f}")  # fmt: skip
+        print(
+            f"{name:<30} {r['env_steps_per_s']:>12,.0f} {r['physics_steps_per_s']:>12,.0f} "
+            f"{r['real_time_factor']:>12,.0f}"
+        )
     fast, ref = results["numba (gym.make)"], results["plain Python/numpy (JIT off)"]
     ratio = fast["real_time_factor"] / ref["real_time_factor"]
     print(f"numba / plain reference in this run: {ratio:,.0f}×; target ≥ 3,000× real time")

@@ -55,8 +55,11 @@ def table(results: dict[tuple[int, str], list[dict[str, Any]]]) -> str:
     head += f" | {'sbx/sb3 total':>13} {'collect':>8} {'update':>7}"
     lines = [head, "-" * len(head)]
     for n in sorted({n for n, _ in results}):
-        med = {(learner, key): statistics.median(r[key] for r in results[(n, learner)])
-               for learner in LEARNERS for key in RATES}  # fmt: skip
+        med = {
+            (learner, key): statistics.median(r[key] for r in results[(n, learner)])
+            for learner in LEARNERS
+            for key in RATES
+        }
         line = f"{n:>5} {results[(n, 'sb3')][0]['n_steps']:>7}"
         for learner in LEARNERS:
             total, collect, update = (med[(learner, key)] for key in RATES)
@@ -68,18 +71,26 @@ def table(results: dict[tuple[int, str], list[dict[str, Any]]]) -> str:
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.learners"),
-                                 __doc__, negatable=False)  # fmt: skip
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.speed.learners"), __doc__, negatable=False
+    )
     with usage_errors(parser):
         if args.json:  # written after the benchmark: refused now, not after minutes of timing
             writable_location(args.json, "--json", folder=False)
-        if min(args.n_envs) < 1 or min(args.rollouts, args.repeats, args.batch_size,
-                                       args.n_epochs) < 1 or args.warmup < 0:  # fmt: skip
-            raise ValueError("--n-envs, --rollouts, --repeats, --batch-size and --n-epochs must "
-                             "be >= 1, --warmup >= 0")  # fmt: skip
+        if (
+            min(args.n_envs) < 1
+            or min(args.rollouts, args.repeats, args.batch_size, args.n_epochs) < 1
+            or args.warmup < 0
+        ):
+            raise ValueError(
+                "--n-envs, --rollouts, --repeats, --batch-size and --n-epochs must "
+                "be >= 1, --warmup >= 0"
+            )
         if importlib.util.find_spec("sbx") is None:
-            raise ValueError("SBX is not installed (pip install sbx-rl): this benchmark times "
-                             "its JAX learner against SB3's")  # fmt: skip
+            raise ValueError(
+                "SBX is not installed (pip install sbx-rl): this benchmark times "
+                "its JAX learner against SB3's"
+            )
 
     from tqdm import tqdm
 
@@ -87,14 +98,25 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     for repeat in range(args.repeats):
         for k, n in enumerate(args.n_envs):
             order = LEARNERS if (repeat + k) % 2 == 0 else LEARNERS[::-1]
-            spec = {"n_envs": n, "n_steps": max(1, ROLLOUT_STEPS // n), "seed": 0,
-                    "batch_size": args.batch_size, "n_epochs": args.n_epochs,
-                    "rollouts": args.rollouts, "warmup": args.warmup, "update_threads": 1,
-                    "update_dtype": "float32", "net_arch": []}  # fmt: skip
+            spec = {
+                "n_envs": n,
+                "n_steps": max(1, ROLLOUT_STEPS // n),
+                "seed": 0,
+                "batch_size": args.batch_size,
+                "n_epochs": args.n_epochs,
+                "rollouts": args.rollouts,
+                "warmup": args.warmup,
+                "update_threads": 1,
+                "update_dtype": "float32",
+                "net_arch": [],
+            }
             plan += [{**spec, "learner": learner} for learner in order]
-    print(f"PPO on {CONFIG} ({ENV_ID}), batch {args.batch_size}, {args.n_epochs} epochs; SB3 "
-          f"(torch) and SBX (JAX), one thread each; {os.cpu_count()} CPUs, load average "
-          f"{os.getloadavg()[0]:.2f} at start\n", flush=True)  # fmt: skip
+    print(
+        f"PPO on {CONFIG} ({ENV_ID}), batch {args.batch_size}, {args.n_epochs} epochs; SB3 "
+        f"(torch) and SBX (JAX), one thread each; {os.cpu_count()} CPUs, load average "
+        f"{os.getloadavg()[0]:.2f} at start\n",
+        flush=True,
+    )
     results: dict[tuple[int, str], list[dict[str, Any]]] = {}
     for spec in tqdm(plan, desc="training runs"):
         results.setdefault((spec["n_envs"], spec["learner"]), []).append(run_in(TREE, spec))

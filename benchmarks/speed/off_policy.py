@@ -93,15 +93,20 @@ def measure(algo: str, opts: Options) -> dict[str, Any]:
         train_freq = cfg.algo_kwargs.get("train_freq", 1)
         ratio = cfg.algo_kwargs.get("gradient_steps", 1) / (train_freq * cfg.n_envs)
     venv.close()
-    return {"algo": algo, "critic": kwargs["policy_kwargs"].get("net_arch"),
-            "collection_steps_per_s": collection, "gradient_step_ms": 1e3 * step,
-            "replay_ratio": ratio,
-            "training_steps_per_s": 1.0 / (1.0 / collection + ratio * step)}  # fmt: skip
+    return {
+        "algo": algo,
+        "critic": kwargs["policy_kwargs"].get("net_arch"),
+        "collection_steps_per_s": collection,
+        "gradient_step_ms": 1e3 * step,
+        "replay_ratio": ratio,
+        "training_steps_per_s": 1.0 / (1.0 / collection + ratio * step),
+    }
 
 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
-    opts, parser = parse_options(Options, argv, program_name("benchmarks.speed.off_policy"),
-                                 __doc__)  # fmt: skip
+    opts, parser = parse_options(
+        Options, argv, program_name("benchmarks.speed.off_policy"), __doc__
+    )
     if opts.warmup < 1 or opts.gradient_steps < 1:
         parser.error("--warmup and --gradient-steps must be >= 1")
     if opts.replay_ratio is not None and not opts.replay_ratio > 0:
@@ -112,11 +117,15 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         parser.error(f"--config: {opts.config} does not exist")
     rows = [measure(algo, opts) for algo in opts.algos]
     print(f"\noff-policy training cost, {Path(opts.config).name} on {opts.env_id}, 1 torch thread")
-    print(f"{'algo':<8} {'collection [steps/s]':>21} {'gradient step [ms]':>19} "
-          f"{'replay ratio':>13} {'training [steps/s]':>19}")  # fmt: skip
+    print(
+        f"{'algo':<8} {'collection [steps/s]':>21} {'gradient step [ms]':>19} "
+        f"{'replay ratio':>13} {'training [steps/s]':>19}"
+    )
     for r in rows:
-        print(f"{r['algo']:<8} {r['collection_steps_per_s']:>21.0f} {r['gradient_step_ms']:>19.1f} "
-              f"{r['replay_ratio']:>13.3g} {r['training_steps_per_s']:>19.0f}")  # fmt: skip
+        print(
+            f"{r['algo']:<8} {r['collection_steps_per_s']:>21.0f} {r['gradient_step_ms']:>19.1f} "
+            f"{r['replay_ratio']:>13.3g} {r['training_steps_per_s']:>19.0f}"
+        )
     return rows
 
 

@@ -85,9 +85,15 @@ def training_rate(n_timesteps: int) -> float:
     from benchmarks.training.train import TrainOptions, train
 
     with tempfile.TemporaryDirectory() as tmp:
-        opts = TrainOptions(config=str(CONFIG), env_id=ENV_ID, out=str(Path(tmp) / "run"),
-                            n_timesteps=n_timesteps, eval_freq=0, checkpoint_freq=10**9,
-                            progress_bar=True)  # fmt: skip
+        opts = TrainOptions(
+            config=str(CONFIG),
+            env_id=ENV_ID,
+            out=str(Path(tmp) / "run"),
+            n_timesteps=n_timesteps,
+            eval_freq=0,
+            checkpoint_freq=10**9,
+            progress_bar=True,
+        )
         tic = time.perf_counter()
         train(opts, argv=["benchmarks.speed_residual"])
         elapsed = time.perf_counter() - tic
@@ -113,16 +119,21 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     env_rate(10)  # compile the kernels outside the timers
     for name, us in base_cost(args.steps).items():
         out[f"base_{name}_us"] = us
-        print(f"base controller ({name:5s}), batch of {n}: {us:8.2f} µs per vehicle-step "
-              f"({us * n / 1e3:.3f} ms per batched call)")  # fmt: skip
+        print(
+            f"base controller ({name:5s}), batch of {n}: {us:8.2f} µs per vehicle-step "
+            f"({us * n / 1e3:.3f} ms per batched call)"
+        )
     wrapped, bare = env_rate(args.steps)
     out.update(env_wrapped=wrapped, env_bare=bare)
-    print(f"env steps/s, zero actions: ResidualVectorEnv {wrapped:,.0f}, bare vector env "
-          f"{bare:,.0f}")  # fmt: skip
+    print(
+        f"env steps/s, zero actions: ResidualVectorEnv {wrapped:,.0f}, bare vector env {bare:,.0f}"
+    )
     rate = training_rate(args.train_steps)
     out["train"] = rate
-    print(f"PPO training: {rate:,.0f} env steps/s → {rate * BUDGET_S / 1e6:.1f} M env steps in "
-          f"{BUDGET_S // 60} min of one core")  # fmt: skip
+    print(
+        f"PPO training: {rate:,.0f} env steps/s → {rate * BUDGET_S / 1e6:.1f} M env steps in "
+        f"{BUDGET_S // 60} min of one core"
+    )
     return out
 
 

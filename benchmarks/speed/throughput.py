@@ -21,11 +21,14 @@ import numpy as np
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 
-SECTIONS = {"env": "benchmarks.speed.env", "vector": "benchmarks.speed.vector",
-            "controllers": "benchmarks.speed.controllers",
-            "render": "benchmarks.speed.render",
-            "training": "benchmarks.speed.training",
-            "off-policy": "benchmarks.speed.off_policy"}  # fmt: skip
+SECTIONS = {
+    "env": "benchmarks.speed.env",
+    "vector": "benchmarks.speed.vector",
+    "controllers": "benchmarks.speed.controllers",
+    "render": "benchmarks.speed.render",
+    "training": "benchmarks.speed.training",
+    "off-policy": "benchmarks.speed.off_policy",
+}
 
 
 def machine() -> str:

@@ -194,15 +194,18 @@ class Options:
         "only, PPO does not learn with it, docs/performance.md); one row each",
         nargs="+",
     )
-    cache: str = option(os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
-                        "folder of the extracted baseline trees")  # fmt: skip
+    cache: str = option(
+        os.path.join(tempfile.gettempdir(), "auv-gym-baselines"),
+        "folder of the extracted baseline trees",
+    )
     quick: bool = option(False, "tiny budget (smoke test)")
     json: str | None = option(None, "also write every run to this file")
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.training"),
-                                 __doc__, negatable=False)  # fmt: skip
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.speed.training"), __doc__, negatable=False
+    )
     if args.json:  # written after the benchmark: refused now, not after minutes of timing
         with usage_errors(parser):
             writable_location(args.json, "--json", folder=False)

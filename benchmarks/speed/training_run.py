@@ -38,8 +38,9 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     jax_learner = spec.get("learner", "sb3") == "sbx"
     if jax_learner:
         # one XLA thread, as torch's: set before jax is first imported
-        os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false "
-                              "intra_op_parallelism_threads=1")  # fmt: skip
+        os.environ.setdefault(
+            "XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+        )
         from sbx import PPO
     else:
         from stable_baselines3 import PPO
@@ -83,8 +84,14 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         # As `train._train` with threads=1 builds it: the trees that can pass the kernel's
         # thread count to the env pass 1 (the serial kernel at every N).
         serial = "threads" in inspect.signature(trainer.make_training_env).parameters
-        venv = trainer.make_training_env(n_envs, int(spec["seed"]), cfg.env_kwargs, "auto", env_id,
-                                         **({"threads": 1} if serial else {}))  # fmt: skip
+        venv = trainer.make_training_env(
+            n_envs,
+            int(spec["seed"]),
+            cfg.env_kwargs,
+            "auto",
+            env_id,
+            **({"threads": 1} if serial else {}),
+        )
         venv = VecNormalize(venv, **cfg.normalize)
         kwargs = {
             **cfg.model_kwargs(),
@@ -98,8 +105,10 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         if jax_learner:  # SBX takes SB3's keywords, but not torch's device or module classes
             kwargs.pop("device", None)
             if "activation_fn" in policy_kwargs:
-                raise ValueError("learner 'sbx': the configuration names a torch activation; "
-                                 "only the default (tanh in both) is compared")  # fmt: skip
+                raise ValueError(
+                    "learner 'sbx': the configuration names a torch activation; "
+                    "only the default (tanh in both) is compared"
+                )
         model = TimedPPO(
             cfg.policy,
             venv,
@@ -117,8 +126,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     update = sum(u - c for _, c, u in timed)
     floor = None
     if not jax_learner:
-        floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]),
-                                    bfloat16)  # fmt: skip
+        floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]), bfloat16)
     return {
         **spec,
         "steps": steps,

@@ -122,17 +122,22 @@ def _side_by_side(
         base = measure_vector(n, args.seconds, args.max_time, threads)
         other = measure_vector(n, args.seconds, args.max_time, threads, env_kwargs=variant)
         ratio = other["physics_steps_per_s"] / base["physics_steps_per_s"]
-        rows.append({"n": n, "threads": base["threads"], "ratio": ratio,
-                     labels[0]: base, labels[1]: other})  # fmt: skip
-        print(f"{n:>7} {base['threads']:>7} {base['physics_steps_per_s']:>14,.0f} "
-              f"{other['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}")  # fmt: skip
+        rows.append(
+            {"n": n, "threads": base["threads"], "ratio": ratio, labels[0]: base, labels[1]: other}
+        )
+        print(
+            f"{n:>7} {base['threads']:>7} {base['physics_steps_per_s']:>14,.0f} "
+            f"{other['physics_steps_per_s']:>14,.0f} {ratio:>7.1%}"
+        )
     return rows
 
 
 def _sensor_rows(args: Options) -> list[dict[str, Any]]:
     """Physics rate with "ideal" and "typical" sensors, side by side (`_side_by_side`)."""
-    print("\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
-          "estimate ('typical'), side by side")  # fmt: skip
+    print(
+        "\nSensor model: physics steps/s with the exact state ('ideal') and the navigation "
+        "estimate ('typical'), side by side"
+    )
     return _side_by_side(args, args.sensor_sizes, {"sensors": "typical"}, ("ideal", "typical"))
 
 
@@ -173,8 +178,9 @@ def _fresh_process(call: str) -> Any:
     """
     code = f"import json; import benchmarks.speed.vector as m; print(json.dumps(m.{call}))"
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         cwd=root)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=root
+    )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -196,8 +202,15 @@ def measure_ppo_collection(
     else:
         env = DummyVecEnv([lambda: AUVPath3DEnv(**kwargs) for _ in range(n_envs)])
         env.seed(seed)
-    model = PPO("MlpPolicy", env, n_steps=n_steps, batch_size=n_envs * n_steps, seed=seed,
-                device="cpu", verbose=0)  # fmt: skip
+    model = PPO(
+        "MlpPolicy",
+        env,
+        n_steps=n_steps,
+        batch_size=n_envs * n_steps,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+    )
     _, callback = model._setup_learn(n_envs * n_steps * (repeats + 1), None)
     callback.on_training_start(locals(), globals())
     model.collect_rollouts(env, callback, model.rollout_buffer, n_rollout_steps=n_steps)  # warm-up
@@ -205,8 +218,11 @@ def measure_ppo_collection(
     for _ in range(repeats):
         model.collect_rollouts(env, callback, model.rollout_buffer, n_rollout_steps=n_steps)
     wall = time.perf_counter() - start
-    return {"backend": backend, "n_envs": n_envs,
-            "timesteps_per_s": repeats * n_envs * n_steps / wall}  # fmt: skip
+    return {
+        "backend": backend,
+        "n_envs": n_envs,
+        "timesteps_per_s": repeats * n_envs * n_steps / wall,
+    }
 
 
 def machine() -> dict[str, Any]:
@@ -244,34 +260,42 @@ def _waves_rows(args: Options) -> list[dict[str, Any]]:
 class Options:
     """The command line of `auv-gym speed vector`."""
 
-    sizes: tuple[int, ...] = option(SIZES, "numbers of vehicles of the throughput table",
-                                    nargs="+")  # fmt: skip
+    sizes: tuple[int, ...] = option(SIZES, "numbers of vehicles of the throughput table", nargs="+")
     seconds: float = option(4.0, "timed wall clock per size")
     max_time: float = option(10.0, "episode length [s]; short so that autoresets happen")
-    waves_n: int = option(4096, "vehicles of the side-by-side run with waves (sea state 4, "
-                          "default components); 0 skips it")  # fmt: skip
+    waves_n: int = option(
+        4096,
+        "vehicles of the side-by-side run with waves (sea state 4, default components); 0 skips it",
+    )
     memory_n: int = option(MEMORY_N, "vehicles of the peak-memory run; 0 skips it")
-    ppo_envs: tuple[int, ...] = option((64,), "n_envs of the SB3 collection runs; none skips "
-                                       "them", nargs="*")  # fmt: skip
+    ppo_envs: tuple[int, ...] = option(
+        (64,), "n_envs of the SB3 collection runs; none skips them", nargs="*"
+    )
     ppo_steps: int = option(128, "n_steps per rollout")
     ppo_repeats: int = option(3, "timed collect_rollouts calls per run")
-    threads: tuple[int, ...] = option((2, 1), "numba thread counts of the throughput table",
-                                      nargs="+")  # fmt: skip
+    threads: tuple[int, ...] = option(
+        (2, 1), "numba thread counts of the throughput table", nargs="+"
+    )
     actuators: tuple[str, ...] = option(
-        ("paper", "realistic"), "actuator models of the throughput table, side by side",
-        choices=("paper", "fins", "realistic"), nargs="+",
-    )  # fmt: skip
+        ("paper", "realistic"),
+        "actuator models of the throughput table, side by side",
+        choices=("paper", "fins", "realistic"),
+        nargs="+",
+    )
     sensor_sizes: tuple[int, ...] = option(
-        (4096,), "N of the side-by-side rows without and with the 'typical' sensor model "
-        "(docs/model.md §14); none skips them", nargs="*",
-    )  # fmt: skip
+        (4096,),
+        "N of the side-by-side rows without and with the 'typical' sensor model "
+        "(docs/model.md §14); none skips them",
+        nargs="*",
+    )
     quick: bool = option(False, "tiny budget (smoke test)")
     json: str | None = option(None, "also write the results to this file")
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    args, parser = parse_options(Options, argv, program_name("benchmarks.speed.vector"),
-                                 __doc__, negatable=False)  # fmt: skip
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.speed.vector"), __doc__, negatable=False
+    )
     if args.json:  # written after the benchmark: refused now, not after minutes of timing
         with usage_errors(parser):
             writable_location(args.json, "--json", folder=False)
@@ -282,23 +306,31 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = (4,), 8, 1
 
     info = machine()
-    print(f"{info['cpu']}, {info['cores']} cores, numba threads ≤ {info['numba_threads']}, "
-          f"load average {info['load_average_1min']:.2f} at start")  # fmt: skip
+    print(
+        f"{info['cpu']}, {info['cores']} cores, numba threads ≤ {info['numba_threads']}, "
+        f"load average {info['load_average_1min']:.2f} at start"
+    )
     results: dict[str, Any] = {"machine": info, "vector": [], "ppo": []}
 
-    print(f"\nAUVPath3DVectorEnv, default physics, white noise ±35, NEXT_STEP autoreset "
-          f"(max_time {args.max_time:g} s)")  # fmt: skip
-    print(f"{'N':>7} {'actuator':>9} {'threads':>7} {'physics steps/s':>16} "
-          f"{'control steps/s':>16} {'real-time ×':>12} {'ms/step':>9} {'glue':>6} "
-          f"{'resets':>7}")  # fmt: skip
+    print(
+        f"\nAUVPath3DVectorEnv, default physics, white noise ±35, NEXT_STEP autoreset "
+        f"(max_time {args.max_time:g} s)"
+    )
+    print(
+        f"{'N':>7} {'actuator':>9} {'threads':>7} {'physics steps/s':>16} "
+        f"{'control steps/s':>16} {'real-time ×':>12} {'ms/step':>9} {'glue':>6} "
+        f"{'resets':>7}"
+    )
     runs = ((t, n, a) for t in args.threads for n in args.sizes for a in args.actuators)
     for threads, n, actuator in runs:
         r = measure_vector(n, args.seconds, args.max_time, threads, actuator=actuator)
         results["vector"].append(r)
-        print(f"{n:>7} {actuator:>9} {r['threads']:>7} {r['physics_steps_per_s']:>16,.0f} "
-              f"{r['vehicle_steps_per_s']:>16,.0f} "
-              f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
-              f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}")  # fmt: skip
+        print(
+            f"{n:>7} {actuator:>9} {r['threads']:>7} {r['physics_steps_per_s']:>16,.0f} "
+            f"{r['vehicle_steps_per_s']:>16,.0f} "
+            f"{r['real_time_factor']:>12,.0f} {r['ms_per_batch_step']:>9.3f} "
+            f"{r['glue_fraction']:>6.1%} {r['autoresets']:>7}"
+        )
 
     if args.waves_n > 0:
         results["waves"] = _waves_rows(args)

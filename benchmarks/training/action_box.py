@@ -28,8 +28,10 @@ class ActionBox(VecEnvWrapper):
         box = spaces.Box(np.asarray(low, np.float32), np.asarray(high, np.float32))
         outer = venv.action_space
         if not (np.all(box.low >= outer.low) and np.all(box.high <= outer.high)):
-            raise ValueError(f"action box [{box.low}, {box.high}] is not inside the env's "
-                             f"[{outer.low}, {outer.high}]")  # fmt: skip
+            raise ValueError(
+                f"action box [{box.low}, {box.high}] is not inside the env's "
+                f"[{outer.low}, {outer.high}]"
+            )
         super().__init__(venv, action_space=box)
 
     def step_async(self, actions: np.ndarray) -> None:
@@ -37,8 +39,10 @@ class ActionBox(VecEnvWrapper):
         outside = np.any((actions < low) | (actions > high), axis=-1)
         if np.any(outside):
             row = int(np.flatnonzero(outside)[0])
-            raise ValueError(f"action {actions[row]!r} (vehicle {row}) is outside the agent's "
-                             f"box [{low}, {high}]")  # fmt: skip
+            raise ValueError(
+                f"action {actions[row]!r} (vehicle {row}) is outside the agent's "
+                f"box [{low}, {high}]"
+            )
         self.venv.step_async(actions)
 
     def reset(self) -> np.ndarray:

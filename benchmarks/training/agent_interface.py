@@ -23,8 +23,9 @@ if TYPE_CHECKING:
 __all__ = ["interface_callbacks", "parse_interface", "pin_scales", "wrap_actions", "wrap_rewards"]
 
 
-def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: Any,
-                    action_bounds: Any) -> dict[str, Any]:  # fmt: skip
+def parse_interface(
+    section: dict[str, Any], path: Any, env_id: str, residual: Any, action_bounds: Any
+) -> dict[str, Any]:
     """The `ZooConfig` fields of a file's interface keys (``action_bounds`` is read before:
     incremental and scaled commands exclude it, a residual agent and each other); errors name
     ``path`` and ``env_id``."""
@@ -40,8 +41,9 @@ def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: A
         fields["action_increment"] = check_increment(section["action_increment"], where)
     if "action_scale" in section:
         if residual is not None or action_bounds is not None or "action_increment" in section:
-            raise ValueError(f"{path}: action_scale excludes residual, action_bounds and "
-                             "action_increment")  # fmt: skip
+            raise ValueError(
+                f"{path}: action_scale excludes residual, action_bounds and action_increment"
+            )
         fields["action_scale"] = check_action_scale(section["action_scale"], where)
     if "action_std_schedule" in section:
         from benchmarks.training.noise_schedule import parse_std_schedule
@@ -58,8 +60,9 @@ def parse_interface(section: dict[str, Any], path: Any, env_id: str, residual: A
     return fields
 
 
-def wrap_actions(venv: Any, cfg: ZooConfig, obs_names: Sequence[str]
-                 ) -> tuple[Any, tuple[float, Sequence[str]] | None]:  # fmt: skip
+def wrap_actions(
+    venv: Any, cfg: ZooConfig, obs_names: Sequence[str]
+) -> tuple[Any, tuple[float, Sequence[str]] | None]:
     """``venv`` under the file's envelope guard (innermost: it limits the env's command), action
     box, scaled or incremental commands, and (δ, names) of the latter (None without)."""
     if cfg.envelope_guard is not None:

@@ -66,13 +66,18 @@ def policy_from_model(
     return policy if guard is None else GuardedPolicy(policy, *guard)
 
 
-def _unguarded(model: Any, vec_normalize: Any, residual: ResidualTraining | None,
-               env_kwargs: dict[str, Any] | None,
-               increment: tuple[float, Sequence[str]] | None,
-               scale: tuple[float, float, float] | None) -> Any:  # fmt: skip
+def _unguarded(
+    model: Any,
+    vec_normalize: Any,
+    residual: ResidualTraining | None,
+    env_kwargs: dict[str, Any] | None,
+    increment: tuple[float, Sequence[str]] | None,
+    scale: tuple[float, float, float] | None,
+) -> Any:
     rms = vec_normalize.obs_rms
-    actor = AgentPolicy(model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs,
-                        vec_normalize.epsilon)  # fmt: skip
+    actor = AgentPolicy(
+        model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs, vec_normalize.epsilon
+    )
     if increment is not None:
         return IncrementPolicy(actor, *increment)
     if scale is not None:
@@ -99,13 +104,22 @@ class PeriodicEvaluation(BaseCallback):
     schedule of a resumed run (its checkpoint's), else the first multiple of `every` ahead.
     """
 
-    def __init__(self, out: Path, every: int, seeds: Sequence[int], eval_kwargs: dict[str, Any],
-                 metadata: MetadataFn, start_wall: float, best: dict[str, Any],
-                 verbose: int = 0, residual: ResidualTraining | None = None,
-                 next_eval: int | None = None,
-                 increment: tuple[float, Sequence[str]] | None = None,
-                 scale: tuple[float, float, float] | None = None,
-                 guard: tuple[EnvelopeGuard, Sequence[str]] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        out: Path,
+        every: int,
+        seeds: Sequence[int],
+        eval_kwargs: dict[str, Any],
+        metadata: MetadataFn,
+        start_wall: float,
+        best: dict[str, Any],
+        verbose: int = 0,
+        residual: ResidualTraining | None = None,
+        next_eval: int | None = None,
+        increment: tuple[float, Sequence[str]] | None = None,
+        scale: tuple[float, float, float] | None = None,
+        guard: tuple[EnvelopeGuard, Sequence[str]] | None = None,
+    ) -> None:
         super().__init__(verbose)
         self.residual, self.increment, self.scale = residual, increment, scale
         self.guard = guard
@@ -134,11 +148,19 @@ class PeriodicEvaluation(BaseCallback):
     def evaluate(self) -> None:
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
-        policy = policy_from_model(self.model, vec_normalize, self.residual, self.eval_kwargs,
-                                   self.increment, self.scale, self.guard)  # fmt: skip
+        policy = policy_from_model(
+            self.model,
+            vec_normalize,
+            self.residual,
+            self.eval_kwargs,
+            self.increment,
+            self.scale,
+            self.guard,
+        )
         extra = () if self.residual is None else ("chattering",)
-        results = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra,
-                                           **self.eval_kwargs)  # fmt: skip
+        results = evaluate_policy_on_seeds(
+            policy, self.seeds, extra_metrics=extra, **self.eval_kwargs
+        )
         summary = summarize(results)
         weight = 0.0 if self.residual is None else self.residual.selection_chattering
         if self.residual is not None:  # a residual agent is also judged on smoothness
@@ -178,10 +200,17 @@ class PeriodicCheckpoint(BaseCallback):
     ``next_checkpoint``: the schedule of a resumed run (its checkpoint's).
     """
 
-    def __init__(self, out: Path, every: int, keep: int, metadata: MetadataFn,
-                 replay_buffer: bool = False, state: StateFn | None = None,
-                 stop_at: int | None = None,
-                 next_checkpoint: int | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        out: Path,
+        every: int,
+        keep: int,
+        metadata: MetadataFn,
+        replay_buffer: bool = False,
+        state: StateFn | None = None,
+        stop_at: int | None = None,
+        next_checkpoint: int | None = None,
+    ) -> None:
         super().__init__()
         self.out, self.every, self.keep, self.metadata = out, every, keep, metadata
         self.replay_buffer, self.state, self.stop_at = replay_buffer, state, stop_at
@@ -218,9 +247,14 @@ class PeriodicCheckpoint(BaseCallback):
         """The checkpoint of now, taken at ``phase`` (see `capture_training_state`)."""
         n = self.num_timesteps
         state = None if self.state is None else self.state(phase)
-        save_agent(self.model, self.model.get_vec_normalize_env(), checkpoint_folder(self.out, n),
-                   self.metadata({}), replay_buffer=self.replay_buffer,
-                   training_state=state)  # fmt: skip
+        save_agent(
+            self.model,
+            self.model.get_vec_normalize_env(),
+            checkpoint_folder(self.out, n),
+            self.metadata({}),
+            replay_buffer=self.replay_buffer,
+            training_state=state,
+        )
         prune_checkpoints(self.out, self.keep)
         self.last_saved = n
 

@@ -62,9 +62,14 @@ def write_metadata(path: Path, metadata: dict[str, Any]) -> None:
     write_json(path, metadata, indent=2, sort_keys=True)
 
 
-def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str, Any],
-               replay_buffer: bool = False,
-               training_state: dict[str, Any] | None = None) -> None:  # fmt: skip
+def save_agent(
+    model: Any,
+    vec_normalize: Any,
+    folder: Path,
+    metadata: dict[str, Any],
+    replay_buffer: bool = False,
+    training_state: dict[str, Any] | None = None,
+) -> None:
     """Write model.zip, vecnormalize.pkl/.npz and metadata.json as the folder ``folder``
     (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl; with
     ``training_state``, `TRAINING_STATE_FILE`). The .npz names the observation layout
@@ -79,11 +84,14 @@ def save_agent(model: Any, vec_normalize: Any, folder: Path, metadata: dict[str,
         vec_normalize.save(str(tmp / VECNORM_FILE))
         rms = vec_normalize.obs_rms
         np.savez(
-            tmp / STATS_FILE, mean=rms.mean, var=rms.var, count=np.float64(rms.count),
+            tmp / STATS_FILE,
+            mean=rms.mean,
+            var=rms.var,
+            count=np.float64(rms.count),
             clip_obs=np.float64(vec_normalize.clip_obs),
             epsilon=np.float64(vec_normalize.epsilon),
             obs_names=np.array(metadata.get("obs_names", OBS_NAMES)),
-        )  # fmt: skip
+        )
         write_metadata(tmp / METADATA_FILE, metadata)
         if replay_buffer:
             model.save_replay_buffer(tmp / REPLAY_FILE)
@@ -133,9 +141,15 @@ def write_vecnormalize_from_stats(agent: Path, gamma: float = 0.99) -> Path:
         observation_space = gym.spaces.Box(-np.inf, np.inf, mean.shape, np.float32)
         action_space = gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
 
-    venv = VecNormalize(DummyVecEnv([_Shape]), training=False, norm_obs=True, norm_reward=False,
-                        clip_obs=float(stats["clip_obs"]), gamma=gamma,
-                        epsilon=float(stats["epsilon"]))  # fmt: skip
+    venv = VecNormalize(
+        DummyVecEnv([_Shape]),
+        training=False,
+        norm_obs=True,
+        norm_reward=False,
+        clip_obs=float(stats["clip_obs"]),
+        gamma=gamma,
+        epsilon=float(stats["epsilon"]),
+    )
     venv.obs_rms = RunningMeanStd(shape=mean.shape)
     venv.obs_rms.mean, venv.obs_rms.var = mean.astype(np.float64), var.astype(np.float64)
     venv.obs_rms.count = float(stats["count"])
@@ -176,8 +190,14 @@ def prune_checkpoints(out: Path, keep: int) -> None:
 # ------------------------------------------------------------------------------ training state
 # Attributes of an SB3 algorithm that model.zip keeps but `load(env=...)` discards (the last
 # observation) or `learn` resets; restored before `learn` so it does not reset the env.
-_MODEL_ATTRIBUTES = ("_last_obs", "_last_episode_starts", "_last_original_obs", "_episode_num",
-                     "ep_info_buffer", "ep_success_buffer")  # fmt: skip
+_MODEL_ATTRIBUTES = (
+    "_last_obs",
+    "_last_episode_starts",
+    "_last_original_obs",
+    "_episode_num",
+    "ep_info_buffer",
+    "ep_success_buffer",
+)
 # Per-wrapper state VecNormalize.save and VecMonitor leave out (the running discounted return of
 # reward normalisation restarts at 0 on load; episode returns and lengths of the log).
 _WRAPPER_ATTRIBUTES = {
@@ -209,8 +229,10 @@ def _tensors(obj: Any) -> dict[str, Any]:
 
 
 def _env_state(venv: Any) -> dict[str, Any]:
-    names = next((names for cls in type(venv).__mro__
-                  if (names := _WRAPPER_ATTRIBUTES.get(cls.__name__))), ())  # fmt: skip
+    names = next(
+        (names for cls in type(venv).__mro__ if (names := _WRAPPER_ATTRIBUTES.get(cls.__name__))),
+        (),
+    )
     if names:
         return {name: copy.deepcopy(getattr(venv, name)) for name in names}
     if hasattr(venv, "snapshot"):  # auv_gym.sb3.SB3VecEnv
@@ -264,8 +286,9 @@ def restore_env_state(model: Any, state: dict[str, Any]) -> None:
     names = [type(v).__name__ for v in chain]
     saved = [name for name, _ in state["envs"]]
     if names != saved:
-        raise ValueError(f"the training env {'<'.join(names)} differs from the checkpoint's "
-                         f"{'<'.join(saved)}")  # fmt: skip
+        raise ValueError(
+            f"the training env {'<'.join(names)} differs from the checkpoint's {'<'.join(saved)}"
+        )
     for venv, (_, values) in zip(chain, state["envs"], strict=True):
         if "snapshot" in values:
             venv.restore(values["snapshot"])

@@ -130,8 +130,10 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     if not isinstance(data, dict) or env_id not in data:
         raise ValueError(f"{path}: no top-level key {env_id!r}")
     if not isinstance(data[env_id], dict):
-        raise ValueError(f"{path}: {env_id} must be a mapping of hyper-parameters, got "
-                         f"{type(data[env_id]).__name__} {data[env_id]!r:.60}")  # fmt: skip
+        raise ValueError(
+            f"{path}: {env_id} must be a mapping of hyper-parameters, got "
+            f"{type(data[env_id]).__name__} {data[env_id]!r:.60}"
+        )
     section = dict(data[env_id])
     accepted = ALGORITHMS[algo].hyperparameters
     unknown = set(section) - ZOO_KEYS - accepted
@@ -148,8 +150,10 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     except (TypeError, ValueError):
         n_timesteps = math.nan
     if not (math.isfinite(n_timesteps) and n_timesteps >= 1 and n_timesteps == int(n_timesteps)):
-        raise ValueError(f"{path}: {env_id}: n_timesteps must be a whole number >= 1, got "
-                         f"{section['n_timesteps']!r}")  # fmt: skip
+        raise ValueError(
+            f"{path}: {env_id}: n_timesteps must be a whole number >= 1, got "
+            f"{section['n_timesteps']!r}"
+        )
     n_timesteps = int(n_timesteps)
     algo_kwargs = {k: section[k] for k in accepted if k in section}
     normalize = section.get("normalize", False)
@@ -191,11 +195,19 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     _check_policy(section["policy"], policy_kwargs, algo, where)
     _check_env_kwargs(env_id, env_kwargs, where)
     return ZooConfig(
-        algo=algo, n_envs=n_envs, n_timesteps=n_timesteps, policy=str(section["policy"]),
-        normalize=normalize, policy_kwargs=dict(policy_kwargs), env_kwargs=env_kwargs,
-        algo_kwargs=algo_kwargs, raw=section, residual=residual, action_bounds=action_bounds,
+        algo=algo,
+        n_envs=n_envs,
+        n_timesteps=n_timesteps,
+        policy=str(section["policy"]),
+        normalize=normalize,
+        policy_kwargs=dict(policy_kwargs),
+        env_kwargs=env_kwargs,
+        algo_kwargs=algo_kwargs,
+        raw=section,
+        residual=residual,
+        action_bounds=action_bounds,
         **interface,
-    )  # fmt: skip
+    )
 
 
 # (low, high, low_open, high_open) of the numeric hyper-parameters; None: unbounded.
@@ -212,14 +224,28 @@ _RANGES: dict[str, tuple[float, float, bool, bool]] = {
     "ent_coef": (0.0, math.inf, False, True),
 }
 # Integer hyper-parameters and their smallest value.
-_INTEGERS = {"n_epochs": 1, "stats_window_size": 1, "sde_sample_freq": -1, "buffer_size": 1,
-             "learning_starts": 0, "target_update_interval": 1, "n_steps": 1, "policy_delay": 1,
-             "top_quantiles_to_drop_per_net": 0}  # fmt: skip
+_INTEGERS = {
+    "n_epochs": 1,
+    "stats_window_size": 1,
+    "sde_sample_freq": -1,
+    "buffer_size": 1,
+    "learning_starts": 0,
+    "target_update_interval": 1,
+    "n_steps": 1,
+    "policy_delay": 1,
+    "top_quantiles_to_drop_per_net": 0,
+}
 _BOOLEANS = ("normalize_advantage", "use_sde", "optimize_memory_usage", "use_sde_at_warmup")
 _OPTIONAL = ("clip_range_vf", "target_kl")  # None (null) switches them off
 # VecNormalize keyword arguments a config may set, with their checks.
-_NORMALIZE = {"norm_obs": bool, "norm_reward": bool, "clip_obs": "positive",
-              "clip_reward": "positive", "gamma": "unit", "epsilon": "positive"}  # fmt: skip
+_NORMALIZE = {
+    "norm_obs": bool,
+    "norm_reward": bool,
+    "clip_obs": "positive",
+    "clip_reward": "positive",
+    "gamma": "unit",
+    "epsilon": "positive",
+}
 
 
 def _is_int(value: Any) -> bool:
@@ -237,8 +263,9 @@ def _number(key: str, value: Any, where: str) -> None:
     if not ok:
         left, right = "(" if low_open else "[", ")" if high_open else "]"
         top = "inf" if high == math.inf else f"{high:g}"
-        raise ValueError(f"{where}: {key} must be a number in {left}{low:g}, {top}{right}, "
-                         f"got {value!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: {key} must be a number in {left}{low:g}, {top}{right}, got {value!r}"
+        )
 
 
 def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: str) -> None:
@@ -255,8 +282,9 @@ def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: 
             except ValueError:
                 start = math.nan
             if not (math.isfinite(start) and start > 0):
-                raise ValueError(f"{where}: {key} {value!r} must be a positive number or "
-                                 "'lin_<x>' with x > 0")  # fmt: skip
+                raise ValueError(
+                    f"{where}: {key} {value!r} must be a positive number or 'lin_<x>' with x > 0"
+                )
         elif key == "ent_coef" and ALGORITHMS[algo].off_policy and isinstance(value, str):
             match = re.fullmatch(r"auto(?:_([0-9.eE+-]+))?", value)
             try:
@@ -264,49 +292,64 @@ def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: 
             except ValueError:
                 ok = False
             if not ok:
-                raise ValueError(f"{where}: ent_coef {value!r} must be a number >= 0, 'auto' "
-                                 "or 'auto_<x>' with x > 0")  # fmt: skip
+                raise ValueError(
+                    f"{where}: ent_coef {value!r} must be a number >= 0, 'auto' "
+                    "or 'auto_<x>' with x > 0"
+                )
         elif key in _RANGES:
             _number(key, value, where)
         elif key in _INTEGERS:
             if not _is_int(value) or value < _INTEGERS[key]:
-                raise ValueError(f"{where}: {key} must be an integer >= {_INTEGERS[key]}, "
-                                 f"got {value!r}")  # fmt: skip
+                raise ValueError(
+                    f"{where}: {key} must be an integer >= {_INTEGERS[key]}, got {value!r}"
+                )
         elif key in _BOOLEANS:
             if not isinstance(value, bool):
                 raise ValueError(f"{where}: {key} must be true or false, got {value!r}")
         elif key == "batch_size":
             smallest = 2 if algo == "ppo" else 1  # PPO normalises advantages over a batch
             if not _is_int(value) or value < smallest:
-                raise ValueError(f"{where}: batch_size must be an integer >= {smallest}, "
-                                 f"got {value!r}")  # fmt: skip
+                raise ValueError(
+                    f"{where}: batch_size must be an integer >= {smallest}, got {value!r}"
+                )
         elif key == "gradient_steps":
             if not _is_int(value) or not (value >= 1 or value == -1):
-                raise ValueError(f"{where}: gradient_steps must be an integer >= 1 or -1 (as "
-                                 f"many as env steps), got {value!r}")  # fmt: skip
+                raise ValueError(
+                    f"{where}: gradient_steps must be an integer >= 1 or -1 (as "
+                    f"many as env steps), got {value!r}"
+                )
         elif key == "train_freq":
-            unit_ok = (isinstance(value, (list, tuple)) and len(value) == 2
-                       and value[1] in ("step", "episode"))  # fmt: skip
+            unit_ok = (
+                isinstance(value, (list, tuple))
+                and len(value) == 2
+                and value[1] in ("step", "episode")
+            )
             count = value[0] if unit_ok else value
             if not _is_int(count) or count < 1:
-                raise ValueError(f"{where}: train_freq must be an integer >= 1 or [n, 'step' | "
-                                 f"'episode'], got {value!r}")  # fmt: skip
+                raise ValueError(
+                    f"{where}: train_freq must be an integer >= 1 or [n, 'step' | "
+                    f"'episode'], got {value!r}"
+                )
         elif key == "target_entropy":
             finite = isinstance(value, (int, float)) and math.isfinite(value)
             if value != "auto" and (isinstance(value, bool) or not finite):
-                raise ValueError(f"{where}: target_entropy must be 'auto' or a finite number, "
-                                 f"got {value!r}")  # fmt: skip
+                raise ValueError(
+                    f"{where}: target_entropy must be 'auto' or a finite number, got {value!r}"
+                )
     if algo == "ppo" and kwargs.get("n_steps", 2048) * n_envs < 2:
-        raise ValueError(f"{where}: n_steps × n_envs must be at least 2 (PPO's rollout), got "
-                         f"{kwargs.get('n_steps', 2048)} × {n_envs}")  # fmt: skip
+        raise ValueError(
+            f"{where}: n_steps × n_envs must be at least 2 (PPO's rollout), got "
+            f"{kwargs.get('n_steps', 2048)} × {n_envs}"
+        )
 
 
 def check_normalize(normalize: Mapping[str, Any], where: str) -> None:
     """VecNormalize keyword arguments: known keys, booleans, positive clips and ε, γ in [0, 1]."""
     unknown = sorted(set(normalize) - set(_NORMALIZE))
     if unknown:
-        raise ValueError(f"{where}: normalize has unknown keys {unknown}; valid: "
-                         f"{sorted(_NORMALIZE)}")  # fmt: skip
+        raise ValueError(
+            f"{where}: normalize has unknown keys {unknown}; valid: {sorted(_NORMALIZE)}"
+        )
     for key, value in normalize.items():
         kind = _NORMALIZE[key]
         number = isinstance(value, (int, float)) and not isinstance(value, bool)
@@ -317,36 +360,48 @@ def check_normalize(normalize: Mapping[str, Any], where: str) -> None:
         else:
             ok = number and 0.0 <= value <= 1.0
         if not ok:
-            wanted = {bool: "true or false", "positive": "a finite number > 0",
-                      "unit": "a number in [0, 1]"}[kind]  # fmt: skip
+            wanted = {
+                bool: "true or false",
+                "positive": "a finite number > 0",
+                "unit": "a number in [0, 1]",
+            }[kind]
             raise ValueError(f"{where}: normalize {key} must be {wanted}, got {value!r}")
 
 
 def _check_policy(policy: Any, policy_kwargs: Mapping[str, Any], algo: str, where: str) -> None:
     """MlpPolicy (the observation is a vector) and keyword arguments its constructor takes."""
     if policy != "MlpPolicy":
-        raise ValueError(f"{where}: policy must be 'MlpPolicy' (the observation is a vector), "
-                         f"got {policy!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: policy must be 'MlpPolicy' (the observation is a vector), got {policy!r}"
+        )
     import inspect
 
     policy_class = ALGORITHMS[algo].sb3_class().policy_aliases["MlpPolicy"]
     accepted = set(inspect.signature(policy_class.__init__).parameters) - {
-        "self", "observation_space", "action_space", "lr_schedule"}  # fmt: skip
+        "self",
+        "observation_space",
+        "action_space",
+        "lr_schedule",
+    }
     unknown = sorted(set(policy_kwargs) - accepted)
     if unknown:
-        raise ValueError(f"{where}: policy_kwargs has keys {policy_class.__name__} does not "
-                         f"take: {unknown}")  # fmt: skip
+        raise ValueError(
+            f"{where}: policy_kwargs has keys {policy_class.__name__} does not take: {unknown}"
+        )
     arch = policy_kwargs.get("net_arch")
     layers = list(arch.values()) if isinstance(arch, dict) else [arch] if arch is not None else []
     for sizes in layers:
         if not isinstance(sizes, (list, tuple)) or not all(_is_int(n) and n >= 1 for n in sizes):
-            raise ValueError(f"{where}: policy_kwargs net_arch must be a list of layer sizes "
-                             f">= 1 (or a dict of such lists), got {arch!r}")  # fmt: skip
+            raise ValueError(
+                f"{where}: policy_kwargs net_arch must be a list of layer sizes "
+                f">= 1 (or a dict of such lists), got {arch!r}"
+            )
     log_std = policy_kwargs.get("log_std_init", 0.0)
     number = isinstance(log_std, (int, float)) and not isinstance(log_std, bool)
     if not (number and math.isfinite(log_std)):
-        raise ValueError(f"{where}: policy_kwargs log_std_init must be a finite number, got "
-                         f"{log_std!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: policy_kwargs log_std_init must be a finite number, got {log_std!r}"
+        )
 
 
 def _check_env_kwargs(env_id: str, env_kwargs: Mapping[str, Any], where: str) -> None:

@@ -26,8 +26,13 @@ MAX_COST_PENALTY = 1e6
 def check_cost_penalty(value: Any, where: str) -> float:
     """w as a float in [0, 1e6]; an error naming ``where`` and the value otherwise
     (`auv_gym.validation.real`)."""
-    return real(f"{where}: cost_penalty", value, 0.0, MAX_COST_PENALTY,
-                unit="(reward per unit of safety cost)")  # fmt: skip
+    return real(
+        f"{where}: cost_penalty",
+        value,
+        0.0,
+        MAX_COST_PENALTY,
+        unit="(reward per unit of safety cost)",
+    )
 
 
 class CostPenalty(VecEnvWrapper):

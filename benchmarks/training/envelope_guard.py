@@ -26,8 +26,10 @@ class GuardedActions(ObservedActions):
     def __init__(self, venv: VecEnv, guard: EnvelopeGuard, obs_names: Sequence[str]) -> None:
         missing = [name for name in GUARD_INPUTS if name not in obs_names]
         if missing:
-            raise ValueError(f"envelope_guard reads {list(GUARD_INPUTS)} from the observation, "
-                             f"which lacks {missing}")  # fmt: skip
+            raise ValueError(
+                f"envelope_guard reads {list(GUARD_INPUTS)} from the observation, "
+                f"which lacks {missing}"
+            )
         self.guard = guard
         self.index = tuple(list(obs_names).index(name) for name in GUARD_INPUTS)
         super().__init__(venv, obs_names)

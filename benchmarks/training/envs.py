@@ -43,9 +43,15 @@ def thread_limit(threads: int) -> Iterator[None]:
         torch.set_num_threads(torch_before)
 
 
-def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: str = "auto",
-                      env_id: str = ENV_ID, residual: ResidualTraining | None = None,
-                      threads: int | None = None) -> Any:  # fmt: skip
+def make_training_env(
+    n_envs: int,
+    seed: int,
+    env_kwargs: dict[str, Any],
+    kind: str = "auto",
+    env_id: str = ENV_ID,
+    residual: ResidualTraining | None = None,
+    threads: int | None = None,
+) -> Any:
     """An SB3 VecEnv of `n_envs` training environments.
 
     "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
@@ -61,8 +67,10 @@ def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: 
         raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
     env_seed = TRAIN_SEED_BASE + 1000 * int(seed)
     if residual is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
-        raise ValueError(f"a residual agent trains on the native vector env of "
-                         f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}")  # fmt: skip
+        raise ValueError(
+            f"a residual agent trains on the native vector env of "
+            f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}"
+        )
     if kind in ("auto", "native") and env_id in VARIANTS:
         from stable_baselines3.common.vec_env import VecMonitor
 
@@ -72,11 +80,13 @@ def make_training_env(n_envs: int, seed: int, env_kwargs: dict[str, Any], kind: 
         if residual is not None:
             from benchmarks.training.residual_env import make_residual_sb3_env
 
-            return VecMonitor(make_residual_sb3_env(n_envs, residual, seed=env_seed,
-                                                    threads=threads, **kwargs))  # fmt: skip
+            return VecMonitor(
+                make_residual_sb3_env(n_envs, residual, seed=env_seed, threads=threads, **kwargs)
+            )
         # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.sb3).
-        return VecMonitor(make_sb3_vec_env(n_envs, seed=env_seed, threads=threads,
-                                           infos="minimal", **kwargs))  # fmt: skip
+        return VecMonitor(
+            make_sb3_vec_env(n_envs, seed=env_seed, threads=threads, infos="minimal", **kwargs)
+        )
     if kind == "native":
         raise ValueError(f"the native vector env simulates {sorted(VARIANTS)} only, not {env_id}")
     from stable_baselines3.common.env_util import make_vec_env

@@ -63,16 +63,22 @@ def evaluate_policy_on_seeds(
     """
     results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)
     return [
-        {"seed": int(r["seed"]), "rms_distance": float(r["rms_distance"]),
-         "rms_x_e": float(r["rms_x_e"]), "rms_y_e": float(r["rms_y_e"]),
-         "rms_z_e": float(r["rms_z_e"]),
-         "max_distance": float(r["max_distance_window"]), "duration": float(r["duration"]),
-         "window_samples": int(r["window_samples"]),
-         "max_surge": float(r["max_surge"]), "overspeed_fraction": float(r["overspeed_fraction"]),
-         "termination_reason": env_termination_reason(str(r["termination_reason"])),
-         **{name: float(r[name]) for name in extra_metrics}}
+        {
+            "seed": int(r["seed"]),
+            "rms_distance": float(r["rms_distance"]),
+            "rms_x_e": float(r["rms_x_e"]),
+            "rms_y_e": float(r["rms_y_e"]),
+            "rms_z_e": float(r["rms_z_e"]),
+            "max_distance": float(r["max_distance_window"]),
+            "duration": float(r["duration"]),
+            "window_samples": int(r["window_samples"]),
+            "max_surge": float(r["max_surge"]),
+            "overspeed_fraction": float(r["overspeed_fraction"]),
+            "termination_reason": env_termination_reason(str(r["termination_reason"])),
+            **{name: float(r[name]) for name in extra_metrics},
+        }
         for r in results
-    ]  # fmt: skip
+    ]
 
 
 def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
@@ -134,8 +140,9 @@ def agent_env_kwargs(env_id: str, metadata: Mapping[str, Any]) -> dict[str, Any]
     return fixed
 
 
-def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
-                        env_id: str = ENV_ID) -> dict[str, Any]:  # fmt: skip
+def held_out_evaluation(
+    agent: str | os.PathLike, duration: float = 300.0, env_id: str = ENV_ID
+) -> dict[str, Any]:
     """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results.
 
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
@@ -146,16 +153,19 @@ def held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
         "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",
-        "seeds": list(HELD_OUT_SEEDS), "duration_s": float(duration),
-        "transient_s": window_start(float(duration)), "summary": summarize(results),
+        "seeds": list(HELD_OUT_SEEDS),
+        "duration_s": float(duration),
+        "transient_s": window_start(float(duration)),
+        "summary": summarize(results),
         "results": results,
         "agent_num_timesteps": policy.metadata.get("num_timesteps"),
         "agent_wall_time_s": policy.metadata.get("wall_time_s"),
-    }  # fmt: skip
+    }
 
 
-def write_held_out_evaluation(agent: str | os.PathLike, duration: float = 300.0,
-                              env_id: str = ENV_ID) -> dict[str, Any]:  # fmt: skip
+def write_held_out_evaluation(
+    agent: str | os.PathLike, duration: float = 300.0, env_id: str = ENV_ID
+) -> dict[str, Any]:
     """`held_out_evaluation` of an agent directory, written to AGENT/held_out_evaluation.json."""
     report = held_out_evaluation(agent, duration, env_id)
     write_json(Path(agent) / HELD_OUT_FILE, report, indent=2, sort_keys=True)

@@ -42,32 +42,38 @@ def agent_folders(source: Path) -> list[tuple[Path, str]]:
         return [(source, "")]
     seeds = sorted(p for p in source.glob(f"{SEED_AGENT_PREFIX}*") if p.is_dir())
     if not seeds:
-        raise ValueError(f"--from {source} holds neither an agent (model.zip) nor "
-                         "agent_seed_<k>/ folders")  # fmt: skip
+        raise ValueError(
+            f"--from {source} holds neither an agent (model.zip) nor agent_seed_<k>/ folders"
+        )
     return [(p, p.name) for p in seeds]
 
 
-def guard_agent(source: Path, target: Path, guard: EnvelopeGuard | None,
-                allocation: bool = False) -> Path:  # fmt: skip
+def guard_agent(
+    source: Path, target: Path, guard: EnvelopeGuard | None, allocation: bool = False
+) -> Path:
     """Copy the agent ``source`` to ``target`` with ``guard`` (None: none added) and, with
     ``allocation``, the paper actuator's allocation recorded; returns ``target``."""
     files = check_agent(source)  # a corrupt agent is refused before anything is written
     metadata: dict[str, Any] = dict(files.metadata)
     if files.residual is not None:
-        raise ValueError(f"{source}: a residual agent cannot take an envelope guard or an "
-                         "actuator allocation")  # fmt: skip
+        raise ValueError(
+            f"{source}: a residual agent cannot take an envelope guard or an actuator allocation"
+        )
     if guard is not None:
         if "envelope_guard" in metadata:
-            raise ValueError(f"{source}: the agent already has an envelope guard "
-                             f"{metadata['envelope_guard']}")  # fmt: skip
+            raise ValueError(
+                f"{source}: the agent already has an envelope guard {metadata['envelope_guard']}"
+            )
         metadata["envelope_guard"] = guard.to_dict()
         metadata["guarded_from"] = str(source)
     if allocation:
         trained_on = (metadata.get("env_kwargs") or {}).get("actuator")
         if trained_on != COMMANDED_ACTUATOR:
-            raise ValueError(f"{source}: actuator allocation needs an agent trained on the "
-                             f"{COMMANDED_ACTUATOR!r} actuator, this one: "
-                             f"{trained_on!r}")  # fmt: skip
+            raise ValueError(
+                f"{source}: actuator allocation needs an agent trained on the "
+                f"{COMMANDED_ACTUATOR!r} actuator, this one: "
+                f"{trained_on!r}"
+            )
         metadata["actuator_allocation"] = COMMANDED_ACTUATOR
         metadata["allocated_from"] = str(source)
     export_agent(source, target, metadata)
@@ -78,19 +84,23 @@ def guard_agent(source: Path, target: Path, guard: EnvelopeGuard | None,
 class Options:
     """The command line of `python -m benchmarks.training.guard_agents`."""
 
-    source: str = option(None, "agent folder or multi-seed results folder", flag="--from",
-                         required=True)  # fmt: skip
+    source: str = option(
+        None, "agent folder or multi-seed results folder", flag="--from", required=True
+    )
     out: str = option(None, "folder to write the guarded copies to", required=True)
-    pitch_soft_deg: float = option(EnvelopeGuard.pitch_soft_deg, "pitch where the guard starts "
-                                   "taking authority away [deg]")  # fmt: skip
-    pitch_hard_deg: float = option(EnvelopeGuard.pitch_hard_deg, "pitch of full counter-moment "
-                                   "[deg]")  # fmt: skip
+    pitch_soft_deg: float = option(
+        EnvelopeGuard.pitch_soft_deg, "pitch where the guard starts taking authority away [deg]"
+    )
+    pitch_hard_deg: float = option(
+        EnvelopeGuard.pitch_hard_deg, "pitch of full counter-moment [deg]"
+    )
     lookahead_s: float = option(EnvelopeGuard.lookahead_s, "pitch prediction θ + T·q, T [s]")
     surge_soft: float = option(EnvelopeGuard.surge_soft, "surge where thrust is cut [m/s]")
     surge_hard: float = option(EnvelopeGuard.surge_hard, "surge of full astern [m/s]")
     guard: bool = option(True, "record the envelope guard (--no-guard: leave it out)")
-    allocation: bool = option(False, "record the actuator allocation (agents trained on the "
-                              "paper actuator)")  # fmt: skip
+    allocation: bool = option(
+        False, "record the actuator allocation (agents trained on the paper actuator)"
+    )
 
 
 def main(argv: list[str] | None = None) -> list[Path]:
@@ -108,12 +118,16 @@ def main(argv: list[str] | None = None) -> list[Path]:
         folders = agent_folders(source)
         if out.resolve() == source.resolve():
             raise ValueError("--out must differ from --from")
-        written = [guard_agent(folder, out / name if name else out, guard, args.allocation)
-                   for folder, name in folders]  # fmt: skip
+        written = [
+            guard_agent(folder, out / name if name else out, guard, args.allocation)
+            for folder, name in folders
+        ]
         for curve in sorted(source.glob("seed_*_learning_curve.csv")) if folders[0][1] else ():
             write_text(out / curve.name, curve.read_text())
-    added = {"envelope_guard": guard.to_dict() if guard else None,
-             "actuator_allocation": COMMANDED_ACTUATOR if args.allocation else None}  # fmt: skip
+    added = {
+        "envelope_guard": guard.to_dict() if guard else None,
+        "actuator_allocation": COMMANDED_ACTUATOR if args.allocation else None,
+    }
     print(f"{len(written)} agent(s) in {out}: {json.dumps(added)}")
     return written
 

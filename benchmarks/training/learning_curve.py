@@ -20,15 +20,28 @@ from auv_gym.files import write_text
 __all__ = ["EVAL_FILE", "EVAL_HEADER", "append_row", "read_rows", "truncate_rows"]
 
 EVAL_FILE = "evaluations.csv"
-EVAL_HEADER = ["num_timesteps", "wall_time_s", "rms_distance_mean", "rms_distance_std",
-               "rms_distance_max", "n_terminated", "max_surge_max"]  # fmt: skip
+EVAL_HEADER = [
+    "num_timesteps",
+    "wall_time_s",
+    "rms_distance_mean",
+    "rms_distance_std",
+    "rms_distance_max",
+    "n_terminated",
+    "max_surge_max",
+]
 
 
 def append_row(path: Path, num_timesteps: int, wall_time: float, summary: dict[str, Any]) -> None:
     """Append one evaluation (a `benchmarks.training.evaluation.summarize` dict) to the curve."""
-    row = [num_timesteps, f"{wall_time:.1f}", f"{summary['rms_distance_mean']:.6g}",
-           f"{summary['rms_distance_std']:.6g}", f"{summary['rms_distance_max']:.6g}",
-           summary["n_terminated"], f"{summary['max_surge_max']:.6g}"]  # fmt: skip
+    row = [
+        num_timesteps,
+        f"{wall_time:.1f}",
+        f"{summary['rms_distance_mean']:.6g}",
+        f"{summary['rms_distance_std']:.6g}",
+        f"{summary['rms_distance_max']:.6g}",
+        summary["n_terminated"],
+        f"{summary['max_surge_max']:.6g}",
+    ]
     new = not path.exists()
     with path.open("a", newline="") as f:
         writer = csv.writer(f)

@@ -48,8 +48,10 @@ def parse_std_schedule(value: Any, where: str) -> StdSchedule:
         real = [isinstance(v, (int, float)) and not isinstance(v, bool) for v in (start, final)]
         ok = all(real) and 0.0 <= start < 1.0 and 0.0 < final <= 1.0
     if not ok:
-        raise ValueError(f"{where}: action_std_schedule must be {{start: s in [0, 1), final: σ in "
-                         f"(0, 1]}}, got {value!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: action_std_schedule must be {{start: s in [0, 1), final: σ in "
+            f"(0, 1]}}, got {value!r}"
+        )
     return StdSchedule(float(value["start"]), float(value["final"]))
 
 
@@ -62,8 +64,10 @@ class AnnealActionStd(BaseCallback):
 
     def _on_training_start(self) -> None:
         if not hasattr(self.model.policy, "log_std") or getattr(self.model, "use_sde", False):
-            raise ValueError("action_std_schedule needs a Gaussian policy with a learned log σ "
-                             "(PPO or A2C without gSDE)")  # fmt: skip
+            raise ValueError(
+                "action_std_schedule needs a Gaussian policy with a learned log σ "
+                "(PPO or A2C without gSDE)"
+            )
 
     def _on_rollout_start(self) -> None:
         import torch

@@ -44,8 +44,9 @@ class PinnedRunningMeanStd(RunningMeanStd):
         super().update(arr)
         self._pin()
 
-    def update_from_moments(self, batch_mean: np.ndarray, batch_var: np.ndarray,
-                            batch_count: float) -> None:  # fmt: skip
+    def update_from_moments(
+        self, batch_mean: np.ndarray, batch_var: np.ndarray, batch_count: float
+    ) -> None:
         super().update_from_moments(batch_mean, batch_var, batch_count)
         self._pin()
 
@@ -53,27 +54,32 @@ class PinnedRunningMeanStd(RunningMeanStd):
 def parse_obs_scales(value: Any, where: str) -> dict[str, float]:
     """{entry name: scale > 0, finite} from a hyper-parameter file, or a named error."""
     if not isinstance(value, Mapping) or not value:
-        raise ValueError(f"{where}: obs_scales must be a non-empty mapping {{entry: scale}}, "
-                         f"got {value!r}")  # fmt: skip
+        raise ValueError(
+            f"{where}: obs_scales must be a non-empty mapping {{entry: scale}}, got {value!r}"
+        )
     scales = {}
     for name, scale in value.items():
         number = isinstance(scale, (int, float)) and not isinstance(scale, bool)
         if not isinstance(name, str) or not number or not (math.isfinite(scale) and scale > 0):
-            raise ValueError(f"{where}: obs_scales[{name!r}] must be a finite number > 0 (the "
-                             f"entry's unit), got {scale!r}")  # fmt: skip
+            raise ValueError(
+                f"{where}: obs_scales[{name!r}] must be a finite number > 0 (the "
+                f"entry's unit), got {scale!r}"
+            )
         scales[name] = float(scale)
     return scales
 
 
-def pin_observation_scales(vec_normalize: Any, obs_names: Sequence[str],
-                           scales: Mapping[str, float]) -> None:  # fmt: skip
+def pin_observation_scales(
+    vec_normalize: Any, obs_names: Sequence[str], scales: Mapping[str, float]
+) -> None:
     """Replace `vec_normalize.obs_rms` by one that keeps the entries named in `scales` at mean 0
     and standard deviation `scales[name]`; unknown names are an error naming the valid ones."""
     names = list(obs_names)
     unknown = sorted(set(scales) - set(names))
     if unknown:
-        raise ValueError(f"obs_scales: unknown observation entries {unknown}; this env's "
-                         f"entries are {names}")  # fmt: skip
+        raise ValueError(
+            f"obs_scales: unknown observation entries {unknown}; this env's entries are {names}"
+        )
     index = np.array([names.index(n) for n in scales], dtype=np.intp)
     scale = np.array(list(scales.values()), dtype=np.float64)
     vec_normalize.obs_rms = PinnedRunningMeanStd(vec_normalize.obs_rms, index, scale)

@@ -57,12 +57,14 @@ PER_INVOCATION = ("seeds",)
 class Options:
     """The command line of `python -m benchmarks.training.publish_phase`."""
 
-    runs: tuple[str, ...] = option((), "finished `train_seeds` run folders of one warm-start "
-                                   "phase", nargs="+", required=True)  # fmt: skip
+    runs: tuple[str, ...] = option(
+        (), "finished `train_seeds` run folders of one warm-start phase", nargs="+", required=True
+    )
     out: str = option(None, "empty or new folder to write the results to", required=True)
     guard: bool = option(True, "record the envelope guard (--no-guard: leave it out)")
-    allocation: bool = option(False, "record the actuator allocation (agents trained on the "
-                              "paper actuator)")  # fmt: skip
+    allocation: bool = option(
+        False, "record the actuator allocation (agents trained on the paper actuator)"
+    )
 
 
 def _read_json(path: Path, what: str) -> dict[str, Any]:
@@ -126,39 +128,49 @@ def _runs(folders: tuple[str, ...]) -> tuple[dict[str, Any], list[tuple[Path, di
                     "init_from); for a run from scratch: train_seeds --results"
                 )
             if plan.get("stop_at") is not None:
-                raise ValueError(f"{folder} paused at stop_at {plan['stop_at']}: resume it to "
-                                 "its budget first (train_seeds --resume)")  # fmt: skip
+                raise ValueError(
+                    f"{folder} paused at stop_at {plan['stop_at']}: resume it to "
+                    "its budget first (train_seeds --resume)"
+                )
         elif shared != plan:
             differ = sorted(k for k in plan.keys() | shared.keys() if plan.get(k) != shared.get(k))
-            raise ValueError(f"{folder} is not of the same phase as {runs[0][0]}: "
-                             f"{', '.join(differ)} differ")  # fmt: skip
+            raise ValueError(
+                f"{folder} is not of the same phase as {runs[0][0]}: {', '.join(differ)} differ"
+            )
         for entry in summary["seeds"]:
             if entry["seed"] in seen:
-                raise ValueError(f"seed {entry['seed']} is in both {seen[entry['seed']]} and "
-                                 f"{folder}")  # fmt: skip
+                raise ValueError(
+                    f"seed {entry['seed']} is in both {seen[entry['seed']]} and {folder}"
+                )
             seen[entry["seed"]] = folder
         runs.append((folder, summary))
     return plan, runs
 
 
-def publish_phase(folders: tuple[str, ...], out: Path, guard: EnvelopeGuard | None,
-                  allocation: bool = False) -> dict[str, Any]:  # fmt: skip
+def publish_phase(
+    folders: tuple[str, ...], out: Path, guard: EnvelopeGuard | None, allocation: bool = False
+) -> dict[str, Any]:
     """Write the phase's results folder ``out`` (module docstring); returns its summary."""
     plan, runs = _runs(folders)
     template = plan["init_from"]
     history = Path(template.format(seed=0)).parent
     if Path(template).parent != history or Path(template).name != f"{SEED_AGENT_PREFIX}{{seed}}":
-        raise ValueError(f"init_from {template!r} is not '<results folder>/"
-                         f"{SEED_AGENT_PREFIX}{{seed}}'")  # fmt: skip
+        raise ValueError(
+            f"init_from {template!r} is not '<results folder>/{SEED_AGENT_PREFIX}{{seed}}'"
+        )
     if out.exists() and any(out.iterdir()):
         raise ValueError(f"--out {out} is not empty")
     if out.resolve() == history.resolve():
         raise ValueError("--out must differ from the history folder")
-    entries = sorted((e for _, summary in runs for e in summary["seeds"]),
-                     key=lambda e: e["seed"])  # fmt: skip
-    invocations = [{"folder": str(run), "seeds": summary["plan"]["seeds"],
-                    "session_wall_time_s": summary["session_wall_time_s"]}
-                   for run, summary in runs]  # fmt: skip
+    entries = sorted((e for _, summary in runs for e in summary["seeds"]), key=lambda e: e["seed"])
+    invocations = [
+        {
+            "folder": str(run),
+            "seeds": summary["plan"]["seeds"],
+            "session_wall_time_s": summary["session_wall_time_s"],
+        }
+        for run, summary in runs
+    ]
     merged = {
         "plan": {**plan, "seeds": [e["seed"] for e in entries]},
         "seeds": entries,
@@ -167,7 +179,7 @@ def publish_phase(folders: tuple[str, ...], out: Path, guard: EnvelopeGuard | No
         "history": str(history),
         "runs": invocations,
         "session_wall_time_s": sum(r["session_wall_time_s"] for r in invocations),
-    }  # fmt: skip
+    }
 
     def fill(folder: Path) -> None:
         for run, summary in runs:
@@ -179,8 +191,9 @@ def publish_phase(folders: tuple[str, ...], out: Path, guard: EnvelopeGuard | No
     return merged
 
 
-def _publish_seed(run: Path, seed: int, history: Path, out: Path, guard: EnvelopeGuard | None,
-                  allocation: bool) -> None:  # fmt: skip
+def _publish_seed(
+    run: Path, seed: int, history: Path, out: Path, guard: EnvelopeGuard | None, allocation: bool
+) -> None:
     """The agent and the two curves of one seed of ``run`` in ``out``."""
     final = seed_dir(run, seed) / "final"
     whole = _read_curve(history / LEARNING_CURVE.format(seed=seed))

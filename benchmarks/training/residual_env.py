@@ -68,8 +68,9 @@ class ResidualVectorEnv(VectorWrapper):
     def __init__(self, env: Any, settings: ResidualTraining | None = None) -> None:
         core = getattr(env, "unwrapped", None)
         if not isinstance(core, AUVPath3DVectorEnv):
-            raise ValueError(f"ResidualVectorEnv wraps an AUVPath3DVectorEnv, got "
-                             f"{type(env).__name__}")  # fmt: skip
+            raise ValueError(
+                f"ResidualVectorEnv wraps an AUVPath3DVectorEnv, got {type(env).__name__}"
+            )
         super().__init__(env)
         self.core = core
         self.settings = settings if settings is not None else ResidualTraining()
@@ -104,15 +105,23 @@ class ResidualVectorEnv(VectorWrapper):
             rows = actuators == name
             if rows.any():
                 action, self._states[name] = controller.predict(
-                    obs, state=self._states[name], episode_start=episode_start,
+                    obs,
+                    state=self._states[name],
+                    episode_start=episode_start,
                     deterministic=True,
-                )  # fmt: skip
+                )
                 out[rows] = np.asarray(action, np.float32).reshape(-1, 3)[rows]
         self._actuators = actuators
         return out
 
-    def _base_predict_rows(self, obs: np.ndarray, rows: np.ndarray, episode_start: bool,
-                           actuators: np.ndarray, keep: bool) -> np.ndarray:  # fmt: skip
+    def _base_predict_rows(
+        self,
+        obs: np.ndarray,
+        rows: np.ndarray,
+        episode_start: bool,
+        actuators: np.ndarray,
+        keep: bool,
+    ) -> np.ndarray:
         """b for ``rows`` only, on copies of their controller states (written back if
         ``keep``): partial resets, and the final observations of ended episodes (not kept)."""
         out = np.empty((rows.size, 3), np.float32)
@@ -124,8 +133,9 @@ class ResidualVectorEnv(VectorWrapper):
             full = self._states[name]
             sub = None if full is None else {k: v[chosen] for k, v in full.items()}
             start = np.full(chosen.size, episode_start)
-            action, sub = controller.predict(obs[chosen], state=sub, episode_start=start,
-                                             deterministic=True)  # fmt: skip
+            action, sub = controller.predict(
+                obs[chosen], state=sub, episode_start=start, deterministic=True
+            )
             out[pick] = np.asarray(action, np.float32).reshape(-1, 3)
             if keep:
                 if full is None:  # first use: a fresh state for every vehicle, then these rows
@@ -135,8 +145,9 @@ class ResidualVectorEnv(VectorWrapper):
         return out
 
     # --------------------------------------------------------------------------------- API
-    def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None
-              ) -> tuple[np.ndarray, dict[str, Any]]:  # fmt: skip
+    def reset(
+        self, *, seed: Any = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
         """Reset as the vector env does; the base controllers restart for the reset vehicles."""
         obs, info = self.env.reset(seed=seed, options=options)
         mask = (options or {}).get("reset_mask")
@@ -155,15 +166,22 @@ class ResidualVectorEnv(VectorWrapper):
         info["base_action"], info["_base_action"] = self._base.copy(), mask.copy()
         return agent_observation(obs, self._base, self._previous), info
 
-    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                                          dict[str, Any]]:  # fmt: skip
+    def step(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Apply base + bounded correction, charge chattering, run the base on the new
         observation. A NaN or inf correction raises ValueError before any vehicle moves."""
         if not self._ever_reset:
             raise RuntimeError("call reset() before step()")
         correction = validate_actions(actions, (self.num_envs, self.settings.action_dim))
-        applied = residual_action(self._base, correction, self.bound, self.settings.filter_max,
-                                  self._previous, self._started)  # fmt: skip
+        applied = residual_action(
+            self._base,
+            correction,
+            self.bound,
+            self.settings.filter_max,
+            self._previous,
+            self._started,
+        )
         obs, reward, terminated, truncated, info = self.env.step(applied)
         stepped = ~self._pending  # NEXT_STEP: vehicles reset by this step did not move
         variation = np.abs(applied.astype(np.float64) - self._previous).sum(axis=1)
@@ -177,8 +195,9 @@ class ResidualVectorEnv(VectorWrapper):
             if mode is AutoresetMode.SAME_STEP and done.any():  # info holds the new episodes'
                 distance = np.where(done, info["final_info"]["distance"], distance)
             scaled = distance / self.settings.precision_scale
-            bonus = np.where(stepped, self.settings.precision_weight * np.exp(-scaled * scaled),
-                             0.0)  # fmt: skip
+            bonus = np.where(
+                stepped, self.settings.precision_weight * np.exp(-scaled * scaled), 0.0
+            )
             reward = reward + bonus
         fresh = self._pending.copy() if mode is AutoresetMode.NEXT_STEP else np.zeros_like(done)
         if mode is AutoresetMode.SAME_STEP and done.any():
@@ -191,8 +210,9 @@ class ResidualVectorEnv(VectorWrapper):
             final_base = self._base_predict_rows(final, rows, False, self._actuators, keep=False)
             boxed = info["final_obs"].copy()
             for j, i in enumerate(rows):
-                boxed[i] = agent_observation(final_obs[j : j + 1], final_base[j : j + 1],
-                                             applied[i : i + 1])[0]  # fmt: skip
+                boxed[i] = agent_observation(
+                    final_obs[j : j + 1], final_base[j : j + 1], applied[i : i + 1]
+                )[0]
             info["final_obs"] = boxed
             final_info = info["final_info"]
             final_info[CHATTERING_KEY] = np.where(done, charge, 0.0)
@@ -239,9 +259,13 @@ def make_residual_sb3_env(
     keyword arguments as `auv_gym.sb3.make_sb3_vec_env`."""
     from auv_gym.sb3 import SB3VecEnv
 
-    core = AUVPath3DVectorEnv(num_envs, max_episode_steps=max_episode_steps,
-                              autoreset_mode=AutoresetMode.SAME_STEP, threads=threads,
-                              **env_kwargs)  # fmt: skip
+    core = AUVPath3DVectorEnv(
+        num_envs,
+        max_episode_steps=max_episode_steps,
+        autoreset_mode=AutoresetMode.SAME_STEP,
+        threads=threads,
+        **env_kwargs,
+    )
     venv = SB3VecEnv(ResidualVectorEnv(core, settings))
     if seed is not None:
         venv.seed(seed)

@@ -75,8 +75,10 @@ def train_one_seed(train_opts: dict[str, Any], status: str) -> dict[str, Any]:
     if status == "fresh" and run.exists():
         shutil.rmtree(run)  # killed before its first checkpoint: nothing to keep
     if status in ("fresh", "resume"):
-        train(replace(opts, resume=status == "resume", export=None),
-              argv=["benchmarks.train_seeds", f"--seed={opts.seed}"])  # fmt: skip
+        train(
+            replace(opts, resume=status == "resume", export=None),
+            argv=["benchmarks.train_seeds", f"--seed={opts.seed}"],
+        )
     best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
     if not (best / HELD_OUT_FILE).is_file():
         write_held_out_evaluation(best, opts.eval_duration, opts.env_id)
@@ -90,12 +92,15 @@ def seed_entry(run: Path) -> dict[str, Any]:
     report = json.loads((best / HELD_OUT_FILE).read_text())
     validation = final.get("best", {})
     return {
-        "seed": final["seed"], "agent": str(best), "num_timesteps": final["num_timesteps"],
+        "seed": final["seed"],
+        "agent": str(best),
+        "num_timesteps": final["num_timesteps"],
         "wall_time_s": final["wall_time_s"],
         "validation_score": validation.get("score"),
         "validation_num_timesteps": validation.get("num_timesteps"),
-        "validation_summary": validation.get("summary"), "test_summary": report["summary"],
-    }  # fmt: skip
+        "validation_summary": validation.get("summary"),
+        "test_summary": report["summary"],
+    }
 
 
 def _child(train_opts: dict[str, Any], status: str, log: str, parent_pid: int) -> None:
@@ -125,8 +130,9 @@ def _steps_done(out: Path, seed: int) -> int:
         return 0
 
 
-def run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: Path,
-               bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
+def run_local(
+    jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: Path, bar: Any, poll_s: float
+) -> dict[int, str]:
     """Run the jobs as spawned processes, ``workers`` at once; seed → error text (failures)."""
     ctx = multiprocessing.get_context("spawn")  # numba's threads are not fork-safe
     pending = list(jobs)
@@ -138,16 +144,19 @@ def run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: Pa
                 seed, train_opts, status = pending.pop(0)
                 log = out / LOGS / f"seed_{seed}.log"
                 log.parent.mkdir(parents=True, exist_ok=True)
-                proc = ctx.Process(target=_child, args=(train_opts, status, str(log), os.getpid()),
-                                   daemon=False)  # fmt: skip
+                proc = ctx.Process(
+                    target=_child, args=(train_opts, status, str(log), os.getpid()), daemon=False
+                )
                 proc.start()
                 running[proc.sentinel] = (seed, proc)
             for sentinel in wait(list(running), timeout=poll_s):
                 seed, proc = running.pop(sentinel)
                 proc.join()
                 if proc.exitcode != 0:
-                    failures[seed] = (f"seed {seed} failed (exit code {proc.exitcode}); see "
-                                      f"{out / LOGS / f'seed_{seed}.log'}")  # fmt: skip
+                    failures[seed] = (
+                        f"seed {seed} failed (exit code {proc.exitcode}); see "
+                        f"{out / LOGS / f'seed_{seed}.log'}"
+                    )
             _update(bar, out, [s for s, *_ in jobs])
     finally:
         for _, proc in running.values():  # an exception or Ctrl-C here: stop the workers
@@ -156,8 +165,14 @@ def run_local(jobs: list[tuple[int, dict[str, Any], str]], workers: int, out: Pa
     return failures
 
 
-def run_ray(jobs: list[tuple[int, dict[str, Any], str]], address: str | None, workers: int,
-             out: Path, bar: Any, poll_s: float) -> dict[int, str]:  # fmt: skip
+def run_ray(
+    jobs: list[tuple[int, dict[str, Any], str]],
+    address: str | None,
+    workers: int,
+    out: Path,
+    bar: Any,
+    poll_s: float,
+) -> dict[int, str]:
     # a new local instance gets ``workers`` CPUs; a cluster has its own
     local = {"num_cpus": workers, "include_dashboard": False} if address is None else {}
     ray = connect_ray(address, **local)

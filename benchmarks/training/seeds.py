@@ -82,8 +82,19 @@ __all__ = [
 PLAN_FILE = "train_seeds.json"
 SUMMARY_FILE = "summary.json"
 # Plan entries that must match when a run is resumed (the rest may change: workers, backend).
-PLAN_KEYS = ("algo", "env_id", "config", "n_timesteps", "eval_seeds", "eval_duration",
-             "eval_freq", "checkpoint_freq", "task_set", "eval_env", "vec_env")  # fmt: skip
+PLAN_KEYS = (
+    "algo",
+    "env_id",
+    "config",
+    "n_timesteps",
+    "eval_seeds",
+    "eval_duration",
+    "eval_freq",
+    "checkpoint_freq",
+    "task_set",
+    "eval_env",
+    "vec_env",
+)
 
 
 def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
@@ -104,8 +115,10 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     train = opts.train
     check_options(replace(train, init_from=None))  # each seed's agent is checked below
     if train.eval_freq < 1:
-        raise ValueError("eval_freq must be positive: the shipped agent is selected on the "
-                         "validation evaluations")  # fmt: skip
+        raise ValueError(
+            "eval_freq must be positive: the shipped agent is selected on the "
+            "validation evaluations"
+        )
     check_evaluation_window(train.eval_duration)
     for seed in opts.seeds if train.init_from else ():
         check_warm_start(agent_for_seed(train.init_from, seed), train.algo)
@@ -114,16 +127,27 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
-        raise ValueError(f"stop_at {train.stop_at} is not a multiple of the config's n_envs "
-                         f"({cfg.n_envs}): a run pauses after whole vector steps")  # fmt: skip
+        raise ValueError(
+            f"stop_at {train.stop_at} is not a multiple of the config's n_envs "
+            f"({cfg.n_envs}): a run pauses after whole vector steps"
+        )
     plan = {
-        "algo": train.algo, "env_id": train.env_id, "config": cfg.raw,
-        "config_file": str(train.config), "n_timesteps": n_timesteps, "stop_at": train.stop_at,
-        "eval_seeds": list(train.eval_seeds), "eval_duration": float(train.eval_duration),
-        "eval_freq": train.eval_freq, "checkpoint_freq": train.checkpoint_freq,
-        "task_set": opts.task_set, "eval_env": train.eval_env, "vec_env": train.vec_env,
-        "seeds": list(opts.seeds), "init_from": train.init_from,
-    }  # fmt: skip
+        "algo": train.algo,
+        "env_id": train.env_id,
+        "config": cfg.raw,
+        "config_file": str(train.config),
+        "n_timesteps": n_timesteps,
+        "stop_at": train.stop_at,
+        "eval_seeds": list(train.eval_seeds),
+        "eval_duration": float(train.eval_duration),
+        "eval_freq": train.eval_freq,
+        "checkpoint_freq": train.checkpoint_freq,
+        "task_set": opts.task_set,
+        "eval_env": train.eval_env,
+        "vec_env": train.vec_env,
+        "seeds": list(opts.seeds),
+        "init_from": train.init_from,
+    }
     out = Path(opts.out)
     plan_file = out / PLAN_FILE
     if opts.resume:
@@ -132,8 +156,10 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         previous = json.loads(plan_file.read_text())
         for key in PLAN_KEYS:
             if previous.get(key) != plan[key]:
-                raise ValueError(f"--resume: {key} was {previous.get(key)!r} in {plan_file}, "
-                                 f"now {plan[key]!r}; resume with the same settings")  # fmt: skip
+                raise ValueError(
+                    f"--resume: {key} was {previous.get(key)!r} in {plan_file}, "
+                    f"now {plan[key]!r}; resume with the same settings"
+                )
         # A pause only moves forward: a lower target than last time must not leave seeds past
         # it (a run itself may end up to one rollout past its target, as PPO collects them).
         target = target_timesteps(n_timesteps, train.stop_at)
@@ -141,8 +167,10 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         for seed in opts.seeds if target < before else ():
             done = seed_progress(seed_dir(out, seed))
             if done > target:
-                raise ValueError(f"--resume: seed {seed} has already trained {done} env steps, "
-                                 f"past the target {target}; use --stop-at >= {done}")  # fmt: skip
+                raise ValueError(
+                    f"--resume: seed {seed} has already trained {done} env steps, "
+                    f"past the target {target}; use --stop-at >= {done}"
+                )
     elif holds_work(out):
         raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
     _check_writable(out)
@@ -181,19 +209,25 @@ def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
     sets = load_task_sets()
     validation = sorted(name for name, s in sets.items() if s.role == "validation")
     if opts.task_set not in sets or sets[opts.task_set].role != "validation":
-        raise ValueError(f"task set {opts.task_set!r} is not a validation set; valid: "
-                         f"{sorted(TASK_SETS) + validation}")  # fmt: skip
+        raise ValueError(
+            f"task set {opts.task_set!r} is not a validation set; valid: "
+            f"{sorted(TASK_SETS) + validation}"
+        )
     chosen = sets[opts.task_set]
     seeds = tuple(opts.train.eval_seeds)
     if seeds == tuple(EVAL_SEEDS):  # the paper default: take the set's own seeds
         if not 1 <= opts.eval_episodes <= len(chosen.seeds):
-            raise ValueError(f"eval_episodes must be 1-{len(chosen.seeds)} (the size of task set "
-                             f"{chosen.name!r}), got {opts.eval_episodes}")  # fmt: skip
+            raise ValueError(
+                f"eval_episodes must be 1-{len(chosen.seeds)} (the size of task set "
+                f"{chosen.name!r}), got {opts.eval_episodes}"
+            )
         seeds = tuple(chosen.seeds[: opts.eval_episodes])
     outside = sorted(set(seeds) - set(chosen.seeds))
     if outside:
-        raise ValueError(f"eval seeds {outside[:5]} lie outside task set {chosen.name!r} (seeds "
-                         f"{chosen.seeds.start}-{chosen.seeds.stop - 1})")  # fmt: skip
+        raise ValueError(
+            f"eval seeds {outside[:5]} lie outside task set {chosen.name!r} (seeds "
+            f"{chosen.seeds.start}-{chosen.seeds.stop - 1})"
+        )
     train = replace(opts.train, eval_env=dict(chosen.env), eval_seeds=seeds)
     return replace(opts, train=train)
 
@@ -273,17 +307,29 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
         if status == "done":
             done_steps += n_timesteps
             continue
-        train_opts = asdict(replace(opts.train, seed=seed, out=str(seed_dir(out, seed)),
-                                    n_timesteps=plan["n_timesteps"], progress_bar=False,
-                                    export=None, resume=False))  # fmt: skip
+        train_opts = asdict(
+            replace(
+                opts.train,
+                seed=seed,
+                out=str(seed_dir(out, seed)),
+                n_timesteps=plan["n_timesteps"],
+                progress_bar=False,
+                export=None,
+                resume=False,
+            )
+        )
         train_opts["eval_seeds"] = tuple(train_opts["eval_seeds"])
         jobs.append((seed, train_opts, status))
     bar = None
     if opts.progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=n_timesteps * len(opts.seeds), initial=done_steps, unit="step",
-                   desc=f"{plan['algo']} × {len(opts.seeds)} seeds")  # fmt: skip
+        bar = tqdm(
+            total=n_timesteps * len(opts.seeds),
+            initial=done_steps,
+            unit="step",
+            desc=f"{plan['algo']} × {len(opts.seeds)} seeds",
+        )
     t0 = time.monotonic()
     if opts.backend == "ray":
         failures = run_ray(jobs, opts.address, opts.workers, out, bar, opts.poll_s)
@@ -296,12 +342,14 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
     entries = [seed_entry(seed_dir(out, seed)) for seed in opts.seeds]
     chosen = select(entries)
     summary = {
-        "plan": plan, "seeds": entries, "selected_seed": chosen["seed"],
+        "plan": plan,
+        "seeds": entries,
+        "selected_seed": chosen["seed"],
         "selection": "lowest validation score (terminated episodes, then mean rms distance"
-                     f"{_chattering_clause(plan)}) on eval_seeds; test episodes are never used "
-                     "to choose",
+        f"{_chattering_clause(plan)}) on eval_seeds; test episodes are never used "
+        "to choose",
         "session_wall_time_s": time.monotonic() - t0,
-    }  # fmt: skip
+    }
     write_json(out / SUMMARY_FILE, summary, indent=2, sort_keys=True)
     if opts.results:
         _write_results(Path(opts.results), out, entries, summary)
@@ -312,8 +360,9 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
     return summary
 
 
-def _write_results(results: Path, out: Path, entries: Sequence[dict[str, Any]],
-                   summary: dict[str, Any]) -> None:  # fmt: skip
+def _write_results(
+    results: Path, out: Path, entries: Sequence[dict[str, Any]], summary: dict[str, Any]
+) -> None:
     """Per seed: its selected agent (``agent_seed_<k>/``, so every seed can be re-evaluated on
     the whole test suite, `benchmarks.evaluate_suite`), the test evaluation and the learning
     curve; and the summary (all atomic). Files an earlier run with other seeds wrote there are
@@ -325,8 +374,11 @@ def _write_results(results: Path, out: Path, entries: Sequence[dict[str, Any]],
         export_agent(Path(entry["agent"]), agent)
         written += [f for f in agent.iterdir() if f.is_file()]
         report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
-        written.append(write_json(results / f"seed_{seed}_test_evaluation.json", report,
-                                  indent=2, sort_keys=True))  # fmt: skip
+        written.append(
+            write_json(
+                results / f"seed_{seed}_test_evaluation.json", report, indent=2, sort_keys=True
+            )
+        )
         curve = seed_dir(out, seed) / EVAL_FILE
         written.append(write_text(results / f"seed_{seed}_learning_curve.csv", curve.read_text()))
     write_json(results / SUMMARY_FILE, summary, indent=2, sort_keys=True)

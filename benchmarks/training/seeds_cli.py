@@ -28,8 +28,15 @@ HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
 # The options of each dataclass, in the order --help lists them.
 TRAIN_FIRST = ("algo", "config", "env_id", "init_from")
 SEEDS_FIRST = ("seeds", "workers", "backend", "address", "out", "resume")
-TRAIN_BUDGET = ("n_timesteps", "stop_at", "eval_seeds", "eval_duration", "eval_freq",
-                "checkpoint_freq", "keep_checkpoints")  # fmt: skip
+TRAIN_BUDGET = (
+    "n_timesteps",
+    "stop_at",
+    "eval_seeds",
+    "eval_duration",
+    "eval_freq",
+    "checkpoint_freq",
+    "keep_checkpoints",
+)
 SEEDS_EVALUATION = ("task_set", "eval_episodes")
 TRAIN_ENVS = ("vec_env", "threads")
 SEEDS_OUTPUTS = ("export", "results", "progress")
@@ -39,12 +46,19 @@ def build_parser() -> argparse.ArgumentParser:
     from benchmarks.arguments import program_name
     from benchmarks.cli import HelpFormatter
 
-    p = ArgumentParser(prog=program_name("benchmarks.train_seeds"),
-                       description=__doc__.split("\n\n")[0],
-                       formatter_class=HelpFormatter)  # fmt: skip
-    for cls, names in ((TrainOptions, TRAIN_FIRST), (SeedsOptions, SEEDS_FIRST),
-                       (TrainOptions, TRAIN_BUDGET), (SeedsOptions, SEEDS_EVALUATION),
-                       (TrainOptions, TRAIN_ENVS), (SeedsOptions, SEEDS_OUTPUTS)):  # fmt: skip
+    p = ArgumentParser(
+        prog=program_name("benchmarks.train_seeds"),
+        description=__doc__.split("\n\n")[0],
+        formatter_class=HelpFormatter,
+    )
+    for cls, names in (
+        (TrainOptions, TRAIN_FIRST),
+        (SeedsOptions, SEEDS_FIRST),
+        (TrainOptions, TRAIN_BUDGET),
+        (SeedsOptions, SEEDS_EVALUATION),
+        (TrainOptions, TRAIN_ENVS),
+        (SeedsOptions, SEEDS_OUTPUTS),
+    ):
         add_options(p, cls, names, negatable=False)
     return p
 
@@ -56,8 +70,7 @@ def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
         ns.config = str(HYPERPARAMS / f"{ns.algo}.yml")
     train_names = TRAIN_FIRST + TRAIN_BUDGET + TRAIN_ENVS
     train = from_args(TrainOptions, ns, train_names, progress_bar=False)
-    return from_args(SeedsOptions, ns, SEEDS_FIRST + SEEDS_EVALUATION + SEEDS_OUTPUTS,
-                     train=train)  # fmt: skip
+    return from_args(SeedsOptions, ns, SEEDS_FIRST + SEEDS_EVALUATION + SEEDS_OUTPUTS, train=train)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -8,8 +8,14 @@ from dataclasses import dataclass
 from benchmarks.options import option
 from benchmarks.training.train import TrainOptions
 
-__all__ = ["DEFAULT_EVAL_EPISODES", "MAX_SEED", "MAX_SEEDS", "TASK_SETS", "SeedsOptions",
-           "parse_seeds"]  # fmt: skip
+__all__ = [
+    "DEFAULT_EVAL_EPISODES",
+    "MAX_SEED",
+    "MAX_SEEDS",
+    "TASK_SETS",
+    "SeedsOptions",
+    "parse_seeds",
+]
 
 # Validation episodes (model selection): "paper", the paper scenario (helix, white noise
 # ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
@@ -55,8 +61,10 @@ def parse_seeds(text: str) -> tuple[int, ...]:
     if min(seeds) < 0:
         raise ValueError(f"--seeds {text!r}: seeds must be non-negative, got {min(seeds)}")
     if max(seeds) > MAX_SEED:
-        raise ValueError(f"--seeds {text!r}: seeds must be at most {MAX_SEED} (numpy's seed "
-                         f"range), got {max(seeds)}")  # fmt: skip
+        raise ValueError(
+            f"--seeds {text!r}: seeds must be at most {MAX_SEED} (numpy's seed "
+            f"range), got {max(seeds)}"
+        )
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"--seeds {text!r} repeats a seed")
     return seeds
@@ -64,8 +72,10 @@ def parse_seeds(text: str) -> tuple[int, ...]:
 
 def _check_count(count: int, text: str) -> None:
     if count > MAX_SEEDS:
-        raise ValueError(f"--seeds {text!r} selects {count} seeds, more than {MAX_SEEDS}: "
-                         "every seed is a whole training run")  # fmt: skip
+        raise ValueError(
+            f"--seeds {text!r} selects {count} seeds, more than {MAX_SEEDS}: "
+            "every seed is a whole training run"
+        )
 
 
 @dataclass
@@ -73,20 +83,24 @@ class SeedsOptions:
     """Arguments of `train_seeds` (CLI `python -m benchmarks.train_seeds`)."""
 
     train: TrainOptions  # the per-seed options; `out` and `seed` are set per seed
-    seeds: tuple[int, ...] = option((0,), "count N, range a-b or list a,b,c", parse=parse_seeds,
-                                    required=True)  # fmt: skip
+    seeds: tuple[int, ...] = option(
+        (0,), "count N, range a-b or list a,b,c", parse=parse_seeds, required=True
+    )
     out: str = option("runs/seeds", "multi-seed run directory", required=True)
     workers: int = option(2, "seeds trained at once")
     backend: str = option("local", "local processes or a Ray cluster", choices=("local", "ray"))
     # None: a local Ray instance.
     address: str | None = option(None, "Ray cluster address (host:port)")
     resume: bool = option(False, "continue every unfinished seed")
-    task_set: str = option("paper", f"validation episodes: {sorted(TASK_SETS)} or a validation "
-                           "set of benchmarks/tasks.toml (e.g. 'validation')")  # fmt: skip
-    eval_episodes: int = option(DEFAULT_EVAL_EPISODES, "validation episodes taken from a task "
-                                "set (its first seeds)")  # fmt: skip
+    task_set: str = option(
+        "paper",
+        f"validation episodes: {sorted(TASK_SETS)} or a validation "
+        "set of benchmarks/tasks.toml (e.g. 'validation')",
+    )
+    eval_episodes: int = option(
+        DEFAULT_EVAL_EPISODES, "validation episodes taken from a task set (its first seeds)"
+    )
     export: str | None = option(None, "copy the selected agent here")
-    results: str | None = option(None, "write every seed's test evaluation and learning curve "
-                                 "here")  # fmt: skip
+    results: str | None = option(None, "write every seed's test evaluation and learning curve here")
     progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
     poll_s: float = 5.0  # [s] between progress updates

@@ -187,8 +187,9 @@ def check_options(opts: TrainOptions) -> None:
     if opts.algo not in ALGORITHMS:
         raise ValueError(f"algo {opts.algo!r} is unknown; valid: {sorted(ALGORITHMS)}")
     if opts.n_timesteps is not None and not opts.n_timesteps >= 1:
-        raise ValueError(f"n_timesteps must be a positive number of env steps, got "
-                         f"{opts.n_timesteps}")  # fmt: skip
+        raise ValueError(
+            f"n_timesteps must be a positive number of env steps, got {opts.n_timesteps}"
+        )
     if opts.stop_at is not None and not opts.stop_at >= 1:
         raise ValueError(f"stop_at must be a positive number of env steps, got {opts.stop_at}")
     if opts.update_threads < 0:
@@ -197,8 +198,9 @@ def check_options(opts: TrainOptions) -> None:
         if not getattr(opts, name) >= 1:
             raise ValueError(f"{name} must be a positive integer, got {getattr(opts, name)}")
     if opts.eval_freq < 0:
-        raise ValueError(f"eval_freq must be >= 0 env steps (0: no evaluation), got "
-                         f"{opts.eval_freq}")  # fmt: skip
+        raise ValueError(
+            f"eval_freq must be >= 0 env steps (0: no evaluation), got {opts.eval_freq}"
+        )
     seeds = tuple(opts.eval_seeds)
     if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
         raise ValueError(f"eval_seeds must be distinct non-negative integers, got {list(seeds)}")
@@ -226,8 +228,12 @@ def _eval_kwargs(opts: TrainOptions, env_kwargs: dict[str, Any]) -> dict[str, An
     fixed arguments (the surge limit of AUVPath3DSpeedLimit-v0) and the training env's
     observation, `eval_duration` long."""
     seen = {"observation": env_kwargs["observation"]} if "observation" in env_kwargs else {}
-    return {**VARIANTS.get(opts.env_id, {}), **seen, **opts.eval_env,
-            "max_time": float(opts.eval_duration)}  # fmt: skip
+    return {
+        **VARIANTS.get(opts.env_id, {}),
+        **seen,
+        **opts.eval_env,
+        "max_time": float(opts.eval_duration),
+    }
 
 
 def observation_layout_of(env_id: str, env_kwargs: dict[str, Any]) -> ObservationConfig:
@@ -277,8 +283,15 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     set_random_seed(opts.seed)
     residual = cfg.residual
     # One thread: the serial kernel at every N (numba's pool would run it on one thread anyway).
-    venv = make_training_env(cfg.n_envs, opts.seed, cfg.env_kwargs, opts.vec_env, opts.env_id,
-                             residual, threads=1 if opts.threads == 1 else None)  # fmt: skip
+    venv = make_training_env(
+        cfg.n_envs,
+        opts.seed,
+        cfg.env_kwargs,
+        opts.vec_env,
+        opts.env_id,
+        residual,
+        threads=1 if opts.threads == 1 else None,
+    )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
     venv, increment = wrap_actions(venv, cfg, obs_names)
@@ -295,8 +308,13 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         warm = previous.get("warm_start")
         venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
         venv.training = True
-        model = algorithm.load(checkpoint / MODEL_FILE, env=venv, device="cpu",
-                               tensorboard_log=str(out / "tb"), verbose=opts.verbose)  # fmt: skip
+        model = algorithm.load(
+            checkpoint / MODEL_FILE,
+            env=venv,
+            device="cpu",
+            tensorboard_log=str(out / "tb"),
+            verbose=opts.verbose,
+        )
         if spec.off_policy and (checkpoint / REPLAY_FILE).is_file():
             model.load_replay_buffer(checkpoint / REPLAY_FILE)
         state = read_training_state(checkpoint)
@@ -315,23 +333,34 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     else:
         venv = VecNormalize(venv, **cfg.normalize)
         pin_scales(venv, cfg, obs_names)
-        model = algorithm(cfg.policy, venv, policy_kwargs=cfg.policy_kwargs, seed=opts.seed,
-                          device="cpu", tensorboard_log=str(out / "tb"), verbose=opts.verbose,
-                          **cfg.model_kwargs())  # fmt: skip
+        model = algorithm(
+            cfg.policy,
+            venv,
+            policy_kwargs=cfg.policy_kwargs,
+            seed=opts.seed,
+            device="cpu",
+            tensorboard_log=str(out / "tb"),
+            verbose=opts.verbose,
+            **cfg.model_kwargs(),
+        )
         if residual is not None:
             zero_correction_layer(model)
         if opts.init_from:
-            warm = warm_start(model, venv, agent_for_seed(opts.init_from, opts.seed), opts.algo,
-                              obs_names)  # fmt: skip
+            warm = warm_start(
+                model, venv, agent_for_seed(opts.init_from, opts.seed), opts.algo, obs_names
+            )
     start_wall = float(previous.get("wall_time_s", 0.0))
     best: dict[str, Any] = dict(previous.get("best", {}))
-    sessions = [*previous.get("sessions", []), {
-        "argv": list(argv if argv is not None else sys.argv),
-        "started": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-        "resumed_from": None if checkpoint is None else str(checkpoint),
-        "exact_resume": None if checkpoint is None else state is not None,
-        "start_timesteps": int(model.num_timesteps),
-    }]  # fmt: skip
+    sessions = [
+        *previous.get("sessions", []),
+        {
+            "argv": list(argv if argv is not None else sys.argv),
+            "started": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+            "resumed_from": None if checkpoint is None else str(checkpoint),
+            "exact_resume": None if checkpoint is None else state is not None,
+            "start_timesteps": int(model.num_timesteps),
+        },
+    ]
     t0 = time.monotonic()
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
     if residual is None:  # the held-out evaluation and the benchmark build its env from this
@@ -340,24 +369,42 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:
         return {
-            "algo": opts.algo, "env_id": opts.env_id, "seed": opts.seed,
-            "num_timesteps": int(model.num_timesteps), "n_timesteps": n_timesteps,
+            "algo": opts.algo,
+            "env_id": opts.env_id,
+            "seed": opts.seed,
+            "num_timesteps": int(model.num_timesteps),
+            "n_timesteps": n_timesteps,
             "wall_time_s": start_wall + (time.monotonic() - t0),
-            "command": " ".join(sessions[0]["argv"]), "sessions": sessions,
-            "options": asdict(opts), "config_file": str(opts.config), "config": cfg.raw,
-            "env_kwargs": cfg.env_kwargs, "eval_env_kwargs": eval_kwargs,
-            "eval_seeds": list(opts.eval_seeds), "obs_names": list(obs_names),
-            "observation_shape": [len(obs_names)], "action_shape": [action_dim], **residual_meta,
+            "command": " ".join(sessions[0]["argv"]),
+            "sessions": sessions,
+            "options": asdict(opts),
+            "config_file": str(opts.config),
+            "config": cfg.raw,
+            "env_kwargs": cfg.env_kwargs,
+            "eval_env_kwargs": eval_kwargs,
+            "eval_seeds": list(opts.eval_seeds),
+            "obs_names": list(obs_names),
+            "observation_shape": [len(obs_names)],
+            "action_shape": [action_dim],
+            **residual_meta,
             **({} if increment is None else {"action_increment": increment[0]}),
             **({} if cfg.action_scale is None else {"action_scale": list(cfg.action_scale)}),
-            **({} if cfg.envelope_guard is None
-               else {"envelope_guard": cfg.envelope_guard.to_dict()}),
-            "versions": versions(), "sb3_version": stable_baselines3.__version__,
-            "git_commit": git_commit(), "vec_env": describe_env(venv),
-            "torch_threads": torch.get_num_threads(), "cpu_count": os.cpu_count(),
-            "best": best, "auv_gym_version": auv_gym.__version__,
-            **({} if warm is None else {"warm_start": warm}), **extra,
-        }  # fmt: skip
+            **(
+                {}
+                if cfg.envelope_guard is None
+                else {"envelope_guard": cfg.envelope_guard.to_dict()}
+            ),
+            "versions": versions(),
+            "sb3_version": stable_baselines3.__version__,
+            "git_commit": git_commit(),
+            "vec_env": describe_env(venv),
+            "torch_threads": torch.get_num_threads(),
+            "cpu_count": os.cpu_count(),
+            "best": best,
+            "auv_gym_version": auv_gym.__version__,
+            **({} if warm is None else {"warm_start": warm}),
+            **extra,
+        }
 
     schedules = {} if state is None else state["schedules"]
     callbacks: list[Any] = []
@@ -370,25 +417,44 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         callbacks.append(UpdateThreads(opts.threads, opts.update_threads))
     evaluation = None
     if opts.eval_freq > 0:
-        evaluation = PeriodicEvaluation(out, opts.eval_freq, opts.eval_seeds, eval_kwargs,
-                                        metadata, start_wall, best, opts.verbose, residual,
-                                        next_eval=schedules.get("next_eval"),
-                                        increment=increment, scale=cfg.action_scale,
-                                        guard=None if cfg.envelope_guard is None
-                                        else (cfg.envelope_guard, obs_names))  # fmt: skip
+        evaluation = PeriodicEvaluation(
+            out,
+            opts.eval_freq,
+            opts.eval_seeds,
+            eval_kwargs,
+            metadata,
+            start_wall,
+            best,
+            opts.verbose,
+            residual,
+            next_eval=schedules.get("next_eval"),
+            increment=increment,
+            scale=cfg.action_scale,
+            guard=None if cfg.envelope_guard is None else (cfg.envelope_guard, obs_names),
+        )
         callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)
 
     def training_state(phase: str) -> dict[str, Any]:
-        return capture_training_state(model, phase, {
-            "next_eval": None if evaluation is None else evaluation.next_eval,
-            "next_checkpoint": checkpoints.next_checkpoint,
-        })  # fmt: skip
+        return capture_training_state(
+            model,
+            phase,
+            {
+                "next_eval": None if evaluation is None else evaluation.next_eval,
+                "next_checkpoint": checkpoints.next_checkpoint,
+            },
+        )
 
-    checkpoints = PeriodicCheckpoint(out, opts.checkpoint_freq, opts.keep_checkpoints, metadata,
-                                     replay_buffer=spec.off_policy, state=training_state,
-                                     stop_at=target if target < n_timesteps else None,
-                                     next_checkpoint=schedules.get("next_checkpoint"))  # fmt: skip
+    checkpoints = PeriodicCheckpoint(
+        out,
+        opts.checkpoint_freq,
+        opts.keep_checkpoints,
+        metadata,
+        replay_buffer=spec.off_policy,
+        state=training_state,
+        stop_at=target if target < n_timesteps else None,
+        next_checkpoint=schedules.get("next_checkpoint"),
+    )
     callbacks.append(checkpoints)
     callbacks.extend(interface_callbacks(cfg, n_timesteps))
     if opts.progress_bar:  # ours, to close it at a pause too
@@ -396,9 +462,13 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     remaining = n_timesteps - int(model.num_timesteps)
     if int(model.num_timesteps) < target:
         try:
-            model.learn(remaining, callback=CallbackList(callbacks), progress_bar=False,
-                        reset_num_timesteps=checkpoint is None,
-                        tb_log_name=algorithm.__name__)  # fmt: skip
+            model.learn(
+                remaining,
+                callback=CallbackList(callbacks),
+                progress_bar=False,
+                reset_num_timesteps=checkpoint is None,
+                tb_log_name=algorithm.__name__,
+            )
         except PauseTraining:  # the checkpoint of the pause is written; the model is as in it
             for callback in callbacks:
                 if isinstance(callback, ProgressBarCallback | UpdateThreads):

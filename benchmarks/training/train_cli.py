@@ -61,19 +61,25 @@ FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 class CommandOptions:
     """The options of this command beside `TrainOptions`: plotting and held-out evaluation."""
 
-    curve: str | None = option(None, "write the learning curve to CURVE.csv and CURVE.png at "
-                               "the end")  # fmt: skip
+    curve: str | None = option(
+        None, "write the learning curve to CURVE.csv and CURVE.png at the end"
+    )
     plot_only: bool = option(False, "only plot the learning curve of --out (needs --curve)")
-    evaluate: str | None = option(None, "only evaluate AGENT on the held-out seeds 0-9 (paper "
-                                  "scenario) and write AGENT/held_out_evaluation.json",
-                                  metavar="AGENT")  # fmt: skip
+    evaluate: str | None = option(
+        None,
+        "only evaluate AGENT on the held-out seeds 0-9 (paper "
+        "scenario) and write AGENT/held_out_evaluation.json",
+        metavar="AGENT",
+    )
 
 
 def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, CommandOptions]:
     """TrainOptions (every field the dataclass offers is an option) and the plotting options."""
-    parser = ArgumentParser(prog=program_name("benchmarks.train_ppo"),
-                            description=__doc__.split("\n\n")[0],
-                            formatter_class=HelpFormatter)  # fmt: skip
+    parser = ArgumentParser(
+        prog=program_name("benchmarks.train_ppo"),
+        description=__doc__.split("\n\n")[0],
+        formatter_class=HelpFormatter,
+    )
     command = add_options(parser, CommandOptions, negatable=False)
     names = add_options(parser, TrainOptions)
     ns = parser.parse_args(argv)
@@ -117,8 +123,9 @@ def training_report(out: Path, export: str | None = None) -> str:
     network of step 0 (every later evaluation scored worse), which an export would ship."""
     best_file = Path(out) / "best" / METADATA_FILE
     if not best_file.is_file():
-        return (f"training: no evaluation ran (--eval-freq 0); the final agent is {out}/final"
-                + (f", exported to {export}" if export else ""))  # fmt: skip
+        return f"training: no evaluation ran (--eval-freq 0); the final agent is {out}/final" + (
+            f", exported to {export}" if export else ""
+        )
     best = json.loads(best_file.read_text()).get("best", {})
     summary, step = best.get("summary", {}), int(best.get("num_timesteps", 0))
     line = (

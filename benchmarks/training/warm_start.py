@@ -44,28 +44,36 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
     folder = Path(agent)
     for name in (MODEL_FILE, VECNORM_FILE, METADATA_FILE):
         if not (folder / name).is_file():
-            raise ValueError(f"init_from {str(folder)!r}: {name} is missing (a saved agent "
-                             f"directory holds {MODEL_FILE}, {VECNORM_FILE} and "
-                             f"{METADATA_FILE})")  # fmt: skip
+            raise ValueError(
+                f"init_from {str(folder)!r}: {name} is missing (a saved agent "
+                f"directory holds {MODEL_FILE}, {VECNORM_FILE} and "
+                f"{METADATA_FILE})"
+            )
     try:
         meta = json.loads((folder / METADATA_FILE).read_text())
     except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"init_from {str(folder)!r}: {METADATA_FILE} is unreadable: "
-                         f"{exc}") from None  # fmt: skip
+        raise ValueError(
+            f"init_from {str(folder)!r}: {METADATA_FILE} is unreadable: {exc}"
+        ) from None
     if not isinstance(meta, dict):
         raise ValueError(f"init_from {str(folder)!r}: {METADATA_FILE} is not a JSON object")
     if meta.get("algo") != algo:
-        raise ValueError(f"init_from {str(folder)!r}: the agent was trained with "
-                         f"{meta.get('algo')!r}, this run uses {algo!r}")  # fmt: skip
+        raise ValueError(
+            f"init_from {str(folder)!r}: the agent was trained with "
+            f"{meta.get('algo')!r}, this run uses {algo!r}"
+        )
     saved = meta.get("obs_names")
     if obs_names is not None and list(saved or ()) != list(obs_names):
-        raise ValueError(f"init_from {str(folder)!r}: the agent observes {saved}, this run's "
-                         f"observation is {list(obs_names)}")  # fmt: skip
+        raise ValueError(
+            f"init_from {str(folder)!r}: the agent observes {saved}, this run's "
+            f"observation is {list(obs_names)}"
+        )
     return meta
 
 
-def warm_start(model: Any, vec_normalize: Any, agent: str | Path, algo: str,
-               obs_names: Sequence[str]) -> dict[str, Any]:  # fmt: skip
+def warm_start(
+    model: Any, vec_normalize: Any, agent: str | Path, algo: str, obs_names: Sequence[str]
+) -> dict[str, Any]:
     """Load ``agent``'s weights into ``model`` and its statistics into ``vec_normalize`` (module
     doc); returns the record for the new run's metadata."""
     folder = Path(agent)
@@ -73,20 +81,24 @@ def warm_start(model: Any, vec_normalize: Any, agent: str | Path, algo: str,
     try:
         model.set_parameters(str(folder / MODEL_FILE), exact_match=True, device="cpu")
     except (RuntimeError, ValueError, KeyError) as exc:  # torch: size mismatch, missing keys
-        raise ValueError(f"init_from {str(folder)!r}: its weights do not fit this run's network "
-                         f"({exc})") from None  # fmt: skip
+        raise ValueError(
+            f"init_from {str(folder)!r}: its weights do not fit this run's network ({exc})"
+        ) from None
     try:
         with (folder / VECNORM_FILE).open("rb") as f:
             saved = pickle.load(f)
         obs_rms, ret_rms = saved.obs_rms, saved.ret_rms
     except Exception as exc:
-        raise ValueError(f"init_from {str(folder)!r}: {VECNORM_FILE} is unreadable: "
-                         f"{exc}") from None  # fmt: skip
+        raise ValueError(
+            f"init_from {str(folder)!r}: {VECNORM_FILE} is unreadable: {exc}"
+        ) from None
     target = vec_normalize.obs_rms
     if np.shape(obs_rms.mean) != np.shape(target.mean):
-        raise ValueError(f"init_from {str(folder)!r}: observation statistics of shape "
-                         f"{np.shape(obs_rms.mean)}, this run's are "
-                         f"{np.shape(target.mean)}")  # fmt: skip
+        raise ValueError(
+            f"init_from {str(folder)!r}: observation statistics of shape "
+            f"{np.shape(obs_rms.mean)}, this run's are "
+            f"{np.shape(target.mean)}"
+        )
     target.mean = np.array(obs_rms.mean, dtype=np.float64)
     target.var = np.array(obs_rms.var, dtype=np.float64)
     target.count = float(obs_rms.count)
