@@ -1,10 +1,10 @@
 """Scalar metrics of a recorded episode (`compute_metrics`): errors, speed, actuation, outcome.
 
 The metrics window (docs/design.md §3.9) is one rule shared by `compute_metrics`, the benchmark
-(`benchmarks.compare`, `benchmarks.paper_figures`) and the training evaluation: windowed metrics
-use the samples with t ≥ transient, where transient is given explicitly or, by default,
-`window_start` = min(`DEFAULT_TRANSIENT`, T/2) of the planned episode length T = max_time: it
-skips the approach from the start point and always leaves half of a short episode to measure.
+(`benchmarks.runner.compare`, `benchmarks.reports.paper_figures`) and the training evaluation:
+windowed metrics use the samples with t ≥ transient, where transient is given explicitly or, by
+default, `window_start` = min(`DEFAULT_TRANSIENT`, T/2) of the planned episode length T = max_time:
+it skips the approach from the start point and always leaves half of a short episode to measure.
 """
 
 from __future__ import annotations

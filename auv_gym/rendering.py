@@ -13,7 +13,7 @@ only when the view must grow (the track leaves the 3-D limits, or the virtual po
 end of the drawn stretch of path; both grow geometrically, so this happens a handful of times
 per episode). ``fast=False`` draws the whole figure for every frame instead: the reference the
 fast path is tested against
-(`tests/test_rendering.py`); `benchmarks/speed_render.py` measures both.
+(`tests/test_rendering.py`); `benchmarks/speed/render.py` measures both.
 """
 
 from __future__ import annotations

@@ -8,9 +8,9 @@
     auv-gym speed env|vector|controllers|render|training|learners|off-policy|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
 
-Each subcommand is the `main(argv)` of a module that also runs as ``python -m benchmarks.<name>``
-(its flat name, e.g. ``benchmarks.compare``, or its package path, ``benchmarks.runner.compare``)
-and shows its options, defaults and choices with ``--help``. Data the commands read (scenarios,
+Each subcommand is the `main(argv)` of a module that also runs as ``python -m <module>`` (e.g.
+``python -m benchmarks.runner.compare``; the modules are listed in `COMMANDS` and `SPEED`) and shows
+its options, defaults and choices with ``--help``. Data the commands read (scenarios,
 hyper-parameters, the shipped agent) is package data, found beside the modules, so every command
 works from any folder; outputs go to paths relative to the current folder.
 """

@@ -104,10 +104,10 @@ def save_tiny_residual_agent():
 
 def _train_tiny_preview_agent(tmp_path, **keys):
     """One seed of a tiny PPO run on AUVPath3DPreview-v0 with the extra hyper-parameter
-    ``keys``, through `benchmarks.train_seeds`; returns the exported agent's folder."""
+    ``keys``, through `benchmarks.training.seeds_cli`; returns the exported agent's folder."""
     import yaml
 
-    from benchmarks.train_seeds import main
+    from benchmarks.training.seeds_cli import main
 
     section = {
         "n_envs": 4,

@@ -80,8 +80,8 @@ def test_agent_ppo_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
 
 
 def test_train_takes_the_algorithm_and_its_default_file():
-    from benchmarks.train_ppo import parse_args
     from benchmarks.training import TrainOptions
+    from benchmarks.training.train_cli import parse_args
 
     opts, _ = parse_args([])
     assert (opts.algo, opts.config) == ("ppo", TrainOptions().config)

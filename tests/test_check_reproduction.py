@@ -7,7 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.check_reproduction import (
+from benchmarks.checks.reproduction import (
+    COMPARE,
+    RESULTS,
     Report,
     _rerun_arguments,
     compare_episodes,
@@ -22,9 +24,11 @@ def _csv(path: Path, rows: list[str]) -> Path:
     return path
 
 
-def test_rerun_arguments_replace_out_and_workers_only() -> None:
+@pytest.mark.parametrize("module", ["benchmarks.compare", "benchmarks.runner.compare"])
+def test_rerun_arguments_replace_out_and_workers_only(module: str) -> None:
+    """The committed results recorded compare under its former flat name; both names re-run."""
     recorded = (
-        "python -m benchmarks.compare --policies fbsm,ppo --scenarios all --seeds 10 "
+        f"python -m {module} --policies fbsm,ppo --scenarios all --seeds 10 "
         "--duration 300 --workers 2 --out benchmarks/results/full --quiet"
     )
     args = _rerun_arguments(recorded, Path("/tmp/x"), 1)
@@ -35,6 +39,17 @@ def test_rerun_arguments_replace_out_and_workers_only() -> None:
             "--out /tmp/x --workers 1"
         ).split()
     )
+
+
+def test_a_recorded_command_that_runs_no_compare_is_refused() -> None:
+    with pytest.raises(ValueError, match=r"does not run benchmarks\.compare or benchmarks\.runner"):
+        _rerun_arguments("python -m benchmarks.runner.evaluate_suite --seeds 1", Path("/x"), 1)
+
+
+def test_the_committed_command_is_re_run_through_the_real_module() -> None:
+    recorded = json.loads((RESULTS / "full" / "episodes.json").read_text())["config"]["command"]
+    assert "--seeds" in _rerun_arguments(recorded, Path("/tmp/x"), 1)
+    assert COMPARE == "benchmarks.runner.compare"
 
 
 def test_compare_episodes_counts_cells_and_one_sided_rows(tmp_path: Path, capsys) -> None:
@@ -73,7 +88,7 @@ def test_compare_json_ignores_wall_times_only(tmp_path: Path) -> None:
 
 def test_a_keep_folder_it_could_not_write_is_refused_before_any_rerun(tmp_path: Path, capsys):
     """Was: found by the re-run of compare, minutes later, as a CalledProcessError traceback."""
-    from benchmarks.check_reproduction import main
+    from benchmarks.checks.reproduction import main
 
     blocker = tmp_path / "a_file"
     blocker.write_text("")

@@ -53,7 +53,7 @@ def test_first_run_says_it_is_compiling_and_remembers_when_done(monkeypatch, cap
 def test_training_ends_with_a_summary_and_warns_about_an_untrained_best(tmp_path):
     import json
 
-    from benchmarks.train_ppo import training_report
+    from benchmarks.training.train_cli import training_report
 
     best = tmp_path / "run" / "best"
     best.mkdir(parents=True)
@@ -78,7 +78,8 @@ def test_training_ends_with_a_summary_and_warns_about_an_untrained_best(tmp_path
 def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, tmp_path, capsys):
     import importlib
 
-    from benchmarks import compare, policies
+    from benchmarks.catalog import policies
+    from benchmarks.runner import compare
 
     real = importlib.import_module
 
@@ -111,7 +112,7 @@ def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, t
 
 @pytest.mark.rl
 def test_video_runs_a_speed_limited_agent_under_its_own_env(tmp_path):
-    from benchmarks.video import parse_args
+    from benchmarks.reports.video import parse_args
 
     args = parse_args(["--policy", "ppo_helix_v1", "--out", str(tmp_path / "v.mp4")])
     assert args.env_id == "AUVPath3DSpeedLimit-v0"  # recorded as AUVPath3D-v1, renamed
@@ -121,7 +122,7 @@ def test_video_runs_a_speed_limited_agent_under_its_own_env(tmp_path):
 
 
 def test_paper_figures_run_each_policy_under_its_env_id(tmp_path):
-    from benchmarks.paper_figures import make_figures
+    from benchmarks.reports.paper_figures import make_figures
     from tests.test_plotting import LOSPolicy
 
     result = make_figures(

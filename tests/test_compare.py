@@ -1,4 +1,4 @@
-"""The benchmark CLI (`python -m benchmarks.compare`) end to end on tiny grids."""
+"""The benchmark CLI (`python -m benchmarks.runner.compare`) end to end on tiny grids."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks.compare import main
-from benchmarks.policies import check_policy_spec
-from benchmarks.scenarios import load_scenarios, select
+from benchmarks.catalog.policies import check_policy_spec
+from benchmarks.catalog.scenarios import load_scenarios, select
+from benchmarks.runner.compare import main
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": f"{ROOT / 'tests'}{os.pathsep}{ROOT}"}
@@ -26,7 +26,7 @@ TINY = ["--scenarios", "nominal,paper", "--seeds", "2", "--duration", "20", "--q
 
 def run_cli(*args: str, check: bool = True) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "benchmarks.compare", *args],
+        [sys.executable, "-m", "benchmarks.runner.compare", *args],
         cwd=ROOT,
         env=ENV,
         capture_output=True,
@@ -118,7 +118,7 @@ def test_interrupted_run_resumes_without_recomputing(tmp_path):
         str(tmp_path),
     ]
     proc = subprocess.Popen(
-        [sys.executable, "-m", "benchmarks.compare", *args],
+        [sys.executable, "-m", "benchmarks.runner.compare", *args],
         cwd=ROOT,
         env=ENV,
         stdout=subprocess.DEVNULL,
@@ -248,7 +248,7 @@ def test_bad_arguments_exit_2_with_one_line_before_any_work(argv, message, tmp_p
     out = tmp_path / "out"
     base = ["--policies", USER, "--scenarios", "nominal", "--seeds", "1", "--duration", "20"]
     err = usage_error(capsys, main, [*base, "--out", str(out), *argv])
-    assert err.startswith("python -m benchmarks.compare: error: ") and message in err, err
+    assert err.startswith("python -m benchmarks.runner.compare: error: ") and message in err, err
     assert not out.exists()  # refused before the output folder was even created
 
 
@@ -259,12 +259,12 @@ def test_unwritable_out_is_refused_before_the_first_episode(where, tmp_path, cap
     blocker.write_text("not a folder")
     out = {"under_a_file": blocker / "out", "a_file": blocker, "proc": Path("/proc/auv_out")}
     monkeypatch.syspath_prepend(str(ROOT / "tests"))
-    import benchmarks.compare
+    import benchmarks.runner.compare
 
     def no_episodes(*args, **kwargs):
         raise AssertionError("an episode ran")
 
-    monkeypatch.setattr(benchmarks.compare, "run_jobs", no_episodes)
+    monkeypatch.setattr(benchmarks.runner.compare, "run_jobs", no_episodes)
     err = usage_error(
         capsys,
         main,
@@ -291,8 +291,8 @@ def test_unwritable_out_in_a_subprocess_is_one_line_without_traceback(tmp_path):
     )
     assert bad.returncode == 2 and bad.stdout == ""
     assert bad.stderr.splitlines() == [
-        f"python -m benchmarks.compare: error: --out '{tmp_path / 'file.txt' / 'out'}' is not "
-        "a writable folder: Not a directory"
+        f"python -m benchmarks.runner.compare: error: --out '{tmp_path / 'file.txt' / 'out'}' "
+        "is not a writable folder: Not a directory"
     ]
 
 
@@ -329,11 +329,13 @@ def test_a_damaged_agent_is_refused_before_the_first_episode(tmp_path, capsys):
     ],
 )
 def test_paper_figures_refuses_bad_arguments_in_one_line(argv, message, tmp_path, capsys):
-    from benchmarks.paper_figures import main as paper_main
+    from benchmarks.reports.paper_figures import main as paper_main
 
     out = tmp_path / "out"
     err = usage_error(capsys, paper_main, ["--duration", "60", "--out", str(out), *argv])
-    assert err.startswith("python -m benchmarks.paper_figures: error: ") and message in err, err
+    assert (
+        err.startswith("python -m benchmarks.reports.paper_figures: error: ") and message in err
+    ), err
     assert not out.exists()
     blocker = tmp_path / "file.txt"
     blocker.write_text("")
@@ -384,7 +386,7 @@ def test_a_killed_compare_leaves_no_worker_running(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.compare",
+            "benchmarks.runner.compare",
             "--policies",
             USER,
             "--scenarios",
@@ -446,8 +448,8 @@ def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys
 def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
     """A v1-trained agent meets the 2.0 m/s surge limit in compare, as in the suite; the
     controllers and the v0 agent keep AUVPath3D-v0 (and their episode fingerprints)."""
-    from benchmarks.jobs import Job
-    from benchmarks.policies import policy_env_id
+    from benchmarks.catalog.policies import policy_env_id
+    from benchmarks.runner.jobs import Job
 
     scenario = load_scenarios()["paper"]
     assert policy_env_id("fbsm") == policy_env_id("ppo") == "AUVPath3D-v0"

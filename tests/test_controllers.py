@@ -291,7 +291,7 @@ def test_bad_observations_and_names_raise():
 
 
 def test_speed_benchmark_runs_in_closed_loop():
-    from benchmarks.speed_controllers import closed_loop, episode_wall_time
+    from benchmarks.speed.controllers import closed_loop, episode_wall_time
 
     out = closed_loop("fbsm", n=3, steps=4, threads=1, warmup=2)
     assert out["rate"] > 0.0 and 0.0 <= out["saturated"] <= 1.0

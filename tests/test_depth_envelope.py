@@ -323,7 +323,7 @@ def test_the_episode_figures_draw_the_surface_and_the_seabed():
 
 
 def test_the_compare_summary_has_an_episode_cost_column():
-    from benchmarks.tables import summarise
+    from benchmarks.reports.tables import summarise
 
     records = [
         {

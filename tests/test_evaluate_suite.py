@@ -1,6 +1,6 @@
-"""The test-suite evaluation (`benchmarks.evaluate_suite`) and its statistics
-(`benchmarks.suite_stats`) on a tiny suite: 2 sets × 2 seeds, 10-s episodes, FBSM and a fake
-2-seed agent directory made of the shipped agent."""
+"""The test-suite evaluation (`benchmarks.runner.evaluate_suite`) and its statistics
+(`benchmarks.analysis.suite_stats`) on a tiny suite: 2 sets × 2 seeds, 10-s episodes, FBSM and a
+fake 2-seed agent directory made of the shipped agent."""
 
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import benchmarks.evaluate_suite as suite_module
+import benchmarks.runner.evaluate_suite as suite_module
 import benchmarks.runner.suite_chunks as chunks_module
 from auv_gym.trajectory import FAILURE_REASONS
-from benchmarks.evaluate_suite import main
-from benchmarks.jobs import Job, run_job
-from benchmarks.policies import DEFAULT_AGENT, check_policy_spec
-from benchmarks.scenarios import load_scenarios
-from benchmarks.suite_stats import write_stats
+from benchmarks.analysis.suite_stats import write_stats
+from benchmarks.catalog.policies import DEFAULT_AGENT, check_policy_spec
+from benchmarks.catalog.scenarios import load_scenarios
+from benchmarks.runner.evaluate_suite import main
+from benchmarks.runner.jobs import Job, run_job
 
 TASKS = """
 [train]
@@ -46,8 +46,8 @@ REPS = "200"
 def make_multi_seed(
     folder: Path, seeds=(3, 5), env_ids=("AUVPath3D-v0", "AUVPath3DSpeedLimit-v0")
 ) -> Path:
-    """A multi-seed results directory (layout of `benchmarks.train_seeds --results`): the shipped
-    agent per seed, metadata with that seed and env id, and a learning curve per seed."""
+    """A multi-seed results directory (layout of `benchmarks.training.seeds_cli --results`): the
+    shipped agent per seed, metadata with that seed and env id, and a learning curve per seed."""
     folder.mkdir(parents=True)
     for k, (seed, env_id) in enumerate(zip(seeds, env_ids, strict=True)):
         agent = folder / f"agent_seed_{seed}"
@@ -271,7 +271,7 @@ def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkey
 
 
 def test_agents_not_shipped_yet_are_named(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr("benchmarks.policies.AGENTS_DIR", tmp_path)
+    monkeypatch.setattr("benchmarks.catalog.policies.AGENTS_DIR", tmp_path)
     for name in ("ppo_generalist", "sac_generalist", "ppo_helix_v1"):
         with pytest.raises(FileNotFoundError, match=f"policy '{name}': the agent is not shipped"):
             check_policy_spec(name)
@@ -335,7 +335,7 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
 
 
 def test_paired_table_by_hand():
-    from benchmarks.smoothness_stats import paired_table
+    from benchmarks.analysis.smoothness_stats import paired_table
 
     base = np.array([[0.10, 0.10, 0.20, 0.20]])
     scores = {

@@ -1,4 +1,4 @@
-"""The long fuzz run (`benchmarks.fuzz`): its configurations are valid, and it sees violations.
+"""The long fuzz run (`benchmarks.checks.fuzz`): its configurations are valid; it sees violations.
 
 The run itself (>= 10^7 vehicle-steps) is a benchmark; here a short one, and the same checks
 against a vector env that misbehaves on purpose.
@@ -13,7 +13,7 @@ import pytest
 
 from auv_gym.config import SimConfig
 from auv_gym.vector_env import AUVPath3DVectorEnv
-from benchmarks import fuzz
+from benchmarks.checks import fuzz
 
 
 def test_drawn_configurations_are_valid_and_span_the_ranges():

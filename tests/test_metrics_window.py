@@ -94,7 +94,7 @@ def test_training_refuses_an_evaluation_without_a_metric(tmp_path):
 
 
 def test_compare_refuses_a_transient_beyond_the_episode(tmp_path, capsys):
-    from benchmarks import compare
+    from benchmarks.runner import compare
 
     with pytest.raises(SystemExit) as exit_info:  # a usage error: one line, exit code 2
         compare.main(

@@ -128,7 +128,7 @@ def test_vehicle_parameters_by_name_and_scale():
 
 
 def test_scenario_files_take_waypoints_and_params(tmp_path):
-    from benchmarks.scenarios import load_scenarios
+    from benchmarks.catalog.scenarios import load_scenarios
 
     file = tmp_path / "s.toml"
     file.write_text(

@@ -44,7 +44,7 @@ def test_pole_placement_gives_the_chosen_closed_loop_poles():
 
 @pytest.mark.parametrize("name", NAMES)
 def test_registered_like_the_other_classical_controllers(name):
-    from benchmarks.policies import PolicySpec
+    from benchmarks.catalog.policies import PolicySpec
 
     policy = controllers.make(name)
     assert isinstance(policy, controllers.PIDLOS) and isinstance(policy, Policy)

@@ -1,4 +1,4 @@
-"""auv_gym.plotting, .episode_figures and benchmarks.paper_figures: PNGs, tables, the CLI."""
+"""auv_gym.plotting, .episode_figures and benchmarks.reports.paper_figures: PNGs, tables, CLI."""
 
 from __future__ import annotations
 
@@ -179,7 +179,7 @@ def test_metrics_table_marks_the_best_value():
 
 
 def test_make_figures_on_test_policies(tmp_path):
-    from benchmarks.paper_figures import make_figures
+    from benchmarks.reports.paper_figures import make_figures
 
     result = make_figures(
         {"plain": LOSPolicy(), "adaptive": AdaptiveLOSPolicy()},
@@ -209,7 +209,7 @@ def test_cli_end_to_end(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.paper_figures",
+            "benchmarks.reports.paper_figures",
             "--out",
             str(out),
             "--duration",
@@ -231,7 +231,15 @@ def test_cli_end_to_end(tmp_path):
     assert png_size(out / "fig3_path_3d.png") == (210, 165)
     assert (out / "metrics.md").read_text().count("| plain |") == 1
     bad = subprocess.run(
-        [sys.executable, "-m", "benchmarks.paper_figures", "--out", str(out), "--duration", "-1"],
+        [
+            sys.executable,
+            "-m",
+            "benchmarks.reports.paper_figures",
+            "--out",
+            str(out),
+            "--duration",
+            "-1",
+        ],
         cwd=ROOT,
         capture_output=True,
         text=True,
@@ -246,7 +254,7 @@ def test_cli_with_the_paper_controllers(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.paper_figures",
+            "benchmarks.reports.paper_figures",
             "--out",
             str(out),
             "--duration",
@@ -277,7 +285,7 @@ def test_a_policy_has_one_colour_in_every_figure():
 
     from auv_gym.paths import Helix
     from auv_gym.plotting import new_figure, plot_track, policy_colours
-    from benchmarks.stats_figures import learning_curve_figure
+    from benchmarks.analysis.stats_figures import learning_curve_figure
 
     names = ["fbsm", "my_agent", "ppo_preview", "other_agent"]
     colours = policy_colours(names)

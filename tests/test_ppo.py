@@ -1,7 +1,8 @@
 """PPO baselines: training CLI (`benchmarks.training`), checkpoints and resume, loading
 (`controllers.ppo`) and its errors, the shipped agent.
 
-Training here is tiny (a few hundred env steps); real training belongs to benchmarks/train_ppo.py.
+Training here is tiny (a few hundred env steps); real training belongs to
+benchmarks/training/train_cli.py.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ AUVPath3DSpeedLimit-v0: *tiny  # the training default
 def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.run(
-        [sys.executable, "-m", "benchmarks.train_ppo", *args],
+        [sys.executable, "-m", "benchmarks.training.train_cli", *args],
         cwd=cwd,
         env=env,
         capture_output=True,

@@ -11,7 +11,7 @@ modules that enforce them), actions from [−3, 3]³ (saturating beyond ±1). In
 - an argument outside its range, or of the wrong type, raises TypeError/ValueError naming it.
 
 The examples are bounded and derandomized so that CI is fast and repeatable;
-`python -m benchmarks.fuzz` is the long random exploration (≥ 10⁷ vehicle-steps).
+`python -m benchmarks.checks.fuzz` is the long random exploration (≥ 10⁷ vehicle-steps).
 """
 
 from __future__ import annotations

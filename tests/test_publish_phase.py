@@ -32,7 +32,7 @@ TINY = {
 
 
 def _train(folder, out, seeds, *extra):
-    from benchmarks.train_seeds import main as train_seeds
+    from benchmarks.training.seeds_cli import main as train_seeds
 
     config = folder / "tiny.yml"
     if not config.exists():

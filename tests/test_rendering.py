@@ -4,7 +4,7 @@ Tolerance: the fast path draws the growing lines stretch by stretch over a cache
 reference draws every line whole; antialiased pixels where two stretches meet may differ. Over a
 whole episode at most 2 % of the pixels may differ, by 0.5/255 on average; the picture outside
 the lines (axes, ticks, labels, path) is the same. Speed is measured by
-`benchmarks/speed_render.py`, not here.
+`benchmarks/speed/render.py`, not here.
 """
 
 from __future__ import annotations

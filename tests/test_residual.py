@@ -313,8 +313,8 @@ def test_saved_and_reloaded_residual_agent_predicts_identically(
 def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     """≤ 60 s: the shipped YAML, one seed, one PPO rollout; the untrained agent (zero last
     layer) scores exactly what its base scores alone on the validation episode."""
-    from benchmarks.train_seeds import main
     from benchmarks.training.evaluation import evaluate_policy_on_seeds
+    from benchmarks.training.seeds_cli import main
     from controllers.ppo import load_policy
 
     config = yaml.safe_load((ROOT / "benchmarks/hyperparams/ppo_residual.yml").read_text())

@@ -115,7 +115,7 @@ def test_compare_on_an_unreachable_ray_address_fails_fast_and_names_it(
 ):
     """Was: `compare --backend ray --address ...` retried for ever (still at 300 s)."""
     pytest.importorskip("ray")
-    from benchmarks.compare import main
+    from benchmarks.runner.compare import main
 
     monkeypatch.setattr(pool, "RAY_PROBE_TIMEOUT_S", 1.0)
     out = tmp_path / "out"
@@ -147,7 +147,7 @@ def _seeds_config(tmp_path: Path, **overrides) -> Path:
 
 
 def _seeds_main(argv: list[str]) -> int:
-    from benchmarks.train_seeds import main
+    from benchmarks.training.seeds_cli import main
 
     return main(argv)
 
@@ -333,7 +333,7 @@ def test_a_failed_start_does_not_block_the_corrected_command(tmp_path):
 
 
 def _train_main(argv: list[str]) -> None:
-    from benchmarks.train_ppo import main
+    from benchmarks.training.train_cli import main
 
     main(argv)
 
@@ -381,7 +381,7 @@ def test_train_refuses_outputs_before_the_first_step(tmp_path, capsys, argv, mes
 
 
 def test_video_refuses_an_unwritable_file_before_rendering(tmp_path, capsys):
-    from benchmarks.video import main
+    from benchmarks.reports.video import main
 
     blocker = _in_a_file(tmp_path)
     t0 = time.monotonic()
@@ -394,7 +394,7 @@ def test_video_refuses_an_unwritable_file_before_rendering(tmp_path, capsys):
 
 
 def test_a_killed_recording_leaves_no_temporary_video_behind(tmp_path):
-    from benchmarks.video import remove_stale_videos
+    from benchmarks.reports.video import remove_stale_videos
 
     out = tmp_path / "run.mp4"
     dead = subprocess.run(
@@ -415,9 +415,9 @@ def test_a_killed_recording_leaves_no_temporary_video_behind(tmp_path):
 # ------------------------------------------------------------------- one output folder, one run
 def test_a_second_run_on_a_locked_folder_is_refused_with_the_holders_pid(tmp_path, capsys):
     """Was: two runs on one --out deleted each other's temporary files."""
-    from benchmarks.compare import main as compare
-    from benchmarks.evaluate_suite import main as suite
-    from benchmarks.paper_figures import main as paper
+    from benchmarks.reports.paper_figures import main as paper
+    from benchmarks.runner.compare import main as compare
+    from benchmarks.runner.evaluate_suite import main as suite
 
     out = tmp_path / "out"
     expected = (
@@ -515,7 +515,7 @@ def test_replace_outputs_removes_only_what_the_last_run_recorded(tmp_path):
 def test_compare_rerun_with_other_arguments_leaves_no_stale_figure(tmp_path):
     """Was: the figures of a run on two scenarios stayed beside the tables of a rerun on one;
     a kill during figure writing left temporary files no rerun removed."""
-    from benchmarks.compare import main
+    from benchmarks.runner.compare import main
 
     out = tmp_path / "out"
     main([*TINY, "--scenarios", "nominal,paper", "--out", str(out)])
@@ -532,7 +532,7 @@ def test_compare_rerun_with_other_arguments_leaves_no_stale_figure(tmp_path):
 
 
 def test_paper_figures_rerun_removes_the_other_policys_files(tmp_path):
-    from benchmarks.paper_figures import main
+    from benchmarks.reports.paper_figures import main
 
     out = tmp_path / "paper"
     main(["--duration", "4", "--transient", "0", "--out", str(out)])

@@ -79,7 +79,7 @@ def test_pool_options_are_checked_in_one_place(args, message):
 
 
 def test_the_suite_takes_the_pool_options_of_compare(tmp_path):
-    from benchmarks.evaluate_suite import build_parser, parse_args
+    from benchmarks.runner.evaluate_suite import build_parser, parse_args
 
     options = {a.dest for a in build_parser()._actions}
     assert {"workers", "backend", "address"} <= options

@@ -208,7 +208,7 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
     out = tmp_path / "speed.json"
     root = Path(__file__).resolve().parents[1]
     subprocess.run(
-        [sys.executable, "-m", "benchmarks.speed_vector", "--quick", "--json", str(out)],
+        [sys.executable, "-m", "benchmarks.speed.vector", "--quick", "--json", str(out)],
         cwd=root,
         check=True,
         capture_output=True,

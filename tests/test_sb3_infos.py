@@ -154,7 +154,7 @@ def test_update_threads_option_is_checked():
 def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     import json
 
-    from benchmarks.speed_training import extract
+    from benchmarks.speed.training import extract
 
     tree = extract("HEAD", tmp_path)
     committed = subprocess.run(
@@ -167,7 +167,7 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.speed_training",
+            "benchmarks.speed.training",
             "--quick",
             "--baseline",
             "none",
@@ -195,7 +195,7 @@ def test_speed_training_times_each_number_of_epochs_it_is_given(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.speed_training",
+            "benchmarks.speed.training",
             "--quick",
             "--baseline",
             "none",
@@ -217,7 +217,7 @@ def test_speed_training_times_each_number_of_epochs_it_is_given(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.speed_training",
+            "benchmarks.speed.training",
             "--quick",
             "--baseline",
             "none",
@@ -312,7 +312,7 @@ def test_speed_training_runs_the_baseline_commit_of_its_default(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.speed_training",
+            "benchmarks.speed.training",
             "--quick",
             "--cache",
             str(tmp_path / "cache"),

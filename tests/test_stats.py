@@ -1,5 +1,5 @@
-"""benchmarks.stats and benchmarks.stats_figures: hand-computed estimates, bootstrap behaviour,
-determinism, bad input, Markdown cells and PNG files."""
+"""benchmarks.analysis.stats and benchmarks.analysis.stats_figures: hand-computed estimates,
+bootstrap behaviour, determinism, bad input, Markdown cells and PNG files."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import pytest
 rliable = pytest.importorskip("rliable")
 from rliable import library, metrics  # noqa: E402
 
-from benchmarks import stats  # noqa: E402
-from benchmarks.stats import Interval  # noqa: E402
-from benchmarks.stats_figures import (  # noqa: E402
+from benchmarks.analysis import stats  # noqa: E402
+from benchmarks.analysis.stats import Interval  # noqa: E402
+from benchmarks.analysis.stats_figures import (  # noqa: E402
     improvement_figure,
     interval_figure,
     learning_curve_figure,
@@ -323,7 +323,7 @@ def test_mean_interval_leaves_missing_values_out():
 def test_policy_colors_stay_distinct_beyond_ten_policies():
     from matplotlib.colors import to_hex
 
-    from benchmarks.stats_figures import policy_colors
+    from benchmarks.analysis.stats_figures import policy_colors
 
     assert len(set(policy_colors(["a", "b"]).values())) == 2
     eleven = policy_colors([f"p{k}" for k in range(11)])

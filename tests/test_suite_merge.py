@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.suite_merge import main, merge_suites
+from benchmarks.analysis.suite_merge import main, merge_suites
 
 HEADER = ["policy", "run", "set", "seed", "rms_distance", "termination_reason"]
 

@@ -16,7 +16,7 @@ from auv_gym.table_format import (
     mark_best,
     markdown_table,
 )
-from benchmarks.tables import summarise
+from benchmarks.reports.tables import summarise
 
 
 @pytest.mark.parametrize(

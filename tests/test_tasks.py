@@ -8,9 +8,9 @@ import pytest
 from auv_gym.config import SimConfig
 from auv_gym.path_generator import PathDistribution, overlaps
 from auv_gym.randomization import task_for_seed
-from benchmarks.scenarios import load_scenarios
-from benchmarks.tasks import TASKS_FILE, load_task_sets, task_set
-from benchmarks.tasks import test_suite as the_test_suite
+from benchmarks.catalog.scenarios import load_scenarios
+from benchmarks.catalog.tasks import TASKS_FILE, load_task_sets, task_set
+from benchmarks.catalog.tasks import test_suite as the_test_suite
 
 BENCHMARK_SCENARIOS = [
     "nominal",

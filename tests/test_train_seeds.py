@@ -1,5 +1,5 @@
-"""Multi-seed training (`benchmarks.train_seeds`): bad input, an end-to-end smoke run with both
-algorithms, SAC's replay buffer across a resume, a killed run resumed, and the Ray backend."""
+"""Multi-seed training (`benchmarks.training.seeds_cli`): bad input, an end-to-end smoke run with
+both algorithms, SAC's replay buffer across a resume, a killed run resumed, and the Ray backend."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 import yaml
 
-from benchmarks.train_seeds import main
 from benchmarks.training.seeds import check_evaluation_window, parse_seeds
+from benchmarks.training.seeds_cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 TINY = {
@@ -208,7 +208,7 @@ def test_smoke_on_the_agent_observation(tmp_path):
     import gymnasium as gym
     import numpy as np
 
-    from benchmarks.policies import agent_run
+    from benchmarks.catalog.policies import agent_run
     from controllers.ppo import load_policy
 
     section = {
@@ -254,7 +254,7 @@ def test_validation_on_a_task_set(tmp_path):
     """--task-set validation: the agent is selected on the validation set's env (its path
     distribution, current, noise, actuators) on its first --eval-episodes seeds, recorded in the
     plan and the agent's metadata; the per-seed test report stays the paper scenario."""
-    from benchmarks.tasks import task_set
+    from benchmarks.catalog.tasks import task_set
 
     validation = task_set("validation")
     args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1")
@@ -337,7 +337,7 @@ def test_killed_run_resumes_every_unfinished_seed(tmp_path):
         tmp_path, "ppo", "run", "--seeds", "2", "--workers", "2", "--n-timesteps", str(budget)
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    command = [sys.executable, "-m", "benchmarks.train_seeds", *args]
+    command = [sys.executable, "-m", "benchmarks.training.seeds_cli", *args]
     proc = subprocess.Popen(
         command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
     )

@@ -80,7 +80,7 @@ def _tiny_config(agent, folder):
 
 
 def test_a_multi_seed_run_starts_each_seed_from_its_agent_and_records_it(agent, tmp_path):
-    from benchmarks.train_seeds import main
+    from benchmarks.training.seeds_cli import main
 
     shutil.copytree(agent, tmp_path / "agent_3")
     assert (
@@ -119,7 +119,7 @@ def test_a_multi_seed_run_starts_each_seed_from_its_agent_and_records_it(agent, 
 
 
 def test_a_missing_seed_agent_is_refused_before_training(agent, tmp_path, capsys):
-    from benchmarks.train_seeds import main
+    from benchmarks.training.seeds_cli import main
 
     shutil.copytree(agent, tmp_path / "agent_0")
     assert (

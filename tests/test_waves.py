@@ -287,7 +287,7 @@ def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
         [
             sys.executable,
             "-m",
-            "benchmarks.wave_depth",
+            "benchmarks.reports.wave_depth",
             "--depths",
             "3",
             "--seeds",

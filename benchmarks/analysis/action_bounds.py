@@ -1,7 +1,7 @@
 """First rung of the off-policy ladder: how far the controllers' commands reach, and how long an
 episode of uniformly random actions lasts inside a box of action bounds.
 
-    python -m benchmarks.action_bounds [--episodes 32] [--duration 100] [--out FILE.json]
+    python -m benchmarks.analysis.action_bounds [--episodes 32] [--duration 100] [--out FILE.json]
 
 SAC explores with a squashed Gaussian over its whole action box from the first step. In this
 env a random full-scale surge thrust and pitch/yaw moment ends an episode early (corridor, pitch
@@ -113,7 +113,7 @@ def boxes(percentiles: dict[str, list[float]]) -> dict[str, Box]:
 
 @dataclass
 class Options:
-    """The options of ``python -m benchmarks.action_bounds``."""
+    """The options of ``python -m benchmarks.analysis.action_bounds``."""
 
     episodes: int = option(32, "validation episodes")
     duration: float = option(100.0, "episode length [s]")
@@ -121,7 +121,9 @@ class Options:
 
 
 def main(argv: list[str] | None = None) -> None:
-    args, parser = parse_options(Options, argv, program_name("benchmarks.action_bounds"), __doc__)
+    args, parser = parse_options(
+        Options, argv, program_name("benchmarks.analysis.action_bounds"), __doc__
+    )
     if args.episodes < 1 or not args.duration > 0:
         parser.error("--episodes must be >= 1 and --duration > 0")
     validation = task_set("validation_paper_actuator")

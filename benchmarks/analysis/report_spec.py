@@ -1,7 +1,8 @@
 """What the statistics of a suite evaluation compare, as data: references, the target ratio,
 (policy, base) pairs and figure panels (`ReportSpec`), read from a TOML report table
 (`DEFAULT_REPORT`: the shipped results' ``benchmarks/report.toml``). The statistics modules
-(`benchmarks.suite_stats`, `benchmarks.smoothness_stats`) name no policy themselves.
+(`benchmarks.analysis.suite_stats`, `benchmarks.analysis.smoothness_stats`) name no policy
+themselves.
 """
 
 from __future__ import annotations

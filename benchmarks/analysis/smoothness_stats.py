@@ -3,11 +3,11 @@ difference with its CI, and the chattering of every policy. Which pairs, the cha
 reference and the "worse" threshold come from the report table (`benchmarks.analysis.report_spec`).
 
 * **Paired difference** of a (policy, base) pair per set and "aggregate": mean score of the policy
-  minus mean score of the base on the same episodes [m] (scores as `benchmarks.suite_stats`:
-  RMS distance, a failed episode the corridor), relative to the base, with a 95 % stratified
-  bootstrap CI (`benchmarks.stats.paired_difference`). A set is a **win** when the upper bound
-  of the difference's CI is below zero, **worse** when the point estimate is more than
-  ``worse_ratio`` above the base.
+  minus mean score of the base on the same episodes [m] (scores as
+  `benchmarks.analysis.suite_stats`: RMS distance, a failed episode the corridor), relative to the
+  base, with a 95 % stratified bootstrap CI (`benchmarks.analysis.stats.paired_difference`). A set
+  is a **win** when the upper bound of the difference's CI is below zero, **worse** when the point
+  estimate is more than ``worse_ratio`` above the base.
 * **Chattering** [1/s] (`auv_gym.metrics`: total variation of the normalised action per second
   over the metrics window) of every policy per set, mean over runs × episodes with its CI; an
   episode that ended before the window has none and is left out. The ratio to the reference's
@@ -39,7 +39,7 @@ def metric_matrices(
     runs: Mapping[str, Sequence[int]],
 ) -> dict[str, np.ndarray]:
     """{policy: (n_runs, n_episodes)} of an episodes.csv ``metric`` (NaN where missing), in the
-    column order of `benchmarks.suite_stats.score_matrices` ((set, seed) by ``sets``)."""
+    column order of `benchmarks.analysis.suite_stats.score_matrices` ((set, seed) by ``sets``)."""
     order = {name: k for k, name in enumerate(sets)}
     cells: dict[str, dict[int, dict[tuple[int, int], float]]] = {}
     for row in rows:

@@ -1,4 +1,4 @@
-"""Figures of `benchmarks.stats` results: interval plots, probability of improvement,
+"""Figures of `benchmarks.analysis.stats` results: interval plots, probability of improvement,
 performance profiles, learning curves with CI bands; atomic saving.
 
 Only matplotlib's object-oriented API (`matplotlib.figure.Figure` with the Agg canvas) is used:

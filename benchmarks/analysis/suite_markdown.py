@@ -1,4 +1,4 @@
-"""The Markdown of a suite evaluation's statistics (`benchmarks.suite_stats.write_stats`):
+"""The Markdown of a suite evaluation's statistics (`benchmarks.analysis.suite_stats.write_stats`):
 interval tables per policy group, probability of improvement, the target table and verdicts."""
 
 from __future__ import annotations

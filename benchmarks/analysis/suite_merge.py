@@ -1,10 +1,10 @@
 """Add the policies of a second suite evaluation to a committed one, once its episodes match.
 
-A committed test-suite evaluation (`benchmarks.evaluate_suite`, e.g. `benchmarks/results/suite`)
-takes hours to re-run for every policy; a new agent needs only its own rows. This command takes
-an evaluation of the new policies run *together with a reference policy already in the target*
-(FBSM, say) and appends the new policies' rows, after checking that the two evaluations are the
-same experiment:
+A committed test-suite evaluation (`benchmarks.runner.evaluate_suite`, e.g.
+`benchmarks/results/suite`) takes hours to re-run for every policy; a new agent needs only its own
+rows. This command takes an evaluation of the new policies run *together with a reference policy
+already in the target* (FBSM, say) and appends the new policies' rows, after checking that the two
+evaluations are the same experiment:
 
 - the same test sets (names, seeds and env settings), episode duration and metrics window;
 - the shared policies' rows are equal cell for cell (the episodes and the code that ran them
@@ -14,11 +14,12 @@ same experiment:
 
 Then OUT/episodes.csv gains the rows, OUT/suite.json the policies and an "additions" entry (the
 command, commit and versions of the second evaluation), both written atomically; re-run
-`python -m benchmarks.evaluate_suite --stats-only --out OUT` for the statistics.
+`python -m benchmarks.runner.evaluate_suite --stats-only --out OUT` for the statistics.
 
-    python -m benchmarks.evaluate_suite --policies fbsm,NEW=DIR --out runs/suite_new --no-stats
-    python -m benchmarks.suite_merge --from runs/suite_new --into benchmarks/results/suite \\
-        --policies NEW
+    python -m benchmarks.runner.evaluate_suite --policies fbsm,NEW=DIR --out runs/suite_new \\
+        --no-stats
+    python -m benchmarks.analysis.suite_merge --from runs/suite_new \\
+        --into benchmarks/results/suite --policies NEW
 """
 
 from __future__ import annotations
@@ -44,8 +45,8 @@ _KEY = ("policy", "run", "set", "seed")
 
 @dataclass
 class MergeOptions:
-    """The options of ``python -m benchmarks.suite_merge``; the folders and policies have no
-    default on the command line."""
+    """The options of ``python -m benchmarks.analysis.suite_merge``; the folders and policies have
+    no default on the command line."""
 
     source: str | None = option(None, "evaluation to take rows from", flag="--from", required=True)
     target: str | None = option(None, "evaluation to add them to", flag="--into", required=True)
@@ -154,7 +155,10 @@ def merge_suites(
 
 def main(argv: Sequence[str] | None = None) -> int:
     args, _ = parse_options(
-        MergeOptions, argv, program_name("benchmarks.suite_merge"), __doc__.split("\n\n")[0]
+        MergeOptions,
+        argv,
+        program_name("benchmarks.analysis.suite_merge"),
+        __doc__.split("\n\n")[0],
     )
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     try:

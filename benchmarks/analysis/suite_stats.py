@@ -1,5 +1,5 @@
-"""Statistics of a test-suite evaluation (`benchmarks.evaluate_suite`): stats.json, stats.md and
-figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliable).
+"""Statistics of a test-suite evaluation (`benchmarks.runner.evaluate_suite`): stats.json, stats.md
+and figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.analysis.stats` (rliable).
 
 * **Score** of an episode: its RMS distance to the virtual point over the metrics window [m]. A
   failed episode (termination_reason in `auv_gym.trajectory.FAILURE_REASONS`: corridor, pitch,
@@ -8,15 +8,15 @@ figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.stats` (rliab
   keeps the path scores worse. `failed` counts them in every table.
 * **Per set and "aggregate"** (every set pooled, each set's episodes resampled within the set):
   IQM and mean with 95 % stratified bootstrap CIs over runs × episodes (one run for a
-  controller: over episodes), `benchmarks.stats.summarize`; probability that a policy's score is
-  below the reference's on the same episode (the report table's reference, or ``--reference``;
-  also against its extra references that were evaluated); performance profiles (fraction of
-  scores below τ [m]).
+  controller: over episodes), `benchmarks.analysis.stats.summarize`; probability that a policy's
+  score is below the reference's on the same episode (the report table's reference, or
+  ``--reference``; also against its extra references that were evaluated); performance profiles
+  (fraction of scores below τ [m]).
 * **Target table**: per set, the ratio of a policy's mean score to the reference's;
   a set passes when the ratio is ≤ the report's ``max_ratio``, no episode failed and the largest
   surge speed of any episode is ≤ the top speed of the set's vehicle (`AUVParams.max_surge`,
   2.0 m/s for REMUS 100).
-* **Smoothness** (`benchmarks.smoothness_stats`): paired RMS-distance differences of the
+* **Smoothness** (`benchmarks.analysis.smoothness_stats`): paired RMS-distance differences of the
   report's (policy, base) pairs, and every policy's chattering (when episodes.csv has the
   column).
 
@@ -25,9 +25,9 @@ What is compared is data, the report table (`benchmarks.analysis.report_spec.Rep
 * **Learning curves** of the policies given as a multi-seed results directory (its
   ``seed_<k>_learning_curve.csv`` per run; columns num_timesteps, wall_time_s,
   rms_distance_mean, ...): IQM over the runs with CI band against env steps and against wall
-  time [s] (`benchmarks.stats.learning_curve`). Runs are cut to the evaluations every run has;
-  an evaluation without a finite rms_distance_mean (every episode terminated) scores the failure
-  score of the default corridor.
+  time [s] (`benchmarks.analysis.stats.learning_curve`). Runs are cut to the evaluations every run
+  has; an evaluation without a finite rms_distance_mean (every episode terminated) scores the
+  failure score of the default corridor.
 
 Everything is written atomically; one bootstrap seed gives bit-identical output.
 """
@@ -249,7 +249,7 @@ def learning_curves(
     results: Path, runs: Sequence[int], reps: int, seed: int
 ) -> dict[str, dict[str, Any]]:
     """{"env steps": curve, "wall time [s]": curve} of one multi-seed results directory
-    (`benchmarks.stats.learning_curve` outputs; module doc). FileNotFoundError naming a
+    (`benchmarks.analysis.stats.learning_curve` outputs; module doc). FileNotFoundError naming a
     missing learning-curve file."""
     curves = []
     for run in runs:

@@ -1,7 +1,7 @@
 """Long fuzz run of the vector env: random valid configurations, random and extreme actions.
 
-    python -m benchmarks.fuzz                          # 10^7 vehicle-steps (a few minutes)
-    python -m benchmarks.fuzz --steps 1e6 --seed 3     # a shorter run with another seed
+    python -m benchmarks.checks.fuzz                          # 10^7 vehicle-steps (a few minutes)
+    python -m benchmarks.checks.fuzz --steps 1e6 --seed 3     # a shorter run with another seed
 
 Each configuration is drawn across the documented argument space of `AUVPath3DEnv` (paths of
 every kind and scale: helices, lines, waypoint splines, out-and-back lines with or without a
@@ -105,7 +105,7 @@ class Tally:
 
 @dataclass
 class FuzzOptions:
-    """The options of ``python -m benchmarks.fuzz`` (`run`'s arguments)."""
+    """The options of ``python -m benchmarks.checks.fuzz`` (`run`'s arguments)."""
 
     steps: float = option(1e7, "vehicle-steps to run, >= 1")
     seed: int = option(0, "seed of the fuzz")
@@ -290,7 +290,7 @@ def report(tally: Tally, seconds: float) -> str:
 
 def main(argv: Sequence[str] | None = None) -> Tally:
     args, parser = parse_options(
-        FuzzOptions, argv, program_name("benchmarks.fuzz"), __doc__.split("\n\n")[0]
+        FuzzOptions, argv, program_name("benchmarks.checks.fuzz"), __doc__.split("\n\n")[0]
     )
     with usage_errors(parser):
         args.check()

@@ -6,14 +6,14 @@ reproduced to the last bit:
 1. `benchmarks/results/full/episodes.csv`: the command recorded in `episodes.json` is re-run into
    a temporary folder; every cell of every (scenario, policy, seed) row is compared as text (the
    CSV holds full-precision floats, so equal text is equal bits).
-2. `benchmarks/results/paper/metrics.json`: `benchmarks.paper_figures` is re-run with the
+2. `benchmarks/results/paper/metrics.json`: `benchmarks.reports.paper_figures` is re-run with the
    recorded seed and duration; every metric value is compared (wall times and versions excepted).
 3. With `--agents`, each shipped agent's `held_out_evaluation.json` is re-evaluated and compared
    value by value (bit-identical on the machine that trained it; elsewhere BLAS may round
    differently, so this check is opt-in).
 
-    python -m benchmarks.check_reproduction                # 1 + 2, about 4 minutes on 2 cores
-    python -m benchmarks.check_reproduction --agents       # 1 + 2 + 3
+    python -m benchmarks.checks.reproduction                # 1 + 2, about 4 minutes on 2 cores
+    python -m benchmarks.checks.reproduction --agents       # 1 + 2 + 3
 
 Rows or columns present on one side only are listed; they are an error unless
 `--allow-new` is given (a benchmark that gained a policy, scenario or metric on purpose must
@@ -47,10 +47,22 @@ def _run(module: str, args: Sequence[str]) -> None:
     subprocess.run(command, check=True)
 
 
+# The compare module as a recorded command names it: its former flat name (the committed results
+# were recorded under it) or its package path; either is re-run as `COMPARE`.
+COMPARE = "benchmarks.runner.compare"
+COMPARE_NAMES = ("benchmarks.compare", COMPARE)
+
+
 def _rerun_arguments(recorded_command: str, out: Path, workers: int) -> list[str]:
-    """The recorded compare command's arguments with --out and --workers replaced."""
+    """The recorded compare command's arguments (after its module, `COMPARE_NAMES`) with --out and
+    --workers replaced. ValueError if the command names no compare module."""
     words = shlex.split(recorded_command)
-    args = words[words.index("benchmarks.compare") + 1 :]
+    module = next((i for i, word in enumerate(words) if word in COMPARE_NAMES), None)
+    if module is None:
+        raise ValueError(
+            f"recorded command {recorded_command!r} does not run {' or '.join(COMPARE_NAMES)}"
+        )
+    args = words[module + 1 :]
     kept: list[str] = []
     skip = False
     for word in args:
@@ -138,7 +150,7 @@ def compare_json(label: str, reference: Path, fresh: Path, report: Report) -> No
 
 @dataclass
 class ReproductionOptions:
-    """The options of ``python -m benchmarks.check_reproduction``."""
+    """The options of ``python -m benchmarks.checks.reproduction``."""
 
     # A Path is immutable: one shared default is safe.
     results: Path = option(RESULTS, "committed results folder")  # noqa: RUF009
@@ -152,7 +164,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args, parser = parse_options(
         ReproductionOptions,
         argv,
-        program_name("benchmarks.check_reproduction"),
+        program_name("benchmarks.checks.reproduction"),
         __doc__.split("\n\n")[0],
         negatable=False,
     )
@@ -167,16 +179,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not required.is_file():
             parser.error(f"committed result {required} not found")
 
+    recorded = json.loads(episodes_json.read_text())["config"]["command"]
+    with usage_errors(parser):  # a command that runs no compare is refused before any re-run
+        _rerun_arguments(recorded, Path(), args.workers)
+
     report = Report(args.allow_new)
     with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
         out = args.keep if args.keep is not None else Path(scratch)
-        recorded = json.loads(episodes_json.read_text())["config"]["command"]
-        _run("benchmarks.compare", _rerun_arguments(recorded, out / "full", args.workers))
+        _run(COMPARE, _rerun_arguments(recorded, out / "full", args.workers))
         compare_episodes(args.results / "full" / "episodes.csv", out / "full/episodes.csv", report)
 
         paper = json.loads(paper_json.read_text())
         _run(
-            "benchmarks.paper_figures",
+            "benchmarks.reports.paper_figures",
             [
                 "--out",
                 str(out / "paper"),

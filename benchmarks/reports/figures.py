@@ -1,4 +1,5 @@
-"""Figures of the benchmark side: a policy comparison (`benchmarks.compare`) and a learning curve.
+"""Figures of the benchmark side: a policy comparison (`benchmarks.runner.compare`) and a learning
+curve.
 
 Built on `auv_gym.plotting` (`new_figure`, `save_figure`, `plot_track`): matplotlib's
 object-oriented API only, no pyplot and no global matplotlib state; every PNG written atomically.
@@ -44,7 +45,8 @@ def comparison_figures(
     """Write per-scenario overlays (first seed) and per-metric bar charts; return the files.
 
     Each record holds "policy", "scenario", "seed", "metrics" and "trajectory", the path of its
-    `.npz` relative to ``out``; ``scenarios`` maps a name to a `benchmarks.scenarios.Scenario`.
+    `.npz` relative to ``out``; ``scenarios`` maps a name to a
+    `benchmarks.catalog.scenarios.Scenario`.
     """
     written = []
     first_seed = min(r["seed"] for r in records)
@@ -119,7 +121,7 @@ def _bar_chart(
 
     A linear axis (a bar's length is its value). Failed episodes are left out of the mean and
     counted above the bar ("✕n"); a policy whose episodes all failed gets a hatched empty bar.
-    ``cells`` are `benchmarks.tables.aggregate`'s.
+    ``cells`` are `benchmarks.reports.tables.aggregate`'s.
     """
     colours = policy_colours(policies)
     fig = new_figure(max(7.0, 0.12 * len(names) * len(policies) + 3.0), 4.6, _COMPARISON_DPI)

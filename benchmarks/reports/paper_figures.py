@@ -1,6 +1,6 @@
 """The paper's Figs. 3–9 (FBSM against backstepping under ±35 white noise) and a metrics table.
 
-    python -m benchmarks.paper_figures --out out/paper_figures [--duration 300] [--seed 0]
+    python -m benchmarks.reports.paper_figures --out out/paper_figures [--duration 300] [--seed 0]
 
 Both controllers (`controllers.make("fbsm")`, `controllers.make("backstepping")`) run the same
 seeded episode of `AUVPath3D-v0` with the env defaults — the paper's helix, start (15, 5, 0) m at
@@ -59,7 +59,7 @@ def _policy_specs(text: str) -> tuple[str, ...]:
 
 @dataclass
 class Args:
-    """The options of ``python -m benchmarks.paper_figures`` (``env``: extra env keyword
+    """The options of ``python -m benchmarks.reports.paper_figures`` (``env``: extra env keyword
     arguments for programmatic callers, no option)."""
 
     out: Path = option(Path("out/paper_figures"), "output folder")  # noqa: RUF009
@@ -84,7 +84,7 @@ def parse_args(argv: Sequence[str] | None = None) -> Args:
     """The arguments, every one checked before any episode runs (a bad one exits with code 2
     and a one-line message)."""
     args, parser = parse_options(
-        Args, argv, program_name("benchmarks.paper_figures"), __doc__.split("\n\n")[0]
+        Args, argv, program_name("benchmarks.reports.paper_figures"), __doc__.split("\n\n")[0]
     )
     with usage_errors(parser):
         validate(args)
@@ -118,8 +118,8 @@ def validate(args: Args) -> None:
 
 
 def build_policies(names: Sequence[str], env: Any) -> dict[str, Any]:
-    """label → policy for each spec (`benchmarks.policies`: "fbsm", "backstepping", any other
-    `controllers.make` name, "ppo", "ppo:PATH" or "module:attribute"), built for ``env`` (a
+    """label → policy for each spec (`benchmarks.catalog.policies`: "fbsm", "backstepping", any
+    other `controllers.make` name, "ppo", "ppo:PATH" or "module:attribute"), built for ``env`` (a
     `SimConfig` or env keyword arguments: control period, vehicle, actuator model).
 
     Classical controllers are labelled as in the paper ("FBSM"), an imported object by its
@@ -149,7 +149,7 @@ def make_figures(
     """Run each policy on the seeded episode, write figures, tables and trajectories to ``out``.
 
     ``env_ids`` maps a label to the env id whose defaults its episode starts from (an agent's
-    training env, `benchmarks.policies.policy_env_id`; default `auv_gym.ENV_ID`), so a
+    training env, `benchmarks.catalog.policies.policy_env_id`; default `auv_gym.ENV_ID`), so a
     speed-limited agent meets its limit here as in `compare` and the suite.
 
     Returns {"figures": stem → file, "files": the other files written, "metrics": label →
@@ -213,9 +213,9 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             label: policy_env_id(spec) for spec, label in zip(args.policies, policies, strict=True)
         }
     except (ValueError, TypeError, OSError) as error:
-        exit_with_usage_error(program_name("benchmarks.paper_figures"), error)
+        exit_with_usage_error(program_name("benchmarks.reports.paper_figures"), error)
     # One run per folder: a second one is refused, a killed one's temporary files removed.
-    with locked_folder(program_name("benchmarks.paper_figures"), args.out):
+    with locked_folder(program_name("benchmarks.reports.paper_figures"), args.out):
         result = make_figures(
             policies,
             args.out,

@@ -2,7 +2,7 @@
 
     auv-gym video --policy fbsm --scenario paper --out run.mp4 [--duration 300] [--every 5]
 
-The policy (`benchmarks.policies` spec) runs one seeded episode of a scenario of
+The policy (`benchmarks.catalog.policies` spec) runs one seeded episode of a scenario of
 `benchmarks/scenarios.toml` through `gym.make(..., render_mode="rgb_array")`; a frame
 (`auv_gym.rendering`) is taken every ``--every`` control steps and played at ``--fps``, so the
 video runs ``every · control_dt · fps`` times faster than the episode (default 5 × 0.05 s × 20
@@ -59,7 +59,9 @@ class VideoOptions:
 def build_parser() -> argparse.ArgumentParser:
     """The parser of `VideoOptions` (each option's default and help from its field)."""
     parser = ArgumentParser(
-        prog=program_name("benchmarks.video"), description=__doc__, formatter_class=HelpFormatter
+        prog=program_name("benchmarks.reports.video"),
+        description=__doc__,
+        formatter_class=HelpFormatter,
     )
     add_options(parser, VideoOptions)
     return parser

@@ -24,9 +24,9 @@ from auv_gym.files import write_json
 from auv_gym.paths import Helix
 from auv_gym.table_format import markdown_table
 from auv_gym.trajectory import FAILURE_REASONS
+from benchmarks.analysis.stats import mean_interval
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.options import option
-from benchmarks.stats import mean_interval
 
 PAPER_CLIMB_SPAN = 97.0  # [m] the paper helix's climb in a 300-s episode (docs/model.md §13.1)
 

@@ -1,7 +1,7 @@
-"""One resumable cache of benchmark work: every finished unit (an episode of `benchmarks.jobs`, a
-chunk of seeds of `benchmarks.evaluate_suite`) is stored atomically as a JSON record holding a
-fingerprint of everything that determines it, so a run restarted with the same arguments reuses
-what is finished and redoes only the rest.
+"""One resumable cache of benchmark work: every finished unit (an episode of
+`benchmarks.runner.jobs`, a chunk of seeds of `benchmarks.runner.evaluate_suite`) is stored
+atomically as a JSON record holding a fingerprint of everything that determines it, so a run
+restarted with the same arguments reuses what is finished and redoes only the rest.
 
 A unit of work has ``fingerprint()`` (a hash), ``record_file(out)`` (its JSON record) and
 ``files(out)`` (every file it writes, the record among them: a unit is finished only when all

@@ -1,12 +1,13 @@
 """FBSM vs backstepping vs PPO (and any Policy) on the same seeded scenarios.
 
-    python -m benchmarks.compare --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos \\
+    python -m benchmarks.runner.compare \\
+        --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos \\
         --scenarios all --seeds 10 --duration 300 --workers 2 --out benchmarks/results/full
 
-Jobs are (policy, scenario, seed) episodes (`benchmarks.jobs`): each finished episode is stored
-under ``OUT/episodes/`` with a fingerprint of everything that determines it, so an interrupted
-run restarted with the same arguments reuses finished episodes, and results do not depend on
-the number of workers or the backend. Policies: `benchmarks.policies`; scenarios:
+Jobs are (policy, scenario, seed) episodes (`benchmarks.runner.jobs`): each finished episode is
+stored under ``OUT/episodes/`` with a fingerprint of everything that determines it, so an
+interrupted run restarted with the same arguments reuses finished episodes, and results do not
+depend on the number of workers or the backend. Policies: `benchmarks.catalog.policies`; scenarios:
 `benchmarks/scenarios.toml`; tables: `benchmarks.reports.tables`; figures:
 `benchmarks.reports.figures`.
 """
@@ -76,7 +77,7 @@ class CompareOptions(EpisodeOptions):
 def build_parser() -> argparse.ArgumentParser:
     """The parser of `CompareOptions` (each option's default and help from its field)."""
     parser = ArgumentParser(
-        prog=program_name("benchmarks.compare"),
+        prog=program_name("benchmarks.runner.compare"),
         description=__doc__.split("\n\n")[0],
         epilog=f"scenarios of the shipped --scenario-file: {', '.join(load_scenarios())}",
         formatter_class=HelpFormatter,
@@ -157,13 +158,13 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             [
                 Path(sys.executable).name,
                 "-m",
-                "benchmarks.compare",
+                "benchmarks.runner.compare",
                 *(argv if argv is not None else sys.argv[1:]),
             ]
         ),
     }
     # One run per folder: a second one is refused, a killed one's temporary files removed.
-    with locked_folder(program_name("benchmarks.compare"), args.out):
+    with locked_folder(program_name("benchmarks.runner.compare"), args.out):
         records = run_jobs(
             args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
         )

@@ -1,21 +1,22 @@
 """Every policy and every training seed on the whole test suite: episodes.csv, then statistics.
 
-    python -m benchmarks.evaluate_suite --workers 2 --out benchmarks/results/suite \\
+    python -m benchmarks.runner.evaluate_suite --workers 2 --out benchmarks/results/suite \\
         --policies fbsm,fbsm_colos,ppo_generalist=runs/ppo_generalist/results
-    python -m benchmarks.evaluate_suite --stats-only --out benchmarks/results/suite
+    python -m benchmarks.runner.evaluate_suite --stats-only --out benchmarks/results/suite
 
 Policies (``--policies``, comma-separated):
 
-* classical controllers and their presets by name, as `benchmarks.compare` takes them; on a
+* classical controllers and their presets by name, as `benchmarks.runner.compare` takes them; on a
   scenario set the scenario's controller keyword arguments apply, exactly as in compare;
-* shipped agents by name (`benchmarks.policies.SHIPPED_AGENTS`), "ppo:PATH", "module:attribute";
+* shipped agents by name (`benchmarks.catalog.policies.SHIPPED_AGENTS`), "ppo:PATH",
+  "module:attribute";
 * NAME=DIR: DIR is one agent directory (one run, named by the training seed its metadata.json
-  records) or a multi-seed results directory (``benchmarks.train_seeds --results``) holding one
-  agent per training seed, ``DIR/agent_seed_<k>/`` (model.zip, vecnormalize.npz,
+  records) or a multi-seed results directory (``benchmarks.training.seeds_cli --results``) holding
+  one agent per training seed, ``DIR/agent_seed_<k>/`` (model.zip, vecnormalize.npz,
   metadata.json): one run per seed; its ``seed_<k>_learning_curve.csv`` files give the learning
   curves of the statistics.
 
-Episodes: every test set of the tasks file (`benchmarks.tasks.test_suite`: the test
+Episodes: every test set of the tasks file (`benchmarks.catalog.tasks.test_suite`: the test
 distribution, the held-out families, one set per benchmark scenario), each on its seeds, for
 ``--duration`` seconds. An agent runs under the env id its metadata.json records (the fixed
 arguments of `auv_gym.VARIANTS`, e.g. AUVPath3DSpeedLimit-v0's 2.0 m/s surge limit, under which
@@ -23,15 +24,15 @@ a faster agent terminates "overspeed"), every other policy under AUVPath3D-v0, t
 env; the ``env_id`` column says which.
 
 The work is split in chunks (policy, run, set): the set's episodes in one batched
-`auv_gym.rollout.evaluate` call. A finished chunk is stored atomically under ``OUT/chunks/``
-with a fingerprint of everything that determines it (the agent's files and the simulator and
-controller sources included, `benchmarks.jobs`), so a killed run continued with the same command
-keeps its finished chunks. Results depend neither on ``--workers`` nor on the order of chunks.
+`auv_gym.rollout.evaluate` call. A finished chunk is stored atomically under ``OUT/chunks/`` with a
+fingerprint of everything that determines it (the agent's files and the simulator and controller
+sources included, `benchmarks.runner.jobs`), so a killed run continued with the same command keeps
+its finished chunks. Results depend neither on ``--workers`` nor on the order of chunks.
 
 Outputs in OUT: ``episodes.csv`` (one row per policy × run × set × episode seed, metrics at full
 precision), ``suite.json`` (command, configuration, agents, versions), then the statistics of
-`benchmarks.suite_stats` (stats.json, stats.md, figures/), which ``--stats-only`` recomputes
-from episodes.csv and suite.json without simulating.
+`benchmarks.analysis.suite_stats` (stats.json, stats.md, figures/), which ``--stats-only``
+recomputes from episodes.csv and suite.json without simulating.
 """
 
 from __future__ import annotations
@@ -114,7 +115,7 @@ class SuiteOptions(EpisodeOptions):
     sets: str = option("all", "comma-separated test sets of --tasks-file, or 'all'")
     # A Path is immutable: one shared default is safe.
     tasks_file: Path = option(  # noqa: RUF009
-        TASKS_FILE, "TOML file of named task sets (benchmarks.tasks)"
+        TASKS_FILE, "TOML file of named task sets (benchmarks.catalog.tasks)"
     )
     out: Path = option(  # noqa: RUF009
         Path("out/suite"),
@@ -145,7 +146,7 @@ class SuiteOptions(EpisodeOptions):
 def build_parser() -> argparse.ArgumentParser:
     """The parser of `SuiteOptions` (each option's default and help from its field)."""
     parser = ArgumentParser(
-        prog=program_name("benchmarks.evaluate_suite"),
+        prog=program_name("benchmarks.runner.evaluate_suite"),
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )
@@ -264,7 +265,7 @@ def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict
     command = [
         Path(sys.executable).name,
         "-m",
-        "benchmarks.evaluate_suite",
+        "benchmarks.runner.evaluate_suite",
         *(argv if argv is not None else sys.argv[1:]),
     ]
     suite = {
@@ -291,7 +292,8 @@ def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict
     return records
 
 
-STATS_FILES = ("stats.json", "stats.md")  # `benchmarks.suite_stats.write_stats`, with figures/
+# What `benchmarks.analysis.suite_stats.write_stats` writes, with figures/.
+STATS_FILES = ("stats.json", "stats.md")
 
 
 def _files(folder: Path) -> dict[Path, int]:
@@ -302,7 +304,7 @@ def _files(folder: Path) -> dict[Path, int]:
 def main(argv: Sequence[str] | None = None) -> None:
     args = parse_args(argv)
     # One run per folder: a second one is refused, a killed one's temporary files removed.
-    with locked_folder(program_name("benchmarks.evaluate_suite"), args.out):
+    with locked_folder(program_name("benchmarks.runner.evaluate_suite"), args.out):
         before = _files(args.out / "figures")
         if not args.stats_only:
             run_suite(args, argv)

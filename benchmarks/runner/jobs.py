@@ -62,7 +62,7 @@ class Job:
     seed: int
     duration: float
     transient: float
-    env_id: str = ENV_ID  # an agent's training env (`benchmarks.policies.policy_env_id`)
+    env_id: str = ENV_ID  # an agent's training env (`benchmarks.catalog.policies.policy_env_id`)
 
     @property
     def env_kwargs(self) -> dict[str, Any]:

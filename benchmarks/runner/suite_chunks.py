@@ -68,7 +68,7 @@ class Run:
 
     run: int
     env_id: str
-    spec: str  # what `benchmarks.policies.build_policy` builds: a name or "ppo:<agent dir>"
+    spec: str  # what `benchmarks.catalog.policies.build_policy` builds: a name or "ppo:<agent dir>"
 
 
 @dataclass(frozen=True)

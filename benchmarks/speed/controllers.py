@@ -1,6 +1,6 @@
 """Controller speed: FBSM and backstepping cost per control step, batched, and a 300-s episode.
 
-    python -m benchmarks.speed_controllers [--steps 200] [--vehicles 1024]
+    python -m benchmarks.speed.controllers [--steps 200] [--vehicles 1024]
 
 Targets: one 300-s FBSM episode through `gym.make` in < 2 s of wall time on one core;
 batched FBSM ≥ 100,000 vehicle-control-steps/s.

@@ -54,7 +54,7 @@ def measure_reference(steps: int) -> dict[str, float]:
     """The same loop with the JIT disabled, in a subprocess."""
     code = (
         "import json, warnings; warnings.simplefilter('ignore');"
-        f"from benchmarks.speed_env import measure; print(json.dumps(measure({steps})))"
+        f"from benchmarks.speed.env import measure; print(json.dumps(measure({steps})))"
     )
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
     out = subprocess.run(

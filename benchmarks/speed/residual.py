@@ -1,6 +1,6 @@
 """Residual-RL speed: the base controller's batched cost, the wrapped env, and PPO training.
 
-    python -m benchmarks.speed_residual [--steps 2000] [--train-steps 100000]
+    python -m benchmarks.speed.residual [--steps 2000] [--train-steps 100000]
 
 Prints, on the training distribution of benchmarks/hyperparams/ppo_residual.yml (n_envs
 vehicles, ``actuator="random"``, one thread):
@@ -95,7 +95,7 @@ def training_rate(n_timesteps: int) -> float:
             progress_bar=True,
         )
         tic = time.perf_counter()
-        train(opts, argv=["benchmarks.speed_residual"])
+        train(opts, argv=["benchmarks.speed.residual"])
         elapsed = time.perf_counter() - tic
         metadata = json.loads((Path(tmp) / "run" / "metadata.json").read_text())
         steps = int(metadata["num_timesteps"])

@@ -2,7 +2,7 @@
 tables.
 
     auv-gym speed all [--sections env,vector,controllers,render,training]
-    python -m benchmarks.throughput [--sections …]
+    python -m benchmarks.speed.throughput [--sections …]
 
 Each section lives in its own module (env, vector, controllers, render,
 training: this tree against the default baseline ref; off-policy: SAC, TQC and CrossQ) and runs

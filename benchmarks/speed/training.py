@@ -25,7 +25,7 @@ as in the trainer (`--update-threads 2` also times the update on two torch threa
 
     auv-gym speed training                      # about 3-5 minutes on 2 cores
     auv-gym speed training --quick              # smoke test
-    python -m benchmarks.speed_training --n-envs 512 --baseline main --rollouts 8
+    python -m benchmarks.speed.training --n-envs 512 --baseline main --rollouts 8
     auv-gym speed training --n-envs 32 512 --batch-size 2048 8192 --update-dtype float32 bfloat16
 
 The baseline's files come from ``git archive REF`` into a cache folder kept between runs (its

@@ -1,6 +1,6 @@
 """The RL training harness: RL-Zoo configuration, training runs, checkpoints, evaluation.
 
-`train` (CLI `python -m benchmarks.train_ppo`) reads an RL-Zoo hyper-parameter file
+`train` (CLI `python -m benchmarks.training.train_cli`) reads an RL-Zoo hyper-parameter file
 (`benchmarks/hyperparams/ppo.yml`, top-level key = the env id), normalises observations (and
 rewards) with `VecNormalize`, evaluates on the paper scenario (helix, white noise ±35 N / N·m)
 with fixed seeds, and writes, under the run directory::
@@ -23,10 +23,10 @@ most one checkpoint interval of compute, never exactness. The agents load with
 `controllers.loader.load_policy` (``controllers.make("agent", path=...)``).
 
 Modules: `config` (YAML files; `ALGORITHMS`, PPO, SAC, TQC and CrossQ, is the loader's table,
-`controllers.algorithms`), `residual` and `residual_env` (a residual agent's training settings
-and env wrapper), `train` (`TrainOptions`, `train`: one algorithm, one seed, one run directory),
-`seeds` (`train_seeds`: N seeds, one run directory each, as local processes or Ray tasks; CLI
-`python -m benchmarks.train_seeds`), `callbacks` (evaluation and checkpoints during training),
+`controllers.algorithms`), `residual` and `residual_env` (a residual agent's training settings and
+env wrapper), `train` (`TrainOptions`, `train`: one algorithm, one seed, one run directory), `seeds`
+(`train_seeds`: N seeds, one run directory each, as local processes or Ray tasks; CLI `python -m
+benchmarks.training.seeds_cli`), `callbacks` (evaluation and checkpoints during training),
 `checkpoints` (agent directories), `evaluation` (seeds, scoring, held-out evaluation),
 `learning_curve` (evaluations.csv). SB3 and torch are imported only when training or evaluating.
 """

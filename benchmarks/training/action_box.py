@@ -3,7 +3,8 @@
 SB3 squashes a SAC agent's Gaussian into its action space and rescales it to the space's bounds;
 giving the agent a narrower space than the env's [−1, 1]³ therefore narrows its exploration and
 its commands to that box, and the space is saved in the model, so a loaded agent stays inside it
-(`benchmarks.training.config`, key ``action_bounds``; `benchmarks.action_bounds` measures boxes).
+(`benchmarks.training.config`, key ``action_bounds``; `benchmarks.analysis.action_bounds`
+measures boxes).
 """
 
 from __future__ import annotations

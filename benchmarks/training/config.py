@@ -30,7 +30,7 @@ An optional ``action_bounds`` key narrows the box the agent acts in, a sub-box o
 [−1, 1]³ given as ``[[low_X, low_M, low_N], [high_X, high_M, high_N]]``: the agent's action
 space becomes that box (`benchmarks.training.train.ActionBox`), saved with the model, so a loaded
 agent acts inside it too. For off-policy agents, whose squashed-Gaussian exploration covers the
-whole box from the first step (`benchmarks.action_bounds` measures what that does).
+whole box from the first step (`benchmarks.analysis.action_bounds` measures what that does).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """How an agent is scored, during training and afterwards: seeded paper-scenario episodes.
 
 Seeds: the evaluation during training uses `EVAL_SEEDS`; reported results use `HELD_OUT_SEEDS`
-(the seeds 0..9 of `benchmarks.compare`); training environments are seeded from
+(the seeds 0..9 of `benchmarks.runner.compare`); training environments are seeded from
 `TRAIN_SEED_BASE` + 1000·seed upwards, so none of them is ever a training seed.
 """
 

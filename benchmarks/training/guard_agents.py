@@ -4,7 +4,7 @@
 The guard limits the pitch and surge commands near the vehicle's limits and is the identity
 inside them; recorded in an agent's ``metadata.json`` it is part of the agent: every loader,
 the benchmark and the test suite evaluate the guarded agent. ``--from`` is one agent folder or a
-multi-seed results folder (``agent_seed_<k>/`` as `benchmarks.train_seeds --results` writes);
+multi-seed results folder (``agent_seed_<k>/`` as `benchmarks.training.seeds_cli --results` writes);
 ``--out`` receives the same layout: each agent copied atomically (`checkpoints.export_agent`),
 its model and statistics unchanged (git stores identical files once) and its metadata.json with
 ``envelope_guard`` added. A results folder's learning curves (``seed_<k>_learning_curve.csv``:

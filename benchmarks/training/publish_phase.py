@@ -1,8 +1,9 @@
 """The seeds of a warm-start training phase as a results folder, like `train_seeds --results`
 writes for a run from scratch, with each agent's whole history.
 
-A phase is one or more runs of `benchmarks.train_seeds --init-from '<history>/agent_seed_{seed}'`
-(seeds may be split over invocations: a seed's training does not depend on the seeds beside it).
+A phase is one or more runs of `benchmarks.training.seeds_cli --init-from
+'<history>/agent_seed_{seed}'` (seeds may be split over invocations: a seed's training does not
+depend on the seeds beside it).
 ``--out`` receives, for every seed of the runs:
 
 - ``agent_seed_<k>/``: the run's final agent, with the envelope guard and (``--allocation``)

@@ -77,7 +77,7 @@ def train_one_seed(train_opts: dict[str, Any], status: str) -> dict[str, Any]:
     if status in ("fresh", "resume"):
         train(
             replace(opts, resume=status == "resume", export=None),
-            argv=["benchmarks.train_seeds", f"--seed={opts.seed}"],
+            argv=["benchmarks.training.seeds_cli", f"--seed={opts.seed}"],
         )
     best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
     if not (best / HELD_OUT_FILE).is_file():

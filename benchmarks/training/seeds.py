@@ -364,7 +364,7 @@ def _write_results(
     results: Path, out: Path, entries: Sequence[dict[str, Any]], summary: dict[str, Any]
 ) -> None:
     """Per seed: its selected agent (``agent_seed_<k>/``, so every seed can be re-evaluated on
-    the whole test suite, `benchmarks.evaluate_suite`), the test evaluation and the learning
+    the whole test suite, `benchmarks.runner.evaluate_suite`), the test evaluation and the learning
     curve; and the summary (all atomic). Files an earlier run with other seeds wrote there are
     removed (`replace_outputs`): the suite would take a stale agent for a seed of this run."""
     written = [results / SUMMARY_FILE]

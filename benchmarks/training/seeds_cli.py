@@ -2,11 +2,11 @@
 
 Examples (see `benchmarks.training.seeds` for the layout, resuming and the agent selection)::
 
-    python -m benchmarks.train_seeds --algo ppo --env-id AUVPath3DSpeedLimit-v0 \\
+    python -m benchmarks.training.seeds_cli --algo ppo --env-id AUVPath3DSpeedLimit-v0 \\
         --config benchmarks/hyperparams/ppo.yml --seeds 0-4 --workers 2 --out runs/ppo_helix_v1 \\
         --export benchmarks/agents/ppo_helix_v1 --results benchmarks/results/seeds/ppo_helix_v1
-    python -m benchmarks.train_seeds ... --resume          # continue a killed run
-    python -m benchmarks.train_seeds ... --backend ray --address HOST:6379
+    python -m benchmarks.training.seeds_cli ... --resume          # continue a killed run
+    python -m benchmarks.training.seeds_cli ... --backend ray --address HOST:6379
 
 ``--seeds`` is a count N (seeds 0..N-1), a range a-b or a list a,b,c. Bad input is refused
 before any training starts with a one-line error and exit code 2.
@@ -47,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     from benchmarks.cli import HelpFormatter
 
     p = ArgumentParser(
-        prog=program_name("benchmarks.train_seeds"),
+        prog=program_name("benchmarks.training.seeds_cli"),
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )
@@ -75,7 +75,7 @@ def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
 
 def main(argv: Sequence[str] | None = None) -> int:
     opts = parse_args(argv)
-    prog = "python -m benchmarks.train_seeds"
+    prog = "python -m benchmarks.training.seeds_cli"
     try:
         summary = train_seeds(opts)
     except (ValueError, FileNotFoundError) as exc:  # refused before any training started

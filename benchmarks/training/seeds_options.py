@@ -17,11 +17,11 @@ __all__ = [
     "parse_seeds",
 ]
 
-# Validation episodes (model selection): "paper", the paper scenario (helix, white noise
-# ±35 N / N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env
-# arguments on its first `eval_episodes` seeds, or on the given eval seeds, which must lie in its
-# range). The per-seed test report is the paper scenario on `HELD_OUT_SEEDS` either way; the whole
-# test suite is `benchmarks.evaluate_suite`. The training distribution is the config's env_kwargs.
+# Validation episodes (model selection): "paper", the paper scenario (helix, white noise ±35 N /
+# N·m) on `EVAL_SEEDS`, or any set of role "validation" in benchmarks/tasks.toml (its env arguments
+# on its first `eval_episodes` seeds, or on the given eval seeds, which must lie in its range). The
+# per-seed test report is the paper scenario on `HELD_OUT_SEEDS` either way; the whole test suite is
+# `benchmarks.runner.evaluate_suite`. The training distribution is the config's env_kwargs.
 TASK_SETS = {"paper": "paper scenario: validation seeds 100-104, test seeds 0-9"}
 DEFAULT_EVAL_EPISODES = 32  # validation episodes drawn from a task set
 MAX_SEEDS = 1000  # training runs of one command
@@ -29,9 +29,9 @@ MAX_SEED = 2**32 - 1  # np.random.seed (SB3's set_random_seed) takes seeds below
 
 
 def parse_seeds(text: str) -> tuple[int, ...]:
-    """ "N" (N ≥ 1 seeds 0…N−1, as `benchmarks.compare --seeds`), "a-b" (inclusive) or "a,b,c";
-    at most `MAX_SEEDS` seeds, each at most `MAX_SEED` (the count is checked before the seeds
-    are listed: a typo like 1e9 costs no memory)."""
+    """ "N" (N ≥ 1 seeds 0…N−1, as `benchmarks.runner.compare --seeds`), "a-b" (inclusive) or
+    "a,b,c"; at most `MAX_SEEDS` seeds, each at most `MAX_SEED` (the count is checked before the
+    seeds are listed: a typo like 1e9 costs no memory)."""
     text = str(text).strip()
     try:
         if "," in text:
@@ -80,7 +80,7 @@ def _check_count(count: int, text: str) -> None:
 
 @dataclass
 class SeedsOptions:
-    """Arguments of `train_seeds` (CLI `python -m benchmarks.train_seeds`)."""
+    """Arguments of `train_seeds` (CLI `python -m benchmarks.training.seeds_cli`)."""
 
     train: TrainOptions  # the per-seed options; `out` and `seed` are set per seed
     seeds: tuple[int, ...] = option(

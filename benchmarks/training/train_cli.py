@@ -5,7 +5,7 @@ an RL-Zoo hyper-parameter file (default: the paper helix under the 2.0 m/s surge
 The shipped agent `benchmarks/agents/ppo_helix` (the paper's unlimited `AUVPath3D-v0`) was
 produced by::
 
-    python -m benchmarks.train_ppo --config benchmarks/hyperparams/ppo.yml --seed 1 \\
+    python -m benchmarks.training.train_cli --config benchmarks/hyperparams/ppo.yml --seed 1 \\
         --env-id AUVPath3D-v0 --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
         --curve benchmarks/results/ppo_learning_curve
 
@@ -13,13 +13,13 @@ An interrupted run continues from its newest checkpoint (step counter intact) wi
 command plus ``--resume``. Watch it with ``tensorboard --logdir runs/ppo_helix/tb``. The learning
 curve of a run (evaluation rms distance against env steps and wall time) is plotted with::
 
-    python -m benchmarks.train_ppo --out runs/ppo_helix --plot-only \\
+    python -m benchmarks.training.train_cli --out runs/ppo_helix --plot-only \\
         --curve benchmarks/results/ppo_learning_curve
 
 and an agent is evaluated on the paper scenario over the held-out seeds 0-9 (300 s; the result
 goes to AGENT/held_out_evaluation.json, which ``--export`` also writes) with::
 
-    python -m benchmarks.train_ppo --evaluate benchmarks/agents/ppo_helix
+    python -m benchmarks.training.train_cli --evaluate benchmarks/agents/ppo_helix
 
 The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
 
@@ -76,7 +76,7 @@ class CommandOptions:
 def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, CommandOptions]:
     """TrainOptions (every field the dataclass offers is an option) and the plotting options."""
     parser = ArgumentParser(
-        prog=program_name("benchmarks.train_ppo"),
+        prog=program_name("benchmarks.training.train_cli"),
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )
@@ -147,7 +147,7 @@ def training_report(out: Path, export: str | None = None) -> str:
 def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     opts, extra = parse_args(args)
-    prog = program_name("benchmarks.train_ppo")
+    prog = program_name("benchmarks.training.train_cli")
     try:  # bad options: one line and exit code 2, before any training starts
         check_outputs(opts, extra)
         if not extra.plot_only and not extra.evaluate:
@@ -161,7 +161,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     if not extra.plot_only:
         # One run per folder: a second one is refused, a killed one's temporary files removed.
         with locked_folder(prog, Path(opts.out)):
-            out = train(opts, argv=["benchmarks/train_ppo.py", *args])
+            out = train(opts, argv=["benchmarks.training.train_cli", *args])
         print(f"run directory: {out}")
         print(training_report(out, opts.export), file=sys.stderr)
     if extra.curve:
