@@ -84,8 +84,6 @@ class SB3VecEnv(VecEnv):
         self.metadata = {**self.metadata, "render_fps": venv.metadata["render_fps"]}
         self._actions: np.ndarray | None = None
         self.info_mode = infos
-        # The last step's vector info and dones, for `step_cost` (computed when read).
-        self._last_step: tuple[dict[str, Any], np.ndarray] | None = None
 
     # ------------------------------------------------------------------------------- stepping
     def reset(self) -> np.ndarray:
@@ -106,7 +104,6 @@ class SB3VecEnv(VecEnv):
         obs, reward, terminated, truncated, info = self.venv.step(actions)
         dones = terminated | truncated
         time_limit = (truncated & ~terminated).tolist()
-        self._last_step = (info, dones)
         infos = self._dicts(info)
         if dones.any():
             # Ended vehicles report their last step's info; the reset info goes to reset_infos.
@@ -118,21 +115,6 @@ class SB3VecEnv(VecEnv):
         for row, flag in zip(infos, time_limit, strict=True):
             row["TimeLimit.truncated"] = flag
         return obs, reward.astype(np.float32), dones, infos
-
-    @property
-    def step_cost(self) -> np.ndarray:
-        """Each vehicle's safety cost of the last step [-] (an ended vehicle's: its final
-        step's; zeros before any step), for training wrappers that read it without per-vehicle
-        dicts (``infos="minimal"``)."""
-        cost = np.zeros(self.num_envs)
-        if self._last_step is None:
-            return cost
-        info, dones = self._last_step
-        if "cost" in info:
-            cost[:] = info["cost"]
-        if dones.any():
-            cost[dones] = np.asarray(info["final_info"]["cost"])[dones]
-        return cost
 
     def _dicts(self, info: dict[str, Any]) -> list[dict[str, Any]]:
         """One info dict per vehicle: the vector env's (``infos="full"``) or empty ones."""

@@ -1,7 +1,7 @@
-"""`ActorWrapper`: the base of policies that transform a loaded actor's output (incremental and
-scaled commands, `controllers.action_increment`, `controllers.action_scale`). It holds the actor
-and its path and forwards every other attribute (metadata, label, num_threads...) to it, so a
-wrapped agent reads like its actor everywhere but in `predict`."""
+"""`ActorWrapper`: the base of policies that transform a loaded actor's output (the envelope guard,
+`controllers.envelope_guard`, and actuator allocation, `controllers.actuator_allocation`). It holds
+the actor and its path and forwards every other attribute (metadata, label, num_threads...) to it,
+so a wrapped agent reads like its actor everywhere but in `predict`."""
 
 from __future__ import annotations
 

@@ -35,7 +35,6 @@ import numpy as np
 
 from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.vehicle import AUVParams, remus100
-from controllers.action_increment import prev_action_index
 from controllers.actor_wrapper import ActorWrapper
 from controllers.allocation import allocate, fin_angle, fin_authority
 from controllers.base import actuator_vector
@@ -51,6 +50,7 @@ __all__ = [
 COMMANDED_ACTUATOR = "paper"  # the one actuator whose normalised τ an agent may command
 ALLOCATED_ACTUATORS = ("fins", "realistic")  # the actuators `AllocatedPolicy` allocates to
 VELOCITY_INPUTS = ("u", "v", "w")  # [m/s] the observation entries the allocation reads
+PREV_ACTION_NAMES = ("a_X_prev", "a_M_prev", "a_N_prev")  # where it feeds the delivered command
 
 
 def check_actuator_allocation(value: Any, where: str) -> str:
@@ -63,6 +63,19 @@ def check_actuator_allocation(value: Any, where: str) -> str:
             f"got {value!r}"
         )
     return value
+
+
+def prev_action_index(obs_names: Sequence[str]) -> np.ndarray:
+    """Positions of the previous action in an observation layout, or an error naming them."""
+    names = list(obs_names)
+    missing = [n for n in PREV_ACTION_NAMES if n not in names]
+    if missing:
+        raise ValueError(
+            f"actuator_allocation needs the previous action in the observation "
+            f"({list(PREV_ACTION_NAMES)}; the agent observation, "
+            f"observation='preview'), missing {missing}"
+        )
+    return np.array([names.index(n) for n in PREV_ACTION_NAMES], dtype=np.intp)
 
 
 @dataclass

@@ -13,11 +13,10 @@ u between u_soft and u_hard (full astern at u_hard). The yaw command is never to
 the soft limits the guard is the identity, so an agent that stays there acts as trained.
 
 The guard reads θ, q and u from the agent's own observation (what the vehicle's attitude and
-velocity sensors give; every agent observation names them) and acts on the command the env
-receives, after an agent's incremental or scaled transform. It is part of an agent when its
-metadata holds ``envelope_guard`` (`controllers.loader.load_policy` wraps it), like
-``action_scale``. The defaults keep margins below the env's limits: the episode ends at 60° of
-pitch and, on the surge-limited ids, at 2.0 m/s (docs/design.md §3.15).
+velocity sensors give; every agent observation names them) and acts on the command the env receives.
+It is part of an agent when its metadata holds ``envelope_guard`` (`controllers.loader.load_policy`
+wraps it). The defaults keep margins below the env's limits: the episode ends at 60° of pitch and,
+on the surge-limited ids, at 2.0 m/s (docs/design.md §3.15).
 """
 
 from __future__ import annotations

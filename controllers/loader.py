@@ -12,8 +12,6 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from controllers.action_increment import IncrementPolicy, check_increment, prev_action_index
-from controllers.action_scale import ScaledPolicy, check_action_scale
 from controllers.actuator_allocation import (
     ALLOCATED_ACTUATORS,
     AllocatedPolicy,
@@ -24,7 +22,14 @@ from controllers.envelope_guard import GuardedPolicy, check_envelope_guard
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
 
-__all__ = ["load_policy", "make_residual"]
+__all__ = ["REMOVED_STAGES", "load_policy", "make_residual"]
+
+# Metadata keys of agent stages that were removed (no shipped agent used them; what they measured
+# stays in docs/results.md): an agent that names one is refused, not loaded without it.
+REMOVED_STAGES = {
+    "action_increment": "incremental commands",
+    "action_scale": "scaled commands",
+}
 
 
 def load_policy(
@@ -34,44 +39,31 @@ def load_policy(
     num_threads: int | None = 1,
     base_kwargs: dict[str, Any] | None = None,
     algo: str | None = None,
-) -> (
-    AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy | GuardedPolicy | AllocatedPolicy
-):
+) -> AgentPolicy | ResidualPolicy | GuardedPolicy | AllocatedPolicy:
     """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
     as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
     `ResidualPolicy` of its base controller, built with the recorded settings and
     ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for other
-    agents), and its actor; for an incremental agent (metadata "action_increment") an
-    `IncrementPolicy` (`controllers.action_increment`); for a scaled agent (metadata
-    "action_scale") a `ScaledPolicy` (`controllers.action_scale`); with metadata
-    "envelope_guard", that policy inside a `GuardedPolicy` (`controllers.envelope_guard`); with
-    metadata "actuator_allocation" and a ``base_kwargs`` actuator "fins" or "realistic", the
-    whole inside an `AllocatedPolicy` (`controllers.actuator_allocation`) for that actuator.
+    agents), and its actor; with metadata "envelope_guard", that policy inside a
+    `GuardedPolicy` (`controllers.envelope_guard`); with metadata "actuator_allocation" and a
+    ``base_kwargs`` actuator "fins" or "realistic", the whole inside an `AllocatedPolicy`
+    (`controllers.actuator_allocation`) for that actuator.
 
     ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
     otherwise. The files are validated first, before torch is imported (FileNotFoundError when
     the model or its statistics are missing, ValueError naming the file and the problem
-    otherwise). `num_threads`: torch's intra-op threads while the policy predicts (None:
-    torch's setting); loading itself leaves torch's settings alone.
+    otherwise; a metadata key of a removed stage, `REMOVED_STAGES`, is such a ValueError).
+    `num_threads`: torch's intra-op threads while the policy predicts (None: torch's setting);
+    loading itself leaves torch's settings alone.
     """
     files = check_agent(path)
     if algo is not None and files.algo != algo:
         raise ValueError(f"agent {files.model} was trained with {files.algo!r}, not {algo!r}")
-    increment = files.metadata.get("action_increment")
-    if increment is not None:  # checked before torch loads anything
-        where = f"{files.metadata_file}"
-        increment = check_increment(increment, where)
-        names = observation_layout(files.metadata)
-        try:
-            prev_action_index(names)
-        except ValueError as error:
-            raise ValueError(f"{where}: {error}") from None
-    scale = files.metadata.get("action_scale")
-    if scale is not None:
-        scale = check_action_scale(scale, f"{files.metadata_file}")
-        if increment is not None or files.residual is not None:
+    for key, stage in REMOVED_STAGES.items():  # checked before torch loads anything
+        if key in files.metadata:
             raise ValueError(
-                f"{files.metadata_file}: action_scale excludes action_increment and residual"
+                f"{files.metadata_file}: {key!r} ({stage}) was removed from auv-gym; this agent "
+                "cannot be loaded"
             )
     guard = files.metadata.get("envelope_guard")
     if guard is not None:
@@ -84,11 +76,7 @@ def load_policy(
         if files.residual is not None:
             raise ValueError(f"{files.metadata_file}: actuator_allocation excludes residual")
     policy = _unguarded(
-        files,
-        load_actor(files, device=device, num_threads=num_threads),
-        increment,
-        scale,
-        base_kwargs,
+        files, load_actor(files, device=device, num_threads=num_threads), base_kwargs
     )
     names = observation_layout(files.metadata)
     if guard is not None:
@@ -101,17 +89,7 @@ def load_policy(
     )
 
 
-def _unguarded(
-    files: Any,
-    actor: AgentPolicy,
-    increment: float | None,
-    scale: tuple[float, float, float] | None,
-    base_kwargs: dict[str, Any] | None,
-) -> Any:
-    if increment is not None:
-        return IncrementPolicy(actor, increment, observation_layout(files.metadata))
-    if scale is not None:
-        return ScaledPolicy(actor, scale)
+def _unguarded(files: Any, actor: AgentPolicy, base_kwargs: dict[str, Any] | None) -> Any:
     if files.residual is None:
         return actor
     base = files.residual.make_base(**(base_kwargs or {}))

@@ -9,9 +9,7 @@ For each policy, on the paper's helix (start, path and 300-s episodes of the pap
     max pitch the largest |θ| over all episodes [deg] (the episode ends beyond 60°)
     stiffness with ``--bias b``: the calm run again with b added to the normalised pitch
               command; Δz̄_e / b [m per unit command] says how far the policy lets a constant
-              pitch moment push it (a controller with integral action: 0). Not measured for an
-              incremental agent (`controllers.action_increment`): the bias would enter the
-              previous command it observes and accumulate
+              pitch moment push it (a controller with integral action: 0)
     surge     with ``--surge-bias b``: the calm run again with b added to the normalised thrust
               command; Δū / b [m/s per unit command] and Δx̄_e / b [m per unit command]. A
               policy that flies a wrong speed because its thrust is mis-calibrated moves with
@@ -125,7 +123,7 @@ def measure(
             return None
         return (window(shifted).mean(axis=0) - calm_window) / value
 
-    if calm_window is not None and not hasattr(policy, "increment"):
+    if calm_window is not None:
         if bias is not None and (change := response(bias, PITCH)) is not None:
             row["stiffness_z"] = float(change[2])
         if surge_bias is not None and (change := response(surge_bias, SURGE)) is not None:

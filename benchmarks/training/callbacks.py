@@ -25,8 +25,6 @@ from benchmarks.training.evaluation import (
 )
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from benchmarks.training.residual import ResidualTraining
-from controllers.action_increment import IncrementPolicy
-from controllers.action_scale import ScaledPolicy
 from controllers.agent import AgentPolicy
 from controllers.envelope_guard import EnvelopeGuard, GuardedPolicy
 from controllers.residual import ResidualPolicy, base_kwargs_for_env
@@ -52,17 +50,13 @@ def policy_from_model(
     vec_normalize: Any,
     residual: ResidualTraining | None = None,
     env_kwargs: dict[str, Any] | None = None,
-    increment: tuple[float, Sequence[str]] | None = None,
-    scale: tuple[float, float, float] | None = None,
     guard: tuple[EnvelopeGuard, Sequence[str]] | None = None,
-) -> AgentPolicy | IncrementPolicy | ScaledPolicy | ResidualPolicy | GuardedPolicy:
+) -> AgentPolicy | ResidualPolicy | GuardedPolicy:
     """The Policy of a model in training, with a snapshot of the current statistics (torch's
     thread setting is the training's); with ``residual``, the `ResidualPolicy` of its base
     controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`); with
-    ``increment`` (δ, observation names), the `IncrementPolicy` of an incremental agent; with
-    ``scale`` (k_X, k_M, k_N), the `ScaledPolicy` of a scaled one; with ``guard`` (the guard,
-    observation names), that policy inside its `GuardedPolicy`."""
-    policy = _unguarded(model, vec_normalize, residual, env_kwargs, increment, scale)
+    ``guard`` (the guard, observation names), that policy inside its `GuardedPolicy`."""
+    policy = _unguarded(model, vec_normalize, residual, env_kwargs)
     return policy if guard is None else GuardedPolicy(policy, *guard)
 
 
@@ -71,17 +65,11 @@ def _unguarded(
     vec_normalize: Any,
     residual: ResidualTraining | None,
     env_kwargs: dict[str, Any] | None,
-    increment: tuple[float, Sequence[str]] | None,
-    scale: tuple[float, float, float] | None,
 ) -> Any:
     rms = vec_normalize.obs_rms
     actor = AgentPolicy(
         model.policy, rms.mean.copy(), rms.var.copy(), vec_normalize.clip_obs, vec_normalize.epsilon
     )
-    if increment is not None:
-        return IncrementPolicy(actor, *increment)
-    if scale is not None:
-        return ScaledPolicy(actor, scale)
     if residual is None:
         return actor
     base = residual.make_base(**base_kwargs_for_env(env_kwargs or {}))
@@ -97,11 +85,9 @@ class PeriodicEvaluation(BaseCallback):
     the learning curve, and the agent saved to OUT/best when its `score` improves.
 
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
-    A residual agent (``residual``) is evaluated as its `ResidualPolicy`, an incremental one
-    (``increment``: δ and the observation names) as its `IncrementPolicy`, a scaled one
-    (``scale``) as its `ScaledPolicy`, a guarded one (``guard``) inside its `GuardedPolicy`.
-    ``next_eval``: the
-    schedule of a resumed run (its checkpoint's), else the first multiple of `every` ahead.
+    A residual agent (``residual``) is evaluated as its `ResidualPolicy`, a guarded one
+    (``guard``) inside its `GuardedPolicy`. ``next_eval``: the schedule of a resumed run (its
+    checkpoint's), else the first multiple of `every` ahead.
     """
 
     def __init__(
@@ -116,13 +102,10 @@ class PeriodicEvaluation(BaseCallback):
         verbose: int = 0,
         residual: ResidualTraining | None = None,
         next_eval: int | None = None,
-        increment: tuple[float, Sequence[str]] | None = None,
-        scale: tuple[float, float, float] | None = None,
         guard: tuple[EnvelopeGuard, Sequence[str]] | None = None,
     ) -> None:
         super().__init__(verbose)
-        self.residual, self.increment, self.scale = residual, increment, scale
-        self.guard = guard
+        self.residual, self.guard = residual, guard
         self.out, self.every, self.seeds = out, every, tuple(seeds)
         self.eval_kwargs, self.metadata = eval_kwargs, metadata
         self.start_wall, self.best = start_wall, best
@@ -153,8 +136,6 @@ class PeriodicEvaluation(BaseCallback):
             vec_normalize,
             self.residual,
             self.eval_kwargs,
-            self.increment,
-            self.scale,
             self.guard,
         )
         extra = () if self.residual is None else ("chattering",)

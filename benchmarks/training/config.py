@@ -69,13 +69,17 @@ ZOO_KEYS = frozenset(
         "residual",
         "action_bounds",
         "obs_scales",
-        "action_increment",
-        "action_scale",
-        "action_std_schedule",
-        "cost_penalty",
         "envelope_guard",
     }
 )
+# Keys of removed training features (no kept agent used them; their findings stay in
+# docs/results.md): a file that still names one is refused with what the key did.
+REMOVED_KEYS = {
+    "action_increment": "incremental commands",
+    "action_scale": "scaled commands",
+    "action_std_schedule": "the exploration-noise schedule",
+    "cost_penalty": "the safety cost as a training penalty",
+}
 
 
 @dataclass(frozen=True)
@@ -99,10 +103,6 @@ class ZooConfig:
     residual: ResidualTraining | None = None
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
-    action_increment: float | None = None  # δ (`controllers.action_increment`)
-    action_scale: tuple[float, float, float] | None = None  # k (`controllers.action_scale`)
-    action_std_schedule: Any = None  # `training.noise_schedule.StdSchedule`
-    cost_penalty: float | None = None  # w of r − w·cost (`training.cost_penalty`)
     envelope_guard: Any = None  # `controllers.envelope_guard.EnvelopeGuard` of the commands
 
     def model_kwargs(self) -> dict[str, Any]:
@@ -135,6 +135,13 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
             f"{type(data[env_id]).__name__} {data[env_id]!r:.60}"
         )
     section = dict(data[env_id])
+    removed = sorted(set(section) & set(REMOVED_KEYS))
+    if removed:
+        key = removed[0]
+        raise ValueError(
+            f"{path}: {env_id}: key {key!r} ({REMOVED_KEYS[key]}) was removed from auv-gym; "
+            "delete it from the file"
+        )
     accepted = ALGORITHMS[algo].hyperparameters
     unknown = set(section) - ZOO_KEYS - accepted
     if unknown:
@@ -186,7 +193,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         action_bounds = parse_action_bounds(section["action_bounds"], path)
     from benchmarks.training.agent_interface import parse_interface
 
-    interface = parse_interface(section, path, env_id, residual, action_bounds)
+    interface = parse_interface(section, path, env_id, residual)
     # Every value SB3 would refuse, or accept and train nonsense with, is refused here: before
     # the first training step, not at the model's construction or in its first update.
     where = f"{path}: {env_id}"

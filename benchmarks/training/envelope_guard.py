@@ -4,7 +4,7 @@ The wrapper sits under `VecNormalize` (it reads θ, q and u from the raw observa
 last returned: the new episode's first one after an autoreset) and limits the commands as a
 loaded guarded agent does (`controllers.envelope_guard`), so training and evaluation see the
 same commands. It is the innermost action wrapper: the guard acts on the command the env
-receives, after a scaled or incremental transform.
+receives.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """`ObservedActions`: the base of action wrappers that act on each vehicle's last raw observation
-(incremental commands, the envelope guard). It sits under `VecNormalize` and keeps ``last_obs``:
-the observation each vehicle last returned (the new episode's first one after an autoreset),
-which a resumed run restores (`checkpoints`)."""
+(the envelope guard). It sits under `VecNormalize` and keeps ``last_obs``: the observation each
+vehicle last returned (the new episode's first one after an autoreset), which a resumed run restores
+(`checkpoints`)."""
 
 from __future__ import annotations
 

@@ -17,12 +17,7 @@ from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.files import LOCK_FILE, git_commit, versions
 from auv_gym.observation import ObservationConfig
 from benchmarks.options import comma_integers, option, whole_number
-from benchmarks.training.agent_interface import (
-    interface_callbacks,
-    pin_scales,
-    wrap_actions,
-    wrap_rewards,
-)
+from benchmarks.training.agent_interface import pin_scales, wrap_actions
 from benchmarks.training.checkpoints import (
     REPLAY_FILE,
     capture_training_state,
@@ -294,8 +289,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
-    venv, increment = wrap_actions(venv, cfg, obs_names)
-    venv = wrap_rewards(venv, cfg)
+    venv = wrap_actions(venv, cfg, obs_names)
 
     previous: dict[str, Any] = {}
     warm: dict[str, Any] | None = None
@@ -387,8 +381,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "observation_shape": [len(obs_names)],
             "action_shape": [action_dim],
             **residual_meta,
-            **({} if increment is None else {"action_increment": increment[0]}),
-            **({} if cfg.action_scale is None else {"action_scale": list(cfg.action_scale)}),
             **(
                 {}
                 if cfg.envelope_guard is None
@@ -428,8 +420,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             opts.verbose,
             residual,
             next_eval=schedules.get("next_eval"),
-            increment=increment,
-            scale=cfg.action_scale,
             guard=None if cfg.envelope_guard is None else (cfg.envelope_guard, obs_names),
         )
         callbacks.append(evaluation)
@@ -456,7 +446,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         next_checkpoint=schedules.get("next_checkpoint"),
     )
     callbacks.append(checkpoints)
-    callbacks.extend(interface_callbacks(cfg, n_timesteps))
     if opts.progress_bar:  # ours, to close it at a pause too
         callbacks.append(ProgressBarCallback())
     remaining = n_timesteps - int(model.num_timesteps)
