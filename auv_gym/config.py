@@ -99,8 +99,6 @@ class SimConfig:
     actuator_params: ActuatorParams = field(default_factory=ActuatorParams)
     random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
     random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
-    # [N, N·m, N·m]; None: the vehicle's (`params`: X_max, M_max, N_max), the one source.
-    actuator_limits: tuple[float, float, float] | None = None
     control_dt: float = 0.05  # [s]
     physics_dt: float = 0.01  # [s]
     max_time: float = 300.0  # [s]
@@ -278,19 +276,6 @@ class SimConfig:
             real("param_uncertainty", self.param_uncertainty, 0.0, 1.0, high_open=True),
         )
         self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
-        if self.actuator_limits is None:
-            put("actuator_limits", self.params.actuator_limits)
-        put(
-            "actuator_limits",
-            vector("actuator_limits", self.actuator_limits, 3, 0.0, 1e6, "N, N·m"),
-        )
-        if min(self.actuator_limits) <= 0.0:
-            raise ValueError(f"actuator_limits must be positive, got {self.actuator_limits}")
-        if self.actuator_limits != self.params.actuator_limits:
-            raise ValueError(
-                f"actuator_limits {self.actuator_limits} conflicts with params (X_max, M_max, "
-                f"N_max) = {self.params.actuator_limits}: give the limits once, in params"
-            )
         put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
         most = MAX_SUBSTEPS * self.physics_dt
         put(
@@ -483,7 +468,7 @@ class SimConfig:
         for c, name in enumerate(("f_u", "f_v", "f_w", "f_q", "f_r")):
             values[f"noise_{name}"] = self.noise.amplitude[c]
         for c, axis in enumerate("XMN"):
-            values[f"limit_{axis}"] = self.actuator_limits[c]
+            values[f"limit_{axis}"] = self.params.actuator_limits[c]
         for c, axis in enumerate("xyz"):
             values[f"current_{axis}"] = self.current.mean[c]
             values[f"gm_b_{axis}"] = gm_b[c]

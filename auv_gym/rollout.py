@@ -261,7 +261,7 @@ def _run_batch(
                 termination_reason=episode_end(int(codes[i])),
                 control_dt=config.control_dt,
                 u_desired=config.u_desired,
-                actuator_limits=config.actuator_limits,
+                actuator_limits=config.params.actuator_limits,
                 top_speed=config.params.max_surge,
                 metadata={**base_meta, "seed": seed},
             )

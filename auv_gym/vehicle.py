@@ -80,7 +80,7 @@ class AUVParams:
     fin_max: float = math.pi / 6.0  # [rad] fin deflection limit ±30°
     # Actuator limits (docs/model.md §2.3): |X| <= X_max; |M| <= M_max, |N| <= N_max for the
     # "paper" model ("fins" bounds M, N by the fin authority instead). Plant and controllers
-    # read them from here (`SimConfig.actuator_limits`, `controllers.base.actuator_vector`).
+    # read them from here (`actuator_limits`, `controllers.base.actuator_vector`).
     X_max: float = 50.0  # [N]
     M_max: float = 10.0  # [N·m]
     N_max: float = 10.0  # [N·m]

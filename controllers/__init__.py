@@ -33,7 +33,7 @@ __all__ = [
     "FBSM",
     "PIDLOS",
     "PRESETS",
-    "REGISTRY",
+    "RENAMED",
     "Backstepping",
     "BatchedController",
     "ControllerGains",
@@ -44,10 +44,10 @@ __all__ = [
     "make",
 ]
 
-# "agent" loads any saved agent; "ppo" is its former name; another algorithm's name loads an
-# agent trained with that algorithm (`controllers.algorithms`).
-AGENT_NAMES = ("agent", *ALGORITHMS)
-REGISTRY = (*CLASSICAL, "ppo")  # policy names of the benchmark CLIs (a residual agent: ppo:PATH)
+# "agent" loads any saved agent; another algorithm's name loads an agent trained with that
+# algorithm (`controllers.algorithms`). "ppo" is not one: it was the former name of "agent".
+AGENT_NAMES = ("agent", *(name for name in ALGORITHMS if name != "ppo"))
+RENAMED = {"ppo": "controllers.make('agent', path=...)"}  # former name → what to call instead
 
 
 def make(name: str, env: Any = None, **kwargs: Any) -> Any:
@@ -64,10 +64,11 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     `controllers.pid.PIDLOS`) accepts `pid` (`controllers.pid.PIDGains`), `gains` (read for
     the guidance only), `params`, `control_dt`, `actuator` and the names of `PIDGains` and
     `controllers.pid.GUIDANCE_GAINS`. All three take ``actuator="realistic"`` with an optional
-    `actuator_params` (`auv_gym.actuators.ActuatorParams`; docs/model.md §2.7). "agent" (alias
-    "ppo") takes `path` (a saved agent directory of any algorithm of `controllers.algorithms`,
-    plain or residual; `controllers.loader.load_policy`) and that function's keywords; "sac" (any
-    other algorithm name) does the same for an agent of that algorithm only.
+    `actuator_params` (`auv_gym.actuators.ActuatorParams`; docs/model.md §2.7). "agent" takes
+    `path` (a saved agent directory of any algorithm of `controllers.algorithms`, plain or
+    residual; `controllers.loader.load_policy`) and that function's keywords; "sac" (and "tqc",
+    "crossq") does the same for an agent of that algorithm only. A former name (`RENAMED`:
+    "ppo") is a one-line ValueError naming the call that replaces it.
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
     Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
@@ -76,6 +77,8 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
     """
+    if name in RENAMED:
+        raise ValueError(f"controller {name!r} was renamed: use {RENAMED[name]}")
     if env is not None:
         kwargs = _with_env_settings(name, policy_settings(env), kwargs)
     if name in CLASSICAL:
@@ -85,7 +88,7 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
 
         if "path" not in kwargs:
             raise ValueError(f"controllers.make({name!r}) needs path=<saved agent directory>")
-        algo = None if name in ("agent", "ppo") else name
+        algo = None if name == "agent" else name
         return load_policy(kwargs.pop("path"), algo=algo, **kwargs)
     if name == "residual":
         from controllers.loader import make_residual

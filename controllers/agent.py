@@ -48,7 +48,6 @@ __all__ = [
     "VECNORM_FILE",
     "AgentFiles",
     "AgentPolicy",
-    "PPOPolicy",
     "check_agent",
     "load_actor",
 ]
@@ -125,9 +124,6 @@ class AgentPolicy:
 
     def __repr__(self) -> str:
         return f"AgentPolicy(path={self.path!r})"
-
-
-PPOPolicy = AgentPolicy  # the name before the loader took any algorithm
 
 
 @contextlib.contextmanager

@@ -3,8 +3,7 @@
 `load_policy` checks an agent's files (`controllers.agent.check_agent`), loads its actor with the
 algorithm its metadata names (`controllers.algorithms`) and, for a residual agent (metadata
 "residual"), puts the actor on top of its base controller (`controllers.residual`). It is what
-``controllers.make("agent", path=...)`` (alias "ppo") and ``controllers.make("residual",
-agent=PATH)`` call.
+``controllers.make("agent", path=...)`` and ``controllers.make("residual", agent=PATH)`` call.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from benchmarks.training.checkpoints import export_agent
-from controllers.ppo import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
+from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 pytestmark = pytest.mark.rl
 

@@ -1,7 +1,7 @@
 """A saved agent's files are validated completely on load (issue 11, item 5).
 
 Each test damages one file of a copy of the shipped agent (benchmarks/agents/ppo_helix) and
-expects an error naming that file and the problem, raised by `controllers.ppo.check_agent`
+expects an error naming that file and the problem, raised by `controllers.agent.check_agent`
 before torch is imported, and by `load_policy`, which calls it first. Was, e.g.: a
 vecnormalize.npz with NaN clip_obs or negative epsilon loaded, then failed deep in torch or
 predicted NaN actions.
@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from auv_gym.observation import OBS_DIM, OBS_NAMES
-from controllers.ppo import check_agent
+from controllers.agent import check_agent
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED = ROOT / "benchmarks" / "agents" / "ppo_helix"
@@ -204,7 +204,7 @@ def test_a_damaged_agent_file_is_named_with_its_problem(case: str, agent_copy: P
 @pytest.mark.rl
 @pytest.mark.parametrize("case", ["clip_obs NaN", "epsilon < 0", "model bit flip", "meta obs size"])
 def test_load_policy_refuses_the_same_files(case: str, agent_copy: Path) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     damage, _, message = DAMAGES[case]
     damage(agent_copy)
@@ -235,7 +235,7 @@ def test_checking_an_agent_does_not_import_torch(tmp_path: Path) -> None:
     DAMAGES["epsilon < 0"][0](agent)
     code = (
         "import sys\n"
-        "from controllers.ppo import check_agent\n"
+        "from controllers.agent import check_agent\n"
         f"check_agent({str(SHIPPED)!r})\n"
         "try:\n"
         f"    check_agent({str(agent)!r})\n"

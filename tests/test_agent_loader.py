@@ -1,6 +1,7 @@
 """One agent loader: `controllers.make("agent", path=...)` loads a saved agent of any algorithm of
-the one table training shares (`controllers.algorithms`), plain or residual; "ppo" is an alias;
-errors name the algorithm found; `auv-gym train --algo` chooses the algorithm and its file."""
+the one table training shares (`controllers.algorithms`), plain or residual; "ppo", its former name,
+is refused naming the call that replaces it; errors name the algorithm found; `auv-gym train --algo`
+chooses the algorithm and its file."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ def test_training_and_loading_share_one_algorithm_table():
         "tqc": ("sb3_contrib", "TQC"),
         "crossq": ("sb3_contrib", "CrossQ"),
     }
-    assert controllers.AGENT_NAMES == ("agent", "ppo", "sac", "tqc", "crossq")
+    assert controllers.AGENT_NAMES == ("agent", "sac", "tqc", "crossq")
     assert "tau" not in ALGORITHMS["crossq"].hyperparameters  # no target networks
     assert "top_quantiles_to_drop_per_net" in ALGORITHMS["tqc"].hyperparameters
 
@@ -53,19 +54,24 @@ def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
 def test_make_needs_a_path_and_knows_the_names():
     with pytest.raises(ValueError, match=r"controllers.make\('agent'\) needs path="):
         controllers.make("agent")
-    with pytest.raises(
-        ValueError, match=r"valid: \[.*'agent', 'ppo', 'sac', 'tqc', 'crossq', 'residual'"
-    ):
+    with pytest.raises(ValueError, match=r"valid: \[.*'agent', 'sac', 'tqc', 'crossq', 'residual'"):
         controllers.make("dqn", path="x")
 
 
+def test_the_former_name_ppo_is_refused_in_one_line():
+    for kwargs in ({}, {"path": str(AGENTS / "ppo_helix")}):
+        with pytest.raises(ValueError) as error:
+            controllers.make("ppo", **kwargs)
+        assert str(error.value) == (
+            "controller 'ppo' was renamed: use controllers.make('agent', path=...)"
+        )
+
+
 @pytest.mark.rl
-def test_agent_ppo_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
+def test_agent_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
     obs = np.linspace(-0.5, 0.5, 15, dtype=np.float32)
     path = str(AGENTS / "sac_generalist")
-    actions = [
-        controllers.make(name, path=path).predict(obs)[0] for name in ("agent", "ppo", "sac")
-    ]
+    actions = [controllers.make(name, path=path).predict(obs)[0] for name in ("agent", "sac")]
     assert type(controllers.make("agent", path=path)).__name__ == "AgentPolicy"
     for action in actions[1:]:
         np.testing.assert_array_equal(action, actions[0])

@@ -65,7 +65,7 @@ def test_a_trained_agent_normalises_its_errors_by_the_fixed_scale(
 ):
     """A tiny PPO run with x_e, z_e at 0.5 m: the exported statistics hold mean 0, variance 0.25
     there, and the loaded agent feeds its network x_e/0.5 m."""
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     train_tiny_preview_agent(tmp_path, obs_scales={"x_e": 0.5, "z_e": 0.5})
     stats = np.load(tmp_path / "agent" / "vecnormalize.npz")

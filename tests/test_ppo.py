@@ -1,5 +1,5 @@
 """PPO baselines: training CLI (`benchmarks.training`), checkpoints and resume, loading
-(`controllers.ppo`) and its errors, the shipped agent.
+(`controllers.loader`) and its errors, the shipped agent.
 
 Training here is tiny (a few hundred env steps); real training belongs to
 benchmarks/training/train_cli.py.
@@ -98,7 +98,7 @@ def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_cli_writes_complete_loadable_agents(tiny_run: Path) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     first = json.loads((tiny_run.parent / "first_metadata.json").read_text())
     assert first["num_timesteps"] == 256
@@ -189,7 +189,7 @@ def saved_agent(tmp_path_factory: pytest.TempPathFactory):
 
 
 def test_save_load_identical_deterministic_predictions(saved_agent) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     model, venv, folder = saved_agent
     obs = _random_obs(64)
@@ -210,7 +210,7 @@ def test_save_load_identical_deterministic_predictions(saved_agent) -> None:
 
 
 def test_policy_rejects_bad_observation_shape(saved_agent) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     policy = load_policy(saved_agent[2])
     with pytest.raises(ValueError, match="observation must have shape"):
@@ -226,7 +226,7 @@ def _copy_agent(src: Path, dst: Path, skip: tuple[str, ...] = ()) -> Path:
 
 
 def test_missing_statistics_named(saved_agent, tmp_path: Path) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     agent = _copy_agent(
         saved_agent[2], tmp_path / "a", skip=("vecnormalize.npz", "vecnormalize.pkl")
@@ -240,7 +240,7 @@ def test_missing_statistics_named(saved_agent, tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("damage", ["garbage", "truncated"])
 def test_corrupt_zip_named(saved_agent, tmp_path: Path, damage: str) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     agent = _copy_agent(saved_agent[2], tmp_path / "a")
     data = (agent / "model.zip").read_bytes()
@@ -253,7 +253,7 @@ def test_corrupt_zip_named(saved_agent, tmp_path: Path, damage: str) -> None:
 
 
 def test_other_observation_layout_named(saved_agent, tmp_path: Path) -> None:
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     agent = _copy_agent(saved_agent[2], tmp_path / "a")
     meta = json.loads((agent / "metadata.json").read_text())
@@ -277,7 +277,7 @@ def test_other_observation_space_named(saved_agent, tmp_path: Path) -> None:
     import gymnasium as gym
     from stable_baselines3 import PPO
 
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     agent = _copy_agent(saved_agent[2], tmp_path / "a", skip=("metadata.json", "model.zip"))
     PPO("MlpPolicy", gym.make("Pendulum-v1"), n_steps=32, batch_size=32, device="cpu").save(
@@ -315,7 +315,7 @@ def test_zoo_config_errors(tmp_path: Path) -> None:
 def test_shipped_agent_follows_helix_briefly() -> None:
     """The shipped agent on held-out seed 0 (paper scenario), 60 s: no termination, closes in."""
     from auv_gym.rollout import evaluate
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     policy = load_policy(SHIPPED)
     assert policy.metadata["obs_names"] == list(OBS_NAMES)
@@ -348,9 +348,10 @@ def test_shipped_agent_meets_acceptance_on_held_out_seeds() -> None:
 
 def test_controllers_make_dispatches_to_load_policy() -> None:
     import controllers
-    from controllers.ppo import PPOPolicy, load_policy
+    from controllers.agent import AgentPolicy
+    from controllers.loader import load_policy
 
-    policy = controllers.make("ppo", path=str(SHIPPED))
-    assert isinstance(policy, PPOPolicy)
+    policy = controllers.make("agent", path=str(SHIPPED))
+    assert isinstance(policy, AgentPolicy)
     obs = _random_obs(8, seed=1)
     np.testing.assert_array_equal(policy.predict(obs)[0], load_policy(SHIPPED).predict(obs)[0])

@@ -284,7 +284,8 @@ def test_saved_and_reloaded_residual_agent_predicts_identically(
     tmp_path, save_tiny_residual_agent, assert_same_episodes
 ):
     from benchmarks.training.callbacks import policy_from_model
-    from controllers.ppo import check_agent, load_policy
+    from controllers.agent import check_agent
+    from controllers.loader import load_policy
 
     settings_ = ResidualTraining(bound=(0.2, 0.4, 0.4))
     model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 7, ENV)
@@ -315,7 +316,7 @@ def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     layer) scores exactly what its base scores alone on the validation episode."""
     from benchmarks.training.evaluation import evaluate_policy_on_seeds
     from benchmarks.training.seeds_cli import main
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     config = yaml.safe_load((ROOT / "benchmarks/hyperparams/ppo_residual.yml").read_text())
     section = config["AUVPath3DSpeedLimit-v0"]

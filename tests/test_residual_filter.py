@@ -126,7 +126,8 @@ def test_saved_filter_agent_reloads_with_six_actions(
     tmp_path, save_tiny_residual_agent, assert_same_episodes
 ):
     from benchmarks.training.callbacks import policy_from_model
-    from controllers.ppo import check_agent, load_policy
+    from controllers.agent import check_agent
+    from controllers.loader import load_policy
 
     residual = ResidualTraining(filter_max=0.6)
     model, venv = save_tiny_residual_agent(residual, tmp_path / "agent", 3, ENV)

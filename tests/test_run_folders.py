@@ -602,7 +602,7 @@ def test_speed_benchmarks_refuse_options_before_timing(tmp_path, capsys, argv, m
 
 def _fake_seed(out: Path, seed: int) -> dict:
     """The files `_write_results` reads for one finished seed (contents are placeholders)."""
-    from controllers.ppo import METADATA_FILE, MODEL_FILE, STATS_FILE
+    from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE
 
     agent = out / f"seed_{seed}" / "best"
     agent.mkdir(parents=True)

@@ -192,7 +192,7 @@ def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
     assert summary["selected_seed"] == min(scores, key=lambda s: (*scores[s], s))
     meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
     assert meta["seed"] == summary["selected_seed"] and meta["algo"] == algo
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     assert load_policy(tmp_path / "agent").metadata["env_id"] == "AUVPath3DSpeedLimit-v0"
     # Everything finished: a resumed run trains nothing and reports the same seeds.
@@ -209,7 +209,7 @@ def test_smoke_on_the_agent_observation(tmp_path):
     import numpy as np
 
     from benchmarks.catalog.policies import agent_run
-    from controllers.ppo import load_policy
+    from controllers.loader import load_policy
 
     section = {
         **TINY["ppo"],

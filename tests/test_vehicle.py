@@ -134,20 +134,15 @@ def test_actuator_limits_come_from_the_vehicle_record():
     from controllers.base import actuator_vector
 
     assert remus100().actuator_limits == ACTUATOR_LIMITS == (50.0, 10.0, 10.0)
-    assert SimConfig().actuator_limits == ACTUATOR_LIMITS
+    assert SimConfig().params.actuator_limits == ACTUATOR_LIMITS
     strong = AUVParams(X_max=60.0, N_max=12.0)
     assert actuator_vector("paper", strong)[2:] == (60.0, 10.0, 12.0)  # the controllers' limits
     env = AUVPath3DEnv(params={"X_max": 60.0, "N_max": 12.0}, disturbance="none")
-    assert env.config.actuator_limits == (60.0, 10.0, 12.0)
+    assert env.config.params.actuator_limits == (60.0, 10.0, 12.0)
     env.reset(seed=0)
     *_, info = env.step(np.array([1.0, 0.0, -1.0]))  # full surge and yaw: the plant's limits
     assert info["tau"][0] == 60.0 and info["tau"][2] == -12.0
     with pytest.raises(ValueError, match=r"^AUVParams.M_max must be positive, got 0.0$"):
         AUVParams(M_max=0.0)
-    with pytest.raises(
-        ValueError,
-        match=r"^actuator_limits \(50.0, 10.0, 10.0\) conflicts with "
-        r"params \(X_max, M_max, N_max\) = \(60.0, 10.0, 12.0\): give the limits "
-        r"once, in params$",
-    ):
-        SimConfig(params=strong, actuator_limits=(50.0, 10.0, 10.0))
+    with pytest.raises(TypeError, match=r"unexpected keyword argument 'actuator_limits'$"):
+        SimConfig(params=strong, actuator_limits=(60.0, 10.0, 12.0))  # removed: params only
