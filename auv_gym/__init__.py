@@ -11,10 +11,10 @@ Importing the package registers these ids with Gymnasium (idempotently); each is
 | `AUVPath3DSpeedLimit-v0` | v0 limited to the vehicle's top speed (REMUS 100: 2.0 m/s); was v1 |
 | `AUVPath3DPreview-v0`    | the RL task: the surge limit and the agent observation (path     |
 |                          | preview, velocity over ground, previous action; `observation`)  |
-| `AUVPath3DPreviewIntegral-v0` | the RL task with leaky integrals of y_e, z_e (T = 10 s) added |
-|                          | to the agent observation (`ObservationConfig.integral_time`)    |
-| `AUVPath3DPreviewAntiWindup-v0` | the RL task with integrals of x_e, y_e, z_e (T = 10 s), each |
-|                          | clipped to ±1 m·s (`integral_errors`, `integral_limit`)         |
+
+Integral action is an option of the RL task: ``gym.make("AUVPath3DPreview-v0",
+observation="preview_integral")``. The generation-named ids of earlier releases
+(`REMOVED_ENV_IDS`) are refused by `gym.make` with a one-line error naming that call.
 
 The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
 no "out of date" warning. `LEGACY_ENV_IDS` maps ids that agents' metadata may still record
@@ -41,7 +41,7 @@ from auv_gym.observation import (
 from auv_gym.path_generator import PathDistribution
 from auv_gym.paths import FittedCurve, Helix, Path, Spline, StraightLine, fit_curve, make_path
 from auv_gym.sensors import SensorConfig
-from auv_gym.task import SURGE_LIMIT, VEHICLE_TOP_SPEED  # noqa: F401  (SURGE_LIMIT: former name)
+from auv_gym.task import VEHICLE_TOP_SPEED
 from auv_gym.vehicle import AUVParams, remus100
 
 __all__ = [
@@ -62,6 +62,7 @@ __all__ = [
     "StraightLine",
     "fit_curve",
     "make_path",
+    "recorded_env_id",
     "remus100",
     "resolve_env_id",
 ]
@@ -73,8 +74,6 @@ ENV_ID = "AUVPath3D-v0"
 
 SPEED_LIMIT_ENV_ID = "AUVPath3DSpeedLimit-v0"
 PREVIEW_ENV_ID = "AUVPath3DPreview-v0"
-PREVIEW_INTEGRAL_ENV_ID = "AUVPath3DPreviewIntegral-v0"
-PREVIEW_ANTIWINDUP_ENV_ID = "AUVPath3DPreviewAntiWindup-v0"
 
 # Variants are separate ids with fixed keyword arguments (docs/design.md §3, Registration).
 VARIANTS: dict[str, dict] = {
@@ -84,37 +83,47 @@ VARIANTS: dict[str, dict] = {
     # the default reward changed: overspeed term and termination above 2.0 m/s (env docstring)
     SPEED_LIMIT_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED},
     PREVIEW_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED, "observation": "preview"},
-    # integral action for a static policy: what the third-generation generalist observes
-    PREVIEW_INTEGRAL_ENV_ID: {
-        "surge_limit": VEHICLE_TOP_SPEED,
-        "observation": {"kind": "preview", "integral_time": 10.0},
-    },
-    # the along-track error integrated too, every integral clipped: the fourth generation's
-    PREVIEW_ANTIWINDUP_ENV_ID: {
-        "surge_limit": VEHICLE_TOP_SPEED,
-        "observation": {
-            "kind": "preview",
-            "integral_time": 10.0,
-            "integral_errors": "xyz",
-            "integral_limit": 1.0,
-        },
-    },
 }
 # Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium
 # call v0 "out of date" on every `gym.make("AUVPath3D-v0")`.
 LEGACY_ENV_IDS: dict[str, str] = {"AUVPath3D-v1": SPEED_LIMIT_ENV_ID}
+# Ids named after agent generations, removed: integral action is an observation option of the RL
+# task. An agent's metadata may still record them (with its observation, which it runs under).
+REMOVED_ENV_IDS: dict[str, str] = {
+    "AUVPath3DPreviewIntegral-v0": (
+        f'gym.make("{PREVIEW_ENV_ID}", observation={{"kind": "preview", "integral_time": 10.0}})'
+    ),
+    "AUVPath3DPreviewAntiWindup-v0": (
+        f'gym.make("{PREVIEW_ENV_ID}", observation="preview_integral")'
+    ),
+}
 
 
 def resolve_env_id(env_id: str) -> str:
     """Today's id for ``env_id`` (a `VARIANTS` key or a `LEGACY_ENV_IDS` one); ValueError
-    naming the id and the ids that exist otherwise."""
+    naming the id and the ids that exist otherwise, or the call that replaces a removed id
+    (`REMOVED_ENV_IDS`)."""
     env_id = LEGACY_ENV_IDS.get(env_id, env_id) if isinstance(env_id, str) else env_id
+    if env_id in REMOVED_ENV_IDS:
+        raise ValueError(f"env id {env_id!r} was removed: use {REMOVED_ENV_IDS[env_id]}")
     if env_id not in VARIANTS:
         raise ValueError(
             f"unknown env id {env_id!r}; valid: {list(VARIANTS)} (and the earlier "
             f"{list(LEGACY_ENV_IDS)})"
         )
     return env_id
+
+
+def recorded_env_id(env_id: str) -> str:
+    """Today's id for the env id an agent's metadata records: `resolve_env_id`, except that a
+    removed generation id (`REMOVED_ENV_IDS`) is the RL task, `PREVIEW_ENV_ID` (the agent runs
+    under it with the observation its metadata records)."""
+    return PREVIEW_ENV_ID if env_id in REMOVED_ENV_IDS else resolve_env_id(env_id)
+
+
+def _removed_env(removed_id: str, **_: object) -> None:
+    """The entry point of a removed id: a one-line error naming its replacement."""
+    raise ValueError(f"env id {removed_id!r} was removed: use {REMOVED_ENV_IDS[removed_id]}")
 
 
 def _register() -> None:
@@ -131,6 +140,14 @@ def _register() -> None:
             max_episode_steps=None,
             kwargs=kwargs,
         )
+    for env_id in REMOVED_ENV_IDS:
+        if env_id not in registry:
+            register(
+                id=env_id,
+                entry_point=_removed_env,
+                max_episode_steps=None,
+                kwargs={"removed_id": env_id},
+            )
 
 
 _register()

@@ -251,14 +251,15 @@ class AUVPath3DEnv(gym.Env):
       `surge_limit` = "vehicle" by default, the vehicle record's top speed
       (`AUVParams.max_surge`, 2.0 m/s for REMUS 100): the overspeed reward term and the "overspeed"
       termination (docs/design.md §3). Everything else, including every other default, is v0's.
-    * `AUVPath3DPreview-v0`: the RL task — the speed limit and ``observation="preview"``.
-    * `AUVPath3DPreviewIntegral-v0`: the RL task with ``observation={"kind": "preview",
-      "integral_time": 10.0}``: leaky integrals of y_e and z_e [m·s] after the preview entries.
-    * `AUVPath3DPreviewAntiWindup-v0`: the RL task with the integrals of x_e, y_e and z_e
-      (``"integral_errors": "xyz"``), each clipped to ±1 m·s (``"integral_limit": 1.0``).
+    * `AUVPath3DPreview-v0`: the RL task — the speed limit and ``observation="preview"``;
+      integral action is an option of it: ``observation="preview_integral"`` adds leaky
+      integrals of x_e, y_e and z_e [m·s] (T = 10 s), each clipped to ±1 m·s (anti-windup).
+      ``observation={"kind": "preview", "integral_time": T, "integral_errors": "yz" | "xyz",
+      "integral_limit": L}`` sets them one by one.
 
     Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8); an
-    agent's metadata naming `AUVPath3D-v1` is read as `AUVPath3DSpeedLimit-v0`.
+    agent's metadata naming `AUVPath3D-v1` is read as `AUVPath3DSpeedLimit-v0`, one naming a
+    removed id (`auv_gym.REMOVED_ENV_IDS`) as the RL task with its recorded observation.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}

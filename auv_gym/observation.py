@@ -60,6 +60,7 @@ __all__ = [
     "GUIDE",
     "OBS",
     "OBSERVATION_KINDS",
+    "OBSERVATION_PRESETS",
     "OBS_HIGH",
     "OBS_INDEX",
     "OBS_LOW",
@@ -188,6 +189,17 @@ def build_observation(st, guid, u_d, out):
 
 # The agent observation (module docstring): kinds, defaults and the bounds of its extra entries.
 OBSERVATION_KINDS = ("paper", "preview")
+# Named observations beyond the kinds: the agent observation with integral action for a static
+# policy — integrals of x_e, y_e, z_e (time constant 10 s), each clipped to ±1 m·s (anti-windup;
+# docs/model.md, the agent observation). What the reference generalist observes.
+OBSERVATION_PRESETS: dict[str, dict] = {
+    "preview_integral": {
+        "kind": "preview",
+        "integral_time": 10.0,
+        "integral_errors": "xyz",
+        "integral_limit": 1.0,
+    },
+}
 DEFAULT_PREVIEW_POINTS = 5  # K
 DEFAULT_PREVIEW_SPACING = 2.0  # [m] Δs: K·Δs = 10 m, 10 s of travel at u_D = 1 m/s
 MAX_PREVIEW_POINTS = 64
@@ -262,13 +274,15 @@ class ObservationConfig:
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
-        """From None or "paper", "preview" (default K and Δs), a dict {"kind", "points",
-        "spacing", "integral_time", "integral_errors", "integral_limit"} or an
-        `ObservationConfig`."""
+        """From None or "paper", "preview" (default K and Δs), a name of `OBSERVATION_PRESETS`
+        ("preview_integral"), a dict {"kind", "points", "spacing", "integral_time",
+        "integral_errors", "integral_limit"} or an `ObservationConfig`."""
         if spec is None:
             return cls()
         if isinstance(spec, ObservationConfig):
             return spec
+        if isinstance(spec, str) and spec in OBSERVATION_PRESETS:
+            return cls(**OBSERVATION_PRESETS[spec])
         if isinstance(spec, str):
             return cls(kind=spec)
         if isinstance(spec, Mapping):
@@ -279,7 +293,8 @@ class ObservationConfig:
             )
             return cls(**{"kind": "preview", **fields})
         raise ArgumentTypeError(
-            f"observation must be one of {list(OBSERVATION_KINDS)}, a dict with keys kind, "
+            f"observation must be one of {[*OBSERVATION_KINDS, *OBSERVATION_PRESETS]}, a dict "
+            "with keys kind, "
             f"points, spacing, integral_time, integral_errors, integral_limit or an "
             f"ObservationConfig, got {spec!r:.80}"
         )

@@ -50,10 +50,10 @@ __all__ = [
 # `auv_gym.table_format`.
 TABLE_METRICS = METRIC_INFO
 
-# One colour per policy, the same in every figure and every run: the policies the project ships
-# have fixed colours (classical in blues/greens, agents in warm colours); any other name takes a
-# colour from tab20 by a stable hash of its name, probing past colours already taken in that
-# figure so that no two policies of one figure share a colour.
+# One colour per policy, the same in every figure and every run: the classical controllers and
+# the reference agents have fixed colours (classical in blues/greens, agents in warm colours);
+# any other name takes a colour from tab20 by a stable hash of its name, probing past colours
+# already taken in that figure so that no two policies of one figure share a colour.
 POLICY_COLOURS: dict[str, str] = {
     "fbsm": "#1f77b4",
     "FBSM": "#1f77b4",
@@ -66,25 +66,10 @@ POLICY_COLOURS: dict[str, str] = {
     "pid_los": "#d6616b",
     "pid_ilos": "#e7969c",
     "pid_colos": "#cedb9c",
-    "ppo": "#d62728",
-    "ppo_helix_v1": "#ff9896",
-    "ppo_generalist": "#ff7f0e",
-    "ppo_preview": "#9467bd",
-    "ppo_preview_net256": "#e377c2",
-    "ppo_integral": "#9e9ac8",
-    "ppo_antiwindup": "#e7ba52",
-    "ppo_paper_actuator": "#7b4173",
-    "ppo_paper_actuator_guard": "#ce6dbd",
-    "ppo_paper_start_guard": "#3182bd",
-    "ppo_paper_start_guard_alloc": "#6baed6",
-    "ppo_along_track_guard_alloc": "#08519c",
-    "ppo_cross_track_guard_alloc": "#08306b",
-    "sac_generalist": "#8c564b",
-    "sac_paper_actuator_guard_alloc": "#c49c94",
-    "sac_helix": "#393b79",
-    "sac_antiwindup": "#637939",
+    "ppo_generalist": "#d62728",
+    "ppo_helix": "#ff7f0e",
     "ppo_residual": "#7f7f7f",
-    "ppo_residual_v2": "#c7c7c7",
+    "sac_helix": "#9467bd",
 }
 _HASH_PALETTE = (
     "#393b79",

@@ -5,7 +5,7 @@
     auv-gym train --algo sac --config …      # needs the rl extra
     auv-gym train-seeds --algo ppo --seeds 5 --out runs/x   # several seeds, selection
     auv-gym paper-figures --out out/paper
-    auv-gym speed env|vector|controllers|render|training|learners|off-policy|all [options]
+    auv-gym speed env|vector|controllers|render|training|off-policy|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m <module>`` (e.g.
@@ -58,13 +58,12 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 # `auv-gym speed NAME` → (module, one-line description).
 SPEED: dict[str, tuple[str, str]] = {
-    "all": ("benchmarks.speed.throughput", "every section below but learners, in one run"),
+    "all": ("benchmarks.speed.throughput", "every section below, in one run"),
     "env": ("benchmarks.speed.env", "single env through gym.make, against the JIT-off reference"),
     "vector": ("benchmarks.speed.vector", "native vector env, peak memory, SB3 data collection"),
     "controllers": ("benchmarks.speed.controllers", "FBSM and backstepping predict cost"),
     "render": ("benchmarks.speed.render", "rgb_array frames per second, fast and full redraw"),
     "training": ("benchmarks.speed.training", "PPO training env steps/s, against a baseline ref"),
-    "learners": ("benchmarks.speed.learners", "PPO's learner in SB3 (torch) against SBX (JAX)"),
     "off-policy": ("benchmarks.speed.off_policy", "SAC, TQC and CrossQ gradient-step cost"),
 }
 # Modules of the optional extras: a missing one is named with the extra that installs it.

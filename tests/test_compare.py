@@ -148,7 +148,7 @@ def test_unknown_names_and_missing_agent_give_clear_errors(tmp_path):
     )
     assert bad.returncode != 0 and "unknown scenario ['hurricane']" in bad.stderr
     with pytest.raises(FileNotFoundError, match="does not exist"):
-        check_policy_spec(f"ppo:{tmp_path / 'missing_agent'}")
+        check_policy_spec(f"agent:{tmp_path / 'missing_agent'}")
     with pytest.raises(ValueError, match="cannot import"):
         check_policy_spec("user_policy_nowhere:policy")
 
@@ -300,7 +300,7 @@ def test_two_policies_writing_the_same_files_are_refused(tmp_path, capsys):
     """`ppo:a/b` and `ppo:a_b` both store episodes under ppo-a_b/: one would overwrite the other."""
     for name in ("a/b", "a_b"):
         shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_helix", tmp_path / name)
-    specs = f"ppo:{tmp_path / 'a/b'},ppo:{tmp_path / 'a_b'}"
+    specs = f"agent:{tmp_path / 'a/b'},agent:{tmp_path / 'a_b'}"
     err = usage_error(capsys, main, ["--policies", specs, "--out", str(tmp_path / "out")])
     assert "share the label" in err
 
@@ -309,8 +309,8 @@ def test_a_damaged_agent_is_refused_before_the_first_episode(tmp_path, capsys):
     agent = shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_helix", tmp_path / "agent")
     stats = dict(np.load(agent / "vecnormalize.npz"))
     np.savez(agent / "vecnormalize.npz", **{**stats, "clip_obs": np.float64("nan")})
-    err = usage_error(capsys, main, ["--policies", f"ppo:{agent}", "--out", str(tmp_path / "o")])
-    assert f"policy 'ppo:{agent}'" in err and "clip_obs is not finite" in err
+    err = usage_error(capsys, main, ["--policies", f"agent:{agent}", "--out", str(tmp_path / "o")])
+    assert f"policy 'agent:{agent}'" in err and "clip_obs is not finite" in err
     assert not (tmp_path / "o").exists()
 
 
@@ -325,7 +325,7 @@ def test_a_damaged_agent_is_refused_before_the_first_episode(tmp_path, capsys):
         (["--transient", "60"], "--transient must be a finite number in [0, 60) s"),
         (["--dpi", "5"], "--dpi must be an integer in [20, 1200], got 5"),
         (["--seed", "-1"], "--seed must be non-negative, got -1"),
-        (["--policies", "ppo:/nonexistent"], "agent /nonexistent does not exist"),
+        (["--policies", "agent:/nonexistent"], "agent /nonexistent does not exist"),
     ],
 )
 def test_paper_figures_refuses_bad_arguments_in_one_line(argv, message, tmp_path, capsys):
@@ -446,19 +446,23 @@ def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys
 
 
 def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
-    """A v1-trained agent meets the 2.0 m/s surge limit in compare, as in the suite; the
-    controllers and the v0 agent keep AUVPath3D-v0 (and their episode fingerprints)."""
-    from benchmarks.catalog.policies import policy_env_id
+    """An agent carries its env: the residual agent meets the 2.0 m/s surge limit it trained
+    with, the generalist its integral observation, in compare as in the suite; the controllers
+    keep AUVPath3D-v0 (and their episode fingerprints)."""
+    from benchmarks.catalog.policies import policy_env
     from benchmarks.runner.jobs import Job
 
     scenario = load_scenarios()["paper"]
-    assert policy_env_id("fbsm") == policy_env_id("ppo") == "AUVPath3D-v0"
-    assert policy_env_id("ppo_generalist") == "AUVPath3DSpeedLimit-v0"
-    v1 = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3DSpeedLimit-v0")
-    assert v1.env_kwargs["surge_limit"] == "vehicle"  # REMUS 100's top speed, 2.0 m/s
+    assert policy_env("fbsm") == policy_env("ppo_helix") == ("AUVPath3D-v0", {})
+    assert policy_env("ppo_residual") == ("AUVPath3DSpeedLimit-v0", {})
+    env_id, agent_env = policy_env("ppo_generalist")
+    assert env_id == "AUVPath3DPreview-v0" and agent_env["observation"]["integral_limit"] == 1.0
+    job = Job("ppo_generalist", scenario, 0, 10.0, 5.0, env_id, agent_env)
+    assert job.env_kwargs["surge_limit"] == "vehicle"  # REMUS 100's top speed, 2.0 m/s
+    assert job.env_kwargs["observation"] == agent_env["observation"]
     assert "surge_limit" not in Job("fbsm", scenario, 0, 10.0, 5.0).env_kwargs
-    same = Job("ppo_generalist", scenario, 0, 10.0, 5.0, "AUVPath3D-v0")
-    assert v1.fingerprint() != same.fingerprint()
+    bare = Job("ppo_generalist", scenario, 0, 10.0, 5.0, env_id)
+    assert job.fingerprint() != bare.fingerprint()
     argv = [
         "--policies",
         "fbsm,ppo_generalist",
@@ -476,10 +480,11 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
     records = main(argv)
     assert {r["policy"]: r["env_id"] for r in records} == {
         "fbsm": "AUVPath3D-v0",
-        "ppo_generalist": "AUVPath3DSpeedLimit-v0",
+        "ppo_generalist": "AUVPath3DPreview-v0",
     }
     config = json.loads((tmp_path / "episodes.json").read_text())["config"]
-    assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DSpeedLimit-v0"}
+    assert config["env_ids"] == {"fbsm": "AUVPath3D-v0", "ppo_generalist": "AUVPath3DPreview-v0"}
+    assert config["agent_envs"] == {"ppo_generalist": agent_env}
 
 
 def test_a_run_of_too_many_episodes_is_refused_before_the_jobs_are_listed(tmp_path, capsys):

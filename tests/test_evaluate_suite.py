@@ -17,7 +17,7 @@ import benchmarks.runner.evaluate_suite as suite_module
 import benchmarks.runner.suite_chunks as chunks_module
 from auv_gym.trajectory import FAILURE_REASONS
 from benchmarks.analysis.suite_stats import write_stats
-from benchmarks.catalog.policies import DEFAULT_AGENT, check_policy_spec
+from benchmarks.catalog.policies import AGENTS_DIR, check_policy_spec
 from benchmarks.catalog.scenarios import load_scenarios
 from benchmarks.runner.evaluate_suite import main
 from benchmarks.runner.jobs import Job, run_job
@@ -51,7 +51,7 @@ def make_multi_seed(
     folder.mkdir(parents=True)
     for k, (seed, env_id) in enumerate(zip(seeds, env_ids, strict=True)):
         agent = folder / f"agent_seed_{seed}"
-        shutil.copytree(DEFAULT_AGENT, agent)
+        shutil.copytree(AGENTS_DIR / "ppo_helix", agent)
         meta = json.loads((agent / "metadata.json").read_text())
         (agent / "metadata.json").write_text(json.dumps({**meta, "seed": seed, "env_id": env_id}))
         rows = [(0, 0.0, 5.0), (1000, 10.0 + k, 2.0 + k), (2000, 20.0 + k, 1.0 + k)]
@@ -270,15 +270,15 @@ def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkey
     assert "--tasks-file" in err and "No such file" in err
 
 
-def test_agents_not_shipped_yet_are_named(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr("benchmarks.catalog.policies.AGENTS_DIR", tmp_path)
-    for name in ("ppo_generalist", "sac_generalist", "ppo_helix_v1"):
-        with pytest.raises(FileNotFoundError, match=f"policy '{name}': the agent is not shipped"):
+def test_former_policy_names_say_what_to_type(tmp_path, capsys):
+    for name, new in (("ppo", "ppo_helix"), ("ppo_cross_track_guard_alloc", "ppo_generalist")):
+        with pytest.raises(ValueError, match=f"policy '{name}' was renamed: use '{new}'"):
             check_policy_spec(name)
+    with pytest.raises(ValueError, match=r"'ppo:PATH' was renamed, use 'agent:x'"):
+        check_policy_spec("ppo:x")
     err = usage_error(capsys, ["--policies", "fbsm,sac_generalist", "--out", str(tmp_path / "o")])
-    assert "the agent is not shipped (yet)" in err and "sac_generalist" in err
-    shutil.copytree(DEFAULT_AGENT, tmp_path / "ppo_generalist")  # shipped: loads like "ppo"
-    assert check_policy_spec("ppo_generalist").agent == tmp_path / "ppo_generalist"
+    assert "'sac_generalist' is no longer shipped" in err and "ppo_generalist" in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_statistics_of_the_tiny_suite(tiny, monkeypatch):

@@ -97,11 +97,12 @@ def test_packages_and_data_come_from_the_install(installed, tmp_path: Path) -> N
     bin_dir, env = installed
     code = (
         "import auv_gym, benchmarks, controllers\n"
-        "from benchmarks.catalog.policies import DEFAULT_AGENT\n"
+        "from benchmarks.catalog.policies import AGENTS_DIR\n"
         "from benchmarks.catalog.scenarios import SCENARIOS_FILE\n"
         "from benchmarks.training.train import TrainOptions\n"
         "print(auv_gym.__file__, benchmarks.__file__, controllers.__file__,\n"
-        "      DEFAULT_AGENT / 'model.zip', SCENARIOS_FILE, TrainOptions().config, sep='\\n')"
+        "      AGENTS_DIR / 'ppo_helix' / 'model.zip', SCENARIOS_FILE, TrainOptions().config,\n"
+        "      sep='\\n')"
     )
     out = _run([str(bin_dir / "python"), "-c", code], tmp_path, env)
     assert out.returncode == 0, out.stderr[-2000:]

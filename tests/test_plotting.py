@@ -287,12 +287,12 @@ def test_a_policy_has_one_colour_in_every_figure():
     from auv_gym.plotting import new_figure, plot_track, policy_colours
     from benchmarks.analysis.stats_figures import learning_curve_figure
 
-    names = ["fbsm", "my_agent", "ppo_preview", "other_agent"]
+    names = ["fbsm", "my_agent", "ppo_helix", "other_agent"]
     colours = policy_colours(names)
     assert len(set(colours.values())) == len(names)
     # Fixed for shipped names, stable for others, whatever else is drawn and in which order.
-    assert policy_colours(["ppo_preview", "fbsm"]) == {
-        "ppo_preview": colours["ppo_preview"],
+    assert policy_colours(["ppo_helix", "fbsm"]) == {
+        "ppo_helix": colours["ppo_helix"],
         "fbsm": colours["fbsm"],
     }
     assert policy_colours(["my_agent"])["my_agent"] == policy_colours(["x", "my_agent"])["my_agent"]
@@ -314,9 +314,9 @@ def test_every_shipped_policy_has_a_fixed_colour_of_its_own():
     """A shipped name without a fixed colour takes one by hash, which can sit next to a
     look-alike (sac_antiwindup drew in ppo_generalist's orange in the suite's learning curves)."""
     from auv_gym.plotting import POLICY_COLOURS
-    from benchmarks.catalog.policies import SHIPPED_AGENTS
+    from benchmarks.catalog.policies import REFERENCE_AGENTS
     from controllers import CLASSICAL
 
-    names = [*CLASSICAL, *SHIPPED_AGENTS, "sac_antiwindup"]
+    names = [*CLASSICAL, *REFERENCE_AGENTS, "sac_antiwindup"]
     assert [n for n in names if n not in POLICY_COLOURS] == []
     assert len({POLICY_COLOURS[n] for n in names}) == len(names)

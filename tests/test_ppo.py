@@ -290,7 +290,7 @@ def test_other_observation_space_named(saved_agent, tmp_path: Path) -> None:
 def test_zoo_config_errors(tmp_path: Path) -> None:
     from benchmarks.training.config import read_zoo_config
 
-    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo.yml")
+    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo_helix.yml")
     assert cfg.normalize["norm_obs"] is True
     assert cfg.normalize["gamma"] == cfg.algo_kwargs["gamma"]  # copied, as RL Zoo does
     assert cfg.env_kwargs["randomize_start"] is True

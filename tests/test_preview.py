@@ -247,8 +247,8 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
         "surge_limit": "vehicle",
         "observation": "preview",
     }
-    # The integral id: the preview observation and the two leaky error integrals after it.
-    integral = gym.make("AUVPath3DPreviewIntegral-v0")
+    # Leaky integrals of y_e, z_e: the preview observation and the two integrals after it.
+    integral = gym.make("AUVPath3DPreview-v0", observation={"kind": "preview", "integral_time": 10})
     preview = gym.make("AUVPath3DPreview-v0")
     assert integral.observation_space.shape == (preview.observation_space.shape[0] + 2,) == (48,)
     obs, _ = integral.reset(seed=3)
@@ -259,8 +259,8 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
     reference, *_ = preview.step(action)
     decay = math.exp(-0.05 / 10.0)  # T = 10 s, the paper's 0.05-s control period
     np.testing.assert_allclose(obs[-2:], 10.0 * (1.0 - decay) * reference[1:3], rtol=1e-6)
-    # The anti-windup id: x_e, y_e, z_e integrated, each clipped to ±1 m·s.
-    antiwindup = gym.make("AUVPath3DPreviewAntiWindup-v0")
+    # The integral option: x_e, y_e, z_e integrated, each clipped to ±1 m·s (anti-windup).
+    antiwindup = gym.make("AUVPath3DPreview-v0", observation="preview_integral")
     assert antiwindup.observation_space.shape == (49,)
     assert antiwindup.observation_space.high[-3:].tolist() == [1.0, 1.0, 1.0]
     obs, _ = antiwindup.reset(seed=3)
@@ -271,6 +271,12 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
         obs[-3:], np.clip(10.0 * (1.0 - decay) * reference[:3], -1, 1), rtol=1e-6
     )
     assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
+    for removed in ("AUVPath3DPreviewIntegral-v0", "AUVPath3DPreviewAntiWindup-v0"):
+        with pytest.raises(ValueError, match=f"env id '{removed}' was removed: use gym.make"):
+            gym.make(removed)
+        with pytest.raises(ValueError, match=f"env id '{removed}' was removed"):
+            auv_gym.resolve_env_id(removed)
+    assert auv_gym.recorded_env_id("AUVPath3DPreviewAntiWindup-v0") == "AUVPath3DPreview-v0"
     with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v9'.*AUVPath3DPreview-v0"):
         auv_gym.resolve_env_id("AUVPath3D-v9")
 

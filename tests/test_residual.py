@@ -374,8 +374,7 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
 
     hyper = ROOT / "benchmarks" / "hyperparams"
     cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3DSpeedLimit-v0")
-    generalist = read_zoo_config(hyper / "ppo_generalist.yml", "AUVPath3DSpeedLimit-v0")
-    assert cfg.env_kwargs == generalist.env_kwargs and cfg.env_kwargs["actuator"] == "random"
+    assert cfg.env_kwargs["actuator"] == "random" and cfg.env_kwargs["random_current"] == 0.5
     expected = {
         "tv_weight": 1.0,
         "precision_weight": 3.0,
@@ -385,7 +384,7 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     assert cfg.residual == ResidualTraining(**expected)
     assert cfg.residual.bound == (0.25, 0.5, 0.5) and cfg.residual.action_dim == 6
     assert cfg.residual.precision_scale == 0.1
-    assert cfg.n_timesteps == 4_000_000 == generalist.n_timesteps // 5
+    assert cfg.n_timesteps == 4_000_000
     text = (hyper / "ppo_residual.yml").read_text().replace("tv_weight: 1.0", "tv_weight: -1")
     broken = tmp_path / "bad.yml"
     broken.write_text(text)

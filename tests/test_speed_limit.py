@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import auv_gym  # noqa: F401  (registers the ids)
-from auv_gym import AUVPath3DEnv
+from auv_gym import AUVParams, AUVPath3DEnv
 from auv_gym.metrics import compute_metrics
-from auv_gym.task import SURGE_LIMIT, RewardWeights
+from auv_gym.task import RewardWeights
 from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
 from auv_gym.vector_env import AUVPath3DVectorEnv
 
@@ -48,7 +48,7 @@ def test_v0_has_no_surge_limit_and_its_reward_is_the_sum_without_the_overspeed_t
 
 def test_v1_terminates_above_the_surge_limit_with_the_failure_penalty():
     env = gym.make("AUVPath3DSpeedLimit-v0")
-    assert env.unwrapped.config.limits.surge_limit == SURGE_LIMIT == 2.0
+    assert env.unwrapped.config.limits.surge_limit == AUVParams().max_surge == 2.0
     surges, _, infos, terminated = _sprint(env)
     assert terminated and infos[-1]["termination_reason"] == "overspeed"
     assert surges[-1] > 2.0 and surges[:-1].max() <= 2.0  # the first step above the limit

@@ -51,7 +51,6 @@ def test_the_former_flags_and_several_values_stay() -> None:
         ("residual", ["--train-steps", "0"], "--steps and --train-steps must be positive"),
         ("throughput", ["--sections", "gpu"], "--sections: unknown ['gpu']"),
         ("training", ["--warmup", "-1"], "--warmup >= 0"),
-        ("learners", ["--rollouts", "0"], "--rollouts, --repeats, --batch-size and --n-epochs"),
         ("off_policy", ["--replay-ratio", "0"], "--replay-ratio must be > 0, got 0.0"),
         ("off_policy", ["--algos", "ddpg"], "argument --algos: invalid choice: 'ddpg'"),
         ("vector", ["--actuators", "jet"], "argument --actuators: invalid choice: 'jet'"),
@@ -75,68 +74,3 @@ def test_off_policy_cost_builds_each_learner_as_the_trainer_does() -> None:
     assert row["critic"] == {"pi": [128, 128], "qf": [32, 32]} and row["replay_ratio"] == 0.25
     expected = 1.0 / (1.0 / row["collection_steps_per_s"] + 0.25e-3 * row["gradient_step_ms"])
     assert row["training_steps_per_s"] == pytest.approx(expected, rel=1e-12)
-
-
-def test_the_learner_comparison_names_a_missing_sbx(monkeypatch, capsys) -> None:
-    import importlib.util
-
-    from benchmarks.speed import learners
-
-    real = importlib.util.find_spec
-    monkeypatch.setattr(
-        importlib.util, "find_spec", lambda name, *a: None if name == "sbx" else real(name, *a)
-    )
-    with pytest.raises(SystemExit) as stop:
-        learners.main([])
-    err = capsys.readouterr().err
-    assert stop.value.code == 2
-    assert "SBX is not installed (pip install sbx-rl)" in err and err.count("\n") == 1, err
-
-
-def test_the_learner_table_prints_medians_and_their_ratios() -> None:
-    from benchmarks.speed.learners import table
-
-    def run(total, collect, update):
-        return {
-            "n_steps": 64,
-            "total_per_s": total,
-            "collect_per_s": collect,
-            "update_per_s": update,
-        }
-
-    results = {
-        (128, "sb3"): [
-            run(20_000, 60_000, 30_000),
-            run(22_000, 58_000, 32_000),
-            run(18_000, 62_000, 28_000),
-        ],
-        (128, "sbx"): [run(22_000, 40_000, 54_000)],
-    }
-    row = table(results).splitlines()[-1]
-    assert row.split("|")[1].split() == ["20,000", "60,000", "30,000"]  # medians
-    assert row.split("|")[3].split() == ["1.10×", "0.67×", "1.80×"]
-
-
-@pytest.mark.rl
-def test_the_jax_learner_trains_through_the_same_measure() -> None:
-    """With SBX installed: `measure` trains its PPO on the same env and rollout shape and
-    times it (no torch floor: that is SB3's)."""
-    pytest.importorskip("sbx")
-    from benchmarks.speed.training_run import measure
-
-    spec = {
-        "n_envs": 4,
-        "n_steps": 16,
-        "batch_size": 32,
-        "n_epochs": 2,
-        "rollouts": 2,
-        "warmup": 1,
-        "update_threads": 1,
-        "update_dtype": "float32",
-        "net_arch": [],
-        "seed": 0,
-        "learner": "sbx",
-    }
-    result = measure(spec)
-    assert result["steps"] == 2 * 4 * 16 and result["epochs_run"] == 3 * 2
-    assert result["update_per_s"] > 0 and "floor_update_per_s" not in result

@@ -393,27 +393,14 @@ def test_ray_backend_runs_the_same_seeds(tmp_path, monkeypatch):
 
 
 SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
-    ("sac.yml", "sac", "AUVPath3DSpeedLimit-v0", 0.995, None),
-    ("ppo_generalist.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
-    ("ppo.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
-    ("ppo_preview.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("ppo_helix.yml", "ppo", "AUVPath3D-v0", 0.995, None),
+    ("ppo_helix.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
+    ("ppo_residual.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, 3.0),
     ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
-    ("ppo_preview_net256.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
-    ("ppo_integral.yml", "ppo", "AUVPath3DPreviewIntegral-v0", 0.995, 3.0),
-    ("ppo_antiwindup.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("sac_helix_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("sac_antiwindup.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_margins.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_paper_actuator.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_failure_charge.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("sac_paper_actuator.yml", "sac", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_heading_spread.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_paper_start.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_along_track.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_cross_track.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
-    ("ppo_cross_track_bends.yml", "ppo", "AUVPath3DPreviewAntiWindup-v0", 0.995, 3.0),
+    ("ppo_generalist.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("ppo_generalist_along_track.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("ppo_generalist_cross_track.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
 ]
-FAILURE_CHARGE = {"ppo_failure_charge.yml": 1000.0}  # w_termination; the others charge 300
 
 
 @pytest.mark.rl
@@ -429,7 +416,7 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
     from benchmarks.training.train import make_training_env
 
     cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / file, env_id, algo)
-    weights = {"distance": 3.0, "termination": FAILURE_CHARGE.get(file, 300.0), "tracking": 3.0}
+    weights = {"distance": 3.0, "termination": 300.0, "tracking": 3.0}
     if precision is not None:
         weights["precision"] = precision
     assert cfg.env_kwargs["reward_weights"] == weights
@@ -457,52 +444,41 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
 
 
 def test_phase_configs_change_only_what_their_comments_say():
-    """The curriculum's phases (warm-started from the previous phase's agents): the cross-track
-    phase differs from the along-track phase only in the pinned y_e, z_e scales (2 -> 0.5 m,
-    integrals 2 -> 1 m·s); its ablation only in the spline family's turns and pieces on top."""
+    """The generalist's phases (each warm-started from the previous phase's agents): the
+    along-track phase pins x_e at 0.25 m (its integral at 0.5 m·s) and a third of the learning
+    rate; the cross-track phase then pins y_e, z_e at 0.5 m (integrals 1 m·s); nothing else."""
     import dataclasses
 
     from benchmarks.training.config import read_zoo_config
 
-    env_id = "AUVPath3DPreviewAntiWindup-v0"
-    along, cross, bends = (
+    env_id = "AUVPath3DPreview-v0"
+    first, along, cross = (
         dataclasses.asdict(read_zoo_config(ROOT / "benchmarks" / "hyperparams" / f, env_id, "ppo"))
-        for f in ("ppo_along_track.yml", "ppo_cross_track.yml", "ppo_cross_track_bends.yml")
+        for f in (
+            "ppo_generalist.yml",
+            "ppo_generalist_along_track.yml",
+            "ppo_generalist_cross_track.yml",
+        )
     )
-    for config in (along, cross, bends):
+    for config in (first, along, cross):
         config.pop("raw")  # the file as read; the parsed fields below are what training uses
+    assert first["env_kwargs"]["observation"] == "preview_integral"
+    along_change = {"x_e": 0.25, "x_e_integral": 0.5}
+    assert along["obs_scales"] == {**first["obs_scales"], **along_change}
+    assert first["n_timesteps"] == 8_000_000 and along["n_timesteps"] == 2_000_000
+    assert (first["algo_kwargs"]["learning_rate"], along["algo_kwargs"]["learning_rate"]) == (
+        "lin_3e-4",
+        "lin_1e-4",
+    )
+    rate = {"learning_rate": "lin_1e-4"}
+    assert along["algo_kwargs"] == {**first["algo_kwargs"], **rate}
+    changes = ("obs_scales", "n_timesteps", "algo_kwargs")
+    assert {k: v for k, v in along.items() if k not in changes} == {
+        k: v for k, v in first.items() if k not in changes
+    }
     changed = {"y_e": 0.5, "z_e": 0.5, "y_e_integral": 1.0, "z_e_integral": 1.0}
-    assert {k: along["obs_scales"][k] for k in changed} == dict.fromkeys(changed, 2.0)
     assert cross["obs_scales"] == {**along["obs_scales"], **changed}
     assert {**cross, "obs_scales": along["obs_scales"]} == along
-    path = {
-        **cross["env_kwargs"]["path"],
-        "spline_radius": [8.0, 40.0],
-        "piece_length": [20.0, 80.0],
-    }
-    assert bends == {**cross, "env_kwargs": {**cross["env_kwargs"], "path": path}}
-
-
-@pytest.mark.rl
-def test_margins_config_trains_inside_tighter_limits_and_validates_at_the_ids():
-    """ppo_margins.yml ends training episodes past 50° of pitch and 1.8 m/s of surge; its
-    validation episodes keep the env id's 60° and 2.0 m/s (the limits every policy is tested
-    under)."""
-    import math
-
-    import gymnasium as gym
-
-    from benchmarks.training.config import read_zoo_config
-    from benchmarks.training.train import TrainOptions, _eval_kwargs
-
-    env_id = "AUVPath3DPreviewAntiWindup-v0"
-    cfg = read_zoo_config(ROOT / "benchmarks" / "hyperparams" / "ppo_margins.yml", env_id, "ppo")
-    limits = gym.make(env_id, **cfg.env_kwargs).unwrapped.config.limits
-    assert (limits.max_pitch, limits.surge_limit) == pytest.approx((math.radians(50.0), 1.8))
-    evaluation = _eval_kwargs(TrainOptions(env_id=env_id), cfg.env_kwargs)
-    assert "max_pitch" not in evaluation and evaluation["surge_limit"] == "vehicle"
-    limits = gym.make(env_id, **evaluation).unwrapped.config.limits
-    assert (limits.max_pitch, limits.surge_limit) == pytest.approx((math.radians(60.0), 2.0))
 
 
 @pytest.mark.rl

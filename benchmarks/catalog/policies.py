@@ -1,24 +1,18 @@
-"""Policy specs of the benchmark CLIs: one parser for "fbsm", "ppo", "ppo:PATH", "module:attribute".
+"""Policy specs of the benchmark CLIs: one parser for "fbsm", "ppo_generalist", "agent:PATH" and
+"module:attribute".
 
 * a name of `controllers.CLASSICAL` ("fbsm", "backstepping", their presets): built with
   `controllers.make` for the scenario's control period and controller keyword arguments;
-* a name of `SHIPPED_AGENTS` ("ppo", "ppo_helix_v1", "ppo_generalist", "sac_generalist",
-  "ppo_residual", "ppo_preview", "ppo_preview_net256", "ppo_integral", "ppo_antiwindup",
-  "ppo_paper_actuator", "ppo_paper_actuator_guard" (the same agent inside its envelope guard,
-  `controllers.envelope_guard`), "ppo_paper_start_guard" (the same training for 8M env steps,
-  guarded), "ppo_paper_start_guard_alloc" (that agent with its moments allocated to the
-  scenario's actuator, `controllers.actuator_allocation`), "ppo_along_track_guard_alloc" (that
-  agent trained on for 2M env steps with its along-track error at a finer scale, guarded and
-  allocated likewise), "ppo_cross_track_guard_alloc" (that one trained on for 2M more with its
-  cross-track and depth errors at a finer scale, likewise),
-  "sac_paper_actuator_guard_alloc"
-  (the SAC generalist trained inside the envelope guard, allocated likewise), "sac_helix"): the
-  agent shipped under `benchmarks/agents/<folder>` (a name whose folder is not there yet is a
-  one-line error saying so); "ppo:PATH": any saved agent directory or model zip
-  (`controllers.loader.load_policy`, any algorithm of `controllers.algorithms`); a residual
-  agent's base controller is built like a classical one, for the scenario;
+* a name of `REFERENCE_AGENTS`: the reference agent shipped under `benchmarks/agents/<name>`
+  (benchmarks/agents/README.md);
+* "agent:PATH": any saved agent directory or model zip (`controllers.loader.load_policy`, any
+  algorithm of `controllers.algorithms`); a residual agent's base controller is built like a
+  classical one, for the scenario;
 * "module:attribute": an importable Policy object, or a class / factory called with the
   scenario's controller keyword arguments (`controllers.import_policy`).
+
+A name of an earlier release (`REMOVED_POLICIES`: "ppo", "ppo:PATH", agents no longer shipped)
+is a one-line error naming what to type instead.
 """
 
 from __future__ import annotations
@@ -29,48 +23,52 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
-from auv_gym import ENV_ID, VARIANTS, ObservationConfig, resolve_env_id
+from auv_gym import ENV_ID, VARIANTS, ObservationConfig, recorded_env_id
 from controllers import CLASSICAL
 
 __all__ = [
     "AGENTS_DIR",
-    "DEFAULT_AGENT",
-    "SHIPPED_AGENTS",
+    "AGENT_PREFIX",
+    "REFERENCE_AGENTS",
+    "REMOVED_POLICIES",
     "MissingExtraError",
     "PolicySpec",
     "agent_run",
     "build_policy",
     "check_policy_spec",
+    "policy_env",
     "policy_env_id",
     "policy_label",
     "policy_names",
 ]
 
 AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
-# Policy name → folder of benchmarks/agents/ (README "Agents"; the realistic-speed
-# retrained specialist and the generalists trained on the task distribution,
-# AUVPath3DSpeedLimit-v0).
-SHIPPED_AGENTS = {
+# The reference agents: the name is the folder of benchmarks/agents/ (README there).
+REFERENCE_AGENTS = ("ppo_generalist", "ppo_helix", "ppo_residual", "sac_helix")
+AGENT_PREFIX = "agent:"
+_NOT_SHIPPED = "is no longer shipped (its results stay in docs/results.md); reference agents:"
+# Names of earlier releases → what to type now (None: the agent left the tree).
+REMOVED_POLICIES: dict[str, str | None] = {
     "ppo": "ppo_helix",
-    "ppo_helix_v1": "ppo_helix_v1",
-    "ppo_generalist": "ppo_generalist",
-    "sac_generalist": "sac_generalist",
-    "ppo_residual": "ppo_residual",
-    "ppo_preview": "ppo_preview",
-    "ppo_preview_net256": "ppo_preview_net256",
-    "ppo_integral": "ppo_integral",
-    "ppo_antiwindup": "ppo_antiwindup",
-    "ppo_paper_actuator": "ppo_paper_actuator",
-    "ppo_paper_actuator_guard": "ppo_paper_actuator_guard",
-    "ppo_paper_start_guard": "ppo_paper_start_guard",
-    "ppo_paper_start_guard_alloc": "ppo_paper_start_guard_alloc",
-    "ppo_along_track_guard_alloc": "ppo_along_track_guard_alloc",
-    "ppo_cross_track_guard_alloc": "ppo_cross_track_guard_alloc",
-    "sac_paper_actuator_guard_alloc": "sac_paper_actuator_guard_alloc",
-    "sac_helix": "sac_helix",
+    "ppo_cross_track_guard_alloc": "ppo_generalist",
+    **dict.fromkeys(
+        (
+            "ppo_helix_v1",
+            "sac_generalist",
+            "ppo_preview",
+            "ppo_preview_net256",
+            "ppo_integral",
+            "ppo_antiwindup",
+            "ppo_paper_actuator",
+            "ppo_paper_actuator_guard",
+            "ppo_paper_start_guard",
+            "ppo_paper_start_guard_alloc",
+            "ppo_along_track_guard_alloc",
+            "sac_paper_actuator_guard_alloc",
+        )
+    ),
 }
-DEFAULT_AGENT = AGENTS_DIR / SHIPPED_AGENTS["ppo"]
-AGENT_PREFIX = "ppo:"
+FORMER_AGENT_PREFIX = "ppo:"
 RL_MODULES = ("torch", "stable_baselines3")  # what loading an agent imports (the rl extra)
 
 
@@ -88,7 +86,7 @@ class MissingExtraError(ValueError):
 
 @dataclass(frozen=True)
 class PolicySpec:
-    """A parsed spec: its text, its kind and, for "ppo" / "ppo:PATH", the agent's path."""
+    """A parsed spec: its text, its kind and, for an agent, its path."""
 
     text: str
     kind: Literal["classical", "agent", "import"]
@@ -99,20 +97,28 @@ class PolicySpec:
         """Classify ``spec`` without touching files or importing; ValueError if it names nothing."""
         if spec in CLASSICAL:
             return cls(spec, "classical")
-        if spec in SHIPPED_AGENTS:
-            return cls(spec, "agent", AGENTS_DIR / SHIPPED_AGENTS[spec])
+        if spec in REFERENCE_AGENTS:
+            return cls(spec, "agent", AGENTS_DIR / spec)
         if spec.startswith(AGENT_PREFIX):
             return cls(spec, "agent", Path(spec[len(AGENT_PREFIX) :]))
+        if spec.startswith(FORMER_AGENT_PREFIX):
+            path = spec[len(FORMER_AGENT_PREFIX) :]
+            raise ValueError(f"policy {spec!r}: 'ppo:PATH' was renamed, use 'agent:{path}'")
+        if spec in REMOVED_POLICIES:
+            new = REMOVED_POLICIES[spec]
+            if new is not None:
+                raise ValueError(f"policy {spec!r} was renamed: use {new!r}")
+            raise ValueError(f"policy {spec!r} {_NOT_SHIPPED} {list(REFERENCE_AGENTS)}")
         if ":" in spec:
             return cls(spec, "import")
         raise ValueError(
-            f"unknown policy {spec!r}; valid: {policy_names()}, 'ppo:PATH' or 'module:attribute'"
+            f"unknown policy {spec!r}; valid: {policy_names()}, 'agent:PATH' or 'module:attribute'"
         )
 
 
 def policy_names() -> list[str]:
-    """The policies known by name: the classical controllers and presets, the shipped agents."""
-    return [*CLASSICAL, *SHIPPED_AGENTS]
+    """The policies known by name: the classical controllers and presets, the reference agents."""
+    return [*CLASSICAL, *REFERENCE_AGENTS]
 
 
 def check_policy_spec(spec: str) -> PolicySpec:
@@ -129,10 +135,6 @@ def check_policy_spec(spec: str) -> PolicySpec:
             raise MissingExtraError(
                 f"policy {spec!r}: running an agent needs {', '.join(missing)}, from the 'rl' "
                 "extra: pip install 'auv-gym[rl]'"
-            )
-        if not parsed.agent.exists() and spec in SHIPPED_AGENTS:
-            raise FileNotFoundError(
-                f"policy {spec!r}: the agent is not shipped (yet): {parsed.agent} does not exist"
             )
         if not parsed.agent.exists():
             raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
@@ -162,17 +164,21 @@ def build_policy(spec: str, env: Any, controller_kwargs: dict[str, Any] | None =
 
 
 def policy_label(text: str) -> str:
-    """A file-system-safe label of a spec or policy name ("ppo:runs/x" → "ppo-runs_x")."""
+    """A file-system-safe label of a spec or policy name ("agent:runs/x" → "agent-runs_x")."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in text.replace(":", "-", 1))
     return safe.strip("_") or "policy"
 
 
-def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tuple[int, str]:
-    """(training seed, env id) that a checked agent's metadata.json records; the env id must be
-    a key of `auv_gym.VARIANTS` or an earlier id that `auv_gym.resolve_env_id` maps to one (an
-    agent is evaluated under the env it was trained on, e.g. AUVPath3DSpeedLimit-v0's surge
-    limit); ``default_env_id`` stands in for a missing one (None: an error). Errors name
-    ``where``."""
+def agent_run(
+    where: str, agent: Path, default_env_id: str | None = None
+) -> tuple[int, str, dict[str, Any]]:
+    """(training seed, env id, env arguments) of a checked agent: an agent carries its env.
+
+    The env id is the one its metadata.json records, a key of `auv_gym.VARIANTS` or an earlier
+    id (`auv_gym.LEGACY_ENV_IDS`; a removed generation id, `auv_gym.REMOVED_ENV_IDS`, is the RL
+    task); the env arguments hold the observation it was trained on where the id's registered
+    one differs (e.g. ``observation="preview_integral"``). ``default_env_id`` stands in for a
+    missing id (None: an error). Errors name ``where``."""
     from controllers.agent import check_agent
 
     try:
@@ -181,7 +187,7 @@ def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tup
         raise type(error)(f"{where}: {error}") from None
     recorded = files.metadata.get("env_id", default_env_id)
     try:  # an id of an earlier release (AUVPath3D-v1) runs under today's name for that env
-        env_id = resolve_env_id(recorded)
+        env_id = recorded_env_id(recorded)
     except ValueError as error:
         raise ValueError(
             f"{where}: {agent}/metadata.json records env_id {recorded!r}; an agent runs under "
@@ -189,23 +195,24 @@ def agent_run(where: str, agent: Path, default_env_id: str | None = None) -> tup
         ) from None
     trained = ObservationConfig.from_spec(files.metadata.get("observation"))
     registered = ObservationConfig.from_spec(VARIANTS[env_id].get("observation"))
-    if trained != registered:  # the benchmark builds an agent's env from its id alone
-        raise ValueError(
-            f"{where}: {agent} was trained on the observation {trained.to_dict()}, but its env "
-            f"{env_id} gives {registered.to_dict()}; benchmarks run an agent under its env id's "
-            "registered arguments (evaluate it with auv_gym.rollout and that observation)"
-        )
+    env_kwargs = {} if trained == registered else {"observation": trained.to_dict()}
     seed = files.metadata.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"{where}: {agent}/metadata.json records seed {seed!r}, not an int >= 0")
-    return seed, env_id
+    return seed, env_id, env_kwargs
+
+
+def policy_env(spec: str) -> tuple[str, dict[str, Any]]:
+    """(env id, env arguments) a policy runs under: an agent's training env (`agent_run`), else
+    the benchmark's `auv_gym.ENV_ID` with no arguments (the classical controllers, imported
+    policies and agents whose files record no env id, e.g. an RL Zoo model zip)."""
+    parsed = PolicySpec.parse(spec)
+    if parsed.kind != "agent" or parsed.agent is None:
+        return ENV_ID, {}
+    _, env_id, env_kwargs = agent_run(f"policy {spec!r}", parsed.agent, default_env_id=ENV_ID)
+    return env_id, env_kwargs
 
 
 def policy_env_id(spec: str) -> str:
-    """The env id a policy runs under: an agent's training env (`agent_run`), else the
-    benchmark's `auv_gym.ENV_ID` (the classical controllers, imported policies and agents
-    whose files record no env id, e.g. an RL Zoo model zip)."""
-    parsed = PolicySpec.parse(spec)
-    if parsed.kind != "agent" or parsed.agent is None:
-        return ENV_ID
-    return agent_run(f"policy {spec!r}", parsed.agent, default_env_id=ENV_ID)[1]
+    """The env id a policy runs under (`policy_env`)."""
+    return policy_env(spec)[0]

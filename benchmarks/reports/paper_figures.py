@@ -67,7 +67,8 @@ class Args:
     seed: int = option(0, "reset seed shared by the policies (same noise)")
     policies: tuple[str, ...] = option(
         DEFAULT_POLICIES,
-        "comma-separated specs: controllers.make names, ppo, ppo:PATH, module:attribute",
+        "comma-separated specs: controllers.make names, reference agent names, agent:PATH, "
+        "module:attribute",
         parse=_policy_specs,
     )
     control_dt: float = option(SimConfig.control_dt, "control period [s]")
@@ -119,7 +120,8 @@ def validate(args: Args) -> None:
 
 def build_policies(names: Sequence[str], env: Any) -> dict[str, Any]:
     """label → policy for each spec (`benchmarks.catalog.policies`: "fbsm", "backstepping", any
-    other `controllers.make` name, "ppo", "ppo:PATH" or "module:attribute"), built for ``env`` (a
+    other `controllers.make` name, a reference agent name, "agent:PATH" or "module:attribute"),
+    built for ``env`` (a
     `SimConfig` or env keyword arguments: control period, vehicle, actuator model).
 
     Classical controllers are labelled as in the paper ("FBSM"), an imported object by its

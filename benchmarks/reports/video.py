@@ -43,7 +43,9 @@ class VideoOptions:
     """The options of `auv-gym video`."""
 
     policy: str = option(
-        "fbsm", "policy spec: a controllers.make name, ppo, ppo:PATH or module:attribute"
+        "fbsm",
+        "policy spec: a controllers.make name, a reference agent name, agent:PATH or "
+        "module:attribute",
     )
     scenario: str = option("paper", "scenario name in --scenario-file")
     # A Path is immutable: one shared default is safe.

@@ -1,7 +1,7 @@
 """FBSM vs backstepping vs PPO (and any Policy) on the same seeded scenarios.
 
     python -m benchmarks.runner.compare \\
-        --policies fbsm,backstepping,ppo,fbsm_ilos,backstepping_ilos \\
+        --policies fbsm,backstepping,ppo_helix,fbsm_ilos,backstepping_ilos \\
         --scenarios all --seeds 10 --duration 300 --workers 2 --out benchmarks/results/full
 
 Jobs are (policy, scenario, seed) episodes (`benchmarks.runner.jobs`): each finished episode is
@@ -38,7 +38,7 @@ from benchmarks.catalog.policies import (
     PolicySpec,
     build_policy,
     check_policy_spec,
-    policy_env_id,
+    policy_env,
     policy_label,
     policy_names,
 )
@@ -58,8 +58,8 @@ class CompareOptions(EpisodeOptions):
     """The options of `auv-gym compare` (and the episode runner's, `EpisodeOptions`)."""
 
     policies: str = option(
-        "fbsm,backstepping,ppo",
-        f"comma-separated: {', '.join(policy_names())}, ppo:PATH, module:attribute",
+        "fbsm,backstepping,ppo_helix",
+        f"comma-separated: {', '.join(policy_names())}, agent:PATH, module:attribute",
     )
     scenarios: str = option("all", "comma-separated names of --scenario-file or 'all'")
     # A Path is immutable: one shared default is safe.
@@ -103,9 +103,10 @@ def check_args(args: argparse.Namespace) -> None:
     policies = comma_names(args.policies, "--policies")
     labels: dict[str, str] = {}
     env_ids: dict[str, str] = {}
+    agent_envs: dict[str, dict[str, Any]] = {}
     for spec in policies:
         check_policy_spec(spec)
-        env_ids[spec] = policy_env_id(spec)
+        env_ids[spec], agent_envs[spec] = policy_env(spec)
         label = policy_label(spec)
         if label in labels:  # both would write OUT/episodes/<scenario>/<label>/
             raise ValueError(f"--policies {labels[label]!r} and {spec!r} share the label {label!r}")
@@ -135,9 +136,18 @@ def check_args(args: argparse.Namespace) -> None:
     args.transient = transient
     args.policy_list = policies
     args.env_ids = env_ids
+    args.agent_envs = {spec: env for spec, env in agent_envs.items() if env}
     args.scenario_table = {n: scenarios[n] for n in names}
     args.jobs = [
-        Job(policy, scenarios[name], seed, args.duration, args.transient, env_ids[policy])
+        Job(
+            policy,
+            scenarios[name],
+            seed,
+            args.duration,
+            args.transient,
+            env_ids[policy],
+            agent_envs[policy],
+        )
         for name in names
         for policy in policies
         for seed in range(args.seeds)
@@ -150,6 +160,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
     config = {
         "policies": args.policy_list,
         "env_ids": args.env_ids,  # an agent runs under its training env
+        **({"agent_envs": args.agent_envs} if args.agent_envs else {}),  # and its observation
         "scenarios": {n: asdict(s) for n, s in scenarios.items()},
         "seeds": args.seeds,
         "duration": args.duration,

@@ -8,7 +8,7 @@ Policies (``--policies``, comma-separated):
 
 * classical controllers and their presets by name, as `benchmarks.runner.compare` takes them; on a
   scenario set the scenario's controller keyword arguments apply, exactly as in compare;
-* shipped agents by name (`benchmarks.catalog.policies.SHIPPED_AGENTS`), "ppo:PATH",
+* reference agents by name (`benchmarks.catalog.policies.REFERENCE_AGENTS`), "agent:PATH",
   "module:attribute";
 * NAME=DIR: DIR is one agent directory (one run, named by the training seed its metadata.json
   records) or a multi-seed results directory (``benchmarks.training.seeds_cli --results``) holding
@@ -99,7 +99,7 @@ __all__ = [
 
 EPISODES_FILE = "episodes.csv"
 SUITE_FILE = "suite.json"
-DEFAULT_POLICIES = "fbsm,backstepping,ppo"
+DEFAULT_POLICIES = "fbsm,backstepping,ppo_generalist"
 
 
 @dataclass
@@ -108,7 +108,7 @@ class SuiteOptions(EpisodeOptions):
 
     policies: str = option(
         DEFAULT_POLICIES,
-        "comma-separated: controller or shipped agent names (as compare), ppo:PATH, "
+        "comma-separated: controller or reference agent names (as compare), agent:PATH, "
         "module:attribute, NAME=DIR (an agent or a multi-seed results directory of "
         "agent_seed_<k>/ folders)",
     )

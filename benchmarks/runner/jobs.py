@@ -16,7 +16,7 @@ import functools
 import hashlib
 import json
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -62,12 +62,19 @@ class Job:
     seed: int
     duration: float
     transient: float
-    env_id: str = ENV_ID  # an agent's training env (`benchmarks.catalog.policies.policy_env_id`)
+    env_id: str = ENV_ID  # an agent's training env (`benchmarks.catalog.policies.policy_env`)
+    # An agent's own env arguments (its observation) beyond the id's; never part of the hash.
+    agent_env: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
 
     @property
     def env_kwargs(self) -> dict[str, Any]:
-        """The env: the env id's fixed arguments, the scenario's, the duration [s]."""
-        return {**VARIANTS[self.env_id], **self.scenario.env, "max_time": self.duration}
+        """The env: the env id's fixed arguments, the agent's, the scenario's, the duration [s]."""
+        return {
+            **VARIANTS[self.env_id],
+            **self.agent_env,
+            **self.scenario.env,
+            "max_time": self.duration,
+        }
 
     def fingerprint(self) -> str:
         """Hash of everything that determines the episode: the job, the agent file if any, and
@@ -83,6 +90,8 @@ class Job:
         }
         if self.env_id != ENV_ID:  # the default keeps the fingerprints of earlier runs
             payload["env_id"] = self.env_id
+        if self.agent_env:
+            payload["agent_env"] = self.agent_env
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
     def path(self, out: Path) -> Path:

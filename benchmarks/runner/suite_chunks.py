@@ -10,7 +10,7 @@ import io
 import json
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -68,7 +68,9 @@ class Run:
 
     run: int
     env_id: str
-    spec: str  # what `benchmarks.catalog.policies.build_policy` builds: a name or "ppo:<agent dir>"
+    spec: str  # what `benchmarks.catalog.policies.build_policy` builds: a name or "agent:<dir>"
+    # An agent's own env arguments (its observation) beyond the id's; never part of the hash.
+    agent_env: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -93,7 +95,12 @@ class Chunk:
 
     @property
     def env_kwargs(self) -> dict[str, Any]:
-        return {**VARIANTS[self.run.env_id], **self.task.env, "max_time": self.duration}
+        return {
+            **VARIANTS[self.run.env_id],
+            **self.run.agent_env,
+            **self.task.env,
+            "max_time": self.duration,
+        }
 
     def fingerprint(self) -> str:
         """Hash of everything that determines the chunk's episodes."""
@@ -131,8 +138,9 @@ def resolve_policy(spec: str) -> SuitePolicy:
         parsed = check_policy_spec(spec)
         if parsed.agent is None:
             return SuitePolicy(spec, parsed.kind, (Run(0, ENV_ID, spec),))
-        seed, env_id = agent_run(f"policy {spec!r}", parsed.agent)
-        return SuitePolicy(spec, "agent", (Run(seed, env_id, f"ppo:{parsed.agent}"),))
+        seed, env_id, agent_env = agent_run(f"policy {spec!r}", parsed.agent)
+        run = Run(seed, env_id, f"agent:{parsed.agent}", agent_env)
+        return SuitePolicy(spec, "agent", (run,))
     name, _, folder = spec.partition("=")
     where = f"--policies {spec!r}"
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]*", name):
@@ -141,8 +149,8 @@ def resolve_policy(spec: str) -> SuitePolicy:
     if not folder or not directory.is_dir():
         raise FileNotFoundError(f"{where}: agent directory {folder!r} does not exist")
     if (directory / "model.zip").is_file():
-        seed, env_id = agent_run(where, directory)
-        return SuitePolicy(name, "agent", (Run(seed, env_id, f"ppo:{directory}"),))
+        seed, env_id, agent_env = agent_run(where, directory)
+        return SuitePolicy(name, "agent", (Run(seed, env_id, f"agent:{directory}", agent_env),))
     seeds = sorted(int(m[1]) for p in directory.iterdir() if (m := AGENT_SEED.fullmatch(p.name)))
     if not seeds:
         raise ValueError(
@@ -152,8 +160,8 @@ def resolve_policy(spec: str) -> SuitePolicy:
     runs = []
     for seed in seeds:
         agent = directory / f"{SEED_AGENT_PREFIX}{seed}"
-        _, env_id = agent_run(where, agent)
-        runs.append(Run(seed, env_id, f"ppo:{agent}"))
+        _, env_id, agent_env = agent_run(where, agent)
+        runs.append(Run(seed, env_id, f"agent:{agent}", agent_env))
     return SuitePolicy(name, "agent", tuple(runs), str(directory))
 
 

@@ -1,7 +1,7 @@
 """PPO training speed on the generalist configuration, this tree against a baseline, side by side.
 
 For each number of vehicles N (default 32, 128, 512) PPO trains on the generalist configuration
-(`benchmarks/hyperparams/ppo_generalist.yml`: AUVPath3DSpeedLimit-v0 with the [train] task
+(`benchmarks/speed/training_workload.yml`: AUVPath3DSpeedLimit-v0 with the [train] task
 distribution,
 VecMonitor and VecNormalize, MlpPolicy [64, 64], batch 2048, 10 epochs) as
 `benchmarks.training.train` builds it, once with this tree's code and once with the code of a

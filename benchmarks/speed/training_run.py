@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-CONFIG = "benchmarks/hyperparams/ppo_generalist.yml"
+CONFIG = Path(__file__).resolve().parent / "training_workload.yml"  # this tree's, for both
 ENV_ID = "AUVPath3DSpeedLimit-v0"
 LEGACY_ENV_ID = "AUVPath3D-v1"  # the same env's id in trees before the rename
 
@@ -23,34 +23,22 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     """Time PPO on the importable tree's trainer (run in a subprocess per tree).
 
     ``spec``: n_envs, n_steps, batch_size, n_epochs, rollouts, warmup, update_threads,
-    update_dtype, net_arch (empty: the configuration's networks), seed, and optionally learner:
-    "sb3" (default, torch) or "sbx" (SBX's PPO in JAX, `benchmarks.speed.learners`: the same
-    algorithm, hyper-parameters, networks and rollout buffer; XLA on one thread; neither
-    ``update_threads`` nor ``update_dtype`` nor the torch floor applies). Uses only what every
+    update_dtype, net_arch (empty: the configuration's networks), seed. Uses only what every
     version of the harness has (`read_zoo_config`, `make_training_env`, `thread_limit`), so
     the same function times old and new code; the bfloat16 update (``update_dtype``:
     `PPO.train` under `torch.autocast`) is applied here, so it times either tree's learner in
     that precision.
     """
     import torch
+    from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
-
-    jax_learner = spec.get("learner", "sb3") == "sbx"
-    if jax_learner:
-        # one XLA thread, as torch's: set before jax is first imported
-        os.environ.setdefault(
-            "XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
-        )
-        from sbx import PPO
-    else:
-        from stable_baselines3 import PPO
 
     import auv_gym
     from benchmarks.training.config import read_zoo_config
 
     trainer = importlib.import_module("benchmarks.training.train")  # the package hides the name
     env_id = ENV_ID if ENV_ID in auv_gym.VARIANTS else LEGACY_ENV_ID  # the tree's name for it
-    cfg = read_zoo_config(Path(trainer.__file__).parents[2] / CONFIG, env_id, "ppo")
+    cfg = read_zoo_config(CONFIG, env_id, "ppo")
     n_envs, n_steps = int(spec["n_envs"]), int(spec["n_steps"])
     bfloat16 = spec.get("update_dtype", "float32") == "bfloat16"
     phases: list[tuple[float, float, float]] = []  # (start, collected, updated) per rollout
@@ -65,11 +53,6 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
             return more
 
         def train(self) -> None:
-            if jax_learner:  # SBX's update waits for each minibatch's result (its KL, .item())
-                super().train()
-                start, collected, _ = phases[-1]
-                phases[-1] = (start, collected, time.perf_counter())
-                return
             threads = torch.get_num_threads()
             torch.set_num_threads(int(spec["update_threads"]))
             try:
@@ -102,20 +85,13 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
         policy_kwargs = dict(cfg.policy_kwargs)
         if spec.get("net_arch"):
             policy_kwargs["net_arch"] = [int(width) for width in spec["net_arch"]]
-        if jax_learner:  # SBX takes SB3's keywords, but not torch's device or module classes
-            kwargs.pop("device", None)
-            if "activation_fn" in policy_kwargs:
-                raise ValueError(
-                    "learner 'sbx': the configuration names a torch activation; "
-                    "only the default (tanh in both) is compared"
-                )
         model = TimedPPO(
             cfg.policy,
             venv,
             policy_kwargs=policy_kwargs,
             seed=int(spec["seed"]),
             verbose=0,
-            **({} if jax_learner else {"device": "cpu"}),
+            device="cpu",
             **kwargs,
         )
         rollouts = int(spec["warmup"]) + int(spec["rollouts"])
@@ -124,9 +100,7 @@ def measure(spec: dict[str, Any]) -> dict[str, Any]:
     steps = len(timed) * n_envs * n_steps
     collect = sum(c - s for s, c, _ in timed)
     update = sum(u - c for _, c, u in timed)
-    floor = None
-    if not jax_learner:
-        floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]), bfloat16)
+    floor = bare_update_seconds(model, n_envs * n_steps, int(spec["update_threads"]), bfloat16)
     return {
         **spec,
         "steps": steps,

@@ -1,7 +1,7 @@
 """The RL training harness: RL-Zoo configuration, training runs, checkpoints, evaluation.
 
 `train` (CLI `python -m benchmarks.training.train_cli`) reads an RL-Zoo hyper-parameter file
-(`benchmarks/hyperparams/ppo.yml`, top-level key = the env id), normalises observations (and
+(`benchmarks/hyperparams/ppo_helix.yml`, top-level key = the env id), normalises observations (and
 rewards) with `VecNormalize`, evaluates on the paper scenario (helix, white noise ±35 N / N·m)
 with fixed seeds, and writes, under the run directory::
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym import ENV_ID, VARIANTS, resolve_env_id
+from auv_gym import ENV_ID, VARIANTS, recorded_env_id
 from auv_gym.files import write_json
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
@@ -134,7 +134,7 @@ def agent_env_kwargs(env_id: str, metadata: Mapping[str, Any]) -> dict[str, Any]
     """The fixed env arguments an agent is evaluated under: those of ``env_id`` (a key or alias
     of `auv_gym.VARIANTS`) plus the observation recorded in the agent's ``metadata``, for an
     agent trained on another observation than its id's default."""
-    fixed = dict(VARIANTS[resolve_env_id(env_id)])
+    fixed = dict(VARIANTS[recorded_env_id(env_id)])
     if metadata.get("observation") is not None:
         fixed["observation"] = metadata["observation"]
     return fixed
@@ -148,7 +148,7 @@ def held_out_evaluation(
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
-    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[resolve_env_id(env_id)]))
+    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[recorded_env_id(env_id)]))
     fixed = agent_env_kwargs(env_id, policy.metadata)
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {

@@ -2,9 +2,9 @@
 
 Examples (see `benchmarks.training.seeds` for the layout, resuming and the agent selection)::
 
-    python -m benchmarks.training.seeds_cli --algo ppo --env-id AUVPath3DSpeedLimit-v0 \\
-        --config benchmarks/hyperparams/ppo.yml --seeds 0-4 --workers 2 --out runs/ppo_helix_v1 \\
-        --export benchmarks/agents/ppo_helix_v1 --results benchmarks/results/seeds/ppo_helix_v1
+    python -m benchmarks.training.seeds_cli --algo ppo --env-id AUVPath3D-v0 \\
+        --config benchmarks/hyperparams/ppo_helix.yml --seeds 0-4 --workers 2 \\
+        --out runs/ppo_helix --export runs/ppo_helix/agent
     python -m benchmarks.training.seeds_cli ... --resume          # continue a killed run
     python -m benchmarks.training.seeds_cli ... --backend ray --address HOST:6379
 
@@ -22,9 +22,8 @@ from pathlib import Path
 from benchmarks.arguments import ArgumentParser
 from benchmarks.options import add_options, from_args
 from benchmarks.training.seeds import SeedsOptions, train_seeds
-from benchmarks.training.train import TrainOptions
+from benchmarks.training.train import TrainOptions, default_config
 
-HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
 # The options of each dataclass, in the order --help lists them.
 TRAIN_FIRST = ("algo", "config", "env_id", "init_from")
 SEEDS_FIRST = ("seeds", "workers", "backend", "address", "out", "resume")
@@ -67,7 +66,10 @@ def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
     """SeedsOptions from the command line; bad input exits with code 2 and one line."""
     ns = build_parser().parse_args(argv)
     if ns.config is None:
-        ns.config = str(HYPERPARAMS / f"{ns.algo}.yml")
+        try:
+            ns.config = default_config(ns.algo)
+        except ValueError as error:
+            build_parser().error(str(error))
     train_names = TRAIN_FIRST + TRAIN_BUDGET + TRAIN_ENVS
     train = from_args(TrainOptions, ns, train_names, progress_bar=False)
     return from_args(SeedsOptions, ns, SEEDS_FIRST + SEEDS_EVALUATION + SEEDS_OUTPUTS, train=train)

@@ -60,6 +60,21 @@ HERE = Path(__file__).resolve().parent.parent  # benchmarks/
 VEC_ENVS = ("auto", "native", "dummy")  # `envs.make_training_env`
 
 
+# The hyper-parameter file an algorithm trains with when none is given: its reference agent's.
+DEFAULT_CONFIGS = {"ppo": "ppo_helix.yml", "sac": "sac_helix.yml"}
+
+
+def default_config(algo: str) -> str:
+    """The default hyper-parameter file of ``algo`` (`DEFAULT_CONFIGS`); ValueError naming the
+    algorithms that have one otherwise (another algorithm needs --config)."""
+    if algo not in DEFAULT_CONFIGS:
+        raise ValueError(
+            f"--algo {algo} has no default hyper-parameter file (defaults exist for "
+            f"{sorted(DEFAULT_CONFIGS)}): give --config"
+        )
+    return str(HERE / "hyperparams" / DEFAULT_CONFIGS[algo])
+
+
 @dataclass
 class TrainOptions:
     """Arguments of `train`; the CLIs `auv-gym train` / `train-seeds` are generated from the
@@ -71,11 +86,11 @@ class TrainOptions:
         "controllers.make('agent', path=...))",
         choices=sorted(ALGORITHMS),
     )
-    # The command line's default None stands for the algorithm's file.
+    # The command line's default None stands for the algorithm's file (`default_config`).
     config: str = option(
-        str(HERE / "hyperparams" / "ppo.yml"),
-        "RL-Zoo hyper-parameter YAML "
-        "(top-level key = env id; default: benchmarks/hyperparams/<algo>.yml)",
+        str(HERE / "hyperparams" / "ppo_helix.yml"),
+        "RL-Zoo hyper-parameter YAML (top-level key = env id; default: the reference agent's "
+        "file of the algorithm, benchmarks/hyperparams/ppo_helix.yml or sac_helix.yml)",
         cli_default=None,
     )
     # Top-level key of the config and Gymnasium id; the surge-limited task by default, so that a

@@ -5,7 +5,8 @@ an RL-Zoo hyper-parameter file (default: the paper helix under the 2.0 m/s surge
 The shipped agent `benchmarks/agents/ppo_helix` (the paper's unlimited `AUVPath3D-v0`) was
 produced by::
 
-    python -m benchmarks.training.train_cli --config benchmarks/hyperparams/ppo.yml --seed 1 \\
+    python -m benchmarks.training.train_cli --seed 1 \\
+        --config benchmarks/hyperparams/ppo_helix.yml \\
         --env-id AUVPath3D-v0 --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
         --curve benchmarks/results/ppo_learning_curve
 
@@ -24,7 +25,7 @@ goes to AGENT/held_out_evaluation.json, which ``--export`` also writes) with::
 The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
 
     python -m rl_zoo3.train --algo ppo --env AUVPath3D-v0 --gym-packages auv_gym \\
-        -conf benchmarks/hyperparams/ppo.yml
+        -conf benchmarks/hyperparams/ppo_helix.yml
 
 Outputs and file formats: see `benchmarks.training`; the agents load with
 ``controllers.make("agent", path=...)``.
@@ -51,7 +52,7 @@ from benchmarks.reports.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seeds import MAX_SEED
-from benchmarks.training.train import HERE, check_options
+from benchmarks.training.train import check_options, default_config
 from controllers.agent import METADATA_FILE
 
 FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
@@ -84,7 +85,10 @@ def parse_args(argv: Sequence[str] | None = None) -> tuple[TrainOptions, Command
     names = add_options(parser, TrainOptions)
     ns = parser.parse_args(argv)
     if ns.config is None:
-        ns.config = str(HERE / "hyperparams" / f"{ns.algo}.yml")
+        try:
+            ns.config = default_config(ns.algo)
+        except ValueError as error:
+            parser.error(str(error))
     extra = from_args(CommandOptions, ns, command)
     if extra.plot_only and not extra.curve:
         parser.error("--plot-only needs --curve")
