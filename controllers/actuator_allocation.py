@@ -6,7 +6,7 @@ another actuator the same numbers mean something else: with the fin-limited mome
 docs/model.md §2.3) a_M is a fin deflection whose moment is K·δ_max·u|u|·a_M (3.2 N·m at
 1 m/s), with the realistic propeller and fins ("realistic", §2.6) a shaft speed and two fin
 angles. A classical controller is told its vehicle's actuator and allocates its τ_d to it
-(`controllers.base.BatchedController._allocate`); `AllocatedPolicy` does the same for an agent:
+(`controllers.base.BatchedController._allocate`); `Allocation` does the same for an agent:
 
     τ_d = a·τ_max                                            (the agent's command, N and N·m)
     fins:      a'_M = clip(M_d / (K·δ_max·u|u|), −1, 1), a'_N alike; the sign at u ≤ 0
@@ -19,36 +19,33 @@ clip(a_N, ±K·δ_max·u|u|/N_max)), instead of the fin or shaft commands it has
 agent then meets the vehicle it was trained on with less moment authority. On the paper's
 actuator the allocation is the identity and the loader does not add it.
 
-It is part of an agent when its metadata holds ``actuator_allocation: "paper"`` (the actuator
-whose normalised τ it commands); `controllers.loader.load_policy` wraps it with the scenario's
-actuator (``base_kwargs``). An env that draws the actuator per episode (``actuator="random"``)
-tells no actuator, and the agent runs unallocated there (docs/design.md §3.16).
+It is a stage of an agent (`controllers.stages`: ``{"name": "actuator_allocation", "commands":
+"paper"}``, the actuator whose normalised τ it commands), built for the scenario's actuator. An
+env that draws the actuator per episode (``actuator="random"``) tells no actuator, and the agent
+runs unallocated there (docs/design.md §3.16).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.vehicle import AUVParams, remus100
-from controllers.actor_wrapper import ActorWrapper
 from controllers.allocation import allocate, fin_angle, fin_authority
 from controllers.base import actuator_vector
 
 __all__ = [
     "ALLOCATED_ACTUATORS",
     "COMMANDED_ACTUATOR",
-    "AllocatedPolicy",
-    "AllocationState",
+    "Allocation",
     "check_actuator_allocation",
 ]
 
 COMMANDED_ACTUATOR = "paper"  # the one actuator whose normalised τ an agent may command
-ALLOCATED_ACTUATORS = ("fins", "realistic")  # the actuators `AllocatedPolicy` allocates to
+ALLOCATED_ACTUATORS = ("fins", "realistic")  # the actuators `Allocation` flies
 VELOCITY_INPUTS = ("u", "v", "w")  # [m/s] the observation entries the allocation reads
 PREV_ACTION_NAMES = ("a_X_prev", "a_M_prev", "a_N_prev")  # where it feeds the delivered command
 
@@ -78,80 +75,56 @@ def prev_action_index(obs_names: Sequence[str]) -> np.ndarray:
     return np.array([names.index(n) for n in PREV_ACTION_NAMES], dtype=np.intp)
 
 
-@dataclass
-class AllocationState:
-    """The wrapped actor's recurrent state and each row's previous delivered command (n, 3)."""
-
-    inner: Any
-    previous: np.ndarray
-
-
-class AllocatedPolicy(ActorWrapper):
-    """A Policy whose commands (the paper actuator's normalised τ) are allocated to ``actuator``
-    ("fins" or "realistic"; module docstring)."""
+class Allocation:
+    """The allocation of an agent's commands (the paper actuator's normalised τ) to
+    ``actuator`` ("fins" or "realistic"; module docstring), for an agent observing
+    ``obs_names``; errors name ``where``."""
 
     def __init__(
         self,
-        actor: Any,
         obs_names: Sequence[str],
         actuator: str,
         params: AUVParams | None = None,
         actuator_params: ActuatorParams | dict | None = None,
+        where: str = "actuator_allocation",
     ) -> None:
-        super().__init__(actor)
         if actuator not in ALLOCATED_ACTUATORS:
             raise ValueError(
-                f"AllocatedPolicy allocates to {list(ALLOCATED_ACTUATORS)}, got "
+                f"{where}: the allocation flies {list(ALLOCATED_ACTUATORS)}, got "
                 f"actuator {actuator!r}"
             )
         names = list(obs_names)
         missing = [name for name in VELOCITY_INPUTS if name not in names]
         if missing:
             raise ValueError(
-                f"actuator_allocation reads {list(VELOCITY_INPUTS)} from the "
+                f"{where}: actuator_allocation reads {list(VELOCITY_INPUTS)} from the "
                 f"agent's observation, which lacks {missing}"
             )
         self.velocity_index = np.array([names.index(n) for n in VELOCITY_INPUTS])
-        self.previous_index = prev_action_index(names)
+        try:
+            self.previous_index = prev_action_index(names)
+        except ValueError as error:
+            raise ValueError(f"{where}: {error}") from None
         self.actuator = actuator
         self.actuator_params = actuator_params_from_spec(actuator_params)
         vehicle = params if params is not None else remus100()
         _, self.fin_gain, *limits = actuator_vector(actuator, vehicle, self.actuator_params)
         self.limits = np.array(limits, dtype=np.float64)  # (X_max [N], M_max, N_max [N·m])
 
-    def predict(
-        self,
-        observation: np.ndarray,
-        state: AllocationState | None = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, AllocationState]:
-        """The allocated commands (float32, (3,) or (n, 3)) for observations (d,) or (n, d)."""
-        single = np.ndim(observation) == 1
-        obs = np.array(np.atleast_2d(observation), dtype=np.float32, copy=True)
-        n = obs.shape[0]
-        if state is None or state.previous.shape[0] != n:
-            state = AllocationState(None, np.zeros((n, 3), dtype=np.float32))
-        if episode_start is not None:
-            state.previous[np.asarray(episode_start, dtype=bool).reshape(n)] = 0.0
-        obs[:, self.previous_index] = state.previous
-        commands, inner = self.actor.predict(
-            obs[0] if single else obs, state.inner, episode_start, deterministic
-        )
+    def allocate(
+        self, commands: np.ndarray, observation: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(the actuator's commands, the delivered command in the agent's units), both float32
+        (n, 3), for the agent's commands (n, 3) at the observations (n, d) it saw."""
         a = np.clip(np.atleast_2d(np.asarray(commands, dtype=np.float64)), -1.0, 1.0)
-        velocity = obs[:, self.velocity_index].astype(np.float64)
+        velocity = np.atleast_2d(observation)[:, self.velocity_index].astype(np.float64)
         authority = fin_authority(self.fin_gain, velocity[:, 0])  # [N·m]
         moments = a[:, 1:] * self.limits[1:]  # [N·m] M_d, N_d
         delivered = np.clip(moments, -authority[:, None], authority[:, None])
-        previous = np.column_stack([a[:, 0], delivered / self.limits[1:]])
-        state = AllocationState(inner, previous.astype(np.float32))
+        previous = np.column_stack([a[:, 0], delivered / self.limits[1:]]).astype(np.float32)
         if self.actuator == "fins":  # a normalised deflection; the sign where there is no flow
             out = np.column_stack([a[:, 0], fin_angle(moments, authority[:, None], 1.0, 1.0)])
         else:
             tau = np.column_stack([a[:, 0] * self.limits[0], delivered])
             out = allocate(tau, velocity, self.actuator_params)
-        out = out.astype(np.float32)
-        return (out[0] if single else out), state
-
-    def __repr__(self) -> str:
-        return f"AllocatedPolicy(path={self.path!r}, actuator={self.actuator!r})"
+        return out.astype(np.float32), previous

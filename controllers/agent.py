@@ -186,6 +186,7 @@ class AgentFiles:
     metadata: dict[str, Any]
     residual: ResidualSettings | None = None  # metadata "residual": a residual agent
     algo: str = "ppo"  # the key of `controllers.algorithms.ALGORITHMS` it was trained with
+    stages: tuple[dict[str, Any], ...] = ()  # metadata "stages", checked (`controllers.stages`)
 
     @property
     def label(self) -> str:
@@ -234,9 +235,41 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     names = observation_layout(metadata)
     _check_model_zip(model, len(names), action_dim, f"{algo.class_name} model")
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
+    stages = agent_stages(metadata, str(meta))
+    if stages and residual is not None:
+        raise ValueError(f"{meta}: a residual agent takes no stages (its base is its own)")
     return AgentFiles(
-        model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual, algo.name
+        model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual, algo.name, stages
     )
+
+
+# Metadata keys of earlier releases: the stages an agent now lists under "stages".
+FORMER_STAGE_KEYS = ("envelope_guard", "actuator_allocation")
+# Metadata keys of agent stages that were removed (no shipped agent used them; what they measured
+# stays in docs/results.md): an agent that names one is refused, not loaded without it.
+REMOVED_STAGES = {
+    "action_increment": "incremental commands",
+    "action_scale": "scaled commands",
+}
+
+
+def agent_stages(metadata: dict[str, Any], where: str) -> tuple[dict[str, Any], ...]:
+    """The checked stage list of an agent's metadata (`controllers.stages.check_stage_specs`);
+    a one-line ValueError naming ``where`` for a former key or a removed stage."""
+    from controllers.stages import check_stage_specs
+
+    for key in FORMER_STAGE_KEYS:
+        if key in metadata:
+            raise ValueError(
+                f"{where}: {key!r} is now a stage: list it as {{'name': {key!r}, ...}} "
+                "under 'stages'"
+            )
+    for key, stage in REMOVED_STAGES.items():
+        if key in metadata:
+            raise ValueError(
+                f"{where}: {key!r} ({stage}) was removed from auv-gym; this agent cannot be loaded"
+            )
+    return check_stage_specs(metadata.get("stages"), where)
 
 
 def _read_metadata(meta: Path) -> dict[str, Any]:

@@ -14,9 +14,10 @@ the soft limits the guard is the identity, so an agent that stays there acts as 
 
 The guard reads θ, q and u from the agent's own observation (what the vehicle's attitude and
 velocity sensors give; every agent observation names them) and acts on the command the env receives.
-It is part of an agent when its metadata holds ``envelope_guard`` (`controllers.loader.load_policy`
-wraps it). The defaults keep margins below the env's limits: the episode ends at 60° of pitch and,
-on the surge-limited ids, at 2.0 m/s (docs/design.md §3.15).
+It is a stage of an agent (`controllers.stages`: ``{"name": "envelope_guard", ...}``), applied
+around the network at inference and around the env in training alike. The defaults keep margins
+below the env's limits: the episode ends at 60° of pitch and, on the surge-limited ids, at
+2.0 m/s (docs/design.md §3.15).
 """
 
 from __future__ import annotations
@@ -29,9 +30,8 @@ from typing import Any
 import numpy as np
 
 from auv_gym.validation import real
-from controllers.actor_wrapper import ActorWrapper
 
-__all__ = ["EnvelopeGuard", "GuardedPolicy", "check_envelope_guard", "guard_commands"]
+__all__ = ["GUARD_INPUTS", "EnvelopeGuard", "check_envelope_guard", "guard_commands"]
 
 GUARD_INPUTS = ("theta", "q", "u")  # observation entries the guard reads [rad, rad/s, m/s]
 
@@ -110,32 +110,3 @@ def guard_commands(
     rows[:, 1] = np.clip(rows[:, 1], -nose_down, nose_up)
     rows[:, 0] = np.minimum(rows[:, 0], _authority(u, guard.surge_soft, guard.surge_hard))
     return out
-
-
-class GuardedPolicy(ActorWrapper):
-    """A Policy whose commands pass an `EnvelopeGuard` (the yaw command untouched)."""
-
-    def __init__(self, actor: Any, guard: Any, obs_names: Sequence[str]) -> None:
-        super().__init__(actor)
-        self.guard = check_envelope_guard(guard, "GuardedPolicy")
-        missing = [name for name in GUARD_INPUTS if name not in obs_names]
-        if missing:
-            raise ValueError(
-                f"envelope_guard reads {list(GUARD_INPUTS)} from the agent's "
-                f"observation, which lacks {missing}"
-            )
-        self.index = tuple(list(obs_names).index(name) for name in GUARD_INPUTS)
-
-    def predict(
-        self,
-        observation: np.ndarray,
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
-        """The actor's commands, guarded, for observations (d,) or (n, d) of its layout."""
-        commands, state = self.actor.predict(observation, state, episode_start, deterministic)
-        return guard_commands(commands, observation, self.index, self.guard), state
-
-    def __repr__(self) -> str:
-        return f"GuardedPolicy(path={self.path!r}, guard={self.guard.to_dict()})"

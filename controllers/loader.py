@@ -11,24 +11,12 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from controllers.actuator_allocation import (
-    ALLOCATED_ACTUATORS,
-    AllocatedPolicy,
-    check_actuator_allocation,
-)
 from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
-from controllers.envelope_guard import GuardedPolicy, check_envelope_guard
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
+from controllers.stages import StagedPolicy, build_stages, check_stage_specs
 
-__all__ = ["REMOVED_STAGES", "load_policy", "make_residual"]
-
-# Metadata keys of agent stages that were removed (no shipped agent used them; what they measured
-# stays in docs/results.md): an agent that names one is refused, not loaded without it.
-REMOVED_STAGES = {
-    "action_increment": "incremental commands",
-    "action_scale": "scaled commands",
-}
+__all__ = ["load_policy", "make_residual"]
 
 
 def load_policy(
@@ -38,61 +26,37 @@ def load_policy(
     num_threads: int | None = 1,
     base_kwargs: dict[str, Any] | None = None,
     algo: str | None = None,
-) -> AgentPolicy | ResidualPolicy | GuardedPolicy | AllocatedPolicy:
+    stages: Any = None,
+) -> AgentPolicy | ResidualPolicy | StagedPolicy:
     """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
-    as a Policy: its actor (`controllers.agent.AgentPolicy`), or for a residual agent a
-    `ResidualPolicy` of its base controller, built with the recorded settings and
-    ``base_kwargs`` (the scenario's, e.g. ``actuator``, ``control_dt``; ignored for other
-    agents), and its actor; with metadata "envelope_guard", that policy inside a
-    `GuardedPolicy` (`controllers.envelope_guard`); with metadata "actuator_allocation" and a
-    ``base_kwargs`` actuator "fins" or "realistic", the whole inside an `AllocatedPolicy`
-    (`controllers.actuator_allocation`) for that actuator.
+    as a Policy: its network (`controllers.agent.AgentPolicy`), inside the stages its metadata
+    lists (`controllers.stages.StagedPolicy`, built for the plant of ``base_kwargs``: the
+    scenario's ``actuator``, ``params``, ``actuator_params``, ``control_dt``); for a residual
+    agent a `ResidualPolicy` of its base controller, built with the recorded settings and
+    ``base_kwargs``, and its network.
 
-    ``algo``: the algorithm the caller expects (None: any); ValueError naming the one found
-    otherwise. The files are validated first, before torch is imported (FileNotFoundError when
-    the model or its statistics are missing, ValueError naming the file and the problem
-    otherwise; a metadata key of a removed stage, `REMOVED_STAGES`, is such a ValueError).
-    `num_threads`: torch's intra-op threads while the policy predicts (None: torch's setting);
-    loading itself leaves torch's settings alone.
+    ``stages``: None for the agent's own; a list of stage specs replaces them (``[]``: the bare
+    network; ``["envelope_guard"]``: guard an agent trained without it), checked like the
+    metadata's. ``algo``: the algorithm the caller expects (None: any); ValueError naming the one
+    found otherwise. The files are validated first, before torch is imported
+    (`controllers.agent.check_agent`: FileNotFoundError when the model or its statistics are
+    missing, ValueError naming the file and the problem otherwise). `num_threads`: torch's
+    intra-op threads while the policy predicts (None: torch's setting); loading itself leaves
+    torch's settings alone.
     """
     files = check_agent(path)
     if algo is not None and files.algo != algo:
         raise ValueError(f"agent {files.model} was trained with {files.algo!r}, not {algo!r}")
-    for key, stage in REMOVED_STAGES.items():  # checked before torch loads anything
-        if key in files.metadata:
-            raise ValueError(
-                f"{files.metadata_file}: {key!r} ({stage}) was removed from auv-gym; this agent "
-                "cannot be loaded"
-            )
-    guard = files.metadata.get("envelope_guard")
-    if guard is not None:
-        guard = check_envelope_guard(guard, f"{files.metadata_file}")
-        if files.residual is not None:
-            raise ValueError(f"{files.metadata_file}: envelope_guard excludes residual")
-    allocation = files.metadata.get("actuator_allocation")
-    if allocation is not None:
-        check_actuator_allocation(allocation, f"{files.metadata_file}")
-        if files.residual is not None:
-            raise ValueError(f"{files.metadata_file}: actuator_allocation excludes residual")
-    policy = _unguarded(
-        files, load_actor(files, device=device, num_threads=num_threads), base_kwargs
-    )
-    names = observation_layout(files.metadata)
-    if guard is not None:
-        policy = GuardedPolicy(policy, guard, names)
+    specs = files.stages if stages is None else check_stage_specs(stages, "stages")
+    if specs and files.residual is not None:
+        raise ValueError(f"{files.model}: a residual agent takes no stages (its base is its own)")
     settings = base_kwargs or {}
-    if allocation is None or settings.get("actuator") not in ALLOCATED_ACTUATORS:
-        return policy
-    return AllocatedPolicy(
-        policy, names, settings["actuator"], settings.get("params"), settings.get("actuator_params")
-    )
-
-
-def _unguarded(files: Any, actor: AgentPolicy, base_kwargs: dict[str, Any] | None) -> Any:
-    if files.residual is None:
-        return actor
-    base = files.residual.make_base(**(base_kwargs or {}))
-    return ResidualPolicy(base, actor, files.residual.bound, files.residual)
+    built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
+    actor = load_actor(files, device=device, num_threads=num_threads)
+    if files.residual is not None:
+        base = files.residual.make_base(**settings)
+        return ResidualPolicy(base, actor, files.residual.bound, files.residual)
+    return StagedPolicy(actor, built) if built else actor
 
 
 def make_residual(

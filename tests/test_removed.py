@@ -11,7 +11,7 @@ import pytest
 
 import controllers
 from benchmarks.training.config import REMOVED_KEYS
-from controllers.loader import REMOVED_STAGES
+from controllers.agent import REMOVED_STAGES
 
 ROOT = Path(__file__).resolve().parent.parent
 AGENT = ROOT / "benchmarks" / "agents" / "ppo_helix"

@@ -1,14 +1,16 @@
 """What a hyper-parameter file changes about the agent's interface to the env, read and applied
 in one place: the action box (``action_bounds``, `action_box`), fixed observation scales
-(``obs_scales``, `normalization`) and the envelope guard of the commands (``envelope_guard``,
-`envelope_guard`). Each is opt-in; a file without these keys trains as before."""
+(``obs_scales``, `normalization`) and the agent's stages (``stages``, `controllers.stages`:
+trained inside them, exported with them). Each is opt-in; a file without these keys trains as
+before."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from controllers.envelope_guard import check_envelope_guard
+from controllers.env_settings import policy_settings
+from controllers.stages import build_stages, check_stage_specs
 
 if TYPE_CHECKING:
     from benchmarks.training.config import ZooConfig
@@ -28,19 +30,26 @@ def parse_interface(
 
         fields["obs_scales"] = parse_obs_scales(section["obs_scales"], where)
     if "envelope_guard" in section:
+        raise ValueError(
+            f"{where}: envelope_guard is now a stage: stages: [{{name: envelope_guard, ...}}]"
+        )
+    if "stages" in section:
         if residual is not None:
-            raise ValueError(f"{path}: envelope_guard excludes residual")
-        fields["envelope_guard"] = check_envelope_guard(section["envelope_guard"], where)
+            raise ValueError(f"{where}: a residual agent takes no stages (its base is its own)")
+        fields["stages"] = check_stage_specs(section["stages"], where)
     return fields
 
 
-def wrap_actions(venv: Any, cfg: ZooConfig, obs_names: Sequence[str]) -> Any:
-    """``venv`` under the file's envelope guard (innermost: it limits the env's command) and
-    action box."""
-    if cfg.envelope_guard is not None:
-        from benchmarks.training.envelope_guard import GuardedActions
+def wrap_actions(
+    venv: Any, cfg: ZooConfig, obs_names: Sequence[str], env_kwargs: dict[str, Any]
+) -> Any:
+    """``venv`` inside the file's stages (innermost: they give the env's command), built for
+    the training env's plant (``env_kwargs``: the id's and the file's), and its action box."""
+    stages = build_stages(cfg.stages, obs_names, policy_settings(env_kwargs), "stages")
+    if stages:
+        from benchmarks.training.stages import StagedActions
 
-        venv = GuardedActions(venv, cfg.envelope_guard, obs_names)
+        venv = StagedActions(venv, stages, len(obs_names))
     if cfg.action_bounds is not None:
         from benchmarks.training.action_box import ActionBox
 

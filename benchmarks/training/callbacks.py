@@ -26,8 +26,9 @@ from benchmarks.training.evaluation import (
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from benchmarks.training.residual import ResidualTraining
 from controllers.agent import AgentPolicy
-from controllers.envelope_guard import EnvelopeGuard, GuardedPolicy
+from controllers.env_settings import policy_settings
 from controllers.residual import ResidualPolicy, base_kwargs_for_env
+from controllers.stages import StagedPolicy, build_stages
 
 __all__ = [
     "AdaptiveUpdateThreads",
@@ -50,14 +51,17 @@ def policy_from_model(
     vec_normalize: Any,
     residual: ResidualTraining | None = None,
     env_kwargs: dict[str, Any] | None = None,
-    guard: tuple[EnvelopeGuard, Sequence[str]] | None = None,
-) -> AgentPolicy | ResidualPolicy | GuardedPolicy:
+    stages: tuple[Sequence[dict[str, Any]], Sequence[str]] = ((), ()),
+) -> AgentPolicy | ResidualPolicy | StagedPolicy:
     """The Policy of a model in training, with a snapshot of the current statistics (torch's
     thread setting is the training's); with ``residual``, the `ResidualPolicy` of its base
     controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`); with
-    ``guard`` (the guard, observation names), that policy inside its `GuardedPolicy`."""
+    ``stages`` (the agent's stage specs, its observation names), that policy inside them, built
+    for the plant of ``env_kwargs`` (`controllers.stages.StagedPolicy`)."""
     policy = _unguarded(model, vec_normalize, residual, env_kwargs)
-    return policy if guard is None else GuardedPolicy(policy, *guard)
+    specs, obs_names = stages
+    built = build_stages(specs, obs_names, policy_settings(env_kwargs or {}), "stages")
+    return StagedPolicy(policy, built) if built else policy
 
 
 def _unguarded(
@@ -85,9 +89,9 @@ class PeriodicEvaluation(BaseCallback):
     the learning curve, and the agent saved to OUT/best when its `score` improves.
 
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
-    A residual agent (``residual``) is evaluated as its `ResidualPolicy`, a guarded one
-    (``guard``) inside its `GuardedPolicy`. ``next_eval``: the schedule of a resumed run (its
-    checkpoint's), else the first multiple of `every` ahead.
+    A residual agent (``residual``) is evaluated as its `ResidualPolicy`, an agent with stages
+    (``stages``: specs, observation names) inside them. ``next_eval``: the schedule of a resumed
+    run (its checkpoint's), else the first multiple of `every` ahead.
     """
 
     def __init__(
@@ -102,10 +106,10 @@ class PeriodicEvaluation(BaseCallback):
         verbose: int = 0,
         residual: ResidualTraining | None = None,
         next_eval: int | None = None,
-        guard: tuple[EnvelopeGuard, Sequence[str]] | None = None,
+        stages: tuple[Sequence[dict[str, Any]], Sequence[str]] = ((), ()),
     ) -> None:
         super().__init__(verbose)
-        self.residual, self.guard = residual, guard
+        self.residual, self.stages = residual, stages
         self.out, self.every, self.seeds = out, every, tuple(seeds)
         self.eval_kwargs, self.metadata = eval_kwargs, metadata
         self.start_wall, self.best = start_wall, best
@@ -136,7 +140,7 @@ class PeriodicEvaluation(BaseCallback):
             vec_normalize,
             self.residual,
             self.eval_kwargs,
-            self.guard,
+            self.stages,
         )
         extra = () if self.residual is None else ("chattering",)
         results = evaluate_policy_on_seeds(

@@ -203,7 +203,7 @@ _MODEL_ATTRIBUTES = (
 _WRAPPER_ATTRIBUTES = {
     "VecNormalize": ("returns", "old_obs", "old_reward", "obs_rms", "ret_rms"),
     "VecMonitor": ("episode_returns", "episode_lengths", "episode_count"),
-    "ObservedActions": ("last_obs",),  # GuardedActions
+    "StagedActions": ("last_obs", "memories"),
 }
 
 

@@ -69,7 +69,8 @@ ZOO_KEYS = frozenset(
         "residual",
         "action_bounds",
         "obs_scales",
-        "envelope_guard",
+        "stages",
+        "envelope_guard",  # refused with the stage that replaces it
     }
 )
 # Keys of removed training features (no kept agent used them; their findings stay in
@@ -103,7 +104,7 @@ class ZooConfig:
     residual: ResidualTraining | None = None
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
-    envelope_guard: Any = None  # `controllers.envelope_guard.EnvelopeGuard` of the commands
+    stages: tuple[dict[str, Any], ...] = ()  # trained inside and exported (`controllers.stages`)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""

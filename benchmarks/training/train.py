@@ -304,7 +304,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
-    venv = wrap_actions(venv, cfg, obs_names)
+    venv = wrap_actions(venv, cfg, obs_names, {**VARIANTS.get(opts.env_id, {}), **cfg.env_kwargs})
 
     previous: dict[str, Any] = {}
     warm: dict[str, Any] | None = None
@@ -396,11 +396,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "observation_shape": [len(obs_names)],
             "action_shape": [action_dim],
             **residual_meta,
-            **(
-                {}
-                if cfg.envelope_guard is None
-                else {"envelope_guard": cfg.envelope_guard.to_dict()}
-            ),
+            **({"stages": list(cfg.stages)} if cfg.stages else {}),
             "versions": versions(),
             "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(),
@@ -435,7 +431,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             opts.verbose,
             residual,
             next_eval=schedules.get("next_eval"),
-            guard=None if cfg.envelope_guard is None else (cfg.envelope_guard, obs_names),
+            stages=(cfg.stages, obs_names),
         )
         callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)

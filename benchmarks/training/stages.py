@@ -1,0 +1,51 @@
+"""`StagedActions`: the env's commands pass the agent's stages in training, as they do at
+inference (`controllers.stages`: the same `Stage` objects, the same arithmetic).
+
+The wrapper sits under `VecNormalize`, innermost of the action wrappers: the network's action
+goes through every stage (the envelope guard, the actuator allocation) to the command the env
+receives, and what the network observes is the stages' view of the raw observation (the
+allocation feeds back the command the actuator delivered). ``last_obs`` is that view of each
+vehicle's last observation (the new episode's first after an autoreset) and ``memories`` the
+stages' per-vehicle state; a resumed run restores both (`checkpoints`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+
+from controllers.stages import Stage, apply_stages, observe_stages
+
+__all__ = ["StagedActions"]
+
+
+class StagedActions(VecEnvWrapper):
+    """``venv`` whose actions pass ``stages`` (in order) and whose observations their view."""
+
+    def __init__(self, venv: VecEnv, stages: Sequence[Stage], obs_dim: int) -> None:
+        super().__init__(venv)
+        self.stages = list(stages)
+        self.memories = [stage.start(venv.num_envs) for stage in self.stages]
+        self.last_obs = np.zeros((venv.num_envs, obs_dim), np.float32)
+
+    def _seen(self, obs: np.ndarray) -> np.ndarray:
+        seen = observe_stages(self.stages, obs, self.memories)
+        self.last_obs = np.array(seen, dtype=np.float32)
+        return seen
+
+    def reset(self) -> np.ndarray:
+        obs = self.venv.reset()
+        self.memories = [stage.start(self.num_envs) for stage in self.stages]
+        return self._seen(obs)
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self.venv.step_async(apply_stages(self.stages, actions, self.last_obs, self.memories))
+
+    def step_wait(self):  # SB3 VecEnvStepReturn
+        obs, rewards, dones, infos = self.venv.step_wait()
+        starts = np.asarray(dones, dtype=bool)  # autoreset: these rows begin a new episode
+        for stage, memory in zip(self.stages, self.memories, strict=True):
+            stage.restart(memory, starts)
+        return self._seen(obs), rewards, dones, infos

@@ -1,0 +1,274 @@
+"""An agent's stages: what happens to its commands between its network and the env, in order.
+
+A trained network is rarely the whole agent. Its metadata lists the stages its commands pass,
+outermost last, each a mapping with its ``name`` and settings::
+
+    "stages": [
+        {"name": "envelope_guard", "pitch_soft_deg": 35.0, ...},   # controllers.envelope_guard
+        {"name": "actuator_allocation", "commands": "paper"},     # controllers.actuator_allocation
+    ]
+
+One implementation applies them everywhere: `StagedPolicy` around the network at inference
+(`controllers.loader.load_policy`), and `benchmarks.training.stages.StagedActions` around the
+vector env in training (the same `Stage` objects, the same arithmetic). A stage may also rewrite
+what the network observes (the allocation feeds back the command the actuator delivered) and
+keep a per-vehicle memory between steps, reset at each episode start.
+
+A stage reads its inputs from the raw observation by name (θ, q, u for the guard; u, v, w and
+the previous action for the allocation); `build_stages` checks that the agent's observation
+holds them before anything runs. Unknown stage names, settings or an order other than
+`STAGE_ORDER` are one-line errors naming the file and what exists.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from controllers.actuator_allocation import (
+    ALLOCATED_ACTUATORS,
+    COMMANDED_ACTUATOR,
+    Allocation,
+    check_actuator_allocation,
+)
+from controllers.envelope_guard import GUARD_INPUTS, check_envelope_guard, guard_commands
+
+__all__ = [
+    "STAGE_ORDER",
+    "AllocationStage",
+    "GuardStage",
+    "PipelineState",
+    "Stage",
+    "StagedPolicy",
+    "apply_stages",
+    "build_stages",
+    "check_stage_specs",
+    "observe_stages",
+]
+
+STAGE_ORDER = ("envelope_guard", "actuator_allocation")  # the order the commands pass them
+
+
+class Stage:
+    """One stage: `observe` may rewrite the network's observation, `act` transforms the commands
+    (normalised, (n, 3)); `memory` is the stage's per-vehicle state (None: stateless)."""
+
+    name = ""
+
+    def start(self, n: int) -> Any:
+        """The memory of ``n`` vehicles at their episodes' start."""
+        return None
+
+    def restart(self, memory: Any, rows: np.ndarray) -> None:
+        """Reset the memory of the vehicles ``rows`` (bool, (n,)) whose episode starts."""
+
+    def observe(self, observation: np.ndarray, memory: Any) -> np.ndarray:
+        """What the network sees, from the raw observations (n, d)."""
+        return observation
+
+    def act(
+        self, commands: np.ndarray, observation: np.ndarray, memory: Any
+    ) -> tuple[np.ndarray, Any]:
+        """The commands (n, 3) after this stage, and its memory after the step."""
+        raise NotImplementedError
+
+    def to_dict(self) -> dict[str, Any]:
+        """The stage as metadata.json lists it."""
+        raise NotImplementedError
+
+
+class GuardStage(Stage):
+    """The envelope guard (`controllers.envelope_guard`): pitch and surge commands ramped away
+    near the vehicle's limits, read from θ, q, u of the observation. Stateless."""
+
+    name = "envelope_guard"
+
+    def __init__(self, settings: Any, obs_names: Sequence[str], where: str) -> None:
+        self.guard = check_envelope_guard(settings, where)
+        missing = [n for n in GUARD_INPUTS if n not in obs_names]
+        if missing:
+            raise ValueError(
+                f"{where}: envelope_guard reads {list(GUARD_INPUTS)} from the agent's "
+                f"observation, which lacks {missing}"
+            )
+        self.index = tuple(list(obs_names).index(n) for n in GUARD_INPUTS)
+
+    def act(
+        self, commands: np.ndarray, observation: np.ndarray, memory: Any
+    ) -> tuple[np.ndarray, Any]:
+        return guard_commands(commands, observation, self.index, self.guard), memory
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, **self.guard.to_dict()}
+
+
+class AllocationStage(Stage):
+    """The actuator allocation (`controllers.actuator_allocation`): the agent's normalised τ on
+    the paper's actuator flown on the env's fins or propeller and fins; the memory is each
+    vehicle's delivered command, fed back in the previous-action entries."""
+
+    name = "actuator_allocation"
+
+    def __init__(self, allocation: Allocation) -> None:
+        self.allocation = allocation
+
+    def start(self, n: int) -> np.ndarray:
+        return np.zeros((n, 3), dtype=np.float32)
+
+    def restart(self, memory: np.ndarray, rows: np.ndarray) -> None:
+        memory[rows] = 0.0
+
+    def observe(self, observation: np.ndarray, memory: np.ndarray) -> np.ndarray:
+        obs = np.array(observation, dtype=np.float32, copy=True)
+        obs[:, self.allocation.previous_index] = memory
+        return obs
+
+    def act(
+        self, commands: np.ndarray, observation: np.ndarray, memory: Any
+    ) -> tuple[np.ndarray, Any]:
+        return self.allocation.allocate(commands, observation)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "commands": COMMANDED_ACTUATOR}
+
+
+def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
+    """The stage list of an agent's metadata or a training config, checked: a list of mappings
+    with a known ``name`` (`STAGE_ORDER`) and valid settings, each at most once, in that order.
+    A one-line ValueError naming ``where`` otherwise."""
+    if specs is None:
+        return ()
+    if not isinstance(specs, Sequence) or isinstance(specs, str):
+        raise ValueError(f"{where}: stages must be a list of {{name: ...}} mappings, got {specs!r}")
+    checked = []
+    for spec in specs:
+        if isinstance(spec, str):
+            spec = {"name": spec}
+        if not isinstance(spec, Mapping) or "name" not in spec:
+            raise ValueError(f"{where}: each stage is a mapping with a 'name', got {spec!r}")
+        name = spec["name"]
+        if name not in STAGE_ORDER:
+            raise ValueError(f"{where}: unknown stage {name!r}; stages: {list(STAGE_ORDER)}")
+        settings = {k: v for k, v in spec.items() if k != "name"}
+        if name == "envelope_guard":
+            settings = check_envelope_guard(settings, f"{where}: stage {name}").to_dict()
+        else:
+            unknown = sorted(set(settings) - {"commands"})
+            if unknown:
+                raise ValueError(f"{where}: stage {name} has unknown keys {unknown}")
+            check_actuator_allocation(
+                settings.get("commands", COMMANDED_ACTUATOR), f"{where}: stage {name}"
+            )
+            settings = {"commands": COMMANDED_ACTUATOR}
+        checked.append({"name": name, **settings})
+    names = [s["name"] for s in checked]
+    if len(set(names)) != len(names) or names != sorted(names, key=STAGE_ORDER.index):
+        raise ValueError(
+            f"{where}: stages {names} must each appear once, in the order {list(STAGE_ORDER)}"
+        )
+    return tuple(checked)
+
+
+def build_stages(
+    specs: Sequence[Mapping[str, Any]],
+    obs_names: Sequence[str],
+    settings: Mapping[str, Any] | None = None,
+    where: str = "stages",
+) -> list[Stage]:
+    """The `Stage` objects of checked ``specs`` (`check_stage_specs`) for an agent observing
+    ``obs_names``, on the plant of ``settings`` (`controllers.env_settings.policy_settings`:
+    ``actuator``, ``params``, ``actuator_params``). The allocation is the identity on the
+    actuator the agent commands (the paper's) and on one drawn per episode ("random"), which
+    tells the agent nothing: it is left out there."""
+    settings = settings or {}
+    stages: list[Stage] = []
+    for spec in specs:
+        if spec["name"] == "envelope_guard":
+            settings_of_guard = {k: v for k, v in spec.items() if k != "name"}
+            stages.append(GuardStage(settings_of_guard, obs_names, where))
+        elif settings.get("actuator") in ALLOCATED_ACTUATORS:
+            allocation = Allocation(
+                obs_names,
+                settings["actuator"],
+                settings.get("params"),
+                settings.get("actuator_params"),
+                where,
+            )
+            stages.append(AllocationStage(allocation))
+    return stages
+
+
+@dataclass
+class PipelineState:
+    """The network's recurrent state and each stage's memory, for one batch of vehicles."""
+
+    inner: Any
+    memories: list[Any]
+    n: int
+
+
+def observe_stages(
+    stages: Sequence[Stage], observation: np.ndarray, memories: Sequence[Any]
+) -> np.ndarray:
+    """What the network sees: the raw observations (n, d) through every stage's `observe`."""
+    for stage, memory in zip(stages, memories, strict=True):
+        observation = stage.observe(observation, memory)
+    return observation
+
+
+def apply_stages(
+    stages: Sequence[Stage], commands: np.ndarray, observation: np.ndarray, memories: list[Any]
+) -> np.ndarray:
+    """The network's commands (n, 3) through every stage in order; ``memories`` is updated in
+    place. ``observation`` is what the network saw."""
+    for k, stage in enumerate(stages):
+        commands, memories[k] = stage.act(commands, observation, memories[k])
+    return commands
+
+
+class StagedPolicy:
+    """A network (a Policy of its observation, e.g. `controllers.agent.AgentPolicy`) with its
+    stages: the Policy of the whole agent. Every other attribute (metadata, path, ...) is the
+    network's."""
+
+    def __init__(self, actor: Any, stages: Sequence[Stage]) -> None:
+        self.actor = actor
+        self.stages = list(stages)
+        self.path = getattr(actor, "path", None)
+
+    def __getattr__(self, name: str) -> Any:  # metadata, label, num_threads... of the network
+        if name == "actor":  # not set yet (e.g. while unpickling): no recursion
+            raise AttributeError(name)
+        return getattr(self.actor, name)
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: PipelineState | None = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, PipelineState]:
+        """The agent's commands (float32, (3,) or (n, 3)) for raw observations (d,) or (n, d)."""
+        single = np.ndim(observation) == 1
+        obs = np.atleast_2d(observation)
+        n = obs.shape[0]
+        if state is None or state.n != n:
+            state = PipelineState(None, [stage.start(n) for stage in self.stages], n)
+        if episode_start is not None:
+            rows = np.asarray(episode_start, dtype=bool).reshape(n)
+            for stage, memory in zip(self.stages, state.memories, strict=True):
+                stage.restart(memory, rows)
+        seen = observe_stages(self.stages, obs, state.memories)
+        commands, inner = self.actor.predict(
+            seen[0] if single else seen, state.inner, episode_start, deterministic
+        )
+        out = apply_stages(self.stages, np.atleast_2d(commands), seen, state.memories)
+        state.inner = inner
+        return (out[0] if single else out), state
+
+    def __repr__(self) -> str:
+        names = [stage.name for stage in self.stages]
+        return f"StagedPolicy(path={self.path!r}, stages={names})"
