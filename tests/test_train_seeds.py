@@ -395,11 +395,9 @@ def test_ray_backend_runs_the_same_seeds(tmp_path, monkeypatch):
 SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo_helix.yml", "ppo", "AUVPath3D-v0", 0.995, None),
     ("ppo_helix.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, None),
-    ("ppo_residual.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.995, 3.0),
+    ("ppo_residual.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.98, None),
     ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
     ("ppo_generalist.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
-    ("ppo_generalist_along_track.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
-    ("ppo_generalist_cross_track.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
 ]
 
 
@@ -423,7 +421,8 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
     kwargs = cfg.model_kwargs()
     if algo == "sac":
         kwargs["buffer_size"] = 1000  # the real buffer allocates ~100 MB
-    venv = make_training_env(2, 0, {"max_time": 5.0}, env_id=env_id)
+    seen = {k: v for k, v in cfg.env_kwargs.items() if k == "observation"}  # the agent's
+    venv = make_training_env(2, 0, {"max_time": 5.0, **seen}, env_id=env_id)
     if cfg.action_bounds is not None:
         venv = ActionBox(venv, *cfg.action_bounds)
     venv = VecNormalize(venv, **cfg.normalize)
@@ -441,44 +440,6 @@ def test_shipped_configs_build_their_algorithm(file, algo, env_id, gamma, precis
         np.testing.assert_array_equal(model.action_space.low, np.float32(cfg.action_bounds[0]))
         model.learn(64)  # acts inside the box (ActionBox refuses anything else)
     venv.close()
-
-
-def test_phase_configs_change_only_what_their_comments_say():
-    """The generalist's phases (each warm-started from the previous phase's agents): the
-    along-track phase pins x_e at 0.25 m (its integral at 0.5 m·s) and a third of the learning
-    rate; the cross-track phase then pins y_e, z_e at 0.5 m (integrals 1 m·s); nothing else."""
-    import dataclasses
-
-    from benchmarks.training.config import read_zoo_config
-
-    env_id = "AUVPath3DPreview-v0"
-    first, along, cross = (
-        dataclasses.asdict(read_zoo_config(ROOT / "benchmarks" / "hyperparams" / f, env_id, "ppo"))
-        for f in (
-            "ppo_generalist.yml",
-            "ppo_generalist_along_track.yml",
-            "ppo_generalist_cross_track.yml",
-        )
-    )
-    for config in (first, along, cross):
-        config.pop("raw")  # the file as read; the parsed fields below are what training uses
-    assert first["env_kwargs"]["observation"] == "preview_integral"
-    along_change = {"x_e": 0.25, "x_e_integral": 0.5}
-    assert along["obs_scales"] == {**first["obs_scales"], **along_change}
-    assert first["n_timesteps"] == 8_000_000 and along["n_timesteps"] == 2_000_000
-    assert (first["algo_kwargs"]["learning_rate"], along["algo_kwargs"]["learning_rate"]) == (
-        "lin_3e-4",
-        "lin_1e-4",
-    )
-    rate = {"learning_rate": "lin_1e-4"}
-    assert along["algo_kwargs"] == {**first["algo_kwargs"], **rate}
-    changes = ("obs_scales", "n_timesteps", "algo_kwargs")
-    assert {k: v for k, v in along.items() if k not in changes} == {
-        k: v for k, v in first.items() if k not in changes
-    }
-    changed = {"y_e": 0.5, "z_e": 0.5, "y_e_integral": 1.0, "z_e_integral": 1.0}
-    assert cross["obs_scales"] == {**along["obs_scales"], **changed}
-    assert {**cross, "obs_scales": along["obs_scales"]} == along
 
 
 @pytest.mark.rl

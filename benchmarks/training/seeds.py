@@ -60,7 +60,7 @@ from benchmarks.training.seeds_options import (  # the options, importable from 
     SeedsOptions,
     parse_seeds,
 )
-from benchmarks.training.train import check_options, target_timesteps
+from benchmarks.training.train import check_options, observation_layout_of, target_timesteps
 from benchmarks.training.warm_start import agent_for_seed, check_warm_start
 
 __all__ = [
@@ -125,6 +125,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.runner.pool`)
         check_pool_options(1, opts.backend, opts.address)
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
+    check_obs_scales(cfg, train.env_id, str(train.config))
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
         raise ValueError(
@@ -181,6 +182,20 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
             except OSError as error:
                 raise ValueError(str(error)) from None
     return plan
+
+
+def check_obs_scales(cfg: Any, env_id: str, where: str) -> None:
+    """The observation entries a config pins (``obs_scales``) exist in the observation of its
+    env (id and env_kwargs): checked before any worker starts; ValueError naming ``where``."""
+    if cfg.obs_scales is None or cfg.residual is not None:
+        return
+    names = observation_layout_of(env_id, cfg.env_kwargs).names
+    unknown = sorted(set(cfg.obs_scales) - set(names))
+    if unknown:
+        raise ValueError(
+            f"{where}: obs_scales names {unknown}, which the observation of {env_id} does not "
+            f"have; its entries: {list(names)}"
+        )
 
 
 def holds_work(out: Path) -> bool:

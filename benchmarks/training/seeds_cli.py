@@ -21,6 +21,7 @@ from pathlib import Path
 
 from benchmarks.arguments import ArgumentParser
 from benchmarks.options import add_options, from_args
+from benchmarks.training.schedule import read_schedule, train_schedule
 from benchmarks.training.seeds import SeedsOptions, train_seeds
 from benchmarks.training.train import TrainOptions, default_config
 
@@ -63,8 +64,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
-    """SeedsOptions from the command line; bad input exits with code 2 and one line."""
-    ns = build_parser().parse_args(argv)
+    """SeedsOptions from the command line; bad input exits with code 2 and one line. A
+    schedule file's ``options`` (`benchmarks.training.schedule`) are the defaults of the options
+    it names, and its env section the default env id: the command line wins."""
+    parser = build_parser()
+    ns = parser.parse_args(argv)
+    if ns.config is not None:
+        try:
+            schedule = read_schedule(ns.config)
+        except ValueError as error:
+            parser.error(str(error))
+        if schedule is not None:
+            parser.set_defaults(**schedule.options, env_id=schedule.env_id)
+            ns = parser.parse_args(argv)
     if ns.config is None:
         try:
             ns.config = default_config(ns.algo)
@@ -79,7 +91,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     opts = parse_args(argv)
     prog = "python -m benchmarks.training.seeds_cli"
     try:
-        summary = train_seeds(opts)
+        schedule = read_schedule(opts.train.config)
+        if schedule is not None:
+            summary = train_schedule(opts, schedule)["phases"][-1]["summary"]
+        else:
+            summary = train_seeds(opts)
     except (ValueError, FileNotFoundError) as exc:  # refused before any training started
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,308 @@
+"""A training schedule: an agent's whole recipe in one file, trained by one command.
+
+An RL-Zoo hyper-parameter file (one env id's section, `benchmarks.training.config`) plus a
+``schedule`` section::
+
+    AUVPath3DPreview-v0:            # the first phase's hyper-parameters
+      n_timesteps: !!float 8e6
+      ...
+    schedule:
+      options: {task_set: validation_paper_start, eval_episodes: 64, eval_freq: 500000}
+      stages: [envelope_guard, actuator_allocation]   # added to the exported agents
+      phases:
+        - {name: base}
+        - {name: along_track, n_timesteps: !!float 2e6, learning_rate: lin_1e-4,
+           obs_scales: {x_e: 0.25, x_e_integral: 0.5}}
+
+Each phase is a multi-seed run (`benchmarks.training.seeds`) of the section with its changes and
+those of the phases before it on top (``obs_scales`` merged entry by entry, every other key
+replaced: a phase says what changes from the phase before), each seed
+starting from the previous phase's agent of the same seed (its weights, optimiser state and
+statistics: `benchmarks.training.warm_start`; the first phase from scratch, or from
+``init_from``). ``options`` are the defaults of the command's own options (the command line
+wins); ``stages`` are added to the exported agents only, after training (`controllers.stages`:
+a file's own ``stages`` trains inside them).
+
+Layout of OUT: ``phase_<k>_<name>/`` (each phase's multi-seed run; ``selected/agent_seed_<s>``
+is each seed's agent, selected on validation, that the next phase starts from), ``configs/``
+(each phase's hyper-parameter file) and ``schedule.json`` (the plan and every phase's
+summary). A killed schedule continues with the same command plus ``--resume``: finished phases
+are kept, the running one resumes. Every phase's configuration is checked before the first one
+starts.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from auv_gym.files import write_json, write_text
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
+from benchmarks.training.config import ZOO_KEYS, read_zoo_config
+from benchmarks.training.evaluation import HELD_OUT_FILE
+from benchmarks.training.seeds import (
+    PLAN_FILE,
+    SUMMARY_FILE,
+    SeedsOptions,
+    check_obs_scales,
+    train_seeds,
+)
+from benchmarks.training.warm_start import SEED_FIELD
+from controllers.agent import METADATA_FILE
+from controllers.algorithms import ALGORITHMS
+from controllers.stages import check_stage_specs
+
+__all__ = [
+    "SCHEDULE_FILE",
+    "SCHEDULE_KEY",
+    "Phase",
+    "Schedule",
+    "read_schedule",
+    "train_schedule",
+]
+
+SCHEDULE_KEY = "schedule"
+SCHEDULE_FILE = "schedule.json"
+CONFIGS = "configs"  # OUT/configs/phase_<k>_<name>.yml: each phase's hyper-parameter file
+SELECTED = "selected"  # OUT/phase_<k>_<name>/selected/agent_seed_<s>: each seed's agent
+SCHEDULE_KEYS = ("phases", "stages", "options")
+# The command's options a schedule may set (its defaults: the command line wins).
+OPTION_KEYS = (
+    "algo",
+    "task_set",
+    "eval_episodes",
+    "eval_duration",
+    "eval_freq",
+    "checkpoint_freq",
+)
+PHASE_KEYS = ("name", "n_timesteps", "init_from")  # besides the section's own keys
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One phase: its name, and what it changes in the section (n_timesteps included)."""
+
+    name: str
+    changes: dict[str, Any]
+    init_from: str | None = None  # the first phase only: an agent template ({seed})
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A checked schedule file: its env id, phases, export stages and option defaults."""
+
+    path: Path
+    env_id: str
+    section: dict[str, Any]
+    phases: tuple[Phase, ...]
+    stages: tuple[dict[str, Any], ...]
+    options: dict[str, Any]
+
+    def phase_section(self, k: int) -> dict[str, Any]:
+        """Phase ``k``'s hyper-parameters: the section with the changes of phases 0..k on top,
+        in order (a phase changes what the phase before it trained with)."""
+        section = dict(self.section)
+        for phase in self.phases[: k + 1]:
+            for key, value in phase.changes.items():
+                if key == "obs_scales" and isinstance(value, Mapping):
+                    section[key] = {**(section.get(key) or {}), **value}
+                else:
+                    section[key] = value
+        return section
+
+    def folder(self, out: Path, k: int) -> Path:
+        """Phase ``k``'s multi-seed run directory under OUT."""
+        return out / f"phase_{k + 1}_{self.phases[k].name}"
+
+
+def read_schedule(path: str | Path) -> Schedule | None:
+    """The schedule of a hyper-parameter file, checked; None when it has no ``schedule``.
+
+    ValueError (one line naming the file and the key) for: a schedule that is not a mapping or
+    has unknown keys, no phases, a phase without a unique identifier name, an unknown phase key
+    (valid: the section's keys, `PHASE_KEYS`), ``init_from`` on a later phase, unknown stages or
+    options, a file without exactly one env section.
+    """
+    import yaml
+
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as error:
+        raise ValueError(f"{path}: cannot be read as YAML: {error}") from None
+    if not isinstance(data, dict) or SCHEDULE_KEY not in data:
+        return None
+    where = f"{path}: {SCHEDULE_KEY}"
+    spec = data[SCHEDULE_KEY]
+    if not isinstance(spec, dict):
+        raise ValueError(f"{where} must be a mapping of {list(SCHEDULE_KEYS)}")
+    unknown = sorted(set(spec) - set(SCHEDULE_KEYS))
+    if unknown:
+        raise ValueError(f"{where}: unknown keys {unknown}; valid: {list(SCHEDULE_KEYS)}")
+    envs = [key for key in data if key != SCHEDULE_KEY]
+    if len(envs) != 1 or not isinstance(data[envs[0]], dict):
+        raise ValueError(f"{path}: a schedule file holds one env section, found {envs}")
+    env_id = envs[0]
+    options = dict(spec.get("options") or {})
+    unknown = sorted(set(options) - set(OPTION_KEYS))
+    if unknown:
+        raise ValueError(f"{where}.options: unknown keys {unknown}; valid: {list(OPTION_KEYS)}")
+    algo = options.get("algo", "ppo")
+    if algo not in ALGORITHMS:
+        raise ValueError(f"{where}.options: unknown algo {algo!r}; valid: {sorted(ALGORITHMS)}")
+    allowed = set(PHASE_KEYS) | set(ZOO_KEYS) | set(ALGORITHMS[algo].hyperparameters)
+    phases = spec.get("phases")
+    if not isinstance(phases, list) or not phases:
+        raise ValueError(f"{where}.phases must be a non-empty list of phases")
+    checked: list[Phase] = []
+    for k, phase in enumerate(phases):
+        at = f"{where}.phases[{k}]"
+        if not isinstance(phase, dict):
+            raise ValueError(f"{at} must be a mapping with a 'name', got {phase!r}")
+        name = phase.get("name")
+        if not isinstance(name, str) or not re.fullmatch(r"[a-z][a-z0-9_]*", name):
+            raise ValueError(f"{at}: name must be a lower-case identifier, got {name!r}")
+        if name in (p.name for p in checked):
+            raise ValueError(f"{at}: phase name {name!r} is used twice")
+        unknown = sorted(set(phase) - allowed)
+        if unknown:
+            raise ValueError(
+                f"{at} ({name}): unknown keys {unknown}; a phase changes the section's "
+                f"hyper-parameters (or {list(PHASE_KEYS)})"
+            )
+        init_from = phase.get("init_from")
+        if init_from is not None and k > 0:
+            raise ValueError(
+                f"{at} ({name}): init_from belongs to the first phase (later phases start "
+                "from the previous phase's agents)"
+            )
+        changes = {key: v for key, v in phase.items() if key not in ("name", "init_from")}
+        checked.append(Phase(name, changes, None if init_from is None else str(init_from)))
+    stages = check_stage_specs(spec.get("stages"), f"{where}.stages")
+    return Schedule(path, env_id, dict(data[env_id]), tuple(checked), stages, options)
+
+
+def _write_phase_config(schedule: Schedule, k: int, out: Path) -> Path:
+    import yaml
+
+    text = yaml.safe_dump({schedule.env_id: schedule.phase_section(k)}, sort_keys=False)
+    (out / CONFIGS).mkdir(parents=True, exist_ok=True)
+    return write_text(out / CONFIGS / f"{schedule.folder(out, k).name}.yml", text)
+
+
+def check_schedule(schedule: Schedule, algo: str, out: Path) -> list[Path]:
+    """Write and check every phase's configuration (`read_zoo_config`) before any training;
+    the config files, one per phase. Errors name the phase."""
+    configs = []
+    for k, phase in enumerate(schedule.phases):
+        config = _write_phase_config(schedule, k, out)
+        try:
+            cfg = read_zoo_config(config, schedule.env_id, algo)
+            check_obs_scales(cfg, schedule.env_id, str(config))
+        except ValueError as error:
+            raise ValueError(
+                f"{schedule.path}: phase {phase.name!r}: {error}".replace(f"{config}: ", "")
+            ) from None
+        configs.append(config)
+    first = schedule.phases[0].init_from
+    if first is not None and SEED_FIELD not in first and not Path(first).is_dir():
+        raise ValueError(
+            f"{schedule.path}: phase {schedule.phases[0].name!r}: init_from {first!r} does not "
+            "exist (an agent folder, or a template with {seed})"
+        )
+    return configs
+
+
+def _with_stages(agent: Path, stages: tuple[dict[str, Any], ...]) -> None:
+    """Add ``stages`` to a copied agent's metadata (atomically); nothing when there are none."""
+    if not stages:
+        return
+    meta_file = agent / METADATA_FILE
+    metadata = json.loads(meta_file.read_text())
+    metadata["stages"] = [dict(s) for s in check_stage_specs(stages, str(meta_file))]
+    write_json(meta_file, metadata, indent=2, sort_keys=True)
+
+
+def _finished(folder: Path, seeds: tuple[int, ...]) -> dict[str, Any] | None:
+    """A phase's summary when it finished every seed of this command, else None."""
+    summary_file = folder / SUMMARY_FILE
+    if not summary_file.is_file():
+        return None
+    summary = json.loads(summary_file.read_text())
+    done = sorted(entry["seed"] for entry in summary.get("seeds", ()))
+    return summary if done == sorted(seeds) else None
+
+
+def train_schedule(opts: SeedsOptions, schedule: Schedule) -> dict[str, Any]:
+    """Train every phase of ``schedule`` for every seed of ``opts`` (module doc); returns the
+    summary written to OUT/schedule.json. ``opts.train.config`` is the schedule's file."""
+    out = Path(opts.out)
+    if not opts.resume and out.exists() and any(out.iterdir()):
+        raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
+    if opts.train.init_from is not None:
+        raise ValueError(
+            "--init-from: a schedule's first phase names its initial agent (init_from)"
+        )
+    configs = check_schedule(schedule, opts.train.algo, out)
+    plan = {
+        "config_file": str(schedule.path),
+        "env_id": schedule.env_id,
+        "phases": [{"name": p.name, **p.changes} for p in schedule.phases],
+        "stages": list(schedule.stages),
+        "seeds": list(opts.seeds),
+    }
+    write_json(out / SCHEDULE_FILE, {"plan": plan, "phases": []}, indent=2, sort_keys=True)
+    summaries: list[dict[str, Any]] = []
+    for k, phase in enumerate(schedule.phases):
+        folder = schedule.folder(out, k)
+        summary = _finished(folder, opts.seeds)
+        if summary is None:
+            if k == 0:
+                init_from = phase.init_from
+            else:
+                previous = schedule.folder(out, k - 1) / SELECTED  # each seed's agent there
+                init_from = str(previous / f"{SEED_AGENT_PREFIX}{SEED_FIELD}")
+            if opts.progress:
+                print(f"phase {k + 1}/{len(schedule.phases)}: {phase.name}", flush=True)
+            phase_opts = replace(
+                opts,
+                out=str(folder),
+                resume=(folder / PLAN_FILE).is_file(),
+                export=None,
+                results=None,
+                train=replace(
+                    opts.train,
+                    config=str(configs[k]),
+                    env_id=schedule.env_id,
+                    init_from=init_from,
+                    n_timesteps=None,
+                ),
+            )
+            summary = train_seeds(phase_opts)
+        for entry in summary["seeds"]:  # what the next phase starts from, seed by seed
+            selected = folder / SELECTED / f"{SEED_AGENT_PREFIX}{entry['seed']}"
+            if not selected.is_dir():
+                export_agent(Path(entry["agent"]), selected)
+        summaries.append({"name": phase.name, "summary": summary})
+        write_json(
+            out / SCHEDULE_FILE, {"plan": plan, "phases": summaries}, indent=2, sort_keys=True
+        )
+    last = summaries[-1]["summary"]
+    chosen = next(e for e in last["seeds"] if e["seed"] == last["selected_seed"])
+    if opts.export:
+        export_agent(Path(chosen["agent"]), Path(opts.export))
+        _with_stages(Path(opts.export), schedule.stages)
+        report = json.loads((Path(chosen["agent"]) / HELD_OUT_FILE).read_text())
+        write_json(Path(opts.export) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
+    if opts.results:
+        for entry in last["seeds"]:
+            agent = Path(opts.results) / f"{SEED_AGENT_PREFIX}{entry['seed']}"
+            export_agent(Path(entry["agent"]), agent)
+            _with_stages(agent, schedule.stages)
+    result = {"plan": plan, "phases": summaries, "selected_seed": last["selected_seed"]}
+    write_json(out / SCHEDULE_FILE, result, indent=2, sort_keys=True)
+    return result

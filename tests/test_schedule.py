@@ -1,0 +1,165 @@
+"""Training schedules (`benchmarks.training.schedule`): a whole recipe in one file, trained by
+one command. A tiny two-phase schedule end to end (the second phase starts from each seed's
+agent of the first, the exported agent carries the schedule's stages, a resumed command skips
+finished phases), the reference generalist's schedule as its recipe, and bad schedules refused
+in one line before any work."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from benchmarks.training.schedule import read_schedule
+from benchmarks.training.seeds_cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV_ID = "AUVPath3DPreview-v0"
+SECTION = {
+    "n_envs": 4,
+    "n_timesteps": 512,
+    "policy": "MlpPolicy",
+    "normalize": True,
+    "n_steps": 64,
+    "batch_size": 128,
+    "n_epochs": 1,
+    "learning_rate": "lin_3e-4",
+    "policy_kwargs": "dict(net_arch=[16])",
+    "obs_scales": {"x_e": 2.0, "y_e": 2.0},
+    "env_kwargs": {"observation": "preview_integral", "randomize_start": True, "max_time": 20.0},
+}
+SCHEDULE = {
+    "options": {"eval_freq": 256, "eval_duration": 110.0},
+    "stages": ["envelope_guard"],
+    "phases": [
+        {"name": "base"},
+        {"name": "fine", "n_timesteps": 256, "obs_scales": {"x_e": 0.25}},
+    ],
+}
+
+
+def _write(tmp_path: Path, schedule: dict | None = None, section: dict | None = None) -> Path:
+    path = tmp_path / "schedule.yml"
+    data = {ENV_ID: section or SECTION, "schedule": schedule or SCHEDULE}
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def _argv(config: Path, out: Path, *extra: str) -> list[str]:
+    return [
+        "--config",
+        str(config),
+        "--seeds",
+        "0-1",
+        "--workers",
+        "2",
+        "--eval-seeds",
+        "100",
+        "--checkpoint-freq",
+        "128",
+        "--out",
+        str(out),
+        "--quiet",
+        *extra,
+    ]
+
+
+def test_the_generalist_schedule_is_its_recipe():
+    schedule = read_schedule(ROOT / "benchmarks" / "hyperparams" / "ppo_generalist.yml")
+    assert schedule is not None and schedule.env_id == ENV_ID
+    assert [p.name for p in schedule.phases] == ["base", "along_track", "cross_track"]
+    base, along, cross = (schedule.phase_section(k) for k in range(3))
+    assert base["n_timesteps"] == 8e6 and base["learning_rate"] == "lin_3e-4"
+    assert base["env_kwargs"]["observation"] == "preview_integral"
+    assert along["n_timesteps"] == cross["n_timesteps"] == 2e6
+    assert along["learning_rate"] == cross["learning_rate"] == "lin_1e-4"
+    assert along["obs_scales"] == {**base["obs_scales"], "x_e": 0.25, "x_e_integral": 0.5}
+    changed = {"y_e": 0.5, "z_e": 0.5, "y_e_integral": 1.0, "z_e_integral": 1.0}
+    assert cross["obs_scales"] == {**along["obs_scales"], **changed}
+    for section in (along, cross):  # nothing else changes between phases
+        assert {
+            k: v
+            for k, v in section.items()
+            if k not in ("n_timesteps", "learning_rate", "obs_scales")
+        } == {
+            k: v for k, v in base.items() if k not in ("n_timesteps", "learning_rate", "obs_scales")
+        }
+    assert [s["name"] for s in schedule.stages] == ["envelope_guard", "actuator_allocation"]
+    assert schedule.options["task_set"] == "validation_paper_start"
+    assert schedule.options["eval_episodes"] == 64
+
+
+@pytest.mark.rl
+def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
+    config = _write(tmp_path)
+    out, agent = tmp_path / "run", tmp_path / "agent"
+    assert main(_argv(config, out, "--export", str(agent))) == 0
+    record = json.loads((out / "schedule.json").read_text())
+    assert [p["name"] for p in record["phases"]] == ["base", "fine"]
+    base, fine = (out / name for name in ("phase_1_base", "phase_2_fine"))
+    for seed in (0, 1):  # each seed of the second phase started from its own first-phase agent
+        meta = json.loads((fine / f"seed_{seed}" / "final" / "metadata.json").read_text())
+        assert meta["warm_start"]["init_from"] == str(base / "selected" / f"agent_seed_{seed}")
+        assert meta["num_timesteps"] == 256  # the phase's own budget (one rollout)
+        first = json.loads((base / f"seed_{seed}" / "final" / "metadata.json").read_text())
+        assert first["num_timesteps"] == 512 and "warm_start" not in first
+    fine_config = yaml.safe_load((out / "configs" / "phase_2_fine.yml").read_text())[ENV_ID]
+    assert fine_config["obs_scales"] == {"x_e": 0.25, "y_e": 2.0}
+    assert fine_config["n_timesteps"] == 256
+    exported = json.loads((agent / "metadata.json").read_text())
+    assert [s["name"] for s in exported["stages"]] == ["envelope_guard"]
+    assert exported["env_id"] == ENV_ID and exported["observation"]["integral_limit"] == 1.0
+    from controllers.loader import load_policy
+
+    assert [s.name for s in load_policy(agent).stages] == ["envelope_guard"]
+    # Resumed when everything is done: nothing trains again, the record is rewritten the same.
+    before = {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")}
+    assert main(_argv(config, out, "--resume")) == 0
+    assert {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")} == before
+    assert (
+        json.loads((out / "schedule.json").read_text())["selected_seed"] == record["selected_seed"]
+    )
+
+
+@pytest.mark.parametrize(
+    ("schedule", "message"),
+    [
+        ({"phases": []}, r"schedule.phases must be a non-empty list"),
+        (
+            {"phases": [{"name": "a", "n_steps_total": 3}]},
+            r"phases\[0\] \(a\): unknown keys \['n_steps_total'\]",
+        ),
+        ({"phases": [{"name": "a"}, {"name": "a"}]}, "phase name 'a' is used twice"),
+        ({"phases": [{"name": "A b"}]}, "name must be a lower-case identifier"),
+        (
+            {"phases": [{"name": "a"}, {"name": "b", "init_from": "x"}]},
+            "init_from belongs to the first phase",
+        ),
+        (
+            {"phases": [{"name": "a"}], "stages": ["lowpass"]},
+            r"schedule.stages: unknown stage 'lowpass'",
+        ),
+        (
+            {"phases": [{"name": "a"}], "options": {"seeds": 3}},
+            r"options: unknown keys \['seeds'\]",
+        ),
+        ({"phases": [{"name": "a"}], "cost": 1}, r"schedule: unknown keys \['cost'\]"),
+        (
+            {"phases": [{"name": "a", "init_from": "missing/agent"}]},
+            "init_from 'missing/agent' does not exist",
+        ),
+        ({"phases": [{"name": "a", "obs_scales": {"psi": 1.0}}]}, "phase 'a'"),
+    ],
+)
+def test_bad_schedules_are_refused_in_one_line_before_any_work(tmp_path, capsys, schedule, message):
+    config = _write(tmp_path, schedule)
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as stop:
+        code = main(_argv(config, out))
+        raise SystemExit(code)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1, err
+    assert pytest.importorskip("re").search(message, err), err
+    assert not (out / "phase_1_a").exists()
