@@ -24,7 +24,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from auv_gym.numba_cache import kernels_are_cached, mark_kernels_cached
+from auv_gym.support.numba_cache import kernels_are_cached, mark_kernels_cached
 
 __all__ = ["COMMANDS", "SPEED", "HelpFormatter", "main"]
 
@@ -51,6 +51,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "paper-figures": (
         "benchmarks.reports.paper_figures",
         "the paper's Figs. 3-9, FBSM vs backstepping",
+    ),
+    "compile": (
+        "benchmarks.runner.compile_kernels",
+        "compile and cache the simulation kernels (set-up runs it)",
     ),
     "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),
     "video": ("benchmarks.reports.video", "an episode's video: 3-D track and errors (video extra)"),
@@ -212,7 +216,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif command == "docs":
             return _docs(rest)
         else:
-            if not {"-h", "--help"} & set(rest):
+            if command != "compile" and not {"-h", "--help"} & set(rest):
                 compiled = _compile_notice()
             code = _run(COMMANDS[command][0], f"auv-gym {command}", rest)
     except ModuleNotFoundError as error:

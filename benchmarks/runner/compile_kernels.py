@@ -1,0 +1,97 @@
+"""`auv-gym compile`: compile and cache the simulation kernels once, saying how far it is.
+
+numba compiles each kernel on its first use after an install or an edit of the physics, and
+caches it on disk (`auv_gym.support.numba_cache`): without this step the first benchmark or test
+run spends minutes at 0 % of its progress bar. The set-up (scripts/setup.sh) runs it instead: it
+flies every classical controller on every benchmark scenario, and the RL task's agent
+observation, for one second each, which compiles every kernel they use, then records that the
+cache is current. Run again, it returns at once unless a source changed.
+
+    auv-gym compile             # or: python -m benchmarks.runner.compile_kernels
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from benchmarks.arguments import parse_options, program_name
+from benchmarks.options import option
+
+__all__ = ["main"]
+
+POLICIES = ("fbsm", "backstepping", "pid_los")  # every classical kernel
+
+
+@dataclass
+class Options:
+    """The options of `auv-gym compile`."""
+
+    force: bool = option(False, "compile even when the cache is marked current")
+    quiet: bool = option(False, "no progress bar")
+
+
+def _packages() -> tuple[Path, Path]:
+    import auv_gym
+    import controllers
+
+    return Path(auv_gym.__file__).parent, Path(controllers.__file__).parent
+
+
+def compile_kernels(progress: bool = True) -> float:
+    """Fly every classical controller on every scenario and the RL task for 1 s; the wall
+    time [s] it took."""
+    import gymnasium as gym
+    import numpy as np
+
+    import controllers
+    from auv_gym.rollout import evaluate
+    from benchmarks.catalog.scenarios import load_scenarios
+
+    scenarios = list(load_scenarios().values())
+    jobs = [(s, p) for s in scenarios for p in POLICIES]
+    start = time.perf_counter()
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(jobs) + 1, desc="compiling kernels", unit="episode", file=sys.stderr)
+    for scenario, name in jobs:
+        if bar is not None:
+            bar.set_postfix_str(f"{scenario.name}, {name}")
+        env = {**scenario.env, "max_time": 1.0}
+        policy = controllers.make(name, env=env, **scenario.controller)
+        evaluate(policy, [0], transient=0.0, **env)
+        if bar is not None:
+            bar.update()
+    envs = gym.make_vec("AUVPath3DPreview-v0", num_envs=2, observation="preview_integral")
+    envs.reset(seed=0)
+    envs.step(np.zeros((2, 3), dtype=np.float32))
+    envs.close()
+    if bar is not None:
+        bar.update()
+        bar.close()
+    return time.perf_counter() - start
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from auv_gym.support.numba_cache import kernels_are_cached, mark_kernels_cached
+
+    opts, _ = parse_options(
+        Options, argv, program_name("benchmarks.runner.compile_kernels"), __doc__, negatable=False
+    )
+    packages = _packages()
+    if kernels_are_cached(*packages) and not opts.force:
+        print("auv-gym compile: the kernels are compiled and current", file=sys.stderr)
+        return 0
+    seconds = compile_kernels(progress=not opts.quiet)
+    mark_kernels_cached(*packages)
+    print(f"auv-gym compile: kernels compiled and cached in {seconds:.0f} s", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
