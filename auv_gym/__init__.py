@@ -19,18 +19,31 @@ observation="preview_integral")``. The generation-named ids of earlier releases
 The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
 no "out of date" warning. `LEGACY_ENV_IDS` maps ids that agents' metadata may still record
 (`AUVPath3D-v1`) to today's (`resolve_env_id`).
+
+The modules live in rooms, imported one way (docs/architecture.md): `support` → `paths` →
+`vehicle`, `ocean` → `sim` (the simulation core) → `envs` (the env API) → this top level, which
+also holds the evaluation API (`auv_gym.rollout`, `auv_gym.metrics`).
 """
 
 from __future__ import annotations
 
 # First: the kernel cache locator must be in place before any kernel is defined.
-import auv_gym.numba_cache  # noqa: F401
+import auv_gym.support.numba_cache  # noqa: F401
 
 # isort: split
 from gymnasium.envs.registration import register, registry
 
-from auv_gym.env import AUVPath3DEnv
-from auv_gym.observation import (
+from auv_gym.envs.env import AUVPath3DEnv
+from auv_gym.paths.shapes import (
+    FittedCurve,
+    Helix,
+    Path,
+    Spline,
+    StraightLine,
+    fit_curve,
+    make_path,
+)
+from auv_gym.sim.observation import (
     OBS_HIGH,
     OBS_INDEX,
     OBS_LOW,
@@ -38,11 +51,10 @@ from auv_gym.observation import (
     OBS_UNITS,
     ObservationConfig,
 )
-from auv_gym.path_generator import PathDistribution
-from auv_gym.paths import FittedCurve, Helix, Path, Spline, StraightLine, fit_curve, make_path
-from auv_gym.sensors import SensorConfig
-from auv_gym.task import VEHICLE_TOP_SPEED
-from auv_gym.vehicle import AUVParams, remus100
+from auv_gym.sim.path_generator import PathDistribution
+from auv_gym.sim.task import VEHICLE_TOP_SPEED
+from auv_gym.vehicle.params import AUVParams, remus100
+from auv_gym.vehicle.sensors import SensorConfig
 
 __all__ = [
     "OBS_HIGH",
@@ -132,8 +144,8 @@ def _register() -> None:
             continue
         register(
             id=env_id,
-            entry_point="auv_gym.env:AUVPath3DEnv",
-            vector_entry_point="auv_gym.vector_env:AUVPath3DVectorEnv",
+            entry_point="auv_gym.envs.env:AUVPath3DEnv",
+            vector_entry_point="auv_gym.envs.vector_env:AUVPath3DVectorEnv",
             # The envs truncate at max_time themselves, for any control_dt; a registered
             # TimeLimit would cut every other control_dt at the wrong step (env.spec reports the
             # episode length of the arguments).

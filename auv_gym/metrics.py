@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
+from auv_gym.sim.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 
 __all__ = [
     "DEFAULT_TRANSIENT",
@@ -135,7 +135,7 @@ def compute_metrics(
     Outcome:
       success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
       ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
-      episode_return — Σ reward; episode_cost — Σ safety cost (`auv_gym.safety_cost`; NaN
+      episode_return — Σ reward; episode_cost — Σ safety cost (`auv_gym.sim.safety_cost`; NaN
       for a file recorded before the cost existed); termination_reason — the episode end
       (`EPISODE_ENDS`);
       duration [s], steps; transient — the window start used [s]; window_samples — the

@@ -1,4 +1,5 @@
-"""Seeded rollouts of any policy → recorded episodes (`auv_gym.trajectory.Trajectory`) → metrics.
+"""Seeded rollouts of any policy → recorded episodes (`auv_gym.sim.trajectory.Trajectory`) →
+metrics.
 
 A *policy* is anything with SB3's `PolicyPredictor` method
 
@@ -6,7 +7,7 @@ A *policy* is anything with SB3's `PolicyPredictor` method
 
 batched over the first axis: the controllers of `controllers`, a stable-baselines3 model, or a
 user's object. `rollouts` runs one policy over a list of seeds at once: one row per seed of a
-`auv_gym.simulator.Simulator`, each row reset from ``gymnasium.utils.seeding.np_random(seed)`` —
+`auv_gym.sim.simulator.Simulator`, each row reset from ``gymnasium.utils.seeding.np_random(seed)`` —
 exactly what ``AUVPath3DEnv.reset(seed=seed)`` does — and one batched `predict` call per control
 step. Every policy evaluated on a seed therefore meets the same disturbance realisation, and a
 row reproduces the single env bit for bit (the tests check it).
@@ -41,15 +42,12 @@ import numba
 import numpy as np
 from gymnasium.utils import seeding
 
-from auv_gym.actuators import ACTUATOR_STATE
-from auv_gym.config import SimConfig
-from auv_gym.dynamics import STATE_NAMES
-from auv_gym.files import environment, json_default
 from auv_gym.metrics import FIN_RATE_LIMITED, compute_metrics
-from auv_gym.observation import GUIDANCE_FIELDS
-from auv_gym.simulator import Simulator
-from auv_gym.task import REWARD_TERMS
-from auv_gym.trajectory import (
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.observation import GUIDANCE_FIELDS
+from auv_gym.sim.simulator import Simulator
+from auv_gym.sim.task import REWARD_TERMS
+from auv_gym.sim.trajectory import (
     DISTURBANCE_FIELDS,
     INTERVAL_FIELDS,
     SAMPLE_FIELDS,
@@ -57,11 +55,14 @@ from auv_gym.trajectory import (
     Trajectory,
     episode_end,
 )
+from auv_gym.support.files import environment, json_default
+from auv_gym.vehicle.actuators import ACTUATOR_STATE
+from auv_gym.vehicle.dynamics import STATE_NAMES
 
 __all__ = ["Policy", "evaluate", "policy_name", "rollout", "rollouts"]
 
 DEFAULT_BATCH = 32  # rows per simulator batch; memory ≈ 2 MB per row for a 300-s episode
-# Columns of the pre-allocated sample and interval records (layouts of auv_gym.trajectory).
+# Columns of the pre-allocated sample and interval records (layouts of auv_gym.sim.trajectory).
 _STATE_SLICE = slice(0, len(STATE_NAMES))
 _GUID_SLICE = slice(len(STATE_NAMES), len(STATE_NAMES) + len(GUIDANCE_FIELDS))
 _S_COLUMN = SAMPLE_FIELDS.index("s")

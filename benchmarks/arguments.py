@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
-from auv_gym.files import output_lock
+from auv_gym.support.files import output_lock
 from benchmarks.options import add_options, from_args, option
 
 __all__ = [
@@ -151,8 +151,8 @@ def writable_location(path: str | os.PathLike, flag: str, folder: bool = True) -
 
 @contextlib.contextmanager
 def locked_folder(prog: str, folder: Path, flag: str = "--out") -> Iterator[Path]:
-    """`auv_gym.files.output_lock` on ``folder`` for the block; another live run holding it (or
-    a folder that cannot be created) ends the command like a usage error: one line, exit 2."""
+    """`auv_gym.support.files.output_lock` on ``folder`` for the block; another live run holding it
+    (or a folder that cannot be created) ends the command like a usage error: one line, exit 2."""
     stack = contextlib.ExitStack()
     try:
         held = stack.enter_context(output_lock(folder, flag))
@@ -183,7 +183,7 @@ class EpisodeOptions:
 def check_episode_arguments(args: argparse.Namespace) -> None:
     """ValueError naming the option: ``--duration`` in (0, `MAX_EPISODE_TIME`] s,
     ``--transient`` in [0, duration) s, and the pool options (`benchmarks.runner.pool`)."""
-    from auv_gym.config import MAX_EPISODE_TIME
+    from auv_gym.sim.config import MAX_EPISODE_TIME
     from benchmarks.runner.pool import check_pool_options
 
     finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")

@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import Any
 
 import auv_gym
-from auv_gym.numba_cache import register_package
+from auv_gym.support.numba_cache import register_package
 
 # Before the first kernel is defined: the controllers' kernels inline auv_gym's dynamics and
-# guidance, so an edit there must also recompile them (see `auv_gym.numba_cache`).
+# guidance, so an edit there must also recompile them (see `auv_gym.support.numba_cache`).
 register_package(Path(__file__).parent, Path(auv_gym.__file__).parent)
 
 from controllers.algorithms import ALGORITHMS  # noqa: E402
@@ -64,8 +64,8 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     `controllers.pid.PIDLOS`) accepts `pid` (`controllers.pid.PIDGains`), `gains` (read for
     the guidance only), `params`, `control_dt`, `actuator` and the names of `PIDGains` and
     `controllers.pid.GUIDANCE_GAINS`. All three take ``actuator="realistic"`` with an optional
-    `actuator_params` (`auv_gym.actuators.ActuatorParams`; docs/model.md §2.7). "agent" takes
-    `path` (a saved agent directory of any algorithm of `controllers.algorithms`, plain or
+    `actuator_params` (`auv_gym.vehicle.actuators.ActuatorParams`; docs/model.md §2.7). "agent"
+    takes `path` (a saved agent directory of any algorithm of `controllers.algorithms`, plain or
     residual; `controllers.loader.load_policy`) and that function's keywords; "sac" (and "tqc",
     "crossq") does the same for an agent of that algorithm only. A former name (`RENAMED`:
     "ppo") is a one-line ValueError naming the call that replaces it.

@@ -32,8 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.vehicle import AUVParams, remus100
+from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
 from controllers.allocation import allocate, fin_angle, fin_authority
 from controllers.base import actuator_vector
 

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym import __version__
-from auv_gym.observation import OBS_DIM, OBS_NAMES, ObservationConfig
+from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, ObservationConfig
 from controllers.algorithms import ALGORITHMS, algorithm_of
 from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from auv_gym.actuators import ActuatorParams
+from auv_gym.vehicle.actuators import ActuatorParams
 
 __all__ = ["allocate", "fin_angle", "fin_authority", "fin_gain"]
 

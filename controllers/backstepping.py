@@ -1,6 +1,6 @@
 r"""Traditional backstepping comparator (docs/model.md §4.7): nominal-model inverse, same guidance.
 
-With the nominal model ν̇ = f_n(ν, θ) + b_n τ (f_n from `auv_gym.dynamics.nu_dot` with τ = 0,
+With the nominal model ν̇ = f_n(ν, θ) + b_n τ (f_n from `auv_gym.vehicle.dynamics.nu_dot` with τ = 0,
 including the surge Coriolis terms when the model has them, docs/model.md §10.3):
 
     X = m11 (−f1 + u̇_D − k_u S1),                  k_u = h1 + λ1
@@ -23,9 +23,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from auv_gym.dynamics import nu_dot
-from auv_gym.observation import OBS_INDEX
-from auv_gym.vehicle import AUVParams, params_record
+from auv_gym.sim.observation import OBS_INDEX
+from auv_gym.vehicle.dynamics import nu_dot
+from auv_gym.vehicle.params import AUVParams, params_record
 from controllers.alos import guidance_diagnostics
 from controllers.base import BatchedController
 from controllers.fbsm import moment_limits

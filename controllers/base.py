@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.actuators import ActuatorParams, actuator_params_from_spec
-from auv_gym.observation import OBS_DIM, OBS_INDEX
 from auv_gym.rollout import Policy  # the one definition, shared with the rollouts
+from auv_gym.sim.observation import OBS_DIM, OBS_INDEX
 from auv_gym.vehicle import AUVParams, remus100
+from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
 from controllers.allocation import allocate, fin_authority, fin_gain
 from controllers.gains import ControllerGains
 

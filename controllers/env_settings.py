@@ -3,7 +3,7 @@
 A controller models the plant it commands: its control period Δt_c, the vehicle record
 (`auv_gym.vehicle.AUVParams`: the nominal hydrodynamics and the thrust and fin limits) and the
 actuator model (docs/model.md §2.3, §2.6–2.7). All three are settings of the env
-(`auv_gym.config.SimConfig`), so ``controllers.make(name, env=env)`` reads them from there
+(`auv_gym.sim.config.SimConfig`), so ``controllers.make(name, env=env)`` reads them from there
 instead of every caller restating them; an explicit keyword argument still wins.
 """
 
@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from auv_gym.config import SimConfig
-from auv_gym.validation import ArgumentTypeError
+from auv_gym.sim.config import SimConfig
+from auv_gym.support.validation import ArgumentTypeError
 
 __all__ = ["env_config", "policy_settings"]
 
@@ -24,7 +24,7 @@ _PER_EPISODE_ACTUATOR = "random"
 def env_config(env: Any) -> SimConfig:
     """The `SimConfig` of ``env``: a `SimConfig`, the env keyword arguments (a mapping), an
     `AUVPath3DEnv` or `AUVPath3DVectorEnv` (wrapped or not) or the stable-baselines3 adapter of
-    one (`auv_gym.sb3`); TypeError naming the type otherwise."""
+    one (`auv_gym.envs.sb3`); TypeError naming the type otherwise."""
     if isinstance(env, SimConfig):
         return env
     if isinstance(env, Mapping):

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.validation import real
+from auv_gym.support.validation import real
 
 __all__ = ["GUARD_INPUTS", "EnvelopeGuard", "check_envelope_guard", "guard_commands"]
 

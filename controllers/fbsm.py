@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from auv_gym.observation import OBS_INDEX
+from auv_gym.sim.observation import OBS_INDEX
 from auv_gym.vehicle import AUVParams
 from controllers.alos import guidance_diagnostics
 from controllers.base import BatchedController

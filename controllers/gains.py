@@ -7,7 +7,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from auv_gym.validation import flag, real
+from auv_gym.support.validation import flag, real
 
 __all__ = ["GAIN_LAYOUT", "ControllerGains", "MembershipSet"]
 
@@ -35,7 +35,7 @@ class MembershipSet:
 
 NON_NEGATIVE = ("sigma_leak", "ilos_y", "ilos_z")  # gains where 0 switches a feature off
 OBSERVER_STEP_LIMIT = 2.0 * math.sqrt(2.0) - 2.0
-# The current guidance (`controllers.alos`), checked with `auv_gym.validation.real`:
+# The current guidance (`controllers.alos`), checked with `auv_gym.support.validation.real`:
 # name -> (low, high, low_open, high_open, unit); 0 switches the observer and the trims off.
 GUIDANCE_RANGES = {
     "current_observer": (0.0, math.inf, False, False, "rad/s"),

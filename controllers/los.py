@@ -14,8 +14,8 @@ import math
 
 from numba import njit
 
-from auv_gym.guidance import wrap_angle
-from auv_gym.observation import OBS_INDEX
+from auv_gym.paths.guidance import wrap_angle
+from auv_gym.sim.observation import OBS_INDEX
 from controllers.alos import (
     ALPHA_HAT,
     BETA_HAT,

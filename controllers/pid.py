@@ -59,8 +59,8 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
-from auv_gym.observation import OBS_INDEX
-from auv_gym.validation import flag, real
+from auv_gym.sim.observation import OBS_INDEX
+from auv_gym.support.validation import flag, real
 from auv_gym.vehicle import AUVParams
 from controllers.alos import guidance_diagnostics
 from controllers.base import BatchedController

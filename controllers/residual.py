@@ -1,7 +1,7 @@
 r"""Residual policy: a classical base controller plus a learned, bounded correction
 (docs/design.md §3.10).
 
-Per control step k, with o_k the env's observation (`auv_gym.observation`), b_k the base
+Per control step k, with o_k the env's observation (`auv_gym.sim.observation`), b_k the base
 controller's normalised action and a_{k−1} the previously applied action (0 at an episode's
 first step):
 
@@ -48,8 +48,8 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
-from auv_gym.task import SURGE_LIMIT
+from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
+from auv_gym.sim.task import SURGE_LIMIT
 from controllers.registry import CLASSICAL, make_classical
 
 __all__ = [

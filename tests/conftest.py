@@ -3,8 +3,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_gym.config import SimConfig
-from auv_gym.simulator import Simulator
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.simulator import Simulator
 
 
 @pytest.fixture
@@ -35,7 +35,7 @@ def _single_env_observations(kwargs: dict, seed: int, actions: np.ndarray):
     """(observations, env) of one `AUVPath3DEnv` reset with ``seed`` and stepped with
     ``actions`` (steps, 3), resetting without a seed after an episode ends: what a vector env's
     NEXT_STEP autoreset gives its vehicle (the reset step's action is ignored)."""
-    from auv_gym.env import AUVPath3DEnv
+    from auv_gym.envs.env import AUVPath3DEnv
 
     env = AUVPath3DEnv(**kwargs)
     single, done = [env.reset(seed=seed)[0]], False

@@ -17,7 +17,7 @@ import pytest
 
 import controllers
 from auv_gym.rollout import rollouts
-from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, remus100
+from auv_gym.vehicle.params import HYDRODYNAMIC_FIELDS, remus100
 
 pytestmark = pytest.mark.slow  # 300-s closed loops at two control periods
 

@@ -1,5 +1,5 @@
-"""Realistic actuators (auv_gym.actuators, docs/model.md §2.6): the reference cross-check, the
-ideal limit, rate and angle limits, state handling in the simulator, and bad input."""
+"""Realistic actuators (auv_gym.vehicle.actuators, docs/model.md §2.6): the reference cross-check,
+the ideal limit, rate and angle limits, state handling in the simulator, and bad input."""
 
 from __future__ import annotations
 
@@ -14,7 +14,11 @@ from hypothesis import strategies as st
 
 import controllers
 from auv_gym import AUVPath3DEnv
-from auv_gym.actuators import (
+from auv_gym.paths.guidance import wrap_angle
+from auv_gym.rollout import rollouts
+from auv_gym.sim.integrator import rk4_step
+from auv_gym.vehicle import remus100
+from auv_gym.vehicle.actuators import (
     ACTUATOR_STATE,
     ActuatorParams,
     actuator_forces,
@@ -23,11 +27,7 @@ from auv_gym.actuators import (
     propeller_thrust,
     propeller_torque,
 )
-from auv_gym.dynamics import STATE, STATE_DIM
-from auv_gym.guidance import wrap_angle
-from auv_gym.integrator import rk4_step
-from auv_gym.rollout import rollouts
-from auv_gym.vehicle import remus100
+from auv_gym.vehicle.dynamics import STATE, STATE_DIM
 
 REFERENCE = Path(__file__).parent / "data" / "pvs_remus100_actuators.json"
 IDEAL = {"motor_time_constant": 0.0, "fin_time_constant": 0.0, "fin_rate_max": math.inf}

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from auv_gym.observation import OBS_DIM, OBS_NAMES
+from auv_gym.sim.observation import OBS_DIM, OBS_NAMES
 from controllers.agent import check_agent
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -11,9 +11,9 @@ from hypothesis import strategies as st
 
 import controllers
 from auv_gym import OBS_NAMES
-from auv_gym.actuators import ActuatorParams, actuator_forces, actuator_record
 from auv_gym.rollout import rollouts
 from auv_gym.vehicle import remus100
+from auv_gym.vehicle.actuators import ActuatorParams, actuator_forces, actuator_record
 from controllers.allocation import allocate, fin_gain
 
 P = ActuatorParams()

@@ -134,7 +134,7 @@ def test_paper_figures_run_each_policy_under_its_env_id(tmp_path):
         env_ids={"limited": "AUVPath3DSpeedLimit-v0"},
     )
     assert set(result["metrics"]) == {"plain", "limited"}
-    from auv_gym.trajectory import Trajectory
+    from auv_gym.sim.trajectory import Trajectory
 
     plain = Trajectory.load(tmp_path / "trajectories" / "plain.npz")
     limited = Trajectory.load(tmp_path / "trajectories" / "limited.npz")

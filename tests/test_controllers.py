@@ -10,7 +10,7 @@ import pytest
 
 import controllers
 from auv_gym import OBS_INDEX, OBS_NAMES
-from auv_gym.observation import OBS_DIM
+from auv_gym.sim.observation import OBS_DIM
 from controllers.base import Policy
 from controllers.fuzzy import N_RULES, WORK_DIM, adaptive_loop, fuzzy_basis
 from controllers.gains import ControllerGains, pack_gains

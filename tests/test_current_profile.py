@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from auv_gym import AUVPath3DEnv
-from auv_gym.current_profile import CurrentProfile, profile_velocity
-from auv_gym.ocean import OCEAN
+from auv_gym.ocean.current_profile import CurrentProfile, profile_velocity
+from auv_gym.ocean.forcing import OCEAN
 
 
 def _speed(profile: CurrentProfile, depth: float) -> float:

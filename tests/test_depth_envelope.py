@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from auv_gym import AUVPath3DEnv
-from auv_gym.depth_envelope import DepthEnvelope, path_depth_range
-from auv_gym.dynamics import STATE, STATE_DIM
-from auv_gym.path_offset import ShiftedPath
-from auv_gym.paths import DEFAULT_WAYPOINTS, Helix, Spline
-from auv_gym.safety_cost import SafetyCost, safety_vector
-from auv_gym.task import RewardWeights, TaskLimits, task_cost, task_vector
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.ocean.depth_envelope import DepthEnvelope, path_depth_range
+from auv_gym.paths.offset import ShiftedPath
+from auv_gym.paths.shapes import DEFAULT_WAYPOINTS, Helix, Spline
+from auv_gym.sim.safety_cost import SafetyCost, safety_vector
+from auv_gym.sim.task import RewardWeights, TaskLimits, task_cost, task_vector
+from auv_gym.vehicle.dynamics import STATE, STATE_DIM
 
 # A level line 10 m deep; the default start is 8 m below p(0), at 18 m.
 LEVEL = {"kind": "line", "start": [0.0, 0.0, 10.0], "direction": [1.0, 0.0, 0.0]}
@@ -31,7 +31,7 @@ ENVELOPE = {
 def _expected_cost(
     z: float, u: float, theta: float, envelope: DepthEnvelope, cost: SafetyCost
 ) -> float:
-    """The documented formula (auv_gym.safety_cost), written out independently."""
+    """The documented formula (auv_gym.sim.safety_cost), written out independently."""
     m = envelope.margin
     seabed = math.inf if envelope.seabed_depth is None else envelope.seabed_depth
     intrusion = max(m - z, z - (seabed - m), 0.0)
@@ -212,7 +212,7 @@ def test_bad_input_is_a_named_error(kwargs, error, message):
 
 
 def test_a_config_built_directly_refuses_an_offset_it_would_not_apply():
-    from auv_gym.config import SimConfig
+    from auv_gym.sim.config import SimConfig
 
     with pytest.raises(ValueError, match=r"path_offset \(0.0, 0.0, 5.0\) m moves drawn paths"):
         SimConfig(path=Helix(), path_offset=(0.0, 0.0, 5.0))
@@ -265,7 +265,7 @@ def test_episodes_are_deterministic_per_seed_and_batched_equals_single():
 
 
 def test_the_sb3_adapter_passes_the_cost_on():
-    from auv_gym.sb3 import make_sb3_vec_env
+    from auv_gym.envs.sb3 import make_sb3_vec_env
 
     venv = make_sb3_vec_env(2, seed=0, **ENVELOPE)
     venv.reset()
@@ -297,9 +297,9 @@ def test_the_renderer_draws_the_surface_and_the_seabed():
 
 def test_the_episode_figures_draw_the_surface_and_the_seabed():
     import controllers
-    from auv_gym.episode_figures import figure_path_3d, figure_vertical
-    from auv_gym.plotting import new_figure, plot_track
     from auv_gym.rollout import rollouts
+    from benchmarks.reports.episode_figures import figure_path_3d, figure_vertical
+    from benchmarks.reports.plotting import new_figure, plot_track
 
     (tr,) = rollouts(controllers.make("fbsm"), [0], max_time=5.0, **DEEP)
     lines = {

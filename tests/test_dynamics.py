@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from auv_gym.dynamics import eta_dot, generalized_forces, nu_dot
-from auv_gym.vehicle import DERIVED_INERTIAS, PARAM_INDEX, AUVParams, params_record, remus100
+from auv_gym.vehicle.dynamics import eta_dot, generalized_forces, nu_dot
+from auv_gym.vehicle.params import DERIVED_INERTIAS, PARAM_INDEX, AUVParams, params_record, remus100
 
 ZERO_TAU = (0.0, 0.0, 0.0)
 ZERO_F = (0.0, 0.0, 0.0, 0.0, 0.0)

@@ -15,9 +15,9 @@ from gymnasium.utils.env_checker import check_env
 
 import auv_gym
 from auv_gym import OBS_INDEX, OBS_NAMES, AUVPath3DEnv
-from auv_gym.observation import OBS_HIGH, OBS_LOW, OBS_UNITS
 from auv_gym.paths import StraightLine
-from auv_gym.task import REWARD_TERMS
+from auv_gym.sim.observation import OBS_HIGH, OBS_LOW, OBS_UNITS
+from auv_gym.sim.task import REWARD_TERMS
 
 FOLLOW = np.array([0.45, 0.0, 0.0], dtype=np.float32)
 

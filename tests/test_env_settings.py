@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 import controllers
-from auv_gym.actuators import ActuatorParams
-from auv_gym.config import SimConfig
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.rollout import rollout
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.sim.config import SimConfig
 from auv_gym.vehicle import remus100
+from auv_gym.vehicle.actuators import ActuatorParams
 from controllers.env_settings import env_config, policy_settings
 
 # A vehicle, control period and actuator model that are none of the defaults.

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import auv_gym  # noqa: F401  (registers the ids)
-from auv_gym.dynamics import STATE
-from auv_gym.observation import OBS
+from auv_gym.sim.observation import OBS
+from auv_gym.vehicle.dynamics import STATE
 
 LINE = {"kind": "line", "direction": [1.0, 0.0, 0.0]}  # default start heading: along the line
 
@@ -127,7 +127,7 @@ def test_rotation_turns_random_starts_and_keeps_their_distance() -> None:
 
 
 def test_batched_rotated_starts_equal_single_ones() -> None:
-    from auv_gym.vector_env import AUVPath3DVectorEnv
+    from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 
     kwargs = {"path": "random", "start_rotation": -math.pi / 2}  # validation_paper_start's
     vec = AUVPath3DVectorEnv(4, **kwargs)

@@ -15,7 +15,7 @@ import pytest
 
 import benchmarks.runner.evaluate_suite as suite_module
 import benchmarks.runner.suite_chunks as chunks_module
-from auv_gym.trajectory import FAILURE_REASONS
+from auv_gym.sim.trajectory import FAILURE_REASONS
 from benchmarks.analysis.suite_stats import write_stats
 from benchmarks.catalog.policies import AGENTS_DIR, check_policy_spec
 from benchmarks.catalog.scenarios import load_scenarios

@@ -12,7 +12,7 @@ import controllers
 from auv_gym import OBS_INDEX, AUVPath3DEnv
 from auv_gym.metrics import MetricsWindowWarning, compute_metrics
 from auv_gym.rollout import evaluate, rollout, rollouts
-from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
+from auv_gym.sim.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
 
 
 class ProportionalPolicy:

@@ -11,8 +11,8 @@ import math
 import numpy as np
 import pytest
 
-from auv_gym.config import SimConfig
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.sim.config import SimConfig
 from benchmarks.checks import fuzz
 
 

@@ -7,16 +7,16 @@ import math
 import numpy as np
 import pytest
 
-from auv_gym.dynamics import state_derivative
-from auv_gym.guidance import (
+from auv_gym.paths import PATHS, Helix, Spline, StraightLine, make_path
+from auv_gym.paths.guidance import (
     body_errors,
     error_rates,
     path_angles,
     virtual_point_speed,
     wrap_angle,
 )
-from auv_gym.paths import PATHS, Helix, Spline, StraightLine, make_path
-from auv_gym.vehicle import params_record, remus100
+from auv_gym.vehicle.dynamics import state_derivative
+from auv_gym.vehicle.params import params_record, remus100
 
 ALL_PATHS = [Helix(), StraightLine(), make_path("waypoints"), Helix(radius=5.0, climb=-0.5)]
 

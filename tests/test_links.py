@@ -408,8 +408,8 @@ def documented_defaults(text: str, names: set[str]) -> dict[str, list[float | bo
 def code_defaults() -> dict[str, float | bool]:
     """The defaults of `AUVParams`, `ActuatorParams` and `ControllerGains`, membership sets as
     `surge_mf.p` etc."""
-    from auv_gym.actuators import ActuatorParams
     from auv_gym.vehicle import AUVParams
+    from auv_gym.vehicle.actuators import ActuatorParams
     from controllers.gains import ControllerGains, MembershipSet
 
     defaults: dict[str, float | bool] = {}

@@ -20,12 +20,12 @@ import pytest
 
 import auv_gym
 import controllers
-from auv_gym.numba_cache import NUMBA_MARKER, cache_directory, sources_digest
+from auv_gym.support.numba_cache import NUMBA_MARKER, cache_directory, sources_digest
 
 AUV_DIR = Path(auv_gym.__file__).parent
 CTL_DIR = Path(controllers.__file__).parent
 
-_REGISTER = "from pathlib import Path\nfrom auv_gym.numba_cache import register_package\n"
+_REGISTER = "from pathlib import Path\nfrom auv_gym.support.numba_cache import register_package\n"
 _PROBE = """
 import json
 from {module} import kernel
@@ -63,7 +63,11 @@ def _package(root: Path, name: str, register: str, files: dict[str, str]) -> Pat
     package.mkdir()
     (package / "__init__.py").write_text(_REGISTER + register + "\n")
     for filename, text in files.items():
-        (package / filename).write_text(text)
+        path = package / filename
+        for folder in reversed(path.relative_to(package).parents[:-1]):  # sub-packages
+            (package / folder).mkdir(exist_ok=True)
+            (package / folder / "__init__.py").touch()
+        path.write_text(text)
     return package
 
 
@@ -93,6 +97,36 @@ def test_an_edit_of_an_inlined_module_recompiles_the_kernel(tmp_path: Path) -> N
     (pkg / "helpers.py").write_text(_helper(5.0))
     assert _kernel_call(tmp_path, "pkg.kernels") == {"result": 6.0, "hits": 0, "misses": 1}
     assert _kernel_call(tmp_path, "pkg.kernels") == {"result": 6.0, "hits": 1, "misses": 0}
+
+
+def test_a_kernel_in_a_sub_package_is_cached_beside_it_and_stale_after_an_edit_in_another(
+    tmp_path: Path,
+) -> None:
+    """The registered package's tree is one unit: a kernel of ``pkg/sim`` inlining a function of
+    ``pkg/physics`` is recompiled after an edit there, and cached in ``pkg/sim/__pycache__``."""
+    kernels = (
+        "from numba import njit\nfrom pkg.physics.helpers import value\n\n"
+        "@njit(cache=True)\ndef kernel(x):\n    return x + value()\n"
+    )
+    files = {
+        "physics/helpers.py": _helper(1.0),
+        "sim/kernels.py": kernels,
+        "sim/notes.py": "X = 1\n",
+    }
+    pkg = _package(tmp_path, "pkg", "register_package(Path(__file__).parent)", files)
+
+    assert _kernel_call(tmp_path, "pkg.sim.kernels") == {"result": 2.0, "hits": 0, "misses": 1}
+    assert _kernel_call(tmp_path, "pkg.sim.kernels") == {"result": 2.0, "hits": 1, "misses": 0}
+    cached = sorted(p.suffix for p in (pkg / "sim" / "__pycache__").glob("kernels.*.nb*"))
+    assert cached == [".nbc", ".nbi"]
+    assert not list((pkg / "__pycache__").glob("*.nb*"))
+
+    (pkg / "sim" / "notes.py").write_text("X = 2  # no kernel here: the cache stays valid\n")
+    assert _kernel_call(tmp_path, "pkg.sim.kernels")["hits"] == 1
+
+    (pkg / "physics" / "helpers.py").write_text(_helper(5.0))
+    assert _kernel_call(tmp_path, "pkg.sim.kernels") == {"result": 6.0, "hits": 0, "misses": 1}
+    assert _kernel_call(tmp_path, "pkg.sim.kernels") == {"result": 6.0, "hits": 1, "misses": 0}
 
 
 def test_an_edit_in_a_package_inlined_from_recompiles_the_dependent_kernel(tmp_path: Path) -> None:
@@ -126,23 +160,23 @@ def test_import_is_lazy_and_touches_no_cache_file(tmp_path: Path) -> None:
         shutil.copytree(
             package, tmp_path / package.name, ignore=shutil.ignore_patterns("__pycache__")
         )
-    _run("from auv_gym.guidance import wrap_angle\nwrap_angle(1.0)\n", tmp_path)
+    _run("from auv_gym.paths.guidance import wrap_angle\nwrap_angle(1.0)\n", tmp_path)
     folders = {"AUV_DIR": str(tmp_path / "auv_gym"), "CTL_DIR": str(tmp_path / "controllers")}
-    assert list((tmp_path / "auv_gym" / "__pycache__").glob("guidance.*.nbi"))
+    assert list((tmp_path / "auv_gym" / "paths" / "__pycache__").glob("guidance.*.nbi"))
     code = """
 import json, os
 from pathlib import Path
 def listing():
     out = {}
     for folder in (Path(os.environ["AUV_DIR"]), Path(os.environ["CTL_DIR"])):
-        for p in sorted((folder / "__pycache__").glob("*.nb*")):
+        for p in sorted(folder.rglob("__pycache__/*.nb*")):
             out[str(p)] = p.stat().st_mtime_ns
     return out
 before = listing()
 import auv_gym, controllers
-from auv_gym import numba_cache
+from auv_gym.support import numba_cache
 after_import = (len(numba_cache._DIGESTS), listing() == before)
-from auv_gym.guidance import wrap_angle
+from auv_gym.paths.guidance import wrap_angle
 wrap_angle(4.0)
 print(json.dumps([*after_import, len(numba_cache._DIGESTS)]))
 """
@@ -159,11 +193,11 @@ def _index_stamp(cache_dir: Path, pattern: str) -> str:
 
 
 def test_installed_kernels_are_stamped_with_their_package_digests() -> None:
-    from auv_gym.guidance import wrap_angle
+    from auv_gym.paths.guidance import wrap_angle
     from controllers.los import loop_errors  # noqa: F401  (defines the controllers' kernels)
 
     wrap_angle(1.0)  # loads or writes its cache entry
-    auv_cache = Path(cache_directory(AUV_DIR))
+    auv_cache = Path(cache_directory(AUV_DIR / "paths"))
     assert _index_stamp(auv_cache, "guidance.wrap_angle-*.nbi") == sources_digest(
         AUV_DIR, containing=NUMBA_MARKER
     )
@@ -231,16 +265,19 @@ def test_a_read_only_install_imports_and_runs_kernels_without_a_disk_cache() -> 
 import json
 import auv_gym, controllers
 from pathlib import Path
-from auv_gym.guidance import wrap_angle
-from auv_gym.numba_cache import cache_directory
+from auv_gym.paths.guidance import wrap_angle
+from auv_gym.support.numba_cache import cache_directory
 value = wrap_angle(4.0)
-print(json.dumps([auv_gym.__file__, value, cache_directory(Path(auv_gym.__file__).parent)]))
+cache = cache_directory(Path(auv_gym.__file__).parent / "paths")
+print(json.dumps([auv_gym.__file__, value, cache]))
 """
     out, root = _run_read_only(code)
     module, value, cache = json.loads(out.stdout.strip().splitlines()[-1])
     assert module == str(root / "auv_gym" / "__init__.py")
     assert value == pytest.approx(4.0 - 2.0 * 3.141592653589793)
-    assert Path(cache).parent == Path(tempfile.gettempdir())
+    # one private folder for the package, a sub-folder per room with kernels
+    assert Path(cache).name == "paths"
+    assert Path(cache).parent.parent == Path(tempfile.gettempdir())
 
 
 @pytest.mark.slow

@@ -1,5 +1,5 @@
 """Path and parameter-draw validity that sampling cannot fool: proven bounds on |p'| and the turn
-rates (`auv_gym.path_bounds`), waypoint paths that double back, path distributions and
+rates (`auv_gym.paths.bounds`), waypoint paths that double back, path distributions and
 parameter draws that are valid for every seed or refused when built."""
 
 from __future__ import annotations
@@ -14,20 +14,20 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import auv_gym  # registers the ids
-from auv_gym.config import SimConfig, path_turn_rates
-from auv_gym.dynamics import STATE
-from auv_gym.guidance import path_angles
-from auv_gym.observation import PATH_RATE_BOUND
-from auv_gym.path_bounds import _kernel_rates, min_tangent_squared, spline_turn_rates
-from auv_gym.path_generator import (
+from auv_gym.paths.bounds import _kernel_rates, min_tangent_squared, spline_turn_rates
+from auv_gym.paths.guidance import path_angles
+from auv_gym.paths.shapes import MIN_TANGENT, Spline, fit_curve, path_eval
+from auv_gym.sim.config import SimConfig, path_turn_rates
+from auv_gym.sim.observation import PATH_RATE_BOUND
+from auv_gym.sim.path_generator import (
     CURVATURE_SLACK,
     FAMILIES,
     MAX_TURN_RATE,
     PathDistribution,
     curvature_and_angle,
 )
-from auv_gym.paths import MIN_TANGENT, Spline, fit_curve, path_eval
-from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, remus100
+from auv_gym.vehicle.dynamics import STATE
+from auv_gym.vehicle.params import HYDRODYNAMIC_FIELDS, remus100
 
 CI = settings(
     deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.too_slow]
@@ -164,14 +164,14 @@ def test_an_accepted_waypoint_path_resets_for_every_seed(steps, scale, u_desired
 
 def _natural(points: np.ndarray) -> np.ndarray:
     """The SPLINE kernel vector of the natural spline through ``points``, unchecked."""
-    from auv_gym.path_kernels import natural_cubic_coefficients, spline_data
+    from auv_gym.paths.kernels import natural_cubic_coefficients, spline_data
 
     knots = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))]
     return spline_data(knots, natural_cubic_coefficients(knots, points))
 
 
 def test_the_bound_of_the_default_waypoints_is_exact_to_the_tolerance():
-    spline = Spline(auv_gym.paths.DEFAULT_WAYPOINTS)
+    spline = Spline(auv_gym.paths.shapes.DEFAULT_WAYPOINTS)
     psi, theta = spline_turn_rates(spline.data)
     dense_psi, dense_theta, _ = dense_rates(spline, 20_000)
     assert dense_psi <= psi.upper <= dense_psi * 1.001

@@ -11,11 +11,13 @@ import pytest
 
 import auv_gym
 import controllers
-from auv_gym.config import SimConfig
-from auv_gym.dynamics import STATE, STATE_DIM
-from auv_gym.env import AUVPath3DEnv
-from auv_gym.integrator import rk4_step
-from auv_gym.path_generator import (
+from auv_gym.envs.env import AUVPath3DEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.paths.shapes import HELIX, Helix, Spline, fit_curve, make_path
+from auv_gym.rollout import evaluate
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.integrator import rk4_step
+from auv_gym.sim.path_generator import (
     CURVATURE_SLACK,
     FAMILIES,
     MAX_FLIGHT_PATH_ANGLE_DEG,
@@ -24,12 +26,10 @@ from auv_gym.path_generator import (
     curvature_and_angle,
     overlaps,
 )
-from auv_gym.paths import HELIX, Helix, Spline, fit_curve, make_path
-from auv_gym.randomization import task_for_seed
-from auv_gym.rollout import evaluate
-from auv_gym.validation import ArgumentTypeError
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.sim.randomization import task_for_seed
+from auv_gym.support.validation import ArgumentTypeError
 from auv_gym.vehicle import remus100
+from auv_gym.vehicle.dynamics import STATE, STATE_DIM
 
 WAYPOINTS = [(0.0, 0.0, 5.0), (40.0, 10.0, 8.0), (80.0, -5.0, 12.0), (120.0, 5.0, 10.0)]
 
@@ -273,7 +273,7 @@ def test_domain_randomisation_draws_within_its_ranges():
     env = AUVPath3DEnv(path="random", random_current=0.4, random_noise=0.5, actuator="random")
     env.reset(seed=7)
     task = tasks[7]
-    cfg = dict(zip(auv_gym.integrator.CONFIG_FIELDS, env.sim._cfg[0], strict=True))
+    cfg = dict(zip(auv_gym.sim.integrator.CONFIG_FIELDS, env.sim._cfg[0], strict=True))
     assert cfg["current_x"] == task.current[0] and cfg["current_y"] == task.current[1]
     assert cfg["noise_f_u"] == 35.0 * task.noise_scale
     assert cfg["actuator"] == {"paper": 0.0, "fins": 1.0}[task.actuator]
@@ -375,8 +375,8 @@ def test_fbsm_follows_generated_paths():
 
 
 def test_a_path_checks_its_kernel_data_and_bounds_its_turn_rates():
-    from auv_gym.path_offset import ShiftedPath
     from auv_gym.paths import path_turn_rates
+    from auv_gym.paths.offset import ShiftedPath
 
     broken = Spline(WAYPOINTS)
     broken.data = broken.data[:-1].copy()  # one coefficient short of 1 + 4 knots + 3·12

@@ -1,4 +1,5 @@
-"""auv_gym.plotting, .episode_figures and benchmarks.reports.paper_figures: PNGs, tables, CLI."""
+"""benchmarks.reports.plotting, .episode_figures and benchmarks.reports.paper_figures: PNGs, tables,
+CLI."""
 
 from __future__ import annotations
 
@@ -14,10 +15,10 @@ import numpy as np
 import pytest
 
 from auv_gym import OBS_INDEX, make_path
-from auv_gym.episode_figures import PAPER_FIGURES, paper_figures
-from auv_gym.plotting import metrics_table, save_figure
 from auv_gym.rollout import rollouts
-from auv_gym.trajectory import Trajectory
+from auv_gym.sim.trajectory import Trajectory
+from benchmarks.reports.episode_figures import PAPER_FIGURES, paper_figures
+from benchmarks.reports.plotting import metrics_table, save_figure
 
 ROOT = Path(__file__).resolve().parents[1]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -108,7 +109,7 @@ def test_figures_draw_the_data(episodes, tmp_path):
     assert colours.shape[0] > 50  # anti-aliased lines and text in several colours
     from matplotlib.colors import to_rgb
 
-    from auv_gym.plotting import policy_colours
+    from benchmarks.reports.plotting import policy_colours
 
     colour = np.array(to_rgb(policy_colours(["plain"])["plain"]))  # the policy's own colour
     near = np.all(np.abs(pixels - colour) < 0.05, axis=-1)
@@ -284,8 +285,8 @@ def test_a_policy_has_one_colour_in_every_figure():
     from matplotlib.colors import to_hex
 
     from auv_gym.paths import Helix
-    from auv_gym.plotting import new_figure, plot_track, policy_colours
     from benchmarks.analysis.stats_figures import learning_curve_figure
+    from benchmarks.reports.plotting import new_figure, plot_track, policy_colours
 
     names = ["fbsm", "my_agent", "ppo_helix", "other_agent"]
     colours = policy_colours(names)
@@ -313,8 +314,8 @@ def test_a_policy_has_one_colour_in_every_figure():
 def test_every_shipped_policy_has_a_fixed_colour_of_its_own():
     """A shipped name without a fixed colour takes one by hash, which can sit next to a
     look-alike (sac_antiwindup drew in ppo_generalist's orange in the suite's learning curves)."""
-    from auv_gym.plotting import POLICY_COLOURS
     from benchmarks.catalog.policies import REFERENCE_AGENTS
+    from benchmarks.reports.plotting import POLICY_COLOURS
     from controllers import CLASSICAL
 
     names = [*CLASSICAL, *REFERENCE_AGENTS, "sac_antiwindup"]

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from auv_gym.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
+from auv_gym.sim.observation import OBS_DIM, OBS_HIGH, OBS_LOW, OBS_NAMES
 
 pytestmark = pytest.mark.rl
 

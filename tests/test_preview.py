@@ -13,8 +13,8 @@ from gymnasium.vector import AutoresetMode
 
 import auv_gym
 from auv_gym import AUVPath3DEnv, ObservationConfig
-from auv_gym.observation import OBS_DIM, OBS_NAMES
 from auv_gym.paths import Helix, Spline, StraightLine
+from auv_gym.sim.observation import OBS_DIM, OBS_NAMES
 from tests.test_vector_env import DISTURBED, SHORT, run_parity
 
 PREVIEW = ObservationConfig("preview", points=4, spacing=3.0)
@@ -285,7 +285,7 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
 def test_sb3_adapter_sets_terminal_observation_and_truncation_on_every_autoreset():
     """Truncations (time limit) and terminations (corridor) both: every done carries the
     46-entry terminal observation; "TimeLimit.truncated" is True exactly for the time limits."""
-    from auv_gym.sb3 import make_sb3_vec_env
+    from auv_gym.envs.sb3 import make_sb3_vec_env
 
     n = 6
     env = make_sb3_vec_env(n, seed=0, max_time=1.0, corridor=17.75, observation="preview")

@@ -28,18 +28,18 @@ from hypothesis.extra.numpy import arrays
 
 import auv_gym  # noqa: F401  (registers the ids)
 from auv_gym import AUVPath3DEnv
-from auv_gym.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
-from auv_gym.disturbances import (
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.ocean.disturbances import (
     MAX_CURRENT_SPEED,
     MAX_CURRENT_TIME_CONSTANT,
     MAX_NOISE_AMPLITUDE,
     CurrentConfig,
     NoiseConfig,
 )
-from auv_gym.observation import ERROR_BOUND, PATH_RATE_BOUND, SPEED_BOUND
-from auv_gym.paths import POSITION_BOUND, Helix, Spline, StraightLine, make_path
-from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, TERMINATION_REASONS
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.paths.shapes import POSITION_BOUND, Helix, Spline, StraightLine, make_path
+from auv_gym.sim.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
+from auv_gym.sim.observation import ERROR_BOUND, PATH_RATE_BOUND, SPEED_BOUND
+from auv_gym.sim.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.vehicle import remus100
 
 # may leave the observation space

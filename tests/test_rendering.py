@@ -1,4 +1,5 @@
-"""`render_mode="rgb_array"` frames (`auv_gym.rendering`): the fast path against the full redraw.
+"""`render_mode="rgb_array"` frames (`auv_gym.envs.rendering`): the fast path against the full
+redraw.
 
 Tolerance: the fast path draws the growing lines stretch by stretch over a cached layer, the
 reference draws every line whole; antialiased pixels where two stretches meet may differ. Over a
@@ -14,8 +15,8 @@ import pytest
 
 import controllers
 from auv_gym import AUVPath3DEnv
+from auv_gym.envs.rendering import EpisodeRenderer
 from auv_gym.paths import make_path
-from auv_gym.rendering import EpisodeRenderer
 
 
 def _compare(fast: np.ndarray, slow: np.ndarray) -> tuple[float, float]:

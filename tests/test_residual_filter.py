@@ -14,8 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import controllers
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.rollout import rollouts
-from auv_gym.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import ResidualTraining
 from benchmarks.training.residual_env import ResidualVectorEnv
 from controllers.residual import (

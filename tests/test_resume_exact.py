@@ -186,7 +186,7 @@ def test_paused_and_killed_runs_resume_bit_for_bit(tmp_path: Path, algo: str) ->
 def test_vector_env_snapshot_restores_mid_episode(tmp_path: Path) -> None:
     """A snapshot mid-episode, restored into a fresh vector env built with the same arguments,
     continues bit for bit (random tasks, per-vehicle generators, autoresets included)."""
-    from auv_gym.sb3 import make_sb3_vec_env
+    from auv_gym.envs.sb3 import make_sb3_vec_env
 
     kwargs = {
         "randomize_start": True,

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from auv_gym.files import OUTPUTS_FILE, output_lock, remove_temporaries, replace_outputs
+from auv_gym.support.files import OUTPUTS_FILE, output_lock, remove_temporaries, replace_outputs
 from benchmarks.runner import pool
 from benchmarks.runner.pool import check_ray_address
 
@@ -453,7 +453,7 @@ def test_a_second_run_on_a_locked_folder_is_refused_with_the_holders_pid(tmp_pat
 def test_the_lock_is_released_when_its_holder_is_killed(tmp_path):
     out = tmp_path / "out"
     code = (
-        f"from auv_gym.files import output_lock\nwith output_lock({str(out)!r}):\n"
+        f"from auv_gym.support.files import output_lock\nwith output_lock({str(out)!r}):\n"
         "    print('held', flush=True)\n    import time; time.sleep(60)\n"
     )
     holder = subprocess.Popen(

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from auv_gym.files import write_json
+from auv_gym.support.files import write_json
 from benchmarks.runner.cache import run_resumable, stored_record
 from benchmarks.runner.pool import MAX_WORKERS, check_pool_options
 

@@ -11,7 +11,7 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 from auv_gym import AUVPath3DEnv
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 
 pytest.importorskip("stable_baselines3")
 pytestmark = pytest.mark.rl
@@ -21,7 +21,7 @@ from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
 from stable_baselines3.common.monitor import Monitor  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor  # noqa: E402
 
-from auv_gym.sb3 import SB3VecEnv, make_sb3_vec_env  # noqa: E402
+from auv_gym.envs.sb3 import SB3VecEnv, make_sb3_vec_env  # noqa: E402
 
 SHORT = {"corridor": 18.0, "max_time": 2.5}
 
@@ -193,7 +193,7 @@ def test_missing_stable_baselines3_raises_import_error_naming_the_extra():
         "gym.make_vec('AUVPath3D-v0', num_envs=2).reset(seed=0)\n"
         "assert 'torch' not in sys.modules\n"
         "try:\n"
-        "    import auv_gym.sb3\n"
+        "    import auv_gym.envs.sb3\n"
         "except ImportError as e:\n"
         "    print(e)\n"
     )

@@ -16,7 +16,7 @@ pytestmark = pytest.mark.rl
 
 from stable_baselines3.common.vec_env import VecMonitor, VecNormalize  # noqa: E402
 
-from auv_gym.sb3 import SB3VecEnv, _info_dicts, make_sb3_vec_env  # noqa: E402
+from auv_gym.envs.sb3 import SB3VecEnv, _info_dicts, make_sb3_vec_env  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 # Short episodes that end both ways: astern actions leave the corridor, the rest time out.
@@ -120,7 +120,7 @@ def test_training_env_uses_minimal_infos_and_the_serial_kernel():
     venv = make_training_env(300, 0, {"max_time": 5.0}, env_id="AUVPath3DSpeedLimit-v0", threads=1)
     adapter = venv.venv
     assert adapter.info_mode == "minimal" and adapter.core.threads == 1
-    from auv_gym.simulator import _step_one
+    from auv_gym.sim.simulator import _step_one
 
     assert adapter.core.sim._kernel is _step_one
 
@@ -158,9 +158,13 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
 
     tree = extract("HEAD", tmp_path)
     committed = subprocess.run(
-        ["git", "show", "HEAD:auv_gym/sb3.py"], cwd=ROOT, check=True, capture_output=True, text=True
+        ["git", "show", "HEAD:auv_gym/envs/sb3.py"],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
     ).stdout
-    assert (tree / "auv_gym" / "sb3.py").read_text() == committed
+    assert (tree / "auv_gym" / "envs" / "sb3.py").read_text() == committed
     assert extract("HEAD", tmp_path) == tree  # cached
     out = tmp_path / "speed.json"
     subprocess.run(

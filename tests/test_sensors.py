@@ -10,13 +10,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from auv_gym import AUVPath3DEnv
-from auv_gym.config import SimConfig
-from auv_gym.dynamics import STATE
-from auv_gym.guidance import wrap_angle
-from auv_gym.navigation import NAV
-from auv_gym.sensors import SENSOR_PRESETS, SensorConfig
-from auv_gym.simulator import Simulator
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.paths.guidance import wrap_angle
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.navigation import NAV
+from auv_gym.sim.simulator import Simulator
+from auv_gym.vehicle.dynamics import STATE
+from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
 
 # The measured entries of the state and the navigation estimate, in this order.
 MEASURED = (

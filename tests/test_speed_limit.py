@@ -11,10 +11,10 @@ import pytest
 
 import auv_gym  # noqa: F401  (registers the ids)
 from auv_gym import AUVParams, AUVPath3DEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.metrics import compute_metrics
-from auv_gym.task import RewardWeights
-from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.sim.task import RewardWeights
+from auv_gym.sim.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
 
 FULL_THRUST = np.array([1.0, 0.0, 0.0])
 

@@ -14,8 +14,8 @@ from typing import ClassVar
 import numpy as np
 import pytest
 
-from auv_gym.actuators import ActuatorParams
-from auv_gym.observation import ObservationConfig
+from auv_gym.sim.observation import ObservationConfig
+from auv_gym.vehicle.actuators import ActuatorParams
 from controllers.actuator_allocation import Allocation
 from controllers.allocation import allocate
 from controllers.envelope_guard import EnvelopeGuard, check_envelope_guard, guard_commands

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from auv_gym.plotting import metrics_table
-from auv_gym.table_format import (
+from benchmarks.reports.plotting import metrics_table
+from benchmarks.reports.table_format import (
     EMPTY,
     Cell,
     display_scale,

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_gym.config import SimConfig
-from auv_gym.path_generator import PathDistribution, overlaps
-from auv_gym.randomization import task_for_seed
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.path_generator import PathDistribution, overlaps
+from auv_gym.sim.randomization import task_for_seed
 from benchmarks.catalog.scenarios import load_scenarios
 from benchmarks.catalog.tasks import TASKS_FILE, load_task_sets, task_set
 from benchmarks.catalog.tasks import test_suite as the_test_suite

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from auv_gym import resolve_env_id
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.metrics import compute_metrics
-from auv_gym.observation import OBS_HIGH, OBS_LOW
 from auv_gym.rollout import rollout
-from auv_gym.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.sim.observation import OBS_HIGH, OBS_LOW
+from auv_gym.sim.trajectory import INTERVAL_FIELDS, SAMPLE_FIELDS, Trajectory
 from auv_gym.vehicle import remus100
 from benchmarks.analysis.suite_markdown import stats_markdown
 from benchmarks.analysis.suite_stats import target_table, top_speeds

@@ -14,13 +14,13 @@ import pytest
 
 import auv_gym  # noqa: F401  (registers the ids)
 from auv_gym import AUVPath3DEnv
-from auv_gym.config import SimConfig
-from auv_gym.disturbances import CurrentConfig, NoiseConfig
-from auv_gym.observation import OBS_HIGH, OBS_INDEX, OBS_LOW
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.ocean.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.paths import Helix, Spline, StraightLine
-from auv_gym.task import REWARD_TERMS, TERMINATION_REASONS, RewardWeights, TaskLimits, task_row
-from auv_gym.validation import ArgumentTypeError, choice, flag, integer, real, vector
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.observation import OBS_HIGH, OBS_INDEX, OBS_LOW
+from auv_gym.sim.task import REWARD_TERMS, TERMINATION_REASONS, RewardWeights, TaskLimits, task_row
+from auv_gym.support.validation import ArgumentTypeError, choice, flag, integer, real, vector
 from auv_gym.vehicle import AUVParams
 
 STILL = np.zeros(3, np.float32)

@@ -13,8 +13,8 @@ from gymnasium.wrappers import TimeLimit
 
 import auv_gym  # noqa: F401  (registers the ids)
 from auv_gym import AUVPath3DEnv
-from auv_gym.config import SimConfig
-from auv_gym.vector_env import PARALLEL_MIN_VEHICLES, AUVPath3DVectorEnv, parse_autoreset_mode
+from auv_gym.envs.vector_env import PARALLEL_MIN_VEHICLES, AUVPath3DVectorEnv, parse_autoreset_mode
+from auv_gym.sim.config import SimConfig
 
 # Episodes that end within a few dozen steps: a corridor just above the initial 17.7 m distance,
 # a short horizon, and random actions (as tests/test_env.py bounds them).
@@ -406,7 +406,7 @@ def test_thread_count_changes_nothing_but_speed():
 
 def test_batched_row_resets_equal_one_by_one_resets():
     """`Simulator.reset_rows` (autoresets) draws exactly what `reset_row` draws, row by row."""
-    from auv_gym.simulator import Simulator
+    from auv_gym.sim.simulator import Simulator
 
     current = {"mean": (0.1, 0.0, 0.0), "std": (0.05, 0.05, 0.0)}
     config = SimConfig.from_kwargs(param_uncertainty=0.3, randomize_start=True, current=current)

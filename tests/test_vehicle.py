@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from auv_gym.config import ACTUATOR_LIMITS
-from auv_gym.dynamics import STATE_DIM
-from auv_gym.integrator import rk4_step
 from auv_gym.paths import Helix
-from auv_gym.vehicle import HYDRODYNAMIC_FIELDS, AUVParams, remus100
+from auv_gym.sim.config import ACTUATOR_LIMITS
+from auv_gym.sim.integrator import rk4_step
+from auv_gym.vehicle.dynamics import STATE_DIM
+from auv_gym.vehicle.params import HYDRODYNAMIC_FIELDS, AUVParams, remus100
 
 
 def test_derived_inertias_match_model_md():
@@ -129,8 +129,8 @@ def test_batched_equals_stacked_single_rows(make_sim):
 
 
 def test_actuator_limits_come_from_the_vehicle_record():
-    from auv_gym.config import SimConfig
-    from auv_gym.env import AUVPath3DEnv
+    from auv_gym.envs.env import AUVPath3DEnv
+    from auv_gym.sim.config import SimConfig
     from controllers.base import actuator_vector
 
     assert remus100().actuator_limits == ACTUATOR_LIMITS == (50.0, 10.0, 10.0)

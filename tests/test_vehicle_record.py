@@ -10,9 +10,9 @@ import pytest
 
 import auv_gym
 import controllers
-from auv_gym.config import SimConfig
 from auv_gym.rollout import rollout
-from auv_gym.task import VEHICLE_TOP_SPEED
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.task import VEHICLE_TOP_SPEED
 from auv_gym.vehicle import AUVParams, remus100
 from controllers.pid import PIDLOS
 
@@ -70,7 +70,7 @@ def test_a_bad_top_speed_is_one_line(kwargs, error, message) -> None:
 
 def test_the_default_vehicles_observation_bounds_are_unchanged() -> None:
     """REMUS 100: speeds within ±10 m/s (u_p 20), ground speeds 30 m/s or 1.5·(10 + current)."""
-    from auv_gym.observation import OBS_HIGH, OBS_LOW, ObservationConfig, vehicle_speed_bound
+    from auv_gym.sim.observation import OBS_HIGH, OBS_LOW, ObservationConfig, vehicle_speed_bound
 
     assert vehicle_speed_bound(remus100().max_surge) == 10.0
     for env_id in auv_gym.VARIANTS:
@@ -116,7 +116,7 @@ def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
 def test_a_faster_vehicle_is_observed_within_its_own_speed_bound() -> None:
     """A vehicle of X_max = 300 N reaches 13.6 m/s: REMUS 100's bounds end its episode at 10 m/s
     ("envelope"); with its top speed of 3 m/s the speed bound is 15 m/s and it keeps going."""
-    from auv_gym.env import AUVPath3DEnv
+    from auv_gym.envs.env import AUVPath3DEnv
 
     speeds, reasons = {}, {}
     for top in (2.0, 3.0):

@@ -16,11 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from auv_gym import AUVPath3DEnv
-from auv_gym.config import SimConfig
-from auv_gym.ocean import OCEAN, OCEAN_HEADER, ocean_row
-from auv_gym.simulator import Simulator
-from auv_gym.vector_env import AUVPath3DVectorEnv
-from auv_gym.waves import (
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
+from auv_gym.ocean.forcing import OCEAN, OCEAN_HEADER, ocean_row
+from auv_gym.ocean.waves import (
     COMPONENT,
     COMPONENT_DIM,
     GRAVITY,
@@ -30,6 +28,8 @@ from auv_gym.waves import (
     surface_elevation,
     wave_kinematics,
 )
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.simulator import Simulator
 
 RECORD_S, RECORD_DT = 7200.0, 0.5  # [s] two hours sampled at 2 Hz: ~800 peak periods
 
@@ -331,8 +331,8 @@ def test_snapshots_carry_the_sea_and_older_snapshots_had_a_flat_one():
 
 def test_only_a_non_neutral_vehicle_feels_the_fluid_acceleration():
     # (ρ∇ − m) R_Bᵀ a with ρ∇ = m B/W (docs/model.md §13.3): zero for the neutral REMUS 100
-    from auv_gym.ocean import NO_WAVE, ocean_forcing
-    from auv_gym.vehicle import params_record, remus100
+    from auv_gym.ocean.forcing import NO_WAVE, ocean_forcing
+    from auv_gym.vehicle.params import params_record, remus100
 
     row = ocean_row(WaveConfig(components=3), None, np.array([5, 6], np.uint64), 0.01)
     wave = (*NO_WAVE[:3], 0.1, -0.2, 0.3, *NO_WAVE[6:])  # a = (0.1, −0.2, 0.3) m/s², t₀ = 0

@@ -31,8 +31,8 @@ from tqdm import tqdm
 
 import controllers
 from auv_gym import PREVIEW_ENV_ID, VARIANTS
-from auv_gym.files import write_json
 from auv_gym.rollout import rollouts
+from auv_gym.support.files import write_json
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.catalog.tasks import task_set
 from benchmarks.options import option

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.table_format import EMPTY, format_number, markdown_table
 from benchmarks.analysis.stats import AGGREGATE, Interval, mean_interval, paired_difference
+from benchmarks.reports.table_format import EMPTY, format_number, markdown_table
 
 __all__ = [
     "chattering_table",

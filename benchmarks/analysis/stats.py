@@ -38,8 +38,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from rliable import library
 
-from auv_gym import table_format
-from auv_gym.table_format import EMPTY, format_number
+from benchmarks.reports import table_format
+from benchmarks.reports.table_format import EMPTY, format_number
 
 AGGREGATE = "aggregate"
 MIN_REPS = 100

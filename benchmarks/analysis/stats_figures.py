@@ -17,12 +17,13 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-from auv_gym.plotting import policy_colours
 from benchmarks.analysis.stats import AGGREGATE
+from benchmarks.reports.plotting import policy_colours
 
 
 def policy_colors(policies) -> dict[str, Any]:
-    """One colour per policy, the same in every figure (`auv_gym.plotting.policy_colours`)."""
+    """One colour per policy, the same in every figure
+    (`benchmarks.reports.plotting.policy_colours`)."""
     return policy_colours(list(policies))
 
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from auv_gym import table_format
-from auv_gym.table_format import format_number
-from auv_gym.task import SURGE_LIMIT
+from auv_gym.sim.task import SURGE_LIMIT
 from benchmarks.analysis.smoothness_stats import column_chunks
 from benchmarks.analysis.stats import Interval, markdown_table
+from benchmarks.reports import table_format
+from benchmarks.reports.table_format import format_number
 
 __all__ = ["policy_group", "stats_markdown"]
 

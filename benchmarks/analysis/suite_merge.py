@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import write_json, write_text
+from auv_gym.support.files import write_json, write_text
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 

@@ -2,7 +2,7 @@
 and figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.analysis.stats` (rliable).
 
 * **Score** of an episode: its RMS distance to the virtual point over the metrics window [m]. A
-  failed episode (termination_reason in `auv_gym.trajectory.FAILURE_REASONS`: corridor, pitch,
+  failed episode (termination_reason in `auv_gym.sim.trajectory.FAILURE_REASONS`: corridor, pitch,
   non_finite, envelope, overspeed) scores its set's corridor half-width (30 m by default,
   docs/model.md §11.5), the distance at which the env declares the path lost: no episode that
   keeps the path scores worse. `failed` counts them in every table.
@@ -43,10 +43,10 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.config import SimConfig
-from auv_gym.files import jsonable, write_json, write_text
-from auv_gym.task import SURGE_LIMIT
-from auv_gym.trajectory import FAILURE_REASONS
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.task import SURGE_LIMIT
+from auv_gym.sim.trajectory import FAILURE_REASONS
+from auv_gym.support.files import jsonable, write_json, write_text
 from benchmarks.analysis.report_spec import ReportSpec
 from benchmarks.analysis.smoothness_stats import (
     chattering_table,

@@ -63,7 +63,7 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
 def _check_env(path: Path, name: str, env: dict[str, Any]) -> None:
     """The env arguments build (paths, waypoint lists, `params` by name or scale factor): a bad
     one raises ValueError naming the file, the scenario and the argument."""
-    from auv_gym.config import SimConfig
+    from auv_gym.sim.config import SimConfig
 
     try:
         SimConfig.from_kwargs(**env)

@@ -10,7 +10,7 @@ holds the benchmark scenarios (`benchmarks/scenarios.toml`) by name, one set per
 ValueError naming the set: unknown keys or roles, a bad seed range, env arguments the env refuses
 (an impossible generator range such as radius ≤ 0 or a climb beyond the vehicle's limits names the
 field), training or validation seeds that meet a test set's or each other's, and a `held_out`
-test set whose paths the training distribution could draw (`auv_gym.path_generator.overlaps`).
+test set whose paths the training distribution could draw (`auv_gym.sim.path_generator.overlaps`).
 
     from benchmarks.catalog.tasks import load_task_sets, task_set
     train = task_set("train")                   # .env, .seeds (a range)
@@ -28,8 +28,8 @@ from itertools import combinations
 from pathlib import Path
 from typing import Any
 
-from auv_gym.config import SimConfig
-from auv_gym.path_generator import PathDistribution, overlaps
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.path_generator import PathDistribution, overlaps
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
 
 __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test_suite"]

@@ -41,9 +41,9 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.config import SimConfig
-from auv_gym.path_generator import PathDistribution
-from auv_gym.task import TERMINATION_REASONS
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.path_generator import PathDistribution
+from auv_gym.sim.task import TERMINATION_REASONS
 from benchmarks.arguments import finite_number, parse_options, program_name, usage_errors
 from benchmarks.checks.fuzz_draws import EPISODE_PHYSICS, draw_actions, draw_config
 from benchmarks.options import option
@@ -136,7 +136,7 @@ def fuzz_configuration(
     """Run ``n_vehicles`` of one configuration for ``control_steps`` control steps (SAME_STEP
     autoresets), or until their work (physics vehicle-steps + `RESET_WORK` per reset) reaches
     ``work_budget``, checking every step; add what happened to ``tally``."""
-    from auv_gym.vector_env import AUVPath3DVectorEnv
+    from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 
     tally.configurations += 1
     try:

@@ -10,25 +10,33 @@ from typing import Any
 import numpy as np
 
 from auv_gym import PREVIEW_ENV_ID, SPEED_LIMIT_ENV_ID, VARIANTS
-from auv_gym.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
-from auv_gym.disturbances import (
+from auv_gym.ocean.disturbances import (
     MAX_CURRENT_SPEED,
     MAX_CURRENT_TIME_CONSTANT,
     MAX_NOISE_AMPLITUDE,
     CurrentConfig,
     NoiseConfig,
 )
-from auv_gym.observation import ERROR_BOUND, PATH_RATE_BOUND, SPEED_BOUND
-from auv_gym.path_generator import (
+from auv_gym.paths.shapes import (
+    POSITION_BOUND,
+    Helix,
+    Path,
+    Spline,
+    StraightLine,
+    fit_curve,
+    make_path,
+)
+from auv_gym.sim.config import MAX_SUBSTEPS, PHYSICS_DT_RANGE, path_turn_rates
+from auv_gym.sim.observation import ERROR_BOUND, PATH_RATE_BOUND, SPEED_BOUND
+from auv_gym.sim.path_generator import (
     FAMILIES,
     LENGTH_RANGE,
     MAX_FLIGHT_PATH_ANGLE_DEG,
     MIN_TURN_RADIUS,
     PathDistribution,
 )
-from auv_gym.paths import POSITION_BOUND, Helix, Path, Spline, StraightLine, fit_curve, make_path
-from auv_gym.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
-from auv_gym.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, VEHICLE_TOP_SPEED
+from auv_gym.sim.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
+from auv_gym.sim.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, VEHICLE_TOP_SPEED
 from auv_gym.vehicle import remus100
 
 EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays in milliseconds

@@ -1,11 +1,16 @@
-"""Import cycles between the project's modules: ``python -m benchmarks.checks.import_cycles``.
+"""Import cycles and upward imports between the project's modules:
+``python -m benchmarks.checks.import_cycles``.
 
 Reads every module of the packages (default: auv_gym, controllers, benchmarks) with `ast`, without
 importing them, and follows every import statement, also those inside functions (a deferred
 import hides a cycle from the interpreter, not from a reader). ``from a import b`` is an edge to
 ``a.b`` when that is a module, else to ``a``; a module's implicit import of its parent packages is
-not an edge. Imports under ``if TYPE_CHECKING:`` are skipped. Prints each cycle (a strongly
-connected component of the graph) and exits 1 if there is one, 0 otherwise.
+not an edge. Imports under ``if TYPE_CHECKING:`` are skipped.
+
+Prints each cycle (a strongly connected component of the graph) and each upward import: an import
+against the one direction of `LAYERS` (auv_gym's rooms support → paths → vehicle, ocean → sim →
+envs → the top of auv_gym; then controllers, then benchmarks; docs/architecture.md). Exits 1 if
+there is either, 0 otherwise.
 """
 
 from __future__ import annotations
@@ -13,13 +18,32 @@ from __future__ import annotations
 import argparse
 import ast
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-__all__ = ["find_cycles", "import_graph", "main"]
+__all__ = ["LAYERS", "find_cycles", "import_graph", "layer_of", "main", "upward_imports"]
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("auv_gym", "controllers", "benchmarks")
+
+_MODEL = ("auv_gym.support", "auv_gym.paths")
+_CORE = (*_MODEL, "auv_gym.vehicle", "auv_gym.ocean", "auv_gym.sim")
+_AUV_GYM = (*_CORE, "auv_gym.envs", "auv_gym")
+# Layer → the layers its modules may import besides their own. A module belongs to the longest
+# layer name it starts with: ``auv_gym.sim.config`` to auv_gym.sim, ``auv_gym.rollout`` to the top
+# of auv_gym (registration and the evaluation API: ``__init__``, rollout, metrics). vehicle and
+# ocean are peers: neither imports the other.
+LAYERS: dict[str, tuple[str, ...]] = {
+    "auv_gym.support": (),
+    "auv_gym.paths": ("auv_gym.support",),
+    "auv_gym.vehicle": _MODEL,
+    "auv_gym.ocean": _MODEL,
+    "auv_gym.sim": _CORE[:-1],
+    "auv_gym.envs": _CORE,
+    "auv_gym": _AUV_GYM[:-1],
+    "controllers": _AUV_GYM,
+    "benchmarks": (*_AUV_GYM, "controllers"),
+}
 
 
 def _modules(root: Path, packages: Sequence[str]) -> dict[str, Path]:
@@ -122,6 +146,28 @@ def find_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return sorted(cycles)
 
 
+def layer_of(module: str, layers: Mapping[str, Sequence[str]] = LAYERS) -> str | None:
+    """The layer of ``module``: the longest layer name it is or starts with (None: no layer)."""
+    found = [name for name in layers if module == name or module.startswith(f"{name}.")]
+    return max(found, key=len, default=None)
+
+
+def upward_imports(
+    graph: Mapping[str, set[str]], layers: Mapping[str, Sequence[str]] = LAYERS
+) -> list[tuple[str, str]]:
+    """(importer, imported) of every import of a layer its layer may not import, sorted."""
+    found = []
+    for module, targets in graph.items():
+        own = layer_of(module, layers)
+        if own is None:
+            continue
+        for target in targets:
+            other = layer_of(target, layers)
+            if other is not None and other != own and other not in layers[own]:
+                found.append((module, target))
+    return sorted(found)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m benchmarks.checks.import_cycles", description=__doc__.split("\n\n")[0]
@@ -130,10 +176,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     graph = import_graph(ROOT, args.packages)
     cycles = find_cycles(graph)
+    upward = upward_imports(graph)
     for cycle in cycles:
         print("import cycle: " + " <-> ".join(cycle))
-    print(f"{len(graph)} modules, {sum(map(len, graph.values()))} imports, {len(cycles)} cycles")
-    return 1 if cycles else 0
+    for module, target in upward:
+        allowed = ", ".join(LAYERS[layer_of(module)]) or "nothing else"
+        print(f"upward import: {module} -> {target} ({layer_of(module)} imports {allowed})")
+    print(
+        f"{len(graph)} modules, {sum(map(len, graph.values()))} imports, "
+        f"{len(upward)} upward imports, {len(cycles)} cycles"
+    )
+    return 1 if cycles or upward else 0
 
 
 if __name__ == "__main__":

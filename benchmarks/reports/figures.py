@@ -1,7 +1,7 @@
 """Figures of the benchmark side: a policy comparison (`benchmarks.runner.compare`) and a learning
 curve.
 
-Built on `auv_gym.plotting` (`new_figure`, `save_figure`, `plot_track`): matplotlib's
+Built on `benchmarks.reports.plotting` (`new_figure`, `save_figure`, `plot_track`): matplotlib's
 object-oriented API only, no pyplot and no global matplotlib state; every PNG written atomically.
 """
 
@@ -13,14 +13,19 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.config import SimConfig
-from auv_gym.envelope_drawing import envelope_of
-from auv_gym.files import write_atomic
 from auv_gym.metrics import window_start
-from auv_gym.plotting import new_figure, plot_track, policy_colours, save_figure
-from auv_gym.randomization import task_for_seed
-from auv_gym.table_format import Cell
-from auv_gym.trajectory import FAILURE_REASONS, Trajectory
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.randomization import task_for_seed
+from auv_gym.sim.trajectory import FAILURE_REASONS, Trajectory
+from auv_gym.support.files import write_atomic
+from benchmarks.reports.plotting import (
+    envelope_of,
+    new_figure,
+    plot_track,
+    policy_colours,
+    save_figure,
+)
+from benchmarks.reports.table_format import Cell
 from benchmarks.reports.tables import aggregate
 from benchmarks.training.learning_curve import EVAL_FILE, read_rows
 

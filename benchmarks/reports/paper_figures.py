@@ -30,9 +30,9 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
-from auv_gym.config import MAX_EPISODE_TIME, SimConfig
-from auv_gym.files import environment, jsonable, replace_outputs, write_json, write_text
 from auv_gym.rollout import policy_name
+from auv_gym.sim.config import MAX_EPISODE_TIME, SimConfig
+from auv_gym.support.files import environment, jsonable, replace_outputs, write_json, write_text
 from benchmarks.arguments import (
     comma_names,
     exit_with_usage_error,
@@ -158,11 +158,11 @@ def make_figures(
     metrics, "wall_time": label → s}.
     ``env_kwargs`` override the env defaults (the paper's scenario); ``max_time`` = duration.
     """
-    from auv_gym.episode_figures import paper_figures
     from auv_gym.metrics import check_window, compute_metrics
     from auv_gym.paths import make_path
-    from auv_gym.plotting import metrics_table
     from auv_gym.rollout import rollout
+    from benchmarks.reports.episode_figures import paper_figures
+    from benchmarks.reports.plotting import metrics_table
 
     if not policies:
         raise ValueError("make_figures needs at least one policy")

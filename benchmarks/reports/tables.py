@@ -8,8 +8,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import environment, write_json, write_text
-from auv_gym.table_format import (
+from auv_gym.sim.trajectory import FAILURE_REASONS
+from auv_gym.support.files import environment, write_json, write_text
+from benchmarks.reports.table_format import (
     FAILURE_CONVENTION,
     METRIC_INFO,
     Cell,
@@ -17,7 +18,6 @@ from auv_gym.table_format import (
     mark_best,
     markdown_table,
 )
-from auv_gym.trajectory import FAILURE_REASONS
 
 __all__ = ["SUMMARY_GROUPS", "SUMMARY_METRICS", "aggregate", "summarise", "write_tables"]
 
@@ -30,7 +30,7 @@ SUMMARY_GROUPS: dict[str, tuple[str, ...]] = {
     "safety": ("episode_cost",),
 }
 SUMMARY_METRICS = {m: METRIC_INFO[m][2] for group in SUMMARY_GROUPS.values() for m in group}
-# Short column headers (the long labels are in `auv_gym.table_format.METRIC_INFO`).
+# Short column headers (the long labels are in `benchmarks.reports.table_format.METRIC_INFO`).
 _HEADERS = {
     "rms_distance": "RMS d",
     "rms_y_e": "RMS y_e",
@@ -92,7 +92,7 @@ def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
     """Markdown: per scenario, one row per policy, mean ± std over the finished episodes.
 
     Four tables per scenario (tracking, speed, effort, safety), each with the failed-episode count;
-    the conventions are `auv_gym.table_format`'s.
+    the conventions are `benchmarks.reports.table_format`'s.
     """
     cells = aggregate(records)
     policies = list(dict.fromkeys(r["policy"] for r in records))

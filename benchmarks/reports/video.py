@@ -4,7 +4,7 @@
 
 The policy (`benchmarks.catalog.policies` spec) runs one seeded episode of a scenario of
 `benchmarks/scenarios.toml` through `gym.make(..., render_mode="rgb_array")`; a frame
-(`auv_gym.rendering`) is taken every ``--every`` control steps and played at ``--fps``, so the
+(`auv_gym.envs.rendering`) is taken every ``--every`` control steps and played at ``--fps``, so the
 video runs ``every · control_dt · fps`` times faster than the episode (default 5 × 0.05 s × 20
 fps = 5×: a 300-s episode becomes a 60-s video of 1200 frames). Frames stream to the ffmpeg
 binary of imageio-ffmpeg (the video extra) and the file appears atomically when complete.
@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from auv_gym import VARIANTS
-from auv_gym.config import SimConfig
+from auv_gym.sim.config import SimConfig
 from benchmarks.arguments import (
     ArgumentParser,
     parse_checked,

@@ -20,13 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.files import write_json
 from auv_gym.paths import Helix
-from auv_gym.table_format import markdown_table
-from auv_gym.trajectory import FAILURE_REASONS
+from auv_gym.sim.trajectory import FAILURE_REASONS
+from auv_gym.support.files import write_json
 from benchmarks.analysis.stats import mean_interval
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.options import option
+from benchmarks.reports.table_format import markdown_table
 
 PAPER_CLIMB_SPAN = 97.0  # [m] the paper helix's climb in a 300-s episode (docs/model.md §13.1)
 
@@ -135,7 +135,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
 def plot_depth(rows: list[dict[str, Any]], file: str, title: str) -> None:
     """RMS distance [m] (log scale, 95 % intervals shaded) against path depth [m], with and
     without waves, written to ``file``."""
-    from auv_gym.plotting import new_figure, save_figure
+    from benchmarks.reports.plotting import new_figure, save_figure
 
     fig = new_figure(6.0, 4.0, layout="constrained")
     ax = fig.add_subplot()

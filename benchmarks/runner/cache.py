@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
-from auv_gym.files import remove_temporaries
+from auv_gym.support.files import remove_temporaries
 from benchmarks.runner.pool import execute
 
 __all__ = ["Work", "run_resumable", "stored_record"]

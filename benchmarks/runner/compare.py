@@ -21,9 +21,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from auv_gym.config import SimConfig
-from auv_gym.files import replace_outputs
 from auv_gym.metrics import check_window
+from auv_gym.sim.config import SimConfig
+from auv_gym.support.files import replace_outputs
 from benchmarks.arguments import (
     ArgumentParser,
     EpisodeOptions,

@@ -44,14 +44,14 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from auv_gym.config import SimConfig
-from auv_gym.files import (
+from auv_gym.metrics import check_window
+from auv_gym.sim.config import SimConfig
+from auv_gym.support.files import (
     environment,
     replace_outputs,
     write_json,
     write_text,
 )
-from auv_gym.metrics import check_window
 from benchmarks.analysis.report_spec import DEFAULT_REPORT, ReportSpec
 from benchmarks.arguments import (
     ArgumentParser,

@@ -23,10 +23,10 @@ from typing import Any
 import auv_gym
 import controllers
 from auv_gym import ENV_ID, VARIANTS
-from auv_gym.files import jsonable, write_json
 from auv_gym.metrics import compute_metrics
-from auv_gym.numba_cache import sources_digest
 from auv_gym.rollout import rollout
+from auv_gym.support.files import jsonable, write_json
+from auv_gym.support.numba_cache import sources_digest
 from benchmarks.catalog.policies import PolicySpec, build_policy, policy_label
 from benchmarks.catalog.scenarios import Scenario
 from benchmarks.runner.cache import run_resumable, stored_record

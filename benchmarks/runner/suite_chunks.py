@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
-from auv_gym.files import json_default, write_json
 from auv_gym.rollout import evaluate
+from auv_gym.support.files import json_default, write_json
 from benchmarks.catalog.policies import (
     PolicySpec,
     agent_run,

@@ -22,8 +22,8 @@ import numba
 import numpy as np
 
 import controllers
-from auv_gym.config import SimConfig
-from auv_gym.simulator import Simulator
+from auv_gym.sim.config import SimConfig
+from auv_gym.sim.simulator import Simulator
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 

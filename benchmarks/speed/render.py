@@ -25,7 +25,7 @@ def measure(frames: int, every: int, fast: bool) -> dict[str, float]:
 
     import auv_gym  # noqa: F401  (registers the env)
     import controllers
-    from auv_gym.rendering import EpisodeRenderer
+    from auv_gym.envs.rendering import EpisodeRenderer
 
     max_time = (frames * every + 1) * 0.05
     env = gym.make("AUVPath3D-v0", render_mode="rgb_array", max_time=max_time).unwrapped

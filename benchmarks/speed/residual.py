@@ -25,7 +25,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from auv_gym import VARIANTS
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 from benchmarks.training.config import read_zoo_config

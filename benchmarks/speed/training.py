@@ -45,7 +45,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import write_json
+from auv_gym.support.files import write_json
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.options import option
 from benchmarks.speed.training_run import CONFIG, ENV_ID

@@ -10,7 +10,7 @@
 2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
    growth of `ru_maxrss` over the same process after imports and compilation.
 3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
-   `auv_gym.sb3` adapter, against SB3's DummyVecEnv over single envs, each in a fresh process.
+   `auv_gym.envs.sb3` adapter, against SB3's DummyVecEnv over single envs, each in a fresh process.
 
     python -m benchmarks.speed.vector             # full run (about 2 minutes)
     python -m benchmarks.speed.vector --quick     # smoke test
@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.files import write_json
+from auv_gym.support.files import write_json
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.options import option
 
@@ -64,7 +64,7 @@ def measure_vector(
     autoreset; the time spent inside the compiled kernel is recorded separately (the rest is
     the env's Python glue: validation, truncation, infos, resets).
     """
-    from auv_gym.vector_env import AUVPath3DVectorEnv
+    from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 
     # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
     env = AUVPath3DVectorEnv(
@@ -143,7 +143,7 @@ def _sensor_rows(args: Options) -> list[dict[str, Any]]:
 
 def measure_memory(n: int, steps: int = 20) -> dict[str, float]:
     """Peak RSS of n vehicles: run in this process (call it in a fresh one, see `main`)."""
-    from auv_gym.vector_env import AUVPath3DVectorEnv
+    from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 
     warm = AUVPath3DVectorEnv(2)
     warm.reset(seed=0)
@@ -193,7 +193,7 @@ def measure_ppo_collection(
     from stable_baselines3.common.vec_env import DummyVecEnv
 
     from auv_gym import AUVPath3DEnv
-    from auv_gym.sb3 import make_sb3_vec_env
+    from auv_gym.envs.sb3 import make_sb3_vec_env
 
     torch.set_num_threads(1)  # docs/design.md §4: one thread is as fast for these small networks
     kwargs = {"max_time": 30.0, "randomize_start": True}
@@ -246,7 +246,7 @@ def machine() -> dict[str, Any]:
 
 def _waves_rows(args: Options) -> list[dict[str, Any]]:
     """Physics rate without and with waves, side by side (`_side_by_side`)."""
-    from auv_gym.waves import WaveConfig
+    from auv_gym.ocean.waves import WaveConfig
 
     waves = WaveConfig()  # sea state 4, default components and update interval
     print(

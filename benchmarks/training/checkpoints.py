@@ -2,7 +2,7 @@
 
 Every agent directory (`final/`, `best/`, `checkpoints/step_<num_timesteps>/`, an exported agent)
 is complete on its own — model, normalisation statistics, metadata — in the layout
-`controllers.loader.load_policy` reads, and each is written through `auv_gym.files.
+`controllers.loader.load_policy` reads, and each is written through `auv_gym.support.files.
 write_folder_atomic`, so a killed run never leaves a half-written agent.
 
 A checkpoint also holds the training state (`TRAINING_STATE_FILE`, `capture_training_state`)
@@ -29,8 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.files import write_folder_atomic, write_json
-from auv_gym.observation import OBS_NAMES
+from auv_gym.sim.observation import OBS_NAMES
+from auv_gym.support.files import write_folder_atomic, write_json
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 __all__ = [
@@ -235,7 +235,7 @@ def _env_state(venv: Any) -> dict[str, Any]:
     )
     if names:
         return {name: copy.deepcopy(getattr(venv, name)) for name in names}
-    if hasattr(venv, "snapshot"):  # auv_gym.sb3.SB3VecEnv
+    if hasattr(venv, "snapshot"):  # auv_gym.envs.sb3.SB3VecEnv
         return {"snapshot": venv.snapshot()}
     if getattr(venv, "venv", None) is None:  # another base VecEnv (DummyVecEnv): all of it
         return {"vars": copy.deepcopy(vars(venv))}

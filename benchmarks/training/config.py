@@ -415,7 +415,7 @@ def _check_policy(policy: Any, policy_kwargs: Mapping[str, Any], algo: str, wher
 def _check_env_kwargs(env_id: str, env_kwargs: Mapping[str, Any], where: str) -> None:
     """The training env's keyword arguments, as the env would check them at its creation."""
     from auv_gym import VARIANTS
-    from auv_gym.config import SimConfig
+    from auv_gym.sim.config import SimConfig
 
     if env_id not in VARIANTS:  # another registered env checks its own arguments
         import gymnasium

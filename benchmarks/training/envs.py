@@ -54,7 +54,7 @@ def make_training_env(
 ) -> Any:
     """An SB3 VecEnv of `n_envs` training environments.
 
-    "native": `auv_gym.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
+    "native": `auv_gym.envs.sb3` over the batched `AUVPath3DVectorEnv` (one compiled call per step);
     "dummy": SB3's DummyVecEnv over `gym.make`; "auto": native when available. The native env
     simulates every id of `auv_gym.VARIANTS` (its fixed keyword arguments, then `env_kwargs`).
     With ``residual`` the native env is wrapped in
@@ -74,7 +74,7 @@ def make_training_env(
     if kind in ("auto", "native") and env_id in VARIANTS:
         from stable_baselines3.common.vec_env import VecMonitor
 
-        from auv_gym.sb3 import make_sb3_vec_env
+        from auv_gym.envs.sb3 import make_sb3_vec_env
 
         kwargs = {**VARIANTS[env_id], **env_kwargs}
         if residual is not None:
@@ -83,7 +83,7 @@ def make_training_env(
             return VecMonitor(
                 make_residual_sb3_env(n_envs, residual, seed=env_seed, threads=threads, **kwargs)
             )
-        # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.sb3).
+        # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.envs.sb3).
         return VecMonitor(
             make_sb3_vec_env(n_envs, seed=env_seed, threads=threads, infos="minimal", **kwargs)
         )

@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from auv_gym import ENV_ID, VARIANTS, recorded_env_id
-from auv_gym.files import write_json
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
-from auv_gym.trajectory import env_termination_reason
+from auv_gym.sim.trajectory import env_termination_reason
+from auv_gym.support.files import write_json
 from controllers.loader import load_policy
 from controllers.residual import base_kwargs_for_env
 
@@ -58,7 +58,7 @@ def evaluate_policy_on_seeds(
     window: then the rms values are NaN), duration [s], max_surge [m/s] and overspeed_fraction
     (time with u above the vehicle's top speed) over the episode, and termination_reason in the
     env's spelling ("" when the episode ran to max_time,
-    `auv_gym.trajectory.env_termination_reason`), then the `auv_gym.metrics` named in
+    `auv_gym.sim.trajectory.env_termination_reason`), then the `auv_gym.metrics` named in
     ``extra_metrics`` (e.g. "chattering" [1/s]) as floats.
     """
     results = evaluate(policy, list(seeds), transient=transient, **env_kwargs)

@@ -15,7 +15,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import write_text
+from auv_gym.support.files import write_text
 
 __all__ = ["EVAL_FILE", "EVAL_HEADER", "append_row", "read_rows", "truncate_rows"]
 

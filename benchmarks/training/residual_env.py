@@ -1,7 +1,7 @@
 r"""Training side of the residual policy: the native vector env with the base controller inside
 (docs/design.md §3.10).
 
-`ResidualVectorEnv` wraps an `auv_gym.vector_env.AUVPath3DVectorEnv` (any autoreset mode). It
+`ResidualVectorEnv` wraps an `auv_gym.envs.vector_env.AUVPath3DVectorEnv` (any autoreset mode). It
 runs the base controller of all vehicles in one batched `predict` per control step, exactly as
 `controllers.residual.ResidualPolicy` and the evaluation run it, and exposes to the agent
 
@@ -19,12 +19,12 @@ reward terms. The precision bonus (``precision_weight`` w_P, default 0, scale
 ``precision_scale`` d_P = 0.1 m) is the env's tracking bonus at the scale where a classical
 base already holds the path, so that accuracy lost to smoothing costs reward; it is reported as
 ``info["reward_residual_precision"]`` (present when w_P > 0; the env's own "precision" term,
-`auv_gym.task`, has a fixed d_P).
+`auv_gym.sim.task`, has a fixed d_P).
 With ``actuator="random"`` each vehicle's base controller uses the actuator its
-episode drew (`auv_gym.simulator.Simulator.actuators`), as a scenario would configure it: one
+episode drew (`auv_gym.sim.simulator.Simulator.actuators`), as a scenario would configure it: one
 controller per actuator model, each called for the whole batch while any vehicle uses it.
 
-`make_residual_sb3_env` gives the same env as a stable-baselines3 VecEnv (`auv_gym.sb3`).
+`make_residual_sb3_env` gives the same env as a stable-baselines3 VecEnv (`auv_gym.envs.sb3`).
 Deterministic: the base controllers are deterministic functions of the observations, so the same
 seed and actions give bit-identical trajectories.
 """
@@ -38,8 +38,8 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorWrapper
 from gymnasium.vector.utils import batch_space
 
-from auv_gym.env import validate_actions
-from auv_gym.vector_env import AUVPath3DVectorEnv
+from auv_gym.envs.env import validate_actions
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import ResidualTraining
 from controllers.residual import (
     agent_observation,
@@ -255,9 +255,9 @@ def make_residual_sb3_env(
     threads: int | None = None,
     **env_kwargs: Any,
 ) -> Any:
-    """`ResidualVectorEnv` over ``num_envs`` vehicles as an SB3 VecEnv (`auv_gym.sb3`);
-    keyword arguments as `auv_gym.sb3.make_sb3_vec_env`."""
-    from auv_gym.sb3 import SB3VecEnv
+    """`ResidualVectorEnv` over ``num_envs`` vehicles as an SB3 VecEnv (`auv_gym.envs.sb3`);
+    keyword arguments as `auv_gym.envs.sb3.make_sb3_vec_env`."""
+    from auv_gym.envs.sb3 import SB3VecEnv
 
     core = AUVPath3DVectorEnv(
         num_envs,

@@ -40,7 +40,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import write_json, write_text
+from auv_gym.support.files import write_json, write_text
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import HELD_OUT_FILE

@@ -36,7 +36,7 @@ from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-from auv_gym.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
+from auv_gym.support.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
 from benchmarks.arguments import writable_location
 from benchmarks.runner.pool import check_pool_options, check_ray_address
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent

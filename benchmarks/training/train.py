@@ -14,8 +14,8 @@ from typing import Any
 
 import auv_gym
 from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
-from auv_gym.files import LOCK_FILE, git_commit, versions
-from auv_gym.observation import ObservationConfig
+from auv_gym.sim.observation import ObservationConfig
+from auv_gym.support.files import LOCK_FILE, git_commit, versions
 from benchmarks.options import comma_integers, option, whole_number
 from benchmarks.training.agent_interface import pin_scales, wrap_actions
 from benchmarks.training.checkpoints import (
@@ -145,7 +145,7 @@ class TrainOptions:
     eval_env: dict[str, Any] = field(default_factory=dict)  # no command-line option
     vec_env: str = option(
         "auto",
-        "auto | native (auv_gym.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
+        "auto | native (auv_gym.envs.sb3 batched adapter) | dummy (SB3 DummyVecEnv)",
         choices=VEC_ENVS,
     )
     threads: int = option(

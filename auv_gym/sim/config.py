@@ -1,0 +1,476 @@
+"""Validated settings of the path-following simulation: `SimConfig`, shared by both envs.
+
+`SimConfig.from_kwargs` turns the environments' keyword arguments into settings (each bad value a
+one-line error naming it, docs/design.md §3) and `SimConfig.packed` into the float64 row the
+compiled step reads (`auv_gym.sim.integrator.CONFIG_FIELDS`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from auv_gym.ocean.current_profile import CurrentProfile
+from auv_gym.ocean.depth_envelope import DepthEnvelope, check_path_depths
+from auv_gym.ocean.disturbances import (
+    CurrentConfig,
+    NoiseConfig,
+    gauss_markov_coefficients,
+)
+from auv_gym.ocean.waves import WaveConfig
+from auv_gym.paths.offset import shift_path
+from auv_gym.paths.shapes import (
+    POSITION_BOUND,
+    Path,
+    make_path,
+    path_turn_rates,
+)
+from auv_gym.sim.config_args import (
+    DISTURBANCE_PRESETS,
+    noise_from,
+    path_from,
+    path_is_random,
+    reward_from,
+    start_rotation_from,
+)
+from auv_gym.sim.integrator import (
+    ACTUATORS,
+    CONFIG_FIELDS,
+)
+from auv_gym.sim.observation import (
+    ERROR_BOUND,
+    PATH_RATE_BOUND,
+    SPEED_BOUND,
+    ObservationConfig,
+)
+from auv_gym.sim.path_generator import PathDistribution
+from auv_gym.sim.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
+from auv_gym.sim.safety_cost import SafetyCost
+from auv_gym.sim.task import (
+    VEHICLE_TOP_SPEED,
+    RewardWeights,
+    TaskLimits,
+)
+from auv_gym.support.validation import ArgumentTypeError, choice, flag, real, vector
+from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
+from auv_gym.vehicle.params import AUVParams, params_from_spec, remus100
+from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
+
+__all__ = [
+    "ACTUATOR_LIMITS",
+    "DISTURBANCE_PRESETS",
+    "MAX_EPISODE_TIME",
+    "MAX_SUBSTEPS",
+    "PHYSICS_DT_RANGE",
+    "SimConfig",
+    "path_is_random",
+    "path_turn_rates",
+]
+
+# "paper" mode limits of REMUS 100 (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
+ACTUATOR_LIMITS = AUVParams().actuator_limits
+VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
+_SUBSTEP_TOL = 1e-9
+# Documented ranges of the timing and start arguments (AUVPath3DEnv docstring, "Arguments").
+PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
+MAX_SUBSTEPS = 10_000  # physics steps per control step: bounds the cost of one step()
+MAX_EPISODE_TIME = 1e6  # [s] max_time (11.6 days)
+HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
+START_OFFSET = 2.0  # [m] per axis: a random start near the start point (`Simulator`) moves
+START_JITTER = START_OFFSET * math.sqrt(3.0)  # [m] so far at most from the start point
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Validated simulation settings (units: s, m, m/s, N, N·m)."""
+
+    # A fixed path, or a `PathDistribution` drawing one per episode (`randomization.draw_task`).
+    path: Path | PathDistribution = field(default_factory=lambda: make_path("helix"))
+    params: AUVParams = field(default_factory=remus100)
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+    current: CurrentConfig = field(default_factory=CurrentConfig)
+    param_uncertainty: float = 0.0  # ε: coefficients scaled by 1 + U[−ε, ε] per episode
+    actuator: str = "paper"  # "paper", "fins", "realistic" or "random" (paper or fins per episode)
+    # The propeller, motor, fins and servos of actuator="realistic" (docs/model.md §2.6).
+    actuator_params: ActuatorParams = field(default_factory=ActuatorParams)
+    random_current: float = 0.0  # [m/s] largest speed of a random horizontal current per episode
+    random_noise: float = 0.0  # ε: noise amplitudes × (1 + U[−ε, ε]) per episode
+    control_dt: float = 0.05  # [s]
+    physics_dt: float = 0.01  # [s]
+    max_time: float = 300.0  # [s]
+    u_desired: float = 1.0  # [m/s] u_D
+    sigma: float = 0.5  # [m] virtual-point law width σ
+    # "corrected": u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3); "printed": the paper's misprint
+    # u_D(1 − tanh(x_e/σ)), unstable, kept only for the sign-regression tests (docs/model.md §8.9).
+    virtual_point_law: str = "corrected"
+    randomize_start: bool = False
+    # [rad] half-width of the heading error of `randomize_start`'s near-start draws (its other
+    # half draws ±π/3 anywhere on the first turn); π/2 covers the paper's start, 90° off the path
+    start_heading_spread: float = 0.2
+    # [rad] turns the start (its position about p(0), and its heading) about the vertical before
+    # any random draw: −π/2 gives every path the paper helix's start geometry (docs/model.md §3.5)
+    start_rotation: float | tuple[float, float] = 0.0  # or (low, high): drawn per episode
+    start_position: tuple[float, float, float] | None = None  # [m]; None: the path's default
+    start_heading: float | None = None  # [rad]
+    reward: RewardWeights = field(default_factory=RewardWeights)
+    limits: TaskLimits = field(default_factory=TaskLimits)
+    # "paper": the paper's 15 entries; "preview": the agent observation (`auv_gym.sim.observation`)
+    observation: ObservationConfig = field(default_factory=ObservationConfig)
+    # [m] added to every drawn path; `from_kwargs` moves a fixed path itself (`path_offset`)
+    path_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    depth_envelope: DepthEnvelope | None = None  # None: no surface, no seabed (the paper's)
+    safety_cost: SafetyCost = field(default_factory=SafetyCost)
+    waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §13)
+    current_profile: CurrentProfile | None = None  # None: the uniform current only (§13.5)
+    # "ideal": the observation is the exact state; else from a navigation estimate (`sensors`)
+    sensors: SensorConfig = field(default_factory=lambda: SENSOR_PRESETS["ideal"])
+
+    @classmethod
+    def from_kwargs(
+        cls,
+        path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
+        disturbance: str | float | NoiseConfig = "paper",
+        current: CurrentConfig | Sequence[float] | dict | None = None,
+        param_uncertainty: float = 0.0,
+        actuator: str = "paper",
+        control_dt: float = 0.05,
+        physics_dt: float = 0.01,
+        noise_hold: float | None = None,
+        max_time: float = 300.0,
+        randomize_start: bool = False,
+        u_desired: float = 1.0,
+        sigma: float = 0.5,
+        virtual_point_law: str = "corrected",
+        corridor: float = 30.0,
+        max_pitch: float = math.radians(60.0),
+        surge_limit: float | str = math.inf,
+        params: AUVParams | Mapping[str, Any] | None = None,
+        start_position: Sequence[float] | None = None,
+        start_heading: float | None = None,
+        reward_weights: RewardWeights | dict | None = None,
+        random_current: float = 0.0,
+        start_heading_spread: float = 0.2,
+        start_rotation: float | Sequence[float] = 0.0,
+        random_noise: float = 0.0,
+        observation: str | Mapping | ObservationConfig | None = None,
+        path_offset: Sequence[float] | None = None,
+        depth_envelope: DepthEnvelope | Mapping | bool | None = None,
+        safety_cost: SafetyCost | Mapping | None = None,
+        waves: WaveConfig | str | int | Mapping | None = None,
+        current_profile: CurrentProfile | Mapping | None = None,
+        actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
+        sensors: str | Mapping | SensorConfig | None = None,
+    ) -> SimConfig:
+        """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
+        and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
+        argument, its value and the allowed range."""
+        the_path = path_from(path)
+        offset = (0.0, 0.0, 0.0)
+        if path_offset is not None:
+            offset = vector("path_offset", path_offset, 3, -POSITION_BOUND, POSITION_BOUND, "m")
+        if isinstance(the_path, Path):
+            the_path, offset = shift_path(the_path, offset), (0.0, 0.0, 0.0)
+        s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
+        vehicle = params_from_spec(params)
+        if isinstance(surge_limit, str):  # the one name: the vehicle record's top speed
+            if surge_limit != VEHICLE_TOP_SPEED:
+                raise ValueError(
+                    f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
+                    f" (params.max_surge), got {surge_limit!r:.80}"
+                )
+            surge_limit = vehicle.max_surge
+        return cls(
+            path=the_path,
+            params=vehicle,
+            noise=noise_from(disturbance, noise_hold),
+            current=CurrentConfig.from_spec(current),
+            param_uncertainty=param_uncertainty,
+            actuator=actuator,
+            actuator_params=actuator_params_from_spec(actuator_params),
+            random_current=random_current,
+            random_noise=random_noise,
+            control_dt=control_dt,
+            physics_dt=physics_dt,
+            max_time=max_time,
+            u_desired=u_desired,
+            sigma=sigma,
+            virtual_point_law=virtual_point_law,
+            randomize_start=randomize_start,
+            start_heading_spread=start_heading_spread,
+            start_rotation=start_rotation,
+            start_position=start_position,
+            start_heading=start_heading,
+            reward=reward_from(reward_weights),
+            limits=TaskLimits(
+                corridor=corridor,
+                max_pitch=max_pitch,
+                s_end=s_end,
+                surge_limit=surge_limit,
+            ),
+            observation=ObservationConfig.from_spec(observation),
+            path_offset=offset,
+            depth_envelope=DepthEnvelope.from_spec(depth_envelope),
+            safety_cost=SafetyCost.from_spec(safety_cost),
+            waves=WaveConfig.from_spec(waves),
+            current_profile=CurrentProfile.from_spec(current_profile),
+            sensors=SensorConfig.from_spec(sensors),
+        )
+
+    def __post_init__(self) -> None:
+        def put(name: str, value: object) -> None:  # canonical value (float, tuple) of a field
+            object.__setattr__(self, name, value)
+
+        if not isinstance(self.path, PathDistribution):
+            if not isinstance(self.path, Path):
+                raise ArgumentTypeError(f"path must be a Path, got {self.path!r:.80}")
+            self.path.check_kernel_data()
+        for name, kind in (
+            ("params", AUVParams),
+            ("noise", NoiseConfig),
+            ("current", CurrentConfig),
+            ("reward", RewardWeights),
+            ("limits", TaskLimits),
+            ("actuator_params", ActuatorParams),
+            ("observation", ObservationConfig),
+            ("safety_cost", SafetyCost),
+            ("sensors", SensorConfig),
+        ):
+            if not isinstance(getattr(self, name), kind):
+                raise ArgumentTypeError(
+                    f"{name} must be an {kind.__name__}, got {getattr(self, name)!r:.80}"
+                )
+        if not isinstance(self.depth_envelope, DepthEnvelope | None):
+            raise ArgumentTypeError(
+                f"depth_envelope must be a DepthEnvelope or None, got {self.depth_envelope!r:.80}"
+            )
+        put(
+            "path_offset",
+            vector("path_offset", self.path_offset, 3, -POSITION_BOUND, POSITION_BOUND, "m"),
+        )
+        if any(self.path_offset) and not isinstance(self.path, PathDistribution):
+            raise ValueError(
+                f"path_offset {self.path_offset} m moves drawn paths here; a fixed "
+                "path is moved by from_kwargs (the env argument) or ShiftedPath"
+            )
+        for name, kind in (("waves", WaveConfig), ("current_profile", CurrentProfile)):
+            if not isinstance(getattr(self, name), (kind, type(None))):
+                raise ArgumentTypeError(
+                    f"{name} must be None or a {kind.__name__}, got {getattr(self, name)!r:.80}"
+                )
+        put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
+        put(
+            "random_current",
+            real("random_current", self.random_current, 0.0, MAX_RANDOM_CURRENT, unit="m/s"),
+        )
+        put("random_noise", real("random_noise", self.random_noise, 0.0, MAX_RANDOM_NOISE))
+        put(
+            "virtual_point_law",
+            choice("virtual_point_law", self.virtual_point_law, VIRTUAL_POINT_LAWS),
+        )
+        put(
+            "param_uncertainty",
+            real("param_uncertainty", self.param_uncertainty, 0.0, 1.0, high_open=True),
+        )
+        self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
+        put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
+        most = MAX_SUBSTEPS * self.physics_dt
+        put(
+            "control_dt",
+            real(
+                "control_dt",
+                self.control_dt,
+                0.0,
+                most,
+                low_open=True,
+                unit=f"s (<= {MAX_SUBSTEPS} physics steps)",
+            ),
+        )
+        put(
+            "max_time",
+            real(
+                "max_time",
+                self.max_time,
+                self.control_dt,
+                MAX_EPISODE_TIME,
+                unit="s (at least one control_dt)",
+            ),
+        )
+        put(
+            "u_desired",
+            real(
+                "u_desired",
+                self.u_desired,
+                0.0,
+                SPEED_BOUND,
+                low_open=True,
+                unit="m/s, the observation's bound on u_D",
+            ),
+        )
+        put("sigma", real("sigma", self.sigma, 0.0, math.inf, low_open=True, unit="m"))
+        surge_limit = self.limits.surge_limit
+        if not (self.u_desired < surge_limit <= SPEED_BOUND or surge_limit == math.inf):
+            raise ValueError(
+                f"surge_limit must be above u_desired = {self.u_desired} m/s and at most "
+                f"{SPEED_BOUND} m/s, or inf, got {surge_limit!r} m/s"
+            )
+        self.sensors.fix_steps(self.control_dt)  # the fix interval: whole control steps
+        put("randomize_start", flag("randomize_start", self.randomize_start))
+        put(
+            "start_heading_spread",
+            real("start_heading_spread", self.start_heading_spread, 0.0, math.pi, unit="rad"),
+        )
+        put("start_rotation", start_rotation_from(self.start_rotation))
+        if self.start_position is not None:
+            put(
+                "start_position",
+                vector(
+                    "start_position", self.start_position, 3, -POSITION_BOUND, POSITION_BOUND, "m"
+                ),
+            )
+        if self.start_heading is not None:
+            put(
+                "start_heading",
+                real(
+                    "start_heading",
+                    self.start_heading,
+                    -HEADING_BOUND,
+                    HEADING_BOUND,
+                    unit="rad (±2π)",
+                ),
+            )
+        for name, value in (
+            ("control_dt", self.control_dt),
+            ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)", self.noise.hold),
+        ):
+            ratio = value / self.physics_dt
+            if abs(ratio - round(ratio)) > _SUBSTEP_TOL * ratio or round(ratio) < 1:
+                raise ValueError(
+                    f"{name} = {value} s must be a whole multiple of physics_dt = "
+                    f"{self.physics_dt} s"
+                )
+        if isinstance(self.path, PathDistribution):
+            # Generated paths start at the origin with a drawn heading: a fixed start would
+            # be meaningless (docs/model.md §3.8); their turn rates (≤ 1/8 m) always fit.
+            for name in ("start_position", "start_heading"):
+                if getattr(self, name) is not None:
+                    raise ValueError(
+                        f"{name} cannot be given with a random path (path = "
+                        "'random' or a PathDistribution): each episode starts at "
+                        "its own path's default start"
+                    )
+        else:
+            self._check_path_fits_the_observation()
+            self._check_start_fits_the_observation()
+            self.check_depths(self.path)
+
+    def check_depths(self, path: Path, drawn: bool = False) -> None:
+        """The path (a drawn one at its reset) and the start lie inside the depth envelope's
+        safe band (`depth_envelope.check_path_depths`); nothing to check without one."""
+        if self.depth_envelope is None:
+            return
+        given = self.start_position is not None and not drawn
+        start = self.start_position if given else path.default_start()[0]
+        check_path_depths(
+            path,
+            self.depth_envelope,
+            start_z=float(start[2]),
+            u_desired=self.u_desired,
+            max_time=self.max_time,
+            randomize_start=self.randomize_start,
+            drawn=drawn,
+        )
+
+    @property
+    def current_speed_bound(self) -> float:
+        """Largest current speed [m/s] an episode can meet: per axis |mean| + the random current
+        + 8 stationary standard deviations of the Gauss–Markov part (exceeded with probability
+        about 1e-15 per draw), combined over the three axes."""
+        axes = [
+            abs(m) + self.random_current + 8.0 * s
+            for m, s in zip(self.current.mean, self.current.std, strict=True)
+        ]
+        return math.sqrt(sum(a * a for a in axes))
+
+    @property
+    def randomized(self) -> bool:
+        """True if episodes draw their own path, current, noise amplitude or actuator."""
+        return (
+            isinstance(self.path, PathDistribution)
+            or self.random_current > 0.0
+            or self.random_noise > 0.0
+            or self.actuator == "random"
+        )
+
+    def _check_path_fits_the_observation(self) -> None:
+        """ψ̇_F and θ̇_F stay within ±PATH_RATE_BOUND for every u_p <= 2 u_D: a proven bound
+        on the whole path, so no start or s later in an episode can leave the bounds."""
+        limit = PATH_RATE_BOUND / (2.0 * self.u_desired)
+        bound = max(self.path.turn_rate_bounds(accept_below=limit), key=lambda b: b.upper)
+        rate = bound.upper
+        if rate > limit and 2.0 * self.u_desired * rate > PATH_RATE_BOUND:
+            where = self.path.turn_location(bound)
+            raise ValueError(
+                f"path turns at up to {rate:.4g} rad/m{where}: with u_desired = "
+                f"{self.u_desired} m/s the virtual point (u_p <= 2 u_D) turns at up to "
+                f"{2.0 * self.u_desired * rate:.4g} rad/s, beyond the observation bound "
+                f"{PATH_RATE_BOUND} rad/s; use u_desired <= {PATH_RATE_BOUND / (2 * rate):.4g} m/s "
+                "or a gentler path (a waypoint path that nearly doubles back needs a turn "
+                "waypoint beside the reversal)"
+            )
+
+    def _check_start_fits_the_observation(self) -> None:
+        """The start's errors to p(0) lie within the observation's ±ERROR_BOUND."""
+        p0 = self.path.evaluate(0.0)[0]
+        given = self.start_position is not None
+        start = np.asarray(self.start_position) if given else self.path.default_start()[0]
+        distance = float(np.linalg.norm(start - p0))
+        allowed = ERROR_BOUND - (START_JITTER if self.randomize_start else 0.0)
+        if not distance <= allowed:
+            name = "start_position" if given else "the path's default start"
+            raise ValueError(
+                f"{name} {tuple(start.tolist())} m is {distance:.4g} m from the path's start "
+                f"p(0) = {tuple(p0.tolist())} m; the observation bounds the position errors to "
+                f"±{ERROR_BOUND:g} m, so the start must lie within {allowed:.4g} m of p(0)"
+                + (" (less the random offset of randomize_start)" if self.randomize_start else "")
+            )
+
+    @property
+    def kernel_sigma(self) -> float:
+        """σ as the kernels use it: u_D(1 + tanh(x_e/σ)) with σ < 0 gives the printed law."""
+        return VIRTUAL_POINT_LAWS[self.virtual_point_law] * self.sigma
+
+    @property
+    def substeps(self) -> int:
+        """Physics steps per control step."""
+        return round(self.control_dt / self.physics_dt)
+
+    @property
+    def max_steps(self) -> int:
+        """Control steps until truncation at `max_time`."""
+        return math.ceil(self.max_time / self.control_dt - _SUBSTEP_TOL)
+
+    def packed(self) -> np.ndarray:
+        """The float64 row `integrator.advance_vehicle` reads (layout `CONFIG_FIELDS`)."""
+        gm_a, gm_b = gauss_markov_coefficients(self.current, self.physics_dt)
+        values = {
+            "n_sub": self.substeps,
+            "physics_dt": self.physics_dt,
+            "hold_steps": round(self.noise.hold / self.physics_dt),
+            "u_d": self.u_desired,
+            "sigma": self.kernel_sigma,
+            "actuator": ACTUATORS.get(self.actuator, 0),  # "random": set per episode
+            "gm_a": gm_a,
+        }
+        for c, name in enumerate(("f_u", "f_v", "f_w", "f_q", "f_r")):
+            values[f"noise_{name}"] = self.noise.amplitude[c]
+        for c, axis in enumerate("XMN"):
+            values[f"limit_{axis}"] = self.params.actuator_limits[c]
+        for c, axis in enumerate("xyz"):
+            values[f"current_{axis}"] = self.current.mean[c]
+            values[f"gm_b_{axis}"] = gm_b[c]
+        values.update(self.actuator_params.packed(self.physics_dt))
+        return np.array([float(values[name]) for name in CONFIG_FIELDS])

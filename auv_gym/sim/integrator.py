@@ -1,0 +1,291 @@
+"""Time integration: classical RK4 of `dynamics.state_derivative` and the control-period loop.
+
+`advance_vehicle` moves one vehicle through one control period: per physics step it draws the
+white noise, applies the actuator model, takes one RK4 step (with the waves and the profiled
+current of `auv_gym.ocean` added to the current, when configured) and advances the Gauss–Markov
+current; at the end it writes the period's mean τ and f and refreshes the guidance row and the
+observation. Everything that simulates calls it: the single env with one row, the vector env
+with thousands (`simulator`).
+
+Speed (README "Performance"): the state, the RK4 stages, the parameters, the packed config and
+the sums stay in registers as tuples for the whole period; no heap array is made and no array
+reference is taken inside the loop (each costs two atomic reference-count updates).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from auv_gym.ocean.disturbances import N_CHANNELS, gauss_markov_step, white_noise
+from auv_gym.ocean.forcing import NO_WAVE, OCEAN, ocean_forcing, refresh_waves
+from auv_gym.paths.guidance import wrap_angle
+from auv_gym.sim.observation import build_observation, guidance_row
+from auv_gym.support.records import field_indices, fixed_tuple, record_type
+from auv_gym.vehicle.actuators import (
+    ACTUATOR_CONFIG_FIELDS,
+    ACTUATOR_STATE,
+    DEFAULT_ACTUATOR_CONFIG,
+    actuator_config,
+    actuator_forces,
+    actuator_step,
+)
+from auv_gym.vehicle.dynamics import STATE, STATE_DIM, state_derivative
+from auv_gym.vehicle.params import params_record
+
+__all__ = [
+    "ACTUATORS",
+    "CONFIG_FIELDS",
+    "RECORD",
+    "RECORD_DIM",
+    "RECORD_FIELDS",
+    "advance_vehicle",
+    "config_record",
+    "rk4",
+    "rk4_step",
+]
+
+PAPER_ACTUATOR, FIN_ACTUATOR, REALISTIC_ACTUATOR = 0, 1, 2
+ACTUATORS = {"paper": PAPER_ACTUATOR, "fins": FIN_ACTUATOR, "realistic": REALISTIC_ACTUATOR}
+
+# Layout of the packed simulation config (`config.SimConfig.packed`): the fields every mode
+# reads as a record, then the realistic actuators' parameters, read only in that mode (a wider
+# record costs the default kernel a third of its speed).
+_RECORD_FIELDS = (
+    "n_sub",
+    "physics_dt",
+    "hold_steps",
+    "u_d",
+    "sigma",
+    "actuator",
+    "gm_a",
+    "noise_f_u",
+    "noise_f_v",
+    "noise_f_w",
+    "noise_f_q",
+    "noise_f_r",
+    "limit_X",
+    "limit_M",
+    "limit_N",
+    "current_x",
+    "current_y",
+    "current_z",
+    "gm_b_x",
+    "gm_b_y",
+    "gm_b_z",
+)
+CONFIG_FIELDS = (*_RECORD_FIELDS, *ACTUATOR_CONFIG_FIELDS)
+CONFIG_DIM = len(_RECORD_FIELDS)  # entries of `ConfigRecord`; the actuators' follow
+ConfigRecord = record_type("ConfigRecord", _RECORD_FIELDS, __name__)
+
+# Per-vehicle record of a control period: mean applied τ [N, N·m] and mean disturbance f.
+RECORD_FIELDS = ("X", "M", "N", "f_u", "f_v", "f_w", "f_q", "f_r")
+RECORD_DIM = len(RECORD_FIELDS)
+RECORD = field_indices("RecordIndex", RECORD_FIELDS, __name__)
+
+
+@njit(cache=True, inline="always")
+def config_record(cfg):
+    """The packed config row ``cfg`` as a `ConfigRecord` held in registers."""
+    return ConfigRecord(*fixed_tuple(cfg, CONFIG_DIM))
+
+
+# RK4 arithmetic on whole 11-tuples, element by element (a tuple cannot be built in a loop).
+@njit(cache=True, inline="always")
+def _stage(st, h, k):
+    """st + h·k."""
+    return (
+        st[0] + h * k[0],
+        st[1] + h * k[1],
+        st[2] + h * k[2],
+        st[3] + h * k[3],
+        st[4] + h * k[4],
+        st[5] + h * k[5],
+        st[6] + h * k[6],
+        st[7] + h * k[7],
+        st[8] + h * k[8],
+        st[9] + h * k[9],
+        st[10] + h * k[10],
+    )
+
+
+@njit(cache=True, inline="always")
+def _rk4_combine(st, h, k1, k2, k3, k4):
+    """st + h·(k1 + 2 k2 + 2 k3 + k4), with h = dt/6."""
+    return _stage(
+        st,
+        h,
+        (
+            k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0],
+            k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1],
+            k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2],
+            k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3],
+            k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4],
+            k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5],
+            k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6],
+            k1[7] + 2.0 * k2[7] + 2.0 * k3[7] + k4[7],
+            k1[8] + 2.0 * k2[8] + 2.0 * k3[8] + k4[8],
+            k1[9] + 2.0 * k2[9] + 2.0 * k3[9] + k4[9],
+            k1[10] + 2.0 * k2[10] + 2.0 * k3[10] + k4[10],
+        ),
+    )
+
+
+@njit(cache=True, inline="always")
+def rk4(st, tau, f, current, p, kind, pdata, u_d, sigma, dt):
+    """One classical RK4 step of `dynamics.state_derivative` over dt [s] on a state tuple, with
+    τ, f and the current held; arguments as there."""
+    k1 = state_derivative(st, tau, f, current, p, kind, pdata, u_d, sigma)
+    k2 = state_derivative(_stage(st, 0.5 * dt, k1), tau, f, current, p, kind, pdata, u_d, sigma)
+    k3 = state_derivative(_stage(st, 0.5 * dt, k2), tau, f, current, p, kind, pdata, u_d, sigma)
+    k4 = state_derivative(_stage(st, dt, k3), tau, f, current, p, kind, pdata, u_d, sigma)
+    return _rk4_combine(st, dt / 6.0, k1, k2, k3, k4)
+
+
+@njit(cache=True)
+def rk4_step(st, tau, f, current, p_array, kind, pdata, u_d, sigma, dt, out):
+    """Array form of `rk4`: reads the state row ``st`` and the packed parameters ``p_array``
+    (`AUVParams.to_vector`), writes the new state into ``out``."""
+    nxt = rk4(
+        fixed_tuple(st, STATE_DIM),
+        tau,
+        f,
+        current,
+        params_record(p_array),
+        kind,
+        pdata,
+        u_d,
+        sigma,
+        dt,
+    )
+    for i in range(STATE_DIM):
+        out[i] = nxt[i]
+
+
+@njit(cache=True, inline="always")
+def _actuation(a_X, a_M, a_N, cfg, fin_gain, u):
+    """τ = (X, M, N) [N, N·m] for the action (a_X, a_M, a_N) in [−1, 1]³ (docs/model.md §2.3):
+    "paper" scales by the constant limits; "fins" keeps X = a_X·X_max and gives
+    M, N = a·K·δ_max·u|u| (fin-lift coefficient K, deflection limit δ_max), updated every step."""
+    X = a_X * cfg.limit_X
+    if int(cfg.actuator) == PAPER_ACTUATOR:
+        return X, a_M * cfg.limit_M, a_N * cfg.limit_N
+    authority = fin_gain * u * abs(u)
+    return X, a_M * authority, a_N * authority
+
+
+@njit(cache=True, inline="always")
+def advance_vehicle(
+    st,
+    cur,
+    act,
+    action,
+    p_array,
+    noise_key,
+    current_key,
+    step_index,
+    kind,
+    pdata,
+    cfg_array,
+    guid,
+    obs,
+    record,
+    ocean,
+):
+    """Advance one vehicle by one control period, in place; returns False on a non-finite state.
+
+    ``st`` (layout `dynamics.STATE`), ``cur`` (Gauss–Markov current deviation (x, y, z)
+    [m/s]) and, with the realistic actuators, ``act`` (layout `actuators.ACTUATOR_STATE`) are
+    updated; ``guid``, ``obs`` and ``record`` (layout `RECORD`) are rewritten only
+    while the state is finite, so the caller keeps the last valid observation. ``action`` holds
+    (a_X, a_M, a_N) in [−1, 1] (realistic actuators: the normalised commands of n, δ_s, δ_r);
+    ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
+    ``step_index`` counts physics steps since the reset and keys the noise (`white_noise`) and
+    the current (`gauss_markov_step`). ``ocean`` is the vehicle's ocean row (`ocean.ocean_row`):
+    waves and a profiled current added to the current, when its ``active`` flag is set.
+    """
+    cfg = config_record(cfg_array)
+    p = params_record(p_array)
+    n_sub, hold_steps = int(cfg.n_sub), int(cfg.hold_steps)
+    noise_amplitude = (cfg.noise_f_u, cfg.noise_f_v, cfg.noise_f_w, cfg.noise_f_q, cfg.noise_f_r)
+    gm_b = (cfg.gm_b_x, cfg.gm_b_y, cfg.gm_b_z)
+    fin_gain = p.fin_moment_coeff * p.fin_max
+    x = fixed_tuple(st, STATE_DIM)
+    a_X, a_M, a_N = action[0], action[1], action[2]
+    dc = (cur[0], cur[1], cur[2])
+    sum_X = sum_M = sum_N = 0.0
+    sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
+    finite = True
+    ocean_on = ocean[OCEAN.active] != 0.0
+    wave = NO_WAVE
+    # Realistic actuators (docs/model.md §2.6): their state moves first in each physics step,
+    # then its τ is held over the RK4 step; the fins' Y, Z enter where f_v, f_w do.
+    realistic = int(cfg.actuator) == REALISTIC_ACTUATOR
+    a = actuator_config(cfg_array, CONFIG_DIM) if realistic else DEFAULT_ACTUATOR_CONFIG
+    shaft, d_s = act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s]
+    d_r = act[ACTUATOR_STATE.delta_r]
+    rate_limited = 0
+    for k in range(n_sub):
+        n = step_index + k
+        f = white_noise(noise_amplitude, noise_key, n, hold_steps)
+        current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
+        if ocean_on:  # held across the RK4 stages, like the current; t at mid-step
+            wave = refresh_waves(ocean, x, n, k, cfg.physics_dt, wave)
+            current, f = ocean_forcing(ocean, x, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
+        if realistic:
+            shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, a)
+            rate_limited += limited
+            X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w], a)
+            f_in = (f[0], f[1] + Y, f[2] + Z, f[3], f[4])
+        else:
+            X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
+            f_in = f
+        nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
+        dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
+        sum_X += X
+        sum_M += M
+        sum_N += N
+        sum_f = (
+            sum_f[0] + f[0],
+            sum_f[1] + f[1],
+            sum_f[2] + f[2],
+            sum_f[3] + f[3],
+            sum_f[4] + f[4],
+        )
+        for j in range(STATE_DIM):
+            if not math.isfinite(nxt[j]):
+                finite = False
+        if not finite:
+            x = nxt
+            break
+        x = (  # the state with ψ wrapped to (−π, π]
+            nxt[0],
+            nxt[1],
+            nxt[2],
+            nxt[3],
+            wrap_angle(nxt[STATE.psi]),
+            nxt[5],
+            nxt[6],
+            nxt[7],
+            nxt[8],
+            nxt[9],
+            nxt[10],
+        )
+    for j in range(STATE_DIM):
+        st[j] = x[j]
+    cur[0], cur[1], cur[2] = dc
+    if realistic:
+        act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s] = shaft, d_s
+        act[ACTUATOR_STATE.delta_r] = d_r
+        act[ACTUATOR_STATE.rate_limited] = rate_limited / n_sub
+    if not finite:
+        return False
+    record[RECORD.X] = sum_X / n_sub
+    record[RECORD.M] = sum_M / n_sub
+    record[RECORD.N] = sum_N / n_sub
+    for c in range(N_CHANNELS):  # f_u … f_r
+        record[RECORD.f_u + c] = sum_f[c] / n_sub
+    guidance_row(st, kind, pdata, cfg.u_d, cfg.sigma, guid)
+    build_observation(st, guid, cfg.u_d, obs)
+    return True

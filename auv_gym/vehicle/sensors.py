@@ -1,0 +1,217 @@
+"""Sensor and navigation settings (docs/model.md §14): what the observation is measured with.
+
+`SensorConfig` holds the error model of each sensor of a REMUS-class navigation suite: a Doppler
+velocity log (DVL: white noise, a turn-on bias and scale-factor error per episode, dropout), an
+attitude and heading reference (AHRS: pitch, heading and the rates q, r, each with white noise
+and a turn-on bias), a pressure depth sensor (noise, bias), the horizontal position from dead
+reckoning on the DVL and AHRS reset by a position fix (USBL, or GPS at the surface) every
+`fix_interval` seconds, and a delay of whole control steps. The kernels that apply it live in
+`auv_gym.sim.navigation`; the reward, termination and metrics keep reading the true state.
+
+Presets (`SENSOR_PRESETS`): "ideal" (no sensor model: the observation is the exact state, the
+default) and "typical" (values and their sources in docs/model.md §14.3). A dict of fields, or
+{"preset": name, **overrides}, sets them one by one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, fields, replace
+
+import numpy as np
+
+from auv_gym.support.validation import ArgumentTypeError, choice, integer, keys_within, real
+
+__all__ = ["SENSOR_FIELDS", "SENSOR_PRESETS", "SensorConfig", "sensor_key"]
+
+# Documented ranges: far beyond any real sensor, so only nonsense is refused.
+MAX_SPEED_ERROR = 1.0  # [m/s] DVL noise and bias σ
+MAX_SCALE_ERROR = 0.5  # [-] DVL scale-factor σ
+MAX_ANGLE_ERROR = 0.5  # [rad] pitch and heading noise and bias σ (29°)
+MAX_RATE_ERROR = 0.5  # [rad/s] q, r noise and bias σ
+MAX_DEPTH_ERROR = 10.0  # [m] depth noise and bias σ
+MAX_FIX_NOISE = 100.0  # [m] position-fix σ per horizontal axis
+MAX_FIX_INTERVAL = 1e6  # [s]
+MAX_DELAY = 1000  # [control steps]
+MAX_DROPOUT = 0.99  # [-] probability that a DVL sample is lost
+PRESET_NAMES = ("ideal", "typical")
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """Error model of the navigation suite; every σ is a standard deviation, every bias the σ of
+    a constant drawn per episode (a turn-on bias), all 0 by default (exact sensors).
+
+    Measurements at each control step t (docs/model.md §14.1), n ~ N(0, 1) drawn per sample:
+    DVL ν̂ = (1 + k)ν + b + σ n per axis (k, b drawn per episode); AHRS θ̂ = θ + b + σ n,
+    ψ̂ = ψ + b + σ n, q̂, r̂ likewise; depth ẑ = z + b + σ n; horizontal position from a fix
+    p̂ = p + σ_fix n every `fix_interval` [s] (0: every control step), else dead reckoning.
+    """
+
+    dvl_noise: float = 0.0  # [m/s] σ of each velocity sample, per axis
+    dvl_bias: float = 0.0  # [m/s] σ of the per-episode velocity offset, per axis
+    dvl_scale: float = 0.0  # [-] σ of the per-episode scale-factor error, per axis
+    dvl_dropout: float = 0.0  # [-] probability a sample is lost (the last valid one is held)
+    pitch_noise: float = 0.0  # [rad]
+    pitch_bias: float = 0.0  # [rad]
+    heading_noise: float = 0.0  # [rad]
+    heading_bias: float = 0.0  # [rad]
+    rate_noise: float = 0.0  # [rad/s] σ of q̂ and r̂ samples
+    rate_bias: float = 0.0  # [rad/s]
+    depth_noise: float = 0.0  # [m]
+    depth_bias: float = 0.0  # [m]
+    fix_noise: float = 0.0  # [m] σ of a position fix, per horizontal axis
+    fix_interval: float | None = 0.0  # [s] between fixes; 0: every step; None: start fix only
+    delay: int = 0  # [control steps] k: the observation uses the measurements of step t − k
+    preset: str = "custom"  # the name it was built from ("ideal" bypasses the sensor model)
+
+    def __post_init__(self) -> None:
+        ranges = {
+            "dvl_noise": (MAX_SPEED_ERROR, "m/s"),
+            "dvl_bias": (MAX_SPEED_ERROR, "m/s"),
+            "dvl_scale": (MAX_SCALE_ERROR, ""),
+            "dvl_dropout": (MAX_DROPOUT, ""),
+            "pitch_noise": (MAX_ANGLE_ERROR, "rad"),
+            "pitch_bias": (MAX_ANGLE_ERROR, "rad"),
+            "heading_noise": (MAX_ANGLE_ERROR, "rad"),
+            "heading_bias": (MAX_ANGLE_ERROR, "rad"),
+            "rate_noise": (MAX_RATE_ERROR, "rad/s"),
+            "rate_bias": (MAX_RATE_ERROR, "rad/s"),
+            "depth_noise": (MAX_DEPTH_ERROR, "m"),
+            "depth_bias": (MAX_DEPTH_ERROR, "m"),
+            "fix_noise": (MAX_FIX_NOISE, "m"),
+        }
+        for name, (high, unit) in ranges.items():
+            value = real(f"sensors {name}", getattr(self, name), 0.0, high, unit=unit)
+            object.__setattr__(self, name, value)
+        if self.fix_interval is not None:
+            unit = "s (0: a fix every control step; None: dead reckoning)"
+            interval = real(
+                "sensors fix_interval", self.fix_interval, 0.0, MAX_FIX_INTERVAL, unit=unit
+            )
+            object.__setattr__(self, "fix_interval", interval)
+        object.__setattr__(self, "delay", integer("sensors delay", self.delay, 0, MAX_DELAY))
+        choice("sensors preset", self.preset, [*PRESET_NAMES, "custom"])
+        if self.preset == "ideal" and replace(self, preset="custom") != SensorConfig():
+            raise ValueError(
+                "sensors preset 'ideal' means exact sensors: give its errors with "
+                "preset='custom' (or a dict {'preset': 'ideal', ...})"
+            )
+
+    @property
+    def ideal(self) -> bool:
+        """True for the "ideal" preset: the observation is the exact state (no sensor kernel)."""
+        return self.preset == "ideal"
+
+    @classmethod
+    def from_spec(cls, spec: str | Mapping | SensorConfig | None) -> SensorConfig:
+        """From None or a preset name, a dict of fields (optionally with "preset": the name
+        whose values the others override) or a `SensorConfig`."""
+        if spec is None:
+            return SENSOR_PRESETS["ideal"]
+        if isinstance(spec, SensorConfig):
+            return spec
+        if isinstance(spec, str):
+            return SENSOR_PRESETS[choice("sensors preset", spec, SENSOR_PRESETS)]
+        if isinstance(spec, Mapping):
+            names = [f.name for f in fields(cls)]
+            given = keys_within("sensors", spec, names)
+            base = SENSOR_PRESETS[
+                choice("sensors preset", given.pop("preset", "ideal"), SENSOR_PRESETS)
+            ]
+            return replace(base, **given, preset="custom") if given else base
+        raise ArgumentTypeError(
+            f"sensors must be None, one of {sorted(SENSOR_PRESETS)}, a dict of SensorConfig "
+            f"fields or a SensorConfig, got {spec!r:.80}"
+        )
+
+    def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
+        return asdict(self)
+
+    def fix_steps(self, control_dt: float) -> int:
+        """Control steps between position fixes: 1 for `fix_interval` = 0, 0 for none; a
+        ValueError unless the interval is a whole multiple of control_dt."""
+        if self.fix_interval is None:
+            return 0
+        if self.fix_interval == 0.0:
+            return 1
+        ratio = self.fix_interval / control_dt
+        if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
+            raise ValueError(
+                f"sensors fix_interval = {self.fix_interval} s must be a whole "
+                f"multiple of control_dt = {control_dt} s"
+            )
+        return round(ratio)
+
+    def packed(self, control_dt: float) -> np.ndarray:
+        """The float64 row `navigation.sense_rows` reads (layout `SENSOR_FIELDS`)."""
+        values = {f.name: getattr(self, f.name) for f in fields(self) if f.name in SENSOR_FIELDS}
+        values["fix_steps"] = self.fix_steps(control_dt)
+        values["delay"] = self.delay
+        values["control_dt"] = control_dt
+        return np.array([float(values[name]) for name in SENSOR_FIELDS])
+
+
+# Layout of `SensorConfig.packed`.
+SENSOR_FIELDS = (
+    "dvl_noise",
+    "dvl_bias",
+    "dvl_scale",
+    "dvl_dropout",
+    "pitch_noise",
+    "pitch_bias",
+    "heading_noise",
+    "heading_bias",
+    "rate_noise",
+    "rate_bias",
+    "depth_noise",
+    "depth_bias",
+    "fix_noise",
+    "fix_steps",
+    "delay",
+    "control_dt",
+)
+
+_DEG = math.pi / 180.0
+SENSOR_PRESETS: dict[str, SensorConfig] = {
+    "ideal": SensorConfig(preset="ideal"),
+    # A REMUS-class suite; each value's source is in docs/model.md §14.3.
+    "typical": SensorConfig(
+        dvl_noise=0.01,  # [m/s] single-ping σ, 1200 kHz bottom track at ~1 m/s
+        dvl_bias=0.002,  # [m/s] "±0.2 % ± 2 mm/s": the offset part
+        dvl_scale=0.003,  # [-] the proportional part (0.2-0.3 % of v)
+        dvl_dropout=0.02,  # [-] lost bottom lock on 2 % of the pings
+        pitch_noise=0.05 * _DEG,
+        pitch_bias=0.3 * _DEG,  # AHRS roll/pitch accuracy 0.2-0.3° (dynamic)
+        heading_noise=0.1 * _DEG,
+        heading_bias=1.0 * _DEG,  # AHRS magnetic heading accuracy 1°
+        rate_noise=0.03 * _DEG,  # [rad/s] 0.01 °/s/√Hz over a 10 Hz band
+        rate_bias=10.0 / 3600.0 * _DEG,  # [rad/s] in-run bias stability 10 °/h
+        depth_noise=0.01,  # [m]
+        depth_bias=0.05,  # [m] 0.05 % of a 100 m full scale
+        fix_noise=0.5,  # [m] USBL, ~0.5 % of a 100 m slant range
+        fix_interval=10.0,  # [s] one USBL fix every 10 s
+        delay=0,
+        preset="typical",
+    ),
+}
+
+_SALT = np.uint64(0x5E4507A7105E4507)  # separates the sensor streams from the disturbance ones
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+
+
+def sensor_key(noise_key: np.uint64 | np.ndarray, stream: int) -> np.ndarray:
+    """The episode's sensor key number ``stream`` (0: per-sample errors, 1: per-episode
+    biases), derived from its white-noise key by SplitMix64 mixing: a new key per episode that
+    draws nothing from the episode generator, so every existing configuration's draws stay the
+    same, and that depends on the seed only, never on the actions."""
+    with np.errstate(over="ignore"):
+        z = np.asarray(noise_key, dtype=np.uint64) ^ _SALT
+        z = z + (np.uint64(stream) + np.uint64(1)) * _GOLDEN
+        z = (z ^ (z >> np.uint64(30))) * _MIX1
+        z = (z ^ (z >> np.uint64(27))) * _MIX2
+        return z ^ (z >> np.uint64(31))
