@@ -313,11 +313,11 @@ def test_a_policy_has_one_colour_in_every_figure():
 
 def test_every_shipped_policy_has_a_fixed_colour_of_its_own():
     """A shipped name without a fixed colour takes one by hash, which can sit next to a
-    look-alike (sac_antiwindup drew in ppo_generalist's orange in the suite's learning curves)."""
+    look-alike (an agent once drew in another's orange in the suite's learning curves)."""
     from benchmarks.catalog.policies import REFERENCE_AGENTS
     from benchmarks.reports.plotting import POLICY_COLOURS
     from controllers import CLASSICAL
 
-    names = [*CLASSICAL, *REFERENCE_AGENTS, "sac_antiwindup"]
+    names = [*CLASSICAL, *REFERENCE_AGENTS]
     assert [n for n in names if n not in POLICY_COLOURS] == []
     assert len({POLICY_COLOURS[n] for n in names}) == len(names)

@@ -124,7 +124,9 @@ def _bar_chart(
 ) -> Path:
     """bars_<metric>.png: mean ± std over the finished episodes per scenario, one bar per policy.
 
-    A linear axis (a bar's length is its value). Failed episodes are left out of the mean and
+    A linear axis (a bar's length is its value), or a log axis where the means span more than
+    two decades (centimetres beside metres: on a linear axis the small bars vanish; the title
+    says which). Failed episodes are left out of the mean and
     counted above the bar ("✕n"); a policy whose episodes all failed gets a hatched empty bar.
     ``cells`` are `benchmarks.reports.tables.aggregate`'s.
     """
@@ -170,9 +172,16 @@ def _bar_chart(
                 ax.text(xi, height, f"✕{failed}", ha="center", va="bottom", fontsize=7, color="C3")
     ax.set_xticks(x, names, rotation=20)
     ax.set_ylabel(label)
-    ax.set_ylim(bottom=0)
+    positive = [v.mean() for v, _ in bars.values() if v.size and v.mean() > 0]
+    log = bool(positive) and max(positive) > 100.0 * min(positive)
+    if log:
+        ax.set_yscale("log")
+        ax.set_ylim(bottom=min(positive) / 3.0)
+    else:
+        ax.set_ylim(bottom=0)
     ax.set_title(
-        f"{metric}: mean ± std over finished episodes; ✕n: n failed episodes, hatched: all failed",
+        f"{metric}: mean ± std over finished episodes{' (log axis)' if log else ''}; "
+        "✕n: n failed episodes, hatched: all failed",
         fontsize=9,
     )
     ax.grid(True, axis="y", alpha=0.3)

@@ -19,7 +19,14 @@ from benchmarks.reports.table_format import (
     markdown_table,
 )
 
-__all__ = ["SUMMARY_GROUPS", "SUMMARY_METRICS", "aggregate", "summarise", "write_tables"]
+__all__ = [
+    "SUMMARY_GROUPS",
+    "SUMMARY_METRICS",
+    "aggregate",
+    "overview",
+    "summarise",
+    "write_tables",
+]
 
 # Metrics in the summary table, with the direction that is better, in the column groups that
 # keep each table's rows within a screen: tracking, speed, effort, safety.
@@ -82,6 +89,36 @@ def aggregate(records: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, 
             for metric in SUMMARY_METRICS
         }
     return cells
+
+
+def overview(records: list[dict[str, Any]]) -> str:
+    """One screen: a row per policy, a column per scenario, each cell the mean RMS distance [m]
+    over the finished episodes and, after a "/", how many of them failed (the benchmark's
+    headline metric; every other one is in summary.md)."""
+    cells = aggregate(records)
+    policies = list(dict.fromkeys(r["policy"] for r in records))
+    scenarios = list(dict.fromkeys(r["scenario"] for r in records))
+    rows = []
+    for policy in policies:
+        row = [policy]
+        for scenario in scenarios:
+            cell = cells.get((scenario, policy), {}).get("rms_distance")
+            if cell is None:
+                row.append("")
+                continue
+            mean = cell.mean()
+            text = "-" if math.isnan(mean) else f"{mean:.3g}"
+            row.append(text + (f" /{cell.failed}✗" if cell.failed else ""))
+        rows.append(row)
+    widths = [max(len(r[k]) for r in [["policy", *scenarios], *rows]) for k in range(len(rows[0]))]
+
+    def line(cols: list[str]) -> str:
+        return "  ".join(
+            c.ljust(w) if k == 0 else c.rjust(w)
+            for k, (c, w) in enumerate(zip(cols, widths, strict=True))
+        )
+
+    return "\n".join([line(["policy", *scenarios]), *(line(r) for r in rows)])
 
 
 def _value(value: Any) -> float:

@@ -45,7 +45,7 @@ from benchmarks.catalog.policies import (
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
-from benchmarks.reports.tables import write_tables
+from benchmarks.reports.tables import overview, write_tables
 from benchmarks.runner.jobs import Job, run_jobs
 
 MAX_SEEDS = 100_000  # seeds per scenario
@@ -179,14 +179,23 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         records = run_jobs(
             args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
         )
-        summary = write_tables(records, args.out, config)
+        write_tables(records, args.out, config)
         written = [args.out / name for name in TABLES]
+        figures: list[Path] = []
         if not args.no_figures:
             from benchmarks.reports.figures import comparison_figures
 
-            written += comparison_figures(records, args.out, scenarios=scenarios)
-        replace_outputs(args.out, written)  # no figure of an earlier run beside these tables
-    print(summary)
+            figures = comparison_figures(records, args.out, scenarios=scenarios)
+        replace_outputs(args.out, [*written, *figures])  # no figure of an earlier run beside
+    print(
+        f"RMS distance to the path [m], mean of {args.seeds} seed(s) after "
+        f"t = {args.transient:g} s; /n✗: n episodes failed (left the corridor, pitched over...)"
+    )
+    print(overview(records))
+    print(f"\nevery metric: {args.out / 'summary.md'}")
+    print(f"every episode: {args.out / 'episodes.csv'} (and episodes.json)")
+    if figures:
+        print(f"figures ({len(figures)}): {args.out / 'figures'}")
     return records
 
 
