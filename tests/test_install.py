@@ -205,7 +205,7 @@ def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
         str(bin_dir / "auv-gym"),
         "compare",
         "--policies",
-        "fbsm,ppo",
+        "fbsm,ppo_helix",
         "--scenarios",
         "paper",
         "--seeds",

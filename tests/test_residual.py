@@ -374,7 +374,7 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
 
     hyper = ROOT / "benchmarks" / "hyperparams"
     cfg = read_zoo_config(hyper / "ppo_residual.yml", "AUVPath3DSpeedLimit-v0")
-    assert cfg.env_kwargs["actuator"] == "random" and cfg.env_kwargs["random_current"] == 0.5
+    assert cfg.env_kwargs["actuator"] == "random" and cfg.env_kwargs["random_current"] == 0.3
     expected = {
         "tv_weight": 1.0,
         "precision_weight": 3.0,

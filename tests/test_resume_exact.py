@@ -52,16 +52,19 @@ SAC = {
     "use_sde": True,
     "sde_sample_freq": 8,
 }
-# PPO inside an envelope guard tight enough to act in 5-s episodes: its wrapper's last
-# observations are part of what a resume restores.
+# PPO inside an envelope guard stage tight enough to act in 5-s episodes: its wrapper's last
+# observations and memories are part of what a resume restores.
 GUARDED = {
     **PPO,
-    "envelope_guard": {
-        "pitch_soft_deg": 2.0,
-        "pitch_hard_deg": 6.0,
-        "surge_soft": 0.3,
-        "surge_hard": 0.6,
-    },
+    "stages": [
+        {
+            "name": "envelope_guard",
+            "pitch_soft_deg": 2.0,
+            "pitch_hard_deg": 6.0,
+            "surge_soft": 0.3,
+            "surge_hard": 0.6,
+        }
+    ],
 }
 CASES = {
     "ppo": ("AUVPath3D-v0", PPO, 768, 300),
@@ -163,8 +166,8 @@ def test_paused_and_killed_runs_resume_bit_for_bit(tmp_path: Path, algo: str) ->
     if algo.startswith("ppo"):
         _assert_same_agent(tmp_path / "agent_a", tmp_path / "agent_b")
     if algo == "ppo_guard":  # the exported agent carries its guard
-        guard = json.loads((tmp_path / "agent_b" / "metadata.json").read_text())["envelope_guard"]
-        assert guard["pitch_hard_deg"] == 6.0
+        (guard,) = json.loads((tmp_path / "agent_b" / "metadata.json").read_text())["stages"]
+        assert guard["name"] == "envelope_guard" and guard["pitch_hard_deg"] == 6.0
     # The pause left its checkpoint; the later ones are those of the run that never stopped.
     for step in range(512, n_timesteps + 1, 256):
         name = f"checkpoints/step_{step:010d}"

@@ -68,6 +68,7 @@ def measure(algo: str, opts: Options) -> dict[str, Any]:
     import torch
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from auv_gym import VARIANTS
     from benchmarks.training.agent_interface import wrap_actions
     from benchmarks.training.config import ALGORITHMS, read_zoo_config
     from benchmarks.training.envs import make_training_env
@@ -77,7 +78,7 @@ def measure(algo: str, opts: Options) -> dict[str, Any]:
     cfg = read_zoo_config(opts.config, opts.env_id, "sac")
     names = observation_layout_of(opts.env_id, cfg.env_kwargs).names
     venv = make_training_env(cfg.n_envs, 0, cfg.env_kwargs, env_id=opts.env_id, threads=1)
-    venv = wrap_actions(venv, cfg, names)
+    venv = wrap_actions(venv, cfg, names, {**VARIANTS.get(opts.env_id, {}), **cfg.env_kwargs})
     venv = VecNormalize(venv, **cfg.normalize)
     kwargs = _kwargs(algo, cfg, opts)
     model = ALGORITHMS[algo].sb3_class()(cfg.policy, venv, seed=0, device="cpu", **kwargs)
