@@ -49,11 +49,11 @@ def test_a_pickle_rebuilt_from_the_stats_normalises_like_the_loader():
     import gymnasium as gym
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_preview"
+    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_helix"
     stats = np.load(agent / STATS_FILE)
     pickle = agent / VECNORM_FILE
     assert pickle.is_file()  # shipped: every agent folder loads in SB3 and RL Zoo as it is
-    venv = VecNormalize.load(str(pickle), DummyVecEnv([lambda: gym.make("AUVPath3DPreview-v0")]))
+    venv = VecNormalize.load(str(pickle), DummyVecEnv([lambda: gym.make("AUVPath3D-v0")]))
     obs = venv.venv.reset()
     expected = np.clip(
         (obs - stats["mean"]) / np.sqrt(stats["var"] + stats["epsilon"]),

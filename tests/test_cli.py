@@ -91,12 +91,12 @@ def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, t
     monkeypatch.setattr(importlib, "import_module", without_torch)
     monkeypatch.setattr(compare, "run_jobs", lambda *a, **k: pytest.fail("an episode ran"))
     with pytest.raises(policies.MissingExtraError, match=r"pip install 'auv-gym\[rl\]'"):
-        policies.check_policy_spec("ppo")
+        policies.check_policy_spec("ppo_helix")
     code = cli.main(
         [
             "compare",
             "--policies",
-            "fbsm,ppo",
+            "fbsm,ppo_helix",
             "--scenarios",
             "paper",
             "--seeds",
@@ -114,7 +114,7 @@ def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, t
 def test_video_runs_a_speed_limited_agent_under_its_own_env(tmp_path):
     from benchmarks.reports.video import parse_args
 
-    args = parse_args(["--policy", "ppo_helix", "--out", str(tmp_path / "v.mp4")])
+    args = parse_args(["--policy", "ppo_residual", "--out", str(tmp_path / "v.mp4")])
     assert args.env_id == "AUVPath3DSpeedLimit-v0"  # recorded as AUVPath3D-v1, renamed
     assert parse_args(["--policy", "fbsm", "--out", str(tmp_path / "f.mp4")]).env_id == (
         "AUVPath3D-v0"

@@ -240,8 +240,9 @@ def test_smoke_on_the_agent_observation(tmp_path):
     assert meta["eval_env_kwargs"]["observation"] == {"points": 3, "spacing": 4.0}
     held_out = json.loads((tmp_path / "agent" / "held_out_evaluation.json").read_text())
     assert held_out["summary"]["n_episodes"] == 10  # the test report ran on its observation
-    with pytest.raises(ValueError, match=r"trained on the observation .*'points': 3.*'points': 5"):
-        agent_run("agent", tmp_path / "agent")  # its id's default preview differs
+    _, env_id, agent_env = agent_run("agent", tmp_path / "agent")  # it carries its observation
+    assert env_id == "AUVPath3DPreview-v0"
+    assert agent_env == {"observation": {"kind": "preview", "points": 3, "spacing": 4.0}}
     policy = load_policy(tmp_path / "agent")
     env = gym.make("AUVPath3DPreview-v0", observation={"points": 3, "spacing": 4.0})
     obs, _ = env.reset(seed=0)

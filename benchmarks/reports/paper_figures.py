@@ -43,7 +43,7 @@ from benchmarks.arguments import (
     usage_errors,
     writable_folder,
 )
-from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env_id, policy_label
+from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env, policy_label
 from benchmarks.options import option
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
@@ -146,13 +146,15 @@ def make_figures(
     transient: float | None = None,
     dpi: int = Args.dpi,
     env_ids: Mapping[str, str] | None = None,
+    agent_envs: Mapping[str, Mapping[str, Any]] | None = None,
     **env_kwargs: Any,
 ) -> dict[str, Any]:
     """Run each policy on the seeded episode, write figures, tables and trajectories to ``out``.
 
     ``env_ids`` maps a label to the env id whose defaults its episode starts from (an agent's
-    training env, `benchmarks.catalog.policies.policy_env_id`; default `auv_gym.ENV_ID`), so a
-    speed-limited agent meets its limit here as in `compare` and the suite.
+    training env, `benchmarks.catalog.policies.policy_env`; default `auv_gym.ENV_ID`) and
+    ``agent_envs`` a label to the env arguments an agent carries (its observation), so an agent
+    meets its speed limit and sees its observation here as in `compare` and the suite.
 
     Returns {"figures": stem → file, "files": the other files written, "metrics": label →
     metrics, "wall_time": label → s}.
@@ -173,8 +175,9 @@ def make_figures(
     for label, policy in policies.items():
         start = time.perf_counter()
         env_id = (env_ids or {}).get(label, ENV_ID)
+        own = (agent_envs or {}).get(label, {})
         tr = rollout(
-            policy, seed, name=label, max_time=duration, **{**VARIANTS[env_id], **env_kwargs}
+            policy, seed, name=label, max_time=duration, **{**VARIANTS[env_id], **own, **env_kwargs}
         )
         wall[label] = time.perf_counter() - start
         trajectories[label] = tr
@@ -211,9 +214,11 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     start = time.perf_counter()
     try:  # agents are loaded here, before any episode: a corrupt one is a usage error
         policies = build_policies(args.policies, {**args.env, "control_dt": args.control_dt})
-        env_ids = {
-            label: policy_env_id(spec) for spec, label in zip(args.policies, policies, strict=True)
+        envs = {
+            label: policy_env(spec) for spec, label in zip(args.policies, policies, strict=True)
         }
+        env_ids = {label: env_id for label, (env_id, _) in envs.items()}
+        agent_envs = {label: own for label, (_, own) in envs.items() if own}
     except (ValueError, TypeError, OSError) as error:
         exit_with_usage_error(program_name("benchmarks.reports.paper_figures"), error)
     # One run per folder: a second one is refused, a killed one's temporary files removed.
@@ -227,6 +232,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             dpi=args.dpi,
             control_dt=args.control_dt,
             env_ids=env_ids,
+            agent_envs=agent_envs,
             **args.env,
         )
         written = [*map(Path, result["figures"].values()), *result["files"]]

@@ -32,7 +32,7 @@ from benchmarks.arguments import (
     program_name,
     writable_location,
 )
-from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env_id
+from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
@@ -99,7 +99,8 @@ def check_args(args: argparse.Namespace) -> None:
     args.env_kwargs = {**scenario.env, "max_time": float(args.duration)}
     check_policy_spec(args.policy)
     # An agent runs under the env id it records, as in `compare` and the suite.
-    args.env_id = policy_env_id(args.policy)
+    args.env_id, agent_env = policy_env(args.policy)
+    args.env_kwargs = {**agent_env, **args.env_kwargs}
     try:
         config = SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
     except (TypeError, ValueError) as error:
