@@ -1,9 +1,18 @@
 #!/usr/bin/env bash
-# The test suite: set-up (idempotent), lint, then every test on both cores.
+# The test suite: set-up (idempotent), lint, then the tests on both cores.
+#   bash scripts/test.sh                  # every test but the integration tier (about 5 min)
+#   bash scripts/test.sh --integration    # the integration tier alone: fresh installs, baseline
+#                                         # trees, Ray, every learner and resume path (about 8 min)
+# Other arguments go to pytest. CI runs both (.ci/run).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 . .venv/bin/activate
 ruff check .
 ruff format --check .
-python -m pytest -q -n 2 "$@"
+if [ "${1:-}" = "--integration" ]; then
+    shift
+    python -m pytest -q -n 2 -m integration "$@"
+else
+    python -m pytest -q -n 2 -m "not integration" "$@"
+fi

@@ -184,6 +184,7 @@ def test_scenario_file_documents_every_scenario():
     assert select("all", list(scenarios), "scenario") == list(scenarios)
 
 
+@pytest.mark.integration
 def test_ray_backend_matches_local_processes(tmp_path, monkeypatch):
     pytest.importorskip("ray")
     monkeypatch.setenv("PYTHONPATH", ENV["PYTHONPATH"])  # Ray workers import the user policy

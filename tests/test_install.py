@@ -93,6 +93,7 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str,
     return bin_dir, env
 
 
+@pytest.mark.integration
 def test_packages_and_data_come_from_the_install(installed, tmp_path: Path) -> None:
     bin_dir, env = installed
     code = (
@@ -115,6 +116,7 @@ def test_packages_and_data_come_from_the_install(installed, tmp_path: Path) -> N
     assert "base install" in blocked.stderr  # the extras really are out of reach
 
 
+@pytest.mark.integration
 def test_help_lists_every_command_with_defaults(installed, tmp_path: Path) -> None:
     bin_dir, env = installed
     top = _run([str(bin_dir / "auv-gym"), "--help"], tmp_path, env)
@@ -137,6 +139,7 @@ def test_help_lists_every_command_with_defaults(installed, tmp_path: Path) -> No
     assert "Traceback" not in train.stderr and not (tmp_path / "run").exists()
 
 
+@pytest.mark.integration
 @pytest.mark.slow  # compiles the numba kernels of the fresh install (30-90 s)
 def test_compare_runs_from_another_folder_on_the_base_install(installed, tmp_path: Path) -> None:
     bin_dir, env = installed
@@ -197,6 +200,7 @@ def test_every_option_shows_its_default(argv: list[str], capsys) -> None:
         assert re.search(r"\(default:\s", block), f"no default shown for {block.split()[0]}"
 
 
+@pytest.mark.integration
 def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
     installed, tmp_path: Path
 ) -> None:
@@ -221,6 +225,7 @@ def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
     assert "Traceback" not in result.stderr and not (tmp_path / "run" / "episodes").exists()
 
 
+@pytest.mark.integration
 def test_the_installed_command_finds_the_manual(installed, tmp_path: Path) -> None:
     bin_dir, env = installed
     result = _run([str(bin_dir / "auv-gym"), "docs"], tmp_path, env)

@@ -78,6 +78,7 @@ def _helper(value: float) -> str:
     )
 
 
+@pytest.mark.integration
 def test_an_edit_of_an_inlined_module_recompiles_the_kernel(tmp_path: Path) -> None:
     kernels = (
         "from numba import njit\nfrom pkg.helpers import value\n\n"
@@ -99,6 +100,7 @@ def test_an_edit_of_an_inlined_module_recompiles_the_kernel(tmp_path: Path) -> N
     assert _kernel_call(tmp_path, "pkg.kernels") == {"result": 6.0, "hits": 1, "misses": 0}
 
 
+@pytest.mark.integration
 def test_a_kernel_in_a_sub_package_is_cached_beside_it_and_stale_after_an_edit_in_another(
     tmp_path: Path,
 ) -> None:
@@ -129,6 +131,7 @@ def test_a_kernel_in_a_sub_package_is_cached_beside_it_and_stale_after_an_edit_i
     assert _kernel_call(tmp_path, "pkg.sim.kernels") == {"result": 6.0, "hits": 1, "misses": 0}
 
 
+@pytest.mark.integration
 def test_an_edit_in_a_package_inlined_from_recompiles_the_dependent_kernel(tmp_path: Path) -> None:
     base = _package(
         tmp_path, "base", "register_package(Path(__file__).parent)", {"helpers.py": _helper(1.0)}
@@ -280,6 +283,7 @@ print(json.dumps([auv_gym.__file__, value, cache]))
     assert Path(cache).parent.parent == Path(tempfile.gettempdir())
 
 
+@pytest.mark.integration
 @pytest.mark.slow
 def test_a_read_only_install_steps_the_env() -> None:
     code = """

@@ -24,6 +24,7 @@ def _compare(fast: np.ndarray, slow: np.ndarray) -> tuple[float, float]:
     return float((diff.max(axis=2) > 0).mean()), float(diff.mean())
 
 
+@pytest.mark.integration
 def test_fast_frames_match_the_full_redraw_over_an_episode():
     """FBSM on the paper scenario, 120 s, a frame every 20 control steps from both renderers."""
     env = AUVPath3DEnv(render_mode="rgb_array", max_time=120.0)

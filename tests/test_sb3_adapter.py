@@ -201,6 +201,7 @@ def test_missing_stable_baselines3_raises_import_error_naming_the_extra():
     assert "pip install 'auv-gym[rl]'" in out.stdout
 
 
+@pytest.mark.integration
 def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
     import json
     from pathlib import Path

@@ -151,6 +151,7 @@ def test_update_threads_option_is_checked():
         check_options(TrainOptions(update_threads=-1))
 
 
+@pytest.mark.integration
 def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     import json
 
@@ -191,6 +192,7 @@ def test_speed_training_extracts_a_baseline_and_runs_a_tiny_budget(tmp_path):
     assert math.isfinite(r["floor_update_per_s"]) and r["floor_update_per_s"] > 0
 
 
+@pytest.mark.integration
 def test_speed_training_times_each_number_of_epochs_it_is_given(tmp_path):
     import json
 
@@ -299,6 +301,7 @@ def test_adaptive_update_threads_keeps_the_faster_count_and_backs_off_its_probes
     assert used[2:11] == [best] * 9 and callback.probe_every == 40
 
 
+@pytest.mark.integration
 def test_speed_training_runs_the_baseline_commit_of_its_default(tmp_path):
     """The default baseline (b8de6c4) predates `benchmarks.options` and `parse_options`: the
     timed run must import nothing of the project at module level to run in it."""

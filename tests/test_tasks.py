@@ -29,6 +29,7 @@ def _helix_parameters(path):
     return path.radius, float(np.degrees(np.arcsin(abs(path.climb))))
 
 
+@pytest.mark.integration
 def test_training_seeds_and_draws_never_meet_a_test_episode():
     sets = load_task_sets()
     train, validation = sets["train"], sets["validation"]

@@ -165,7 +165,15 @@ def _summary(out: Path) -> dict:
 
 
 @pytest.mark.rl
-@pytest.mark.parametrize("algo", ["ppo", "sac", "tqc", "crossq"])
+@pytest.mark.parametrize(
+    "algo",
+    [
+        "ppo",
+        "sac",
+        pytest.param("tqc", marks=pytest.mark.integration),
+        pytest.param("crossq", marks=pytest.mark.integration),
+    ],
+)
 def test_smoke_two_seeds_end_to_end(tmp_path, capsys, algo):
     """2 seeds, 256 env steps each, as two local processes: per-seed run directories, test
     evaluations and learning curves, the selection on validation, the exported agent."""
@@ -274,6 +282,7 @@ def test_validation_on_a_task_set(tmp_path):
     assert main([*args, "--task-set", "paper", "--eval-seeds", "100", "--resume"]) == 2
 
 
+@pytest.mark.integration
 @pytest.mark.rl
 def test_stop_at_pauses_on_the_full_schedule_and_resume_continues(tmp_path, capsys):
     """--stop-at pauses every seed with the schedules still running over --n-timesteps (the
@@ -325,6 +334,7 @@ def test_sac_resume_restores_the_replay_buffer(tmp_path):
     assert buffer.n_envs == 4 and buffer.size() == 64
 
 
+@pytest.mark.integration
 @pytest.mark.rl
 def test_killed_run_resumes_every_unfinished_seed(tmp_path):
     """SIGKILL the command once both seeds have a checkpoint: no worker survives it, and
@@ -377,6 +387,7 @@ def _state(pid: str) -> str:
         return "zombie"
 
 
+@pytest.mark.integration
 @pytest.mark.rl
 def test_ray_backend_runs_the_same_seeds(tmp_path, monkeypatch):
     ray = pytest.importorskip("ray")

@@ -280,6 +280,7 @@ def test_threaded_kernel_equals_the_serial_one_with_waves():
     assert np.array_equal(*runs)
 
 
+@pytest.mark.integration
 def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
     out = tmp_path / "depth.json"
     root = Path(__file__).resolve().parents[1]
