@@ -151,13 +151,18 @@ def rollouts(
             too short to share among threads, and on a loaded machine the threaded kernel's
             barrier makes small batches slower than one thread (README, Performance). Results do
             not depend on it.
-        **env_kwargs: `AUVPath3DEnv` keyword arguments (not ``render_mode``).
+        **env_kwargs: `AUVPath3DEnv` keyword arguments (not ``render_mode``), on top of the
+            env the policy carries, if it carries one (``policy.env_kwargs``: a saved agent runs
+            under the env id and observation it was trained on, `controllers.agent`).
 
     The policy is called once per control step with the float32 observations of all rows of a
     batch; ``episode_start`` is True at the first step only. Rows that have terminated are fed
     their last observation and their actions are ignored.
     """
     _check_policy(policy)
+    carried = getattr(policy, "env_kwargs", None)
+    if isinstance(carried, Mapping):
+        env_kwargs = {**carried, **env_kwargs}
     seed_list = _check_seeds(seeds)
     if not (isinstance(batch_size, (int, np.integer)) and batch_size >= 1):
         raise ValueError(f"batch_size must be a positive integer, got {batch_size!r}")

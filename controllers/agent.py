@@ -93,6 +93,8 @@ class AgentPolicy:
         self.observation_space = sb3_policy.observation_space
         self.action_space = sb3_policy.action_space
         self.obs_dim = int(self.obs_mean.shape[0])  # 15, or 21 for a residual agent's actor
+        # The env the agent carries: `auv_gym.rollout` runs it there unless told otherwise.
+        self.env_kwargs = agent_env_kwargs(self.metadata)
         sb3_policy.set_training_mode(False)
 
     def normalize(self, observation: np.ndarray) -> np.ndarray:
@@ -192,6 +194,22 @@ class AgentFiles:
     def label(self) -> str:
         """How errors name the model: its algorithm's class ("PPO model", "SAC model")."""
         return f"{ALGORITHMS[self.algo].class_name} model"
+
+
+def agent_env_kwargs(metadata: dict[str, Any]) -> dict[str, Any]:
+    """The env an agent carries, as `AUVPath3DEnv` keyword arguments: the fixed arguments of
+    the env id its metadata records (`auv_gym.VARIANTS`; a removed generation id is the RL task,
+    `auv_gym.recorded_env_id`; none recorded: the paper's `AUVPath3D-v0`) and the observation it
+    was trained on where that id's differs. A residual agent observes through its base."""
+    from auv_gym import ENV_ID, VARIANTS, recorded_env_id
+
+    fixed = dict(VARIANTS[recorded_env_id(metadata.get("env_id", ENV_ID))])
+    if "residual" in metadata:
+        return fixed
+    trained = ObservationConfig.from_spec(metadata.get("observation"))
+    if trained != ObservationConfig.from_spec(fixed.get("observation")):
+        fixed["observation"] = trained.to_dict()
+    return fixed
 
 
 def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:

@@ -55,7 +55,9 @@ def load_policy(
     actor = load_actor(files, device=device, num_threads=num_threads)
     if files.residual is not None:
         base = files.residual.make_base(**settings)
-        return ResidualPolicy(base, actor, files.residual.bound, files.residual)
+        policy = ResidualPolicy(base, actor, files.residual.bound, files.residual)
+        policy.env_kwargs = actor.env_kwargs  # the env it carries (`auv_gym.rollout`)
+        return policy
     return StagedPolicy(actor, built) if built else actor
 
 

@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
-from auv_gym.sim.task import SURGE_LIMIT
+from auv_gym.sim.task import REMUS_TOP_SPEED
 from controllers.registry import CLASSICAL, make_classical
 
 __all__ = [
@@ -193,7 +193,9 @@ def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def residual_observation_bounds(max_surge: float = SURGE_LIMIT) -> tuple[np.ndarray, np.ndarray]:
+def residual_observation_bounds(
+    max_surge: float = REMUS_TOP_SPEED,
+) -> tuple[np.ndarray, np.ndarray]:
     """(low, high) of the agent's observation: the env's bounds for a vehicle of top speed
     ``max_surge`` [m/s] (`AUVParams.max_surge`; REMUS 100's: `OBS_LOW`, `OBS_HIGH`), then ±1
     for b and a_{k−1}."""

@@ -27,3 +27,18 @@ def test_the_reference_generalist_follows_the_paper_helix_under_its_own_env() ->
     assert [r["termination_reason"] for r in results] == ["time_limit"] * 2
     # Suite IQM on `paper`: 0.0386 m against FBSM's 0.0641 m.
     assert max(r["rms_distance"] for r in results) < 0.8 * FBSM_PAPER_RMS
+
+
+def test_an_agent_runs_under_the_env_it_carries_unless_told_otherwise() -> None:
+    """`evaluate(agent, seeds)` needs no env arguments: the agent's id and observation are its
+    defaults (it once failed with "observation must have shape (49,)"); given ones win."""
+    import controllers
+    from auv_gym.rollout import evaluate
+
+    policy = controllers.make("agent", path=str(AGENT))
+    assert policy.env_kwargs["observation"]["integral_limit"] == 1.0
+    (result,) = evaluate(policy, [0], max_time=120.0)
+    assert result["termination_reason"] == "time_limit"
+    assert result["rms_distance"] < FBSM_PAPER_RMS
+    (calm,) = evaluate(policy, [0], max_time=120.0, disturbance="none")
+    assert calm["rms_distance"] < result["rms_distance"]

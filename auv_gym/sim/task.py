@@ -23,7 +23,7 @@ u_max and u > u_max ends the episode as "overspeed", a failure (docs/design.md �
 u_max = inf (the `AUVPath3D-v0` default) the term is exactly −0.0 and nothing terminates, so v0
 rewards are unchanged bit for bit; `AUVPath3DSpeedLimit-v0` (and `AUVPath3DPreview-v0`) set
 ``surge_limit="vehicle"`` (`VEHICLE_TOP_SPEED`): u_max is the vehicle record's top speed
-`AUVParams.max_surge`, 2.0 m/s for REMUS 100 (`SURGE_LIMIT`).
+`AUVParams.max_surge`, 2.0 m/s for REMUS 100 (`REMUS_TOP_SPEED`).
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ PRECISION_SCALE = 0.1
 # The `surge_limit` argument that means "the vehicle's top speed" (`AUVParams.max_surge`).
 VEHICLE_TOP_SPEED = "vehicle"
 # [m/s] u_max of AUVPath3DSpeedLimit-v0 with REMUS 100, the default vehicle
-SURGE_LIMIT = AUVParams().max_surge
+REMUS_TOP_SPEED = AUVParams().max_surge
 # Documented ranges. Bounded weights and a corridor of at least 1 cm keep every reward finite
 # (the observation is bounded by the float32 range or the episode ends as "non_finite"); a
 # corridor inside the observation's ±ERROR_BOUND keeps a running vehicle's errors in bounds.

@@ -33,7 +33,7 @@ import numpy as np
 
 from auv_gym.sim.config import ACTUATOR_LIMITS
 from auv_gym.sim.observation import GUIDANCE_FIELDS
-from auv_gym.sim.task import PATH_END, REWARD_TERMS, SURGE_LIMIT, TERMINATION_REASONS
+from auv_gym.sim.task import PATH_END, REMUS_TOP_SPEED, REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.support.files import json_default, write_atomic
 from auv_gym.vehicle.dynamics import STATE_NAMES
 
@@ -112,7 +112,7 @@ class Trajectory:
     u_desired: float = 1.0
     actuator_limits: tuple[float, float, float] = ACTUATOR_LIMITS
     metadata: dict[str, Any] = field(default_factory=dict)
-    top_speed: float = SURGE_LIMIT
+    top_speed: float = REMUS_TOP_SPEED
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.float64)
@@ -214,7 +214,7 @@ class Trajectory:
             "actuator_limits": list(self.actuator_limits),
             "metadata": self.metadata,
         }
-        if self.top_speed != SURGE_LIMIT:
+        if self.top_speed != REMUS_TOP_SPEED:
             meta["top_speed"] = self.top_speed
         arrays["metadata"] = np.array(json.dumps(meta, default=json_default))
         saver = np.savez_compressed if compress else np.savez
@@ -243,5 +243,5 @@ class Trajectory:
                 u_desired=float(meta["u_desired"]),
                 actuator_limits=tuple(meta["actuator_limits"]),
                 metadata=meta["metadata"],
-                top_speed=float(meta.get("top_speed", SURGE_LIMIT)),
+                top_speed=float(meta.get("top_speed", REMUS_TOP_SPEED)),
             )

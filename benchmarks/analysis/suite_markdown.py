@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from auv_gym.sim.task import SURGE_LIMIT
+from auv_gym.sim.task import REMUS_TOP_SPEED
 from benchmarks.analysis.smoothness_stats import column_chunks
 from benchmarks.analysis.stats import Interval, markdown_table
 from benchmarks.reports import table_format
@@ -49,7 +49,7 @@ def stats_markdown(
     for other, table in stats["improvement_tables"].items():
         lines.append(f"## Probability of a smaller RMS distance than {other} (ties ½)\n")
         lines += _split_tables(_by_policy(table), kinds)
-    distinct = set((speeds or {}).values()) or {SURGE_LIMIT}
+    distinct = set((speeds or {}).values()) or {REMUS_TOP_SPEED}
     surge = (
         f"{distinct.pop():g} m/s" if len(distinct) == 1 else "the top speed of the set's vehicle"
     )

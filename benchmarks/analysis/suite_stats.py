@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.sim.config import SimConfig
-from auv_gym.sim.task import SURGE_LIMIT
+from auv_gym.sim.task import REMUS_TOP_SPEED
 from auv_gym.sim.trajectory import FAILURE_REASONS
 from auv_gym.support.files import jsonable, write_json, write_text
 from benchmarks.analysis.report_spec import ReportSpec
@@ -192,7 +192,7 @@ def target_table(
     """One entry per (set, policy other than the references): mean scores [m], their ratio to
     the best reference of the set, failed episodes, largest surge [m/s] and whether the set
     passes: ratio ≤ ``max_ratio``, no failed episode, surge ≤ the set's top speed in ``speeds``
-    [m/s] (`top_speeds`; a set it lacks: REMUS 100's `SURGE_LIMIT`) (module doc).
+    [m/s] (`top_speeds`; a set it lacks: REMUS 100's `REMUS_TOP_SPEED`) (module doc).
     ``reference``: a policy, or several (those evaluated count), of which each set takes the
     one with the lowest mean ("the best classical policy")."""
     names = [reference] if isinstance(reference, str) else list(reference)
@@ -203,7 +203,7 @@ def target_table(
     table = []
     for name in dict.fromkeys(groups):
         cols = labels == name
-        top_speed = (speeds or {}).get(name, SURGE_LIMIT)
+        top_speed = (speeds or {}).get(name, REMUS_TOP_SPEED)
         ref_means = {r: float(scores[r][:, cols].mean()) for r in names}
         best = min(ref_means, key=ref_means.__getitem__)
         for policy, x in scores.items():

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
-from auv_gym import ENV_ID, VARIANTS, ObservationConfig, recorded_env_id
+from auv_gym import ENV_ID, VARIANTS, recorded_env_id
 from controllers import CLASSICAL
 
 __all__ = [
@@ -193,9 +193,11 @@ def agent_run(
             f"{where}: {agent}/metadata.json records env_id {recorded!r}; an agent runs under "
             f"its training env: {error}"
         ) from None
-    trained = ObservationConfig.from_spec(files.metadata.get("observation"))
-    registered = ObservationConfig.from_spec(VARIANTS[env_id].get("observation"))
-    env_kwargs = {} if trained == registered else {"observation": trained.to_dict()}
+    from controllers.agent import agent_env_kwargs
+
+    fixed = VARIANTS[env_id]  # what the id gives; the rest is the agent's own (its observation)
+    own = agent_env_kwargs(files.metadata)
+    env_kwargs = {k: v for k, v in own.items() if k not in fixed or fixed[k] != v}
     seed = files.metadata.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"{where}: {agent}/metadata.json records seed {seed!r}, not an int >= 0")
