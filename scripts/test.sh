@@ -2,7 +2,7 @@
 # The test suite: set-up (idempotent), lint, then the tests on both cores.
 #   bash scripts/test.sh                  # every test but the integration tier (about 5 min)
 #   bash scripts/test.sh --integration    # the integration tier alone: fresh installs, baseline
-#                                         # trees, Ray, every learner and resume path (about 8 min)
+#                                         # trees, Ray, recompiles, commands end to end (about 5 min)
 # Other arguments go to pytest. CI runs both (.ci/run).
 set -euo pipefail
 cd "$(dirname "$0")/.."

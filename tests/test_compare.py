@@ -41,6 +41,7 @@ def metrics_by_job(out: Path) -> dict[tuple, dict]:
     return {(e["scenario"], e["policy"], e["seed"]): e["metrics"] for e in episodes}
 
 
+@pytest.mark.integration
 def test_cli_end_to_end_writes_tables_and_figures(tmp_path):
     run_cli(
         "--policies",

@@ -215,6 +215,7 @@ def test_a_crashed_run_keeps_its_finished_chunks(tiny, tmp_path, monkeypatch):
     assert len(read_rows(out / "episodes.csv")) == 8
 
 
+@pytest.mark.integration
 def test_rerun_with_two_workers_is_bit_identical(tiny, tmp_path):
     out = tmp_path / "again"
     argv = [*tiny["argv"][:-5], "--out", str(out), "--no-stats", "--quiet"]

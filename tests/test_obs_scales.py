@@ -59,6 +59,7 @@ def test_unknown_entries_are_named_with_the_valid_ones():
         pin_observation_scales(_Normalize(), ["x_e", "z_e"], {"z_err": 0.5})
 
 
+@pytest.mark.integration
 @pytest.mark.rl
 def test_a_trained_agent_normalises_its_errors_by_the_fixed_scale(
     tmp_path, train_tiny_preview_agent

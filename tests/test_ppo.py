@@ -140,6 +140,7 @@ def test_resume_continues_step_counter(tiny_run: Path) -> None:
     assert ckpt["num_timesteps"] == 512
 
 
+@pytest.mark.integration
 def test_cli_refuses_to_overwrite_and_to_resume_nothing(tiny_run: Path, tmp_path: Path) -> None:
     (tmp_path / "tiny.yml").write_text(TINY_YAML)
     again = run_cli("--config", "tiny.yml", "--out", str(tiny_run), *TINY_ARGS, cwd=tmp_path)

@@ -91,6 +91,7 @@ def test_the_generalist_schedule_is_its_recipe():
     assert schedule.options["eval_episodes"] == 64
 
 
+@pytest.mark.integration
 @pytest.mark.rl
 def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
     config = _write(tmp_path)

@@ -169,7 +169,7 @@ def _summary(out: Path) -> dict:
     "algo",
     [
         "ppo",
-        "sac",
+        pytest.param("sac", marks=pytest.mark.integration),
         pytest.param("tqc", marks=pytest.mark.integration),
         pytest.param("crossq", marks=pytest.mark.integration),
     ],

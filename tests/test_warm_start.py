@@ -79,6 +79,7 @@ def _tiny_config(agent, folder):
     return str(folder / "tiny.yml")
 
 
+@pytest.mark.integration
 def test_a_multi_seed_run_starts_each_seed_from_its_agent_and_records_it(agent, tmp_path):
     from benchmarks.training.seeds_cli import main
 

@@ -67,10 +67,16 @@ def compile_kernels(progress: bool = True) -> float:
         evaluate(policy, [0], transient=0.0, **env)
         if bar is not None:
             bar.update()
-    envs = gym.make_vec("AUVPath3DPreview-v0", num_envs=2, observation="preview_integral")
-    envs.reset(seed=0)
-    envs.step(np.zeros((2, 3), dtype=np.float32))
-    envs.close()
+    # The env API's own call signatures: float32 and float64 actions, one env and a batch.
+    for dtype in (np.float32, np.float64):
+        envs = gym.make_vec("AUVPath3DPreview-v0", num_envs=2, observation="preview_integral")
+        envs.reset(seed=0)
+        envs.step(np.zeros((2, 3), dtype=dtype))
+        envs.close()
+        env = gym.make("AUVPath3D-v0")
+        env.reset(seed=0)
+        env.step(np.zeros(3, dtype=dtype))
+        env.close()
     if bar is not None:
         bar.update()
         bar.close()
