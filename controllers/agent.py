@@ -196,14 +196,16 @@ class AgentFiles:
         return f"{ALGORITHMS[self.algo].class_name} model"
 
 
-def agent_env_kwargs(metadata: dict[str, Any]) -> dict[str, Any]:
+def agent_env_kwargs(metadata: dict[str, Any], env_id: str | None = None) -> dict[str, Any]:
     """The env an agent carries, as `AUVPath3DEnv` keyword arguments: the fixed arguments of
-    the env id its metadata records (`auv_gym.VARIANTS`; a removed generation id is the RL task,
-    `auv_gym.recorded_env_id`; none recorded: the paper's `AUVPath3D-v0`) and the observation it
-    was trained on where that id's differs. A residual agent observes through its base."""
+    ``env_id`` (None: the id its metadata records; `auv_gym.VARIANTS`; a removed generation id
+    is the RL task, `auv_gym.recorded_env_id`; none recorded: the paper's `AUVPath3D-v0`) and
+    the observation it was trained on where that id's differs. A residual agent observes
+    through its base."""
     from auv_gym import ENV_ID, VARIANTS, recorded_env_id
 
-    fixed = dict(VARIANTS[recorded_env_id(metadata.get("env_id", ENV_ID))])
+    recorded = metadata.get("env_id", ENV_ID) if env_id is None else env_id
+    fixed = dict(VARIANTS[recorded_env_id(recorded)])
     if "residual" in metadata:
         return fixed
     trained = ObservationConfig.from_spec(metadata.get("observation"))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +20,7 @@ from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.sim.trajectory import env_termination_reason
 from auv_gym.support.files import write_json
+from controllers.agent import agent_env_kwargs
 from controllers.loader import load_policy
 from controllers.residual import base_kwargs_for_env
 
@@ -130,16 +131,6 @@ def chattering_mean(results: Sequence[dict[str, Any]]) -> float:
     return float(values.mean()) if values.size else math.nan
 
 
-def agent_env_kwargs(env_id: str, metadata: Mapping[str, Any]) -> dict[str, Any]:
-    """The fixed env arguments an agent is evaluated under: those of ``env_id`` (a key or alias
-    of `auv_gym.VARIANTS`) plus the observation recorded in the agent's ``metadata``, for an
-    agent trained on another observation than its id's default."""
-    fixed = dict(VARIANTS[recorded_env_id(env_id)])
-    if metadata.get("observation") is not None:
-        fixed["observation"] = metadata["observation"]
-    return fixed
-
-
 def held_out_evaluation(
     agent: str | os.PathLike, duration: float = 300.0, env_id: str = ENV_ID
 ) -> dict[str, Any]:
@@ -149,7 +140,7 @@ def held_out_evaluation(
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
     policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[recorded_env_id(env_id)]))
-    fixed = agent_env_kwargs(env_id, policy.metadata)
+    fixed = agent_env_kwargs(policy.metadata, env_id)  # the env it carries, under ``env_id``
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
         "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",
