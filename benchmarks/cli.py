@@ -7,6 +7,7 @@
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|training|off-policy|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
+    auv-gym export ppo_generalist --out policy.onnx   # one ONNX graph (rl and onnx extras)
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m <module>`` (e.g.
 ``python -m benchmarks.runner.compare``; the modules are listed in `COMMANDS` and `SPEED`) and shows
@@ -52,6 +53,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "benchmarks.reports.paper_figures",
         "the paper's Figs. 3-9, FBSM vs backstepping",
     ),
+    "export": (
+        "benchmarks.runner.export",
+        "an agent as one ONNX graph with its contract (rl and onnx extras)",
+    ),
     "compile": (
         "benchmarks.runner.compile_kernels",
         "compile and cache the simulation kernels (set-up runs it)",
@@ -83,6 +88,8 @@ EXTRAS = {
     "rliable": "stats",
     "arch": "stats",
     "pandas": "stats",
+    "onnx": "onnx",
+    "onnxruntime": "onnx",
 }
 
 

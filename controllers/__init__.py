@@ -21,7 +21,7 @@ register_package(Path(__file__).parent, Path(auv_gym.__file__).parent)
 from controllers.algorithms import ALGORITHMS  # noqa: E402
 from controllers.backstepping import Backstepping  # noqa: E402
 from controllers.base import BatchedController, Policy  # noqa: E402
-from controllers.env_settings import policy_settings  # noqa: E402
+from controllers.env_settings import env_config, policy_settings  # noqa: E402
 from controllers.fbsm import FBSM  # noqa: E402
 from controllers.gains import ControllerGains, MembershipSet  # noqa: E402
 from controllers.pid import PIDLOS, PIDGains  # noqa: E402
@@ -76,6 +76,9 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     other keyword configures the base controller. "lowpass"
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
+    "onnx" (`controllers.onnx_policy.OnnxPolicy`, docs/design.md §3.18) takes `path` (an
+    exported agent's .onnx file, `auv-gym export`) and runs it with onnxruntime alone; with
+    ``env`` its observation layout, actuator and control period are checked against the env's.
     """
     if name in RENAMED:
         raise ValueError(f"controller {name!r} was renamed: use {RENAMED[name]}")
@@ -90,6 +93,14 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
             raise ValueError(f"controllers.make({name!r}) needs path=<saved agent directory>")
         algo = None if name == "agent" else name
         return load_policy(kwargs.pop("path"), algo=algo, **kwargs)
+    if name == "onnx":
+        from controllers.onnx_policy import OnnxPolicy
+
+        if "path" not in kwargs:
+            raise ValueError("controllers.make('onnx') needs path=<exported agent .onnx file>")
+        if env is not None:
+            kwargs.setdefault("observation_names", env_config(env).observation.names)
+        return OnnxPolicy(kwargs.pop("path"), **kwargs)
     if name == "residual":
         from controllers.loader import make_residual
 
@@ -98,7 +109,7 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
         from controllers.registry import make_lowpass
 
         return make_lowpass(**kwargs)
-    valid = [*CLASSICAL, *AGENT_NAMES, "residual", "lowpass"]
+    valid = [*CLASSICAL, *AGENT_NAMES, "onnx", "residual", "lowpass"]
     raise ValueError(f"unknown controller {name!r}; valid: {valid}")
 
 

@@ -8,6 +8,8 @@
 * "agent:PATH": any saved agent directory or model zip (`controllers.loader.load_policy`, any
   algorithm of `controllers.algorithms`); a residual agent's base controller is built like a
   classical one, for the scenario;
+* "onnx:FILE": an exported agent (`auv-gym export`), run by onnxruntime alone
+  (`controllers.onnx_policy.OnnxPolicy`) in the env its contract records;
 * "module:attribute": an importable Policy object, or a class / factory called with the
   scenario's controller keyword arguments (`controllers.import_policy`).
 
@@ -29,6 +31,7 @@ from controllers import CLASSICAL
 __all__ = [
     "AGENTS_DIR",
     "AGENT_PREFIX",
+    "ONNX_PREFIX",
     "REFERENCE_AGENTS",
     "REMOVED_POLICIES",
     "MissingExtraError",
@@ -46,6 +49,7 @@ AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
 # The reference agents: the name is the folder of benchmarks/agents/ (README there).
 REFERENCE_AGENTS = ("ppo_generalist", "ppo_helix", "ppo_residual", "sac_helix")
 AGENT_PREFIX = "agent:"
+ONNX_PREFIX = "onnx:"
 _NOT_SHIPPED = "is no longer shipped (its results stay in docs/results.md); reference agents:"
 # Names of earlier releases → what to type now (None: the agent left the tree).
 REMOVED_POLICIES: dict[str, str | None] = {
@@ -86,11 +90,17 @@ class MissingExtraError(ValueError):
 
 @dataclass(frozen=True)
 class PolicySpec:
-    """A parsed spec: its text, its kind and, for an agent, its path."""
+    """A parsed spec: its text, its kind and, for an agent, its path (an export: its file)."""
 
     text: str
-    kind: Literal["classical", "agent", "import"]
+    kind: Literal["classical", "agent", "onnx", "import"]
     agent: Path | None = None
+    onnx: Path | None = None
+
+    @property
+    def files(self) -> Path | None:
+        """The files the policy is read from (an agent folder, an .onnx file), or None."""
+        return self.agent if self.agent is not None else self.onnx
 
     @classmethod
     def parse(cls, spec: str) -> PolicySpec:
@@ -101,6 +111,8 @@ class PolicySpec:
             return cls(spec, "agent", AGENTS_DIR / spec)
         if spec.startswith(AGENT_PREFIX):
             return cls(spec, "agent", Path(spec[len(AGENT_PREFIX) :]))
+        if spec.startswith(ONNX_PREFIX):
+            return cls(spec, "onnx", onnx=Path(spec[len(ONNX_PREFIX) :]))
         if spec.startswith(FORMER_AGENT_PREFIX):
             path = spec[len(FORMER_AGENT_PREFIX) :]
             raise ValueError(f"policy {spec!r}: 'ppo:PATH' was renamed, use 'agent:{path}'")
@@ -112,7 +124,8 @@ class PolicySpec:
         if ":" in spec:
             return cls(spec, "import")
         raise ValueError(
-            f"unknown policy {spec!r}; valid: {policy_names()}, 'agent:PATH' or 'module:attribute'"
+            f"unknown policy {spec!r}; valid: {policy_names()}, 'agent:PATH', 'onnx:FILE' or "
+            "'module:attribute'"
         )
 
 
@@ -144,9 +157,29 @@ def check_policy_spec(spec: str) -> PolicySpec:
             check_agent(parsed.agent)
         except (OSError, ValueError) as error:
             raise type(error)(f"policy {spec!r}: {error}") from None
+    if parsed.onnx is not None:
+        check_onnx_spec(spec, parsed.onnx)
     if parsed.kind == "import":
         controllers.import_policy(spec, instantiate=False)
     return parsed
+
+
+def check_onnx_spec(spec: str, path: Path) -> None:
+    """An exported agent before any episode: onnxruntime installed, contract and graph intact and
+    agreeing, and the graph's observation the one of the env its contract records."""
+    if not _importable("onnxruntime"):
+        raise MissingExtraError(
+            f"policy {spec!r}: running an ONNX policy needs onnxruntime, from the 'onnx' extra: "
+            "pip install 'auv-gym[onnx]'"
+        )
+    from auv_gym.sim.config import SimConfig
+
+    env_id, env_kwargs = policy_env(spec)
+    try:
+        names = SimConfig.from_kwargs(**{**VARIANTS[env_id], **env_kwargs}).observation.names
+        controllers.make("onnx", path=str(path), observation_names=names)
+    except (OSError, ValueError) as error:
+        raise type(error)(f"policy {spec!r}: {error}") from None
 
 
 def build_policy(spec: str, env: Any, controller_kwargs: dict[str, Any] | None = None) -> Any:
@@ -160,6 +193,8 @@ def build_policy(spec: str, env: Any, controller_kwargs: dict[str, Any] | None =
         return controllers.make(spec, env=env, **kwargs)
     if parsed.kind == "agent":  # a residual agent's base is configured like a classical one
         return controllers.make("agent", env=env, path=str(parsed.agent), base_kwargs=kwargs)
+    if parsed.kind == "onnx":  # so is an exported residual agent's
+        return controllers.make("onnx", env=env, path=str(parsed.onnx), base_kwargs=kwargs)
     return controllers.import_policy(spec, **kwargs)
 
 
@@ -209,6 +244,8 @@ def policy_env(spec: str) -> tuple[str, dict[str, Any]]:
     the benchmark's `auv_gym.ENV_ID` with no arguments (the classical controllers, imported
     policies and agents whose files record no env id, e.g. an RL Zoo model zip)."""
     parsed = PolicySpec.parse(spec)
+    if parsed.onnx is not None:
+        return onnx_env(spec, parsed.onnx)
     if parsed.kind != "agent" or parsed.agent is None:
         return ENV_ID, {}
     _, env_id, env_kwargs = agent_run(f"policy {spec!r}", parsed.agent, default_env_id=ENV_ID)
@@ -218,3 +255,18 @@ def policy_env(spec: str) -> tuple[str, dict[str, Any]]:
 def policy_env_id(spec: str) -> str:
     """The env id a policy runs under (`policy_env`)."""
     return policy_env(spec)[0]
+
+
+def onnx_env(spec: str, path: Path) -> tuple[str, dict[str, Any]]:
+    """(env id, env arguments) an exported agent's contract records, as `agent_run` gives them
+    for its saved agent; errors name the spec."""
+    from controllers.onnx_policy import read_contract
+
+    try:
+        contract = read_contract(path)
+        env_id = recorded_env_id(contract.env_id)
+    except (OSError, ValueError) as error:
+        raise type(error)(f"policy {spec!r}: {error}") from None
+    fixed = VARIANTS[env_id]
+    own = contract.env_kwargs
+    return env_id, {k: v for k, v in own.items() if k not in fixed or fixed[k] != v}

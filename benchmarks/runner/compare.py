@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from auv_gym import VARIANTS
 from auv_gym.metrics import check_window
 from auv_gym.sim.config import SimConfig
 from auv_gym.support.files import replace_outputs
@@ -128,8 +129,12 @@ def check_args(args: argparse.Namespace) -> None:
             # one metrics-window rule (docs/design.md §3.9); it must hold a metric everywhere
             transient = check_window(args.duration, args.transient, config.control_dt)
             for spec in policies:
-                if PolicySpec.parse(spec).kind == "classical":
+                kind = PolicySpec.parse(spec).kind
+                if kind == "classical":
                     build_policy(spec, config, scenario.controller)
+                elif kind == "onnx":  # its actuator and observation, as the job's env has them
+                    env = {**VARIANTS[env_ids[spec]], **agent_envs[spec], **env_kwargs}
+                    build_policy(spec, env, scenario.controller)
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
     writable_folder(args.out)  # last: a bad argument above creates no folder

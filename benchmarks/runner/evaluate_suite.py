@@ -212,7 +212,8 @@ def check_args(args: argparse.Namespace) -> None:
                 try:
                     config = SimConfig.from_kwargs(**chunk.env_kwargs)
                     transient = check_window(args.duration, args.transient, config.control_dt)
-                    if PolicySpec.parse(run.spec).kind == "classical":
+                    # built per task before any episode (an export: for its actuator)
+                    if PolicySpec.parse(run.spec).kind in ("classical", "onnx"):
                         build_policy(run.spec, config, task.controller)
                 except (TypeError, ValueError) as error:
                     raise ValueError(
@@ -275,7 +276,7 @@ def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict
         "tasks_file": str(args.tasks_file),
         "policies": {p.name: asdict(p) for p in args.policy_list},
         "agents": {
-            r.spec: agent_digest(PolicySpec.parse(r.spec).agent)
+            r.spec: agent_digest(PolicySpec.parse(r.spec).files)
             for p in args.policy_list
             for r in p.runs
             if p.kind == "agent"

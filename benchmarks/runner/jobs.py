@@ -85,7 +85,7 @@ class Job:
             "seed": self.seed,
             "duration": self.duration,
             "transient": self.transient,
-            "agent": agent_digest(PolicySpec.parse(self.policy).agent),
+            "agent": agent_digest(PolicySpec.parse(self.policy).files),
             "code": code_digest(),
         }
         if self.env_id != ENV_ID:  # the default keeps the fingerprints of earlier runs
@@ -116,11 +116,18 @@ def code_digest() -> str:
 
 
 def agent_digest(agent: Path | None) -> str:
-    """Hash of an agent's files (a directory's, sorted by path, or one model zip); "" for None."""
+    """Hash of an agent's files (a directory's, sorted by path, one model zip, or an exported
+    .onnx file with its contract); "" for None."""
     if agent is None:
         return ""
     digest = hashlib.sha256()
-    for file in sorted(p for p in agent.rglob("*") if p.is_file()) if agent.is_dir() else [agent]:
+    if agent.is_dir():
+        files = sorted(p for p in agent.rglob("*") if p.is_file())
+    elif agent.suffix == ".onnx":
+        files = [agent, agent.with_suffix(".json")]
+    else:
+        files = [agent]
+    for file in files:
         digest.update(file.read_bytes())
     return digest.hexdigest()[:16]
 

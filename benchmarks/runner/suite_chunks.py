@@ -22,6 +22,7 @@ from benchmarks.catalog.policies import (
     agent_run,
     build_policy,
     check_policy_spec,
+    policy_env,
     policy_label,
 )
 from benchmarks.catalog.tasks import TaskSet
@@ -78,7 +79,7 @@ class SuitePolicy:
     """A policy of the suite with its runs; ``results``: a multi-seed results directory."""
 
     name: str
-    kind: str  # "classical", "agent" or "import"
+    kind: str  # "classical", "agent", "onnx" or "import"
     runs: tuple[Run, ...]
     results: str | None = None
 
@@ -107,7 +108,7 @@ class Chunk:
         parsed = PolicySpec.parse(self.run.spec)
         payload = {
             "policy": "agent" if parsed.agent is not None else self.run.spec,
-            "agent": agent_digest(parsed.agent),
+            "agent": agent_digest(parsed.files),
             "env": self.env_kwargs,
             "controller": self.task.controller if parsed.agent is None else {},
             "seeds": [self.task.seeds.start, self.task.seeds.stop],
@@ -136,6 +137,9 @@ def resolve_policy(spec: str) -> SuitePolicy:
     ValueError / FileNotFoundError naming the entry otherwise."""
     if "=" not in spec:
         parsed = check_policy_spec(spec)
+        if parsed.onnx is not None:  # an export runs in the env its contract records
+            env_id, env_kwargs = policy_env(spec)
+            return SuitePolicy(spec, "onnx", (Run(0, env_id, spec, env_kwargs),))
         if parsed.agent is None:
             return SuitePolicy(spec, parsed.kind, (Run(0, ENV_ID, spec),))
         seed, env_id, agent_env = agent_run(f"policy {spec!r}", parsed.agent)

@@ -1,0 +1,386 @@
+"""Export a saved agent to one ONNX graph and its contract (`auv-gym export`, docs/design.md §3.18).
+
+The graph maps the raw observation, as the env (or the vehicle's navigation) gives it, to the
+command the env receives: the agent's observation normalisation, its network's deterministic
+action, SB3's action scaling and every stage its metadata lists, built for the actuator the
+export names (`controllers.stages.build_stages`: the allocation is the identity on the paper's
+actuator and left out there). A residual agent's graph ends in its bounded correction and
+learned filter on top of its base controller's command, an input (the base is a classical
+controller with adaptive laws, run beside the graph by `controllers.onnx_policy.OnnxPolicy`).
+
+Before anything is written the agent's files are checked (`controllers.agent.check_agent`), the
+output folder must exist, and the graph is run by onnxruntime against the Python agent on
+observations drawn from the agent's own normalisation statistics: an export whose commands
+differ by more than `PARITY_TOLERANCE` is refused. Export needs torch (to read the network) and
+onnx; running the result needs only onnxruntime and numpy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym import __version__
+from auv_gym.support.files import write_atomic, write_json
+from controllers.agent import AgentFiles, check_agent, load_actor, observation_layout
+from controllers.onnx_graph import (
+    OPSET,
+    Graph,
+    action_head,
+    allocation_graph,
+    guard_graph,
+    network_graph,
+    normalisation_graph,
+    residual_graph,
+)
+from controllers.onnx_policy import CONTRACT_FORMAT, CONTRACT_VERSION, contract_path, sha256_of
+from controllers.stages import AllocationStage, GuardStage, build_stages
+
+__all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_agent", "mlp_layers"]
+
+ACTUATORS = ("paper", "fins", "realistic")  # what an export's commands may be for
+PARITY_TOLERANCE = 1e-5  # max |ONNX − Python| over the check's commands, normalised units
+PARITY_SAMPLES = 2048  # observations the export checks itself on
+# The env's command for each actuator (docs/model.md §2.3, §2.6): names and what 1 means.
+ACTION_LAYOUT = {
+    "paper": (["X", "M", "N"], "τ / τ_max, τ_max = (50 N, 10 N·m, 10 N·m)"),
+    "fins": (["X", "delta_s", "delta_r"], "X / 50 N; fin angles / δ_max"),
+    "realistic": (["rpm", "delta_s", "delta_r"], "shaft speed / n_max; fin angles / δ_max"),
+}
+
+
+def mlp_layers(module: Any, where: str) -> list[tuple[str, Any]]:
+    """The layers of a torch MLP (Linear, Tanh, ReLU, Hardtanh, Identity, Flatten; nested
+    Sequential) as ("linear", (W, b)), ("tanh", None), ... in order; a one-line ValueError
+    naming ``where`` and the module for anything else."""
+    import torch
+
+    out: list[tuple[str, Any]] = []
+    children = list(module.children()) if isinstance(module, torch.nn.Sequential) else [module]
+    for child in children:
+        if isinstance(child, torch.nn.Sequential):
+            out.extend(mlp_layers(child, where))
+        elif isinstance(child, torch.nn.Linear):
+            weight = child.weight.detach().cpu().numpy().astype(np.float32)
+            bias = (
+                child.bias.detach().cpu().numpy().astype(np.float32)
+                if child.bias is not None
+                else np.zeros(weight.shape[0], np.float32)
+            )
+            out.append(("linear", (weight, bias)))
+        elif isinstance(child, torch.nn.Tanh):
+            out.append(("tanh", None))
+        elif isinstance(child, torch.nn.ReLU):
+            out.append(("relu", None))
+        elif isinstance(child, torch.nn.Hardtanh):
+            out.append(("hardtanh", (float(child.min_val), float(child.max_val))))
+        elif not isinstance(child, (torch.nn.Identity, torch.nn.Flatten)):
+            raise ValueError(f"{where}: layer {child!r} has no ONNX export here")
+    return out
+
+
+def actor_layers(sb3_policy: Any, where: str) -> tuple[list[tuple[str, Any]], bool]:
+    """(the layers from normalised observation to the action's mean, squashed?) of an SB3
+    policy: PPO's `mlp_extractor.policy_net` + `action_net`, or SAC's (and TQC's, CrossQ's)
+    `actor.latent_pi` + `actor.mu` followed by tanh."""
+    import torch
+
+    if hasattr(sb3_policy, "mlp_extractor"):  # ActorCriticPolicy (PPO)
+        extractor = sb3_policy.pi_features_extractor
+        if not isinstance(extractor, torch.nn.Flatten) and type(extractor).__name__ != (
+            "FlattenExtractor"
+        ):
+            raise ValueError(f"{where}: features extractor {extractor!r} has no ONNX export here")
+        if getattr(sb3_policy, "use_sde", False):
+            raise ValueError(f"{where}: gSDE on an on-policy agent has no ONNX export here")
+        body = mlp_layers(sb3_policy.mlp_extractor.policy_net, where)
+        return body + mlp_layers(sb3_policy.action_net, where), bool(sb3_policy.squash_output)
+    actor = getattr(sb3_policy, "actor", None)
+    if actor is None or not hasattr(actor, "latent_pi"):
+        raise ValueError(f"{where}: policy {type(sb3_policy).__name__} has no ONNX export here")
+    return mlp_layers(actor.latent_pi, where) + mlp_layers(actor.mu, where), True
+
+
+def _check_out(out: str | os.PathLike) -> Path:
+    target = Path(out)
+    if target.suffix != ".onnx":
+        raise ValueError(f"--out {target}: the file name must end in .onnx")
+    if not target.parent.is_dir():
+        raise FileNotFoundError(f"--out {target}: folder {target.parent} does not exist")
+    return target
+
+
+def export_agent(
+    agent: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    actuator: str = "paper",
+    actuator_params: Mapping[str, Any] | None = None,
+) -> tuple[Path, Path, dict[str, Any]]:
+    """Export the saved agent ``agent`` to ``out`` (.onnx) and its contract beside it (.json),
+    its commands for the env actuator ``actuator`` (`ACTUATORS`; ``actuator_params``: the
+    realistic actuators' settings). Returns (onnx file, contract file, the parity check's
+    figures). Every check runs before a file is written (module doc)."""
+    target = _check_out(out)
+    if actuator not in ACTUATORS:
+        raise ValueError(f"actuator {actuator!r} is not one of {list(ACTUATORS)}")
+    files = check_agent(agent)
+    layout = observation_layout(files.metadata)
+    settings: dict[str, Any] = {"actuator": actuator}
+    if actuator_params is not None:
+        settings["actuator_params"] = actuator_params
+    stages = build_stages(files.stages, layout, settings, str(files.model))
+    actor = load_actor(files, num_threads=1)
+    model, state_size = _build_model(files, actor, stages, layout)
+    parity = _parity(model, files, actor, stages, state_size)
+    if parity["max_abs_error"] > PARITY_TOLERANCE:
+        raise ValueError(
+            f"{files.model}: the exported graph differs from the agent by "
+            f"{parity['max_abs_error']:.3g} > {PARITY_TOLERANCE:g}; nothing written"
+        )
+    contract = _contract(files, target, layout, state_size, actuator, stages, parity)
+    _annotate(model, contract)
+    data = model.SerializeToString()
+    contract["onnx_sha256"] = hashlib.sha256(data).hexdigest()
+    write_atomic(target, lambda fh: fh.write(data))
+    contract_file = write_json(contract_path(target), contract, indent=1)
+    return target, contract_file, parity
+
+
+def _build_model(
+    files: AgentFiles, actor: Any, stages: list[Any], layout: tuple[str, ...]
+) -> tuple[Any, int]:
+    """The ONNX model of the agent and the size of its memory."""
+    from onnx import TensorProto, checker, helper
+
+    where = str(files.model)
+    g = Graph()
+    n = "n"
+    inputs = []
+    env_names = layout if files.residual is None else layout[:15]
+    observation = "observation"
+    inputs.append(
+        helper.make_tensor_value_info(observation, TensorProto.FLOAT, [n, len(env_names)])
+    )
+    layers, squash = actor_layers(actor.sb3_policy, where)
+    space = actor.sb3_policy.action_space
+    seen = observation
+    state_outputs: list[str] = []
+    if files.residual is not None:
+        state_size = 4  # previous applied action (3), started (1)
+        inputs.append(helper.make_tensor_value_info("state", TensorProto.FLOAT, [n, state_size]))
+        inputs.append(helper.make_tensor_value_info("base_action", TensorProto.FLOAT, [n, 3]))
+        previous = g.op("Slice", "state", *(g.const([v], np.int64) for v in (0, 3, 1)))
+        started = g.op("Slice", "state", *(g.const([v], np.int64) for v in (3, 4, 1)))
+        seen = g.op("Concat", observation, "base_action", previous, axis=1)
+    else:
+        allocation = next((s for s in stages if isinstance(s, AllocationStage)), None)
+        state_size = 3 if allocation is not None else 0
+        if allocation is not None:  # the network sees the delivered command (`Stage.observe`)
+            inputs.append(helper.make_tensor_value_info("state", TensorProto.FLOAT, [n, 3]))
+            keep = np.ones(len(layout), np.float32)
+            keep[allocation.allocation.previous_index] = 0.0
+            place = np.zeros((3, len(layout)), np.float32)
+            place[np.arange(3), allocation.allocation.previous_index] = 1.0
+            seen = g.op(
+                "Add",
+                g.op("Mul", observation, g.const(keep, np.float32)),
+                g.op("MatMul", "state", g.const(place, np.float32)),
+            )
+    normed = normalisation_graph(
+        g, seen, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon
+    )
+    commands = action_head(g, network_graph(g, normed, layers), space.low, space.high, squash)
+    if files.residual is not None:
+        settings = files.residual
+        commands = residual_graph(
+            g, "base_action", commands, previous, started, settings.bound, settings.filter_max
+        )
+        ones = g.op("ConstantOfShape", g.op("Shape", started), value=_one_float32())
+        state_outputs = [g.op("Concat", commands, ones, axis=1)]  # (applied, started = 1)
+    for stage in stages:
+        if isinstance(stage, GuardStage):
+            commands = guard_graph(g, commands, seen, stage.index, stage.guard)
+        elif isinstance(stage, AllocationStage):
+            commands, delivered = allocation_graph(g, commands, seen, stage.allocation)
+            state_outputs = [delivered]
+        else:
+            raise ValueError(f"{where}: stage {stage.name!r} has no ONNX export here")
+    g.op("Identity", commands, output="action")
+    outputs = [helper.make_tensor_value_info("action", TensorProto.FLOAT, [n, 3])]
+    if state_size:
+        g.op("Identity", state_outputs[0], output="next_state")
+        outputs.append(
+            helper.make_tensor_value_info("next_state", TensorProto.FLOAT, [n, state_size])
+        )
+    graph = helper.make_graph(g.nodes, "auv_gym_agent", inputs, outputs, g.initializers)
+    model = helper.make_model(
+        graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="auv-gym"
+    )
+    model.producer_version = __version__
+    model.ir_version = 8  # onnxruntime ≥ 1.12 reads it
+    checker.check_model(model, full_check=True)
+    return model, state_size
+
+
+def _one_float32() -> Any:
+    from onnx import numpy_helper
+
+    return numpy_helper.from_array(np.ones(1, np.float32))
+
+
+def _session(model: Any) -> Any:
+    import onnxruntime
+
+    options = onnxruntime.SessionOptions()
+    options.intra_op_num_threads = 1
+    options.log_severity_level = 3
+    return onnxruntime.InferenceSession(
+        model.SerializeToString(), options, providers=["CPUExecutionProvider"]
+    )
+
+
+def _parity(
+    model: Any, files: AgentFiles, actor: Any, stages: list[Any], state_size: int
+) -> dict[str, Any]:
+    """The graph against the Python agent on `PARITY_SAMPLES` observations drawn from the
+    agent's normalisation statistics (μ ± σ per entry; a residual agent: base commands, previous
+    actions and episode starts drawn too): the largest |difference| of the commands and of the
+    memory it passes on."""
+    from controllers.residual import agent_observation, residual_action
+    from controllers.stages import PipelineState, StagedPolicy
+
+    rng = np.random.default_rng(0)
+    k = PARITY_SAMPLES
+    draw = files.obs_mean + np.sqrt(files.obs_var) * rng.standard_normal((k, files.obs_mean.size))
+    session = _session(model)
+    if files.residual is not None:
+        obs = draw[:, :15].astype(np.float32)
+        base = rng.uniform(-1.0, 1.0, (k, 3)).astype(np.float32)
+        previous = rng.uniform(-1.0, 1.0, (k, 3)).astype(np.float32)
+        started = rng.integers(0, 2, k).astype(bool)
+        state = np.column_stack([previous, started]).astype(np.float32)
+        got, got_state = session.run(
+            None, {"observation": obs, "state": state, "base_action": base}
+        )
+        correction, _ = actor.predict(agent_observation(obs, base, previous))
+        want = residual_action(
+            base, correction, files.residual.bound, files.residual.filter_max, previous, started
+        )
+        want_state = np.column_stack([want, np.ones(k)])
+    else:
+        obs = draw.astype(np.float32)
+        policy = StagedPolicy(actor, stages)
+        memories = [stage.start(k) for stage in stages]
+        feeds = {"observation": obs}
+        if state_size:
+            delivered = rng.uniform(-1.0, 1.0, (k, 3)).astype(np.float32)
+            memories = [delivered.copy() if m is not None else m for m in memories]
+            feeds["state"] = delivered
+        reference_state = PipelineState(None, memories, k)
+        want, reference_state = policy.predict(obs, reference_state)
+        got, *rest = session.run(None, feeds)
+        got_state = rest[0] if rest else np.zeros((k, 0))
+        kept = [m for m in reference_state.memories if m is not None]
+        want_state = kept[0] if kept else np.zeros((k, 0))
+    errors = [np.abs(np.asarray(got, np.float64) - want)]
+    errors.append(np.abs(np.asarray(got_state, np.float64) - want_state))
+    worst = max(float(e.max()) if e.size else 0.0 for e in errors)
+    return {"observations": k, "max_abs_error": worst, "seed": 0}
+
+
+def _contract(
+    files: AgentFiles,
+    target: Path,
+    layout: tuple[str, ...],
+    state_size: int,
+    actuator: str,
+    stages: list[Any],
+    parity: dict[str, Any],
+) -> dict[str, Any]:
+    """The contract JSON of an export (`controllers.onnx_policy.read_contract` reads it)."""
+    from auv_gym import recorded_env_id
+    from auv_gym.sim.config import SimConfig
+    from auv_gym.sim.observation import ObservationConfig
+    from controllers.agent import agent_env_kwargs
+
+    metadata = files.metadata
+    env_kwargs = agent_env_kwargs(metadata)
+    env_id = recorded_env_id(metadata.get("env_id", "AUVPath3D-v0"))
+    config = SimConfig.from_kwargs(**env_kwargs)
+    names = layout if files.residual is None else layout[:15]
+    units = ObservationConfig.from_spec(env_kwargs.get("observation")).units
+    action_names, action_meaning = ACTION_LAYOUT[actuator]
+    inputs = [{"name": "observation", "shape": ["n", len(names)], "dtype": "float32"}]
+    if state_size:
+        inputs.append({"name": "state", "shape": ["n", state_size], "dtype": "float32"})
+    if files.residual is not None:
+        inputs.append({"name": "base_action", "shape": ["n", 3], "dtype": "float32"})
+    outputs = [{"name": "action", "shape": ["n", 3], "dtype": "float32"}]
+    if state_size:
+        outputs.append({"name": "next_state", "shape": ["n", state_size], "dtype": "float32"})
+    residual = None
+    if files.residual is not None:
+        residual = {
+            "base": files.residual.base,
+            "base_kwargs": files.residual.base_kwargs,
+            "bound": list(files.residual.bound),
+            "filter_max": files.residual.filter_max,
+        }
+    keys = ("algo", "seed", "num_timesteps", "git_commit", "config_file", "auv_gym_version")
+    return {
+        "format": CONTRACT_FORMAT,
+        "format_version": CONTRACT_VERSION,
+        "onnx_file": target.name,
+        "onnx_sha256": None,  # of the serialised graph, set by `export_agent`
+        "opset": OPSET,
+        "env_id": env_id,
+        "env_kwargs": env_kwargs,
+        "control_period_s": config.control_dt,
+        "observation": {"names": list(names), "units": [units.get(x, "") for x in names]},
+        "action": {"names": action_names, "units": action_meaning, "range": [-1.0, 1.0]},
+        "actuator": actuator,
+        # the agent allocates its commands: the graph is for this actuator only
+        "allocated": any(spec["name"] == "actuator_allocation" for spec in files.stages),
+        "state": {
+            "size": state_size,
+            "reset": "zeros at every episode start; pass next_state back as state",
+        },
+        "inputs": inputs,
+        "outputs": outputs,
+        "stages": [stage.to_dict() for stage in stages],
+        "residual": residual,
+        "parity": parity,
+        "provenance": {
+            "agent": str(Path(files.model).parent),
+            "model_sha256": sha256_of(Path(files.model)),
+            **{key: metadata[key] for key in keys if key in metadata},
+            "exported_with": f"auv-gym {__version__}",
+        },
+    }
+
+
+def _annotate(model: Any, contract: Mapping[str, Any]) -> None:
+    """The model's metadata properties: what a runtime must know without the contract (env id,
+    observation and action names and units, actuator, control period, memory size)."""
+    from onnx import helper
+
+    props = {
+        "format": f"{CONTRACT_FORMAT} {CONTRACT_VERSION}",
+        "env_id": contract["env_id"],
+        "observation_names": json.dumps(contract["observation"]["names"]),
+        "observation_units": json.dumps(contract["observation"]["units"], ensure_ascii=False),
+        "action_names": json.dumps(contract["action"]["names"]),
+        "action_units": contract["action"]["units"],
+        "actuator": contract["actuator"],
+        "control_period_s": repr(contract["control_period_s"]),
+        "state_size": str(contract["state"]["size"]),
+        "stages": json.dumps([stage["name"] for stage in contract["stages"]]),
+    }
+    helper.set_model_props(model, props)
