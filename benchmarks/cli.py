@@ -74,6 +74,7 @@ SPEED: dict[str, tuple[str, str]] = {
     "render": ("benchmarks.speed.render", "rgb_array frames per second, fast and full redraw"),
     "training": ("benchmarks.speed.training", "PPO training env steps/s, against a baseline ref"),
     "off-policy": ("benchmarks.speed.off_policy", "SAC, TQC and CrossQ gradient-step cost"),
+    "onnx": ("benchmarks.speed.onnx", "ONNX export vs torch policy: latency per step, batch 1"),
 }
 # Modules of the optional extras: a missing one is named with the extra that installs it.
 EXTRAS = {

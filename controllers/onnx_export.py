@@ -42,7 +42,7 @@ from controllers.onnx_graph import (
 from controllers.onnx_policy import CONTRACT_FORMAT, CONTRACT_VERSION, contract_path, sha256_of
 from controllers.stages import AllocationStage, GuardStage, build_stages
 
-__all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_agent", "mlp_layers"]
+__all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers"]
 
 ACTUATORS = ("paper", "fins", "realistic")  # what an export's commands may be for
 PARITY_TOLERANCE = 1e-5  # max |ONNX − Python| over the check's commands, normalised units
@@ -116,7 +116,7 @@ def _check_out(out: str | os.PathLike) -> Path:
     return target
 
 
-def export_agent(
+def export_onnx(
     agent: str | os.PathLike,
     out: str | os.PathLike,
     *,
@@ -338,7 +338,7 @@ def _contract(
         "format": CONTRACT_FORMAT,
         "format_version": CONTRACT_VERSION,
         "onnx_file": target.name,
-        "onnx_sha256": None,  # of the serialised graph, set by `export_agent`
+        "onnx_sha256": None,  # of the serialised graph, set by `export_onnx`
         "opset": OPSET,
         "env_id": env_id,
         "env_kwargs": env_kwargs,

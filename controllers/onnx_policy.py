@@ -212,7 +212,7 @@ class OnnxPolicy:
             kwargs = {k: v for k, v in env_owned.items() if v is not None}
             recorded = dict(contract.residual.get("base_kwargs") or {})
             self.base = make_classical(
-                contract.residual["base"], **recorded, **dict(base_kwargs or {}), **kwargs
+                contract.residual["base"], **{**recorded, **kwargs, **dict(base_kwargs or {})}
             )
         self.session = _session(where, num_threads)
         _check_session(self.session, contract)

@@ -65,7 +65,7 @@ def agent_path(text: str) -> Path:
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     parser = build_parser()
     args = parser.parse_args(argv)
-    from controllers.onnx_export import export_agent
+    from controllers.onnx_export import export_onnx
 
     start = time.perf_counter()
     with usage_errors(parser):
@@ -75,7 +75,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
                 params = json.loads(args.actuator_params)
             except json.JSONDecodeError as exc:
                 raise ValueError(f"--actuator-params is not JSON: {exc}") from None
-        onnx_file, contract, parity = export_agent(
+        onnx_file, contract, parity = export_onnx(
             agent_path(args.agent), args.out, actuator=args.actuator, actuator_params=params
         )
     print(

@@ -1,0 +1,210 @@
+"""Parity of the exported agents: their ONNX graphs against the Python agents on the test suite.
+
+    python -m benchmarks.checks.onnx_parity --out benchmarks/results/onnx
+
+For each reference agent (and the generalist exported for the propeller and fins), every
+episode of the test suite (`benchmarks/tasks.toml`) is flown twice:
+
+1. by the Python agent (`controllers.make("agent")`), with its ONNX export fed the same
+   observations, episode starts and memory at every control step beside it: the largest
+   |ONNX − Python| over all commands (target ≤ 1e-5, issue: 100,000 observations or more);
+2. by the ONNX export alone (`controllers.make("onnx")`), closed loop: each episode's RMS
+   distance against the Python agent's, relative difference (target ≤ 0.1 % per episode).
+
+Writes parity.json and parity.md (atomically) to --out and prints the table.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym import VARIANTS
+from auv_gym.rollout import evaluate
+from auv_gym.support.files import write_json, write_text
+from benchmarks.arguments import (
+    comma_names,
+    finite_number,
+    parse_options,
+    program_name,
+    usage_errors,
+    writable_folder,
+)
+from benchmarks.catalog.policies import AGENTS_DIR, REFERENCE_AGENTS, build_policy, policy_env
+from benchmarks.catalog.tasks import test_suite
+from benchmarks.options import option
+
+__all__ = ["Exports", "ParityOptions", "TwinPolicy", "check", "main"]
+
+COMMAND_TOLERANCE = 1e-5  # max |ONNX − Python| command, normalised units
+RMS_TOLERANCE = 1e-3  # relative difference of an episode's RMS distance
+
+
+class TwinPolicy:
+    """The Python agent flies; its export computes the same step beside it (own memory, same
+    observations and episode starts). ``worst``: the largest |difference| so far; ``count``:
+    observations compared."""
+
+    def __init__(self, python: Any, exported: Any) -> None:
+        self.python = python
+        self.exported = exported
+        self.env_kwargs = python.env_kwargs
+        self.worst = 0.0
+        self.count = 0
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        py_state, onnx_state = state if state is not None else (None, None)
+        action, py_state = self.python.predict(observation, py_state, episode_start, deterministic)
+        twin, onnx_state = self.exported.predict(
+            observation, onnx_state, episode_start, deterministic
+        )
+        diff = np.abs(np.asarray(twin, np.float64) - np.asarray(action, np.float64))
+        self.worst = max(self.worst, float(diff.max()))
+        self.count += int(np.atleast_2d(observation).shape[0])
+        return action, (py_state, onnx_state)
+
+
+@dataclass
+class ParityOptions:
+    """The command line of `python -m benchmarks.checks.onnx_parity`."""
+
+    out: Path = option(Path("out/onnx_parity"), "folder of parity.json, parity.md")  # noqa: RUF009
+    duration: float = option(300.0, "episode length [s]")
+    agents: str = option(",".join(REFERENCE_AGENTS), "reference agents, comma-separated")
+
+
+class Exports:
+    """An agent's exports by actuator: the shipped one (the paper's actuator), and for an agent
+    that allocates its commands one per other actuator, exported into ``folder`` when needed."""
+
+    def __init__(self, agent: str, folder: Path) -> None:
+        from controllers.onnx_policy import read_contract
+
+        self.agent = agent
+        self.folder = folder
+        self.shipped = AGENTS_DIR / agent / "policy.onnx"
+        self.allocated = read_contract(self.shipped).allocated
+        self.files: dict[str, Path] = {"paper": self.shipped}
+
+    def for_actuator(self, actuator: str) -> Path:
+        from controllers.onnx_export import export_onnx
+
+        if not self.allocated or actuator == "random":
+            return self.shipped
+        if actuator not in self.files:
+            target = self.folder / f"{self.agent}_{actuator}.onnx"
+            export_onnx(AGENTS_DIR / self.agent, target, actuator=actuator)
+            self.files[actuator] = target
+        return self.files[actuator]
+
+
+def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, Any]:
+    """Both flights of an agent's exports over the whole test suite (module doc); ``actuator``
+    overrides every task's (None: each task's own)."""
+    agent = exports.agent
+    env_id, agent_env = policy_env(agent)
+    worst_rms, episodes, count, worst = 0.0, 0, 0, 0.0
+    start = time.perf_counter()
+    for task in test_suite():
+        env = {**VARIANTS[env_id], **agent_env, **task.env, "max_time": duration}
+        controller = dict(task.controller)
+        if actuator is not None:  # the scenario's controllers are told it too
+            env["actuator"] = actuator
+            controller.pop("actuator", None)
+        onnx_spec = f"onnx:{exports.for_actuator(env.get('actuator', 'paper'))}"
+        twin = TwinPolicy(
+            build_policy(agent, env, controller), build_policy(onnx_spec, env, controller)
+        )
+        seeds = list(task.seeds)
+        flown = evaluate(twin, seeds, **env)
+        alone = evaluate(build_policy(onnx_spec, env, controller), seeds, **env)
+        for a, b in zip(flown, alone, strict=True):
+            worst_rms = max(worst_rms, relative_difference(a["rms_distance"], b["rms_distance"]))
+        episodes += len(seeds)
+        count += twin.count
+        worst = max(worst, twin.worst)
+        print(
+            f"  {task.name:<36} {len(seeds):>3} episodes, max |Δ command| {twin.worst:.2g}",
+            flush=True,
+        )
+    return {
+        "agent": agent,
+        "actuator": actuator or "each task's",
+        "episodes": episodes,
+        "observations": count,
+        "max_abs_command_error": worst,
+        "max_relative_rms_error": worst_rms,
+        "wall_s": time.perf_counter() - start,
+    }
+
+
+def relative_difference(a: float, b: float) -> float:
+    """|a − b|/|a|; 0 when both are NaN (an episode that ended before the metrics window, in
+    both flights), inf when only one is."""
+    if np.isnan(a) and np.isnan(b):
+        return 0.0
+    if np.isnan(a) or np.isnan(b):
+        return np.inf
+    return abs(a - b) / max(abs(a), 1e-12)
+
+
+def table(rows: Sequence[dict[str, Any]]) -> str:
+    """The markdown table of the results."""
+    lines = [
+        "| export | episodes | observations | max abs command error | max relative RMS error |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['label']} | {r['episodes']} | {r['observations']:,} | "
+            f"{r['max_abs_command_error']:.2g} | {r['max_relative_rms_error']:.2g} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
+    args, parser = parse_options(
+        ParityOptions, argv, program_name("benchmarks.checks.onnx_parity"), __doc__
+    )
+    with usage_errors(parser):
+        agents = comma_names(args.agents, "--agents")
+        unknown = sorted(set(agents) - set(REFERENCE_AGENTS))
+        if unknown:
+            raise ValueError(f"--agents: unknown {unknown}; valid: {list(REFERENCE_AGENTS)}")
+        finite_number("--duration", args.duration, 10.0, 1000.0, unit="s")
+        writable_folder(args.out)
+    rows = []
+    with tempfile.TemporaryDirectory() as scratch:
+        for agent in agents:
+            exports = Exports(agent, Path(scratch))
+            runs = [(agent, None)]
+            if exports.allocated:
+                runs.append((f"{agent} on propeller and fins", "realistic"))
+            for label, actuator in runs:
+                print(f"{label}:", flush=True)
+                rows.append({"label": label, **check(exports, actuator, args.duration)})
+    text = table(rows)
+    verdict = all(
+        r["max_abs_command_error"] <= COMMAND_TOLERANCE
+        and r["max_relative_rms_error"] <= RMS_TOLERANCE
+        for r in rows
+    )
+    write_json(args.out / "parity.json", {"duration_s": args.duration, "rows": rows})
+    write_text(
+        args.out / "parity.md",
+        f"ONNX exports against the Python agents, test suite, {args.duration:g}-s episodes "
+        f"(targets: command ≤ {COMMAND_TOLERANCE:g}, RMS ≤ {RMS_TOLERANCE:.1%} per episode)\n\n"
+        + text,
+    )
+    print(text + f"targets met: {verdict}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()

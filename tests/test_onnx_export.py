@@ -1,0 +1,296 @@
+"""Exported agents (ONNX): each graph piece against its numpy original, the shipped exports, the
+closed loop against the Python agent, a runtime without torch, and bad input refused up front."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("onnxruntime")
+pytest.importorskip("onnx")
+
+import controllers
+from auv_gym.sim.observation import ObservationConfig
+from auv_gym.vehicle.actuators import ActuatorParams
+from benchmarks.catalog.policies import AGENTS_DIR, REFERENCE_AGENTS, policy_env
+from controllers.actuator_allocation import Allocation
+from controllers.envelope_guard import EnvelopeGuard, guard_commands
+from controllers.onnx_graph import (
+    OPSET,
+    Graph,
+    allocation_graph,
+    guard_graph,
+    normalisation_graph,
+    residual_graph,
+)
+from controllers.onnx_policy import read_contract, sha256_of
+from controllers.residual import residual_action
+
+ROOT = Path(__file__).resolve().parents[1]
+NAMES = ObservationConfig.from_spec("preview_integral").names
+
+
+def run_graph(g: Graph, inputs: dict[str, np.ndarray], outputs: list[str]) -> list[np.ndarray]:
+    """Run the graph ``g`` on float32 ``inputs`` (n, k) with onnxruntime; its named outputs."""
+    import onnxruntime
+    from onnx import TensorProto, checker, helper
+
+    ins = [
+        helper.make_tensor_value_info(k, TensorProto.FLOAT, ["n", v.shape[1]])
+        for k, v in inputs.items()
+    ]
+    outs = [helper.make_tensor_value_info(name, TensorProto.FLOAT, ["n", None]) for name in outputs]
+    graph = helper.make_graph(g.nodes, "piece", ins, outs, g.initializers)
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)])
+    model.ir_version = 8
+    checker.check_model(model, full_check=True)
+    session = onnxruntime.InferenceSession(
+        model.SerializeToString(), providers=["CPUExecutionProvider"]
+    )
+    return session.run(outputs, inputs)
+
+
+def operating_observations(n: int, rng: np.random.Generator) -> np.ndarray:
+    """Observations (n, 49) spread over and beyond the envelope: pitch to ±70°, q to ±0.5 rad/s,
+    surge −0.5 to 2.5 m/s, sway and heave ±0.5 m/s (u = 0 in some rows: no flow over the fins)."""
+    obs = rng.normal(0.0, 1.0, (n, len(NAMES))).astype(np.float32)
+    col = {name: NAMES.index(name) for name in ("theta", "q", "u", "v", "w")}
+    obs[:, col["theta"]] = rng.uniform(-1.2, 1.2, n)
+    obs[:, col["q"]] = rng.uniform(-0.5, 0.5, n)
+    obs[:, col["u"]] = rng.uniform(-0.5, 2.5, n)
+    obs[:10, col["u"]] = 0.0
+    obs[:, col["v"]] = rng.uniform(-0.5, 0.5, n)
+    obs[:, col["w"]] = rng.uniform(-0.5, 0.5, n)
+    return obs
+
+
+def test_the_guard_graph_is_guard_commands():
+    rng = np.random.default_rng(1)
+    obs = operating_observations(4000, rng)
+    commands = rng.uniform(-1.0, 1.0, (4000, 3)).astype(np.float32)
+    guard = EnvelopeGuard()
+    index = [NAMES.index(n) for n in ("theta", "q", "u")]
+    g = Graph()
+    guard_graph(g, "commands", "observation", index, guard)
+    g.op("Identity", g.nodes[-1].output[0], output="out")
+    (got,) = run_graph(g, {"commands": commands, "observation": obs}, ["out"])
+    want = guard_commands(commands, obs, index, guard)
+    assert np.abs(want - commands).max() > 0.5  # the guard acted on many rows
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("actuator", ["fins", "realistic"])
+def test_the_allocation_graph_is_the_allocation(actuator):
+    rng = np.random.default_rng(2)
+    obs = operating_observations(4000, rng)
+    commands = rng.uniform(-1.2, 1.2, (4000, 3)).astype(np.float32)
+    allocation = Allocation(NAMES, actuator, actuator_params=ActuatorParams())
+    g = Graph()
+    out, delivered = allocation_graph(g, "commands", "observation", allocation)
+    g.op("Identity", out, output="out")
+    g.op("Identity", delivered, output="delivered")
+    got, got_delivered = run_graph(
+        g, {"commands": commands, "observation": obs}, ["out", "delivered"]
+    )
+    want, want_delivered = allocation.allocate(commands, obs)
+    assert np.mean(np.abs(want) >= 1.0) > 0.005  # saturated rows are covered
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(got_delivered, want_delivered, rtol=0, atol=1e-6)
+
+
+def test_the_residual_and_normalisation_graphs_are_their_numpy_forms():
+    rng = np.random.default_rng(3)
+    n = 3000
+    base, previous = (rng.uniform(-1, 1, (n, 3)).astype(np.float32) for _ in range(2))
+    correction = rng.uniform(-1.5, 1.5, (n, 6)).astype(np.float32)
+    started = rng.integers(0, 2, (n, 1)).astype(np.float32)
+    g = Graph()
+    out = residual_graph(g, "base", "correction", "previous", "started", (0.25, 0.5, 0.5), 0.8)
+    g.op("Identity", out, output="out")
+    feeds = {"base": base, "correction": correction, "previous": previous, "started": started}
+    (got,) = run_graph(g, feeds, ["out"])
+    want = residual_action(base, correction, (0.25, 0.5, 0.5), 0.8, previous, started[:, 0] > 0)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
+
+    obs = rng.normal(0, 3, (n, 5)).astype(np.float32)
+    mean, var = rng.normal(0, 1, 5), rng.uniform(0.0, 4.0, 5)
+    g = Graph()
+    g.op("Identity", normalisation_graph(g, "obs", mean, var, 5.0, 1e-8), output="out")
+    (got,) = run_graph(g, {"obs": obs}, ["out"])
+    want = np.clip((obs - mean) / np.sqrt(var + 1e-8), -5.0, 5.0).astype(np.float32)
+    assert np.any(np.abs(want) == 5.0)
+    np.testing.assert_array_equal(got, want)  # float64 in both: the same roundings
+
+
+@pytest.mark.parametrize("agent", REFERENCE_AGENTS)
+def test_every_reference_agent_ships_a_current_export(agent):
+    import onnx
+
+    folder = AGENTS_DIR / agent
+    contract = read_contract(folder / "policy.onnx")
+    raw = contract.raw
+    assert raw["provenance"]["model_sha256"] == sha256_of(folder / "model.zip")
+    assert raw["parity"]["max_abs_error"] <= 1e-5 and raw["parity"]["observations"] >= 2048
+    env_id, _ = policy_env(agent)
+    assert contract.env_id == env_id
+    metadata = json.loads((folder / "metadata.json").read_text())
+    expected = metadata["obs_names"][:15] if "residual" in metadata else metadata["obs_names"]
+    assert list(contract.obs_names) == expected
+    props = {p.key: p.value for p in onnx.load(folder / "policy.onnx").metadata_props}
+    assert props["env_id"] == env_id
+    assert json.loads(props["observation_names"]) == expected
+    assert props["actuator"] == "paper" and float(props["control_period_s"]) == 0.05
+
+
+@pytest.mark.rl
+@pytest.mark.parametrize(
+    ("agent", "env"),
+    [
+        # the paper's ±35 N·m noise is ten times the fins' authority: the noise-free helix
+        ("ppo_generalist", {"actuator": "fins", "disturbance": "none"}),
+        ("ppo_residual", {"disturbance": "paper", "current": {"mean": [0.2, 0.1, 0.0]}}),
+        ("sac_helix", {"disturbance": "paper"}),
+    ],
+)
+def test_an_export_flies_like_its_agent(tmp_path, agent, env):
+    from auv_gym import VARIANTS
+    from auv_gym.rollout import evaluate
+    from benchmarks.runner.export import main as export
+
+    actuator = env.get("actuator", "paper")
+    onnx_file = tmp_path / "agent.onnx"
+    result = export([agent, "--out", str(onnx_file), "--actuator", actuator])
+    assert result["max_abs_error"] <= 1e-5
+    env_id, own = policy_env(agent)
+    kwargs = {**VARIANTS[env_id], **own, **env, "max_time": 120.0}
+    python = controllers.make("agent", env=kwargs, path=str(AGENTS_DIR / agent))
+    exported = controllers.make("onnx", env=kwargs, path=str(onnx_file))
+    a = evaluate(python, [0, 1], transient=60.0, **kwargs)
+    b = evaluate(exported, [0, 1], transient=60.0, **kwargs)
+    for x, y in zip(a, b, strict=True):
+        assert x["rms_distance"] < 0.5  # on the path after the approach
+        assert y["rms_distance"] == pytest.approx(x["rms_distance"], rel=1e-3)
+
+
+def test_the_documented_runtime_flies_without_torch(tmp_path):
+    text = (ROOT / "docs" / "usage.md").read_text(encoding="utf-8")
+    code = text.split("<!-- onnx-example -->\n```python\n")[1].split("```")[0]
+    assert len(code.strip().splitlines()) <= 40
+    script = tmp_path / "fly.py"
+    script.write_text(
+        "import sys\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] in ('torch', 'stable_baselines3', 'sb3_contrib'):\n"
+        "            raise ImportError(f'{name} is blocked')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        + code
+        + "\nassert not {'torch', 'stable_baselines3'} & set(sys.modules)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    rms = float(done.stdout.split("last half: ")[1].split(" m")[0])
+    assert 0.01 < rms < 0.1  # the generalist's few centimetres
+
+
+def _cli(*argv: str) -> tuple[int, str]:
+    done = subprocess.run(
+        [sys.executable, "-m", "benchmarks", *argv],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "PYTHONWARNINGS": "ignore"},
+    )
+    return done.returncode, done.stderr.strip()
+
+
+def _agent_copy(tmp_path: Path, agent: str = "ppo_generalist") -> Path:
+    copy = tmp_path / agent
+    shutil.copytree(AGENTS_DIR / agent, copy)
+    return copy
+
+
+@pytest.mark.parametrize("problem", ["unknown stage", "no statistics", "missing folder"])
+def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem):
+    agent = _agent_copy(tmp_path)
+    out = tmp_path / "out" / "agent.onnx"
+    out.parent.mkdir()
+    if problem == "unknown stage":
+        meta = json.loads((agent / "metadata.json").read_text())
+        meta["stages"].append({"name": "lowpass"})
+        (agent / "metadata.json").write_text(json.dumps(meta))
+        expected = f"{agent}/metadata.json: unknown stage 'lowpass'"
+    elif problem == "no statistics":
+        (agent / "vecnormalize.npz").unlink()
+        (agent / "vecnormalize.pkl").unlink()
+        expected = "normalisation statistics missing"
+    else:
+        out = tmp_path / "nowhere" / "agent.onnx"
+        expected = f"folder {out.parent} does not exist"
+    code, err = _cli("export", str(agent), "--out", str(out))
+    assert code == 2
+    assert len(err.splitlines()) == 1 and expected in err, err
+    assert not out.parent.exists() or list(out.parent.iterdir()) == []
+
+
+def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path):
+    for name in ("policy.onnx", "policy.json"):
+        shutil.copy(AGENTS_DIR / "ppo_helix" / name, tmp_path / name)
+    onnx_file, contract_file = tmp_path / "policy.onnx", tmp_path / "policy.json"
+    contract = json.loads(contract_file.read_text())
+    contract["observation"]["names"] = contract["observation"]["names"] + ["a_X_prev"]
+    contract_file.write_text(json.dumps(contract))
+    out = tmp_path / "run"
+    code, err = _cli(
+        "compare",
+        "--policies",
+        f"fbsm,onnx:{onnx_file}",
+        "--seeds",
+        "1",
+        "--duration",
+        "20",
+        "--scenarios",
+        "paper",
+        "--out",
+        str(out),
+    )
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert f"{onnx_file}" in err and "16" in err and "15" in err
+    assert not out.exists()
+
+    data = bytearray(onnx_file.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    onnx_file.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=r"does not match its contract .* \(SHA-256 differs"):
+        controllers.make("onnx", path=str(onnx_file))
+
+
+def test_the_runtime_checks_the_env_and_its_input():
+    path = str(AGENTS_DIR / "ppo_generalist" / "policy.onnx")
+    env = {"observation": "preview_integral", "surge_limit": "vehicle"}
+    with pytest.raises(ValueError, match="exported for actuator 'paper', the env has 'fins'"):
+        controllers.make("onnx", path=path, env={**env, "actuator": "fins"})
+    with pytest.raises(ValueError, match=r"acts every 0\.05 s, the env every 0\.1 s"):
+        controllers.make("onnx", path=path, env={**env, "control_dt": 0.1})
+    with pytest.raises(ValueError, match=r"takes observations of 49 values .* the env gives 15"):
+        controllers.make("onnx", path=path, env={})
+    policy = controllers.make("onnx", path=path, env=env)
+    with pytest.raises(ValueError, match=r"shape \(49,\) or \(n, 49\)"):
+        policy.predict(np.zeros(15, np.float32))
+    bad = np.zeros((2, 49), np.float32)
+    bad[1, 3] = np.nan
+    with pytest.raises(ValueError, match="observation row 1 is not finite"):
+        policy.predict(bad)
+    action, state = policy.predict(np.zeros((2, 49), np.float32))
+    assert action.shape == (2, 3) and action.dtype == np.float32
+    assert np.all(np.abs(action) <= 1.0) and state.n == 2
