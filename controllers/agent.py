@@ -5,7 +5,8 @@ An agent directory holds::
 
     model.zip          the SB3 model (`PPO.save`, `SAC.save`, ...)
     vecnormalize.npz   observation mean/var/clip/epsilon and obs_names: all a loaded agent needs
-    vecnormalize.pkl   the full pickled `VecNormalize` (optional: for resuming and for RL Zoo)
+    vecnormalize.pkl   the full pickled `VecNormalize`, for SB3 and RL Zoo users (optional; never
+                       unpickled here: a pickle can run code, docs/usage.md "Trusting agent files")
     metadata.json      how it was trained (optional; "algo" names the algorithm, default "ppo";
                        `obs_names` is checked when present)
 
@@ -54,7 +55,7 @@ __all__ = [
 
 MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.npz"  # obs mean/var/clip/epsilon: all a loaded agent needs
-VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize (for resuming and for RL Zoo)
+VECNORM_FILE = "vecnormalize.pkl"  # the full VecNormalize, for SB3 and RL Zoo; never unpickled
 METADATA_FILE = "metadata.json"
 STATS_KEYS = ("mean", "var", "clip_obs", "epsilon")
 
@@ -223,8 +224,8 @@ def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:
 
 
 def check_agent(path: str | os.PathLike) -> AgentFiles:
-    """Validate a saved agent completely, without torch (except for a pickled VecNormalize,
-    whose classes need stable-baselines3): every problem raises an error naming the file.
+    """Validate a saved agent completely, without torch and without unpickling anything: every
+    problem raises an error naming the file.
 
     FileNotFoundError: the agent, its model.zip or its statistics are missing. ValueError:
     model.zip is not a zip, fails its CRC check, lacks SB3's ``data``/``policy.pth`` or was saved
@@ -369,26 +370,20 @@ def _check_model_zip(
 def _read_stats(
     stats: Path, names: tuple[str, ...] = OBS_NAMES
 ) -> tuple[np.ndarray, np.ndarray, float, float]:
-    """(mean, var, clip_obs, epsilon) from a .npz or a pickled VecNormalize, checked: shapes
+    """(mean, var, clip_obs, epsilon) from a .npz (a pickle is refused, never loaded), checked:
+    shapes
     (d,), (d,), (), () for the d = len(names) observation values; all finite; var >= 0;
     clip_obs > 0; epsilon > 0."""
     shapes = {"mean": (len(names),), "var": (len(names),), "clip_obs": (), "epsilon": ()}
+    if stats.suffix != ".npz":
+        raise ValueError(
+            f"normalisation statistics {stats}: auv-gym reads {STATS_FILE} only and never "
+            f"unpickles {stats.name} (a pickle can run code); in a session you trust, write "
+            f"{STATS_FILE} beside it with benchmarks.training.checkpoints.stats_from_vecnormalize"
+        )
     try:
-        if stats.suffix == ".npz":
-            with np.load(stats, allow_pickle=False) as data:
-                values = {key: data[key] for key in data.files}
-        else:
-            import pickle
-
-            with stats.open("rb") as f:
-                vec_normalize = pickle.load(f)
-            rms = vec_normalize.obs_rms
-            values = {
-                "mean": rms.mean,
-                "var": rms.var,
-                "clip_obs": vec_normalize.clip_obs,
-                "epsilon": vec_normalize.epsilon,
-            }
+        with np.load(stats, allow_pickle=False) as data:
+            values = {key: data[key] for key in data.files}
     except Exception as exc:
         raise ValueError(f"normalisation statistics {stats} are unreadable: {exc}") from exc
     missing = [key for key in STATS_KEYS if key not in values]

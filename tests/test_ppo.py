@@ -202,11 +202,18 @@ def test_save_load_identical_deterministic_predictions(saved_agent) -> None:
     single, _ = policy.predict(obs[5])  # one row: same up to float32 matmul rounding
     assert single.shape == (3,)
     np.testing.assert_allclose(single, expected[5], rtol=1e-5, atol=1e-7)
-    # The pickled VecNormalize alone (RL Zoo's layout) gives the same agent.
-    (folder.parent / "zoo").mkdir()
-    shutil.copy2(folder / "model.zip", folder.parent / "zoo" / "model.zip")
-    shutil.copy2(folder / "vecnormalize.pkl", folder.parent / "zoo" / "vecnormalize.pkl")
-    from_pickle, _ = load_policy(folder.parent / "zoo" / "model.zip").predict(obs)
+    # The pickled VecNormalize alone (RL Zoo's layout) is refused, never unpickled; converted
+    # once by its owner (`stats_from_vecnormalize`), it gives the same agent.
+    from benchmarks.training.checkpoints import stats_from_vecnormalize
+
+    zoo = folder.parent / "zoo"
+    zoo.mkdir()
+    shutil.copy2(folder / "model.zip", zoo / "model.zip")
+    shutil.copy2(folder / "vecnormalize.pkl", zoo / "vecnormalize.pkl")
+    with pytest.raises(ValueError, match=r"never unpickles vecnormalize\.pkl"):
+        load_policy(zoo / "model.zip")
+    stats_from_vecnormalize(zoo / "vecnormalize.pkl")
+    from_pickle, _ = load_policy(zoo / "model.zip").predict(obs)
     np.testing.assert_array_equal(from_pickle, expected)
 
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from auv_gym import VARIANTS
 from auv_gym.rollout import evaluate
+from auv_gym.sim.observation import OBS_INDEX
 from auv_gym.support.files import write_json, write_text
 from benchmarks.arguments import (
     comma_names,
@@ -56,6 +57,7 @@ class TwinPolicy:
         self.exported = exported
         self.env_kwargs = python.env_kwargs
         self.worst = 0.0
+        self.worst_surge = float("nan")  # u [m/s] where the largest difference was seen
         self.count = 0
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
@@ -65,7 +67,10 @@ class TwinPolicy:
             observation, onnx_state, episode_start, deterministic
         )
         diff = np.abs(np.asarray(twin, np.float64) - np.asarray(action, np.float64))
-        self.worst = max(self.worst, float(diff.max()))
+        if diff.max() > self.worst:
+            self.worst = float(diff.max())
+            row = np.unravel_index(int(np.argmax(diff)), diff.shape)[0] if diff.ndim == 2 else 0
+            self.worst_surge = float(np.atleast_2d(observation)[row, OBS_INDEX["u"]])
         self.count += int(np.atleast_2d(observation).shape[0])
         return action, (py_state, onnx_state)
 
@@ -109,7 +114,7 @@ def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, 
     overrides every task's (None: each task's own)."""
     agent = exports.agent
     env_id, agent_env = policy_env(agent)
-    worst_rms, episodes, count, worst = 0.0, 0, 0, 0.0
+    worst_rms, episodes, count, worst, worst_surge = 0.0, 0, 0, 0.0, float("nan")
     start = time.perf_counter()
     for task in test_suite():
         env = {**VARIANTS[env_id], **agent_env, **task.env, "max_time": duration}
@@ -128,9 +133,11 @@ def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, 
             worst_rms = max(worst_rms, relative_difference(a["rms_distance"], b["rms_distance"]))
         episodes += len(seeds)
         count += twin.count
-        worst = max(worst, twin.worst)
+        if twin.worst > worst:
+            worst, worst_surge = twin.worst, twin.worst_surge
         print(
-            f"  {task.name:<36} {len(seeds):>3} episodes, max |Δ command| {twin.worst:.2g}",
+            f"  {task.name:<36} {len(seeds):>3} episodes, max |Δ command| {twin.worst:.2g} "
+            f"(at u = {twin.worst_surge:.2f} m/s)",
             flush=True,
         )
     return {
@@ -139,6 +146,7 @@ def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, 
         "episodes": episodes,
         "observations": count,
         "max_abs_command_error": worst,
+        "surge_at_max_error": worst_surge,
         "max_relative_rms_error": worst_rms,
         "wall_s": time.perf_counter() - start,
     }
@@ -157,13 +165,15 @@ def relative_difference(a: float, b: float) -> float:
 def table(rows: Sequence[dict[str, Any]]) -> str:
     """The markdown table of the results."""
     lines = [
-        "| export | episodes | observations | max abs command error | max relative RMS error |",
-        "|---|---:|---:|---:|---:|",
+        "| export | episodes | observations | max abs command error | at surge [m/s] "
+        "| max relative RMS error |",
+        "|---|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         lines.append(
             f"| {r['label']} | {r['episodes']} | {r['observations']:,} | "
-            f"{r['max_abs_command_error']:.2g} | {r['max_relative_rms_error']:.2g} |"
+            f"{r['max_abs_command_error']:.2g} | {r['surge_at_max_error']:.2f} | "
+            f"{r['max_relative_rms_error']:.2g} |"
         )
     return "\n".join(lines) + "\n"
 

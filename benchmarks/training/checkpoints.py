@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.sim.observation import OBS_NAMES
-from auv_gym.support.files import write_folder_atomic, write_json
+from auv_gym.support.files import write_atomic, write_folder_atomic, write_json
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 __all__ = [
@@ -62,6 +62,44 @@ def write_metadata(path: Path, metadata: dict[str, Any]) -> None:
     write_json(path, metadata, indent=2, sort_keys=True)
 
 
+def write_stats(path: Any, vec_normalize: Any, obs_names: Any) -> None:
+    """vecnormalize.npz of a `VecNormalize`: the observation statistics a loaded agent needs
+    (mean, var, count, clip_obs, epsilon, obs_names) and the return statistics a warm start
+    continues from (ret_mean, ret_var, ret_count, clip_reward, gamma), plain arrays that load
+    without unpickling anything."""
+    obs, ret = vec_normalize.obs_rms, vec_normalize.ret_rms
+    np.savez(
+        path,
+        mean=obs.mean,
+        var=obs.var,
+        count=np.float64(obs.count),
+        clip_obs=np.float64(vec_normalize.clip_obs),
+        epsilon=np.float64(vec_normalize.epsilon),
+        obs_names=np.array(obs_names),
+        ret_mean=np.float64(ret.mean),
+        ret_var=np.float64(ret.var),
+        ret_count=np.float64(ret.count),
+        clip_reward=np.float64(vec_normalize.clip_reward),
+        gamma=np.float64(vec_normalize.gamma),
+    )
+
+
+def stats_from_vecnormalize(pickled: Path, obs_names: Any = None) -> Path:
+    """Write vecnormalize.npz beside a pickled VecNormalize (an RL Zoo or SB3 agent's
+    vecnormalize.pkl), so that auv-gym can load the agent without unpickling anything.
+
+    This function itself unpickles ``pickled``, which runs any code the file holds: call it
+    only on files you trust (your own training runs), once; docs/usage.md "Trusting agent
+    files"."""
+    pickled = Path(pickled)
+    with pickled.open("rb") as f:
+        vec_normalize = pickle.load(f)  # trusted by the caller, as documented
+    names = OBS_NAMES if obs_names is None else obs_names
+    target = pickled.with_name(STATS_FILE)
+    write_atomic(target, lambda fh: write_stats(fh, vec_normalize, names))
+    return target
+
+
 def save_agent(
     model: Any,
     vec_normalize: Any,
@@ -82,16 +120,7 @@ def save_agent(
     def fill(tmp: Path) -> None:
         model.save(tmp / MODEL_FILE)
         vec_normalize.save(str(tmp / VECNORM_FILE))
-        rms = vec_normalize.obs_rms
-        np.savez(
-            tmp / STATS_FILE,
-            mean=rms.mean,
-            var=rms.var,
-            count=np.float64(rms.count),
-            clip_obs=np.float64(vec_normalize.clip_obs),
-            epsilon=np.float64(vec_normalize.epsilon),
-            obs_names=np.array(metadata.get("obs_names", OBS_NAMES)),
-        )
+        write_stats(tmp / STATS_FILE, vec_normalize, metadata.get("obs_names", OBS_NAMES))
         write_metadata(tmp / METADATA_FILE, metadata)
         if replay_buffer:
             model.save_replay_buffer(tmp / REPLAY_FILE)
