@@ -205,6 +205,7 @@ def test_ray_backend_matches_local_processes(tmp_path, monkeypatch):
     local = main([*common, "--workers", "1", "--out", str(tmp_path / "local")])
     import ray
 
+    ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)  # the caller's cluster
     try:
         remote = main([*common, "--backend", "ray", "--out", str(tmp_path / "ray")])
     finally:

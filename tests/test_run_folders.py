@@ -652,3 +652,13 @@ def test_train_refuses_an_unknown_vec_env_and_an_unregistered_env_id(tmp_path, c
     err = one_line_exit_2(capsys, _train_main, [*base, "--env-id", "Nope-v0"])
     assert f"{config}: Nope-v0: Environment `Nope` doesn't exist" in err
     assert not (tmp_path / "run").exists()
+
+
+def test_train_seeds_refuses_an_address_without_ray_and_trains_nothing(tmp_path, capsys):
+    """Was: `train-seeds --address` without `--backend ray` trained locally in silence."""
+    pytest.importorskip("stable_baselines3")
+    out = tmp_path / "run"
+    argv = ["--config", str(_seeds_config(tmp_path)), "--seeds", "1", "--out", str(out)]
+    err = one_line_exit_2(capsys, _seeds_main, [*argv, "--address", "127.0.0.1:6379"])
+    assert "--address needs --backend ray" in err
+    assert not out.exists()

@@ -97,3 +97,31 @@ def test_the_suite_takes_the_pool_options_of_compare(tmp_path):
             ]
         )
     assert stop.value.code == 2
+
+
+def test_ray_without_a_cluster_to_join_is_refused_and_nothing_listens(monkeypatch):
+    """Was: a local cluster whose GCS, raylet and workers listened on every interface."""
+    ray = pytest.importorskip("ray")
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    if ray.is_initialized():
+        pytest.skip("a Ray instance of this process is running")
+    before = _listening_ports()
+    with pytest.raises(ValueError, match=r"--backend ray needs --address HOST:PORT .* no cluster"):
+        check_pool_options(1, "ray")
+    assert not ray.is_initialized()
+    assert _listening_ports() <= before  # no new listening socket
+
+
+def _listening_ports() -> set[int]:
+    """Ports with a listening TCP socket on this machine (/proc/net/tcp and tcp6)."""
+    ports = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        try:
+            lines = Path(table).read_text().splitlines()[1:]
+        except OSError:
+            continue
+        for line in lines:
+            fields = line.split()
+            if fields[3] == "0A":  # TCP_LISTEN
+                ports.add(int(fields[1].rsplit(":", 1)[1], 16))
+    return ports

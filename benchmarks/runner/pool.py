@@ -45,8 +45,10 @@ RAY_CLIENT_PING = b"\x08\x06"
 
 def check_pool_options(workers: int, backend: str = "local", address: str | None = None) -> None:
     """ValueError naming the option: ``--workers`` outside [1, `MAX_WORKERS`], an unknown
-    ``--backend``, ``--address`` without Ray, Ray not installed, or a Ray address no Ray server
-    answers (`check_ray_address`)."""
+    ``--backend``, ``--address`` without Ray, Ray not installed, Ray without a cluster to join
+    (no ``--address``, no ``RAY_ADDRESS`` and no ``ray.init`` of the caller's: a local cluster
+    started here would listen on every interface, docs/usage.md "Ray"), or a Ray address no
+    Ray server answers (`check_ray_address`)."""
     if not 1 <= workers <= MAX_WORKERS:
         raise ValueError(f"--workers must be an integer in [1, {MAX_WORKERS}], got {workers}")
     if backend not in BACKENDS:
@@ -58,8 +60,16 @@ def check_pool_options(workers: int, backend: str = "local", address: str | None
             import ray
         except ImportError:
             raise ValueError("--backend ray needs Ray: pip install 'auv-gym[ray]'") from None
-        if not ray.is_initialized():  # ray.init would retry an unreachable address for ever
-            check_ray_address(address)
+        if ray.is_initialized():  # the caller's own ray.init: its cluster
+            return
+        if address is None and not os.environ.get("RAY_ADDRESS"):
+            raise ValueError(
+                "--backend ray needs --address HOST:PORT (or auto) of a Ray cluster you started "
+                "(e.g. ray start --head --node-ip-address 127.0.0.1): auv-gym starts no cluster "
+                "of its own, whose servers would listen on every network interface; for this "
+                "machine's cores use --backend local"
+            )
+        check_ray_address(address)  # ray.init would retry an unreachable address for ever
 
 
 def execute(

@@ -122,8 +122,8 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     check_evaluation_window(train.eval_duration)
     for seed in opts.seeds if train.init_from else ():
         check_warm_start(agent_for_seed(train.init_from, seed), train.algo)
-    if opts.backend == "ray":  # Ray installed, the address answering (`benchmarks.runner.pool`)
-        check_pool_options(1, opts.backend, opts.address)
+    if opts.backend == "ray" or opts.address is not None:  # `benchmarks.runner.pool`: Ray
+        check_pool_options(1, opts.backend, opts.address)  # installed, its address answering
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     check_obs_scales(cfg, train.env_id, str(train.config))
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
