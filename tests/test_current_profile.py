@@ -64,6 +64,7 @@ def test_a_vehicle_at_rest_drifts_with_the_current_at_its_depth(make_sim):
         current_profile=profile,
         current=(0.1, 0.0, 0.0),
         start_position=(0.0, 0.0, 10.0),
+        path_offset=(0.0, 0.0, 110.0),  # a current profile acts below the surface
     )
     p0 = sim.state[0, :3].copy()
     for _ in range(200):  # 10 s
@@ -82,7 +83,11 @@ def test_the_drift_phase_is_drawn_per_episode_and_the_track_follows_it(make_sim)
     }
     sims = [
         make_sim(
-            seed=s, disturbance="none", current_profile=profile, start_position=(0.0, 0.0, 0.0)
+            seed=s,
+            disturbance="none",
+            current_profile=profile,
+            start_position=(0.0, 0.0, 0.0),
+            path_offset=(0.0, 0.0, 110.0),
         )
         for s in (0, 1)
     ]
@@ -138,4 +143,4 @@ def test_the_drift_phase_is_drawn_per_episode_and_the_track_follows_it(make_sim)
 )
 def test_bad_profile_arguments_name_the_argument(profile, message):
     with pytest.raises(ValueError, match=message):
-        AUVPath3DEnv(current_profile=profile)
+        AUVPath3DEnv(current_profile=profile, path_offset=(0.0, 0.0, 110.0))

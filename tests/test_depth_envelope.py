@@ -11,8 +11,9 @@ import pytest
 from auv_gym import AUVPath3DEnv
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.ocean.depth_envelope import DepthEnvelope, path_depth_range
-from auv_gym.paths.offset import ShiftedPath
+from auv_gym.paths.offset import ShiftedPath, shift_path
 from auv_gym.paths.shapes import DEFAULT_WAYPOINTS, Helix, Spline
+from auv_gym.sim.config import SimConfig
 from auv_gym.sim.safety_cost import SafetyCost, safety_vector
 from auv_gym.sim.task import RewardWeights, TaskLimits, task_cost, task_vector
 from auv_gym.vehicle.dynamics import STATE, STATE_DIM
@@ -218,16 +219,52 @@ def test_a_config_built_directly_refuses_an_offset_it_would_not_apply():
         SimConfig(path=Helix(), path_offset=(0.0, 0.0, 5.0))
 
 
-def test_a_drawn_path_that_crosses_the_envelope_is_refused_at_reset():
-    # Helices climbing 10-20° from 20 m: within 300 m they rise 52-103 m, through the surface.
-    env = AUVPath3DEnv(
-        path={"families": ["helix"], "climb_angle_deg": [10.0, 20.0]},
-        path_offset=(0.0, 0.0, 20.0),
-        depth_envelope=True,
+def test_drawn_paths_are_drawn_inside_the_band_and_never_refused_at_a_reset():
+    """Was: accepted at construction, then refused at 300 of 300 resets (4 of 300 at 100 m),
+    in the vector env from `step()` at an autoreset."""
+    # Helices climbing 10-20° from 60 m over a seabed at 130 m: within 300 m they rise or sink
+    # 52-103 m, so about half the draws leave the band; every reset gets one inside it.
+    kwargs = {
+        "path": {"families": ["helix", "line"], "climb_angle_deg": [10.0, 20.0]},
+        "path_offset": (0.0, 0.0, 60.0),
+        "depth_envelope": {"seabed_depth": 130.0},
+    }
+    config = SimConfig.from_kwargs(**kwargs)
+    raw = [shift_path(config.path.draw(np.random.default_rng(s)), (0, 0, 60.0)) for s in range(40)]
+    outside = 0
+    for path in raw:
+        try:
+            config.check_depths(path, drawn=True)
+        except ValueError:
+            outside += 1
+    assert 5 <= outside <= 35  # the distribution itself crosses the band often
+    env = AUVPath3DEnv(**kwargs)
+    for seed in range(40):
+        env.reset(seed=seed)
+        config.check_depths(env.sim.paths[0], drawn=True)  # inside the band
+
+
+def test_a_distribution_that_cannot_fit_the_band_is_refused_at_construction():
+    with pytest.raises(ValueError, match=r"none of 64 paths drawn .* fits the safe band"):
+        AUVPath3DEnv(path="random", depth_envelope=True)  # paths start at the surface
+
+
+@pytest.mark.integration
+def test_a_vector_env_autoresets_10000_times_inside_the_band():
+    venv = AUVPath3DVectorEnv(
+        200,
+        path={"families": ["helix", "line", "spline"], "climb_angle_deg": [5.0, 20.0]},
+        path_offset=(0.0, 0.0, 60.0),
+        depth_envelope={"seabed_depth": 130.0},
+        max_time=0.5,
+        randomize_start=True,
     )
-    with pytest.raises(ValueError, match=r"the path drawn at this reset .*path_offset"):
-        for seed in range(4):  # half of them climb, half descend
-            env.reset(seed=seed)
+    venv.reset(seed=0)
+    resets = 0
+    while resets < 10_000:
+        *_, terminated, truncated, _ = venv.step(np.zeros((200, 3), np.float32))
+        resets += int(np.sum(terminated | truncated))
+    assert resets >= 10_000
 
 
 def test_episodes_are_deterministic_per_seed_and_batched_equals_single():

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from auv_gym import AUVPath3DEnv
@@ -22,14 +22,18 @@ from auv_gym.ocean.waves import (
     COMPONENT,
     COMPONENT_DIM,
     GRAVITY,
+    MAX_STEEPNESS,
     SEA_STATES,
     WaveConfig,
     draw_components,
+    peak_wavelength,
     surface_elevation,
     wave_kinematics,
 )
 from auv_gym.sim.config import SimConfig
 from auv_gym.sim.simulator import Simulator
+
+DEEP = {"path_offset": (0.0, 0.0, 110.0)}  # waves act below the surface: the helix moved down
 
 RECORD_S, RECORD_DT = 7200.0, 0.5  # [s] two hours sampled at 2 Hz: ~800 peak periods
 
@@ -130,7 +134,7 @@ def test_a_vehicle_at_rest_rides_the_orbital_motion(make_sim, interval, toleranc
     # its track is the integral of the orbital velocity along it, here by a fine Euler sum.
     # The kernel holds the field at the refresh position between refreshes (§13.3).
     waves = WaveConfig(update_interval=interval)
-    sim = make_sim(disturbance="none", waves=waves, start_position=(0.0, 0.0, 3.0))
+    sim = make_sim(disturbance="none", waves=waves, start_position=(0.0, 0.0, 3.0), **DEEP)
     row = sim.ocean[0]
     n = int(row[OCEAN.wave_components])
     p = sim.state[0, :3].copy()
@@ -146,7 +150,7 @@ def test_a_vehicle_at_rest_rides_the_orbital_motion(make_sim, interval, toleranc
 
 
 def test_ocean_rows_depend_on_the_seed_only():
-    a, b = AUVPath3DEnv(waves="sea_state_4"), AUVPath3DEnv(waves="sea_state_4")
+    a, b = AUVPath3DEnv(waves="sea_state_4", **DEEP), AUVPath3DEnv(waves="sea_state_4", **DEEP)
     a.reset(seed=11)
     b.reset(seed=11)
     rows = a.sim.ocean.copy()
@@ -162,7 +166,7 @@ def test_ocean_rows_depend_on_the_seed_only():
 def test_same_seed_gives_identical_wavy_episodes():
     runs = []
     for _ in range(2):
-        env = AUVPath3DEnv(waves={"sea_state": 5, "components": 8}, max_time=5.0)
+        env = AUVPath3DEnv(waves={"sea_state": 5, "components": 8}, max_time=5.0, **DEEP)
         obs = [env.reset(seed=4)[0]]
         actions = np.random.default_rng(2).uniform(-1, 1, size=(100, 3)).astype(np.float32)
         obs += [env.step(a)[0] for a in actions]
@@ -172,6 +176,7 @@ def test_same_seed_gives_identical_wavy_episodes():
 
 def test_batched_wavy_episodes_equal_single_envs_bit_for_bit(single_env_observations):
     kwargs = {
+        **DEEP,
         "waves": {"sea_state": 4, "components": 8},
         "current_profile": {
             "surface_speed": 0.3,
@@ -229,13 +234,13 @@ def test_no_waves_no_profile_leaves_the_ocean_row_inactive():
 )
 def test_bad_wave_arguments_name_the_argument(waves, message):
     with pytest.raises(ValueError, match=message):
-        AUVPath3DEnv(waves=waves)
+        AUVPath3DEnv(waves=waves, **DEEP)
 
 
 @settings(deadline=None, derandomize=True, database=None, max_examples=60)
 @given(
     height=st.floats(0.01, 30.0),
-    period=st.floats(1.0, 30.0),
+    period=st.floats(1.0, 30.0),  # seas steeper than the breaking limit are refused (below)
     spectrum=st.sampled_from(["jonswap", "pierson_moskowitz"]),
     components=st.integers(1, 200),
     spreading=st.floats(0.0, 1000.0),
@@ -244,6 +249,7 @@ def test_bad_wave_arguments_name_the_argument(waves, message):
 def test_every_valid_sea_carries_its_energy_in_its_band(
     height, period, spectrum, components, spreading, seed
 ):
+    assume(height / peak_wavelength(period) <= MAX_STEEPNESS)
     config = WaveConfig(
         significant_height=height,
         peak_period=period,
@@ -268,6 +274,7 @@ def test_threaded_kernel_equals_the_serial_one_with_waves():
         waves={"sea_state": 5, "components": 6},
         current_profile={"surface_speed": 0.3, "reference_depth": 20.0},
         start_position=(15.0, 5.0, 6.0),
+        **DEEP,
     )
     runs = []
     for parallel in (False, True):
@@ -314,7 +321,7 @@ def test_wave_depth_benchmark_runs_with_a_tiny_budget(tmp_path):
 
 def test_snapshots_carry_the_sea_and_older_snapshots_had_a_flat_one():
     actions = np.random.default_rng(1).uniform(-0.5, 0.5, size=(60, 2, 3))
-    venv = AUVPath3DVectorEnv(2, waves={"components": 4}, max_time=1.0)  # autoresets redraw
+    venv = AUVPath3DVectorEnv(2, waves={"components": 4}, max_time=1.0, **DEEP)  # redraws
     venv.reset(seed=3)
     for a in actions[:30]:
         venv.step(a)
@@ -355,3 +362,36 @@ def test_only_a_non_neutral_vehicle_feels_the_fluid_acceleration():
     )  # R_Bᵀ, roll 0
     expected = 0.1 * nominal.m * rotation @ [0.1, -0.2, 0.3]
     np.testing.assert_allclose(got, [*expected, 0.0, 0.0], rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"waves": "sea_state_4"}, r"waves act below the sea surface .* reach z = -98\.99 m"),
+        (
+            {"current_profile": {"surface_speed": 0.3, "reference_depth": 20.0}},
+            r"current_profile act below the sea",
+        ),
+        ({"path": "random", "waves": 3}, r"a drawn path .*path_offset = \[0, 0, 106\]"),
+        (
+            {"waves": {"significant_height": 30.0, "peak_period": 1.0}, **DEEP},
+            r"135× the breaking steepness H/L = 1/7 .* peak_period ≥ 11\.6 s",
+        ),
+        (
+            {"actuator_params": {"rpm_max": 1000.0}},
+            r"actuator_params configure .* they would do nothing",
+        ),
+    ],
+)
+def test_ocean_options_are_checked_as_physics_at_construction(kwargs, message):
+    """Was: waves over the default helix (above the sea) applied surface orbital velocities all
+    episode (FBSM 0.93 m instead of 0.066 m); a 30-m sea with a 1-s period was accepted; the
+    propeller settings were ignored on the paper's actuator."""
+    with pytest.raises(ValueError, match=message):
+        AUVPath3DEnv(**kwargs)
+
+
+def test_the_same_sea_over_a_path_below_the_surface_is_accepted():
+    env = AUVPath3DEnv(waves="sea_state_4", **DEEP)
+    env.reset(seed=0)
+    assert env.sim.config.waves is not None

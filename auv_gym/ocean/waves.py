@@ -50,6 +50,16 @@ SEA_STATES = {3: (0.88, 7.5), 4: (1.88, 8.8), 5: (3.25, 9.7)}
 DEFAULT_COMPONENTS = 32  # docs/model.md §13.2: Hs, Tp within 5 %, ≥ 50 % of the no-wave speed
 MAX_COMPONENTS = 1024
 MAX_HEIGHT = 30.0  # [m] beyond any recorded sea
+# Miche's limit for a deep-water wave, H/L ≤ 1/7, held by the significant height at the peak
+# wavelength: steeper seas break (docs/model.md §13); every sea state of `SEA_STATES` is far below.
+MAX_STEEPNESS = 1.0 / 7.0
+
+
+def peak_wavelength(peak_period: float) -> float:
+    """Deep-water wavelength L = g·T²/(2π) [m] of waves of period ``peak_period`` [s]."""
+    return GRAVITY * peak_period**2 / (2.0 * math.pi)
+
+
 PERIOD_RANGE = (1.0, 30.0)  # [s] wind sea and swell
 MAX_SPREADING = 1000.0  # s of cos-2s; 1000 is long-crested within ±3°
 # The discretised band [0.5, 3] ω_p holds all but ~1.5 % of the PM energy (renormalised).
@@ -147,6 +157,15 @@ class WaveConfig:
             "update_interval",
             real("waves update_interval", self.update_interval, 0.0, 1.0, low_open=True, unit="s"),
         )
+        steepness = self.significant_height / peak_wavelength(self.peak_period)
+        if steepness > MAX_STEEPNESS:
+            lowest = math.sqrt(2.0 * math.pi * self.significant_height / (GRAVITY * MAX_STEEPNESS))
+            raise ValueError(
+                f"waves: significant_height {self.significant_height:g} m at peak_period "
+                f"{self.peak_period:g} s is {steepness / MAX_STEEPNESS:.3g}× the breaking "
+                f"steepness H/L = 1/7 (L = g·T_p²/2π = {peak_wavelength(self.peak_period):.3g} "
+                f"m): such a sea breaks; give peak_period ≥ {lowest:.3g} s or a lower height"
+            )
 
     @classmethod
     def from_spec(cls, spec: WaveConfig | str | int | Mapping | None) -> WaveConfig | None:

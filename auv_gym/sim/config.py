@@ -47,6 +47,7 @@ from auv_gym.sim.observation import (
     SPEED_BOUND,
     ObservationConfig,
 )
+from auv_gym.sim.path_depths import check_below_the_surface, check_drawn_paths_fit
 from auv_gym.sim.path_generator import PathDistribution
 from auv_gym.sim.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.sim.safety_cost import SafetyCost
@@ -183,6 +184,12 @@ class SimConfig:
                     f" (params.max_surge), got {surge_limit!r:.80}"
                 )
             surge_limit = vehicle.max_surge
+        if actuator_params is not None and actuator != "realistic":
+            raise ValueError(
+                f"actuator_params configure the propeller and fins of actuator='realistic'; "
+                f"with actuator={actuator!r} they would do nothing: drop them or give "
+                "actuator='realistic'"
+            )
         return cls(
             path=the_path,
             params=vehicle,
@@ -366,6 +373,8 @@ class SimConfig:
             self._check_path_fits_the_observation()
             self._check_start_fits_the_observation()
             self.check_depths(self.path)
+        check_below_the_surface(self)  # waves and a current profile act below it
+        check_drawn_paths_fit(self)  # so that no reset is refused (`path_depths.draw_path`)
 
     def check_depths(self, path: Path, drawn: bool = False) -> None:
         """The path (a drawn one at its reset) and the start lie inside the depth envelope's

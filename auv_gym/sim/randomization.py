@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from gymnasium.utils import seeding
 
-from auv_gym.paths.offset import shift_path
 from auv_gym.paths.shapes import Path
+from auv_gym.sim.path_depths import draw_path
 from auv_gym.sim.path_generator import PathDistribution
 
 if TYPE_CHECKING:
@@ -58,7 +58,7 @@ def draw_task(config: SimConfig, rng: np.random.Generator) -> EpisodeTask:
     path_rng, current_rng, noise_rng, actuator_rng = (np.random.default_rng(int(s)) for s in seeds)
     path = config.path
     if isinstance(path, PathDistribution):  # a fixed path carries its offset already
-        path = shift_path(path.draw(path_rng), config.path_offset)
+        path = draw_path(config, path_rng)  # inside a depth envelope's band
     current = (0.0, 0.0, 0.0)
     if config.random_current > 0.0:
         direction = current_rng.uniform(-math.pi, math.pi)
