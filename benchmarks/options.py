@@ -26,8 +26,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import typing
 from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path, PurePath
 from typing import Any
 
 __all__ = [
@@ -82,9 +84,16 @@ def option(
 def whole_number(text: str) -> int:
     """An integer, also written as a float ("2e6"); a fraction is an error, not truncated."""
     value = float(text)
-    if value != int(value):
+    if not math.isfinite(value) or value != int(value):
         raise ValueError(f"{text!r} is not a whole number")
     return int(value)
+
+
+def path_argument(text: str) -> Path:
+    """A file or folder path; an empty text is an error (it would mean the current folder)."""
+    if not text.strip():
+        raise ValueError("must name a file or folder, got an empty path")
+    return Path(text)
 
 
 def comma_integers(text: str) -> tuple[int, ...]:
@@ -177,6 +186,8 @@ def add_options(
                 kwargs["type"] = _text_type(meta["parse"], flag)
                 if isinstance(default, tuple):  # shown as typed; argparse parses it
                     default = ",".join(map(str, default))
+            elif isinstance(default, PurePath):  # "" would silently mean the current folder
+                kwargs["type"] = _text_type(path_argument, flag)
             elif default is not None:
                 kwargs["type"] = type(default)
             else:  # `float | None` reads a float, as argparse's type=float does

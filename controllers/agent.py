@@ -37,6 +37,7 @@ import numpy as np
 
 from auv_gym import __version__
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, ObservationConfig
+from auv_gym.support.validation import ArgumentTypeError
 from controllers.algorithms import ALGORITHMS, algorithm_of
 from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
 
@@ -235,6 +236,11 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     auv-gym major version, or has an invalid "residual" section. The expected observation is
     the env's 15 values, or the residual 21 when the metadata has a "residual" section.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise ArgumentTypeError(
+            f"agent path must be a folder or model zip path (str or os.PathLike), got "
+            f"{type(path).__name__} {path!r:.60}"
+        )
     model, stats, meta = _locate(Path(path))
     metadata = _read_metadata(meta) if meta is not None else {}
     algo = algorithm_of(metadata, str(meta))
@@ -442,6 +448,13 @@ def load_actor(
         model = algorithm.load(files.model, device=device, custom_objects=custom)
     except Exception as exc:
         raise ValueError(f"{files.label} {files.model} cannot be loaded: {exc}") from exc
+    bad = [name for name, value in model.policy.state_dict().items() if not value.isfinite().all()]
+    if bad:
+        raise ValueError(
+            f"{files.label} {files.model}: non-finite weights in {bad[:3]}"
+            + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
+            + " (a diverged or damaged model)"
+        )
     layout = observation_layout(files.metadata)
     shape = tuple(model.observation_space.shape or ())
     if shape != (len(layout),):

@@ -11,6 +11,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
+from gymnasium.error import ResetNeeded
 
 from auv_gym.envs.checks import check_reset_observations, validate_actions
 from auv_gym.envs.info import single_info, track_point
@@ -348,6 +349,7 @@ class AUVPath3DEnv(gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self._truncation_index = self.config.max_steps * self.config.substeps
         self._last_obs = np.zeros(self.observation_space.shape, np.float32)  # the last returned
+        self._needs_reset = True  # until a reset succeeds: no episode to step
         self._renderer = (
             EpisodeRenderer(
                 self.config.path, self.config.max_time, envelope=self.config.depth_envelope
@@ -376,6 +378,7 @@ class AUVPath3DEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        self._needs_reset = True  # a refused reset leaves no episode half-started
         if options is not None and not isinstance(options, Mapping):
             raise ArgumentTypeError(f"options must be None or a dict, got {options!r:.80}")
         if options:
@@ -393,11 +396,14 @@ class AUVPath3DEnv(gym.Env):
             self.sim.speed_bound,
         )
         self._last_obs[:] = obs
+        self._needs_reset = False
         if self._renderer is not None:
             self._renderer.reset(*track_point(self.sim, 0), path=self.sim.paths[0])
         return obs, single_info(self.sim, self.config.physics_dt, 0, reset=True)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if self._needs_reset:
+            raise ResetNeeded("AUVPath3DEnv: call reset() before step() (no episode is running)")
         sim = self.sim
         sim.step(validate_actions(action, (3,))[None])
         code = int(sim.code[0])

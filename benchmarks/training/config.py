@@ -35,6 +35,7 @@ whole box from the first step (`benchmarks.analysis.action_bounds` measures what
 
 from __future__ import annotations
 
+import ast
 import math
 import os
 import re
@@ -117,7 +118,8 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
 
     `normalize` may be a bool, a dict or a string evaluating to a dict, as in RL Zoo; the
     discount `gamma` is copied into it like RL Zoo does. `policy_kwargs` may be a dict or a
-    string such as "dict(net_arch=[64, 64])" (evaluated with only `dict` and `torch.nn`).
+    string such as "dict(net_arch=[64, 64])" (parsed as a literal, never evaluated:
+    `_literal`).
     """
     import yaml
 
@@ -126,8 +128,11 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"hyper-parameter file {path} does not exist")
-    with path.open() as f:
-        data = yaml.safe_load(f)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        problem = " ".join(str(error).split())
+        raise ValueError(f"{path}: cannot be read as YAML: {problem}") from None
     if not isinstance(data, dict) or env_id not in data:
         raise ValueError(f"{path}: no top-level key {env_id!r}")
     if not isinstance(data[env_id], dict):
@@ -431,15 +436,65 @@ def _check_env_kwargs(env_id: str, env_kwargs: Mapping[str, Any], where: str) ->
         raise ValueError(f"{where}: env_kwargs: {error}") from None
 
 
-def _eval_kwargs(text: str, path: Path, key: str) -> dict[str, Any]:
-    import torch
+# The activation functions a hyper-parameter string may name (`nn.<name>`): torch classes.
+ACTIVATIONS = ("ReLU", "Tanh", "ELU", "LeakyReLU", "SiLU", "GELU", "Sigmoid", "Softplus", "Mish")
 
+
+def _literal(node: ast.AST, where: str) -> Any:
+    """The value of a literal expression node: numbers, strings, booleans, None, lists, tuples,
+    dicts, ``dict(key=...)`` and ``nn.<activation>`` (`ACTIVATIONS`); a one-line ValueError
+    naming ``where`` and the construct for anything else (no call, name or attribute runs)."""
+    if isinstance(node, ast.Constant) and isinstance(
+        node.value, (int, float, str, bool, type(None))
+    ):
+        return node.value
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        value = _literal(node.operand, where)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return -value if isinstance(node.op, ast.USub) else value
+    if isinstance(node, ast.List):
+        return [_literal(e, where) for e in node.elts]
+    if isinstance(node, ast.Tuple):
+        return tuple(_literal(e, where) for e in node.elts)
+    if isinstance(node, ast.Dict) and None not in node.keys:
+        return {
+            _literal(k, where): _literal(v, where)
+            for k, v in zip(node.keys, node.values, strict=True)
+        }
+    if (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Name)
+        and node.func.id == "dict"
+        and not node.args
+        and all(k.arg is not None for k in node.keywords)
+    ):
+        return {k.arg: _literal(k.value, where) for k in node.keywords}
+    if (
+        isinstance(node, ast.Attribute)
+        and isinstance(node.value, ast.Name)
+        and node.value.id == "nn"
+        and node.attr in ACTIVATIONS
+    ):
+        import torch
+
+        return getattr(torch.nn, node.attr)
+    raise ValueError(
+        f"{where}: {ast.unparse(node)!r} is not a literal (numbers, strings, lists, dict(...), "
+        f"nn.<activation> with activation in {list(ACTIVATIONS)})"
+    )
+
+
+def _eval_kwargs(text: str, path: Path, key: str) -> dict[str, Any]:
+    """A dict from a hyper-parameter string such as "dict(net_arch=[64, 64],
+    activation_fn=nn.ReLU)", parsed as a literal (`_literal`), never evaluated."""
+    where = f"{path}: {key}"
     try:
-        value = eval(text, {"__builtins__": {}}, {"dict": dict, "nn": torch.nn})
-    except Exception as exc:
-        raise ValueError(f"{path}: cannot evaluate {key} {text!r}: {exc}") from exc
+        tree = ast.parse(text, mode="eval")
+    except SyntaxError as exc:
+        raise ValueError(f"{where} {text!r} is not an expression: {exc.msg}") from None
+    value = _literal(tree.body, where)
     if not isinstance(value, dict):
-        raise ValueError(f"{path}: {key} must evaluate to a dict, got {type(value).__name__}")
+        raise ValueError(f"{where} must be a dict, got {type(value).__name__}")
     return value
 
 

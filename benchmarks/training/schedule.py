@@ -132,8 +132,9 @@ def read_schedule(path: str | Path) -> Schedule | None:
     path = Path(path)
     try:
         data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as error:
-        raise ValueError(f"{path}: cannot be read as YAML: {error}") from None
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        problem = " ".join(str(error).split())
+        raise ValueError(f"{path}: cannot be read as YAML: {problem}") from None
     if not isinstance(data, dict) or SCHEDULE_KEY not in data:
         return None
     where = f"{path}: {SCHEDULE_KEY}"
