@@ -125,3 +125,32 @@ def test_a_policy_kwargs_payload_never_runs(tmp_path):
         "net_arch": {"pi": [32], "vf": [32]},
         "activation_fn": torch.nn.ReLU,
     }
+
+
+def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episode(tmp_path):
+    """Was: compare checked an agent's allocation only when its episodes came, after the other
+    policies' had run."""
+    import json
+
+    agent = tmp_path / "helix_allocated"
+    shutil.copytree(AGENTS_DIR / "ppo_helix", agent)
+    meta = json.loads((agent / "metadata.json").read_text())
+    meta["stages"] = [{"name": "actuator_allocation", "commands": "paper"}]
+    (agent / "metadata.json").write_text(json.dumps(meta))
+    out = tmp_path / "run"
+    code, err = _cli(
+        "compare",
+        "--policies",
+        f"fbsm,agent:{agent}",
+        "--scenarios",
+        "paper,fins",
+        "--seeds",
+        "1",
+        "--duration",
+        "20",
+        "--out",
+        str(out),
+    )
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "scenario 'fins'" in err and "previous action" in err
+    assert not out.exists()

@@ -38,6 +38,7 @@ __all__ = [
     "PolicySpec",
     "agent_run",
     "build_policy",
+    "check_policy_for_env",
     "check_policy_spec",
     "policy_env",
     "policy_env_id",
@@ -180,6 +181,31 @@ def check_onnx_spec(spec: str, path: Path) -> None:
         controllers.make("onnx", path=str(path), observation_names=names)
     except (OSError, ValueError) as error:
         raise type(error)(f"policy {spec!r}: {error}") from None
+
+
+def check_policy_for_env(
+    spec: str, env: Any, controller_kwargs: dict[str, Any] | None = None
+) -> None:
+    """What building the policy ``spec`` for a scenario's ``env`` would refuse, without running
+    anything or loading torch: a classical controller or an export is built; an agent's stages
+    are built for the env's plant (an allocation whose observation lacks its inputs, say) and a
+    residual agent's base controller too. Call it for every policy and scenario before any
+    episode."""
+    parsed = PolicySpec.parse(spec)
+    if parsed.kind in ("classical", "onnx"):
+        build_policy(spec, env, controller_kwargs)
+        return
+    if parsed.kind != "agent" or parsed.agent is None:
+        return
+    from controllers.agent import check_agent, observation_layout
+    from controllers.env_settings import policy_settings
+    from controllers.stages import build_stages
+
+    files = check_agent(parsed.agent)
+    settings = {**policy_settings(env), **(controller_kwargs or {})}
+    build_stages(files.stages, observation_layout(files.metadata), settings, str(files.model))
+    if files.residual is not None:
+        files.residual.make_base(**settings)
 
 
 def build_policy(spec: str, env: Any, controller_kwargs: dict[str, Any] | None = None) -> Any:

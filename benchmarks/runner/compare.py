@@ -36,8 +36,7 @@ from benchmarks.arguments import (
     writable_folder,
 )
 from benchmarks.catalog.policies import (
-    PolicySpec,
-    build_policy,
+    check_policy_for_env,
     check_policy_spec,
     policy_env,
     policy_label,
@@ -128,13 +127,9 @@ def check_args(args: argparse.Namespace) -> None:
             config = SimConfig.from_kwargs(**env_kwargs)
             # one metrics-window rule (docs/design.md §3.9); it must hold a metric everywhere
             transient = check_window(args.duration, args.transient, config.control_dt)
-            for spec in policies:
-                kind = PolicySpec.parse(spec).kind
-                if kind == "classical":
-                    build_policy(spec, config, scenario.controller)
-                elif kind == "onnx":  # its actuator and observation, as the job's env has them
-                    env = {**VARIANTS[env_ids[spec]], **agent_envs[spec], **env_kwargs}
-                    build_policy(spec, env, scenario.controller)
+            for spec in policies:  # as each job's env will build it, before any episode
+                env = {**VARIANTS[env_ids[spec]], **agent_envs[spec], **env_kwargs}
+                check_policy_for_env(spec, env, scenario.controller)
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
     writable_folder(args.out)  # last: a bad argument above creates no folder

@@ -65,7 +65,7 @@ from benchmarks.arguments import (
 )
 from benchmarks.catalog.policies import (
     PolicySpec,
-    build_policy,
+    check_policy_for_env,
     policy_label,
 )
 from benchmarks.catalog.scenarios import select
@@ -212,9 +212,8 @@ def check_args(args: argparse.Namespace) -> None:
                 try:
                     config = SimConfig.from_kwargs(**chunk.env_kwargs)
                     transient = check_window(args.duration, args.transient, config.control_dt)
-                    # built per task before any episode (an export: for its actuator)
-                    if PolicySpec.parse(run.spec).kind in ("classical", "onnx"):
-                        build_policy(run.spec, config, task.controller)
+                    # as each chunk will build it, before any episode
+                    check_policy_for_env(run.spec, chunk.env_kwargs, task.controller)
                 except (TypeError, ValueError) as error:
                     raise ValueError(
                         f"task set {task.name!r}, policy {policy.name!r}: {error}"
