@@ -12,8 +12,9 @@ noise, parameter uncertainty up to the limit of a vehicle with positive added ma
 actuator models, random or far starts, every reward weight, …) and runs a batch of vehicles
 (`AUVPath3DVectorEnv`, SAME_STEP autoreset) through several episodes. Actions mix uniform
 [−1, 1], saturating [−3, 3], the corners ±1, zeros, huge finite values up to ±1.8e308 and
-denormals. Every control step is checked for the invariants of tests/test_properties.py; the
-counts are printed with a one-line verdict, and the exit code is 1 if any invariant was violated:
+denormals (clipped to [−1, 1] for the realistic actuators, which refuse anything outside it).
+Every control step is checked for the invariants of tests/test_properties.py; the counts are
+printed with a one-line verdict, and the exit code is 1 if any invariant was violated:
 
 - NaN observations: a non-finite value in a returned observation (or final observation);
 - non-finite rewards;
@@ -158,6 +159,8 @@ def fuzz_configuration(
         if work >= work_budget:
             break
         actions = draw_actions(rng, n_vehicles)
+        if env.config.actuator == "realistic":  # it refuses commands outside [-1, 1] (a test)
+            actions = np.clip(actions, -1.0, 1.0)
         try:
             obs, reward, terminated, truncated, info = env.step(actions)
         except Exception as error:

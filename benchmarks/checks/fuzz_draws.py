@@ -1,6 +1,7 @@
 """The draws of the fuzz run (`benchmarks.checks.fuzz`): a random valid configuration of the
 vector env across its documented argument space (paths of every kind, envs, integration steps,
-disturbances, uncertainty, actuators, starts, reward weights) and random and extreme actions."""
+disturbances, uncertainty, actuators, starts, reward weights; the depth envelope, waves, current
+profile, navigation suite, agent observation and safety cost) and random and extreme actions."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from auv_gym.ocean.disturbances import (
     CurrentConfig,
     NoiseConfig,
 )
+from auv_gym.ocean.waves import MAX_HEIGHT, MAX_STEEPNESS, PERIOD_RANGE, peak_wavelength
 from auv_gym.paths.shapes import (
     POSITION_BOUND,
     Helix,
@@ -52,6 +54,7 @@ __all__ = [
     "draw_config",
     "draw_curve",
     "draw_distribution",
+    "draw_ocean",
     "draw_path",
     "log_uniform",
 ]
@@ -206,7 +209,7 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
             time_constant=log_uniform(rng, 1e-3, MAX_CURRENT_TIME_CONSTANT),
         )
     kw["param_uncertainty"] = 0.0 if rng.random() < 0.5 else float(rng.uniform(0.0, 0.999))
-    kw["actuator"] = str(rng.choice(["paper", "fins", "random"]))
+    kw["actuator"] = str(rng.choice(["paper", "fins", "random", "realistic"]))
     kw["randomize_start"] = bool(rng.random() < 0.5)
     if rng.random() < 0.25:
         kw["random_current"] = float(rng.uniform(0.0, MAX_RANDOM_CURRENT))
@@ -254,7 +257,55 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
         kw["params"] = {"X_udot": added, "Y_vdot": float(rng.uniform(-50.0, 0.99 * m))}
         limit = min(m / max(added, kw["params"]["Y_vdot"]) - 1.0, 0.999)
         kw["param_uncertainty"] = float(rng.uniform(0.0, limit)) * (1.0 - 1e-9)
+    if rng.random() < 0.5:
+        draw_ocean(rng, kw)
     return kw, n_steps
+
+
+def draw_ocean(rng: np.random.Generator, kw: dict[str, Any]) -> None:
+    """The options of the vehicle as built and its ocean, each on or off: a depth envelope, waves
+    (sea states or any sea below the breaking steepness), a current profile, the navigation
+    suite, the agent observation with integrals, the safety cost. Drawn paths are moved down to
+    a drawn depth (the envelope and the waves act below the surface); a fixed path is often above
+    it, and the env then refuses the draw at construction (counted as refused)."""
+    if not isinstance(kw["path"], str) or kw["path"] == "random":
+        if isinstance(kw["path"], PathDistribution) or kw["path"] == "random":
+            kw["path_offset"] = (0.0, 0.0, float(rng.uniform(0.0, 600.0)))
+    depth = kw.get("path_offset", (0.0, 0.0, 0.0))[2]
+    if rng.random() < 0.5:
+        kw["depth_envelope"] = {
+            "seabed_depth": float(depth + rng.uniform(5.0, 700.0)),
+            "margin": float(rng.uniform(0.1, 5.0)),
+        }
+    if rng.random() < 0.5:
+        if rng.random() < 0.5:
+            kw["waves"] = f"sea_state_{int(rng.integers(3, 6))}"
+        else:
+            period = float(rng.uniform(*PERIOD_RANGE))
+            highest = min(MAX_HEIGHT, MAX_STEEPNESS * peak_wavelength(period))
+            kw["waves"] = {
+                "significant_height": float(rng.uniform(0.01, highest)),
+                "peak_period": period,
+                "components": int(rng.integers(1, 65)),
+                "spreading": float(rng.uniform(0.0, 100.0)),
+                "direction": float(rng.uniform(-math.pi, math.pi)),
+            }
+    if rng.random() < 0.4:
+        kw["current_profile"] = {
+            "surface_speed": float(rng.uniform(0.0, 1.0)),
+            "reference_depth": float(rng.uniform(1.0, 500.0)),
+            "reference_speed": float(rng.uniform(0.0, 0.5)),
+            "exponent": float(rng.uniform(0.05, 1.0)),
+            "direction": float(rng.uniform(-math.pi, math.pi)),
+            "drift_amplitude": float(rng.uniform(0.0, 1.0)),
+            "drift_period": float(log_uniform(rng, 10.0, 1e4)),
+        }
+    if rng.random() < 0.4:
+        kw["sensors"] = str(rng.choice(["ideal", "typical"]))
+    if rng.random() < 0.3 and kw.get("observation") is None:
+        kw["observation"] = "preview_integral"
+    if rng.random() < 0.3:
+        kw["safety_cost"] = {}
 
 
 def draw_actions(rng: np.random.Generator, n: int) -> np.ndarray:
