@@ -1,0 +1,272 @@
+r"""The 6-DOF REMUS 100 of Fossen's *Handbook of Marine Craft Hydrodynamics and Motion Control*
+(2nd ed., Wiley 2021), as his PythonVehicleSimulator's ``remus100`` writes it: the reference
+form of the second plant (docs/model.md §15), in numpy, one state at a time.
+
+With ν = (u, v, w, p, q, r) [m/s, rad/s], ν_r = ν − ν_c the velocity through the water (a
+current of speed V_c toward β_c in the horizontal plane, ν_c = V_c(cos(β_c − ψ), sin(β_c − ψ),
+0, 0, 0, 0)), η = (x, y, z, φ, θ, ψ):
+
+    M ν̇ = τ_act + τ_liftdrag + τ_crossflow − (C_RB(ν_r) + C_A(ν_r) + D) ν_r − g(η) + M ν̇_c
+
+- M = M_RB + M_A: a prolate spheroid of length L and diameter d, neutrally buoyant; M_RB the
+  rigid body at the centre of gravity r_bg = (0, 0, 0.02) m moved to the origin,
+  M_RB = H(r_bg)ᵀ diag(m, m, m, I_x, I_y, I_z) H(r_bg); M_A Lamb's k-factors of the spheroid
+  (roll added inertia 0.3·I_x). C_RB and C_A from M (Fossen 2021 eq. 3.63, ``m2c``), C_A without
+  the Munk moments in pitch and yaw (entries (5,1), (5,3), (6,1), (6,2) and their transposes
+  zeroed, which keeps it skew-symmetric).
+- D: linear damping from time constants (surge, sway, heave 20 s, yaw 1 s) and damping ratios
+  in roll (0.3) and pitch (0.8) of the restoring frequencies; surge and sway fade with speed,
+  e^{−3U_r}, where the quadratic terms take over.
+- τ_liftdrag: the hull as a low-aspect wing at the angle of attack α = atan2(w_r, u_r) (Beard and
+  McLain 2012; C_D0 from the cylinder's 0.42 of Allen et al. 2000).
+- τ_crossflow: cross-flow drag by strip theory, 21 strips with Hoerner's 2-D coefficient.
+- g(η): restoring forces and moments of weight W = buoyancy B at r_bg and r_bb = 0.
+- τ_act: propeller thrust and the fins (`auv_gym.vehicle.actuators`, the same formulas) and the
+  propeller torque in roll, K_prop/10 (the reference scales it down to match experiments).
+
+`accelerations` is cross-checked against numbers recorded from the reference on a grid of
+states and commands (tests/test_remus6dof.py, ≤ 1e-9 relative); unforced and undamped, the
+kinetic energy ½ νᵀMν is conserved (C skew-symmetric).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from auv_gym.vehicle.actuators import ActuatorParams, propeller_thrust, propeller_torque
+
+__all__ = [
+    "REMUS6DOF",
+    "SixDofVehicle",
+    "accelerations",
+    "coriolis",
+    "coriolis_matrix",
+    "restoring_forces",
+]
+
+# Hoerner's 2-D cross-flow drag coefficient against B/(2T) (Fossen's ``Hoerner``).
+_HOERNER_X = np.array(
+    [
+        *(0.0109, 0.1766, 0.3530, 0.4519, 0.4728, 0.4929, 0.4933, 0.5585, 0.6464, 0.8336),
+        *(0.9880, 1.3081, 1.6392, 1.8600, 2.3129, 2.6000, 3.0088, 3.4508, 3.7379, 4.0031),
+    ]
+)
+_HOERNER_Y = np.array(
+    [
+        *(1.9661, 1.9657, 1.8976, 1.7872, 1.5837, 1.2786, 1.2108, 1.0836, 0.9986, 0.8796),
+        *(0.8284, 0.7599, 0.6914, 0.6571, 0.6307, 0.5962, 0.5868, 0.5859, 0.5599, 0.5593),
+    ]
+)
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    """S(a): a × b = S(a) b."""
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def _transform(r: np.ndarray) -> np.ndarray:
+    """H(r) = [[I, S(r)ᵀ], [0, I]]: moves a model from the point r to the origin."""
+    h = np.identity(6)
+    h[0:3, 3:6] = _skew(r).T
+    return h
+
+
+@dataclass(frozen=True)
+class SixDofVehicle:
+    """The hull of the 6-DOF REMUS 100 (module doc); SI units. Derived matrices are computed
+    once (`mass`, `added_mass`, `inverse_mass`, `damping_base`)."""
+
+    length: float = 1.6  # [m] L
+    diameter: float = 0.19  # [m] d
+    water_density: float = 1026.0  # [kg/m³] ρ
+    gravity: float = 9.81  # [m/s²]
+    r_bg: tuple[float, float, float] = (0.0, 0.0, 0.02)  # [m] centre of gravity from the origin
+    r_bb: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m] centre of buoyancy
+    hull_drag_coeff: float = 0.42  # [-] C_d of the cylinder (Allen et al. 2000)
+    roll_added_inertia: float = 0.3  # [-] M_A,44 / I_x
+    surge_time_constant: float = 20.0  # [s]
+    sway_time_constant: float = 20.0  # [s]
+    heave_time_constant: float = 20.0  # [s]
+    yaw_time_constant: float = 1.0  # [s]
+    roll_damping_ratio: float = 0.3  # [-]
+    pitch_damping_ratio: float = 0.8  # [-]
+    propeller_torque_scale: float = 0.1  # [-] K_prop/10 in roll (the reference's scaling)
+    strips: int = 20  # cross-flow strips (21 stations)
+    actuators: ActuatorParams = field(default_factory=ActuatorParams.pvs_remus100)
+
+    def __post_init__(self) -> None:
+        a, b = self.length / 2.0, self.diameter / 2.0
+        rho = self.water_density
+        m = 4.0 / 3.0 * math.pi * rho * a * b * b  # [kg] the spheroid's displaced mass
+        ix = 2.0 / 5.0 * m * b * b
+        iy = 1.0 / 5.0 * m * (a * a + b * b)
+        r_bg = np.asarray(self.r_bg, float)
+        h = _transform(r_bg)
+        rigid = h.T @ np.diag([m, m, m, ix, iy, iy]) @ h
+        e = math.sqrt(1.0 - (b / a) ** 2)
+        log = math.log((1.0 + e) / (1.0 - e))
+        alpha_0 = 2.0 * (1.0 - e * e) / e**3 * (0.5 * log - e)
+        beta_0 = 1.0 / e**2 - (1.0 - e * e) / (2.0 * e**3) * log
+        k1, k2 = alpha_0 / (2.0 - alpha_0), beta_0 / (2.0 - beta_0)
+        k_prime = (
+            e**4
+            * (beta_0 - alpha_0)
+            / ((2.0 - e * e) * (2.0 * e * e - (2.0 - e * e) * (beta_0 - alpha_0)))
+        )
+        added = np.diag(
+            [m * k1, m * k2, m * k2, self.roll_added_inertia * ix, k_prime * iy, k_prime * iy]
+        )
+        mass = rigid + added
+        weight = m * self.gravity
+        arm = self.r_bg[2] - self.r_bb[2]
+        w_roll = math.sqrt(weight * arm / mass[3, 3])
+        w_pitch = math.sqrt(weight * arm / mass[4, 4])
+        damping = np.diag(
+            [
+                mass[0, 0] / self.surge_time_constant,
+                mass[1, 1] / self.sway_time_constant,
+                mass[2, 2] / self.heave_time_constant,
+                mass[3, 3] * 2.0 * self.roll_damping_ratio * w_roll,
+                mass[4, 4] * 2.0 * self.pitch_damping_ratio * w_pitch,
+                mass[5, 5] / self.yaw_time_constant,
+            ]
+        )
+        area = 0.7 * self.length * self.diameter  # [m²] S: 70 % of the rectangle
+        derived = {
+            "mass_kg": m,
+            "weight": weight,
+            "rigid_body": rigid,
+            "added_mass": added,
+            "mass": mass,
+            "inverse_mass": np.linalg.inv(mass),
+            "damping_base": damping,
+            "wing_area": area,
+            "zero_lift_drag": self.hull_drag_coeff * math.pi * b * b / area,
+            "crossflow_coeff": float(np.interp(0.5, _HOERNER_X, _HOERNER_Y)),  # B/(2T), B = T
+        }
+        for name, value in derived.items():
+            object.__setattr__(self, name, value)
+
+
+REMUS6DOF = SixDofVehicle()
+
+
+def coriolis(mass: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """C(ν) of a symmetric 6×6 inertia matrix (Fossen 2021 eq. 3.63), skew-symmetric."""
+    m = 0.5 * (mass + mass.T)
+    p1 = m[0:3, 0:3] @ nu[0:3] + m[0:3, 3:6] @ nu[3:6]
+    p2 = m[3:6, 0:3] @ nu[0:3] + m[3:6, 3:6] @ nu[3:6]
+    c = np.zeros((6, 6))
+    c[0:3, 3:6] = -_skew(p1)
+    c[3:6, 0:3] = -_skew(p1)
+    c[3:6, 3:6] = -_skew(p2)
+    return c
+
+
+def restoring_forces(vehicle: SixDofVehicle, phi: float, theta: float) -> np.ndarray:
+    """g(η) [N, N·m] of weight and buoyancy (W = B) at r_bg and r_bb, roll φ and pitch θ [rad]."""
+    w = b = vehicle.weight
+    xg, yg, zg = vehicle.r_bg
+    xb, yb, zb = vehicle.r_bb
+    sth, cth, sphi, cphi = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
+    return np.array(
+        [
+            (w - b) * sth,
+            -(w - b) * cth * sphi,
+            -(w - b) * cth * cphi,
+            -(yg * w - yb * b) * cth * cphi + (zg * w - zb * b) * cth * sphi,
+            (zg * w - zb * b) * sth + (xg * w - xb * b) * cth * cphi,
+            -(xg * w - xb * b) * cth * sphi - (yg * w - yb * b) * sth,
+        ]
+    )
+
+
+def _lift_drag(vehicle: SixDofVehicle, alpha: float, u_r: float) -> np.ndarray:
+    """The hull's lift and drag at angle of attack α [rad] and relative speed U_r [m/s]."""
+    span, area = vehicle.diameter, vehicle.wing_area
+    aspect = span * span / area
+    cl = math.pi * aspect / (1.0 + math.sqrt(1.0 + (aspect / 2.0) ** 2)) * alpha
+    cd = vehicle.zero_lift_drag + cl * cl / (math.pi * 0.7 * aspect)  # Oswald e = 0.7
+    pressure = 0.5 * vehicle.water_density * u_r * u_r * area
+    drag, lift = pressure * cd, pressure * cl
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    return np.array([-ca * drag + sa * lift, 0.0, -sa * drag - ca * lift, 0.0, 0.0, 0.0])
+
+
+def _crossflow(vehicle: SixDofVehicle, v_r: float, r: float) -> np.ndarray:
+    """Cross-flow drag in sway and yaw by strip theory."""
+    n, length, depth = vehicle.strips, vehicle.length, vehicle.diameter
+    dx = length / n
+    x = -length / 2.0 + dx * np.arange(n + 1)
+    flow = v_r + x * r
+    strip = -0.5 * vehicle.water_density * depth * vehicle.crossflow_coeff * np.abs(flow) * flow
+    return np.array([0.0, float(np.sum(strip * dx)), 0.0, 0.0, 0.0, float(np.sum(strip * x * dx))])
+
+
+def accelerations(
+    vehicle: SixDofVehicle,
+    eta: np.ndarray,
+    nu: np.ndarray,
+    actuator_state: np.ndarray,
+    current_speed: float = 0.0,
+    current_direction: float = 0.0,
+) -> np.ndarray:
+    """ν̇ [m/s², rad/s²] at pose η (x, y, z [m], φ, θ, ψ [rad]), velocity ν (u, v, w [m/s],
+    p, q, r [rad/s]) and actuator state (δ_r, δ_s [rad], n [rpm]; saturated at their limits),
+    in a current V_c [m/s] toward β_c [rad] (module doc)."""
+    a = vehicle.actuators
+    psi = eta[5]
+    u_c = current_speed * math.cos(current_direction - psi)
+    v_c = current_speed * math.sin(current_direction - psi)
+    nu_c = np.array([u_c, v_c, 0.0, 0.0, 0.0, 0.0])
+    dnu_c = np.array([nu[5] * v_c, -nu[5] * u_c, 0.0, 0.0, 0.0, 0.0])
+    nu_r = np.asarray(nu, float) - nu_c
+    alpha = math.atan2(nu_r[2], nu_r[0])
+    speed = math.sqrt(nu[0] ** 2 + nu[1] ** 2 + nu[2] ** 2)
+    u_r = math.sqrt(nu_r[0] ** 2 + nu_r[1] ** 2 + nu_r[2] ** 2)
+    delta_r = float(np.clip(actuator_state[0], -a.delta_max_rudder, a.delta_max_rudder))
+    delta_s = float(np.clip(actuator_state[1], -a.delta_max_stern, a.delta_max_stern))
+    n_rpm = float(np.clip(actuator_state[2], -a.rpm_max, a.rpm_max))
+    x_prop, k_prop = _propeller(n_rpm, speed, a)
+    half_rho = 0.5 * a.water_density
+    k_r = half_rho * (nu_r[0] ** 2 + nu_r[1] ** 2) * a.fin_area_rudder * a.lift_coeff_rudder
+    k_s = half_rho * (nu_r[0] ** 2 + nu_r[2] ** 2) * a.fin_area_stern * a.lift_coeff_stern
+    y_r, z_s = -k_r * delta_r, -k_s * delta_s
+    tau = np.array(
+        [
+            (1.0 - a.thrust_deduction) * x_prop - k_r * delta_r**2 - k_s * delta_s**2,
+            y_r,
+            z_s,
+            vehicle.propeller_torque_scale * k_prop,
+            -a.x_stern * z_s,
+            a.x_rudder * y_r,
+        ]
+    )
+    d = vehicle.damping_base.copy()
+    d[0, 0] *= math.exp(-3.0 * u_r)
+    d[1, 1] *= math.exp(-3.0 * u_r)
+    total = (
+        tau
+        + _lift_drag(vehicle, alpha, u_r)
+        + _crossflow(vehicle, nu_r[1], nu_r[5])
+        - (coriolis_matrix(vehicle, nu_r) + d) @ nu_r
+        - restoring_forces(vehicle, eta[3], eta[4])
+    )
+    return dnu_c + vehicle.inverse_mass @ total
+
+
+def coriolis_matrix(vehicle: SixDofVehicle, nu_r: np.ndarray) -> np.ndarray:
+    """C_RB(ν_r) + C_A(ν_r) without the Munk moments in pitch and yaw (module doc)."""
+    added = coriolis(vehicle.added_mass, nu_r)
+    for i, j in ((4, 0), (4, 2), (5, 0), (5, 1)):
+        added[i, j] = added[j, i] = 0.0
+    return coriolis(vehicle.rigid_body, nu_r) + added
+
+
+def _propeller(n_rpm: float, speed: float, a: ActuatorParams) -> tuple[float, float]:
+    """(thrust X_prop [N], shaft torque K_prop [N·m]) at n [rpm] and vehicle speed U [m/s]."""
+    # the kernels' own formulas, run as Python on the parameter record
+    return propeller_thrust.py_func(n_rpm, speed, a), propeller_torque.py_func(n_rpm, speed, a)
