@@ -29,19 +29,12 @@ from benchmarks.options import option
 __all__ = ["GRID_POINTS", "RecordOptions", "grid", "main"]
 
 GRID_POINTS = 400
-COLUMNS = tuple(
-    zip(
-        ("x", "y", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")
-        + ("delta_r", "delta_s", "n", "current_speed", "current_direction"),
-        ("m",) * 3
-        + ("rad",) * 3
-        + ("m/s",) * 3
-        + ("rad/s",) * 3
-        + ("rad", "rad", "rpm")
-        + ("m/s", "rad"),
-        strict=True,
-    )
-)
+NAMES = [
+    *("x", "y", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r"),
+    *("delta_r", "delta_s", "n", "current_speed", "current_direction"),
+]
+UNITS = [*["m"] * 3, *["rad"] * 3, *["m/s"] * 3, *["rad/s"] * 3, "rad", "rad", "rpm", "m/s", "rad"]
+COLUMNS = tuple(zip(NAMES, UNITS, strict=True))  # the grid's inputs and their units
 
 
 def grid(points: int = GRID_POINTS, seed: int = 0) -> np.ndarray:
