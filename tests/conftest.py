@@ -159,3 +159,27 @@ def _train_tiny_preview_agent(tmp_path, **keys):
 def train_tiny_preview_agent():
     """`_train_tiny_preview_agent(tmp_path, **keys)`: a tiny exported agent (rl tests only)."""
     return _train_tiny_preview_agent
+
+
+@pytest.fixture
+def auv_gym_command():
+    """Run ``python -m benchmarks ARGV`` (the `auv-gym` command) in a subprocess: (exit code,
+    stderr without the one-time notice that the kernels compile, which is no error line)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+
+    def run(*argv: str, cwd: Path = root) -> tuple[int, str]:
+        done = subprocess.run(
+            [sys.executable, "-m", "benchmarks", *argv],
+            cwd=cwd,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        lines = [x for x in done.stderr.splitlines() if "compiling the simulation kernels" not in x]
+        return done.returncode, "\n".join(lines).strip()
+
+    return run

@@ -52,7 +52,15 @@ def test_drawn_configurations_are_valid_and_span_the_ranges():
         (None, None),
         ("vehicle", None),
         ("vehicle", "preview"),
+        (None, "preview_integral"),
+        ("vehicle", "preview_integral"),
     }
+    # the vehicle as built and its ocean, each drawn in some configurations
+    for option in ("depth_envelope", "waves", "current_profile", "sensors", "safety_cost"):
+        assert sum(option in kw for kw, _ in drawn) >= 10, option
+    assert sum(kw["actuator"] == "realistic" for kw, _ in drawn) >= 30
+    deep = [c for c in configs if c.waves is not None or c.depth_envelope is not None]
+    assert deep and all(c.path_offset[2] > 16.0 for c in deep)  # drawn paths moved down
     limited = [kw for kw, _ in drawn if isinstance(kw.get("params"), dict)]
     assert limited and all(kw["param_uncertainty"] > 0 for kw in limited)
     corridors = [kw["corridor"] for kw, _ in drawn]

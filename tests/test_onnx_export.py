@@ -4,7 +4,6 @@ closed loop against the Python agent, a runtime without torch, and bad input ref
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -202,18 +201,6 @@ def test_the_documented_runtime_flies_without_torch(tmp_path):
     assert 0.01 < rms < 0.1  # the generalist's few centimetres
 
 
-def _cli(*argv: str) -> tuple[int, str]:
-    done = subprocess.run(
-        [sys.executable, "-m", "benchmarks", *argv],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, "PYTHONWARNINGS": "ignore"},
-    )
-    return done.returncode, done.stderr.strip()
-
-
 def _agent_copy(tmp_path: Path, agent: str = "ppo_generalist") -> Path:
     copy = tmp_path / agent
     shutil.copytree(AGENTS_DIR / agent, copy)
@@ -221,7 +208,7 @@ def _agent_copy(tmp_path: Path, agent: str = "ppo_generalist") -> Path:
 
 
 @pytest.mark.parametrize("problem", ["unknown stage", "no statistics", "missing folder"])
-def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem):
+def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem, auv_gym_command):
     agent = _agent_copy(tmp_path)
     out = tmp_path / "out" / "agent.onnx"
     out.parent.mkdir()
@@ -237,13 +224,13 @@ def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem):
     else:
         out = tmp_path / "nowhere" / "agent.onnx"
         expected = f"folder {out.parent} does not exist"
-    code, err = _cli("export", str(agent), "--out", str(out))
+    code, err = auv_gym_command("export", str(agent), "--out", str(out))
     assert code == 2
     assert len(err.splitlines()) == 1 and expected in err, err
     assert not out.parent.exists() or list(out.parent.iterdir()) == []
 
 
-def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path):
+def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path, auv_gym_command):
     for name in ("policy.onnx", "policy.json"):
         shutil.copy(AGENTS_DIR / "ppo_helix" / name, tmp_path / name)
     onnx_file, contract_file = tmp_path / "policy.onnx", tmp_path / "policy.json"
@@ -251,7 +238,7 @@ def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path):
     contract["observation"]["names"] = contract["observation"]["names"] + ["a_X_prev"]
     contract_file.write_text(json.dumps(contract))
     out = tmp_path / "run"
-    code, err = _cli(
+    code, err = auv_gym_command(
         "compare",
         "--policies",
         f"fbsm,onnx:{onnx_file}",

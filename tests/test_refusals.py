@@ -4,8 +4,6 @@ nothing run that the input asked for."""
 from __future__ import annotations
 
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,19 +15,6 @@ from auv_gym.envs.env import AUVPath3DEnv
 from benchmarks.catalog.policies import AGENTS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _cli(*argv: str, cwd: Path = ROOT) -> tuple[int, str]:
-    done = subprocess.run(
-        [sys.executable, "-m", "benchmarks", *argv],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    # the one-time notice that the kernels compile is not an error line
-    lines = [x for x in done.stderr.splitlines() if "compiling the simulation kernels" not in x]
-    return done.returncode, "\n".join(lines).strip()
 
 
 def test_step_before_reset_is_refused_and_a_refused_reset_leaves_the_env_usable():
@@ -67,8 +52,8 @@ def test_non_finite_weights_are_named(tmp_path):
         controllers.make("agent", path=str(agent))
 
 
-def test_an_empty_out_is_refused_and_nothing_is_written(tmp_path):
-    code, err = _cli("compare", "--policies", "fbsm", "--out", "", cwd=tmp_path)
+def test_an_empty_out_is_refused_and_nothing_is_written(tmp_path, auv_gym_command):
+    code, err = auv_gym_command("compare", "--policies", "fbsm", "--out", "", cwd=tmp_path)
     assert code == 2 and err.endswith(
         "argument --out: must name a file or folder, got an empty path"
     )
@@ -76,8 +61,8 @@ def test_an_empty_out_is_refused_and_nothing_is_written(tmp_path):
 
 
 @pytest.mark.rl
-def test_an_infinite_step_count_and_malformed_yaml_are_one_line(tmp_path):
-    code, err = _cli(
+def test_an_infinite_step_count_and_malformed_yaml_are_one_line(tmp_path, auv_gym_command):
+    code, err = auv_gym_command(
         "train",
         "--config",
         str(ROOT / "benchmarks/hyperparams/ppo_helix.yml"),
@@ -91,7 +76,9 @@ def test_an_infinite_step_count_and_malformed_yaml_are_one_line(tmp_path):
     bad.write_text("AUVPath3D-v0:\n  n_envs: [1,\n")
     for command in ("train", "train-seeds"):
         extra = ("--seeds", "1") if command == "train-seeds" else ()
-        code, err = _cli(command, "--config", str(bad), *extra, "--out", str(tmp_path / "b"))
+        code, err = auv_gym_command(
+            command, "--config", str(bad), *extra, "--out", str(tmp_path / "b")
+        )
         assert code == 2 and len(err.splitlines()) == 1, err
         assert f"{bad}: cannot be read as YAML" in err
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
@@ -127,7 +114,9 @@ def test_a_policy_kwargs_payload_never_runs(tmp_path):
     }
 
 
-def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episode(tmp_path):
+def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episode(
+    tmp_path, auv_gym_command
+):
     """Was: compare checked an agent's allocation only when its episodes came, after the other
     policies' had run."""
     import json
@@ -138,7 +127,7 @@ def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episo
     meta["stages"] = [{"name": "actuator_allocation", "commands": "paper"}]
     (agent / "metadata.json").write_text(json.dumps(meta))
     out = tmp_path / "run"
-    code, err = _cli(
+    code, err = auv_gym_command(
         "compare",
         "--policies",
         f"fbsm,agent:{agent}",

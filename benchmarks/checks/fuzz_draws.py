@@ -40,6 +40,7 @@ from auv_gym.sim.path_generator import (
 from auv_gym.sim.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.sim.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, VEHICLE_TOP_SPEED
 from auv_gym.vehicle import remus100
+from auv_gym.vehicle.sensors import MAX_FIX_INTERVAL
 
 EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays in milliseconds
 VARIANT_IDS = ("AUVPath3D-v0", SPEED_LIMIT_ENV_ID, PREVIEW_ENV_ID)  # the envs fuzzed
@@ -263,45 +264,54 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
 
 
 def draw_ocean(rng: np.random.Generator, kw: dict[str, Any]) -> None:
-    """The options of the vehicle as built and its ocean, each on or off: a depth envelope, waves
-    (sea states or any sea below the breaking steepness), a current profile, the navigation
-    suite, the agent observation with integrals, the safety cost. Drawn paths are moved down to
-    a drawn depth (the envelope and the waves act below the surface); a fixed path is often above
-    it, and the env then refuses the draw at construction (counted as refused)."""
-    if not isinstance(kw["path"], str) or kw["path"] == "random":
-        if isinstance(kw["path"], PathDistribution) or kw["path"] == "random":
-            kw["path_offset"] = (0.0, 0.0, float(rng.uniform(0.0, 600.0)))
-    depth = kw.get("path_offset", (0.0, 0.0, 0.0))[2]
-    if rng.random() < 0.5:
-        kw["depth_envelope"] = {
-            "seabed_depth": float(depth + rng.uniform(5.0, 700.0)),
-            "margin": float(rng.uniform(0.1, 5.0)),
-        }
-    if rng.random() < 0.5:
+    """The options of the vehicle as built and its ocean, each on or off, valid for the drawn
+    configuration: for a drawn path, a depth deep enough for its whole episode (it starts at the
+    offset, its start 8 ± 8 m lower, and climbs at most its largest flight-path angle over
+    u_desired·max_time) with a depth envelope below it, waves (sea states or any sea below the
+    breaking steepness) and a current profile; for every path the typical navigation suite with
+    fixes every whole number of control periods (or none), the agent observation with integrals
+    and the safety cost."""
+    distribution = kw["path"]
+    if distribution == "random":
+        distribution = PathDistribution()
+    if isinstance(distribution, PathDistribution):
+        climb = math.radians(distribution.climb_angle_deg[1] + 0.5)
+        reach = kw["u_desired"] * kw["max_time"] * math.sin(climb) + 16.0  # [m] up or down
+        margin = float(rng.uniform(0.1, 5.0))
+        depth = reach + margin + float(rng.uniform(0.0, 100.0))
+        kw["path_offset"] = (0.0, 0.0, depth)
         if rng.random() < 0.5:
-            kw["waves"] = f"sea_state_{int(rng.integers(3, 6))}"
-        else:
-            period = float(rng.uniform(*PERIOD_RANGE))
-            highest = min(MAX_HEIGHT, MAX_STEEPNESS * peak_wavelength(period))
-            kw["waves"] = {
-                "significant_height": float(rng.uniform(0.01, highest)),
-                "peak_period": period,
-                "components": int(rng.integers(1, 65)),
-                "spreading": float(rng.uniform(0.0, 100.0)),
-                "direction": float(rng.uniform(-math.pi, math.pi)),
+            kw["depth_envelope"] = {
+                "seabed_depth": depth + reach + margin + float(rng.uniform(0.1, 200.0)),
+                "margin": margin,
             }
-    if rng.random() < 0.4:
-        kw["current_profile"] = {
-            "surface_speed": float(rng.uniform(0.0, 1.0)),
-            "reference_depth": float(rng.uniform(1.0, 500.0)),
-            "reference_speed": float(rng.uniform(0.0, 0.5)),
-            "exponent": float(rng.uniform(0.05, 1.0)),
-            "direction": float(rng.uniform(-math.pi, math.pi)),
-            "drift_amplitude": float(rng.uniform(0.0, 1.0)),
-            "drift_period": float(log_uniform(rng, 10.0, 1e4)),
-        }
-    if rng.random() < 0.4:
-        kw["sensors"] = str(rng.choice(["ideal", "typical"]))
+        if rng.random() < 0.5:
+            if rng.random() < 0.5:
+                kw["waves"] = f"sea_state_{int(rng.integers(3, 6))}"
+            else:
+                period = float(rng.uniform(*PERIOD_RANGE))
+                highest = min(MAX_HEIGHT, MAX_STEEPNESS * peak_wavelength(period))
+                kw["waves"] = {
+                    "significant_height": float(rng.uniform(0.01, highest)),
+                    "peak_period": period,
+                    "components": int(rng.integers(1, 65)),
+                    "spreading": float(rng.uniform(0.0, 100.0)),
+                    "direction": float(rng.uniform(-math.pi, math.pi)),
+                }
+        if rng.random() < 0.4:
+            kw["current_profile"] = {
+                "surface_speed": float(rng.uniform(0.0, 1.0)),
+                "reference_depth": float(rng.uniform(1.0, 500.0)),
+                "reference_speed": float(rng.uniform(0.0, 0.5)),
+                "exponent": float(rng.uniform(0.05, 1.0)),
+                "direction": float(rng.uniform(-math.pi, math.pi)),
+                "drift_amplitude": float(rng.uniform(0.0, 1.0)),
+                "drift_period": float(log_uniform(rng, 10.0, 1e4)),
+            }
+    if rng.random() < 0.4:  # the typical suite, with fixes every whole number of periods
+        periods = int(rng.integers(1, max(2, int(MAX_FIX_INTERVAL / kw["control_dt"]))))
+        fix = None if rng.random() < 0.2 else min(periods * kw["control_dt"], MAX_FIX_INTERVAL)
+        kw["sensors"] = {"preset": "typical", "fix_interval": fix}
     if rng.random() < 0.3 and kw.get("observation") is None:
         kw["observation"] = "preview_integral"
     if rng.random() < 0.3:
