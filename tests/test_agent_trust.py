@@ -6,8 +6,6 @@ from __future__ import annotations
 import os
 import pickle
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -15,8 +13,6 @@ import pytest
 import controllers
 from benchmarks.catalog.policies import AGENTS_DIR
 from controllers.agent import check_agent
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 class Payload:
@@ -49,31 +45,13 @@ def test_a_planted_pickle_is_refused_and_never_runs(planted):
     assert not marker.exists()
 
 
-def test_compare_refuses_it_before_any_episode(planted, tmp_path):
+def test_compare_refuses_it_before_any_episode(planted, tmp_path, auv_gym_command):
     agent, marker = planted
     out = tmp_path / "run"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "benchmarks",
-            "compare",
-            "--policies",
-            f"fbsm,agent:{agent}",
-            "--scenarios",
-            "paper",
-            "--seeds",
-            "1",
-            "--duration",
-            "20",
-            "--out",
-            str(out),
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
+    episodes = "--scenarios paper --seeds 1 --duration 20".split()
+    code, err = auv_gym_command(
+        "compare", "--policies", f"fbsm,agent:{agent}", *episodes, "--out", str(out)
     )
-    assert done.returncode == 2
-    assert len(done.stderr.strip().splitlines()) == 1 and "vecnormalize.pkl" in done.stderr
+    assert code == 2
+    assert len(err.splitlines()) == 1 and "vecnormalize.pkl" in err
     assert not marker.exists() and not out.exists()

@@ -127,18 +127,9 @@ def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episo
     meta["stages"] = [{"name": "actuator_allocation", "commands": "paper"}]
     (agent / "metadata.json").write_text(json.dumps(meta))
     out = tmp_path / "run"
+    episodes = "--scenarios paper,fins --seeds 1 --duration 20".split()
     code, err = auv_gym_command(
-        "compare",
-        "--policies",
-        f"fbsm,agent:{agent}",
-        "--scenarios",
-        "paper,fins",
-        "--seeds",
-        "1",
-        "--duration",
-        "20",
-        "--out",
-        str(out),
+        "compare", "--policies", f"fbsm,agent:{agent}", *episodes, "--out", str(out)
     )
     assert code == 2 and len(err.splitlines()) == 1, err
     assert "scenario 'fins'" in err and "previous action" in err
