@@ -20,6 +20,7 @@ from auv_gym.sim.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 __all__ = [
     "DEFAULT_TRANSIENT",
     "FIN_RATE_LIMITED",
+    "SHAFT_POWER",
     "MetricsWindowWarning",
     "check_window",
     "compute_metrics",
@@ -29,6 +30,7 @@ __all__ = [
 DEFAULT_TRANSIENT = 100.0  # [s] longest default start of the metrics window
 # The trajectory extra with the realistic actuators' rate-limited fraction per control step.
 FIN_RATE_LIMITED = "fin_rate_limited"
+SHAFT_POWER = "shaft_power"  # extras: the propeller shaft power at each interval's end [W]
 _SAT_TOL = 1e-9
 _T_TOL = 1e-9  # [s] sample times k·control_dt are compared with this tolerance
 
@@ -132,6 +134,9 @@ def compute_metrics(
       command); control_effort_X/_M/_N, chattering_X/_M/_N, saturation_fraction_X/_M/_N — per
       channel; fin_rate_saturation (realistic actuators only) — fraction of the episode's
       physics steps in which a fin moved at its rate limit (docs/model.md §2.6).
+    Propulsion (realistic actuators only, over the window; `_propulsion`):
+      mean_shaft_power — mean propeller shaft power [W]; energy_per_km — shaft energy per
+      kilometre the vehicle travelled [kJ/km].
     Outcome:
       success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
       ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
@@ -207,6 +212,8 @@ def compute_metrics(
         metrics[f"saturation_fraction_{axis}"] = float(saturated[:, j].mean()) if steps else 0.0
     if FIN_RATE_LIMITED in tr.extras:  # realistic actuators only (`auv_gym.rollout`)
         metrics["fin_rate_saturation"] = float(np.mean(tr.extras[FIN_RATE_LIMITED]))
+    if SHAFT_POWER in tr.extras:  # the propeller's (`auv_gym.rollout`)
+        metrics.update(_propulsion(tr, window))
     metrics["final_distance"] = float(distance[-1])
     final = t >= t[-1] - final_window + 1e-9
     final_rms = float(np.sqrt(np.mean(np.square(distance[final]))))
@@ -219,3 +226,23 @@ def compute_metrics(
     metrics["transient"] = float(transient)
     metrics["window_samples"] = window_samples
     return metrics
+
+
+def _propulsion(tr: Trajectory, window: np.ndarray) -> dict[str, float]:
+    """mean_shaft_power [W] and energy_per_km [kJ/km] over the window's samples: the shaft power
+    recorded at each interval's end (`SHAFT_POWER`), integrated by the trapezoid rule between
+    consecutive window samples, per kilometre of the vehicle's track between them (which
+    follows the path to its RMS distance, so it is the path's length to that accuracy)."""
+    power = np.asarray(tr.extras[SHAFT_POWER], dtype=np.float64)  # at t[1:], the ends
+    ends = window[1:]
+    if ends.sum() < 2:
+        return {"mean_shaft_power": math.nan, "energy_per_km": math.nan}
+    p, t = power[ends], tr.t[1:][ends]
+    position = np.column_stack([tr["x"], tr["y"], tr["z"]])[1:][ends]
+    track_km = float(np.linalg.norm(np.diff(position, axis=0), axis=1).sum()) / 1000.0
+    energy_kj = _trapezoid(p, t) / 1000.0
+    span = float(t[-1] - t[0])
+    return {
+        "mean_shaft_power": _trapezoid(p, t) / span,
+        "energy_per_km": energy_kj / track_km if track_km > 0 else math.nan,
+    }

@@ -42,7 +42,7 @@ import numba
 import numpy as np
 from gymnasium.utils import seeding
 
-from auv_gym.metrics import FIN_RATE_LIMITED, compute_metrics
+from auv_gym.metrics import FIN_RATE_LIMITED, SHAFT_POWER, compute_metrics
 from auv_gym.sim.config import SimConfig
 from auv_gym.sim.observation import GUIDANCE_FIELDS
 from auv_gym.sim.simulator import Simulator
@@ -56,8 +56,8 @@ from auv_gym.sim.trajectory import (
     episode_end,
 )
 from auv_gym.support.files import environment, json_default
-from auv_gym.vehicle.actuators import ACTUATOR_STATE
-from auv_gym.vehicle.dynamics import STATE_NAMES
+from auv_gym.vehicle.actuators import ACTUATOR_STATE, actuator_record, shaft_powers
+from auv_gym.vehicle.dynamics import STATE, STATE_NAMES
 
 __all__ = ["Policy", "evaluate", "policy_name", "rollout", "rollouts"]
 
@@ -193,6 +193,7 @@ def _run_batch(
 ) -> list[Trajectory]:
     n = len(seeds)
     sim = Simulator(config, n)
+    propeller = actuator_record(config.actuator_params, config.physics_dt)  # for its power
     for i, seed in enumerate(seeds):
         sim.reset_row(i, seeding.np_random(seed)[0])
     max_steps = config.max_steps
@@ -229,7 +230,10 @@ def _run_batch(
         intervals[:, k, _COST_COLUMN] = sim.cost
         if config.actuator == "realistic":  # the plant's, beside the policy's diagnostics
             limited = sim.actuator_state[:, ACTUATOR_STATE.rate_limited]
-            _record_extras(extras, {FIN_RATE_LIMITED: limited}, k, n, max_steps)
+            u, v, w = (sim.state[:, i] for i in (STATE.u, STATE.v, STATE.w))
+            rpm = sim.actuator_state[:, ACTUATOR_STATE.n_rpm]
+            power = shaft_powers(rpm, u, v, w, propeller)
+            _record_extras(extras, {FIN_RATE_LIMITED: limited, SHAFT_POWER: power}, k, n, max_steps)
         ended = alive & (sim.code != 0)
         if ended.any():
             steps[ended] = k + 1

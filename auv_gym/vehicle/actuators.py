@@ -45,6 +45,7 @@ __all__ = [
     "fin_forces",
     "propeller_thrust",
     "propeller_torque",
+    "shaft_powers",
 ]
 
 # The paper's vehicle (Prestero 2001): fin moment per u² per radian |M_uuδs| = |N_uuδr| [kg/rad]
@@ -248,6 +249,18 @@ def propeller_torque(n_rpm, speed, a):
             )
         )
     return a.water_density * d**5 * a.kq_0 * abs(n_rps) * n_rps
+
+
+@njit(cache=True)
+def shaft_powers(n_rpm, u, v, w, a):
+    """Shaft power P = 2π·n·Q(n, U) [W] the motor delivers to each vehicle's propeller, for shaft
+    speeds n [rpm] and body velocities u, v, w [m/s] (arrays of one length; U = √(u² + v² +
+    w²), as in the thrust): positive ahead and astern (docs/model.md §2.6)."""
+    out = np.empty(n_rpm.shape[0])
+    for i in range(n_rpm.shape[0]):
+        speed = math.sqrt(u[i] * u[i] + v[i] * v[i] + w[i] * w[i])
+        out[i] = 2.0 * math.pi * (n_rpm[i] / 60.0) * propeller_torque(n_rpm[i], speed, a)
+    return out
 
 
 @njit(cache=True, inline="always")

@@ -35,6 +35,8 @@ SUMMARY_GROUPS: dict[str, tuple[str, ...]] = {
     "speed": ("surge_overshoot", "rms_speed_error", "max_surge", "overspeed_fraction"),
     "effort": ("control_effort", "chattering", "saturation_fraction"),
     "safety": ("episode_cost",),
+    # the vehicle as built (propeller and fins): only scenarios with them show this group
+    "propulsion": ("fin_rate_saturation", "mean_shaft_power", "energy_per_km"),
 }
 SUMMARY_METRICS = {m: METRIC_INFO[m][2] for group in SUMMARY_GROUPS.values() for m in group}
 # Short column headers (the long labels are in `benchmarks.reports.table_format.METRIC_INFO`).
@@ -52,6 +54,9 @@ _HEADERS = {
     "chattering": "chattering",
     "saturation_fraction": "saturated",
     "episode_cost": "episode cost",
+    "fin_rate_saturation": "fin rate-limited",
+    "mean_shaft_power": "shaft power",
+    "energy_per_km": "energy per km",
 }
 
 
@@ -128,7 +133,8 @@ def _value(value: Any) -> float:
 def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
     """Markdown: per scenario, one row per policy, mean ± std over the finished episodes.
 
-    Four tables per scenario (tracking, speed, effort, safety), each with the failed-episode count;
+    Four tables per scenario (tracking, speed, effort, safety) and, with the propeller and fins, a
+    fifth (propulsion: fin rate limit, shaft power, energy per km), each with the failed count;
     the conventions are `benchmarks.reports.table_format`'s.
     """
     cells = aggregate(records)
@@ -144,9 +150,16 @@ def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
     for scenario in scenarios:
         lines += ["", f"## {scenario}"]
         for group, metrics in SUMMARY_GROUPS.items():
+            if not _recorded(records, scenario, metrics):  # e.g. no propeller, no propulsion
+                continue
             table = _group_table(cells, scenario, policies, metrics).rstrip()
             lines += ["", f"{group}:", "", table]
     return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _recorded(records: list[dict[str, Any]], scenario: str, metrics: tuple[str, ...]) -> bool:
+    """Whether any episode of ``scenario`` recorded one of ``metrics``."""
+    return any(r["scenario"] == scenario and metrics[0] in r["metrics"] for r in records)
 
 
 def _group_table(
