@@ -74,3 +74,17 @@ def test_a_neutral_vehicle_at_rest_stays_at_rest_and_rights_itself():
     assert thrust[0] > 0 and thrust[3] != 0  # the propeller pushes and twists in roll
     no_torque = dataclasses.replace(REMUS6DOF, propeller_torque_scale=0.0)
     assert accelerations(no_torque, eta, rest, np.array([0.0, 0.0, 1000.0]))[3] == 0.0
+
+
+def test_the_5dof_model_against_the_6dof_one_at_zero_roll():
+    """docs/model.md §15: the same τ on both, φ = p = 0 (`benchmarks.analysis.plant_limit`)."""
+    from auv_gym.vehicle.params import remus100
+    from benchmarks.analysis.plant_limit import STATES, compare
+
+    cruise = compare(STATES["cruise 1 m/s"])
+    vehicle = remus100()
+    drag = -vehicle.X_uu  # [kg/m] the paper's X_u|u| u|u| at u = 1 m/s, in N
+    assert cruise["five_dof"][0] == pytest.approx((8.0 - drag) / vehicle.m11, rel=1e-12)
+    assert cruise["roll"] == 0.0 and cruise["six_dof"][0] < cruise["five_dof"][0] / 3
+    turning = compare(STATES["turning"])
+    assert turning["roll"] > 0.05  # the roll the 5-DOF model drops

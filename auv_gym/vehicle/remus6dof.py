@@ -42,8 +42,10 @@ __all__ = [
     "REMUS6DOF",
     "SixDofVehicle",
     "accelerations",
+    "actuation",
     "coriolis",
     "coriolis_matrix",
+    "hull_accelerations",
     "restoring_forces",
 ]
 
@@ -217,16 +219,28 @@ def accelerations(
     """ν̇ [m/s², rad/s²] at pose η (x, y, z [m], φ, θ, ψ [rad]), velocity ν (u, v, w [m/s],
     p, q, r [rad/s]) and actuator state (δ_r, δ_s [rad], n [rpm]; saturated at their limits),
     in a current V_c [m/s] toward β_c [rad] (module doc)."""
-    a = vehicle.actuators
-    psi = eta[5]
-    u_c = current_speed * math.cos(current_direction - psi)
-    v_c = current_speed * math.sin(current_direction - psi)
+    nu_c = _current(nu, eta[5], current_speed, current_direction)[0]
+    tau = actuation(vehicle, nu, np.asarray(nu, float) - nu_c, actuator_state)
+    return hull_accelerations(vehicle, eta, nu, tau, current_speed, current_direction)
+
+
+def _current(
+    nu: np.ndarray, psi: float, speed: float, direction: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(ν_c, ν̇_c) of a horizontal current of ``speed`` [m/s] toward ``direction`` [rad]."""
+    u_c, v_c = speed * math.cos(direction - psi), speed * math.sin(direction - psi)
     nu_c = np.array([u_c, v_c, 0.0, 0.0, 0.0, 0.0])
-    dnu_c = np.array([nu[5] * v_c, -nu[5] * u_c, 0.0, 0.0, 0.0, 0.0])
-    nu_r = np.asarray(nu, float) - nu_c
-    alpha = math.atan2(nu_r[2], nu_r[0])
+    return nu_c, np.array([nu[5] * v_c, -nu[5] * u_c, 0.0, 0.0, 0.0, 0.0])
+
+
+def actuation(
+    vehicle: SixDofVehicle, nu: np.ndarray, nu_r: np.ndarray, actuator_state: np.ndarray
+) -> np.ndarray:
+    """τ_act [N, N·m] of the propeller and fins (δ_r, δ_s [rad], n [rpm], saturated) at
+    velocity ν and velocity through the water ν_r: thrust, fin forces and moments, and the
+    propeller torque in roll (module doc)."""
+    a = vehicle.actuators
     speed = math.sqrt(nu[0] ** 2 + nu[1] ** 2 + nu[2] ** 2)
-    u_r = math.sqrt(nu_r[0] ** 2 + nu_r[1] ** 2 + nu_r[2] ** 2)
     delta_r = float(np.clip(actuator_state[0], -a.delta_max_rudder, a.delta_max_rudder))
     delta_s = float(np.clip(actuator_state[1], -a.delta_max_stern, a.delta_max_stern))
     n_rpm = float(np.clip(actuator_state[2], -a.rpm_max, a.rpm_max))
@@ -235,7 +249,7 @@ def accelerations(
     k_r = half_rho * (nu_r[0] ** 2 + nu_r[1] ** 2) * a.fin_area_rudder * a.lift_coeff_rudder
     k_s = half_rho * (nu_r[0] ** 2 + nu_r[2] ** 2) * a.fin_area_stern * a.lift_coeff_stern
     y_r, z_s = -k_r * delta_r, -k_s * delta_s
-    tau = np.array(
+    return np.array(
         [
             (1.0 - a.thrust_deduction) * x_prop - k_r * delta_r**2 - k_s * delta_s**2,
             y_r,
@@ -245,11 +259,28 @@ def accelerations(
             a.x_rudder * y_r,
         ]
     )
+
+
+def hull_accelerations(
+    vehicle: SixDofVehicle,
+    eta: np.ndarray,
+    nu: np.ndarray,
+    tau: np.ndarray,
+    current_speed: float = 0.0,
+    current_direction: float = 0.0,
+) -> np.ndarray:
+    """ν̇ [m/s², rad/s²] of the hull under generalized forces ``tau`` (6,) [N, N·m] (module doc):
+    what `accelerations` gives for the actuators' τ, and the way to apply any other τ (the
+    5-DOF model's X, M, N, say)."""
+    nu_c, dnu_c = _current(nu, eta[5], current_speed, current_direction)
+    nu_r = np.asarray(nu, float) - nu_c
+    alpha = math.atan2(nu_r[2], nu_r[0])
+    u_r = math.sqrt(nu_r[0] ** 2 + nu_r[1] ** 2 + nu_r[2] ** 2)
     d = vehicle.damping_base.copy()
     d[0, 0] *= math.exp(-3.0 * u_r)
     d[1, 1] *= math.exp(-3.0 * u_r)
     total = (
-        tau
+        np.asarray(tau, float)
         + _lift_drag(vehicle, alpha, u_r)
         + _crossflow(vehicle, nu_r[1], nu_r[5])
         - (coriolis_matrix(vehicle, nu_r) + d) @ nu_r
