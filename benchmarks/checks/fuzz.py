@@ -21,7 +21,8 @@ printed with a one-line verdict, and the exit code is 1 if any invariant was vio
 - exceptions: any exception from building, resetting or stepping a valid configuration;
 - wrong truncations: `truncated` not exactly at the first control step with t >= max_time;
 - out-of-space observations: outside `observation_space` without a failure termination
-  (corridor, pitch, envelope, non_finite), a reset observation outside it;
+  (`FAILURE_REASONS`: corridor, pitch, envelope, overspeed, broached, grounded, non_finite), a
+  reset observation outside it;
 - unknown reasons: `terminated` without a documented reason, or a reason without `terminated`;
 - inconsistent infos: ``info["_final_obs"]`` not marking exactly the finished vehicles.
 
@@ -45,6 +46,7 @@ import numpy as np
 from auv_gym.sim.config import SimConfig
 from auv_gym.sim.path_generator import PathDistribution
 from auv_gym.sim.task import TERMINATION_REASONS
+from auv_gym.sim.trajectory import FAILURE_REASONS
 from benchmarks.arguments import finite_number, parse_options, program_name, usage_errors
 from benchmarks.checks.fuzz_draws import EPISODE_PHYSICS, draw_actions, draw_config
 from benchmarks.options import option
@@ -61,7 +63,9 @@ __all__ = [
     "run",
 ]
 
-FAILURES = frozenset({"corridor", "pitch", "envelope", "non_finite"})  # may leave the space
+# Failure ends may leave the observation space in their last step (a corridor, pitch, depth or
+# speed limit crossed within one control period, which may be long): every documented failure.
+FAILURES = FAILURE_REASONS
 COUNTERS = (
     "nan_observations",
     "non_finite_rewards",
