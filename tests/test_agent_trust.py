@@ -3,6 +3,7 @@ files")."""
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import shutil
@@ -55,3 +56,23 @@ def test_compare_refuses_it_before_any_episode(planted, tmp_path, auv_gym_comman
     assert code == 2
     assert len(err.splitlines()) == 1 and "vecnormalize.pkl" in err
     assert not marker.exists() and not out.exists()
+
+
+@pytest.mark.rl
+def test_a_warm_start_reads_the_npz_and_never_the_pickle(planted, tmp_path):
+    """Was: `train --init-from` always unpickled the agent's vecnormalize.pkl."""
+    import numpy as np
+
+    from benchmarks.training.warm_start import check_warm_start
+
+    agent, marker = planted
+    meta = json.loads((agent / "metadata.json").read_text())
+    (agent / "metadata.json").write_text(json.dumps({**meta, "algo": "ppo"}))
+    source = np.load(AGENTS_DIR / "ppo_helix" / "vecnormalize.npz")
+    stats = {key: source[key] for key in source.files}
+    np.savez(agent / "vecnormalize.npz", **stats)  # saved before the return statistics were
+    with pytest.raises(ValueError, match=r"lacks \['ret_mean', 'ret_var', 'ret_count'\]"):
+        check_warm_start(agent, "ppo")
+    np.savez(agent / "vecnormalize.npz", **stats, ret_mean=0.0, ret_var=4.0, ret_count=10.0)
+    assert check_warm_start(agent, "ppo")["obs_names"]  # the metadata, checked
+    assert not marker.exists()  # the planted pickle beside it was never opened

@@ -7,26 +7,26 @@ into a freshly built model and `VecNormalize`:
 
     model.zip          every parameter of the policy and its optimiser state (`set_parameters`,
                        exact match: the same network, observation and action shapes)
-    vecnormalize.pkl   the running observation and return statistics; entries the new
+    vecnormalize.npz   the running observation and return statistics (plain arrays: nothing is
+                       unpickled, docs/usage.md "Trusting agent files"); entries the new
                        configuration pins (`obs_scales`) stay pinned at its scales
 
-The agent's inference wrappers (an envelope guard, an actuator allocation: `metadata.json`) are
-not training state and are not carried over: re-apply them to the new run's agents
-(`benchmarks.training.guard_agents`). The agent must have been trained with the same algorithm
-on the same observation layout; anything else is a ValueError naming the difference.
+The agent's stages (an envelope guard, an actuator allocation: `metadata.json`) are not training
+state and are not carried over: a schedule's export stages add them to the new run's agents
+(`benchmarks.training.schedule`). The agent must have been trained with the same algorithm on the
+same observation layout; anything else is a ValueError naming the difference.
 """
 
 from __future__ import annotations
 
 import json
-import pickle
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
+from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE
 
 __all__ = ["SEED_FIELD", "agent_for_seed", "check_warm_start", "warm_start"]
 
@@ -42,11 +42,11 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
     """The agent's metadata, checked to start a run of ``algo`` on ``obs_names`` (None: not
     compared); ValueError naming a missing file, another algorithm or another layout."""
     folder = Path(agent)
-    for name in (MODEL_FILE, VECNORM_FILE, METADATA_FILE):
+    for name in (MODEL_FILE, STATS_FILE, METADATA_FILE):
         if not (folder / name).is_file():
             raise ValueError(
                 f"init_from {str(folder)!r}: {name} is missing (a saved agent "
-                f"directory holds {MODEL_FILE}, {VECNORM_FILE} and "
+                f"directory holds {MODEL_FILE}, {STATS_FILE} and "
                 f"{METADATA_FILE})"
             )
     try:
@@ -62,6 +62,7 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
             f"init_from {str(folder)!r}: the agent was trained with "
             f"{meta.get('algo')!r}, this run uses {algo!r}"
         )
+    _statistics(folder)  # readable, with the return statistics, before any work
     saved = meta.get("obs_names")
     if obs_names is not None and list(saved or ()) != list(obs_names):
         raise ValueError(
@@ -84,32 +85,51 @@ def warm_start(
         raise ValueError(
             f"init_from {str(folder)!r}: its weights do not fit this run's network ({exc})"
         ) from None
-    try:
-        with (folder / VECNORM_FILE).open("rb") as f:
-            saved = pickle.load(f)
-        obs_rms, ret_rms = saved.obs_rms, saved.ret_rms
-    except Exception as exc:
-        raise ValueError(
-            f"init_from {str(folder)!r}: {VECNORM_FILE} is unreadable: {exc}"
-        ) from None
+    obs_mean, obs_var, obs_count, ret_mean, ret_var, ret_count = _statistics(folder)
     target = vec_normalize.obs_rms
-    if np.shape(obs_rms.mean) != np.shape(target.mean):
+    if np.shape(obs_mean) != np.shape(target.mean):
         raise ValueError(
             f"init_from {str(folder)!r}: observation statistics of shape "
-            f"{np.shape(obs_rms.mean)}, this run's are "
+            f"{np.shape(obs_mean)}, this run's are "
             f"{np.shape(target.mean)}"
         )
-    target.mean = np.array(obs_rms.mean, dtype=np.float64)
-    target.var = np.array(obs_rms.var, dtype=np.float64)
-    target.count = float(obs_rms.count)
+    target.mean = np.array(obs_mean, dtype=np.float64)
+    target.var = np.array(obs_var, dtype=np.float64)
+    target.count = float(obs_count)
     if hasattr(target, "_pin"):  # this configuration's fixed scales win
         target._pin()
-    vec_normalize.ret_rms.mean = np.array(ret_rms.mean, dtype=np.float64)
-    vec_normalize.ret_rms.var = np.array(ret_rms.var, dtype=np.float64)
-    vec_normalize.ret_rms.count = float(ret_rms.count)
+    vec_normalize.ret_rms.mean = np.array(ret_mean, dtype=np.float64)
+    vec_normalize.ret_rms.var = np.array(ret_var, dtype=np.float64)
+    vec_normalize.ret_rms.count = float(ret_count)
     return {
         "init_from": str(folder),
         "num_timesteps": meta.get("num_timesteps"),
         "git_commit": meta.get("git_commit"),
         "config_file": meta.get("config_file"),
     }
+
+
+RETURN_KEYS = ("ret_mean", "ret_var", "ret_count")
+
+
+def _statistics(folder: Path) -> tuple[Any, ...]:
+    """(obs mean, var, count, return mean, var, count) from the agent's vecnormalize.npz, read
+    without unpickling; a ValueError naming the file when it is unreadable or lacks the return
+    statistics (agents saved before they were recorded there)."""
+    path = folder / STATS_FILE
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            values = {key: np.asarray(data[key]) for key in data.files}
+    except Exception as exc:
+        raise ValueError(f"init_from {str(folder)!r}: {STATS_FILE} is unreadable: {exc}") from None
+    missing = [k for k in ("mean", "var", "count", *RETURN_KEYS) if k not in values]
+    if missing:
+        raise ValueError(
+            f"init_from {str(folder)!r}: {STATS_FILE} lacks {missing} (saved before auv-gym "
+            "recorded the return statistics there); in a session you trust, rewrite it from the "
+            "agent's vecnormalize.pkl with benchmarks.training.checkpoints.stats_from_vecnormalize"
+        )
+    for key, value in values.items():
+        if key != "obs_names" and not np.all(np.isfinite(value)):
+            raise ValueError(f"init_from {str(folder)!r}: {STATS_FILE} {key} is not finite")
+    return tuple(values[k] for k in ("mean", "var", "count", *RETURN_KEYS))
