@@ -111,16 +111,23 @@ def measure_vector(
 
 
 def _side_by_side(
-    args: Options, sizes: list[int], variant: dict[str, Any], labels: tuple[str, str]
+    args: Options,
+    sizes: list[int],
+    variant: dict[str, Any],
+    labels: tuple[str, str],
+    common: dict[str, Any] | None = None,
 ) -> list[dict[str, Any]]:
-    """Physics rate without and with ``variant`` (env keyword arguments), measured back to back
-    per (threads, N) so that their ratio is taken under one machine load; printed as a table
-    and returned as rows {n, threads, ratio, <labels[0]>, <labels[1]>}."""
+    """Physics rate without and with ``variant`` (env keyword arguments; ``common`` on both
+    sides), measured back to back per (threads, N) so that their ratio is taken under one machine
+    load; printed as a table and returned as rows {n, threads, ratio, <labels[0]>, <labels[1]>}."""
+    common = dict(common or {})
     print(f"{'N':>7} {'threads':>7} {labels[0]:>14} {labels[1]:>14} {'ratio':>7}")
     rows = []
     for threads, n in ((t, n) for t in args.threads for n in sizes):
-        base = measure_vector(n, args.seconds, args.max_time, threads)
-        other = measure_vector(n, args.seconds, args.max_time, threads, env_kwargs=variant)
+        base = measure_vector(n, args.seconds, args.max_time, threads, env_kwargs=common)
+        other = measure_vector(
+            n, args.seconds, args.max_time, threads, env_kwargs={**common, **variant}
+        )
         ratio = other["physics_steps_per_s"] / base["physics_steps_per_s"]
         rows.append(
             {"n": n, "threads": base["threads"], "ratio": ratio, labels[0]: base, labels[1]: other}
@@ -253,7 +260,8 @@ def _waves_rows(args: Options) -> list[dict[str, Any]]:
         f"\nWaves: sea state 4 ({waves.spectrum}, {waves.components} components, field "
         f"refreshed every {waves.update_interval:g} s) beside no waves"
     )
-    return _side_by_side(args, [args.waves_n], {"waves": waves}, ("no_waves", "waves"))
+    deep = {"path_offset": (0.0, 0.0, 110.0)}  # waves act below the surface: the helix moved down
+    return _side_by_side(args, [args.waves_n], {"waves": waves}, ("no_waves", "waves"), deep)
 
 
 @dataclass
