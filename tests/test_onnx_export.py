@@ -149,6 +149,7 @@ def test_every_reference_agent_ships_a_current_export(agent):
 
 
 @pytest.mark.rl
+@pytest.mark.integration  # an export and four 120-s episodes per agent
 @pytest.mark.parametrize(
     ("agent", "env"),
     [
@@ -178,6 +179,7 @@ def test_an_export_flies_like_its_agent(tmp_path, agent, env):
         assert y["rms_distance"] == pytest.approx(x["rms_distance"], rel=1e-3)
 
 
+@pytest.mark.integration  # a subprocess flying a 150-s episode
 def test_the_documented_runtime_flies_without_torch(tmp_path):
     text = (ROOT / "docs" / "usage.md").read_text(encoding="utf-8")
     code = text.split("<!-- onnx-example -->\n```python\n")[1].split("```")[0]
