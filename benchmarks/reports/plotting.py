@@ -201,7 +201,9 @@ def metrics_table(
     from auv_gym.sim.trajectory import FAILURE_REASONS
 
     names = list(results)
-    rows = list(metrics) if metrics is not None else list(TABLE_METRICS)
+    # by default every metric some policy recorded (the propulsion rows need a propeller)
+    recorded = [m for m in TABLE_METRICS if any(m in results[name] for name in names)]
+    rows = list(metrics) if metrics is not None else recorded
     eligible = [results[n].get("termination_reason") not in FAILURE_REASONS for n in names]
     body = []
     for metric in rows:
