@@ -39,7 +39,13 @@ from controllers.onnx_graph import (
     normalisation_graph,
     residual_graph,
 )
-from controllers.onnx_policy import CONTRACT_FORMAT, CONTRACT_VERSION, contract_path, sha256_of
+from controllers.onnx_policy import (
+    CONTRACT_FORMAT,
+    CONTRACT_VERSION,
+    contract_path,
+    inference_session,
+    sha256_of,
+)
 from controllers.stages import AllocationStage, GuardStage, build_stages
 
 __all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers"]
@@ -235,17 +241,6 @@ def _one_float32() -> Any:
     return numpy_helper.from_array(np.ones(1, np.float32))
 
 
-def _session(model: Any) -> Any:
-    import onnxruntime
-
-    options = onnxruntime.SessionOptions()
-    options.intra_op_num_threads = 1
-    options.log_severity_level = 3
-    return onnxruntime.InferenceSession(
-        model.SerializeToString(), options, providers=["CPUExecutionProvider"]
-    )
-
-
 def _parity(
     model: Any, files: AgentFiles, actor: Any, stages: list[Any], state_size: int
 ) -> dict[str, Any]:
@@ -259,7 +254,7 @@ def _parity(
     rng = np.random.default_rng(0)
     k = PARITY_SAMPLES
     draw = files.obs_mean + np.sqrt(files.obs_var) * rng.standard_normal((k, files.obs_mean.size))
-    session = _session(model)
+    session = inference_session(model.SerializeToString(), where=files.model)
     if files.residual is not None:
         obs = draw[:, :15].astype(np.float32)
         base = rng.uniform(-1.0, 1.0, (k, 3)).astype(np.float32)

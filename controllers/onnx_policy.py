@@ -37,6 +37,7 @@ __all__ = [
     "OnnxContract",
     "OnnxPolicy",
     "contract_path",
+    "inference_session",
     "read_contract",
 ]
 
@@ -214,7 +215,7 @@ class OnnxPolicy:
             self.base = make_classical(
                 contract.residual["base"], **{**recorded, **kwargs, **dict(base_kwargs or {})}
             )
-        self.session = _session(where, num_threads)
+        self.session = inference_session(where, num_threads)
         _check_session(self.session, contract)
 
     def predict(
@@ -262,21 +263,25 @@ class OnnxPolicy:
         return f"OnnxPolicy(path={self.path!r})"
 
 
-def _session(path: Path, num_threads: int) -> Any:
+def inference_session(source: Path | bytes, num_threads: int = 1, where: Any = None) -> Any:
+    """An onnxruntime session on the CPU of an ONNX file or serialised model, on
+    ``num_threads`` intra-op threads; errors name ``where`` (default: the file)."""
+    where = source if where is None else where
     try:
         import onnxruntime
     except ImportError as exc:
         raise ImportError(
-            f"running {path} needs onnxruntime (pip install 'auv-gym[onnx]'): {exc}"
+            f"running {where} needs onnxruntime (pip install 'auv-gym[onnx]'): {exc}"
         ) from exc
     options = onnxruntime.SessionOptions()
     options.intra_op_num_threads = num_threads
     options.inter_op_num_threads = 1
     options.log_severity_level = 3
+    model = str(source) if isinstance(source, Path) else source
     try:
-        return onnxruntime.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+        return onnxruntime.InferenceSession(model, options, providers=["CPUExecutionProvider"])
     except Exception as exc:  # onnxruntime raises its own error types for a bad graph
-        raise ValueError(f"ONNX graph {path} cannot be loaded: {exc}") from None
+        raise ValueError(f"ONNX graph {where} cannot be loaded: {exc}") from None
 
 
 def _check_session(session: Any, contract: OnnxContract) -> None:
