@@ -248,10 +248,16 @@ _FINITE = "must be a finite number in"
         ),
         ({"delay": -1}, r"sensors delay must be an integer in \[0, 1000\], got -1"),
         ({"delay": 1.5}, r"sensors delay must be an integer in \[0, 1000\], got 1.5"),
-        ("perfect", r"unknown sensors preset 'perfect'; valid: \['ideal', 'typical'\]"),
-        ({"preset": "best"}, r"unknown sensors preset 'best'; valid: \['ideal', 'typical'\]"),
+        (
+            "perfect",
+            r"unknown sensors preset 'perfect'; valid: \['ideal', 'typical', 'typical_kalman'\]",
+        ),
+        (
+            {"preset": "best"},
+            r"unknown sensors preset 'best'; valid: \['ideal', 'typical', 'typical_kalman'\]",
+        ),
         ({"gps": 1.0}, r"sensors has unknown key\(s\) \['gps'\]"),
-        (3, r"sensors must be None, one of \['ideal', 'typical'\], a dict"),
+        (3, r"sensors must be None, one of \['ideal', 'typical', 'typical_kalman'\], a dict"),
     ],
 )
 def test_bad_sensor_arguments_raise_one_named_line(sensors, message):

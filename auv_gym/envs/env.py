@@ -152,12 +152,12 @@ class AUVPath3DEnv(gym.Env):
     | argument | default | meaning |
     |---|---|---|
     | `path` | "helix" | "helix", "line", "waypoints", "random", a `Path`, waypoints (below) |
-    | `disturbance` | "paper" | "paper" (±35 white noise), "none", an amplitude, a `NoiseConfig` |
+    | `disturbance` | "paper" | "paper" (±35 white noise), "none", "ocean" (below), an amplitude, a `NoiseConfig` |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
-    | `param_uncertainty` | 0.0 | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode |
+    | `param_uncertainty` | None | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode (None: 0) |
     | `actuator` | "paper" | "paper", "fins", "realistic" or "random" ("paper" or "fins", ½ each) |
     | `actuator_params` | defaults | `ActuatorParams` or dict of its fields ("realistic" only) |
-    | `random_current` | 0.0 | V [m/s]: per episode a horizontal current, speed U[0, V] |
+    | `random_current` | None | V [m/s]: per episode a horizontal current, speed U[0, V] (None: 0) |
     | `random_noise` | 0.0 | ε: white-noise amplitudes × (1 + U[−ε, ε]) per episode |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
     | `physics_dt` | 0.01 | RK4 step [s] |
@@ -181,6 +181,13 @@ class AUVPath3DEnv(gym.Env):
     | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §13) |
     | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
     | `sensors` | "ideal" | "ideal" (exact state), "typical", dict, `SensorConfig`: model.md §14 |
+    | `surface_above_path` | None | [m] sea surface above the path's shallowest point (§13.6) |
+
+    ``disturbance="ocean"`` is the ocean a REMUS-class vehicle meets in service
+    (`auv_gym.ocean.preset`, docs/model.md §16): unmodelled-dynamics noise sized to the fins,
+    a random, Gauss–Markov and depth-sheared current, sea state 3 and ±20 % coefficients. It
+    fills `current`, `random_current`, `param_uncertainty`, `waves`, `current_profile` and,
+    without a `depth_envelope`, `surface_above_path` (10 m) where they are left at None.
 
     Allowed values (`auv_gym.support.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
@@ -272,7 +279,7 @@ class AUVPath3DEnv(gym.Env):
         path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
         disturbance: str | float | NoiseConfig = "paper",
         current: CurrentConfig | Sequence[float] | dict | None = None,
-        param_uncertainty: float = 0.0,
+        param_uncertainty: float | None = None,
         actuator: str = "paper",
         control_dt: float = 0.05,
         physics_dt: float = 0.01,
@@ -292,7 +299,7 @@ class AUVPath3DEnv(gym.Env):
         start_heading_spread: float = 0.2,
         start_rotation: float | Sequence[float] = 0.0,
         render_mode: str | None = None,
-        random_current: float = 0.0,
+        random_current: float | None = None,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
         path_offset: Sequence[float] | None = None,
@@ -302,6 +309,7 @@ class AUVPath3DEnv(gym.Env):
         current_profile: CurrentProfile | Mapping | None = None,
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
         sensors: str | Mapping | SensorConfig | None = None,
+        surface_above_path: float | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path,
@@ -336,6 +344,7 @@ class AUVPath3DEnv(gym.Env):
             current_profile=current_profile,
             actuator_params=actuator_params,
             sensors=sensors,
+            surface_above_path=surface_above_path,
         )
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

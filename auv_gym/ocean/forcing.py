@@ -27,6 +27,7 @@ __all__ = [
     "OCEAN_FIELDS",
     "ocean_forcing",
     "ocean_row",
+    "ocean_velocity",
     "ocean_width",
     "refresh_waves",
 ]
@@ -44,6 +45,7 @@ OCEAN_FIELDS = (
     "drift_amplitude",
     "drift_omega",
     "drift_phase",
+    "surface_z",
 )
 OCEAN_HEADER = len(OCEAN_FIELDS)
 OCEAN = field_indices("OceanIndex", OCEAN_FIELDS, __name__)
@@ -59,15 +61,22 @@ def ocean_width(waves: WaveConfig | None) -> int:
 
 
 def ocean_row(
-    waves: WaveConfig | None, profile: CurrentProfile | None, keys: np.ndarray, physics_dt: float
+    waves: WaveConfig | None,
+    profile: CurrentProfile | None,
+    keys: np.ndarray,
+    physics_dt: float,
+    surface_z: float = 0.0,
 ) -> np.ndarray:
     """An episode's ocean row from its two 64-bit keys (`disturbances.draw_keys`): a function
-    of the seed only, so batched and single envs draw the same sea."""
+    of the seed only, so batched and single envs draw the same sea. ``surface_z`` [m] is the
+    NED z of the sea surface the waves and the profile are measured from (docs/model.md §13.6).
+    """
     row = np.zeros(ocean_width(waves))
     if waves is None and profile is None:
         return row
     rng = np.random.default_rng([int(keys[0]), int(keys[1]), _OCEAN_STREAM])
     row[OCEAN.active] = 1.0
+    row[OCEAN.surface_z] = surface_z
     if waves is not None:
         row[OCEAN.wave_components] = waves.components
         row[OCEAN.wave_every] = max(1, round(waves.update_interval / physics_dt))
@@ -94,7 +103,8 @@ def refresh_waves(ocean, st, step, k, dt, wave):
     if n == 0 or k % int(ocean[OCEAN.wave_every]) != 0:
         return wave
     t0 = step * dt
-    field = wave_kinematics(ocean, OCEAN_HEADER, n, st[0], st[1], st[2], t0)
+    depth = st[2] - ocean[OCEAN.surface_z]  # exactly z for the surface at z = 0
+    field = wave_kinematics(ocean, OCEAN_HEADER, n, st[0], st[1], depth, t0)
     return (*field, t0)
 
 
@@ -104,7 +114,7 @@ def ocean_forcing(ocean, st, t, wave, current, f, p):
 
     The earth-frame ``current`` [m/s] gains the orbital velocity, extrapolated from the last
     refresh in time, v + a τ + j τ²/2 with τ = t − t₀, and the profiled current at the depth
-    z = st[2]. The disturbance ``f`` gains the net fluid-inertia force (ρ∇ − m) R_Bᵀ a on
+    z − z_surface (st[2] − surface_z). The disturbance ``f`` gains the net fluid-inertia force (ρ∇ − m) R_Bᵀ a on
     (f_u, f_v, f_w), ρ∇ = m B/W, which vanishes for a neutral vehicle (B = W).
     """
     cx, cy, cz = current
@@ -137,10 +147,41 @@ def ocean_forcing(ocean, st, t, wave, current, f, p):
             ocean[OCEAN.drift_amplitude],
             ocean[OCEAN.drift_omega],
             ocean[OCEAN.drift_phase],
-            st[2],
+            st[2] - ocean[OCEAN.surface_z],
             t,
         )
         cx += px
         cy += py
         cz += pz
     return (cx, cy, cz), f
+
+
+@njit(cache=True, inline="always")
+def ocean_velocity(ocean, x, y, z, t):
+    """The earth-frame velocity [m/s] an ocean row adds to the current at (x, y, z) [m] and
+    time t [s]: the waves' orbital velocity, evaluated exactly, and the profiled current
+    (docs/model.md §13); zero for an inactive row. What a bottom-tracking DVL sees beside the
+    uniform current (`auv_gym.sim.navigation`)."""
+    if ocean[OCEAN.active] == 0.0:
+        return 0.0, 0.0, 0.0
+    depth = z - ocean[OCEAN.surface_z]
+    vx = vy = vz = 0.0
+    n = int(ocean[OCEAN.wave_components])
+    if n > 0:
+        field = wave_kinematics(ocean, OCEAN_HEADER, n, x, y, depth, t)
+        vx, vy, vz = field[0], field[1], field[2]
+    if ocean[OCEAN.profile] != 0.0:
+        px, py, pz = profile_velocity(
+            ocean[OCEAN.surface_speed],
+            ocean[OCEAN.reference_speed],
+            ocean[OCEAN.reference_depth],
+            ocean[OCEAN.exponent],
+            ocean[OCEAN.direction],
+            ocean[OCEAN.drift_amplitude],
+            ocean[OCEAN.drift_omega],
+            ocean[OCEAN.drift_phase],
+            depth,
+            t,
+        )
+        vx, vy, vz = vx + px, vy + py, vz + pz
+    return vx, vy, vz

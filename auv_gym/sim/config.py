@@ -21,6 +21,7 @@ from auv_gym.ocean.disturbances import (
     NoiseConfig,
     gauss_markov_coefficients,
 )
+from auv_gym.ocean.preset import OCEAN_PRESET, OCEAN_PRESET_NAME
 from auv_gym.ocean.waves import WaveConfig
 from auv_gym.paths.offset import shift_path
 from auv_gym.paths.shapes import (
@@ -80,6 +81,7 @@ _SUBSTEP_TOL = 1e-9
 PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
 MAX_SUBSTEPS = 10_000  # physics steps per control step: bounds the cost of one step()
 MAX_EPISODE_TIME = 1e6  # [s] max_time (11.6 days)
+MAX_SURFACE_ABOVE_PATH = 11_000.0  # [m] the deepest ocean
 HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
 START_OFFSET = 2.0  # [m] per axis: a random start near the start point (`Simulator`) moves
 START_JITTER = START_OFFSET * math.sqrt(3.0)  # [m] so far at most from the start point
@@ -127,6 +129,10 @@ class SimConfig:
     safety_cost: SafetyCost = field(default_factory=SafetyCost)
     waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §13)
     current_profile: CurrentProfile | None = None  # None: the uniform current only (§13.5)
+    # [m] the sea surface lies this far above the shallowest point of each episode's path and
+    # start (the waves and the profile act at that operating depth, docs/model.md §13.6);
+    # None: the surface is z = 0. Set by the "ocean" preset without a depth envelope.
+    surface_above_path: float | None = None
     # "ideal": the observation is the exact state; else from a navigation estimate (`sensors`)
     sensors: SensorConfig = field(default_factory=lambda: SENSOR_PRESETS["ideal"])
 
@@ -136,7 +142,7 @@ class SimConfig:
         path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
         disturbance: str | float | NoiseConfig = "paper",
         current: CurrentConfig | Sequence[float] | dict | None = None,
-        param_uncertainty: float = 0.0,
+        param_uncertainty: float | None = None,
         actuator: str = "paper",
         control_dt: float = 0.05,
         physics_dt: float = 0.01,
@@ -153,7 +159,7 @@ class SimConfig:
         start_position: Sequence[float] | None = None,
         start_heading: float | None = None,
         reward_weights: RewardWeights | dict | None = None,
-        random_current: float = 0.0,
+        random_current: float | None = None,
         start_heading_spread: float = 0.2,
         start_rotation: float | Sequence[float] = 0.0,
         random_noise: float = 0.0,
@@ -165,10 +171,28 @@ class SimConfig:
         current_profile: CurrentProfile | Mapping | None = None,
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
         sensors: str | Mapping | SensorConfig | None = None,
+        surface_above_path: float | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
-        argument, its value and the allowed range."""
+        argument, its value and the allowed range. ``disturbance="ocean"`` fills the ocean's
+        arguments left at None from `auv_gym.ocean.preset.OCEAN_PRESET`."""
+        if isinstance(disturbance, str) and disturbance == OCEAN_PRESET_NAME:
+            ocean = OCEAN_PRESET
+            if noise_hold is not None:
+                raise ValueError(
+                    "noise_hold cannot be given with disturbance='ocean' (its unmodelled-"
+                    f"dynamics noise is held {ocean.noise.hold} s); give a NoiseConfig instead"
+                )
+            disturbance = ocean.noise
+            current = ocean.current if current is None else current
+            random_current = ocean.random_current if random_current is None else random_current
+            if param_uncertainty is None:
+                param_uncertainty = ocean.param_uncertainty
+            waves = ocean.waves if waves is None else waves
+            current_profile = ocean.current_profile if current_profile is None else current_profile
+            if surface_above_path is None and depth_envelope in (None, False):
+                surface_above_path = ocean.surface_above_path
         the_path = path_from(path)
         offset = (0.0, 0.0, 0.0)
         if path_offset is not None:
@@ -195,10 +219,10 @@ class SimConfig:
             params=vehicle,
             noise=noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
-            param_uncertainty=param_uncertainty,
+            param_uncertainty=0.0 if param_uncertainty is None else param_uncertainty,
             actuator=actuator,
             actuator_params=actuator_params_from_spec(actuator_params),
-            random_current=random_current,
+            random_current=0.0 if random_current is None else random_current,
             random_noise=random_noise,
             control_dt=control_dt,
             physics_dt=physics_dt,
@@ -225,6 +249,7 @@ class SimConfig:
             waves=WaveConfig.from_spec(waves),
             current_profile=CurrentProfile.from_spec(current_profile),
             sensors=SensorConfig.from_spec(sensors),
+            surface_above_path=surface_above_path,
         )
 
     def __post_init__(self) -> None:
@@ -373,6 +398,23 @@ class SimConfig:
             self._check_path_fits_the_observation()
             self._check_start_fits_the_observation()
             self.check_depths(self.path)
+        if self.surface_above_path is not None:
+            put(
+                "surface_above_path",
+                real(
+                    "surface_above_path",
+                    self.surface_above_path,
+                    0.0,
+                    MAX_SURFACE_ABOVE_PATH,
+                    unit="m",
+                ),
+            )
+            if self.depth_envelope is not None:
+                raise ValueError(
+                    "surface_above_path places the sea surface above a path whose z is a "
+                    "reference height; with a depth_envelope z is a true depth and the surface "
+                    "is z = 0: give one of them"
+                )
         check_below_the_surface(self)  # waves and a current profile act below it
         check_drawn_paths_fit(self)  # so that no reset is refused (`path_depths.draw_path`)
 

@@ -49,7 +49,7 @@ def noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None)
         return NoiseConfig((amplitude,) * 5, hold)
     error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
     raise error(
-        f"unknown disturbance {disturbance!r:.80}; valid: {sorted(DISTURBANCE_PRESETS)}, "
+        f"unknown disturbance {disturbance!r:.80}; valid: {sorted([*DISTURBANCE_PRESETS, 'ocean'])}, "
         f"a NoiseConfig or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
     )
 

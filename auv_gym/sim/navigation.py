@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from auv_gym.ocean.disturbances import KEY, standard_normal, uniform01
+from auv_gym.ocean.forcing import OCEAN, ocean_velocity
 from auv_gym.paths.guidance import body_errors_trig, wrap_angle
 from auv_gym.sim.integrator import config_record
 from auv_gym.sim.observation import GUIDANCE_DIM, OBS_DIM, build_observation, guidance_row
@@ -36,7 +37,9 @@ if TYPE_CHECKING:
 __all__ = ["MEAS", "MEAS_FIELDS", "NAV", "NAV_FIELDS", "STRIDE", "Navigation"]
 
 # Per-vehicle navigation state: per-episode biases and scale factors, the dead-reckoned
-# position [m] and its rate [m/s], the last valid DVL sample through the water and over ground.
+# position [m] and its rate [m/s], the last valid DVL sample through the water and over ground,
+# and the navigation filter's bias estimates, its covariance P (row-major 4×4 over x, y, k, β)
+# and the scratch of its update (gain K, 4×2, and H P, 2×4; docs/model.md §14.4).
 NAV_FIELDS = (
     "b_u",
     "b_v",
@@ -59,6 +62,11 @@ NAV_FIELDS = (
     "dvl_ground_u",
     "dvl_ground_v",
     "dvl_ground_w",
+    "scale_error",
+    "heading_error",
+    *(f"p{i}{j}" for i in range(4) for j in range(4)),
+    *(f"k{i}" for i in range(8)),
+    *(f"hp{i}" for i in range(8)),
 )
 NAV = field_indices("NavIndex", NAV_FIELDS, __name__)
 NAV_DIM = len(NAV_FIELDS)
@@ -120,11 +128,79 @@ def _sample_dvl(s, st, c_x, c_y, c_z, key, block, nv):
 
 
 @njit(cache=True, inline="always")
+def _p(nv, i, j):
+    return nv[NAV.p00 + 4 * i + j]
+
+
+@njit(cache=True, inline="always")
+def _filter_position(s, st, key, block, reset, fix, dx, dy, nv):
+    """One step of the navigation filter (docs/model.md §14.4), state (x, y, k, β): the
+    horizontal position [m], the scale-factor error k [-] and the heading error β [rad] of the
+    dead-reckoned velocity v̂ = (1 + k) R(β) v.
+
+    Predict with the trapezoidal mean v̄ of the measured rate: p ← p + Δt (v̄ − k v̄ − β J v̄),
+    J v̄ = (−v̄_y, v̄_x); P ← F P Fᵀ + Q, F = I + G with G's only entries
+    ∂p/∂(k, β) = Δt [[−v̄_x, v̄_y], [−v̄_y, −v̄_x]], Q = diag(q_p, q_p, q_b, q_b). On a fix
+    z = p + σ_fix n: S = P_pp + σ_fix² I, K = P Hᵀ S⁻¹, P ← P − K H P. A reset starts at the
+    first fix, k = β = 0, P = diag(σ_fix², σ_fix², σ_k0², σ_β0²).
+    """
+    noise_x = _normal(s.fix_noise, key, block + CH_FIX)
+    noise_y = _normal(s.fix_noise, key, block + CH_FIX + 1)
+    r = s.fix_noise * s.fix_noise
+    if reset:
+        nv[NAV.x_hat] = st[STATE.x] + noise_x
+        nv[NAV.y_hat] = st[STATE.y] + noise_y
+        nv[NAV.scale_error], nv[NAV.heading_error] = 0.0, 0.0
+        for j in range(16):
+            nv[NAV.p00 + j] = 0.0
+        nv[NAV.p00], nv[NAV.p11] = r, r
+        nv[NAV.p22], nv[NAV.p33] = s.p0_scale, s.p0_heading
+        return
+    dt = s.control_dt
+    vx = 0.5 * (nv[NAV.x_dot_hat] + dx)
+    vy = 0.5 * (nv[NAV.y_dot_hat] + dy)
+    k, beta = nv[NAV.scale_error], nv[NAV.heading_error]
+    nv[NAV.x_hat] += dt * (vx - k * vx + beta * vy)
+    nv[NAV.y_hat] += dt * (vy - k * vy - beta * vx)
+    g02, g03, g12, g13 = -dt * vx, dt * vy, -dt * vy, -dt * vx
+    for j in range(4):  # F P: rows 0, 1 gain G's rows times rows 2, 3
+        nv[NAV.p00 + j] += g02 * _p(nv, 2, j) + g03 * _p(nv, 3, j)
+        nv[NAV.p10 + j] += g12 * _p(nv, 2, j) + g13 * _p(nv, 3, j)
+    for i in range(4):  # (F P) Fᵀ: columns 0, 1 alike
+        nv[NAV.p00 + 4 * i] += g02 * _p(nv, i, 2) + g03 * _p(nv, i, 3)
+        nv[NAV.p00 + 4 * i + 1] += g12 * _p(nv, i, 2) + g13 * _p(nv, i, 3)
+    nv[NAV.p00] += s.q_position
+    nv[NAV.p11] += s.q_position
+    nv[NAV.p22] += s.q_bias
+    nv[NAV.p33] += s.q_bias
+    if not fix:
+        return
+    s00, s01, s11 = nv[NAV.p00] + r, nv[NAV.p01], nv[NAV.p11] + r
+    det = s00 * s11 - s01 * s01
+    i00, i01, i11 = s11 / det, -s01 / det, s00 / det  # S⁻¹
+    for i in range(4):  # K = P Hᵀ S⁻¹ and H P, kept in the scratch columns
+        nv[NAV.k0 + 2 * i] = _p(nv, i, 0) * i00 + _p(nv, i, 1) * i01
+        nv[NAV.k0 + 2 * i + 1] = _p(nv, i, 0) * i01 + _p(nv, i, 1) * i11
+        nv[NAV.hp0 + i] = _p(nv, 0, i)
+        nv[NAV.hp0 + 4 + i] = _p(nv, 1, i)
+    innovation_x = st[STATE.x] + noise_x - nv[NAV.x_hat]
+    innovation_y = st[STATE.y] + noise_y - nv[NAV.y_hat]
+    for i, name in enumerate((NAV.x_hat, NAV.y_hat, NAV.scale_error, NAV.heading_error)):
+        nv[name] += nv[NAV.k0 + 2 * i] * innovation_x + nv[NAV.k0 + 2 * i + 1] * innovation_y
+    for i in range(4):
+        for j in range(4):
+            nv[NAV.p00 + 4 * i + j] -= (
+                nv[NAV.k0 + 2 * i] * nv[NAV.hp0 + j] + nv[NAV.k0 + 2 * i + 1] * nv[NAV.hp0 + 4 + j]
+            )
+
+
+@njit(cache=True, inline="always")
 def _sense_row(
     i,
     reset,
     state,
     current,
+    ocean,
     step_index,
     code,
     row,
@@ -154,16 +230,15 @@ def _sense_row(
         _draw_biases(s, keys[i, 1], nv)
     dropped = not reset and uniform01(key, 2 * (block + CH_DROP)) < s.dvl_dropout
     if not dropped:  # a lost ping leaves the last valid sample in `nv`
-        _sample_dvl(
-            s,
-            st,
-            cfg.current_x + current[i, 0],
-            cfg.current_y + current[i, 1],
-            cfg.current_z + current[i, 2],
-            key,
-            block,
-            nv,
-        )
+        c_x = cfg.current_x + current[i, 0]
+        c_y = cfg.current_y + current[i, 1]
+        c_z = cfg.current_z + current[i, 2]
+        if ocean[i, OCEAN.active] != 0.0:  # over ground: the waves and profile at time t too
+            ox, oy, oz = ocean_velocity(
+                ocean[i], st[STATE.x], st[STATE.y], st[STATE.z], step_index[i] * cfg.physics_dt
+            )
+            c_x, c_y, c_z = c_x + ox, c_y + oy, c_z + oz
+        _sample_dvl(s, st, c_x, c_y, c_z, key, block, nv)
     theta = _add(st[STATE.theta], nv[NAV.b_theta] + _normal(s.pitch_noise, key, block + CH_PITCH))
     psi_error = nv[NAV.b_psi] + _normal(s.heading_noise, key, block + CH_HEADING)
     psi = st[STATE.psi] if psi_error == 0.0 else wrap_angle(st[STATE.psi] + psi_error)
@@ -177,7 +252,10 @@ def _sense_row(
         ground, math.cos(theta), math.sin(theta), math.cos(psi), math.sin(psi)
     )
     fix_steps = int(s.fix_steps)
-    if reset or (fix_steps > 0 and t % fix_steps == 0):  # a fix: p̂ = p + σ_fix n
+    fix = reset or (fix_steps > 0 and t % fix_steps == 0)
+    if s.kalman != 0.0:
+        _filter_position(s, st, key, block, reset, fix, dx, dy, nv)
+    elif fix:  # a fix: p̂ = p + σ_fix n
         nv[NAV.x_hat] = _add(st[STATE.x], _normal(s.fix_noise, key, block + CH_FIX))
         nv[NAV.y_hat] = _add(st[STATE.y], _normal(s.fix_noise, key, block + CH_FIX + 1))
     else:
@@ -218,6 +296,7 @@ def _sense(
     reset,
     state,
     current,
+    ocean,
     step_index,
     code,
     row,
@@ -241,6 +320,7 @@ def _sense(
             reset,
             state,
             current,
+            ocean,
             step_index,
             code,
             row,
@@ -266,14 +346,19 @@ class Navigation:
 
     ARRAYS = ("keys", "nav", "buffer", "estimate", "guid")
 
-    def __init__(self, config: SensorConfig, control_dt: float, n: int) -> None:
+    def __init__(self, config: SensorConfig, control_dt: float, n: int, speed: float = 1.0) -> None:
         self.config = config
-        self._packed = config.packed(control_dt)
+        self._packed = config.packed(control_dt, speed)
         self.keys = np.zeros((n, 2), dtype=np.uint64)  # sample key, bias key
         self.nav = np.zeros((n, NAV_DIM))
         self.buffer = np.zeros((n, config.delay + 1, MEAS_DIM))
         self.estimate = np.zeros((n, STATE_DIM))  # the state with the measured entries
         self.guid = np.zeros((n, GUIDANCE_DIM))  # guidance row of the estimated pose
+
+    def ground_velocity(self, rows: np.ndarray) -> np.ndarray:
+        """The last valid DVL sample over ground (u, v, w) of ``rows``, body frame [m/s]: what
+        the agent observation's velocity over ground reads when sensors are modelled."""
+        return self.nav[rows, NAV.dvl_ground_u : NAV.dvl_ground_w + 1]
 
     def sense(self, sim: Simulator, rows: np.ndarray, reset: bool) -> None:
         """Measure ``rows`` of the `Simulator` ``sim`` and overwrite their observations;
@@ -287,6 +372,7 @@ class Navigation:
             reset,
             sim.state,
             sim.current,
+            sim.ocean,
             sim.step_index,
             sim.code,
             sim._row,

@@ -36,6 +36,7 @@ __all__ = [
     "check_below_the_surface",
     "check_drawn_paths_fit",
     "draw_path",
+    "episode_surface_z",
 ]
 
 FIT_SAMPLES = 64  # draws tried at construction; one must fit the depth envelope
@@ -59,7 +60,7 @@ def check_below_the_surface(config: SimConfig) -> None:
     """ValueError naming ``path_offset`` when waves or a current profile are on and the path or
     its start can reach the surface z = 0 in an episode (module doc)."""
     users = _surface_users(config)
-    if not users:
+    if not users or config.surface_above_path is not None:  # the surface follows the path
         return
     rise = RANDOM_START_RISE if config.randomize_start else 0.0
     arc = _episode_arc(config)
@@ -84,8 +85,20 @@ def check_below_the_surface(config: SimConfig) -> None:
         raise ValueError(
             f"{users} act below the sea surface z = 0, but {what} can reach z = {highest:.4g} m "
             f"over the {arc:g} m an episode covers: move the path at least {move} m down "
-            f"(path_offset = [0, 0, {move}])"
+            f"(path_offset = [0, 0, {move}]), or place the surface above it "
+            "(surface_above_path, without a depth envelope)"
         )
+
+
+def episode_surface_z(config: SimConfig, path: Path, start_z: float) -> float:
+    """[m] the NED z of the sea surface for an episode on ``path`` from ``start_z``:
+    `surface_above_path` above the shallowest of the start and the path over the arc an episode
+    covers (docs/model.md §13.6); 0 when the configuration has no such setting."""
+    if config.surface_above_path is None:
+        return 0.0
+    tangent = float(np.linalg.norm(path.evaluate(0.0)[1]))
+    top, _ = path_depth_range(path, _episode_arc(config) / tangent)
+    return min(top, start_z) - config.surface_above_path
 
 
 def _start_depth(config: SimConfig) -> float:

@@ -30,6 +30,7 @@ from auv_gym.sim.integrator import (
     config_record,
 )
 from auv_gym.sim.navigation import Navigation
+from auv_gym.sim.path_depths import episode_surface_z
 from auv_gym.sim.observation import (
     GUIDANCE_DIM,
     OBS_DIM,
@@ -356,7 +357,9 @@ class Simulator:
         assert self.params.shape[1] == N_PARAMS
         # The sensor model (`auv_gym.sim.navigation`): None for ideal sensors, the exact state.
         self.navigation = (
-            None if config.sensors.ideal else Navigation(config.sensors, config.control_dt, self.n)
+            None
+            if config.sensors.ideal
+            else Navigation(config.sensors, config.control_dt, self.n, config.u_desired)
         )
 
     @property
@@ -470,6 +473,8 @@ class Simulator:
             layout.spacing,
             self.extra,
         )
+        if self.navigation is not None:  # over ground as the DVL measured it, not the truth
+            self.extra[rows, :3] = self.navigation.ground_velocity(rows)
 
     def _set_task(self, i: int, task: EpisodeTask) -> None:
         """Write vehicle i's drawn task into its row of the episode table."""
@@ -508,7 +513,10 @@ class Simulator:
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
         self.actuator_state[i] = 0.0  # propeller stopped, fins centred
         if cfg.waves is not None or cfg.current_profile is not None:
-            self.ocean[i] = ocean_row(cfg.waves, cfg.current_profile, self.keys[i], cfg.physics_dt)
+            surface_z = episode_surface_z(cfg, self.paths[i], float(position[2]))
+            self.ocean[i] = ocean_row(
+                cfg.waves, cfg.current_profile, self.keys[i], cfg.physics_dt, surface_z
+            )
         self.step_index[i] = 0
         self.record[i] = 0.0
         self.terms[i] = 0.0

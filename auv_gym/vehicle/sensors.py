@@ -8,9 +8,14 @@ reckoning on the DVL and AHRS reset by a position fix (USBL, or GPS at the surfa
 `fix_interval` seconds, and a delay of whole control steps. The kernels that apply it live in
 `auv_gym.sim.navigation`; the reward, termination and metrics keep reading the true state.
 
+The horizontal position is dead reckoning reset by each fix (``navigation="dead_reckoning"``),
+or a Kalman filter over the same measurements (``navigation="kalman"``, docs/model.md §14.4)
+that blends each fix into the dead-reckoned track and estimates the track's velocity error.
+
 Presets (`SENSOR_PRESETS`): "ideal" (no sensor model: the observation is the exact state, the
-default) and "typical" (values and their sources in docs/model.md §14.3). A dict of fields, or
-{"preset": name, **overrides}, sets them one by one.
+default), "typical" (values and their sources in docs/model.md §14.3) and "typical_kalman"
+(the same suite with the navigation filter). A dict of fields, or {"preset": name,
+**overrides}, sets them one by one.
 """
 
 from __future__ import annotations
@@ -35,7 +40,16 @@ MAX_FIX_NOISE = 100.0  # [m] position-fix σ per horizontal axis
 MAX_FIX_INTERVAL = 1e6  # [s]
 MAX_DELAY = 1000  # [control steps]
 MAX_DROPOUT = 0.99  # [-] probability that a DVL sample is lost
-PRESET_NAMES = ("ideal", "typical")
+PRESET_NAMES = ("ideal", "typical", "typical_kalman")
+NAVIGATION_MODES = ("dead_reckoning", "kalman")
+MAX_FILTER_NOISE = 10.0  # [m/s, 1/√s, -, rad] the filter's assumed errors
+# The filter's bias model when not given (docs/model.md §14.4): the scale and heading errors
+# are constant in the sensor model; a random walk of 3e-4 /√s (1° over an hour) keeps the
+# filter from locking onto its first estimate, and floors of 0.1 % and 0.1° keep P₀ positive
+# definite for sensors without those biases.
+DEFAULT_BIAS_NOISE = 3e-4  # [1/√s]
+MIN_INITIAL_SCALE = 0.001  # [-]
+MIN_INITIAL_HEADING = 0.1 * math.pi / 180.0  # [rad]
 
 
 @dataclass(frozen=True)
@@ -64,6 +78,14 @@ class SensorConfig:
     fix_noise: float = 0.0  # [m] σ of a position fix, per horizontal axis
     fix_interval: float | None = 0.0  # [s] between fixes; 0: every step; None: start fix only
     delay: int = 0  # [control steps] k: the observation uses the measurements of step t − k
+    navigation: str = "dead_reckoning"  # or "kalman": the position filter of §14.4
+    # The filter's model (None: derived from the errors above, docs/model.md §14.4): σ of the
+    # measured horizontal velocity per sample [m/s], the random-walk density of the scale and
+    # heading errors it estimates [1/√s, rad/√s] and their initial σ [-], [rad].
+    filter_velocity_noise: float | None = None
+    filter_bias_noise: float | None = None
+    filter_initial_scale: float | None = None
+    filter_initial_heading: float | None = None
     preset: str = "custom"  # the name it was built from ("ideal" bypasses the sensor model)
 
     def __post_init__(self) -> None:
@@ -93,6 +115,31 @@ class SensorConfig:
             object.__setattr__(self, "fix_interval", interval)
         object.__setattr__(self, "delay", integer("sensors delay", self.delay, 0, MAX_DELAY))
         choice("sensors preset", self.preset, [*PRESET_NAMES, "custom"])
+        choice("sensors navigation", self.navigation, NAVIGATION_MODES)
+        for name, unit in (
+            ("filter_velocity_noise", "m/s"),
+            ("filter_bias_noise", "1/√s"),
+            ("filter_initial_scale", ""),
+            ("filter_initial_heading", "rad"),
+        ):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            if not isinstance(value, bool) and isinstance(value, int | float) and value <= 0.0:
+                raise ValueError(
+                    f"sensors {name} = {value!r} {unit} makes the navigation filter's "
+                    "covariance not positive definite: give a value > 0 (or None to derive it)"
+                )
+            checked = real(
+                f"sensors {name}", value, 0.0, MAX_FILTER_NOISE, low_open=True, unit=unit
+            )
+            object.__setattr__(self, name, checked)
+        if self.navigation == "kalman" and not (self.fix_noise > 0.0 and self.fix_interval):
+            raise ValueError(
+                "sensors navigation = 'kalman' blends position fixes into dead reckoning: it "
+                "needs a sensor model with fix_noise > 0 and a fix_interval > 0 (the preset "
+                "'typical_kalman' has them)"
+            )
         if self.preset == "ideal" and replace(self, preset="custom") != SensorConfig():
             raise ValueError(
                 "sensors preset 'ideal' means exact sensors: give its errors with "
@@ -145,12 +192,36 @@ class SensorConfig:
             )
         return round(ratio)
 
-    def packed(self, control_dt: float) -> np.ndarray:
-        """The float64 row `navigation.sense_rows` reads (layout `SENSOR_FIELDS`)."""
+    def filter_model(self, speed: float) -> tuple[float, float, float, float]:
+        """The navigation filter's (velocity noise σ_v [m/s], bias noise q [1/√s], initial
+        scale error σ_k0 [-], initial heading error σ_β0 [rad]) at the cruising ``speed``
+        [m/s]: the given values, else σ_v from the DVL and heading noise, σ_k0 and σ_β0 from
+        the DVL scale factor and the AHRS heading bias (docs/model.md §14.4)."""
+        velocity = self.filter_velocity_noise
+        if velocity is None:
+            velocity = math.hypot(self.dvl_noise, self.heading_noise * speed)
+        bias = DEFAULT_BIAS_NOISE if self.filter_bias_noise is None else self.filter_bias_noise
+        scale = self.filter_initial_scale
+        if scale is None:
+            scale = max(math.hypot(self.dvl_scale, self.dvl_bias / speed), MIN_INITIAL_SCALE)
+        heading = self.filter_initial_heading
+        if heading is None:
+            heading = max(math.hypot(self.heading_bias, self.dvl_bias / speed), MIN_INITIAL_HEADING)
+        return velocity, bias, scale, heading
+
+    def packed(self, control_dt: float, speed: float = 1.0) -> np.ndarray:
+        """The float64 row `navigation.sense_rows` reads (layout `SENSOR_FIELDS`); ``speed``
+        [m/s] sizes the filter's model (`filter_model`)."""
         values = {f.name: getattr(self, f.name) for f in fields(self) if f.name in SENSOR_FIELDS}
         values["fix_steps"] = self.fix_steps(control_dt)
         values["delay"] = self.delay
         values["control_dt"] = control_dt
+        velocity, bias, scale, heading = self.filter_model(speed)
+        values["kalman"] = 1.0 if self.navigation == "kalman" else 0.0
+        values["q_position"] = (velocity * control_dt) ** 2  # [m²] per control step
+        values["q_bias"] = bias * bias * control_dt  # [-, rad²] per control step
+        values["p0_scale"] = scale * scale
+        values["p0_heading"] = heading * heading
         return np.array([float(values[name]) for name in SENSOR_FIELDS])
 
 
@@ -172,6 +243,11 @@ SENSOR_FIELDS = (
     "fix_steps",
     "delay",
     "control_dt",
+    "kalman",
+    "q_position",
+    "q_bias",
+    "p0_scale",
+    "p0_heading",
 )
 
 _DEG = math.pi / 180.0
@@ -197,6 +273,9 @@ SENSOR_PRESETS: dict[str, SensorConfig] = {
         preset="typical",
     ),
 }
+SENSOR_PRESETS["typical_kalman"] = replace(
+    SENSOR_PRESETS["typical"], navigation="kalman", preset="typical_kalman"
+)
 
 _SALT = np.uint64(0x5E4507A7105E4507)  # separates the sensor streams from the disturbance ones
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
