@@ -152,12 +152,12 @@ class AUVPath3DEnv(gym.Env):
     | argument | default | meaning |
     |---|---|---|
     | `path` | "helix" | "helix", "line", "waypoints", "random", a `Path`, waypoints (below) |
-    | `disturbance` | "paper" | "paper" (±35 white noise), "none", "ocean" (below), an amplitude, a `NoiseConfig` |
+    | `disturbance` | "paper" | "paper" (±35), "none", "ocean" (below), amplitude, `NoiseConfig` |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
-    | `param_uncertainty` | None | ε: hydrodynamic coefficients × (1 + U[−ε, ε]) per episode (None: 0) |
+    | `param_uncertainty` | None | ε: coefficients × (1 + U[−ε, ε]) per episode (None: 0) |
     | `actuator` | "paper" | "paper", "fins", "realistic" or "random" ("paper" or "fins", ½ each) |
     | `actuator_params` | defaults | `ActuatorParams` or dict of its fields ("realistic" only) |
-    | `random_current` | None | V [m/s]: per episode a horizontal current, speed U[0, V] (None: 0) |
+    | `random_current` | None | V [m/s]: per episode a current of speed U[0, V] (None: 0) |
     | `random_noise` | 0.0 | ε: white-noise amplitudes × (1 + U[−ε, ε]) per episode |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
     | `physics_dt` | 0.01 | RK4 step [s] |

@@ -114,7 +114,8 @@ def ocean_forcing(ocean, st, t, wave, current, f, p):
 
     The earth-frame ``current`` [m/s] gains the orbital velocity, extrapolated from the last
     refresh in time, v + a τ + j τ²/2 with τ = t − t₀, and the profiled current at the depth
-    z − z_surface (st[2] − surface_z). The disturbance ``f`` gains the net fluid-inertia force (ρ∇ − m) R_Bᵀ a on
+    z − z_surface (st[2] − surface_z). The disturbance ``f`` gains the net fluid-inertia force
+    (ρ∇ − m) R_Bᵀ a on
     (f_u, f_v, f_w), ρ∇ = m B/W, which vanishes for a neutral vehicle (B = W).
     """
     cx, cy, cz = current

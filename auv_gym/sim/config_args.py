@@ -48,8 +48,9 @@ def noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None)
         )
         return NoiseConfig((amplitude,) * 5, hold)
     error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
+    names = sorted([*DISTURBANCE_PRESETS, "ocean"])
     raise error(
-        f"unknown disturbance {disturbance!r:.80}; valid: {sorted([*DISTURBANCE_PRESETS, 'ocean'])}, "
+        f"unknown disturbance {disturbance!r:.80}; valid: {names}, "
         f"a NoiseConfig or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
     )
 

@@ -30,7 +30,6 @@ from auv_gym.sim.integrator import (
     config_record,
 )
 from auv_gym.sim.navigation import Navigation
-from auv_gym.sim.path_depths import episode_surface_z
 from auv_gym.sim.observation import (
     GUIDANCE_DIM,
     OBS_DIM,
@@ -38,6 +37,7 @@ from auv_gym.sim.observation import (
     guidance_row,
     vehicle_speed_bound,
 )
+from auv_gym.sim.path_depths import episode_surface_z
 from auv_gym.sim.preview import extend_rows
 from auv_gym.sim.randomization import EpisodeTask, draw_task
 from auv_gym.sim.safety_cost import safety_vector
