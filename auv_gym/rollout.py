@@ -67,7 +67,8 @@ _STATE_SLICE = slice(0, len(STATE_NAMES))
 _GUID_SLICE = slice(len(STATE_NAMES), len(STATE_NAMES) + len(GUIDANCE_FIELDS))
 _S_COLUMN = SAMPLE_FIELDS.index("s")
 _ACTION_SLICE = slice(0, 3)
-_RECORD_SLICE = slice(3, 3 + len(TAU_FIELDS) + len(DISTURBANCE_FIELDS))  # = Simulator.record
+# τ and the white noise: the first columns of Simulator.record (the ocean's velocity follows).
+_RECORD_SLICE = slice(3, 3 + len(TAU_FIELDS) + len(DISTURBANCE_FIELDS))
 _REWARD_COLUMN = INTERVAL_FIELDS.index("reward")
 _TERMS_SLICE = slice(_REWARD_COLUMN + 1, _REWARD_COLUMN + 1 + len(REWARD_TERMS))
 _COST_COLUMN = INTERVAL_FIELDS.index("cost")
@@ -224,7 +225,7 @@ def _run_batch(
         sim.step(actions)
         samples[:, k + 1, _STATE_SLICE] = sim.state
         samples[:, k + 1, _GUID_SLICE] = sim.guid
-        intervals[:, k, _RECORD_SLICE] = sim.record
+        intervals[:, k, _RECORD_SLICE] = sim.record[:, : _RECORD_SLICE.stop - _RECORD_SLICE.start]
         intervals[:, k, _REWARD_COLUMN] = sim.reward
         intervals[:, k, _TERMS_SLICE] = sim.terms
         intervals[:, k, _COST_COLUMN] = sim.cost

@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import Any
 
 from controllers.backstepping import Backstepping
+from controllers.command_filtered import CommandFilteredBackstepping
 from controllers.fbsm import FBSM
 from controllers.lowpass import DEFAULT_ALPHA, LowPassPolicy
 from controllers.pid import PIDLOS
@@ -31,8 +32,14 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     # The textbook baseline (`controllers.pid`, docs/model.md §4.9) with the same guidance options.
     "pid_ilos": ("pid_los", {"ilos_y": 3.0}),
     "pid_colos": ("pid_los", _COLOS),
+    # Command-filtered backstepping (`controllers.command_filtered`, docs/model.md §4.10): the
+    # backstepping law kept inside the fins' magnitude and rate limits, with the same guidance.
+    "command_filtered_colos": (
+        "command_filtered",
+        {**_COLOS, "alos_y": 0.01, "alos_z": 0.01},
+    ),
 }
-CLASSICAL = ("fbsm", "backstepping", "pid_los", *PRESETS)
+CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
 UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] != "lowpass")
 
 
@@ -48,6 +55,8 @@ def make_classical(name: str, **kwargs: Any) -> Any:
         return Backstepping(**kwargs)
     if name == "pid_los":
         return PIDLOS(**kwargs)
+    if name == "command_filtered":
+        return CommandFilteredBackstepping(**kwargs)
     if name == "lowpass":  # a preset's low-pass over an unfiltered classical base
         return make_lowpass(**kwargs)
     raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")

@@ -293,6 +293,23 @@ class SimConfig:
                 raise ArgumentTypeError(
                     f"{name} must be None or a {kind.__name__}, got {getattr(self, name)!r:.80}"
                 )
+        if self.surface_above_path is not None:
+            put(
+                "surface_above_path",
+                real(
+                    "surface_above_path",
+                    self.surface_above_path,
+                    0.0,
+                    MAX_SURFACE_ABOVE_PATH,
+                    unit="m",
+                ),
+            )
+            if self.depth_envelope is not None:
+                raise ValueError(
+                    "surface_above_path places the sea surface above a path whose z is a "
+                    "reference height; with a depth_envelope z is a true depth and the surface "
+                    "is z = 0: give one of them"
+                )
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
         put(
             "random_current",
@@ -398,23 +415,6 @@ class SimConfig:
             self._check_path_fits_the_observation()
             self._check_start_fits_the_observation()
             self.check_depths(self.path)
-        if self.surface_above_path is not None:
-            put(
-                "surface_above_path",
-                real(
-                    "surface_above_path",
-                    self.surface_above_path,
-                    0.0,
-                    MAX_SURFACE_ABOVE_PATH,
-                    unit="m",
-                ),
-            )
-            if self.depth_envelope is not None:
-                raise ValueError(
-                    "surface_above_path places the sea surface above a path whose z is a "
-                    "reference height; with a depth_envelope z is a true depth and the surface "
-                    "is z = 0: give one of them"
-                )
         check_below_the_surface(self)  # waves and a current profile act below it
         check_drawn_paths_fit(self)  # so that no reset is refused (`path_depths.draw_path`)
 

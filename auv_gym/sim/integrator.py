@@ -80,7 +80,10 @@ CONFIG_DIM = len(_RECORD_FIELDS)  # entries of `ConfigRecord`; the actuators' fo
 ConfigRecord = record_type("ConfigRecord", _RECORD_FIELDS, __name__)
 
 # Per-vehicle record of a control period: mean applied τ [N, N·m] and mean disturbance f.
-RECORD_FIELDS = ("X", "M", "N", "f_u", "f_v", "f_w", "f_q", "f_r")
+# The control period's mean τ and white noise, and the earth-frame velocity the ocean row
+# (waves, profiled current) added to the current in its last physics step [m/s]: what a
+# bottom-tracking DVL sees beside the uniform current (`auv_gym.sim.navigation`).
+RECORD_FIELDS = ("X", "M", "N", "f_u", "f_v", "f_w", "f_q", "f_r", "ocean_x", "ocean_y", "ocean_z")
 RECORD_DIM = len(RECORD_FIELDS)
 RECORD = field_indices("RecordIndex", RECORD_FIELDS, __name__)
 
@@ -226,13 +229,16 @@ def advance_vehicle(
     shaft, d_s = act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s]
     d_r = act[ACTUATOR_STATE.delta_r]
     rate_limited = 0
+    added = (0.0, 0.0, 0.0)
     for k in range(n_sub):
         n = step_index + k
         f = white_noise(noise_amplitude, noise_key, n, hold_steps)
         current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
         if ocean_on:  # held across the RK4 stages, like the current; t at mid-step
             wave = refresh_waves(ocean, x, n, k, cfg.physics_dt, wave)
+            uniform = current
             current, f = ocean_forcing(ocean, x, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
+            added = (current[0] - uniform[0], current[1] - uniform[1], current[2] - uniform[2])
         if realistic:
             shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, a)
             rate_limited += limited
@@ -286,6 +292,8 @@ def advance_vehicle(
     record[RECORD.N] = sum_N / n_sub
     for c in range(N_CHANNELS):  # f_u … f_r
         record[RECORD.f_u + c] = sum_f[c] / n_sub
+    if ocean_on:
+        record[RECORD.ocean_x], record[RECORD.ocean_y], record[RECORD.ocean_z] = added
     guidance_row(st, kind, pdata, cfg.u_d, cfg.sigma, guid)
     build_observation(st, guid, cfg.u_d, obs)
     return True

@@ -24,7 +24,7 @@ from numba import njit
 from auv_gym.ocean.disturbances import KEY, standard_normal, uniform01
 from auv_gym.ocean.forcing import OCEAN, ocean_velocity
 from auv_gym.paths.guidance import body_errors_trig, wrap_angle
-from auv_gym.sim.integrator import config_record
+from auv_gym.sim.integrator import RECORD, config_record
 from auv_gym.sim.observation import GUIDANCE_DIM, OBS_DIM, build_observation, guidance_row
 from auv_gym.sim.task import ENVELOPE, NON_FINITE
 from auv_gym.support.records import field_indices, fixed_tuple, record_type
@@ -201,6 +201,7 @@ def _sense_row(
     state,
     current,
     ocean,
+    record,
     step_index,
     code,
     row,
@@ -233,10 +234,17 @@ def _sense_row(
         c_x = cfg.current_x + current[i, 0]
         c_y = cfg.current_y + current[i, 1]
         c_z = cfg.current_z + current[i, 2]
-        if ocean[i, OCEAN.active] != 0.0:  # over ground: the waves and profile at time t too
-            ox, oy, oz = ocean_velocity(
-                ocean[i], st[STATE.x], st[STATE.y], st[STATE.z], step_index[i] * cfg.physics_dt
-            )
+        if ocean[i, OCEAN.active] != 0.0:  # over ground: the waves and profile too
+            if reset:  # evaluated at the start; later the physics' last step's (`RECORD`)
+                ox, oy, oz = ocean_velocity(
+                    ocean[i], st[STATE.x], st[STATE.y], st[STATE.z], step_index[i] * cfg.physics_dt
+                )
+            else:
+                ox, oy, oz = (
+                    record[i, RECORD.ocean_x],
+                    record[i, RECORD.ocean_y],
+                    record[i, RECORD.ocean_z],
+                )
             c_x, c_y, c_z = c_x + ox, c_y + oy, c_z + oz
         _sample_dvl(s, st, c_x, c_y, c_z, key, block, nv)
     theta = _add(st[STATE.theta], nv[NAV.b_theta] + _normal(s.pitch_noise, key, block + CH_PITCH))
@@ -297,6 +305,7 @@ def _sense(
     state,
     current,
     ocean,
+    record,
     step_index,
     code,
     row,
@@ -321,6 +330,7 @@ def _sense(
             state,
             current,
             ocean,
+            record,
             step_index,
             code,
             row,
@@ -373,6 +383,7 @@ class Navigation:
             sim.state,
             sim.current,
             sim.ocean,
+            sim.record,
             sim.step_index,
             sim.code,
             sim._row,

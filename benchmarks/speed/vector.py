@@ -6,7 +6,8 @@
    Physics vehicle-steps/s = control vehicle-steps/s × 5; aggregate real-time factor =
    simulated seconds of all vehicles per wall-clock second. Each size runs once per actuator
    model of ``--actuators``, side by side ("realistic": propeller and fin dynamics,
-   docs/model.md §2.6).
+   docs/model.md §2.6). Beside them, side by side: waves, the sensor model, and the whole
+   vehicle as built (`AS_BUILT`).
 2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
    growth of `ru_maxrss` over the same process after imports and compilation.
 3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
@@ -67,9 +68,8 @@ def measure_vector(
     from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 
     # Defaults otherwise: helix, ±35 white noise, RK4 at 0.01 s, control every 0.05 s.
-    env = AUVPath3DVectorEnv(
-        n, max_time=max_time, threads=threads, actuator=actuator, **(env_kwargs or {})
-    )
+    kwargs = {"actuator": actuator, **(env_kwargs or {})}  # env_kwargs may name the actuator
+    env = AUVPath3DVectorEnv(n, max_time=max_time, threads=threads, **kwargs)
     bank = _actions(n, 16, seed)
     env.reset(seed=seed)
     env.step(bank[0])  # compile / load the kernel outside the timed loop
@@ -97,7 +97,7 @@ def measure_vector(
     vehicle_steps = steps * n
     return {
         "n": n,
-        "actuator": actuator,
+        "actuator": env.config.actuator,
         "threads": env.threads,
         "batch_steps": steps,
         "vehicle_steps_per_s": vehicle_steps / wall,
@@ -264,6 +264,20 @@ def _waves_rows(args: Options) -> list[dict[str, Any]]:
     return _side_by_side(args, [args.waves_n], {"waves": waves}, ("no_waves", "waves"), deep)
 
 
+# The vehicle as built (benchmarks/scenarios.toml as_built_helix): propeller and fins, the
+# navigation suite with its Kalman filter, the ocean preset (waves, sheared and random currents).
+AS_BUILT = {"disturbance": "ocean", "actuator": "realistic", "sensors": "typical_kalman"}
+
+
+def _as_built_rows(args: Options) -> list[dict[str, Any]]:
+    """Physics rate of the paper configuration and the as-built one, side by side."""
+    print(
+        "\nThe vehicle as built (ocean preset, propeller and fins, 'typical_kalman' navigation) "
+        "beside the paper configuration"
+    )
+    return _side_by_side(args, [args.as_built_n], AS_BUILT, ("paper", "as_built"))
+
+
 @dataclass
 class Options:
     """The command line of `auv-gym speed vector`."""
@@ -274,6 +288,9 @@ class Options:
     waves_n: int = option(
         4096,
         "vehicles of the side-by-side run with waves (sea state 4, default components); 0 skips it",
+    )
+    as_built_n: int = option(
+        4096, "vehicles of the side-by-side run of the as-built configuration; 0 skips it"
     )
     memory_n: int = option(MEMORY_N, "vehicles of the peak-memory run; 0 skips it")
     ppo_envs: tuple[int, ...] = option(
@@ -309,7 +326,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             writable_location(args.json, "--json", folder=False)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = (1, 64), 0.05, 1024, 0.5
-        args.waves_n = 64
+        args.waves_n = args.as_built_n = 64
         args.threads, args.sensor_sizes = (1,), (64,)
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = (4,), 8, 1
 
@@ -344,6 +361,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results["waves"] = _waves_rows(args)
     if args.sensor_sizes:
         results["sensors"] = _sensor_rows(args)
+    if args.as_built_n > 0:
+        results["as_built"] = _as_built_rows(args)
 
     if args.memory_n > 0:
         mem = _fresh_process(f"measure_memory({args.memory_n})")

@@ -1,0 +1,116 @@
+"""The ocean preset (disturbance="ocean", docs/model.md §16) and the sea surface it places above
+any path (surface_above_path, §13.6)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from auv_gym import AUVPath3DEnv
+from auv_gym.ocean.depth_envelope import path_depth_range
+from auv_gym.ocean.forcing import OCEAN
+from auv_gym.ocean.preset import OCEAN_PRESET, SURFACE_ABOVE_PATH
+from auv_gym.sim.config import SimConfig
+from benchmarks.catalog.scenarios import load_scenarios
+
+
+def test_the_preset_fills_every_part_left_at_none():
+    config = SimConfig.from_kwargs(disturbance="ocean")
+    assert config.noise == OCEAN_PRESET.noise
+    assert config.noise.amplitude == (1.0, 1.0, 1.0, 0.3, 0.3) and config.noise.hold == 1.0
+    assert config.current == OCEAN_PRESET.current
+    assert config.random_current == 0.2 and config.param_uncertainty == 0.2
+    assert config.waves == OCEAN_PRESET.waves and config.current_profile is not None
+    assert config.surface_above_path == SURFACE_ABOVE_PATH
+
+
+def test_explicit_arguments_replace_their_part_only():
+    config = SimConfig.from_kwargs(
+        disturbance="ocean", current=[0.0, 0.3, 0.0], random_current=0.0, param_uncertainty=0.0
+    )
+    assert config.current.mean == (0.0, 0.3, 0.0) and config.current.std == (0.0, 0.0, 0.0)
+    assert config.random_current == 0.0 and config.param_uncertainty == 0.0
+    assert config.waves == OCEAN_PRESET.waves  # the rest stays the preset's
+    assert SimConfig.from_kwargs().param_uncertainty == 0.0  # None means 0 elsewhere
+
+
+@pytest.mark.parametrize("path", ["helix", "line", "waypoints", "random"])
+def test_any_path_gets_its_surface_ten_metres_above_its_shallowest_point(path):
+    """The paper helix climbs 97 m from z = 0: the surface goes 10 m above its top, so its
+    start is ~107 m deep and its end 10 m deep; the waves act there, not above the water."""
+    env = AUVPath3DEnv(path=path, disturbance="ocean")
+    env.reset(seed=2)
+    sim = env.unwrapped.sim
+    surface = sim.ocean[0, OCEAN.surface_z]
+    path_now = sim.paths[0]
+    tangent = float(np.linalg.norm(path_now.evaluate(0.0)[1]))
+    top, _ = path_depth_range(path_now, 300.0 / tangent)
+    assert surface == pytest.approx(min(top, sim.state[0, 2]) - 10.0)
+    for _ in range(100):
+        env.step(np.array([0.3, 0.0, 0.0], np.float32))
+    assert sim.state[0, 2] - surface > 9.0  # below the surface, at the operating depth
+
+
+def test_waves_at_the_operating_depth_move_the_vehicle():
+    """Sea state 3 at 10 m depth (orbital speed ~0.15 m/s) against the same episode without
+    waves: the tracks part by more than 5 cm within 30 s."""
+    tracks = []
+    for waves in (None, {"sea_state": 3, "significant_height": 1e-6}):
+        env = AUVPath3DEnv(
+            path={"kind": "helix", "climb": 0.0, "center": [10.0, 0.0, 0.0]},
+            start_position=[15.0, 5.0, 0.0],
+            disturbance="ocean",
+            waves=waves,
+            param_uncertainty=0.0,
+        )
+        env.reset(seed=0)
+        for _ in range(600):
+            env.step(np.array([0.3, 0.0, 0.0], np.float32))
+        tracks.append(env.unwrapped.sim.state[0, :3].copy())
+    assert np.linalg.norm(tracks[0] - tracks[1]) > 0.05
+
+
+def test_with_a_depth_envelope_the_surface_is_z_zero():
+    scenarios = load_scenarios()
+    config = SimConfig.from_kwargs(**scenarios["as_built_survey"].env)
+    assert config.surface_above_path is None
+    env = AUVPath3DEnv(**scenarios["as_built_coastal"].env)
+    env.reset(seed=0)
+    assert env.unwrapped.sim.ocean[0, OCEAN.surface_z] == 0.0
+
+
+def test_the_as_built_scenarios_are_built_as_described():
+    scenarios = load_scenarios()
+    for name in ("as_built_helix", "as_built_survey", "as_built_coastal"):
+        config = SimConfig.from_kwargs(**scenarios[name].env)
+        assert config.actuator == "realistic"
+        assert config.sensors.navigation == "kalman" and config.sensors.fix_noise == 0.5
+        assert config.noise == OCEAN_PRESET.noise and config.waves is not None
+    coastal = SimConfig.from_kwargs(**scenarios["as_built_coastal"].env)
+    assert coastal.current.mean == (0.0, 0.3, 0.0) and coastal.random_current == 0.0
+    survey = SimConfig.from_kwargs(**scenarios["as_built_survey"].env)
+    assert survey.current_profile.surface_speed == 0.4
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"disturbance": "oceanic"}, r"unknown disturbance 'oceanic'; valid: \['none', 'ocean'"),
+        ({"disturbance": "ocean", "noise_hold": 0.1}, r"noise_hold cannot be given with"),
+        (
+            {"disturbance": "ocean", "depth_envelope": True, "surface_above_path": 5.0},
+            r"surface_above_path places the sea surface",
+        ),
+        ({"surface_above_path": -1.0}, r"surface_above_path must be a finite number"),
+        ({"surface_above_path": math.nan}, r"surface_above_path must be a finite number"),
+        (
+            {"disturbance": "ocean", "depth_envelope": True},
+            r"the path and the start reach z = -98.99 m .* move the path at least 101 m down",
+        ),
+    ],
+)
+def test_bad_ocean_arguments_raise_one_named_line(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        SimConfig.from_kwargs(**kwargs)
