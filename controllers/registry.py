@@ -32,12 +32,18 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     # The textbook baseline (`controllers.pid`, docs/model.md §4.9) with the same guidance options.
     "pid_ilos": ("pid_los", {"ilos_y": 3.0}),
     "pid_colos": ("pid_los", _COLOS),
-    # Command-filtered backstepping (`controllers.command_filtered`, docs/model.md §4.10): the
-    # backstepping law kept inside the fins' magnitude and rate limits, with the same guidance.
+    # For the vehicle as built (propeller and fins, navigation filter, docs/results.md "The
+    # vehicle as built"): command-filtered backstepping (`controllers.command_filtered`,
+    # docs/model.md §4.10) keeps the backstepping law inside the fins' magnitude and rate
+    # limits, and both it and the PID re-tune soften the vertical LOS (k_z 0.5 → 0.15, 0.1 1/m:
+    # the depth loop then stops chasing the noise of the estimate) and, for backstepping,
+    # stiffen the yaw error gain k2 0.3 → 1 1/s; chosen on validation seed 100 (4 vehicles ×
+    # 3 as-built scenarios), never on the test seeds.
     "command_filtered_colos": (
         "command_filtered",
-        {**_COLOS, "alos_y": 0.01, "alos_z": 0.01},
+        {**_COLOS, "alos_y": 0.01, "alos_z": 0.01, "k_z": 0.15, "k2": 1.0},
     ),
+    "pid_as_built": ("pid_los", {**_COLOS, "k_z": 0.1}),
 }
 CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
 UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] != "lowpass")

@@ -1,4 +1,4 @@
-"""The navigation filter (sensors navigation="kalman", docs/model.md §14.4): its update against
+"""The navigation filter (sensors navigation="kalman", docs/model.md §14.8): its update against
 the textbook matrix form, its consistency over long records, batched = single, bad input."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The ocean preset (disturbance="ocean", docs/model.md §16) and the sea surface it places above
-any path (surface_above_path, §13.6)."""
+any path (surface_above_path, §13.8)."""
 
 from __future__ import annotations
 

@@ -181,7 +181,7 @@ class AUVPath3DEnv(gym.Env):
     | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §13) |
     | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
     | `sensors` | "ideal" | "ideal" (exact state), "typical", dict, `SensorConfig`: model.md §14 |
-    | `surface_above_path` | None | [m] sea surface above the path's shallowest point (§13.6) |
+    | `surface_above_path` | None | [m] sea surface above the path's shallowest point (§13.8) |
 
     ``disturbance="ocean"`` is the ocean a REMUS-class vehicle meets in service
     (`auv_gym.ocean.preset`, docs/model.md §16): unmodelled-dynamics noise sized to the fins,

@@ -69,7 +69,7 @@ def ocean_row(
 ) -> np.ndarray:
     """An episode's ocean row from its two 64-bit keys (`disturbances.draw_keys`): a function
     of the seed only, so batched and single envs draw the same sea. ``surface_z`` [m] is the
-    NED z of the sea surface the waves and the profile are measured from (docs/model.md §13.6).
+    NED z of the sea surface the waves and the profile are measured from (docs/model.md §13.8).
     """
     row = np.zeros(ocean_width(waves))
     if waves is None and profile is None:

@@ -130,7 +130,7 @@ class SimConfig:
     waves: WaveConfig | None = None  # None: a flat sea (docs/model.md §13)
     current_profile: CurrentProfile | None = None  # None: the uniform current only (§13.5)
     # [m] the sea surface lies this far above the shallowest point of each episode's path and
-    # start (the waves and the profile act at that operating depth, docs/model.md §13.6);
+    # start (the waves and the profile act at that operating depth, docs/model.md §13.8);
     # None: the surface is z = 0. Set by the "ocean" preset without a depth envelope.
     surface_above_path: float | None = None
     # "ideal": the observation is the exact state; else from a navigation estimate (`sensors`)

@@ -39,7 +39,7 @@ __all__ = ["MEAS", "MEAS_FIELDS", "NAV", "NAV_FIELDS", "STRIDE", "Navigation"]
 # Per-vehicle navigation state: per-episode biases and scale factors, the dead-reckoned
 # position [m] and its rate [m/s], the last valid DVL sample through the water and over ground,
 # and the navigation filter's bias estimates, its covariance P (row-major 4×4 over x, y, k, β)
-# and the scratch of its update (gain K, 4×2, and H P, 2×4; docs/model.md §14.4).
+# and the scratch of its update (gain K, 4×2, and H P, 2×4; docs/model.md §14.8).
 NAV_FIELDS = (
     "b_u",
     "b_v",
@@ -134,7 +134,7 @@ def _p(nv, i, j):
 
 @njit(cache=True, inline="always")
 def _filter_position(s, st, key, block, reset, fix, dx, dy, nv):
-    """One step of the navigation filter (docs/model.md §14.4), state (x, y, k, β): the
+    """One step of the navigation filter (docs/model.md §14.8), state (x, y, k, β): the
     horizontal position [m], the scale-factor error k [-] and the heading error β [rad] of the
     dead-reckoned velocity v̂ = (1 + k) R(β) v.
 

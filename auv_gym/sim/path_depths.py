@@ -93,7 +93,7 @@ def check_below_the_surface(config: SimConfig) -> None:
 def episode_surface_z(config: SimConfig, path: Path, start_z: float) -> float:
     """[m] the NED z of the sea surface for an episode on ``path`` from ``start_z``:
     `surface_above_path` above the shallowest of the start and the path over the arc an episode
-    covers (docs/model.md §13.6); 0 when the configuration has no such setting."""
+    covers (docs/model.md §13.8); 0 when the configuration has no such setting."""
     if config.surface_above_path is None:
         return 0.0
     tangent = float(np.linalg.norm(path.evaluate(0.0)[1]))

@@ -9,7 +9,7 @@ reckoning on the DVL and AHRS reset by a position fix (USBL, or GPS at the surfa
 `auv_gym.sim.navigation`; the reward, termination and metrics keep reading the true state.
 
 The horizontal position is dead reckoning reset by each fix (``navigation="dead_reckoning"``),
-or a Kalman filter over the same measurements (``navigation="kalman"``, docs/model.md §14.4)
+or a Kalman filter over the same measurements (``navigation="kalman"``, docs/model.md §14.8)
 that blends each fix into the dead-reckoned track and estimates the track's velocity error.
 
 Presets (`SENSOR_PRESETS`): "ideal" (no sensor model: the observation is the exact state, the
@@ -43,7 +43,7 @@ MAX_DROPOUT = 0.99  # [-] probability that a DVL sample is lost
 PRESET_NAMES = ("ideal", "typical", "typical_kalman")
 NAVIGATION_MODES = ("dead_reckoning", "kalman")
 MAX_FILTER_NOISE = 10.0  # [m/s, 1/√s, -, rad] the filter's assumed errors
-# The filter's bias model when not given (docs/model.md §14.4): the scale and heading errors
+# The filter's bias model when not given (docs/model.md §14.8): the scale and heading errors
 # are constant in the sensor model; a random walk of 3e-4 /√s (1° over an hour) keeps the
 # filter from locking onto its first estimate, and floors of 0.1 % and 0.1° keep P₀ positive
 # definite for sensors without those biases.
@@ -78,8 +78,8 @@ class SensorConfig:
     fix_noise: float = 0.0  # [m] σ of a position fix, per horizontal axis
     fix_interval: float | None = 0.0  # [s] between fixes; 0: every step; None: start fix only
     delay: int = 0  # [control steps] k: the observation uses the measurements of step t − k
-    navigation: str = "dead_reckoning"  # or "kalman": the position filter of §14.4
-    # The filter's model (None: derived from the errors above, docs/model.md §14.4): σ of the
+    navigation: str = "dead_reckoning"  # or "kalman": the position filter of §14.8
+    # The filter's model (None: derived from the errors above, docs/model.md §14.8): σ of the
     # measured horizontal velocity per sample [m/s], the random-walk density of the scale and
     # heading errors it estimates [1/√s, rad/√s] and their initial σ [-], [rad].
     filter_velocity_noise: float | None = None
@@ -196,7 +196,7 @@ class SensorConfig:
         """The navigation filter's (velocity noise σ_v [m/s], bias noise q [1/√s], initial
         scale error σ_k0 [-], initial heading error σ_β0 [rad]) at the cruising ``speed``
         [m/s]: the given values, else σ_v from the DVL and heading noise, σ_k0 and σ_β0 from
-        the DVL scale factor and the AHRS heading bias (docs/model.md §14.4)."""
+        the DVL scale factor and the AHRS heading bias (docs/model.md §14.8)."""
         velocity = self.filter_velocity_noise
         if velocity is None:
             velocity = math.hypot(self.dvl_noise, self.heading_noise * speed)
