@@ -23,7 +23,7 @@ def _fly(policy, env, seed, steps):
         action, state = policy.predict(obs, state=state, episode_start=np.array([start]))
         start = False
         diagnostics.append((*state["diag"][0], obs[OBS_INDEX["u"]]))
-        obs, _, terminated, truncated, info = env.step(action)
+        obs, _, terminated, _, info = env.step(action)
         rate_limited.append(env.unwrapped.sim.actuator_state[0, ACTUATOR_STATE.rate_limited])
         distance.append(info["distance"])
         assert not terminated, info.get("termination_reason")
