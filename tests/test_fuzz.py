@@ -59,8 +59,16 @@ def test_drawn_configurations_are_valid_and_span_the_ranges():
     for option in ("depth_envelope", "waves", "current_profile", "sensors", "safety_cost"):
         assert sum(option in kw for kw, _ in drawn) >= 10, option
     assert sum(kw["actuator"] == "realistic" for kw, _ in drawn) >= 30
-    deep = [c for c in configs if c.waves is not None or c.depth_envelope is not None]
+    deep = [
+        c
+        for c in configs
+        if (c.waves is not None and c.surface_above_path is None) or c.depth_envelope is not None
+    ]
     assert deep and all(c.path_offset[2] > 16.0 for c in deep)  # drawn paths moved down
+    # or the surface placed above any path, the ocean preset, the navigation filter
+    assert sum(c.surface_above_path is not None for c in configs) >= 10
+    assert sum(c.noise.hold == 1.0 and c.noise.amplitude[3] == 0.3 for c in configs) >= 1
+    assert sum(c.sensors.navigation == "kalman" for c in configs) >= 5
     limited = [kw for kw, _ in drawn if isinstance(kw.get("params"), dict)]
     assert limited and all(kw["param_uncertainty"] > 0 for kw in limited)
     corridors = [kw["corridor"] for kw, _ in drawn]

@@ -114,3 +114,10 @@ def test_the_as_built_scenarios_are_built_as_described():
 def test_bad_ocean_arguments_raise_one_named_line(kwargs, message):
     with pytest.raises(ValueError, match=message):
         SimConfig.from_kwargs(**kwargs)
+
+
+def test_a_scenario_asking_for_the_filter_without_sensors_is_refused_on_loading(tmp_path):
+    path = tmp_path / "scenarios.toml"
+    path.write_text('[bad]\nenv = { disturbance = "ocean", sensors = { navigation = "kalman" } }\n')
+    with pytest.raises(ValueError, match=r"scenario 'bad'.*navigation = 'kalman' blends"):
+        load_scenarios(path)

@@ -268,9 +268,10 @@ def draw_ocean(rng: np.random.Generator, kw: dict[str, Any]) -> None:
     configuration: for a drawn path, a depth deep enough for its whole episode (it starts at the
     offset, its start 8 ± 8 m lower, and climbs at most its largest flight-path angle over
     u_desired·max_time) with a depth envelope below it, waves (sea states or any sea below the
-    breaking steepness) and a current profile; for every path the typical navigation suite with
-    fixes every whole number of control periods (or none), the agent observation with integrals
-    and the safety cost."""
+    breaking steepness) and a current profile; for every path without a depth envelope a sea
+    surface above it (waves, sometimes the whole ocean preset); the typical navigation suite
+    with fixes every whole number of control periods (or none), dead-reckoning or filtered, the
+    agent observation with integrals and the safety cost."""
     distribution = kw["path"]
     if distribution == "random":
         distribution = PathDistribution()
@@ -308,10 +309,22 @@ def draw_ocean(rng: np.random.Generator, kw: dict[str, Any]) -> None:
                 "drift_amplitude": float(rng.uniform(0.0, 1.0)),
                 "drift_period": float(log_uniform(rng, 10.0, 1e4)),
             }
+    if "depth_envelope" not in kw and rng.random() < 0.3:  # a sea surface above any path
+        kw["surface_above_path"] = float(rng.uniform(0.5, 50.0))
+        kw.setdefault("waves", "sea_state_3")
+        ratio = 1.0 / kw["physics_dt"]  # the ocean preset's noise is held 1 s
+        if rng.random() < 0.5 and abs(ratio - round(ratio)) < 1e-9 * ratio:
+            kw["disturbance"] = "ocean"
+            kw.pop("noise_hold", None)
     if rng.random() < 0.4:  # the typical suite, with fixes every whole number of periods
         periods = int(rng.integers(1, max(2, int(MAX_FIX_INTERVAL / kw["control_dt"]))))
         fix = None if rng.random() < 0.2 else min(periods * kw["control_dt"], MAX_FIX_INTERVAL)
-        kw["sensors"] = {"preset": "typical", "fix_interval": fix}
+        kalman = fix is not None and rng.random() < 0.5  # the filter needs fixes
+        kw["sensors"] = {
+            "preset": "typical",
+            "fix_interval": fix,
+            "navigation": "kalman" if kalman else "dead_reckoning",
+        }
     if rng.random() < 0.3 and kw.get("observation") is None:
         kw["observation"] = "preview_integral"
     if rng.random() < 0.3:
