@@ -233,5 +233,12 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
     row = results["waves"][0]
     rates = [row[label]["physics_steps_per_s"] for label in ("no_waves", "waves")]
     assert min(rates) > 0 and row["ratio"] == pytest.approx(rates[1] / rates[0])
+    # the vehicle as built beside the paper configuration, both measured
+    as_built = results["as_built"][0]
+    assert as_built["as_built"]["actuator"] == "realistic"
+    assert as_built["as_built"]["sensors"] == "typical_kalman"
+    assert as_built["paper"]["actuator"] == "paper" and as_built["paper"]["sensors"] == "ideal"
+    rates = [as_built[label]["physics_steps_per_s"] for label in ("paper", "as_built")]
+    assert min(rates) > 0 and as_built["ratio"] == pytest.approx(rates[1] / rates[0])
     assert {r["backend"] for r in results["ppo"]} == {"adapter", "DummyVecEnv"}
     assert all(r["timesteps_per_s"] > 0 for r in results["ppo"])
