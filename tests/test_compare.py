@@ -176,6 +176,9 @@ def test_scenario_file_documents_every_scenario():
         "realistic_actuators",
         "realistic_sensors",
         "realistic",
+        "as_built_helix",
+        "as_built_survey",
+        "as_built_coastal",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}

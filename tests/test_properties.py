@@ -274,12 +274,14 @@ BAD = {
     ),
     "u_desired": st.one_of(outside(0.0, SPEED_BOUND), st.just(0.0)),
     "sigma": st.one_of(outside(0.0, math.inf), st.just(0.0)),
-    "param_uncertainty": st.one_of(outside(0.0, 1.0), st.just(1.0)),
+    "param_uncertainty": st.one_of(outside(0.0, 1.0), st.just(1.0)).filter(
+        lambda v: v is not None  # None: the preset's (0 outside disturbance="ocean")
+    ),
     "corridor": outside(MIN_CORRIDOR, ERROR_BOUND),
     "max_pitch": st.one_of(outside(0.0, math.pi / 2), st.sampled_from([0.0, math.pi / 2])),
     "start_heading": st.one_of(outside(-2 * math.pi, 2 * math.pi).filter(lambda v: v is not None)),
     "disturbance": st.one_of(outside(0.0, MAX_NOISE_AMPLITUDE), st.text(max_size=5)).filter(
-        lambda v: v not in ("paper", "none")
+        lambda v: v not in ("paper", "none", "ocean")
     ),
     "randomize_start": st.one_of(NOT_NUMBERS, st.integers(), st.text(max_size=5)).filter(
         lambda v: not isinstance(v, bool)

@@ -267,7 +267,6 @@ BAD_TYPES = [
     ("current", 0.3),
     ("current", {"mean": "abc"}),
     ("param_uncertainty", "0.1"),
-    ("param_uncertainty", None),
     ("actuator", ["paper"]),
     ("actuator", 0),
     ("control_dt", "0.05"),
