@@ -210,10 +210,22 @@ def agent_env_kwargs(metadata: dict[str, Any], env_id: str | None = None) -> dic
     fixed = dict(VARIANTS[recorded_env_id(recorded)])
     if "residual" in metadata:
         return fixed
+    if commands_realistic_actuators(metadata):  # its actions are shaft speed and fin angles
+        fixed["actuator"] = REALISTIC_ACTUATOR
     trained = ObservationConfig.from_spec(metadata.get("observation"))
     if trained != ObservationConfig.from_spec(fixed.get("observation")):
         fixed["observation"] = trained.to_dict()
     return fixed
+
+
+REALISTIC_ACTUATOR = "realistic"
+
+
+def commands_realistic_actuators(metadata: dict[str, Any]) -> bool:
+    """True for an agent trained on the propeller and fins (``actuator="realistic"``): its
+    actions are normalised shaft speed and fin angles, which no other actuator interprets, so
+    it carries that actuator like its observation (docs/model.md §2.6)."""
+    return (metadata.get("env_kwargs") or {}).get("actuator") == REALISTIC_ACTUATOR
 
 
 def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:
