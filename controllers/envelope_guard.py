@@ -8,7 +8,9 @@ seconds ahead (rad), the nose-up moment command a_M is capped by
     a_M ≤ 1 − 2·clip((θ_p − θ_soft)/(θ_hard − θ_soft), 0, 1)
 
 (full authority below θ_soft, full nose-down at θ_hard) and, mirrored, the nose-down command
-by the same ramp in −θ_p; the surge command a_X is capped by the same ramp in the surge speed
+by the same ramp in −θ_p (for an agent commanding the stern-plane angle δ_s of the realistic
+actuator, whose positive deflection pitches the nose down, ``nose_up_command = -1`` mirrors
+the two); the surge command a_X is capped by the same ramp in the surge speed
 u between u_soft and u_hard (full astern at u_hard). The yaw command is never touched. Inside
 the soft limits the guard is the identity, so an agent that stays there acts as trained.
 
@@ -45,9 +47,17 @@ class EnvelopeGuard:
     lookahead_s: float = 1.0
     surge_soft: float = 1.8
     surge_hard: float = 1.95
+    # +1: a positive a_M pitches the nose up (the paper's M); −1: a_M is the stern-plane angle
+    # δ_s of the realistic actuator, whose positive deflection pitches the nose down (§2.6).
+    nose_up_command: float = 1.0
 
     def __post_init__(self) -> None:
         where = "envelope_guard"
+        if self.nose_up_command not in (1.0, -1.0) or isinstance(self.nose_up_command, bool):
+            raise ValueError(
+                f"{where}.nose_up_command must be 1 (a_M nose-up, the paper's M) or -1 (the "
+                f"stern-plane angle, positive nose-down), got {self.nose_up_command!r}"
+            )
         soft = real(
             f"{where}.pitch_soft_deg", self.pitch_soft_deg, 0.0, 90.0, low_open=True, unit="deg"
         )
@@ -107,6 +117,9 @@ def guard_commands(
     soft, hard = math.radians(guard.pitch_soft_deg), math.radians(guard.pitch_hard_deg)
     nose_up = _authority(predicted, soft, hard)
     nose_down = _authority(-predicted, soft, hard)
-    rows[:, 1] = np.clip(rows[:, 1], -nose_down, nose_up)
+    if guard.nose_up_command > 0.0:
+        rows[:, 1] = np.clip(rows[:, 1], -nose_down, nose_up)
+    else:  # the stern plane: a positive command pitches the nose down
+        rows[:, 1] = np.clip(rows[:, 1], -nose_up, nose_down)
     rows[:, 0] = np.minimum(rows[:, 0], _authority(u, guard.surge_soft, guard.surge_hard))
     return out

@@ -28,7 +28,13 @@ import numpy as np
 
 from auv_gym import __version__
 from auv_gym.support.files import write_atomic, write_json
-from controllers.agent import AgentFiles, check_agent, load_actor, observation_layout
+from controllers.agent import (
+    AgentFiles,
+    check_agent,
+    commands_realistic_actuators,
+    load_actor,
+    observation_layout,
+)
 from controllers.onnx_graph import (
     OPSET,
     Graph,
@@ -126,17 +132,26 @@ def export_onnx(
     agent: str | os.PathLike,
     out: str | os.PathLike,
     *,
-    actuator: str = "paper",
+    actuator: str | None = None,
     actuator_params: Mapping[str, Any] | None = None,
 ) -> tuple[Path, Path, dict[str, Any]]:
     """Export the saved agent ``agent`` to ``out`` (.onnx) and its contract beside it (.json),
-    its commands for the env actuator ``actuator`` (`ACTUATORS`; ``actuator_params``: the
-    realistic actuators' settings). Returns (onnx file, contract file, the parity check's
-    figures). Every check runs before a file is written (module doc)."""
+    its commands for the env actuator ``actuator`` (`ACTUATORS`; None: "paper", or "realistic"
+    for an agent trained on the propeller and fins, whose commands no other actuator reads;
+    ``actuator_params``: the realistic actuators' settings). Returns (onnx file, contract file,
+    the parity check's figures). Every check runs before a file is written (module doc)."""
     target = _check_out(out)
+    files = check_agent(agent)
+    own = "realistic" if commands_realistic_actuators(files.metadata) else None
+    if actuator is None:
+        actuator = own or "paper"
     if actuator not in ACTUATORS:
         raise ValueError(f"actuator {actuator!r} is not one of {list(ACTUATORS)}")
-    files = check_agent(agent)
+    if own is not None and actuator != own:
+        raise ValueError(
+            f"{files.model}: the agent commands the propeller and fins (actuator='realistic'); "
+            f"it cannot be exported for actuator {actuator!r}"
+        )
     layout = observation_layout(files.metadata)
     settings: dict[str, Any] = {"actuator": actuator}
     if actuator_params is not None:

@@ -144,7 +144,10 @@ def guard_graph(g: Graph, commands: str, observation: str, index: Sequence[int],
     nose_down = _ramp(g, g.op("Neg", predicted), soft, hard)
     a = g.cast(commands, np.float64)
     a_x = g.op("Min", g.column(a, 0), _ramp(g, u, guard.surge_soft, guard.surge_hard))
-    a_m = g.clip(g.column(a, 1), g.op("Neg", nose_down), nose_up)
+    if guard.nose_up_command > 0.0:
+        a_m = g.clip(g.column(a, 1), g.op("Neg", nose_down), nose_up)
+    else:  # the stern plane: a positive command pitches the nose down
+        a_m = g.clip(g.column(a, 1), g.op("Neg", nose_up), nose_down)
     return g.cast(g.columns(a_x, a_m, g.column(a, 2)), np.float32)
 
 

@@ -187,6 +187,12 @@ class OnnxPolicy:
                 f"({contract.env_id}, {contract.file}), the env gives "
                 f"{len(observation_names)}: run it in the env its contract records"
             )
+        own_actuator = contract.actuator == "realistic" and not contract.allocated
+        if own_actuator and actuator is not None and actuator != contract.actuator:
+            raise ValueError(
+                f"{where} commands the propeller and fins (shaft speed and fin angles), the "
+                f"env has actuator {actuator!r}: fly it with actuator='realistic'"
+            )
         if contract.allocated and actuator is not None and actuator != contract.actuator:
             raise ValueError(
                 f"{where} was exported for actuator {contract.actuator!r}, the env has "

@@ -70,11 +70,12 @@ def operating_observations(n: int, rng: np.random.Generator) -> np.ndarray:
     return obs
 
 
-def test_the_guard_graph_is_guard_commands():
+@pytest.mark.parametrize("nose_up_command", [1.0, -1.0])
+def test_the_guard_graph_is_guard_commands(nose_up_command):
     rng = np.random.default_rng(1)
     obs = operating_observations(4000, rng)
     commands = rng.uniform(-1.0, 1.0, (4000, 3)).astype(np.float32)
-    guard = EnvelopeGuard()
+    guard = EnvelopeGuard(nose_up_command=nose_up_command)
     index = [NAMES.index(n) for n in ("theta", "q", "u")]
     g = Graph()
     guard_graph(g, "commands", "observation", index, guard)
@@ -145,7 +146,9 @@ def test_every_reference_agent_ships_a_current_export(agent):
     props = {p.key: p.value for p in onnx.load(folder / "policy.onnx").metadata_props}
     assert props["env_id"] == env_id
     assert json.loads(props["observation_names"]) == expected
-    assert props["actuator"] == "paper" and float(props["control_period_s"]) == 0.05
+    own = metadata.get("env_kwargs", {}).get("actuator") == "realistic"  # ppo_as_built
+    assert props["actuator"] == ("realistic" if own else "paper")
+    assert float(props["control_period_s"]) == 0.05
 
 
 @pytest.mark.rl

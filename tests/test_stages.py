@@ -49,6 +49,22 @@ def test_inside_the_soft_limits_the_guard_is_the_identity():
     np.testing.assert_array_equal(guard_commands(commands, obs, INDEX, GUARD), commands)
 
 
+def test_the_stern_plane_guard_mirrors_the_moment_command():
+    """For the realistic actuator a_M is δ_s, positive nose-down: the same limits, mirrored."""
+    stern = EnvelopeGuard(nose_up_command=-1.0)
+    cases = [  # (θ [deg], command a_M (δ_s), guarded)
+        (42.5, -1.0, 0.0),  # half way up: the nose-up deflection (δ_s < 0) capped at 0
+        (42.5, 0.6, 0.6),  # nose-down stays allowed
+        (55.0, -0.2, 1.0),  # past the hard limit: full nose-down deflection
+        (-55.0, 0.3, -1.0),  # mirrored: full nose-up deflection
+    ]
+    for theta, command, expected in cases:
+        out = guard_commands(
+            np.float32([0.5, command, 0.0]), _guard_obs(theta, 0.0, 1.0), INDEX, stern
+        )
+        np.testing.assert_allclose(out, [0.5, expected, 0.0], atol=1e-6)
+
+
 def test_hand_computed_guarded_commands():
     cases = [  # (θ [deg], q [deg/s], u [m/s], command, guarded)
         (42.5, 0.0, 1.0, [0.5, 1.0, 0.3], [0.5, 0.0, 0.3]),  # half way: nose-up capped at 0
@@ -103,6 +119,7 @@ def test_a_guard_stage_reads_its_inputs_by_name():
         ({"pitch_hard_deg": math.nan}, "pitch_hard_deg must be"),
         ({"lookahead_s": -1.0}, "lookahead_s must be"),
         ({"pitch": 40.0}, r"unknown keys \['pitch'\]"),
+        ({"nose_up_command": 0.5}, r"nose_up_command must be 1 .* or -1"),
         ("yes", "must be true or a mapping"),
     ],
 )

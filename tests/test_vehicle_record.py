@@ -105,14 +105,14 @@ def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
         else:
             seen = {"observation": metadata["observation"]} if "observation" in metadata else {}
             env_id = auv_gym.recorded_env_id(metadata["env_id"])  # the env the agent carries
-            env = gym.make(env_id, **metadata["env_kwargs"], **seen)
+            env = gym.make(env_id, **{**metadata["env_kwargs"], **seen})
             low, high = env.observation_space.low, env.observation_space.high
             space = policy.observation_space
             env.close()
         np.testing.assert_array_equal(space.low, low, err_msg=name)
         np.testing.assert_array_equal(space.high, high, err_msg=name)
         checked += 1
-    assert checked == len(REFERENCE_AGENTS) == 4
+    assert checked == len(REFERENCE_AGENTS) == 5
 
 
 def test_a_faster_vehicle_is_observed_within_its_own_speed_bound() -> None:

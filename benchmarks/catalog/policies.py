@@ -48,7 +48,7 @@ __all__ = [
 
 AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
 # The reference agents: the name is the folder of benchmarks/agents/ (README there).
-REFERENCE_AGENTS = ("ppo_generalist", "ppo_helix", "ppo_residual", "sac_helix")
+REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_helix", "ppo_residual", "sac_helix")
 AGENT_PREFIX = "agent:"
 ONNX_PREFIX = "onnx:"
 _NOT_SHIPPED = "is no longer shipped (its results stay in docs/results.md); reference agents:"

@@ -42,8 +42,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--actuator",
         choices=ACTUATORS,
-        default="paper",
-        help="the env actuator the commands are for (the allocation stage is built for it)",
+        default=None,
+        help="the env actuator the commands are for (the allocation stage is built for it; "
+        "default: paper, or realistic for an agent trained on the propeller and fins)",
     )
     parser.add_argument(
         "--actuator-params",
@@ -78,9 +79,10 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         onnx_file, contract, parity = export_onnx(
             agent_path(args.agent), args.out, actuator=args.actuator, actuator_params=params
         )
+    actuator = json.loads(contract.read_text())["actuator"]
     print(
         f"wrote {onnx_file} ({onnx_file.stat().st_size / 1024:.0f} KiB) and {contract}: "
-        f"commands for actuator {args.actuator!r}, max |ONNX − agent| "
+        f"commands for actuator {actuator!r}, max |ONNX − agent| "
         f"{parity['max_abs_error']:.2g} over {parity['observations']} observations, "
         f"{time.perf_counter() - start:.1f} s"
     )
