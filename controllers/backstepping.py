@@ -48,7 +48,7 @@ from controllers.gains import (
 )
 from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
 
-__all__ = ["Backstepping"]
+__all__ = ["Backstepping", "nominal_law"]
 
 _U, _V, _W, _Q, _R, _TH, _UD = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r", "theta", "u_D"))
 
@@ -60,10 +60,11 @@ def _saturated(tau, limit):
     return min(max(tau / limit, -1.0), 1.0)
 
 
-@njit(cache=True)
-def _backstepping_row(o, g, p, filt, started, action, diag, errors):
-    loop_errors(o, g, filt, started, errors)
-    z1, z2, _, _, da1, z3, z4, _, _, da2 = errors[:10]
+@njit(cache=True, inline="always")
+def nominal_law(o, g, p, errors):
+    """(X [N], f5, f6, k_q, k_r): the surge command of the module docstring and the nominal
+    model's pitch and yaw accelerations at τ = 0 [rad/s²] with the moment loops' gains [1/s],
+    shared with `controllers.command_filtered`; ``errors`` from `loop_errors`."""
     u, theta = o[_U], o[_TH]
     nu = (u, o[_V], o[_W], o[_Q], o[_R])
     f1, _, _, f5, f6 = nu_dot(
@@ -76,6 +77,15 @@ def _backstepping_row(o, g, p, filt, started, action, diag, errors):
         X = (-f1 + errors[13] - k_u * (u - errors[12])) / g[B1]
     else:
         X = (-f1 - k_u * (u - o[_UD])) / g[B1]
+    return X, f5, f6, k_q, k_r
+
+
+@njit(cache=True)
+def _backstepping_row(o, g, p, filt, started, action, diag, errors):
+    loop_errors(o, g, filt, started, errors)
+    z1, z2, _, _, da1, z3, z4, _, _, da2 = errors[:10]
+    u, theta = o[_U], o[_TH]
+    X, f5, f6, k_q, k_r = nominal_law(o, g, p, errors)
     M = (-f5 + da1 - z1 - k_q * z2) / g[B5]
     N = (-f6 + da2 - z3 / math.cos(theta) - k_r * z4) / g[B6]
     m_max, n_max = moment_limits(u, g)

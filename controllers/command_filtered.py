@@ -31,38 +31,15 @@ from numba import njit, prange
 
 from auv_gym.sim.observation import OBS_INDEX
 from auv_gym.vehicle.actuators import ActuatorParams
-from auv_gym.vehicle.dynamics import nu_dot
-from auv_gym.vehicle.params import AUVParams, params_record
-from controllers.alos import guidance_diagnostics
-from controllers.backstepping import _saturated
-from controllers.base import BatchedController
+from auv_gym.vehicle.params import AUVParams
+from controllers.backstepping import Backstepping, _saturated, nominal_law
 from controllers.fbsm import moment_limits
-from controllers.gains import (
-    B1,
-    B5,
-    B6,
-    C1,
-    C2,
-    DT,
-    FINS,
-    H1,
-    H2,
-    H3,
-    K1,
-    K2,
-    LAM1,
-    LAM2,
-    LAM3,
-    SPEED_OVER_GROUND,
-    X_MAX,
-    ControllerGains,
-    pack_gains,
-)
-from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
+from controllers.gains import B5, B6, DT, FINS, K1, K2, X_MAX, ControllerGains
+from controllers.los import LOOP_DIM, loop_errors
 
 __all__ = ["FILTER_SUBSTEPS", "CommandFilteredBackstepping"]
 
-_U, _V, _W, _Q, _R, _TH, _UD = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r", "theta", "u_D"))
+_U, _TH = OBS_INDEX["u"], OBS_INDEX["theta"]
 # Command-filter state per vehicle: (M, Ṁ, N, Ṅ) of the filters, ξ₁ … ξ₄ of the compensation.
 _M, _M_RATE, _N, _N_RATE, _XI1, _XI2, _XI3, _XI4 = range(8)
 COMMAND_DIM = 8
@@ -96,19 +73,8 @@ def _cfb_row(o, g, p, cf, settings, filt, started, action, diag, errors):
             cf[j] = 0.0
     loop_errors(o, g, filt, started, errors)
     z1, z2, _, _, da1, z3, z4, _, _, da2 = errors[:10]
-    u, theta = o[_U], o[_TH]
-    cos_theta = math.cos(theta)
-    nu = (u, o[_V], o[_W], o[_Q], o[_R])
-    f1, _, _, f5, f6 = nu_dot(
-        nu, theta, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0), params_record(p)
-    )
-    k_u = g[H1] + g[LAM1]
-    k_q = g[C1] + g[H2] + g[LAM2]
-    k_r = g[C2] + g[H3] + g[LAM3]
-    if g[SPEED_OVER_GROUND] > 0.0:
-        X = (-f1 + errors[13] - k_u * (u - errors[12])) / g[B1]
-    else:
-        X = (-f1 - k_u * (u - o[_UD])) / g[B1]
+    u, cos_theta = o[_U], math.cos(o[_TH])
+    X, f5, f6, k_q, k_r = nominal_law(o, g, p, errors)
     z1_bar = z1 - cf[_XI1]
     z3_bar = z3 - cf[_XI3]
     m_command = (-f5 + da1 - z1_bar - k_q * z2) / g[B5]
@@ -146,7 +112,7 @@ _cfb_serial = njit(cache=True)(_cfb_rows)
 _cfb_parallel = njit(cache=True, parallel=True)(_cfb_rows)
 
 
-class CommandFilteredBackstepping(BatchedController):
+class CommandFilteredBackstepping(Backstepping):
     """Command-filtered backstepping (module docstring), batched over vehicles.
 
     Args:
@@ -173,7 +139,7 @@ class CommandFilteredBackstepping(BatchedController):
         fin_rate_max: float | None = None,
         **gain_overrides: float,
     ) -> None:
-        super().__init__(gains, params, control_dt, actuator, gain_overrides, threads)
+        super().__init__(gains, params, control_dt, actuator, threads, **gain_overrides)
         for name, value, high in (
             ("filter_wn", filter_wn, 20.0),
             ("filter_zeta", filter_zeta, 10.0),
@@ -187,10 +153,6 @@ class CommandFilteredBackstepping(BatchedController):
         delta_max = min(actuators.delta_max_stern, actuators.delta_max_rudder)
         per_authority = rate / delta_max if math.isfinite(rate) else 1e9
         self._settings = np.array([float(filter_wn), float(filter_zeta), per_authority])
-        p = self.params
-        self._p = p.to_vector()
-        b = (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66)
-        self._g = pack_gains(self.gains, self.control_dt, b, self._actuator)
         if self._g[FINS] == 0.0:
             raise ValueError(
                 "command_filtered limits moments to the fins' authority: give actuator='fins' "
@@ -198,12 +160,7 @@ class CommandFilteredBackstepping(BatchedController):
             )
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
-        return {
-            "filter": np.zeros((n, FILTER_DIM)),
-            "command": np.zeros((n, COMMAND_DIM)),
-            "started": np.zeros(n, dtype=bool),
-            "diag": np.zeros((n, 5)),
-        }
+        return {**super().init_state(n), "command": np.zeros((n, COMMAND_DIM))}
 
     def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
         kernel = _cfb_parallel if (self.threads == "auto" and obs.shape[0] >= 64) else _cfb_serial
@@ -220,9 +177,7 @@ class CommandFilteredBackstepping(BatchedController):
         )
 
     def diagnostics(self, state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Desired angles, the compensation ξ₁ … ξ₄ and the current-guidance states (extras)."""
+        """Backstepping's (desired angles, current guidance) and the compensation ξ₁ … ξ₄."""
         command = state["command"]
-        out = {"theta_d": state["diag"][:, 3].copy(), "psi_d_rel": state["diag"][:, 4].copy()}
-        for j, name in enumerate(("xi_1", "xi_2", "xi_3", "xi_4")):
-            out[name] = command[:, _XI1 + j].copy()
-        return {**out, **guidance_diagnostics(self.gains, state["filter"])}
+        xi = {f"xi_{j + 1}": command[:, _XI1 + j].copy() for j in range(4)}
+        return {**super().diagnostics(state), **xi}

@@ -95,6 +95,24 @@ def ocean_row(
 
 
 @njit(cache=True, inline="always")
+def _row_profile(ocean, depth, t):
+    """The profiled current of an ocean row at ``depth`` below its surface [m] and time t [s]
+    (`current_profile.profile_velocity`) [m/s]."""
+    return profile_velocity(
+        ocean[OCEAN.surface_speed],
+        ocean[OCEAN.reference_speed],
+        ocean[OCEAN.reference_depth],
+        ocean[OCEAN.exponent],
+        ocean[OCEAN.direction],
+        ocean[OCEAN.drift_amplitude],
+        ocean[OCEAN.drift_omega],
+        ocean[OCEAN.drift_phase],
+        depth,
+        t,
+    )
+
+
+@njit(cache=True, inline="always")
 def refresh_waves(ocean, st, step, k, dt, wave):
     """The wave state at physics step ``step`` (the k-th of the control period): the field
     (`waves.wave_kinematics`: v, a, j) at the state's position and t₀ = step·dt [s] on every
@@ -139,18 +157,7 @@ def ocean_forcing(ocean, st, t, wave, current, f, p):
                 f[4],
             )
     if ocean[OCEAN.profile] != 0.0:
-        px, py, pz = profile_velocity(
-            ocean[OCEAN.surface_speed],
-            ocean[OCEAN.reference_speed],
-            ocean[OCEAN.reference_depth],
-            ocean[OCEAN.exponent],
-            ocean[OCEAN.direction],
-            ocean[OCEAN.drift_amplitude],
-            ocean[OCEAN.drift_omega],
-            ocean[OCEAN.drift_phase],
-            st[2] - ocean[OCEAN.surface_z],
-            t,
-        )
+        px, py, pz = _row_profile(ocean, st[2] - ocean[OCEAN.surface_z], t)
         cx += px
         cy += py
         cz += pz
@@ -172,17 +179,6 @@ def ocean_velocity(ocean, x, y, z, t):
         field = wave_kinematics(ocean, OCEAN_HEADER, n, x, y, depth, t)
         vx, vy, vz = field[0], field[1], field[2]
     if ocean[OCEAN.profile] != 0.0:
-        px, py, pz = profile_velocity(
-            ocean[OCEAN.surface_speed],
-            ocean[OCEAN.reference_speed],
-            ocean[OCEAN.reference_depth],
-            ocean[OCEAN.exponent],
-            ocean[OCEAN.direction],
-            ocean[OCEAN.drift_amplitude],
-            ocean[OCEAN.drift_omega],
-            ocean[OCEAN.drift_phase],
-            depth,
-            t,
-        )
+        px, py, pz = _row_profile(ocean, depth, t)
         vx, vy, vz = vx + px, vy + py, vz + pz
     return vx, vy, vz

@@ -65,8 +65,7 @@ def check_below_the_surface(config: SimConfig) -> None:
     rise = RANDOM_START_RISE if config.randomize_start else 0.0
     arc = _episode_arc(config)
     if isinstance(config.path, Path):
-        tangent = float(np.linalg.norm(config.path.evaluate(0.0)[1]))
-        top, _ = path_depth_range(config.path, arc / tangent)
+        top = _episode_top(config, config.path)
         given = config.start_position
         start_z = float((given if given is not None else config.path.default_start()[0])[2])
         highest = min(top, start_z - rise)
@@ -96,9 +95,14 @@ def episode_surface_z(config: SimConfig, path: Path, start_z: float) -> float:
     covers (docs/model.md §13.8); 0 when the configuration has no such setting."""
     if config.surface_above_path is None:
         return 0.0
+    return min(_episode_top(config, path), start_z) - config.surface_above_path
+
+
+def _episode_top(config: SimConfig, path: Path) -> float:
+    """[m] the smallest z of ``path`` over the arc an episode covers."""
     tangent = float(np.linalg.norm(path.evaluate(0.0)[1]))
     top, _ = path_depth_range(path, _episode_arc(config) / tangent)
-    return min(top, start_z) - config.surface_above_path
+    return top
 
 
 def _start_depth(config: SimConfig) -> float:
