@@ -20,6 +20,7 @@ from auv_gym.sim.trajectory import FAILURE_REASONS, TAU_FIELDS, Trajectory
 __all__ = [
     "DEFAULT_TRANSIENT",
     "FIN_RATE_LIMITED",
+    "ROLL_ANGLE",
     "SHAFT_POWER",
     "MetricsWindowWarning",
     "check_window",
@@ -31,6 +32,7 @@ DEFAULT_TRANSIENT = 100.0  # [s] longest default start of the metrics window
 # The trajectory extra with the realistic actuators' rate-limited fraction per control step.
 FIN_RATE_LIMITED = "fin_rate_limited"
 SHAFT_POWER = "shaft_power"  # extras: the propeller shaft power at each interval's end [W]
+ROLL_ANGLE = "roll"  # extras: the 6-DOF plant's roll angle φ at each interval's end [rad]
 _SAT_TOL = 1e-9
 _T_TOL = 1e-9  # [s] sample times k·control_dt are compared with this tolerance
 
@@ -137,6 +139,7 @@ def compute_metrics(
     Propulsion (realistic actuators only, over the window; `_propulsion`):
       mean_shaft_power — mean propeller shaft power [W]; energy_per_km — shaft energy per
       kilometre the vehicle travelled [kJ/km].
+    Roll (the 6-DOF plant only, docs/model.md §15): max_roll — max |φ| over the episode [rad].
     Outcome:
       success — no failure termination (`FAILURE_REASONS`) and RMS d over the final
       ``final_window`` s ≤ ``success_distance`` (default 1 m, about one REMUS length);
@@ -214,6 +217,8 @@ def compute_metrics(
         metrics["fin_rate_saturation"] = float(np.mean(tr.extras[FIN_RATE_LIMITED]))
     if SHAFT_POWER in tr.extras:  # the propeller's (`auv_gym.rollout`)
         metrics.update(_propulsion(tr, window))
+    if ROLL_ANGLE in tr.extras:  # the 6-DOF plant's (`auv_gym.rollout`)
+        metrics["max_roll"] = float(np.max(np.abs(tr.extras[ROLL_ANGLE]), initial=0.0))
     metrics["final_distance"] = float(distance[-1])
     final = t >= t[-1] - final_window + 1e-9
     final_rms = float(np.sqrt(np.mean(np.square(distance[final]))))

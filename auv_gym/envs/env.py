@@ -30,6 +30,7 @@ from auv_gym.sim.task import NON_FINITE, RewardWeights
 from auv_gym.support.validation import ArgumentTypeError
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.params import AUVParams
+from auv_gym.vehicle.remus6dof import SixDofVehicle
 from auv_gym.vehicle.sensors import SensorConfig
 
 __all__ = ["AUVPath3DEnv", "check_reset_observations", "validate_actions"]
@@ -182,6 +183,8 @@ class AUVPath3DEnv(gym.Env):
     | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
     | `sensors` | "ideal" | "ideal" (exact state), "typical", dict, `SensorConfig`: model.md §14 |
     | `surface_above_path` | None | [m] sea surface above the path's shallowest point (§13.8) |
+    | `plant` | "5dof" | "5dof" (the paper's model) or "6dof" (with roll, model.md §15) |
+    | `plant_params` | REMUS 100 | "6dof" only: `SixDofVehicle` or a complete dict of its fields |
 
     ``disturbance="ocean"`` is the ocean a REMUS-class vehicle meets in service
     (`auv_gym.ocean.preset`, docs/model.md §16): unmodelled-dynamics noise sized to the fins,
@@ -310,6 +313,8 @@ class AUVPath3DEnv(gym.Env):
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
         sensors: str | Mapping | SensorConfig | None = None,
         surface_above_path: float | None = None,
+        plant: str = "5dof",
+        plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path,
@@ -345,6 +350,8 @@ class AUVPath3DEnv(gym.Env):
             actuator_params=actuator_params,
             sensors=sensors,
             surface_above_path=surface_above_path,
+            plant=plant,
+            plant_params=plant_params,
         )
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

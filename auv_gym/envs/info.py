@@ -12,6 +12,7 @@ import numpy as np
 
 from auv_gym.sim.integrator import RECORD
 from auv_gym.sim.observation import GUIDE
+from auv_gym.sim.six_dof_integrator import ROLL
 from auv_gym.sim.task import REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.vehicle.dynamics import STATE
 
@@ -31,7 +32,8 @@ _DISTURBANCE = slice(RECORD.f_u, RECORD.f_r + 1)  # white noise f_u … f_r [N, 
 
 def info_columns(sim: Simulator, physics_dt: float, stepped: bool) -> dict[str, np.ndarray]:
     """Each info key's values over vehicles, in the info's order (views of the simulator's
-    rows, except ``t``); with ``stepped`` also the reward terms and the safety cost."""
+    rows, except ``t``); with ``stepped`` also the reward terms and the safety cost; on the
+    6-DOF plant also the roll angle ``phi`` [rad] and rate ``roll_rate`` [rad/s]."""
     g, record = sim.guid, sim.record
     columns: dict[str, np.ndarray] = {
         "x_e": g[:, GUIDE.x_e],
@@ -44,6 +46,9 @@ def info_columns(sim: Simulator, physics_dt: float, stepped: bool) -> dict[str, 
         "tau": record[:, _TAU],
         "disturbance": record[:, _DISTURBANCE],
     }
+    if sim.hull.shape[1]:  # the 6-DOF plant
+        columns["phi"] = sim.roll[:, ROLL.phi]
+        columns["roll_rate"] = sim.roll[:, ROLL.p]
     if stepped:
         columns.update(zip(REWARD_KEYS, sim.terms.T, strict=True))
         columns["cost"] = sim.cost

@@ -60,14 +60,18 @@ from auv_gym.sim.task import (
 from auv_gym.support.validation import ArgumentTypeError, choice, flag, real, vector
 from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
 from auv_gym.vehicle.params import AUVParams, params_from_spec, remus100
+from auv_gym.vehicle.remus6dof import REMUS6DOF, SixDofVehicle
 from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
 
 __all__ = [
     "ACTUATOR_LIMITS",
     "DISTURBANCE_PRESETS",
+    "FIVE_DOF_PLANT",
     "MAX_EPISODE_TIME",
     "MAX_SUBSTEPS",
     "PHYSICS_DT_RANGE",
+    "PLANTS",
+    "SIX_DOF_PLANT",
     "SimConfig",
     "path_is_random",
     "path_turn_rates",
@@ -76,6 +80,8 @@ __all__ = [
 # "paper" mode limits of REMUS 100 (docs/model.md §2.3): |X| <= 50 N, |M|, |N| <= 10 N·m.
 ACTUATOR_LIMITS = AUVParams().actuator_limits
 VIRTUAL_POINT_LAWS = {"corrected": 1.0, "printed": -1.0}
+FIVE_DOF_PLANT, SIX_DOF_PLANT = "5dof", "6dof"
+PLANTS = (FIVE_DOF_PLANT, SIX_DOF_PLANT)  # the `plant` argument's names
 _SUBSTEP_TOL = 1e-9
 # Documented ranges of the timing and start arguments (AUVPath3DEnv docstring, "Arguments").
 PHYSICS_DT_RANGE = (1e-6, 0.1)  # [s] RK4 step
@@ -135,6 +141,10 @@ class SimConfig:
     surface_above_path: float | None = None
     # "ideal": the observation is the exact state; else from a navigation estimate (`sensors`)
     sensors: SensorConfig = field(default_factory=lambda: SENSOR_PRESETS["ideal"])
+    # "5dof": the paper's model (docs/model.md §2); "6dof": Fossen's 6-DOF REMUS 100 (§15), its
+    # hull from `plant_params` (the REMUS 100's by default)
+    plant: str = FIVE_DOF_PLANT
+    plant_params: SixDofVehicle = REMUS6DOF
 
     @classmethod
     def from_kwargs(
@@ -172,6 +182,8 @@ class SimConfig:
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
         sensors: str | Mapping | SensorConfig | None = None,
         surface_above_path: float | None = None,
+        plant: str = "5dof",
+        plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -214,7 +226,16 @@ class SimConfig:
                 f"with actuator={actuator!r} they would do nothing: drop them or give "
                 "actuator='realistic'"
             )
+        if plant_params is not None and plant != SIX_DOF_PLANT:
+            raise ValueError(
+                f"plant_params describe the hull of plant={SIX_DOF_PLANT!r}; with plant="
+                f"{plant!r:.40} they would do nothing: drop them or give plant={SIX_DOF_PLANT!r}"
+            )
         return cls(
+            plant=plant,
+            plant_params=REMUS6DOF
+            if plant_params is None
+            else SixDofVehicle.from_record(plant_params),
             path=the_path,
             params=vehicle,
             noise=noise_from(disturbance, noise_hold),
@@ -270,6 +291,7 @@ class SimConfig:
             ("observation", ObservationConfig),
             ("safety_cost", SafetyCost),
             ("sensors", SensorConfig),
+            ("plant_params", SixDofVehicle),
         ):
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(
@@ -311,6 +333,7 @@ class SimConfig:
                     "is z = 0: give one of them"
                 )
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
+        put("plant", choice("plant", self.plant, PLANTS))
         put(
             "random_current",
             real("random_current", self.random_current, 0.0, MAX_RANDOM_CURRENT, unit="m/s"),

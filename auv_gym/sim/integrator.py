@@ -36,12 +36,18 @@ from auv_gym.vehicle.params import params_record
 
 __all__ = [
     "ACTUATORS",
+    "CONFIG_DIM",
     "CONFIG_FIELDS",
+    "REALISTIC_ACTUATOR",
     "RECORD",
     "RECORD_DIM",
     "RECORD_FIELDS",
+    "actuation",
+    "add_noise",
     "advance_vehicle",
     "config_record",
+    "finish_period",
+    "physics_step_forcing",
     "rk4",
     "rk4_step",
 ]
@@ -167,7 +173,7 @@ def rk4_step(st, tau, f, current, p_array, kind, pdata, u_d, sigma, dt, out):
 
 
 @njit(cache=True, inline="always")
-def _actuation(a_X, a_M, a_N, cfg, fin_gain, u):
+def actuation(a_X, a_M, a_N, cfg, fin_gain, u):
     """τ = (X, M, N) [N, N·m] for the action (a_X, a_M, a_N) in [−1, 1]³ (docs/model.md §2.3):
     "paper" scales by the constant limits; "fins" keeps X = a_X·X_max and gives
     M, N = a·K·δ_max·u|u| (fin-lift coefficient K, deflection limit δ_max), updated every step."""
@@ -232,33 +238,35 @@ def advance_vehicle(
     added = (0.0, 0.0, 0.0)
     for k in range(n_sub):
         n = step_index + k
-        f = white_noise(noise_amplitude, noise_key, n, hold_steps)
-        current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
-        if ocean_on:  # held across the RK4 stages, like the current; t at mid-step
-            wave = refresh_waves(ocean, x, n, k, cfg.physics_dt, wave)
-            uniform = current
-            current, f = ocean_forcing(ocean, x, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
-            added = (current[0] - uniform[0], current[1] - uniform[1], current[2] - uniform[2])
+        f, current, wave, added = physics_step_forcing(
+            cfg,
+            p,
+            noise_amplitude,
+            noise_key,
+            hold_steps,
+            dc,
+            ocean_on,
+            ocean,
+            x,
+            n,
+            k,
+            wave,
+            added,
+        )
         if realistic:
             shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, a)
             rate_limited += limited
             X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w], a)
             f_in = (f[0], f[1] + Y, f[2] + Z, f[3], f[4])
         else:
-            X, M, N = _actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
+            X, M, N = actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
             f_in = f
         nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
         dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
         sum_X += X
         sum_M += M
         sum_N += N
-        sum_f = (
-            sum_f[0] + f[0],
-            sum_f[1] + f[1],
-            sum_f[2] + f[2],
-            sum_f[3] + f[3],
-            sum_f[4] + f[4],
-        )
+        sum_f = add_noise(sum_f, f)
         for j in range(STATE_DIM):
             if not math.isfinite(nxt[j]):
                 finite = False
@@ -287,6 +295,45 @@ def advance_vehicle(
         act[ACTUATOR_STATE.rate_limited] = rate_limited / n_sub
     if not finite:
         return False
+    finish_period(
+        st, kind, pdata, cfg, guid, obs, record, sum_X, sum_M, sum_N, sum_f, ocean_on, added
+    )
+    return True
+
+
+@njit(cache=True, inline="always")
+def physics_step_forcing(
+    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, pose, n, k, wave, added
+):
+    """The white noise f and the earth-fixed current [m/s] of physics step n (the k-th of the
+    period) at ``pose`` (x, y, z [m], θ, ψ [rad], …), held across its RK4 stages: the uniform
+    current plus its Gauss–Markov deviation ``dc``, and with an ocean row its waves and profile
+    (t at mid-step). Returns (f, current, wave, added): ``added`` [m/s] is the ocean's part of
+    the current, the last one kept when there is no ocean."""
+    f = white_noise(noise_amplitude, noise_key, n, hold_steps)
+    current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
+    if ocean_on:
+        wave = refresh_waves(ocean, pose, n, k, cfg.physics_dt, wave)
+        uniform = current
+        current, f = ocean_forcing(ocean, pose, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
+        added = (current[0] - uniform[0], current[1] - uniform[1], current[2] - uniform[2])
+    return f, current, wave, added
+
+
+@njit(cache=True, inline="always")
+def add_noise(total, f):
+    """The running sum of the five disturbance channels plus f."""
+    return (total[0] + f[0], total[1] + f[1], total[2] + f[2], total[3] + f[3], total[4] + f[4])
+
+
+@njit(cache=True, inline="always")
+def finish_period(
+    st, kind, pdata, cfg, guid, obs, record, sum_X, sum_M, sum_N, sum_f, ocean_on, added
+):
+    """Write the period's mean τ and f and, with an ocean row, the ocean's last added velocity
+    into ``record`` (layout `RECORD`), then the guidance row and the observation of the state
+    ``st``."""
+    n_sub = int(cfg.n_sub)
     record[RECORD.X] = sum_X / n_sub
     record[RECORD.M] = sum_M / n_sub
     record[RECORD.N] = sum_N / n_sub
@@ -296,4 +343,3 @@ def advance_vehicle(
         record[RECORD.ocean_x], record[RECORD.ocean_y], record[RECORD.ocean_z] = added
     guidance_row(st, kind, pdata, cfg.u_d, cfg.sigma, guid)
     build_observation(st, guid, cfg.u_d, obs)
-    return True

@@ -20,7 +20,7 @@ from auv_gym.ocean.disturbances import (
 )
 from auv_gym.ocean.forcing import ocean_row, ocean_width
 from auv_gym.paths.shapes import Path
-from auv_gym.sim.config import SimConfig
+from auv_gym.sim.config import SIX_DOF_PLANT, SimConfig
 from auv_gym.sim.episode_start import draw_start
 from auv_gym.sim.integrator import (
     ACTUATORS,
@@ -41,6 +41,7 @@ from auv_gym.sim.path_depths import episode_surface_z
 from auv_gym.sim.preview import extend_rows
 from auv_gym.sim.randomization import EpisodeTask, draw_task
 from auv_gym.sim.safety_cost import safety_vector
+from auv_gym.sim.six_dof_integrator import ROLL_DIM, advance_six_dof
 from auv_gym.sim.task import (
     ENVELOPE,
     REWARD_TERMS,
@@ -82,31 +83,55 @@ def _step_row(
     code,
     cost,
     ocean,
+    roll,
+    hull,
 ):
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
-    config and task are row ``row[i]`` of the episode table (`Simulator`)."""
+    config and task are row ``row[i]`` of the episode table (`Simulator`); the 6-DOF plant
+    when ``hull`` has columns (its roll state in ``roll``), else the 5-DOF."""
     a = actions[i]
     for j in range(3):  # documented actuator saturation: |a_j| <= 1
         a[j] = min(max(a[j], -1.0), 1.0)
     r = row[i]
     cfg = cfgs[r]
-    advance_vehicle(
-        state[i],
-        current[i],
-        act[i],
-        a,
-        params[i],
-        keys[i, KEY.noise],
-        keys[i, KEY.current],
-        step_index[i],
-        kinds[r],
-        pdata[r],
-        cfg,
-        guid[i],
-        obs[i],
-        record[i],
-        ocean[i],
-    )
+    if hull.shape[1]:
+        advance_six_dof(
+            state[i],
+            roll[i],
+            current[i],
+            act[i],
+            a,
+            params[i],
+            hull[i],
+            keys[i, KEY.noise],
+            keys[i, KEY.current],
+            step_index[i],
+            kinds[r],
+            pdata[r],
+            cfg,
+            guid[i],
+            obs[i],
+            record[i],
+            ocean[i],
+        )
+    else:
+        advance_vehicle(
+            state[i],
+            current[i],
+            act[i],
+            a,
+            params[i],
+            keys[i, KEY.noise],
+            keys[i, KEY.current],
+            step_index[i],
+            kinds[r],
+            pdata[r],
+            cfg,
+            guid[i],
+            obs[i],
+            record[i],
+            ocean[i],
+        )
     step_index[i] += int(config_record(cfg).n_sub)
     reward[i], code[i] = task_row(
         state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r], terms[i]
@@ -152,6 +177,8 @@ def _step_one(
     code,
     cost,
     ocean,
+    roll,
+    hull,
 ):
     bad = _first_non_finite_row(actions)
     if bad < 0:
@@ -180,6 +207,8 @@ def _step_one(
                 code,
                 cost,
                 ocean,
+                roll,
+                hull,
             )
     return bad
 
@@ -208,6 +237,8 @@ def _step_all(
     code,
     cost,
     ocean,
+    roll,
+    hull,
 ):
     bad = _first_non_finite_row(actions)
     if bad < 0:
@@ -236,6 +267,8 @@ def _step_all(
                 code,
                 cost,
                 ocean,
+                roll,
+                hull,
             )
     return bad
 
@@ -253,6 +286,7 @@ _W_TERMINATION = TASK_FIELDS.index("w_termination")
 _CONFIG_INDEX = {name: j for j, name in enumerate(CONFIG_FIELDS)}
 _NOISE_COLUMNS = [_CONFIG_INDEX[f"noise_f_{c}"] for c in "uvwqr"]
 _CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
+_HULL_STREAM = 6  # the 6-DOF hull's draws: a stream of the episode's keys of its own
 _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code → name
 
 
@@ -280,6 +314,8 @@ SNAPSHOT_ARRAYS = (
     "_kind",
     "ocean",
     "actuator_state",
+    "roll",
+    "hull",
 )
 
 
@@ -334,6 +370,13 @@ class Simulator:
         self.code = np.zeros(n, dtype=np.int64)
         self.cost = np.zeros(n)  # safety cost of the last step (`auv_gym.sim.safety_cost`)
         self._actions = np.zeros((n, 3))
+        # The 6-DOF plant: each vehicle's roll (φ [rad], p [rad/s]) and hull row
+        # (`SixDofVehicle.kernel_vector`, drawn per episode with parameter uncertainty); the
+        # hull has no columns for the 5-DOF plant, which is how the kernel tells them apart.
+        self.roll = np.zeros((n, ROLL_DIM))
+        six_dof = config.plant == SIX_DOF_PLANT
+        self._nominal_hull = config.plant_params.kernel_vector() if six_dof else np.zeros(0)
+        self.hull = np.tile(self._nominal_hull, (n, 1))
         # Waves and profiled current per vehicle (`ocean.ocean_row`); all zero without them.
         self.ocean = np.zeros((n, ocean_width(config.waves)))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
@@ -403,6 +446,8 @@ class Simulator:
             "ocean": np.zeros((self.n, ocean_width(None))),
             "actuator_state": np.zeros_like(self.actuator_state),
             "cost": np.zeros(self.n),
+            "roll": np.zeros_like(self.roll),
+            "hull": self.hull.copy(),
             **snapshot["arrays"],
         }
         targets = self._snapshot_arrays()
@@ -512,6 +557,9 @@ class Simulator:
         # Start the Gauss–Markov deviation in its stationary distribution.
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
         self.actuator_state[i] = 0.0  # propeller stopped, fins centred
+        self.roll[i] = 0.0
+        if self.hull.shape[1]:
+            self.hull[i] = self._hull_row(i)
         if cfg.waves is not None or cfg.current_profile is not None:
             surface_z = episode_surface_z(cfg, self.paths[i], float(position[2]))
             self.ocean[i] = ocean_row(
@@ -523,6 +571,16 @@ class Simulator:
         self.reward[i] = 0.0
         self.code[i] = 0
         self.cost[i] = 0.0
+
+    def _hull_row(self, i: int) -> np.ndarray:
+        """Vehicle i's 6-DOF hull row for its episode: the nominal one, or with parameter
+        uncertainty one drawn from the episode's keys (so the episode's other draws, and hence
+        its start and disturbances, are those of the same seed on the 5-DOF plant)."""
+        fraction = self.config.param_uncertainty
+        if fraction == 0.0:
+            return self._nominal_hull
+        rng = np.random.Generator(np.random.PCG64([*self.keys[i].tolist(), _HULL_STREAM]))
+        return self.config.plant_params.perturbed(rng, fraction).kernel_vector()
 
     def step(self, actions: np.ndarray) -> None:
         """Advance all vehicles one control step with actions in [−1, 1], shape (n, 3).
@@ -556,6 +614,8 @@ class Simulator:
             self.code,
             self.cost,
             self.ocean,
+            self.roll,
+            self.hull,
         )
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")

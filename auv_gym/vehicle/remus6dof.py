@@ -31,15 +31,22 @@ kinetic energy ½ νᵀMν is conserved (C skew-symmetric).
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
 
 import numpy as np
 
+from auv_gym.support.validation import ArgumentTypeError, integer, keys_within, real, vector
 from auv_gym.vehicle.actuators import ActuatorParams, propeller_thrust, propeller_torque
+from auv_gym.vehicle.six_dof import SIX_DOF_FIELDS
 
 __all__ = [
+    "COEFFICIENTS",
     "REMUS6DOF",
+    "UNCERTAIN_COEFFICIENTS",
     "SixDofVehicle",
     "accelerations",
     "actuation",
@@ -62,6 +69,9 @@ _HOERNER_Y = np.array(
         *(0.8284, 0.7599, 0.6914, 0.6571, 0.6307, 0.5962, 0.5868, 0.5859, 0.5599, 0.5593),
     ]
 )
+
+
+_OSWALD = 0.7  # [-] Oswald efficiency e of the hull's induced drag
 
 
 def _skew(a: np.ndarray) -> np.ndarray:
@@ -100,6 +110,7 @@ class SixDofVehicle:
     actuators: ActuatorParams = field(default_factory=ActuatorParams.pvs_remus100)
 
     def __post_init__(self) -> None:
+        self._validate()
         a, b = self.length / 2.0, self.diameter / 2.0
         rho = self.water_density
         m = 4.0 / 3.0 * math.pi * rho * a * b * b  # [kg] the spheroid's displaced mass
@@ -152,7 +163,124 @@ class SixDofVehicle:
         for name, value in derived.items():
             object.__setattr__(self, name, value)
 
+    def _validate(self) -> None:
+        """Each coefficient in its physical range, else a one-line error naming it."""
+        put = object.__setattr__
+        for name in COEFFICIENTS:
+            value = getattr(self, name)
+            where = f"SixDofVehicle.{name}"
+            if name in ("r_bg", "r_bb"):
+                put(self, name, vector(where, value, 3, -10.0, 10.0, "m"))
+            elif name == "strips":
+                put(self, name, integer(where, value, 1, 1000))
+            elif name.endswith("damping_ratio") or name in (
+                "hull_drag_coeff",
+                "propeller_torque_scale",
+                "roll_added_inertia",
+            ):
+                put(self, name, real(where, value, 0.0, 100.0))
+            else:
+                put(self, name, real(where, value, 0.0, math.inf, low_open=True))
+        if not self.diameter < self.length:
+            raise ValueError(
+                f"SixDofVehicle.diameter = {self.diameter} m must be below its length "
+                f"{self.length} m (a prolate spheroid)"
+            )
+        if not self.r_bg[2] > self.r_bb[2]:
+            raise ValueError(
+                f"SixDofVehicle.r_bg = {self.r_bg} m must lie below r_bb = {self.r_bb} m "
+                "(z_g > z_b): the roll and pitch damping are set from the restoring frequencies"
+            )
+        if not isinstance(self.actuators, ActuatorParams):
+            raise ArgumentTypeError(
+                f"SixDofVehicle.actuators must be an ActuatorParams, got {self.actuators!r:.80}"
+            )
 
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> SixDofVehicle:
+        """A vehicle from a complete record of `COEFFICIENTS` (a user's vehicle, e.g. read from
+        TOML; `record` gives the REMUS 100's to start from); a missing or unknown key is a
+        one-line error naming it and the coefficients that exist."""
+        if isinstance(record, SixDofVehicle):
+            return record
+        if not isinstance(record, Mapping):
+            raise ArgumentTypeError(
+                f"plant_params must be a SixDofVehicle or a mapping of {list(COEFFICIENTS)}, "
+                f"got {record!r:.80}"
+            )
+        given = keys_within("plant_params", record, COEFFICIENTS)
+        missing = [name for name in COEFFICIENTS if name not in given]
+        if missing:
+            raise ValueError(
+                f"plant_params is missing the coefficient(s) {missing}; a 6-DOF vehicle record "
+                f"gives all of {list(COEFFICIENTS)} (SixDofVehicle().record() is the REMUS 100's)"
+            )
+        return cls(**given)
+
+    def record(self) -> dict[str, Any]:
+        """The coefficients as a plain dict (`from_record` reads it back)."""
+        return {name: getattr(self, name) for name in COEFFICIENTS}
+
+    def perturbed(self, rng: np.random.Generator, fraction: float) -> SixDofVehicle:
+        """A copy whose hydrodynamic coefficients (`UNCERTAIN_COEFFICIENTS`: hull drag, roll
+        added inertia, the damping time constants and ratios) are each scaled by
+        1 + U[−fraction, fraction], drawn from rng in that order; the geometry and mass stay."""
+        scales = 1.0 + rng.uniform(-fraction, fraction, len(UNCERTAIN_COEFFICIENTS))
+        changes = {
+            name: getattr(self, name) * float(scale)
+            for name, scale in zip(UNCERTAIN_COEFFICIENTS, scales, strict=True)
+        }
+        return dataclasses.replace(self, **changes)
+
+    def kernel_vector(self) -> np.ndarray:
+        """The float64 row the compiled plant reads (`six_dof.SIX_DOF_FIELDS`)."""
+        span, area = self.diameter, self.wing_area
+        aspect = span * span / area
+        values = {
+            "speed_decay": 3.0,
+            "weight": self.weight,
+            "buoyancy": self.weight,  # neutrally buoyant, as the reference
+            "water_density": self.water_density,
+            "length": self.length,
+            "diameter": self.diameter,
+            "wing_area": area,
+            "lift_slope": math.pi * aspect / (1.0 + math.sqrt(1.0 + (aspect / 2.0) ** 2)),
+            "zero_lift_drag": self.zero_lift_drag,
+            "induced_drag": 1.0 / (math.pi * _OSWALD * aspect),
+            "crossflow_coeff": self.crossflow_coeff,
+            "strips": float(self.strips),
+            "propeller_torque_scale": self.propeller_torque_scale,
+        }
+        for axis, value in zip("xyz", self.r_bg, strict=True):
+            values[f"{axis}_g"] = value
+        for axis, value in zip("xyz", self.r_bb, strict=True):
+            values[f"{axis}_b"] = value
+        for axis, value in zip("uvwpqr", np.diag(self.damping_base), strict=True):
+            values[f"damping_{axis}"] = value
+        for name, matrix in (
+            ("rigid", self.rigid_body),
+            ("added", self.added_mass),
+            ("inverse_mass", self.inverse_mass),
+        ):
+            for i in range(6):
+                for j in range(6):
+                    values[f"{name}_{i}{j}"] = matrix[i, j]
+        return np.array([float(values[name]) for name in SIX_DOF_FIELDS])
+
+
+# The coefficients of a vehicle record (`SixDofVehicle.from_record`); the actuators are the env's.
+COEFFICIENTS = tuple(f.name for f in fields(SixDofVehicle) if f.name != "actuators")
+# What parameter uncertainty scales (`SixDofVehicle.perturbed`).
+UNCERTAIN_COEFFICIENTS = (
+    "hull_drag_coeff",
+    "roll_added_inertia",
+    "surge_time_constant",
+    "sway_time_constant",
+    "heave_time_constant",
+    "yaw_time_constant",
+    "roll_damping_ratio",
+    "pitch_damping_ratio",
+)
 REMUS6DOF = SixDofVehicle()
 
 
@@ -191,7 +319,7 @@ def _lift_drag(vehicle: SixDofVehicle, alpha: float, u_r: float) -> np.ndarray:
     span, area = vehicle.diameter, vehicle.wing_area
     aspect = span * span / area
     cl = math.pi * aspect / (1.0 + math.sqrt(1.0 + (aspect / 2.0) ** 2)) * alpha
-    cd = vehicle.zero_lift_drag + cl * cl / (math.pi * 0.7 * aspect)  # Oswald e = 0.7
+    cd = vehicle.zero_lift_drag + cl * cl / (math.pi * _OSWALD * aspect)
     pressure = 0.5 * vehicle.water_density * u_r * u_r * area
     drag, lift = pressure * cd, pressure * cl
     ca, sa = math.cos(alpha), math.sin(alpha)

@@ -106,7 +106,7 @@ def read_episodes(path: Path) -> list[dict[str, Any]]:
             "duration",
         ):
             row[key] = float(row[key])
-        for key in ("chattering", "saturation_fraction"):  # absent from older files
+        for key in ("chattering", "saturation_fraction", "max_roll"):  # absent from older files
             if key in row:
                 row[key] = float(row[key])
     return rows

@@ -40,18 +40,19 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from auv_gym.metrics import check_window
-from auv_gym.sim.config import SimConfig
+from auv_gym.sim.config import FIVE_DOF_PLANT, PLANTS, SimConfig
 from auv_gym.support.files import (
     environment,
     replace_outputs,
     write_json,
     write_text,
 )
+from auv_gym.support.validation import choice
 from benchmarks.analysis.report_spec import DEFAULT_REPORT, ReportSpec
 from benchmarks.arguments import (
     ArgumentParser,
@@ -113,6 +114,11 @@ class SuiteOptions(EpisodeOptions):
         "agent_seed_<k>/ folders)",
     )
     sets: str = option("all", "comma-separated test sets of --tasks-file, or 'all'")
+    plant: str = option(
+        FIVE_DOF_PLANT,
+        f"the plant every set runs on: {' or '.join(PLANTS)} (docs/model.md §15); the policies "
+        "stay as designed or trained",
+    )
     # A Path is immutable: one shared default is safe.
     tasks_file: Path = option(  # noqa: RUF009
         TASKS_FILE, "TOML file of named task sets (benchmarks.catalog.tasks)"
@@ -187,6 +193,9 @@ def check_args(args: argparse.Namespace) -> None:
         raise ValueError(f"--tasks-file {str(args.tasks_file)!r} has no test set")
     by_name = {s.name: s for s in suite}
     sets = [by_name[n] for n in select(args.sets, list(by_name), "set")]
+    choice("--plant", args.plant, PLANTS)
+    if args.plant != FIVE_DOF_PLANT:
+        sets = [replace(s, env={**s.env, "plant": args.plant}) for s in sets]
     names = comma_names(args.policies, "--policies")
     policies = [resolve_policy(spec) for spec in names]
     labels: dict[str, str] = {}

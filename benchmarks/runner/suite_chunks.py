@@ -8,6 +8,7 @@ import csv
 import hashlib
 import io
 import json
+import math
 import re
 import time
 from dataclasses import dataclass, field
@@ -56,6 +57,7 @@ METRICS = {
     "overspeed_fraction": "overspeed_fraction",
     "chattering": "chattering",  # [1/s]
     "saturation_fraction": "saturation_fraction",
+    "max_roll": "max_roll",  # [rad] the 6-DOF plant's; NaN on the 5-DOF, which has no roll
     "termination_reason": "termination_reason",
     "window_samples": "window_samples",
     "duration": "duration",
@@ -183,7 +185,7 @@ def run_chunk(chunk: Chunk, out: Path) -> dict[str, Any]:
         "fingerprint": chunk.fingerprint(),
         "wall_time_s": time.perf_counter() - start,
         "episodes": [
-            {"seed": int(r["seed"]), **{col: r[key] for col, key in METRICS.items()}}
+            {"seed": int(r["seed"]), **{col: r.get(key, math.nan) for col, key in METRICS.items()}}
             for r in results
         ],
     }

@@ -1,0 +1,339 @@
+r"""The compiled 6-DOF plant (``plant="6dof"``, docs/model.md §15): the equations of
+`auv_gym.vehicle.remus6dof` for the kernels, on tuples in registers.
+
+The simulator's 6-DOF state is `SIX_DOF_STATE`: η = (x, y, z, φ, θ, ψ) [m, rad], the velocity
+through the water ν_r = (u, v, w, p, q, r) [m/s, rad/s] and the virtual point's s. As in the
+5-DOF model (docs/model.md §2.5) the current enters the kinematics, so the kinetics are written
+in ν_r (Fossen 2021 §10.3; for a uniform current they are the reference's ν̇ − ν̇_c exactly):
+
+    M ν̇_r = τ + τ_liftdrag(ν_r) + τ_crossflow(ν_r) − (C_RB(ν_r) + C_A(ν_r) + D(ν_r)) ν_r − g(η)
+    ṗ_n = R(φ, θ, ψ) (u, v, w) + v_c,     (φ̇, θ̇, ψ̇) = T(φ, θ) (p, q, r)
+
+The hull's numbers are one float64 row per vehicle (`SixDofVehicle.kernel_vector`, layout
+`SIX_DOF_FIELDS`): M_RB, M_A and M⁻¹ as full 6×6 blocks (a user's vehicle may put its centre
+of gravity anywhere), then the scalars. `six_dof_nu_dot` is checked against numbers recorded
+from the reference implementation (tests/test_six_dof_plant.py, ≤ 1e-9 relative).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from auv_gym.paths.guidance import body_errors_trig, virtual_point_speed
+from auv_gym.paths.shapes import path_eval
+from auv_gym.support.records import field_indices
+from auv_gym.vehicle.actuators import fin_forces, propeller_thrust, propeller_torque
+
+__all__ = [
+    "SIX_DOF",
+    "SIX_DOF_FIELDS",
+    "SIX_DOF_STATE",
+    "SIX_DOF_STATE_DIM",
+    "SIX_DOF_STATE_NAMES",
+    "six_dof_actuation",
+    "six_dof_derivative",
+    "six_dof_hull_forces",
+    "six_dof_nu_dot",
+    "six_dof_rk4",
+]
+
+SIX_DOF_STATE_NAMES = ("x", "y", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r", "s")
+SIX_DOF_STATE_DIM = len(SIX_DOF_STATE_NAMES)
+SIX_DOF_STATE = field_indices("SixDofStateIndex", SIX_DOF_STATE_NAMES, __name__)
+
+_MATRICES = ("rigid", "added", "inverse_mass")  # M_RB, M_A, M⁻¹: 36 entries each, row-major
+SIX_DOF_FIELDS = (
+    *(f"{name}_{i}{j}" for name in _MATRICES for i in range(6) for j in range(6)),
+    *(f"damping_{axis}" for axis in ("u", "v", "w", "p", "q", "r")),  # [N·s/m, N·m·s] at U = 0
+    "speed_decay",  # [s/m] surge and sway linear damping × exp(−speed_decay·U_r)
+    "weight",  # [N] W = B
+    "buoyancy",  # [N]
+    "x_g",
+    "y_g",
+    "z_g",  # [m] centre of gravity
+    "x_b",
+    "y_b",
+    "z_b",  # [m] centre of buoyancy
+    "water_density",  # [kg/m³]
+    "length",  # [m]
+    "diameter",  # [m]
+    "wing_area",  # [m²] S of the hull's lift and drag
+    "lift_slope",  # [1/rad] C_L per α
+    "zero_lift_drag",  # [-] C_D0
+    "induced_drag",  # [-] 1/(π e A): C_D = C_D0 + induced_drag·C_L²
+    "crossflow_coeff",  # [-] Hoerner's 2-D C_D
+    "strips",  # cross-flow strips (strips + 1 stations)
+    "propeller_torque_scale",  # [-] share of the shaft torque felt in roll
+)
+SIX_DOF = field_indices("SixDofIndex", SIX_DOF_FIELDS, __name__)
+_RIGID, _ADDED, _INVERSE = SIX_DOF.rigid_00, SIX_DOF.added_00, SIX_DOF.inverse_mass_00
+
+
+@njit(cache=True, inline="always")
+def _matvec(h, offset, x):
+    """The 6×6 row-major block at ``offset`` of ``h`` times the 6-tuple x."""
+    return (
+        h[offset + 0] * x[0]
+        + h[offset + 1] * x[1]
+        + h[offset + 2] * x[2]
+        + h[offset + 3] * x[3]
+        + h[offset + 4] * x[4]
+        + h[offset + 5] * x[5],
+        h[offset + 6] * x[0]
+        + h[offset + 7] * x[1]
+        + h[offset + 8] * x[2]
+        + h[offset + 9] * x[3]
+        + h[offset + 10] * x[4]
+        + h[offset + 11] * x[5],
+        h[offset + 12] * x[0]
+        + h[offset + 13] * x[1]
+        + h[offset + 14] * x[2]
+        + h[offset + 15] * x[3]
+        + h[offset + 16] * x[4]
+        + h[offset + 17] * x[5],
+        h[offset + 18] * x[0]
+        + h[offset + 19] * x[1]
+        + h[offset + 20] * x[2]
+        + h[offset + 21] * x[3]
+        + h[offset + 22] * x[4]
+        + h[offset + 23] * x[5],
+        h[offset + 24] * x[0]
+        + h[offset + 25] * x[1]
+        + h[offset + 26] * x[2]
+        + h[offset + 27] * x[3]
+        + h[offset + 28] * x[4]
+        + h[offset + 29] * x[5],
+        h[offset + 30] * x[0]
+        + h[offset + 31] * x[1]
+        + h[offset + 32] * x[2]
+        + h[offset + 33] * x[3]
+        + h[offset + 34] * x[4]
+        + h[offset + 35] * x[5],
+    )
+
+
+@njit(cache=True, inline="always")
+def _cross(a0, a1, a2, b0, b1, b2):
+    """a × b."""
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@njit(cache=True, inline="always")
+def _coriolis_product(mv, nu):
+    """C(ν) ν of a symmetric inertia M, given M ν (Fossen 2021 eq. 3.63): with ν = (ν₁, ν₂) and
+    M ν = (p₁, p₂), C(ν) ν = (ν₂ × p₁, ν₁ × p₁ + ν₂ × p₂)."""
+    top = _cross(nu[3], nu[4], nu[5], mv[0], mv[1], mv[2])
+    a = _cross(nu[0], nu[1], nu[2], mv[0], mv[1], mv[2])
+    b = _cross(nu[3], nu[4], nu[5], mv[3], mv[4], mv[5])
+    return top[0], top[1], top[2], a[0] + b[0], a[1] + b[1], a[2] + b[2]
+
+
+@njit(cache=True, inline="always")
+def six_dof_hull_forces(nu_r, phi, theta, h):
+    """The hull's generalized forces [N, N·m] at ν_r, roll φ and pitch θ [rad]: lift and drag,
+    cross-flow drag, −(C_RB + C_A + D) ν_r and −g(η) (module doc; docs/model.md §15)."""
+    u, v, w, p, q, r = nu_r
+    # Rigid-body and added-mass Coriolis; C_A without the Munk moments in pitch and yaw: the
+    # entries (5,1), (5,3), (6,1), (6,2) of C_A and their transposes (1-based) are removed.
+    c_rb = _coriolis_product(_matvec(h, _RIGID, nu_r), nu_r)
+    ma = _matvec(h, _ADDED, nu_r)
+    c_a = _coriolis_product(ma, nu_r)
+    ax, ay, az = ma[0], ma[1], ma[2]
+    coriolis = (
+        c_rb[0] + c_a[0] - (az * q - ay * r),
+        c_rb[1] + c_a[1] - ax * r,
+        c_rb[2] + c_a[2] + ax * q,
+        c_rb[3] + c_a[3],
+        c_rb[4] + c_a[4] - (ax * w - az * u),
+        c_rb[5] + c_a[5] - (ay * u - ax * v),
+    )
+    speed = math.sqrt(u * u + v * v + w * w)  # U_r [m/s]
+    fade = math.exp(-h[SIX_DOF.speed_decay] * speed)
+    damping = (
+        h[SIX_DOF.damping_u] * fade * u,
+        h[SIX_DOF.damping_v] * fade * v,
+        h[SIX_DOF.damping_w] * w,
+        h[SIX_DOF.damping_p] * p,
+        h[SIX_DOF.damping_q] * q,
+        h[SIX_DOF.damping_r] * r,
+    )
+    # The hull as a low-aspect wing at α = atan2(w_r, u_r) (Beard and McLain 2012).
+    alpha = math.atan2(w, u)
+    lift_coeff = h[SIX_DOF.lift_slope] * alpha
+    drag_coeff = h[SIX_DOF.zero_lift_drag] + h[SIX_DOF.induced_drag] * lift_coeff * lift_coeff
+    pressure = 0.5 * h[SIX_DOF.water_density] * speed * speed * h[SIX_DOF.wing_area]
+    drag, lift = pressure * drag_coeff, pressure * lift_coeff
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    # Cross-flow drag by strip theory: the reference's sum over strips + 1 stations × dx.
+    stations = int(h[SIX_DOF.strips])
+    length = h[SIX_DOF.length]
+    dx = length / stations
+    gain = -0.5 * h[SIX_DOF.water_density] * h[SIX_DOF.diameter] * h[SIX_DOF.crossflow_coeff]
+    sway_cf = yaw_cf = 0.0
+    for k in range(stations + 1):
+        x = -0.5 * length + dx * k
+        flow = v + x * r
+        strip = gain * abs(flow) * flow * dx
+        sway_cf += strip
+        yaw_cf += strip * x
+    # Restoring forces and moments g(η) of W at r_g and B at r_b.
+    sth, cth, sphi, cphi = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
+    weight, buoyancy = h[SIX_DOF.weight], h[SIX_DOF.buoyancy]
+    net = weight - buoyancy
+    gx = h[SIX_DOF.x_g] * weight - h[SIX_DOF.x_b] * buoyancy
+    gy = h[SIX_DOF.y_g] * weight - h[SIX_DOF.y_b] * buoyancy
+    gz = h[SIX_DOF.z_g] * weight - h[SIX_DOF.z_b] * buoyancy
+    restoring = (
+        net * sth,
+        -net * cth * sphi,
+        -net * cth * cphi,
+        -gy * cth * cphi + gz * cth * sphi,
+        gz * sth + gx * cth * cphi,
+        -gx * cth * sphi - gy * sth,
+    )
+    return (
+        -ca * drag + sa * lift - coriolis[0] - damping[0] - restoring[0],
+        sway_cf - coriolis[1] - damping[1] - restoring[1],
+        -sa * drag - ca * lift - coriolis[2] - damping[2] - restoring[2],
+        -coriolis[3] - damping[3] - restoring[3],
+        -coriolis[4] - damping[4] - restoring[4],
+        yaw_cf - coriolis[5] - damping[5] - restoring[5],
+    )
+
+
+@njit(cache=True, inline="always")
+def six_dof_nu_dot(nu_r, phi, theta, tau, h):
+    """ν̇_r = M⁻¹ (τ + hull forces) [m/s², rad/s²] for generalized forces τ (6,) [N, N·m]."""
+    hull = six_dof_hull_forces(nu_r, phi, theta, h)
+    total = (
+        tau[0] + hull[0],
+        tau[1] + hull[1],
+        tau[2] + hull[2],
+        tau[3] + hull[3],
+        tau[4] + hull[4],
+        tau[5] + hull[5],
+    )
+    return _matvec(h, _INVERSE, total)
+
+
+@njit(cache=True, inline="always")
+def six_dof_actuation(n_rpm, delta_s, delta_r, nu_r, propeller_speed, torque_scale, a):
+    """τ (6,) [N, N·m] of the propeller and fins (`auv_gym.vehicle.actuators`, the same formulas)
+    at the velocity through the water ν_r, with the propeller's torque in roll scaled by
+    ``torque_scale``; the propeller's advance speed is ``propeller_speed`` [m/s] (the env passes
+    |ν_r|, the speed through the water; the reference's check passes the speed over ground)."""
+    drag, y_r, z_s, m_s, n_r = fin_forces(delta_s, delta_r, nu_r[0], nu_r[1], nu_r[2], a)
+    thrust = (1.0 - a.thrust_deduction) * propeller_thrust(n_rpm, propeller_speed, a)
+    roll = torque_scale * propeller_torque(n_rpm, propeller_speed, a)
+    return thrust + drag, y_r, z_s, roll, m_s, n_r
+
+
+@njit(cache=True, inline="always")
+def six_dof_derivative(st, tau, f, current, h, kind, pdata, u_d, sigma):
+    """d/dt of the 6-DOF state (layout `SIX_DOF_STATE`) under τ (6,) and the disturbance f
+    (f_u, f_v, f_w, f_q, f_r) [N, N·m] (no roll channel), in the earth-fixed current (v_c,x,
+    v_c,y, v_c,z) [m/s]; ``kind``, ``pdata``, ``u_d``, ``sigma`` the virtual point's path and
+    law, as `dynamics.state_derivative`."""
+    phi, theta, psi = st[3], st[4], st[5]
+    nu = (st[6], st[7], st[8], st[9], st[10], st[11])
+    forces = (
+        tau[0] + f[0],
+        tau[1] + f[1],
+        tau[2] + f[2],
+        tau[3],
+        tau[4] + f[3],
+        tau[5] + f[4],
+    )
+    du, dv, dw, dp, dq, dr = six_dof_nu_dot(nu, phi, theta, forces, h)
+    cphi, sphi = math.cos(phi), math.sin(phi)
+    cth, sth = math.cos(theta), math.sin(theta)
+    cpsi, spsi = math.cos(psi), math.sin(psi)
+    u, v, w, p, q, r = nu
+    # ṗ_n = R(φ, θ, ψ) (u, v, w), Fossen's zyx convention; (φ̇, θ̇, ψ̇) = T(φ, θ)(p, q, r).
+    dx = (
+        cpsi * cth * u
+        + (-spsi * cphi + cpsi * sth * sphi) * v
+        + (spsi * sphi + cpsi * cphi * sth) * w
+    )
+    dy = (
+        spsi * cth * u
+        + (cpsi * cphi + sphi * sth * spsi) * v
+        + (-cpsi * sphi + sth * spsi * cphi) * w
+    )
+    dz = -sth * u + cth * sphi * v + cth * cphi * w
+    turn = q * sphi + r * cphi
+    dphi = p + turn * sth / cth
+    dtheta = q * cphi - r * sphi
+    dpsi = turn / cth
+    # The virtual point's law reads the along-track error x_e, which the body x-axis alone
+    # fixes: roll does not enter it (docs/model.md §15).
+    px, py, pz, dpx, dpy, dpz, _, _, _ = path_eval(kind, pdata, st[12])
+    x_e, _, _ = body_errors_trig(st[0] - px, st[1] - py, st[2] - pz, cth, sth, cpsi, spsi)
+    s_dot = virtual_point_speed(x_e, u_d, sigma) / math.sqrt(dpx * dpx + dpy * dpy + dpz * dpz)
+    return (
+        dx + current[0],
+        dy + current[1],
+        dz + current[2],
+        dphi,
+        dtheta,
+        dpsi,
+        du,
+        dv,
+        dw,
+        dp,
+        dq,
+        dr,
+        s_dot,
+    )
+
+
+@njit(cache=True, inline="always")
+def _stage(st, h, k):
+    """st + h·k on 13-tuples."""
+    return (
+        st[0] + h * k[0],
+        st[1] + h * k[1],
+        st[2] + h * k[2],
+        st[3] + h * k[3],
+        st[4] + h * k[4],
+        st[5] + h * k[5],
+        st[6] + h * k[6],
+        st[7] + h * k[7],
+        st[8] + h * k[8],
+        st[9] + h * k[9],
+        st[10] + h * k[10],
+        st[11] + h * k[11],
+        st[12] + h * k[12],
+    )
+
+
+@njit(cache=True, inline="always")
+def _weighted(k1, k2, k3, k4):
+    """k1 + 2 k2 + 2 k3 + k4 on 13-tuples."""
+    return (
+        k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0],
+        k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1],
+        k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2],
+        k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3],
+        k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4],
+        k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5],
+        k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6],
+        k1[7] + 2.0 * k2[7] + 2.0 * k3[7] + k4[7],
+        k1[8] + 2.0 * k2[8] + 2.0 * k3[8] + k4[8],
+        k1[9] + 2.0 * k2[9] + 2.0 * k3[9] + k4[9],
+        k1[10] + 2.0 * k2[10] + 2.0 * k3[10] + k4[10],
+        k1[11] + 2.0 * k2[11] + 2.0 * k3[11] + k4[11],
+        k1[12] + 2.0 * k2[12] + 2.0 * k3[12] + k4[12],
+    )
+
+
+@njit(cache=True, inline="always")
+def six_dof_rk4(st, tau, f, current, h, kind, pdata, u_d, sigma, dt):
+    """One classical RK4 step of `six_dof_derivative` over dt [s], τ, f and the current held."""
+    k1 = six_dof_derivative(st, tau, f, current, h, kind, pdata, u_d, sigma)
+    k2 = six_dof_derivative(_stage(st, 0.5 * dt, k1), tau, f, current, h, kind, pdata, u_d, sigma)
+    k3 = six_dof_derivative(_stage(st, 0.5 * dt, k2), tau, f, current, h, kind, pdata, u_d, sigma)
+    k4 = six_dof_derivative(_stage(st, dt, k3), tau, f, current, h, kind, pdata, u_d, sigma)
+    return _stage(st, dt / 6.0, _weighted(k1, k2, k3, k4))
