@@ -13,7 +13,8 @@ as one `auv-gym suite` per plant (``OUT/<group>_<plant>/``, resumable chunk by c
 tables come from their episodes.csv files:
 
 * ``transfer.csv`` — one row per (group, policy, set and "aggregate"): per plant the mean score
-  [m] with its 95 % bootstrap interval over training seeds and episodes (`stats.mean_interval`;
+  [m] with its 95 % bootstrap interval over runs and episode seeds (`stats.mean_interval`; the
+  agents are the shipped reference agents, one training seed each;
   a failed episode scores the set's corridor, as in the suite's statistics), failures, and the
   largest roll angle [deg] of the 6-DOF episodes; the ratio of the means 6-DOF / 5-DOF.
 * ``transfer.md`` — the same as a table, and the targets: the best classical policy of each
@@ -47,7 +48,6 @@ __all__ = ["GROUPS", "Group", "main", "transfer_rows"]
 
 PLANTS = ("5dof", "6dof")
 AGGREGATE = "aggregate"
-_SEEDS = Path("benchmarks/results/seeds")
 
 
 @dataclass(frozen=True)
@@ -76,8 +76,8 @@ GROUPS = {
             "fbsm_colos",
             "backstepping",
             "backstepping_colos",
-            f"ppo_generalist={_SEEDS / 'ppo_generalist'}",
-            f"ppo_residual={_SEEDS / 'ppo_residual'}",
+            "ppo_generalist",
+            "ppo_residual",
             "ppo_helix",
             "sac_helix",
         ),
@@ -224,10 +224,11 @@ def _markdown(rows: Sequence[Mapping[str, Any]], goals: Sequence[Mapping], max_r
     out = io.StringIO()
     out.write("# Transfer from the 5-DOF plant to the 6-DOF plant\n\n")
     out.write(
-        "Mean score [m] (RMS distance to the virtual point; a failed episode scores the "
-        "corridor) with 95 % bootstrap intervals over training seeds and episodes; failures "
-        "of episodes; the largest |roll| of the 6-DOF episodes (median of the episodes' "
-        "largest). Policies unchanged: designed or trained on the 5-DOF.\n\n"
+        "Mean score [m] (RMS distance to the virtual point over t ≥ 100 s; a failed episode "
+        "scores the corridor) with 95 % bootstrap intervals over episode seeds (one run per "
+        "classical controller and per shipped agent); failed episodes; the largest |roll| of "
+        "the 6-DOF episodes (median of the episodes' largest). Policies unchanged: designed or "
+        "trained on the 5-DOF.\n\n"
     )
     out.write(f"## Targets (6-DOF mean ≤ {max_ratio} × 5-DOF mean, no failure)\n\n")
     out.write("| group | role | policy | 5-DOF | 6-DOF | ratio | failures 6-DOF | met |\n")
