@@ -262,6 +262,7 @@ def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkey
         (["--policies", "fbsm", "--workers", "0"], "--workers must be an integer in [1, 1024]"),
         (["--policies", "fbsm", "--reps", "10"], "--reps must be an integer >= 100"),
         (["--policies", "fbsm", "--stats-only"], "episodes.csv does not exist"),
+        (["--policies", "fbsm", "--plant", "7dof"], "unknown --plant '7dof'; valid: ['5dof'"),
     ]
     for extra, message in cases:
         err = usage_error(capsys, [*base, *extra])

@@ -69,7 +69,7 @@ def test_a_vehicle_record_round_trips_and_names_what_is_wrong():
     incomplete = {k: v for k, v in record.items() if k != "hull_drag_coeff"}
     with pytest.raises(ValueError, match=r"missing the coefficient\(s\) \['hull_drag_coeff'\]"):
         SixDofVehicle.from_record(incomplete)
-    with pytest.raises(ValueError, match="plant_params.*'fin_size'"):
+    with pytest.raises(ValueError, match=r"plant_params.*'fin_size'"):
         SixDofVehicle.from_record({**record, "fin_size": 1.0})
     with pytest.raises(ValueError, match="diameter"):
         SixDofVehicle(diameter=2.0)
@@ -112,7 +112,7 @@ def test_the_6dof_env_is_deterministic_and_matches_the_vector_env():
     np.testing.assert_array_equal(obs[0], first[0])
     for k in range(1, 41):
         action = np.array([0.6, 0.1 * math.sin(0.05 * (k - 1)), 0.3])
-        obs, *_ , vinfo = vector.step(np.stack([action, action]))
+        obs, *_, vinfo = vector.step(np.stack([action, action]))
         np.testing.assert_array_equal(obs[0], first[k])
     assert vinfo["phi"][0] == infos[40]["phi"]
 
@@ -157,3 +157,15 @@ def test_a_6dof_rollout_reports_its_maximum_roll():
         assert compute_metrics(trajectory)["max_roll"] == np.abs(trajectory.extras["roll"]).max()
     five = rollouts(controllers.make("fbsm_colos"), [0], max_time=30.0)[0]
     assert "max_roll" not in compute_metrics(five)
+
+
+def test_a_policy_whose_observation_does_not_fit_is_named():
+    """The observation layout is the same on both plants; an exported agent built for another
+    layout is refused on the 6-DOF plant as on the 5-DOF, in one line naming both."""
+    pytest.importorskip("onnxruntime")
+    from benchmarks.catalog.policies import AGENTS_DIR
+
+    graph = AGENTS_DIR / "ppo_generalist" / "policy.onnx"
+    with pytest.raises(ValueError, match=r"observations of 49 values.*the env gives 15") as caught:
+        controllers.make("onnx", path=str(graph), env={"plant": "6dof"})
+    assert "\n" not in str(caught.value)

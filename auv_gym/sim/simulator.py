@@ -12,7 +12,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.extending import overload
 
 from auv_gym.ocean.disturbances import (
     KEY,
@@ -58,6 +59,139 @@ from auv_gym.vehicle.params import N_PARAMS
 __all__ = ["Simulator"]
 
 
+def _advance_plant(
+    i,
+    state,
+    roll,
+    hull,
+    cur,
+    act,
+    a,
+    p,
+    noise_key,
+    current_key,
+    n,
+    kind,
+    pdata,
+    cfg,
+    guid,
+    obs,
+    record,
+    ocean,
+):
+    """Advance vehicle i one control period on its plant (compiled: `_advance_plant_kernel`)."""
+    raise NotImplementedError("compiled only")
+
+
+@overload(_advance_plant, inline="always")
+def _advance_plant_kernel(
+    i,
+    state,
+    roll,
+    hull,
+    cur,
+    act,
+    a,
+    p,
+    noise_key,
+    current_key,
+    n,
+    kind,
+    pdata,
+    cfg,
+    guid,
+    obs,
+    record,
+    ocean,
+):
+    """The plant is chosen when the kernel is compiled, by the type of ``hull``: None compiles
+    the 5-DOF kernel, with no 6-DOF code in it (a plant that is off costs nothing), an array
+    the 6-DOF one. Each is cached on its own."""
+    if isinstance(hull, types.NoneType):
+
+        def five_dof(
+            i,
+            state,
+            roll,
+            hull,
+            cur,
+            act,
+            a,
+            p,
+            noise_key,
+            current_key,
+            n,
+            kind,
+            pdata,
+            cfg,
+            guid,
+            obs,
+            record,
+            ocean,
+        ):
+            advance_vehicle(
+                state[i],
+                cur,
+                act,
+                a,
+                p,
+                noise_key,
+                current_key,
+                n,
+                kind,
+                pdata,
+                cfg,
+                guid,
+                obs,
+                record,
+                ocean,
+            )
+
+        return five_dof
+
+    def six_dof(
+        i,
+        state,
+        roll,
+        hull,
+        cur,
+        act,
+        a,
+        p,
+        noise_key,
+        current_key,
+        n,
+        kind,
+        pdata,
+        cfg,
+        guid,
+        obs,
+        record,
+        ocean,
+    ):
+        advance_six_dof(
+            state[i],
+            roll[i],
+            cur,
+            act,
+            a,
+            p,
+            hull[i],
+            noise_key,
+            current_key,
+            n,
+            kind,
+            pdata,
+            cfg,
+            guid,
+            obs,
+            record,
+            ocean,
+        )
+
+    return six_dof
+
+
 @njit(cache=True, inline="always")
 def _step_row(
     i,
@@ -87,51 +221,33 @@ def _step_row(
     hull,
 ):
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
-    config and task are row ``row[i]`` of the episode table (`Simulator`); the 6-DOF plant
-    when ``hull`` has columns (its roll state in ``roll``), else the 5-DOF."""
+    config and task are row ``row[i]`` of the episode table (`Simulator`); ``roll`` and ``hull``
+    are the 6-DOF plant's arrays, None for the 5-DOF (`_advance_plant`)."""
     a = actions[i]
     for j in range(3):  # documented actuator saturation: |a_j| <= 1
         a[j] = min(max(a[j], -1.0), 1.0)
     r = row[i]
     cfg = cfgs[r]
-    if hull.shape[1]:
-        advance_six_dof(
-            state[i],
-            roll[i],
-            current[i],
-            act[i],
-            a,
-            params[i],
-            hull[i],
-            keys[i, KEY.noise],
-            keys[i, KEY.current],
-            step_index[i],
-            kinds[r],
-            pdata[r],
-            cfg,
-            guid[i],
-            obs[i],
-            record[i],
-            ocean[i],
-        )
-    else:
-        advance_vehicle(
-            state[i],
-            current[i],
-            act[i],
-            a,
-            params[i],
-            keys[i, KEY.noise],
-            keys[i, KEY.current],
-            step_index[i],
-            kinds[r],
-            pdata[r],
-            cfg,
-            guid[i],
-            obs[i],
-            record[i],
-            ocean[i],
-        )
+    _advance_plant(
+        i,
+        state,
+        roll,
+        hull,
+        current[i],
+        act[i],
+        a,
+        params[i],
+        keys[i, KEY.noise],
+        keys[i, KEY.current],
+        step_index[i],
+        kinds[r],
+        pdata[r],
+        cfg,
+        guid[i],
+        obs[i],
+        record[i],
+        ocean[i],
+    )
     step_index[i] += int(config_record(cfg).n_sub)
     reward[i], code[i] = task_row(
         state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r], terms[i]
@@ -377,6 +493,8 @@ class Simulator:
         six_dof = config.plant == SIX_DOF_PLANT
         self._nominal_hull = config.plant_params.kernel_vector() if six_dof else np.zeros(0)
         self.hull = np.tile(self._nominal_hull, (n, 1))
+        # What the kernels get: None for the 5-DOF selects its kernel (`_advance_plant`).
+        self._plant_arrays = (self.roll, self.hull) if six_dof else (None, None)
         # Waves and profiled current per vehicle (`ocean.ocean_row`); all zero without them.
         self.ocean = np.zeros((n, ocean_width(config.waves)))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
@@ -614,8 +732,7 @@ class Simulator:
             self.code,
             self.cost,
             self.ocean,
-            self.roll,
-            self.hull,
+            *self._plant_arrays,
         )
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
