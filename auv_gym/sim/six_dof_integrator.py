@@ -54,7 +54,9 @@ ROLL_DIM = len(ROLL_NAMES)
 ROLL = field_indices("RollIndex", ROLL_NAMES, __name__)
 
 
-@njit(cache=True, inline="always")
+# Not inlined: the kernels call it, so its large body is compiled once and not into each kernel
+# (the threaded kernel's compilation grows steeply with the size of its loop body).
+@njit(cache=True)
 def advance_six_dof(
     st,
     roll,

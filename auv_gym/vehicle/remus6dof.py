@@ -258,7 +258,7 @@ class SixDofVehicle:
         for axis, value in zip("uvwpqr", np.diag(self.damping_base), strict=True):
             values[f"damping_{axis}"] = value
         for name, matrix in (
-            ("rigid", self.rigid_body),
+            ("mass", self.rigid_body + self.added_mass),
             ("added", self.added_mass),
             ("inverse_mass", self.inverse_mass),
         ):

@@ -10,9 +10,9 @@ in ν_r (Fossen 2021 §10.3; for a uniform current they are the reference's ν̇
     ṗ_n = R(φ, θ, ψ) (u, v, w) + v_c,     (φ̇, θ̇, ψ̇) = T(φ, θ) (p, q, r)
 
 The hull's numbers are one float64 row per vehicle (`SixDofVehicle.kernel_vector`, layout
-`SIX_DOF_FIELDS`): M_RB, M_A and M⁻¹ as full 6×6 blocks (a user's vehicle may put its centre
-of gravity anywhere), then the scalars. `six_dof_nu_dot` is checked against numbers recorded
-from the reference implementation (tests/test_six_dof_plant.py, ≤ 1e-9 relative).
+`SIX_DOF_FIELDS`): M = M_RB + M_A, M_A and M⁻¹ as full 6×6 blocks (a user's vehicle may put
+its centre of gravity anywhere), then the scalars. `six_dof_nu_dot` is checked against numbers
+recorded from the reference implementation (tests/test_six_dof_plant.py, ≤ 1e-9 relative).
 """
 
 from __future__ import annotations
@@ -43,7 +43,8 @@ SIX_DOF_STATE_NAMES = ("x", "y", "z", "phi", "theta", "psi", "u", "v", "w", "p",
 SIX_DOF_STATE_DIM = len(SIX_DOF_STATE_NAMES)
 SIX_DOF_STATE = field_indices("SixDofStateIndex", SIX_DOF_STATE_NAMES, __name__)
 
-_MATRICES = ("rigid", "added", "inverse_mass")  # M_RB, M_A, M⁻¹: 36 entries each, row-major
+# M = M_RB + M_A, M_A, M⁻¹: 36 entries each, row-major
+_MATRICES = ("mass", "added", "inverse_mass")
 SIX_DOF_FIELDS = (
     *(f"{name}_{i}{j}" for name in _MATRICES for i in range(6) for j in range(6)),
     *(f"damping_{axis}" for axis in ("u", "v", "w", "p", "q", "r")),  # [N·s/m, N·m·s] at U = 0
@@ -68,7 +69,7 @@ SIX_DOF_FIELDS = (
     "propeller_torque_scale",  # [-] share of the shaft torque felt in roll
 )
 SIX_DOF = field_indices("SixDofIndex", SIX_DOF_FIELDS, __name__)
-_RIGID, _ADDED, _INVERSE = SIX_DOF.rigid_00, SIX_DOF.added_00, SIX_DOF.inverse_mass_00
+_MASS, _ADDED, _INVERSE = SIX_DOF.mass_00, SIX_DOF.added_00, SIX_DOF.inverse_mass_00
 
 
 @njit(cache=True, inline="always")
@@ -115,6 +116,31 @@ def _matvec(h, offset, x):
 
 
 @njit(cache=True, inline="always")
+def _matvec3(h, offset, x):
+    """The first three rows of `_matvec`."""
+    return (
+        h[offset + 0] * x[0]
+        + h[offset + 1] * x[1]
+        + h[offset + 2] * x[2]
+        + h[offset + 3] * x[3]
+        + h[offset + 4] * x[4]
+        + h[offset + 5] * x[5],
+        h[offset + 6] * x[0]
+        + h[offset + 7] * x[1]
+        + h[offset + 8] * x[2]
+        + h[offset + 9] * x[3]
+        + h[offset + 10] * x[4]
+        + h[offset + 11] * x[5],
+        h[offset + 12] * x[0]
+        + h[offset + 13] * x[1]
+        + h[offset + 14] * x[2]
+        + h[offset + 15] * x[3]
+        + h[offset + 16] * x[4]
+        + h[offset + 17] * x[5],
+    )
+
+
+@njit(cache=True, inline="always")
 def _cross(a0, a1, a2, b0, b1, b2):
     """a × b."""
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
@@ -131,23 +157,71 @@ def _coriolis_product(mv, nu):
 
 
 @njit(cache=True, inline="always")
-def six_dof_hull_forces(nu_r, phi, theta, h):
-    """The hull's generalized forces [N, N·m] at ν_r, roll φ and pitch θ [rad]: lift and drag,
-    cross-flow drag, −(C_RB + C_A + D) ν_r and −g(η) (module doc; docs/model.md §15)."""
+def _power_sums(first, last):
+    """(Σk⁰, Σk¹, Σk², Σk³) over the whole numbers k = first … last (none if last < first)."""
+    if last < first:
+        return 0.0, 0.0, 0.0, 0.0
+    lo, hi = first - 1.0, float(last)
+    s1 = 0.5 * (hi * (hi + 1.0) - lo * (lo + 1.0))
+    s2 = (hi * (hi + 1.0) * (2.0 * hi + 1.0) - lo * (lo + 1.0) * (2.0 * lo + 1.0)) / 6.0
+    s3 = 0.25 * ((hi * (hi + 1.0)) ** 2 - (lo * (lo + 1.0)) ** 2)
+    return hi - lo, s1, s2, s3
+
+
+@njit(cache=True, inline="always")
+def _signed_sums(a, b, x0, dx, first, last):
+    """Σ (a + b k)² dx and Σ (a + b k)² (x0 + dx k) dx over k = first … last."""
+    n0, n1, n2, n3 = _power_sums(first, last)
+    quad0 = a * a * n0 + 2.0 * a * b * n1 + b * b * n2  # Σ (a + bk)²
+    quad1 = a * a * n1 + 2.0 * a * b * n2 + b * b * n3  # Σ k (a + bk)²
+    return quad0 * dx, (x0 * quad0 + dx * quad1) * dx
+
+
+@njit(cache=True, inline="always")
+def _crossflow(v, r, h):
+    """Cross-flow sway force [N] and yaw moment [N·m] by strip theory (docs/model.md §15):
+    the reference's sum over its strips + 1 stations x_k = −L/2 + k·dx of
+    −½ρ d C_D,2D |v + x_k r|(v + x_k r) dx (and × x_k), in closed form: the flow a + b·k is
+    linear in k, so each side of its sign change is a sum of k⁰ … k³."""
+    stations = int(h[SIX_DOF.strips])
+    length = h[SIX_DOF.length]
+    dx = length / stations
+    x0 = -0.5 * length
+    gain = -0.5 * h[SIX_DOF.water_density] * h[SIX_DOF.diameter] * h[SIX_DOF.crossflow_coeff]
+    a, b = v + x0 * r, dx * r  # the flow at station k: a + b·k [m/s]
+    if b > 0.0:  # negative flow below the crossing, positive from it on
+        split = min(max(math.ceil(-a / b), 0), stations + 1)
+        neg = _signed_sums(a, b, x0, dx, 0, split - 1)
+        pos = _signed_sums(a, b, x0, dx, split, stations)
+    elif b < 0.0:
+        split = min(max(math.floor(-a / b) + 1, 0), stations + 1)
+        pos = _signed_sums(a, b, x0, dx, 0, split - 1)
+        neg = _signed_sums(a, b, x0, dx, split, stations)
+    elif a >= 0.0:
+        pos, neg = _signed_sums(a, b, x0, dx, 0, stations), (0.0, 0.0)
+    else:
+        pos, neg = (0.0, 0.0), _signed_sums(a, b, x0, dx, 0, stations)
+    return gain * (pos[0] - neg[0]), gain * (pos[1] - neg[1])
+
+
+@njit(cache=True, inline="always")
+def six_dof_hull_forces(nu_r, sin_phi, cos_phi, sin_theta, cos_theta, h):
+    """The hull's generalized forces [N, N·m] at ν_r, given sin and cos of roll φ and pitch θ:
+    lift and drag, cross-flow drag, −(C_RB + C_A + D) ν_r and −g(η) (module doc; docs/model.md
+    §15)."""
     u, v, w, p, q, r = nu_r
     # Rigid-body and added-mass Coriolis; C_A without the Munk moments in pitch and yaw: the
     # entries (5,1), (5,3), (6,1), (6,2) of C_A and their transposes (1-based) are removed.
-    c_rb = _coriolis_product(_matvec(h, _RIGID, nu_r), nu_r)
-    ma = _matvec(h, _ADDED, nu_r)
-    c_a = _coriolis_product(ma, nu_r)
-    ax, ay, az = ma[0], ma[1], ma[2]
+    # C(M) ν is linear in M, so C_RB + C_A is C of M_RB + M_A: one product.
+    c = _coriolis_product(_matvec(h, _MASS, nu_r), nu_r)
+    ax, ay, az = _matvec3(h, _ADDED, nu_r)  # the linear part of M_A ν
     coriolis = (
-        c_rb[0] + c_a[0] - (az * q - ay * r),
-        c_rb[1] + c_a[1] - ax * r,
-        c_rb[2] + c_a[2] + ax * q,
-        c_rb[3] + c_a[3],
-        c_rb[4] + c_a[4] - (ax * w - az * u),
-        c_rb[5] + c_a[5] - (ay * u - ax * v),
+        c[0] - (az * q - ay * r),
+        c[1] - ax * r,
+        c[2] + ax * q,
+        c[3],
+        c[4] - (ax * w - az * u),
+        c[5] - (ay * u - ax * v),
     )
     speed = math.sqrt(u * u + v * v + w * w)  # U_r [m/s]
     fade = math.exp(-h[SIX_DOF.speed_decay] * speed)
@@ -165,21 +239,11 @@ def six_dof_hull_forces(nu_r, phi, theta, h):
     drag_coeff = h[SIX_DOF.zero_lift_drag] + h[SIX_DOF.induced_drag] * lift_coeff * lift_coeff
     pressure = 0.5 * h[SIX_DOF.water_density] * speed * speed * h[SIX_DOF.wing_area]
     drag, lift = pressure * drag_coeff, pressure * lift_coeff
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    # Cross-flow drag by strip theory: the reference's sum over strips + 1 stations × dx.
-    stations = int(h[SIX_DOF.strips])
-    length = h[SIX_DOF.length]
-    dx = length / stations
-    gain = -0.5 * h[SIX_DOF.water_density] * h[SIX_DOF.diameter] * h[SIX_DOF.crossflow_coeff]
-    sway_cf = yaw_cf = 0.0
-    for k in range(stations + 1):
-        x = -0.5 * length + dx * k
-        flow = v + x * r
-        strip = gain * abs(flow) * flow * dx
-        sway_cf += strip
-        yaw_cf += strip * x
+    axial = math.sqrt(u * u + w * w)  # cos α, sin α without the trigonometry
+    ca, sa = (u / axial, w / axial) if axial > 0.0 else (1.0, 0.0)
+    sway_cf, yaw_cf = _crossflow(v, r, h)
     # Restoring forces and moments g(η) of W at r_g and B at r_b.
-    sth, cth, sphi, cphi = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
+    sth, cth, sphi, cphi = sin_theta, cos_theta, sin_phi, cos_phi
     weight, buoyancy = h[SIX_DOF.weight], h[SIX_DOF.buoyancy]
     net = weight - buoyancy
     gx = h[SIX_DOF.x_g] * weight - h[SIX_DOF.x_b] * buoyancy
@@ -206,7 +270,13 @@ def six_dof_hull_forces(nu_r, phi, theta, h):
 @njit(cache=True, inline="always")
 def six_dof_nu_dot(nu_r, phi, theta, tau, h):
     """ν̇_r = M⁻¹ (τ + hull forces) [m/s², rad/s²] for generalized forces τ (6,) [N, N·m]."""
-    hull = six_dof_hull_forces(nu_r, phi, theta, h)
+    return _nu_dot(nu_r, math.sin(phi), math.cos(phi), math.sin(theta), math.cos(theta), tau, h)
+
+
+@njit(cache=True, inline="always")
+def _nu_dot(nu_r, sin_phi, cos_phi, sin_theta, cos_theta, tau, h):
+    """`six_dof_nu_dot` given the sines and cosines of φ and θ (the derivative shares them)."""
+    hull = six_dof_hull_forces(nu_r, sin_phi, cos_phi, sin_theta, cos_theta, h)
     total = (
         tau[0] + hull[0],
         tau[1] + hull[1],
@@ -246,9 +316,9 @@ def six_dof_derivative(st, tau, f, current, h, kind, pdata, u_d, sigma):
         tau[4] + f[3],
         tau[5] + f[4],
     )
-    du, dv, dw, dp, dq, dr = six_dof_nu_dot(nu, phi, theta, forces, h)
     cphi, sphi = math.cos(phi), math.sin(phi)
     cth, sth = math.cos(theta), math.sin(theta)
+    du, dv, dw, dp, dq, dr = _nu_dot(nu, sphi, cphi, sth, cth, forces, h)
     cpsi, spsi = math.cos(psi), math.sin(psi)
     u, v, w, p, q, r = nu
     # ṗ_n = R(φ, θ, ψ) (u, v, w), Fossen's zyx convention; (φ̇, θ̇, ψ̇) = T(φ, θ)(p, q, r).

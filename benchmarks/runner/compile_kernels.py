@@ -73,10 +73,19 @@ def compile_kernels(progress: bool = True) -> float:
         envs.reset(seed=0)
         envs.step(np.zeros((2, 3), dtype=dtype))
         envs.close()
-        env = gym.make("AUVPath3D-v0")
-        env.reset(seed=0)
-        env.step(np.zeros(3, dtype=dtype))
-        env.close()
+        for plant in ("5dof", "6dof"):  # the 6-DOF plant's kernels are their own
+            env = gym.make("AUVPath3D-v0", plant=plant)
+            env.reset(seed=0)
+            env.step(np.zeros(3, dtype=dtype))
+            env.close()
+    # The 6-DOF plant in a batch and on the vehicle as built (the suite's --plant, the tests).
+    as_built = {"disturbance": "ocean", "actuator": "realistic", "sensors": "typical_kalman"}
+    for env in ({"plant": "6dof"}, {"plant": "6dof", **as_built}):
+        envs = gym.make_vec("AUVPath3D-v0", num_envs=2, **env)
+        envs.reset(seed=0)
+        envs.step(np.zeros((2, 3)))
+        envs.close()
+        evaluate(controllers.make("pid_los", env=env), [0], transient=0.0, max_time=1.0, **env)
     if bar is not None:
         bar.update()
         bar.close()
