@@ -143,7 +143,7 @@ def test_full_precision_and_the_same_episodes_as_compare(tiny, tmp_path):
     job = Job("fbsm", load_scenarios()["fins"], 3, 10.0, 5.0)
     metrics = run_job(job, tmp_path)["metrics"]
     for column, key in suite_module.METRICS.items():
-        expected = metrics[key]
+        expected = metrics.get(key, math.nan)  # max_roll: the 6-DOF plant's only
         assert mine[column] == (repr(expected) if isinstance(expected, float) else str(expected))
 
 

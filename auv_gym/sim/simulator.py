@@ -79,8 +79,46 @@ def _advance_plant(
     record,
     ocean,
 ):
-    """Advance vehicle i one control period on its plant (compiled: `_advance_plant_kernel`)."""
-    raise NotImplementedError("compiled only")
+    """Advance vehicle i one control period on its plant: the 5-DOF when ``hull`` is None, else
+    the 6-DOF. Compiled through `_advance_plant_kernel`; this body runs with the JIT off."""
+    if hull is None:
+        advance_vehicle(
+            state[i],
+            cur,
+            act,
+            a,
+            p,
+            noise_key,
+            current_key,
+            n,
+            kind,
+            pdata,
+            cfg,
+            guid,
+            obs,
+            record,
+            ocean,
+        )
+    else:
+        advance_six_dof(
+            state[i],
+            roll[i],
+            cur,
+            act,
+            a,
+            p,
+            hull[i],
+            noise_key,
+            current_key,
+            n,
+            kind,
+            pdata,
+            cfg,
+            guid,
+            obs,
+            record,
+            ocean,
+        )
 
 
 @overload(_advance_plant, inline="always")
