@@ -59,7 +59,7 @@ from auv_gym.vehicle.params import N_PARAMS
 __all__ = ["Simulator"]
 
 
-def _advance_plant(
+def _five_dof_row(
     i,
     state,
     roll,
@@ -79,46 +79,71 @@ def _advance_plant(
     record,
     ocean,
 ):
+    advance_vehicle(
+        state[i],
+        cur,
+        act,
+        a,
+        p,
+        noise_key,
+        current_key,
+        n,
+        kind,
+        pdata,
+        cfg,
+        guid,
+        obs,
+        record,
+        ocean,
+    )
+
+
+def _six_dof_row(
+    i,
+    state,
+    roll,
+    hull,
+    cur,
+    act,
+    a,
+    p,
+    noise_key,
+    current_key,
+    n,
+    kind,
+    pdata,
+    cfg,
+    guid,
+    obs,
+    record,
+    ocean,
+):
+    advance_six_dof(
+        state[i],
+        roll[i],
+        cur,
+        act,
+        a,
+        p,
+        hull[i],
+        noise_key,
+        current_key,
+        n,
+        kind,
+        pdata,
+        cfg,
+        guid,
+        obs,
+        record,
+        ocean,
+    )
+
+
+def _advance_plant(i, state, roll, hull, *period):
     """Advance vehicle i one control period on its plant: the 5-DOF when ``hull`` is None, else
-    the 6-DOF. Compiled through `_advance_plant_kernel`; this body runs with the JIT off."""
-    if hull is None:
-        advance_vehicle(
-            state[i],
-            cur,
-            act,
-            a,
-            p,
-            noise_key,
-            current_key,
-            n,
-            kind,
-            pdata,
-            cfg,
-            guid,
-            obs,
-            record,
-            ocean,
-        )
-    else:
-        advance_six_dof(
-            state[i],
-            roll[i],
-            cur,
-            act,
-            a,
-            p,
-            hull[i],
-            noise_key,
-            current_key,
-            n,
-            kind,
-            pdata,
-            cfg,
-            guid,
-            obs,
-            record,
-            ocean,
-        )
+    the 6-DOF (``period``: the arguments of `integrator.advance_vehicle` after the state).
+    Compiled through `_advance_plant_kernel`; this body runs with the JIT off."""
+    (_five_dof_row if hull is None else _six_dof_row)(i, state, roll, hull, *period)
 
 
 @overload(_advance_plant, inline="always")
@@ -145,89 +170,7 @@ def _advance_plant_kernel(
     """The plant is chosen when the kernel is compiled, by the type of ``hull``: None compiles
     the 5-DOF kernel, with no 6-DOF code in it (a plant that is off costs nothing), an array
     the 6-DOF one. Each is cached on its own."""
-    if isinstance(hull, types.NoneType):
-
-        def five_dof(
-            i,
-            state,
-            roll,
-            hull,
-            cur,
-            act,
-            a,
-            p,
-            noise_key,
-            current_key,
-            n,
-            kind,
-            pdata,
-            cfg,
-            guid,
-            obs,
-            record,
-            ocean,
-        ):
-            advance_vehicle(
-                state[i],
-                cur,
-                act,
-                a,
-                p,
-                noise_key,
-                current_key,
-                n,
-                kind,
-                pdata,
-                cfg,
-                guid,
-                obs,
-                record,
-                ocean,
-            )
-
-        return five_dof
-
-    def six_dof(
-        i,
-        state,
-        roll,
-        hull,
-        cur,
-        act,
-        a,
-        p,
-        noise_key,
-        current_key,
-        n,
-        kind,
-        pdata,
-        cfg,
-        guid,
-        obs,
-        record,
-        ocean,
-    ):
-        advance_six_dof(
-            state[i],
-            roll[i],
-            cur,
-            act,
-            a,
-            p,
-            hull[i],
-            noise_key,
-            current_key,
-            n,
-            kind,
-            pdata,
-            cfg,
-            guid,
-            obs,
-            record,
-            ocean,
-        )
-
-    return six_dof
+    return _five_dof_row if isinstance(hull, types.NoneType) else _six_dof_row
 
 
 @njit(cache=True, inline="always")

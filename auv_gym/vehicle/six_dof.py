@@ -73,8 +73,9 @@ _MASS, _ADDED, _INVERSE = SIX_DOF.mass_00, SIX_DOF.added_00, SIX_DOF.inverse_mas
 
 
 @njit(cache=True, inline="always")
-def _matvec(h, offset, x):
-    """The 6×6 row-major block at ``offset`` of ``h`` times the 6-tuple x."""
+def _matvec3(h, offset, x):
+    """The first three rows of the 6×6 row-major block at ``offset`` of ``h`` times the
+    6-tuple x (`_matvec`)."""
     return (
         h[offset + 0] * x[0]
         + h[offset + 1] * x[1]
@@ -94,50 +95,13 @@ def _matvec(h, offset, x):
         + h[offset + 15] * x[3]
         + h[offset + 16] * x[4]
         + h[offset + 17] * x[5],
-        h[offset + 18] * x[0]
-        + h[offset + 19] * x[1]
-        + h[offset + 20] * x[2]
-        + h[offset + 21] * x[3]
-        + h[offset + 22] * x[4]
-        + h[offset + 23] * x[5],
-        h[offset + 24] * x[0]
-        + h[offset + 25] * x[1]
-        + h[offset + 26] * x[2]
-        + h[offset + 27] * x[3]
-        + h[offset + 28] * x[4]
-        + h[offset + 29] * x[5],
-        h[offset + 30] * x[0]
-        + h[offset + 31] * x[1]
-        + h[offset + 32] * x[2]
-        + h[offset + 33] * x[3]
-        + h[offset + 34] * x[4]
-        + h[offset + 35] * x[5],
     )
 
 
 @njit(cache=True, inline="always")
-def _matvec3(h, offset, x):
-    """The first three rows of `_matvec`."""
-    return (
-        h[offset + 0] * x[0]
-        + h[offset + 1] * x[1]
-        + h[offset + 2] * x[2]
-        + h[offset + 3] * x[3]
-        + h[offset + 4] * x[4]
-        + h[offset + 5] * x[5],
-        h[offset + 6] * x[0]
-        + h[offset + 7] * x[1]
-        + h[offset + 8] * x[2]
-        + h[offset + 9] * x[3]
-        + h[offset + 10] * x[4]
-        + h[offset + 11] * x[5],
-        h[offset + 12] * x[0]
-        + h[offset + 13] * x[1]
-        + h[offset + 14] * x[2]
-        + h[offset + 15] * x[3]
-        + h[offset + 16] * x[4]
-        + h[offset + 17] * x[5],
-    )
+def _matvec(h, offset, x):
+    """The 6×6 row-major block at ``offset`` of ``h`` times the 6-tuple x."""
+    return _matvec3(h, offset, x) + _matvec3(h, offset + 18, x)
 
 
 @njit(cache=True, inline="always")
