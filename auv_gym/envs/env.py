@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
+from os import PathLike
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -30,6 +31,7 @@ from auv_gym.sim.task import NON_FINITE, RewardWeights
 from auv_gym.support.validation import ArgumentTypeError
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.params import AUVParams
+from auv_gym.vehicle.record import Vehicle
 from auv_gym.vehicle.remus6dof import SixDofVehicle
 from auv_gym.vehicle.sensors import SensorConfig
 
@@ -185,6 +187,12 @@ class AUVPath3DEnv(gym.Env):
     | `surface_above_path` | None | [m] sea surface above the path's shallowest point (§13.8) |
     | `plant` | "5dof" | "5dof" (the paper's model) or "6dof" (with roll, model.md §15) |
     | `plant_params` | REMUS 100 | "6dof" only: `SixDofVehicle` or a complete dict of its fields |
+    | `vehicle` | "remus100" | a shipped name, a `.toml` vehicle file, a dict or a `Vehicle` |
+
+    ``vehicle`` is the data file of the vehicle flown (docs/vehicles.md): its limits, 5-DOF
+    model, propeller and fins, 6-DOF hull and navigation suite. ``params``, ``actuator_params``
+    and ``plant_params`` change parts of it (a dict of ``params`` or ``actuator_params`` replaces
+    the named fields of the vehicle's), ``sensors="vehicle"`` takes the suite it carries.
 
     ``disturbance="ocean"`` is the ocean a REMUS-class vehicle meets in service
     (`auv_gym.ocean.preset`, docs/model.md §16): unmodelled-dynamics noise sized to the fins,
@@ -315,6 +323,7 @@ class AUVPath3DEnv(gym.Env):
         surface_above_path: float | None = None,
         plant: str = "5dof",
         plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
+        vehicle: str | PathLike | Mapping[str, Any] | Vehicle | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path,
@@ -352,6 +361,7 @@ class AUVPath3DEnv(gym.Env):
             surface_above_path=surface_above_path,
             plant=plant,
             plant_params=plant_params,
+            vehicle=vehicle,
         )
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

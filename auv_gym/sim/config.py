@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from os import PathLike
 from typing import Any
 
 import numpy as np
@@ -58,8 +59,15 @@ from auv_gym.sim.task import (
     TaskLimits,
 )
 from auv_gym.support.validation import ArgumentTypeError, choice, flag, real, vector
-from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
-from auv_gym.vehicle.params import AUVParams, params_from_spec, remus100
+from auv_gym.vehicle.actuators import ActuatorParams
+from auv_gym.vehicle.params import AUVParams, remus100
+from auv_gym.vehicle.record import (
+    DEFAULT_VEHICLE,
+    Vehicle,
+    actuators_from,
+    hull_from,
+    load_vehicle,
+)
 from auv_gym.vehicle.remus6dof import REMUS6DOF, SixDofVehicle
 from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
 
@@ -99,6 +107,7 @@ class SimConfig:
 
     # A fixed path, or a `PathDistribution` drawing one per episode (`randomization.draw_task`).
     path: Path | PathDistribution = field(default_factory=lambda: make_path("helix"))
+    vehicle: str = DEFAULT_VEHICLE  # the vehicle's name (its records are the fields below)
     params: AUVParams = field(default_factory=remus100)
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     current: CurrentConfig = field(default_factory=CurrentConfig)
@@ -184,11 +193,15 @@ class SimConfig:
         surface_above_path: float | None = None,
         plant: str = "5dof",
         plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
+        vehicle: str | PathLike | Mapping[str, Any] | Vehicle | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
         argument, its value and the allowed range. ``disturbance="ocean"`` fills the ocean's
-        arguments left at None from `auv_gym.ocean.preset.OCEAN_PRESET`."""
+        arguments left at None from `auv_gym.ocean.preset.OCEAN_PRESET`. ``vehicle`` (a shipped
+        name, a ``.toml`` file, a mapping or a `Vehicle`; None: REMUS 100) gives the records that
+        ``params``, ``actuator_params``, ``plant_params`` and ``sensors="vehicle"`` start from."""
+        the_vehicle = load_vehicle(vehicle)
         if isinstance(disturbance, str) and disturbance == OCEAN_PRESET_NAME:
             ocean = OCEAN_PRESET
             if noise_hold is not None:
@@ -212,14 +225,14 @@ class SimConfig:
         if isinstance(the_path, Path):
             the_path, offset = shift_path(the_path, offset), (0.0, 0.0, 0.0)
         s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
-        vehicle = params_from_spec(params)
+        hull = hull_from(the_vehicle, params)
         if isinstance(surge_limit, str):  # the one name: the vehicle record's top speed
             if surge_limit != VEHICLE_TOP_SPEED:
                 raise ValueError(
                     f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
                     f" (params.max_surge), got {surge_limit!r:.80}"
                 )
-            surge_limit = vehicle.max_surge
+            surge_limit = hull.max_surge
         if actuator_params is not None and actuator != "realistic":
             raise ValueError(
                 f"actuator_params configure the propeller and fins of actuator='realistic'; "
@@ -231,18 +244,21 @@ class SimConfig:
                 f"plant_params describe the hull of plant={SIX_DOF_PLANT!r}; with plant="
                 f"{plant!r:.40} they would do nothing: drop them or give plant={SIX_DOF_PLANT!r}"
             )
+        if isinstance(sensors, str) and sensors == "vehicle":
+            sensors = the_vehicle.sensors
         return cls(
+            vehicle=the_vehicle.name,
             plant=plant,
-            plant_params=REMUS6DOF
+            plant_params=the_vehicle.hull_6dof
             if plant_params is None
             else SixDofVehicle.from_record(plant_params),
             path=the_path,
-            params=vehicle,
+            params=hull,
             noise=noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
             param_uncertainty=0.0 if param_uncertainty is None else param_uncertainty,
             actuator=actuator,
-            actuator_params=actuator_params_from_spec(actuator_params),
+            actuator_params=actuators_from(the_vehicle, actuator_params),
             random_current=0.0 if random_current is None else random_current,
             random_noise=random_noise,
             control_dt=control_dt,
@@ -334,6 +350,8 @@ class SimConfig:
                 )
         put("actuator", choice("actuator", self.actuator, [*ACTUATORS, "random"]))
         put("plant", choice("plant", self.plant, PLANTS))
+        if not (isinstance(self.vehicle, str) and self.vehicle):
+            raise ArgumentTypeError(f"vehicle must be a vehicle's name, got {self.vehicle!r:.80}")
         put(
             "random_current",
             real("random_current", self.random_current, 0.0, MAX_RANDOM_CURRENT, unit="m/s"),

@@ -3,7 +3,9 @@
 - `params`: `AUVParams` (REMUS 100 by default, `remus100`) and its packed form for the kernels;
 - `dynamics`: the equations of motion and the virtual point's ṡ (the simulator state `STATE`);
 - `actuators`: `ActuatorParams`, the fin and propeller models and the actuator state;
-- `sensors`: `SensorConfig`, the error model of the navigation suite (DVL, AHRS, depth, fixes).
+- `sensors`: `SensorConfig`, the error model of the navigation suite (DVL, AHRS, depth, fixes);
+- `record`: `Vehicle`, all of the above for one vehicle, read from its TOML file (`load_vehicle`,
+  the shipped files in `data/`).
 
 Imports `auv_gym.support` and `auv_gym.paths` (the state's s is the virtual point's).
 """
@@ -17,6 +19,12 @@ from auv_gym.vehicle.actuators import (
 )
 from auv_gym.vehicle.dynamics import STATE, STATE_DIM, STATE_NAMES
 from auv_gym.vehicle.params import AUVParams, params_from_spec, remus100
+from auv_gym.vehicle.record import (
+    Vehicle,
+    VehicleFileError,
+    load_vehicle,
+    shipped_vehicles,
+)
 from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
 
 __all__ = [
@@ -28,7 +36,11 @@ __all__ = [
     "AUVParams",
     "ActuatorParams",
     "SensorConfig",
+    "Vehicle",
+    "VehicleFileError",
     "actuator_params_from_spec",
+    "load_vehicle",
     "params_from_spec",
     "remus100",
+    "shipped_vehicles",
 ]

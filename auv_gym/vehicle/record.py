@@ -1,0 +1,470 @@
+"""A vehicle as one record, read from a TOML file (docs/vehicles.md).
+
+A `Vehicle` holds everything the simulator needs to know about one AUV: its limits, the paper's
+5-DOF model (`AUVParams`, docs/model.md §2.2), its propeller and fins (`ActuatorParams`, §2.6),
+the 6-DOF hull of Fossen's form (`SixDofVehicle`, §15) and the navigation suite it carries
+(`SensorConfig`, §14). `load_vehicle` builds one from a shipped vehicle's name (the files of
+`auv_gym/vehicle/data/`), a path to a ``.toml`` file, a mapping of the same layout or a
+`Vehicle`; every field is checked when it is read, and a problem is one line naming the file and
+the field (`VehicleFileError`, a ValueError).
+
+The fins are listed one by one (area, lift slope, position, the roll angle of the fin's axis,
+angle limit, servo time constant and rate). The simulator's fin model drives them as two coupled
+pairs, the stern planes (axes horizontal: roll 0 or π) for pitch and the rudders (axes vertical:
+roll ±π/2) for yaw, so a layout is accepted when it reduces exactly to those two pairs;
+`fin_pairs` does that reduction and names the fin that breaks it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym.support.validation import ArgumentTypeError, keys_within, real
+from auv_gym.vehicle.actuators import ActuatorParams
+from auv_gym.vehicle.params import AUVParams
+from auv_gym.vehicle.remus6dof import COEFFICIENTS as HULL_6DOF_FIELDS
+from auv_gym.vehicle.remus6dof import SixDofVehicle
+from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
+
+__all__ = [
+    "DEFAULT_VEHICLE",
+    "FORMAT_VERSION",
+    "VEHICLE_DIRECTORY",
+    "FinSpec",
+    "Vehicle",
+    "VehicleFileError",
+    "actuators_from",
+    "check_mass_matrix",
+    "fin_pairs",
+    "hull_from",
+    "load_vehicle",
+    "shipped_vehicles",
+]
+
+FORMAT_VERSION = 1
+DEFAULT_VEHICLE = "remus100"
+VEHICLE_DIRECTORY = Path(__file__).parent / "data"
+
+# `AUVParams` fields the file keeps in [limits]; the rest of them are [model_5dof], but for
+# `fin_max`, which is the fins' own angle limit (the smaller of the two pairs').
+LIMIT_FIELDS = ("max_surge", "X_max", "M_max", "N_max")
+MODEL_5DOF_FIELDS = tuple(
+    f.name for f in fields(AUVParams) if f.name not in (*LIMIT_FIELDS, "fin_max", "surge_coriolis")
+)
+# `ActuatorParams` fields of [actuators]: the propeller, its motor and the water; the fins'
+# fields (area, lift slope, position, limit, servo) are assembled from [[actuators.fins]].
+PROPULSION_FIELDS = (
+    "water_density",
+    "prop_diameter",
+    "thrust_deduction",
+    "advance_speed_ratio",
+    "kt_0",
+    "kq_0",
+    "kt_max",
+    "kq_max",
+    "advance_max",
+    "rpm_max",
+    "motor_time_constant",
+)
+FIN_FIELDS = (
+    "name",
+    "area",
+    "lift_slope",
+    "x",
+    "axis_roll",
+    "angle_max",
+    "servo_time_constant",
+    "rate_max",
+)
+TOP_LEVEL = ("format", "name", "description", "sources", "surge_coriolis")
+SECTIONS = ("limits", "model_5dof", "actuators", "model_6dof", "sensors")
+# A fin's axis counts as horizontal or vertical when its roll angle is within this of one
+# [rad]: 1e-9 rad moves a 1-m fin's lift line by a nanometre.
+AXIS_TOLERANCE = 1e-9
+
+
+class VehicleFileError(ValueError):
+    """A vehicle file or mapping that cannot describe a vehicle; one line naming the field."""
+
+
+@dataclass(frozen=True)
+class FinSpec:
+    """One control fin (SI): its area A [m²], lift slope C_L [1/rad], position x [m] along the
+    body (aft negative), the roll angle of its axis [rad] (0: a horizontal stern plane, π/2: a
+    vertical rudder), angle limit [rad], servo time constant [s] and rate limit [rad/s]."""
+
+    name: str
+    area: float
+    lift_slope: float
+    x: float
+    axis_roll: float
+    angle_max: float
+    servo_time_constant: float
+    rate_max: float
+
+    @property
+    def pitch_share(self) -> float:
+        """|cos(axis roll)|: the share of the fin's lift that turns the vehicle in pitch."""
+        return abs(math.cos(self.axis_roll))
+
+    @property
+    def yaw_share(self) -> float:
+        """|sin(axis roll)|: the share of the fin's lift that turns the vehicle in yaw."""
+        return abs(math.sin(self.axis_roll))
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """One vehicle: name, limits and models (module doc). ``source`` is the file it was read
+    from ("" for a mapping)."""
+
+    name: str
+    description: str
+    hull_5dof: AUVParams
+    actuators: ActuatorParams
+    fins: tuple[FinSpec, ...]
+    hull_6dof: SixDofVehicle
+    sensors: SensorConfig
+    sources: tuple[str, ...] = ()
+    source: str = ""
+
+    @property
+    def max_surge(self) -> float:
+        """Top speed [m/s]."""
+        return self.hull_5dof.max_surge
+
+
+def shipped_vehicles() -> tuple[str, ...]:
+    """The names of the vehicle files shipped with the package."""
+    return tuple(sorted(p.stem for p in VEHICLE_DIRECTORY.glob("*.toml")))
+
+
+def load_vehicle(spec: str | Path | Mapping[str, Any] | Vehicle | None = None) -> Vehicle:
+    """The vehicle of the env's ``vehicle`` argument: None (REMUS 100), a shipped vehicle's name,
+    a path to a ``.toml`` vehicle file, a mapping of the file's layout, or a `Vehicle`.
+
+    Raises `VehicleFileError` naming the file and the field for a missing, unknown, non-finite
+    or physically impossible value, and ValueError listing the shipped names for an unknown one.
+    """
+    if spec is None:
+        spec = DEFAULT_VEHICLE
+    if isinstance(spec, Vehicle):
+        return spec
+    if isinstance(spec, Mapping):
+        return vehicle_from_mapping(spec, "vehicle mapping")
+    if isinstance(spec, Path) or (isinstance(spec, str) and spec.endswith(".toml")):
+        return _read_file(Path(spec))
+    if isinstance(spec, str):
+        if spec not in shipped_vehicles():
+            raise ValueError(
+                f"vehicle {spec!r:.80} is not a shipped vehicle {list(shipped_vehicles())} "
+                "nor a path to a .toml vehicle file"
+            )
+        return _read_file(VEHICLE_DIRECTORY / f"{spec}.toml")
+    raise TypeError(
+        "vehicle must be a shipped vehicle's name, a path to a .toml file, a mapping or a "
+        f"Vehicle, got {spec!r:.80}"
+    )
+
+
+def _read_file(path: Path) -> Vehicle:
+    try:
+        text = path.read_bytes()
+    except OSError as exc:
+        raise VehicleFileError(f"vehicle file {path}: cannot be read ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(text.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise VehicleFileError(f"vehicle file {path}: not valid TOML ({exc})") from None
+    return vehicle_from_mapping(data, str(path))
+
+
+def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
+    """A `Vehicle` from the parsed layout of a vehicle file; ``where`` names the file in errors."""
+
+    def fail(field: str, problem: str) -> VehicleFileError:
+        return VehicleFileError(f"{where}: {field}: {problem}")
+
+    def section(name: str, allowed: tuple[str, ...], required: bool = True) -> dict[str, Any]:
+        value = data.get(name, {})
+        if not isinstance(value, Mapping):
+            raise fail(f"[{name}]", f"must be a table, got {value!r:.60}")
+        unknown = sorted(set(value) - set(allowed))
+        if unknown:
+            raise fail(f"[{name}] {unknown[0]}", f"unknown field; known: {', '.join(allowed)}")
+        if required:
+            missing = [key for key in allowed if key not in value]
+            if missing:
+                raise fail(f"[{name}] {missing[0]}", "missing")
+        return dict(value)
+
+    def number(field: str, value: Any) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise fail(field, f"must be a number, got {value!r:.60}")
+        if not math.isfinite(value):
+            raise fail(field, f"must be finite, got {value!r}")
+        return float(value)
+
+    if not isinstance(data, Mapping):
+        raise VehicleFileError(f"{where}: must be a table of the vehicle-file layout")
+    unknown = sorted(set(data) - set(TOP_LEVEL) - set(SECTIONS))
+    if unknown:
+        raise fail(unknown[0], f"unknown field; known: {', '.join((*TOP_LEVEL, *SECTIONS))}")
+    for key in ("format", "name"):
+        if key not in data:
+            raise fail(key, "missing")
+    if data["format"] != FORMAT_VERSION:
+        raise fail("format", f"must be {FORMAT_VERSION}, got {data['format']!r:.40}")
+    name = data["name"]
+    if not (isinstance(name, str) and name.strip()):
+        raise fail("name", f"must be a non-empty string, got {name!r:.60}")
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise fail("description", "must be a string")
+    sources = data.get("sources", [])
+    if not (isinstance(sources, list) and all(isinstance(s, str) for s in sources)):
+        raise fail("sources", "must be a list of strings")
+    surge_coriolis = data.get("surge_coriolis", True)
+    if not isinstance(surge_coriolis, bool):
+        raise fail("surge_coriolis", f"must be true or false, got {surge_coriolis!r:.40}")
+
+    fins, actuators = _actuators(section("actuators", (*PROPULSION_FIELDS, "fins")), number, fail)
+    limits = section("limits", LIMIT_FIELDS)
+    model = section("model_5dof", MODEL_5DOF_FIELDS)
+    values = {key: number(f"[limits] {key}", v) for key, v in limits.items()}
+    values |= {key: number(f"[model_5dof] {key}", v) for key, v in model.items()}
+    values["fin_max"] = min(actuators.delta_max_stern, actuators.delta_max_rudder)
+    hull_5dof = _built(AUVParams, {**values, "surge_coriolis": surge_coriolis}, fail, "model_5dof")
+
+    hull = section("model_6dof", HULL_6DOF_FIELDS)
+    hull_values = {}
+    for key, value in hull.items():
+        if key in ("r_bg", "r_bb"):
+            if not (isinstance(value, list) and len(value) == 3):
+                raise fail(f"[model_6dof] {key}", f"must be a list of 3 numbers, got {value!r:.60}")
+            hull_values[key] = tuple(number(f"[model_6dof] {key}", v) for v in value)
+        elif key == "strips":
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise fail("[model_6dof] strips", f"must be an integer, got {value!r:.40}")
+            hull_values[key] = value
+        else:
+            hull_values[key] = number(f"[model_6dof] {key}", value)
+    hull_6dof = _built(SixDofVehicle, hull_values, fail, "model_6dof")
+    check_mass_matrix(hull_6dof.mass, fail)
+
+    return Vehicle(
+        name=name,
+        description=description,
+        hull_5dof=hull_5dof,
+        actuators=actuators,
+        fins=fins,
+        hull_6dof=hull_6dof,
+        sensors=_sensors(data.get("sensors", {"preset": "ideal"}), fail),
+        sources=tuple(sources),
+        source="" if where == "vehicle mapping" else where,
+    )
+
+
+def check_mass_matrix(mass: np.ndarray, fail) -> None:
+    """Refuse a 6-DOF mass matrix M_RB + M_A [kg, kg m, kg m²] that is not symmetric positive
+    definite: ν̇ = M⁻¹(τ − …) would be unbounded or run backwards."""
+    smallest = float(np.linalg.eigvalsh(0.5 * (mass + mass.T)).min())
+    if not (smallest > 0.0 and np.allclose(mass, mass.T, rtol=1e-12, atol=0.0)):
+        raise fail(
+            "[model_6dof]",
+            f"mass matrix M_RB + M_A is not positive definite (smallest eigenvalue {smallest:.3g})",
+        )
+
+
+def _built(kind: type, values: dict[str, Any], fail, section_name: str):
+    """``kind(**values)``, its own range checks reported against the file."""
+    try:
+        return kind(**values)
+    except (TypeError, ValueError) as exc:
+        raise fail(f"[{section_name}]", str(exc)) from None
+
+
+def _actuators(values: dict[str, Any], number, fail) -> tuple[tuple[FinSpec, ...], ActuatorParams]:
+    """The fins of [[actuators.fins]] and the propeller of [actuators] as `ActuatorParams`."""
+    propulsion = {key: number(f"[actuators] {key}", values[key]) for key in PROPULSION_FIELDS}
+    listed = values["fins"]
+    if not isinstance(listed, list) or not listed:
+        raise fail("[[actuators.fins]]", "must list at least one fin")
+    fins = []
+    for i, entry in enumerate(listed):
+        where = f"[[actuators.fins]] #{i + 1}"
+        if not isinstance(entry, Mapping):
+            raise fail(where, "must be a table")
+        unknown = sorted(set(entry) - set(FIN_FIELDS))
+        if unknown:
+            raise fail(f"{where} {unknown[0]}", f"unknown field; known: {', '.join(FIN_FIELDS)}")
+        missing = [key for key in FIN_FIELDS if key not in entry]
+        if missing:
+            raise fail(f"{where} {missing[0]}", "missing")
+        if not (isinstance(entry["name"], str) and entry["name"]):
+            raise fail(f"{where} name", "must be a non-empty string")
+        where = f"[[actuators.fins]] {entry['name']!r}"
+        fin = FinSpec(
+            name=entry["name"],
+            **{key: number(f"{where} {key}", entry[key]) for key in FIN_FIELDS[1:]},
+        )
+        for key in ("area", "lift_slope", "angle_max"):
+            if not getattr(fin, key) > 0.0:
+                raise fail(f"{where} {key}", f"must be positive, got {getattr(fin, key):g}")
+        if fin.angle_max > math.pi / 2:
+            raise fail(f"{where} angle_max", f"must be at most π/2 rad, got {fin.angle_max:g}")
+        if fin.servo_time_constant < 0.0:
+            raise fail(f"{where} servo_time_constant", "must be non-negative")
+        if not fin.rate_max > 0.0:
+            raise fail(f"{where} rate_max", f"must be positive, got {fin.rate_max:g}")
+        fins.append(fin)
+    names = [fin.name for fin in fins]
+    if len(set(names)) != len(names):
+        raise fail("[[actuators.fins]] name", f"fin names repeat: {names}")
+    stern, rudder = fin_pairs(tuple(fins), fail)
+    try:
+        actuators = ActuatorParams(
+            **propulsion,
+            fin_area_stern=stern[0],
+            lift_coeff_stern=stern[1],
+            x_stern=stern[2],
+            delta_max_stern=stern[3],
+            fin_area_rudder=rudder[0],
+            lift_coeff_rudder=rudder[1],
+            x_rudder=rudder[2],
+            delta_max_rudder=rudder[3],
+            fin_time_constant=fins[0].servo_time_constant,
+            fin_rate_max=fins[0].rate_max,
+        )
+    except (TypeError, ValueError) as exc:
+        raise fail("[actuators]", str(exc)) from None
+    return tuple(fins), actuators
+
+
+def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
+    """The fins as the simulator's two coupled pairs: ((area, lift slope, x, angle limit) of the
+    stern planes, the same of the rudders) [m², 1/rad, m, rad], areas summed.
+
+    Refuses, naming the fin, a layout that cannot produce a pitch or a yaw moment, an axis that
+    is neither horizontal nor vertical, and fins of one pair (or servos of any two fins) that
+    differ, which the coupled pairs cannot represent.
+    """
+    if fail is None:
+
+        def fail(field: str, problem: str) -> VehicleFileError:
+            return VehicleFileError(f"{field}: {problem}")
+
+    groups: dict[str, list[FinSpec]] = {"stern planes": [], "rudders": []}
+    for fin in fins:
+        if fin.yaw_share <= AXIS_TOLERANCE:
+            groups["stern planes"].append(fin)
+        elif fin.pitch_share <= AXIS_TOLERANCE:
+            groups["rudders"].append(fin)
+        else:
+            raise fail(
+                f"[[actuators.fins]] {fin.name!r} axis_roll",
+                f"{fin.axis_roll:g} rad is neither horizontal (0, π) nor vertical (±π/2); the "
+                "fin model drives stern planes and rudders as coupled pairs",
+            )
+    for group, moment in (("stern planes", "pitch"), ("rudders", "yaw")):
+        if not any(fin.x != 0.0 for fin in groups[group]):
+            raise fail(
+                "[[actuators.fins]]",
+                f"no fin can produce a {moment} moment (no {group[:-1]} away from x = 0): "
+                "the vehicle could not be steered",
+            )
+    first = fins[0]
+    for fin in fins[1:]:
+        for key in ("servo_time_constant", "rate_max"):
+            if getattr(fin, key) != getattr(first, key):
+                raise fail(
+                    f"[[actuators.fins]] {fin.name!r} {key}",
+                    f"{getattr(fin, key):g} differs from fin {first.name!r}'s "
+                    f"{getattr(first, key):g}; the fins share one servo model",
+                )
+    pairs = []
+    for group in ("stern planes", "rudders"):
+        lead = groups[group][0]
+        for fin in groups[group][1:]:
+            for key in ("lift_slope", "x", "angle_max"):
+                if getattr(fin, key) != getattr(lead, key):
+                    raise fail(
+                        f"[[actuators.fins]] {fin.name!r} {key}",
+                        f"{getattr(fin, key):g} differs from {lead.name!r}'s "
+                        f"{getattr(lead, key):g}; the {group} are driven as one coupled pair",
+                    )
+        area = 0.0
+        for fin in groups[group]:
+            area += fin.area
+        pairs.append((area, lead.lift_slope, lead.x, lead.angle_max))
+    return pairs[0], pairs[1]
+
+
+def _sensors(value: Any, fail) -> SensorConfig:
+    """[sensors]: ``preset = "<name>"`` (`SENSOR_PRESETS`) or the fields of a `SensorConfig`."""
+    if not isinstance(value, Mapping):
+        raise fail("[sensors]", "must be a table")
+    if set(value) == {"preset"}:
+        preset = value["preset"]
+        if preset not in SENSOR_PRESETS:
+            raise fail("[sensors] preset", f"{preset!r:.40} is not one of {list(SENSOR_PRESETS)}")
+        return SENSOR_PRESETS[preset]
+    try:
+        return SensorConfig.from_spec(dict(value))
+    except (TypeError, ValueError) as exc:
+        raise fail("[sensors]", str(exc)) from None
+
+
+def hull_from(vehicle: Vehicle, params: AUVParams | Mapping[str, Any] | None) -> AUVParams:
+    """The env's ``params`` on ``vehicle``: None (its 5-DOF model), an `AUVParams`, or a dict of
+    field values [SI] replacing the vehicle's, with an optional ``scale`` dict of factors applied
+    after them, e.g. ``{"m": 32.0, "scale": {"X_uu": 1.2}}``. An unknown name is a ValueError
+    naming it."""
+    if params is None:
+        return vehicle.hull_5dof
+    if isinstance(params, AUVParams):
+        return params
+    names = [f.name for f in fields(AUVParams)]
+    if not isinstance(params, Mapping):
+        raise ArgumentTypeError(
+            f"params must be None, an AUVParams or a dict of its fields "
+            f"(and 'scale'), got {params!r:.80}"
+        )
+    values = keys_within("params", params, [*names, "scale"])
+    scale = keys_within("params scale", values.pop("scale", {}), names)
+    for name, factor in scale.items():
+        real(f"params scale {name}", factor)
+    try:
+        hull = vehicle.hull_5dof.replace(**values)
+    except TypeError as exc:  # a wrong kind of value, named by AUVParams' own checks
+        raise ArgumentTypeError(str(exc)) from None
+    return hull.scaled(scale) if scale else hull
+
+
+def actuators_from(
+    vehicle: Vehicle, actuator_params: ActuatorParams | Mapping[str, Any] | None
+) -> ActuatorParams:
+    """The env's ``actuator_params`` on ``vehicle``: None (its propeller and fins), an
+    `ActuatorParams`, or a dict of fields [SI] replacing the vehicle's; an unknown name is a
+    ValueError naming it."""
+    if actuator_params is None:
+        return vehicle.actuators
+    if isinstance(actuator_params, ActuatorParams):
+        return actuator_params
+    if not isinstance(actuator_params, Mapping):
+        raise ArgumentTypeError(
+            f"actuator_params must be None, an ActuatorParams or a dict of "
+            f"its fields, got {actuator_params!r:.80}"
+        )
+    values = keys_within(
+        "actuator_params", actuator_params, [f.name for f in fields(ActuatorParams)]
+    )
+    return dataclasses.replace(vehicle.actuators, **values)

@@ -1,0 +1,232 @@
+"""A vehicle is a data file: the shipped REMUS 100 file is today's vehicle bit for bit, a user's
+file flies without code, and a bad file is one line naming the file and the field."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import auv_gym  # noqa: F401  (registers the env ids)
+import controllers
+from auv_gym.metrics import compute_metrics
+from auv_gym.rollout import rollouts
+from auv_gym.sim.config import SimConfig
+from auv_gym.vehicle import (
+    SENSOR_PRESETS,
+    ActuatorParams,
+    AUVParams,
+    Vehicle,
+    VehicleFileError,
+    load_vehicle,
+    shipped_vehicles,
+)
+from auv_gym.vehicle.record import VEHICLE_DIRECTORY, check_mass_matrix
+from auv_gym.vehicle.remus6dof import SixDofVehicle
+
+REMUS_FILE = VEHICLE_DIRECTORY / "remus100.toml"
+
+
+def remus_layout() -> dict:
+    return tomllib.loads(REMUS_FILE.read_text())
+
+
+def write_toml(path: Path, data: dict) -> Path:
+    """A minimal TOML writer for the vehicle layout (tables, arrays of tables, scalars)."""
+
+    def value(v) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, float) and math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        if isinstance(v, float) and math.isnan(v):
+            return "nan"
+        return repr(v)
+
+    lines = [f"{k} = {value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for name, table in data.items():
+        if not isinstance(table, dict):
+            continue
+        lines.append(f"[{name}]")
+        lines += [f"{k} = {value(v)}" for k, v in table.items() if not isinstance(v, list | dict)]
+        lines += [
+            f"{k} = {value(v)}"
+            for k, v in table.items()
+            if isinstance(v, list) and not (v and isinstance(v[0], dict))
+        ]
+        for key, items in table.items():
+            if isinstance(items, list) and items and isinstance(items[0], dict):
+                for item in items:
+                    lines.append(f"[[{name}.{key}]]")
+                    lines += [f"{k} = {value(v)}" for k, v in item.items()]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_the_shipped_remus100_file_is_the_default_vehicle_bit_for_bit() -> None:
+    assert "remus100" in shipped_vehicles()
+    vehicle = load_vehicle("remus100")
+    assert vehicle.hull_5dof == AUVParams()
+    assert vehicle.actuators == ActuatorParams()
+    assert vehicle.hull_6dof == SixDofVehicle()
+    assert vehicle.sensors == SENSOR_PRESETS["typical"]
+    assert len(vehicle.fins) == 4
+    assert vehicle.hull_5dof.to_vector().tobytes() == AUVParams().to_vector().tobytes()
+    for plant, actuator in (("5dof", "paper"), ("5dof", "realistic"), ("6dof", "realistic")):
+        default = SimConfig.from_kwargs(plant=plant, actuator=actuator)
+        named = SimConfig.from_kwargs(plant=plant, actuator=actuator, vehicle="remus100")
+        from_file = SimConfig.from_kwargs(plant=plant, actuator=actuator, vehicle=REMUS_FILE)
+        for config in (named, from_file):  # every field but the path (a new object each)
+            assert dataclasses.replace(config, path=default.path) == default
+        assert default.packed().tobytes() == from_file.packed().tobytes()
+        assert named.vehicle == "remus100"
+
+
+def test_a_named_vehicle_flies_the_same_episode_as_the_default() -> None:
+    fbsm = controllers.make("fbsm")
+    (default,) = rollouts(fbsm, [3], max_time=20.0)
+    (named,) = rollouts(fbsm, [3], max_time=20.0, vehicle=str(REMUS_FILE))
+    assert default.samples.keys() == named.samples.keys()
+    for key, values in default.samples.items():
+        assert np.array_equal(values, named.samples[key]), key
+
+
+def test_params_on_a_vehicle_replace_its_fields() -> None:
+    layout = remus_layout()
+    layout["model_5dof"]["m"] = 33.0
+    layout["name"] = "heavier"
+    config = SimConfig.from_kwargs(vehicle=layout, params={"I_y": 4.0})
+    assert (config.params.m, config.params.I_y, config.vehicle) == (33.0, 4.0, "heavier")
+    assert SimConfig.from_kwargs(sensors="vehicle").sensors == SENSOR_PRESETS["typical"]
+
+
+def scaled_remus(factor: float) -> dict:
+    """REMUS 100 scaled geometrically by ``factor`` in length: each coefficient by the power of
+    the length in its unit (kg: 3, kg/m: 2, kg·m: 4, kg·m²: 5), the fins' area by 2 and position
+    by 1, the moment limits by 4 (the thrust limit kept)."""
+    powers = {"m": 3, "W": 3, "B": 3, "I_y": 5, "I_z": 5, "z_g": 1, "z_b": 1, "X_udot": 3}
+    powers |= dict.fromkeys(["Y_vdot", "Z_wdot", "X_vr", "X_wq", "Y_ur", "Z_uq"], 3)
+    powers |= dict.fromkeys(["M_uw", "M_ww", "N_uv", "N_vv", "fin_moment_coeff"], 3)
+    powers |= dict.fromkeys(["M_qdot", "N_rdot", "M_qq", "N_rr"], 5)
+    powers |= dict.fromkeys(["X_uu", "X_vv", "X_ww", "Y_uv", "Y_vv", "Z_uw", "Z_ww"], 2)
+    powers |= dict.fromkeys(["X_qq", "X_rr", "M_uq", "N_ur"], 4)
+    layout = remus_layout()
+    layout["name"] = "remus_scaled"
+    model = layout["model_5dof"]
+    assert set(model) == set(powers)  # every coefficient has its power
+    for name, power in powers.items():
+        model[name] *= factor**power
+    layout["limits"]["M_max"] *= factor**4
+    layout["limits"]["N_max"] *= factor**4
+    for fin in layout["actuators"]["fins"]:
+        fin["area"] *= factor**2
+        fin["x"] *= factor
+    hull = layout["model_6dof"]
+    hull["length"] *= factor
+    hull["diameter"] *= factor
+    hull["r_bg"] = [factor * c for c in hull["r_bg"]]
+    return layout
+
+
+def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) -> None:
+    path = write_toml(tmp_path / "remus_scaled.toml", scaled_remus(1.2))
+    vehicle = load_vehicle(path)
+    assert vehicle.name == "remus_scaled"
+    assert vehicle.hull_5dof.m == pytest.approx(30.48 * 1.2**3)
+    assert vehicle.hull_6dof.length == pytest.approx(1.92)
+    env = gym.make("AUVPath3D-v0", vehicle=path)
+    pid = controllers.make("pid_los", env=env)
+    assert pid.params == vehicle.hull_5dof  # the controller reads the vehicle from the env
+    env.close()
+    (episode,) = rollouts(pid, [0], max_time=200.0, vehicle=str(path))
+    metrics = compute_metrics(episode)
+    assert episode.termination_reason == "time_limit"
+    assert metrics["rms_distance"] < 0.2  # [m] after the approach: 0.045 (REMUS 100: 0.087)
+
+
+@pytest.mark.parametrize(
+    "edit, field",
+    [
+        (lambda d: d["model_5dof"].pop("X_uu"), "[model_5dof] X_uu: missing"),
+        (lambda d: d["model_5dof"].update(X_uuu=1.0), "[model_5dof] X_uuu: unknown field"),
+        (lambda d: d["model_5dof"].update(X_uu=math.nan), "[model_5dof] X_uu: must be finite"),
+        (lambda d: d["model_5dof"].update(m=-1.0), "AUVParams.m must be positive"),
+        (lambda d: d["model_5dof"].update(I_y="3"), "[model_5dof] I_y: must be a number"),
+        (lambda d: d["limits"].pop("max_surge"), "[limits] max_surge: missing"),
+        (lambda d: d["model_6dof"].update(diameter=-0.2), "[model_6dof]"),
+        (lambda d: d["model_6dof"].update(r_bg=[0.0, 0.0]), "[model_6dof] r_bg: must be a list"),
+        (lambda d: d.update(format=2), "format: must be 1"),
+        (lambda d: d.pop("name"), "name: missing"),
+        (lambda d: d.update(colour="red"), "colour: unknown field"),
+        (lambda d: d["sensors"].update(preset="perfect"), "[sensors] preset"),
+        (
+            lambda d: d["actuators"]["fins"][0].update(area=0.0),
+            "'stern_starboard' area: must be positive",
+        ),
+        (lambda d: d["actuators"]["fins"][0].pop("x"), "#1 x: missing"),
+        (
+            lambda d: d["actuators"]["fins"][2].update(axis_roll=0.7),
+            "'rudder_top' axis_roll: 0.7 rad is neither horizontal",
+        ),
+        (
+            lambda d: d["actuators"].update(fins=d["actuators"]["fins"][:2]),
+            "no fin can produce a yaw moment",
+        ),
+        (
+            lambda d: [fin.update(x=0.0) for fin in d["actuators"]["fins"][:2]],
+            "no fin can produce a pitch moment",
+        ),
+        (
+            lambda d: d["actuators"]["fins"][1].update(lift_slope=1.0),
+            "'stern_port' lift_slope: 1 differs",
+        ),
+        (
+            lambda d: d["actuators"]["fins"][3].update(rate_max=2.0),
+            "'rudder_bottom' rate_max: 2 differs",
+        ),
+        (lambda d: d["actuators"].pop("rpm_max"), "[actuators] rpm_max: missing"),
+    ],
+)
+def test_a_bad_vehicle_file_is_one_line_naming_the_file_and_field(
+    tmp_path: Path, edit, field: str
+) -> None:
+    layout = remus_layout()
+    edit(layout)
+    path = write_toml(tmp_path / "bad.toml", layout)
+    with pytest.raises(VehicleFileError) as error:
+        gym.make("AUVPath3D-v0", vehicle=path)
+    message = str(error.value)
+    assert "\n" not in message
+    assert message.startswith(f"{path}: ")
+    assert field in message
+
+
+def test_a_mass_matrix_that_is_not_positive_definite_is_refused() -> None:
+    mass = SixDofVehicle().mass.copy()
+    check_mass_matrix(mass, lambda field, problem: VehicleFileError(f"f.toml: {field}: {problem}"))
+    mass[3, 3] = -0.01  # [kg m²] a roll inertia below zero
+    with pytest.raises(VehicleFileError, match=r"f.toml: \[model_6dof\]: mass matrix .* not pos"):
+        check_mass_matrix(mass, lambda f, p: VehicleFileError(f"f.toml: {f}: {p}"))
+
+
+def test_unknown_names_and_unreadable_files_are_one_line(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match=r"'torpedo9' is not a shipped vehicle \['remus100'"):
+        SimConfig.from_kwargs(vehicle="torpedo9")
+    with pytest.raises(VehicleFileError, match="cannot be read"):
+        load_vehicle(tmp_path / "absent.toml")
+    corrupt = tmp_path / "corrupt.toml"
+    corrupt.write_bytes(b"format = 1\nname = \n\xff")
+    with pytest.raises(VehicleFileError, match=r"corrupt\.toml: not valid TOML"):
+        load_vehicle(corrupt)
+    with pytest.raises(TypeError, match="vehicle must be"):
+        load_vehicle(3.5)
+    assert isinstance(load_vehicle(load_vehicle()), Vehicle)
