@@ -7,6 +7,7 @@
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|training|off-policy|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
+    auv-gym record --policy fbsm --scenario paper --out run.mcap   # ROS 2 MCAP, mcap extra
     auv-gym export ppo_generalist --out policy.onnx   # one ONNX graph (rl and onnx extras)
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m <module>`` (e.g.
@@ -63,6 +64,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "speed": ("", "speed benchmarks that print figures (auv-gym speed --help)"),
     "video": ("benchmarks.reports.video", "an episode's video: 3-D track and errors (video extra)"),
+    "record": (
+        "benchmarks.reports.record",
+        "an episode as MCAP with ROS 2 messages, for Foxglove and ros2 bag (mcap extra)",
+    ),
     "docs": ("", "where the manual is (docs/*.md: model, design, usage, results)"),
 }
 # `auv-gym speed NAME` → (module, one-line description).
@@ -91,6 +96,8 @@ EXTRAS = {
     "pandas": "stats",
     "onnx": "onnx",
     "onnxruntime": "onnx",
+    "mcap": "mcap",
+    "mcap_ros2": "mcap",
 }
 
 

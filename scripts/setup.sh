@@ -29,7 +29,7 @@ else
     else
         python -m pip install -q "torch==2.13.0"
     fi
-    python -m pip install -q -e ".[rl,test,ray,stats,video,onnx]"
+    python -m pip install -q -e ".[rl,test,ray,stats,video,onnx,mcap]"
     python -c "import torch; print(f'set-up: torch {torch.__version__}, CUDA build: {torch.version.cuda is not None}')" >&2
     echo "$wanted" > "$stamp"
 fi
