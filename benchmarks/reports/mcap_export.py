@@ -44,6 +44,7 @@ __all__ = [
     "enu_position",
     "flu_vector",
     "message_definition",
+    "path_points",
     "sim_time_ns",
     "write_episode_mcap",
 ]
@@ -307,7 +308,7 @@ def write_episode_mcap(
 
 def _metadata(trajectory: Trajectory, facts: Mapping[str, Any]) -> dict[str, str]:
     record = {
-        **{k: v for k, v in facts.items()},
+        **facts,
         "termination_reason": trajectory.termination_reason,
         "control_dt": trajectory.control_dt,
         "steps": trajectory.steps,
