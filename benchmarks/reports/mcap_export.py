@@ -93,7 +93,7 @@ _SEPARATOR = "=" * 80
 
 
 def _short(name: str) -> str:
-    """ "nav_msgs/msg/Odometry" → "nav_msgs/Odometry"."""
+    """The name without its interface kind: nav_msgs/msg/Odometry → nav_msgs/Odometry."""
     package, *_, message = name.split("/")
     return f"{package}/{message}"
 
