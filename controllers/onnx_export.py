@@ -8,18 +8,31 @@ actuator and left out there). A residual agent's graph ends in its bounded corre
 learned filter on top of its base controller's command, an input (the base is a classical
 controller with adaptive laws, run beside the graph by `controllers.onnx_policy.OnnxPolicy`).
 
+The contract and the graph's metadata state everything the graph was built for: the env (id and
+arguments, with the actuator and its settings, so that a run from the contract flies the actuator
+the graph commands), the control period, the plant the agent was trained on, the actuator, the
+allocation's vehicle constants and settings, and the stages. An option that would not change the
+graph is refused, not ignored: ``actuator`` other than the default for an agent without an
+allocation stage (its commands would only be relabelled), ``actuator_params`` for any graph
+without an allocation to the realistic actuator.
+
 Before anything is written the agent's files are checked (`controllers.agent.check_agent`), the
 output folder must exist, and the graph is run by onnxruntime against the Python agent on
 observations drawn from the agent's own normalisation statistics: an export whose commands
-differ by more than `PARITY_TOLERANCE` is refused. Export needs torch (to read the network) and
-onnx; running the result needs only onnxruntime and numpy.
+differ by more than `PARITY_TOLERANCE` is refused. The contract and the graph then pass the
+runtime's own checks (`controllers.onnx_contract.check_contract`), and both files are written or
+neither (`write_export`). Export needs torch (to read the network) and onnx; running the result
+needs only onnxruntime and numpy.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
+import shutil
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -27,13 +40,22 @@ from typing import Any
 import numpy as np
 
 from auv_gym import __version__
-from auv_gym.support.files import write_atomic, write_json
+from auv_gym.support.files import json_default
 from controllers.agent import (
     AgentFiles,
     check_agent,
     commands_realistic_actuators,
     load_actor,
     observation_layout,
+)
+from controllers.onnx_contract import (
+    ACTUATORS,
+    CONTRACT_FORMAT,
+    CONTRACT_VERSION,
+    check_contract,
+    contract_path,
+    graph_io,
+    sha256_of,
 )
 from controllers.onnx_graph import (
     OPSET,
@@ -45,18 +67,12 @@ from controllers.onnx_graph import (
     normalisation_graph,
     residual_graph,
 )
-from controllers.onnx_policy import (
-    CONTRACT_FORMAT,
-    CONTRACT_VERSION,
-    contract_path,
-    inference_session,
-    sha256_of,
-)
+from controllers.onnx_policy import inference_session
 from controllers.stages import AllocationStage, GuardStage, build_stages
 
-__all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers"]
+__all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers", "write_export"]
 
-ACTUATORS = ("paper", "fins", "realistic")  # what an export's commands may be for
+_REPOSITORY = Path(__file__).resolve().parents[1]  # holds controllers/ and benchmarks/
 PARITY_TOLERANCE = 1e-5  # max |ONNX − Python| over the check's commands, normalised units
 PARITY_SAMPLES = 2048  # observations the export checks itself on
 # The env's command for each actuator (docs/model.md §2.3, §2.6): names and what 1 means.
@@ -138,24 +154,15 @@ def export_onnx(
     """Export the saved agent ``agent`` to ``out`` (.onnx) and its contract beside it (.json),
     its commands for the env actuator ``actuator`` (`ACTUATORS`; None: "paper", or "realistic"
     for an agent trained on the propeller and fins, whose commands no other actuator reads;
-    ``actuator_params``: the realistic actuators' settings). Returns (onnx file, contract file,
-    the parity check's figures). Every check runs before a file is written (module doc)."""
+    another is refused for an agent without an allocation stage) and ``actuator_params`` (the
+    realistic actuators' settings its allocation is built for; refused where there is none).
+    Returns (onnx file, contract file, the parity check's figures). Every check runs before a
+    file is written (module doc)."""
     target = _check_out(out)
     files = check_agent(agent)
-    own = "realistic" if commands_realistic_actuators(files.metadata) else None
-    if actuator is None:
-        actuator = own or "paper"
-    if actuator not in ACTUATORS:
-        raise ValueError(f"actuator {actuator!r} is not one of {list(ACTUATORS)}")
-    if own is not None and actuator != own:
-        raise ValueError(
-            f"{files.model}: the agent commands the propeller and fins (actuator='realistic'); "
-            f"it cannot be exported for actuator {actuator!r}"
-        )
+    actuator, params = _export_settings(files, actuator, actuator_params)
     layout = observation_layout(files.metadata)
-    settings: dict[str, Any] = {"actuator": actuator}
-    if actuator_params is not None:
-        settings["actuator_params"] = actuator_params
+    settings: dict[str, Any] = {"actuator": actuator, "actuator_params": params}
     stages = build_stages(files.stages, layout, settings, str(files.model))
     actor = load_actor(files, num_threads=1)
     model, state_size = _build_model(files, actor, stages, layout)
@@ -165,13 +172,101 @@ def export_onnx(
             f"{files.model}: the exported graph differs from the agent by "
             f"{parity['max_abs_error']:.3g} > {PARITY_TOLERANCE:g}; nothing written"
         )
-    contract = _contract(files, target, layout, state_size, actuator, stages, parity)
+    contract = _contract(files, target, layout, state_size, actuator, params, stages, parity)
     _annotate(model, contract)
     data = model.SerializeToString()
     contract["onnx_sha256"] = hashlib.sha256(data).hexdigest()
-    write_atomic(target, lambda fh: fh.write(data))
-    contract_file = write_json(contract_path(target), contract, indent=1)
+    check_contract(contract, data, target, contract_path(target))  # what a load will check
+    contract_file = write_export(target, data, contract)
     return target, contract_file, parity
+
+
+def _export_settings(
+    files: AgentFiles, actuator: str | None, actuator_params: Any
+) -> tuple[str, Any]:
+    """(the actuator, the `ActuatorParams` or None) an export is built for, after refusing
+    what would not change the graph (module doc)."""
+    from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
+
+    own = "realistic" if commands_realistic_actuators(files.metadata) else None
+    default = own or "paper"
+    if actuator is None:
+        actuator = default
+    if actuator not in ACTUATORS:
+        raise ValueError(f"actuator {actuator!r:.40} is not one of {list(ACTUATORS)}")
+    if own is not None and actuator != own:
+        raise ValueError(
+            f"{files.model}: the agent commands the propeller and fins (actuator='realistic'); "
+            f"it cannot be exported for actuator {actuator!r}"
+        )
+    allocating = any(spec["name"] == "actuator_allocation" for spec in files.stages)
+    if actuator != default and not allocating:
+        raise ValueError(
+            f"--actuator {actuator}: {files.metadata_file} lists no actuator_allocation stage, so "
+            f"the graph would be its {default!r} graph with the commands relabelled, not "
+            f"allocated; export it without --actuator (it flies any actuator as the agent does)"
+        )
+    if actuator_params is None:
+        return actuator, None
+    if actuator != "realistic" or not allocating:
+        why = (
+            f"with --actuator {actuator} there is no propeller to configure"
+            if actuator != "realistic"
+            else f"{files.metadata_file} lists no actuator_allocation stage for them to change"
+        )
+        raise ValueError(
+            f"--actuator-params configure the realistic actuator's allocation, and {why}: they "
+            "would not change the graph; drop them (give them to the env instead)"
+        )
+    try:
+        params = actuator_params_from_spec(actuator_params)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"--actuator-params: {error}") from None
+    return actuator, (None if params == ActuatorParams() else params)
+
+
+def write_export(target: Path, data: bytes, contract: Mapping[str, Any]) -> Path:
+    """Write the graph ``data`` to ``target`` and ``contract`` beside it: both or neither.
+
+    Both are written to temporary files first (a failure there leaves the folder as it was),
+    then renamed into place, the graph first; if the contract's rename fails, the previous
+    graph is put back (or the new one removed). A process killed between the two renames leaves
+    a graph its old contract refuses (SHA-256), never a pair that loads wrongly. Returns the
+    contract's path."""
+    contract_file = contract_path(target)
+    text = (json.dumps(contract, indent=1, default=json_default) + "\n").encode("utf-8")
+    mask = os.umask(0)
+    os.umask(mask)
+    temporaries: list[str] = []
+    try:
+        for path, payload in ((target, data), (contract_file, text)):
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            temporaries.append(tmp)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(payload)
+            os.chmod(tmp, 0o666 & ~mask)
+        backup = None
+        if target.exists():  # kept until the contract is in place
+            fd, backup = tempfile.mkstemp(
+                prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+            )
+            os.close(fd)
+            temporaries.append(backup)
+            shutil.copy2(target, backup)
+        os.replace(temporaries[0], target)
+        try:
+            os.replace(temporaries[1], contract_file)
+        except BaseException:
+            if backup is not None:
+                os.replace(backup, target)
+            else:
+                target.unlink(missing_ok=True)
+            raise
+    finally:
+        for tmp in temporaries:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    return contract_file
 
 
 def _build_model(
@@ -311,30 +406,39 @@ def _contract(
     layout: tuple[str, ...],
     state_size: int,
     actuator: str,
+    actuator_params: Any,
     stages: list[Any],
     parity: dict[str, Any],
 ) -> dict[str, Any]:
-    """The contract JSON of an export (`controllers.onnx_policy.read_contract` reads it)."""
+    """The contract JSON of an export (`controllers.onnx_contract.read_contract` reads it)."""
     from auv_gym import recorded_env_id
     from auv_gym.sim.config import SimConfig
     from auv_gym.sim.observation import ObservationConfig
+    from auv_gym.vehicle.actuators import ActuatorParams
     from controllers.agent import agent_env_kwargs
 
     metadata = files.metadata
-    env_kwargs = agent_env_kwargs(metadata)
     env_id = recorded_env_id(metadata.get("env_id", "AUVPath3D-v0"))
+    trained = metadata.get("env_kwargs") or {}
+    plant = trained.get("plant", "5dof")
+    # The env the graph was built for: the agent's, flown on the export's actuator and plant.
+    env_kwargs = agent_env_kwargs(metadata)
+    if actuator != "paper":
+        env_kwargs["actuator"] = actuator
+    params = None
+    if actuator_params is not None:
+        default = dataclasses.asdict(ActuatorParams())
+        params = {k: v for k, v in dataclasses.asdict(actuator_params).items() if v != default[k]}
+        env_kwargs["actuator_params"] = params
+    for key in ("plant", "plant_params"):
+        if key in trained and plant != "5dof":
+            env_kwargs[key] = trained[key]
     config = SimConfig.from_kwargs(**env_kwargs)
     names = layout if files.residual is None else layout[:15]
     units = ObservationConfig.from_spec(env_kwargs.get("observation")).units
     action_names, action_meaning = ACTION_LAYOUT[actuator]
-    inputs = [{"name": "observation", "shape": ["n", len(names)], "dtype": "float32"}]
-    if state_size:
-        inputs.append({"name": "state", "shape": ["n", state_size], "dtype": "float32"})
-    if files.residual is not None:
-        inputs.append({"name": "base_action", "shape": ["n", 3], "dtype": "float32"})
-    outputs = [{"name": "action", "shape": ["n", 3], "dtype": "float32"}]
-    if state_size:
-        outputs.append({"name": "next_state", "shape": ["n", state_size], "dtype": "float32"})
+    inputs, outputs = graph_io(len(names), state_size, files.residual is not None)
+    allocation = next((s.allocation for s in stages if isinstance(s, AllocationStage)), None)
     residual = None
     if files.residual is not None:
         residual = {
@@ -343,7 +447,6 @@ def _contract(
             "bound": list(files.residual.bound),
             "filter_max": files.residual.filter_max,
         }
-    keys = ("algo", "seed", "num_timesteps", "git_commit", "config_file", "auv_gym_version")
     return {
         "format": CONTRACT_FORMAT,
         "format_version": CONTRACT_VERSION,
@@ -353,11 +456,17 @@ def _contract(
         "env_id": env_id,
         "env_kwargs": env_kwargs,
         "control_period_s": config.control_dt,
+        "plant": plant,  # the agent's training plant; the graph holds no plant model
         "observation": {"names": list(names), "units": [units.get(x, "") for x in names]},
         "action": {"names": action_names, "units": action_meaning, "range": [-1.0, 1.0]},
         "actuator": actuator,
+        "actuator_params": params,  # the realistic allocation's, where not the defaults
         # the agent allocates its commands: the graph is for this actuator only
         "allocated": any(spec["name"] == "actuator_allocation" for spec in files.stages),
+        # the vehicle constants the allocation stage holds (K·δ_max [kg]; X [N], M, N [N·m])
+        "allocation": None
+        if allocation is None
+        else {"fin_gain_kg": float(allocation.fin_gain), "limits": allocation.limits.tolist()},
         "state": {
             "size": state_size,
             "reset": "zeros at every episode start; pass next_state back as state",
@@ -367,30 +476,61 @@ def _contract(
         "stages": [stage.to_dict() for stage in stages],
         "residual": residual,
         "parity": parity,
-        "provenance": {
-            "agent": str(Path(files.model).parent),
-            "model_sha256": sha256_of(Path(files.model)),
-            **{key: metadata[key] for key in keys if key in metadata},
-            "exported_with": f"auv-gym {__version__}",
-        },
+        "provenance": _provenance(files),
     }
 
 
+def _provenance(files: AgentFiles) -> dict[str, Any]:
+    """Where the export came from, without the exporting machine's paths: the agent folder's
+    name, the model's SHA-256, how it was trained, and its training file only where it is a
+    file of this repository (a path relative to it)."""
+    metadata = files.metadata
+    out: dict[str, Any] = {
+        "agent": Path(files.model).parent.name,
+        "model_sha256": sha256_of(Path(files.model)),
+    }
+    for key in ("algo", "seed", "num_timesteps", "git_commit", "auv_gym_version"):
+        if key in metadata:
+            out[key] = metadata[key]
+    config = metadata.get("config_file")
+    if isinstance(config, str) and _repository_file(config):
+        out["config_file"] = Path(config).as_posix()
+    out["exported_with"] = f"auv-gym {__version__}"
+    return out
+
+
+def _repository_file(path: str) -> bool:
+    """``path`` is relative, stays inside the repository and names one of its files."""
+    relative = Path(path)
+    if relative.is_absolute() or ".." in relative.parts:
+        return False
+    return (_REPOSITORY / relative).is_file()
+
+
 def _annotate(model: Any, contract: Mapping[str, Any]) -> None:
-    """The model's metadata properties: what a runtime must know without the contract (env id,
-    observation and action names and units, actuator, control period, memory size)."""
+    """The model's metadata properties: what a runtime must know without the contract and what
+    the graph was built for (env id and arguments, observation and action names and units,
+    actuator and its settings, allocation constants, plant, control period, memory size,
+    stages, residual base). `controllers.onnx_contract` checks the contract against them."""
     from onnx import helper
 
     props = {
         "format": f"{CONTRACT_FORMAT} {CONTRACT_VERSION}",
         "env_id": contract["env_id"],
+        "env_kwargs": json.dumps(contract["env_kwargs"]),
         "observation_names": json.dumps(contract["observation"]["names"]),
         "observation_units": json.dumps(contract["observation"]["units"], ensure_ascii=False),
         "action_names": json.dumps(contract["action"]["names"]),
         "action_units": contract["action"]["units"],
         "actuator": contract["actuator"],
+        "actuator_params": json.dumps(contract["actuator_params"]),
+        "allocated": json.dumps(contract["allocated"]),
+        "allocation": json.dumps(contract["allocation"]),
+        "plant": contract["plant"],
         "control_period_s": repr(contract["control_period_s"]),
         "state_size": str(contract["state"]["size"]),
         "stages": json.dumps([stage["name"] for stage in contract["stages"]]),
+        "stage_settings": json.dumps(contract["stages"]),
+        "residual": json.dumps(contract["residual"]),
     }
     helper.set_model_props(model, props)

@@ -1,148 +1,71 @@
 """An exported agent (`auv-gym export`) as a Policy that needs only numpy and onnxruntime.
 
-An export is two files side by side::
-
-    policy.onnx   one graph: the raw observation (and the agent's memory) → the command the env
-                  receives: normalisation, the network's deterministic action, the action scaling
-                  and every stage (`controllers.onnx_export`, docs/design.md §3.18)
-    policy.json   its contract: input and output layout with names and units, the memory's size
-                  and when it resets, the control period, the env it was trained in, the
-                  actuator its commands are for, and where it came from (`CONTRACT_FORMAT`)
-
 The graph's inputs are ``observation`` (n, d) float32 and, when the agent has a memory (the
 allocation's delivered command, a residual agent's previous action), ``state`` (n, s); its
 outputs ``action`` (n, 3) float32 and ``next_state`` (n, s). The caller keeps the state, zeros
 at each episode start. A residual agent's graph also takes ``base_action`` (n, 3), the command of
-its classical base controller, which `OnnxPolicy` runs (numpy, `controllers.registry`).
+its classical base controller, which `OnnxPolicy` runs (numpy, `controllers.registry`). What the
+files hold and how they are checked: `controllers.onnx_contract`.
+
+`OnnxPolicy` adds the checks that need onnxruntime or the env: the session gets the checked
+bytes (it reads no file) and its inputs and outputs must be the contract's; the env's actuator,
+actuator settings, vehicle and control period must be those the graph was built for
+(`check_env`); every call's outputs must be finite and the command within [-1, 1]. Each refusal
+is one ValueError line naming the file. Every onnxruntime session of the project runs with
+telemetry off and its memory capped (`onnxruntime_module`).
 
 Nothing here imports torch or stable-baselines3 (a test runs `OnnxPolicy` with them blocked).
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
+from controllers.onnx_contract import (
+    ACTUATORS,
+    CONTRACT_FORMAT,
+    CONTRACT_VERSION,
+    OnnxContract,
+    check_path,
+    contract_path,
+    graph_io,
+    read_contract,
+    sha256_of,
+    short,
+)
+
 __all__ = [
+    "ACTUATORS",
     "CONTRACT_FORMAT",
     "CONTRACT_VERSION",
+    "MAX_RUN_BYTES",
+    "TELEMETRY_VARIABLE",
     "OnnxContract",
     "OnnxPolicy",
+    "check_env",
     "contract_path",
     "inference_session",
+    "onnxruntime_module",
     "read_contract",
+    "sha256_of",
 ]
 
-CONTRACT_FORMAT = "auv-gym onnx policy"
-CONTRACT_VERSION = 1
-INPUT_NAMES = ("observation", "state", "base_action")
-OUTPUT_NAMES = ("action", "next_state")
-
-
-def contract_path(onnx_path: str | os.PathLike) -> Path:
-    """The contract beside an ONNX file: ``policy.onnx`` → ``policy.json``."""
-    return Path(onnx_path).with_suffix(".json")
-
-
-def sha256_of(path: Path) -> str:
-    """The SHA-256 of a file's bytes, hex."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-@dataclass(frozen=True)
-class OnnxContract:
-    """A checked contract (`read_contract`): what the graph takes and gives."""
-
-    onnx: Path
-    file: Path
-    obs_names: tuple[str, ...]
-    state_size: int
-    actuator: str  # the env actuator its commands are for ("paper", "fins", "realistic")
-    allocated: bool  # the agent lists the actuator allocation among its stages
-    control_period_s: float
-    env_id: str
-    env_kwargs: dict[str, Any]  # the env the agent carries (`auv_gym.rollout` runs it there)
-    residual: dict[str, Any] | None  # {"base", "base_kwargs"} of a residual agent
-    raw: dict[str, Any]
-
-    @property
-    def obs_dim(self) -> int:
-        return len(self.obs_names)
-
-
-def _field(data: Mapping[str, Any], key: str, kind: type | tuple[type, ...], where: Path) -> Any:
-    if key not in data:
-        raise ValueError(f"ONNX contract {where}: missing {key!r}")
-    value = data[key]
-    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
-        raise ValueError(f"ONNX contract {where}: {key!r} is {value!r}")
-    return value
-
-
-def read_contract(path: str | os.PathLike) -> OnnxContract:
-    """The contract of an exported agent (the .onnx file or its .json), checked without
-    onnxruntime: format and version, the layout, the ONNX file present with the recorded SHA-256
-    (a damaged or swapped graph is refused). FileNotFoundError or a one-line ValueError naming
-    the file otherwise."""
-    given = Path(path)
-    onnx_file = given if given.suffix == ".onnx" else given.with_suffix(".onnx")
-    file = contract_path(onnx_file)
-    for needed, what in ((onnx_file, "ONNX graph"), (file, "contract")):
-        if not needed.is_file():
-            raise FileNotFoundError(f"exported agent {given}: {what} {needed} does not exist")
-    try:
-        data = json.loads(file.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"ONNX contract {file} is unreadable: {exc}") from None
-    if not isinstance(data, dict) or data.get("format") != CONTRACT_FORMAT:
-        raise ValueError(f"ONNX contract {file}: not an {CONTRACT_FORMAT!r} contract")
-    if data.get("format_version") != CONTRACT_VERSION:
-        raise ValueError(
-            f"ONNX contract {file}: format version {data.get('format_version')!r}, this "
-            f"auv-gym reads {CONTRACT_VERSION}"
-        )
-    observation = _field(data, "observation", dict, file)
-    names = _field(observation, "names", list, file)
-    if not names or not all(isinstance(n, str) for n in names):
-        raise ValueError(f"ONNX contract {file}: observation names must be a list of strings")
-    state = _field(data, "state", dict, file)
-    size = _field(state, "size", int, file)
-    if size < 0:
-        raise ValueError(f"ONNX contract {file}: state size {size} < 0")
-    period = _field(data, "control_period_s", (int, float), file)
-    if not (math.isfinite(period) and period > 0):
-        raise ValueError(f"ONNX contract {file}: control_period_s {period!r} is not > 0")
-    digest = _field(data, "onnx_sha256", str, file)
-    if sha256_of(onnx_file) != digest:
-        raise ValueError(
-            f"ONNX graph {onnx_file} does not match its contract {file} (SHA-256 differs: "
-            "damaged, or replaced without re-exporting)"
-        )
-    residual = data.get("residual")
-    if residual is not None and not (isinstance(residual, dict) and "base" in residual):
-        raise ValueError(f"ONNX contract {file}: residual must be {{'base': ..., ...}}")
-    actuator = _field(data, "actuator", str, file)
-    return OnnxContract(
-        onnx=onnx_file,
-        file=file,
-        obs_names=tuple(names),
-        state_size=size,
-        actuator=actuator,
-        allocated=bool(data.get("allocated", False)),
-        control_period_s=float(period),
-        env_id=_field(data, "env_id", str, file),
-        env_kwargs=dict(_field(data, "env_kwargs", dict, file)),
-        residual=residual,
-        raw=data,
-    )
+# What onnxruntime may allocate while running the project's sessions, all of them together (its
+# memory arena; constant folding at load has onnxruntime's own 1-GiB limit). The exports need
+# about 1 KiB per vehicle of a batch.
+MAX_RUN_BYTES = 512 * 2**20
+ACTION_SLACK = 1e-6  # float32 rounding allowed beyond the action range [-1, 1]
+# onnxruntime ≥ 1.29 writes a device id and an event queue under
+# ~/.cache/Microsoft/DeveloperTools/.onnxruntime/ when imported unless this is set.
+TELEMETRY_VARIABLE = "ORT_DISABLE_TELEMETRY"
+_CAPPED_ARENA: list[bool] = []  # registered once per process (`onnxruntime_module`)
 
 
 @dataclass
@@ -159,12 +82,12 @@ class OnnxPolicy:
     keeps its memory, reset at each episode start.
 
     ``actuator``, ``actuator_params``, ``control_dt``, ``params``, ``observation_names``: the
-    env's, as `controllers.make("onnx", path=..., env=env)` passes them. An agent that allocates its
-    commands was exported for one actuator: another is a ValueError naming the file and the
-    export command that fits; so is another control period. A residual agent's base controller is
-    built with them and ``base_kwargs`` (the scenario's controller settings; a plain agent has
-    no use for them, as in `controllers.loader.load_policy`). ``num_threads``: onnxruntime's
-    intra-op threads.
+    env's, as `controllers.make("onnx", path=..., env=env)` passes them; given, they are checked
+    against what the graph was built for (`check_env`). Without them the policy carries its env
+    (``env_kwargs``: the contract's, its actuator and settings included), where `auv_gym.rollout`
+    runs it. A residual agent's base controller is built with them and ``base_kwargs`` (the
+    scenario's controller settings; a plain agent has no use for them, as in
+    `controllers.loader.load_policy`). ``num_threads``: onnxruntime's intra-op threads.
     """
 
     def __init__(
@@ -179,6 +102,9 @@ class OnnxPolicy:
         observation_names: Any = None,
         base_kwargs: Mapping[str, Any] | None = None,
     ) -> None:
+        check_path(path, "controllers.make('onnx'): path")
+        if isinstance(num_threads, bool) or not (isinstance(num_threads, int) and num_threads >= 1):
+            raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
         contract = read_contract(path)
         where = contract.onnx
         if observation_names is not None and tuple(observation_names) != contract.obs_names:
@@ -187,29 +113,13 @@ class OnnxPolicy:
                 f"({contract.env_id}, {contract.file}), the env gives "
                 f"{len(observation_names)}: run it in the env its contract records"
             )
-        own_actuator = contract.actuator == "realistic" and not contract.allocated
-        if own_actuator and actuator is not None and actuator != contract.actuator:
-            raise ValueError(
-                f"{where} commands the propeller and fins (shaft speed and fin angles), the "
-                f"env has actuator {actuator!r}: fly it with actuator='realistic'"
-            )
-        if contract.allocated and actuator is not None and actuator != contract.actuator:
-            raise ValueError(
-                f"{where} was exported for actuator {contract.actuator!r}, the env has "
-                f"{actuator!r}: auv-gym export AGENT --actuator {actuator} --out FILE.onnx"
-            )
-        if control_dt is not None and not math.isclose(control_dt, contract.control_period_s):
-            raise ValueError(
-                f"{where} acts every {contract.control_period_s:g} s, the env every "
-                f"{control_dt:g} s"
-            )
-        if not (isinstance(num_threads, int) and num_threads >= 1):
-            raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
+        env_given = control_dt is not None or params is not None
+        check_env(contract, actuator, actuator_params, params, control_dt, env_given)
         self.contract = contract
         self.path = str(where)
         self.obs_dim = contract.obs_dim
         self.metadata = dict(contract.raw.get("provenance", {}))
-        self.env_kwargs = dict(contract.env_kwargs)  # the env it carries (`auv_gym.rollout`)
+        self.env_kwargs = dict(contract.env_kwargs)  # the env it was built for (`auv_gym.rollout`)
         self.base = None
         if contract.residual is not None:
             from controllers.registry import make_classical
@@ -218,10 +128,14 @@ class OnnxPolicy:
             env_owned["actuator_params"] = actuator_params
             kwargs = {k: v for k, v in env_owned.items() if v is not None}
             recorded = dict(contract.residual.get("base_kwargs") or {})
-            self.base = make_classical(
-                contract.residual["base"], **{**recorded, **kwargs, **dict(base_kwargs or {})}
-            )
-        self.session = inference_session(where, num_threads)
+            base = contract.residual["base"]
+            try:
+                self.base = make_classical(
+                    base, **{**recorded, **kwargs, **dict(base_kwargs or {})}
+                )
+            except (TypeError, ValueError) as error:
+                raise type(error)(f"{where}: its residual base {base!r}: {error}") from None
+        self.session = inference_session(contract.data, num_threads, where=where)
         _check_session(self.session, contract)
 
     def predict(
@@ -232,7 +146,8 @@ class OnnxPolicy:
         deterministic: bool = True,
     ) -> tuple[np.ndarray, OnnxState]:
         """Commands (float32, (3,) or (n, 3)) for raw observations (d,) or (n, d) (layout:
-        the contract's observation names)."""
+        the contract's observation names). The graph's outputs are checked at every call:
+        shape, finite, the command within [-1, 1]."""
         obs = np.asarray(observation, dtype=np.float32)
         d = self.obs_dim
         if obs.ndim not in (1, 2) or obs.shape[-1] != d:
@@ -259,57 +174,184 @@ class OnnxPolicy:
                 batch, state.base, episode_start, deterministic
             )
             feeds["base_action"] = np.asarray(base_action, np.float32).reshape(n, 3)
-        outputs = self.session.run(None, feeds)
-        action = outputs[0]
+        try:
+            outputs = self.session.run(None, feeds)
+        except Exception as exc:  # onnxruntime's own error types, many lines each
+            raise ValueError(f"ONNX graph {self.path} failed to run: {_first_line(exc)}") from None
+        action = _checked_output(outputs[0], (n, 3), "action", self.path, 1.0 + ACTION_SLACK)
         if self.contract.state_size:
-            state.memory = outputs[1]
+            size = (n, self.contract.state_size)
+            state.memory = _checked_output(outputs[1], size, "next_state", self.path, math.inf)
         return (action[0] if single else action), state
 
     def __repr__(self) -> str:
         return f"OnnxPolicy(path={self.path!r})"
 
 
-def inference_session(source: Path | bytes, num_threads: int = 1, where: Any = None) -> Any:
-    """An onnxruntime session on the CPU of an ONNX file or serialised model, on
-    ``num_threads`` intra-op threads; errors name ``where`` (default: the file)."""
-    where = source if where is None else where
+def check_env(
+    contract: OnnxContract,
+    actuator: str | None,
+    actuator_params: Any,
+    params: Any,
+    control_dt: float | None,
+    env_given: bool,
+) -> None:
+    """An env's actuator, its settings, its vehicle and control period against what the graph
+    was built for: a one-line ValueError naming the file and the mismatch (and the export
+    command that fits, where one does). ``env_given``: the caller passed an env's settings, so
+    ``actuator=None`` means the env draws its actuator per episode ("random")."""
+    from auv_gym.vehicle.actuators import actuator_params_from_spec
+    from controllers.base import actuator_vector
+
+    where = contract.onnx
+    own = contract.actuator
+    if contract.one_actuator and actuator is None and env_given:
+        raise ValueError(
+            f"{where} commands actuator {own!r} only; the env draws its actuator per episode "
+            f"(actuator='random'): fly it with actuator={own!r}"
+        )
+    if actuator is not None and actuator != own:
+        if contract.actuator == "realistic" and not contract.allocated:
+            raise ValueError(
+                f"{where} commands the propeller and fins (shaft speed and fin angles), the "
+                f"env has actuator {actuator!r}: fly it with actuator='realistic'"
+            )
+        if contract.allocated:
+            raise ValueError(
+                f"{where} was exported for actuator {own!r}, the env has {actuator!r}: "
+                f"auv-gym export AGENT --actuator {actuator} --out FILE.onnx"
+            )
+    if contract.allocation is not None and actuator == own:
+        env_params = actuator_params_from_spec(actuator_params)
+        if own == "realistic":
+            built = actuator_params_from_spec(contract.actuator_params)
+            if env_params != built:
+                differ = _changed(env_params, built)
+                wanted = json.dumps(_changed(env_params, type(env_params)()))
+                raise ValueError(
+                    f"{where}'s allocation was built for other actuator_params than the env's "
+                    f"(they differ in {sorted(differ)}): auv-gym export AGENT --actuator "
+                    f"realistic --actuator-params '{wanted}' --out FILE.onnx"
+                )
+        if params is not None:
+            _, gain, *limits = actuator_vector(own, params, env_params)
+            stated = contract.allocation
+            same = math.isclose(gain, stated["fin_gain_kg"], rel_tol=1e-12) and all(
+                math.isclose(a, b, rel_tol=1e-12)
+                for a, b in zip(limits, stated["limits"], strict=True)
+            )
+            if not same:
+                raise ValueError(
+                    f"{where}'s allocation was built for the fin gain K·δ_max "
+                    f"{stated['fin_gain_kg']:.4g} kg and limits {stated['limits']} N, N·m; the "
+                    f"env's vehicle gives {gain:.4g} kg and {[float(v) for v in limits]}"
+                )
+    if control_dt is not None and not math.isclose(control_dt, contract.control_period_s):
+        raise ValueError(
+            f"{where} acts every {contract.control_period_s:g} s, the env every {control_dt:g} s"
+        )
+
+
+def _changed(params: Any, reference: Any) -> dict[str, Any]:
+    """The fields of a dataclass ``params`` that differ from ``reference``'s."""
+    mine, theirs = asdict(params), asdict(reference)
+    return {k: v for k, v in mine.items() if v != theirs[k]}
+
+
+def _first_line(exc: BaseException) -> str:
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    text = lines[0] if lines else type(exc).__name__
+    return text if len(text) <= 300 else text[:297] + "..."
+
+
+def _checked_output(
+    value: Any, shape: tuple[int, int], name: str, where: str, bound: float
+) -> np.ndarray:
+    """An output of the graph: float32 of ``shape``, finite and within ±``bound``; a one-line
+    ValueError naming ``where`` otherwise."""
+    out = np.asarray(value)
+    if out.shape != shape or out.dtype != np.float32:
+        raise ValueError(
+            f"ONNX graph {where} gave {name} of shape {out.shape} {out.dtype}, expected "
+            f"{shape} float32"
+        )
+    bad = ~np.isfinite(out) | (np.abs(out) > bound)
+    if bad.any():
+        row = int(np.argwhere(bad)[0][0])
+        what = "not finite" if not np.isfinite(out[row]).all() else "outside [-1, 1]"
+        raise ValueError(f"ONNX graph {where} gave {name} row {row} {out[row].tolist()}: {what}")
+    return out
+
+
+def onnxruntime_module(where: Any = "an ONNX policy") -> Any:
+    """onnxruntime, imported with its telemetry off and the project's sessions' memory capped.
+
+    `TELEMETRY_VARIABLE` is set before the import (onnxruntime reads it then: without it, the
+    import alone writes a device id and an event queue under
+    ~/.cache/Microsoft/DeveloperTools/.onnxruntime/), and the telemetry events are switched off
+    after it, for an onnxruntime that something else imported first. The memory arena the
+    sessions share is registered once, capped at `MAX_RUN_BYTES`. ImportError naming ``where``
+    and the extra if onnxruntime is missing."""
+    os.environ[TELEMETRY_VARIABLE] = "1"
     try:
         import onnxruntime
     except ImportError as exc:
         raise ImportError(
             f"running {where} needs onnxruntime (pip install 'auv-gym[onnx]'): {exc}"
         ) from exc
+    disable = getattr(onnxruntime, "disable_telemetry_events", None)
+    if disable is not None:
+        disable()
+    if not _CAPPED_ARENA:
+        memory = onnxruntime.OrtMemoryInfo(
+            "Cpu",
+            onnxruntime.OrtAllocatorType.ORT_ARENA_ALLOCATOR,
+            0,
+            onnxruntime.OrtMemType.DEFAULT,
+        )
+        onnxruntime.create_and_register_allocator(
+            memory, onnxruntime.OrtArenaCfg(MAX_RUN_BYTES, -1, -1, -1)
+        )
+        _CAPPED_ARENA.append(True)
+    return onnxruntime
+
+
+def inference_session(source: bytes, num_threads: int = 1, where: Any = None) -> Any:
+    """An onnxruntime session on the CPU of a serialised model (the bytes that were checked:
+    the session reads no file), on ``num_threads`` intra-op threads, telemetry off and its
+    memory in the capped arena (`onnxruntime_module`); errors name ``where``."""
+    onnxruntime = onnxruntime_module(where)
     options = onnxruntime.SessionOptions()
     options.intra_op_num_threads = num_threads
     options.inter_op_num_threads = 1
     options.log_severity_level = 3
-    model = str(source) if isinstance(source, Path) else source
+    options.add_session_config_entry("session.use_env_allocators", "1")
     try:
-        return onnxruntime.InferenceSession(model, options, providers=["CPUExecutionProvider"])
+        return onnxruntime.InferenceSession(source, options, providers=["CPUExecutionProvider"])
     except Exception as exc:  # onnxruntime raises its own error types for a bad graph
-        raise ValueError(f"ONNX graph {where} cannot be loaded: {exc}") from None
+        raise ValueError(f"ONNX graph {where} cannot be loaded: {_first_line(exc)}") from None
+
+
+_ONNX_FLOAT = "tensor(float)"
 
 
 def _check_session(session: Any, contract: OnnxContract) -> None:
-    """The graph's inputs and outputs are the contract's: names, and the observation size."""
-    inputs = {i.name: i.shape for i in session.get_inputs()}
-    expected = {"observation"}
-    if contract.state_size:
-        expected.add("state")
-    if contract.residual is not None:
-        expected.add("base_action")
-    if set(inputs) != expected:
-        raise ValueError(
-            f"ONNX graph {contract.onnx} takes {sorted(inputs)}, its contract {contract.file} "
-            f"says {sorted(expected)}"
-        )
-    size = inputs["observation"][-1]
-    if size != contract.obs_dim:
-        raise ValueError(
-            f"ONNX graph {contract.onnx} takes observations of {size} values, its contract "
-            f"{contract.file} names {contract.obs_dim}"
-        )
-    outputs = [o.name for o in session.get_outputs()]
-    wanted = list(OUTPUT_NAMES[: 2 if contract.state_size else 1])
-    if outputs != wanted:
-        raise ValueError(f"ONNX graph {contract.onnx} gives {outputs}, expected {wanted}")
+    """The graph's inputs and outputs are the contract's: names, order, rank, sizes (the first
+    dimension free: the batch) and type."""
+    inputs, outputs = graph_io(contract.obs_dim, contract.state_size, contract.residual is not None)
+    for kind, declared, wanted in (
+        ("takes", session.get_inputs(), inputs),
+        ("gives", session.get_outputs(), outputs),
+    ):
+        got = [(a.name, _shape(a.shape), a.type) for a in declared]
+        want = [(t["name"], ["n", t["shape"][1]], _ONNX_FLOAT) for t in wanted]
+        if got != want:
+            raise ValueError(
+                f"ONNX graph {contract.onnx} {kind} {short(got)}, its contract "
+                f"{contract.file} says {short(want)}"
+            )
+
+
+def _shape(shape: Any) -> list[Any]:
+    """A declared shape with its free dimensions (a name or None) written "n"."""
+    return ["n" if not isinstance(d, int) else d for d in shape]

@@ -168,11 +168,15 @@ def check_policy_spec(spec: str) -> PolicySpec:
 def check_onnx_spec(spec: str, path: Path) -> None:
     """An exported agent before any episode: onnxruntime installed, contract and graph intact and
     agreeing, and the graph's observation the one of the env its contract records."""
-    if not _importable("onnxruntime"):
+    from controllers.onnx_policy import onnxruntime_module
+
+    try:  # imported with its telemetry off, as every onnxruntime import of the project
+        onnxruntime_module(spec)
+    except ImportError:
         raise MissingExtraError(
             f"policy {spec!r}: running an ONNX policy needs onnxruntime, from the 'onnx' extra: "
             "pip install 'auv-gym[onnx]'"
-        )
+        ) from None
     from auv_gym.sim.config import SimConfig
 
     env_id, env_kwargs = policy_env(spec)
@@ -290,9 +294,11 @@ def policy_env_id(spec: str) -> str:
 
 
 def onnx_env(spec: str, path: Path) -> tuple[str, dict[str, Any]]:
-    """(env id, env arguments) an exported agent's contract records, as `agent_run` gives them
-    for its saved agent; errors name the spec."""
-    from controllers.onnx_policy import read_contract
+    """(env id, env arguments) an exported agent's contract records (the env its graph was
+    built for: an export for the fins or the propeller and fins names that actuator and its
+    settings), as `agent_run` gives them for its saved agent; the contract is checked in full
+    (`controllers.onnx_contract.read_contract`); errors name the spec."""
+    from controllers.onnx_contract import read_contract
 
     try:
         contract = read_contract(path)
