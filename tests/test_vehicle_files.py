@@ -118,15 +118,14 @@ def scaled_remus(factor: float) -> dict:
     powers |= dict.fromkeys(["M_uw", "M_ww", "N_uv", "N_vv", "fin_moment_coeff"], 3)
     powers |= dict.fromkeys(["M_qdot", "N_rdot", "M_qq", "N_rr"], 5)
     powers |= dict.fromkeys(["X_uu", "X_vv", "X_ww", "Y_uv", "Y_vv", "Z_uw", "Z_ww"], 2)
-    powers |= dict.fromkeys(["X_qq", "X_rr", "M_uq", "N_ur"], 4)
+    powers |= dict.fromkeys(["X_qq", "X_rr", "M_uq", "N_ur", "M_max", "N_max"], 4)
+    powers["X_max"] = 0
     layout = remus_layout()
     layout["name"] = "remus_scaled"
     model = layout["model_5dof"]
     assert set(model) == set(powers)  # every coefficient has its power
     for name, power in powers.items():
         model[name] *= factor**power
-    layout["limits"]["M_max"] *= factor**4
-    layout["limits"]["N_max"] *= factor**4
     for fin in layout["actuators"]["fins"]:
         fin["area"] *= factor**2
         fin["x"] *= factor
@@ -162,6 +161,17 @@ def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) ->
         (lambda d: d["model_5dof"].update(m=-1.0), "AUVParams.m must be positive"),
         (lambda d: d["model_5dof"].update(I_y="3"), "[model_5dof] I_y: must be a number"),
         (lambda d: d["limits"].pop("max_surge"), "[limits] max_surge: missing"),
+        (lambda d: d["limits"].update(max_surge=0.0), "[limits] max_surge: must be positive"),
+        (lambda d: d["model_5dof"].pop("N_max"), "[model_5dof] N_max: missing"),
+        (
+            lambda d: d["actuators"]["fins"][0].update(induced_drag=0.5),
+            "'stern_starboard' induced_drag: 0.5: the coupled pairs",
+        ),
+        (
+            lambda d: d["actuators"]["fins"][0].update(radius=-0.1),
+            "'stern_starboard' radius: must be non-negative",
+        ),
+        (lambda d: d["actuators"].update(kt_0=-1.0), "[actuators]"),
         (lambda d: d["model_6dof"].update(diameter=-0.2), "[model_6dof]"),
         (lambda d: d["model_6dof"].update(r_bg=[0.0, 0.0]), "[model_6dof] r_bg: must be a list"),
         (lambda d: d.update(format=2), "format: must be 1"),

@@ -29,6 +29,7 @@ import numpy as np
 
 from auv_gym.support.validation import ArgumentTypeError, keys_within, real
 from auv_gym.vehicle.actuators import ActuatorParams
+from auv_gym.vehicle.fins import FinLayout
 from auv_gym.vehicle.params import AUVParams
 from auv_gym.vehicle.remus6dof import COEFFICIENTS as HULL_6DOF_FIELDS
 from auv_gym.vehicle.remus6dof import SixDofVehicle
@@ -39,6 +40,7 @@ __all__ = [
     "FORMAT_VERSION",
     "VEHICLE_DIRECTORY",
     "FinSpec",
+    "Propeller",
     "Vehicle",
     "VehicleFileError",
     "actuators_from",
@@ -53,9 +55,10 @@ FORMAT_VERSION = 1
 DEFAULT_VEHICLE = "remus100"
 VEHICLE_DIRECTORY = Path(__file__).parent / "data"
 
-# `AUVParams` fields the file keeps in [limits]; the rest of them are [model_5dof], but for
-# `fin_max`, which is the fins' own angle limit (the smaller of the two pairs').
-LIMIT_FIELDS = ("max_surge", "X_max", "M_max", "N_max")
+# `AUVParams` fields the file keeps in [limits] (every vehicle has them); the rest are
+# [model_5dof] (the "paper" actuator's limits X_max, M_max, N_max with them), but for `fin_max`,
+# which is the fins' own angle limit (the smallest of theirs).
+LIMIT_FIELDS = ("max_surge",)
 MODEL_5DOF_FIELDS = tuple(
     f.name for f in fields(AUVParams) if f.name not in (*LIMIT_FIELDS, "fin_max", "surge_coriolis")
 )
@@ -80,6 +83,8 @@ FIN_FIELDS = (
     "lift_slope",
     "x",
     "axis_roll",
+    "radius",
+    "induced_drag",
     "angle_max",
     "servo_time_constant",
     "rate_max",
@@ -99,13 +104,17 @@ class VehicleFileError(ValueError):
 class FinSpec:
     """One control fin (SI): its area A [m²], lift slope C_L [1/rad], position x [m] along the
     body (aft negative), the roll angle of its axis [rad] (0: a horizontal stern plane, π/2: a
-    vertical rudder), angle limit [rad], servo time constant [s] and rate limit [rad/s]."""
+    vertical rudder), the radius [m] of its centre of pressure from the body's x axis, its
+    induced-drag factor [-] (`auv_gym.vehicle.fins`), angle limit [rad], servo time constant [s]
+    and rate limit [rad/s]."""
 
     name: str
     area: float
     lift_slope: float
     x: float
     axis_roll: float
+    radius: float
+    induced_drag: float
     angle_max: float
     servo_time_constant: float
     rate_max: float
@@ -122,24 +131,63 @@ class FinSpec:
 
 
 @dataclass(frozen=True)
+class Propeller:
+    """The propeller, its motor and the water of [actuators] (the propeller fields of
+    `ActuatorParams`, docs/model.md §2.6; SI)."""
+
+    water_density: float
+    prop_diameter: float
+    thrust_deduction: float
+    advance_speed_ratio: float
+    kt_0: float
+    kq_0: float
+    kt_max: float
+    kq_max: float
+    advance_max: float
+    rpm_max: float
+    motor_time_constant: float
+
+
+@dataclass(frozen=True)
 class Vehicle:
     """One vehicle: name, limits and models (module doc). ``source`` is the file it was read
     from ("" for a mapping)."""
 
     name: str
     description: str
-    hull_5dof: AUVParams
-    actuators: ActuatorParams
+    limits: dict[str, float]
+    hull_5dof: AUVParams | None  # None: the vehicle has no model in the paper's 5-DOF form
+    actuators: ActuatorParams | None  # the fins as the simulator's two pairs; None: they are not
     fins: tuple[FinSpec, ...]
     hull_6dof: SixDofVehicle
     sensors: SensorConfig
+    propeller: Propeller
     sources: tuple[str, ...] = ()
     source: str = ""
+    pairs_problem: str = ""  # why the fins are not two coupled pairs (when actuators is None)
 
     @property
     def max_surge(self) -> float:
         """Top speed [m/s]."""
-        return self.hull_5dof.max_surge
+        return self.limits["max_surge"]
+
+    @property
+    def fin_layout(self) -> FinLayout:
+        """The fins as the arrays of the general fin model (`auv_gym.vehicle.fins`)."""
+        return FinLayout.from_fins(self.fins, self.propeller.water_density)
+
+    def check_simulated(self) -> None:
+        """Raise ValueError, in one line naming the vehicle and its file, unless the simulator
+        can fly it: a 5-DOF model (the env's state and the paper's controllers are built on it)
+        and fins that drive as the two coupled pairs of the fin model."""
+        where = f"vehicle {self.name!r}" + (f" ({self.source})" if self.source else "")
+        if self.hull_5dof is None:
+            raise VehicleFileError(
+                f"{where} has no [model_5dof]: the env flies vehicles with the paper's 5-DOF "
+                "model (its 6-DOF hull alone is used by auv_gym.vehicle.fins and the cross-check)"
+            )
+        if self.actuators is None:
+            raise VehicleFileError(self.pairs_problem)
 
 
 def shipped_vehicles() -> tuple[str, ...]:
@@ -236,13 +284,25 @@ def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
     if not isinstance(surge_coriolis, bool):
         raise fail("surge_coriolis", f"must be true or false, got {surge_coriolis!r:.40}")
 
-    fins, actuators = _actuators(section("actuators", (*PROPULSION_FIELDS, "fins")), number, fail)
-    limits = section("limits", LIMIT_FIELDS)
-    model = section("model_5dof", MODEL_5DOF_FIELDS)
-    values = {key: number(f"[limits] {key}", v) for key, v in limits.items()}
-    values |= {key: number(f"[model_5dof] {key}", v) for key, v in model.items()}
-    values["fin_max"] = min(actuators.delta_max_stern, actuators.delta_max_rudder)
-    hull_5dof = _built(AUVParams, {**values, "surge_coriolis": surge_coriolis}, fail, "model_5dof")
+    actuator_values = section("actuators", (*PROPULSION_FIELDS, "fins"))
+    fins, actuators, pairs_problem = _actuators(actuator_values, number, fail)
+    propeller = Propeller(
+        **{key: number(f"[actuators] {key}", actuator_values[key]) for key in PROPULSION_FIELDS}
+    )
+    limits = {
+        key: number(f"[limits] {key}", v) for key, v in section("limits", LIMIT_FIELDS).items()
+    }
+    for key, value in limits.items():
+        if not value > 0.0:
+            raise fail(f"[limits] {key}", f"must be positive, got {value:g}")
+    hull_5dof = None
+    if "model_5dof" in data:
+        model = section("model_5dof", MODEL_5DOF_FIELDS)
+        values = {key: number(f"[model_5dof] {key}", v) for key, v in model.items()}
+        values["fin_max"] = min(fin.angle_max for fin in fins)
+        hull_5dof = _built(
+            AUVParams, {**limits, **values, "surge_coriolis": surge_coriolis}, fail, "model_5dof"
+        )
 
     hull = section("model_6dof", HULL_6DOF_FIELDS)
     hull_values = {}
@@ -263,11 +323,14 @@ def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
     return Vehicle(
         name=name,
         description=description,
+        limits=limits,
         hull_5dof=hull_5dof,
         actuators=actuators,
+        pairs_problem=pairs_problem,
         fins=fins,
         hull_6dof=hull_6dof,
         sensors=_sensors(data.get("sensors", {"preset": "ideal"}), fail),
+        propeller=propeller,
         sources=tuple(sources),
         source="" if where == "vehicle mapping" else where,
     )
@@ -292,9 +355,16 @@ def _built(kind: type, values: dict[str, Any], fail, section_name: str):
         raise fail(f"[{section_name}]", str(exc)) from None
 
 
-def _actuators(values: dict[str, Any], number, fail) -> tuple[tuple[FinSpec, ...], ActuatorParams]:
-    """The fins of [[actuators.fins]] and the propeller of [actuators] as `ActuatorParams`."""
+def _actuators(
+    values: dict[str, Any], number, fail
+) -> tuple[tuple[FinSpec, ...], ActuatorParams | None, str]:
+    """The fins of [[actuators.fins]], the propeller of [actuators] and the fins as the
+    simulator's pairs, in one `ActuatorParams` (None, and why, when the fins are not pairs)."""
     propulsion = {key: number(f"[actuators] {key}", values[key]) for key in PROPULSION_FIELDS}
+    try:  # the propeller's ranges, whatever the fins
+        ActuatorParams(**propulsion)
+    except (TypeError, ValueError) as exc:
+        raise fail("[actuators]", str(exc)) from None
     listed = values["fins"]
     if not isinstance(listed, list) or not listed:
         raise fail("[[actuators.fins]]", "must list at least one fin")
@@ -314,13 +384,21 @@ def _actuators(values: dict[str, Any], number, fail) -> tuple[tuple[FinSpec, ...
         where = f"[[actuators.fins]] {entry['name']!r}"
         fin = FinSpec(
             name=entry["name"],
-            **{key: number(f"{where} {key}", entry[key]) for key in FIN_FIELDS[1:]},
+            **{
+                key: math.inf
+                if key == "rate_max" and entry[key] == math.inf  # no rate limit
+                else number(f"{where} {key}", entry[key])
+                for key in FIN_FIELDS[1:]
+            },
         )
         for key in ("area", "lift_slope", "angle_max"):
             if not getattr(fin, key) > 0.0:
                 raise fail(f"{where} {key}", f"must be positive, got {getattr(fin, key):g}")
         if fin.angle_max > math.pi / 2:
             raise fail(f"{where} angle_max", f"must be at most π/2 rad, got {fin.angle_max:g}")
+        for key in ("radius", "induced_drag"):
+            if getattr(fin, key) < 0.0:
+                raise fail(f"{where} {key}", f"must be non-negative, got {getattr(fin, key):g}")
         if fin.servo_time_constant < 0.0:
             raise fail(f"{where} servo_time_constant", "must be non-negative")
         if not fin.rate_max > 0.0:
@@ -329,7 +407,11 @@ def _actuators(values: dict[str, Any], number, fail) -> tuple[tuple[FinSpec, ...
     names = [fin.name for fin in fins]
     if len(set(names)) != len(names):
         raise fail("[[actuators.fins]] name", f"fin names repeat: {names}")
-    stern, rudder = fin_pairs(tuple(fins), fail)
+    check_steerable(tuple(fins), fail)
+    try:
+        stern, rudder = fin_pairs(tuple(fins), fail)
+    except VehicleFileError as exc:
+        return tuple(fins), None, str(exc)
     try:
         actuators = ActuatorParams(
             **propulsion,
@@ -346,16 +428,31 @@ def _actuators(values: dict[str, Any], number, fail) -> tuple[tuple[FinSpec, ...
         )
     except (TypeError, ValueError) as exc:
         raise fail("[actuators]", str(exc)) from None
-    return tuple(fins), actuators
+    return tuple(fins), actuators, ""
+
+
+def check_steerable(fins: tuple[FinSpec, ...], fail) -> None:
+    """Refuse a layout whose fins cannot turn the vehicle in pitch or in yaw: no fin with a
+    horizontal share of its lift (|cos φ| > 0) away from x = 0, or none with a vertical one."""
+    for moment, share, kind in (
+        ("pitch", "pitch_share", "stern plane"),
+        ("yaw", "yaw_share", "rudder"),
+    ):
+        if not any(getattr(fin, share) > AXIS_TOLERANCE and fin.x != 0.0 for fin in fins):
+            raise fail(
+                "[[actuators.fins]]",
+                f"no fin can produce a {moment} moment (no {kind} away from x = 0): "
+                "the vehicle could not be steered",
+            )
 
 
 def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
     """The fins as the simulator's two coupled pairs: ((area, lift slope, x, angle limit) of the
     stern planes, the same of the rudders) [m², 1/rad, m, rad], areas summed.
 
-    Refuses, naming the fin, a layout that cannot produce a pitch or a yaw moment, an axis that
-    is neither horizontal nor vertical, and fins of one pair (or servos of any two fins) that
-    differ, which the coupled pairs cannot represent.
+    Refuses, naming the fin, an axis that is neither horizontal nor vertical, an induced-drag
+    factor other than 1, and fins of one pair (or servos of any two fins) that differ, which the
+    coupled pairs cannot represent.
     """
     if fail is None:
 
@@ -374,13 +471,16 @@ def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
                 f"{fin.axis_roll:g} rad is neither horizontal (0, π) nor vertical (±π/2); the "
                 "fin model drives stern planes and rudders as coupled pairs",
             )
-    for group, moment in (("stern planes", "pitch"), ("rudders", "yaw")):
-        if not any(fin.x != 0.0 for fin in groups[group]):
+    for fin in fins:
+        if fin.induced_drag != 1.0:
             raise fail(
-                "[[actuators.fins]]",
-                f"no fin can produce a {moment} moment (no {group[:-1]} away from x = 0): "
-                "the vehicle could not be steered",
+                f"[[actuators.fins]] {fin.name!r} induced_drag",
+                f"{fin.induced_drag:g}: the coupled pairs of the fin model have the induced drag "
+                "of Fossen's remus100 (1)",
             )
+    for group in groups.values():
+        if not group:
+            raise fail("[[actuators.fins]]", "the fin model needs both stern planes and rudders")
     first = fins[0]
     for fin in fins[1:]:
         for key in ("servo_time_constant", "rate_max"):
@@ -394,7 +494,7 @@ def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
     for group in ("stern planes", "rudders"):
         lead = groups[group][0]
         for fin in groups[group][1:]:
-            for key in ("lift_slope", "x", "angle_max"):
+            for key in ("lift_slope", "x", "radius", "angle_max"):
                 if getattr(fin, key) != getattr(lead, key):
                     raise fail(
                         f"[[actuators.fins]] {fin.name!r} {key}",
@@ -428,6 +528,7 @@ def hull_from(vehicle: Vehicle, params: AUVParams | Mapping[str, Any] | None) ->
     field values [SI] replacing the vehicle's, with an optional ``scale`` dict of factors applied
     after them, e.g. ``{"m": 32.0, "scale": {"X_uu": 1.2}}``. An unknown name is a ValueError
     naming it."""
+    vehicle.check_simulated()
     if params is None:
         return vehicle.hull_5dof
     if isinstance(params, AUVParams):

@@ -1,0 +1,115 @@
+"""The torpedo of Fossen's PythonVehicleSimulator, added as a vehicle file alone: its
+accelerations against the reference's own `dynamics`, the general fin model against the REMUS
+100's pairs, and the allocation of stern-plane and rudder commands onto any fin layout."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import auv_gym  # noqa: F401  (registers the env ids)
+from auv_gym.vehicle import VehicleFileError, load_vehicle
+from auv_gym.vehicle.actuators import ActuatorParams
+from auv_gym.vehicle.fins import accelerations, allocate_fins, fin_wrench
+from auv_gym.vehicle.remus6dof import REMUS6DOF
+from auv_gym.vehicle.remus6dof import accelerations as remus_accelerations
+
+DATA = Path(__file__).parent / "data"
+FIN_LIMIT = math.radians(15.0)
+
+
+def test_torpedo_accelerations_equal_the_reference_on_400_states() -> None:
+    data = json.loads((DATA / "pvs_torpedo_6dof.json").read_text())
+    rows = np.array(data["rows"])
+    assert rows.shape == (400, 25)
+    assert data["columns"][12:16] == [
+        "delta_top_rudder",
+        "delta_bottom_rudder",
+        "delta_starboard_stern",
+        "delta_port_stern",
+    ]
+    # the grid reaches past the limits, meets currents and holds independent fin angles
+    assert (np.abs(rows[:, 12:16]) > FIN_LIMIT).any(axis=1).sum() > 200
+    assert (np.abs(rows[:, 16]) > 1525.0).sum() > 30
+    assert (rows[:, 17] > 0.0).sum() > 300
+    assert (np.abs(rows[:, 12] + rows[:, 13]) > 0.05).sum() > 150  # rudders apart
+    torpedo = load_vehicle("torpedo")
+    layout = torpedo.fin_layout
+    worst = 0.0
+    for row in rows:
+        got = accelerations(
+            torpedo.hull_6dof,
+            torpedo.propeller,
+            layout,
+            row[0:6],
+            row[6:12],
+            row[12:16],
+            row[16],
+            row[17],
+            row[18],
+        )
+        want = row[19:25]
+        worst = max(worst, float(np.linalg.norm(got - want) / np.linalg.norm(want)))
+    assert worst <= 1e-9  # measured: 9.9e-15
+
+
+def test_the_general_fin_model_is_the_remus100_pair_model() -> None:
+    """The REMUS 100's four fins (pairs lumped on the axis, induced drag 1) under the allocated
+    commands give the 6-DOF REMUS 100's accelerations on the reference grid of that vehicle."""
+    remus = load_vehicle("remus100")
+    layout = remus.fin_layout
+    rows = np.array(json.loads((DATA / "pvs_remus100_6dof.json").read_text())["rows"])
+    hull = REMUS6DOF.__class__(**{**REMUS6DOF.record(), "actuators": remus.actuators})
+    worst = 0.0
+    for row in rows:
+        delta_r, delta_s, n_rpm = row[12], row[13], row[14]
+        fins = allocate_fins(layout, delta_s, delta_r)
+        got = accelerations(
+            hull, remus.propeller, layout, row[0:6], row[6:12], fins, n_rpm, row[15], row[16]
+        )
+        want = remus_accelerations(hull, row[0:6], row[6:12], row[12:15], row[15], row[16])
+        worst = max(worst, float(np.linalg.norm(got - want) / np.linalg.norm(want)))
+    assert worst <= 1e-12
+
+
+def test_allocation_from_the_geometry() -> None:
+    remus = load_vehicle("remus100").fin_layout
+    delta_s, delta_r = 0.123456789, -0.3
+    # starboard and port stern planes, top and bottom rudders: today's pair commands, exactly
+    assert allocate_fins(remus, delta_s, delta_r).tolist() == [delta_s, -delta_s, delta_r, -delta_r]
+    assert (
+        allocate_fins(remus, 2.0, -2.0).tolist() == (np.array([1, -1, -1, 1]) * np.pi / 6).tolist()
+    )
+    torpedo = load_vehicle("torpedo").fin_layout
+    # the reference's own command vector for (δ_r, δ_s): [δ_r, −δ_r, −δ_s, δ_s]
+    assert allocate_fins(torpedo, 0.1, 0.05).tolist() == [0.05, -0.05, -0.1, 0.1]
+    # every fin's lift adds to the pair's force: heave −δ_s, side −δ_r; no roll moment
+    tau = fin_wrench(torpedo, np.array([1.5, 0.0, 0.0]), allocate_fins(torpedo, 0.1, 0.0))
+    assert tau[2] < 0.0 and abs(tau[1]) < 1e-15 and abs(tau[3]) < 1e-15
+    tau = fin_wrench(torpedo, np.array([1.5, 0.0, 0.0]), allocate_fins(torpedo, 0.0, 0.1))
+    assert tau[1] < 0.0 and abs(tau[2]) < 1e-15 and abs(tau[3]) < 1e-15
+    # an X-tail (axes at ±45°, ±135°): each fin takes a share of both commands
+    layout = dataclasses.replace(torpedo, axis_roll=np.radians([45.0, 135.0, -45.0, -135.0]))
+    tau = fin_wrench(layout, np.array([1.5, 0.0, 0.0]), allocate_fins(layout, 0.1, 0.0))
+    assert tau[2] < 0.0 and abs(tau[1]) < 1e-15 and abs(tau[3]) < 1e-15
+
+
+def test_the_torpedo_file_loads_and_the_env_says_why_it_does_not_fly_it_yet() -> None:
+    torpedo = load_vehicle("torpedo")
+    assert torpedo.hull_5dof is None and torpedo.actuators is None
+    assert torpedo.hull_6dof == REMUS6DOF.__class__(actuators=ActuatorParams.pvs_remus100())
+    assert [fin.name for fin in torpedo.fins] == [
+        "rudder_top",
+        "rudder_bottom",
+        "stern_port",
+        "stern_starboard",
+    ]
+    assert torpedo.max_surge == 2.5
+    with pytest.raises(VehicleFileError, match=r"vehicle 'torpedo' \(.*torpedo.toml\) has no"):
+        gym.make("AUVPath3D-v0", vehicle="torpedo", plant="6dof", actuator="realistic")
