@@ -27,7 +27,29 @@ import numpy as np
 
 from auv_gym.vehicle.actuators import ActuatorParams
 
-__all__ = ["allocate", "fin_angle", "fin_authority", "fin_gain"]
+__all__ = ["ALLOCATION_FIELDS", "allocate", "fin_angle", "fin_authority", "fin_gain"]
+
+# The `ActuatorParams` fields `allocate` and `fin_gain` read: an allocation built for one set is
+# the allocation of every set equal in these (the torque curve, the motor's and servos' lags and
+# the servo rate limit are not inverted). tests/test_onnx_trust.py holds the list to the code.
+ALLOCATION_FIELDS = (
+    "water_density",
+    "prop_diameter",
+    "thrust_deduction",
+    "advance_speed_ratio",
+    "kt_0",
+    "kt_max",
+    "advance_max",
+    "rpm_max",
+    "fin_area_stern",
+    "fin_area_rudder",
+    "lift_coeff_stern",
+    "lift_coeff_rudder",
+    "x_stern",
+    "x_rudder",
+    "delta_max_stern",
+    "delta_max_rudder",
+)
 
 
 def fin_gain(params: ActuatorParams) -> float:

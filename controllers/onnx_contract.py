@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from controllers.allocation import ALLOCATION_FIELDS
+
 __all__ = [
     "ACTUATORS",
     "CONTRACT_FORMAT",
@@ -40,6 +42,7 @@ __all__ = [
     "MAX_CONTRACT_BYTES",
     "MAX_GRAPH_BYTES",
     "OnnxContract",
+    "allocation_settings",
     "check_contract",
     "check_path",
     "contract_path",
@@ -250,6 +253,11 @@ def _contract_of(data: dict[str, Any], onnx_file: Path, file: Path, graph: bytes
         )
     if params is not None and not isinstance(params, dict):
         raise ValueError(f"ONNX contract {file}: actuator_params is {params!r:.60}, not a mapping")
+    unread = sorted(set(params or {}) - set(ALLOCATION_FIELDS))
+    if unread:
+        raise ValueError(
+            f"ONNX contract {file}: actuator_params {unread} are not read by the allocation"
+        )
     residual = data.get("residual")
     if residual is not None:
         _check_residual(residual, file)
@@ -280,7 +288,10 @@ def _contract_of(data: dict[str, Any], onnx_file: Path, file: Path, graph: bytes
         "observation": (list(config.observation.names), names),
     }
     if allocates and actuator == "realistic":
-        built["actuator_params"] = (config.actuator_params, own_params)
+        built["actuator_params"] = (
+            allocation_settings(config.actuator_params),
+            allocation_settings(own_params),
+        )
     if not math.isclose(config.control_dt, period):
         built["control period"] = (config.control_dt, period)
     for what, (env_value, own) in built.items():
@@ -307,6 +318,13 @@ def _contract_of(data: dict[str, Any], onnx_file: Path, file: Path, graph: bytes
         stages=tuple(stages),
         data=graph,
     )
+
+
+def allocation_settings(params: Any) -> dict[str, Any]:
+    """The fields of `ActuatorParams` ``params`` the allocation reads
+    (`controllers.allocation.ALLOCATION_FIELDS`): what an allocation to the realistic actuator
+    depends on."""
+    return {name: getattr(params, name) for name in ALLOCATION_FIELDS}
 
 
 def short(value: Any) -> str:

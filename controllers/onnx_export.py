@@ -222,7 +222,33 @@ def _export_settings(
         params = actuator_params_from_spec(actuator_params)
     except (TypeError, ValueError) as error:
         raise ValueError(f"--actuator-params: {error}") from None
-    return actuator, (None if params == ActuatorParams() else params)
+    changed = allocation_params(params)
+    unread = sorted(
+        name
+        for name, value in dataclasses.asdict(params).items()
+        if value != getattr(ActuatorParams(), name) and name not in changed
+    )
+    if unread:
+        raise ValueError(
+            f"--actuator-params {unread}: the allocation does not read them (the torque curve, "
+            "the motor's and servos' lags, the servo rate limit), so they would not change the "
+            "graph; drop them (give them to the env instead)"
+        )
+    return actuator, (params if changed else None)
+
+
+def allocation_params(params: Any) -> dict[str, Any]:
+    """The fields of `ActuatorParams` ``params`` that the allocation reads
+    (`controllers.allocation.ALLOCATION_FIELDS`) where they differ from the defaults."""
+    from auv_gym.vehicle.actuators import ActuatorParams
+    from controllers.allocation import ALLOCATION_FIELDS
+
+    default = ActuatorParams()
+    return {
+        name: getattr(params, name)
+        for name in ALLOCATION_FIELDS
+        if getattr(params, name) != getattr(default, name)
+    }
 
 
 def write_export(target: Path, data: bytes, contract: Mapping[str, Any]) -> Path:
@@ -414,7 +440,6 @@ def _contract(
     from auv_gym import recorded_env_id
     from auv_gym.sim.config import SimConfig
     from auv_gym.sim.observation import ObservationConfig
-    from auv_gym.vehicle.actuators import ActuatorParams
     from controllers.agent import agent_env_kwargs
 
     metadata = files.metadata
@@ -427,8 +452,7 @@ def _contract(
         env_kwargs["actuator"] = actuator
     params = None
     if actuator_params is not None:
-        default = dataclasses.asdict(ActuatorParams())
-        params = {k: v for k, v in dataclasses.asdict(actuator_params).items() if v != default[k]}
+        params = allocation_params(actuator_params)
         env_kwargs["actuator_params"] = params
     for key in ("plant", "plant_params"):
         if key in trained and plant != "5dof":

@@ -23,7 +23,7 @@ import json
 import math
 import os
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -33,6 +33,7 @@ from controllers.onnx_contract import (
     CONTRACT_FORMAT,
     CONTRACT_VERSION,
     OnnxContract,
+    allocation_settings,
     check_path,
     contract_path,
     graph_io,
@@ -224,14 +225,16 @@ def check_env(
     if contract.allocation is not None and actuator == own:
         env_params = actuator_params_from_spec(actuator_params)
         if own == "realistic":
-            built = actuator_params_from_spec(contract.actuator_params)
-            if env_params != built:
-                differ = _changed(env_params, built)
-                wanted = json.dumps(_changed(env_params, type(env_params)()))
+            built = allocation_settings(actuator_params_from_spec(contract.actuator_params))
+            env_settings = allocation_settings(env_params)
+            if env_settings != built:
+                differ = sorted(k for k in built if built[k] != env_settings[k])
+                default = allocation_settings(type(env_params)())
+                wanted = {k: v for k, v in env_settings.items() if v != default[k]}
                 raise ValueError(
                     f"{where}'s allocation was built for other actuator_params than the env's "
-                    f"(they differ in {sorted(differ)}): auv-gym export AGENT --actuator "
-                    f"realistic --actuator-params '{wanted}' --out FILE.onnx"
+                    f"(they differ in {differ}): auv-gym export AGENT --actuator realistic "
+                    f"--actuator-params '{json.dumps(wanted)}' --out FILE.onnx"
                 )
         if params is not None:
             _, gain, *limits = actuator_vector(own, params, env_params)
@@ -250,12 +253,6 @@ def check_env(
         raise ValueError(
             f"{where} acts every {contract.control_period_s:g} s, the env every {control_dt:g} s"
         )
-
-
-def _changed(params: Any, reference: Any) -> dict[str, Any]:
-    """The fields of a dataclass ``params`` that differ from ``reference``'s."""
-    mine, theirs = asdict(params), asdict(reference)
-    return {k: v for k, v in mine.items() if v != theirs[k]}
 
 
 def _first_line(exc: BaseException) -> str:

@@ -147,8 +147,42 @@ def test_every_reference_agent_ships_a_current_export(agent):
     assert props["env_id"] == env_id
     assert json.loads(props["observation_names"]) == expected
     own = metadata.get("env_kwargs", {}).get("actuator") == "realistic"  # ppo_as_built
-    assert props["actuator"] == ("realistic" if own else "paper")
-    assert float(props["control_period_s"]) == 0.05
+    assert props["actuator"] == raw["actuator"] == ("realistic" if own else "paper")
+    assert float(props["control_period_s"]) == raw["control_period_s"] == 0.05
+    # everything the graph was built for, in the contract and the graph alike
+    assert raw["format_version"] == 2 and props["plant"] == raw["plant"] == "5dof"
+    assert json.loads(props["env_kwargs"]) == raw["env_kwargs"]
+    assert raw["env_kwargs"].get("actuator", "paper") == raw["actuator"]
+    assert json.loads(props["stage_settings"]) == raw["stages"]
+    assert json.loads(props["actuator_params"]) is raw["actuator_params"] is None
+    assert json.loads(props["allocation"]) is raw["allocation"] is None  # none on its actuator
+    assert json.loads(props["allocated"]) is raw["allocated"]
+
+
+@pytest.mark.parametrize("agent", REFERENCE_AGENTS)
+def test_shipped_contracts_hold_no_machine_paths(agent):
+    """Was: the exporting machine's absolute paths and training files outside the repository."""
+    raw = json.loads((AGENTS_DIR / agent / "policy.json").read_text())
+
+    def strings(value):
+        if isinstance(value, dict):
+            for k, v in value.items():
+                yield k
+                yield from strings(v)
+        elif isinstance(value, list):
+            for v in value:
+                yield from strings(v)
+        elif isinstance(value, str):
+            yield value
+
+    found = list(strings(raw))
+    assert len(found) > 90  # names, units, provenance: the walk reached them
+    for text in found:
+        assert not text.startswith(("/", "~")) and not Path(text).is_absolute(), text
+        assert not any(root in text for root in ("/root", "/work", "/tmp", "/home")), text
+    assert raw["provenance"]["agent"] == agent
+    config = raw["provenance"].get("config_file")
+    assert config is None or (ROOT / config).is_file()  # a file of this repository
 
 
 @pytest.mark.rl
@@ -286,3 +320,116 @@ def test_the_runtime_checks_the_env_and_its_input():
     action, state = policy.predict(np.zeros((2, 49), np.float32))
     assert action.shape == (2, 3) and action.dtype == np.float32
     assert np.all(np.abs(action) <= 1.0) and state.n == 2
+
+
+@pytest.mark.parametrize(
+    ("agent", "options", "expected"),
+    [
+        # no allocation stage: the graph would be the same, its commands relabelled
+        ("ppo_helix", ["--actuator", "fins"], "--actuator fins: {meta} lists no actuator_alloc"),
+        ("sac_helix", ["--actuator", "realistic"], "--actuator realistic: {meta} lists no"),
+        # actuator settings where no allocation to the propeller and fins reads them
+        ("ppo_generalist", ["--actuator-params", '{"rpm_max": 1400}'], "with --actuator paper"),
+        (
+            "ppo_generalist",
+            ["--actuator", "fins", "--actuator-params", '{"rpm_max": 1400}'],
+            "with --actuator fins there is no propeller to configure",
+        ),
+        (
+            "ppo_as_built",
+            ["--actuator-params", '{"rpm_max": 1400}'],
+            "{meta} lists no actuator_allocation stage for them to change",
+        ),
+        (
+            "ppo_generalist",
+            ["--actuator", "realistic", "--actuator-params", '{"fin_rate_max": 0.9}'],
+            "--actuator-params ['fin_rate_max']: the allocation does not read them",
+        ),
+        (
+            "ppo_generalist",
+            ["--actuator", "realistic", "--actuator-params", '{"rpm": 1}'],
+            "--actuator-params: ",
+        ),
+    ],
+)
+def test_export_options_that_would_not_change_the_graph_are_refused(
+    tmp_path, capsys, agent, options, expected
+):
+    """Was: --actuator fins on an agent without an allocation relabelled its commands, and
+    --actuator-params with paper or fins were ignored."""
+    from benchmarks.runner.export import main as export
+
+    out = tmp_path / "agent.onnx"
+    with pytest.raises(SystemExit) as exit_:
+        export([agent, "--out", str(out), *options])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and len(err.splitlines()) == 1, err
+    assert expected.format(meta=AGENTS_DIR / agent / "metadata.json") in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def exports_for_other_actuators(tmp_path_factory):
+    """ppo_generalist exported for the fins, and for the propeller and fins with a 1400-rpm
+    shaft limit (two exports, about 4 s each)."""
+    pytest.importorskip("stable_baselines3")
+    from controllers.onnx_export import export_onnx
+
+    folder = tmp_path_factory.mktemp("exports")
+    agent = AGENTS_DIR / "ppo_generalist"
+    fins, _, _ = export_onnx(agent, folder / "fins.onnx", actuator="fins")
+    slow, _, _ = export_onnx(
+        agent, folder / "slow.onnx", actuator="realistic", actuator_params={"rpm_max": 1400.0}
+    )
+    return fins, slow
+
+
+@pytest.mark.rl
+def test_an_export_for_the_fins_states_it_and_is_flown_there(exports_for_other_actuators):
+    """Was: the contract's env did not name the fins, so a run from it flew the paper's
+    actuator (0.036 m RMS reported where the fins give 0.285 m)."""
+    import onnx
+
+    from auv_gym.rollout import rollout
+
+    fins, _ = exports_for_other_actuators
+    raw = read_contract(fins).raw
+    assert raw["actuator"] == raw["env_kwargs"]["actuator"] == "fins" and raw["allocated"]
+    # K·δ_max = 6.15 kg/rad · π/6 rad; the paper vehicle's X_max, M_max, N_max
+    assert raw["allocation"]["fin_gain_kg"] == pytest.approx(6.15 * np.pi / 6, rel=1e-12)
+    assert raw["allocation"]["limits"] == [50.0, 10.0, 10.0]
+    assert [s["name"] for s in raw["stages"]] == ["envelope_guard", "actuator_allocation"]
+    props = {p.key: p.value for p in onnx.load(fins).metadata_props}
+    assert json.loads(props["env_kwargs"])["actuator"] == "fins"
+    assert json.loads(props["allocation"]) == raw["allocation"]
+    env_id, env = policy_env(f"onnx:{fins}")
+    assert (env_id, env["actuator"]) == ("AUVPath3DPreview-v0", "fins")
+    policy = controllers.make("onnx", path=str(fins))
+    trajectory = rollout(policy, 0, max_time=2.0)  # the env from the contract alone
+    assert trajectory.metadata["env_kwargs"]["actuator"] == "fins"
+    own = policy.env_kwargs
+    with pytest.raises(ValueError, match=r"exported for actuator 'fins', the env has 'paper'"):
+        controllers.make("onnx", path=str(fins), env={**own, "actuator": "paper"})
+    with pytest.raises(ValueError, match=r"draws its actuator per episode \(actuator='random'\)"):
+        controllers.make("onnx", path=str(fins), env={**own, "actuator": "random"})
+    with pytest.raises(ValueError, match=r"fin gain K·δ_max 3\.22 kg .* vehicle gives 2\.641 kg"):
+        controllers.make("onnx", path=str(fins), env={**own, "params": {"fin_max": 0.4294}})
+
+
+@pytest.mark.rl
+def test_an_export_for_other_actuator_settings_states_them(exports_for_other_actuators):
+    """Was: --actuator-params changed the graph but were not recorded, so the export was
+    accepted beside other settings (commands up to 2 apart)."""
+    _, slow = exports_for_other_actuators
+    raw = read_contract(slow).raw
+    assert raw["actuator_params"] == raw["env_kwargs"]["actuator_params"] == {"rpm_max": 1400.0}
+    own = controllers.make("onnx", path=str(slow)).env_kwargs
+    assert own["actuator"] == "realistic"
+    default = {**own, "actuator_params": None}
+    with pytest.raises(ValueError, match=r"differ in \['rpm_max'\]\): auv-gym export AGENT "):
+        controllers.make("onnx", path=str(slow), env=default)
+    # the servo rate limit is not in the allocation: the same graph flies it
+    slower_fins = {**own, "actuator_params": {"rpm_max": 1400.0, "fin_rate_max": 0.9}}
+    policy = controllers.make("onnx", path=str(slow), env=slower_fins)
+    action, _ = policy.predict(np.zeros((2, 49), np.float32))
+    assert action.shape == (2, 3)
