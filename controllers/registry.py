@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from auv_gym.vehicle.record import DerivedAUVParams
 from controllers.backstepping import Backstepping
 from controllers.command_filtered import CommandFilteredBackstepping
 from controllers.fbsm import FBSM
@@ -46,12 +47,19 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "pid_as_built": ("pid_los", {**_COLOS, "k_z": 0.1}),
 }
 CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
+# The controllers whose laws are built on the vehicle's 5-DOF model (docs/model.md §4).
+MODEL_BASED = ("fbsm", "backstepping", "command_filtered")
 UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] != "lowpass")
 
 
 def make_classical(name: str, **kwargs: Any) -> Any:
     """The classical controller ``name`` (a name of `CLASSICAL`); keyword arguments override
     its preset's (see `controllers.make`)."""
+    if isinstance(kwargs.get("params"), DerivedAUVParams) and _law(name, kwargs) in MODEL_BASED:
+        raise ValueError(
+            f"{name} is built on the vehicle's 5-DOF model, and this vehicle has none (its "
+            "5-DOF record is derived from the 6-DOF hull): fly a PID + LOS controller"
+        )
     if name in PRESETS:
         base, preset = PRESETS[name]
         return make_classical(base, **{**preset, **kwargs})
@@ -66,6 +74,14 @@ def make_classical(name: str, **kwargs: Any) -> Any:
     if name == "lowpass":  # a preset's low-pass over an unfiltered classical base
         return make_lowpass(**kwargs)
     raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")
+
+
+def _law(name: str, kwargs: dict[str, Any]) -> str:
+    """The control law under the classical name ``name`` (through presets and low-pass)."""
+    while name in PRESETS:
+        base, preset = PRESETS[name]
+        name, kwargs = base, {**preset, **kwargs}
+    return _law(kwargs.get("base", "fbsm_colos"), {}) if name == "lowpass" else name
 
 
 def make_lowpass(

@@ -14,9 +14,14 @@ import numpy as np
 import pytest
 
 import auv_gym  # noqa: F401  (registers the env ids)
-from auv_gym.vehicle import VehicleFileError, load_vehicle
+import controllers
+from auv_gym.metrics import compute_metrics
+from auv_gym.rollout import rollouts
+from auv_gym.sim.config import SimConfig
+from auv_gym.vehicle import load_vehicle
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.fins import accelerations, allocate_fins, fin_wrench
+from auv_gym.vehicle.record import DerivedAUVParams
 from auv_gym.vehicle.remus6dof import REMUS6DOF
 from auv_gym.vehicle.remus6dof import accelerations as remus_accelerations
 
@@ -100,16 +105,30 @@ def test_allocation_from_the_geometry() -> None:
     assert tau[2] < 0.0 and abs(tau[1]) < 1e-15 and abs(tau[3]) < 1e-15
 
 
-def test_the_torpedo_file_loads_and_the_env_says_why_it_does_not_fly_it_yet() -> None:
+def test_the_torpedo_flies_on_the_6dof_plant_with_pid_los_and_refuses_fbsm() -> None:
     torpedo = load_vehicle("torpedo")
-    assert torpedo.hull_5dof is None and torpedo.actuators is None
+    assert torpedo.hull_5dof is None
     assert torpedo.hull_6dof == REMUS6DOF.__class__(actuators=ActuatorParams.pvs_remus100())
+    assert torpedo.actuators.fin_induced_drag == 0.0  # the reference's fins have lift only
+    assert torpedo.actuators.fin_area_stern == 2 * 0.00665  # a cross flies as two pairs
     assert [fin.name for fin in torpedo.fins] == [
         "rudder_top",
         "rudder_bottom",
         "stern_port",
         "stern_starboard",
     ]
-    assert torpedo.max_surge == 2.5
-    with pytest.raises(VehicleFileError, match=r"vehicle 'torpedo' \(.*torpedo.toml\) has no"):
-        gym.make("AUVPath3D-v0", vehicle="torpedo", plant="6dof", actuator="realistic")
+    with pytest.raises(ValueError, match="has no \\[model_5dof\\]: it flies on plant='6dof'"):
+        gym.make("AUVPath3D-v0", vehicle="torpedo")
+    env = {"vehicle": "torpedo", "plant": "6dof", "actuator": "realistic", "u_desired": 2.0}
+    config = SimConfig.from_kwargs(**env, disturbance="none")
+    assert isinstance(config.params, DerivedAUVParams) and config.params.max_surge == 2.5
+    assert config.params.m11 == pytest.approx(torpedo.hull_6dof.mass[0, 0])
+    for name in ("fbsm", "backstepping_colos", "command_filtered"):
+        with pytest.raises(ValueError, match=f"^{name} is built on the vehicle's 5-DOF model"):
+            controllers.make(name, env=config)
+    pid = controllers.make("pid_as_built", env=config)
+    (episode,) = rollouts(pid, [0], max_time=200.0, **env, disturbance="none")
+    assert episode.termination_reason == "time_limit"
+    assert compute_metrics(episode)["rms_distance"] < 1.0  # [m] measured 0.48 over 300 s
+    with pytest.raises(ValueError, match="params: vehicle 'torpedo' has no \\[model_5dof\\]"):
+        SimConfig.from_kwargs(**env, params={"m": 30.0})

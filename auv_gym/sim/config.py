@@ -244,6 +244,12 @@ class SimConfig:
                 f"plant_params describe the hull of plant={SIX_DOF_PLANT!r}; with plant="
                 f"{plant!r:.40} they would do nothing: drop them or give plant={SIX_DOF_PLANT!r}"
             )
+        if the_vehicle.hull_5dof is None and (plant, actuator) != (SIX_DOF_PLANT, "realistic"):
+            raise ValueError(
+                f"vehicle {the_vehicle.name!r} has no [model_5dof]: it flies on plant='6dof' "
+                f"with actuator='realistic' only, got plant={plant!r:.20}, "
+                f"actuator={actuator!r:.20}"
+            )
         if isinstance(sensors, str) and sensors == "vehicle":
             sensors = the_vehicle.sensors
         return cls(

@@ -91,6 +91,8 @@ class ActuatorParams:
     delta_max_rudder: float = math.pi / 6.0  # [rad] |δ_r| limit
     fin_rate_max: float = math.radians(60.0)  # [rad/s] |δ̇| limit (assumed; inf: none)
     fin_time_constant: float = 0.1  # [s] T_δ of δ̇ = (δ_c − δ)/T_δ
+    # [-] κ of the fins' drag −κ ½ρU²AC_Lδ²: 1 in the reference's remus100, 0 in its torpedo
+    fin_induced_drag: float = 1.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -102,6 +104,8 @@ class ActuatorParams:
                 object.__setattr__(self, f.name, real(name, value, 0.0, unit="s"))
             elif f.name in ("x_stern", "x_rudder", "kt_max", "kq_max"):
                 object.__setattr__(self, f.name, real(name, value))
+            elif f.name == "fin_induced_drag":
+                object.__setattr__(self, f.name, real(name, value, 0.0, 10.0))
             elif f.name == "thrust_deduction":
                 object.__setattr__(self, f.name, real(name, value, 0.0, 1.0, high_open=True))
             elif f.name.startswith("delta_max"):
@@ -273,7 +277,7 @@ def fin_forces(delta_s, delta_r, u, v, w, a):
     k_s = half_rho * (u * u + w * w) * a.fin_area_stern * a.lift_coeff_stern  # ½ρU_v²A_sC_Ls
     y_r = -k_r * delta_r
     z_s = -k_s * delta_s
-    drag = -k_r * delta_r * delta_r - k_s * delta_s * delta_s  # X_r + X_s
+    drag = a.fin_induced_drag * (-k_r * delta_r * delta_r - k_s * delta_s * delta_s)  # X_r + X_s
     return drag, y_r, z_s, -a.x_stern * z_s, a.x_rudder * y_r
 
 

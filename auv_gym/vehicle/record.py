@@ -36,15 +36,18 @@ from auv_gym.vehicle.remus6dof import SixDofVehicle
 from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
 
 __all__ = [
+    "CRUISE_SPEED",
     "DEFAULT_VEHICLE",
     "FORMAT_VERSION",
     "VEHICLE_DIRECTORY",
+    "DerivedAUVParams",
     "FinSpec",
     "Propeller",
     "Vehicle",
     "VehicleFileError",
     "actuators_from",
     "check_mass_matrix",
+    "derived_5dof",
     "fin_pairs",
     "hull_from",
     "load_vehicle",
@@ -94,6 +97,17 @@ SECTIONS = ("limits", "model_5dof", "actuators", "model_6dof", "sensors")
 # A fin's axis counts as horizontal or vertical when its roll angle is within this of one
 # [rad]: 1e-9 rad moves a 1-m fin's lift line by a nanometre.
 AXIS_TOLERANCE = 1e-9
+
+
+CRUISE_SPEED = 1.0  # [m/s] where a 6-DOF hull's linear damping is read as u-proportional terms
+
+
+@dataclass(frozen=True)
+class DerivedAUVParams(AUVParams):
+    """A 5-DOF record derived from a vehicle's 6-DOF hull (`derived_5dof`), for what needs a
+    vehicle's inertias, damping and limits without flying the 5-DOF model: the PID gains'
+    placement, the observation's bounds, the actuator limits. Not a model of the vehicle: the
+    paper's model-based controllers refuse it (`controllers.registry`)."""
 
 
 class VehicleFileError(ValueError):
@@ -176,16 +190,14 @@ class Vehicle:
         """The fins as the arrays of the general fin model (`auv_gym.vehicle.fins`)."""
         return FinLayout.from_fins(self.fins, self.propeller.water_density)
 
+    def simulated_5dof(self) -> AUVParams:
+        """The 5-DOF record the env carries: the vehicle's own, or one derived from its 6-DOF
+        hull (`derived_5dof`) for a vehicle without a [model_5dof]."""
+        return self.hull_5dof if self.hull_5dof is not None else derived_5dof(self)
+
     def check_simulated(self) -> None:
-        """Raise ValueError, in one line naming the vehicle and its file, unless the simulator
-        can fly it: a 5-DOF model (the env's state and the paper's controllers are built on it)
-        and fins that drive as the two coupled pairs of the fin model."""
-        where = f"vehicle {self.name!r}" + (f" ({self.source})" if self.source else "")
-        if self.hull_5dof is None:
-            raise VehicleFileError(
-                f"{where} has no [model_5dof]: the env flies vehicles with the paper's 5-DOF "
-                "model (its 6-DOF hull alone is used by auv_gym.vehicle.fins and the cross-check)"
-            )
+        """Raise `VehicleFileError`, in one line naming the fin and the file, unless the
+        simulator can fly the fins: as the two coupled pairs of the fin model."""
         if self.actuators is None:
             raise VehicleFileError(self.pairs_problem)
 
@@ -425,6 +437,7 @@ def _actuators(
             delta_max_rudder=rudder[3],
             fin_time_constant=fins[0].servo_time_constant,
             fin_rate_max=fins[0].rate_max,
+            fin_induced_drag=fins[0].induced_drag,
         )
     except (TypeError, ValueError) as exc:
         raise fail("[actuators]", str(exc)) from None
@@ -450,9 +463,9 @@ def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
     """The fins as the simulator's two coupled pairs: ((area, lift slope, x, angle limit) of the
     stern planes, the same of the rudders) [m², 1/rad, m, rad], areas summed.
 
-    Refuses, naming the fin, an axis that is neither horizontal nor vertical, an induced-drag
-    factor other than 1, and fins of one pair (or servos of any two fins) that differ, which the
-    coupled pairs cannot represent.
+    Refuses, naming the fin, an axis that is neither horizontal nor vertical, and fins of one pair
+    (or the servos or induced drag of any two fins) that differ, which the coupled pairs cannot
+    represent.
     """
     if fail is None:
 
@@ -471,24 +484,17 @@ def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
                 f"{fin.axis_roll:g} rad is neither horizontal (0, π) nor vertical (±π/2); the "
                 "fin model drives stern planes and rudders as coupled pairs",
             )
-    for fin in fins:
-        if fin.induced_drag != 1.0:
-            raise fail(
-                f"[[actuators.fins]] {fin.name!r} induced_drag",
-                f"{fin.induced_drag:g}: the coupled pairs of the fin model have the induced drag "
-                "of Fossen's remus100 (1)",
-            )
     for group in groups.values():
         if not group:
             raise fail("[[actuators.fins]]", "the fin model needs both stern planes and rudders")
     first = fins[0]
     for fin in fins[1:]:
-        for key in ("servo_time_constant", "rate_max"):
+        for key in ("servo_time_constant", "rate_max", "induced_drag"):
             if getattr(fin, key) != getattr(first, key):
                 raise fail(
                     f"[[actuators.fins]] {fin.name!r} {key}",
                     f"{getattr(fin, key):g} differs from fin {first.name!r}'s "
-                    f"{getattr(first, key):g}; the fins share one servo model",
+                    f"{getattr(first, key):g}; the fins share one servo and drag model",
                 )
     pairs = []
     for group in ("stern planes", "rudders"):
@@ -529,8 +535,13 @@ def hull_from(vehicle: Vehicle, params: AUVParams | Mapping[str, Any] | None) ->
     after them, e.g. ``{"m": 32.0, "scale": {"X_uu": 1.2}}``. An unknown name is a ValueError
     naming it."""
     vehicle.check_simulated()
+    if params is not None and vehicle.hull_5dof is None:
+        raise ValueError(
+            f"params: vehicle {vehicle.name!r} has no [model_5dof] to change (its 5-DOF record "
+            "is derived from the 6-DOF hull); edit the vehicle file's [model_6dof] instead"
+        )
     if params is None:
-        return vehicle.hull_5dof
+        return vehicle.simulated_5dof()
     if isinstance(params, AUVParams):
         return params
     names = [f.name for f in fields(AUVParams)]
@@ -569,3 +580,71 @@ def actuators_from(
         "actuator_params", actuator_params, [f.name for f in fields(ActuatorParams)]
     )
     return dataclasses.replace(vehicle.actuators, **values)
+
+
+def derived_5dof(vehicle: Vehicle) -> DerivedAUVParams:
+    """The 5-DOF record of a vehicle without one, from its 6-DOF hull and actuators [SI].
+
+    Derived: the rigid body (the spheroid's mass, weight = buoyancy, I_y and I_z about the
+    origin, z_g, z_b), the added mass (the hull's Lamb factors), the axial drag
+    X_u|u| = −½ρ S C_D0, the heave, pitch and yaw damping of the hull at `CRUISE_SPEED` u0 as
+    u-proportional terms (Z_uw = −(d_33 + ½ρ S C_Lα u0)/u0 with the hull's lift slope, M_uq =
+    −d_55/u0, N_ur = −d_66/u0, Y_uv as Z_uw), the fin authority |x_s| ½ρ A_s C_Ls, and the
+    limits: full thrust at rest, the fins' moments at top speed and full deflection. The
+    remaining coefficients (quadratic cross-flow, Munk and coupling terms) are 0: nothing that
+    flies such a vehicle reads them (the 6-DOF plant has its own, docs/vehicles.md §1.3).
+    """
+    hull, actuators = vehicle.hull_6dof, vehicle.actuators
+    if actuators is None:
+        vehicle.check_simulated()
+    rho, u0 = hull.water_density, CRUISE_SPEED
+    aspect = hull.diameter**2 / hull.wing_area
+    lift_slope = math.pi * aspect / (1.0 + math.sqrt(1.0 + (aspect / 2.0) ** 2))
+    damping = np.diag(hull.damping_base)
+    heave = -(damping[2] + 0.5 * rho * hull.wing_area * lift_slope * u0) / u0
+    stern, rudder = actuators.fin_moment_coeff()
+    n_rps = actuators.rpm_max / 60.0
+    thrust = rho * actuators.prop_diameter**4 * actuators.kt_0 * n_rps * n_rps
+    top = vehicle.max_surge
+    return DerivedAUVParams(
+        m=hull.mass_kg,
+        W=hull.weight,
+        B=hull.weight,
+        I_y=float(hull.rigid_body[4, 4]),
+        I_z=float(hull.rigid_body[5, 5]),
+        z_g=float(hull.r_bg[2]),
+        z_b=float(hull.r_bb[2]),
+        X_udot=-float(hull.added_mass[0, 0]),
+        Y_vdot=-float(hull.added_mass[1, 1]),
+        Z_wdot=-float(hull.added_mass[2, 2]),
+        M_qdot=-float(hull.added_mass[4, 4]),
+        N_rdot=-float(hull.added_mass[5, 5]),
+        X_uu=-0.5 * rho * hull.wing_area * hull.zero_lift_drag,
+        X_vv=0.0,
+        X_ww=0.0,
+        X_qq=0.0,
+        X_rr=0.0,
+        X_vr=0.0,
+        X_wq=0.0,
+        Y_ur=0.0,
+        Y_uv=heave,
+        Y_vv=0.0,
+        Z_uq=0.0,
+        Z_uw=heave,
+        Z_ww=0.0,
+        M_qq=0.0,
+        M_uq=float(-damping[4] / u0),
+        M_uw=0.0,
+        M_ww=0.0,
+        N_uv=0.0,
+        N_vv=0.0,
+        N_ur=float(-damping[5] / u0),
+        N_rr=0.0,
+        fin_moment_coeff=stern,
+        fin_max=min(actuators.delta_max_stern, actuators.delta_max_rudder),
+        X_max=(1.0 - actuators.thrust_deduction) * thrust,
+        M_max=stern * actuators.delta_max_stern * top * top,
+        N_max=rudder * actuators.delta_max_rudder * top * top,
+        max_surge=top,
+        surge_coriolis=False,
+    )
