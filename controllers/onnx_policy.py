@@ -39,7 +39,6 @@ from controllers.onnx_contract import (
     graph_io,
     read_contract,
     sha256_of,
-    short,
 )
 
 __all__ = [
@@ -334,7 +333,7 @@ _ONNX_FLOAT = "tensor(float)"
 
 def _check_session(session: Any, contract: OnnxContract) -> None:
     """The graph's inputs and outputs are the contract's: names, order, rank, sizes (the first
-    dimension free: the batch) and type."""
+    dimension free: the batch) and type; the first that differs is named."""
     inputs, outputs = graph_io(contract.obs_dim, contract.state_size, contract.residual is not None)
     for kind, declared, wanted in (
         ("takes", session.get_inputs(), inputs),
@@ -342,13 +341,22 @@ def _check_session(session: Any, contract: OnnxContract) -> None:
     ):
         got = [(a.name, _shape(a.shape), a.type) for a in declared]
         want = [(t["name"], ["n", t["shape"][1]], _ONNX_FLOAT) for t in wanted]
-        if got != want:
+        if len(got) != len(want):
             raise ValueError(
-                f"ONNX graph {contract.onnx} {kind} {short(got)}, its contract "
-                f"{contract.file} says {short(want)}"
+                f"ONNX graph {contract.onnx} {kind} {[g[0] for g in got]}, its contract "
+                f"{contract.file} says {[w[0] for w in want]}"
             )
+        for mine, theirs in zip(got, want, strict=True):
+            if mine != theirs:
+                raise ValueError(
+                    f"ONNX graph {contract.onnx} {kind} {mine}, its contract {contract.file} "
+                    f"says {theirs}"
+                )
 
 
 def _shape(shape: Any) -> list[Any]:
-    """A declared shape with its free dimensions (a name or None) written "n"."""
-    return ["n" if not isinstance(d, int) else d for d in shape]
+    """A declared shape with a free first dimension (the batch: a name or None) written "n"."""
+    return [
+        ("n" if k == 0 else d) if not isinstance(d, int) or d is None else d
+        for k, d in enumerate(shape)
+    ]
