@@ -4,11 +4,14 @@
     auv-gym export ppo_generalist --actuator realistic --out p.onnx # propeller and fins
     auv-gym export agent:runs/x/agent --out x.onnx
 
-Writes FILE.onnx and FILE.json (`controllers.onnx_export`); the graph is run against the Python
-agent before anything is written. Every problem (an unknown agent, a damaged agent folder, an
-unknown stage, a missing normalisation file, a missing output folder) is one line naming the
-file, exit code 2, with nothing written. Needs the rl extra (to read the network) and the onnx
-extra.
+Writes FILE.onnx and FILE.json (`controllers.onnx_export`), both or neither; the graph is run
+against the Python agent before anything is written, and the contract states everything the
+graph was built for (env with its actuator and settings, control period, plant, stages). Every
+problem (an unknown agent, a damaged agent folder, an unknown stage, a missing normalisation
+file, a missing output folder, an option that would not change the graph: --actuator for an
+agent without an allocation stage, --actuator-params without an allocation to the propeller and
+fins or naming settings it does not read) is one line naming the file or the option, exit code
+2, with nothing written. Needs the rl extra (to read the network) and the onnx extra.
 """
 
 from __future__ import annotations
@@ -44,12 +47,14 @@ def build_parser() -> argparse.ArgumentParser:
         choices=ACTUATORS,
         default=None,
         help="the env actuator the commands are for (the allocation stage is built for it; "
-        "default: paper, or realistic for an agent trained on the propeller and fins)",
+        "default: paper, or realistic for an agent trained on the propeller and fins; another "
+        "is refused for an agent without an allocation stage)",
     )
     parser.add_argument(
         "--actuator-params",
         default=None,
-        help="JSON of the realistic actuators' settings (auv_gym.vehicle.actuators)",
+        help="JSON of the realistic actuators' settings the allocation is built for "
+        "(auv_gym.vehicle.actuators; only those it reads, with --actuator realistic)",
     )
     return parser
 
