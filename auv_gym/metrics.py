@@ -64,11 +64,16 @@ def check_window(duration: float, transient: float | None, control_dt: float) ->
     """
     start = window_start(duration, transient)
     if duration - start < control_dt - _T_TOL:
+        # the shortest episode whose window holds two samples: transient + control_dt, or
+        # 2 control_dt under the default rule min(100 s, duration/2)
+        shortest = control_dt + (transient if transient is not None else control_dt)
+        longer = f"an episode of at least {shortest:g} s"
+        latest = duration - control_dt  # the latest transient that would do: none below 0
+        remedy = f"a transient ≤ {latest:g} s or {longer}" if latest >= 0.0 else longer
         raise ValueError(
             f"the metrics window t ≥ {start:g} s of a {duration:g}-s episode holds fewer than two "
             f"samples (control period {control_dt:g} s), so every windowed metric would be "
-            f"undefined: use a transient ≤ {duration - control_dt:g} s or a longer episode "
-            "(docs/design.md §3.9)"
+            f"undefined: use {remedy} (docs/design.md §3.9)"
         )
     return start
 

@@ -207,7 +207,8 @@ class AUVPath3DEnv(gym.Env):
     - `noise_hold` a whole multiple of `physics_dt`, ≤ 1e6 s; given together with a `NoiseConfig`
       it must equal that config's `hold` (no silent override). Amplitudes in [0, 1e4] N or N·m.
     - `current`: mean and std per axis within ±10 m/s (std ≥ 0), time constant in (0, 1e6] s.
-    - `surge_limit` in (u_desired, 10] m/s, inf or "vehicle" (`params.max_surge`).
+    - `surge_limit` in (u_desired, 10] m/s, inf or "vehicle" (`params.max_surge`); a random
+      start's surge stays below 0.75 `surge_limit` (0-1.5 m/s otherwise).
     - `param_uncertainty` in [0, 1); `u_desired` in (0, 10] m/s, so that u_D and u_p ≤ 2u_D stay
       inside their observation bounds; `sigma` > 0 m.
     - `corridor` in [0.01, 500] m, inside the ±500 m bounds of the observed errors; `max_pitch`
@@ -223,7 +224,14 @@ class AUVPath3DEnv(gym.Env):
     - `sensors`: each σ finite and ≥ 0 (at most 1 m/s, 0.5 rad, 0.5 rad/s, 10 m, 100 m for the
       fixes), `dvl_dropout` in [0, 0.99], `fix_interval` a whole multiple of `control_dt` (0:
       every step) or None, `delay` an integer in [0, 1000] control steps
-      (`auv_gym.vehicle.sensors`).
+      (`auv_gym.vehicle.sensors`); the navigation filter's `filter_*` settings in [1e-6, 10]
+      and only with ``navigation="kalman"``, which also needs `fix_noise` >= 1e-6 m.
+    - `plant_params`: `length` in [0.01, 1000] m, `diameter` in [length/1000, length),
+      `water_density` in [1, 1e4] kg/m³, `gravity` in (0, 100] m/s², damping time constants
+      > 0 and ratios in [0, 100]; and every mode of the hull steppable by RK4 at
+      `physics_dt`: |λ|·physics_dt <= 2.5, at the stiff end of `param_uncertainty`'s draws
+      (REMUS 100 at 0.01 s: time constants >= 0.004 s, roll damping ratio <= 19.3; the error
+      names the coefficient and its bound, docs/model.md §15.1).
 
     Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
     in (0, 1e5] m, ω in [−1e3, 0) ∪ (0, 1e3] rad per unit s (ω > 0 a starboard, ω < 0 a port

@@ -58,7 +58,7 @@ from auv_gym.sim.task import (
     RewardWeights,
     TaskLimits,
 )
-from auv_gym.support.validation import ArgumentTypeError, choice, flag, real, vector
+from auv_gym.support.validation import ArgumentTypeError, choice, flag, is_real, real, vector
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.params import AUVParams, remus100
 from auv_gym.vehicle.record import (
@@ -233,6 +233,11 @@ class SimConfig:
                     f" (params.max_surge), got {surge_limit!r:.80}"
                 )
             surge_limit = hull.max_surge
+        elif not is_real(surge_limit):
+            raise ArgumentTypeError(
+                f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
+                f" (params.max_surge), got {surge_limit!r:.80} ({type(surge_limit).__name__})"
+            )
         if actuator_params is not None and actuator != "realistic":
             raise ValueError(
                 f"actuator_params configure the propeller and fins of actuator='realistic'; "
@@ -373,6 +378,8 @@ class SimConfig:
         )
         self.params.check_perturbation(self.param_uncertainty)  # every draw valid, or refused
         put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
+        if self.plant == SIX_DOF_PLANT:  # a hull RK4 can step at physics_dt, every draw
+            self.plant_params.check_step(self.physics_dt, self.param_uncertainty)
         most = MAX_SUBSTEPS * self.physics_dt
         put(
             "control_dt",

@@ -10,7 +10,12 @@ import numpy as np
 from auv_gym.paths.shapes import Path
 from auv_gym.sim.config import START_OFFSET, SimConfig
 
-__all__ = ["draw_start"]
+__all__ = ["MAX_START_SURGE", "START_SURGE_SHARE", "draw_start"]
+
+MAX_START_SURGE = 1.5  # [m/s] the fastest surge of a start drawn on the first turn
+# The drawn surge stays below this share of `surge_limit`, so that no episode starts as
+# "overspeed" (0.75 × 2 m/s: the speed-limited ids keep 1.5 m/s, their draws bit for bit).
+START_SURGE_SHARE = 0.75
 
 
 def draw_start(
@@ -41,7 +46,8 @@ def _on_the_first_turn(
     cfg: SimConfig, rng: np.random.Generator, path: Path, draws: np.ndarray
 ) -> tuple[np.ndarray, float, float, float]:
     """A start anywhere on the first turn: up to 8 m off the path, ±60° of heading error and
-    0–1.5 m/s of surge; a rotation turns only its heading (it lies along the path)."""
+    0–1.5 m/s of surge (at most 0.75 `surge_limit`); a rotation turns only its heading (it lies
+    along the path)."""
     s_span = min(40.0, path.s_end) if math.isfinite(path.s_end) else 40.0
     s0 = 0.5 * (draws[1] + 1.0) * 0.9 * s_span
     p, dp, _ = path.evaluate(s0)
@@ -50,7 +56,9 @@ def _on_the_first_turn(
     rotation = _rotation(cfg, rng)
     if rotation != 0.0:
         path_heading = path_heading + rotation
-    return position, path_heading + (math.pi / 3) * draws[5], s0, 0.75 * (draws[6] + 1.0)
+    # 0-1.5 m/s, below a surge limit under 2 m/s: the start must not end the episode
+    top = min(MAX_START_SURGE, START_SURGE_SHARE * cfg.limits.surge_limit)
+    return position, path_heading + (math.pi / 3) * draws[5], s0, 0.5 * top * (draws[6] + 1.0)
 
 
 def _rotation(cfg: SimConfig, rng: np.random.Generator) -> float:

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from auv_gym.ocean.depth_envelope import RANDOM_START_RISE, path_depth_range
-from auv_gym.paths.offset import shift_path
+from auv_gym.paths.offset import ShiftedPath, shift_path
 from auv_gym.paths.shapes import Path
 
 if TYPE_CHECKING:
@@ -81,12 +81,21 @@ def check_below_the_surface(config: SimConfig) -> None:
         what = "a drawn path (climbing at up to its largest flight-path angle) and its start"
     if highest < 0.0:
         move = math.ceil(-highest)
+        # the remedy adds to the offset already given (a fixed path carries it, moved)
+        given = config.path.offset if isinstance(config.path, ShiftedPath) else config.path_offset
+        remedy = [_number(given[0]), _number(given[1]), _number(given[2] + move)]
         raise ValueError(
             f"{users} act below the sea surface z = 0, but {what} can reach z = {highest:.4g} m "
-            f"over the {arc:g} m an episode covers: move the path at least {move} m down "
-            f"(path_offset = [0, 0, {move}]), or place the surface above it "
+            f"over the {arc:g} m an episode covers: move the path at least {move} m further "
+            f"down (path_offset = [{', '.join(remedy)}]), or place the surface above it "
             "(surface_above_path, without a depth envelope)"
         )
+
+
+def _number(value: float) -> str:
+    """A coordinate [m] as typed: 615 rather than 615.0."""
+    value = float(value)
+    return str(int(value)) if value.is_integer() and abs(value) < 1e15 else repr(value)
 
 
 def episode_surface_z(config: SimConfig, path: Path, start_z: float) -> float:

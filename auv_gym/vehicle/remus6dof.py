@@ -72,6 +72,30 @@ _HOERNER_Y = np.array(
 
 
 _OSWALD = 0.7  # [-] Oswald efficiency e of the hull's induced drag
+# Documented ranges of the geometry (docs/model.md §15.1): a prolate spheroid from 1 cm to 1 km
+# no more slender than 1000:1 (at d/L = 1e-10 its eccentricity rounds to 1 and Lamb's k-factors
+# divide by zero), in water and gravity of finite, physical size.
+LENGTH_RANGE = (0.01, 1000.0)  # [m]
+MAX_SLENDERNESS = 1000.0  # [-] length / diameter
+WATER_DENSITY_RANGE = (1.0, 1e4)  # [kg/m³]
+MAX_GRAVITY = 100.0  # [m/s²]
+# RK4 is stable for λ·dt inside its stability region, which crosses the negative real axis at
+# −2.785 and the imaginary axis at ±2√2. A hull is accepted at a physics step dt when every mode
+# of its linearisation at rest (damping, restoring and mass, `SixDofVehicle.stiffest_rate`)
+# has |λ|·dt <= RK4_STEP_LIMIT: the half-disc of that radius lies inside the region, with room
+# for the speed-dependent terms it leaves out. Measured (docs/model.md §15.1): beyond it the
+# first step blows up ("non_finite"), within it every episode stays finite.
+RK4_STEP_LIMIT = 2.5
+# The damping coefficient of each axis (u, v, w, p, q, r) of the linearisation's modes.
+_AXIS_COEFFICIENTS = (
+    "surge_time_constant",
+    "sway_time_constant",
+    "heave_time_constant",
+    "roll_damping_ratio",
+    "pitch_damping_ratio",
+    "yaw_time_constant",
+)
+_AXIS_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 
 
 def _skew(a: np.ndarray) -> np.ndarray:
@@ -179,12 +203,24 @@ class SixDofVehicle:
                 "roll_added_inertia",
             ):
                 put(self, name, real(where, value, 0.0, 100.0))
+            elif name == "length":
+                put(self, name, real(where, value, *LENGTH_RANGE, unit="m"))
+            elif name == "water_density":
+                put(self, name, real(where, value, *WATER_DENSITY_RANGE, unit="kg/m³"))
+            elif name == "gravity":
+                put(self, name, real(where, value, 0.0, MAX_GRAVITY, low_open=True, unit="m/s²"))
             else:
                 put(self, name, real(where, value, 0.0, math.inf, low_open=True))
         if not self.diameter < self.length:
             raise ValueError(
                 f"SixDofVehicle.diameter = {self.diameter} m must be below its length "
                 f"{self.length} m (a prolate spheroid)"
+            )
+        if self.diameter * MAX_SLENDERNESS < self.length:
+            raise ValueError(
+                f"SixDofVehicle.diameter = {self.diameter:.4g} m must be at least length/"
+                f"{MAX_SLENDERNESS:g} = {self.length / MAX_SLENDERNESS:.4g} m (a spheroid more "
+                f"slender than {MAX_SLENDERNESS:g}:1 has no finite added mass in float64)"
             )
         if not self.r_bg[2] > self.r_bb[2]:
             raise ValueError(
@@ -195,6 +231,106 @@ class SixDofVehicle:
             raise ArgumentTypeError(
                 f"SixDofVehicle.actuators must be an ActuatorParams, got {self.actuators!r:.80}"
             )
+
+    def _rest_modes(self, damping: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Eigenvalues and eigenvectors of the hull linearised at rest, state (φ, θ, ν), with
+        the linear damping diagonal ``damping`` (6,): ν̇ = −M⁻¹(D ν + G (φ, θ)), φ̇ = p, θ̇ = q;
+        G the restoring moments' slopes (W = B). Coriolis, lift and cross-flow terms are
+        quadratic in ν and vanish there."""
+        w = self.weight
+        (xg, yg, zg), (xb, yb, zb) = self.r_bg, self.r_bb
+        slopes = np.zeros((6, 2))
+        slopes[3, 0] = slopes[4, 1] = w * (zg - zb)
+        slopes[5, 0], slopes[5, 1] = -w * (xg - xb), -w * (yg - yb)
+        a = np.zeros((8, 8))
+        a[0, 5] = a[1, 6] = 1.0
+        a[2:, 2:] = -self.inverse_mass * damping  # M⁻¹ diag(d): column j times d_j
+        a[2:, :2] = -self.inverse_mass @ slopes
+        return np.linalg.eig(a)
+
+    def stiffest_rate(self) -> tuple[float, str]:
+        """(|λ| [1/s] of the fastest mode of the hull at rest (`_rest_modes`), the axis whose
+        motion dominates it: "surge" … "yaw"). RK4 at a physics step dt steps it when
+        |λ|·dt <= `RK4_STEP_LIMIT`."""
+        values, vectors = self._rest_modes(np.diag(self.damping_base))
+        k = int(np.argmax(np.abs(values)))
+        motion = np.abs(vectors[2:, k])  # ν part: φ, θ move with p, q
+        motion[3] += abs(vectors[0, k])
+        motion[4] += abs(vectors[1, k])
+        return float(abs(values[k])), _AXIS_NAMES[int(np.argmax(motion))]
+
+    def _rate_with(self, name: str, value: float) -> float:
+        """The fastest rate at rest with one damping coefficient ``name`` set to ``value``."""
+        return dataclasses.replace(self, **{name: value}).stiffest_rate()[0]
+
+    def check_step(self, physics_dt: float, uncertainty: float = 0.0) -> None:
+        """ValueError (one line, naming the coefficient and its bound) unless RK4 at
+        ``physics_dt`` [s] can step every mode of this hull (`RK4_STEP_LIMIT`), also when
+        parameter uncertainty ε = ``uncertainty`` scales the damping time constants by 1 − ε
+        and the damping ratios and the roll added inertia by 1 ± ε (their stiff ends)."""
+        most = RK4_STEP_LIMIT / physics_dt  # [1/s] the fastest rate RK4 can step
+        scale = {n: 1.0 - uncertainty for n in _AXIS_COEFFICIENTS if n.endswith("constant")}
+        scale.update({n: 1.0 + uncertainty for n in _AXIS_COEFFICIENTS if n.endswith("ratio")})
+        hull = self
+        if uncertainty > 0.0:
+            changes = {n: getattr(self, n) * f for n, f in scale.items()}
+            changes["roll_added_inertia"] = self.roll_added_inertia * (1.0 - uncertainty)
+            hull = dataclasses.replace(self, **changes)
+        rate, axis = hull.stiffest_rate()
+        if rate <= most:
+            return
+        shortest = RK4_STEP_LIMIT / rate  # [s] the physics step that would step it
+        where = (
+            f" (at its stiff end under param_uncertainty {uncertainty:g})" if uncertainty else ""
+        )
+        # The coefficient to blame: the one whose softest value (no damping) helps most.
+        soft = {n: 0.0 if n.endswith("ratio") else 1e300 for n in _AXIS_COEFFICIENTS}
+        relaxed = {n: hull._rate_with(n, soft[n]) for n in _AXIS_COEFFICIENTS}
+        name = min(relaxed, key=relaxed.__getitem__)
+        if relaxed[name] > most:  # no single coefficient can help
+            undamped = dataclasses.replace(hull, **soft).stiffest_rate()[0]
+            if undamped > most:
+                cause = (
+                    f"the {axis} mode of this hull (length, diameter, r_bg, r_bb, "
+                    f"roll_added_inertia) moves at {undamped:.4g} rad/s undamped"
+                )
+            else:
+                stiff = [n for n in _AXIS_COEFFICIENTS if relaxed[n] < rate]
+                cause = (
+                    f"its damping ({', '.join(stiff)}) moves its {axis} mode at {rate:.4g} rad/s"
+                )
+            raise ValueError(
+                f"plant_params: {cause}{where}, faster than the {most:.4g} rad/s that RK4 at "
+                f"physics_dt = {physics_dt:g} s can step (|λ|·dt <= {RK4_STEP_LIMIT:g}): use "
+                f"physics_dt <= {shortest:.3g} s or another hull"
+            )
+        axis = _AXIS_NAMES[_AXIS_COEFFICIENTS.index(name)]
+        if name.endswith("ratio"):
+            low, high = 0.0, getattr(hull, name)
+        else:  # a time constant: the rate falls as it grows
+            low = high = getattr(hull, name)
+            while hull._rate_with(name, high) > most:
+                high *= 2.0
+        for _ in range(60):
+            middle = 0.5 * (low + high)
+            fast = hull._rate_with(name, middle) > most
+            if name.endswith("ratio"):
+                low, high = (low, middle) if fast else (middle, high)
+            else:
+                low, high = (middle, high) if fast else (low, middle)
+        if name.endswith("ratio"):
+            bound = _round(low / scale[name], down=True)
+            side = "at most"
+        else:
+            bound = _round(high / scale[name], down=False)
+            side = "at least"
+        raise ValueError(
+            f"plant_params {name} = {getattr(self, name):g} must be {side} {bound:.3g}"
+            f"{' s' if name.endswith('constant') else ''}: its {axis} mode moves at "
+            f"{rate:.4g} rad/s{where}, faster than the {most:.4g} rad/s that RK4 at physics_dt "
+            f"= {physics_dt:g} s can step (|λ|·dt <= {RK4_STEP_LIMIT:g}); or use physics_dt <= "
+            f"{shortest:.3g} s"
+        )
 
     @classmethod
     def from_record(cls, record: Mapping[str, Any]) -> SixDofVehicle:
@@ -282,6 +418,15 @@ UNCERTAIN_COEFFICIENTS = (
     "pitch_damping_ratio",
 )
 REMUS6DOF = SixDofVehicle()
+
+
+def _round(value: float, down: bool) -> float:
+    """``value`` to three significant digits, rounded down or up (a bound that still holds)."""
+    if value <= 0.0:
+        return 0.0
+    unit = 10.0 ** (math.floor(math.log10(value)) - 2)
+    steps = value / unit
+    return (math.floor(steps) if down else math.ceil(steps)) * unit
 
 
 def coriolis(mass: np.ndarray, nu: np.ndarray) -> np.ndarray:
@@ -379,7 +524,8 @@ def actuation(
     y_r, z_s = -k_r * delta_r, -k_s * delta_s
     return np.array(
         [
-            (1.0 - a.thrust_deduction) * x_prop - k_r * delta_r**2 - k_s * delta_s**2,
+            (1.0 - a.thrust_deduction) * x_prop
+            + a.fin_induced_drag * (-k_r * delta_r**2 - k_s * delta_s**2),
             y_r,
             z_s,
             vehicle.propeller_torque_scale * k_prop,

@@ -43,6 +43,11 @@ MAX_DROPOUT = 0.99  # [-] probability that a DVL sample is lost
 PRESET_NAMES = ("ideal", "typical", "typical_kalman")
 NAVIGATION_MODES = ("dead_reckoning", "kalman")
 MAX_FILTER_NOISE = 10.0  # [m/s, 1/√s, -, rad] the filter's assumed errors
+# The smallest filter setting and, with the filter, position-fix σ [m/s, 1/√s, -, rad, m]: the
+# filter's covariance holds their squares and the fix update divides by a product of two, so
+# they must stay far from float64's underflow (all five at 1e-100: 1e-400 rounds to 0, and the
+# first fix divided by zero; docs/model.md §14.8). 1e-6 is far below any real sensor.
+MIN_FILTER_NOISE = 1e-6
 # The filter's bias model when not given (docs/model.md §14.8): the scale and heading errors
 # are constant in the sensor model; a random walk of 3e-4 /√s (1° over an hour) keeps the
 # filter from locking onto its first estimate, and floors of 0.1 % and 0.1° keep P₀ positive
@@ -125,20 +130,31 @@ class SensorConfig:
             value = getattr(self, name)
             if value is None:
                 continue
+            if self.navigation != "kalman":
+                raise ValueError(
+                    f"sensors {name} sets the model of the navigation filter; with navigation="
+                    f"{self.navigation!r} there is no filter and it would do nothing: drop it "
+                    "or give navigation='kalman'"
+                )
             if not isinstance(value, bool) and isinstance(value, int | float) and value <= 0.0:
                 raise ValueError(
                     f"sensors {name} = {value!r} {unit} makes the navigation filter's "
                     "covariance not positive definite: give a value > 0 (or None to derive it)"
                 )
-            checked = real(
-                f"sensors {name}", value, 0.0, MAX_FILTER_NOISE, low_open=True, unit=unit
-            )
+            checked = real(f"sensors {name}", value, MIN_FILTER_NOISE, MAX_FILTER_NOISE, unit=unit)
             object.__setattr__(self, name, checked)
         if self.navigation == "kalman" and not (self.fix_noise > 0.0 and self.fix_interval):
             raise ValueError(
                 "sensors navigation = 'kalman' blends position fixes into dead reckoning: it "
                 "needs a sensor model with fix_noise > 0 and a fix_interval > 0 (the preset "
                 "'typical_kalman' has them)"
+            )
+        if self.navigation == "kalman" and self.fix_noise < MIN_FILTER_NOISE:
+            raise ValueError(
+                f"sensors fix_noise = {self.fix_noise!r} m is below {MIN_FILTER_NOISE:g} m, "
+                "the smallest fix error the navigation filter can divide by (its square and "
+                "their product would underflow): give fix_noise >= "
+                f"{MIN_FILTER_NOISE:g} m with navigation='kalman'"
             )
         if self.preset == "ideal" and replace(self, preset="custom") != SensorConfig():
             raise ValueError(
