@@ -126,8 +126,13 @@ def writable_location(path: str | os.PathLike, flag: str, folder: bool = True) -
     writable folder (proved with a temporary file, removed). Missing parents are fine: the
     writer creates them. OSError naming the flag and the path otherwise, so a command refuses
     an output it could not write before its first episode or training step."""
-    target = Path(path)
     kind = "folder" if folder else "file"
+    if isinstance(path, str) and not path.strip():
+        raise OSError(
+            f"{flag} {path!r} names no {kind}: give a path (an empty one would write into the "
+            "current folder)"
+        )
+    target = Path(path)
     problem = None
     if folder and target.exists() and not target.is_dir():
         problem = "it is a file, not a folder"

@@ -51,6 +51,7 @@ __all__ = [
     "AgentFiles",
     "AgentPolicy",
     "check_agent",
+    "check_weights",
     "load_actor",
 ]
 
@@ -432,6 +433,35 @@ def _read_stats(
     if epsilon <= 0:
         raise ValueError(f"{stats}: epsilon must be > 0, got {epsilon}")
     return mean, var, clip_obs, epsilon
+
+
+def check_weights(files: AgentFiles) -> None:
+    """Every weight of a checked agent's policy (model.zip's policy.pth) finite, as `load_actor`
+    requires, read as tensors only (torch's ``weights_only``: nothing else is unpickled) and
+    without building the model: for the checks before any episode. ValueError naming the file."""
+    import io
+
+    import torch
+
+    try:
+        with zipfile.ZipFile(files.model) as archive:
+            data = archive.read("policy.pth")
+        state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+    except Exception as exc:
+        raise ValueError(f"{files.label} {files.model}: policy.pth cannot be read: {exc}") from None
+    if not isinstance(state, dict):
+        raise ValueError(f"{files.label} {files.model}: policy.pth holds no state dict")
+    bad = [
+        str(name)
+        for name, value in state.items()
+        if torch.is_tensor(value) and value.is_floating_point() and not value.isfinite().all()
+    ]
+    if bad:
+        raise ValueError(
+            f"{files.label} {files.model}: non-finite weights in {bad[:3]}"
+            + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
+            + " (a diverged or damaged model)"
+        )
 
 
 def load_actor(

@@ -260,7 +260,7 @@ def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkey
         (["--policies", "backstepping"], "--reference 'fbsm' is not among --policies"),
         (["--policies", "fbsm", "--duration", "0"], "--duration must be a finite number in (0"),
         (["--policies", "fbsm", "--workers", "0"], "--workers must be an integer in [1, 1024]"),
-        (["--policies", "fbsm", "--reps", "10"], "--reps must be an integer >= 100"),
+        (["--policies", "fbsm", "--reps", "10"], "--reps must be an integer in [100, 100000]"),
         (["--policies", "fbsm", "--stats-only"], "episodes.csv does not exist"),
         (["--policies", "fbsm", "--plant", "7dof"], "unknown --plant '7dof'; valid: ['5dof'"),
     ]

@@ -233,7 +233,7 @@ ONE = {"a": [[1.0]]}
         (partial(IE, {"a": [[1.0], [1.0, 2.0]]}), "not a numeric"),
         (partial(IE, {"a": [[1.0]], "b": [[1.0, 2.0]]}), "different numbers of episodes"),
         (partial(IE, {"a": [[1.0, 2.0]]}, ["x"]), "1 labels for 2"),
-        (partial(IE, ONE, reps=10), "reps=10: need an integer >= 100"),
+        (partial(IE, ONE, reps=10), "reps=10: need an integer in \\[100, 100000\\]"),
         (partial(IE, ONE, confidence=95), "confidence=95"),
         (partial(IE, ONE, seed=-1), "seed=-1"),
         (partial(PI, ONE, "fbsm"), "reference='fbsm': not among"),

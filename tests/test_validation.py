@@ -544,3 +544,426 @@ def test_rollouts_and_evaluate_refuse_what_the_env_refuses(kwargs, match):
     for run in (rollouts, evaluate):
         with pytest.raises(ValueError, match=match):
             run(Idle(), [0], max_time=0.1, **kwargs)
+
+
+# --------------------------------------------- issue 55 item 5: the edges of the newest options
+def _hull(**changes):
+    from auv_gym.vehicle.remus6dof import REMUS6DOF
+
+    return {**REMUS6DOF.record(), **changes}
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        (  # was: a bare ZeroDivisionError (the spheroid's eccentricity rounded to 1)
+            {"diameter": 1e-10},
+            r"^SixDofVehicle.diameter = 1e-10 m must be at least length/1000 = 0.0016 m",
+        ),
+        ({"length": 1e200}, r"^SixDofVehicle.length must be a finite number in \[0.01, 1000\] m"),
+        ({"water_density": 1e300}, r"^SixDofVehicle.water_density must be a finite number in"),
+    ],
+)
+def test_a_hull_of_unphysical_size_is_one_line(changes, message):
+    with pytest.raises(ValueError, match=message):
+        AUVPath3DEnv(plant="6dof", plant_params=_hull(**changes))
+
+
+@pytest.mark.parametrize(
+    ("changes", "physics_dt", "message"),
+    [
+        (  # was: every episode "non_finite" at step 1
+            {"roll_damping_ratio": 100.0},
+            0.01,
+            r"^plant_params roll_damping_ratio = 100 must be at most 19.3: its roll mode moves at "
+            r"1293 rad/s, faster than the 250 rad/s that RK4 at physics_dt = 0.01 s can step "
+            r"\(\|λ\|·dt <= 2.5\); or use physics_dt <= 0.00193 s$",
+        ),
+        ({"yaw_time_constant": 1e-6}, 0.01, r"yaw_time_constant = 1e-06 must be at least 0.004 s"),
+        (
+            {"surge_time_constant": 1e-6},
+            0.01,
+            r"surge_time_constant = 1e-06 must be at least 0.00401",
+        ),
+        ({"pitch_damping_ratio": 100.0}, 0.1, r"pitch_damping_ratio = 100 must be at most 13.8"),
+    ],
+)
+def test_a_hull_rk4_cannot_step_is_refused_with_its_bound(changes, physics_dt, message):
+    with pytest.raises(ValueError, match=message):
+        AUVPath3DEnv(plant="6dof", plant_params=_hull(**changes), physics_dt=physics_dt)
+
+
+def test_a_stiff_hull_runs_at_the_bound_and_with_a_shorter_step():
+    """The bound is RK4's: at it (19.3) and with the step the message names, episodes stay
+    finite; the REMUS 100 hull passes at the default physics_dt with any uncertainty, and at
+    the largest (0.1 s) up to ±90 % (its yaw time constant 1 s × 0.04 is RK4's limit there)."""
+    from auv_gym.vehicle.remus6dof import REMUS6DOF
+
+    for changes, physics_dt in (
+        ({"roll_damping_ratio": 19.3}, 0.01),
+        ({"yaw_time_constant": 0.004}, 0.01),
+        ({"roll_damping_ratio": 100.0}, 0.001),
+    ):
+        env = AUVPath3DEnv(
+            plant="6dof", plant_params=_hull(**changes), physics_dt=physics_dt, max_time=2.0
+        )
+        env.reset(seed=0)
+        for _ in range(40):
+            _, _, terminated, truncated, info = env.step(np.full(3, 0.5, np.float32))
+            assert not terminated, info.get("termination_reason")
+        assert truncated
+    for uncertainty in (0.0, 0.5, 0.9):
+        REMUS6DOF.check_step(0.1, uncertainty)
+    REMUS6DOF.check_step(0.01, 0.99)
+
+
+def test_parameter_uncertainty_is_bounded_at_its_stiff_end():
+    """±50 % makes a yaw time constant of 0.006 s reach 0.003 s: refused, the bound named."""
+    with pytest.raises(ValueError, match=r"yaw_time_constant = 0.006 must be at least 0.008 s"):
+        AUVPath3DEnv(
+            plant="6dof", plant_params=_hull(yaw_time_constant=0.006), param_uncertainty=0.5
+        )
+
+
+@pytest.mark.parametrize(
+    ("sensors", "message"),
+    [
+        (  # was: accepted, then ZeroDivisionError in step() at the first fix (t = 10 s)
+            {
+                "preset": "typical_kalman",
+                "fix_noise": 1e-200,
+                "filter_velocity_noise": 1e-200,
+                "filter_bias_noise": 1e-200,
+                "filter_initial_scale": 1e-200,
+                "filter_initial_heading": 1e-200,
+            },
+            r"^sensors filter_velocity_noise must be a finite number in \[1e-06, 10\] m/s, "
+            r"got 1e-200$",
+        ),
+        (
+            {"preset": "typical_kalman", "fix_noise": 1e-200},
+            r"^sensors fix_noise = 1e-200 m is below 1e-06 m, the smallest fix error the "
+            r"navigation filter can divide by",
+        ),
+        (  # was: ignored silently
+            {"preset": "typical", "filter_velocity_noise": 0.1},
+            r"^sensors filter_velocity_noise sets the model of the navigation filter; with "
+            r"navigation='dead_reckoning' there is no filter and it would do nothing: drop it or "
+            r"give navigation='kalman'$",
+        ),
+    ],
+)
+def test_navigation_filter_settings_it_cannot_use_are_refused(sensors, message):
+    with pytest.raises(ValueError, match=message):
+        AUVPath3DEnv(sensors=sensors)
+
+
+def test_the_smallest_filter_settings_run_past_the_first_fixes():
+    small = dict.fromkeys(
+        ("fix_noise", "filter_velocity_noise", "filter_bias_noise", "filter_initial_scale"), 1e-6
+    )
+    env = AUVPath3DEnv(sensors={"preset": "typical_kalman", **small}, max_time=21.0)
+    env.reset(seed=0)
+    for _ in range(420):  # fixes at 10 s and 20 s
+        _, reward, terminated, _, _ = env.step(STILL)
+        assert math.isfinite(reward) and not terminated
+
+
+def test_the_surface_remedy_adds_to_the_offset_given():
+    """Was: 'path_offset = [0, 0, 15]' when (0, 0, 600) was given and 615 is needed."""
+    with pytest.raises(ValueError, match=r"\(path_offset = \[2, 0, 615\]\)"):
+        AUVPath3DEnv(waves="sea_state_3", path_offset=(2, 0, 600), max_time=2000.0)
+    AUVPath3DEnv(waves="sea_state_3", path_offset=(2, 0, 615), max_time=2000.0)  # it suffices
+    with pytest.raises(ValueError, match=r"\(path_offset = \[0, 0, 106\]\)"):
+        AUVPath3DEnv(waves="sea_state_3", path="random", path_offset=(0, 0, 50))
+
+
+# ------------------------------------------------- issue 55: left from earlier rounds
+def test_a_low_surge_limit_is_never_exceeded_by_the_start():
+    """Was: surge_limit=1.2 ended 8 of 100 random-start episodes "overspeed" at step 1 (the
+    start's surge was drawn up to 1.5 m/s); the speed-limited ids' draws are unchanged."""
+    env = AUVPath3DEnv(surge_limit=1.2, randomize_start=True)
+    for seed in range(100):
+        env.reset(seed=seed)
+        assert env.state[5] <= 0.9 + 1e-12
+        _, _, terminated, _, info = env.step(STILL)
+        assert not terminated, (seed, info.get("termination_reason"))
+    free, limited = (
+        AUVPath3DEnv(randomize_start=True),
+        AUVPath3DEnv(surge_limit=2.0, randomize_start=True),
+    )
+    for seed in range(20):
+        free.reset(seed=seed)
+        limited.reset(seed=seed)
+        assert np.array_equal(free.state, limited.state)
+
+
+@pytest.mark.parametrize("value", [[1.2], None, True, complex(2.0)])
+def test_a_surge_limit_of_the_wrong_type_is_a_type_error(value):
+    with pytest.raises(ArgumentTypeError, match=r"^surge_limit must be a speed in m/s, inf or"):
+        AUVPath3DEnv(surge_limit=value)
+
+
+@pytest.mark.parametrize("bad", [{"seed": -1}, {"options": {"x": 1}}])
+def test_a_refused_reset_leaves_the_env_usable(bad):
+    """The env checks before it touches the episode. (Through `gym.make`'s default
+    PassiveEnvChecker, Gymnasium 1.4 itself raises TypeError at the next step, for CartPole
+    too: the checker marks its first reset done before it runs, so it is bypassed here.)"""
+    for env in (AUVPath3DEnv(), gym.make("AUVPath3D-v0", disable_env_checker=True)):
+        with pytest.raises((ValueError, gym.error.Error)):
+            env.reset(**bad)
+        env.reset(seed=0)
+        assert len(env.step(STILL)) == 5
+
+
+@pytest.mark.parametrize(
+    ("duration", "transient", "message"),
+    [
+        (0.01, None, r"use an episode of at least 0.1 s \("),  # was: "transient ≤ -0.04 s"
+        (0.09, None, r"use a transient ≤ 0.04 s or an episode of at least 0.1 s"),
+        (1.0, 0.99, r"use a transient ≤ 0.95 s or an episode of at least 1.04 s"),
+    ],
+)
+def test_the_metrics_window_remedy_is_never_negative(duration, transient, message):
+    from auv_gym.metrics import check_window
+
+    with pytest.raises(ValueError, match=message):
+        check_window(duration, transient, 0.05)
+
+
+def test_bootstrap_replicates_are_bounded():
+    """Was: suite --reps 1000000000 accepted (still bootstrapping after 200 s)."""
+    from benchmarks.analysis.suite_stats import check_stats_options
+
+    with pytest.raises(ValueError, match=r"^--reps must be an integer in \[100, 100000\]"):
+        check_stats_options(10**9, 0)
+    check_stats_options(100_000, 0)
+
+
+def _train_seeds(argv, capsys):
+    """`auv-gym train-seeds ARGV`: (exit code, the error line)."""
+    from benchmarks.cli import main
+
+    code = main(["train-seeds", *argv])
+    return code, capsys.readouterr().err.strip()
+
+
+@pytest.mark.rl
+def test_train_seeds_out_must_name_a_folder(tmp_path, monkeypatch, capsys):
+    """Was: --out "" trained into the current folder; --out FILE said "not empty; pass
+    --resume"; errors began "python -m benchmarks.training.seeds_cli"."""
+    pytest.importorskip("stable_baselines3")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("")
+    base = ["--algo", "ppo", "--seeds", "1"]
+    code, err = _train_seeds([*base, "--out", ""], capsys)
+    assert code == 2
+    assert err == (
+        "auv-gym train-seeds: error: --out '' names no folder: give the run's folder (an empty "
+        "path would write into the current folder)"
+    )
+    code, err = _train_seeds([*base, "--out", "afile"], capsys)
+    assert code == 2
+    assert (
+        err == "auv-gym train-seeds: error: --out 'afile' is a file, not a folder: give the "
+        "run's folder"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+@pytest.mark.rl
+def test_train_out_must_name_a_folder(tmp_path, monkeypatch, capsys):
+    pytest.importorskip("stable_baselines3")
+    from benchmarks.training.train_cli import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--algo", "ppo", "--out", ""])
+    assert exit_info.value.code == 2
+    assert "error: --out '' names no folder: give a path" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.rl
+def test_a_refused_schedule_leaves_its_out_folder_as_it_was(tmp_path, capsys):
+    """Was: OUT/configs/ stayed, and the corrected command was refused "not empty"."""
+    pytest.importorskip("stable_baselines3")
+    from benchmarks.catalog.policies import AGENTS_DIR
+
+    schedule = AGENTS_DIR.parent / "hyperparams" / "ppo_as_built.yml"
+    base = ["--algo", "ppo", "--config", str(schedule), "--seeds", "1", "--quiet"]
+    (tmp_path / "empty").mkdir()
+    for out in (tmp_path / "new", tmp_path / "empty"):
+        code, err = _train_seeds([*base, "--out", str(out), "--eval-duration", "0.01"], capsys)
+        assert code == 2 and "use an episode of at least 0.1 s" in err, err
+    assert not (tmp_path / "new").exists()
+    assert not any((tmp_path / "empty").iterdir())
+
+
+def test_a_finished_schedule_names_the_summary_it_wrote(tmp_path, monkeypatch, capsys):
+    """Was: "summary: OUT/summary.json", which a schedule does not write (OUT/schedule.json)."""
+    pytest.importorskip("yaml")
+    from benchmarks.catalog.policies import AGENTS_DIR
+    from benchmarks.training import seeds_cli
+
+    entry = {
+        "seed": 0,
+        "num_timesteps": 1,
+        "wall_time_s": 1.0,
+        "test_summary": {"rms_distance_mean": 0.1, "n_terminated": 0, "max_surge_max": 1.0},
+    }
+    summary = {"seeds": [entry], "selected_seed": 0}
+    monkeypatch.setattr(seeds_cli, "train_schedule", lambda *_: {"phases": [{"summary": summary}]})
+    schedule = AGENTS_DIR.parent / "hyperparams" / "ppo_as_built.yml"
+    out = tmp_path / "run"
+    argv = ["--algo", "ppo", "--config", str(schedule), "--seeds", "1", "--out", str(out)]
+    assert seeds_cli.main(argv) == 0
+    assert f"summary: {out / 'schedule.json'}" in capsys.readouterr().out
+
+
+# ------------------------------------- issue 55 item 4: every check before the first episode
+def _agent_copy(tmp_path, name):
+    import shutil
+
+    from benchmarks.catalog.policies import AGENTS_DIR
+
+    copy = tmp_path / name
+    shutil.copytree(AGENTS_DIR / name, copy, ignore=shutil.ignore_patterns("*.onnx", "*.pkl"))
+    return copy
+
+
+def _refused(command, argv, capsys):
+    """The one error line of `auv-gym COMMAND ARGV`, which must exit 2."""
+    from benchmarks.cli import main
+
+    assert main([command, *argv]) == 2
+    return capsys.readouterr().err.strip()
+
+
+@pytest.mark.rl
+def test_compare_and_suite_refuse_nan_agent_weights_before_any_episode(tmp_path, capsys):
+    """Was: found when the agent's episodes started, after fbsm's had run."""
+    torch = pytest.importorskip("torch")
+    import io
+    import zipfile
+
+    agent = _agent_copy(tmp_path, "ppo_helix")
+    with zipfile.ZipFile(agent / "model.zip") as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    state = torch.load(io.BytesIO(members["policy.pth"]), weights_only=True)
+    state["action_net.weight"][0, 0] = float("nan")
+    buffer = io.BytesIO()
+    torch.save(state, buffer)
+    members["policy.pth"] = buffer.getvalue()
+    with zipfile.ZipFile(agent / "model.zip", "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    expected = (
+        f"error: policy 'agent:{agent}': PPO model {agent}/model.zip: non-finite weights in "
+        "['action_net.weight'] (a diverged or damaged model)"
+    )
+    policies = f"fbsm,agent:{agent}"
+    out = tmp_path / "out"
+    err = _refused(
+        "compare", ["--policies", policies, "--scenarios", "paper", "--out", str(out)], capsys
+    )
+    assert err == f"auv-gym compare: {expected}"
+    err = _refused("suite", ["--policies", policies, "--no-stats", "--out", str(out)], capsys)
+    assert err == f"auv-gym suite: {expected}"
+    assert not out.exists()
+
+
+def test_a_factory_that_returns_no_policy_is_named(tmp_path, monkeypatch, capsys):
+    """Was: "policy must have predict(...), got int" after fbsm's episodes, naming nothing."""
+    (tmp_path / "factories55.py").write_text("def make(**kwargs):\n    return 42\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    out = tmp_path / "out"
+    argv = ["--policies", "fbsm,factories55:make", "--scenarios", "paper", "--out", str(out)]
+    assert _refused("compare", argv, capsys) == (
+        "auv-gym compare: error: scenario 'paper': policy 'factories55:make' gave int 42, not a "
+        "Policy (an object with predict(observation, state, episode_start, deterministic))"
+    )
+    assert not out.exists()
+
+
+@pytest.mark.rl
+def test_a_residual_agents_bad_base_kwargs_name_the_agent_and_its_file(tmp_path, capsys):
+    """Was: "scenario 'paper': must be called with a dataclass type or instance"."""
+    pytest.importorskip("stable_baselines3")
+    import json
+
+    agent = _agent_copy(tmp_path, "ppo_residual")
+    meta = json.loads((agent / "metadata.json").read_text())
+    meta["residual"]["base_kwargs"] = {"gains": {"nonsense": 1}}
+    (agent / "metadata.json").write_text(json.dumps(meta))
+    argv = [
+        "--policies",
+        f"fbsm,agent:{agent}",
+        "--scenarios",
+        "paper",
+        "--out",
+        str(tmp_path / "o"),
+    ]
+    assert _refused("compare", argv, capsys).startswith(
+        f"auv-gym compare: error: scenario 'paper': policy 'agent:{agent}': its residual base "
+        f"'fbsm_colos' with base_kwargs {{'gains': {{'nonsense': 1}}}} ({agent}/metadata.json) "
+        "cannot be built: "
+    )
+
+
+@pytest.mark.rl
+def test_train_seeds_checks_every_initial_agent_and_network_before_any_worker(tmp_path, capsys):
+    """Was: "seed 0 failed; see log" for an initial agent of another observation, weights that
+    do not fit the network, and a network too large to allocate."""
+    pytest.importorskip("stable_baselines3")
+    from benchmarks.catalog.policies import AGENTS_DIR
+
+    section = (
+        "AUVPath3D-v0:\n  n_envs: 2\n  n_timesteps: 64\n  policy: MlpPolicy\n"
+        '  normalize: "dict(norm_obs=True, norm_reward=True)"\n  n_steps: 32\n'
+        '  batch_size: 64\n  policy_kwargs: "dict(net_arch={arch}, log_std_init=-1.0)"\n'
+        "  env_kwargs: {{{env}}}\n"
+    )
+    cases = {
+        "observation": (
+            "[64, 64]",
+            "observation: preview",
+            r"the agent observes 15 entries, "
+            r"this run's observation has 46 \(first difference at entry 15: None "
+            r"against 'u_ground'\)",
+        ),
+        "weights": (
+            "[32, 32]",
+            "max_time: 10.0",
+            r"its weights \(.*model.zip\) do not fit the "
+            r"network of .*weights.yml .*size mismatch for mlp_extractor",
+        ),
+        "size": (
+            "[100000, 100000, 100000]",
+            "max_time: 10.0",
+            r"size.yml: policy_kwargs "
+            r"net_arch \[100000, 100000, 100000\] builds about 4e\+10 weights",
+        ),
+    }
+    import re
+
+    for name, (arch, env, message) in cases.items():
+        config = tmp_path / f"{name}.yml"
+        config.write_text(section.format(arch=arch, env=env))
+        argv = [
+            "--algo",
+            "ppo",
+            "--config",
+            str(config),
+            "--env-id",
+            "AUVPath3D-v0",
+            "--seeds",
+            "1",
+            "--init-from",
+            str(AGENTS_DIR / "ppo_helix"),
+            "--out",
+            str(tmp_path / name),
+        ]
+        code, err = _train_seeds(argv, capsys)
+        assert code == 2 and re.search(message, err), err
+        assert not (tmp_path / name).exists()

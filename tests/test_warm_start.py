@@ -162,9 +162,11 @@ def test_bad_agents_are_named(agent, tmp_path):
     with pytest.raises(ValueError, match=r"trained with 'ppo', this run uses 'sac'"):
         check_warm_start(copy, "sac")
     with pytest.raises(
-        ValueError, match=r"the agent observes .*this run's observation is \['x_e'\]"
+        ValueError,
+        match=r"the agent observes \d+ entries, this run's observation has 2 \(first "
+        r"difference at entry 1: 'y_e' against 'u'\)",
     ):
-        check_warm_start(copy, "ppo", ["x_e"])
+        check_warm_start(copy, "ppo", ["x_e", "u"])
     (copy / "metadata.json").write_text("{not json")
     with pytest.raises(ValueError, match=r"metadata\.json is unreadable"):
         check_warm_start(copy, "ppo")

@@ -43,6 +43,9 @@ from benchmarks.reports.table_format import EMPTY, format_number
 
 AGGREGATE = "aggregate"
 MIN_REPS = 100
+# Bootstrap replicates at most: 50× the default 2000, whose intervals move by less than their
+# printed digits; each replicate resamples every episode, so a typo like 1e9 would run for days.
+MAX_REPS = 100_000
 
 
 class Interval(NamedTuple):
@@ -75,8 +78,8 @@ class _SeedEpisodeBootstrap(library.StratifiedIndependentBootstrap):
 
 
 def _check_options(reps: int, confidence: float, seed: int) -> None:
-    if not isinstance(reps, (int, np.integer)) or reps < MIN_REPS:
-        raise ValueError(f"reps={reps!r}: need an integer >= {MIN_REPS}")
+    if not isinstance(reps, (int, np.integer)) or not MIN_REPS <= reps <= MAX_REPS:
+        raise ValueError(f"reps={reps!r}: need an integer in [{MIN_REPS}, {MAX_REPS}]")
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence={confidence!r}: need 0 < confidence < 1")
     if not isinstance(seed, (int, np.integer)) or seed < 0:

@@ -56,6 +56,7 @@ from benchmarks.analysis.smoothness_stats import (
 )
 from benchmarks.analysis.stats import (
     AGGREGATE,
+    MAX_REPS,
     MIN_REPS,
     Interval,
     learning_curve,
@@ -82,8 +83,11 @@ FIGURES = "figures"
 
 def check_stats_options(reps: int, seed: int) -> None:
     """ValueError naming the flag for a bootstrap count below `MIN_REPS` or a negative seed."""
-    if reps < MIN_REPS:
-        raise ValueError(f"--reps must be an integer >= {MIN_REPS}, got {reps}")
+    if not MIN_REPS <= reps <= MAX_REPS:
+        raise ValueError(
+            f"--reps must be an integer in [{MIN_REPS}, {MAX_REPS}] (bootstrap replicates), "
+            f"got {reps}"
+        )
     if seed < 0:
         raise ValueError(f"--bootstrap-seed must be an integer >= 0, got {seed}")
 

@@ -152,10 +152,10 @@ def check_policy_spec(spec: str) -> PolicySpec:
             )
         if not parsed.agent.exists():
             raise FileNotFoundError(f"policy {spec!r}: agent {parsed.agent} does not exist")
-        from controllers.agent import check_agent
+        from controllers.agent import check_agent, check_weights
 
         try:
-            check_agent(parsed.agent)
+            check_weights(check_agent(parsed.agent))  # NaN weights too, before any episode
         except (OSError, ValueError) as error:
             raise type(error)(f"policy {spec!r}: {error}") from None
     if parsed.onnx is not None:
@@ -194,12 +194,32 @@ def check_policy_for_env(
     anything or loading torch: a classical controller or an export is built; an agent's stages
     are built for the env's plant (an allocation whose observation lacks its inputs, say) and a
     residual agent's base controller too. Call it for every policy and scenario before any
-    episode."""
+    episode. An imported policy's factory is called and must return a Policy. Errors name the
+    policy (and an agent's file)."""
     parsed = PolicySpec.parse(spec)
+    try:
+        _check_for_env(parsed, env, controller_kwargs)
+    except (TypeError, ValueError) as error:
+        message = str(error)
+        if not message.startswith(f"policy {spec!r}"):
+            message = f"policy {spec!r}: {message}"
+        raise type(error)(message) from None
+
+
+def _check_for_env(parsed: PolicySpec, env: Any, controller_kwargs: dict[str, Any] | None) -> None:
+    spec = parsed.text
     if parsed.kind in ("classical", "onnx"):
         build_policy(spec, env, controller_kwargs)
         return
-    if parsed.kind != "agent" or parsed.agent is None:
+    if parsed.kind == "import":
+        policy = build_policy(spec, env, controller_kwargs)
+        if not callable(getattr(policy, "predict", None)):
+            raise ValueError(
+                f"policy {spec!r} gave {type(policy).__name__} {policy!r:.40}, not a Policy (an "
+                "object with predict(observation, state, episode_start, deterministic))"
+            )
+        return
+    if parsed.agent is None:
         return
     from controllers.agent import check_agent, commands_realistic_actuators, observation_layout
     from controllers.env_settings import policy_settings
@@ -215,7 +235,19 @@ def check_policy_for_env(
         )
     build_stages(files.stages, observation_layout(files.metadata), settings, str(files.model))
     if files.residual is not None:
-        files.residual.make_base(**settings)
+        residual = files.residual
+        try:
+            base = residual.make_base(**settings)
+        except (TypeError, ValueError) as error:
+            raise ValueError(
+                f"policy {spec!r}: its residual base {residual.base!r} with base_kwargs "
+                f"{residual.base_kwargs!r:.120} ({files.metadata_file}) cannot be built: {error}"
+            ) from None
+        if not callable(getattr(base, "predict", None)):
+            raise ValueError(
+                f"policy {spec!r}: its residual base {residual.base!r} "
+                f"({files.metadata_file}) gave {type(base).__name__}, not a Policy"
+            )
 
 
 def build_policy(spec: str, env: Any, controller_kwargs: dict[str, Any] | None = None) -> Any:

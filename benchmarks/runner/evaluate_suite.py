@@ -224,9 +224,10 @@ def check_args(args: argparse.Namespace) -> None:
                     # as each chunk will build it, before any episode
                     check_policy_for_env(run.spec, chunk.env_kwargs, task.controller)
                 except (TypeError, ValueError) as error:
-                    raise ValueError(
-                        f"task set {task.name!r}, policy {policy.name!r}: {error}"
-                    ) from None
+                    where = f"task set {task.name!r}"
+                    if not str(error).startswith("policy "):  # it names the policy itself
+                        where += f", policy {policy.name!r}"
+                    raise ValueError(f"{where}: {error}") from None
                 chunks.append(chunk)
     writable_folder(args.out)  # last: a bad argument above creates no folder
     args.transient = transient

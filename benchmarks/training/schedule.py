@@ -49,6 +49,8 @@ from benchmarks.training.seeds import (
     SUMMARY_FILE,
     SeedsOptions,
     check_obs_scales,
+    check_out_folder,
+    holds_work,
     train_seeds,
 )
 from benchmarks.training.warm_start import SEED_FIELD
@@ -241,6 +243,7 @@ def _finished(folder: Path, seeds: tuple[int, ...]) -> dict[str, Any] | None:
 def train_schedule(opts: SeedsOptions, schedule: Schedule) -> dict[str, Any]:
     """Train every phase of ``schedule`` for every seed of ``opts`` (module doc); returns the
     summary written to OUT/schedule.json. ``opts.train.config`` is the schedule's file."""
+    check_out_folder(opts.out)
     out = Path(opts.out)
     if not opts.resume and out.exists() and any(out.iterdir()):
         raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
@@ -248,6 +251,34 @@ def train_schedule(opts: SeedsOptions, schedule: Schedule) -> dict[str, Any]:
         raise ValueError(
             "--init-from: a schedule's first phase names its initial agent (init_from)"
         )
+    created = not out.exists()
+    try:
+        return _train_schedule(opts, schedule, out)
+    except (ValueError, FileNotFoundError):  # refused before training (`train_seeds`)
+        if not opts.resume and not holds_work(schedule.folder(out, 0)):
+            _remove_refused_start(schedule, out, created)
+        raise
+
+
+def _remove_refused_start(schedule: Schedule, out: Path, created: bool) -> None:
+    """Remove what a fresh schedule refused before training wrote in OUT (its phase configs,
+    schedule.json, phase folders holding no work), so that the corrected command finds OUT as it
+    was; nothing else is touched."""
+    import shutil
+
+    for k in range(len(schedule.phases)):
+        config = out / CONFIGS / f"{schedule.folder(out, k).name}.yml"
+        config.unlink(missing_ok=True)
+        folder = schedule.folder(out, k)
+        if folder.is_dir() and not holds_work(folder):
+            shutil.rmtree(folder, ignore_errors=True)
+    (out / SCHEDULE_FILE).unlink(missing_ok=True)
+    for folder in (out / CONFIGS, *((out,) if created else ())):
+        if folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()
+
+
+def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[str, Any]:
     configs = check_schedule(schedule, opts.train.algo, out)
     plan = {
         "config_file": str(schedule.path),

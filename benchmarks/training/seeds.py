@@ -61,7 +61,13 @@ from benchmarks.training.seeds_options import (  # the options, importable from 
     parse_seeds,
 )
 from benchmarks.training.train import check_options, observation_layout_of, target_timesteps
-from benchmarks.training.warm_start import agent_for_seed, check_warm_start
+from benchmarks.training.warm_start import (
+    agent_for_seed,
+    check_initial_agents,
+    check_network_size,
+)
+from controllers.agent import ACTION_DIM
+from controllers.residual import RESIDUAL_OBS_NAMES
 
 __all__ = [
     "DEFAULT_EVAL_EPISODES",
@@ -71,6 +77,7 @@ __all__ = [
     "SUMMARY_FILE",
     "TASK_SETS",
     "SeedsOptions",
+    "check_out_folder",
     "check_ray_address",
     "check_seeds_options",
     "parse_seeds",
@@ -107,6 +114,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     """
     if not opts.seeds or min(opts.seeds) < 0:
         raise ValueError(f"seeds must be non-empty and non-negative, got {list(opts.seeds)}")
+    check_out_folder(opts.out)
     opts = resolve_validation(opts)
     if not (isinstance(opts.workers, int) and opts.workers >= 1):
         raise ValueError(f"workers must be a positive integer, got {opts.workers!r}")
@@ -120,12 +128,24 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
             "validation evaluations"
         )
     check_evaluation_window(train.eval_duration)
-    for seed in opts.seeds if train.init_from else ():
-        check_warm_start(agent_for_seed(train.init_from, seed), train.algo)
     if opts.backend == "ray" or opts.address is not None:  # `benchmarks.runner.pool`: Ray
         check_pool_options(1, opts.backend, opts.address)  # installed, its address answering
     cfg = read_zoo_config(train.config, train.env_id, train.algo)
     check_obs_scales(cfg, train.env_id, str(train.config))
+    # The network every seed builds, and each seed's initial agent loaded into it, as the
+    # workers will: before any of them starts (a failure there says only "see log").
+    residual = cfg.residual
+    obs_names = (
+        observation_layout_of(train.env_id, cfg.env_kwargs).names
+        if residual is None
+        else RESIDUAL_OBS_NAMES
+    )
+    action_dim = ACTION_DIM if residual is None else residual.action_dim
+    check_network_size(cfg.policy_kwargs, len(obs_names), action_dim, str(train.config))
+    agents = [agent_for_seed(train.init_from, s) for s in opts.seeds] if train.init_from else []
+    check_initial_agents(
+        agents, train.algo, obs_names, action_dim, cfg.policy_kwargs, str(train.config)
+    )
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
         raise ValueError(
@@ -196,6 +216,17 @@ def check_obs_scales(cfg: Any, env_id: str, where: str) -> None:
             f"{where}: obs_scales names {unknown}, which the observation of {env_id} does not "
             f"have; its entries: {list(names)}"
         )
+
+
+def check_out_folder(out: str | Path) -> None:
+    """ValueError naming --out when it names no folder ("": the current folder) or a file."""
+    if isinstance(out, str) and not out.strip():
+        raise ValueError(
+            f"--out {out!r} names no folder: give the run's folder (an empty path would write "
+            "into the current folder)"
+        )
+    if Path(out).exists() and not Path(out).is_dir():
+        raise ValueError(f"--out {str(out)!r} is a file, not a folder: give the run's folder")
 
 
 def holds_work(out: Path) -> bool:

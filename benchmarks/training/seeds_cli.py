@@ -21,8 +21,8 @@ from pathlib import Path
 
 from benchmarks.arguments import ArgumentParser
 from benchmarks.options import add_options, from_args
-from benchmarks.training.schedule import read_schedule, train_schedule
-from benchmarks.training.seeds import SeedsOptions, train_seeds
+from benchmarks.training.schedule import SCHEDULE_FILE, read_schedule, train_schedule
+from benchmarks.training.seeds import SUMMARY_FILE, SeedsOptions, train_seeds
 from benchmarks.training.train import TrainOptions, default_config
 
 # The options of each dataclass, in the order --help lists them.
@@ -88,12 +88,16 @@ def parse_args(argv: Sequence[str] | None = None) -> SeedsOptions:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from benchmarks.arguments import program_name
+
     opts = parse_args(argv)
-    prog = "python -m benchmarks.training.seeds_cli"
+    prog = program_name("benchmarks.training.seeds_cli")  # auv-gym train-seeds when installed
+    summary_file = Path(opts.out) / SUMMARY_FILE
     try:
         schedule = read_schedule(opts.train.config)
         if schedule is not None:
             summary = train_schedule(opts, schedule)["phases"][-1]["summary"]
+            summary_file = Path(opts.out) / SCHEDULE_FILE  # each phase's summary, the selection
         else:
             summary = train_seeds(opts)
     except (ValueError, FileNotFoundError) as exc:  # refused before any training started
@@ -110,7 +114,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             f" test rms distance {test['rms_distance_mean']:.4g} m, {test['n_terminated']} "
             f"terminated, max surge {test['max_surge_max']:.3g} m/s"
         )
-    print(f"selected seed {best['seed']} (validation); summary: {Path(opts.out) / 'summary.json'}")
+    print(f"selected seed {best['seed']} (validation); summary: {summary_file}")
     return 0
 
 

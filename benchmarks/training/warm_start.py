@@ -19,6 +19,7 @@ same observation layout; anything else is a ValueError naming the difference.
 
 from __future__ import annotations
 
+import itertools
 import json
 from collections.abc import Sequence
 from pathlib import Path
@@ -28,9 +29,86 @@ import numpy as np
 
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE
 
-__all__ = ["SEED_FIELD", "agent_for_seed", "check_warm_start", "warm_start"]
+__all__ = [
+    "MAX_NETWORK_WEIGHTS",
+    "SEED_FIELD",
+    "agent_for_seed",
+    "check_initial_agents",
+    "check_network_size",
+    "check_warm_start",
+    "warm_start",
+]
 
 SEED_FIELD = "{seed}"  # replaced by each seed's number in a multi-seed run's --init-from
+# Weights of the networks a configuration may build (estimated from net_arch: an actor and a
+# critic, or each list of a dict): 40 MB of float32, which with the optimiser's moments and the
+# gradients every seed's worker holds four times; the shipped configurations need 0.1 % of it.
+MAX_NETWORK_WEIGHTS = 10_000_000
+
+
+def check_network_size(
+    policy_kwargs: dict[str, Any], obs_dim: int, action_dim: int, where: str
+) -> None:
+    """ValueError naming ``where`` (the config file) when ``policy_kwargs``' net_arch would build
+    networks of more than `MAX_NETWORK_WEIGHTS` weights: refused before a worker fails to
+    allocate them."""
+    arch = policy_kwargs.get("net_arch")
+    if arch is None:  # SB3's default, small
+        return
+    chains = list(arch.values()) if isinstance(arch, dict) else [arch, arch]
+    total = 0
+    for sizes in chains:
+        widths = [obs_dim + action_dim, *(int(n) for n in sizes), 2 * action_dim]
+        total += sum(a * b + b for a, b in itertools.pairwise(widths))
+    if total > MAX_NETWORK_WEIGHTS:
+        raise ValueError(
+            f"{where}: policy_kwargs net_arch {arch!r:.80} builds about {total:.3g} weights "
+            f"(observation {obs_dim}, actions {action_dim}), more than {MAX_NETWORK_WEIGHTS:.0e}:"
+            " use smaller layers"
+        )
+
+
+def check_initial_agents(
+    agents: Sequence[str | Path],
+    algo: str,
+    obs_names: Sequence[str],
+    action_dim: int,
+    policy_kwargs: dict[str, Any],
+    where: str,
+) -> None:
+    """Every initial agent of a run, before any worker starts: its files, algorithm and
+    observation (`check_warm_start`), and its weights loaded into the network this run builds
+    (``policy_kwargs``, from the config file ``where``), exactly as `warm_start` will; a
+    ValueError naming the agent folder and the config otherwise."""
+    if not agents:
+        return
+    for agent in agents:
+        check_warm_start(agent, algo, obs_names)
+    import io
+    import zipfile
+
+    import torch
+    from gymnasium import spaces
+
+    from benchmarks.training.config import ALGORITHMS
+
+    policy_class = ALGORITHMS[algo].sb3_class().policy_aliases["MlpPolicy"]
+    box = spaces.Box(-np.inf, np.inf, (len(obs_names),), np.float32)
+    actions = spaces.Box(-1.0, 1.0, (action_dim,), np.float32)
+    network = policy_class(box, actions, lambda _: 0.0, **policy_kwargs)
+    for agent in agents:
+        model = Path(agent) / MODEL_FILE
+        try:
+            with zipfile.ZipFile(model) as archive:
+                data = archive.read("policy.pth")
+            state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+            network.load_state_dict(state, strict=True)
+        except (RuntimeError, ValueError, KeyError, OSError, zipfile.BadZipFile) as exc:
+            problem = " ".join(str(exc).split())
+            raise ValueError(
+                f"init_from {str(agent)!r}: its weights ({model}) do not fit the network of "
+                f"{where} (policy_kwargs {policy_kwargs!r:.80}): {problem:.300}"
+            ) from None
 
 
 def agent_for_seed(template: str, seed: int) -> str:
@@ -65,9 +143,17 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
     _statistics(folder)  # readable, with the return statistics, before any work
     saved = meta.get("obs_names")
     if obs_names is not None and list(saved or ()) != list(obs_names):
+        theirs, ours = list(saved or ()), list(obs_names)
+        k = next((i for i, (a, b) in enumerate(zip(theirs, ours, strict=False)) if a != b), None)
+        k = min(len(theirs), len(ours)) if k is None else k
+        differs = (
+            f"entry {k}: {theirs[k] if k < len(theirs) else None!r} against "
+            f"{ours[k] if k < len(ours) else None!r}"
+        )
         raise ValueError(
-            f"init_from {str(folder)!r}: the agent observes {saved}, this run's "
-            f"observation is {list(obs_names)}"
+            f"init_from {str(folder)!r}: the agent observes {len(theirs)} entries, this run's "
+            f"observation has {len(ours)} (first difference at {differs}): start from an agent "
+            "trained on this run's observation"
         )
     return meta
 
