@@ -165,7 +165,7 @@ def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) ->
         (lambda d: d["model_5dof"].pop("N_max"), "[model_5dof] N_max: missing"),
         (
             lambda d: d["actuators"]["fins"][0].update(induced_drag=0.5),
-            "'stern_starboard' induced_drag: 0.5: the coupled pairs",
+            "'stern_port' induced_drag: 1 differs from fin 'stern_starboard''s 0.5",
         ),
         (
             lambda d: d["actuators"]["fins"][0].update(radius=-0.1),
