@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -139,6 +140,61 @@ def test_interrupted_run_resumes_without_recomputing(tmp_path):
     assert len(after) == 4
     assert all(after[name] == mtime for name, mtime in done.items())  # reused, not recomputed
     assert not list(tmp_path.rglob("*.tmp*"))
+
+
+def test_the_summary_opens_with_the_overview_and_lists_every_figure(tmp_path, monkeypatch):
+    """Was: summary.md had neither the console's overview nor a word on the figures."""
+    monkeypatch.syspath_prepend(str(ROOT / "tests"))
+    argv = ["--scenarios", "paper", "--seeds", "2", "--duration", "10", "--workers", "1"]
+    main(["--policies", USER, *argv, "--quiet", "--out", str(tmp_path)])
+    summary = (tmp_path / "summary.md").read_text()
+    lines = summary.splitlines()
+    assert lines[0] == "# Benchmark summary" and lines[2].startswith("RMS distance to the path")
+    assert lines[4:6] == ["| policy | paper |", "|---|---:|"]
+    assert re.fullmatch(rf"\| {USER} \| [\d.]+ \|", lines[6])
+    figures = sorted(p.name for p in (tmp_path / "figures").iterdir())
+    listed = re.findall(r"^- \[`([^`]+)`\]\(figures/\1\): \S.{20,}$", summary, re.M)
+    assert len(figures) == 2 + 7 and sorted(listed) == figures  # track, distance, 7 bar charts
+    assert summary.index("## Figures") < summary.index("## paper")
+
+
+def test_the_cache_keeps_the_series_the_figures_draw_and_resumes_across_the_choice(
+    tmp_path, monkeypatch
+):
+    """The episode cache was 124 MB of the main job's 126: every episode's time series, though
+    the figures draw the first seed's only. A run keeps those by default, --trajectories all
+    keeps every one; records without a series are rerun only when a series is wanted, and a
+    cache with every series (as runs wrote before) is reused as it is."""
+    monkeypatch.syspath_prepend(str(ROOT / "tests"))
+    argv = ["--policies", USER, "--scenarios", "paper", "--seeds", "2", "--duration", "10"]
+    argv += ["--workers", "1", "--quiet", "--no-figures", "--out", str(tmp_path)]
+    first = main(argv)
+    episodes = tmp_path / "episodes" / "paper" / "user_policy-policy"
+
+    def files() -> dict[str, int]:
+        return {p.name: p.stat().st_mtime_ns for p in episodes.iterdir()}
+
+    before = files()
+    assert sorted(before) == ["seed_0.json", "seed_0.npz", "seed_1.json"]
+    assert [r["trajectory"] for r in first] == [
+        "episodes/paper/user_policy-policy/seed_0.npz",
+        None,
+    ]
+    every = main([*argv, "--trajectories", "all"])  # seed 1 reruns to store its series
+    after = files()
+    assert sorted(after) == ["seed_0.json", "seed_0.npz", "seed_1.json", "seed_1.npz"]
+    assert (
+        after["seed_0.json"] == before["seed_0.json"]
+        and after["seed_0.npz"] == before["seed_0.npz"]
+    )
+    assert after["seed_1.json"] != before["seed_1.json"]
+    assert [r["metrics"] for r in every] == [r["metrics"] for r in first]  # the same episodes
+    from auv_gym.sim.trajectory import Trajectory
+
+    series = Trajectory.load(tmp_path / every[1]["trajectory"])
+    assert series.metadata["seed"] == 1
+    again = main(argv)  # a cache with every series: reused, nothing reruns or is deleted
+    assert files() == after and [r["metrics"] for r in again] == [r["metrics"] for r in first]
 
 
 def test_unknown_names_and_missing_agent_give_clear_errors(tmp_path):

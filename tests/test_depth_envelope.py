@@ -378,5 +378,5 @@ def test_the_compare_summary_has_an_episode_cost_column():
     summary = summarise(records, {"seeds": 3, "duration": 300.0, "transient": 100.0})
     # the broached episode is a failure: counted, and excluded from the mean
     assert summary.endswith(
-        "| policy | failed | episode cost |\n|---|---:|---:|\n| p | 1/3 | 2.00 ± 0.50 |\n"
+        "| policy | failed | episode cost |\n|---|---:|---:|\n| p | 1/3 | 2.00 ± 0.50 (n = 2/3) |\n"
     )

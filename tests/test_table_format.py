@@ -16,7 +16,7 @@ from benchmarks.reports.table_format import (
     mark_best,
     markdown_table,
 )
-from benchmarks.reports.tables import summarise
+from benchmarks.reports.tables import aggregate, overview, overview_note, summarise
 
 
 @pytest.mark.parametrize(
@@ -72,8 +72,18 @@ def test_failed_entries_are_never_bold_and_ties_are_not_a_win():
 
 def test_cell_counts_failures_and_is_empty_when_every_episode_failed():
     assert Cell((), failed=10).text() == EMPTY and Cell((), failed=10).episodes == 10
-    assert Cell((0.1, 0.3), failed=1).text() == "0.200 ± 0.100"
+    assert Cell((0.1, 0.3), failed=1).text() == "0.200 ± 0.100 (n = 2/3)"
     assert Cell((31.0, math.inf)).text("settling_time_0p5") == "never"
+
+
+def test_a_mean_over_fewer_than_all_episodes_shows_its_sample_size():
+    """Was: a mean over 1 of 3 episodes printed as a plain number, like a mean over 3."""
+    assert Cell((0.3,), failed=2).text() == "0.300 (n = 1/3)"
+    assert Cell((0.3,), failed=2).sample_size() == "n = 1/3"
+    assert Cell((0.1, math.nan, 0.3)).text() == "0.200 ± 0.100 (n = 2/3)"  # one undefined
+    assert Cell((0.1, 0.3)).text() == "0.200 ± 0.100" and Cell((0.1, 0.3)).sample_size() == ""
+    assert Cell((), failed=3).sample_size() == "" and Cell((), failed=3).counted == 0
+    assert Cell((31.0, math.inf), failed=1).text("settling_time_0p5") == "never (n = 2/3)"
 
 
 def test_markdown_table_refuses_ragged_rows():
@@ -96,16 +106,75 @@ def test_summary_never_marks_a_failed_policy_best_and_prints_no_inf():
         _record("ppo", 1, 0.2, "overspeed"),
     ]
     text = summarise(records, {"seeds": 2, "duration": 100.0, "transient": 50.0})
-    rows: dict[str, str] = {}  # the tracking table's row of each policy (it comes first)
-    for line in text.splitlines():
+    rows: dict[str, str] = {}  # the tracking table's row of each policy (the scenario's first)
+    for line in text[text.index("## paper") :].splitlines():
         if line.startswith("| "):
             rows.setdefault(line.split(" | ")[0][2:], line)
     assert "inf" not in text
     assert rows["fbsm"].startswith("| fbsm | 0/2 | **0.0650 ± 0.0050** |")
     assert rows["untrained"].startswith(f"| untrained | 2/2 | {EMPTY} |")
-    assert rows["ppo"].startswith("| ppo | 1/2 | 0.300 |")
+    assert rows["ppo"].startswith("| ppo | 1/2 | 0.300 (n = 1/2) |")
     assert "| policy | failed | RMS d [m] |" in text
     assert max(len(line) for line in text.splitlines() if line.startswith("|")) < 120
+
+
+def test_a_settling_time_never_reached_is_never_not_a_missing_value():
+    """Episode records store a settling time never reached (+inf) as null; the summary read it
+    back as NaN and printed "—" (as for a cell without a finished episode) and the bar chart
+    drew no bar, which read as best."""
+    records = [_record("slow", seed, 0.5) for seed in range(2)]
+    for r in records:
+        r["metrics"]["settling_time_0p5"] = None
+    records += [_record("quick", seed, 0.1) for seed in range(2)]
+    del records[-1]["metrics"]["settling_time_0p5"]  # not recorded: undefined, not "never"
+    cells = aggregate(records)
+    assert cells[("paper", "slow")]["settling_time_0p5"].mean() == math.inf
+    assert cells[("paper", "quick")]["settling_time_0p5"].values[1] != math.inf
+    text = summarise(records, {"seeds": 2, "duration": 100.0, "transient": 50.0})
+    slow = next(line for line in text.splitlines() if line.startswith("| slow | 0/2 |"))
+    assert slow.endswith("| never |")
+    quick = next(line for line in text.splitlines() if line.startswith("| quick | 0/2 |"))
+    assert quick.endswith("| **20.0 (n = 1/2)** |")
+
+
+def test_the_summary_opens_with_the_overview_and_the_list_of_figures():
+    records = [
+        _record("fbsm", 0, 0.06),
+        _record("fbsm", 1, 0.07),
+        _record("fbsm", 2, 0.08),
+        _record("ppo", 0, 0.3),
+        _record("ppo", 1, 2.0, "corridor"),
+        _record("ppo", 2, 2.0, "pitch"),
+        *(_record("untrained", s, 9.0, "corridor") for s in range(3)),
+    ]
+    figures = [
+        ("figures/track_paper.png", "paper: every policy's track"),
+        ("figures/bars_rms_distance.png", "RMS distance [m]"),
+    ]
+    text = summarise(records, {"seeds": 3, "duration": 100.0, "transient": 50.0}, figures)
+    lines = text.splitlines()
+    assert lines[0] == "# Benchmark summary"
+    assert lines[2] == overview_note(3, 50.0)
+    assert lines[4:9] == [
+        "| policy | paper |",
+        "|---|---:|",
+        "| fbsm | 0.07 |",
+        "| ppo | 0.3 (n = 1/3) |",
+        "| untrained | all 3 failed |",
+    ]
+    assert lines[10:15] == [
+        "## Figures",
+        "",
+        "- [`track_paper.png`](figures/track_paper.png): paper: every policy's track",
+        "- [`bars_rms_distance.png`](figures/bars_rms_distance.png): RMS distance [m]",
+        "",
+    ]
+    assert "## paper" in text and text.index("## Figures") < text.index("## paper")
+    console = overview(records).splitlines()  # the console's table: the same cells
+    assert console[2].split() == ["ppo", "0.3", "(n", "=", "1/3)"]
+    assert console[3].split() == ["untrained", "all", "3", "failed"]
+    bare = summarise(records, {"seeds": 3, "duration": 100.0, "transient": 50.0})
+    assert "## Figures\n\nNone: this run drew no figures.\n" in bare
 
 
 def test_metrics_table_never_bolds_a_failed_episode():

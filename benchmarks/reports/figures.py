@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,11 +25,14 @@ from benchmarks.reports.plotting import (
     policy_colours,
     save_figure,
 )
-from benchmarks.reports.table_format import Cell
+from benchmarks.reports.table_format import NEVER_METRICS, Cell
 from benchmarks.reports.tables import aggregate
 from benchmarks.training.learning_curve import EVAL_FILE, read_rows
 
-__all__ = ["BAR_METRICS", "comparison_figures", "plot_learning_curve"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["BAR_METRICS", "comparison_figures", "figure_captions", "plot_learning_curve"]
 
 # Metric → axis label of the bar charts.
 BAR_METRICS = {
@@ -47,10 +50,11 @@ _COMPARISON_DPI = 110
 def comparison_figures(
     records: Sequence[Mapping[str, Any]], out: Path, scenarios: Mapping[str, Any]
 ) -> list[Path]:
-    """Write per-scenario overlays (first seed) and per-metric bar charts; return the files.
+    """Write per-scenario overlays (first seed) and per-metric bar charts; return the files
+    (`figure_captions` says what each shows).
 
     Each record holds "policy", "scenario", "seed", "metrics" and "trajectory", the path of its
-    `.npz` relative to ``out``; ``scenarios`` maps a name to a
+    `.npz` relative to ``out`` (the first seed's at least); ``scenarios`` maps a name to a
     `benchmarks.catalog.scenarios.Scenario`.
     """
     written = []
@@ -73,12 +77,53 @@ def comparison_figures(
     return written
 
 
+def figure_captions(files: Sequence[Path], out: Path, seed: int = 0) -> list[tuple[str, str]]:
+    """(file relative to ``out``, one line on what it shows) for files of `comparison_figures`;
+    ``seed``: the seed the track and distance figures draw (the run's first)."""
+    captions = []
+    for file in files:
+        stem = Path(file).stem
+        kind, _, name = stem.partition("_")
+        if kind == "track":
+            text = (
+                f"{name}: every policy's track, seed {seed}, in 3-D, from above and from the "
+                "side (× where an episode failed)"
+            )
+        elif kind == "distance":
+            text = (
+                f"{name}: distance to the virtual point over time, seed {seed}, linear and log "
+                "scale (× where an episode failed)"
+            )
+        elif kind == "bars" and name in BAR_METRICS:
+            text = (
+                f"{BAR_METRICS[name]}: mean ± std over the finished episodes per scenario and "
+                "policy (n = k/N: k of N finished; hatched: "
+                + ("never settled or " if name in NEVER_METRICS else "")
+                + "all failed)"
+            )
+        else:
+            text = stem
+        captions.append((Path(file).relative_to(out).as_posix(), text))
+    return captions
+
+
+def _failures(trajectories: Mapping[str, Trajectory]) -> dict[str, str]:
+    """Policy → how its episode failed, for the episodes that failed."""
+    return {
+        p: tr.termination_reason
+        for p, tr in trajectories.items()
+        if tr.termination_reason in FAILURE_REASONS
+    }
+
+
 def _scenario_figures(
     name: str, path: Any, trajectories: Mapping[str, Trajectory], seed: int, folder: Path
 ) -> list[Path]:
     """track_<name>.png (3D and projections) and distance_<name>.png (linear and log)."""
     s_max = max(float(np.nanmax(tr["s"])) for tr in trajectories.values())
-    rows = -(-len(trajectories) // 6)  # legend rows below the panels
+    failed = _failures(trajectories)
+    entries = 1 + len(trajectories) + bool(failed)  # the path, the policies, the cross
+    rows = -(-entries // 5)  # legend rows below the panels
     fig = new_figure(13.0, 4.4 + 0.25 * rows, _COMPARISON_DPI)
     plot_track(
         fig,
@@ -86,32 +131,60 @@ def _scenario_figures(
         {p: tr.position for p, tr in trajectories.items()},
         s_max=s_max,
         envelope=envelope_of(trajectories.values()),
+        failed=failed,
     )
     fig.suptitle(f"{name}: tracks, seed {seed}")
     fig.tight_layout(rect=(0, 0.06 * rows, 1, 1))
     track = save_figure(fig, folder / f"track_{name}.png")
 
+    distance = _distance_figure(name, trajectories, seed)
+    return [track, save_figure(distance, folder / f"distance_{name}.png")]
+
+
+def _distance_figure(name: str, trajectories: Mapping[str, Trajectory], seed: int) -> Figure:
+    """The distance to the virtual point over time, on a linear and a log scale side by side
+    (each panel titled with its scale), a cross where an episode failed."""
+    failed = _failures(trajectories)
     colours = policy_colours(list(trajectories))
+    rows = -(-len(trajectories) // 5)
     fig = new_figure(10.0, 4.4 + 0.25 * rows, _COMPARISON_DPI)
     ax_lin, ax_log = fig.subplots(1, 2)
     for policy, tr in trajectories.items():
-        failed = tr.termination_reason in FAILURE_REASONS
-        label = f"{policy} (failed: {tr.termination_reason})" if failed else policy
+        label = f"{policy} (failed: {failed[policy]})" if policy in failed else policy
         for ax in (ax_lin, ax_log):
             ax.plot(tr.t, tr["distance"], lw=1.1, color=colours[policy], label=label)
-            if failed:
+            if policy in failed:
                 ax.plot(tr.t[-1], tr["distance"][-1], "x", ms=8, color=colours[policy])
     ax_log.set_yscale("log")
-    for ax in (ax_lin, ax_log):
-        ax.set(xlabel="t [s]", ylabel="distance to virtual point [m]")
+    for ax, scale in ((ax_lin, "linear scale"), (ax_log, "log scale")):
+        ax.set(xlabel="t [s]", ylabel="distance to virtual point [m]", title=scale)
         ax.grid(True, alpha=0.3)
     handles, labels = ax_lin.get_legend_handles_labels()
     fig.legend(
-        handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8, frameon=False
+        handles, labels, loc="lower center", ncols=min(len(labels), 5), fontsize=8, frameon=False
     )
     fig.suptitle(f"{name}: distance to the virtual point, seed {seed} (× an episode that failed)")
     fig.tight_layout(rect=(0, 0.06 * rows, 1, 1))
-    return [track, save_figure(fig, folder / f"distance_{name}.png")]
+    return fig
+
+
+# How a bar chart draws a cell that has no mean to draw as a bar: hatch, fill and legend text.
+NO_BAR = {
+    "never": ("///", "none", "never settled (in a finished episode): no settling time"),
+    "failed": ("xxx", "0.85", "every episode failed: no value"),
+}
+
+
+def _bar_cell(cell: Cell) -> tuple[str, float, float]:
+    """(kind, mean, std) of a cell: "value" (a bar), "never" (a finished episode never reached
+    the threshold: the mean is +inf), "failed" (no finished episode) or "none" (no value)."""
+    values = np.asarray(cell.values, dtype=float)
+    values = values[~np.isnan(values)]
+    if values.size == 0:
+        return ("failed" if cell.failed else "none"), np.nan, np.nan
+    if np.isposinf(values).any():
+        return "never", np.inf, np.nan
+    return "value", float(values.mean()), float(values.std())
 
 
 def _bar_chart(
@@ -122,73 +195,122 @@ def _bar_chart(
     label: str,
     folder: Path,
 ) -> Path:
-    """bars_<metric>.png: mean ± std over the finished episodes per scenario, one bar per policy.
+    """bars_<metric>.png (`_bar_figure`)."""
+    fig = _bar_figure(cells, policies, names, metric, label)
+    return save_figure(fig, folder / f"bars_{metric}.png")
+
+
+def _bar_figure(
+    cells: Mapping[tuple[str, str], Mapping[str, Cell]],
+    policies: list[str],
+    names: list[str],
+    metric: str,
+    label: str,
+) -> Figure:
+    """Mean ± std over the finished episodes per scenario, one bar per policy.
 
     A linear axis (a bar's length is its value), or a log axis where the means span more than
-    two decades (centimetres beside metres: on a linear axis the small bars vanish; the title
-    says which). Failed episodes are left out of the mean and
-    counted above the bar ("✕n"); a policy whose episodes all failed gets a hatched empty bar.
-    ``cells`` are `benchmarks.reports.tables.aggregate`'s.
+    two decades (centimetres beside metres: on a linear axis the small bars vanish); the title
+    says which scale. A mean over fewer than all the episodes of its cell (the others failed)
+    says so above its bar ("n = 2/3"). A cell without a value to draw is never a bar: it is a
+    hatched column over the whole height of the axes, in its policy's colour, with a word
+    across it and a legend entry: "never" where a finished episode never settled (its settling
+    time is off any scale; short or missing bars are the ones that settled), "failed" where
+    every episode failed. ``cells`` are `benchmarks.reports.tables.aggregate`'s.
     """
+    from matplotlib.patches import Patch, Rectangle
+    from matplotlib.transforms import blended_transform_factory
+
     colours = policy_colours(policies)
     fig = new_figure(max(7.0, 0.12 * len(names) * len(policies) + 3.0), 4.6, _COMPARISON_DPI)
     ax = fig.subplots()
+    column = blended_transform_factory(ax.transData, ax.transAxes)  # x in data, y in [0, 1]
     width = 0.8 / max(len(policies), 1)
     x = np.arange(len(names))
-    bars = {}
-    for policy in policies:
-        for scenario in names:
-            cell = cells.get((scenario, policy), {}).get(metric, Cell(()))
-            values = np.asarray(cell.values, dtype=float)
-            bars[(policy, scenario)] = (values[np.isfinite(values)], cell.failed)
-    top = max((v.mean() + v.std() for v, _ in bars.values() if v.size), default=1.0)
+    cell_of = {(p, n): cells.get((n, p), {}).get(metric, Cell(())) for p in policies for n in names}
+    kinds = {key: _bar_cell(cell) for key, cell in cell_of.items()}
+    drawn = [mean for kind, mean, _ in kinds.values() if kind == "value"]
+    tops = [mean + std for kind, mean, std in kinds.values() if kind == "value"]
+    positive = [m for m in drawn if m > 0]
+    log = bool(positive) and max(positive) > 100.0 * min(positive)
+    seen: set[str] = set()
+    partial = False
     for k, policy in enumerate(policies):
         offset = (k - (len(policies) - 1) / 2) * width
         for i, scenario in enumerate(names):
-            values, failed = bars[(policy, scenario)]
+            kind, mean, std = kinds[(policy, scenario)]
             xi = x[i] + offset
-            if values.size:
-                ax.bar(
-                    xi,
-                    values.mean(),
-                    width,
-                    yerr=values.std(),
-                    capsize=2,
-                    color=colours[policy],
-                    label=policy if i == 0 else None,
+            if kind == "value":
+                ax.bar(xi, mean, width, yerr=std, capsize=2, color=colours[policy])
+                size = cell_of[(policy, scenario)].sample_size()
+                if size:
+                    partial = True
+                    ax.annotate(
+                        size,
+                        (xi, mean + std),
+                        xytext=(0, 2),
+                        textcoords="offset points",
+                        ha="center",
+                        va="bottom",
+                        rotation=90,
+                        fontsize=6.5,
+                    )
+            elif kind in NO_BAR:
+                seen.add(kind)
+                ax.add_patch(
+                    Rectangle(
+                        (xi - width / 2, 0.0),
+                        width,
+                        1.0,
+                        transform=column,
+                        facecolor=NO_BAR[kind][1],
+                        hatch=NO_BAR[kind][0],
+                        edgecolor=colours[policy],
+                        linewidth=0.8,
+                    )
                 )
-            elif failed:
-                ax.bar(
+                ax.text(
                     xi,
-                    top,
-                    width,
-                    fill=False,
-                    hatch="///",
-                    edgecolor=colours[policy],
-                    label=policy if i == 0 else None,
+                    0.5,
+                    kind,
+                    transform=column,
+                    rotation=90,
+                    ha="center",
+                    va="center",
+                    fontsize=7,
+                    bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none"},
                 )
-            if failed:
-                height = values.mean() + values.std() if values.size else top
-                ax.text(xi, height, f"✕{failed}", ha="center", va="bottom", fontsize=7, color="C3")
     ax.set_xticks(x, names, rotation=20)
+    if names:
+        ax.set_xlim(-0.5, len(names) - 0.5)
     ax.set_ylabel(label)
-    positive = [v.mean() for v, _ in bars.values() if v.size and v.mean() > 0]
-    log = bool(positive) and max(positive) > 100.0 * min(positive)
+    room = 0.2 if partial else 0.05  # of the axes' height, above the highest error bar
     if log:
         ax.set_yscale("log")
-        ax.set_ylim(bottom=min(positive) / 3.0)
-    else:
-        ax.set_ylim(bottom=0)
+        bottom = min(positive) / 3.0
+        decades = np.log10(max(tops) / bottom)
+        ax.set_ylim(bottom, max(tops) * 10.0 ** (decades * room / (1.0 - room)))
+    elif tops:
+        ax.set_ylim(0.0, max(tops) / (1.0 - room) or 1.0)
     ax.set_title(
-        f"{metric}: mean ± std over finished episodes{' (log axis)' if log else ''}; "
-        "✕n: n failed episodes, hatched: all failed",
+        f"{metric}: mean ± std over the finished episodes, {'log' if log else 'linear'} scale",
         fontsize=9,
     )
     ax.grid(True, axis="y", alpha=0.3)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    handles = [Patch(facecolor=colours[p], label=p) for p in policies]
+    for kind in ("never", "failed"):
+        if kind in seen:
+            hatch, face, text = NO_BAR[kind]
+            handles.append(Patch(facecolor=face, hatch=hatch, edgecolor="0.3", label=text))
+    if partial:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], ls="", label="n = k/N: mean of the k of N that finished"))
+    ax.legend(
+        handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False
+    )
     fig.tight_layout()
-    return save_figure(fig, folder / f"bars_{metric}.png")
+    return fig
 
 
 def plot_learning_curve(run: Path, prefix: Path) -> None:

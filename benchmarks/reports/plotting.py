@@ -41,6 +41,7 @@ if TYPE_CHECKING:
 
 
 __all__ = [
+    "OKABE_ITO",
     "POLICY_COLOURS",
     "TABLE_METRICS",
     "envelope_of",
@@ -57,52 +58,70 @@ __all__ = [
 # `benchmarks.reports.table_format`.
 TABLE_METRICS = METRIC_INFO
 
-# One colour per policy, the same in every figure and every run: the classical controllers and
-# the reference agents have fixed colours (classical in blues/greens, agents in warm colours);
-# any other name takes a colour from tab20 by a stable hash of its name, probing past colours
-# already taken in that figure so that no two policies of one figure share a colour.
-POLICY_COLOURS: dict[str, str] = {
-    "fbsm": "#1f77b4",
-    "FBSM": "#1f77b4",
-    "fbsm_colos": "#17becf",
-    "fbsm_colos_lowpass": "#9edae5",
-    "fbsm_ilos": "#aec7e8",
-    "backstepping": "#2ca02c",
-    "backstepping_colos": "#98df8a",
-    "backstepping_ilos": "#bcbd22",
-    "pid_los": "#d6616b",
-    "pid_ilos": "#e7969c",
-    "pid_colos": "#cedb9c",
-    "pid_as_built": "#8c564b",
-    "command_filtered": "#006d2c",
-    "command_filtered_colos": "#41ab5d",
-    "ppo_generalist": "#d62728",
-    "ppo_as_built": "#e377c2",
-    "ppo_helix": "#ff7f0e",
-    "ppo_residual": "#7f7f7f",
-    "sac_helix": "#9467bd",
+# One colour per policy, the same in every figure and every run, from colour-blind-safe palettes:
+# the reference policies (the main job's eight and ppo_as_built) take the eight colours of Okabe &
+# Ito (2008) and tableau-colorblind10's dark grey (Okabe–Ito's grey is its reddish purple for a
+# deuteranope), told apart with each common colour-vision deficiency: classical in blues, green
+# and black, agents in vermillion, orange, purple, grey and yellow (was: tab10's red beside a
+# pink). The other presets take colours of Paul Tol's muted palette near their family's (FBSM's
+# in blues, backstepping's in greens, PID's in greys and olive). Any other name takes a colour
+# of `_HASH_PALETTE` by a stable hash of its name, probing past colours already taken in that
+# figure so that no two policies of one figure share a colour.
+OKABE_ITO = {
+    "black": "#000000",
+    "orange": "#E69F00",
+    "sky blue": "#56B4E9",
+    "bluish green": "#009E73",
+    "yellow": "#F0E442",
+    "blue": "#0072B2",
+    "vermillion": "#D55E00",
+    "reddish purple": "#CC79A7",
 }
+POLICY_COLOURS: dict[str, str] = {
+    "fbsm": OKABE_ITO["blue"],
+    "FBSM": OKABE_ITO["blue"],
+    "fbsm_colos": OKABE_ITO["sky blue"],
+    "backstepping": OKABE_ITO["bluish green"],
+    "pid_los": OKABE_ITO["black"],
+    "ppo_generalist": OKABE_ITO["vermillion"],
+    "ppo_helix": OKABE_ITO["orange"],
+    "ppo_residual": "#595959",  # dark grey (tableau-colorblind10)
+    "sac_helix": OKABE_ITO["reddish purple"],
+    "ppo_as_built": OKABE_ITO["yellow"],
+    # Tol's muted palette
+    "fbsm_ilos": "#332288",  # indigo
+    "fbsm_colos_lowpass": "#88CCEE",  # cyan
+    "backstepping_ilos": "#117733",  # green
+    "backstepping_colos": "#44AA99",  # teal
+    "command_filtered": "#882255",  # wine
+    "command_filtered_colos": "#AA4499",  # purple
+    "pid_ilos": "#ABABAB",  # light grey (tableau-colorblind10)
+    "pid_colos": "#999933",  # olive
+    "pid_as_built": "#DDCC77",  # sand
+}
+# Paul Tol's bright and vibrant palettes without their greys (each colour-blind-safe in itself),
+# then his light palette, for a figure of more than twelve such names.
 _HASH_PALETTE = (
-    "#393b79",
-    "#637939",
-    "#8c6d31",
-    "#843c39",
-    "#7b4173",
-    "#3182bd",
-    "#e6550d",
-    "#31a354",
-    "#756bb1",
-    "#636363",
-    "#6baed6",
-    "#fd8d3c",
-    "#74c476",
-    "#9e9ac8",
-    "#969696",
-    "#e7ba52",
-    "#ad494a",
-    "#a55194",
-    "#5254a3",
-    "#b5cf6b",
+    "#4477AA",
+    "#EE6677",
+    "#228833",
+    "#CCBB44",
+    "#66CCEE",
+    "#AA3377",
+    "#EE7733",
+    "#0077BB",
+    "#33BBEE",
+    "#EE3377",
+    "#CC3311",
+    "#009988",
+    "#77AADD",
+    "#EE8866",
+    "#44BB99",
+    "#BBCC33",
+    "#AAAA00",
+    "#EEDD88",
+    "#FFAABB",
+    "#99DDFF",
 )
 
 
@@ -157,14 +176,22 @@ def plot_track(
     tracks: dict[str, np.ndarray],
     s_max: float,
     envelope: DepthEnvelope | None = None,
+    failed: Mapping[str, str] | None = None,
 ) -> None:
     """Draw the path and tracks (name → (T, 3) NED positions [m]) in 3D plus x–y and x–z views,
     with the sea surface and seabed of ``envelope`` if given.
 
-    Depth is plotted as −z so that "up" is up. Each policy has its `policy_colours` colour;
-    the legend sits below the panels, where it covers no data.
+    Depth is plotted as −z so that "up" is up. The path is drawn up to arc length ``s_max`` [m]
+    (the furthest the episodes got; a finite path ends sooner). Each policy has its
+    `policy_colours` colour; a track that ends in a failure (``failed``: name → reason) ends in
+    a cross and says so in the legend, the others in a dot. The horizontal view keeps x and y to
+    one scale by widening its data limits, never by shrinking its panel (a 150-m line with 20-m
+    turns was once a strip a tenth of the panel's height). The legend sits below the panels,
+    where it covers no data.
     """
-    ref = path.sample(600, s_max=max(s_max, 1.0))
+    failed = dict(failed or {})
+    s_end = path.s_end if math.isfinite(path.s_end) else math.inf
+    ref = path.evaluate(np.linspace(0.0, min(max(s_max, 1.0), s_end), 600))[0]
     ax3d = fig.add_subplot(1, 3, 1, projection="3d")
     ax_xy = fig.add_subplot(1, 3, 2)
     ax_xz = fig.add_subplot(1, 3, 3)
@@ -174,20 +201,31 @@ def plot_track(
     colours = policy_colours(list(tracks))
     for name, track in tracks.items():
         style = {"lw": 1.2, "color": colours[name], "alpha": 0.85}
-        ax3d.plot(track[:, 0], track[:, 1], -track[:, 2], label=name, **style)
+        label = f"{name} (failed: {failed[name]})" if name in failed else name
+        ax3d.plot(track[:, 0], track[:, 1], -track[:, 2], label=label, **style)
         ax_xy.plot(track[:, 0], track[:, 1], **style)
         ax_xz.plot(track[:, 0], -track[:, 2], **style)
-        ax3d.scatter(*track[-1, :2], -track[-1, 2], s=12, color=colours[name])
+        end = {"marker": "x", "s": 40} if name in failed else {"marker": "o", "s": 12}
+        ax3d.scatter(*track[-1, :2], -track[-1, 2], color=colours[name], **end)
+        for ax, (i, j, sign) in ((ax_xy, (0, 1, 1.0)), (ax_xz, (0, 2, -1.0))):
+            if name in failed:
+                ax.scatter(track[-1, i], sign * track[-1, j], color=colours[name], **end)
     draw_boundaries_3d(ax3d, envelope, *extent([ref, *tracks.values()]))
     draw_boundary_lines(ax_xz, envelope)
     ax3d.set(xlabel="x [m]", ylabel="y [m]", zlabel="−z [m]", title="3D path")
-    ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="horizontal projection", aspect="equal")
+    ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="horizontal projection")
+    ax_xy.set_aspect("equal", adjustable="datalim")
     ax_xz.set(xlabel="x [m]", ylabel="−z [m]", title="vertical projection")
     for ax in (ax_xy, ax_xz):
         ax.grid(True, alpha=0.3)
     handles, labels = ax3d.get_legend_handles_labels()
+    if failed:  # what the cross means, once
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], ls="", marker="x", color="k"))
+        labels.append("end of a failed episode")
     fig.legend(
-        handles, labels, loc="lower center", ncols=min(len(labels), 6), fontsize=8, frameon=False
+        handles, labels, loc="lower center", ncols=min(len(labels), 5), fontsize=8, frameon=False
     )
 
 

@@ -12,6 +12,7 @@ Every markdown table the project writes (the paper figures' `metrics.md`, a benc
 - A failed episode (an end in `auv_gym.sim.trajectory.FAILURE_REASONS`) contributes no metric: the
   metric is over the episodes that ran to the end, the failures are counted beside it, a cell
   with no finished episode is "—", and a policy with a failed episode is never marked best.
+  A mean over fewer than all the episodes of a cell shows its sample size: ``0.300 (n = 1/3)``.
   `inf` is never printed as a number; a settling threshold never reached is "never".
 """
 
@@ -27,6 +28,7 @@ __all__ = [
     "EMPTY",
     "FAILURE_CONVENTION",
     "METRIC_INFO",
+    "NEVER_METRICS",
     "SIGNIFICANT_FIGURES",
     "Cell",
     "display_scale",
@@ -43,8 +45,9 @@ FAILURE_CONVENTION = (
     "Metrics are over the episodes that ran to the end; failed episodes (an early end: corridor, "
     "envelope, overspeed, non-finite state, broached, grounded) are counted in the *failed* "
     "column and excluded, "
-    f"“{EMPTY}” marks a cell with no finished episode, and a policy with a failed episode is "
-    "never marked best (**bold**). “never”: the threshold was not reached."
+    f"“{EMPTY}” marks a cell with no finished episode, “(n = 1/3)” a mean over 1 of its 3 "
+    "episodes, and a policy with a failed episode is never marked best (**bold**). “never”: the "
+    "threshold was not reached (in at least one finished episode)."
 )
 
 # name → (label, unit, better: "min" / "max" / "" for no ranking).
@@ -73,8 +76,9 @@ METRIC_INFO: dict[str, tuple[str, str, str]] = {
     "termination_reason": ("episode end", "-", ""),
 }
 
-# Metrics whose +inf means "the threshold was never reached" rather than "undefined".
-_NEVER_METRICS = frozenset({"settling_time_0p5", "settling_time_0p1"})
+# Metrics whose +inf means "the threshold was never reached" rather than "undefined" (an episode
+# record stores it as null: `benchmarks.reports.tables.aggregate` reads it back as +inf).
+NEVER_METRICS = frozenset({"settling_time_0p5", "settling_time_0p1"})
 _SMALLER_UNITS = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3)}
 _SMALL = 0.01  # below 1 cm (1 cm/s), metres print as millimetres
 
@@ -102,7 +106,7 @@ def format_number(value: object, significant: int = SIGNIFICANT_FIGURES, metric:
     if math.isnan(x) or x == -math.inf:
         return EMPTY
     if x == math.inf:
-        return "never" if metric in _NEVER_METRICS else EMPTY
+        return "never" if metric in NEVER_METRICS else EMPTY
     if x == 0:
         return "0"
     # Round to the significant figures first: 9.996 with 3 figures is "10.0", not "10.00".
@@ -145,7 +149,8 @@ class Cell:
     """One policy's values of one metric in one setting, with its failed-episode count.
 
     ``values`` are the metric of the episodes that ran to the end (non-finite entries are
-    kept: a settling time of +inf is "never"); ``failed`` of ``episodes`` ended early.
+    kept: a settling time of +inf is "never", NaN is undefined and left out of the mean);
+    ``failed`` of ``episodes`` ended early.
     """
 
     values: tuple[float, ...]
@@ -154,6 +159,17 @@ class Cell:
     @property
     def episodes(self) -> int:
         return len(self.values) + self.failed
+
+    @property
+    def counted(self) -> int:
+        """How many episodes the mean is over: the finished ones with a defined value."""
+        return int(np.count_nonzero(~np.isnan(np.asarray(self.values, dtype=float))))
+
+    def sample_size(self) -> str:
+        """ "n = k/N" when the mean is over k of the cell's N episodes (some failed, or their
+        metric is undefined); "" when it is over all of them or over none."""
+        counted = self.counted
+        return f"n = {counted}/{self.episodes}" if 0 < counted < self.episodes else ""
 
     def mean(self) -> float:
         """Mean over finished episodes; +inf when any is +inf (never settled); NaN if none."""
@@ -166,14 +182,19 @@ class Cell:
         return float(data.mean())
 
     def text(self, metric: str = "", scale: float = 1.0) -> str:
+        """ "mean ± std", "never", or "—"; with "(n = k/N)" after it when the mean is over
+        fewer than all the episodes."""
         data = np.asarray(self.values, dtype=float)
         data = data[~np.isnan(data)]
         if data.size == 0:
             return EMPTY
         mean = self.mean()
         if not math.isfinite(mean) or data.size == 1:
-            return format_number(mean * scale, metric=metric)
-        return format_mean_std(mean * scale, float(data.std()) * scale, metric=metric)
+            text = format_number(mean * scale, metric=metric)
+        else:
+            text = format_mean_std(mean * scale, float(data.std()) * scale, metric=metric)
+        size = self.sample_size()
+        return f"{text} ({size})" if size else text
 
 
 def mark_best(

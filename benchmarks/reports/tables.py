@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +14,7 @@ from auv_gym.support.files import environment, write_json, write_text
 from benchmarks.reports.table_format import (
     FAILURE_CONVENTION,
     METRIC_INFO,
+    NEVER_METRICS,
     Cell,
     display_scale,
     mark_best,
@@ -24,6 +26,7 @@ __all__ = [
     "SUMMARY_METRICS",
     "aggregate",
     "overview",
+    "overview_note",
     "summarise",
     "write_tables",
 ]
@@ -60,8 +63,16 @@ _HEADERS = {
 }
 
 
-def write_tables(records: list[dict[str, Any]], out: Path, config: dict[str, Any]) -> str:
-    """episodes.csv, episodes.json and summary.md; returns the markdown summary."""
+def write_tables(
+    records: list[dict[str, Any]],
+    out: Path,
+    config: dict[str, Any],
+    figures: Sequence[tuple[str, str]] | None = None,
+) -> str:
+    """episodes.csv, episodes.json and summary.md; returns the markdown summary.
+
+    ``figures``: (file relative to ``out``, one line on what it shows) of every figure the run
+    drew, listed near the top of the summary (None: the run drew none)."""
     metric_names = sorted({k for r in records for k in r["metrics"]})
     header = ["scenario", "policy", "seed", *metric_names]
 
@@ -75,7 +86,7 @@ def write_tables(records: list[dict[str, Any]], out: Path, config: dict[str, Any
     write_text(out / "episodes.csv", buffer.getvalue())
     payload = {"config": config, **environment(), "episodes": records}
     write_json(out / "episodes.json", payload, indent=1)
-    summary = summarise(records, config)
+    summary = summarise(records, config, figures)
     write_text(out / "summary.md", summary)
     return summary
 
@@ -90,16 +101,29 @@ def aggregate(records: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, 
         finished = [m for m in episodes if m.get("termination_reason") not in FAILURE_REASONS]
         failed = len(episodes) - len(finished)
         cells[key] = {
-            metric: Cell(tuple(_value(m.get(metric)) for m in finished), failed)
+            metric: Cell(tuple(_value(m, metric) for m in finished), failed)
             for metric in SUMMARY_METRICS
         }
     return cells
 
 
-def overview(records: list[dict[str, Any]]) -> str:
+OVERVIEW_METRIC = "rms_distance"  # the benchmark's headline metric
+
+
+def overview_note(seeds: int, transient: float) -> str:
+    """The line that says what the overview's cells are."""
+    return (
+        f"RMS distance to the path [m], mean of {seeds} seed(s) after t = {transient:g} s; "
+        "(n = k/N): the mean of the k of N episodes that did not fail (the others left the "
+        "corridor, pitched over...)."
+    )
+
+
+def overview(records: list[dict[str, Any]], markdown: bool = False) -> str:
     """One screen: a row per policy, a column per scenario, each cell the mean RMS distance [m]
-    over the finished episodes and, after a "/", how many of them failed (the benchmark's
-    headline metric; every other one is in summary.md)."""
+    over the finished episodes with its sample size "(n = k/N)" when some failed, or
+    "all N failed" (the benchmark's headline metric; every other one is in summary.md).
+    ``markdown``: as a markdown table (summary.md's first table) instead of aligned text."""
     cells = aggregate(records)
     policies = list(dict.fromkeys(r["policy"] for r in records))
     scenarios = list(dict.fromkeys(r["scenario"] for r in records))
@@ -107,15 +131,13 @@ def overview(records: list[dict[str, Any]]) -> str:
     for policy in policies:
         row = [policy]
         for scenario in scenarios:
-            cell = cells.get((scenario, policy), {}).get("rms_distance")
-            if cell is None:
-                row.append("")
-                continue
-            mean = cell.mean()
-            text = "-" if math.isnan(mean) else f"{mean:.3g}"
-            row.append(text + (f" /{cell.failed}✗" if cell.failed else ""))
+            cell = cells.get((scenario, policy), {}).get(OVERVIEW_METRIC)
+            row.append("" if cell is None else _overview_cell(cell))
         rows.append(row)
-    widths = [max(len(r[k]) for r in [["policy", *scenarios], *rows]) for k in range(len(rows[0]))]
+    header = ["policy", *scenarios]
+    if markdown:
+        return markdown_table(header, rows)
+    widths = [max(len(r[k]) for r in [header, *rows]) for k in range(len(header))]
 
     def line(cols: list[str]) -> str:
         return "  ".join(
@@ -123,25 +145,61 @@ def overview(records: list[dict[str, Any]]) -> str:
             for k, (c, w) in enumerate(zip(cols, widths, strict=True))
         )
 
-    return "\n".join([line(["policy", *scenarios]), *(line(r) for r in rows)])
+    return "\n".join([line(header), *(line(r) for r in rows)])
 
 
-def _value(value: Any) -> float:
-    return math.nan if value is None else float(value)
+def _overview_cell(cell: Cell) -> str:
+    mean = cell.mean()
+    if math.isnan(mean):
+        return f"all {cell.episodes} failed" if cell.failed else "-"
+    size = cell.sample_size()
+    return f"{mean:.3g}" + (f" ({size})" if size else "")
 
 
-def summarise(records: list[dict[str, Any]], config: dict[str, Any]) -> str:
-    """Markdown: per scenario, one row per policy, mean ± std over the finished episodes.
+def _value(metrics: dict[str, Any], metric: str) -> float:
+    """A recorded metric as a float: NaN when missing or undefined; a settling time stored as
+    null (never reached: records hold no infinities) is +inf."""
+    if metric not in metrics:
+        return math.nan
+    value = metrics[metric]
+    if value is None:
+        return math.inf if metric in NEVER_METRICS else math.nan
+    return float(value)
 
-    Four tables per scenario (tracking, speed, effort, safety) and, with the propeller and fins, a
-    fifth (propulsion: fin rate limit, shaft power, energy per km), each with the failed count;
-    the conventions are `benchmarks.reports.table_format`'s.
+
+def summarise(
+    records: list[dict[str, Any]],
+    config: dict[str, Any],
+    figures: Sequence[tuple[str, str]] | None = None,
+) -> str:
+    """Markdown: the overview table (`overview`), the list of figures, then per scenario one row
+    per policy, mean ± std over the finished episodes.
+
+    ``figures``: (file, what it shows) of each figure of the run, linked relative to the summary
+    (None: none drawn). Four tables per scenario (tracking, speed, effort, safety) and, with the
+    propeller and fins, a fifth (propulsion: fin rate limit, shaft power, energy per km), each
+    with the failed count; the conventions are `benchmarks.reports.table_format`'s.
     """
     cells = aggregate(records)
     policies = list(dict.fromkeys(r["policy"] for r in records))
     scenarios = list(dict.fromkeys(r["scenario"] for r in records))
     lines = [
         "# Benchmark summary",
+        "",
+        overview_note(config["seeds"], config["transient"]),
+        "",
+        overview(records, markdown=True).rstrip(),
+        "",
+        "## Figures",
+        "",
+    ]
+    if figures:
+        lines += [f"- [`{Path(f).name}`]({Path(f).as_posix()}): {text}" for f, text in figures]
+    else:
+        lines += ["None: this run drew no figures."]
+    lines += [
+        "",
+        "## Every metric",
         "",
         f"Seeds per cell: {config['seeds']}; duration {config['duration']} s; metrics over "
         f"t ≥ {config['transient']} s where windowed (IAE and settling time: the whole "

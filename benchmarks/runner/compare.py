@@ -7,9 +7,11 @@
 Jobs are (policy, scenario, seed) episodes (`benchmarks.runner.jobs`): each finished episode is
 stored under ``OUT/episodes/`` with a fingerprint of everything that determines it, so an
 interrupted run restarted with the same arguments reuses finished episodes, and results do not
-depend on the number of workers or the backend. Policies: `benchmarks.catalog.policies`; scenarios:
-`benchmarks/scenarios.toml`; tables: `benchmarks.reports.tables`; figures:
-`benchmarks.reports.figures`.
+depend on the number of workers or the backend. The time series (.npz) of the first seed, which
+the figures draw, are kept beside the records; ``--trajectories all`` keeps every episode's.
+Policies: `benchmarks.catalog.policies`; scenarios: `benchmarks/scenarios.toml`; tables:
+`benchmarks.reports.tables` (summary.md opens with the overview and the list of figures);
+figures: `benchmarks.reports.figures`.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from benchmarks.catalog.policies import (
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
-from benchmarks.reports.tables import overview, write_tables
+from benchmarks.reports.tables import overview, overview_note, write_tables
 from benchmarks.runner.jobs import Job, run_jobs
 
 MAX_SEEDS = 100_000  # seeds per scenario
@@ -71,6 +73,12 @@ class CompareOptions(EpisodeOptions):
         Path("out/compare"), "output folder; a rerun with the same arguments resumes"
     )
     figures: bool = option(True, "tables only", flag="--no-figures", invert=True)
+    trajectories: str = option(
+        "first",
+        "time series (.npz) kept under OUT/episodes/: the first seed's (what the figures draw) "
+        "or every episode's",
+        choices=("first", "all"),
+    )
     progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
 
 
@@ -147,6 +155,7 @@ def check_args(args: argparse.Namespace) -> None:
             args.transient,
             env_ids[policy],
             agent_envs[policy],
+            keep_trajectory=args.trajectories == "all" or seed == 0,
         )
         for name in names
         for policy in policies
@@ -179,18 +188,17 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         records = run_jobs(
             args.jobs, args.out, args.workers, args.backend, args.address, progress=not args.quiet
         )
-        write_tables(records, args.out, config)
-        written = [args.out / name for name in TABLES]
         figures: list[Path] = []
+        captions = None
         if not args.no_figures:
-            from benchmarks.reports.figures import comparison_figures
+            from benchmarks.reports.figures import comparison_figures, figure_captions
 
             figures = comparison_figures(records, args.out, scenarios=scenarios)
+            captions = figure_captions(figures, args.out)
+        write_tables(records, args.out, config, captions)  # the summary lists the figures
+        written = [args.out / name for name in TABLES]
         replace_outputs(args.out, [*written, *figures])  # no figure of an earlier run beside
-    print(
-        f"RMS distance to the path [m], mean of {args.seeds} seed(s) after "
-        f"t = {args.transient:g} s; /n✗: n episodes failed (left the corridor, pitched over...)"
-    )
+    print(overview_note(args.seeds, args.transient))
     print(overview(records))
     print(f"\nevery metric: {args.out / 'summary.md'}")
     print(f"every episode: {args.out / 'episodes.csv'} (and episodes.json)")
