@@ -4,6 +4,7 @@
     auv-gym suite --policies fbsm,ppo_generalist=runs/ppo/results   # whole test suite + statistics
     auv-gym train --algo sac --config …      # needs the rl extra
     auv-gym train-seeds --algo ppo --seeds 5 --out runs/x   # several seeds, selection
+    auv-gym demos --policy fbsm_colos --config …  --out runs/demos   # Minari dataset, rl extra
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|training|off-policy|all [options]
     auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
@@ -50,6 +51,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "benchmarks.training.seeds_cli",
         "N training seeds, selection on validation (rl extra)",
     ),
+    "demos": (
+        "benchmarks.training.demos_cli",
+        "a classical policy's demonstrations for an agent recipe, as a Minari dataset (rl extra)",
+    ),
     "paper-figures": (
         "benchmarks.reports.paper_figures",
         "the paper's Figs. 3-9, FBSM vs backstepping",
@@ -88,6 +93,8 @@ EXTRAS = {
     "yaml": "rl",
     "rich": "rl",
     "tensorboard": "rl",
+    "minari": "rl",
+    "h5py": "rl",
     "moviepy": "video",
     "imageio_ffmpeg": "video",
     "ray": "ray",

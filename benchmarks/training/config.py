@@ -72,6 +72,7 @@ ZOO_KEYS = frozenset(
         "obs_scales",
         "stages",
         "envelope_guard",  # refused with the stage that replaces it
+        "jump_start",  # imitation of a classical expert instead of PPO (`jump_start`)
     }
 )
 # Keys of removed training features (no kept agent used them; their findings stay in
@@ -106,6 +107,7 @@ class ZooConfig:
     action_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None  # (low, high)
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
     stages: tuple[dict[str, Any], ...] = ()  # trained inside and exported (`controllers.stages`)
+    jump_start: Any = None  # `benchmarks.training.jump_start.JumpStart`: imitation, not PPO
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -207,7 +209,12 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     check_normalize(normalize, where)
     _check_policy(section["policy"], policy_kwargs, algo, where)
     _check_env_kwargs(env_id, env_kwargs, where)
-    return ZooConfig(
+    jump_start = None
+    if "jump_start" in section:
+        from benchmarks.training.jump_start import parse_jump_start
+
+        jump_start = parse_jump_start(section["jump_start"], where)
+    cfg = ZooConfig(
         algo=algo,
         n_envs=n_envs,
         n_timesteps=n_timesteps,
@@ -219,8 +226,14 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         raw=section,
         residual=residual,
         action_bounds=action_bounds,
+        jump_start=jump_start,
         **interface,
     )
+    if jump_start is not None:
+        from benchmarks.training.jump_start import check_jump_start
+
+        check_jump_start(cfg, env_id, where)
+    return cfg
 
 
 # (low, high, low_open, high_open) of the numeric hyper-parameters; None: unbounded.

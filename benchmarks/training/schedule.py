@@ -19,7 +19,15 @@ those of the phases before it on top (``obs_scales`` merged entry by entry, ever
 replaced: a phase says what changes from the phase before), each seed
 starting from the previous phase's agent of the same seed (its weights, optimiser state and
 statistics: `benchmarks.training.warm_start`; the first phase from scratch, or from
-``init_from``). ``options`` are the defaults of the command's own options (the command line
+``init_from``). A phase with a ``jump_start`` (`benchmarks.training.jump_start`) imitates a
+classical expert instead of running PPO, and its changes are its own: the phase after it trains
+with the section as the phases before the jump start left it, from the jump-started agents::
+
+      phases:
+        - {name: jump_start, jump_start: {expert: fbsm_colos, steps: 262144}}
+        - {name: base}                      # PPO from the imitating agents
+
+``options`` are the defaults of the command's own options (the command line
 wins); ``stages`` are added to the exported agents only, after training (`controllers.stages`:
 a file's own ``stages`` trains inside them).
 
@@ -44,6 +52,7 @@ from auv_gym.support.files import write_json, write_text
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import HELD_OUT_FILE
+from benchmarks.training.jump_start import JUMP_START_KEY
 from benchmarks.training.seeds import (
     PLAN_FILE,
     SUMMARY_FILE,
@@ -106,9 +115,12 @@ class Schedule:
 
     def phase_section(self, k: int) -> dict[str, Any]:
         """Phase ``k``'s hyper-parameters: the section with the changes of phases 0..k on top,
-        in order (a phase changes what the phase before it trained with)."""
+        in order (a phase changes what the phase before it trained with), except those of an
+        earlier jump-start phase (they were its own)."""
         section = dict(self.section)
-        for phase in self.phases[: k + 1]:
+        for j, phase in enumerate(self.phases[: k + 1]):
+            if j < k and JUMP_START_KEY in phase.changes:
+                continue  # a jump start's changes are its own (module doc)
             for key, value in phase.changes.items():
                 if key == "obs_scales" and isinstance(value, Mapping):
                     section[key] = {**(section.get(key) or {}), **value}

@@ -55,7 +55,9 @@ def seed_status(out: Path, seed: int, n_timesteps: int) -> str:
     (trained, test evaluation missing), "resume" (a checkpoint to continue from) or "fresh"."""
     run = seed_dir(out, seed)
     final = run / "final" / METADATA_FILE
-    if final.is_file() and json.loads(final.read_text()).get("num_timesteps", 0) >= n_timesteps:
+    meta = json.loads(final.read_text()) if final.is_file() else {}
+    # A jump start (imitation, `benchmarks.training.jump_start`) runs whole: its final is done.
+    if final.is_file() and (meta.get("num_timesteps", 0) >= n_timesteps or "jump_start" in meta):
         best = run / "best"
         return "done" if (best / HELD_OUT_FILE).is_file() else "trained"
     return "resume" if latest_checkpoint(run) is not None else "fresh"

@@ -358,6 +358,10 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             warm = warm_start(
                 model, venv, agent_for_seed(opts.init_from, opts.seed), opts.algo, obs_names
             )
+    if cfg.jump_start is not None and (checkpoint is not None or opts.stop_at is not None):
+        raise ValueError(
+            f"{opts.config}: a jump start runs whole, in one go (no --resume, no --stop-at)"
+        )
     start_wall = float(previous.get("wall_time_s", 0.0))
     best: dict[str, Any] = dict(previous.get("best", {}))
     sessions = [
@@ -371,6 +375,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         },
     ]
     t0 = time.monotonic()
+    jump: dict[str, Any] = {}  # the jump start's record, once it ran (`dagger.run_jump_start`)
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
     if residual is None:  # the held-out evaluation and the benchmark build its env from this
         residual_meta["observation"] = layout.to_dict()
@@ -406,6 +411,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "best": best,
             "auv_gym_version": auv_gym.__version__,
             **({} if warm is None else {"warm_start": warm}),
+            **({"jump_start": dict(jump)} if jump else {}),
             **extra,
         }
 
@@ -460,7 +466,32 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if opts.progress_bar:  # ours, to close it at a pause too
         callbacks.append(ProgressBarCallback())
     remaining = n_timesteps - int(model.num_timesteps)
-    if int(model.num_timesteps) < target:
+    if cfg.jump_start is not None:  # imitation instead of PPO (`benchmarks.training.jump_start`)
+        from stable_baselines3.common.utils import configure_logger
+
+        from benchmarks.training.dagger import run_jump_start
+
+        model.set_logger(configure_logger(opts.verbose, str(out / "tb"), "jump_start"))
+
+        def evaluate() -> None:
+            if evaluation is not None:
+                evaluation.num_timesteps = int(model.num_timesteps)
+                evaluation.evaluate()
+
+        if evaluation is not None:
+            evaluation.init_callback(model)
+        jump.update(
+            run_jump_start(
+                model,
+                venv,
+                cfg,
+                opts.env_id,
+                opts.seed,
+                evaluate,
+                print if opts.verbose or opts.progress_bar else None,
+            )
+        )
+    elif int(model.num_timesteps) < target:
         try:
             model.learn(
                 remaining,
