@@ -178,6 +178,7 @@ HELP_COMMANDS = [
     ["paper-figures"],
     ["train"],
     ["train-seeds"],
+    ["demos"],
     *(["speed", name] for name in SPEED),
     ["video"],
 ]

@@ -39,19 +39,15 @@ class DemosOptions:
         None, "agent recipe (hyper-parameter or schedule file) whose training env is flown"
     )
     env_id: str | None = option(
-        None,
-        "env id (the config's section; default: its only section, or AUVPath3DPreview-v0 "
-        "with --task)",
+        None, "env id: the config's section (None: its only one; AUVPath3DPreview-v0 with --task)"
     )
-    phase: str | None = option(
-        None, "schedule phase whose env is flown (default: the first PPO phase)"
-    )
+    phase: str | None = option(None, "schedule phase whose env is flown (None: the first PPO one)")
     task: str | None = option(None, "instead of --config: a task set of role 'train'")
     observation: str = option("preview_integral", "the agent's observation with --task")
     episodes: int = option(64, "episodes recorded")
     seed: int = option(0, "recording seed: episode k starts from reset seed 5e8 + 1e6·seed + k")
     vehicles: int = option(32, "episodes flown at once (one batched simulator)")
-    progress: bool = option(True, "show a progress bar", flag="--quiet", invert=True)
+    progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
 
 
 def source_of(opts: DemosOptions):  # -> DemoSource
