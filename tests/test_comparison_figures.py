@@ -37,12 +37,13 @@ def _records(policy: str, ends: list[tuple[float | None, str]]) -> list[dict]:
     ]
 
 
-POLICIES = ["fbsm", "backstepping", "ppo_helix", "sac_helix"]
+POLICIES = ["fbsm", "backstepping", "ppo_helix", "sac_helix", "pid_los"]
 RECORDS = [
     *_records("fbsm", [(30.0, "time_limit")] * 3),  # settles: a bar
     *_records("backstepping", [(None, "time_limit")] * 3),  # never settles: no settling time
     *_records("ppo_helix", [(12.0, "time_limit"), (9.0, "corridor"), (9.0, "pitch")]),  # 1 of 3
     *_records("sac_helix", [(9.0, "corridor")] * 3),  # every episode failed
+    *_records("pid_los", [(None, "time_limit"), (40.0, "time_limit"), (50.0, "corridor")]),
 ]
 
 
@@ -72,16 +73,18 @@ def test_never_settled_and_failed_cells_are_hatched_columns_with_legend_entries(
     # backstepping never settled, sac_helix failed: hatched, in their colours, over the whole
     # height of the axes (off any scale), not a bar of some height
     axes_box = ax.get_window_extent()
-    for hatch, policy in (("///", "backstepping"), ("xxx", "sac_helix")):
-        (column,) = columns[hatch]
-        assert to_hex(column.get_edgecolor()) == to_hex(colours[policy])
-        box = column.get_window_extent()
-        assert box.y0 == pytest.approx(axes_box.y0) and box.y1 == pytest.approx(axes_box.y1)
+    # (pid_los: one of three never settled, one failed: its mean is unbounded too)
+    drawn = {"///": ["backstepping", "pid_los"], "xxx": ["sac_helix"]}
+    for hatch, policies in drawn.items():
+        assert len(columns[hatch]) == len(policies)
+        for column, policy in zip(columns[hatch], policies, strict=True):
+            assert to_hex(column.get_edgecolor()) == to_hex(colours[policy])
+            box = column.get_window_extent()
+            assert box.y0 == pytest.approx(axes_box.y0) and box.y1 == pytest.approx(axes_box.y1)
     words = [t.get_text() for t in ax.texts]
-    assert words.count("never") == 1 and words.count("failed") == 1
-    assert "n = 1/3" in words  # above ppo_helix's bar, the mean of the one that finished
+    assert sorted(words) == ["failed", "n = 1/3", "never", "never 1/3"]
     legend = _legend_texts(ax)
-    assert legend[:4] == POLICIES
+    assert legend[: len(POLICIES)] == POLICIES
     assert any(text.startswith("never settled") for text in legend)
     assert any(text.startswith("every episode failed") for text in legend)
     assert any(text.startswith("n = k/N") for text in legend)
@@ -102,6 +105,25 @@ def test_a_chart_without_such_cells_has_no_such_legend_entries_and_says_its_log_
     assert _legend_texts(ax) == ["fbsm", "ppo_helix"]
     assert not [p for p in ax.patches if p.get_hatch()] and not ax.texts
     assert ax.get_yscale() == "log" and ax.get_title().endswith("log scale")
+
+
+def test_many_scenarios_wrap_onto_rows_instead_of_a_strip():
+    """Was: 19 scenarios of 7 policies drew one 19 × 4.6-in strip (benchmarks/results/full)."""
+    names = [f"s{k}" for k in range(19)]
+    policies = [f"p{k}" for k in range(7)]
+    records = [
+        {"scenario": n, "policy": p, "seed": 0, "metrics": {"rms_distance": 1.0 + k}}
+        for n in names
+        for k, p in enumerate(policies)
+    ]
+    fig = _bar_figure(aggregate(records), policies, names, "rms_distance", "m")
+    assert len(fig.axes) == 3
+    shown = [[t.get_text() for t in ax.get_xticklabels()] for ax in fig.axes]
+    assert [len(row) for row in shown] == [7, 7, 5]
+    assert [name for row in shown for name in row] == names
+    width, height = fig.get_size_inches()
+    assert width / height < 1.2
+    assert len({ax.get_ylim() for ax in fig.axes}) == 1  # one scale for every row
 
 
 def test_paired_distance_panels_are_labelled_with_their_scale(monkeypatch):

@@ -73,7 +73,8 @@ def test_failed_entries_are_never_bold_and_ties_are_not_a_win():
 def test_cell_counts_failures_and_is_empty_when_every_episode_failed():
     assert Cell((), failed=10).text() == EMPTY and Cell((), failed=10).episodes == 10
     assert Cell((0.1, 0.3), failed=1).text() == "0.200 ± 0.100 (n = 2/3)"
-    assert Cell((31.0, math.inf)).text("settling_time_0p5") == "never"
+    assert Cell((31.0, math.inf)).text("settling_time_0p5") == "never in 1/2"
+    assert Cell((math.inf, math.inf)).text("settling_time_0p5") == "never"
 
 
 def test_a_mean_over_fewer_than_all_episodes_shows_its_sample_size():
@@ -83,7 +84,7 @@ def test_a_mean_over_fewer_than_all_episodes_shows_its_sample_size():
     assert Cell((0.1, math.nan, 0.3)).text() == "0.200 ± 0.100 (n = 2/3)"  # one undefined
     assert Cell((0.1, 0.3)).text() == "0.200 ± 0.100" and Cell((0.1, 0.3)).sample_size() == ""
     assert Cell((), failed=3).sample_size() == "" and Cell((), failed=3).counted == 0
-    assert Cell((31.0, math.inf), failed=1).text("settling_time_0p5") == "never (n = 2/3)"
+    assert Cell((31.0, math.inf), failed=1).text("settling_time_0p5") == "never in 1/3"
 
 
 def test_markdown_table_refuses_ragged_rows():

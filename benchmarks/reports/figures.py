@@ -175,6 +175,15 @@ NO_BAR = {
 }
 
 
+def _no_bar_word(kind: str, cell: Cell) -> str:
+    """The word across a hatched column: "failed", "never", or "never 3/10" where 3 of the
+    cell's 10 episodes never settled (the others settled or failed)."""
+    if kind != "never":
+        return kind
+    never = int(np.count_nonzero(np.isposinf(np.asarray(cell.values, dtype=float))))
+    return "never" if never == cell.episodes else f"never {never}/{cell.episodes}"
+
+
 def _bar_cell(cell: Cell) -> tuple[str, float, float]:
     """(kind, mean, std) of a cell: "value" (a bar), "never" (a finished episode never reached
     the threshold: the mean is +inf), "failed" (no finished episode) or "none" (no value)."""
@@ -200,6 +209,9 @@ def _bar_chart(
     return save_figure(fig, folder / f"bars_{metric}.png")
 
 
+_BARS_PER_ROW = 56  # bars in a row of a bar chart; more scenarios wrap onto further rows
+
+
 def _bar_figure(
     cells: Mapping[tuple[str, str], Mapping[str, Cell]],
     policies: list[str],
@@ -215,36 +227,88 @@ def _bar_figure(
     says so above its bar ("n = 2/3"). A cell without a value to draw is never a bar: it is a
     hatched column over the whole height of the axes, in its policy's colour, with a word
     across it and a legend entry: "never" where a finished episode never settled (its settling
-    time is off any scale; short or missing bars are the ones that settled), "failed" where
-    every episode failed. ``cells`` are `benchmarks.reports.tables.aggregate`'s.
+    time is off any scale; "never 3/10" where 3 of 10 did), "failed" where every episode
+    failed. Scenarios beyond `_BARS_PER_ROW` bars wrap onto rows that share the y
+    axis (19 scenarios of 7 policies were one 19-in strip, 4.6 in high). ``cells`` are
+    `benchmarks.reports.tables.aggregate`'s.
     """
-    from matplotlib.patches import Patch, Rectangle
-    from matplotlib.transforms import blended_transform_factory
+    from matplotlib.patches import Patch
 
     colours = policy_colours(policies)
-    fig = new_figure(max(7.0, 0.12 * len(names) * len(policies) + 3.0), 4.6, _COMPARISON_DPI)
-    ax = fig.subplots()
-    column = blended_transform_factory(ax.transData, ax.transAxes)  # x in data, y in [0, 1]
-    width = 0.8 / max(len(policies), 1)
-    x = np.arange(len(names))
+    most = max(1, _BARS_PER_ROW // max(len(policies), 1))  # scenarios in a row, at most
+    per_row = max(1, -(-len(names) // -(-len(names) // most))) if names else 1  # rows balanced
+    rows = [names[k : k + per_row] for k in range(0, len(names), per_row)] or [[]]
+    fig = new_figure(
+        max(7.0, 0.12 * per_row * len(policies) + 3.0),
+        4.6 + 3.4 * (len(rows) - 1),
+        _COMPARISON_DPI,
+    )
+    axes = fig.subplots(len(rows), 1, sharey=True, squeeze=False)[:, 0]
     cell_of = {(p, n): cells.get((n, p), {}).get(metric, Cell(())) for p in policies for n in names}
     kinds = {key: _bar_cell(cell) for key, cell in cell_of.items()}
-    drawn = [mean for kind, mean, _ in kinds.values() if kind == "value"]
     tops = [mean + std for kind, mean, std in kinds.values() if kind == "value"]
-    positive = [m for m in drawn if m > 0]
+    positive = [mean for kind, mean, _ in kinds.values() if kind == "value" and mean > 0]
     log = bool(positive) and max(positive) > 100.0 * min(positive)
+    partial = any(cell_of[key].sample_size() for key, k in kinds.items() if k[0] == "value")
     seen: set[str] = set()
-    partial = False
+    for ax, row in zip(axes, rows, strict=True):
+        seen |= _draw_bars(ax, row, policies, colours, cell_of, kinds, per_row)
+        ax.set_ylabel(label)
+        ax.grid(True, axis="y", alpha=0.3)
+    room = 0.2 if partial else 0.05  # of the axes' height, above the highest error bar
+    if log:
+        axes[0].set_yscale("log")
+        bottom = min(positive) / 3.0
+        decades = np.log10(max(tops) / bottom)
+        axes[0].set_ylim(bottom, max(tops) * 10.0 ** (decades * room / (1.0 - room)))
+    elif tops:
+        axes[0].set_ylim(0.0, max(tops) / (1.0 - room) or 1.0)
+    axes[0].set_title(
+        f"{metric}: mean ± std over the finished episodes, {'log' if log else 'linear'} scale",
+        fontsize=9,
+    )
+    handles = [Patch(facecolor=colours[p], label=p) for p in policies]
+    for kind in ("never", "failed"):
+        if kind in seen:
+            hatch, face, text = NO_BAR[kind]
+            handles.append(Patch(facecolor=face, hatch=hatch, edgecolor="0.3", label=text))
+    if partial:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], ls="", label="n = k/N: mean of the k of N that finished"))
+    axes[0].legend(
+        handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _draw_bars(
+    ax: Any,
+    names: list[str],
+    policies: list[str],
+    colours: Mapping[str, str],
+    cell_of: Mapping[tuple[str, str], Cell],
+    kinds: Mapping[tuple[str, str], tuple[str, float, float]],
+    slots: int,
+) -> set[str]:
+    """One row of `_bar_figure`: the scenarios ``names`` in ``slots`` places; returns the kinds
+    of hatched columns drawn."""
+    from matplotlib.patches import Rectangle
+    from matplotlib.transforms import blended_transform_factory
+
+    column = blended_transform_factory(ax.transData, ax.transAxes)  # x in data, y in [0, 1]
+    width = 0.8 / max(len(policies), 1)
+    seen = set()
     for k, policy in enumerate(policies):
         offset = (k - (len(policies) - 1) / 2) * width
         for i, scenario in enumerate(names):
             kind, mean, std = kinds[(policy, scenario)]
-            xi = x[i] + offset
+            xi = i + offset
             if kind == "value":
                 ax.bar(xi, mean, width, yerr=std, capsize=2, color=colours[policy])
                 size = cell_of[(policy, scenario)].sample_size()
                 if size:
-                    partial = True
                     ax.annotate(
                         size,
                         (xi, mean + std),
@@ -257,14 +321,15 @@ def _bar_figure(
                     )
             elif kind in NO_BAR:
                 seen.add(kind)
+                hatch, face, _ = NO_BAR[kind]
                 ax.add_patch(
                     Rectangle(
                         (xi - width / 2, 0.0),
                         width,
                         1.0,
                         transform=column,
-                        facecolor=NO_BAR[kind][1],
-                        hatch=NO_BAR[kind][0],
+                        facecolor=face,
+                        hatch=hatch,
                         edgecolor=colours[policy],
                         linewidth=0.8,
                     )
@@ -272,7 +337,7 @@ def _bar_figure(
                 ax.text(
                     xi,
                     0.5,
-                    kind,
+                    _no_bar_word(kind, cell_of[(policy, scenario)]),
                     transform=column,
                     rotation=90,
                     ha="center",
@@ -280,37 +345,9 @@ def _bar_figure(
                     fontsize=7,
                     bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none"},
                 )
-    ax.set_xticks(x, names, rotation=20)
-    if names:
-        ax.set_xlim(-0.5, len(names) - 0.5)
-    ax.set_ylabel(label)
-    room = 0.2 if partial else 0.05  # of the axes' height, above the highest error bar
-    if log:
-        ax.set_yscale("log")
-        bottom = min(positive) / 3.0
-        decades = np.log10(max(tops) / bottom)
-        ax.set_ylim(bottom, max(tops) * 10.0 ** (decades * room / (1.0 - room)))
-    elif tops:
-        ax.set_ylim(0.0, max(tops) / (1.0 - room) or 1.0)
-    ax.set_title(
-        f"{metric}: mean ± std over the finished episodes, {'log' if log else 'linear'} scale",
-        fontsize=9,
-    )
-    ax.grid(True, axis="y", alpha=0.3)
-    handles = [Patch(facecolor=colours[p], label=p) for p in policies]
-    for kind in ("never", "failed"):
-        if kind in seen:
-            hatch, face, text = NO_BAR[kind]
-            handles.append(Patch(facecolor=face, hatch=hatch, edgecolor="0.3", label=text))
-    if partial:
-        from matplotlib.lines import Line2D
-
-        handles.append(Line2D([], [], ls="", label="n = k/N: mean of the k of N that finished"))
-    ax.legend(
-        handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False
-    )
-    fig.tight_layout()
-    return fig
+    ax.set_xticks(np.arange(len(names)), names, rotation=20)
+    ax.set_xlim(-0.5, slots - 0.5)  # every row at the same bar width
+    return seen
 
 
 def plot_learning_curve(run: Path, prefix: Path) -> None:

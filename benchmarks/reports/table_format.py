@@ -13,7 +13,8 @@ Every markdown table the project writes (the paper figures' `metrics.md`, a benc
   metric is over the episodes that ran to the end, the failures are counted beside it, a cell
   with no finished episode is "—", and a policy with a failed episode is never marked best.
   A mean over fewer than all the episodes of a cell shows its sample size: ``0.300 (n = 1/3)``.
-  `inf` is never printed as a number; a settling threshold never reached is "never".
+  `inf` is never printed as a number; a settling threshold never reached is "never" ("never in
+  3/10" when 3 of 10 episodes never reached it: their mean is unbounded).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ FAILURE_CONVENTION = (
     "column and excluded, "
     f"“{EMPTY}” marks a cell with no finished episode, “(n = 1/3)” a mean over 1 of its 3 "
     "episodes, and a policy with a failed episode is never marked best (**bold**). “never”: the "
-    "threshold was not reached (in at least one finished episode)."
+    "threshold was not reached (“never in 3/10”: in 3 of 10 episodes)."
 )
 
 # name → (label, unit, better: "min" / "max" / "" for no ranking).
@@ -182,13 +183,17 @@ class Cell:
         return float(data.mean())
 
     def text(self, metric: str = "", scale: float = 1.0) -> str:
-        """ "mean ± std", "never", or "—"; with "(n = k/N)" after it when the mean is over
-        fewer than all the episodes."""
+        """ "mean ± std" or "—", with "(n = k/N)" after it when the mean is over fewer than
+        all the episodes; for a settling time not reached in j of the N episodes, "never in
+        j/N" ("never" when j = N)."""
         data = np.asarray(self.values, dtype=float)
         data = data[~np.isnan(data)]
         if data.size == 0:
             return EMPTY
         mean = self.mean()
+        if mean == math.inf and metric in NEVER_METRICS:  # how many never reached it
+            never = int(np.count_nonzero(np.isposinf(data)))
+            return "never" if never == self.episodes else f"never in {never}/{self.episodes}"
         if not math.isfinite(mean) or data.size == 1:
             text = format_number(mean * scale, metric=metric)
         else:
