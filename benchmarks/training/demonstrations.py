@@ -187,8 +187,18 @@ def record_demonstrations(
     n = max(1, min(int(vehicles), episodes))
     env = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.DISABLED, threads=1, **kwargs)
     stages = expert.stages
-    obs_space = env.single_observation_space
-    action_space = _action_space(expert.low, expert.high)
+    try:
+        writer = _DatasetWriter(
+            out,
+            env.single_observation_space,
+            _action_space(expert.low, expert.high),
+            source,
+            policy,
+            seed,
+        )
+    except BaseException:
+        env.close()
+        raise
     buffers: list[dict[str, list]] = [_empty() for _ in range(n)]
     slot = list(range(n))  # the episode each vehicle flies; -1: none left (its data dropped)
     started = n
@@ -201,7 +211,6 @@ def record_demonstrations(
         from tqdm.auto import tqdm
 
         bar = tqdm(total=episodes, unit="episode", desc=f"demos {policy}")
-    writer = _DatasetWriter(out, obs_space, action_space, source, policy, seed)
     try:
         while len(finished) < episodes:
             seen = observe_stages(stages, raw, memories)
