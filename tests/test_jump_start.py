@@ -265,3 +265,19 @@ def test_demos_refuses_bad_arguments_in_one_line(tmp_path, capsys):
         err = capsys.readouterr().err
         assert stop.value.code == 2 and err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "demos").exists()
+
+
+def test_an_agent_inside_the_allocation_onto_propeller_and_fins_has_no_expert_labels():
+    from auv_gym import VARIANTS
+    from auv_gym.sim.observation import ObservationConfig
+    from benchmarks.training.expert import ExpertLabels
+    from controllers.stages import check_stage_specs
+
+    kwargs = {**VARIANTS[ENV_ID], **ENV_KWARGS, "actuator": "realistic"}
+    names = ObservationConfig.from_spec("preview_integral").names
+    specs = check_stage_specs(["actuator_allocation"], "test")
+    with pytest.raises(ValueError, match="allocation onto the 'realistic' actuator"):
+        ExpertLabels("pid_as_built", kwargs, names, specs, where="recipe.yml")
+    box = ExpertLabels("pid_as_built", kwargs, names, (), ([-0.5, -1, -1], [0.5, 1, 1]))
+    clipped = box.to_agent(np.array([[0.9, -1.0, 0.2]]), np.zeros((1, len(names))))
+    np.testing.assert_array_equal(clipped, np.array([[0.5, -1.0, 0.2]], np.float32))
