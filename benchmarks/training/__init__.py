@@ -28,7 +28,11 @@ env wrapper), `train` (`TrainOptions`, `train`: one algorithm, one seed, one run
 (`train_seeds`: N seeds, one run directory each, as local processes or Ray tasks; CLI `python -m
 benchmarks.training.seeds_cli`), `callbacks` (evaluation and checkpoints during training),
 `checkpoints` (agent directories), `evaluation` (seeds, scoring, held-out evaluation),
-`learning_curve` (evaluations.csv). SB3 and torch are imported only when training or evaluating.
+`learning_curve` (evaluations.csv); the jump start from the classical controllers: `expert` (a
+classical controller's commands in the agent's action space), `demonstrations` (its episodes as a
+Minari dataset, `auv-gym demos` in `demos_cli`), `jump_start` (the settings) and `dagger`
+(behaviour cloning and DAgger on the PPO policy). SB3 and torch are imported only when training
+or evaluating.
 """
 
 from benchmarks.training.config import ALGORITHMS, ZooConfig, read_zoo_config

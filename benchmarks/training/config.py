@@ -26,6 +26,10 @@ settings (`benchmarks.training.residual.ResidualTraining`)::
         tv_weight: 0.25             # chattering charge per unit TV of the applied action
         base_kwargs: {}             # base gains (actuator and control_dt come from the env)
 
+An optional ``jump_start`` mapping makes the run imitate a classical expert (or a dataset of
+``auv-gym demos``) instead of running PPO: `benchmarks.training.jump_start`, checked here with
+the rest of the file (the dataset against the agent's observation and actions).
+
 An optional ``action_bounds`` key narrows the box the agent acts in, a sub-box of the env's
 [−1, 1]³ given as ``[[low_X, low_M, low_N], [high_X, high_M, high_N]]``: the agent's action
 space becomes that box (`benchmarks.training.train.ActionBox`), saved with the model, so a loaded
