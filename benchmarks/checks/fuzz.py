@@ -35,6 +35,7 @@ physics steps per control step contribute fewer control steps.
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 from collections.abc import Sequence
@@ -48,6 +49,7 @@ from auv_gym.sim.path_generator import PathDistribution
 from auv_gym.sim.task import TERMINATION_REASONS
 from auv_gym.sim.trajectory import FAILURE_REASONS
 from benchmarks.arguments import finite_number, parse_options, program_name, usage_errors
+from benchmarks.catalog.policies import AGENTS_DIR
 from benchmarks.checks.fuzz_draws import EPISODE_PHYSICS, draw_actions, draw_config
 from benchmarks.options import option
 
@@ -83,6 +85,7 @@ RESET_WORK = 1000
 # drawn spline and its proven bounds): counted as this many physics steps.
 RANDOM_PATH_RESET_WORK = 50_000
 RANDOM_PATH_VEHICLES = 32  # vehicles per configuration with a PathDistribution, at most
+EXPORT_SHARE = 0.3  # configurations flown by a fitting shipped ONNX export, when one fits
 
 
 @dataclass
@@ -93,6 +96,7 @@ class Tally:
     episodes: int = 0
     configurations: int = 0
     refused: int = 0  # draws a constructor refused with a named error (not violations)
+    export_steps: int = 0  # vehicle-steps whose commands came from a shipped ONNX export
     reasons: dict[str, int] = field(default_factory=dict)
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(COUNTERS, 0))
     examples: list[str] = field(default_factory=list)  # the first few violations, reproducible
@@ -154,6 +158,8 @@ def fuzz_configuration(
     low, high = env.single_observation_space.low, env.single_observation_space.high
     outside = ~((obs >= low) & (obs <= high)).all(axis=1)
     tally.violation("out_of_space_observations", int(outside.sum()), f"reset, {where}")
+    exported = fitting_export(env, rng) if rng.random() < EXPORT_SHARE else None
+    state = None
     reset_work = RANDOM_PATH_RESET_WORK if env.config.randomized else RESET_WORK
     count = np.zeros(n_vehicles, dtype=np.int64)  # control steps since each vehicle's reset
     documented = set(TERMINATION_REASONS[1:])
@@ -162,10 +168,14 @@ def fuzz_configuration(
     for _ in range(control_steps):
         if work >= work_budget:
             break
-        actions = draw_actions(rng, n_vehicles)
-        if env.config.actuator == "realistic":  # it refuses commands outside [-1, 1] (a test)
-            actions = np.clip(actions, -1.0, 1.0)
         try:
+            if exported is None:
+                actions = draw_actions(rng, n_vehicles)
+                if env.config.actuator == "realistic":  # it refuses commands outside [-1, 1]
+                    actions = np.clip(actions, -1.0, 1.0)
+            else:  # the export path: the graph, its state and its output checks, every step
+                actions, state = exported.predict(obs, state, episode_start=count == 0)
+                tally.export_steps += n_vehicles
             obs, reward, terminated, truncated, info = env.step(actions)
         except Exception as error:
             tally.violation("exceptions", 1, f"step, {where}: {type(error).__name__}: {error}")
@@ -213,6 +223,36 @@ def fuzz_configuration(
             tally.reasons[key] = tally.reasons.get(key, 0) + 1
         tally.episodes += len(rows)
         count[rows] = 0
+
+
+def fitting_export(env: Any, rng: np.random.Generator) -> Any:
+    """A shipped agent's ONNX export (`controllers.onnx_policy.OnnxPolicy`) that takes this
+    env's observation and was built for its actuator, drawn at random; None when none fits or
+    onnxruntime is not installed."""
+    fitting = _fitting_exports(tuple(env.config.observation.names), env.config.actuator)
+    return fitting[int(rng.integers(len(fitting)))] if fitting else None
+
+
+@functools.cache
+def _fitting_exports(names: tuple[str, ...], actuator: str) -> tuple[Any, ...]:
+    try:
+        import controllers
+        from controllers.onnx_policy import onnxruntime_module
+
+        onnxruntime_module("fuzz")
+    except ImportError:
+        return ()
+    fitting = []
+    for path in sorted(AGENTS_DIR.glob("*/policy.onnx")):
+        try:
+            policy = controllers.make(
+                "onnx", path=str(path), observation_names=names, actuator=actuator
+            )
+        except ValueError:  # another observation or actuator: refused, as it should be
+            continue
+        if policy.base is None:  # a residual agent's base is built for its own scenario
+            fitting.append(policy)
+    return tuple(fitting)
 
 
 def run(
@@ -274,6 +314,7 @@ def report(tally: Tally, seconds: float) -> str:
         f"episodes:                  {tally.episodes:,}",
         f"configurations:            {tally.configurations:,} ({tally.refused:,} refused at "
         "construction with a named error)",
+        f"of them from ONNX exports: {tally.export_steps:,}",
         f"NaN observations:          {tally.counts['nan_observations']}",
         f"non-finite rewards:        {tally.counts['non_finite_rewards']}",
         f"exceptions:                {tally.counts['exceptions']}",

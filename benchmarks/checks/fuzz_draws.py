@@ -5,6 +5,7 @@ profile, navigation suite, agent observation and safety cost) and random and ext
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -40,10 +41,19 @@ from auv_gym.sim.path_generator import (
 from auv_gym.sim.randomization import MAX_RANDOM_CURRENT, MAX_RANDOM_NOISE
 from auv_gym.sim.task import MAX_REWARD_WEIGHT, MIN_CORRIDOR, REWARD_TERMS, VEHICLE_TOP_SPEED
 from auv_gym.vehicle import remus100
-from auv_gym.vehicle.sensors import MAX_FIX_INTERVAL
+from auv_gym.vehicle.remus6dof import REMUS6DOF
+from auv_gym.vehicle.sensors import MAX_FILTER_NOISE, MAX_FIX_INTERVAL, MIN_FILTER_NOISE
 
 EPISODE_PHYSICS = 20_000  # physics steps per episode at most: an episode stays in milliseconds
 VARIANT_IDS = ("AUVPath3D-v0", SPEED_LIMIT_ENV_ID, PREVIEW_ENV_ID)  # the envs fuzzed
+PLANT_SHARE = 0.3  # configurations on Fossen's 6-DOF plant
+TORPEDO_SHARE = 0.3  # of those, the torpedo vehicle file
+FILTER_SETTINGS = (
+    "filter_velocity_noise",
+    "filter_bias_noise",
+    "filter_initial_scale",
+    "filter_initial_heading",
+)
 RANDOM_START_REACH = 2.0 * math.sqrt(3.0)  # [m] the largest random start offset (±2 m per axis)
 
 __all__ = [
@@ -260,7 +270,36 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
         kw["param_uncertainty"] = float(rng.uniform(0.0, limit)) * (1.0 - 1e-9)
     if rng.random() < 0.5:
         draw_ocean(rng, kw)
+    if rng.random() < PLANT_SHARE:
+        draw_plant(rng, kw)
     return kw, n_steps
+
+
+def draw_plant(rng: np.random.Generator, kw: dict[str, Any]) -> None:
+    """Fossen's 6-DOF plant (docs/model.md §15): the REMUS 100's hull, a hull drawn around it
+    (size, centre of gravity, time constants, damping ratios) or the torpedo vehicle file (its
+    own hull, four fins and propeller, docs/vehicles.md). A drawn hull that RK4 cannot step at
+    the drawn physics_dt is refused at construction (`SixDofVehicle.check_step`) and counted so."""
+    kw["plant"] = "6dof"
+    if rng.random() < TORPEDO_SHARE:  # a vehicle without a 5-DOF model flies only as built
+        kw.update(vehicle="torpedo", actuator="realistic")
+        kw.pop("params", None)
+        return
+    if rng.random() < 0.5:
+        kw["plant_params"] = dataclasses.replace(  # a hull around the REMUS 100's
+            REMUS6DOF,
+            **{
+                "length": 1.6 * log_uniform(rng, 0.5, 2.0),
+                "diameter": 0.19 * log_uniform(rng, 0.5, 2.0),
+                "r_bg": (0.0, 0.0, float(rng.uniform(0.005, 0.05))),
+                "surge_time_constant": log_uniform(rng, 5.0, 60.0),
+                "sway_time_constant": log_uniform(rng, 5.0, 60.0),
+                "heave_time_constant": log_uniform(rng, 5.0, 60.0),
+                "yaw_time_constant": log_uniform(rng, 0.3, 3.0),
+                "roll_damping_ratio": float(rng.uniform(0.1, 1.0)),
+                "pitch_damping_ratio": float(rng.uniform(0.3, 1.5)),
+            },
+        )
 
 
 def draw_ocean(rng: np.random.Generator, kw: dict[str, Any]) -> None:
@@ -325,6 +364,10 @@ def draw_ocean(rng: np.random.Generator, kw: dict[str, Any]) -> None:
             "fix_interval": fix,
             "navigation": "kalman" if kalman else "dead_reckoning",
         }
+        if kalman and rng.random() < 0.5:  # the filter's assumed errors, its whole range
+            for name in FILTER_SETTINGS:
+                if rng.random() < 0.5:
+                    kw["sensors"][name] = log_uniform(rng, MIN_FILTER_NOISE, MAX_FILTER_NOISE)
     if rng.random() < 0.3 and kw.get("observation") is None:
         kw["observation"] = "preview_integral"
     if rng.random() < 0.3:
