@@ -41,6 +41,16 @@ def test_rerun_arguments_replace_out_and_workers_only(module: str) -> None:
     )
 
 
+def test_a_recorded_all_re_runs_the_committed_scenarios_only() -> None:
+    """Scenarios added since (the torpedo's) are not rows of the committed run."""
+    recorded = "python -m benchmarks.runner.compare --scenarios all --seeds 2 --out x"
+    args = _rerun_arguments(recorded, Path("/tmp/x"), 1, ["paper", "fins"])
+    assert args == "--seeds 2 --scenarios paper,fins --out /tmp/x --workers 1".split()
+    recorded = "python -m benchmarks.runner.compare --scenarios=all --seeds 2"
+    args = _rerun_arguments(recorded, Path("/y"), 2, ["nominal"])
+    assert args == "--seeds 2 --scenarios nominal --out /y --workers 2".split()
+
+
 def test_a_recorded_command_that_runs_no_compare_is_refused() -> None:
     with pytest.raises(ValueError, match=r"does not run benchmarks\.compare or benchmarks\.runner"):
         _rerun_arguments("python -m benchmarks.runner.evaluate_suite --seeds 1", Path("/x"), 1)

@@ -53,9 +53,13 @@ COMPARE = "benchmarks.runner.compare"
 COMPARE_NAMES = ("benchmarks.compare", COMPARE)
 
 
-def _rerun_arguments(recorded_command: str, out: Path, workers: int) -> list[str]:
+def _rerun_arguments(
+    recorded_command: str, out: Path, workers: int, scenarios: Sequence[str] = ()
+) -> list[str]:
     """The recorded compare command's arguments (after its module, `COMPARE_NAMES`) with --out and
-    --workers replaced. ValueError if the command names no compare module."""
+    --workers replaced and, given ``scenarios`` (the committed run's), --scenarios naming them:
+    a recorded ``--scenarios all`` means the scenarios of its day, not those added since.
+    ValueError if the command names no compare module."""
     words = shlex.split(recorded_command)
     module = next((i for i, word in enumerate(words) if word in COMPARE_NAMES), None)
     if module is None:
@@ -69,13 +73,15 @@ def _rerun_arguments(recorded_command: str, out: Path, workers: int) -> list[str
         if skip:
             skip = False
             continue
-        if word in ("--out", "--workers"):
+        replaced = ("--out", "--workers", *(("--scenarios",) if scenarios else ()))
+        if word in replaced:
             skip = True
             continue
-        if word.startswith(("--out=", "--workers=")):
+        if word.startswith(tuple(f"{option}=" for option in replaced)):
             continue
         kept.append(word)
-    return [*kept, "--out", str(out), "--workers", str(workers)]
+    chosen = ["--scenarios", ",".join(scenarios)] if scenarios else []
+    return [*kept, *chosen, "--out", str(out), "--workers", str(workers)]
 
 
 def _rows(path: Path) -> dict[tuple[str, str, str], dict[str, str]]:
@@ -179,14 +185,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not required.is_file():
             parser.error(f"committed result {required} not found")
 
-    recorded = json.loads(episodes_json.read_text())["config"]["command"]
+    committed = json.loads(episodes_json.read_text())["config"]
+    recorded, scenarios = committed["command"], list(committed["scenarios"])
     with usage_errors(parser):  # a command that runs no compare is refused before any re-run
         _rerun_arguments(recorded, Path(), args.workers)
 
     report = Report(args.allow_new)
     with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
         out = args.keep if args.keep is not None else Path(scratch)
-        _run(COMPARE, _rerun_arguments(recorded, out / "full", args.workers))
+        _run(COMPARE, _rerun_arguments(recorded, out / "full", args.workers, scenarios))
         compare_episodes(args.results / "full" / "episodes.csv", out / "full/episodes.csv", report)
 
         paper = json.loads(paper_json.read_text())
