@@ -14,7 +14,15 @@ from controllers.fbsm import FBSM
 from controllers.lowpass import DEFAULT_ALPHA, LowPassPolicy
 from controllers.pid import PIDLOS
 
-__all__ = ["CLASSICAL", "PRESETS", "UNFILTERED", "make_classical", "make_lowpass"]
+__all__ = [
+    "CLASSICAL",
+    "MODEL_BASED",
+    "PRESETS",
+    "UNFILTERED",
+    "NoFiveDofModelError",
+    "make_classical",
+    "make_lowpass",
+]
 
 # Named variants of the classical controllers (not in the paper), against ocean currents; see
 # `ControllerGains` and README "Results". Integral LOS in the horizontal plane, σ_y = 3. Current-
@@ -52,11 +60,16 @@ MODEL_BASED = ("fbsm", "backstepping", "command_filtered")
 UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] != "lowpass")
 
 
+class NoFiveDofModelError(ValueError):
+    """A controller built on the 5-DOF model (`MODEL_BASED`) asked to fly a vehicle that has
+    none: the benchmark reports the pair as not applicable, a direct call is refused."""
+
+
 def make_classical(name: str, **kwargs: Any) -> Any:
     """The classical controller ``name`` (a name of `CLASSICAL`); keyword arguments override
     its preset's (see `controllers.make`)."""
     if isinstance(kwargs.get("params"), DerivedAUVParams) and _law(name, kwargs) in MODEL_BASED:
-        raise ValueError(
+        raise NoFiveDofModelError(
             f"{name} is built on the vehicle's 5-DOF model, and this vehicle has none (its "
             "5-DOF record is derived from the 6-DOF hull): fly a PID + LOS controller"
         )

@@ -235,6 +235,9 @@ def test_scenario_file_documents_every_scenario():
         "as_built_helix",
         "as_built_survey",
         "as_built_coastal",
+        "torpedo_helix",
+        "torpedo_survey",
+        "torpedo_as_built",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
@@ -242,6 +245,10 @@ def test_scenario_file_documents_every_scenario():
     assert scenarios["realistic"].controller == {"actuator": "realistic"}
     assert scenarios["near_surface_waves"].env["waves"] == "sea_state_4"
     assert select("all", list(scenarios), "scenario") == list(scenarios)
+    torpedo = [s for s in scenarios.values() if s.env.get("vehicle") == "torpedo"]
+    assert len(torpedo) == 3  # `vehicle = "torpedo"` in the file is the env's vehicle
+    assert all(s.env["plant"] == "6dof" and s.env["actuator"] == "realistic" for s in torpedo)
+    assert all(s.controller == {"actuator": "realistic"} for s in torpedo)
 
 
 @pytest.mark.integration

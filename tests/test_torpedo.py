@@ -132,3 +132,60 @@ def test_the_torpedo_flies_on_the_6dof_plant_with_pid_los_and_refuses_fbsm() -> 
     assert compute_metrics(episode)["rms_distance"] < 1.0  # [m] measured 0.48 over 300 s
     with pytest.raises(ValueError, match="params: vehicle 'torpedo' has no \\[model_5dof\\]"):
         SimConfig.from_kwargs(**env, params={"m": 30.0})
+
+
+def test_the_benchmark_flies_the_torpedo_and_reports_model_based_control_as_not_applicable(
+    tmp_path, capsys
+) -> None:
+    """compare on a torpedo scenario beside a REMUS 100 one: the PID flies both, FBSM only the
+    REMUS (the torpedo has no 5-DOF model): no episode of it there, "n/a" in the overview, the
+    pair recorded in the run's config."""
+    from benchmarks.runner.compare import main
+
+    out = tmp_path / "run"
+    argv = ["--policies", "fbsm,pid_as_built", "--scenarios", "torpedo_as_built,realistic"]
+    argv += ["--seeds", "1", "--duration", "3", "--transient", "0", "--quiet", "--no-figures"]
+    records = main([*argv, "--out", str(out)])
+    flown = {(r["scenario"], r["policy"]) for r in records}
+    assert flown == {
+        ("torpedo_as_built", "pid_as_built"),
+        ("realistic", "pid_as_built"),
+        ("realistic", "fbsm"),
+    }
+    torpedo = next(r for r in records if r["scenario"] == "torpedo_as_built")["metrics"]
+    assert torpedo["termination_reason"] == "time_limit"
+    assert 0.0 < torpedo["mean_shaft_power"] < 1000.0  # W, the torpedo's own propeller
+    printed = capsys.readouterr().out
+    assert "n/a: fbsm on torpedo_as_built: fbsm is built on the vehicle's 5-DOF model" in printed
+    overview_row = next(line for line in printed.splitlines() if line.startswith("fbsm "))
+    assert overview_row.split()[1] == "n/a"
+    config = json.loads((out / "episodes.json").read_text())["config"]
+    assert config["not_applicable"] == {"torpedo_as_built": ["fbsm"]}
+
+
+def test_a_policy_that_flies_none_of_the_scenarios_is_refused_in_one_line(tmp_path) -> None:
+    from benchmarks.runner.compare import main
+
+    argv = ["--policies", "backstepping,pid_los", "--scenarios", "torpedo_helix,torpedo_survey"]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--seeds", "1", "--duration", "2", "--quiet", "--out", str(tmp_path / "x")])
+    assert exit_info.value.code == 2
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_scenario_names_its_vehicle_once(tmp_path) -> None:
+    from benchmarks.catalog.scenarios import load_scenarios
+
+    file = tmp_path / "s.toml"
+    file.write_text('[a]\nvehicle = "torpedo"\nenv = { plant = "6dof", actuator = "realistic" }\n')
+    assert load_scenarios(file)["a"].env == {
+        "plant": "6dof",
+        "actuator": "realistic",
+        "vehicle": "torpedo",
+    }
+    file.write_text('[a]\nvehicle = "torpedo"\nenv = { vehicle = "remus100" }\n')
+    with pytest.raises(ValueError, match="scenario 'a': vehicle given twice"):
+        load_scenarios(file)
+    file.write_text('[a]\nvehicle = "orca"\n')
+    with pytest.raises(ValueError, match=r"scenario 'a'.*orca"):
+        load_scenarios(file)

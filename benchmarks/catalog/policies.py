@@ -27,6 +27,7 @@ from typing import Any, Literal
 import controllers
 from auv_gym import ENV_ID, VARIANTS, recorded_env_id
 from controllers import CLASSICAL
+from controllers.registry import NoFiveDofModelError
 
 __all__ = [
     "AGENTS_DIR",
@@ -239,7 +240,9 @@ def _check_for_env(parsed: PolicySpec, env: Any, controller_kwargs: dict[str, An
         try:
             base = residual.make_base(**settings)
         except (TypeError, ValueError) as error:
-            raise ValueError(
+            # a base that needs a 5-DOF model the vehicle lacks: the pair is not applicable
+            kind = NoFiveDofModelError if isinstance(error, NoFiveDofModelError) else ValueError
+            raise kind(
                 f"policy {spec!r}: its residual base {residual.base!r} with base_kwargs "
                 f"{residual.base_kwargs!r:.120} ({files.metadata_file}) cannot be built: {error}"
             ) from None

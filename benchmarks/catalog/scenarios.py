@@ -4,6 +4,8 @@ An env table takes every `AUVPath3D-v0` argument, including a waypoint path
 (``path = [[0, 0, 5], [40, 10, 8], ...]``), a random-path table (``path = { families =
 ["helix"], radius = [10, 13] }``) and vehicle parameters by name or scale factor
 (``params = { m = 32.0, scale = { X_uu = 1.2 } }``); each is validated when the file is loaded.
+A scenario's ``vehicle`` (a shipped vehicle's name or a vehicle file, docs/vehicles.md) is the
+env's ``vehicle`` argument; the REMUS 100 when absent.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ class Scenario:
 
 
 def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
-    """Scenarios from a TOML file: one table per scenario with description, env, controller."""
+    """Scenarios from a TOML file: one table per scenario with description, vehicle, env and
+    controller."""
     with open(path, "rb") as fh:
         try:
             raw = tomllib.load(fh)
@@ -44,17 +47,19 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
     for name, table in raw.items():
         if not isinstance(table, dict):
             raise ValueError(f"{path}: scenario {name!r} must be a table, got {table!r}")
-        unknown = set(table) - {"description", "env", "controller"}
+        unknown = set(table) - {"description", "vehicle", "env", "controller"}
         if unknown:
             raise ValueError(f"{path}: scenario {name!r} has unknown keys {sorted(unknown)}")
         for key in ("env", "controller"):
             if not isinstance(table.get(key, {}), dict):
                 raise ValueError(f"{path}: scenario {name!r}: {key} must be a table")
+        env = dict(table.get("env", {}))
+        if "vehicle" in table:  # the vehicle flown: a shipped name or a vehicle file
+            if "vehicle" in env:
+                raise ValueError(f"{path}: scenario {name!r}: vehicle given twice (and in env)")
+            env["vehicle"] = table["vehicle"]
         scenarios[name] = Scenario(
-            name,
-            table.get("description", ""),
-            dict(table.get("env", {})),
-            dict(table.get("controller", {})),
+            name, table.get("description", ""), env, dict(table.get("controller", {}))
         )
         _check_env(path, name, scenarios[name].env)
     return scenarios

@@ -228,7 +228,8 @@ def _bar_figure(
     hatched column over the whole height of the axes, in its policy's colour, with a word
     across it and a legend entry: "never" where a finished episode never settled (its settling
     time is off any scale; "never 3/10" where 3 of 10 did), "failed" where every episode
-    failed. Scenarios beyond `_BARS_PER_ROW` bars wrap onto rows that share the y
+    failed. A policy not flown on a scenario reads "n/a" at its place. Scenarios beyond
+    `_BARS_PER_ROW` bars wrap onto rows that share the y
     axis (19 scenarios of 7 policies were one 19-in strip, 4.6 in high). ``cells`` are
     `benchmarks.reports.tables.aggregate`'s.
     """
@@ -246,6 +247,9 @@ def _bar_figure(
     axes = fig.subplots(len(rows), 1, sharey=True, squeeze=False)[:, 0]
     cell_of = {(p, n): cells.get((n, p), {}).get(metric, Cell(())) for p in policies for n in names}
     kinds = {key: _bar_cell(cell) for key, cell in cell_of.items()}
+    for p, n in cell_of:  # a policy not flown on a scenario (FBSM on a vehicle without a 5-DOF
+        if (n, p) not in cells:  # model): "n/a" at its place, not an empty slot that reads as 0
+            kinds[(p, n)] = ("n/a", np.nan, np.nan)
     tops = [mean + std for kind, mean, std in kinds.values() if kind == "value"]
     positive = [mean for kind, mean, _ in kinds.values() if kind == "value" and mean > 0]
     log = bool(positive) and max(positive) > 100.0 * min(positive)
@@ -272,6 +276,10 @@ def _bar_figure(
         if kind in seen:
             hatch, face, text = NO_BAR[kind]
             handles.append(Patch(facecolor=face, hatch=hatch, edgecolor="0.3", label=text))
+    if "n/a" in seen:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], ls="", label="n/a: not flown (needs a 5-DOF model)"))
     if partial:
         from matplotlib.lines import Line2D
 
@@ -319,6 +327,19 @@ def _draw_bars(
                         rotation=90,
                         fontsize=6.5,
                     )
+            elif kind == "n/a":
+                seen.add(kind)
+                ax.text(
+                    xi,
+                    0.02,
+                    "n/a",
+                    transform=column,
+                    rotation=90,
+                    ha="center",
+                    va="bottom",
+                    fontsize=7,
+                    color=colours[policy],
+                )
             elif kind in NO_BAR:
                 seen.add(kind)
                 hatch, face, _ = NO_BAR[kind]

@@ -132,7 +132,7 @@ def overview(records: list[dict[str, Any]], markdown: bool = False) -> str:
         row = [policy]
         for scenario in scenarios:
             cell = cells.get((scenario, policy), {}).get(OVERVIEW_METRIC)
-            row.append("" if cell is None else _overview_cell(cell))
+            row.append("n/a" if cell is None else _overview_cell(cell))  # not flown there
         rows.append(row)
     header = ["policy", *scenarios]
     if markdown:

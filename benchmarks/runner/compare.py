@@ -49,6 +49,7 @@ from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
 from benchmarks.reports.tables import overview, overview_note, write_tables
 from benchmarks.runner.jobs import Job, run_jobs
+from controllers.registry import NoFiveDofModelError
 
 MAX_SEEDS = 100_000  # seeds per scenario
 TABLES = ("episodes.csv", "episodes.json", "summary.md")  # `benchmarks.reports.tables.write_tables`
@@ -128,6 +129,7 @@ def check_args(args: argparse.Namespace) -> None:
             f"policies = {episodes} episodes, more than {MAX_EPISODES}"
         )
     check_episode_arguments(args)
+    not_applicable: dict[str, dict[str, str]] = {}  # scenario -> policy -> why
     for name in names:
         scenario = scenarios[name]
         env_kwargs = {**scenario.env, "max_time": args.duration}
@@ -137,15 +139,23 @@ def check_args(args: argparse.Namespace) -> None:
             transient = check_window(args.duration, args.transient, config.control_dt)
             for spec in policies:  # as each job's env will build it, before any episode
                 env = {**VARIANTS[env_ids[spec]], **agent_envs[spec], **env_kwargs}
-                check_policy_for_env(spec, env, scenario.controller)
+                try:
+                    check_policy_for_env(spec, env, scenario.controller)
+                except NoFiveDofModelError as error:  # FBSM on the torpedo: an n/a cell
+                    not_applicable.setdefault(name, {})[spec] = str(error)
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
+    for spec in policies:
+        if all(spec in not_applicable.get(name, {}) for name in names):
+            reason = not_applicable[names[0]][spec]
+            raise ValueError(f"--policies {spec!r} flies none of the chosen scenarios: {reason}")
     writable_folder(args.out)  # last: a bad argument above creates no folder
     args.transient = transient
     args.policy_list = policies
     args.env_ids = env_ids
     args.agent_envs = {spec: env for spec, env in agent_envs.items() if env}
     args.scenario_table = {n: scenarios[n] for n in names}
+    args.not_applicable = not_applicable
     args.jobs = [
         Job(
             policy,
@@ -159,6 +169,7 @@ def check_args(args: argparse.Namespace) -> None:
         )
         for name in names
         for policy in policies
+        if policy not in not_applicable.get(name, {})
         for seed in range(args.seeds)
     ]
 
@@ -171,6 +182,11 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         "env_ids": args.env_ids,  # an agent runs under its training env
         **({"agent_envs": args.agent_envs} if args.agent_envs else {}),  # and its observation
         "scenarios": {n: asdict(s) for n, s in scenarios.items()},
+        **(
+            {"not_applicable": {n: sorted(p) for n, p in args.not_applicable.items()}}
+            if args.not_applicable
+            else {}
+        ),
         "seeds": args.seeds,
         "duration": args.duration,
         "transient": args.transient,
@@ -200,6 +216,11 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         replace_outputs(args.out, [*written, *figures])  # no figure of an earlier run beside
     print(overview_note(args.seeds, args.transient))
     print(overview(records))
+    for spec in args.policy_list:  # one line per policy not flown on some scenarios
+        where = [name for name, refused in args.not_applicable.items() if spec in refused]
+        if where:
+            why = args.not_applicable[where[0]][spec].removeprefix(f"policy {spec!r}: ")
+            print(f"n/a: {spec} on {', '.join(where)}: {why}")
     print(f"\nevery metric: {args.out / 'summary.md'}")
     print(f"every episode: {args.out / 'episodes.csv'} (and episodes.json)")
     if figures:
