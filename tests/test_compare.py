@@ -238,6 +238,9 @@ def test_scenario_file_documents_every_scenario():
         "torpedo_helix",
         "torpedo_survey",
         "torpedo_as_built",
+        "six_dof_helix",
+        "six_dof_survey",
+        "six_dof_as_built",
     }
     assert all(len(s.description) > 20 for s in scenarios.values())
     assert scenarios["fins"].controller == {"actuator": "fins"}
@@ -249,6 +252,9 @@ def test_scenario_file_documents_every_scenario():
     assert len(torpedo) == 3  # `vehicle = "torpedo"` in the file is the env's vehicle
     assert all(s.env["plant"] == "6dof" and s.env["actuator"] == "realistic" for s in torpedo)
     assert all(s.controller == {"actuator": "realistic"} for s in torpedo)
+    for s in torpedo:  # each has a REMUS 100 twin: the same env but the vehicle
+        twin = scenarios[s.name.replace("torpedo_", "six_dof_")]
+        assert {k: v for k, v in s.env.items() if k != "vehicle"} == twin.env
 
 
 @pytest.mark.integration
