@@ -84,6 +84,23 @@ def test_compare_episodes_counts_cells_and_one_sided_rows(tmp_path: Path, capsys
     assert "0.0640 -> 0.0641" in capsys.readouterr().out
 
 
+def test_learned_policies_reproduce_within_float32_rounding_classical_ones_exactly(
+    tmp_path: Path, capsys
+) -> None:
+    old = _csv(tmp_path / "a.csv", ["paper,fbsm,0,0.0640,31.5", "paper,ppo_helix,0,0.0500,20.0"])
+    near = ["paper,fbsm,0,0.06400000001,31.5", "paper,ppo_helix,0,0.05000000001,20.0"]
+    report = Report(allow_new=False)
+    compare_episodes(old, _csv(tmp_path / "b.csv", near), report, learned=["ppo_helix"])
+    assert report.failures == 1  # fbsm's last digits: a difference; ppo_helix's: rounding
+    printed = capsys.readouterr().out
+    assert "0.0640 -> 0.06400000001" in printed
+    assert "1 values of the learned policies (ppo_helix) differ within 1e-06" in printed
+    far = ["paper,fbsm,0,0.0640,31.5", "paper,ppo_helix,0,0.0501,20.0"]  # 2e-3 relative
+    report = Report(allow_new=False)
+    compare_episodes(old, _csv(tmp_path / "c.csv", far), report, learned=["ppo_helix"])
+    assert report.failures == 1
+
+
 def test_compare_json_ignores_wall_times_only(tmp_path: Path) -> None:
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     a.write_text(json.dumps({"wall_time_s": 1.0, "metrics": {"fbsm": {"rms": [0.1, 0.2]}}}))

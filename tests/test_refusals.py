@@ -134,3 +134,23 @@ def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episo
     assert code == 2 and len(err.splitlines()) == 1, err
     assert "scenario 'fins'" in err and "previous action" in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "bad_reset",
+    [{"seed": -1}, {"seed": 0, "options": {"no_such_option": 1}}],
+    ids=["negative seed", "unknown option"],
+)
+def test_a_refused_first_reset_leaves_the_made_env_usable(bad_reset) -> None:
+    """Gymnasium 1.4's passive checker breaks the next step after a refused first reset (its
+    own CartPole-v1 too); the ids are registered without it, and the env refuses, then flies."""
+    import gymnasium as gym
+
+    env = gym.make("AUVPath3D-v0")
+    with pytest.raises((ValueError, TypeError, gym.error.Error)):
+        env.reset(**bad_reset)
+    obs, _ = env.reset(seed=0)
+    obs2, reward, terminated, truncated, _ = env.step(np.zeros(3, dtype=np.float32))
+    assert obs.shape == obs2.shape == (15,)
+    assert np.isfinite(reward) and not terminated and not truncated
+    env.close()
