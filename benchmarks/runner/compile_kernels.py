@@ -68,7 +68,7 @@ def compile_kernels(progress: bool = True) -> float:
             desc="compiling kernels",
             unit="configuration",
             file=sys.stderr,
-            bar_format="{desc}: {n}/{total} configurations flown, {elapsed} elapsed {postfix}",
+            bar_format="{desc}: {n}/{total} configurations flown, {elapsed} elapsed{postfix}",
         )
     for scenario, name in jobs:
         if bar is not None:
