@@ -189,3 +189,18 @@ def test_a_scenario_names_its_vehicle_once(tmp_path) -> None:
     file.write_text('[a]\nvehicle = "orca"\n')
     with pytest.raises(ValueError, match=r"scenario 'a'.*orca"):
         load_scenarios(file)
+
+
+def test_pid_tuning_ranks_candidates_by_failures_then_rms() -> None:
+    """benchmarks.analysis.tune_pid on one validation seed of a short torpedo episode: two LOS
+    gains, each flown, ranked; test seeds refused."""
+    from benchmarks.analysis.tune_pid import main, tune
+
+    rows = tune(["torpedo_helix"], [100], 20.0, grid={"k_y": (0.2, 0.1)}, progress=False)
+    # seed 100 starts far off the helix: the faster LOS leaves the corridor, the other follows
+    assert [r["gains"]["k_y"] for r in rows] == [0.1, 0.2]  # the one without failure first
+    assert [r["failed"] for r in rows] == [0, 1]
+    assert 1.0 < rows[0]["rms"]["torpedo_helix"] < 30.0  # m, converging from the start
+    assert rows[1]["rms"]["torpedo_helix"] == math.inf
+    with pytest.raises(SystemExit):
+        main(["--seeds", "3,100"])

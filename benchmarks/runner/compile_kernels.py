@@ -17,6 +17,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
@@ -70,6 +71,7 @@ def compile_kernels(progress: bool = True) -> float:
             file=sys.stderr,
             bar_format="{desc}: {n}/{total} configurations flown, {elapsed} elapsed{postfix}",
         )
+    ticking = _Ticker(bar) if bar is not None else None  # the clock moves during a compile
     for scenario, name in jobs:
         if bar is not None:
             bar.set_postfix_str(f"{scenario.name}, {name}")
@@ -101,10 +103,32 @@ def compile_kernels(progress: bool = True) -> float:
         envs.step(np.zeros((2, 3)))
         envs.close()
         evaluate(controllers.make("pid_los", env=env), [0], transient=0.0, max_time=1.0, **env)
+    if ticking is not None:
+        ticking.stop()
     if bar is not None:
         bar.update()
         bar.close()
     return time.perf_counter() - start
+
+
+class _Ticker:
+    """Redraws a progress bar every few seconds from a thread: one kernel compiles for minutes
+    with no update, and a bar whose elapsed time stands still reads as hung."""
+
+    def __init__(self, bar: Any, every: float = 5.0) -> None:
+        import threading
+
+        self._bar, self._every, self._done = bar, every, threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._done.wait(self._every):
+            self._bar.refresh()
+
+    def stop(self) -> None:
+        self._done.set()
+        self._thread.join()
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,0 +1,122 @@
+"""Tune the PID + LOS autopilot for a vehicle on validation seeds: a grid over the design speed
+of the pole placement, the heading loop's natural frequency and the LOS gains, scored on the
+benchmark scenarios of that vehicle, never on their test seeds.
+
+    python -m benchmarks.analysis.tune_pid --scenarios torpedo_helix,torpedo_survey,torpedo_as_built
+
+Each candidate flies `pid_as_built` (PID + current-observer LOS, docs/model.md §4.9) with the
+scenario's controller settings and the candidate's gains on the validation seeds (100-104 by
+default; the benchmark's test seeds are 0-9). A candidate that fails an episode (corridor,
+pitch, ...) ranks below every one that fails none; among those, the lower mean over the
+scenarios of the mean RMS distance [m] wins. The table of every candidate and the winner's gains
+are printed (docs/vehicles.md §5: on the torpedo, 4 % over the derived gains).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
+from benchmarks.options import option
+
+__all__ = ["GRID", "main", "tune"]
+
+# The grid: where the PID's poles are placed (u0 [m/s]), how fast the heading loop is [rad/s],
+# and the LOS gains k_y, k_z [1/m] (docs/model.md §4.9).
+GRID: dict[str, tuple[float, ...]] = {
+    "design_speed": (1.0, 2.0),
+    "yaw_wn": (1.5, 2.5, 4.0),
+    "k_y": (0.1, 0.2),
+    "k_z": (0.1, 0.5),
+}
+BASE = "pid_as_built"  # the PID + current-observer LOS preset
+
+
+@dataclass
+class TuneOptions:
+    """The options of ``python -m benchmarks.analysis.tune_pid``."""
+
+    scenarios: str = option("torpedo_helix,torpedo_survey,torpedo_as_built", "scenarios")
+    seeds: str = option("100,101,102,103,104", "validation seeds (not the test seeds 0-9)")
+    duration: float = option(300.0, "episode length [s]")
+
+
+def _score(rms: Sequence[float], failed: int) -> tuple[int, float]:
+    return failed, (sum(rms) / len(rms) if rms else math.inf)
+
+
+def tune(
+    scenarios: Sequence[str],
+    seeds: Sequence[int],
+    duration: float,
+    grid: Mapping[str, Sequence[float]] = GRID,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """Every candidate of ``grid``'s per-scenario mean RMS distance [m] and failed episodes,
+    best first (fewest failed episodes, then the lowest mean over the scenarios)."""
+    import controllers
+    from auv_gym.rollout import evaluate
+    from auv_gym.sim.trajectory import FAILURE_REASONS
+    from benchmarks.catalog.scenarios import load_scenarios
+
+    table = load_scenarios()
+    unknown = [name for name in scenarios if name not in table]
+    if unknown:
+        raise ValueError(f"--scenarios: unknown {unknown}; valid: {sorted(table)}")
+    names = list(grid)
+    candidates = [dict(zip(names, v, strict=True)) for v in itertools.product(*grid.values())]
+    rows = []
+    for k, gains in enumerate(candidates):
+        row: dict[str, Any] = {"gains": gains, "failed": 0, "rms": {}}
+        for name in scenarios:
+            scenario = table[name]
+            env = {**scenario.env, "max_time": duration}
+            policy = controllers.make(BASE, env=env, **scenario.controller, **gains)
+            results = evaluate(policy, list(seeds), **env)
+            finished = [r for r in results if r["termination_reason"] not in FAILURE_REASONS]
+            row["failed"] += len(results) - len(finished)
+            row["rms"][name] = (
+                sum(r["rms_distance"] for r in finished) / len(finished) if finished else math.inf
+            )
+        row["score"] = _score(list(row["rms"].values()), row["failed"])
+        rows.append(row)
+        if progress:
+            print(f"candidate {k + 1}/{len(candidates)}: {_line(row)}", file=sys.stderr)
+    return sorted(rows, key=lambda r: r["score"])
+
+
+def _line(row: dict[str, Any]) -> str:
+    gains = ", ".join(f"{name} {value:g}" for name, value in row["gains"].items())
+    rms = ", ".join(f"{name} {value:.3g} m" for name, value in row["rms"].items())
+    return f"{gains}: {rms}; failed {row['failed']}"
+
+
+def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
+    args, parser = parse_options(
+        TuneOptions, argv, program_name("benchmarks.analysis.tune_pid"), __doc__.split("\n\n")[0]
+    )
+    with usage_errors(parser):
+        scenarios = comma_names(args.scenarios, "--scenarios")
+        seeds = [int(s) for s in comma_names(args.seeds, "--seeds")]
+        if any(0 <= s <= 9 for s in seeds):
+            raise ValueError("--seeds: 0-9 are the benchmark's test seeds; tune on others")
+        if not 0.0 < args.duration <= 3600.0:
+            raise ValueError(f"--duration must be in (0, 3600] s, got {args.duration}")
+    rows = tune(scenarios, seeds, args.duration)
+    print(f"{len(rows)} candidates on {len(seeds)} validation seeds, best first:")
+    for row in rows:
+        print("  " + _line(row))
+    best = rows[0]
+    print("\nbest (controllers.make('pid_as_built', env=..., **gains)):")
+    for name, value in best["gains"].items():
+        print(f"{name} = {value!r}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()
