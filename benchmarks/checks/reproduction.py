@@ -166,6 +166,14 @@ def compare_episodes(
             else:
                 diffs.append(f"{key} {column}: {before} -> {after}")
     report.differences("episodes.csv", diffs, compared)
+    by_policy: dict[str, int] = {}
+    for line in diffs:  # "('scenario', 'policy', 'seed') column: a -> b"
+        policy = line.split("'")[3]
+        by_policy[policy] = by_policy.get(policy, 0) + 1
+    if by_policy:
+        print(
+            "  differing values by policy: " + ", ".join(f"{p} {n}" for p, n in by_policy.items())
+        )
     if rounded:
         print(
             f"episodes.csv: {rounded} values of the learned policies ({', '.join(learned)}) "
