@@ -4,6 +4,7 @@ episodes both were selected on, against the classical policies on the same episo
 
     python -m benchmarks.analysis.jump_start --scratch runs/jump_start/scratch \\
         --jump runs/jump_start/jump --out benchmarks/results/jump_start
+    (several runs of a recipe, other seeds: --scratch A,B)
 
 Each seed's validation curve is read from its phases' `evaluations.csv`; a jump-started seed's
 wall clock and env steps run on from its jump-start phase into its PPO phase. The classical
@@ -37,8 +38,8 @@ EVAL_FILE = "evaluations.csv"
 class JumpStartOptions:
     """The options of ``python -m benchmarks.analysis.jump_start``."""
 
-    scratch: Path | None = option(None, "schedule run from random weights", parse=Path)  # noqa: RUF009
-    jump: Path | None = option(None, "schedule run with a jump_start phase", parse=Path)  # noqa: RUF009
+    scratch: str = option("", "schedule runs from random weights (comma-separated folders)")
+    jump: str = option("", "schedule runs with a jump_start phase first (comma-separated)")
     out: Path | None = option(None, "folder for the curves and summaries", parse=Path)  # noqa: RUF009
 
 
@@ -71,6 +72,17 @@ def seed_curves(run: Path) -> dict[int, list[dict[str, float]]]:
                 last = curves[seed][-1]
                 offsets[seed] = (last["env_steps"], last["wall_time_s"])
     return curves
+
+
+def merged_curves(runs: Sequence[Path]) -> dict[int, list[dict[str, float]]]:
+    """`seed_curves` of several runs of one recipe (different seeds); a seed twice is an error."""
+    merged: dict[int, list[dict[str, float]]] = {}
+    for run in runs:
+        for seed, curve in seed_curves(run).items():
+            if seed in merged:
+                raise ValueError(f"seed {seed} appears in two runs ({run})")
+            merged[seed] = curve
+    return merged
 
 
 def validation_episodes(run: Path) -> tuple[str, list[int], float, dict[str, Any]]:
@@ -205,13 +217,23 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         __doc__.split("\n\n")[0],
     )
     with usage_errors(parser):
-        for flag, run in (("--scratch", args.scratch), ("--jump", args.jump)):
-            if run is None or not (run / "schedule.json").is_file():
-                raise ValueError(f"{flag}: {run} is not a train-seeds schedule run")
+        folders = {}
+        for flag, text in (("--scratch", args.scratch), ("--jump", args.jump)):
+            folders[flag] = [Path(t) for t in text.split(",") if t]
+            bad = [f for f in folders[flag] if not (f / "schedule.json").is_file()]
+            if not folders[flag] or bad:
+                raise ValueError(f"{flag}: {bad or text!r} is not a train-seeds schedule run")
         if args.out is None:
             raise ValueError("--out is required")
-    runs = {"scratch": seed_curves(args.scratch), "jump start": seed_curves(args.jump)}
-    task_set, seeds, duration, env = validation_episodes(args.jump)
+    runs = {
+        "scratch": merged_curves(folders["--scratch"]),
+        "jump start": merged_curves(folders["--jump"]),
+    }
+    every = [*folders["--scratch"], *folders["--jump"]]
+    task_set, seeds, duration, env = validation_episodes(every[0])
+    for run in every[1:]:  # one comparison: the same validation episodes for every run
+        if validation_episodes(run) != (task_set, seeds, duration, env):
+            parser.error(f"{run} was validated on other episodes than {every[0]}")
     references = reference_scores(env, seeds)
     summary = summarise(runs, references)
     args.out.mkdir(parents=True, exist_ok=True)
