@@ -28,9 +28,10 @@ else
     if [ -n "${TORCH_INDEX_URL:-}" ]; then
         echo "set-up: torch from $TORCH_INDEX_URL" >&2
         python -m pip install -q "torch==2.13.0" --index-url "$TORCH_INDEX_URL"
-    elif python -m pip install -q --retries 0 --timeout 15 "torch==2.13.0" \
-        --index-url "$CPU_INDEX" 2>/dev/null; then
+    elif timeout 10 python -c "import urllib.request as u; u.urlopen('$CPU_INDEX/torch/', timeout=5)" \
+        2>/dev/null; then  # reachable: pip alone can hang for minutes on an unreachable index
         echo "set-up: torch's CPU build from $CPU_INDEX" >&2
+        python -m pip install -q "torch==2.13.0" --index-url "$CPU_INDEX"
     else  # PyTorch's index unreachable: the configured index (a mirror may serve the CPU build)
         echo "set-up: $CPU_INDEX unreachable; torch from pip's configured index (the public" \
             "PyPI serves the CUDA build, several GB)" >&2
