@@ -94,6 +94,7 @@ def test_learned_policies_reproduce_within_float32_rounding_classical_ones_exact
     assert report.failures == 1  # fbsm's last digits: a difference; ppo_helix's: rounding
     printed = capsys.readouterr().out
     assert "0.0640 -> 0.06400000001" in printed
+    assert "differing values by policy: fbsm 1" in printed
     assert "1 values of the learned policies (ppo_helix) differ within 1e-06" in printed
     far = ["paper,fbsm,0,0.0640,31.5", "paper,ppo_helix,0,0.0501,20.0"]  # 2e-3 relative
     report = Report(allow_new=False)

@@ -5,11 +5,11 @@ reproduced to the last bit:
 
 1. `benchmarks/results/full/episodes.csv`: the command recorded in `episodes.json` is re-run into
    a temporary folder; every cell of every (scenario, policy, seed) row is compared as text (the
-   CSV holds full-precision floats, so equal text is equal bits).
+   CSV holds full-precision floats, so equal text is equal bits). The learned policies' cells
+   (torch networks) reproduce within `AGENT_TOLERANCE` relative (float32 arithmetic rounds by
+   CPU and BLAS build), counted apart from the exact ones.
 2. `benchmarks/results/paper/metrics.json`: `benchmarks.reports.paper_figures` is re-run with the
    recorded seed and duration; every metric value is compared (wall times and versions excepted).
-   The learned policies' cells (torch networks) reproduce within `AGENT_TOLERANCE` relative
-   (float32 arithmetic rounds by CPU and BLAS build), counted apart from the exact ones.
 3. With `--agents`, each shipped agent's `held_out_evaluation.json` is re-evaluated and compared
    value by value (bit-identical on the machine that trained it; elsewhere BLAS may round
    differently, so this check is opt-in).
@@ -31,6 +31,7 @@ import shlex
 import subprocess
 import sys
 import tempfile
+from collections import Counter
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,11 +77,11 @@ def _rerun_arguments(
     args = words[module + 1 :]
     kept: list[str] = []
     skip = False
+    replaced = ("--out", "--workers", *(("--scenarios",) if scenarios else ()))
     for word in args:
         if skip:
             skip = False
             continue
-        replaced = ("--out", "--workers", *(("--scenarios",) if scenarios else ()))
         if word in replaced:
             skip = True
             continue
@@ -155,6 +156,7 @@ def compare_episodes(
     report.one_sided("columns only in the committed file", sorted(columns_old - columns_new))
     report.one_sided("columns only in the new run", sorted(columns_new - columns_old))
     rounded = 0
+    by_policy: Counter[str] = Counter()  # differing values per policy
     for key in sorted(set(old) & set(new)):
         for column in sorted(columns_old & columns_new):
             compared += 1
@@ -165,11 +167,8 @@ def compare_episodes(
                 rounded += 1
             else:
                 diffs.append(f"{key} {column}: {before} -> {after}")
+                by_policy[key[1]] += 1
     report.differences("episodes.csv", diffs, compared)
-    by_policy: dict[str, int] = {}
-    for line in diffs:  # "('scenario', 'policy', 'seed') column: a -> b"
-        policy = line.split("'")[3]
-        by_policy[policy] = by_policy.get(policy, 0) + 1
     if by_policy:
         print(
             "  differing values by policy: " + ", ".join(f"{p} {n}" for p, n in by_policy.items())

@@ -25,7 +25,7 @@ from benchmarks.options import option
 __all__ = ["main"]
 
 POLICIES = ("fbsm", "backstepping", "pid_los")  # every classical kernel
-# Measured on 2 cores (set-up in a fresh clone, 2026-12): 270-340 s idle, up to 9 min under load.
+# Measured on 2 cores (set-up in a fresh clone, 2026-12): 229-340 s idle, up to 9 min under load.
 FIRST_RUN = "about 5 minutes on 2 cores, longer on a busy machine"
 
 
@@ -79,8 +79,8 @@ def compile_kernels(progress: bool = True) -> float:
         try:
             policy = controllers.make(name, env=env, **scenario.controller)
         except NoFiveDofModelError:  # FBSM on a vehicle without a 5-DOF model: never flown
-            policy = None
-        if policy is not None:
+            pass
+        else:
             evaluate(policy, [0], transient=0.0, **env)
         if bar is not None:
             bar.update()
