@@ -45,8 +45,8 @@ from gymnasium.utils import seeding
 from auv_gym.metrics import FIN_RATE_LIMITED, ROLL_ANGLE, SHAFT_POWER, compute_metrics
 from auv_gym.sim.config import SimConfig
 from auv_gym.sim.observation import GUIDANCE_FIELDS
+from auv_gym.sim.plants import ROLL
 from auv_gym.sim.simulator import Simulator
-from auv_gym.sim.six_dof_integrator import ROLL
 from auv_gym.sim.task import REWARD_TERMS
 from auv_gym.sim.trajectory import (
     DISTURBANCE_FIELDS,
@@ -236,7 +236,7 @@ def _run_batch(
             rpm = sim.actuator_state[:, ACTUATOR_STATE.n_rpm]
             power = shaft_powers(rpm, u, v, w, propeller)
             _record_extras(extras, {FIN_RATE_LIMITED: limited, SHAFT_POWER: power}, k, n, max_steps)
-        if sim.hull.shape[1]:  # the 6-DOF plant's roll, at each interval's end
+        if sim.six_dof:  # the 6-DOF plant's roll, at each interval's end
             _record_extras(extras, {ROLL_ANGLE: sim.roll[:, ROLL.phi]}, k, n, max_steps)
         ended = alive & (sim.code != 0)
         if ended.any():

@@ -12,7 +12,7 @@ import numpy as np
 
 from auv_gym.sim.integrator import RECORD
 from auv_gym.sim.observation import GUIDE
-from auv_gym.sim.six_dof_integrator import ROLL
+from auv_gym.sim.plants import ROLL
 from auv_gym.sim.task import REWARD_TERMS, TERMINATION_REASONS
 from auv_gym.vehicle.dynamics import STATE
 
@@ -46,7 +46,7 @@ def info_columns(sim: Simulator, physics_dt: float, stepped: bool) -> dict[str, 
         "tau": record[:, _TAU],
         "disturbance": record[:, _DISTURBANCE],
     }
-    if sim.hull.shape[1]:  # the 6-DOF plant
+    if sim.six_dof:  # the 6-DOF plant
         columns["phi"] = sim.roll[:, ROLL.phi]
         columns["roll_rate"] = sim.roll[:, ROLL.p]
     if stepped:

@@ -2,7 +2,7 @@ r"""The ocean beyond the uniform current: waves and a depth-profiled current (do
 
 Each vehicle carries an *ocean row* (layout `OCEAN_FIELDS`, then the wave components of
 `auv_gym.ocean.waves`), drawn at reset from its episode keys (`ocean_row`) and read by
-`integrator.advance_vehicle` through two calls per physics step: `refresh_waves` re-evaluates
+`period.advance_period` through two calls per physics step: `refresh_waves` re-evaluates
 the wave field at the vehicle's position every ``wave_every`` physics steps, and
 `ocean_forcing` adds the waves' orbital velocity and the profiled current to the earth-frame
 current of `auv_gym.ocean.disturbances` (held across the RK4 stages, like it). A row whose

@@ -559,7 +559,7 @@ class SimConfig:
         return math.ceil(self.max_time / self.control_dt - _SUBSTEP_TOL)
 
     def packed(self) -> np.ndarray:
-        """The float64 row `integrator.advance_vehicle` reads (layout `CONFIG_FIELDS`)."""
+        """The float64 row `period.advance_period` reads (layout `CONFIG_FIELDS`)."""
         gm_a, gm_b = gauss_markov_coefficients(self.current, self.physics_dt)
         values = {
             "n_sub": self.substeps,

@@ -1,37 +1,24 @@
-"""Time integration: classical RK4 of `dynamics.state_derivative` and the control-period loop.
+"""The pieces of a physics step every plant shares: the packed config, the 5-DOF RK4, the
+commanded actuation, the forcing of one physics step and the period's records.
 
-`advance_vehicle` moves one vehicle through one control period: per physics step it draws the
-white noise, applies the actuator model, takes one RK4 step (with the waves and the profiled
-current of `auv_gym.ocean` added to the current, when configured) and advances the Gauss–Markov
-current; at the end it writes the period's mean τ and f and refreshes the guidance row and the
-observation. Everything that simulates calls it: the single env with one row, the vector env
-with thousands (`simulator`).
-
-Speed (README "Performance"): the state, the RK4 stages, the parameters, the packed config and
-the sums stay in registers as tuples for the whole period; no heap array is made and no array
-reference is taken inside the loop (each costs two atomic reference-count updates).
+The period loop that puts them together, for either plant, is `period.advance_period`; the
+plant-specific steps are in `plants`. Speed (docs/performance.md): the state, the RK4 stages,
+the parameters, the packed config and the sums stay in registers as tuples for the whole period;
+no heap array is made and no array reference is taken inside the loop (each costs two atomic
+reference-count updates).
 """
 
 from __future__ import annotations
 
-import math
+from numba import njit, types
+from numba.extending import overload
 
-from numba import njit
-
-from auv_gym.ocean.disturbances import N_CHANNELS, gauss_markov_step, white_noise
-from auv_gym.ocean.forcing import NO_WAVE, OCEAN, ocean_forcing, refresh_waves
-from auv_gym.paths.guidance import wrap_angle
+from auv_gym.ocean.disturbances import N_CHANNELS, white_noise
+from auv_gym.ocean.forcing import ocean_forcing, refresh_waves
 from auv_gym.sim.observation import build_observation, guidance_row
 from auv_gym.support.records import field_indices, fixed_tuple, record_type
-from auv_gym.vehicle.actuators import (
-    ACTUATOR_CONFIG_FIELDS,
-    ACTUATOR_STATE,
-    DEFAULT_ACTUATOR_CONFIG,
-    actuator_config,
-    actuator_forces,
-    actuator_step,
-)
-from auv_gym.vehicle.dynamics import STATE, STATE_DIM, state_derivative
+from auv_gym.vehicle.actuators import ACTUATOR_CONFIG_FIELDS
+from auv_gym.vehicle.dynamics import STATE_DIM, state_derivative
 from auv_gym.vehicle.params import params_record
 
 __all__ = [
@@ -44,7 +31,6 @@ __all__ = [
     "RECORD_FIELDS",
     "actuation",
     "add_noise",
-    "advance_vehicle",
     "config_record",
     "finish_period",
     "physics_step_forcing",
@@ -184,140 +170,62 @@ def actuation(a_X, a_M, a_N, cfg, fin_gain, u):
     return X, a_M * authority, a_N * authority
 
 
-@njit(cache=True, inline="always")
-def advance_vehicle(
-    st,
-    cur,
-    act,
-    action,
-    p_array,
-    noise_key,
-    current_key,
-    step_index,
-    kind,
-    pdata,
-    cfg_array,
-    guid,
-    obs,
-    record,
-    ocean,
+def _uniform_forcing(
+    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
 ):
-    """Advance one vehicle by one control period, in place; returns False on a non-finite state.
-
-    ``st`` (layout `dynamics.STATE`), ``cur`` (Gauss–Markov current deviation (x, y, z)
-    [m/s]) and, with the realistic actuators, ``act`` (layout `actuators.ACTUATOR_STATE`) are
-    updated; ``guid``, ``obs`` and ``record`` (layout `RECORD`) are rewritten only
-    while the state is finite, so the caller keeps the last valid observation. ``action`` holds
-    (a_X, a_M, a_N) in [−1, 1] (realistic actuators: the normalised commands of n, δ_s, δ_r);
-    ``cfg_array`` is `SimConfig.packed` (layout `CONFIG_FIELDS`);
-    ``step_index`` counts physics steps since the reset and keys the noise (`white_noise`) and
-    the current (`gauss_markov_step`). ``ocean`` is the vehicle's ocean row (`ocean.ocean_row`):
-    waves and a profiled current added to the current, when its ``active`` flag is set.
-    """
-    cfg = config_record(cfg_array)
-    p = params_record(p_array)
-    n_sub, hold_steps = int(cfg.n_sub), int(cfg.hold_steps)
-    noise_amplitude = (cfg.noise_f_u, cfg.noise_f_v, cfg.noise_f_w, cfg.noise_f_q, cfg.noise_f_r)
-    gm_b = (cfg.gm_b_x, cfg.gm_b_y, cfg.gm_b_z)
-    fin_gain = p.fin_moment_coeff * p.fin_max
-    x = fixed_tuple(st, STATE_DIM)
-    a_X, a_M, a_N = action[0], action[1], action[2]
-    dc = (cur[0], cur[1], cur[2])
-    sum_X = sum_M = sum_N = 0.0
-    sum_f = (0.0, 0.0, 0.0, 0.0, 0.0)
-    finite = True
-    ocean_on = ocean[OCEAN.active] != 0.0
-    wave = NO_WAVE
-    # Realistic actuators (docs/model.md §2.6): their state moves first in each physics step,
-    # then its τ is held over the RK4 step; the fins' Y, Z enter where f_v, f_w do.
-    realistic = int(cfg.actuator) == REALISTIC_ACTUATOR
-    a = actuator_config(cfg_array, CONFIG_DIM) if realistic else DEFAULT_ACTUATOR_CONFIG
-    shaft, d_s = act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s]
-    d_r = act[ACTUATOR_STATE.delta_r]
-    rate_limited = 0
-    added = (0.0, 0.0, 0.0)
-    for k in range(n_sub):
-        n = step_index + k
-        f, current, wave, added = physics_step_forcing(
-            cfg,
-            p,
-            noise_amplitude,
-            noise_key,
-            hold_steps,
-            dc,
-            ocean_on,
-            ocean,
-            x,
-            n,
-            k,
-            wave,
-            added,
-        )
-        if realistic:
-            shaft, d_s, d_r, limited = actuator_step(shaft, d_s, d_r, a_X, a_M, a_N, a)
-            rate_limited += limited
-            X, Y, Z, M, N = actuator_forces(shaft, d_s, d_r, x[STATE.u], x[STATE.v], x[STATE.w], a)
-            f_in = (f[0], f[1] + Y, f[2] + Z, f[3], f[4])
-        else:
-            X, M, N = actuation(a_X, a_M, a_N, cfg, fin_gain, x[STATE.u])
-            f_in = f
-        nxt = rk4(x, (X, M, N), f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt)
-        dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
-        sum_X += X
-        sum_M += M
-        sum_N += N
-        sum_f = add_noise(sum_f, f)
-        for j in range(STATE_DIM):
-            if not math.isfinite(nxt[j]):
-                finite = False
-        if not finite:
-            x = nxt
-            break
-        x = (  # the state with ψ wrapped to (−π, π]
-            nxt[0],
-            nxt[1],
-            nxt[2],
-            nxt[3],
-            wrap_angle(nxt[STATE.psi]),
-            nxt[5],
-            nxt[6],
-            nxt[7],
-            nxt[8],
-            nxt[9],
-            nxt[10],
-        )
-    for j in range(STATE_DIM):
-        st[j] = x[j]
-    cur[0], cur[1], cur[2] = dc
-    if realistic:
-        act[ACTUATOR_STATE.n_rpm], act[ACTUATOR_STATE.delta_s] = shaft, d_s
-        act[ACTUATOR_STATE.delta_r] = d_r
-        act[ACTUATOR_STATE.rate_limited] = rate_limited / n_sub
-    if not finite:
-        return False
-    finish_period(
-        st, kind, pdata, cfg, guid, obs, record, sum_X, sum_M, sum_N, sum_f, ocean_on, added
-    )
-    return True
+    f = white_noise(noise_amplitude, noise_key, n, hold_steps)
+    current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
+    return f, current, wave, added
 
 
-@njit(cache=True, inline="always")
-def physics_step_forcing(
-    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, pose, n, k, wave, added
+def _ocean_forcing(
+    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
 ):
-    """The white noise f and the earth-fixed current [m/s] of physics step n (the k-th of the
-    period) at ``pose`` (x, y, z [m], θ, ψ [rad], …), held across its RK4 stages: the uniform
-    current plus its Gauss–Markov deviation ``dc``, and with an ocean row its waves and profile
-    (t at mid-step). Returns (f, current, wave, added): ``added`` [m/s] is the ocean's part of
-    the current, the last one kept when there is no ocean."""
     f = white_noise(noise_amplitude, noise_key, n, hold_steps)
     current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
     if ocean_on:
-        wave = refresh_waves(ocean, pose, n, k, cfg.physics_dt, wave)
+        row = ocean[i]
+        wave = refresh_waves(row, pose, n, k, cfg.physics_dt, wave)
         uniform = current
-        current, f = ocean_forcing(ocean, pose, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
+        current, f = ocean_forcing(row, pose, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
         added = (current[0] - uniform[0], current[1] - uniform[1], current[2] - uniform[2])
     return f, current, wave, added
+
+
+def physics_step_forcing(
+    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
+):
+    """The white noise f and the earth-fixed current [m/s] of physics step n (the k-th of the
+    period) at ``pose`` (x, y, z [m], θ, ψ [rad]), held across its RK4 stages: the uniform
+    current plus its Gauss–Markov deviation ``dc``, and with an active ocean row (row i of
+    ``ocean``) its waves and profile (t at mid-step). Returns (f, current, wave, added):
+    ``added`` [m/s] is the ocean's part of the current, the last one kept when there is no
+    ocean. Compiled, an ``ocean`` of None (no vehicle has an ocean) leaves the ocean's code out
+    of the kernel."""
+    forcing = _uniform_forcing if ocean is None else _ocean_forcing
+    return forcing(
+        cfg,
+        p,
+        noise_amplitude,
+        noise_key,
+        hold_steps,
+        dc,
+        ocean_on,
+        ocean,
+        i,
+        pose,
+        n,
+        k,
+        wave,
+        added,
+    )
+
+
+@overload(physics_step_forcing, inline="always")
+def _physics_step_forcing(
+    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
+):
+    return _uniform_forcing if isinstance(ocean, types.NoneType) else _ocean_forcing
 
 
 @njit(cache=True, inline="always")

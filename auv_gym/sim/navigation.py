@@ -16,15 +16,15 @@ bias key (`sensors.sensor_key`), so every policy meets the same sensor errors.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from auv_gym.ocean.disturbances import KEY, standard_normal, uniform01
-from auv_gym.ocean.forcing import OCEAN, ocean_velocity
 from auv_gym.paths.guidance import body_errors_trig, wrap_angle
-from auv_gym.sim.integrator import RECORD, config_record
+from auv_gym.sim.fleet import ocean_over_ground
+from auv_gym.sim.integrator import config_record
 from auv_gym.sim.observation import GUIDANCE_DIM, OBS_DIM, build_observation, guidance_row
 from auv_gym.sim.task import ENVELOPE, NON_FINITE
 from auv_gym.support.records import field_indices, fixed_tuple, record_type
@@ -195,56 +195,27 @@ def _filter_position(s, st, key, block, reset, fix, dx, dy, nv):
 
 
 @njit(cache=True, inline="always")
-def _sense_row(
-    i,
-    reset,
-    state,
-    current,
-    ocean,
-    record,
-    step_index,
-    code,
-    row,
-    kinds,
-    pdata,
-    cfgs,
-    s,
-    keys,
-    nav,
-    buffer,
-    estimate,
-    nav_guid,
-    obs,
-    obs_low,
-    obs_high,
-):
+def _sense_row(i, reset, fleet, episodes, outputs, s, sensors):
     """Measure vehicle i, update its navigation state and write its observation (module
     docstring); ``reset`` starts an episode (biases, a start fix, a full delay ring)."""
-    if code[i] == NON_FINITE:  # the state is not finite: the last observation stays
+    if outputs.code[i] == NON_FINITE:  # the state is not finite: the last observation stays
         return
-    r = row[i]
-    cfg = config_record(cfgs[r])
-    st, nv, ring = state[i], nav[i], buffer[i]
-    t = step_index[i] // int(cfg.n_sub)
-    key, block = keys[i, 0], STRIDE * t
+    r = episodes.row[i]
+    cfg = config_record(episodes.cfgs[r])
+    st, nv, ring = fleet.state[i], sensors.nav[i], sensors.buffer[i]
+    step_index = fleet.step_index[i]
+    t = step_index // int(cfg.n_sub)
+    key, block = sensors.keys[i, 0], STRIDE * t
     if reset:
-        _draw_biases(s, keys[i, 1], nv)
+        _draw_biases(s, sensors.keys[i, 1], nv)
     dropped = not reset and uniform01(key, 2 * (block + CH_DROP)) < s.dvl_dropout
     if not dropped:  # a lost ping leaves the last valid sample in `nv`
-        c_x = cfg.current_x + current[i, 0]
-        c_y = cfg.current_y + current[i, 1]
-        c_z = cfg.current_z + current[i, 2]
-        if ocean[i, OCEAN.active] != 0.0:  # over ground: the waves and profile too
-            if reset:  # evaluated at the start; later the physics' last step's (`RECORD`)
-                ox, oy, oz = ocean_velocity(
-                    ocean[i], st[STATE.x], st[STATE.y], st[STATE.z], step_index[i] * cfg.physics_dt
-                )
-            else:
-                ox, oy, oz = (
-                    record[i, RECORD.ocean_x],
-                    record[i, RECORD.ocean_y],
-                    record[i, RECORD.ocean_z],
-                )
+        c_x = cfg.current_x + fleet.current[i, 0]
+        c_y = cfg.current_y + fleet.current[i, 1]
+        c_z = cfg.current_z + fleet.current[i, 2]
+        t_s = step_index * cfg.physics_dt
+        flowing, ox, oy, oz = ocean_over_ground(fleet.ocean, i, reset, st, t_s, outputs.record)
+        if flowing:  # over ground: the waves and profile too
             c_x, c_y, c_z = c_x + ox, c_y + oy, c_z + oz
         _sample_dvl(s, st, c_x, c_y, c_z, key, block, nv)
     theta = _add(st[STATE.theta], nv[NAV.b_theta] + _normal(s.pitch_noise, key, block + CH_PITCH))
@@ -279,19 +250,20 @@ def _sense_row(
         m[MEAS.u], m[MEAS.v], m[MEAS.w] = nv[NAV.dvl_u], nv[NAV.dvl_v], nv[NAV.dvl_w]
         m[MEAS.q], m[MEAS.r] = q, r_rate
     delayed = ring[(t + 1) % size]
-    est = estimate[i]
+    est = sensors.estimate[i]
     for j in range(STATE_DIM):
         est[j] = st[j]
     for j in range(MEAS_DIM):
         est[_MEAS_STATE[j]] = delayed[j]
-    guidance_row(est, kinds[r], pdata[r], cfg.u_d, cfg.sigma, nav_guid[i])
-    o = obs[i]
-    build_observation(est, nav_guid[i], cfg.u_d, o)
+    nav_guid = sensors.guid[i]
+    guidance_row(est, episodes.kinds[r], episodes.pdata[r], cfg.u_d, cfg.sigma, nav_guid)
+    o = outputs.obs[i]
+    build_observation(est, nav_guid, cfg.u_d, o)
     # The readings saturate at the observation bounds, except where the true observation left
     # them (an "envelope" end): there exact sensors return what "ideal" returns.
-    if code[i] != ENVELOPE:
+    if outputs.code[i] != ENVELOPE:
         for j in range(OBS_DIM):
-            o[j] = min(max(o[j], obs_low[j]), obs_high[j])
+            o[j] = min(max(o[j], episodes.obs_low[j]), episodes.obs_high[j])
 
 
 # One serial pass, also beside the threaded physics kernel: it costs about 1 µs per vehicle
@@ -299,54 +271,20 @@ def _sense_row(
 # reference counting (`_nrt=False`, as `simulator._step_one`). A threaded pass was slower: the
 # reference counts of its row views are atomic updates the threads contend for.
 @njit(cache=True, _nrt=False)
-def _sense(
-    rows,
-    reset,
-    state,
-    current,
-    ocean,
-    record,
-    step_index,
-    code,
-    row,
-    kinds,
-    pdata,
-    cfgs,
-    scfg,
-    keys,
-    nav,
-    buffer,
-    estimate,
-    nav_guid,
-    obs,
-    obs_low,
-    obs_high,
-):
+def _sense(rows, reset, fleet, episodes, outputs, scfg, sensors):
     s = SensorRecord(*fixed_tuple(scfg, _SENSOR_DIM))
     for n in range(rows.shape[0]):
-        _sense_row(
-            rows[n],
-            reset,
-            state,
-            current,
-            ocean,
-            record,
-            step_index,
-            code,
-            row,
-            kinds,
-            pdata,
-            cfgs,
-            s,
-            keys,
-            nav,
-            buffer,
-            estimate,
-            nav_guid,
-            obs,
-            obs_low,
-            obs_high,
-        )
+        _sense_row(rows[n], reset, fleet, episodes, outputs, s, sensors)
+
+
+class SensorArrays(NamedTuple):
+    """The sensor model's per-vehicle arrays, as the compiled pass takes them."""
+
+    keys: np.ndarray  # uint64 (sample key, bias key)
+    nav: np.ndarray  # navigation state (`NAV`)
+    buffer: np.ndarray  # delay ring of measurements (`MEAS`)
+    estimate: np.ndarray  # the state with the measured entries
+    guid: np.ndarray  # guidance row of the estimated pose
 
 
 class Navigation:
@@ -377,26 +315,5 @@ class Navigation:
             noise_keys = sim.keys[rows, KEY.noise]
             self.keys[rows, 0] = sensor_key(noise_keys, 0)
             self.keys[rows, 1] = sensor_key(noise_keys, 1)
-        _sense(
-            rows,
-            reset,
-            sim.state,
-            sim.current,
-            sim.ocean,
-            sim.record,
-            sim.step_index,
-            sim.code,
-            sim._row,
-            sim._kind,
-            sim._pdata,
-            sim._cfg,
-            self._packed,
-            self.keys,
-            self.nav,
-            self.buffer,
-            self.estimate,
-            self.guid,
-            sim.obs,
-            sim.obs_low,
-            sim.obs_high,
-        )
+        sensors = SensorArrays(self.keys, self.nav, self.buffer, self.estimate, self.guid)
+        _sense(rows, reset, sim.fleet, sim.episodes, sim.outputs, self._packed, sensors)

@@ -15,21 +15,13 @@ import numpy as np
 from numba import njit, prange, types
 from numba.extending import overload
 
-from auv_gym.ocean.disturbances import (
-    KEY,
-    draw_keys,
-)
+from auv_gym.ocean.disturbances import draw_keys
 from auv_gym.ocean.forcing import ocean_row, ocean_width
 from auv_gym.paths.shapes import Path
 from auv_gym.sim.config import SIX_DOF_PLANT, SimConfig
 from auv_gym.sim.episode_start import draw_start
-from auv_gym.sim.integrator import (
-    ACTUATORS,
-    CONFIG_FIELDS,
-    RECORD_DIM,
-    advance_vehicle,
-    config_record,
-)
+from auv_gym.sim.fleet import EpisodeTable, Fleet, StepOutputs
+from auv_gym.sim.integrator import ACTUATORS, CONFIG_FIELDS, RECORD_DIM, config_record
 from auv_gym.sim.navigation import Navigation
 from auv_gym.sim.observation import (
     GUIDANCE_DIM,
@@ -39,10 +31,11 @@ from auv_gym.sim.observation import (
     vehicle_speed_bound,
 )
 from auv_gym.sim.path_depths import episode_surface_z
+from auv_gym.sim.period import advance_period
+from auv_gym.sim.plants import ROLL_DIM
 from auv_gym.sim.preview import extend_rows
 from auv_gym.sim.randomization import EpisodeTask, draw_task
 from auv_gym.sim.safety_cost import safety_vector
-from auv_gym.sim.six_dof_integrator import ROLL_DIM, advance_six_dof
 from auv_gym.sim.task import (
     ENVELOPE,
     REWARD_TERMS,
@@ -59,181 +52,44 @@ from auv_gym.vehicle.params import N_PARAMS
 __all__ = ["Simulator"]
 
 
-def _five_dof_row(
-    i,
-    state,
-    roll,
-    hull,
-    cur,
-    act,
-    a,
-    p,
-    noise_key,
-    current_key,
-    n,
-    kind,
-    pdata,
-    cfg,
-    guid,
-    obs,
-    record,
-    ocean,
-):
-    advance_vehicle(
-        state[i],
-        cur,
-        act,
-        a,
-        p,
-        noise_key,
-        current_key,
-        n,
-        kind,
-        pdata,
-        cfg,
-        guid,
-        obs,
-        record,
-        ocean,
-    )
+def _no_cost(cost, i, st, task):
+    return None
 
 
-def _six_dof_row(
-    i,
-    state,
-    roll,
-    hull,
-    cur,
-    act,
-    a,
-    p,
-    noise_key,
-    current_key,
-    n,
-    kind,
-    pdata,
-    cfg,
-    guid,
-    obs,
-    record,
-    ocean,
-):
-    advance_six_dof(
-        state[i],
-        roll[i],
-        cur,
-        act,
-        a,
-        p,
-        hull[i],
-        noise_key,
-        current_key,
-        n,
-        kind,
-        pdata,
-        cfg,
-        guid,
-        obs,
-        record,
-        ocean,
-    )
+def _score_cost(cost, i, st, task):
+    cost[i] = task_cost(st, task)
 
 
-def _advance_plant(i, state, roll, hull, *period):
-    """Advance vehicle i one control period on its plant: the 5-DOF when ``hull`` is None, else
-    the 6-DOF (``period``: the arguments of `integrator.advance_vehicle` after the state).
-    Compiled through `_advance_plant_kernel`; this body runs with the JIT off."""
-    (_five_dof_row if hull is None else _six_dof_row)(i, state, roll, hull, *period)
+def score_cost(cost, i, st, task):
+    """Vehicle i's safety cost after a step into ``cost[i]``; nothing when ``cost`` is None (the
+    configuration has no safety cost: it stays 0)."""
+    (_no_cost if cost is None else _score_cost)(cost, i, st, task)
 
 
-@overload(_advance_plant, inline="always")
-def _advance_plant_kernel(
-    i,
-    state,
-    roll,
-    hull,
-    cur,
-    act,
-    a,
-    p,
-    noise_key,
-    current_key,
-    n,
-    kind,
-    pdata,
-    cfg,
-    guid,
-    obs,
-    record,
-    ocean,
-):
-    """The plant is chosen when the kernel is compiled, by the type of ``hull``: None compiles
-    the 5-DOF kernel, with no 6-DOF code in it (a plant that is off costs nothing), an array
-    the 6-DOF one. Each is cached on its own."""
-    return _five_dof_row if isinstance(hull, types.NoneType) else _six_dof_row
+@overload(score_cost, inline="always")
+def _score_cost_kernel(cost, i, st, task):
+    return _no_cost if isinstance(cost, types.NoneType) else _score_cost
 
 
-@njit(cache=True, inline="always")
-def _step_row(
-    i,
-    state,
-    current,
-    act,
-    actions,
-    params,
-    keys,
-    step_index,
-    row,
-    kinds,
-    pdata,
-    cfgs,
-    tasks,
-    obs_low,
-    obs_high,
-    guid,
-    obs,
-    record,
-    terms,
-    reward,
-    code,
-    cost,
-    ocean,
-    roll,
-    hull,
-):
+# Called, not inlined: inlined into a prange loop, its writes into arrays that are members of
+# the records were lost (numba 0.68 parfors; tests/test_simulation_core.py checks the threaded
+# kernel against the serial one).
+@njit(cache=True)
+def _step_row(i, fleet, actions, table, out):
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
-    config and task are row ``row[i]`` of the episode table (`Simulator`); ``roll`` and ``hull``
-    are the 6-DOF plant's arrays, None for the 5-DOF (`_advance_plant`)."""
+    config and task are row ``table.row[i]`` of the episode table (`Simulator`)."""
     a = actions[i]
     for j in range(3):  # documented actuator saturation: |a_j| <= 1
         a[j] = min(max(a[j], -1.0), 1.0)
-    r = row[i]
-    cfg = cfgs[r]
-    _advance_plant(
-        i,
-        state,
-        roll,
-        hull,
-        current[i],
-        act[i],
-        a,
-        params[i],
-        keys[i, KEY.noise],
-        keys[i, KEY.current],
-        step_index[i],
-        kinds[r],
-        pdata[r],
-        cfg,
-        guid[i],
-        obs[i],
-        record[i],
-        ocean[i],
+    r = table.row[i]
+    cfg = table.cfgs[r]
+    advance_period(fleet, i, a[0], a[1], a[2], table.kinds[r], table.pdata[r], cfg, out)
+    fleet.step_index[i] += int(config_record(cfg).n_sub)
+    st, task = fleet.state[i], table.tasks[r]
+    out.reward[i], out.code[i] = task_row(
+        st, out.guid[i], out.obs[i], a, table.obs_low, table.obs_high, task, out.terms[i]
     )
-    step_index[i] += int(config_record(cfg).n_sub)
-    reward[i], code[i] = task_row(
-        state[i], guid[i], obs[i], a, obs_low, obs_high, tasks[r], terms[i]
-    )
-    cost[i] = task_cost(state[i], tasks[r])
+    score_cost(out.cost, i, st, task)
 
 
 @njit(cache=True, inline="always")
@@ -246,127 +102,27 @@ def _first_non_finite_row(actions):
 
 
 # Two entry points with the same arguments: numba keys its on-disk cache by function, so the
-# serial and the threaded kernels must be distinct functions. Each returns the first row with a
-# non-finite action (nothing is advanced then), or −1. The serial kernel allocates nothing, so it
-# runs without numba's reference counting (`_nrt=False`): the row views of its loop otherwise
-# cost two atomic updates each, a quarter of its time (the threaded kernel's loop has none).
+# serial and the threaded kernels must be distinct functions. Each takes the `fleet.Fleet`, the
+# (n, 3) actions, the `fleet.EpisodeTable` and the `fleet.StepOutputs`, and returns the first
+# row with a non-finite action (nothing is advanced then), or −1. The serial kernel allocates
+# nothing, so it runs without numba's reference counting (`_nrt=False`): the row views of its
+# loop otherwise cost two atomic updates each, a quarter of its time (the threaded kernel's
+# loop has none).
 @njit(cache=True, _nrt=False)
-def _step_one(
-    state,
-    current,
-    act,
-    actions,
-    params,
-    keys,
-    step_index,
-    row,
-    kinds,
-    pdata,
-    cfgs,
-    tasks,
-    obs_low,
-    obs_high,
-    guid,
-    obs,
-    record,
-    terms,
-    reward,
-    code,
-    cost,
-    ocean,
-    roll,
-    hull,
-):
+def _step_one(fleet, actions, table, out):
     bad = _first_non_finite_row(actions)
     if bad < 0:
-        for i in range(state.shape[0]):
-            _step_row(
-                i,
-                state,
-                current,
-                act,
-                actions,
-                params,
-                keys,
-                step_index,
-                row,
-                kinds,
-                pdata,
-                cfgs,
-                tasks,
-                obs_low,
-                obs_high,
-                guid,
-                obs,
-                record,
-                terms,
-                reward,
-                code,
-                cost,
-                ocean,
-                roll,
-                hull,
-            )
+        for i in range(actions.shape[0]):
+            _step_row(i, fleet, actions, table, out)
     return bad
 
 
 @njit(cache=True, parallel=True)
-def _step_all(
-    state,
-    current,
-    act,
-    actions,
-    params,
-    keys,
-    step_index,
-    row,
-    kinds,
-    pdata,
-    cfgs,
-    tasks,
-    obs_low,
-    obs_high,
-    guid,
-    obs,
-    record,
-    terms,
-    reward,
-    code,
-    cost,
-    ocean,
-    roll,
-    hull,
-):
+def _step_all(fleet, actions, table, out):
     bad = _first_non_finite_row(actions)
     if bad < 0:
-        for i in prange(state.shape[0]):
-            _step_row(
-                i,
-                state,
-                current,
-                act,
-                actions,
-                params,
-                keys,
-                step_index,
-                row,
-                kinds,
-                pdata,
-                cfgs,
-                tasks,
-                obs_low,
-                obs_high,
-                guid,
-                obs,
-                record,
-                terms,
-                reward,
-                code,
-                cost,
-                ocean,
-                roll,
-                hull,
-            )
+        for i in prange(actions.shape[0]):
+            _step_row(i, fleet, actions, table, out)
     return bad
 
 
@@ -468,14 +224,12 @@ class Simulator:
         self.cost = np.zeros(n)  # safety cost of the last step (`auv_gym.sim.safety_cost`)
         self._actions = np.zeros((n, 3))
         # The 6-DOF plant: each vehicle's roll (φ [rad], p [rad/s]) and hull row
-        # (`SixDofVehicle.kernel_vector`, drawn per episode with parameter uncertainty); the
-        # hull has no columns for the 5-DOF plant, which is how the kernel tells them apart.
+        # (`SixDofVehicle.kernel_vector`, drawn per episode with parameter uncertainty); no
+        # columns on the 5-DOF plant.
         self.roll = np.zeros((n, ROLL_DIM))
-        six_dof = config.plant == SIX_DOF_PLANT
-        self._nominal_hull = config.plant_params.kernel_vector() if six_dof else np.zeros(0)
+        self.six_dof = config.plant == SIX_DOF_PLANT
+        self._nominal_hull = config.plant_params.kernel_vector() if self.six_dof else np.zeros(0)
         self.hull = np.tile(self._nominal_hull, (n, 1))
-        # What the kernels get: None for the 5-DOF selects its kernel (`_advance_plant`).
-        self._plant_arrays = (self.roll, self.hull) if six_dof else (None, None)
         # Waves and profiled current per vehicle (`ocean.ocean_row`); all zero without them.
         self.ocean = np.zeros((n, ocean_width(config.waves)))
         # The agent observation's extra entries (`preview.extend_rows`); none for "paper".
@@ -502,6 +256,37 @@ class Simulator:
             None
             if config.sensors.ideal
             else Navigation(config.sensors, config.control_dt, self.n, config.u_desired)
+        )
+        # The kernels' records (`fleet`): an option the configuration leaves off is None, so the
+        # kernel compiled for it has none of its code. The 6-DOF plant always carries the
+        # actuator and ocean rows (their flags decide at run time): its period compiles for
+        # minutes, once instead of once per combination, and costs the same with them.
+        ocean = config.waves is not None or config.current_profile is not None or self.six_dof
+        actuators = self._command_box or self.six_dof
+        self.fleet = Fleet(
+            state=self.state,
+            current=self.current,
+            params=self.params,
+            keys=self.keys,
+            step_index=self.step_index,
+            roll=self.roll if self.six_dof else None,
+            hull=self.hull if self.six_dof else None,
+            actuators=self.actuator_state if actuators else None,
+            ocean=self.ocean if ocean else None,
+        )
+        self.episodes = EpisodeTable(
+            self._row, self._kind, self._pdata, self._cfg, self._task, *self._paper_bounds
+        )
+        weights = config.safety_cost
+        costly = (weights.depth, weights.speed, weights.pitch) != (0.0, 0.0, 0.0)
+        self.outputs = StepOutputs(
+            guid=self.guid,
+            obs=self.obs,
+            record=self.record,
+            terms=self.terms,
+            reward=self.reward,
+            code=self.code,
+            cost=self.cost if costly else None,
         )
 
     @property
@@ -657,7 +442,7 @@ class Simulator:
         self.current[i] = rng.standard_normal(3) * np.asarray(cfg.current.std)
         self.actuator_state[i] = 0.0  # propeller stopped, fins centred
         self.roll[i] = 0.0
-        if self.hull.shape[1]:
+        if self.six_dof:
             self.hull[i] = self._hull_row(i)
         if cfg.waves is not None or cfg.current_profile is not None:
             surface_z = episode_surface_z(cfg, self.paths[i], float(position[2]))
@@ -691,30 +476,7 @@ class Simulator:
         np.copyto(self._actions, actions)
         if self._command_box:
             check_commands(self._actions)
-        bad_row = self._kernel(
-            self.state,
-            self.current,
-            self.actuator_state,
-            self._actions,
-            self.params,
-            self.keys,
-            self.step_index,
-            self._row,
-            self._kind,
-            self._pdata,
-            self._cfg,
-            self._task,
-            *self._paper_bounds,
-            self.guid,
-            self.obs,
-            self.record,
-            self.terms,
-            self.reward,
-            self.code,
-            self.cost,
-            self.ocean,
-            *self._plant_arrays,
-        )
+        bad_row = self._kernel(self.fleet, self._actions, self.episodes, self.outputs)
         if bad_row >= 0:
             raise ValueError(f"action must be finite, got {actions[bad_row]!r} (row {bad_row})")
         if self.navigation is not None:  # after scoring: the reward reads the true state

@@ -264,7 +264,10 @@ def six_dof_actuation(n_rpm, delta_s, delta_r, nu_r, propeller_speed, torque_sca
     return thrust + drag, y_r, z_s, roll, m_s, n_r
 
 
-@njit(cache=True, inline="always")
+# Called, not inlined: the RK4 inlined four copies of this body, and compiling them took 134 s
+# of the set-up's kernel compile on 2 cores against 13.5 s for one called copy; the call costs
+# 11 % of an RK4 step (1.43 against 1.59 µs, one run each; docs/performance.md).
+@njit(cache=True)
 def six_dof_derivative(st, tau, f, current, h, kind, pdata, u_d, sigma):
     """d/dt of the 6-DOF state (layout `SIX_DOF_STATE`) under τ (6,) and the disturbance f
     (f_u, f_v, f_w, f_q, f_r) [N, N·m] (no roll channel), in the earth-fixed current (v_c,x,
