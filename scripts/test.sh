@@ -9,6 +9,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 . .venv/bin/activate
+# The kernels of every benchmark scenario, not only the main job's (once; then instant).
+python -m benchmarks.runner.compile_kernels --all
 ruff check .
 ruff format --check .
 if [ "${1:-}" = "--integration" ]; then
