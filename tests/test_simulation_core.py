@@ -33,16 +33,14 @@ def _off(sim: Simulator) -> set[str]:
 @pytest.mark.parametrize(
     ("kwargs", "expected_off"),
     [
-        ({}, {"roll", "hull", "actuators", "ocean"}),
-        ({"actuator": "fins"}, {"roll", "hull", "actuators", "ocean"}),
-        ({"actuator": "realistic"}, {"roll", "hull", "ocean"}),
-        ({"disturbance": "ocean"}, {"roll", "hull", "actuators"}),
-        ({"safety_cost": _NO_COST}, {"roll", "hull", "actuators", "ocean", "cost"}),
-        # The 6-DOF plant always carries the actuator and ocean rows: one compiled period.
+        ({}, {"roll", "hull"}),
+        ({"actuator": "realistic", "disturbance": "ocean"}, {"roll", "hull"}),
+        ({"safety_cost": _NO_COST}, {"roll", "hull", "cost"}),
         ({"plant": "6dof"}, set()),
+        ({"plant": "6dof", "safety_cost": _NO_COST}, {"cost"}),
     ],
 )
-def test_an_option_that_is_off_is_not_handed_to_the_kernels(kwargs, expected_off) -> None:
+def test_the_plant_and_an_unused_safety_cost_are_chosen_by_type(kwargs, expected_off) -> None:
     sim = _sim(**kwargs)
     assert _off(sim) == expected_off
     assert sim.six_dof == (kwargs.get("plant") == "6dof")

@@ -11,10 +11,12 @@ positional arrays:
 - `StepOutputs`: what a step writes (guidance row, observation, period record, reward terms,
   reward, end code, safety cost).
 
-An option that a configuration does not use is None in its record, and a kernel is compiled for
-the types it is given, so it holds no code for it: the 6-DOF plant's ``roll`` and ``hull``
-(`plants`), the realistic actuators' ``actuators``, the waves' and profiled current's
-``ocean``, the safety cost's ``cost``. The hooks below read and write those optional arrays.
+A record member that is None is compiled out: a kernel is compiled for the types it is given,
+so it holds no code for it. That is how the plant is chosen (the 6-DOF plant's ``roll`` and
+``hull``, None on the 5-DOF: `plants`) and how a safety cost with zero weights is skipped
+(``cost``). The realistic actuators' state and the ocean rows are always passed; their per-row
+flags decide at run time (compiling them out bought little speed for a minute of compiling per
+combination, docs/performance.md).
 """
 
 from __future__ import annotations
@@ -22,8 +24,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import types
-from numba.extending import overload
+from numba import njit
 
 from auv_gym.ocean.forcing import OCEAN, ocean_velocity
 from auv_gym.sim.integrator import REALISTIC_ACTUATOR, RECORD
@@ -52,8 +53,8 @@ class Fleet(NamedTuple):
     step_index: np.ndarray  # int64 physics steps since the reset
     roll: np.ndarray | None  # 6-DOF plant: (φ [rad], p [rad/s]) (`plants.ROLL`)
     hull: np.ndarray | None  # 6-DOF plant: hull rows (`SixDofVehicle.kernel_vector`)
-    actuators: np.ndarray | None  # realistic actuators: `actuators.ACTUATOR_STATE` rows
-    ocean: np.ndarray | None  # waves or profiled current: `ocean.ocean_row` rows
+    actuators: np.ndarray  # realistic actuators: `actuators.ACTUATOR_STATE` rows (else zero)
+    ocean: np.ndarray  # waves or profiled current: `ocean.ocean_row` rows (else inactive)
 
 
 class EpisodeTable(NamedTuple):
@@ -81,113 +82,42 @@ class StepOutputs(NamedTuple):
     cost: np.ndarray | None  # safety cost c ≥ 0 (`safety_cost`)
 
 
-def _is_none(array_type) -> bool:
-    return isinstance(array_type, types.NoneType)
-
-
-def _ocean_off(ocean, i):
-    return False
-
-
-def _ocean_flag(ocean, i):
+@njit(cache=True, inline="always")
+def ocean_active(ocean, i):
+    """Whether vehicle i's ocean row (`ocean.ocean_row`) adds waves or a profiled current."""
     return ocean[i, OCEAN.active] != 0.0
 
 
-def ocean_active(ocean, i):
-    """Whether vehicle i's ocean row (`ocean.ocean_row`) adds waves or a profiled current; False
-    for an ``ocean`` of None, when no vehicle of the configuration has them."""
-    return ocean is not None and ocean[i, OCEAN.active] != 0.0
-
-
-@overload(ocean_active, inline="always")
-def _ocean_active(ocean, i):
-    return _ocean_off if _is_none(ocean) else _ocean_flag
-
-
-def _still_water(ocean, i, reset, st, t, record):
-    return False, 0.0, 0.0, 0.0
-
-
-def _ocean_velocity(ocean, i, reset, st, t, record):
+@njit(cache=True, inline="always")
+def ocean_over_ground(ocean, i, reset, st, t, record):
+    """(active, v_x, v_y, v_z): whether vehicle i's ocean row adds to the current, and the
+    earth-frame velocity [m/s] it adds at the state ``st`` at time t [s] (at a reset) or in the
+    period's last physics step (its ``record`` row, `integrator.RECORD`)."""
     if ocean[i, OCEAN.active] == 0.0:
         return False, 0.0, 0.0, 0.0
-    if reset:  # evaluated at the start; later the physics' last step's (`integrator.RECORD`)
+    if reset:
         ox, oy, oz = ocean_velocity(ocean[i], st[STATE.x], st[STATE.y], st[STATE.z], t)
         return True, ox, oy, oz
     return True, record[i, RECORD.ocean_x], record[i, RECORD.ocean_y], record[i, RECORD.ocean_z]
 
 
-def ocean_over_ground(ocean, i, reset, st, t, record):
-    """(active, v_x, v_y, v_z): whether vehicle i's ocean row adds to the current, and the
-    earth-frame velocity [m/s] it adds at the state ``st`` at time t [s] (at a reset) or in the
-    period's last physics step (its ``record`` row); inactive for an ``ocean`` of None."""
-    return (_still_water if ocean is None else _ocean_velocity)(ocean, i, reset, st, t, record)
-
-
-@overload(ocean_over_ground, inline="always")
-def _ocean_over_ground(ocean, i, reset, st, t, record):
-    return _still_water if _is_none(ocean) else _ocean_velocity
-
-
-# The hooks take the whole (n, ·) array and the vehicle's index, never a row view: a row view
-# returned by an inlined overload from a named tuple's member came back as a copy (numba 0.68),
-# and the realistic actuators' state then never moved.
-def _never_realistic(actuators, actuator):
-    return False
-
-
-def _realistic_code(actuators, actuator):
+@njit(cache=True, inline="always")
+def realistic_actuators(actuator):
+    """Whether a vehicle flies the realistic actuators this episode (its config's code)."""
     return int(actuator) == REALISTIC_ACTUATOR
 
 
-def realistic_actuators(actuators, actuator):
-    """Whether a vehicle flies the realistic actuators this episode (its config's ``actuator``
-    code); False for ``actuators`` None, when no vehicle has them."""
-    return actuators is not None and int(actuator) == REALISTIC_ACTUATOR
-
-
-@overload(realistic_actuators, inline="always")
-def _realistic_actuators(actuators, actuator):
-    return _never_realistic if _is_none(actuators) else _realistic_code
-
-
-def _stopped(actuators, i):
-    return 0.0, 0.0, 0.0
-
-
-def _actuator_values(actuators, i):
+@njit(cache=True, inline="always")
+def actuator_state(actuators, i):
+    """(shaft speed [rpm], δ_s, δ_r [rad]) of vehicle i's actuators (`ACTUATOR_STATE`)."""
     state = ACTUATOR_STATE
     return actuators[i, state.n_rpm], actuators[i, state.delta_s], actuators[i, state.delta_r]
 
 
-def actuator_state(actuators, i):
-    """(shaft speed [rpm], δ_s, δ_r [rad]) of vehicle i's actuators; the stopped propeller and
-    centred fins for None, when no vehicle has the realistic actuators."""
-    return _stopped(actuators, i) if actuators is None else _actuator_values(actuators, i)
-
-
-@overload(actuator_state, inline="always")
-def _actuator_state(actuators, i):
-    return _stopped if _is_none(actuators) else _actuator_values
-
-
-def _keep_nothing(actuators, i, shaft, d_s, d_r, rate_limited):
-    return None
-
-
-def _store_actuators(actuators, i, shaft, d_s, d_r, rate_limited):
+@njit(cache=True, inline="always")
+def store_actuator_state(actuators, i, shaft, d_s, d_r, rate_limited):
+    """Write vehicle i's actuator state and the period's rate-limited fraction."""
     actuators[i, ACTUATOR_STATE.n_rpm] = shaft
     actuators[i, ACTUATOR_STATE.delta_s] = d_s
     actuators[i, ACTUATOR_STATE.delta_r] = d_r
     actuators[i, ACTUATOR_STATE.rate_limited] = rate_limited
-
-
-def store_actuator_state(actuators, i, shaft, d_s, d_r, rate_limited):
-    """Write vehicle i's actuator state and the period's rate-limited fraction, if it has one."""
-    store = _keep_nothing if actuators is None else _store_actuators
-    store(actuators, i, shaft, d_s, d_r, rate_limited)
-
-
-@overload(store_actuator_state, inline="always")
-def _store_actuator_state(actuators, i, shaft, d_s, d_r, rate_limited):
-    return _keep_nothing if _is_none(actuators) else _store_actuators

@@ -10,8 +10,7 @@ reference-count updates).
 
 from __future__ import annotations
 
-from numba import njit, types
-from numba.extending import overload
+from numba import njit
 
 from auv_gym.ocean.disturbances import N_CHANNELS, white_noise
 from auv_gym.ocean.forcing import ocean_forcing, refresh_waves
@@ -170,17 +169,16 @@ def actuation(a_X, a_M, a_N, cfg, fin_gain, u):
     return X, a_M * authority, a_N * authority
 
 
-def _uniform_forcing(
+@njit(cache=True, inline="always")
+def physics_step_forcing(
     cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
 ):
-    f = white_noise(noise_amplitude, noise_key, n, hold_steps)
-    current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
-    return f, current, wave, added
-
-
-def _ocean_forcing(
-    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
-):
+    """The white noise f and the earth-fixed current [m/s] of physics step n (the k-th of the
+    period) at ``pose`` (x, y, z [m], θ, ψ [rad]), held across its RK4 stages: the uniform
+    current plus its Gauss–Markov deviation ``dc``, and with an active ocean row (row i of
+    ``ocean``) its waves and profile (t at mid-step). Returns (f, current, wave, added):
+    ``added`` [m/s] is the ocean's part of the current, the last one kept when there is no
+    ocean."""
     f = white_noise(noise_amplitude, noise_key, n, hold_steps)
     current = (cfg.current_x + dc[0], cfg.current_y + dc[1], cfg.current_z + dc[2])
     if ocean_on:
@@ -190,42 +188,6 @@ def _ocean_forcing(
         current, f = ocean_forcing(row, pose, (n + 0.5) * cfg.physics_dt, wave, current, f, p)
         added = (current[0] - uniform[0], current[1] - uniform[1], current[2] - uniform[2])
     return f, current, wave, added
-
-
-def physics_step_forcing(
-    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
-):
-    """The white noise f and the earth-fixed current [m/s] of physics step n (the k-th of the
-    period) at ``pose`` (x, y, z [m], θ, ψ [rad]), held across its RK4 stages: the uniform
-    current plus its Gauss–Markov deviation ``dc``, and with an active ocean row (row i of
-    ``ocean``) its waves and profile (t at mid-step). Returns (f, current, wave, added):
-    ``added`` [m/s] is the ocean's part of the current, the last one kept when there is no
-    ocean. Compiled, an ``ocean`` of None (no vehicle has an ocean) leaves the ocean's code out
-    of the kernel."""
-    forcing = _uniform_forcing if ocean is None else _ocean_forcing
-    return forcing(
-        cfg,
-        p,
-        noise_amplitude,
-        noise_key,
-        hold_steps,
-        dc,
-        ocean_on,
-        ocean,
-        i,
-        pose,
-        n,
-        k,
-        wave,
-        added,
-    )
-
-
-@overload(physics_step_forcing, inline="always")
-def _physics_step_forcing(
-    cfg, p, noise_amplitude, noise_key, hold_steps, dc, ocean_on, ocean, i, pose, n, k, wave, added
-):
-    return _uniform_forcing if isinstance(ocean, types.NoneType) else _ocean_forcing
 
 
 @njit(cache=True, inline="always")

@@ -66,7 +66,7 @@ def advance_period(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
     """
     cfg = config_record(cfg_array)
     p = params_record(fleet.params[i])
-    hull, act, ocean = fleet.hull, fleet.actuators, fleet.ocean  # None where off
+    hull, act, ocean = fleet.hull, fleet.actuators, fleet.ocean  # hull: None on the 5-DOF
     n_sub, hold_steps = int(cfg.n_sub), int(cfg.hold_steps)
     noise_amplitude = (cfg.noise_f_u, cfg.noise_f_v, cfg.noise_f_w, cfg.noise_f_q, cfg.noise_f_r)
     noise_key, current_key = fleet.keys[i, KEY.noise], fleet.keys[i, KEY.current]
@@ -82,7 +82,7 @@ def advance_period(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
     wave = NO_WAVE
     # Realistic actuators (docs/model.md §2.6): their state moves first in each physics step,
     # then its τ is held over the RK4 step.
-    realistic = realistic_actuators(act, cfg.actuator)
+    realistic = realistic_actuators(cfg.actuator)
     a = actuator_config(cfg_array, CONFIG_DIM) if realistic else DEFAULT_ACTUATOR_CONFIG
     shaft, d_s, d_r = actuator_state(act, i)
     rate_limited = 0

@@ -257,12 +257,12 @@ class Simulator:
             if config.sensors.ideal
             else Navigation(config.sensors, config.control_dt, self.n, config.u_desired)
         )
-        # The kernels' records (`fleet`): an option the configuration leaves off is None, so the
-        # kernel compiled for it has none of its code. The 6-DOF plant always carries the
-        # actuator and ocean rows (their flags decide at run time): its period compiles for
-        # minutes, once instead of once per combination, and costs the same with them.
-        ocean = config.waves is not None or config.current_profile is not None or self.six_dof
-        actuators = self._command_box or self.six_dof
+        # The kernels' records (`fleet`). A kernel is compiled per combination of None and array
+        # in them. The plant is chosen that way (each kernel has one plant's code), and a safety
+        # cost with zero weights; the actuator state and the ocean rows are always passed and
+        # their flags decide at run time: compiling them out bought 1-3 % of the paper
+        # configuration's speed and cost a minute of compiling per combination on 2 cores
+        # (docs/performance.md).
         self.fleet = Fleet(
             state=self.state,
             current=self.current,
@@ -271,8 +271,8 @@ class Simulator:
             step_index=self.step_index,
             roll=self.roll if self.six_dof else None,
             hull=self.hull if self.six_dof else None,
-            actuators=self.actuator_state if actuators else None,
-            ocean=self.ocean if ocean else None,
+            actuators=self.actuator_state,
+            ocean=self.ocean,
         )
         self.episodes = EpisodeTable(
             self._row, self._kind, self._pdata, self._cfg, self._task, *self._paper_bounds
