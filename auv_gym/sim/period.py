@@ -44,14 +44,15 @@ from auv_gym.sim.plants import (
 from auv_gym.vehicle.actuators import DEFAULT_ACTUATOR_CONFIG, actuator_config, actuator_step
 from auv_gym.vehicle.params import params_record
 
-__all__ = ["advance_period"]
+__all__ = ["advance_period", "period_body"]
 
 
-# Not inlined: each step kernel calls it, so its large body is compiled once per plant and set
-# of options, not into every kernel (the threaded kernel's compilation grows steeply with the
-# size of its loop body).
-@njit(cache=True)
-def advance_period(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
+# Two entry points to one body: the serial step kernel inlines it (`period_body`: the call and its
+# records passed by value cost the paper configuration several % of its speed), the threaded one
+# calls it (`advance_period`: its compilation grows steeply with the size of its loop body, and
+# inlined writes into the records' arrays were lost in a prange loop).
+@njit(cache=True, inline="always")
+def period_body(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
     """Advance vehicle i of the `fleet.Fleet` by one control period, in place; returns False on a
     non-finite state.
 
@@ -149,3 +150,9 @@ def advance_period(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
         added,
     )
     return True
+
+
+@njit(cache=True)
+def advance_period(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
+    """`period_body` as a called function (the threaded step kernel's)."""
+    return period_body(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out)

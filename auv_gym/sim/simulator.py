@@ -31,7 +31,7 @@ from auv_gym.sim.observation import (
     vehicle_speed_bound,
 )
 from auv_gym.sim.path_depths import episode_surface_z
-from auv_gym.sim.period import advance_period
+from auv_gym.sim.period import advance_period, period_body
 from auv_gym.sim.plants import ROLL_DIM
 from auv_gym.sim.preview import extend_rows
 from auv_gym.sim.randomization import EpisodeTask, draw_task
@@ -71,6 +71,26 @@ def _score_cost_kernel(cost, i, st, task):
     return _no_cost if isinstance(cost, types.NoneType) else _score_cost
 
 
+@njit(cache=True, inline="always")
+def _saturated_action(actions, i):
+    """Vehicle i's action, saturated in place: the documented |a_j| <= 1."""
+    a = actions[i]
+    for j in range(3):
+        a[j] = min(max(a[j], -1.0), 1.0)
+    return a
+
+
+@njit(cache=True, inline="always")
+def _score_row(i, fleet, a, table, out, r, cfg):
+    """After vehicle i's period: its step count, reward, end code and safety cost."""
+    fleet.step_index[i] += int(config_record(cfg).n_sub)
+    st, task = fleet.state[i], table.tasks[r]
+    out.reward[i], out.code[i] = task_row(
+        st, out.guid[i], out.obs[i], a, table.obs_low, table.obs_high, task, out.terms[i]
+    )
+    score_cost(out.cost, i, st, task)
+
+
 # Called, not inlined: inlined into a prange loop, its writes into arrays that are members of
 # the records were lost (numba 0.68 parfors; tests/test_simulation_core.py checks the threaded
 # kernel against the serial one).
@@ -78,18 +98,11 @@ def _score_cost_kernel(cost, i, st, task):
 def _step_row(i, fleet, actions, table, out):
     """Advance vehicle i one control step with its saturated action, then score it. Its path,
     config and task are row ``table.row[i]`` of the episode table (`Simulator`)."""
-    a = actions[i]
-    for j in range(3):  # documented actuator saturation: |a_j| <= 1
-        a[j] = min(max(a[j], -1.0), 1.0)
+    a = _saturated_action(actions, i)
     r = table.row[i]
     cfg = table.cfgs[r]
     advance_period(fleet, i, a[0], a[1], a[2], table.kinds[r], table.pdata[r], cfg, out)
-    fleet.step_index[i] += int(config_record(cfg).n_sub)
-    st, task = fleet.state[i], table.tasks[r]
-    out.reward[i], out.code[i] = task_row(
-        st, out.guid[i], out.obs[i], a, table.obs_low, table.obs_high, task, out.terms[i]
-    )
-    score_cost(out.cost, i, st, task)
+    _score_row(i, fleet, a, table, out, r, cfg)
 
 
 @njit(cache=True, inline="always")
@@ -112,8 +125,12 @@ def _first_non_finite_row(actions):
 def _step_one(fleet, actions, table, out):
     bad = _first_non_finite_row(actions)
     if bad < 0:
-        for i in range(actions.shape[0]):
-            _step_row(i, fleet, actions, table, out)
+        for i in range(actions.shape[0]):  # `_step_row`, inlined
+            a = _saturated_action(actions, i)
+            r = table.row[i]
+            cfg = table.cfgs[r]
+            period_body(fleet, i, a[0], a[1], a[2], table.kinds[r], table.pdata[r], cfg, out)
+            _score_row(i, fleet, a, table, out, r, cfg)
     return bad
 
 
