@@ -216,7 +216,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         REFERENCES, first["episode_seeds"], first["duration_s"], first["transient_s"]
     )
     record = {
-        "runs": [str(r) for r in runs],
+        "runs": [r.name for r in runs],  # no machine paths in committed results
         "scenario": "paper helix under the RL task's surge limit (AUVPath3DPreview-v0)",
         "episode_seeds": first["episode_seeds"],
         "duration_s": first["duration_s"],
