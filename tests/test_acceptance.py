@@ -68,7 +68,10 @@ def test_check4_convergence_to_the_helix(dt):
     assert np.abs(window(tr, "x_e", 50.0)).max() < 0.2
 
 
-@pytest.mark.parametrize("dt", PERIODS)
+# The 0.05-s period is the slow one (about 2 min on 2 cores): the integration tier's.
+@pytest.mark.parametrize(
+    "dt", [pytest.param(PERIODS[0], marks=pytest.mark.integration), *PERIODS[1:]]
+)
 def test_check6_robust_to_white_noise_and_better_than_backstepping(dt):
     fbsm = run("fbsm", dt, NOISE_SEEDS, disturbance="paper")
     bs = run("backstepping", dt, NOISE_SEEDS, disturbance="paper")

@@ -24,7 +24,19 @@ def test_every_readme_has_examples() -> None:
     assert {doc for doc, _, _ in _examples()} == set(DOCS)
 
 
-@pytest.mark.parametrize(("doc", "index", "code"), _examples(), ids=lambda v: str(v)[:30])
+# The agents README's example flies the generalist for 2 × 200 s (about 2 min on 2 cores): the
+# integration tier's.
+SLOW_DOCS = ("benchmarks/agents/README.md",)
+
+
+def _marked(example: tuple[str, int, str]):
+    marks = [pytest.mark.integration] if example[0] in SLOW_DOCS else []
+    return pytest.param(*example, marks=marks)
+
+
+@pytest.mark.parametrize(
+    ("doc", "index", "code"), [_marked(e) for e in _examples()], ids=lambda v: str(v)[:30]
+)
 def test_readme_example_runs(doc: str, index: int, code: str, monkeypatch, capsys) -> None:
     monkeypatch.chdir(ROOT)  # the examples name files relative to the project root
     namespace: dict = {}
