@@ -12,7 +12,9 @@ def make_sim():
     """A seeded `Simulator` of n vehicles for the given env keyword arguments."""
 
     def _make(n: int = 1, seed: int = 0, **kwargs) -> Simulator:
-        sim = Simulator(SimConfig.from_kwargs(**kwargs), n)
+        # The serial kernel at any n (the set-up compiles it; the threaded one is checked
+        # against it in tests/test_simulation_core.py, integration tier).
+        sim = Simulator(SimConfig.from_kwargs(**kwargs), n, parallel=False)
         for i in range(n):
             sim.reset_row(i, np.random.default_rng(seed + i))
         return sim

@@ -27,16 +27,13 @@ from auv_gym.envs.info import add_vector_infos, track_point
 from auv_gym.envs.rendering import EpisodeRenderer
 from auv_gym.envs.vector_reset import parse_autoreset_mode, reset_mask, seed_list
 from auv_gym.sim.config import SimConfig
-from auv_gym.sim.simulator import Simulator
+from auv_gym.sim.simulator import PARALLEL_MIN_VEHICLES, Simulator
 from auv_gym.sim.task import NON_FINITE
 from auv_gym.support.validation import integer
 
 __all__ = ["PARALLEL_MIN_VEHICLES", "AUVPath3DVectorEnv", "parse_autoreset_mode"]
 
 _ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
-# Below this many vehicles the kernel runs on one thread unless told otherwise: a step costs
-# < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower.
-PARALLEL_MIN_VEHICLES = 256
 MAX_VEHICLES = 2**24  # about 60 GB of state: a bound that names the argument before numpy fails
 
 

@@ -49,7 +49,12 @@ from auv_gym.vehicle.actuators import ACTUATOR_STATE_DIM, check_commands
 from auv_gym.vehicle.dynamics import STATE, STATE_DIM
 from auv_gym.vehicle.params import N_PARAMS
 
-__all__ = ["Simulator"]
+__all__ = ["PARALLEL_MIN_VEHICLES", "Simulator"]
+
+# Below this many vehicles the kernel runs on one thread unless told otherwise: a step costs
+# < 1 ms there, and on a loaded 2-core machine the threads' barrier made it 5-50x slower (and
+# the serial kernel is the one the set-up compiles; the threaded one compiles on first use).
+PARALLEL_MIN_VEHICLES = 256
 
 
 def _no_cost(cost, i, st, task):
@@ -198,7 +203,8 @@ class Simulator:
     (`SimConfig.randomized`, `randomization.draw_task`). The path table is padded to the
     longest path vector; `paths` holds each vehicle's current `Path`.
 
-    ``parallel`` picks the threaded kernel (default: when n > 1) or the serial one; both give
+    ``parallel`` picks the threaded kernel (default: from `PARALLEL_MIN_VEHICLES` vehicles) or
+    the serial one; both give
     identical results. The serial kernel never starts numba's OpenMP pool, whose spinning
     threads compete with torch in the same process (README, Performance).
     """
@@ -223,7 +229,8 @@ class Simulator:
             self._pdata[:] = config.path.data
             self._kind[:] = config.path.kind
         self._nominal = config.params.to_vector()
-        self._kernel = _step_all if (n > 1 if parallel is None else parallel) else _step_one
+        threaded = n >= PARALLEL_MIN_VEHICLES if parallel is None else parallel
+        self._kernel = _step_all if threaded else _step_one
         self.state = np.zeros((n, STATE_DIM))
         self.current = np.zeros((n, 3))
         # Realistic actuators' shaft speed, fin angles and rate-limited fraction (zero otherwise).
