@@ -93,6 +93,8 @@ BIASES = {
 }
 
 
+# Compiles the threaded kernel with the sensor model (about 2.5 min on 2 cores).
+@pytest.mark.integration
 def test_turn_on_biases_are_constant_per_episode_with_the_configured_spread():
     """One episode's bias is a constant draw (the error never changes while the vehicle runs);
     over 3000 episodes their standard deviation is the configured one within 5 %; likewise the

@@ -385,6 +385,8 @@ def test_gymnasium_vector_wrappers_see_the_same_episodes():
     assert list(native.length_queue) == list(ref.length_queue)
 
 
+# Compiles the threaded kernel (about 1.5 min on 2 cores).
+@pytest.mark.integration
 def test_thread_count_changes_nothing_but_speed():
     import numba
 
