@@ -207,9 +207,12 @@ def test_position_fixes_reset_dead_reckoning_at_their_interval():
     assert np.abs(estimates[..., :2] - states[..., :2]).max() < 2e-3
 
 
-def test_batched_equals_single_and_snapshots_resume_exactly():
+# Two threads compile the threaded kernel with the sensor model (about 2.5 min on 2 cores): the
+# integration tier's; the serial kernel is the set-up's.
+@pytest.mark.parametrize("threads", [1, pytest.param(2, marks=pytest.mark.integration)])
+def test_batched_equals_single_and_snapshots_resume_exactly(threads):
     actions = np.random.default_rng(1).uniform(-0.6, 0.6, size=(120, 3, 3))
-    vec = AUVPath3DVectorEnv(3, sensors="typical", threads=2)
+    vec = AUVPath3DVectorEnv(3, sensors="typical", threads=threads)
     obs = [vec.reset(seed=7)[0]]
     for a in actions[:60]:
         obs.append(vec.step(a)[0])

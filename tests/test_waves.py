@@ -269,6 +269,7 @@ def test_every_valid_sea_carries_its_energy_in_its_band(
     assert math.hypot(*v[:3]) <= np.sum(c[:, COMPONENT.a_omega]) * (1 + 1e-12)
 
 
+@pytest.mark.integration  # compiles the threaded kernel with waves (about 70 s on 2 cores)
 def test_threaded_kernel_equals_the_serial_one_with_waves():
     config = SimConfig.from_kwargs(
         waves={"sea_state": 5, "components": 6},

@@ -18,7 +18,8 @@ A kernel's cache lives in the ``__pycache__`` of the folder that defines it, as 
 if that is not writable (a read-only install), in ``NUMBA_CACHE_DIR`` or numba's per-user cache
 directory; if none of those is writable either, in a private temporary directory per package
 removed at exit, with a `NumbaCacheWarning`: the kernels then compile in every new process
-(20–60 s) but nothing fails. ``NUMBA_CACHE_DIR``, when set, is used first, as numba does.
+(up to about 2 min on 2 cores) but nothing fails. ``NUMBA_CACHE_DIR``, when set, is used first,
+as numba does.
 """
 
 from __future__ import annotations
@@ -172,8 +173,8 @@ def _marker(package_dir: str | Path) -> Path | None:
 
 def kernels_are_cached(*package_dirs: str | Path) -> bool:
     """True if a command already ran to its end with these packages' current sources, so their
-    kernels load from the cache instead of compiling (20–60 s); a hint for a progress message,
-    not a guarantee (a command may use kernels an earlier one did not)."""
+    kernels load from the cache instead of compiling (up to about 2 min on 2 cores); a hint for a
+    progress message, not a guarantee (a command may use kernels an earlier one did not)."""
     markers = [_marker(p) for p in package_dirs]
     return all(m is not None and m.is_file() for m in markers)
 

@@ -1,0 +1,180 @@
+"""A multi-seed policy on the whole test suite, seed by seed: does every seed beat the classics?
+
+    python -m benchmarks.analysis.suite_seeds --suite benchmarks/results/reference_suite \\
+        --policy ppo_generalist --out benchmarks/results/seeds/ppo_generalist_suite
+
+Reads a test-suite evaluation (`benchmarks.runner.evaluate_suite`: OUT/episodes.csv and
+OUT/suite.json) in which ``--policy`` ran several training seeds (runs). Per run: the IQM of its
+scores over every set pooled (the suite's "aggregate": a failed episode scores its set's corridor,
+`benchmarks.analysis.suite_stats.episode_score`) with a 95 % stratified bootstrap interval over
+episodes, its failed episodes, and whether it beats each reference: a lower aggregate IQM and no
+failed episode. Then how many runs beat each reference, and the policy's aggregate over runs ×
+episodes. Written to --out: ``suite_seeds.json`` and ``suite_seeds.md``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from benchmarks.arguments import parse_options, program_name, usage_errors
+from benchmarks.options import option
+
+__all__ = ["failure_masks", "main", "seed_table"]
+
+SEEDS_FILE = "suite_seeds.json"
+
+
+@dataclass
+class SuiteSeedsOptions:
+    """The options of ``python -m benchmarks.analysis.suite_seeds``."""
+
+    suite: Path | None = option(None, "a test-suite evaluation folder", parse=Path)  # noqa: RUF009
+    policy: str = option("", "the multi-seed policy of that evaluation")
+    references: str = option("fbsm,fbsm_colos", "comma-separated classical policies to beat")
+    reps: int = option(2000, "bootstrap replicates")
+    out: Path | None = option(None, "folder for the tables", parse=Path)  # noqa: RUF009
+
+
+def seed_table(
+    scores: Mapping[str, np.ndarray],
+    groups: Sequence[str],
+    runs: Mapping[str, Sequence[int]],
+    failed: Mapping[str, np.ndarray],
+    policy: str,
+    references: Sequence[str],
+    reps: int = 2000,
+) -> dict[str, Any]:
+    """Per run of ``policy``: aggregate IQM [m] with its interval, failed episodes, references
+    beaten; the counts and the pooled aggregate (module doc). ``scores``/``failed``: (runs,
+    episodes) arrays per policy in the columns ``groups`` (`suite_stats.score_matrices`)."""
+    from benchmarks.analysis.stats import interval_estimates
+
+    missing = [name for name in (policy, *references) if name not in scores]
+    if missing:
+        raise ValueError(f"not in the evaluation: {missing}; policies: {sorted(scores)}")
+    labels = np.asarray(groups)
+
+    def aggregate(matrix: np.ndarray, key: str) -> list[float]:
+        interval = interval_estimates({key: matrix}, labels, reps=reps)["iqm"][key]
+        return [interval.value, interval.low, interval.high]
+
+    refs = {
+        name: {"iqm": aggregate(scores[name], name), "failed": int(failed[name].sum())}
+        for name in references
+    }
+    per_run = {}
+    for k, run in enumerate(runs[policy]):
+        iqm = aggregate(scores[policy][k : k + 1], f"{policy}|{run}")
+        n_failed = int(failed[policy][k].sum())
+        misses = sorted({groups[j] for j in np.flatnonzero(failed[policy][k])})
+        per_run[str(run)] = {
+            "iqm": iqm,
+            "failed": n_failed,
+            "failed_sets": misses,
+            "beats": {name: n_failed == 0 and iqm[0] < ref["iqm"][0] for name, ref in refs.items()},
+        }
+    return {
+        "policy": policy,
+        "references": refs,
+        "runs": per_run,
+        "beat_counts": {n: sum(r["beats"][n] for r in per_run.values()) for n in refs},
+        "failed_episodes": int(failed[policy].sum()),
+        "episodes": int(failed[policy].size),
+        "aggregate_iqm": aggregate(scores[policy], policy),
+    }
+
+
+def failure_masks(
+    rows: Sequence[Mapping[str, Any]], sets: Sequence[str], runs: Mapping[str, Sequence[int]]
+) -> dict[str, np.ndarray]:
+    """{policy: (runs, episodes) True where the episode failed}, in the columns and run order of
+    `suite_stats.score_matrices` (set order of ``sets``, then episode seed)."""
+    from auv_gym.sim.trajectory import FAILURE_REASONS
+
+    order = {name: k for k, name in enumerate(sets)}
+    cells: dict[str, dict[int, dict[tuple[int, int], bool]]] = {}
+    for row in rows:
+        key = (order[row["set"]], row["seed"])
+        failed = row["termination_reason"] in FAILURE_REASONS
+        cells.setdefault(row["policy"], {}).setdefault(row["run"], {})[key] = failed
+    return {
+        policy: np.array([[by_run[r][c] for c in sorted(by_run[r])] for r in runs[policy]])
+        for policy, by_run in cells.items()
+    }
+
+
+def write_markdown(record: Mapping[str, Any], path: Path) -> None:
+    """`suite_seeds.md`: the per-run table, the counts and the pooled aggregate."""
+    refs = list(record["references"])
+    n_runs = len(record["runs"])
+    head = " | ".join(f"beats {name}" for name in refs)
+    lines = [
+        f"`{record['policy']}` on the test suite ({record['episodes_per_run']} episodes per "
+        f"training seed; a failed episode scores its set's corridor). Aggregate IQM RMS distance "
+        "[m] over every set pooled, 95 % stratified bootstrap interval over episodes.",
+        "",
+        f"| seed | aggregate IQM [m] | failed | {head} |",
+        "|---|---|---:|" + "---|" * len(refs),
+    ]
+
+    def cell(v: Sequence[float]) -> str:
+        return f"{v[0]:.4f} [{v[1]:.4f}, {v[2]:.4f}]"
+
+    for run, entry in record["runs"].items():
+        beats = " | ".join("yes" if entry["beats"][name] else "no" for name in refs)
+        where = f" ({', '.join(entry['failed_sets'])})" if entry["failed_sets"] else ""
+        lines.append(f"| {run} | {cell(entry['iqm'])} | {entry['failed']}{where} | {beats} |")
+    lines += ["", "| policy | aggregate IQM [m] | failed |", "|---|---|---:|"]
+    lines.append(
+        f"| `{record['policy']}` ({n_runs} seeds) | {cell(record['aggregate_iqm'])} | "
+        f"{record['failed_episodes']}/{record['episodes']} |"
+    )
+    for name, ref in record["references"].items():
+        lines.append(f"| {name} | {cell(ref['iqm'])} | {ref['failed']} |")
+    counts = ", ".join(f"{name} {k} of {n_runs}" for name, k in record["beat_counts"].items())
+    lines += ["", f"Seeds that beat each reference (lower IQM, no failed episode): {counts}."]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
+    from auv_gym.support.files import write_json
+    from benchmarks.analysis.suite_stats import failure_scores, read_episodes, score_matrices
+
+    args, parser = parse_options(
+        SuiteSeedsOptions,
+        argv,
+        program_name("benchmarks.analysis.suite_seeds"),
+        __doc__.split("\n\n")[0],
+    )
+    with usage_errors(parser):
+        if args.suite is None or args.out is None or not args.policy:
+            raise ValueError("--suite, --policy and --out are required")
+        for name in ("episodes.csv", "suite.json"):
+            if not (args.suite / name).is_file():
+                raise ValueError(f"--suite {args.suite}: no {name} (run `auv-gym suite` first)")
+        references = [r for r in args.references.split(",") if r]
+        suite = json.loads((args.suite / "suite.json").read_text())
+        rows = read_episodes(args.suite / "episodes.csv")
+        scores, groups, runs = score_matrices(rows, list(suite["sets"]), failure_scores(suite))
+        failed = failure_masks(rows, list(suite["sets"]), runs)
+        record = seed_table(scores, groups, runs, failed, args.policy, references, args.reps)
+    record = {
+        "suite": args.suite.name,  # no machine paths in committed results
+        "episodes_per_run": len(groups),
+        **record,
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_json(args.out / SEEDS_FILE, record, indent=1)
+    write_markdown(record, args.out / "suite_seeds.md")
+    print((args.out / "suite_seeds.md").read_text())
+    return record
+
+
+if __name__ == "__main__":
+    main()
