@@ -12,14 +12,22 @@ TEXT_SUFFIXES = {".json", ".md", ".csv", ".yml", ".yaml", ".toml"}
 MACHINE_PATH = re.compile(r"(?<![\w.])/(?:work|home|Users|check|root|mnt|scratch)/[\w.-]+")
 
 
+def committed_text_files(folders: list[Path] | None = None) -> list[Path]:
+    """The text files (`TEXT_SUFFIXES`) under ``folders`` (default `COMMITTED`), sorted."""
+    return [
+        path
+        for folder in (COMMITTED if folders is None else folders)
+        for path in sorted(folder.rglob("*"))
+        if path.suffix in TEXT_SUFFIXES and path.is_file()
+    ]
+
+
 def test_no_committed_text_file_records_a_machine_path() -> None:
     found = []
-    for folder in COMMITTED:
-        for path in sorted(folder.rglob("*")):
-            if path.suffix in TEXT_SUFFIXES and path.is_file():
-                hit = MACHINE_PATH.search(path.read_text(encoding="utf-8", errors="replace"))
-                if hit:
-                    found.append(f"{path.relative_to(ROOT)}: {hit.group(0)}")
+    for path in committed_text_files():
+        hit = MACHINE_PATH.search(path.read_text(encoding="utf-8", errors="replace"))
+        if hit:
+            found.append(f"{path.relative_to(ROOT)}: {hit.group(0)}")
     assert found == []
 
 
