@@ -24,7 +24,13 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.arguments import ArgumentParser, program_name, usage_errors
-from benchmarks.catalog.policies import AGENT_PREFIX, REFERENCE_AGENTS, PolicySpec
+from benchmarks.catalog.policies import (
+    AGENT_PREFIX,
+    FORMER_AGENT_PREFIX,
+    REFERENCE_AGENTS,
+    REMOVED_POLICIES,
+    PolicySpec,
+)
 from benchmarks.cli import HelpFormatter
 from controllers.onnx_export import ACTUATORS
 
@@ -60,8 +66,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def agent_path(text: str) -> Path:
-    """The folder of a reference agent name, ``agent:PATH`` or a plain path."""
-    if text in REFERENCE_AGENTS or text.startswith(AGENT_PREFIX):
+    """The folder of a reference agent name, ``agent:PATH`` or a plain path. A name of an
+    earlier release (``ppo``, ``ppo:PATH``, an agent no longer shipped) is the one-line
+    ValueError compare gives, naming what to type (`PolicySpec.parse`)."""
+    former = text in REMOVED_POLICIES or text.startswith(FORMER_AGENT_PREFIX)
+    if former or text in REFERENCE_AGENTS or text.startswith(AGENT_PREFIX):
         path = PolicySpec.parse(text).agent
         assert path is not None
         return path
