@@ -7,9 +7,9 @@
     auv-gym demos --policy fbsm_colos --config …  --out runs/demos   # Minari dataset, rl extra
     auv-gym paper-figures --out out/paper
     auv-gym speed env|vector|controllers|render|training|off-policy|all [options]
-    auv-gym video --policy fbsm --scenario paper --out run.mp4   # needs the video extra
-    auv-gym record --policy fbsm --scenario paper --out run.mcap   # ROS 2 MCAP, mcap extra
-    auv-gym export ppo_generalist --out policy.onnx   # one ONNX graph (rl and onnx extras)
+    auv-gym video --policy fbsm --scenario paper --out out/run.mp4   # needs the video extra
+    auv-gym record --policy fbsm --scenario paper --out out/run.mcap   # ROS 2 MCAP, mcap extra
+    auv-gym export ppo_generalist --out out/policy.onnx   # one ONNX graph (rl and onnx extras)
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m <module>`` (e.g.
 ``python -m benchmarks.runner.compare``; the modules are listed in `COMMANDS` and `SPEED`) and shows

@@ -620,7 +620,7 @@ auv-gym compare  # Python, not shell
         (("auv-gym", "compare", "--scenarios", "papr", "--out", "out/x"), "no scenario ['papr']"),
         (("auv-gym", "compare", "--out", "x"), "it writes into the repository"),
         (("auv-gym", "compare", "--out", "benchmarks/results/x"), "it writes into the repository"),
-        (("auv-gym", "video", "--scenario", "paper"), "--out (its default) run.mp4"),
+        (("auv-gym", "record", "--scenario", "paper"), "--out (its default) run.mcap"),
         (("auv-gym", "compare", "--policies", "agent:runs/x", "--out", "out/x"), "neither a"),
         (("auv-gym", "train", "--config", "runs/missing.yml", "--out", "runs/x"), "missing.yml"),
         (("auv-gym", "train-seeds", "--seeds", "0", "--out", "runs/x"), "must be at least 1"),

@@ -61,7 +61,7 @@ def test_the_flags_of_before_stay() -> None:
         0,
         5,
         20,
-        "run.mp4",
+        "out/run.mp4",
         True,
     )
 

@@ -1,6 +1,6 @@
 """An episode as an MCAP file of ROS 2 messages, for Foxglove and ``ros2 bag`` (mcap extra).
 
-    auv-gym record --policy fbsm --scenario paper --seed 0 --duration 300 --out run.mcap
+    auv-gym record --policy fbsm --scenario paper --seed 0 --duration 300 --out out/run.mcap
 
 The policy (`benchmarks.catalog.policies` spec) flies one seeded episode of a scenario of
 `benchmarks/scenarios.toml` (`auv_gym.rollout.rollout`, as `auv-gym compare` runs it: the same

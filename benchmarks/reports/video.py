@@ -1,6 +1,6 @@
 """An episode's video: the 3-D track and the path-following errors over time (MP4, H.264).
 
-    auv-gym video --policy fbsm --scenario paper --out run.mp4 [--duration 300] [--every 5]
+    auv-gym video --policy fbsm --scenario paper --out out/run.mp4 [--duration 300] [--every 5]
 
 The policy (`benchmarks.catalog.policies` spec) runs one seeded episode of a scenario of
 `benchmarks/scenarios.toml` through `gym.make(..., render_mode="rgb_array")`; a frame
@@ -54,7 +54,7 @@ class VideoOptions:
     duration: float = option(300.0, "episode length [s]")
     every: int = option(5, "control steps between frames")
     fps: int = option(20, "frames per second of the video")
-    out: Path = option(Path("run.mp4"), "video file (.mp4)")  # noqa: RUF009
+    out: Path = option(Path("out/run.mp4"), "video file (.mp4); its folder is created")  # noqa: RUF009
     progress: bool = option(True, "no progress bar", flag="--quiet", invert=True)
 
 

@@ -1,8 +1,8 @@
 """`auv-gym export`: a saved agent as one ONNX graph and its contract (docs/usage.md, "Export").
 
-    auv-gym export ppo_generalist --out policy.onnx                 # the paper's actuator
-    auv-gym export ppo_generalist --actuator realistic --out p.onnx # propeller and fins
-    auv-gym export agent:runs/x/agent --out x.onnx
+    auv-gym export ppo_generalist --out out/policy.onnx             # the paper's actuator
+    auv-gym export ppo_generalist --actuator realistic --out out/p.onnx # propeller and fins
+    auv-gym export agent:runs/x/agent --out out/x.onnx
 
 Writes FILE.onnx and FILE.json (`controllers.onnx_export`), both or neither; the graph is run
 against the Python agent before anything is written, and the contract states everything the
