@@ -6,7 +6,7 @@
     auv-gym train-seeds --algo ppo --seeds 5 --out runs/x   # several seeds, selection
     auv-gym demos --policy fbsm_colos --config …  --out runs/demos   # Minari dataset, rl extra
     auv-gym paper-figures --out out/paper
-    auv-gym speed env|vector|controllers|render|training|off-policy|all [options]
+    auv-gym speed env|vector|controllers|render|resets|training|off-policy|all [options]
     auv-gym video --policy fbsm --scenario paper --out out/run.mp4   # needs the video extra
     auv-gym record --policy fbsm --scenario paper --out out/run.mcap   # ROS 2 MCAP, mcap extra
     auv-gym export ppo_generalist --out out/policy.onnx   # one ONNX graph (rl and onnx extras)
@@ -82,6 +82,7 @@ SPEED: dict[str, tuple[str, str]] = {
     "vector": ("benchmarks.speed.vector", "native vector env, peak memory, SB3 data collection"),
     "controllers": ("benchmarks.speed.controllers", "FBSM and backstepping predict cost"),
     "render": ("benchmarks.speed.render", "rgb_array frames per second, fast and full redraw"),
+    "resets": ("benchmarks.speed.resets", "env reset cost per path family and length"),
     "training": ("benchmarks.speed.training", "PPO training env steps/s, against a baseline ref"),
     "off-policy": ("benchmarks.speed.off_policy", "SAC, TQC and CrossQ gradient-step cost"),
     "onnx": ("benchmarks.speed.onnx", "ONNX export vs torch policy: latency per step, batch 1"),

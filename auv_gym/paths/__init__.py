@@ -5,6 +5,7 @@
 - `base`: the `Path` base class, the arguments' ranges and, per kernel kind (`KERNEL_KINDS`),
   its data check, turn-rate bounds and translation;
 - `kernels`: each kind's compiled evaluation `path_eval` (p, p′, p″) and p‴;
+- `cubic`: the cubic-spline coefficients a spline stores (a tridiagonal solve, linear in n);
 - `fit`: `fit_curve`, a user's curve p(s) as a clamped spline in the same s;
 - `bounds`: proven bounds on a spline's |p′| and turn rates;
 - `offset`: a path translated by a fixed offset (`shift_path`);

@@ -1,6 +1,8 @@
 """The kernel side of the paths: each kind's evaluation p(s), p'(s), p''(s) (`path_eval`, one
-numba function inlined into the step kernels) and the cubic-spline coefficients the SPLINE kind
-stores (docs/model.md §3.1, §3.5). `auv_gym.paths` builds and checks the (kind, data) pairs.
+numba function inlined into the step kernels) and the layout of the SPLINE kind's data
+(docs/model.md §3.1, §3.5). `auv_gym.paths` builds and checks the (kind, data) pairs; the
+cubic-spline coefficients that data stores come from `auv_gym.paths.cubic` (plain numpy, outside
+the kernels' sources; re-exported here).
 """
 
 from __future__ import annotations
@@ -9,6 +11,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from auv_gym.paths.cubic import clamped_cubic_coefficients, natural_cubic_coefficients
 
 __all__ = [
     "HELIX",
@@ -103,48 +107,3 @@ def path_third_derivative(kind, data, s):
 def spline_data(knots: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
     """The SPLINE kernel vector [n_seg, knots, coeffs (n_seg, 3, 4) flattened]."""
     return np.r_[float(len(knots) - 1), knots, coeffs.ravel()]
-
-
-def natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Per-segment cubic coefficients (a0..a3) of the natural spline, shape (n_seg, 3, 4)."""
-    n = len(knots)
-    h = np.diff(knots)
-    # Second derivatives m_i solve a tridiagonal system; natural ends m_0 = m_{n−1} = 0.
-    A = np.zeros((n, n))
-    rhs = np.zeros((n, 3))
-    A[0, 0] = A[-1, -1] = 1.0
-    i = np.arange(1, n - 1)  # element-wise the same operations as a loop over the rows
-    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
-    m = np.linalg.solve(A, rhs)
-    return _cubic_coefficients(knots, pts, m)
-
-
-def _cubic_coefficients(knots: np.ndarray, pts: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """(a0..a3) per segment, shape (n_seg, 3, 4), of the cubic spline with knot values ``pts``
-    and second derivatives ``m``."""
-    h = np.diff(knots)
-    a0 = pts[:-1]
-    a1 = (pts[1:] - pts[:-1]) / h[:, None] - h[:, None] * (2.0 * m[:-1] + m[1:]) / 6.0
-    a2 = m[:-1] / 2.0
-    a3 = (m[1:] - m[:-1]) / (6.0 * h[:, None])
-    return np.stack([a0, a1, a2, a3], axis=-1)
-
-
-def clamped_cubic_coefficients(
-    knots: np.ndarray, pts: np.ndarray, slope0: np.ndarray, slope1: np.ndarray
-) -> np.ndarray:
-    """Coefficients (n_seg, 3, 4) of the cubic spline with end slopes p'(s_0), p'(s_n) given:
-    fourth-order accurate up to the ends (a natural spline's p'' = 0 there is only second)."""
-    n = len(knots)
-    h = np.diff(knots)
-    A = np.zeros((n, n))
-    rhs = np.zeros((n, 3))
-    A[0, 0], A[0, 1] = 2.0 * h[0], h[0]
-    rhs[0] = 6.0 * ((pts[1] - pts[0]) / h[0] - slope0)
-    A[-1, -2], A[-1, -1] = h[-1], 2.0 * h[-1]
-    rhs[-1] = 6.0 * (slope1 - (pts[-1] - pts[-2]) / h[-1])
-    i = np.arange(1, n - 1)
-    A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1], 2.0 * (h[i - 1] + h[i]), h[i]
-    rhs[i] = 6.0 * ((pts[i + 1] - pts[i]) / h[i, None] - (pts[i] - pts[i - 1]) / h[i - 1, None])
-    return _cubic_coefficients(knots, pts, np.linalg.solve(A, rhs))

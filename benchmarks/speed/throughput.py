@@ -1,10 +1,10 @@
 """Speed of the simulator, the vector env, the controllers, rendering and PPO training; prints
 tables.
 
-    auv-gym speed all [--sections env,vector,controllers,render,training]
+    auv-gym speed all [--sections env,vector,controllers,render,resets,training]
     python -m benchmarks.speed.throughput [--sections …]
 
-Each section lives in its own module (env, vector, controllers, render,
+Each section lives in its own module (env, vector, controllers, render, resets,
 training: this tree against the default baseline ref; off-policy: SAC, TQC and CrossQ) and runs
 alone with `auv-gym speed <name>` or `python -m benchmarks.speed.<module>`.
 """
@@ -26,6 +26,7 @@ SECTIONS = {
     "vector": "benchmarks.speed.vector",
     "controllers": "benchmarks.speed.controllers",
     "render": "benchmarks.speed.render",
+    "resets": "benchmarks.speed.resets",
     "training": "benchmarks.speed.training",
     "off-policy": "benchmarks.speed.off_policy",
 }

@@ -22,9 +22,10 @@ def thread_limit(threads: int) -> Iterator[None]:
 
     One thread is the default: on a machine shared with other jobs, multi-threaded kernels
     stall at their barriers (docs/design.md §4). The BLAS limit matters at resets: a drawn
-    spline's coefficients come from `numpy.linalg.solve`, whose OpenBLAS threads spin on a busy
-    machine (a 161-waypoint spline: 20 ms on one thread, 136 ms on two beside five training
-    processes; the same bits either way).
+    spline of up to 128 waypoints takes its coefficients from `numpy.linalg.solve`, whose
+    OpenBLAS threads spin on a busy machine (a 161-waypoint spline: 20 ms on one thread, 136 ms
+    on two beside five training processes); longer ones from a BLAS-free solve
+    (`auv_gym.paths.cubic`).
     """
     import numba
     import torch
