@@ -66,9 +66,7 @@ DOCS = (
 HISTORY = {"docs/results.md": "## History"}
 # Wrong commands of docs the lead edits (docs/results.md, being remade with the reference agent):
 # expected to fail until fixed there; then this entry goes (strict: the test says so).
-KNOWN_WRONG = {
-    "docs/results.md:193": "train-seeds without its required --out (docs/results.md is the lead's)",
-}
+KNOWN_WRONG = {}
 # Where a documented command may write: the scratch folders of runs; and, for a command of
 # docs/results.md, the committed results it reproduces.
 OUTPUT_ROOTS = ("out/", "runs/")
@@ -643,9 +641,7 @@ COUNT = re.compile(rf"\b({'|'.join(NUMBERS)}|\d+)\s+(?:reference|shipped|trained
 AGENT_NAME = r"`(?:ppo|sac)_[a-z0-9_]+`"
 AGENT_LIST = re.compile(rf"{AGENT_NAME}(?:,?\s+(?:and\s+)?{AGENT_NAME})+")
 # Counts of docs the lead edits, wrong until then (as KNOWN_WRONG).
-KNOWN_WRONG_COUNTS = {
-    "docs/results.md:24": "'four reference agents' (docs/results.md is the lead's)",
-}
+KNOWN_WRONG_COUNTS = {}
 
 
 def _agent_statements() -> list:

@@ -69,26 +69,22 @@ def _argv(config: Path, out: Path, *extra: str) -> list[str]:
 def test_the_generalist_schedule_is_its_recipe():
     schedule = read_schedule(ROOT / "benchmarks" / "hyperparams" / "ppo_generalist.yml")
     assert schedule is not None and schedule.env_id == ENV_ID
-    assert [p.name for p in schedule.phases] == ["base", "along_track", "cross_track"]
-    base, along, cross = (schedule.phase_section(k) for k in range(3))
-    assert base["n_timesteps"] == 8e6 and base["learning_rate"] == "lin_3e-4"
+    assert [p.name for p in schedule.phases] == ["jump_start", "base", "precision"]
+    assert schedule.phases[0].changes["jump_start"] == {"expert": "fbsm_colos", "steps": 131072}
+    base, precision = schedule.phase_section(1), schedule.phase_section(2)
+    assert base["n_timesteps"] == 3e6 and base["learning_rate"] == "lin_3e-4"
     assert base["env_kwargs"]["observation"] == "preview_integral"
-    assert along["n_timesteps"] == cross["n_timesteps"] == 2e6
-    assert along["learning_rate"] == cross["learning_rate"] == "lin_1e-4"
-    assert along["obs_scales"] == {**base["obs_scales"], "x_e": 0.25, "x_e_integral": 0.5}
-    changed = {"y_e": 0.5, "z_e": 0.5, "y_e_integral": 1.0, "z_e_integral": 1.0}
-    assert cross["obs_scales"] == {**along["obs_scales"], **changed}
-    for section in (along, cross):  # nothing else changes between phases
-        assert {
-            k: v
-            for k, v in section.items()
-            if k not in ("n_timesteps", "learning_rate", "obs_scales")
-        } == {
-            k: v for k, v in base.items() if k not in ("n_timesteps", "learning_rate", "obs_scales")
-        }
+    assert precision["n_timesteps"] == 1e6 and precision["learning_rate"] == "lin_1e-4"
+    changed = {"x_e": 0.25, "x_e_integral": 0.5, "y_e": 0.5, "z_e": 0.5}
+    changed |= {"y_e_integral": 1.0, "z_e_integral": 1.0}
+    assert precision["obs_scales"] == {**base["obs_scales"], **changed}
+    fixed = ("n_timesteps", "learning_rate", "obs_scales")  # nothing else changes
+    assert {k: v for k, v in precision.items() if k not in fixed} == {
+        k: v for k, v in base.items() if k not in fixed
+    }
     assert [s["name"] for s in schedule.stages] == ["envelope_guard", "actuator_allocation"]
     assert schedule.options["task_set"] == "validation_paper_start"
-    assert schedule.options["eval_episodes"] == 64
+    assert schedule.options["eval_episodes"] == 16
 
 
 @pytest.mark.integration
@@ -115,10 +111,22 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
     from controllers.loader import load_policy
 
     assert [s.name for s in load_policy(agent).stages] == ["envelope_guard"]
-    # Resumed when everything is done: nothing trains again, the record is rewritten the same.
+    # Resumed when everything is done: nothing trains again, the record is rewritten the same;
+    # --results then writes every seed's agent, test evaluation and curves, as a one-phase run.
     before = {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")}
-    assert main(_argv(config, out, "--resume")) == 0
+    results = tmp_path / "results"
+    assert main(_argv(config, out, "--resume", "--results", str(results))) == 0
     assert {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")} == before
+    for seed in (0, 1):
+        assert (results / f"agent_seed_{seed}" / "model.zip").is_file()
+        stages = json.loads((results / f"agent_seed_{seed}" / "metadata.json").read_text())
+        assert [s["name"] for s in stages["stages"]] == ["envelope_guard"]
+        test = json.loads((results / f"seed_{seed}_test_evaluation.json").read_text())
+        assert len(test["results"]) == len(test["seeds"]) > 0
+        last = (results / f"seed_{seed}_learning_curve.csv").read_text()
+        assert last == (results / f"phase_2_fine_seed_{seed}_curve.csv").read_text()
+        assert (results / f"phase_1_base_seed_{seed}_curve.csv").is_file()
+    assert json.loads((results / "schedule.json").read_text())["selected_seed"] in (0, 1)
     assert (
         json.loads((out / "schedule.json").read_text())["selected_seed"] == record["selected_seed"]
     )

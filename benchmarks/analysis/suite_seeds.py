@@ -5,11 +5,12 @@
 
 Reads a test-suite evaluation (`benchmarks.runner.evaluate_suite`: OUT/episodes.csv and
 OUT/suite.json) in which ``--policy`` ran several training seeds (runs). Per run: the IQM of its
-scores over every set pooled (the suite's "aggregate": a failed episode scores its set's corridor,
-`benchmarks.analysis.suite_stats.episode_score`) with a 95 % stratified bootstrap interval over
-episodes, its failed episodes, and whether it beats each reference: a lower aggregate IQM and no
-failed episode. Then how many runs beat each reference, and the policy's aggregate over runs ×
-episodes. Written to --out: ``suite_seeds.json`` and ``suite_seeds.md``.
+scores over every set pooled, or over ``--sets`` (the suite's "aggregate": a failed episode
+scores its set's corridor, `benchmarks.analysis.suite_stats.episode_score`) with a 95 %
+stratified bootstrap interval over episodes, its failed episodes, and whether it beats each
+reference: a lower aggregate IQM and no failed episode. Then how many runs beat each
+reference, and the policy's aggregate over runs × episodes. Written to --out:
+``suite_seeds.json`` and ``suite_seeds.md``.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ class SuiteSeedsOptions:
     suite: Path | None = option(None, "a test-suite evaluation folder", parse=Path)  # noqa: RUF009
     policy: str = option("", "the multi-seed policy of that evaluation")
     references: str = option("fbsm,fbsm_colos", "comma-separated classical policies to beat")
+    sets: str = option("", "comma-separated sets to pool (default: every set evaluated)")
     reps: int = option(2000, "bootstrap replicates")
     out: Path | None = option(None, "folder for the tables", parse=Path)  # noqa: RUF009
 
@@ -117,7 +119,9 @@ def write_markdown(record: Mapping[str, Any], path: Path) -> None:
     lines = [
         f"`{record['policy']}` on the test suite ({record['episodes_per_run']} episodes per "
         f"training seed; a failed episode scores its set's corridor). Aggregate IQM RMS distance "
-        "[m] over every set pooled, 95 % stratified bootstrap interval over episodes.",
+        "[m] over the sets pooled, 95 % stratified bootstrap interval over episodes. Sets: "
+        + ", ".join(f"`{name}`" for name in record["sets"])
+        + ".",
         "",
         f"| seed | aggregate IQM [m] | failed | {head} |",
         "|---|---|---:|" + "---|" * len(refs),
@@ -161,11 +165,19 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         references = [r for r in args.references.split(",") if r]
         suite = json.loads((args.suite / "suite.json").read_text())
         rows = read_episodes(args.suite / "episodes.csv")
-        scores, groups, runs = score_matrices(rows, list(suite["sets"]), failure_scores(suite))
-        failed = failure_masks(rows, list(suite["sets"]), runs)
+        sets = [t for t in args.sets.split(",") if t] or list(suite["sets"])
+        unknown = sorted(set(sets) - set(suite["sets"]))
+        if unknown:
+            raise ValueError(
+                f"--sets: {unknown} not in the evaluation; sets: {list(suite['sets'])}"
+            )
+        rows = [row for row in rows if row["set"] in sets]
+        scores, groups, runs = score_matrices(rows, sets, failure_scores(suite))
+        failed = failure_masks(rows, sets, runs)
         record = seed_table(scores, groups, runs, failed, args.policy, references, args.reps)
     record = {
         "suite": args.suite.name,  # no machine paths in committed results
+        "sets": sets,
         "episodes_per_run": len(groups),
         **record,
     }

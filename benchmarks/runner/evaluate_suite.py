@@ -298,8 +298,23 @@ def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict
         **environment(),
     }
     write_text(args.out / EPISODES_FILE, episodes_csv(records))
-    write_json(args.out / SUITE_FILE, suite, indent=1)
+    write_json(args.out / SUITE_FILE, _portable(suite), indent=1)
     return records
+
+
+CHECKOUT = Path(__file__).resolve().parents[2]  # the project root: paths below it are relative
+
+
+def _portable(value: Any) -> Any:
+    """``value`` with every path inside the checkout written relative to it (a reference agent is
+    named by its absolute folder; a committed suite.json must hold no machine path)."""
+    if isinstance(value, str):
+        return value.replace(f"{CHECKOUT}/", "")
+    if isinstance(value, dict):
+        return {_portable(k): _portable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_portable(v) for v in value]
+    return value
 
 
 # What `benchmarks.analysis.suite_stats.write_stats` writes, with figures/.

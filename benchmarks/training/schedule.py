@@ -53,6 +53,8 @@ from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import HELD_OUT_FILE
 from benchmarks.training.jump_start import JUMP_START_KEY
+from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.seed_workers import seed_dir
 from benchmarks.training.seeds import (
     PLAN_FILE,
     SUMMARY_FILE,
@@ -342,11 +344,32 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
         _with_stages(Path(opts.export), schedule.stages)
         report = json.loads((Path(chosen["agent"]) / HELD_OUT_FILE).read_text())
         write_json(Path(opts.export) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
-    if opts.results:
-        for entry in last["seeds"]:
-            agent = Path(opts.results) / f"{SEED_AGENT_PREFIX}{entry['seed']}"
-            export_agent(Path(entry["agent"]), agent)
-            _with_stages(agent, schedule.stages)
     result = {"plan": plan, "phases": summaries, "selected_seed": last["selected_seed"]}
     write_json(out / SCHEDULE_FILE, result, indent=2, sort_keys=True)
+    if opts.results:
+        _write_results(Path(opts.results), schedule, out, last, result)
     return result
+
+
+def _write_results(
+    results: Path, schedule: Schedule, out: Path, last: dict[str, Any], record: dict[str, Any]
+) -> None:
+    """RESULTS, as a one-phase run's (`benchmarks.training.seeds`): per seed its agent with the
+    stages (``agent_seed_<s>/``, for `auv-gym suite`), its held-out test evaluation and its last
+    phase's learning curve (``seed_<s>_learning_curve.csv``), every phase's curve
+    (``phase_<k>_<name>_seed_<s>_curve.csv``); and schedule.json (all atomic)."""
+    for entry in last["seeds"]:
+        seed = entry["seed"]
+        agent = results / f"{SEED_AGENT_PREFIX}{seed}"
+        export_agent(Path(entry["agent"]), agent)
+        _with_stages(agent, schedule.stages)
+        report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
+        write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2, sort_keys=True)
+        for k in range(len(schedule.phases)):
+            curve = seed_dir(schedule.folder(out, k), seed) / EVAL_FILE
+            if curve.is_file():  # a jump-start phase keeps no learning curve
+                text = curve.read_text()
+                write_text(results / f"{schedule.folder(out, k).name}_seed_{seed}_curve.csv", text)
+                if k == len(schedule.phases) - 1:
+                    write_text(results / f"seed_{seed}_learning_curve.csv", text)
+    write_json(results / SCHEDULE_FILE, record, indent=2, sort_keys=True)
