@@ -523,10 +523,18 @@ def _provenance(files: AgentFiles) -> dict[str, Any]:
     return out
 
 
+# The repository's scratch folders (git-ignored): a training file there is the run's copy,
+# absent from every other checkout.
+SCRATCH_FOLDERS = ("runs", "out")
+
+
 def _repository_file(path: str) -> bool:
-    """``path`` is relative, stays inside the repository and names one of its files."""
+    """``path`` is relative, stays inside the repository, outside its scratch folders, and names
+    one of its files."""
     relative = Path(path)
     if relative.is_absolute() or ".." in relative.parts:
+        return False
+    if relative.parts and relative.parts[0] in SCRATCH_FOLDERS:
         return False
     return (_REPOSITORY / relative).is_file()
 
