@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job: set-up (once; re-runs skip what is current), then the reference policies on the
-# scenarios that tell them apart, 3 seeds x 150 s each (about 3 minutes on 2 cores):
+# scenarios that tell them apart, 3 seeds x 150 s each (about 1.5 min on 2 cores once compiled):
 #   classical: the paper's FBSM and backstepping, FBSM with current-observer LOS, PID + LOS;
 #   learned:   the PPO generalist, the residual PPO on FBSM + CO-LOS, the PPO and SAC helix
 #              specialists (benchmarks/agents/README.md);

@@ -31,7 +31,7 @@ POLICIES = ("fbsm", "backstepping", "pid_los")  # every classical kernel
 # The scenarios of the main job (scripts/main.sh): what the set-up compiles.
 MAIN_JOB_SCENARIOS = ("paper", "current", "fins", "waypoints", "storm", "realistic_actuators")
 # Measured on 2 cores (fresh cache, 2026-12-03): see docs/performance.md "Compiling".
-FIRST_RUN = {False: "about 2 minutes on 2 cores", True: "about 3 minutes on 2 cores"}
+FIRST_RUN = {False: "about 2 minutes on 2 cores", True: "about 2.5 minutes on 2 cores"}
 
 
 @dataclass
