@@ -7,7 +7,7 @@ episode of the test suite (`benchmarks/tasks.toml`) is flown twice:
 
 1. by the Python agent (`controllers.make("agent")`), with its ONNX export fed the same
    observations, episode starts and memory at every control step beside it: the largest
-   |ONNX − Python| over all commands (target ≤ 1e-5, issue: 100,000 observations or more);
+   |ONNX − Python| over all commands (target ≤ 1e-5 over 100,000 observations or more);
 2. by the ONNX export alone (`controllers.make("onnx")`), closed loop: each episode's RMS
    distance against the Python agent's, relative difference (target ≤ 0.1 % per episode).
 

@@ -7,7 +7,7 @@ grows with its number of waypoints.
 Resets: `gym.make("AUVPath3D-v0", path=...)`, each seed's reset timed ``--repeats`` times (the
 fastest kept), the median over ``--seeds`` seeds printed, wall clock and CPU time of the process
 (all its threads). Rows: the paper's helix, drawn lines and helices, drawn splines and lawnmowers
-of each ``--lengths`` [m] (the distribution's defaults otherwise), and the lawnmower of issue 54
+of each ``--lengths`` [m] (the distribution's defaults otherwise), and a lawnmower with wide turns
 (879 m with 135-m turn radii, where every natural spline ends inside a turn and misses the
 curvature limit: 20 natural builds, then the clamped one). "builds" counts the spline systems a
 draw solves. Target: a drawn path's reset costs time proportional to its length (the µs/m
@@ -32,8 +32,9 @@ from benchmarks.options import option
 
 LENGTHS = (400.0, 800.0, 1600.0)
 WAYPOINTS = (100, 200, 400, 800)
-# Issue 54, item 8: a drawn 879-m lawnmower with 135-m turn radii took 1.2 s of CPU per reset.
-ISSUE_LAWNMOWER = {"families": ["lawnmower"], "length": 879.0, "radius": [135.0, 135.0]}
+# A drawn 879-m lawnmower with 135-m turn radii: it once took 1.2 s of CPU per reset (a dense
+# solve of its spline system; docs/performance.md).
+WIDE_TURN_LAWNMOWER = {"families": ["lawnmower"], "length": 879.0, "radius": [135.0, 135.0]}
 
 
 def best_time(run: Callable[[], object], repeats: int) -> tuple[float, float]:
@@ -143,7 +144,7 @@ def main(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]:
     ]
     for family in ("spline", "lawnmower"):
         rows += [(f"drawn {family}", {"families": [family], "length": x}) for x in args.lengths]
-    rows.append(("lawnmower, issue 54", ISSUE_LAWNMOWER))
+    rows.append(("lawnmower, 135-m turns", WIDE_TURN_LAWNMOWER))
     resets = []
     print(
         f"\nenv reset, AUVPath3D-v0: median over {args.seeds} seeds of the best of {args.repeats}"
