@@ -185,3 +185,36 @@ def auv_gym_command():
         return done.returncode, "\n".join(lines).strip()
 
     return run
+
+
+def _save_tiny_paper_agent(folder):
+    """An untrained 16-16 PPO agent on the paper's own observation (`AUVPath3D-v0`, 15 values,
+    no previous action), saved as an agent folder: what no shipped agent observes any more."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from auv_gym.sim.observation import OBS_NAMES
+    from benchmarks.training.checkpoints import save_agent
+
+    kwargs = {"randomize_start": True, "max_time": 5.0}
+    venv = VecNormalize(make_vec_env("AUVPath3D-v0", n_envs=2, seed=0, env_kwargs=kwargs))
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=32,
+        batch_size=32,
+        n_epochs=1,
+        seed=0,
+        policy_kwargs={"net_arch": [16, 16]},
+        device="cpu",
+    )
+    model.learn(64)
+    save_agent(model, venv, folder, {"obs_names": list(OBS_NAMES), "seed": 0})
+    return folder
+
+
+@pytest.fixture
+def tiny_paper_agent(tmp_path):
+    """A saved untrained agent on the paper's 15-value observation (rl tests only)."""
+    return _save_tiny_paper_agent(tmp_path / "paper_agent")

@@ -45,15 +45,22 @@ def test_an_agent_folder_without_the_pickle_exports_without_it(tmp_path):
     assert not (tmp_path / "agent" / VECNORM_FILE).exists()
 
 
-def test_a_pickle_rebuilt_from_the_stats_normalises_like_the_loader():
+def test_a_pickle_rebuilt_from_the_stats_normalises_like_the_loader(tmp_path):
+    import shutil
+
     import gymnasium as gym
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_helix"
+    from benchmarks.training.checkpoints import write_vecnormalize_from_stats
+
+    shipped = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_generalist"
+    assert (shipped / VECNORM_FILE).is_file()  # every agent folder loads in SB3 and RL Zoo
+    agent = shutil.copytree(shipped, tmp_path / "agent")
+    (agent / VECNORM_FILE).unlink()
+    pickle = write_vecnormalize_from_stats(agent)
     stats = np.load(agent / STATS_FILE)
-    pickle = agent / VECNORM_FILE
-    assert pickle.is_file()  # shipped: every agent folder loads in SB3 and RL Zoo as it is
-    venv = VecNormalize.load(str(pickle), DummyVecEnv([lambda: gym.make("AUVPath3D-v0")]))
+    env = DummyVecEnv([lambda: gym.make("AUVPath3DPreview-v0", observation="preview_integral")])
+    venv = VecNormalize.load(str(pickle), env)
     obs = venv.venv.reset()
     expected = np.clip(
         (obs - stats["mean"]) / np.sqrt(stats["var"] + stats["epsilon"]),
@@ -69,7 +76,7 @@ def test_rebuilding_the_pickle_is_deterministic(tmp_path):
 
     from benchmarks.training.checkpoints import write_vecnormalize_from_stats
 
-    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_helix"
+    agent = Path(__file__).resolve().parents[1] / "benchmarks" / "agents" / "ppo_generalist"
     copy = tmp_path / "agent"
     shutil.copytree(agent, copy)
     (copy / VECNORM_FILE).unlink(missing_ok=True)

@@ -1,6 +1,6 @@
 """A saved agent's files are validated completely on load (issue 11, item 5).
 
-Each test damages one file of a copy of the shipped agent (benchmarks/agents/ppo_helix) and
+Each test damages one file of a copy of the shipped agent (benchmarks/agents/ppo_generalist) and
 expects an error naming that file and the problem, raised by `controllers.agent.check_agent`
 before torch is imported, and by `load_policy`, which calls it first. Was, e.g.: a
 vecnormalize.npz with NaN clip_obs or negative epsilon loaded, then failed deep in torch or
@@ -21,12 +21,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from auv_gym.sim.observation import OBS_DIM, OBS_NAMES
 from controllers.agent import check_agent
 
 ROOT = Path(__file__).resolve().parent.parent
-SHIPPED = ROOT / "benchmarks" / "agents" / "ppo_helix"
+SHIPPED = ROOT / "benchmarks" / "agents" / "ppo_generalist"
 STATS, MODEL, META = "vecnormalize.npz", "model.zip", "metadata.json"
+# The shipped agent's observation: the path preview and the error integrals (49 values).
+OBS_NAMES = json.loads((SHIPPED / META).read_text())["obs_names"]
+OBS_DIM = len(OBS_NAMES)
+FEWER, MORE = OBS_DIM - 1, OBS_DIM + 1
 
 
 def edit_stats(**changes: object) -> Callable[[Path], None]:
@@ -89,8 +92,8 @@ def flip_a_byte_of_policy(agent: Path) -> None:
     (agent / MODEL).write_bytes(bytes(raw))
 
 
-def shape_14(data: dict) -> dict:
-    return {**data, "observation_space": {**data["observation_space"], "_shape": [14]}}
+def shape_fewer(data: dict) -> dict:
+    return {**data, "observation_space": {**data["observation_space"], "_shape": [FEWER]}}
 
 
 nan, inf = float("nan"), float("inf")
@@ -107,16 +110,24 @@ DAMAGES = {
         STATS,
         r"statistics of shape \(2,\) for epsilon, expected \(\)",
     ),
-    "mean (14,)": (
-        edit_stats(mean=np.zeros(14)),
+    "mean (N - 1,)": (
+        edit_stats(mean=np.zeros(FEWER)),
         STATS,
-        r"statistics of shape \(14,\) for mean, expected \(15,\)",
+        rf"statistics of shape \({FEWER},\) for mean, expected \({OBS_DIM},\)",
     ),
-    "var (15, 1)": (edit_stats(var=np.ones((15, 1))), STATS, r"shape \(15, 1\) for var"),
-    "mean NaN": (edit_stats(mean=[nan] + [0.0] * 14), STATS, r"mean is not finite"),
-    "var inf": (edit_stats(var=[inf] + [1.0] * 14), STATS, r"var is not finite"),
-    "var < 0": (edit_stats(var=[-1.0] + [1.0] * 14), STATS, r"var must be >= 0"),
-    "mean text": (edit_stats(mean=np.array(["a"] * 15)), STATS, r"mean must hold real numbers"),
+    "var (N, 1)": (
+        edit_stats(var=np.ones((OBS_DIM, 1))),
+        STATS,
+        rf"shape \({OBS_DIM}, 1\) for var",
+    ),
+    "mean NaN": (edit_stats(mean=[nan] + [0.0] * FEWER), STATS, r"mean is not finite"),
+    "var inf": (edit_stats(var=[inf] + [1.0] * FEWER), STATS, r"var is not finite"),
+    "var < 0": (edit_stats(var=[-1.0] + [1.0] * FEWER), STATS, r"var must be >= 0"),
+    "mean text": (
+        edit_stats(mean=np.array(["a"] * OBS_DIM)),
+        STATS,
+        r"mean must hold real numbers",
+    ),
     "no epsilon": (edit_stats(epsilon=None), STATS, r"missing statistics \['epsilon'\]"),
     "no mean, var": (
         edit_stats(mean=None, var=None),
@@ -138,7 +149,7 @@ DAMAGES = {
     "model truncated": (
         write_bytes(MODEL, lambda b: b[: len(b) // 2]),
         MODEL,
-        r"damaged \(truncated, or not an SB3 model\): no \['data', 'policy.pth'\]",
+        r"not a valid zip file \(corrupt or truncated\)",  # the directory at its end is gone
     ),
     "model cut short": (
         write_bytes(MODEL, lambda b: b[:-30]),
@@ -149,10 +160,10 @@ DAMAGES = {
     "model bit flip": (flip_a_byte_of_policy, MODEL, r"policy\.pth"),
     "model no policy": (rezip(drop="policy.pth"), MODEL, r"no \['policy.pth'\]"),
     "model no data": (rezip(drop="data"), MODEL, r"no \['data'\]"),
-    "model obs (14,)": (
-        rezip(data=shape_14),
+    "model obs (N - 1,)": (
+        rezip(data=shape_fewer),
         MODEL,
-        r"observation space shape \(14,\), expected \(15,\)",
+        rf"observation space shape \({FEWER},\), expected \({OBS_DIM},\)",
     ),
     "meta garbage": (write_bytes(META, lambda b: b"{not json"), META, r"is unreadable"),
     "meta truncated": (write_bytes(META, lambda b: b[: len(b) // 2]), META, r"is unreadable"),
@@ -162,9 +173,9 @@ DAMAGES = {
         r"must be a JSON object, got a list",
     ),
     "meta obs size": (
-        edit_meta(observation_shape=[16]),
+        edit_meta(observation_shape=[MORE]),
         META,
-        r"observation_shape is \[16\], expected \[15\]",
+        rf"observation_shape is \[{MORE}\], expected \[{OBS_DIM}\]",
     ),
     "meta action size": (
         edit_meta(action_shape=[4]),

@@ -5,6 +5,7 @@ chooses the algorithm and its file."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -37,7 +38,12 @@ def test_training_and_loading_share_one_algorithm_table():
 
 def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
     assert check_agent(AGENTS / "sac_helix").algo == "sac"
-    assert check_agent(AGENTS / "ppo_helix").algo == "ppo"  # metadata without "algo": ppo
+    assert check_agent(AGENTS / "ppo_generalist").algo == "ppo"
+    older = shutil.copytree(AGENTS / "ppo_generalist", tmp_path / "older")
+    metadata = json.loads((older / "metadata.json").read_text())
+    del metadata["algo"]  # agents of the first releases recorded no algorithm: PPO's
+    (older / "metadata.json").write_text(json.dumps(metadata))
+    assert check_agent(older).algo == "ppo"
     agent = tmp_path / "sac"
     shutil.copytree(AGENTS / "sac_helix", agent)
     (agent / "model.zip").write_bytes(b"not a zip")
@@ -60,7 +66,7 @@ def test_make_needs_a_path_and_knows_the_names():
 
 
 def test_the_former_name_ppo_is_refused_in_one_line():
-    for kwargs in ({}, {"path": str(AGENTS / "ppo_helix")}):
+    for kwargs in ({}, {"path": str(AGENTS / "ppo_generalist")}):
         with pytest.raises(ValueError) as error:
             controllers.make("ppo", **kwargs)
         assert str(error.value) == (
@@ -76,8 +82,10 @@ def test_agent_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
     assert type(controllers.make("agent", path=path)).__name__ == "AgentPolicy"
     for action in actions[1:]:
         np.testing.assert_array_equal(action, actions[0])
-    with pytest.raises(ValueError, match=r"ppo_helix/model.zip was trained with 'ppo', not 'sac'"):
-        controllers.make("sac", path=str(AGENTS / "ppo_helix"))
+    with pytest.raises(
+        ValueError, match=r"ppo_generalist/model.zip was trained with 'ppo', not 'sac'"
+    ):
+        controllers.make("sac", path=str(AGENTS / "ppo_generalist"))
     with pytest.raises(ValueError, match=r"sac_helix/model.zip was trained with 'sac', not 'tqc'"):
         controllers.make("tqc", path=path)
     residual = controllers.make("agent", path=str(AGENTS / "ppo_residual"))

@@ -30,7 +30,7 @@ class Payload:
 def planted(tmp_path: Path) -> tuple[Path, Path]:
     """(an agent folder whose only statistics are a planted pickle, the marker it would make)."""
     agent = tmp_path / "agent"
-    shutil.copytree(AGENTS_DIR / "ppo_helix", agent)
+    shutil.copytree(AGENTS_DIR / "ppo_generalist", agent)
     (agent / "vecnormalize.npz").unlink()
     marker = tmp_path / "payload_ran"
     (agent / "vecnormalize.pkl").write_bytes(pickle.dumps(Payload(marker)))
@@ -68,7 +68,7 @@ def test_a_warm_start_reads_the_npz_and_never_the_pickle(planted, tmp_path):
     agent, marker = planted
     meta = json.loads((agent / "metadata.json").read_text())
     (agent / "metadata.json").write_text(json.dumps({**meta, "algo": "ppo"}))
-    source = np.load(AGENTS_DIR / "ppo_helix" / "vecnormalize.npz")
+    source = np.load(AGENTS_DIR / "ppo_generalist" / "vecnormalize.npz")
     stats = {
         key: source[key] for key in source.files if not key.startswith(("ret_", "gamma", "clip_r"))
     }

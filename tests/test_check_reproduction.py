@@ -14,6 +14,7 @@ from benchmarks.checks.reproduction import (
     _rerun_arguments,
     compare_episodes,
     compare_json,
+    retired_policies,
 )
 
 HEADER = "scenario,policy,seed,rms_distance,settling_time\n"
@@ -49,6 +50,29 @@ def test_a_recorded_all_re_runs_the_committed_scenarios_only() -> None:
     recorded = "python -m benchmarks.runner.compare --scenarios=all --seeds 2"
     args = _rerun_arguments(recorded, Path("/y"), 2, ["nominal"])
     assert args == "--seeds 2 --scenarios nominal --out /y --workers 2".split()
+
+
+def test_a_retired_agent_is_left_out_of_the_re_run_and_of_the_comparison(
+    tmp_path: Path, capsys
+) -> None:
+    """The committed full run recorded ppo_helix, retired since: the others re-run, its rows
+    stay on record and are not compared."""
+    recorded = json.loads((RESULTS / "full" / "episodes.json").read_text())["config"]
+    running, retired = retired_policies(recorded["policies"])
+    assert retired == ["ppo_helix"]
+    assert running == [p for p in recorded["policies"] if p != "ppo_helix"]
+    args = _rerun_arguments(recorded["command"], Path("/x"), 1, ["paper"], running)
+    assert args[args.index("--policies") + 1] == ",".join(running)
+    assert args.count("--policies") == 1
+
+    old = _csv(tmp_path / "a.csv", ["paper,fbsm,0,0.0640,31.5", "paper,ppo_helix,0,0.05,20.0"])
+    new = _csv(tmp_path / "b.csv", ["paper,fbsm,0,0.0640,31.5"])
+    report = Report(allow_new=False)
+    compare_episodes(old, new, report, retired=["ppo_helix"])
+    assert report.failures == 0
+    printed = capsys.readouterr().out
+    assert "1 committed rows of retired agents (ppo_helix) are not re-run" in printed
+    assert "5 values compared, 0 differ" in printed
 
 
 def test_a_recorded_command_that_runs_no_compare_is_refused() -> None:
@@ -87,18 +111,20 @@ def test_compare_episodes_counts_cells_and_one_sided_rows(tmp_path: Path, capsys
 def test_learned_policies_reproduce_within_float32_rounding_classical_ones_exactly(
     tmp_path: Path, capsys
 ) -> None:
-    old = _csv(tmp_path / "a.csv", ["paper,fbsm,0,0.0640,31.5", "paper,ppo_helix,0,0.0500,20.0"])
-    near = ["paper,fbsm,0,0.06400000001,31.5", "paper,ppo_helix,0,0.05000000001,20.0"]
+    old = _csv(
+        tmp_path / "a.csv", ["paper,fbsm,0,0.0640,31.5", "paper,ppo_generalist,0,0.0500,20.0"]
+    )
+    near = ["paper,fbsm,0,0.06400000001,31.5", "paper,ppo_generalist,0,0.05000000001,20.0"]
     report = Report(allow_new=False)
-    compare_episodes(old, _csv(tmp_path / "b.csv", near), report, learned=["ppo_helix"])
-    assert report.failures == 1  # fbsm's last digits: a difference; ppo_helix's: rounding
+    compare_episodes(old, _csv(tmp_path / "b.csv", near), report, learned=["ppo_generalist"])
+    assert report.failures == 1  # fbsm's last digits: a difference; ppo_generalist's: rounding
     printed = capsys.readouterr().out
     assert "0.0640 -> 0.06400000001" in printed
     assert "differing values by policy: fbsm 1" in printed
-    assert "1 values of the learned policies (ppo_helix) differ within 1e-06" in printed
-    far = ["paper,fbsm,0,0.0640,31.5", "paper,ppo_helix,0,0.0501,20.0"]  # 2e-3 relative
+    assert "1 values of the learned policies (ppo_generalist) differ within 1e-06" in printed
+    far = ["paper,fbsm,0,0.0640,31.5", "paper,ppo_generalist,0,0.0501,20.0"]  # 2e-3 relative
     report = Report(allow_new=False)
-    compare_episodes(old, _csv(tmp_path / "c.csv", far), report, learned=["ppo_helix"])
+    compare_episodes(old, _csv(tmp_path / "c.csv", far), report, learned=["ppo_generalist"])
     assert report.failures == 1
 
 

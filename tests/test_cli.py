@@ -91,12 +91,12 @@ def test_an_agent_on_a_base_install_is_refused_before_any_episode(monkeypatch, t
     monkeypatch.setattr(importlib, "import_module", without_torch)
     monkeypatch.setattr(compare, "run_jobs", lambda *a, **k: pytest.fail("an episode ran"))
     with pytest.raises(policies.MissingExtraError, match=r"pip install 'auv-gym\[rl\]'"):
-        policies.check_policy_spec("ppo_helix")
+        policies.check_policy_spec("ppo_generalist")
     code = cli.main(
         [
             "compare",
             "--policies",
-            "fbsm,ppo_helix",
+            "fbsm,ppo_generalist",
             "--scenarios",
             "paper",
             "--seeds",

@@ -374,14 +374,14 @@ def test_unwritable_out_in_a_subprocess_is_one_line_without_traceback(tmp_path):
 def test_two_policies_writing_the_same_files_are_refused(tmp_path, capsys):
     """`ppo:a/b` and `ppo:a_b` both store episodes under ppo-a_b/: one would overwrite the other."""
     for name in ("a/b", "a_b"):
-        shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_helix", tmp_path / name)
+        shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_generalist", tmp_path / name)
     specs = f"agent:{tmp_path / 'a/b'},agent:{tmp_path / 'a_b'}"
     err = usage_error(capsys, main, ["--policies", specs, "--out", str(tmp_path / "out")])
     assert "share the label" in err
 
 
 def test_a_damaged_agent_is_refused_before_the_first_episode(tmp_path, capsys):
-    agent = shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_helix", tmp_path / "agent")
+    agent = shutil.copytree(ROOT / "benchmarks" / "agents" / "ppo_generalist", tmp_path / "agent")
     stats = dict(np.load(agent / "vecnormalize.npz"))
     np.savez(agent / "vecnormalize.npz", **{**stats, "clip_obs": np.float64("nan")})
     err = usage_error(capsys, main, ["--policies", f"agent:{agent}", "--out", str(tmp_path / "o")])
@@ -528,7 +528,7 @@ def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):
     from benchmarks.runner.jobs import Job
 
     scenario = load_scenarios()["paper"]
-    assert policy_env("fbsm") == policy_env("ppo_helix") == ("AUVPath3D-v0", {})
+    assert policy_env("fbsm") == ("AUVPath3D-v0", {})
     assert policy_env("ppo_residual") == ("AUVPath3DSpeedLimit-v0", {})
     env_id, agent_env = policy_env("ppo_generalist")
     assert env_id == "AUVPath3DPreview-v0" and agent_env["observation"]["integral_limit"] == 1.0

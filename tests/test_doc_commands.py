@@ -613,7 +613,7 @@ auv-gym compare  # Python, not shell
 @pytest.mark.parametrize(
     "words, problem",
     [
-        (("auv-gym", "compare", "--policies", "ppo"), "was renamed: use 'ppo_helix'"),
+        (("auv-gym", "compare", "--policies", "ppo"), "'ppo' is no longer shipped"),
         (("auv-gym", "compare", "--scenario", "paper"), "has no option ['--scenario']"),
         (("auv-gym", "compare", "--scenarios", "papr", "--out", "out/x"), "no scenario ['papr']"),
         (("auv-gym", "compare", "--out", "x"), "it writes into the repository"),

@@ -51,7 +51,7 @@ def make_multi_seed(
     folder.mkdir(parents=True)
     for k, (seed, env_id) in enumerate(zip(seeds, env_ids, strict=True)):
         agent = folder / f"agent_seed_{seed}"
-        shutil.copytree(AGENTS_DIR / "ppo_helix", agent)
+        shutil.copytree(AGENTS_DIR / "ppo_generalist", agent)
         meta = json.loads((agent / "metadata.json").read_text())
         (agent / "metadata.json").write_text(json.dumps({**meta, "seed": seed, "env_id": env_id}))
         rows = [(0, 0.0, 5.0), (1000, 10.0 + k, 2.0 + k), (2000, 20.0 + k, 1.0 + k)]
@@ -273,9 +273,11 @@ def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkey
 
 
 def test_former_policy_names_say_what_to_type(tmp_path, capsys):
-    for name, new in (("ppo", "ppo_helix"), ("ppo_cross_track_guard_alloc", "ppo_generalist")):
-        with pytest.raises(ValueError, match=f"policy '{name}' was renamed: use '{new}'"):
-            check_policy_spec(name)
+    with pytest.raises(ValueError, match="policy 'ppo_cross_track_guard_alloc' was renamed: use "):
+        check_policy_spec("ppo_cross_track_guard_alloc")
+    for retired in ("ppo", "ppo_helix"):  # the helix specialist and its former name
+        with pytest.raises(ValueError, match=f"policy '{retired}' is no longer shipped"):
+            check_policy_spec(retired)
     with pytest.raises(ValueError, match=r"'ppo:PATH' was renamed, use 'agent:x'"):
         check_policy_spec("ppo:x")
     err = usage_error(capsys, ["--policies", "fbsm,sac_generalist", "--out", str(tmp_path / "o")])

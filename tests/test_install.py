@@ -102,8 +102,8 @@ def test_packages_and_data_come_from_the_install(installed, tmp_path: Path) -> N
         "from benchmarks.catalog.scenarios import SCENARIOS_FILE\n"
         "from benchmarks.training.train import TrainOptions\n"
         "print(auv_gym.__file__, benchmarks.__file__, controllers.__file__,\n"
-        "      AGENTS_DIR / 'ppo_helix' / 'model.zip', SCENARIOS_FILE, TrainOptions().config,\n"
-        "      sep='\\n')"
+        "      AGENTS_DIR / 'ppo_generalist' / 'model.zip', SCENARIOS_FILE,\n"
+        "      TrainOptions().config, sep='\\n')"
     )
     out = _run([str(bin_dir / "python"), "-c", code], tmp_path, env)
     assert out.returncode == 0, out.stderr[-2000:]
@@ -210,7 +210,7 @@ def test_compare_with_an_agent_on_the_base_install_exits_2_before_any_episode(
         str(bin_dir / "auv-gym"),
         "compare",
         "--policies",
-        "fbsm,ppo_helix",
+        "fbsm,ppo_generalist",
         "--scenarios",
         "paper",
         "--seeds",

@@ -280,7 +280,7 @@ def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem, auv_gy
 
 def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path, auv_gym_command):
     for name in ("policy.onnx", "policy.json"):
-        shutil.copy(AGENTS_DIR / "ppo_helix" / name, tmp_path / name)
+        shutil.copy(AGENTS_DIR / "ppo_generalist" / name, tmp_path / name)
     onnx_file, contract_file = tmp_path / "policy.onnx", tmp_path / "policy.json"
     contract = json.loads(contract_file.read_text())
     contract["observation"]["names"] = contract["observation"]["names"] + ["a_X_prev"]
@@ -300,7 +300,7 @@ def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path, 
         str(out),
     )
     assert code == 2 and len(err.splitlines()) == 1, err
-    assert f"{onnx_file}" in err and "16" in err and "15" in err
+    assert f"{onnx_file}" in err and "50 values" in err and "'n', 50" in err
     assert not out.exists()
 
     data = bytearray(onnx_file.read_bytes())
@@ -335,7 +335,7 @@ def test_the_runtime_checks_the_env_and_its_input():
     ("agent", "options", "expected"),
     [
         # no allocation stage: the graph would be the same, its commands relabelled
-        ("ppo_helix", ["--actuator", "fins"], "--actuator fins: {meta} lists no actuator_alloc"),
+        ("sac_helix", ["--actuator", "fins"], "--actuator fins: {meta} lists no actuator_alloc"),
         ("sac_helix", ["--actuator", "realistic"], "--actuator realistic: {meta} lists no"),
         # actuator settings where no allocation to the propeller and fins reads them
         ("ppo_generalist", ["--actuator-params", '{"rpm_max": 1400}'], "with --actuator paper"),

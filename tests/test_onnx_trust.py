@@ -39,7 +39,7 @@ pytestmark = pytest.mark.skipif(
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _copy(tmp_path: Path, agent: str = "ppo_helix") -> Path:
+def _copy(tmp_path: Path, agent: str = "ppo_generalist") -> Path:
     """A copy of a shipped export; its .onnx file."""
     for name in ("policy.onnx", "policy.json"):
         shutil.copy(AGENTS_DIR / agent / name, tmp_path / name)
@@ -128,7 +128,7 @@ def test_a_contract_that_contradicts_itself_is_refused(tmp_path, edit, expected)
 def test_a_contract_the_graph_contradicts_is_refused(tmp_path):
     """A contract edited consistently (the fins named in the env and the actuator) still names
     an env the graph was not built for: the graph's metadata, which the hash covers, says so."""
-    onnx_file = _copy(tmp_path)
+    onnx_file = _copy(tmp_path, "sac_helix")  # no allocation stage
 
     def edit(c):
         c.update(actuator="fins", env_kwargs={**c["env_kwargs"], "actuator": "fins"})
@@ -136,7 +136,7 @@ def test_a_contract_the_graph_contradicts_is_refused(tmp_path):
     _edit_contract(onnx_file, edit)
     with pytest.raises(ValueError) as error:
         read_contract(onnx_file)
-    _one_line(error, "says env_kwargs {'actuator': 'fins'}, its graph", "was built for {}")
+    _one_line(error, "says env_kwargs {'surge_limit': 'vehicle',", "was built for {'surge_limit'")
 
 
 def test_the_graph_inputs_and_outputs_are_checked_against_the_contract(tmp_path):
@@ -161,7 +161,7 @@ def test_the_graph_inputs_and_outputs_are_checked_against_the_contract(tmp_path)
     _edit_graph(onnx_file, one_vehicle)
     with pytest.raises(ValueError) as error:
         controllers.make("onnx", path=str(onnx_file))
-    _one_line(error, "takes ('observation', [1, 15], 'tensor(float)')", "['n', 15]")
+    _one_line(error, "takes ('observation', [1, 49], 'tensor(float)')", "['n', 49]")
 
 
 def test_external_data_is_refused(tmp_path):
@@ -227,7 +227,7 @@ def test_a_node_that_allocates_too_much_is_one_line(tmp_path):
     _edit_graph(onnx_file, _after_action("Add", 0.0, big))
     policy = controllers.make("onnx", path=str(onnx_file))
     with pytest.raises(ValueError) as error:
-        policy.predict(np.zeros(15, np.float32))
+        policy.predict(np.zeros(49, np.float32))
     _one_line(error, f"ONNX graph {onnx_file} failed to run: ", "ConstantOfShape")
 
 
@@ -235,18 +235,20 @@ def test_a_node_that_allocates_too_much_is_one_line(tmp_path):
     ("op", "value", "expected"),
     [
         ("Mul", np.nan, "gave action row 0 [nan, nan, nan]: not finite"),
-        # ppo_helix at the zero observation commands (1, 0.0625, 0.4375)
-        ("Add", 1e6, "gave action row 0 [1000001.0, 1000000.0625, 1000000.4375]: outside [-1, 1]"),
+        ("Add", 1e6, "gave action row 0 [{shifted}]: outside [-1, 1]"),
     ],
 )
 def test_every_output_is_checked(tmp_path, op, value, expected):
     """Was: NaN reached the env, ±1e6 actions were recorded."""
     onnx_file = _copy(tmp_path)
+    observation = np.zeros((2, 49), np.float32)
+    commands = controllers.make("onnx", path=str(onnx_file)).predict(observation)[0]
     _edit_graph(onnx_file, _after_action(op, value))
     policy = controllers.make("onnx", path=str(onnx_file))
     with pytest.raises(ValueError) as error:
-        policy.predict(np.zeros((2, 15), np.float32))
-    _one_line(error, f"ONNX graph {onnx_file} {expected}")
+        policy.predict(observation)
+    shifted = ", ".join(str(float(np.float32(c) + np.float32(value))) for c in commands[0])
+    _one_line(error, f"ONNX graph {onnx_file} {expected.format(shifted=shifted)}")
 
 
 def test_the_scan_reads_the_shipped_graphs_metadata():
@@ -313,7 +315,7 @@ def test_the_allocation_reads_the_actuator_settings_it_lists():
 def _run_onnx_session(home, import_onnxruntime_first):
     """Run one ONNX policy of the project in a fresh interpreter whose home folder is `home`;
     return ORT_DISABLE_TELEMETRY as that interpreter saw it and the telemetry files written."""
-    path = AGENTS_DIR / "ppo_helix" / "policy.onnx"
+    path = AGENTS_DIR / "ppo_generalist" / "policy.onnx"
     script = (
         "import os\n"
         + ("import onnxruntime\n" if import_onnxruntime_first else "")
@@ -321,7 +323,7 @@ def _run_onnx_session(home, import_onnxruntime_first):
         "import controllers\n"
         "from benchmarks.catalog.policies import check_policy_spec\n"
         f"policy = controllers.make('onnx', path={str(path)!r})\n"
-        "policy.predict(np.zeros(15, np.float32))\n"
+        "policy.predict(np.zeros(49, np.float32))\n"
         f"check_policy_spec({'onnx:' + str(path)!r})\n"
         "print(os.environ.get('ORT_DISABLE_TELEMETRY'))\n"
     )

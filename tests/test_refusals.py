@@ -43,7 +43,7 @@ def test_non_finite_weights_are_named(tmp_path):
     from stable_baselines3 import PPO
 
     agent = tmp_path / "agent"
-    shutil.copytree(AGENTS_DIR / "ppo_helix", agent)
+    shutil.copytree(AGENTS_DIR / "ppo_generalist", agent)
     model = PPO.load(agent / "model.zip", device="cpu")
     with __import__("torch").no_grad():
         model.policy.action_net.weight[0, 0] = float("nan")
@@ -115,14 +115,13 @@ def test_a_policy_kwargs_payload_never_runs(tmp_path):
 
 
 def test_an_agent_whose_stages_cannot_fly_a_scenario_is_refused_before_any_episode(
-    tmp_path, auv_gym_command
+    tmp_path, auv_gym_command, tiny_paper_agent
 ):
     """Was: compare checked an agent's allocation only when its episodes came, after the other
-    policies' had run."""
+    policies' had run. The agent observes the paper's 15 values: no previous action."""
     import json
 
-    agent = tmp_path / "helix_allocated"
-    shutil.copytree(AGENTS_DIR / "ppo_helix", agent)
+    agent = tiny_paper_agent
     meta = json.loads((agent / "metadata.json").read_text())
     meta["stages"] = [{"name": "actuator_allocation", "commands": "paper"}]
     (agent / "metadata.json").write_text(json.dumps(meta))

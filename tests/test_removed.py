@@ -14,7 +14,7 @@ from benchmarks.training.config import REMOVED_KEYS
 from controllers.agent import REMOVED_STAGES
 
 ROOT = Path(__file__).resolve().parent.parent
-AGENT = ROOT / "benchmarks" / "agents" / "ppo_helix"
+AGENT = ROOT / "benchmarks" / "agents" / "ppo_generalist"
 CONFIG = """AUVPath3D-v0:
   n_envs: 2
   n_timesteps: 64

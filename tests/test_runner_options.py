@@ -32,7 +32,7 @@ def test_the_flags_of_before_stay() -> None:
     """Every former flag, its destination and default (scripts and the docs use them)."""
     ns = compare.build_parser().parse_args([])
     assert (ns.policies, ns.scenarios, ns.seeds, str(ns.out)) == (
-        "fbsm,backstepping,ppo_helix",
+        "fbsm,backstepping,ppo_generalist",
         "all",
         10,
         "out/compare",

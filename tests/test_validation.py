@@ -847,7 +847,7 @@ def test_compare_and_suite_refuse_nan_agent_weights_before_any_episode(tmp_path,
     import io
     import zipfile
 
-    agent = _agent_copy(tmp_path, "ppo_helix")
+    agent = _agent_copy(tmp_path, "ppo_generalist")
     with zipfile.ZipFile(agent / "model.zip") as archive:
         members = {name: archive.read(name) for name in archive.namelist()}
     state = torch.load(io.BytesIO(members["policy.pth"]), weights_only=True)
@@ -928,13 +928,13 @@ def test_train_seeds_checks_every_initial_agent_and_network_before_any_worker(tm
         "observation": (
             "[64, 64]",
             "observation: preview",
-            r"the agent observes 15 entries, "
-            r"this run's observation has 46 \(first difference at entry 15: None "
-            r"against 'u_ground'\)",
+            r"the agent observes 49 entries, "
+            r"this run's observation has 46 \(first difference at entry 46: 'x_e_integral' "
+            r"against None\)",
         ),
         "weights": (
             "[32, 32]",
-            "max_time: 10.0",
+            "observation: preview_integral, max_time: 10.0",
             r"its weights \(.*model.zip\) do not fit the "
             r"network of .*weights.yml .*size mismatch for mlp_extractor",
         ),
@@ -960,7 +960,7 @@ def test_train_seeds_checks_every_initial_agent_and_network_before_any_worker(tm
             "--seeds",
             "1",
             "--init-from",
-            str(AGENTS_DIR / "ppo_helix"),
+            str(AGENTS_DIR / "ppo_generalist"),
             "--out",
             str(tmp_path / name),
         ]

@@ -78,7 +78,6 @@ GROUPS = {
             "backstepping_colos",
             "ppo_generalist",
             "ppo_residual",
-            "ppo_helix",
             "sac_helix",
         ),
         classical=("fbsm", "fbsm_colos", "backstepping", "backstepping_colos"),

@@ -49,16 +49,17 @@ __all__ = [
 
 AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
 # The reference agents: the name is the folder of benchmarks/agents/ (README there).
-REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_helix", "ppo_residual", "sac_helix")
+REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_residual", "sac_helix")
 AGENT_PREFIX = "agent:"
 ONNX_PREFIX = "onnx:"
 _NOT_SHIPPED = "is no longer shipped (its results stay in docs/results.md); reference agents:"
 # Names of earlier releases → what to type now (None: the agent left the tree).
 REMOVED_POLICIES: dict[str, str | None] = {
-    "ppo": "ppo_helix",
     "ppo_cross_track_guard_alloc": "ppo_generalist",
     **dict.fromkeys(
         (
+            "ppo",
+            "ppo_helix",
             "ppo_helix_v1",
             "sac_generalist",
             "ppo_preview",

@@ -7,7 +7,9 @@ reproduced to the last bit:
    a temporary folder; every cell of every (scenario, policy, seed) row is compared as text (the
    CSV holds full-precision floats, so equal text is equal bits). The learned policies' cells
    (torch networks) reproduce within `AGENT_TOLERANCE` relative (float32 arithmetic rounds by
-   CPU and BLAS build), counted apart from the exact ones.
+   CPU and BLAS build), counted apart from the exact ones. A reference agent retired since
+   (`benchmarks.catalog.policies.REMOVED_POLICIES`) is not re-run: its committed rows stay as
+   the record of what it did and are counted apart.
 2. `benchmarks/results/paper/metrics.json`: `benchmarks.reports.paper_figures` is re-run with the
    recorded seed and duration; every metric value is compared (wall times and versions excepted).
 3. With `--agents`, each shipped agent's `held_out_evaluation.json` is re-evaluated and compared
@@ -38,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
-from benchmarks.catalog.policies import PolicySpec
+from benchmarks.catalog.policies import REMOVED_POLICIES, PolicySpec
 from benchmarks.options import option
 
 RESULTS = Path(__file__).resolve().parents[1] / "results"
@@ -62,11 +64,16 @@ COMPARE_NAMES = ("benchmarks.compare", COMPARE)
 
 
 def _rerun_arguments(
-    recorded_command: str, out: Path, workers: int, scenarios: Sequence[str] = ()
+    recorded_command: str,
+    out: Path,
+    workers: int,
+    scenarios: Sequence[str] = (),
+    policies: Sequence[str] = (),
 ) -> list[str]:
     """The recorded compare command's arguments (after its module, `COMPARE_NAMES`) with --out and
     --workers replaced and, given ``scenarios`` (the committed run's), --scenarios naming them:
-    a recorded ``--scenarios all`` means the scenarios of its day, not those added since.
+    a recorded ``--scenarios all`` means the scenarios of its day, not those added since. Given
+    ``policies``, --policies names them (the recorded ones an agent's retirement left).
     ValueError if the command names no compare module."""
     words = shlex.split(recorded_command)
     module = next((i for i, word in enumerate(words) if word in COMPARE_NAMES), None)
@@ -77,7 +84,12 @@ def _rerun_arguments(
     args = words[module + 1 :]
     kept: list[str] = []
     skip = False
-    replaced = ("--out", "--workers", *(("--scenarios",) if scenarios else ()))
+    replaced = (
+        "--out",
+        "--workers",
+        *(("--scenarios",) if scenarios else ()),
+        *(("--policies",) if policies else ()),
+    )
     for word in args:
         if skip:
             skip = False
@@ -89,7 +101,16 @@ def _rerun_arguments(
             continue
         kept.append(word)
     chosen = ["--scenarios", ",".join(scenarios)] if scenarios else []
+    chosen += ["--policies", ",".join(policies)] if policies else []
     return [*kept, *chosen, "--out", str(out), "--workers", str(workers)]
+
+
+def retired_policies(policies: Sequence[str]) -> tuple[list[str], list[str]]:
+    """``policies`` split into those that still run and the reference agents retired since
+    (`benchmarks.catalog.policies.REMOVED_POLICIES`): a retired agent's committed rows are kept
+    as the record of what it did, and no longer re-run."""
+    retired = [p for p in policies if p in REMOVED_POLICIES]
+    return [p for p in policies if p not in retired], retired
 
 
 def _rows(path: Path) -> dict[tuple[str, str, str], dict[str, str]]:
@@ -143,11 +164,23 @@ def _within_rounding(old: str, new: str) -> bool:
 
 
 def compare_episodes(
-    reference: Path, fresh: Path, report: Report, learned: Sequence[str] = ()
+    reference: Path,
+    fresh: Path,
+    report: Report,
+    learned: Sequence[str] = (),
+    retired: Sequence[str] = (),
 ) -> None:
     """Cell-by-cell comparison of two episodes.csv files: exact, except that the cells of the
-    ``learned`` policies (torch networks) may differ within `AGENT_TOLERANCE` (counted apart)."""
+    ``learned`` policies (torch networks) may differ within `AGENT_TOLERANCE` (counted apart).
+    The committed rows of ``retired`` agents (not re-run) are counted and left out."""
     old, new = _rows(reference), _rows(fresh)
+    left_out = [key for key in old if key[1] in retired]
+    if left_out:
+        print(
+            f"episodes.csv: {len(left_out)} committed rows of retired agents "
+            f"({', '.join(retired)}) are not re-run"
+        )
+    old = {key: row for key, row in old.items() if key[1] not in retired}
     report.one_sided("episode rows only in the committed file", sorted(set(old) - set(new)))
     report.one_sided("episode rows only in the new run", sorted(set(new) - set(old)))
     diffs, compared = [], 0
@@ -231,10 +264,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     report = Report(args.allow_new)
     with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
         out = args.keep if args.keep is not None else Path(scratch)
-        _run(COMPARE, _rerun_arguments(recorded, out / "full", args.workers, scenarios))
-        learned = [p for p in committed["policies"] if PolicySpec.parse(p).kind != "classical"]
+        running, retired = retired_policies(committed["policies"])
+        rerun = _rerun_arguments(
+            recorded, out / "full", args.workers, scenarios, running if retired else ()
+        )
+        _run(COMPARE, rerun)
+        learned = [p for p in running if PolicySpec.parse(p).kind != "classical"]
         compare_episodes(
-            args.results / "full" / "episodes.csv", out / "full/episodes.csv", report, learned
+            args.results / "full" / "episodes.csv",
+            out / "full/episodes.csv",
+            report,
+            learned,
+            retired,
         )
 
         paper = json.loads(paper_json.read_text())
@@ -258,7 +299,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             for recorded_file in sorted(AGENTS.glob(f"*/{HELD_OUT_FILE}")):
                 committed = json.loads(recorded_file.read_text())
-                fresh = held_out_evaluation(recorded_file.parent, committed["duration_s"])
+                # under the env id the agent records: its surge limit, its scenario label
+                metadata = json.loads((recorded_file.parent / "metadata.json").read_text())
+                fresh = held_out_evaluation(
+                    recorded_file.parent, committed["duration_s"], metadata["env_id"]
+                )
                 fresh_file = out / f"{recorded_file.parent.name}_{HELD_OUT_FILE}"
                 fresh_file.write_text(json.dumps(fresh, default=float))
                 compare_json(

@@ -1,7 +1,7 @@
 """FBSM vs backstepping vs PPO (and any Policy) on the same seeded scenarios.
 
     python -m benchmarks.runner.compare \\
-        --policies fbsm,backstepping,ppo_helix,fbsm_ilos,backstepping_ilos \\
+        --policies fbsm,backstepping,ppo_generalist,fbsm_ilos,backstepping_ilos \\
         --scenarios all --seeds 10 --duration 300 --workers 2 --out benchmarks/results/full
 
 Jobs are (policy, scenario, seed) episodes (`benchmarks.runner.jobs`): each finished episode is
@@ -61,7 +61,7 @@ class CompareOptions(EpisodeOptions):
     """The options of `auv-gym compare` (and the episode runner's, `EpisodeOptions`)."""
 
     policies: str = option(
-        "fbsm,backstepping,ppo_helix",
+        "fbsm,backstepping,ppo_generalist",
         f"comma-separated: {', '.join(policy_names())}, agent:PATH, module:attribute",
     )
     scenarios: str = option("all", "comma-separated names of --scenario-file or 'all'")

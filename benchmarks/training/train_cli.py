@@ -2,25 +2,25 @@
 an RL-Zoo hyper-parameter file (default: the paper helix under the 2.0 m/s surge limit,
 `AUVPath3DSpeedLimit-v0`).
 
-The shipped agent `benchmarks/agents/ppo_helix` (the paper's unlimited `AUVPath3D-v0`) was
-produced by::
+One seed on the paper's own task, the unlimited `AUVPath3D-v0` with its 15-entry observation
+(the recipe of the retired helix specialist, docs/results.md "Retired: the helix specialist")::
 
     python -m benchmarks.training.train_cli --seed 1 \\
         --config benchmarks/hyperparams/ppo_helix.yml \\
-        --env-id AUVPath3D-v0 --out runs/ppo_helix --export benchmarks/agents/ppo_helix \\
-        --curve benchmarks/results/ppo_learning_curve
+        --env-id AUVPath3D-v0 --out runs/ppo_helix --export runs/ppo_helix/agent \\
+        --curve runs/ppo_helix/curve
 
 An interrupted run continues from its newest checkpoint (step counter intact) with the same
 command plus ``--resume``. Watch it with ``tensorboard --logdir runs/ppo_helix/tb``. The learning
 curve of a run (evaluation rms distance against env steps and wall time) is plotted with::
 
     python -m benchmarks.training.train_cli --out runs/ppo_helix --plot-only \\
-        --curve benchmarks/results/ppo_learning_curve
+        --curve runs/ppo_helix/curve
 
 and an agent is evaluated on the paper scenario over the held-out seeds 0-9 (300 s; the result
 goes to AGENT/held_out_evaluation.json, which ``--export`` also writes) with::
 
-    python -m benchmarks.training.train_cli --evaluate benchmarks/agents/ppo_helix
+    python -m benchmarks.training.train_cli --evaluate runs/ppo_helix/agent
 
 The same YAML file works with RL Zoo (optional, not a dependency of auv-gym)::
 
