@@ -115,7 +115,12 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
     # --results then writes every seed's agent, test evaluation and curves, as a one-phase run.
     before = {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")}
     results = tmp_path / "results"
+    stale = results / "agent_seed_7" / "model.zip"  # a seed an earlier run here wrote
+    stale.parent.mkdir(parents=True)
+    stale.write_bytes(b"seed 7")
+    (results / ".outputs.json").write_text(json.dumps({"files": ["agent_seed_7/model.zip"]}))
     assert main(_argv(config, out, "--resume", "--results", str(results))) == 0
+    assert not stale.parent.exists()  # the suite would have flown it as a seed of this run
     assert {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")} == before
     for seed in (0, 1):
         assert (results / f"agent_seed_{seed}" / "model.zip").is_file()

@@ -10,6 +10,9 @@ normalised with the current statistics when fitted, so data of every round meet 
 normalisation. Each stream of consecutive steps of one vehicle is a `Segment`; the critic's
 targets are λ-returns along it, bootstrapped with the critic's value of the last observation
 where an episode was truncated or the data stop mid-episode, 0 where it terminated.
+
+SAC and TQC have their own fitting and hand their flights on in a replay buffer
+(`benchmarks.training.dagger_sac`), flown and labelled by the same `collect`.
 """
 
 from __future__ import annotations
@@ -85,10 +88,16 @@ def collect(
     steps: int,
     share: float,
     rng: np.random.Generator,
+    sample: Callable[[np.ndarray, int], np.ndarray] | None = None,
+    record: Callable[..., None] | None = None,
 ) -> list[Segment]:
     """Fly ``steps`` env steps (whole vector steps) in ``venv`` (a `VecNormalize`, training):
     each vehicle's action is the expert's (probability ``share``) or the learner's sampled
-    action; every visited state is labelled with the expert's action. One segment per vehicle."""
+    action; every visited state is labelled with the expert's action. One segment per vehicle.
+
+    ``sample(obs, t)``: the learner's actions at the normalised observations of vector step t
+    (default: the policy's sampled action); ``record(obs, action, reward, next_obs, dones,
+    infos)``, if given, sees every vector step (raw observations and rewards)."""
     n = venv.num_envs
     horizon = max(1, steps // n)
     obs = venv.reset()
@@ -105,7 +114,10 @@ def collect(
         if share >= 1.0:
             action = label
         else:
-            learner, _ = model.policy.predict(obs, deterministic=False)
+            if sample is None:
+                learner, _ = model.policy.predict(obs, deterministic=False)
+            else:
+                learner = sample(obs, t)
             pick = rng.random(n) < share
             action = np.where(pick[:, None], label, learner).astype(np.float32)
         observations[t], labels[t] = raw, label
@@ -116,6 +128,8 @@ def collect(
             if infos[i].get("TimeLimit.truncated", False):  # bootstrapped from its last state
                 next_obs[i][t] = venv.unnormalize_obs(infos[i]["terminal_observation"])
         raw = venv.get_original_obs()
+        if record is not None:
+            record(observations[t], action, rewards[t], raw, dones, infos)
         starts = np.asarray(dones, dtype=bool)
     for i in np.flatnonzero(~ends[-1]):  # the data stop mid-episode
         next_obs[i][horizon - 1] = raw[i].copy()

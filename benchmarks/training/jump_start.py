@@ -1,7 +1,8 @@
-"""A jump start: the actor (and the critic) pre-trained on a classical expert before PPO.
+"""A jump start: the actor (and the critic) pre-trained on a classical expert before PPO or SAC.
 
 A ``jump_start`` entry in a hyper-parameter file's section (in a schedule: a phase of its own)
-makes the run imitate instead of running PPO (`benchmarks.training.dagger` does the work)::
+makes the run imitate instead of running its algorithm (PPO: `benchmarks.training.dagger` does
+the work; SAC and TQC: `benchmarks.training.dagger_sac`)::
 
     jump_start:
       expert: fbsm_colos        # a classical controller (controllers.CLASSICAL), queried in
@@ -14,7 +15,7 @@ makes the run imitate instead of running PPO (`benchmarks.training.dagger` does 
       epochs: 10                # passes over the aggregated data per round
       batch_size: 1024
       learning_rate: 0.001      # Adam, for the jump start only (PPO's optimiser is untouched)
-      value: true               # also fit the critic to the data's λ-returns
+      value: true               # also fit the critic (PPO: to the data's λ-returns)
 
 Round 0 is behaviour cloning on the dataset and on ``steps`` (DAgger: ``steps``/(iterations+1))
 env steps flown by the expert; each DAgger round after it flies the learner (its sampled
@@ -29,12 +30,22 @@ episode was truncated. Observation and return statistics of `VecNormalize` are t
 data. The run then holds an ordinary PPO agent: the next phase warm-starts from it
 (`benchmarks.training.warm_start`).
 
+SAC (and sb3-contrib's TQC, whose actor and update are SAC's) fly the same rounds; the actor's
+deterministic action, tanh of its mean in the normalised action space, is fitted by least
+squares, its ``log_std`` and the entropy coefficient left as built; the critic is warmed up by
+SAC's own TD updates on the replay buffer with the actor frozen (``epochs`` passes in SAC's
+``batch_size``; why not λ-returns: `benchmarks.training.dagger_sac`); every transition flown
+(and the dataset's) fills the replay buffer, which the run writes beside its agents
+(`benchmarks.training.transitions`) and the next phase starts with, ``learning_starts``
+counting it (`benchmarks.training.warm_start`). CrossQ (batch-normalised critics, no target
+networks) has no jump start.
+
 Everything is checked with the rest of the file (`read_zoo_config`), before any training step:
-a jump start without an expert or a dataset, unknown keys, a dataset that does not exist, is
-damaged, or was recorded for another observation or action interface
-(`benchmarks.training.demonstrations.check_dataset`), an expert whose commands cannot be put in
-the agent's action space. The ``imitation`` package (1.0.1) is not used: it pins Gymnasium 0.29
-and stable-baselines3 2.2, which this project has left behind.
+a jump start without an expert or a dataset, unknown keys, an algorithm without a jump start,
+a dataset that does not exist, is damaged, or was recorded for another observation or action
+interface (`benchmarks.training.demonstrations.check_dataset`), an expert whose commands cannot
+be put in the agent's action space. The ``imitation`` package (1.0.1) is not used: it pins
+Gymnasium 0.29 and stable-baselines3 2.2, which this project has left behind.
 """
 
 from __future__ import annotations
@@ -44,10 +55,18 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
-__all__ = ["JUMP_START_KEY", "METHODS", "JumpStart", "check_jump_start", "parse_jump_start"]
+__all__ = [
+    "JUMP_START_ALGORITHMS",
+    "JUMP_START_KEY",
+    "METHODS",
+    "JumpStart",
+    "check_jump_start",
+    "parse_jump_start",
+]
 
 JUMP_START_KEY = "jump_start"
 METHODS = ("bc", "dagger")
+JUMP_START_ALGORITHMS = ("ppo", "sac", "tqc")  # the algorithms a jump start pre-trains (module doc)
 
 
 @dataclass(frozen=True)
@@ -166,15 +185,24 @@ def _integer(value: Mapping[str, Any], key: str, smallest: int, at: str) -> int:
 
 def check_jump_start(cfg: Any, env_id: str, where: str) -> None:
     """The jump start of a checked config (`benchmarks.training.config.ZooConfig`) fits its
-    agent: PPO, not residual; the expert's commands can be put in the agent's action space
+    agent: PPO, SAC or TQC (its replay buffer laid out by rows: no optimize_memory_usage), not
+    residual; the expert's commands can be put in the agent's action space
     (`ExpertLabels`); the dataset is intact and recorded for this observation and action
     interface. One-line ValueError naming ``where`` (and the dataset file)."""
     jump = cfg.jump_start
     if jump is None:
         return
     at = f"{where}: {JUMP_START_KEY}"
-    if cfg.algo != "ppo":
-        raise ValueError(f"{at}: a jump start pre-trains PPO's actor and critic, not {cfg.algo}")
+    if cfg.algo not in JUMP_START_ALGORITHMS:
+        raise ValueError(
+            f"{at}: a jump start pre-trains the actor and critic of "
+            f"{'/'.join(JUMP_START_ALGORITHMS)}, not {cfg.algo}"
+        )
+    if cfg.algo != "ppo" and cfg.algo_kwargs.get("optimize_memory_usage"):
+        raise ValueError(
+            f"{at}: the jump start's transitions fill a replay buffer with next observations "
+            "of their own: set optimize_memory_usage false"
+        )
     if cfg.residual is not None:
         raise ValueError(f"{at}: a residual agent starts as its base already (no jump start)")
     from benchmarks.training.demonstrations import DemoSource, check_dataset

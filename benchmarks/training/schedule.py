@@ -20,8 +20,10 @@ replaced: a phase says what changes from the phase before), each seed
 starting from the previous phase's agent of the same seed (its weights, optimiser state and
 statistics: `benchmarks.training.warm_start`; the first phase from scratch, or from
 ``init_from``). A phase with a ``jump_start`` (`benchmarks.training.jump_start`) imitates a
-classical expert instead of running PPO, and its changes are its own: the phase after it trains
-with the section as the phases before the jump start left it, from the jump-started agents::
+classical expert instead of running PPO or SAC, and its changes are its own: the phase after it
+trains with the section as the phases before the jump start left it, from the jump-started
+agents (an off-policy jump start's flights go with them, to fill the next phase's replay
+buffer: `benchmarks.training.transitions`)::
 
       phases:
         - {name: jump_start, jump_start: {expert: fbsm_colos, steps: 262144}}
@@ -48,7 +50,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from auv_gym.support.files import write_json, write_text
+from auv_gym.support.files import replace_outputs, write_atomic, write_json, write_text
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import HELD_OUT_FILE
@@ -63,7 +65,9 @@ from benchmarks.training.seeds import (
     check_out_folder,
     holds_work,
     train_seeds,
+    write_seed_outputs,
 )
+from benchmarks.training.transitions import TRANSITIONS_FILE
 from benchmarks.training.warm_start import SEED_FIELD
 from controllers.agent import METADATA_FILE
 from controllers.algorithms import ALGORITHMS
@@ -234,6 +238,18 @@ def check_schedule(schedule: Schedule, algo: str, out: Path) -> list[Path]:
     return configs
 
 
+def _pass_transitions(run: Path, selected: Path) -> None:
+    """Copy an off-policy jump start's flights (`TRANSITIONS_FILE` of the seed's run folder)
+    beside its selected agent, where the next phase's warm start finds them; atomically, and
+    only there: exported agents and results never carry them."""
+    source, target = run / TRANSITIONS_FILE, selected / TRANSITIONS_FILE
+    if source.is_file() and not target.is_file():
+        import shutil
+
+        with source.open("rb") as data:
+            write_atomic(target, lambda fh: shutil.copyfileobj(data, fh))
+
+
 def _with_stages(agent: Path, stages: tuple[dict[str, Any], ...]) -> None:
     """Add ``stages`` to a copied agent's metadata (atomically); nothing when there are none."""
     if not stages:
@@ -333,6 +349,7 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
             selected = folder / SELECTED / f"{SEED_AGENT_PREFIX}{entry['seed']}"
             if not selected.is_dir():
                 export_agent(Path(entry["agent"]), selected)
+            _pass_transitions(seed_dir(folder, entry["seed"]), selected)
         summaries.append({"name": phase.name, "summary": summary})
         write_json(
             out / SCHEDULE_FILE, {"plan": plan, "phases": summaries}, indent=2, sort_keys=True
@@ -354,22 +371,22 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
 def _write_results(
     results: Path, schedule: Schedule, out: Path, last: dict[str, Any], record: dict[str, Any]
 ) -> None:
-    """RESULTS, as a one-phase run's (`benchmarks.training.seeds`): per seed its agent with the
-    stages (``agent_seed_<s>/``, for `auv-gym suite`), its held-out test evaluation and its last
-    phase's learning curve (``seed_<s>_learning_curve.csv``), every phase's curve
-    (``phase_<k>_<name>_seed_<s>_curve.csv``); and schedule.json (all atomic)."""
+    """RESULTS, as a one-phase run's (`benchmarks.training.seeds.write_seed_outputs`): per seed
+    its agent with the stages (``agent_seed_<s>/``, for `auv-gym suite`), its held-out test
+    evaluation and its last phase's learning curve (``seed_<s>_learning_curve.csv``), every
+    phase's curve (``phase_<k>_<name>_seed_<s>_curve.csv``); and schedule.json (all atomic).
+    Files an earlier run with other seeds wrote there are removed (`replace_outputs`)."""
+    last_phase = len(schedule.phases) - 1
+    written = [results / SCHEDULE_FILE]
     for entry in last["seeds"]:
         seed = entry["seed"]
-        agent = results / f"{SEED_AGENT_PREFIX}{seed}"
-        export_agent(Path(entry["agent"]), agent)
-        _with_stages(agent, schedule.stages)
-        report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
-        write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2, sort_keys=True)
+        curve = seed_dir(schedule.folder(out, last_phase), seed) / EVAL_FILE
+        written += write_seed_outputs(results, entry, curve)
+        _with_stages(results / f"{SEED_AGENT_PREFIX}{seed}", schedule.stages)
         for k in range(len(schedule.phases)):
-            curve = seed_dir(schedule.folder(out, k), seed) / EVAL_FILE
-            if curve.is_file():  # a jump-start phase keeps no learning curve
-                text = curve.read_text()
-                write_text(results / f"{schedule.folder(out, k).name}_seed_{seed}_curve.csv", text)
-                if k == len(schedule.phases) - 1:
-                    write_text(results / f"seed_{seed}_learning_curve.csv", text)
+            phase_curve = seed_dir(schedule.folder(out, k), seed) / EVAL_FILE
+            if phase_curve.is_file():  # a jump-start phase keeps no learning curve
+                name = f"{schedule.folder(out, k).name}_seed_{seed}_curve.csv"
+                written.append(write_text(results / name, phase_curve.read_text()))
     write_json(results / SCHEDULE_FILE, record, indent=2, sort_keys=True)
+    replace_outputs(results, written)

@@ -144,7 +144,13 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     check_network_size(cfg.policy_kwargs, len(obs_names), action_dim, str(train.config))
     agents = [agent_for_seed(train.init_from, s) for s in opts.seeds] if train.init_from else []
     check_initial_agents(
-        agents, train.algo, obs_names, action_dim, cfg.policy_kwargs, str(train.config)
+        agents,
+        train.algo,
+        obs_names,
+        action_dim,
+        cfg.policy_kwargs,
+        str(train.config),
+        bool(cfg.algo_kwargs.get("use_sde", False)),
     )
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
@@ -409,23 +415,26 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
 def _write_results(
     results: Path, out: Path, entries: Sequence[dict[str, Any]], summary: dict[str, Any]
 ) -> None:
-    """Per seed: its selected agent (``agent_seed_<k>/``, so every seed can be re-evaluated on
-    the whole test suite, `benchmarks.runner.evaluate_suite`), the test evaluation and the learning
-    curve; and the summary (all atomic). Files an earlier run with other seeds wrote there are
-    removed (`replace_outputs`): the suite would take a stale agent for a seed of this run."""
+    """Per seed `write_seed_outputs`, and the summary (all atomic). Files an earlier run with
+    other seeds wrote there are removed (`replace_outputs`): the suite would take a stale agent
+    for a seed of this run."""
     written = [results / SUMMARY_FILE]
     for entry in entries:
-        seed = entry["seed"]
-        agent = results / f"{SEED_AGENT_PREFIX}{seed}"
-        export_agent(Path(entry["agent"]), agent)
-        written += [f for f in agent.iterdir() if f.is_file()]
-        report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
-        written.append(
-            write_json(
-                results / f"seed_{seed}_test_evaluation.json", report, indent=2, sort_keys=True
-            )
-        )
-        curve = seed_dir(out, seed) / EVAL_FILE
-        written.append(write_text(results / f"seed_{seed}_learning_curve.csv", curve.read_text()))
+        written += write_seed_outputs(results, entry, seed_dir(out, entry["seed"]) / EVAL_FILE)
     write_json(results / SUMMARY_FILE, summary, indent=2, sort_keys=True)
     replace_outputs(results, written)
+
+
+def write_seed_outputs(results: Path, entry: dict[str, Any], curve: Path) -> list[Path]:
+    """One seed's selected agent (``agent_seed_<k>/``, so every seed can be re-evaluated on the
+    whole test suite, `benchmarks.runner.evaluate_suite`), its held-out test evaluation and its
+    learning curve ``curve``, written atomically into RESULTS; the files written."""
+    seed = entry["seed"]
+    agent = results / f"{SEED_AGENT_PREFIX}{seed}"
+    export_agent(Path(entry["agent"]), agent)
+    report = json.loads((Path(entry["agent"]) / HELD_OUT_FILE).read_text())
+    return [
+        *(f for f in agent.iterdir() if f.is_file()),
+        write_json(results / f"seed_{seed}_test_evaluation.json", report, indent=2, sort_keys=True),
+        write_text(results / f"seed_{seed}_learning_curve.csv", curve.read_text()),
+    ]

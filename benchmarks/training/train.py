@@ -466,10 +466,13 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if opts.progress_bar:  # ours, to close it at a pause too
         callbacks.append(ProgressBarCallback())
     remaining = n_timesteps - int(model.num_timesteps)
-    if cfg.jump_start is not None:  # imitation instead of PPO (`benchmarks.training.jump_start`)
+    if cfg.jump_start is not None:  # imitation instead of RL (`benchmarks.training.jump_start`)
         from stable_baselines3.common.utils import configure_logger
 
-        from benchmarks.training.dagger import run_jump_start
+        if spec.off_policy:  # SAC, TQC: their own fitting, the flights kept for the next phase
+            from benchmarks.training.dagger_sac import run_off_policy_jump_start as run_jump_start
+        else:
+            from benchmarks.training.dagger import run_jump_start
 
         model.set_logger(configure_logger(opts.verbose, str(out / "tb"), "jump_start"))
 
@@ -505,6 +508,10 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
                 if isinstance(callback, ProgressBarCallback | UpdateThreads):
                     callback.on_training_end()
             model.logger.close()
+    if jump and spec.off_policy:  # before final/: a finished jump start has its transitions
+        from benchmarks.training.transitions import TRANSITIONS_FILE, write_transitions
+
+        write_transitions(out / TRANSITIONS_FILE, model.replay_buffer, obs_names)
     final_meta = metadata({})
     save_agent(model, venv, out / "final", final_meta)
     write_metadata(out / METADATA_FILE, final_meta)

@@ -10,6 +10,12 @@ into a freshly built model and `VecNormalize`:
     vecnormalize.npz   the running observation and return statistics (plain arrays: nothing is
                        unpickled, docs/usage.md "Trusting agent files"); entries the new
                        configuration pins (`obs_scales`) stay pinned at its scales
+    replay_transitions.npz   off-policy agents, where present (an off-policy jump start's
+                       flights, `benchmarks.training.transitions`; plain arrays too): the new
+                       replay buffer starts with them, and ``learning_starts`` counts them:
+                       SAC waits only for the transitions the buffer still lacks (none after a
+                       jump start of at least ``learning_starts`` steps), so it neither flies
+                       a warm-up nor delays its updates when it already has the data
 
 The agent's stages (an envelope guard, an actuator allocation: `metadata.json`) are not training
 state and are not carried over: a schedule's export stages add them to the new run's agents
@@ -27,7 +33,9 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE
+from controllers.algorithms import ALGORITHMS
 
 __all__ = [
     "MAX_NETWORK_WEIGHTS",
@@ -75,27 +83,31 @@ def check_initial_agents(
     action_dim: int,
     policy_kwargs: dict[str, Any],
     where: str,
+    use_sde: bool = False,
 ) -> None:
     """Every initial agent of a run, before any worker starts: its files, algorithm and
-    observation (`check_warm_start`), and its weights loaded into the network this run builds
-    (``policy_kwargs``, from the config file ``where``), exactly as `warm_start` will; a
-    ValueError naming the agent folder and the config otherwise."""
+    observation (`check_warm_start`), an off-policy agent's transitions (`TRANSITIONS_FILE`),
+    and its weights loaded into the network this run builds (``policy_kwargs`` and
+    ``use_sde``, which SB3 gives the policy, from the config file ``where``), exactly as
+    `warm_start` will; a ValueError naming the agent folder and the config otherwise."""
     if not agents:
         return
     for agent in agents:
         check_warm_start(agent, algo, obs_names)
+        transitions = Path(agent) / TRANSITIONS_FILE
+        if ALGORITHMS[algo].off_policy and transitions.is_file():
+            read_transitions(transitions, obs_names, action_dim, f"init_from {str(agent)!r}")
     import io
     import zipfile
 
     import torch
     from gymnasium import spaces
 
-    from benchmarks.training.config import ALGORITHMS
-
     policy_class = ALGORITHMS[algo].sb3_class().policy_aliases["MlpPolicy"]
     box = spaces.Box(-np.inf, np.inf, (len(obs_names),), np.float32)
     actions = spaces.Box(-1.0, 1.0, (action_dim,), np.float32)
-    network = policy_class(box, actions, lambda _: 0.0, **policy_kwargs)
+    sde = {"use_sde": True} if use_sde else {}  # gSDE's layers (SB3 passes it to the policy)
+    network = policy_class(box, actions, lambda _: 0.0, **sde, **policy_kwargs)
     for agent in agents:
         model = Path(agent) / MODEL_FILE
         try:
@@ -187,11 +199,30 @@ def warm_start(
     vec_normalize.ret_rms.mean = np.array(ret_mean, dtype=np.float64)
     vec_normalize.ret_rms.var = np.array(ret_var, dtype=np.float64)
     vec_normalize.ret_rms.count = float(ret_count)
-    return {
+    record = {
         "init_from": str(folder),
         "num_timesteps": meta.get("num_timesteps"),
         "git_commit": meta.get("git_commit"),
         "config_file": meta.get("config_file"),
+    }
+    transitions = folder / TRANSITIONS_FILE
+    if getattr(model, "replay_buffer", None) is not None and transitions.is_file():
+        record["replay_buffer"] = _load_transitions(model, transitions, obs_names, folder)
+    return record
+
+
+def _load_transitions(model: Any, path: Path, obs_names: Sequence[str], folder: Path) -> dict:
+    """Fill ``model``'s replay buffer from ``path`` and count it in ``learning_starts`` (module
+    doc); the record for the run's metadata."""
+    where = f"init_from {str(folder)!r}"
+    stream = read_transitions(path, obs_names, int(model.action_space.shape[0]), where)
+    added = fill_buffer(model.replay_buffer, stream)
+    configured = int(model.learning_starts)
+    model.learning_starts = max(0, configured - added)
+    return {
+        "transitions": added,
+        "configured_learning_starts": configured,
+        "learning_starts": model.learning_starts,
     }
 
 
