@@ -187,34 +187,43 @@ def auv_gym_command():
     return run
 
 
-def _save_tiny_paper_agent(folder):
-    """An untrained 16-16 PPO agent on the paper's own observation (`AUVPath3D-v0`, 15 values,
-    no previous action), saved as an agent folder: what no shipped agent observes any more."""
+def _tiny_paper_model(seed: int = 0):
+    """An untrained 16-16 PPO on the paper's own observation (`AUVPath3D-v0`, 15 values, no
+    previous action) with `VecNormalize` statistics from a short rollout: (model, venv)."""
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from auv_gym.sim.observation import OBS_NAMES
-    from benchmarks.training.checkpoints import save_agent
-
     kwargs = {"randomize_start": True, "max_time": 5.0}
-    venv = VecNormalize(make_vec_env("AUVPath3D-v0", n_envs=2, seed=0, env_kwargs=kwargs))
+    venv = VecNormalize(make_vec_env("AUVPath3D-v0", n_envs=2, seed=seed, env_kwargs=kwargs))
     model = PPO(
         "MlpPolicy",
         venv,
         n_steps=32,
         batch_size=32,
         n_epochs=1,
-        seed=0,
+        seed=seed,
         policy_kwargs={"net_arch": [16, 16]},
         device="cpu",
     )
     model.learn(64)
-    save_agent(model, venv, folder, {"obs_names": list(OBS_NAMES), "seed": 0})
-    return folder
+    return model, venv
+
+
+@pytest.fixture(scope="session")
+def tiny_paper_model():
+    """`_tiny_paper_model(seed)`: (model, venv) of an untrained paper-observation PPO (rl tests)."""
+    return _tiny_paper_model
 
 
 @pytest.fixture
 def tiny_paper_agent(tmp_path):
-    """A saved untrained agent on the paper's 15-value observation (rl tests only)."""
-    return _save_tiny_paper_agent(tmp_path / "paper_agent")
+    """A saved untrained agent on the paper's 15-value observation: what no shipped agent
+    observes any more (rl tests only)."""
+    from auv_gym.sim.observation import OBS_NAMES
+    from benchmarks.training.checkpoints import save_agent
+
+    model, venv = _tiny_paper_model()
+    folder = tmp_path / "paper_agent"
+    save_agent(model, venv, folder, {"obs_names": list(OBS_NAMES), "seed": 0})
+    return folder

@@ -151,28 +151,6 @@ def test_cli_refuses_to_overwrite_and_to_resume_nothing(tiny_run: Path, tmp_path
     assert empty.returncode != 0 and "no complete checkpoint" in empty.stderr
 
 
-def _tiny_model(seed: int = 0):
-    """A small untrained PPO on the real env with VecNormalize statistics from a short rollout."""
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import VecNormalize
-
-    kwargs = {"randomize_start": True, "max_time": 5.0}
-    venv = VecNormalize(make_vec_env("AUVPath3D-v0", n_envs=2, seed=seed, env_kwargs=kwargs))
-    model = PPO(
-        "MlpPolicy",
-        venv,
-        n_steps=32,
-        batch_size=32,
-        n_epochs=1,
-        seed=seed,
-        policy_kwargs={"net_arch": [16, 16]},
-        device="cpu",
-    )
-    model.learn(64)
-    return model, venv
-
-
 def _random_obs(n: int, seed: int = 0) -> np.ndarray:
     rng = np.random.default_rng(seed)
     scale = np.minimum(np.abs(OBS_LOW), OBS_HIGH).clip(max=5.0)
@@ -180,10 +158,10 @@ def _random_obs(n: int, seed: int = 0) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def saved_agent(tmp_path_factory: pytest.TempPathFactory):
+def saved_agent(tmp_path_factory: pytest.TempPathFactory, tiny_paper_model):
     from benchmarks.training.checkpoints import save_agent
 
-    model, venv = _tiny_model()
+    model, venv = tiny_paper_model()
     folder = tmp_path_factory.mktemp("agent") / "agent"
     save_agent(model, venv, folder, {"obs_names": list(OBS_NAMES), "seed": 0})
     return model, venv, folder
