@@ -8,7 +8,7 @@ Importing the package registers these ids with Gymnasium (idempotently); each is
 | `AUVPath3D-v0`           | the paper's scenario: helix, ±35 white noise, 15-entry observation |
 | `AUVPath3DNominal-v0`    | v0 without disturbances                                          |
 | `AUVPath3DFins-v0`       | v0 with fin actuators (moment authority ∝ u²)                    |
-| `AUVPath3DSpeedLimit-v0` | v0 limited to the vehicle's top speed (REMUS 100: 2.0 m/s); was v1 |
+| `AUVPath3DSpeedLimit-v0` | v0 limited to the vehicle's top speed (REMUS 100: 2.0 m/s)        |
 | `AUVPath3DPreview-v0`    | the RL task: the surge limit and the agent observation (path     |
 |                          | preview, velocity over ground, previous action; `observation`)  |
 
@@ -17,8 +17,7 @@ observation="preview_integral")``. The generation-named ids of earlier releases
 (`REMOVED_ENV_IDS`) are refused by `gym.make` with a one-line error naming that call.
 
 The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
-no "out of date" warning. `LEGACY_ENV_IDS` maps ids that agents' metadata may still record
-(`AUVPath3D-v1`) to today's (`resolve_env_id`).
+no "out of date" warning.
 
 The modules live in rooms, imported one way (docs/architecture.md): `support` → `paths` →
 `vehicle`, `ocean` → `sim` (the simulation core) → `envs` (the env API) → this top level, which
@@ -96,9 +95,6 @@ VARIANTS: dict[str, dict] = {
     SPEED_LIMIT_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED},
     PREVIEW_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED, "observation": "preview"},
 }
-# Ids of earlier releases → today's: registered as a version of `AUVPath3D`, v1 made Gymnasium
-# call v0 "out of date" on every `gym.make("AUVPath3D-v0")`.
-LEGACY_ENV_IDS: dict[str, str] = {"AUVPath3D-v1": SPEED_LIMIT_ENV_ID}
 # Ids named after agent generations, removed: integral action is an observation option of the RL
 # task. An agent's metadata may still record them (with its observation, which it runs under).
 REMOVED_ENV_IDS: dict[str, str] = {
@@ -112,17 +108,12 @@ REMOVED_ENV_IDS: dict[str, str] = {
 
 
 def resolve_env_id(env_id: str) -> str:
-    """Today's id for ``env_id`` (a `VARIANTS` key or a `LEGACY_ENV_IDS` one); ValueError
-    naming the id and the ids that exist otherwise, or the call that replaces a removed id
-    (`REMOVED_ENV_IDS`)."""
-    env_id = LEGACY_ENV_IDS.get(env_id, env_id) if isinstance(env_id, str) else env_id
+    """``env_id`` checked: a `VARIANTS` key; ValueError naming the id and the ids that exist
+    otherwise, or the call that replaces a removed id (`REMOVED_ENV_IDS`)."""
     if env_id in REMOVED_ENV_IDS:
         raise ValueError(f"env id {env_id!r} was removed: use {REMOVED_ENV_IDS[env_id]}")
     if env_id not in VARIANTS:
-        raise ValueError(
-            f"unknown env id {env_id!r}; valid: {list(VARIANTS)} (and the earlier "
-            f"{list(LEGACY_ENV_IDS)})"
-        )
+        raise ValueError(f"unknown env id {env_id!r}; valid: {list(VARIANTS)}")
     return env_id
 
 

@@ -115,7 +115,7 @@ def test_video_runs_a_speed_limited_agent_under_its_own_env(tmp_path):
     from benchmarks.reports.video import parse_args
 
     args = parse_args(["--policy", "ppo_residual", "--out", str(tmp_path / "v.mp4")])
-    assert args.env_id == "AUVPath3DSpeedLimit-v0"  # recorded as AUVPath3D-v1, renamed
+    assert args.env_id == "AUVPath3DSpeedLimit-v0"
     assert parse_args(["--policy", "fbsm", "--out", str(tmp_path / "f.mp4")]).env_id == (
         "AUVPath3D-v0"
     )

@@ -238,7 +238,7 @@ def test_bad_preview_arguments_name_the_argument(bad, message):
         AUVPath3DEnv(observation=5)
 
 
-def test_ids_print_nothing_and_legacy_ids_resolve():
+def test_ids_print_nothing_and_former_ids_are_refused():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         for env_id in auv_gym.VARIANTS:
@@ -270,7 +270,8 @@ def test_ids_print_nothing_and_legacy_ids_resolve():
     np.testing.assert_allclose(
         obs[-3:], np.clip(10.0 * (1.0 - decay) * reference[:3], -1, 1), rtol=1e-6
     )
-    assert auv_gym.resolve_env_id("AUVPath3D-v1") == "AUVPath3DSpeedLimit-v0"
+    with pytest.raises(ValueError, match=r"unknown env id 'AUVPath3D-v1'"):  # renamed, then gone
+        auv_gym.resolve_env_id("AUVPath3D-v1")
     for removed in ("AUVPath3DPreviewIntegral-v0", "AUVPath3DPreviewAntiWindup-v0"):
         with pytest.raises(ValueError, match=f"env id '{removed}' was removed: use gym.make"):
             gym.make(removed)

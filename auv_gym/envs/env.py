@@ -275,8 +275,8 @@ class AUVPath3DEnv(gym.Env):
       (weight 0 by default), `waves` and `current_profile` (None by default), and
       ``actuator="realistic"`` with `actuator_params` (propeller and fin dynamics, docs/model.md
       §2.6).
-    * `AUVPath3DSpeedLimit-v0` (registered as `AUVPath3D-v1` until the ids were renamed, so that
-      v0 is not reported "out of date"): realistic speed — the v0 environment with
+    * `AUVPath3DSpeedLimit-v0` (a name of its own, not v1 of v0's, so that v0 is not reported
+      "out of date"): realistic speed — the v0 environment with
       `surge_limit` = "vehicle" by default, the vehicle record's top speed
       (`AUVParams.max_surge`, 2.0 m/s for REMUS 100): the overspeed reward term and the "overspeed"
       termination (docs/design.md §3). Everything else, including every other default, is v0's.
@@ -287,8 +287,8 @@ class AUVPath3DEnv(gym.Env):
       "integral_limit": L}`` sets them one by one.
 
     Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8); an
-    agent's metadata naming `AUVPath3D-v1` is read as `AUVPath3DSpeedLimit-v0`, one naming a
-    removed id (`auv_gym.REMOVED_ENV_IDS`) as the RL task with its recorded observation.
+    agent's metadata naming a removed id (`auv_gym.REMOVED_ENV_IDS`) is read as the RL task with
+    its recorded observation.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}

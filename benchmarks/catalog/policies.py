@@ -281,9 +281,8 @@ def agent_run(
 ) -> tuple[int, str, dict[str, Any]]:
     """(training seed, env id, env arguments) of a checked agent: an agent carries its env.
 
-    The env id is the one its metadata.json records, a key of `auv_gym.VARIANTS` or an earlier
-    id (`auv_gym.LEGACY_ENV_IDS`; a removed generation id, `auv_gym.REMOVED_ENV_IDS`, is the RL
-    task); the env arguments hold the observation it was trained on where the id's registered
+    The env id is the one its metadata.json records, a key of `auv_gym.VARIANTS` (a removed
+    generation id, `auv_gym.REMOVED_ENV_IDS`, is the RL task); the env arguments hold the observation it was trained on where the id's registered
     one differs (e.g. ``observation="preview_integral"``). ``default_env_id`` stands in for a
     missing id (None: an error). Errors name ``where``."""
     from controllers.agent import check_agent
@@ -293,7 +292,7 @@ def agent_run(
     except (OSError, ValueError) as error:
         raise type(error)(f"{where}: {error}") from None
     recorded = files.metadata.get("env_id", default_env_id)
-    try:  # an id of an earlier release (AUVPath3D-v1) runs under today's name for that env
+    try:
         env_id = recorded_env_id(recorded)
     except ValueError as error:
         raise ValueError(
