@@ -30,6 +30,11 @@ An optional ``jump_start`` mapping makes the run imitate a classical expert (or 
 ``auv-gym demos``) instead of running PPO: `benchmarks.training.jump_start`, checked here with
 the rest of the file (the dataset against the agent's observation and actions).
 
+An optional ``demo_regularization`` mapping (SAC) keeps the actor near the expert's labels of the
+jump start it starts from while SAC fine-tunes it: a behaviour-cloning term in the actor loss,
+an actor delay, a share of demonstrations in every batch
+(`benchmarks.training.demo_regularization`).
+
 An optional ``action_bounds`` key narrows the box the agent acts in, a sub-box of the env's
 [−1, 1]³ given as ``[[low_X, low_M, low_N], [high_X, high_M, high_N]]``: the agent's action
 space becomes that box (`benchmarks.training.train.ActionBox`), saved with the model, so a loaded
@@ -77,6 +82,7 @@ ZOO_KEYS = frozenset(
         "stages",
         "envelope_guard",  # refused with the stage that replaces it
         "jump_start",  # imitation of a classical expert instead of PPO (`jump_start`)
+        "demo_regularization",  # SAC kept near the jump start's labels (`demo_regularization`)
     }
 )
 # Keys of removed training features (no kept agent used them; their findings stay in
@@ -112,6 +118,8 @@ class ZooConfig:
     obs_scales: dict[str, float] | None = None  # entries at fixed scales (`training.normalization`)
     stages: tuple[dict[str, Any], ...] = ()  # trained inside and exported (`controllers.stages`)
     jump_start: Any = None  # `benchmarks.training.jump_start.JumpStart`: imitation, not PPO
+    # `benchmarks.training.demo_regularization.DemoRegularization`: SAC near the expert's labels
+    demo_regularization: Any = None
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -218,6 +226,11 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         from benchmarks.training.jump_start import parse_jump_start
 
         jump_start = parse_jump_start(section["jump_start"], where)
+    demo_regularization = None
+    if "demo_regularization" in section:
+        from benchmarks.training.demo_regularization import parse_demo_regularization
+
+        demo_regularization = parse_demo_regularization(section["demo_regularization"], algo, where)
     cfg = ZooConfig(
         algo=algo,
         n_envs=n_envs,
@@ -231,6 +244,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         residual=residual,
         action_bounds=action_bounds,
         jump_start=jump_start,
+        demo_regularization=demo_regularization,
         **interface,
     )
     if jump_start is not None:

@@ -97,7 +97,8 @@ def collect(
 
     ``sample(obs, t)``: the learner's actions at the normalised observations of vector step t
     (default: the policy's sampled action); ``record(obs, action, reward, next_obs, dones,
-    infos)``, if given, sees every vector step (raw observations and rewards)."""
+    infos, labels)``, if given, sees every vector step (raw observations and rewards, the
+    expert's labels)."""
     n = venv.num_envs
     horizon = max(1, steps // n)
     obs = venv.reset()
@@ -129,7 +130,7 @@ def collect(
                 next_obs[i][t] = venv.unnormalize_obs(infos[i]["terminal_observation"])
         raw = venv.get_original_obs()
         if record is not None:
-            record(observations[t], action, rewards[t], raw, dones, infos)
+            record(observations[t], action, rewards[t], raw, dones, infos, labels[t])
         starts = np.asarray(dones, dtype=bool)
     for i in np.flatnonzero(~ends[-1]):  # the data stop mid-episode
         next_obs[i][horizon - 1] = raw[i].copy()

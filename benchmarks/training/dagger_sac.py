@@ -29,8 +29,10 @@ shares); what is fitted differs, and the flights are kept:
   (raw observation and next observation, the terminal one where an episode ended, the action
   taken, scaled to [−1, 1]³, raw reward, done and timeout), a dataset's episodes too, and each
   round's last row is cut (`benchmarks.training.transitions.cut_streams`: the next round's
-  envs restart). The run writes the buffer beside its agents for the next phase
-  (`benchmarks.training.transitions`).
+  envs restart), with the expert's label of every transition (the command DAgger fitted,
+  scaled to [−1, 1]³; a dataset's action). The run writes the buffer and the labels beside its
+  agents for the next phase (`benchmarks.training.transitions`), whose SAC may keep its actor
+  near them (`benchmarks.training.demo_regularization`).
 
 Observation statistics are those of the data, as for PPO: `VecNormalize` learns them while the
 rounds fly (and from the dataset first).
@@ -47,7 +49,7 @@ import numpy as np
 from benchmarks.training.dagger import Segment, collect, dataset_segments, learn_statistics
 from benchmarks.training.expert import ExpertLabels
 from benchmarks.training.jump_start import JumpStart
-from benchmarks.training.transitions import cut_streams, fill_buffer
+from benchmarks.training.transitions import LABELS, attach_labels, cut_streams, fill_buffer
 
 __all__ = [
     "EXPLORATION",
@@ -162,7 +164,8 @@ def warm_up_critic(model: Any, epochs: int) -> dict[str, float]:
 
 def dataset_stream(episodes: Sequence[dict[str, Any]], policy: Any) -> dict[str, np.ndarray]:
     """A dataset's episodes (`benchmarks.training.demonstrations.read_dataset`) as one flat
-    stream of transitions (`benchmarks.training.transitions`), actions scaled to [−1, 1]³."""
+    stream of transitions (`benchmarks.training.transitions`), actions scaled to [−1, 1]³ and
+    labelled with themselves (the expert flew them)."""
     parts: dict[str, list[np.ndarray]] = {key: [] for key in _STREAM}
     for episode in episodes:
         obs = np.asarray(episode["observations"], dtype=np.float32)
@@ -174,6 +177,7 @@ def dataset_stream(episodes: Sequence[dict[str, Any]], policy: Any) -> dict[str,
         parts["observations"].append(obs[:-1])
         parts["next_observations"].append(obs[1:])
         parts["actions"].append(policy.scale_action(np.asarray(episode["actions"], np.float32)))
+        parts[LABELS].append(parts["actions"][-1])  # the expert's own command
         parts["rewards"].append(np.asarray(episode["rewards"], dtype=np.float32))
         parts["dones"].append(terminated | truncated)
         parts["timeouts"].append(truncated & ~terminated)  # SB3's TimeLimit.truncated
@@ -181,7 +185,16 @@ def dataset_stream(episodes: Sequence[dict[str, Any]], policy: Any) -> dict[str,
     return {key: np.concatenate(values) for key, values in parts.items()}
 
 
-_STREAM = ("observations", "next_observations", "actions", "rewards", "dones", "timeouts", "breaks")
+_STREAM = (
+    "observations",
+    "next_observations",
+    "actions",
+    "rewards",
+    "dones",
+    "timeouts",
+    "breaks",
+    LABELS,
+)
 
 
 def _sampler(model: Any, n: int) -> Callable[[np.ndarray, int], np.ndarray]:
@@ -208,15 +221,17 @@ def _sampler(model: Any, n: int) -> Callable[[np.ndarray, int], np.ndarray]:
 def _recorder(model: Any, venv: Any) -> Callable[..., None]:
     """`collect`'s ``record``: every vector step into the replay buffer, as SAC's
     ``_store_transition`` stores it (the terminal observation as the next one where an episode
-    ended, un-normalised from VecNormalize's info)."""
+    ended, un-normalised from VecNormalize's info), and the expert's labels, scaled, into the
+    buffer's ``labels`` at the same row."""
     buffer = model.replay_buffer
 
-    def record(obs, action, reward, next_obs, dones, infos) -> None:
+    def record(obs, action, reward, next_obs, dones, infos, labels) -> None:
         following = np.array(next_obs, dtype=np.float32)
         for i in np.flatnonzero(dones):
             if infos[i].get("terminal_observation") is not None:
                 following[i] = venv.unnormalize_obs(infos[i]["terminal_observation"])
         scaled = model.policy.scale_action(np.asarray(action, dtype=np.float32))
+        buffer.labels[buffer.pos] = model.policy.scale_action(np.asarray(labels, np.float32))
         buffer.add(obs, following, scaled, reward, dones, infos)
 
     return record
@@ -247,6 +262,7 @@ def run_off_policy_jump_start(
     data: list[Segment] = []
     record: dict[str, Any] = {**jump.to_dict(), "rounds": []}
     model.num_timesteps = 0
+    attach_labels(model.replay_buffer)
     if jump.dataset is not None:
         demos = read_dataset(jump.dataset, source.obs_names, source.interface, "jump_start dataset")
         data += dataset_segments(demos.episodes)

@@ -35,9 +35,11 @@ deterministic action, tanh of its mean in the normalised action space, is fitted
 squares, its ``log_std`` and the entropy coefficient left as built; the critic is warmed up by
 SAC's own TD updates on the replay buffer with the actor frozen (``epochs`` passes in SAC's
 ``batch_size``; why not λ-returns: `benchmarks.training.dagger_sac`); every transition flown
-(and the dataset's) fills the replay buffer, which the run writes beside its agents
-(`benchmarks.training.transitions`) and the next phase starts with, ``learning_starts``
-counting it (`benchmarks.training.warm_start`). CrossQ (batch-normalised critics, no target
+(and the dataset's) fills the replay buffer, which the run writes beside its agents with the
+expert's label of each (`benchmarks.training.transitions`) and the next phase starts with,
+``learning_starts`` counting it (`benchmarks.training.warm_start`); a SAC phase with
+``demo_regularization`` keeps its actor near the labels
+(`benchmarks.training.demo_regularization`). CrossQ (batch-normalised critics, no target
 networks) has no jump start.
 
 Everything is checked with the rest of the file (`read_zoo_config`), before any training step:

@@ -23,7 +23,8 @@ statistics: `benchmarks.training.warm_start`; the first phase from scratch, or f
 classical expert instead of running PPO or SAC, and its changes are its own: the phase after it
 trains with the section as the phases before the jump start left it, from the jump-started
 agents (an off-policy jump start's flights go with them, to fill the next phase's replay
-buffer: `benchmarks.training.transitions`)::
+buffer: `benchmarks.training.transitions`, with the expert's labels for a phase that keeps
+its SAC near them, ``demo_regularization``, and hands them on in turn)::
 
       phases:
         - {name: jump_start, jump_start: {expert: fbsm_colos, steps: 262144}}
@@ -219,6 +220,7 @@ def check_schedule(schedule: Schedule, algo: str, out: Path) -> list[Path]:
     """Write and check every phase's configuration (`read_zoo_config`) before any training;
     the config files, one per phase. Errors name the phase."""
     configs = []
+    carries = False  # the phase before hands on labelled transitions (`demo_regularization`)
     for k, phase in enumerate(schedule.phases):
         config = _write_phase_config(schedule, k, out)
         try:
@@ -228,6 +230,13 @@ def check_schedule(schedule: Schedule, algo: str, out: Path) -> list[Path]:
             raise ValueError(
                 f"{schedule.path}: phase {phase.name!r}: {error}".replace(f"{config}: ", "")
             ) from None
+        tuned = cfg.demo_regularization is not None and cfg.jump_start is None
+        if tuned and k > 0 and not carries:
+            raise ValueError(
+                f"{schedule.path}: phase {phase.name!r}: demo_regularization needs the labelled "
+                "transitions of an off-policy jump start: put the phase after a jump_start phase"
+            )
+        carries = cfg.jump_start is not None or tuned
         configs.append(config)
     first = schedule.phases[0].init_from
     if first is not None and SEED_FIELD not in first and not Path(first).is_dir():

@@ -41,6 +41,7 @@ from benchmarks.arguments import writable_location
 from benchmarks.runner.pool import check_pool_options, check_ray_address
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import read_zoo_config
+from benchmarks.training.demo_regularization import check_demonstrations
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.seed_workers import (
@@ -152,6 +153,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         str(train.config),
         bool(cfg.algo_kwargs.get("use_sde", False)),
     )
+    check_demonstrations(cfg, agents, obs_names, action_dim, str(train.config))
     n_timesteps = cfg.n_timesteps if train.n_timesteps is None else int(train.n_timesteps)
     if train.stop_at is not None and train.stop_at % cfg.n_envs:
         raise ValueError(

@@ -264,6 +264,19 @@ def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
         return _train(opts, argv)
 
 
+def _keep_demonstrations(agent: Path, out: Path) -> None:
+    """Copy the labelled transitions of the run's initial agent into the run folder (atomically):
+    a resumed run reads them there, and a schedule hands them on beside the selected agent
+    (`benchmarks.training.demo_regularization`)."""
+    import shutil
+
+    from auv_gym.support.files import write_atomic
+    from benchmarks.training.transitions import TRANSITIONS_FILE
+
+    with (agent / TRANSITIONS_FILE).open("rb") as data:
+        write_atomic(out / TRANSITIONS_FILE, lambda fh: shutil.copyfileobj(data, fh))
+
+
 def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     import stable_baselines3
     import torch
@@ -284,6 +297,12 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
     spec = ALGORITHMS[opts.algo]
     algorithm = spec.sb3_class()
+    # SAC kept near a jump start's labels (`demo_regularization`); a jump start ignores the key.
+    demo = cfg.demo_regularization if cfg.jump_start is None else None
+    if demo is not None:
+        from benchmarks.training.demo_sac import DemoSAC
+
+        algorithm = DemoSAC
     n_timesteps = int(cfg.n_timesteps if opts.n_timesteps is None else opts.n_timesteps)
     out = Path(opts.out)
     if out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()) and not opts.resume:
@@ -312,6 +331,20 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if opts.resume and checkpoint is None:
         raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
     state: dict[str, Any] | None = None
+    demos: dict[str, Any] | None = None  # the labelled transitions, read before any work
+    if demo is not None:
+        from benchmarks.training.demo_regularization import (
+            check_demonstrations,
+            read_demonstrations,
+        )
+
+        source = out if checkpoint is not None else None  # a resumed run's own copy
+        if source is None and opts.init_from:
+            source = Path(agent_for_seed(opts.init_from, opts.seed))
+        action_count = 3 if residual is None else residual.action_dim
+        if source is None:  # refused: no initial agent to carry them
+            check_demonstrations(cfg, [], obs_names, action_count, str(opts.config))
+        demos = read_demonstrations(source, obs_names, action_count, str(opts.config))
     if checkpoint is not None:
         previous = json.loads((checkpoint / METADATA_FILE).read_text())
         warm = previous.get("warm_start")
@@ -358,6 +391,12 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             warm = warm_start(
                 model, venv, agent_for_seed(opts.init_from, opts.seed), opts.algo, obs_names
             )
+    demo_record: dict[str, Any] = {}
+    if demos is not None:  # attached again at a resume: the zip leaves them out
+        model.attach_demonstrations(demo, demos)
+        demo_record = {**demo.to_dict(), "transitions": len(demos["rewards"])}
+        if checkpoint is None:  # the run's own copy: for a resume and the next phase
+            _keep_demonstrations(source, out)
     if cfg.jump_start is not None and (checkpoint is not None or opts.stop_at is not None):
         raise ValueError(
             f"{opts.config}: a jump start runs whole, in one go (no --resume, no --stop-at)"
@@ -412,6 +451,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "auv_gym_version": auv_gym.__version__,
             **({} if warm is None else {"warm_start": warm}),
             **({"jump_start": dict(jump)} if jump else {}),
+            **({} if demos is None else {"demo_regularization": demo_record}),
             **extra,
         }
 

@@ -19,6 +19,13 @@ step (the end of a column, the end of a round whose episodes the next round rest
 into a buffer, a break that is not an episode end becomes ``timeouts`` without ``dones``: SB3's
 targets then bootstrap from the row's own next observation (what SAC's n-step buffer does at
 its newest row), so no n-step return runs across two streams.
+
+A jump start also knows the expert's command in every state it stored (DAgger labels each
+visited state; a dataset's action is the expert's): ``labels``, the expert's action in the
+agent's normalised action space [−1, 1]³, one per transition, ride along when the buffer carries
+them (`attach_labels`; a file without them is read as before). A SAC run that fine-tunes with a
+behaviour-cloning term (`benchmarks.training.demo_regularization`) reads them; laid into a
+replay buffer they are ignored.
 """
 
 from __future__ import annotations
@@ -32,7 +39,9 @@ import numpy as np
 from auv_gym.support.files import write_atomic
 
 __all__ = [
+    "LABELS",
     "TRANSITIONS_FILE",
+    "attach_labels",
     "buffer_stream",
     "cut_streams",
     "fill_buffer",
@@ -42,6 +51,14 @@ __all__ = [
 
 TRANSITIONS_FILE = "replay_transitions.npz"
 ARRAYS = ("observations", "next_observations", "actions", "rewards", "dones", "timeouts", "breaks")
+LABELS = "labels"  # optional: the expert's action per transition, in [-1, 1]^3 (module doc)
+
+
+def attach_labels(buffer: Any) -> np.ndarray:
+    """Give ``buffer`` a ``labels`` array shaped like its actions, NaN (no label) until
+    written: `fill_buffer` and the jump start's recorder fill it, `buffer_stream` hands it on."""
+    buffer.labels = np.full(buffer.actions.shape, np.nan, dtype=np.float32)
+    return buffer.labels
 
 
 def cut_streams(buffer: Any) -> None:
@@ -55,7 +72,7 @@ def cut_streams(buffer: Any) -> None:
 
 def buffer_stream(buffer: Any) -> dict[str, np.ndarray]:
     """The transitions of an SB3 `ReplayBuffer` as one flat stream (module doc): column by
-    column, oldest row first."""
+    column, oldest row first; with ``labels`` when the buffer carries a label for every one."""
     rows = np.arange(buffer.pos)
     if buffer.full:
         rows = (np.arange(buffer.buffer_size) + buffer.pos) % buffer.buffer_size
@@ -68,7 +85,7 @@ def buffer_stream(buffer: Any) -> dict[str, np.ndarray]:
     def flat(array: np.ndarray) -> np.ndarray:  # (rows, n_envs, ...) -> (n_envs * rows, ...)
         return np.swapaxes(array, 0, 1).reshape(-1, *array.shape[2:])
 
-    return {
+    stream = {
         "observations": flat(buffer.observations[rows]),
         "next_observations": flat(buffer.next_observations[rows]),
         "actions": flat(buffer.actions[rows]),
@@ -77,12 +94,17 @@ def buffer_stream(buffer: Any) -> dict[str, np.ndarray]:
         "timeouts": flat(buffer.timeouts[rows].astype(bool) & dones),
         "breaks": flat(breaks),
     }
+    labels = getattr(buffer, LABELS, None)
+    if labels is not None and np.all(np.isfinite(labels[rows])):
+        stream[LABELS] = flat(labels[rows])
+    return stream
 
 
 def fill_buffer(buffer: Any, stream: Mapping[str, np.ndarray]) -> int:
     """Append a flat stream to an SB3 `ReplayBuffer`: cut into ``n_envs`` consecutive chunks,
     one per column (the oldest ``len % n_envs`` transitions, fewer than ``n_envs``, and whatever
-    exceeds the buffer's capacity are left out). Returns the transitions added."""
+    exceeds the buffer's capacity are left out); the stream's ``labels`` too where both it and
+    the buffer carry them (`attach_labels`). Returns the transitions added."""
     n = buffer.n_envs
     total = len(stream["rewards"])
     rows = min(total // n, buffer.buffer_size)
@@ -104,6 +126,8 @@ def fill_buffer(buffer: Any, stream: Mapping[str, np.ndarray]) -> int:
     buffer.rewards[index] = columns("rewards")
     buffer.dones[index] = dones
     buffer.timeouts[index] = (columns("timeouts").astype(bool) & dones) | (breaks & ~dones)
+    if LABELS in stream and getattr(buffer, LABELS, None) is not None:
+        buffer.labels[index] = columns(LABELS)
     buffer.full = buffer.full or buffer.pos + rows >= buffer.buffer_size
     buffer.pos = int((buffer.pos + rows) % buffer.buffer_size)
     return rows * n
@@ -121,7 +145,8 @@ def read_transitions(
     path: Path, obs_names: Sequence[str], action_dim: int, where: str
 ) -> dict[str, np.ndarray]:
     """The stream of a `TRANSITIONS_FILE`, checked for an agent observing ``obs_names`` with
-    ``action_dim`` actions; a one-line ValueError naming ``where`` and the file otherwise."""
+    ``action_dim`` actions, with its ``labels`` where it has them; a one-line ValueError naming
+    ``where`` and the file otherwise."""
     at = f"{where}: {path}"
     try:
         with np.load(path, allow_pickle=False) as data:
@@ -152,4 +177,14 @@ def read_transitions(
                 raise ValueError(f"{at}: {key} is not finite")
     if np.any(np.abs(values["actions"]) > 1.0 + 1e-5):  # float rounding of the rescaling
         raise ValueError(f"{at}: actions outside the normalised action space [-1, 1]")
-    return {key: values[key] for key in ARRAYS}
+    keys = ARRAYS
+    if LABELS in values:
+        labels = values[LABELS]
+        if labels.shape != (total, action_dim):
+            raise ValueError(
+                f"{at}: labels have shape {labels.shape}, expected {(total, action_dim)}"
+            )
+        if not np.all(np.isfinite(labels)) or np.any(np.abs(labels) > 1.0 + 1e-5):
+            raise ValueError(f"{at}: labels are not finite actions in [-1, 1]")
+        keys = (*ARRAYS, LABELS)
+    return {key: values[key] for key in keys}
