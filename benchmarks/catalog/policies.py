@@ -282,8 +282,9 @@ def agent_run(
     """(training seed, env id, env arguments) of a checked agent: an agent carries its env.
 
     The env id is the one its metadata.json records, a key of `auv_gym.VARIANTS` (a removed
-    generation id, `auv_gym.REMOVED_ENV_IDS`, is the RL task); the env arguments hold the observation it was trained on where the id's registered
-    one differs (e.g. ``observation="preview_integral"``). ``default_env_id`` stands in for a
+    generation id, `auv_gym.REMOVED_ENV_IDS`, is the RL task); the env arguments hold the
+    observation it was trained on where the id's registered one differs (e.g.
+    ``observation="preview_integral"``). ``default_env_id`` stands in for a
     missing id (None: an error). Errors name ``where``."""
     from controllers.agent import check_agent
 
