@@ -112,7 +112,7 @@ def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
         np.testing.assert_array_equal(space.low, low, err_msg=name)
         np.testing.assert_array_equal(space.high, high, err_msg=name)
         checked += 1
-    assert checked == len(REFERENCE_AGENTS) == 5
+    assert checked == len(REFERENCE_AGENTS) == 4
 
 
 def test_a_faster_vehicle_is_observed_within_its_own_speed_bound() -> None:
