@@ -6,6 +6,29 @@ import pytest
 from auv_gym.sim.config import SimConfig
 from auv_gym.sim.simulator import Simulator
 
+# sac_helix.yml's SAC keys scaled down for training tests (tests/test_jump_start_sac.py,
+# tests/test_demo_sac.py: `from conftest import TINY_SAC_SECTION`); each adds its env_kwargs.
+TINY_SAC_SECTION = {
+    "n_envs": 4,
+    "n_timesteps": 256,
+    "policy": "MlpPolicy",
+    "normalize": "dict(norm_obs=True, norm_reward=False)",
+    "learning_rate": 3e-4,
+    "buffer_size": 10000,
+    "learning_starts": 500,
+    "batch_size": 64,
+    "tau": 0.005,
+    "gamma": 0.995,
+    "n_steps": 3,
+    "train_freq": 1,
+    "gradient_steps": 1,
+    "ent_coef": "auto",
+    "use_sde": True,
+    "sde_sample_freq": 20,
+    "use_sde_at_warmup": True,
+    "policy_kwargs": "dict(net_arch=[64, 64])",
+}
+
 
 @pytest.fixture
 def make_sim():

@@ -13,34 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from conftest import TINY_SAC_SECTION
 
 pytest.importorskip("minari")
 pytestmark = pytest.mark.rl
 
 ENV_ID = "AUVPath3DPreview-v0"
 ENV_KWARGS = {"observation": "preview_integral", "randomize_start": True, "max_time": 4.0}
-# sac_helix.yml's keys, scaled down.
-SECTION = {
-    "n_envs": 4,
-    "n_timesteps": 256,
-    "policy": "MlpPolicy",
-    "normalize": "dict(norm_obs=True, norm_reward=False)",
-    "learning_rate": 3e-4,
-    "buffer_size": 10000,
-    "learning_starts": 500,
-    "batch_size": 64,
-    "tau": 0.005,
-    "gamma": 0.995,
-    "n_steps": 3,
-    "train_freq": 1,
-    "gradient_steps": 1,
-    "ent_coef": "auto",
-    "use_sde": True,
-    "sde_sample_freq": 20,
-    "use_sde_at_warmup": True,
-    "policy_kwargs": "dict(net_arch=[64, 64])",
-    "env_kwargs": ENV_KWARGS,
-}
+SECTION = {**TINY_SAC_SECTION, "env_kwargs": ENV_KWARGS}
 BOX = [[-0.3, -1.0, -1.0], [0.3, 1.0, 1.0]]
 # Behaviour cloning of the tiny dataset (240 steps, 300 epochs) must bring the imitation loss
 # (mean squared error of tanh of the actor's mean against the label, per entry of the action in
