@@ -27,7 +27,17 @@ import numpy as np
 from benchmarks.training.expert import ExpertLabels
 from benchmarks.training.jump_start import JumpStart
 
-__all__ = ["Segment", "collect", "dataset_segments", "fit", "imitation_mse", "run_jump_start"]
+__all__ = [
+    "RoundSteps",
+    "Segment",
+    "collect",
+    "dataset_segments",
+    "fit",
+    "float_tensor",
+    "imitation_mse",
+    "run_jump_start",
+    "run_rounds",
+]
 
 
 @dataclass
@@ -140,7 +150,8 @@ def collect(
     ]
 
 
-def _tensor(array: np.ndarray) -> Any:
+def float_tensor(array: np.ndarray) -> Any:
+    """``array`` as a float32 torch tensor."""
     import torch
 
     return torch.as_tensor(np.asarray(array, dtype=np.float32))
@@ -152,7 +163,7 @@ def _values(policy: Any, normed: np.ndarray, chunk: int = 8192) -> np.ndarray:
     out = []
     with torch.no_grad():
         for k in range(0, len(normed), chunk):
-            out.append(policy.predict_values(_tensor(normed[k : k + chunk])).numpy().ravel())
+            out.append(policy.predict_values(float_tensor(normed[k : k + chunk])).numpy().ravel())
     return np.concatenate(out) if out else np.zeros(0)
 
 
@@ -195,8 +206,8 @@ def imitation_mse(policy: Any, normed: np.ndarray, labels: np.ndarray, chunk: in
     total = 0.0
     with torch.no_grad():
         for k in range(0, len(normed), chunk):
-            mean = _mean_action(policy, _tensor(normed[k : k + chunk]))
-            total += float(((mean - _tensor(labels[k : k + chunk])) ** 2).sum())
+            mean = _mean_action(policy, float_tensor(normed[k : k + chunk]))
+            total += float(((mean - float_tensor(labels[k : k + chunk])) ** 2).sum())
     return total / max(1, labels.size)
 
 
@@ -233,11 +244,11 @@ def fit(
         order = rng.permutation(n)
         for k in range(0, n - size + 1, size):
             rows = order[k : k + size]
-            x = _tensor(normed[rows])
-            loss = ((_mean_action(policy, x) - _tensor(labels[rows])) ** 2).mean()
+            x = float_tensor(normed[rows])
+            loss = ((_mean_action(policy, x) - float_tensor(labels[rows])) ** 2).mean()
             if returns is not None:
                 value = policy.predict_values(x).flatten()
-                loss = loss + ((value - _tensor(returns[rows])) ** 2).mean()
+                loss = loss + ((value - float_tensor(returns[rows])) ** 2).mean()
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
@@ -251,19 +262,36 @@ def fit(
     return result
 
 
-def run_jump_start(
+@dataclass(frozen=True)
+class RoundSteps:
+    """What an algorithm does in the rounds `run_rounds` shares: PPO's (`ppo_round_steps`) or
+    SAC's (`benchmarks.training.dagger_sac`)."""
+
+    parameters: list[Any]  # what the imitation optimiser trains
+    fit: Callable[[list[Segment], Any, np.random.Generator], dict[str, float]]  # data, Adam, rng
+    describe: Callable[[dict[str, float]], str]  # the progress line's tail, from the losses
+    add_dataset: Callable[[Any], None] = lambda demos: None  # after the statistics learnt it
+    sample: Callable[[np.ndarray, int], np.ndarray] | None = None  # `collect`'s
+    record: Callable[..., None] | None = None  # `collect`'s
+    after_collect: Callable[[], None] = lambda: None
+    entry_extras: Callable[[], dict[str, Any]] = dict  # added to each round's record
+
+
+def run_rounds(
     model: Any,
     venv: Any,
     cfg: Any,
     env_id: str,
     seed: int,
+    make_steps: Callable[[JumpStart], RoundSteps],
     evaluate: Callable[[], None] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
-    """The jump start of ``cfg`` (a `ZooConfig` with ``jump_start``) on ``model`` (a fresh
-    PPO) and ``venv`` (its `VecNormalize`): round 0, then DAgger's rounds, ``evaluate()`` after
-    each (the run's validation: learning curve and best agent). ``model.num_timesteps`` counts
-    the dataset's steps and the steps flown. Returns the record for the agent's metadata."""
+    """The jump start of ``cfg`` (a `ZooConfig` with ``jump_start``) on ``model`` (fresh) and
+    ``venv`` (its `VecNormalize`): the dataset first, round 0 (the expert's share 1), then
+    DAgger's rounds, each fitted by ``make_steps(jump)``'s algorithm, ``evaluate()`` after each
+    (the run's validation: learning curve and best agent). ``model.num_timesteps`` counts the
+    dataset's steps and the steps flown. Returns the record for the agent's metadata."""
     import torch
 
     from benchmarks.training.demonstrations import DemoSource, read_dataset
@@ -272,10 +300,8 @@ def run_jump_start(
     began = time.monotonic()
     source = DemoSource(env_id, dict(cfg.env_kwargs), tuple(cfg.stages), cfg.action_bounds)
     rng = np.random.default_rng(seed)
-    gamma = float(cfg.algo_kwargs.get("gamma", model.gamma))
-    lam = float(cfg.algo_kwargs.get("gae_lambda", getattr(model, "gae_lambda", 0.95)))
-    params = [p for name, p in model.policy.named_parameters() if name != "log_std"]
-    optimizer = torch.optim.Adam(params, lr=jump.learning_rate)
+    steps_of = make_steps(jump)
+    optimizer = torch.optim.Adam(steps_of.parameters, lr=jump.learning_rate)
     data: list[Segment] = []
     record: dict[str, Any] = {**jump.to_dict(), "rounds": []}
     model.num_timesteps = 0
@@ -283,6 +309,7 @@ def run_jump_start(
         demos = read_dataset(jump.dataset, source.obs_names, source.interface, "jump_start dataset")
         data += dataset_segments(demos.episodes)
         learn_statistics(venv, data)
+        steps_of.add_dataset(demos)
         model.num_timesteps += demos.steps
         record["dataset_steps"] = demos.steps
         record["dataset_policy"] = demos.meta.get("policy")
@@ -300,21 +327,53 @@ def run_jump_start(
         share = 1.0 if k == 0 else jump.expert_share**k
         flown = 0
         if steps and expert is not None:
-            data += collect(model, venv, expert, steps, share, rng)
+            data += collect(
+                model, venv, expert, steps, share, rng, steps_of.sample, steps_of.record
+            )
+            steps_of.after_collect()
             flown = (steps // venv.num_envs) * venv.num_envs
             model.num_timesteps += flown
-        losses = fit(model.policy, venv, data, jump, optimizer, gamma, lam, rng)
+        losses = steps_of.fit(data, optimizer, rng)
         entry = {"round": k, "expert_share": share, "env_steps": flown, **losses}
+        entry.update(steps_of.entry_extras())
         entry["wall_s"] = time.monotonic() - began
         record["rounds"].append(entry)
         if progress is not None:
             progress(
                 f"jump start round {k}: {int(losses['samples'])} samples, imitation MSE "
                 f"{losses['imitation_mse_before']:.4f} -> {losses['imitation_mse']:.4f}"
-                + (f", value MSE {losses['value_mse']:.4f}" if "value_mse" in losses else "")
+                + steps_of.describe(losses)
             )
         if evaluate is not None:
             evaluate()
     record["num_timesteps"] = int(model.num_timesteps)
     record["wall_time_s"] = time.monotonic() - began
     return record
+
+
+def run_jump_start(
+    model: Any,
+    venv: Any,
+    cfg: Any,
+    env_id: str,
+    seed: int,
+    evaluate: Callable[[], None] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """`run_rounds` on ``model``, a fresh PPO: its actor (all but ``log_std``) and, with
+    ``jump.value``, its critic fitted on λ-returns (`fit`)."""
+    gamma = float(cfg.algo_kwargs.get("gamma", model.gamma))
+    lam = float(cfg.algo_kwargs.get("gae_lambda", getattr(model, "gae_lambda", 0.95)))
+
+    def make_steps(jump: JumpStart) -> RoundSteps:
+        return RoundSteps(
+            parameters=[p for name, p in model.policy.named_parameters() if name != "log_std"],
+            fit=lambda data, optimizer, rng: fit(
+                model.policy, venv, data, jump, optimizer, gamma, lam, rng
+            ),
+            describe=lambda losses: (
+                f", value MSE {losses['value_mse']:.4f}" if "value_mse" in losses else ""
+            ),
+        )
+
+    return run_rounds(model, venv, cfg, env_id, seed, make_steps, evaluate, progress)

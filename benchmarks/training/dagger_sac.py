@@ -40,14 +40,12 @@ rounds fly (and from the dataset first).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
-from benchmarks.training.dagger import Segment, collect, dataset_segments, learn_statistics
-from benchmarks.training.expert import ExpertLabels
+from benchmarks.training.dagger import RoundSteps, Segment, float_tensor, run_rounds
 from benchmarks.training.jump_start import JumpStart
 from benchmarks.training.transitions import LABELS, attach_labels, cut_streams, fill_buffer
 
@@ -63,12 +61,6 @@ __all__ = [
 EXPLORATION = "log_std"  # the actor's exploration parameters (SB3's name), never fitted
 
 
-def _tensor(array: np.ndarray) -> Any:
-    import torch
-
-    return torch.as_tensor(np.asarray(array, dtype=np.float32))
-
-
 def deterministic_mse(actor: Any, normed: np.ndarray, targets: np.ndarray, chunk: int = 8192):
     """(mean squared error of tanh(actor mean) against ``targets``, per action entry; mean
     exploration std before the tanh) at the normalised observations ``normed``."""
@@ -77,8 +69,8 @@ def deterministic_mse(actor: Any, normed: np.ndarray, targets: np.ndarray, chunk
     total, spread = 0.0, 0.0
     with torch.no_grad():
         for k in range(0, len(normed), chunk):
-            mean, log_std, extra = actor.get_action_dist_params(_tensor(normed[k : k + chunk]))
-            total += float(((torch.tanh(mean) - _tensor(targets[k : k + chunk])) ** 2).sum())
+            mean, log_std, extra = actor.get_action_dist_params(float_tensor(normed[k : k + chunk]))
+            total += float(((torch.tanh(mean) - float_tensor(targets[k : k + chunk])) ** 2).sum())
             dist = actor.action_dist.proba_distribution(mean, log_std, **extra).distribution
             spread += float(dist.stddev.sum())
     size = max(1, targets.size)
@@ -109,8 +101,8 @@ def fit_actor(
         order = rng.permutation(n)
         for k in range(0, n - size + 1, size):
             rows = order[k : k + size]
-            mean, _, _ = actor.get_action_dist_params(_tensor(normed[rows]))
-            loss = ((torch.tanh(mean) - _tensor(targets[rows])) ** 2).mean()
+            mean, _, _ = actor.get_action_dist_params(float_tensor(normed[rows]))
+            loss = ((torch.tanh(mean) - float_tensor(targets[rows])) ** 2).mean()
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
@@ -246,66 +238,37 @@ def run_off_policy_jump_start(
     evaluate: Callable[[], None] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
-    """The jump start of ``cfg`` (a `ZooConfig` with ``jump_start``, algo SAC or TQC) on
-    ``model`` (fresh) and ``venv`` (its `VecNormalize`), as `dagger.run_jump_start` does PPO's
-    (module doc); the flights end in ``model.replay_buffer``. Returns the metadata record."""
-    import torch
+    """`dagger.run_rounds` on ``model`` (a fresh SAC or TQC) and ``venv`` (its `VecNormalize`):
+    the actor fitted (`fit_actor`), the critic warmed up (`warm_up_critic`), the flights kept in
+    ``model.replay_buffer`` with the expert's labels (module doc). Returns the metadata record."""
+    buffer = model.replay_buffer
 
-    from benchmarks.training.demonstrations import DemoSource, read_dataset
+    def make_steps(jump: JumpStart) -> RoundSteps:
+        attach_labels(buffer)
 
-    jump: JumpStart = cfg.jump_start
-    began = time.monotonic()
-    source = DemoSource(env_id, dict(cfg.env_kwargs), tuple(cfg.stages), cfg.action_bounds)
-    rng = np.random.default_rng(seed)
-    params = [p for name, p in model.actor.named_parameters() if name.split(".")[0] != EXPLORATION]
-    optimizer = torch.optim.Adam(params, lr=jump.learning_rate)
-    data: list[Segment] = []
-    record: dict[str, Any] = {**jump.to_dict(), "rounds": []}
-    model.num_timesteps = 0
-    attach_labels(model.replay_buffer)
-    if jump.dataset is not None:
-        demos = read_dataset(jump.dataset, source.obs_names, source.interface, "jump_start dataset")
-        data += dataset_segments(demos.episodes)
-        learn_statistics(venv, data)
-        fill_buffer(model.replay_buffer, dataset_stream(demos.episodes, model.policy))
-        model.num_timesteps += demos.steps
-        record["dataset_steps"] = demos.steps
-        record["dataset_policy"] = demos.meta.get("policy")
-    expert = None
-    if jump.expert is not None:
-        expert = ExpertLabels(
-            jump.expert,
-            source.full_kwargs,
-            source.obs_names,
-            cfg.stages,
-            cfg.action_bounds,
-            "jump_start",
+        def fit(data: list[Segment], optimizer: Any, rng: np.random.Generator) -> dict:
+            losses = fit_actor(model, venv, data, jump, optimizer, rng)
+            if jump.value and buffer.size() > 0:
+                losses.update(warm_up_critic(model, jump.epochs))
+            return losses
+
+        def describe(losses: dict[str, float]) -> str:
+            critic = f", critic loss {losses['critic_loss']:.4g}" if "critic_loss" in losses else ""
+            return f", exploration std {losses['exploration_std']:.3f}{critic}"
+
+        return RoundSteps(
+            parameters=[
+                p for name, p in model.actor.named_parameters() if name.split(".")[0] != EXPLORATION
+            ],
+            fit=fit,
+            describe=describe,
+            add_dataset=lambda demos: fill_buffer(
+                buffer, dataset_stream(demos.episodes, model.policy)
+            ),
+            sample=_sampler(model, venv.num_envs),
+            record=_recorder(model, venv),
+            after_collect=lambda: cut_streams(buffer),
+            entry_extras=lambda: {"replay_transitions": int(buffer.size() * venv.num_envs)},
         )
-    sample, store = _sampler(model, venv.num_envs), _recorder(model, venv)
-    for k, steps in enumerate(jump.round_steps(venv.num_envs)):
-        share = 1.0 if k == 0 else jump.expert_share**k
-        flown = 0
-        if steps and expert is not None:
-            data += collect(model, venv, expert, steps, share, rng, sample, store)
-            cut_streams(model.replay_buffer)
-            flown = (steps // venv.num_envs) * venv.num_envs
-            model.num_timesteps += flown
-        losses = fit_actor(model, venv, data, jump, optimizer, rng)
-        if jump.value and model.replay_buffer.size() > 0:
-            losses.update(warm_up_critic(model, jump.epochs))
-        entry = {"round": k, "expert_share": share, "env_steps": flown, **losses}
-        entry["replay_transitions"] = int(model.replay_buffer.size() * venv.num_envs)
-        entry["wall_s"] = time.monotonic() - began
-        record["rounds"].append(entry)
-        if progress is not None:
-            progress(
-                f"jump start round {k}: {int(losses['samples'])} samples, imitation MSE "
-                f"{losses['imitation_mse_before']:.4f} -> {losses['imitation_mse']:.4f}"
-                f", exploration std {losses['exploration_std']:.3f}"
-                + (f", critic loss {losses['critic_loss']:.4g}" if "critic_loss" in losses else "")
-            )
-        if evaluate is not None:
-            evaluate()
-    record["num_timesteps"] = int(model.num_timesteps)
-    record["wall_time_s"] = time.monotonic() - began
-    return record
+
+    return run_rounds(model, venv, cfg, env_id, seed, make_steps, evaluate, progress)
