@@ -281,3 +281,22 @@ def test_an_agent_inside_the_allocation_onto_propeller_and_fins_has_no_expert_la
     box = ExpertLabels("pid_as_built", kwargs, names, (), ([-0.5, -1, -1], [0.5, 1, 1]))
     clipped = box.to_agent(np.array([[0.9, -1.0, 0.2]]), np.zeros((1, len(names))))
     np.testing.assert_array_equal(clipped, np.array([[0.5, -1.0, 0.2]], np.float32))
+
+
+def test_the_progress_bar_of_a_jump_start_counts_the_steps_it_flies_and_reads(tmp_path, dataset):
+    from benchmarks.training.config import read_zoo_config
+    from benchmarks.training.demonstrations import read_metadata
+    from benchmarks.training.seeds import progress_steps
+
+    def steps_of(jump_start: dict | None) -> int:
+        section = SECTION if jump_start is None else {**SECTION, "jump_start": jump_start}
+        cfg = read_zoo_config(_recipe(tmp_path, section, "progress.yml"), ENV_ID, "ppo")
+        return progress_steps(cfg, SECTION["n_timesteps"])
+
+    recorded = sum(e["steps"] for e in read_metadata(dataset)["episodes"])
+    assert recorded > 0
+    assert steps_of(None) == 256  # PPO: its n_timesteps
+    flown = {"expert": "fbsm_colos", "steps": 640, "iterations": 1}
+    assert steps_of(flown) == 640  # two rounds of 320, not the section's 256
+    assert steps_of({"dataset": str(dataset)}) == recorded
+    assert steps_of({**flown, "dataset": str(dataset)}) == recorded + 640  # round 0 is the data

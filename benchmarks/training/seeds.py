@@ -176,6 +176,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
         "vec_env": train.vec_env,
         "seeds": list(opts.seeds),
         "init_from": train.init_from,
+        "progress_steps": progress_steps(cfg, n_timesteps),
     }
     out = Path(opts.out)
     plan_file = out / PLAN_FILE
@@ -351,15 +352,29 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
         return _train_seeds(opts, plan, out)
 
 
+def progress_steps(cfg: Any, n_timesteps: int) -> int:
+    """Env steps one seed's learning curve will reach: ``n_timesteps``, or for a jump start
+    (which runs whole, `benchmarks.training.jump_start`) its dataset's steps and those it flies."""
+    jump = cfg.jump_start
+    if jump is None:
+        return n_timesteps
+    steps = sum(jump.round_steps(cfg.n_envs))
+    if jump.dataset is not None:
+        from benchmarks.training.demonstrations import read_metadata
+
+        steps += sum(int(e["steps"]) for e in read_metadata(jump.dataset)["episodes"])
+    return max(1, steps)
+
+
 def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[str, Any]:
     write_json(out / PLAN_FILE, plan, indent=2, sort_keys=True)
     n_timesteps = target_timesteps(plan["n_timesteps"], plan["stop_at"])  # this invocation's
     jobs = []
-    done_steps = 0
+    done_seeds = 0
     for seed in opts.seeds:
         status = seed_status(out, seed, n_timesteps)
         if status == "done":
-            done_steps += n_timesteps
+            done_seeds += 1
             continue
         train_opts = asdict(
             replace(
@@ -378,9 +393,10 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
     if opts.progress:
         from tqdm.auto import tqdm
 
+        per_seed = plan["progress_steps"]
         bar = tqdm(
-            total=n_timesteps * len(opts.seeds),
-            initial=done_steps,
+            total=per_seed * len(opts.seeds),
+            initial=done_seeds * per_seed,
             unit="step",
             desc=f"{plan['algo']} × {len(opts.seeds)} seeds",
         )
