@@ -34,6 +34,7 @@ from auv_gym.vehicle.params import AUVParams
 from auv_gym.vehicle.record import Vehicle
 from auv_gym.vehicle.remus6dof import SixDofVehicle
 from auv_gym.vehicle.sensors import SensorConfig
+from auv_gym.vehicle.variation import HullVariation
 
 __all__ = ["AUVPath3DEnv", "check_reset_observations", "validate_actions"]
 
@@ -158,6 +159,7 @@ class AUVPath3DEnv(gym.Env):
     | `disturbance` | "paper" | "paper" (±35), "none", "ocean" (below), amplitude, `NoiseConfig` |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
     | `param_uncertainty` | None | ε: coefficients × (1 + U[−ε, ε]) per episode (None: 0) |
+    | `hull_variation` | None | {mass, cg_offset, added_mass, damping}: drawn per episode (§15.3) |
     | `actuator` | "paper" | "paper", "fins", "realistic" or "random" ("paper" or "fins", ½ each) |
     | `actuator_params` | defaults | `ActuatorParams` or dict of its fields ("realistic" only) |
     | `random_current` | None | V [m/s]: per episode a current of speed U[0, V] (None: 0) |
@@ -332,6 +334,7 @@ class AUVPath3DEnv(gym.Env):
         plant: str = "5dof",
         plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
         vehicle: str | PathLike | Mapping[str, Any] | Vehicle | None = None,
+        hull_variation: HullVariation | Mapping[str, Any] | None = None,
     ) -> None:
         self.config = SimConfig.from_kwargs(
             path=path,
@@ -370,6 +373,7 @@ class AUVPath3DEnv(gym.Env):
             plant=plant,
             plant_params=plant_params,
             vehicle=vehicle,
+            hull_variation=hull_variation,
         )
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(

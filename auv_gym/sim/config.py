@@ -70,6 +70,7 @@ from auv_gym.vehicle.record import (
 )
 from auv_gym.vehicle.remus6dof import REMUS6DOF, SixDofVehicle
 from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
+from auv_gym.vehicle.variation import HullVariation
 
 __all__ = [
     "ACTUATOR_LIMITS",
@@ -112,6 +113,8 @@ class SimConfig:
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     current: CurrentConfig = field(default_factory=CurrentConfig)
     param_uncertainty: float = 0.0  # ε: coefficients scaled by 1 + U[−ε, ε] per episode
+    # mass, centre of gravity, added mass and damping drawn per episode (docs/model.md §15.3)
+    hull_variation: HullVariation = field(default_factory=HullVariation)
     actuator: str = "paper"  # "paper", "fins", "realistic" or "random" (paper or fins per episode)
     # The propeller, motor, fins and servos of actuator="realistic" (docs/model.md §2.6).
     actuator_params: ActuatorParams = field(default_factory=ActuatorParams)
@@ -194,6 +197,7 @@ class SimConfig:
         plant: str = "5dof",
         plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
         vehicle: str | PathLike | Mapping[str, Any] | Vehicle | None = None,
+        hull_variation: HullVariation | Mapping[str, Any] | None = None,
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
@@ -268,6 +272,7 @@ class SimConfig:
             noise=noise_from(disturbance, noise_hold),
             current=CurrentConfig.from_spec(current),
             param_uncertainty=0.0 if param_uncertainty is None else param_uncertainty,
+            hull_variation=HullVariation.from_spec(hull_variation),
             actuator=actuator,
             actuator_params=actuators_from(the_vehicle, actuator_params),
             random_current=0.0 if random_current is None else random_current,
@@ -319,6 +324,7 @@ class SimConfig:
             ("safety_cost", SafetyCost),
             ("sensors", SensorConfig),
             ("plant_params", SixDofVehicle),
+            ("hull_variation", HullVariation),
         ):
             if not isinstance(getattr(self, name), kind):
                 raise ArgumentTypeError(
@@ -380,6 +386,10 @@ class SimConfig:
         put("physics_dt", real("physics_dt", self.physics_dt, *PHYSICS_DT_RANGE, unit="s"))
         if self.plant == SIX_DOF_PLANT:  # a hull RK4 can step at physics_dt, every draw
             self.plant_params.check_step(self.physics_dt, self.param_uncertainty)
+        six_dof_hull = self.plant_params if self.plant == SIX_DOF_PLANT else None
+        self.hull_variation.check(
+            self.params, six_dof_hull, self.physics_dt, self.param_uncertainty
+        )
         most = MAX_SUBSTEPS * self.physics_dt
         put(
             "control_dt",

@@ -48,6 +48,7 @@ from auv_gym.sim.task import (
 from auv_gym.vehicle.actuators import ACTUATOR_STATE_DIM, check_commands
 from auv_gym.vehicle.dynamics import STATE, STATE_DIM
 from auv_gym.vehicle.params import N_PARAMS
+from auv_gym.vehicle.variation import HullDraw, varied_hull_row, varied_params
 
 __all__ = ["PARALLEL_MIN_VEHICLES", "Simulator"]
 
@@ -162,6 +163,7 @@ _CONFIG_INDEX = {name: j for j, name in enumerate(CONFIG_FIELDS)}
 _NOISE_COLUMNS = [_CONFIG_INDEX[f"noise_f_{c}"] for c in "uvwqr"]
 _CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
 _HULL_STREAM = 6  # the 6-DOF hull's draws: a stream of the episode's keys of its own
+_VARIATION_STREAM = 7  # the hull variation's draw (`auv_gym.vehicle.variation`), both plants'
 _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code → name
 
 
@@ -453,7 +455,12 @@ class Simulator:
             self._set_task(i, draw_task(cfg, rng))
         self.keys[i] = draw_keys(rng)
         if cfg.param_uncertainty > 0.0:
-            self.params[i] = cfg.params.perturbed(rng, cfg.param_uncertainty).to_vector()
+            params = cfg.params.perturbed(rng, cfg.param_uncertainty)
+            if cfg.hull_variation.active:
+                params = varied_params(params, self._hull_draw(i))
+            self.params[i] = params.to_vector()
+        elif cfg.hull_variation.active:
+            self.params[i] = varied_params(cfg.params, self._hull_draw(i)).to_vector()
         else:
             self.params[i] = self._nominal
         position, heading, s0, u0 = draw_start(cfg, rng, self.paths[i])
@@ -485,10 +492,19 @@ class Simulator:
         uncertainty one drawn from the episode's keys (so the episode's other draws, and hence
         its start and disturbances, are those of the same seed on the 5-DOF plant)."""
         fraction = self.config.param_uncertainty
-        if fraction == 0.0:
-            return self._nominal_hull
-        rng = np.random.Generator(np.random.PCG64([*self.keys[i].tolist(), _HULL_STREAM]))
-        return self.config.plant_params.perturbed(rng, fraction).kernel_vector()
+        hull = self.config.plant_params
+        if fraction > 0.0:
+            rng = np.random.Generator(np.random.PCG64([*self.keys[i].tolist(), _HULL_STREAM]))
+            hull = hull.perturbed(rng, fraction)
+        if self.config.hull_variation.active:
+            return varied_hull_row(hull, self._hull_draw(i))
+        return self._nominal_hull if fraction == 0.0 else hull.kernel_vector()
+
+    def _hull_draw(self, i: int) -> HullDraw:
+        """Vehicle i's hull variation for its episode, from a stream of the episode's keys of its
+        own: both plants read the same draw, and the episode's other draws are unchanged."""
+        rng = np.random.Generator(np.random.PCG64([*self.keys[i].tolist(), _VARIATION_STREAM]))
+        return self.config.hull_variation.draw(rng)
 
     def step(self, actions: np.ndarray) -> None:
         """Advance all vehicles one control step with actions in [−1, 1], shape (n, 3).

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any
 
@@ -54,6 +54,7 @@ __all__ = [
     "coriolis_matrix",
     "hull_accelerations",
     "restoring_forces",
+    "rigid_body_matrix",
 ]
 
 # Hoerner's 2-D cross-flow drag coefficient against B/(2T) (Fossen's ``Hoerner``).
@@ -110,6 +111,18 @@ def _transform(r: np.ndarray) -> np.ndarray:
     return h
 
 
+def rigid_body_matrix(
+    mass_kg: float, roll_inertia: float, pitch_inertia: float, r_bg: Sequence[float]
+) -> np.ndarray:
+    """M_RB (6×6) at the origin of a body of revolution of mass ``mass_kg`` [kg] and principal
+    inertias ``roll_inertia`` (I_x), ``pitch_inertia`` (I_y = I_z) [kg m²] about its centre of
+    gravity ``r_bg`` [m]: H(r_bg)ᵀ diag(m, m, m, I_x, I_y, I_y) H(r_bg), as Fossen's code moves
+    it."""
+    h = _transform(np.asarray(r_bg, float))
+    m = mass_kg
+    return h.T @ np.diag([m, m, m, roll_inertia, pitch_inertia, pitch_inertia]) @ h
+
+
 @dataclass(frozen=True)
 class SixDofVehicle:
     """The hull of the 6-DOF REMUS 100 (module doc); SI units. Derived matrices are computed
@@ -140,9 +153,7 @@ class SixDofVehicle:
         m = 4.0 / 3.0 * math.pi * rho * a * b * b  # [kg] the spheroid's displaced mass
         ix = 2.0 / 5.0 * m * b * b
         iy = 1.0 / 5.0 * m * (a * a + b * b)
-        r_bg = np.asarray(self.r_bg, float)
-        h = _transform(r_bg)
-        rigid = h.T @ np.diag([m, m, m, ix, iy, iy]) @ h
+        rigid = rigid_body_matrix(m, ix, iy, self.r_bg)
         e = math.sqrt(1.0 - (b / a) ** 2)
         log = math.log((1.0 + e) / (1.0 - e))
         alpha_0 = 2.0 * (1.0 - e * e) / e**3 * (0.5 * log - e)
@@ -174,6 +185,8 @@ class SixDofVehicle:
         area = 0.7 * self.length * self.diameter  # [m²] S: 70 % of the rectangle
         derived = {
             "mass_kg": m,
+            "roll_inertia": ix,  # [kg m²] I_x about the centre of gravity
+            "pitch_inertia": iy,  # [kg m²] I_y = I_z
             "weight": weight,
             "rigid_body": rigid,
             "added_mass": added,
