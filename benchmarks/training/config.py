@@ -40,6 +40,10 @@ An optional ``action_bounds`` key narrows the box the agent acts in, a sub-box o
 space becomes that box (`benchmarks.training.train.ActionBox`), saved with the model, so a loaded
 agent acts inside it too. For off-policy agents, whose squashed-Gaussian exploration covers the
 whole box from the first step (`benchmarks.analysis.action_bounds` measures what that does).
+
+An optional ``plant_share`` mapping puts a share of the ``n_envs`` training vehicles on another
+plant than the section's (``plant_share: {6dof: 0.25}``: round(n_envs × 0.25) vehicles fly the
+6-DOF plant, the others the ``env_kwargs``' plant): `benchmarks.training.plant_share`.
 """
 
 from __future__ import annotations
@@ -54,6 +58,7 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID
+from benchmarks.training.plant_share import PlantShare, parse_plant_share
 from benchmarks.training.residual import ResidualTraining
 from controllers.algorithms import ALGORITHMS, Algorithm
 
@@ -83,6 +88,7 @@ ZOO_KEYS = frozenset(
         "envelope_guard",  # refused with the stage that replaces it
         "jump_start",  # imitation of a classical expert instead of PPO (`jump_start`)
         "demo_regularization",  # SAC kept near the jump start's labels (`demo_regularization`)
+        "plant_share",  # a share of the vehicles on another plant (`plant_share`)
     }
 )
 # Keys of removed training features (no kept agent used them; their findings stay in
@@ -120,6 +126,7 @@ class ZooConfig:
     jump_start: Any = None  # `benchmarks.training.jump_start.JumpStart`: imitation, not PPO
     # `benchmarks.training.demo_regularization.DemoRegularization`: SAC near the expert's labels
     demo_regularization: Any = None
+    plant_share: PlantShare | None = None  # a share of the vehicles on another plant
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -221,6 +228,9 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     check_normalize(normalize, where)
     _check_policy(section["policy"], policy_kwargs, algo, where)
     _check_env_kwargs(env_id, env_kwargs, where)
+    plant_share = parse_plant_share(
+        section.get("plant_share"), n_envs, env_id, env_kwargs, where, residual is not None
+    )
     jump_start = None
     if "jump_start" in section:
         from benchmarks.training.jump_start import parse_jump_start
@@ -245,6 +255,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         action_bounds=action_bounds,
         jump_start=jump_start,
         demo_regularization=demo_regularization,
+        plant_share=plant_share,
         **interface,
     )
     if jump_start is not None:

@@ -1,6 +1,7 @@
 """The training environments of one run (`benchmarks.training.train`): the SB3 VecEnv (native
-batched, a residual agent's wrapped env, or SB3's DummyVecEnv), the thread limit of a run, and
-the zeroed last layer that makes an untrained residual agent its base controller."""
+batched, one per plant concatenated for a plant share, a residual agent's wrapped env, or SB3's
+DummyVecEnv), the thread limit of a run, and the zeroed last layer that makes an untrained
+residual agent its base controller."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
 from benchmarks.training.evaluation import TRAIN_SEED_BASE
+from benchmarks.training.plant_share import PLANT_SHARE_KEY, PlantShare
 from benchmarks.training.residual import ResidualTraining
 
 __all__ = ["describe_env", "make_training_env", "thread_limit", "zero_correction_layer"]
@@ -52,6 +54,7 @@ def make_training_env(
     env_id: str = ENV_ID,
     residual: ResidualTraining | None = None,
     threads: int | None = None,
+    plant_share: PlantShare | None = None,
 ) -> Any:
     """An SB3 VecEnv of `n_envs` training environments.
 
@@ -63,6 +66,9 @@ def make_training_env(
     action and chattering charge; native only).
     ``threads``: numba threads of the native env's kernel (1: the serial kernel at every N;
     None: `AUVPath3DVectorEnv`'s default).
+    ``plant_share`` (native only, not residual): one native env per plant
+    (`PlantShare.vehicles`), the section's own plant first, concatenated
+    (`benchmarks.training.plant_mix.ConcatVecEnv`); vehicle i keeps the env seed of vehicle i.
     """
     if kind not in ("auto", "native", "dummy"):
         raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
@@ -71,6 +77,13 @@ def make_training_env(
         raise ValueError(
             f"a residual agent trains on the native vector env of "
             f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}"
+        )
+    if plant_share is not None and residual is not None:
+        raise ValueError(f"{PLANT_SHARE_KEY} is not supported for a residual agent")
+    if plant_share is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
+        raise ValueError(
+            f"{PLANT_SHARE_KEY} needs the native vector env of {sorted(VARIANTS)}, not "
+            f"vec_env={kind!r} / {env_id}"
         )
     if kind in ("auto", "native") and env_id in VARIANTS:
         from stable_baselines3.common.vec_env import VecMonitor
@@ -85,6 +98,18 @@ def make_training_env(
                 make_residual_sb3_env(n_envs, residual, seed=env_seed, threads=threads, **kwargs)
             )
         # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.envs.sb3).
+        if plant_share is not None:
+            from benchmarks.training.plant_mix import ConcatVecEnv
+
+            parts = [
+                make_sb3_vec_env(
+                    count, threads=threads, infos="minimal", **{**kwargs, "plant": plant}
+                )
+                for plant, count in plant_share.vehicles(n_envs)
+            ]
+            venv = ConcatVecEnv(parts)
+            venv.seed(env_seed)
+            return VecMonitor(venv)
         return VecMonitor(
             make_sb3_vec_env(n_envs, seed=env_seed, threads=threads, infos="minimal", **kwargs)
         )
@@ -113,9 +138,15 @@ def zero_correction_layer(model: Any) -> None:
 
 
 def describe_env(venv: Any) -> str:
-    """The chain of VecEnv wrappers, outermost first ("VecNormalize<VecMonitor<SB3VecEnv>>")."""
+    """The chain of VecEnv wrappers, outermost first ("VecNormalize<VecMonitor<SB3VecEnv>>"); a
+    concatenation lists its parts with their vehicles ("ConcatVecEnv[24×SB3VecEnv<...>, ...]")."""
+    from benchmarks.training.plant_mix import ConcatVecEnv
+
     names = []
     while venv is not None:
         names.append(type(venv).__name__)
+        if isinstance(venv, ConcatVecEnv):
+            parts = (f"{part.num_envs}×{describe_env(part)}" for part in venv.envs)
+            names[-1] += f"[{', '.join(parts)}]"
         venv = getattr(venv, "venv", None)
     return "<".join(names) + ">" * (len(names) - 1)

@@ -57,6 +57,7 @@ from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import HELD_OUT_FILE
 from benchmarks.training.jump_start import JUMP_START_KEY
 from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.plant_share import check_native
 from benchmarks.training.seed_workers import seed_dir
 from benchmarks.training.seeds import (
     PLAN_FILE,
@@ -216,9 +217,10 @@ def _write_phase_config(schedule: Schedule, k: int, out: Path) -> Path:
     return write_text(out / CONFIGS / f"{schedule.folder(out, k).name}.yml", text)
 
 
-def check_schedule(schedule: Schedule, algo: str, out: Path) -> list[Path]:
-    """Write and check every phase's configuration (`read_zoo_config`) before any training;
-    the config files, one per phase. Errors name the phase."""
+def check_schedule(schedule: Schedule, algo: str, out: Path, vec_env: str = "auto") -> list[Path]:
+    """Write and check every phase's configuration (`read_zoo_config`, a plant share on the
+    ``vec_env`` it trains on) before any training; the config files, one per phase. Errors
+    name the phase."""
     configs = []
     carries = False  # the phase before hands on labelled transitions (`demo_regularization`)
     for k, phase in enumerate(schedule.phases):
@@ -226,6 +228,7 @@ def check_schedule(schedule: Schedule, algo: str, out: Path) -> list[Path]:
         try:
             cfg = read_zoo_config(config, schedule.env_id, algo)
             check_obs_scales(cfg, schedule.env_id, str(config))
+            check_native(cfg.plant_share, vec_env, str(config))
         except ValueError as error:
             raise ValueError(
                 f"{schedule.path}: phase {phase.name!r}: {error}".replace(f"{config}: ", "")
@@ -318,7 +321,7 @@ def _remove_refused_start(schedule: Schedule, out: Path, created: bool) -> None:
 
 
 def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[str, Any]:
-    configs = check_schedule(schedule, opts.train.algo, out)
+    configs = check_schedule(schedule, opts.train.algo, out, opts.train.vec_env)
     plan = {
         "config_file": str(schedule.path),
         "env_id": schedule.env_id,
