@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks.analysis.suite_seeds import failure_masks, main, seed_table
+from benchmarks.analysis.suite_seeds import main, seed_table
+from benchmarks.analysis.suite_stats import failure_matrices
 
 SUITE = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "suite"
 
@@ -34,12 +35,12 @@ def test_a_seed_with_a_failed_episode_beats_nobody_and_the_counts_add_up() -> No
         seed_table(scores, groups, {"agent": [3, 7]}, failed, "agent", ["sac"], 100)
 
 
-def test_failure_masks_follow_the_score_columns() -> None:
+def test_failure_matrices_follow_the_score_columns() -> None:
     rows = [
         {"policy": "p", "run": 0, "set": s, "seed": k, "termination_reason": reason}
         for s, k, reason in [("b", 1, "corridor"), ("a", 0, "time_limit"), ("b", 0, "time_limit")]
     ]
-    masks = failure_masks(rows, ["a", "b"], {"p": [0]})
+    masks = failure_matrices(rows, ["a", "b"])
     np.testing.assert_array_equal(masks["p"], [[False, False, True]])
 
 

@@ -26,7 +26,7 @@ import numpy as np
 from benchmarks.arguments import parse_options, program_name, usage_errors
 from benchmarks.options import option
 
-__all__ = ["failure_masks", "main", "seed_table"]
+__all__ = ["main", "seed_table"]
 
 SEEDS_FILE = "suite_seeds.json"
 
@@ -92,25 +92,6 @@ def seed_table(
     }
 
 
-def failure_masks(
-    rows: Sequence[Mapping[str, Any]], sets: Sequence[str], runs: Mapping[str, Sequence[int]]
-) -> dict[str, np.ndarray]:
-    """{policy: (runs, episodes) True where the episode failed}, in the columns and run order of
-    `suite_stats.score_matrices` (set order of ``sets``, then episode seed)."""
-    from auv_gym.sim.trajectory import FAILURE_REASONS
-
-    order = {name: k for k, name in enumerate(sets)}
-    cells: dict[str, dict[int, dict[tuple[int, int], bool]]] = {}
-    for row in rows:
-        key = (order[row["set"]], row["seed"])
-        failed = row["termination_reason"] in FAILURE_REASONS
-        cells.setdefault(row["policy"], {}).setdefault(row["run"], {})[key] = failed
-    return {
-        policy: np.array([[by_run[r][c] for c in sorted(by_run[r])] for r in runs[policy]])
-        for policy, by_run in cells.items()
-    }
-
-
 def write_markdown(record: Mapping[str, Any], path: Path) -> None:
     """`suite_seeds.md`: the per-run table, the counts and the pooled aggregate."""
     refs = list(record["references"])
@@ -148,7 +129,12 @@ def write_markdown(record: Mapping[str, Any], path: Path) -> None:
 
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     from auv_gym.support.files import write_json
-    from benchmarks.analysis.suite_stats import failure_scores, read_episodes, score_matrices
+    from benchmarks.analysis.suite_stats import (
+        failure_matrices,
+        failure_scores,
+        read_episodes,
+        score_matrices,
+    )
 
     args, parser = parse_options(
         SuiteSeedsOptions,
@@ -173,7 +159,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             )
         rows = [row for row in rows if row["set"] in sets]
         scores, groups, runs = score_matrices(rows, sets, failure_scores(suite))
-        failed = failure_masks(rows, sets, runs)
+        failed = failure_matrices(rows, sets)
         record = seed_table(scores, groups, runs, failed, args.policy, references, args.reps)
     record = {
         "suite": args.suite.name,  # no machine paths in committed results

@@ -37,7 +37,7 @@ from __future__ import annotations
 import csv
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -67,7 +67,9 @@ from benchmarks.analysis.suite_markdown import stats_markdown
 
 __all__ = [
     "check_stats_options",
+    "episode_matrices",
     "episode_score",
+    "failure_matrices",
     "learning_curves",
     "read_episodes",
     "score_matrices",
@@ -148,14 +150,17 @@ def top_speeds(suite: Mapping[str, Any]) -> dict[str, float]:
     }
 
 
-def score_matrices(
-    rows: Sequence[Mapping[str, Any]], sets: Sequence[str], failure: Mapping[str, float]
+def episode_matrices(
+    rows: Sequence[Mapping[str, Any]],
+    sets: Sequence[str],
+    value: Callable[[Mapping[str, Any]], Any],
 ) -> tuple[dict[str, np.ndarray], list[str], dict[str, list[int]]]:
-    """({policy: (n_runs, n_episodes) scores}, set of each episode column, {policy: runs}).
+    """({policy: (n_runs, n_episodes) ``value(row)``}, set of each episode column, {policy:
+    runs}).
 
     Columns are (set, seed) in the order of ``sets``, then seed; every run of every policy must
     hold exactly these episodes (ValueError naming the first that does not)."""
-    cells: dict[str, dict[int, dict[tuple[int, int], float]]] = {}
+    cells: dict[str, dict[int, dict[tuple[int, int], Any]]] = {}
     order = {name: k for k, name in enumerate(sets)}
     for row in rows:
         if row["set"] not in order:
@@ -167,11 +172,11 @@ def score_matrices(
                 f"episodes.csv: policy {row['policy']!r}, run {row['run']} has set "
                 f"{row['set']!r} seed {row['seed']} twice"
             )
-        cell[key] = episode_score(row, failure[row["set"]])
+        cell[key] = value(row)
     if not cells:
         raise ValueError("episodes.csv holds no episode")
     columns = sorted(next(iter(next(iter(cells.values())).values())))
-    scores, runs = {}, {}
+    matrices, runs = {}, {}
     for policy, by_run in cells.items():
         for run, cell in by_run.items():
             if sorted(cell) != columns:
@@ -181,8 +186,25 @@ def score_matrices(
                     "sets"
                 )
         runs[policy] = sorted(by_run)
-        scores[policy] = np.array([[by_run[r][c] for c in columns] for r in runs[policy]])
-    return scores, [sets[s] for s, _ in columns], runs
+        matrices[policy] = np.array([[by_run[r][c] for c in columns] for r in runs[policy]])
+    return matrices, [sets[s] for s, _ in columns], runs
+
+
+def score_matrices(
+    rows: Sequence[Mapping[str, Any]], sets: Sequence[str], failure: Mapping[str, float]
+) -> tuple[dict[str, np.ndarray], list[str], dict[str, list[int]]]:
+    """`episode_matrices` of the episodes' scores (`episode_score`, a failed episode scoring
+    its set's ``failure``)."""
+    return episode_matrices(rows, sets, lambda row: episode_score(row, failure[row["set"]]))
+
+
+def failure_matrices(
+    rows: Sequence[Mapping[str, Any]], sets: Sequence[str]
+) -> dict[str, np.ndarray]:
+    """{policy: (runs, episodes) True where the episode failed}, in `score_matrices`' columns."""
+    from auv_gym.sim.trajectory import FAILURE_REASONS
+
+    return episode_matrices(rows, sets, lambda row: row["termination_reason"] in FAILURE_REASONS)[0]
 
 
 def target_table(
