@@ -165,10 +165,19 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
             "init_from 'missing/agent' does not exist",
         ),
         ({"phases": [{"name": "a", "obs_scales": {"psi": 1.0}}]}, "phase 'a'"),
+        (  # the section trains inside the guard already: the export would carry it twice
+            {"phases": [{"name": "a"}], "stages": ["envelope_guard"], "section_stages": True},
+            r"schedule.stages after AUVPath3DPreview-v0.stages: stages \['envelope_guard', "
+            r"'envelope_guard'\] must each appear once",
+        ),
     ],
 )
 def test_bad_schedules_are_refused_in_one_line_before_any_work(tmp_path, capsys, schedule, message):
-    config = _write(tmp_path, schedule)
+    schedule = dict(schedule)
+    section = (
+        {**SECTION, "stages": ["envelope_guard"]} if schedule.pop("section_stages", 0) else None
+    )
+    config = _write(tmp_path, schedule, section)
     out = tmp_path / "run"
     with pytest.raises(SystemExit) as stop:
         code = main(_argv(config, out))
@@ -177,3 +186,17 @@ def test_bad_schedules_are_refused_in_one_line_before_any_work(tmp_path, capsys,
     assert stop.value.code == 2 and err.count("\n") == 1, err
     assert pytest.importorskip("re").search(message, err), err
     assert not (out / "phase_1_a").exists()
+
+
+def test_the_exports_carry_the_stages_trained_inside_then_the_schedules(tmp_path):
+    """Was: an agent trained inside the envelope guard (the section's stages) was exported with
+    the schedule's stages only, and flew without the guard it had learnt inside."""
+    from benchmarks.training.schedule import _with_stages
+
+    agent = tmp_path / "agent"
+    agent.mkdir()
+    (agent / "metadata.json").write_text(json.dumps({"stages": [{"name": "envelope_guard"}]}))
+    _with_stages(agent, ({"name": "actuator_allocation"},))
+    stages = json.loads((agent / "metadata.json").read_text())["stages"]
+    assert [s["name"] for s in stages] == ["envelope_guard", "actuator_allocation"]
+    assert stages[0]["pitch_soft_deg"] == 35.0  # checked and filled in, as the schedule's are

@@ -31,8 +31,8 @@ its SAC near them, ``demo_regularization``, and hands them on in turn)::
         - {name: base}                      # PPO from the imitating agents
 
 ``options`` are the defaults of the command's own options (the command line
-wins); ``stages`` are added to the exported agents only, after training (`controllers.stages`:
-a file's own ``stages`` trains inside them).
+wins); ``stages`` are added to the exported agents only, after training, behind the stages the
+agent trained inside (`controllers.stages`: a file's own ``stages`` trains inside them).
 
 Layout of OUT: ``phase_<k>_<name>/`` (each phase's multi-seed run; ``selected/agent_seed_<s>``
 is each seed's agent, selected on validation, that the next phase starts from), ``configs/``
@@ -206,6 +206,10 @@ def read_schedule(path: str | Path) -> Schedule | None:
         changes = {key: v for key, v in phase.items() if key not in ("name", "init_from")}
         checked.append(Phase(name, changes, None if init_from is None else str(init_from)))
     stages = check_stage_specs(spec.get("stages"), f"{where}.stages")
+    # The exports carry the stages the agent trains inside (the section's), then these: each
+    # once, in the stages' order.
+    inside = check_stage_specs(data[env_id].get("stages"), f"{path}: {env_id}.stages")
+    check_stage_specs([*inside, *stages], f"{where}.stages after {env_id}.stages")
     return Schedule(path, env_id, dict(data[env_id]), tuple(checked), stages, options)
 
 
@@ -263,12 +267,14 @@ def _pass_transitions(run: Path, selected: Path) -> None:
 
 
 def _with_stages(agent: Path, stages: tuple[dict[str, Any], ...]) -> None:
-    """Add ``stages`` to a copied agent's metadata (atomically); nothing when there are none."""
+    """Add ``stages`` after the stages a copied agent trained inside (its metadata's, written
+    atomically); nothing when there are none."""
     if not stages:
         return
     meta_file = agent / METADATA_FILE
     metadata = json.loads(meta_file.read_text())
-    metadata["stages"] = [dict(s) for s in check_stage_specs(stages, str(meta_file))]
+    inside = list(metadata.get("stages") or [])
+    metadata["stages"] = [dict(s) for s in check_stage_specs([*inside, *stages], str(meta_file))]
     write_json(meta_file, metadata, indent=2, sort_keys=True)
 
 
