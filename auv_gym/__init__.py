@@ -13,8 +13,7 @@ Importing the package registers these ids with Gymnasium (idempotently); each is
 |                          | preview, velocity over ground, previous action; `observation`)  |
 
 Integral action is an option of the RL task: ``gym.make("AUVPath3DPreview-v0",
-observation="preview_integral")``. The generation-named ids of earlier releases
-(`REMOVED_ENV_IDS`) are refused by `gym.make` with a one-line error naming that call.
+observation="preview_integral")``.
 
 The ids are separate names, not versions of one name, so that `gym.make("AUVPath3D-v0")` prints
 no "out of date" warning.
@@ -73,7 +72,6 @@ __all__ = [
     "StraightLine",
     "fit_curve",
     "make_path",
-    "recorded_env_id",
     "remus100",
     "resolve_env_id",
 ]
@@ -95,38 +93,14 @@ VARIANTS: dict[str, dict] = {
     SPEED_LIMIT_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED},
     PREVIEW_ENV_ID: {"surge_limit": VEHICLE_TOP_SPEED, "observation": "preview"},
 }
-# Ids named after agent generations, removed: integral action is an observation option of the RL
-# task. An agent's metadata may still record them (with its observation, which it runs under).
-REMOVED_ENV_IDS: dict[str, str] = {
-    "AUVPath3DPreviewIntegral-v0": (
-        f'gym.make("{PREVIEW_ENV_ID}", observation={{"kind": "preview", "integral_time": 10.0}})'
-    ),
-    "AUVPath3DPreviewAntiWindup-v0": (
-        f'gym.make("{PREVIEW_ENV_ID}", observation="preview_integral")'
-    ),
-}
 
 
 def resolve_env_id(env_id: str) -> str:
     """``env_id`` checked: a `VARIANTS` key; ValueError naming the id and the ids that exist
-    otherwise, or the call that replaces a removed id (`REMOVED_ENV_IDS`)."""
-    if env_id in REMOVED_ENV_IDS:
-        raise ValueError(f"env id {env_id!r} was removed: use {REMOVED_ENV_IDS[env_id]}")
+    otherwise."""
     if env_id not in VARIANTS:
         raise ValueError(f"unknown env id {env_id!r}; valid: {list(VARIANTS)}")
     return env_id
-
-
-def recorded_env_id(env_id: str) -> str:
-    """Today's id for the env id an agent's metadata records: `resolve_env_id`, except that a
-    removed generation id (`REMOVED_ENV_IDS`) is the RL task, `PREVIEW_ENV_ID` (the agent runs
-    under it with the observation its metadata records)."""
-    return PREVIEW_ENV_ID if env_id in REMOVED_ENV_IDS else resolve_env_id(env_id)
-
-
-def _removed_env(removed_id: str, **_: object) -> None:
-    """The entry point of a removed id: a one-line error naming its replacement."""
-    raise ValueError(f"env id {removed_id!r} was removed: use {REMOVED_ENV_IDS[removed_id]}")
 
 
 def _register() -> None:
@@ -148,14 +122,6 @@ def _register() -> None:
             # checks its own arguments, observations and actions (docs/design.md §3).
             disable_env_checker=True,
         )
-    for env_id in REMOVED_ENV_IDS:
-        if env_id not in registry:
-            register(
-                id=env_id,
-                entry_point=_removed_env,
-                max_episode_steps=None,
-                kwargs={"removed_id": env_id},
-            )
 
 
 _register()

@@ -201,14 +201,14 @@ class AgentFiles:
 
 def agent_env_kwargs(metadata: dict[str, Any], env_id: str | None = None) -> dict[str, Any]:
     """The env an agent carries, as `AUVPath3DEnv` keyword arguments: the fixed arguments of
-    ``env_id`` (None: the id its metadata records; `auv_gym.VARIANTS`; a removed generation id
-    is the RL task, `auv_gym.recorded_env_id`; none recorded: the paper's `AUVPath3D-v0`) and
+    ``env_id`` (None: the id its metadata records; `auv_gym.VARIANTS`; none recorded: the
+    paper's `AUVPath3D-v0`) and
     the observation it was trained on where that id's differs. A residual agent observes
     through its base."""
-    from auv_gym import ENV_ID, VARIANTS, recorded_env_id
+    from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 
     recorded = metadata.get("env_id", ENV_ID) if env_id is None else env_id
-    fixed = dict(VARIANTS[recorded_env_id(recorded)])
+    fixed = dict(VARIANTS[resolve_env_id(recorded)])
     if "residual" in metadata:
         return fixed
     if commands_realistic_actuators(metadata):  # its actions are shaft speed and fin angles

@@ -209,7 +209,7 @@ def check_contract(data: Any, graph: bytes, onnx_file: Path, file: Path) -> Onnx
 def _contract_of(data: dict[str, Any], onnx_file: Path, file: Path, graph: bytes) -> OnnxContract:
     """The `OnnxContract` of the contract JSON ``data``, each field checked and the fields
     checked against each other and against the env they describe."""
-    from auv_gym import VARIANTS, recorded_env_id
+    from auv_gym import VARIANTS, resolve_env_id
     from auv_gym.sim.config import PLANTS, SimConfig
     from auv_gym.vehicle.actuators import actuator_params_from_spec
     from controllers.stages import check_stage_specs
@@ -277,7 +277,7 @@ def _contract_of(data: dict[str, Any], onnx_file: Path, file: Path, graph: bytes
     env_id = _field(data, "env_id", str, file)
     env_kwargs = dict(_field(data, "env_kwargs", dict, file))
     try:
-        env_id = recorded_env_id(env_id)
+        env_id = resolve_env_id(env_id)
         config = SimConfig.from_kwargs(**{**VARIANTS[env_id], **env_kwargs})
         own_params = actuator_params_from_spec(params)
     except (TypeError, ValueError) as error:

@@ -437,13 +437,13 @@ def _contract(
     parity: dict[str, Any],
 ) -> dict[str, Any]:
     """The contract JSON of an export (`controllers.onnx_contract.read_contract` reads it)."""
-    from auv_gym import recorded_env_id
+    from auv_gym import resolve_env_id
     from auv_gym.sim.config import SimConfig
     from auv_gym.sim.observation import ObservationConfig
     from controllers.agent import agent_env_kwargs
 
     metadata = files.metadata
-    env_id = recorded_env_id(metadata.get("env_id", "AUVPath3D-v0"))
+    env_id = resolve_env_id(metadata.get("env_id", "AUVPath3D-v0"))
     trained = metadata.get("env_kwargs") or {}
     plant = trained.get("plant", "5dof")
     # The env the graph was built for: the agent's, flown on the export's actuator and plant.

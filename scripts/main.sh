@@ -14,6 +14,6 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 . .venv/bin/activate
 python -m benchmarks.runner.compare \
-    --policies fbsm,fbsm_colos,backstepping,pid_los,ppo_generalist,ppo_residual,sac_helix \
+    --policies fbsm,fbsm_colos,backstepping,pid_los,ppo_generalist,ppo_residual,sac_generalist \
     --scenarios paper,current,fins,waypoints,storm,realistic_actuators \
     --seeds 3 --duration 150 --out out/quick "$@"

@@ -275,7 +275,7 @@ def test_an_off_policy_agent_with_n_step_returns_loads_without_warnings() -> Non
     from controllers.agent import observation_layout
     from controllers.loader import load_policy
 
-    agent = ROOT / "benchmarks" / "agents" / "sac_helix"  # trained with n_steps 3
+    agent = ROOT / "benchmarks" / "agents" / "sac_generalist"  # trained with n_steps 3
     assert json.loads((agent / META).read_text())["algo"] == "sac"
     with warnings.catch_warnings():
         warnings.simplefilter("error")

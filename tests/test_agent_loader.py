@@ -37,7 +37,7 @@ def test_training_and_loading_share_one_algorithm_table():
 
 
 def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
-    assert check_agent(AGENTS / "sac_helix").algo == "sac"
+    assert check_agent(AGENTS / "sac_generalist").algo == "sac"
     assert check_agent(AGENTS / "ppo_generalist").algo == "ppo"
     older = shutil.copytree(AGENTS / "ppo_generalist", tmp_path / "older")
     metadata = json.loads((older / "metadata.json").read_text())
@@ -45,7 +45,7 @@ def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
     (older / "metadata.json").write_text(json.dumps(metadata))
     assert check_agent(older).algo == "ppo"
     agent = tmp_path / "sac"
-    shutil.copytree(AGENTS / "sac_helix", agent)
+    shutil.copytree(AGENTS / "sac_generalist", agent)
     (agent / "model.zip").write_bytes(b"not a zip")
     with pytest.raises(ValueError, match=r"^SAC model .*model.zip is not a valid zip file"):
         check_agent(agent)
@@ -77,16 +77,18 @@ def test_the_former_name_ppo_is_refused_in_one_line():
 @pytest.mark.rl
 def test_agent_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
     obs = np.linspace(-0.5, 0.5, 49, dtype=np.float32)  # its integral preview observation
-    path = str(AGENTS / "sac_helix")
+    path = str(AGENTS / "sac_generalist")
     actions = [controllers.make(name, path=path).predict(obs)[0] for name in ("agent", "sac")]
-    assert type(controllers.make("agent", path=path)).__name__ == "AgentPolicy"
+    assert type(controllers.make("agent", path=path)).__name__ == "StagedPolicy"  # its stages
     for action in actions[1:]:
         np.testing.assert_array_equal(action, actions[0])
     with pytest.raises(
         ValueError, match=r"ppo_generalist/model.zip was trained with 'ppo', not 'sac'"
     ):
         controllers.make("sac", path=str(AGENTS / "ppo_generalist"))
-    with pytest.raises(ValueError, match=r"sac_helix/model.zip was trained with 'sac', not 'tqc'"):
+    with pytest.raises(
+        ValueError, match=r"sac_generalist/model.zip was trained with 'sac', not 'tqc'"
+    ):
         controllers.make("tqc", path=path)
     residual = controllers.make("agent", path=str(AGENTS / "ppo_residual"))
     assert type(residual).__name__ == "ResidualPolicy" and residual.filter_max == 0.8

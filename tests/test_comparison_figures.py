@@ -37,12 +37,12 @@ def _records(policy: str, ends: list[tuple[float | None, str]]) -> list[dict]:
     ]
 
 
-POLICIES = ["fbsm", "backstepping", "ppo_helix", "sac_helix", "pid_los"]
+POLICIES = ["fbsm", "backstepping", "ppo_helix", "sac_generalist", "pid_los"]
 RECORDS = [
     *_records("fbsm", [(30.0, "time_limit")] * 3),  # settles: a bar
     *_records("backstepping", [(None, "time_limit")] * 3),  # never settles: no settling time
     *_records("ppo_helix", [(12.0, "time_limit"), (9.0, "corridor"), (9.0, "pitch")]),  # 1 of 3
-    *_records("sac_helix", [(9.0, "corridor")] * 3),  # every episode failed
+    *_records("sac_generalist", [(9.0, "corridor")] * 3),  # every episode failed
     *_records("pid_los", [(None, "time_limit"), (40.0, "time_limit"), (50.0, "corridor")]),
 ]
 
@@ -70,11 +70,11 @@ def test_never_settled_and_failed_cells_are_hatched_columns_with_legend_entries(
     colours = policy_colours(POLICIES)
     # fbsm and ppo_helix: bars of their means over what finished
     assert sorted(round(p.get_height(), 6) for p in columns["bars"]) == [12.0, 30.0]
-    # backstepping never settled, sac_helix failed: hatched, in their colours, over the whole
+    # backstepping never settled, sac_generalist failed: hatched, in their colours, over the whole
     # height of the axes (off any scale), not a bar of some height
     axes_box = ax.get_window_extent()
     # (pid_los: one of three never settled, one failed: its mean is unbounded too)
-    drawn = {"///": ["backstepping", "pid_los"], "xxx": ["sac_helix"]}
+    drawn = {"///": ["backstepping", "pid_los"], "xxx": ["sac_generalist"]}
     for hatch, policies in drawn.items():
         assert len(columns[hatch]) == len(policies)
         for column, policy in zip(columns[hatch], policies, strict=True):

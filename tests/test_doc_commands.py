@@ -692,7 +692,7 @@ def test_export_refuses_a_former_agent_name_as_compare_does(tmp_path, capsys) ->
     from benchmarks.catalog.policies import PolicySpec
     from benchmarks.runner import export
 
-    for name in ("ppo", "ppo:runs/x", "sac_generalist"):
+    for name in ("ppo", "ppo:runs/x", "sac_helix"):
         with pytest.raises(ValueError) as compare_says:
             PolicySpec.parse(name)
         with pytest.raises(SystemExit) as stop:

@@ -280,8 +280,8 @@ def test_former_policy_names_say_what_to_type(tmp_path, capsys):
             check_policy_spec(retired)
     with pytest.raises(ValueError, match=r"'ppo:PATH' was renamed, use 'agent:x'"):
         check_policy_spec("ppo:x")
-    err = usage_error(capsys, ["--policies", "fbsm,sac_generalist", "--out", str(tmp_path / "o")])
-    assert "'sac_generalist' is no longer shipped" in err and "ppo_generalist" in err
+    err = usage_error(capsys, ["--policies", "fbsm,sac_helix", "--out", str(tmp_path / "o")])
+    assert "'sac_helix' is no longer shipped" in err and "ppo_generalist" in err
     assert not (tmp_path / "o").exists()
 
 

@@ -200,7 +200,7 @@ def test_shipped_contracts_hold_no_machine_paths(agent):
         # the paper's ±35 N·m noise is ten times the fins' authority: the noise-free helix
         ("ppo_generalist", {"actuator": "fins", "disturbance": "none"}),
         ("ppo_residual", {"disturbance": "paper", "current": {"mean": [0.2, 0.1, 0.0]}}),
-        ("sac_helix", {"disturbance": "paper"}),
+        ("sac_generalist", {"disturbance": "paper"}),
     ],
 )
 def test_an_export_flies_like_its_agent(tmp_path, agent, env):
@@ -334,9 +334,6 @@ def test_the_runtime_checks_the_env_and_its_input():
 @pytest.mark.parametrize(
     ("agent", "options", "expected"),
     [
-        # no allocation stage: the graph would be the same, its commands relabelled
-        ("sac_helix", ["--actuator", "fins"], "--actuator fins: {meta} lists no actuator_alloc"),
-        ("sac_helix", ["--actuator", "realistic"], "--actuator realistic: {meta} lists no"),
         # actuator settings where no allocation to the propeller and fins reads them
         ("ppo_generalist", ["--actuator-params", '{"rpm_max": 1400}'], "with --actuator paper"),
         (
@@ -375,6 +372,30 @@ def test_export_options_that_would_not_change_the_graph_are_refused(
     assert exit_.value.code == 2 and len(err.splitlines()) == 1, err
     assert expected.format(meta=AGENTS_DIR / agent / "metadata.json") in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.rl
+@pytest.mark.parametrize(
+    ("actuator", "expected"),
+    [
+        ("fins", "--actuator fins: {meta} lists no actuator_alloc"),
+        ("realistic", "--actuator realistic: {meta} lists no"),
+    ],
+)
+def test_an_actuator_for_an_agent_without_an_allocation_is_refused(
+    tmp_path, capsys, tiny_paper_agent, actuator, expected
+):
+    """No allocation stage: the graph would be the same, its commands relabelled."""
+    from benchmarks.runner.export import main as export
+
+    out = tmp_path / "out"
+    out.mkdir()
+    with pytest.raises(SystemExit) as exit_:
+        export([str(tiny_paper_agent), "--out", str(out / "agent.onnx"), "--actuator", actuator])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and len(err.splitlines()) == 1, err
+    assert expected.format(meta=tiny_paper_agent / "metadata.json") in err, err
+    assert list(out.iterdir()) == []
 
 
 @pytest.fixture(scope="module")

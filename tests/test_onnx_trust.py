@@ -128,7 +128,7 @@ def test_a_contract_that_contradicts_itself_is_refused(tmp_path, edit, expected)
 def test_a_contract_the_graph_contradicts_is_refused(tmp_path):
     """A contract edited consistently (the fins named in the env and the actuator) still names
     an env the graph was not built for: the graph's metadata, which the hash covers, says so."""
-    onnx_file = _copy(tmp_path, "sac_helix")  # no allocation stage
+    onnx_file = _copy(tmp_path, "ppo_as_built")  # no allocation stage
 
     def edit(c):
         c.update(actuator="fins", env_kwargs={**c["env_kwargs"], "actuator": "fins"})

@@ -328,5 +328,11 @@ def test_policy_colors_stay_distinct_beyond_ten_policies():
     assert len(set(policy_colors(["a", "b"]).values())) == 2
     eleven = policy_colors([f"p{k}" for k in range(11)])
     assert len({to_hex(c) for c in eleven.values()}) == 11  # C10 would repeat C0
-    shipped = [*(f"p{k}" for k in range(6)), "fbsm", "ppo_residual", "ppo_generalist", "sac_helix"]
+    shipped = [
+        *(f"p{k}" for k in range(6)),
+        "fbsm",
+        "ppo_residual",
+        "ppo_generalist",
+        "sac_generalist",
+    ]
     assert len({to_hex(c) for c in policy_colors(shipped).values()}) == len(shipped)

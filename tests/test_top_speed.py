@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from auv_gym import recorded_env_id
+from auv_gym import resolve_env_id
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.metrics import compute_metrics
 from auv_gym.rollout import rollout
@@ -152,7 +152,7 @@ def test_shipped_agents_load_with_their_envs_observation_space(name: str) -> Non
     actor = load_actor(files)
     seen = {"observation": files.metadata["observation"]} if "observation" in files.metadata else {}
     env_kwargs = {**files.metadata.get("env_kwargs", {}), **seen}  # the env the agent carries
-    env = gym.make(recorded_env_id(files.metadata["env_id"]), **env_kwargs)
+    env = gym.make(resolve_env_id(files.metadata["env_id"]), **env_kwargs)
     low, high = env.observation_space.low, env.observation_space.high
     if "residual" in files.metadata:
         low, high = residual_observation_bounds(env.unwrapped.config.params.max_surge)

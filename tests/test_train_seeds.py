@@ -411,6 +411,8 @@ SHIPPED_CONFIGS = [  # file, algorithm, env id, gamma, precision weight
     ("ppo_residual.yml", "ppo", "AUVPath3DSpeedLimit-v0", 0.98, None),
     ("sac_helix.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
     ("ppo_generalist.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("sac_generalist.yml", "sac", "AUVPath3DPreview-v0", 0.995, 3.0),
+    ("ppo_as_built.yml", "ppo", "AUVPath3DPreview-v0", 0.995, 3.0),
 ]
 
 

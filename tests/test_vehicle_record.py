@@ -104,7 +104,7 @@ def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
             space = policy.agent.observation_space
         else:
             seen = {"observation": metadata["observation"]} if "observation" in metadata else {}
-            env_id = auv_gym.recorded_env_id(metadata["env_id"])  # the env the agent carries
+            env_id = auv_gym.resolve_env_id(metadata["env_id"])  # the env the agent carries
             env = gym.make(env_id, **{**metadata["env_kwargs"], **seen})
             low, high = env.observation_space.low, env.observation_space.high
             space = policy.observation_space

@@ -288,9 +288,7 @@ class AUVPath3DEnv(gym.Env):
       ``observation={"kind": "preview", "integral_time": T, "integral_errors": "yz" | "xyz",
       "integral_limit": L}`` sets them one by one.
 
-    Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8); an
-    agent's metadata naming a removed id (`auv_gym.REMOVED_ENV_IDS`) is read as the RL task with
-    its recorded observation.
+    Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}

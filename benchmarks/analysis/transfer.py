@@ -78,7 +78,7 @@ GROUPS = {
             "backstepping_colos",
             "ppo_generalist",
             "ppo_residual",
-            "sac_helix",
+            "sac_generalist",
         ),
         classical=("fbsm", "fbsm_colos", "backstepping", "backstepping_colos"),
         agent="ppo_generalist",

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import controllers
-from auv_gym import ENV_ID, VARIANTS, recorded_env_id
+from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 from controllers import CLASSICAL
 from controllers.registry import NoFiveDofModelError
 
@@ -49,7 +49,7 @@ __all__ = [
 
 AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
 # The reference agents: the name is the folder of benchmarks/agents/ (README there).
-REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_residual", "sac_helix")
+REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_residual", "sac_generalist")
 AGENT_PREFIX = "agent:"
 ONNX_PREFIX = "onnx:"
 _NOT_SHIPPED = "is no longer shipped (its results stay in docs/results.md); reference agents:"
@@ -61,7 +61,7 @@ REMOVED_POLICIES: dict[str, str | None] = {
             "ppo",
             "ppo_helix",
             "ppo_helix_v1",
-            "sac_generalist",
+            "sac_helix",
             "ppo_preview",
             "ppo_preview_net256",
             "ppo_integral",
@@ -281,8 +281,8 @@ def agent_run(
 ) -> tuple[int, str, dict[str, Any]]:
     """(training seed, env id, env arguments) of a checked agent: an agent carries its env.
 
-    The env id is the one its metadata.json records, a key of `auv_gym.VARIANTS` (a removed
-    generation id, `auv_gym.REMOVED_ENV_IDS`, is the RL task); the env arguments hold the
+    The env id is the one its metadata.json records, a key of `auv_gym.VARIANTS`; the env
+    arguments hold the
     observation it was trained on where the id's registered one differs (e.g.
     ``observation="preview_integral"``). ``default_env_id`` stands in for a
     missing id (None: an error). Errors name ``where``."""
@@ -294,7 +294,7 @@ def agent_run(
         raise type(error)(f"{where}: {error}") from None
     recorded = files.metadata.get("env_id", default_env_id)
     try:
-        env_id = recorded_env_id(recorded)
+        env_id = resolve_env_id(recorded)
     except ValueError as error:
         raise ValueError(
             f"{where}: {agent}/metadata.json records env_id {recorded!r}; an agent runs under "
@@ -338,7 +338,7 @@ def onnx_env(spec: str, path: Path) -> tuple[str, dict[str, Any]]:
 
     try:
         contract = read_contract(path)
-        env_id = recorded_env_id(contract.env_id)
+        env_id = resolve_env_id(contract.env_id)
     except (OSError, ValueError) as error:
         raise type(error)(f"policy {spec!r}: {error}") from None
     fixed = VARIANTS[env_id]

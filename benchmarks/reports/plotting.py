@@ -86,7 +86,7 @@ POLICY_COLOURS: dict[str, str] = {
     "ppo_generalist": OKABE_ITO["vermillion"],
     "ppo_helix": OKABE_ITO["orange"],
     "ppo_residual": "#595959",  # dark grey (tableau-colorblind10)
-    "sac_helix": OKABE_ITO["reddish purple"],
+    "sac_generalist": OKABE_ITO["reddish purple"],
     "ppo_as_built": OKABE_ITO["yellow"],
     # Tol's muted palette
     "fbsm_ilos": "#332288",  # indigo

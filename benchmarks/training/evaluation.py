@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym import ENV_ID, VARIANTS, recorded_env_id
+from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.sim.trajectory import env_termination_reason
@@ -139,7 +139,7 @@ def held_out_evaluation(
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
-    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[recorded_env_id(env_id)]))
+    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[resolve_env_id(env_id)]))
     fixed = agent_env_kwargs(policy.metadata, env_id)  # the env it carries, under ``env_id``
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
