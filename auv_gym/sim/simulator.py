@@ -454,15 +454,14 @@ class Simulator:
         if self._per_vehicle:  # the task first, from its own seeds (`draw_task`)
             self._set_task(i, draw_task(cfg, rng))
         self.keys[i] = draw_keys(rng)
+        # One hull variation per episode, read by both plants' parameters.
+        variation = self._hull_draw(i) if cfg.hull_variation.active else None
+        params = cfg.params
         if cfg.param_uncertainty > 0.0:
-            params = cfg.params.perturbed(rng, cfg.param_uncertainty)
-            if cfg.hull_variation.active:
-                params = varied_params(params, self._hull_draw(i))
-            self.params[i] = params.to_vector()
-        elif cfg.hull_variation.active:
-            self.params[i] = varied_params(cfg.params, self._hull_draw(i)).to_vector()
-        else:
-            self.params[i] = self._nominal
+            params = params.perturbed(rng, cfg.param_uncertainty)
+        if variation is not None:
+            params = varied_params(params, variation)
+        self.params[i] = self._nominal if params is cfg.params else params.to_vector()
         position, heading, s0, u0 = draw_start(cfg, rng, self.paths[i])
         self.state[i] = 0.0
         self.state[i, [STATE.x, STATE.y, STATE.z]] = position
@@ -474,7 +473,7 @@ class Simulator:
         self.actuator_state[i] = 0.0  # propeller stopped, fins centred
         self.roll[i] = 0.0
         if self.six_dof:
-            self.hull[i] = self._hull_row(i)
+            self.hull[i] = self._hull_row(i, variation)
         if cfg.waves is not None or cfg.current_profile is not None:
             surface_z = episode_surface_z(cfg, self.paths[i], float(position[2]))
             self.ocean[i] = ocean_row(
@@ -487,17 +486,18 @@ class Simulator:
         self.code[i] = 0
         self.cost[i] = 0.0
 
-    def _hull_row(self, i: int) -> np.ndarray:
+    def _hull_row(self, i: int, variation: HullDraw | None) -> np.ndarray:
         """Vehicle i's 6-DOF hull row for its episode: the nominal one, or with parameter
         uncertainty one drawn from the episode's keys (so the episode's other draws, and hence
-        its start and disturbances, are those of the same seed on the 5-DOF plant)."""
+        its start and disturbances, are those of the same seed on the 5-DOF plant), with the
+        episode's hull ``variation`` applied (None: none)."""
         fraction = self.config.param_uncertainty
         hull = self.config.plant_params
         if fraction > 0.0:
             rng = np.random.Generator(np.random.PCG64([*self.keys[i].tolist(), _HULL_STREAM]))
             hull = hull.perturbed(rng, fraction)
-        if self.config.hull_variation.active:
-            return varied_hull_row(hull, self._hull_draw(i))
+        if variation is not None:
+            return varied_hull_row(hull, variation)
         return self._nominal_hull if fraction == 0.0 else hull.kernel_vector()
 
     def _hull_draw(self, i: int) -> HullDraw:
