@@ -1,0 +1,81 @@
+"""The ONNX parity check (`benchmarks.checks.onnx_parity`) on a two-set suite: the as-built
+agent flies the set on its own actuator, with its export beside it, and not the fins set."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from benchmarks.catalog.tasks import test_suite
+from benchmarks.checks import onnx_parity
+
+
+@pytest.fixture
+def two_sets(monkeypatch):
+    """The suite cut to one episode of `fins` (paper-style moments) and one of
+    `as_built_helix` (propeller and fins)."""
+    wanted = ("scenario:fins", "scenario:as_built_helix")
+    sets = [
+        dataclasses.replace(task, seeds=range(task.seeds.start, task.seeds.start + 1))
+        for task in test_suite()
+        if task.name in wanted
+    ]
+    assert [task.name for task in sets] == list(wanted)
+    monkeypatch.setattr(onnx_parity, "test_suite", lambda: sets)
+    return sets
+
+
+def test_the_as_built_agent_flies_only_its_actuator_and_its_export_agrees(two_sets, tmp_path):
+    row = onnx_parity.check(onnx_parity.Exports("ppo_as_built", tmp_path), None, 20.0)
+    assert row["not_flown"] == ["scenario:fins"]
+    assert row["episodes"] == 1
+    assert list(row["max_relative_rms_error_by_set"]) == ["scenario:as_built_helix"]
+    assert row["observations"] == 400  # 20 s at the 0.05-s control period
+    assert row["max_abs_command_error"] <= onnx_parity.COMMAND_TOLERANCE
+    assert row["max_relative_rms_error"] <= onnx_parity.RMS_TOLERANCE
+
+
+def test_rows_are_written_as_each_export_finishes(tmp_path):
+    row = {
+        "label": "ppo_as_built",
+        "episodes": 1,
+        "observations": 200,
+        "max_abs_command_error": 2e-7,
+        "surge_at_max_error": 1.0,
+        "max_relative_rms_error": 0.0,
+        "max_relative_rms_error_by_set": {"scenario:as_built_helix": 0.0},
+        "nudged_relative_rms_difference_by_set": {"scenario:as_built_helix": 1e-8},
+        "rms_target": "met",
+        "not_flown": ["scenario:fins"],
+    }
+    onnx_parity.write_results(tmp_path, 20.0, [row])
+    assert json.loads((tmp_path / "parity.json").read_text())["rows"] == [row]
+    text = (tmp_path / "parity.md").read_text()
+    assert "| ppo_as_built | 1 | 200 | 2e-07 | 1.00 | 0 | 1e-08 | met |" in text
+    assert "ppo_as_built: scenario:fins" in text
+
+
+def test_rms_verdict_tells_a_sensitive_loop_from_a_missed_export():
+    tolerance = onnx_parity.RMS_TOLERANCE
+    assert onnx_parity.rms_verdict({"a": tolerance / 2}, {"a": 0.0}) == "met"
+    # beyond the tolerance where the nudged agent moves as far: rounding, not the export
+    assert onnx_parity.rms_verdict({"a": 0.5, "b": 0.0}, {"a": 0.8, "b": 0.0}) == "sensitive"
+    # beyond it where the nudged agent stays put: the export differs
+    assert onnx_parity.rms_verdict({"a": 0.5, "b": 0.01}, {"a": 0.8, "b": 0.0}) == "missed"
+
+
+def test_a_nudge_moves_every_command_by_its_size_within_the_bounds():
+    class Fixed:
+        env_kwargs = None  # read by the nudge, unused here
+
+        def predict(self, observation, state=None, episode_start=None, deterministic=True):
+            return np.array([[0.5, -1.0, 1.0]], np.float32), state
+
+    nudged = onnx_parity.NudgedPolicy(Fixed(), 1e-3)
+    moved = np.concatenate([nudged.predict(None)[0] for _ in range(50)])
+    assert np.allclose(np.abs(moved[:, 0] - 0.5), 1e-3, atol=1e-7)
+    assert set(np.sign(moved[:, 0] - 0.5).tolist()) == {-1.0, 1.0}  # both signs drawn
+    assert moved[:, 1].min() >= -1.0 and moved[:, 2].max() <= 1.0  # kept in the box
