@@ -31,11 +31,16 @@ SECTION = {
     "env_kwargs": {"observation": "preview_integral", "randomize_start": True, "max_time": 20.0},
 }
 SCHEDULE = {
-    "options": {"eval_freq": 256, "eval_duration": 110.0},
+    "options": {"eval_freq": 256, "eval_duration": 110.0, "eval_episodes": 2},
     "stages": ["envelope_guard"],
     "phases": [
         {"name": "base"},
-        {"name": "fine", "n_timesteps": 256, "obs_scales": {"x_e": 0.25}},
+        {
+            "name": "fine",
+            "n_timesteps": 256,
+            "obs_scales": {"x_e": 0.25},
+            "task_set": "validation_paper_start",  # selected on its own set from here on
+        },
     ],
 }
 
@@ -103,6 +108,10 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
         first = json.loads((base / f"seed_{seed}" / "final" / "metadata.json").read_text())
         assert first["num_timesteps"] == 512 and "warm_start" not in first
     fine_config = yaml.safe_load((out / "configs" / "phase_2_fine.yml").read_text())[ENV_ID]
+    assert "task_set" not in fine_config  # a selection option, not a hyper-parameter
+    for folder, seeds in ((base, [100]), (fine, [100_200, 100_201])):
+        plan = json.loads((folder / "train_seeds.json").read_text())
+        assert plan["eval_seeds"] == seeds, folder
     assert fine_config["obs_scales"] == {"x_e": 0.25, "y_e": 2.0}
     assert fine_config["n_timesteps"] == 256
     exported = json.loads((agent / "metadata.json").read_text())
@@ -160,6 +169,10 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
             r"options: unknown keys \['seeds'\]",
         ),
         ({"phases": [{"name": "a"}], "cost": 1}, r"schedule: unknown keys \['cost'\]"),
+        (
+            {"phases": [{"name": "a", "task_set": "train"}]},
+            r"phases\[0\] \(a\): task_set: 'train' is not a validation set",
+        ),
         (
             {"phases": [{"name": "a", "init_from": "missing/agent"}]},
             "init_from 'missing/agent' does not exist",

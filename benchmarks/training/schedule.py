@@ -30,6 +30,10 @@ its SAC near them, ``demo_regularization``, and hands them on in turn)::
         - {name: jump_start, jump_start: {expert: fbsm_colos, steps: 262144}}
         - {name: base}                      # PPO from the imitating agents
 
+A phase's ``task_set`` names the validation set it and the phases after it select on (its
+first ``eval_episodes`` seeds), in place of the command's: an as-built agent that learns both
+plants is selected on the 6-DOF plant in its last phase.
+
 ``options`` are the defaults of the command's own options (the command line
 wins); ``stages`` are added to the exported agents only, after training, behind the stages the
 agent trained inside (`controllers.stages`: a file's own ``stages`` trains inside them).
@@ -54,7 +58,7 @@ from typing import Any
 from auv_gym.support.files import replace_outputs, write_atomic, write_json, write_text
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
-from benchmarks.training.evaluation import HELD_OUT_FILE
+from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE
 from benchmarks.training.jump_start import JUMP_START_KEY
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.plant_share import check_native
@@ -98,7 +102,7 @@ OPTION_KEYS = (
     "eval_freq",
     "checkpoint_freq",
 )
-PHASE_KEYS = ("name", "n_timesteps", "init_from")  # besides the section's own keys
+PHASE_KEYS = ("name", "n_timesteps", "init_from", "task_set")  # besides the section's keys
 
 
 @dataclass(frozen=True)
@@ -108,6 +112,7 @@ class Phase:
     name: str
     changes: dict[str, Any]
     init_from: str | None = None  # the first phase only: an agent template ({seed})
+    task_set: str | None = None  # the validation set it selects on, from here on
 
 
 @dataclass(frozen=True)
@@ -139,6 +144,16 @@ class Schedule:
     def folder(self, out: Path, k: int) -> Path:
         """Phase ``k``'s multi-seed run directory under OUT."""
         return out / f"phase_{k + 1}_{self.phases[k].name}"
+
+
+def _check_validation_set(name: Any, where: str) -> None:
+    """ValueError naming ``where`` unless ``name`` is a validation set of the task file."""
+    from benchmarks.catalog.tasks import load_task_sets
+
+    sets = load_task_sets()
+    if not isinstance(name, str) or name not in sets or sets[name].role != "validation":
+        valid = sorted(n for n, s in sets.items() if s.role == "validation")
+        raise ValueError(f"{where}: {name!r} is not a validation set; valid: {valid}")
 
 
 def read_schedule(path: str | Path) -> Schedule | None:
@@ -203,8 +218,15 @@ def read_schedule(path: str | Path) -> Schedule | None:
                 f"{at} ({name}): init_from belongs to the first phase (later phases start "
                 "from the previous phase's agents)"
             )
-        changes = {key: v for key, v in phase.items() if key not in ("name", "init_from")}
-        checked.append(Phase(name, changes, None if init_from is None else str(init_from)))
+        task_set = phase.get("task_set")
+        if task_set is not None:
+            _check_validation_set(task_set, f"{at} ({name}): task_set")
+        changes = {
+            key: v for key, v in phase.items() if key not in ("name", "init_from", "task_set")
+        }
+        checked.append(
+            Phase(name, changes, None if init_from is None else str(init_from), task_set)
+        )
     stages = check_stage_specs(spec.get("stages"), f"{where}.stages")
     # The exports carry the stages the agent trains inside (the section's), then these: each
     # once, in the stages' order.
@@ -331,14 +353,25 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
     plan = {
         "config_file": str(schedule.path),
         "env_id": schedule.env_id,
-        "phases": [{"name": p.name, **p.changes} for p in schedule.phases],
+        "phases": [
+            {"name": p.name, **p.changes, **({"task_set": p.task_set} if p.task_set else {})}
+            for p in schedule.phases
+        ],
         "stages": list(schedule.stages),
         "seeds": list(opts.seeds),
     }
     write_json(out / SCHEDULE_FILE, {"plan": plan, "phases": []}, indent=2, sort_keys=True)
     summaries: list[dict[str, Any]] = []
+    selection = replace(opts)  # the validation of the phases so far: the command's, then theirs
     for k, phase in enumerate(schedule.phases):
         folder = schedule.folder(out, k)
+        if phase.task_set is not None:  # its own set's first eval_episodes seeds
+            default_seeds = tuple(EVAL_SEEDS)
+            selection = replace(
+                opts,
+                task_set=phase.task_set,
+                train=replace(opts.train, eval_seeds=default_seeds),
+            )
         summary = _finished(folder, opts.seeds)
         if summary is None:
             if k == 0:
@@ -349,13 +382,13 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
             if opts.progress:
                 print(f"phase {k + 1}/{len(schedule.phases)}: {phase.name}", flush=True)
             phase_opts = replace(
-                opts,
+                selection,
                 out=str(folder),
                 resume=(folder / PLAN_FILE).is_file(),
                 export=None,
                 results=None,
                 train=replace(
-                    opts.train,
+                    selection.train,
                     config=str(configs[k]),
                     env_id=schedule.env_id,
                     init_from=init_from,
