@@ -71,6 +71,7 @@ from benchmarks.training.seeds import (
     check_out_folder,
     holds_work,
     train_seeds,
+    validation_set,
     write_seed_outputs,
 )
 from benchmarks.training.transitions import TRANSITIONS_FILE
@@ -146,16 +147,6 @@ class Schedule:
         return out / f"phase_{k + 1}_{self.phases[k].name}"
 
 
-def _check_validation_set(name: Any, where: str) -> None:
-    """ValueError naming ``where`` unless ``name`` is a validation set of the task file."""
-    from benchmarks.catalog.tasks import load_task_sets
-
-    sets = load_task_sets()
-    if not isinstance(name, str) or name not in sets or sets[name].role != "validation":
-        valid = sorted(n for n, s in sets.items() if s.role == "validation")
-        raise ValueError(f"{where}: {name!r} is not a validation set; valid: {valid}")
-
-
 def read_schedule(path: str | Path) -> Schedule | None:
     """The schedule of a hyper-parameter file, checked; None when it has no ``schedule``.
 
@@ -220,7 +211,7 @@ def read_schedule(path: str | Path) -> Schedule | None:
             )
         task_set = phase.get("task_set")
         if task_set is not None:
-            _check_validation_set(task_set, f"{at} ({name}): task_set")
+            validation_set(task_set, f"{at} ({name}): task_set:")
         changes = {
             key: v for key, v in phase.items() if key not in ("name", "init_from", "task_set")
         }
@@ -362,15 +353,14 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
     }
     write_json(out / SCHEDULE_FILE, {"plan": plan, "phases": []}, indent=2, sort_keys=True)
     summaries: list[dict[str, Any]] = []
-    selection = replace(opts)  # the validation of the phases so far: the command's, then theirs
+    selection = opts  # the validation of the phases so far: the command's, then theirs
     for k, phase in enumerate(schedule.phases):
         folder = schedule.folder(out, k)
         if phase.task_set is not None:  # its own set's first eval_episodes seeds
-            default_seeds = tuple(EVAL_SEEDS)
             selection = replace(
                 opts,
                 task_set=phase.task_set,
-                train=replace(opts.train, eval_seeds=default_seeds),
+                train=replace(opts.train, eval_seeds=tuple(EVAL_SEEDS)),
             )
         summary = _finished(folder, opts.seeds)
         if summary is None:

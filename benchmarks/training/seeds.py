@@ -85,6 +85,7 @@ __all__ = [
     "resolve_validation",
     "seed_status",
     "train_seeds",
+    "validation_set",
 ]
 
 PLAN_FILE = "train_seeds.json"
@@ -253,22 +254,29 @@ def holds_work(out: Path) -> bool:
     return False
 
 
+def validation_set(name: Any, label: str = "task set") -> Any:
+    """The task file's validation set ``name`` (a `TaskSet`), None for a built-in one
+    (`TASK_SETS`); ValueError "<label> <name> is not a validation set; valid: [...]" otherwise."""
+    if isinstance(name, str) and name in TASK_SETS:
+        return None
+    from benchmarks.catalog.tasks import load_task_sets
+
+    sets = load_task_sets()
+    if not isinstance(name, str) or name not in sets or sets[name].role != "validation":
+        validation = sorted(n for n, s in sets.items() if s.role == "validation")
+        raise ValueError(
+            f"{label} {name!r} is not a validation set; valid: {sorted(TASK_SETS) + validation}"
+        )
+    return sets[name]
+
+
 def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
     """`opts` with the validation episodes of its task set filled in (`TrainOptions.eval_env`
     and `eval_seeds`); ValueError (one line) for an unknown set, a set that is not a validation
     set, or evaluation seeds outside the set's range."""
-    if opts.task_set in TASK_SETS:
+    chosen = validation_set(opts.task_set)
+    if chosen is None:
         return opts
-    from benchmarks.catalog.tasks import load_task_sets
-
-    sets = load_task_sets()
-    validation = sorted(name for name, s in sets.items() if s.role == "validation")
-    if opts.task_set not in sets or sets[opts.task_set].role != "validation":
-        raise ValueError(
-            f"task set {opts.task_set!r} is not a validation set; valid: "
-            f"{sorted(TASK_SETS) + validation}"
-        )
-    chosen = sets[opts.task_set]
     seeds = tuple(opts.train.eval_seeds)
     if seeds == tuple(EVAL_SEEDS):  # the paper default: take the set's own seeds
         if not 1 <= opts.eval_episodes <= len(chosen.seeds):
