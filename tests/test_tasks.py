@@ -85,6 +85,21 @@ def test_task_sets_build_their_envs():
     assert task_set("validation").episodes()[0] == (task_set("validation").env, 100_000)
 
 
+def test_a_validation_set_on_two_plants_flies_every_seed_on_each():
+    both = task_set("validation_as_built_start_plants")
+    assert both.plants == ("5dof", "6dof") and "plant" not in both.env
+    episodes = both.episodes()
+    assert len(episodes) == 2 * len(both.seeds) == 200
+    assert [env["plant"] for env, _ in episodes[:1] + episodes[100:101]] == ["5dof", "6dof"]
+    assert [seed for _, seed in episodes[:100]] == [seed for _, seed in episodes[100:]]
+    # the 5-DOF half is validation_as_built_start's env on seeds of its own
+    start = task_set("validation_as_built_start")
+    assert {k: v for k, v in episodes[0][0].items() if k != "plant"} == start.env
+    assert set(both.seeds).isdisjoint(start.seeds)
+    assert both.eval_env()["plant"] == ["5dof", "6dof"]
+    assert task_set("validation").eval_env() == task_set("validation").env
+
+
 def _write(tmp_path, text):
     file = tmp_path / "tasks.toml"
     file.write_text(text)
@@ -132,6 +147,28 @@ TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { p
         (
             '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\ncontroller = "fins"\n',
             r"task set 'x': controller must be a table, got 'fins'",
+        ),
+        (
+            '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nplants = ["5dof", "6dof"]\n',
+            r"task set 'x': only a validation set flies several plants, this one is 'test'",
+        ),
+        (
+            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["5dof", "6dof"]\n'
+            'env = { plant = "6dof" }\n',
+            r"task set 'x': give plants or env.plant, not both",
+        ),
+        (
+            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["5dof", "7dof"]\n',
+            r"plants must list two or more distinct plants of \['5dof', '6dof'\], got \['5dof', '7dof'\]",
+        ),
+        (
+            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["6dof"]\n',
+            r"plants must list two or more distinct plants",
+        ),
+        (
+            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["6dof", "5dof"]\n'
+            'env = { vehicle = "torpedo", actuator = "realistic" }\n',
+            r"task set 'x', plant '5dof': vehicle 'torpedo' has no \[model_5dof\]",
         ),
         (
             '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nscenarios = ["fins"]\n'

@@ -114,6 +114,7 @@ def test_parse_seeds(text, seeds):
             ["--seeds", "2", "--task-set", "nope"],
             "task set 'nope' is not a validation set; valid: ['paper', 'validation', "
             "'validation_as_built', 'validation_as_built_start', 'validation_as_built_start_6dof', "
+            "'validation_as_built_start_plants', "
             "'validation_fins_start', "
             "'validation_paper_actuator', 'validation_paper_start']",
         ),
@@ -282,6 +283,42 @@ def test_validation_on_a_task_set(tmp_path):
     assert entry["test_summary"]["n_episodes"] == 10
     # Resuming with another validation set is refused: selection must not change mid-run.
     assert main([*args, "--task-set", "paper", "--eval-seeds", "100", "--resume"]) == 2
+
+
+@pytest.mark.rl
+def test_validation_on_both_plants(tmp_path):
+    """A validation set on two plants (validation_as_built_start_plants): every validation seed
+    flies once per plant, the score is the mean over both, and the learning curve and the
+    summary carry each plant's figures."""
+    from benchmarks.catalog.tasks import task_set
+
+    as_built = {"actuator": "realistic", "sensors": "typical_kalman", "disturbance": "ocean"}
+    section = {**TINY["ppo"], "env_kwargs": {**as_built, "randomize_start": True, "max_time": 20.0}}
+    config = tmp_path / "as_built.yml"
+    config.write_text(yaml.safe_dump({"AUVPath3DSpeedLimit-v0": section}))
+    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1")
+    args[args.index("--eval-seeds") : args.index("--eval-seeds") + 2] = []
+    args[args.index("--config") + 1] = str(config)
+    both = ["--task-set", "validation_as_built_start_plants", "--eval-episodes", "1"]
+    assert main([*args, *both]) == 0
+    plan = json.loads((tmp_path / "run" / "train_seeds.json").read_text())
+    assert plan["eval_env"]["plant"] == ["5dof", "6dof"]
+    assert plan["eval_seeds"] == [task_set("validation_as_built_start_plants").seeds.start]
+    entry = _summary(tmp_path / "run")["seeds"][0]
+    validation = entry["validation_summary"]
+    assert validation["n_episodes"] == 2 and set(validation["per_plant"]) == {"5dof", "6dof"}
+    per_plant = [validation["per_plant"][p]["rms_distance_mean"] for p in ("5dof", "6dof")]
+    assert all(np.isfinite(per_plant)) and per_plant[0] != per_plant[1]
+    assert validation["rms_distance_mean"] == pytest.approx(np.mean(per_plant), rel=1e-12)
+    curve = (tmp_path / "run" / "seed_0" / "evaluations.csv").read_text().splitlines()
+    header = curve[0].split(",")
+    assert header[-4:] == [
+        "rms_distance_mean_5dof",
+        "n_terminated_5dof",
+        "rms_distance_mean_6dof",
+        "n_terminated_6dof",
+    ]
+    assert [line.split(",")[0] for line in curve[1:]] == ["0", "256"]
 
 
 @pytest.mark.integration

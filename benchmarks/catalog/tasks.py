@@ -6,6 +6,10 @@ policies are told (``controller``, as a scenario's: e.g. the actuator); the test
 holds the benchmark scenarios (`benchmarks/scenarios.toml`) by name, one set per scenario
 ("scenario:<name>"). An episode is the pair (env keyword arguments, seed).
 
+A validation set may fly every seed on several plants (``plants = ["5dof", "6dof"]``, in place of
+an env ``plant``): an agent meant for both is then selected on both at once, each seed once per
+plant, so its score is the mean over the plants (`episodes`).
+
 `load_task_sets` validates the whole file before anything runs, each problem a one-line
 ValueError naming the set: unknown keys or roles, a bad seed range, env arguments the env refuses
 (an impossible generator range such as radius ≤ 0 or a climb beyond the vehicle's limits names the
@@ -28,7 +32,7 @@ from itertools import combinations
 from pathlib import Path
 from typing import Any
 
-from auv_gym.sim.config import SimConfig
+from auv_gym.sim.config import PLANTS, SimConfig
 from auv_gym.sim.path_generator import PathDistribution, overlaps
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
 
@@ -36,7 +40,7 @@ __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test
 
 TASKS_FILE = Path(__file__).resolve().parents[1] / "tasks.toml"
 ROLES = ("train", "validation", "test")
-_KEYS = {"role", "description", "seeds", "env", "controller", "scenarios", "held_out"}
+_KEYS = {"role", "description", "seeds", "env", "controller", "scenarios", "held_out", "plants"}
 MAX_SEED = 2**32 - 1  # numpy's SeedSequence accepts any, SB3 and Gymnasium pass 32-bit seeds
 
 
@@ -51,10 +55,20 @@ class TaskSet:
     env: dict[str, Any] = field(default_factory=dict)
     controller: dict[str, Any] = field(default_factory=dict)  # a scenario's controller kwargs
     held_out: str | None = None  # the training set whose distribution this one lies outside
+    plants: tuple[str, ...] = ()  # a validation set's plants, every seed on each (module doc)
 
     def episodes(self) -> list[tuple[dict[str, Any], int]]:
-        """(env keyword arguments, seed) of every episode of the set."""
+        """(env keyword arguments, seed) of every episode of the set: with ``plants``, every
+        seed on each plant in turn (plant-major order)."""
+        if self.plants:
+            return [({**self.env, "plant": p}, seed) for p in self.plants for seed in self.seeds]
         return [(dict(self.env), seed) for seed in self.seeds]
+
+    def eval_env(self) -> dict[str, Any]:
+        """The env keyword arguments a training run's validation passes on: ``env``, with the
+        list of ``plants`` as its ``plant`` when the set has several
+        (`benchmarks.training.evaluation.plant_groups` splits them again)."""
+        return {**self.env, "plant": list(self.plants)} if self.plants else dict(self.env)
 
 
 def _seeds(where: str, spec: Any) -> range:
@@ -123,16 +137,40 @@ def load_task_sets(
                 )
             continue
         env = dict(table.get("env", {}))
-        configs[name] = _check_env(where, env)
+        plants = _plants(where, table.get("plants"), role, env)
+        checked = [_check_env(f"{where}, plant {p!r}", {**env, "plant": p}) for p in plants]
+        configs[name] = checked[0] if checked else _check_env(where, env)
         controller = table.get("controller", {})
         if not isinstance(controller, Mapping):
             raise ValueError(f"{where}: controller must be a table, got {controller!r}")
         sets[name] = TaskSet(
-            name, role, description, seeds, env, dict(controller), held_out=held_out
+            name, role, description, seeds, env, dict(controller), held_out, plants
         )
     _check_disjoint(path.name, sets)
     _check_held_out(path.name, sets, configs)
     return sets
+
+
+def _plants(where: str, spec: Any, role: str, env: dict[str, Any]) -> tuple[str, ...]:
+    """A validation set's ``plants`` list: two or more distinct plant names, no env ``plant``."""
+    if spec is None:
+        return ()
+    if role != "validation":
+        raise ValueError(
+            f"{where}: only a validation set flies several plants, this one is {role!r}"
+        )
+    if "plant" in env:
+        raise ValueError(f"{where}: give plants or env.plant, not both")
+    if (
+        not isinstance(spec, list)
+        or len(spec) < 2
+        or len(set(spec)) != len(spec)
+        or not all(p in PLANTS for p in spec)
+    ):
+        raise ValueError(
+            f"{where}: plants must list two or more distinct plants of {list(PLANTS)}, got {spec!r}"
+        )
+    return tuple(spec)
 
 
 def _check_disjoint(file: str, sets: dict[str, TaskSet]) -> None:

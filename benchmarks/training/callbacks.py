@@ -20,6 +20,7 @@ from benchmarks.training.checkpoints import (
 from benchmarks.training.evaluation import (
     chattering_mean,
     evaluate_policy_on_seeds,
+    plant_groups,
     score,
     summarize,
 )
@@ -135,17 +136,17 @@ class PeriodicEvaluation(BaseCallback):
     def evaluate(self) -> None:
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
-        policy = policy_from_model(
-            self.model,
-            vec_normalize,
-            self.residual,
-            self.eval_kwargs,
-            self.stages,
-        )
         extra = () if self.residual is None else ("chattering",)
-        results = evaluate_policy_on_seeds(
-            policy, self.seeds, extra_metrics=extra, **self.eval_kwargs
-        )
+        groups = plant_groups(self.eval_kwargs)
+        results = []
+        for env_kwargs in groups:  # a policy per plant: its stages are built for the plant
+            policy = policy_from_model(
+                self.model, vec_normalize, self.residual, env_kwargs, self.stages
+            )
+            rows = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra, **env_kwargs)
+            if len(groups) > 1:
+                rows = [{**row, "plant": env_kwargs["plant"]} for row in rows]
+            results.extend(rows)
         summary = summarize(results)
         weight = 0.0 if self.residual is None else self.residual.selection_chattering
         if self.residual is not None:  # a residual agent is also judged on smoothness

@@ -33,6 +33,7 @@ __all__ = [
     "check_evaluation_duration",
     "evaluate_policy_on_seeds",
     "held_out_evaluation",
+    "plant_groups",
     "score",
     "summarize",
     "write_held_out_evaluation",
@@ -82,9 +83,28 @@ def evaluate_policy_on_seeds(
     ]
 
 
+def plant_groups(env_kwargs: dict[str, Any]) -> list[dict[str, Any]]:
+    """The env keyword arguments of each plant an evaluation flies: one entry per name when
+    ``plant`` is a list (a validation set on several plants, `benchmarks.catalog.tasks`),
+    else ``[env_kwargs]``."""
+    plants = env_kwargs.get("plant")
+    if not isinstance(plants, (list, tuple)):
+        return [env_kwargs]
+    return [{**env_kwargs, "plant": plant} for plant in plants]
+
+
 def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Mean ± std of rms_distance over seeds, the number of terminated episodes and the largest
-    surge speed [m/s] of any episode."""
+    surge speed [m/s] of any episode; results on several plants (rows with a "plant") add
+    "per_plant": each plant's summary."""
+    plants = list(dict.fromkeys(r["plant"] for r in results if "plant" in r))
+    if not plants:
+        return _summary(results)
+    per_plant = {p: _summary([r for r in results if r.get("plant") == p]) for p in plants}
+    return {**_summary(results), "per_plant": per_plant}
+
+
+def _summary(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
     rms = np.array([r["rms_distance"] for r in results], dtype=float)
     terminated = [r["termination_reason"] for r in results if r["termination_reason"]]
     finite = rms[np.isfinite(rms)]

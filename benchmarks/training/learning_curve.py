@@ -2,7 +2,8 @@
 
 Columns: env steps, training wall time [s] (summed over resumed sessions), and the mean, std and
 max rms distance [m], the number of terminated episodes and the largest surge speed [m/s]
-over the evaluation seeds. Rows are
+over the evaluation seeds; a validation on several plants adds each plant's mean rms distance
+and terminated episodes (``rms_distance_mean_<plant>``, ``n_terminated_<plant>``). Rows are
 appended and flushed to disk one by one; a resumed run first drops the rows past the checkpoint
 it restarts from. `benchmarks.reports.figures.plot_learning_curve` draws it.
 """
@@ -42,11 +43,15 @@ def append_row(path: Path, num_timesteps: int, wall_time: float, summary: dict[s
         summary["n_terminated"],
         f"{summary['max_surge_max']:.6g}",
     ]
+    header = list(EVAL_HEADER)
+    for plant, part in summary.get("per_plant", {}).items():
+        header += [f"rms_distance_mean_{plant}", f"n_terminated_{plant}"]
+        row += [f"{part['rms_distance_mean']:.6g}", part["n_terminated"]]
     new = not path.exists()
     with path.open("a", newline="") as f:
         writer = csv.writer(f)
         if new:
-            writer.writerow(EVAL_HEADER)
+            writer.writerow(header)
         writer.writerow(row)
         f.flush()
         os.fsync(f.fileno())

@@ -291,7 +291,7 @@ def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
             f"eval seeds {outside[:5]} lie outside task set {chosen.name!r} (seeds "
             f"{chosen.seeds.start}-{chosen.seeds.stop - 1})"
         )
-    train = replace(opts.train, eval_env=dict(chosen.env), eval_seeds=seeds)
+    train = replace(opts.train, eval_env=chosen.eval_env(), eval_seeds=seeds)
     return replace(opts, train=train)
 
 
