@@ -106,6 +106,7 @@ def _write(tmp_path, text):
     return file
 
 
+VALIDATION = '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\n'
 TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { path = "random" }\n'
 
 
@@ -153,20 +154,20 @@ TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { p
             r"task set 'x': only a validation set flies several plants, this one is 'test'",
         ),
         (
-            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["5dof", "6dof"]\n'
-            'env = { plant = "6dof" }\n',
+            VALIDATION + 'plants = ["5dof", "6dof"]\nenv = { plant = "6dof" }\n',
             r"task set 'x': give plants or env.plant, not both",
         ),
         (
-            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["5dof", "7dof"]\n',
-            r"plants must list two or more distinct plants of \['5dof', '6dof'\], got \['5dof', '7dof'\]",
+            VALIDATION + 'plants = ["5dof", "7dof"]\n',
+            r"plants must list two or more distinct plants of \['5dof', '6dof'\], "
+            r"got \['5dof', '7dof'\]",
         ),
         (
-            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["6dof"]\n',
+            VALIDATION + 'plants = ["6dof"]\n',
             r"plants must list two or more distinct plants",
         ),
         (
-            '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\nplants = ["6dof", "5dof"]\n'
+            VALIDATION + 'plants = ["6dof", "5dof"]\n'
             'env = { vehicle = "torpedo", actuator = "realistic" }\n',
             r"task set 'x', plant '5dof': vehicle 'torpedo' has no \[model_5dof\]",
         ),
