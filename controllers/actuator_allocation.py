@@ -22,7 +22,8 @@ actuator the allocation is the identity and the loader does not add it.
 It is a stage of an agent (`controllers.stages`: ``{"name": "actuator_allocation", "commands":
 "paper"}``, the actuator whose normalised τ it commands), built for the scenario's actuator. An
 env that draws the actuator per episode (``actuator="random"``) tells no actuator, and the agent
-runs unallocated there (docs/design.md §3.16).
+runs unallocated there; in training on one, the allocation follows each episode's draw
+(`controllers.stages.DrawnAllocationStage`; docs/design.md §3.16).
 """
 
 from __future__ import annotations

@@ -39,6 +39,7 @@ from controllers.envelope_guard import GUARD_INPUTS, check_envelope_guard, guard
 __all__ = [
     "STAGE_ORDER",
     "AllocationStage",
+    "DrawnAllocationStage",
     "GuardStage",
     "PipelineState",
     "Stage",
@@ -135,6 +136,51 @@ class AllocationStage(Stage):
         return {"name": self.name, "commands": COMMANDED_ACTUATOR}
 
 
+class DrawnAllocationStage(AllocationStage):
+    """The actuator allocation in training on an env that draws each episode's actuator
+    (``actuator="random"``: the paper's or the fins): the rows whose episode drew the fins are
+    allocated as `AllocationStage` allocates them, the others pass unchanged (the allocation is
+    the identity on the paper's actuator), so that every vehicle meets the commands the exported
+    agent will give on its actuator. Training only: the wrapper tells it each episode's draw
+    (`set_drawn`; `benchmarks.training.stages.StagedActions`). The memory is (n, 4): the
+    delivered command, then 1.0 on the allocated rows."""
+
+    def start(self, n: int) -> np.ndarray:
+        return np.zeros((n, 4), dtype=np.float32)
+
+    def restart(self, memory: np.ndarray, rows: np.ndarray) -> None:
+        memory[rows, :3] = 0.0
+
+    def set_drawn(self, memory: np.ndarray, rows: np.ndarray, actuators: Sequence[str]) -> None:
+        """Record the actuators drawn by the vehicles ``rows`` (bool, (n,)) whose episodes start:
+        ``actuators`` holds every vehicle's (n,), "paper" or an allocated one."""
+        drawn = np.asarray(actuators, dtype=object)
+        unknown = sorted(set(drawn[rows]) - {COMMANDED_ACTUATOR, self.allocation.actuator})
+        if unknown:
+            raise ValueError(
+                f"actuator_allocation in training allocates to {self.allocation.actuator!r} "
+                f"and passes {COMMANDED_ACTUATOR!r}; the env drew {unknown}"
+            )
+        memory[rows, 3] = (drawn[rows] == self.allocation.actuator).astype(np.float32)
+
+    def observe(self, observation: np.ndarray, memory: np.ndarray) -> np.ndarray:
+        obs = np.array(observation, dtype=np.float32, copy=True)
+        allocated = memory[:, 3] > 0.5
+        obs[np.ix_(allocated, self.allocation.previous_index)] = memory[allocated, :3]
+        return obs
+
+    def act(
+        self, commands: np.ndarray, observation: np.ndarray, memory: Any
+    ) -> tuple[np.ndarray, Any]:
+        out = np.array(commands, dtype=np.float32, copy=True)
+        allocated = memory[:, 3] > 0.5
+        if allocated.any():
+            out[allocated], memory[allocated, :3] = self.allocation.allocate(
+                out[allocated], observation[allocated]
+            )
+        return out, memory
+
+
 def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
     """The stage list of an agent's metadata or a training config, checked: a list of mappings
     with a known ``name`` (`STAGE_ORDER`) and valid settings, each at most once, in that order.
@@ -177,18 +223,26 @@ def build_stages(
     obs_names: Sequence[str],
     settings: Mapping[str, Any] | None = None,
     where: str = "stages",
+    drawn: str | None = None,
 ) -> list[Stage]:
     """The `Stage` objects of checked ``specs`` (`check_stage_specs`) for an agent observing
     ``obs_names``, on the plant of ``settings`` (`controllers.env_settings.policy_settings`:
     ``actuator``, ``params``, ``actuator_params``). The allocation is the identity on the
     actuator the agent commands (the paper's) and on one drawn per episode ("random"), which
-    tells the agent nothing: it is left out there."""
+    tells a deployed agent nothing: it is left out there. In training on such an env,
+    ``drawn`` names the allocated actuator the episodes may draw ("fins"): the allocation is
+    then a `DrawnAllocationStage` to it, told each episode's draw by the training wrapper."""
     settings = settings or {}
     stages: list[Stage] = []
     for spec in specs:
         if spec["name"] == "envelope_guard":
             settings_of_guard = {k: v for k, v in spec.items() if k != "name"}
             stages.append(GuardStage(settings_of_guard, obs_names, where))
+        elif drawn is not None:
+            allocation = Allocation(
+                obs_names, drawn, settings.get("params"), settings.get("actuator_params"), where
+            )
+            stages.append(DrawnAllocationStage(allocation))
         elif settings.get("actuator") in ALLOCATED_ACTUATORS:
             allocation = Allocation(
                 obs_names,

@@ -278,6 +278,9 @@ def test_an_agent_inside_the_allocation_onto_propeller_and_fins_has_no_expert_la
     specs = check_stage_specs(["actuator_allocation"], "test")
     with pytest.raises(ValueError, match="allocation onto the 'realistic' actuator"):
         ExpertLabels("pid_as_built", kwargs, names, specs, where="recipe.yml")
+    drawn = {**kwargs, "actuator": "random"}  # each episode's actuator drawn: no one label
+    with pytest.raises(ValueError, match=r"recipe.yml: .* drawn per episode \(actuator='random'\)"):
+        ExpertLabels("fbsm_colos", drawn, names, specs, where="recipe.yml")
     box = ExpertLabels("pid_as_built", kwargs, names, (), ([-0.5, -1, -1], [0.5, 1, 1]))
     clipped = box.to_agent(np.array([[0.9, -1.0, 0.2]]), np.zeros((1, len(names))))
     np.testing.assert_array_equal(clipped, np.array([[0.5, -1.0, 0.2]], np.float32))

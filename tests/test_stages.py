@@ -9,6 +9,7 @@ import json
 import math
 import shutil
 from pathlib import Path
+from types import SimpleNamespace
 from typing import ClassVar
 
 import numpy as np
@@ -264,6 +265,50 @@ def test_training_and_inference_apply_the_same_stages_to_the_same_commands():
     raw_env.close()
 
 
+@pytest.mark.parametrize("kind", ["native", "dummy"])
+def test_training_on_drawn_actuators_allocates_the_fin_episodes_only(kind):
+    """actuator="random" draws the paper's actuator or the fins per episode: behind
+    `StagedActions` the allocation flies the fin episodes (their commands and fed-back previous
+    action are `Allocation`'s) and passes the paper episodes unchanged, across autoresets."""
+    from benchmarks.training.agent_interface import wrap_actions
+    from benchmarks.training.stages import StagedActions
+    from benchmarks.training.train import make_training_env
+    from controllers.stages import DrawnAllocationStage
+
+    kwargs = {"actuator": "random", "disturbance": "none", "max_time": 2.0}
+    inner = make_training_env(4, 3, kwargs, kind=kind, env_id="AUVPath3DPreview-v0")
+    specs = check_stage_specs(["actuator_allocation"], "test")
+    cfg = SimpleNamespace(stages=specs, action_bounds=None)  # what wrap_actions reads of a file
+    venv = wrap_actions(inner, cfg, NAMES, {**kwargs, "observation": "preview"})
+    assert isinstance(venv, StagedActions)
+    assert [type(stage) for stage in venv.stages] == [DrawnAllocationStage]
+    sent = []
+    inner_step = venv.venv.step_async
+    venv.venv.step_async = lambda a: (sent.append(np.array(a)), inner_step(a))[1]
+    fins = Allocation(NAMES, "fins")
+    rng = np.random.default_rng(1)
+    seen = venv.reset()
+    drawn = np.array(venv.venv.get_attr("actuator"))
+    draws, delivered_prev = [drawn], None
+    for _ in range(100):
+        actions = rng.uniform(-1, 1, size=(4, 3)).astype(np.float32)
+        on_fins = drawn == "fins"
+        if delivered_prev is not None:  # what the network saw: the delivered command on fins
+            np.testing.assert_array_equal(seen[on_fins][:, PREV], delivered_prev[on_fins])
+        seen_next, _, dones, _ = venv.step(actions)
+        allocated, delivered = fins.allocate(actions, seen)
+        np.testing.assert_array_equal(sent[-1][on_fins], allocated[on_fins])
+        np.testing.assert_array_equal(sent[-1][~on_fins], actions[~on_fins])
+        delivered_prev = np.where(dones[:, None], 0.0, delivered).astype(np.float32)
+        seen = seen_next
+        drawn = np.array(venv.venv.get_attr("actuator"))
+        draws.append(drawn)
+    venv.close()
+    draws = np.array(draws)
+    assert {"paper", "fins"} == set(draws.ravel())  # both drawn, some vehicle switched
+    assert any(len(set(draws[:, i])) == 2 for i in range(4))
+
+
 @pytest.mark.rl
 def test_the_training_wrapper_guards_the_env_commands():
     """Full nose-up from rest: the wrapper lets it through until θ + T·q passes 35°, then the
@@ -348,6 +393,23 @@ def test_a_file_trains_inside_its_stages_and_exports_them(tmp_path, train_tiny_p
         config.write_text(yaml.safe_dump({"AUVPath3DPreview-v0": {**section, key: value}}))
         with pytest.raises(ValueError, match=f"bad.yml: AUVPath3DPreview-v0: .*{message}"):
             read_zoo_config(config, "AUVPath3DPreview-v0", "ppo")
+
+
+@pytest.mark.rl
+def test_an_agent_trained_on_drawn_actuators_exports_its_allocation(
+    tmp_path, train_tiny_preview_agent
+):
+    """Trained inside the allocation on actuator="random": the exported agent lists the
+    allocation, flies the fins allocated and the paper's actuator as its network commands."""
+    import controllers
+
+    env = {"randomize_start": True, "max_time": 20.0, "actuator": "random"}
+    agent = train_tiny_preview_agent(tmp_path, env_kwargs=env, stages=["actuator_allocation"])
+    recorded = json.loads((agent / "metadata.json").read_text())["stages"]
+    assert recorded == [{"name": "actuator_allocation", "commands": "paper"}]
+    fins = controllers.make("agent", path=str(agent), env={"actuator": "fins"})
+    paper = controllers.make("agent", path=str(agent), env={"actuator": "paper"})
+    assert [type(s) for s in fins.stages] == [AllocationStage] and not getattr(paper, "stages", [])
 
 
 @pytest.mark.parametrize(

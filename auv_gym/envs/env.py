@@ -461,6 +461,12 @@ class AUVPath3DEnv(gym.Env):
         """The simulator state (x, y, z, θ, ψ, u, v, w, q, r, s) [m, rad, m/s, rad/s, -]."""
         return self.sim.state[0].copy()
 
+    @property
+    def actuator(self) -> str:
+        """The actuator model of the current episode, "paper", "fins" or "realistic": the
+        configured one, or the one the episode drew (``actuator="random"``)."""
+        return str(self.sim.actuators[0])
+
     def render(self) -> np.ndarray | None:
         """RGB frame (320, 960, 3) uint8 of the episode so far (`auv_gym.envs.rendering`), or
         None."""

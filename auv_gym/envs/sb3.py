@@ -34,7 +34,7 @@ __all__ = ["INFO_MODES", "SB3VecEnv", "make_sb3_vec_env"]
 INFO_MODES = ("full", "minimal")
 
 # Attributes that differ between vehicles; every other attribute is shared by all of them.
-_PER_VEHICLE = ("state", "np_random", "observation_space", "action_space")
+_PER_VEHICLE = ("state", "np_random", "actuator", "observation_space", "action_space")
 
 
 class SB3VecEnv(VecEnv):
@@ -48,7 +48,9 @@ class SB3VecEnv(VecEnv):
 
     The vehicles are rows of one simulator, so attributes are shared: `get_attr` returns the vector
     env's attribute for each requested index, except the per-vehicle ``state`` (11-vector),
-    ``np_random`` (the vehicle's generator) and the single ``observation_space`` /
+    ``np_random`` (the vehicle's generator), ``actuator`` (the actuator model of the vehicle's
+    current episode: the configured one or, with ``actuator="random"``, the one its episode
+    drew) and the single ``observation_space`` /
     ``action_space``; `set_attr` changes the shared attribute and therefore needs all indices;
     `env_method` calls the vector env's method once and returns its result for each index;
     `env_is_wrapped` is False (no gymnasium wrappers; wrap the whole VecEnv with `VecMonitor`,
@@ -160,6 +162,9 @@ class SB3VecEnv(VecEnv):
                 return [self.core.sim.state[i].copy() for i in rows]
             if attr_name == "np_random":
                 return [self.core.vehicle_np_random[i] for i in rows]
+            if attr_name == "actuator":
+                actuators = self.core.sim.actuators
+                return [str(actuators[i]) for i in rows]
             return [getattr(self.venv, f"single_{attr_name}")] * len(rows)
         value = getattr(self._holder(attr_name), attr_name)
         return [value] * len(rows)

@@ -9,7 +9,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from controllers.env_settings import policy_settings
+from auv_gym.sim.randomization import RANDOM_ACTUATORS
+from controllers.actuator_allocation import ALLOCATED_ACTUATORS
+from controllers.env_settings import env_config, policy_settings
 from controllers.stages import build_stages, check_stage_specs
 
 if TYPE_CHECKING:
@@ -44,8 +46,18 @@ def wrap_actions(
     venv: Any, cfg: ZooConfig, obs_names: Sequence[str], env_kwargs: dict[str, Any]
 ) -> Any:
     """``venv`` inside the file's stages (innermost: they give the env's command), built for
-    the training env's plant (``env_kwargs``: the id's and the file's), and its action box."""
-    stages = build_stages(cfg.stages, obs_names, policy_settings(env_kwargs), "stages")
+    the training env's plant (``env_kwargs``: the id's and the file's), and its action box.
+
+    On an env that draws each episode's actuator (``actuator="random"``: the paper's or the
+    fins), the allocation flies the vehicles whose episode drew the fins and passes the others
+    (`controllers.stages.DrawnAllocationStage`), as the exported agent will on each actuator."""
+    settings = policy_settings(env_kwargs)
+    drawn = None
+    config = env_config(env_kwargs)
+    if config.actuator == "random":
+        settings = {**settings, "actuator_params": config.actuator_params}
+        (drawn,) = [a for a in RANDOM_ACTUATORS if a in ALLOCATED_ACTUATORS]
+    stages = build_stages(cfg.stages, obs_names, settings, "stages", drawn)
     if stages:
         from benchmarks.training.stages import StagedActions
 

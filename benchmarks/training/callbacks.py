@@ -139,7 +139,7 @@ class PeriodicEvaluation(BaseCallback):
         extra = () if self.residual is None else ("chattering",)
         groups = plant_groups(self.eval_kwargs)
         results = []
-        for env_kwargs in groups:  # a policy per plant: its stages are built for the plant
+        for env_kwargs in groups:  # one batch per plant, stages built from its env arguments
             policy = policy_from_model(
                 self.model, vec_normalize, self.residual, env_kwargs, self.stages
             )

@@ -71,6 +71,13 @@ class ExpertLabels:
 
         self.name = check_expert_name(name, where)
         settings = policy_settings(dict(env_kwargs))
+        drawn = "actuator" not in settings  # the env draws each episode's actuator
+        if drawn and any(spec["name"] == "actuator_allocation" for spec in stage_specs):
+            raise ValueError(
+                f"{where}: the agent trains inside the actuator allocation on actuators drawn "
+                "per episode (actuator='random'), where the expert's labels would need each "
+                "episode's draw; jump-start on one actuator and add a phase on 'random' after it"
+            )
         self.policy = controllers.make(name, env=dict(env_kwargs))
         self.stages = build_stages(stage_specs, obs_names, settings, f"{where}: stages")
         self.allocation = None

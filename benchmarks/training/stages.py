@@ -6,7 +6,9 @@ goes through every stage (the envelope guard, the actuator allocation) to the co
 receives, and what the network observes is the stages' view of the raw observation (the
 allocation feeds back the command the actuator delivered). ``last_obs`` is that view of each
 vehicle's last observation (the new episode's first after an autoreset) and ``memories`` the
-stages' per-vehicle state; a resumed run restores both (`checkpoints`).
+stages' per-vehicle state; a resumed run restores both (`checkpoints`). A stage that follows
+each episode's drawn actuator (`controllers.stages.DrawnAllocationStage`) is told the draw of
+every vehicle whose episode starts, read from the env (``get_attr("actuator")``).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
-from controllers.stages import Stage, apply_stages, observe_stages
+from controllers.stages import DrawnAllocationStage, Stage, apply_stages, observe_stages
 
 __all__ = ["StagedActions"]
 
@@ -35,9 +37,20 @@ class StagedActions(VecEnvWrapper):
         self.last_obs = np.array(seen, dtype=np.float32)
         return seen
 
+    def _tell_drawn(self, rows: np.ndarray) -> None:
+        """Each drawn-actuator stage learns the actuators of the episodes starting at ``rows``."""
+        drawn = [
+            k for k, stage in enumerate(self.stages) if isinstance(stage, DrawnAllocationStage)
+        ]
+        if drawn and rows.any():
+            actuators = self.venv.get_attr("actuator")
+            for k in drawn:
+                self.stages[k].set_drawn(self.memories[k], rows, actuators)
+
     def reset(self) -> np.ndarray:
         obs = self.venv.reset()
         self.memories = [stage.start(self.num_envs) for stage in self.stages]
+        self._tell_drawn(np.ones(self.num_envs, dtype=bool))
         return self._seen(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
@@ -48,4 +61,5 @@ class StagedActions(VecEnvWrapper):
         starts = np.asarray(dones, dtype=bool)  # autoreset: these rows begin a new episode
         for stage, memory in zip(self.stages, self.memories, strict=True):
             stage.restart(memory, starts)
+        self._tell_drawn(starts)
         return self._seen(obs), rewards, dones, infos
