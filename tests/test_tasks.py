@@ -85,18 +85,30 @@ def test_task_sets_build_their_envs():
     assert task_set("validation").episodes()[0] == (task_set("validation").env, 100_000)
 
 
-def test_a_validation_set_on_two_plants_flies_every_seed_on_each():
-    both = task_set("validation_as_built_start_plants")
-    assert both.plants == ("5dof", "6dof") and "plant" not in both.env
-    episodes = both.episodes()
-    assert len(episodes) == 2 * len(both.seeds) == 200
-    assert [env["plant"] for env, _ in episodes[:1] + episodes[100:101]] == ["5dof", "6dof"]
+@pytest.mark.parametrize(
+    ("name", "like", "key", "values"),
+    [
+        (
+            "validation_as_built_start_plants",
+            "validation_as_built_start",
+            "plant",
+            ["5dof", "6dof"],
+        ),
+        ("validation_actuators_start", "validation_paper_start", "actuator", ["paper", "fins"]),
+    ],
+)
+def test_a_varied_validation_set_flies_every_seed_once_per_value(name, like, key, values):
+    varied = task_set(name)
+    assert varied.vary == (key, tuple(values))
+    episodes = varied.episodes()
+    assert len(episodes) == 2 * len(varied.seeds) == 200
+    assert [env[key] for env, _ in episodes[:1] + episodes[100:101]] == values
     assert [seed for _, seed in episodes[:100]] == [seed for _, seed in episodes[100:]]
-    # the 5-DOF half is validation_as_built_start's env on seeds of its own
-    start = task_set("validation_as_built_start")
-    assert {k: v for k, v in episodes[0][0].items() if k != "plant"} == start.env
-    assert set(both.seeds).isdisjoint(start.seeds)
-    assert both.eval_env()["plant"] == ["5dof", "6dof"]
+    # each half is the set it varies, with its value, on seeds of its own
+    base = task_set(like)
+    assert {k: v for k, v in base.env.items() if k != key} == varied.env
+    assert set(varied.seeds).isdisjoint(base.seeds)
+    assert varied.eval_env()[key] == values
     assert task_set("validation").eval_env() == task_set("validation").env
 
 
@@ -106,6 +118,7 @@ def _write(tmp_path, text):
     return file
 
 
+TEST = '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\n'
 VALIDATION = '[x]\nrole = "validation"\nseeds = { first = 0, count = 5 }\n'
 TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { path = "random" }\n'
 
@@ -150,24 +163,30 @@ TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { p
             r"task set 'x': controller must be a table, got 'fins'",
         ),
         (
-            '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\nplants = ["5dof", "6dof"]\n',
-            r"task set 'x': only a validation set flies several plants, this one is 'test'",
+            TEST + 'vary = { plant = ["5dof", "6dof"] }\n',
+            r"task set 'x': only a validation set may vary, this one is 'test'",
         ),
         (
-            VALIDATION + 'plants = ["5dof", "6dof"]\nenv = { plant = "6dof" }\n',
-            r"task set 'x': give plants or env.plant, not both",
+            VALIDATION + 'vary = { plant = ["5dof", "6dof"] }\nenv = { plant = "6dof" }\n',
+            r"task set 'x': give vary.plant or plant in env/controller, not both",
         ),
         (
-            VALIDATION + 'plants = ["5dof", "7dof"]\n',
-            r"plants must list two or more distinct plants of \['5dof', '6dof'\], "
+            VALIDATION
+            + 'vary = { actuator = ["paper", "fins"] }\ncontroller = { actuator = "fins" }\n',
+            r"task set 'x': give vary.actuator or actuator in env/controller, not both",
+        ),
+        (
+            VALIDATION + 'vary = { plant = ["5dof", "7dof"] }\n',
+            r"vary.plant must list two or more distinct values of \['5dof', '6dof'\], "
             r"got \['5dof', '7dof'\]",
         ),
+        (VALIDATION + 'vary = { plant = ["6dof"] }\n', r"vary.plant must list two or more"),
         (
-            VALIDATION + 'plants = ["6dof"]\n',
-            r"plants must list two or more distinct plants",
+            VALIDATION + 'vary = { sensors = ["none", "typical"] }\n',
+            r"vary must be a table of one key of \['actuator', 'plant'\]",
         ),
         (
-            VALIDATION + 'plants = ["6dof", "5dof"]\n'
+            VALIDATION + 'vary = { plant = ["6dof", "5dof"] }\n'
             'env = { vehicle = "torpedo", actuator = "realistic" }\n',
             r"task set 'x', plant '5dof': vehicle 'torpedo' has no \[model_5dof\]",
         ),

@@ -113,8 +113,8 @@ def test_parse_seeds(text, seeds):
         (
             ["--seeds", "2", "--task-set", "nope"],
             "task set 'nope' is not a validation set; valid: ['paper', 'validation', "
-            "'validation_as_built', 'validation_as_built_start', 'validation_as_built_start_6dof', "
-            "'validation_as_built_start_plants', "
+            "'validation_actuators_start', 'validation_as_built', 'validation_as_built_start', "
+            "'validation_as_built_start_6dof', 'validation_as_built_start_plants', "
             "'validation_fins_start', "
             "'validation_paper_actuator', 'validation_paper_start']",
         ),
@@ -306,8 +306,8 @@ def test_validation_on_both_plants(tmp_path):
     assert plan["eval_seeds"] == [task_set("validation_as_built_start_plants").seeds.start]
     entry = _summary(tmp_path / "run")["seeds"][0]
     validation = entry["validation_summary"]
-    assert validation["n_episodes"] == 2 and set(validation["per_plant"]) == {"5dof", "6dof"}
-    per_plant = [validation["per_plant"][p]["rms_distance_mean"] for p in ("5dof", "6dof")]
+    assert validation["n_episodes"] == 2 and set(validation["per_variant"]) == {"5dof", "6dof"}
+    per_plant = [validation["per_variant"][p]["rms_distance_mean"] for p in ("5dof", "6dof")]
     assert all(np.isfinite(per_plant)) and per_plant[0] != per_plant[1]
     assert validation["rms_distance_mean"] == pytest.approx(np.mean(per_plant), rel=1e-12)
     curve = (tmp_path / "run" / "seed_0" / "evaluations.csv").read_text().splitlines()

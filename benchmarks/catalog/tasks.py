@@ -6,9 +6,10 @@ policies are told (``controller``, as a scenario's: e.g. the actuator); the test
 holds the benchmark scenarios (`benchmarks/scenarios.toml`) by name, one set per scenario
 ("scenario:<name>"). An episode is the pair (env keyword arguments, seed).
 
-A validation set may fly every seed on several plants (``plants = ["5dof", "6dof"]``, in place of
-an env ``plant``): an agent meant for both is then selected on both at once, each seed once per
-plant, so its score is the mean over the plants (`episodes`).
+A validation set may fly every seed on several plants or actuators (``vary = { plant = ["5dof",
+"6dof"] }`` or ``vary = { actuator = ["paper", "fins"] }``, in place of that env argument): an
+agent meant for all of them is then selected on all at once, each seed once per value, so its
+score is the mean over them (`episodes`).
 
 `load_task_sets` validates the whole file before anything runs, each problem a one-line
 ValueError naming the set: unknown keys or roles, a bad seed range, env arguments the env refuses
@@ -40,7 +41,8 @@ __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test
 
 TASKS_FILE = Path(__file__).resolve().parents[1] / "tasks.toml"
 ROLES = ("train", "validation", "test")
-_KEYS = {"role", "description", "seeds", "env", "controller", "scenarios", "held_out", "plants"}
+_KEYS = {"role", "description", "seeds", "env", "controller", "scenarios", "held_out", "vary"}
+VARIED = {"plant": PLANTS, "actuator": ("paper", "fins", "realistic")}  # what `vary` may vary
 MAX_SEED = 2**32 - 1  # numpy's SeedSequence accepts any, SB3 and Gymnasium pass 32-bit seeds
 
 
@@ -55,20 +57,24 @@ class TaskSet:
     env: dict[str, Any] = field(default_factory=dict)
     controller: dict[str, Any] = field(default_factory=dict)  # a scenario's controller kwargs
     held_out: str | None = None  # the training set whose distribution this one lies outside
-    plants: tuple[str, ...] = ()  # a validation set's plants, every seed on each (module doc)
+    vary: tuple[str, tuple[str, ...]] | None = None  # (env key, its values): module doc
 
     def episodes(self) -> list[tuple[dict[str, Any], int]]:
-        """(env keyword arguments, seed) of every episode of the set: with ``plants``, every
-        seed on each plant in turn (plant-major order)."""
-        if self.plants:
-            return [({**self.env, "plant": p}, seed) for p in self.plants for seed in self.seeds]
-        return [(dict(self.env), seed) for seed in self.seeds]
+        """(env keyword arguments, seed) of every episode of the set: with ``vary``, every seed
+        once per value, value by value."""
+        if self.vary is None:
+            return [(dict(self.env), seed) for seed in self.seeds]
+        key, values = self.vary
+        return [({**self.env, key: value}, seed) for value in values for seed in self.seeds]
 
     def eval_env(self) -> dict[str, Any]:
         """The env keyword arguments a training run's validation passes on: ``env``, with the
-        list of ``plants`` as its ``plant`` when the set has several
-        (`benchmarks.training.evaluation.plant_groups` splits them again)."""
-        return {**self.env, "plant": list(self.plants)} if self.plants else dict(self.env)
+        varied key's list of values when the set varies one
+        (`benchmarks.training.evaluation.variant_groups` splits them again)."""
+        if self.vary is None:
+            return dict(self.env)
+        key, values = self.vary
+        return {**self.env, key: list(values)}
 
 
 def _seeds(where: str, spec: Any) -> range:
@@ -137,40 +143,48 @@ def load_task_sets(
                 )
             continue
         env = dict(table.get("env", {}))
-        plants = _plants(where, table.get("plants"), role, env)
-        checked = [_check_env(f"{where}, plant {p!r}", {**env, "plant": p}) for p in plants]
-        configs[name] = checked[0] if checked else _check_env(where, env)
         controller = table.get("controller", {})
         if not isinstance(controller, Mapping):
             raise ValueError(f"{where}: controller must be a table, got {controller!r}")
-        sets[name] = TaskSet(
-            name, role, description, seeds, env, dict(controller), held_out, plants
-        )
+        vary = _vary(where, table.get("vary"), role, env, controller)
+        checked = []
+        if vary is not None:
+            key, values = vary
+            checked = [_check_env(f"{where}, {key} {v!r}", {**env, key: v}) for v in values]
+        configs[name] = checked[0] if checked else _check_env(where, env)
+        sets[name] = TaskSet(name, role, description, seeds, env, dict(controller), held_out, vary)
     _check_disjoint(path.name, sets)
     _check_held_out(path.name, sets, configs)
     return sets
 
 
-def _plants(where: str, spec: Any, role: str, env: dict[str, Any]) -> tuple[str, ...]:
-    """A validation set's ``plants`` list: two or more distinct plant names, no env ``plant``."""
+def _vary(
+    where: str, spec: Any, role: str, env: dict[str, Any], controller: Mapping[str, Any]
+) -> tuple[str, tuple[str, ...]] | None:
+    """A validation set's ``vary`` table: one key of `VARIED` (not also in ``env`` or the
+    ``controller`` table) with two or more distinct values of its own."""
     if spec is None:
-        return ()
+        return None
     if role != "validation":
+        raise ValueError(f"{where}: only a validation set may vary, this one is {role!r}")
+    if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in VARIED:
         raise ValueError(
-            f"{where}: only a validation set flies several plants, this one is {role!r}"
+            f"{where}: vary must be a table of one key of {sorted(VARIED)}, got {spec!r}"
         )
-    if "plant" in env:
-        raise ValueError(f"{where}: give plants or env.plant, not both")
+    ((key, values),) = spec.items()
+    if key in env or key in controller:
+        raise ValueError(f"{where}: give vary.{key} or {key} in env/controller, not both")
     if (
-        not isinstance(spec, list)
-        or len(spec) < 2
-        or len(set(spec)) != len(spec)
-        or not all(p in PLANTS for p in spec)
+        not isinstance(values, list)
+        or len(values) < 2
+        or len(set(values)) != len(values)
+        or not all(v in VARIED[key] for v in values)
     ):
         raise ValueError(
-            f"{where}: plants must list two or more distinct plants of {list(PLANTS)}, got {spec!r}"
+            f"{where}: vary.{key} must list two or more distinct values of "
+            f"{list(VARIED[key])}, got {values!r}"
         )
-    return tuple(spec)
+    return key, tuple(values)
 
 
 def _check_disjoint(file: str, sets: dict[str, TaskSet]) -> None:

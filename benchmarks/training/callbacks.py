@@ -20,9 +20,9 @@ from benchmarks.training.checkpoints import (
 from benchmarks.training.evaluation import (
     chattering_mean,
     evaluate_policy_on_seeds,
-    plant_groups,
     score,
     summarize,
+    variant_groups,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from benchmarks.training.residual import ResidualTraining
@@ -137,15 +137,15 @@ class PeriodicEvaluation(BaseCallback):
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
         vec_normalize = self.model.get_vec_normalize_env()
         extra = () if self.residual is None else ("chattering",)
-        groups = plant_groups(self.eval_kwargs)
         results = []
-        for env_kwargs in groups:  # one batch per plant, stages built from its env arguments
+        for label, env_kwargs in variant_groups(self.eval_kwargs):
+            # one batch per plant or actuator, the stages built from its env arguments
             policy = policy_from_model(
                 self.model, vec_normalize, self.residual, env_kwargs, self.stages
             )
             rows = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra, **env_kwargs)
-            if len(groups) > 1:
-                rows = [{**row, "plant": env_kwargs["plant"]} for row in rows]
+            if label is not None:
+                rows = [{**row, "variant": label} for row in rows]
             results.extend(rows)
         summary = summarize(results)
         weight = 0.0 if self.residual is None else self.residual.selection_chattering

@@ -20,6 +20,7 @@ from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.sim.trajectory import env_termination_reason
 from auv_gym.support.files import write_json
+from benchmarks.catalog.tasks import VARIED
 from controllers.agent import agent_env_kwargs
 from controllers.loader import load_policy
 from controllers.residual import base_kwargs_for_env
@@ -33,9 +34,9 @@ __all__ = [
     "check_evaluation_duration",
     "evaluate_policy_on_seeds",
     "held_out_evaluation",
-    "plant_groups",
     "score",
     "summarize",
+    "variant_groups",
     "write_held_out_evaluation",
 ]
 
@@ -83,25 +84,26 @@ def evaluate_policy_on_seeds(
     ]
 
 
-def plant_groups(env_kwargs: dict[str, Any]) -> list[dict[str, Any]]:
-    """The env keyword arguments of each plant an evaluation flies: one entry per name when
-    ``plant`` is a list (a validation set on several plants, `benchmarks.catalog.tasks`),
-    else ``[env_kwargs]``."""
-    plants = env_kwargs.get("plant")
-    if not isinstance(plants, (list, tuple)):
-        return [env_kwargs]
-    return [{**env_kwargs, "plant": plant} for plant in plants]
+def variant_groups(env_kwargs: dict[str, Any]) -> list[tuple[str | None, dict[str, Any]]]:
+    """The (label, env keyword arguments) of each variant an evaluation flies: one per value
+    when ``plant`` or ``actuator`` is a list (a validation set's ``vary``,
+    `benchmarks.catalog.tasks`), labelled by the value; else ``[(None, env_kwargs)]``."""
+    for key in VARIED:
+        values = env_kwargs.get(key)
+        if isinstance(values, (list, tuple)):
+            return [(str(value), {**env_kwargs, key: value}) for value in values]
+    return [(None, env_kwargs)]
 
 
 def summarize(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Mean ± std of rms_distance over seeds, the number of terminated episodes and the largest
-    surge speed [m/s] of any episode; results on several plants (rows with a "plant") add
-    "per_plant": each plant's summary."""
-    plants = list(dict.fromkeys(r["plant"] for r in results if "plant" in r))
-    if not plants:
+    surge speed [m/s] of any episode; results on several variants (rows with a "variant":
+    plants or actuators, `variant_groups`) add "per_variant": each one's summary."""
+    variants = list(dict.fromkeys(r["variant"] for r in results if "variant" in r))
+    if not variants:
         return _summary(results)
-    per_plant = {p: _summary([r for r in results if r.get("plant") == p]) for p in plants}
-    return {**_summary(results), "per_plant": per_plant}
+    per_variant = {v: _summary([r for r in results if r.get("variant") == v]) for v in variants}
+    return {**_summary(results), "per_variant": per_variant}
 
 
 def _summary(results: Sequence[dict[str, Any]]) -> dict[str, Any]:

@@ -2,8 +2,9 @@
 
 Columns: env steps, training wall time [s] (summed over resumed sessions), and the mean, std and
 max rms distance [m], the number of terminated episodes and the largest surge speed [m/s]
-over the evaluation seeds; a validation on several plants adds each plant's mean rms distance
-and terminated episodes (``rms_distance_mean_<plant>``, ``n_terminated_<plant>``). Rows are
+over the evaluation seeds; a validation on several plants or actuators adds each one's mean rms
+distance and terminated episodes (``rms_distance_mean_<value>``, ``n_terminated_<value>``,
+e.g. ``_6dof``, ``_fins``). Rows are
 appended and flushed to disk one by one; a resumed run first drops the rows past the checkpoint
 it restarts from. `benchmarks.reports.figures.plot_learning_curve` draws it.
 """
@@ -44,8 +45,8 @@ def append_row(path: Path, num_timesteps: int, wall_time: float, summary: dict[s
         f"{summary['max_surge_max']:.6g}",
     ]
     header = list(EVAL_HEADER)
-    for plant, part in summary.get("per_plant", {}).items():
-        header += [f"rms_distance_mean_{plant}", f"n_terminated_{plant}"]
+    for variant, part in summary.get("per_variant", {}).items():
+        header += [f"rms_distance_mean_{variant}", f"n_terminated_{variant}"]
         row += [f"{part['rms_distance_mean']:.6g}", part["n_terminated"]]
     new = not path.exists()
     with path.open("a", newline="") as f:
