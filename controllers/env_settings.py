@@ -15,7 +15,7 @@ from typing import Any
 from auv_gym.sim.config import SimConfig
 from auv_gym.support.validation import ArgumentTypeError
 
-__all__ = ["env_config", "policy_settings"]
+__all__ = ["draws_actuator", "env_config", "policy_settings"]
 
 # Drawn per episode: a policy built once cannot know which, so it keeps its own default ("paper").
 _PER_EPISODE_ACTUATOR = "random"
@@ -39,6 +39,11 @@ def env_config(env: Any) -> SimConfig:
     )
 
 
+def draws_actuator(env: Any) -> bool:
+    """Whether ``env`` (see `env_config`) draws each episode's actuator (``actuator="random"``)."""
+    return env_config(env).actuator == _PER_EPISODE_ACTUATOR
+
+
 def policy_settings(env: Any) -> dict[str, Any]:
     """The keyword arguments of a classical controller (`controllers.make`) that ``env``
     (see `env_config`) fixes: ``control_dt`` [s], ``params`` (the nominal vehicle; per-episode
@@ -46,7 +51,7 @@ def policy_settings(env: Any) -> dict[str, Any]:
     env draws it per episode, ``actuator`` with its ``actuator_params``."""
     config = env_config(env)
     settings: dict[str, Any] = {"control_dt": config.control_dt, "params": config.params}
-    if config.actuator != _PER_EPISODE_ACTUATOR:
+    if not draws_actuator(config):
         settings["actuator"] = config.actuator
         settings["actuator_params"] = config.actuator_params
     return settings

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from auv_gym.sim.randomization import RANDOM_ACTUATORS
 from controllers.actuator_allocation import ALLOCATED_ACTUATORS
-from controllers.env_settings import env_config, policy_settings
+from controllers.env_settings import draws_actuator, env_config, policy_settings
 from controllers.stages import build_stages, check_stage_specs
 
 if TYPE_CHECKING:
@@ -53,9 +53,8 @@ def wrap_actions(
     (`controllers.stages.DrawnAllocationStage`), as the exported agent will on each actuator."""
     settings = policy_settings(env_kwargs)
     drawn = None
-    config = env_config(env_kwargs)
-    if config.actuator == "random":
-        settings = {**settings, "actuator_params": config.actuator_params}
+    if draws_actuator(env_kwargs):
+        settings = {**settings, "actuator_params": env_config(env_kwargs).actuator_params}
         (drawn,) = [a for a in RANDOM_ACTUATORS if a in ALLOCATED_ACTUATORS]
     stages = build_stages(cfg.stages, obs_names, settings, "stages", drawn)
     if stages:

@@ -67,12 +67,13 @@ class ExpertLabels:
         where: str = "expert",
     ) -> None:
         import controllers
-        from controllers.env_settings import policy_settings
+        from controllers.env_settings import draws_actuator, policy_settings
 
         self.name = check_expert_name(name, where)
         settings = policy_settings(dict(env_kwargs))
-        drawn = "actuator" not in settings  # the env draws each episode's actuator
-        if drawn and any(spec["name"] == "actuator_allocation" for spec in stage_specs):
+        if draws_actuator(dict(env_kwargs)) and any(
+            spec["name"] == "actuator_allocation" for spec in stage_specs
+        ):
             raise ValueError(
                 f"{where}: the agent trains inside the actuator allocation on actuators drawn "
                 "per episode (actuator='random'), where the expert's labels would need each "

@@ -31,6 +31,10 @@ class StagedActions(VecEnvWrapper):
         self.stages = list(stages)
         self.memories = [stage.start(venv.num_envs) for stage in self.stages]
         self.last_obs = np.zeros((venv.num_envs, obs_dim), np.float32)
+        # the stages told each starting episode's drawn actuator (found once: step is hot)
+        self.drawn = [
+            k for k, stage in enumerate(self.stages) if isinstance(stage, DrawnAllocationStage)
+        ]
 
     def _seen(self, obs: np.ndarray) -> np.ndarray:
         seen = observe_stages(self.stages, obs, self.memories)
@@ -39,12 +43,9 @@ class StagedActions(VecEnvWrapper):
 
     def _tell_drawn(self, rows: np.ndarray) -> None:
         """Each drawn-actuator stage learns the actuators of the episodes starting at ``rows``."""
-        drawn = [
-            k for k, stage in enumerate(self.stages) if isinstance(stage, DrawnAllocationStage)
-        ]
-        if drawn and rows.any():
+        if self.drawn and rows.any():
             actuators = self.venv.get_attr("actuator")
-            for k in drawn:
+            for k in self.drawn:
                 self.stages[k].set_drawn(self.memories[k], rows, actuators)
 
     def reset(self) -> np.ndarray:
