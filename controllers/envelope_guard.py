@@ -14,6 +14,16 @@ the two); the surge command a_X is capped by the same ramp in the surge speed
 u between u_soft and u_hard (full astern at u_hard). The yaw command is never touched. Inside
 the soft limits the guard is the identity, so an agent that stays there acts as trained.
 
+Optionally the guard also protects the low-speed edge, as an aircraft's alpha floor does: the fins'
+lift grows with u², so a vehicle that lets its surge fall loses the moments it would need to
+turn back, and a learned policy that brakes to turn can stall for good (docs/design.md §3.15).
+With ``surge_floor_soft`` > 0 the surge command is floored by the mirrored ramp
+
+    a_X ≥ −1 + 2·clip((u_floor_soft − u)/(u_floor_soft − u_floor_hard), 0, 1)
+
+(no floor above u_floor_soft, full ahead from u_floor_hard down). It is off by default, and an
+agent saved without it records nothing new.
+
 The guard reads θ, q and u from the agent's own observation (what the vehicle's attitude and
 velocity sensors give; every agent observation names them) and acts on the command the env receives.
 It is a stage of an agent (`controllers.stages`: ``{"name": "envelope_guard", ...}``), applied
@@ -47,6 +57,9 @@ class EnvelopeGuard:
     lookahead_s: float = 1.0
     surge_soft: float = 1.8
     surge_hard: float = 1.95
+    # The low-speed floor [m/s]: off while surge_floor_soft is 0.
+    surge_floor_soft: float = 0.0
+    surge_floor_hard: float = 0.0
     # +1: a positive a_M pitches the nose up (the paper's M); −1: a_M is the stern-plane angle
     # δ_s of the realistic actuator, whose positive deflection pitches the nose down (§2.6).
     nose_up_command: float = 1.0
@@ -72,10 +85,31 @@ class EnvelopeGuard:
                 f"{where}: each soft limit must lie below its hard limit, got pitch "
                 f"{soft:g}/{hard:g} deg, surge {u_soft:g}/{u_hard:g} m/s"
             )
+        floor_soft = real(f"{where}.surge_floor_soft", self.surge_floor_soft, 0.0, 10.0, unit="m/s")
+        floor_hard = real(f"{where}.surge_floor_hard", self.surge_floor_hard, 0.0, 10.0, unit="m/s")
+        if floor_soft == 0.0 and floor_hard != 0.0:
+            raise ValueError(
+                f"{where}: surge_floor_hard {floor_hard:g} m/s needs a surge_floor_soft above "
+                "it (0 turns the low-speed floor off)"
+            )
+        if floor_soft > 0.0 and not (floor_hard < floor_soft < u_soft):
+            raise ValueError(
+                f"{where}: the low-speed floor needs surge_floor_hard < surge_floor_soft < "
+                f"surge_soft, got {floor_hard:g} < {floor_soft:g} < {u_soft:g} m/s"
+            )
+
+    @property
+    def has_floor(self) -> bool:
+        """Whether the low-speed floor is on."""
+        return self.surge_floor_soft > 0.0
 
     def to_dict(self) -> dict[str, float]:
-        """The settings as metadata.json records them."""
-        return {k: float(v) for k, v in asdict(self).items()}
+        """The settings as metadata.json records them (the floor only when it is on, so an
+        agent without it records what it always did)."""
+        settings = {k: float(v) for k, v in asdict(self).items()}
+        if not self.has_floor:
+            del settings["surge_floor_soft"], settings["surge_floor_hard"]
+        return settings
 
 
 def check_envelope_guard(value: Any, where: str) -> EnvelopeGuard:
@@ -121,5 +155,8 @@ def guard_commands(
         rows[:, 1] = np.clip(rows[:, 1], -nose_down, nose_up)
     else:  # the stern plane: a positive command pitches the nose down
         rows[:, 1] = np.clip(rows[:, 1], -nose_up, nose_down)
+    if guard.has_floor:  # the mirrored ramp in −u: −1 above the soft floor, +1 below the hard
+        floor = -_authority(-u, -guard.surge_floor_soft, -guard.surge_floor_hard)
+        rows[:, 0] = np.maximum(rows[:, 0], floor)
     rows[:, 0] = np.minimum(rows[:, 0], _authority(u, guard.surge_soft, guard.surge_hard))
     return out

@@ -135,7 +135,8 @@ def _ramp(g: Graph, x: str, soft: float, hard: float) -> str:
 
 def guard_graph(g: Graph, commands: str, observation: str, index: Sequence[int], guard: Any) -> str:
     """The envelope guard (`controllers.envelope_guard.guard_commands`): a_M clipped to the pitch
-    ramps of θ + T·q, a_X capped by the surge ramp of u; float32 commands in and out."""
+    ramps of θ + T·q, a_X floored by the low-speed ramp (when on) and capped by the surge ramp of
+    u; float32 commands in and out."""
     obs = g.cast(observation, np.float64)
     theta, q, u = (g.column(obs, i) for i in index)
     predicted = g.op("Add", theta, g.op("Mul", g.const(guard.lookahead_s), q))
@@ -143,7 +144,11 @@ def guard_graph(g: Graph, commands: str, observation: str, index: Sequence[int],
     nose_up = _ramp(g, predicted, soft, hard)
     nose_down = _ramp(g, g.op("Neg", predicted), soft, hard)
     a = g.cast(commands, np.float64)
-    a_x = g.op("Min", g.column(a, 0), _ramp(g, u, guard.surge_soft, guard.surge_hard))
+    a_x = g.column(a, 0)
+    if guard.has_floor:
+        floor = _ramp(g, g.op("Neg", u), -guard.surge_floor_soft, -guard.surge_floor_hard)
+        a_x = g.op("Max", a_x, g.op("Neg", floor))
+    a_x = g.op("Min", a_x, _ramp(g, u, guard.surge_soft, guard.surge_hard))
     if guard.nose_up_command > 0.0:
         a_m = g.clip(g.column(a, 1), g.op("Neg", nose_down), nose_up)
     else:  # the stern plane: a positive command pitches the nose down

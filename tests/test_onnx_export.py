@@ -77,12 +77,16 @@ def operating_observations(n: int, rng: np.random.Generator) -> np.ndarray:
     return obs
 
 
-@pytest.mark.parametrize("nose_up_command", [1.0, -1.0])
-def test_the_guard_graph_is_guard_commands(nose_up_command):
+@pytest.mark.parametrize(
+    ("nose_up_command", "floor"), [(1.0, (0.0, 0.0)), (-1.0, (0.0, 0.0)), (-1.0, (1.2, 0.9))]
+)
+def test_the_guard_graph_is_guard_commands(nose_up_command, floor):
     rng = np.random.default_rng(1)
     obs = operating_observations(4000, rng)
     commands = rng.uniform(-1.0, 1.0, (4000, 3)).astype(np.float32)
-    guard = EnvelopeGuard(nose_up_command=nose_up_command)
+    guard = EnvelopeGuard(
+        nose_up_command=nose_up_command, surge_floor_soft=floor[0], surge_floor_hard=floor[1]
+    )
     index = [NAMES.index(n) for n in ("theta", "q", "u")]
     g = Graph()
     guard_graph(g, "commands", "observation", index, guard)
@@ -90,6 +94,9 @@ def test_the_guard_graph_is_guard_commands(nose_up_command):
     (got,) = run_graph(g, {"commands": commands, "observation": obs}, ["out"])
     want = guard_commands(commands, obs, index, guard)
     assert np.abs(want - commands).max() > 0.5  # the guard acted on many rows
+    if guard.has_floor:  # and the floor on the slow ones
+        slow = obs[:, index[2]] < 0.9
+        assert np.all(want[slow, 0] == 1.0) and np.any(commands[slow, 0] < 0.0)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
 
 

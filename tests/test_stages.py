@@ -90,6 +90,38 @@ def test_hand_computed_guarded_commands():
     np.testing.assert_allclose(batch, [c[4] for c in cases], atol=1e-6)
 
 
+FLOOR = EnvelopeGuard(surge_floor_soft=1.2, surge_floor_hard=0.9)
+
+
+def test_hand_computed_low_speed_floor():
+    """The floor raises the surge command below u_floor_soft (full ahead from u_floor_hard on)
+    and leaves everything else, and every command of a guard without it, as it was."""
+    cases = [  # (u [m/s], a_X, guarded a_X)
+        (1.5, -1.0, -1.0),  # above the soft floor: astern allowed
+        (1.2, -0.7, -0.7),  # at the soft floor: still −1
+        (1.05, -1.0, 0.0),  # half way: −1 + 2·0.5
+        (1.0, -0.5, 1.0 / 3.0),  # two thirds of the way: floor −1 + 2·(2/3) = 1/3
+        (1.0, 0.8, 0.8),  # above the floor stays
+        (0.9, -1.0, 1.0),  # at the hard floor: full ahead
+        (0.0, 0.2, 1.0),  # stopped: full ahead
+        (1.875, 0.5, 0.0),  # the overspeed cap still acts
+    ]
+    commands = np.float32([[a, 0.3, -0.2] for _, a, _ in cases])
+    obs = np.stack([_guard_obs(0.0, 0.0, u) for u, _, _ in cases])
+    got = guard_commands(commands, obs, INDEX, FLOOR)
+    np.testing.assert_allclose(got[:, 0], [c[2] for c in cases], atol=1e-6)
+    np.testing.assert_array_equal(got[:, 1:], commands[:, 1:])
+    plain = guard_commands(commands[:7], obs[:7], INDEX, GUARD)
+    np.testing.assert_array_equal(plain, commands[:7])  # no floor, below the surge cap
+
+
+def test_a_guard_records_its_floor_only_when_on():
+    assert "surge_floor_soft" not in GUARD.to_dict()  # agents saved before it read the same
+    assert FLOOR.to_dict()["surge_floor_soft"] == 1.2
+    assert FLOOR.to_dict()["surge_floor_hard"] == 0.9
+    assert check_envelope_guard(FLOOR.to_dict(), "here") == FLOOR
+
+
 class _Constant:
     """A Policy that always commands full nose-up and thrust."""
 
@@ -121,6 +153,10 @@ def test_a_guard_stage_reads_its_inputs_by_name():
         ({"lookahead_s": -1.0}, "lookahead_s must be"),
         ({"pitch": 40.0}, r"unknown keys \['pitch'\]"),
         ({"nose_up_command": 0.5}, r"nose_up_command must be 1 .* or -1"),
+        ({"surge_floor_hard": 0.5}, "surge_floor_hard 0.5 m/s needs a surge_floor_soft"),
+        ({"surge_floor_soft": 1.0, "surge_floor_hard": 1.1}, "surge_floor_hard < surge_floor_soft"),
+        ({"surge_floor_soft": 1.9}, "< surge_soft, got 0 < 1.9 < 1.8"),
+        ({"surge_floor_soft": -0.1}, "surge_floor_soft must be"),
         ("yes", "must be true or a mapping"),
     ],
 )
