@@ -26,7 +26,6 @@ Then how many runs meet each target, and the policy's means over all runs. Writt
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -75,16 +74,12 @@ def _read_folder(folder: Path) -> tuple[dict[str, Any], PlantSuite]:
     from benchmarks.analysis.suite_stats import (
         failure_matrices,
         failure_scores,
-        read_episodes,
+        read_suite,
         score_matrices,
     )
 
-    for name in ("episodes.csv", "suite.json"):
-        if not (folder / name).is_file():
-            raise ValueError(f"{folder}: no {name} (run `auv-gym suite` first)")
-    suite = json.loads((folder / "suite.json").read_text())
+    suite, rows = read_suite(folder, str(folder))
     sets = list(suite["sets"])
-    rows = read_episodes(folder / "episodes.csv")
     scores, columns, runs = score_matrices(rows, sets, failure_scores(suite))
     return suite, PlantSuite(scores, failure_matrices(rows, sets), columns, sets, runs)
 
@@ -94,19 +89,17 @@ def read_plant(folders: Sequence[Path], policy: str, reference: str) -> PlantSui
     checking the folders are one experiment (module doc); ValueError naming the folder."""
     if not folders:
         raise ValueError("no suite folder given")
-    first_suite, merged = _read_folder(folders[0])
-    scores: dict[str, list[np.ndarray]] = {policy: []}
-    failed: dict[str, list[np.ndarray]] = {policy: []}
+    loaded = [_read_folder(folder) for folder in folders]
+    first_suite, first = loaded[0]
     runs: list[int] = []
-    for folder in folders:
-        suite, plant = (first_suite, merged) if folder is folders[0] else _read_folder(folder)
+    for folder, (suite, plant) in zip(folders, loaded, strict=True):
         for key in SAME_EXPERIMENT:
             if suite.get(key) != first_suite.get(key):
                 raise ValueError(f"{folder}: its {key} differ from those of {folders[0]}")
         for name in (policy, reference):
             if name not in plant.scores:
                 raise ValueError(f"{folder}: no policy {name!r}; policies: {sorted(plant.scores)}")
-        if not np.array_equal(plant.scores[reference], merged.scores[reference]):
+        if not np.array_equal(plant.scores[reference], first.scores[reference]):
             raise ValueError(
                 f"{folder}: {reference!r} scores differ from those in {folders[0]}: not the "
                 "same experiment"
@@ -115,15 +108,17 @@ def read_plant(folders: Sequence[Path], policy: str, reference: str) -> PlantSui
         if repeated:
             raise ValueError(f"{folder}: runs {repeated} of {policy!r} are in another folder too")
         runs += plant.runs[policy]
-        scores[policy].append(plant.scores[policy])
-        failed[policy].append(plant.failed[policy])
     order = np.argsort(runs, kind="stable")  # the policy's runs in order, whatever the folders'
+
+    def stacked(field: str) -> np.ndarray:
+        return np.concatenate([getattr(plant, field)[policy] for _, plant in loaded])[order]
+
     return PlantSuite(
-        {policy: np.concatenate(scores[policy])[order], reference: merged.scores[reference]},
-        {policy: np.concatenate(failed[policy])[order], reference: merged.failed[reference]},
-        merged.columns,
-        merged.sets,
-        {policy: sorted(runs), reference: merged.runs[reference]},
+        {policy: stacked("scores"), reference: first.scores[reference]},
+        {policy: stacked("failed"), reference: first.failed[reference]},
+        first.columns,
+        first.sets,
+        {policy: sorted(runs), reference: first.runs[reference]},
     )
 
 

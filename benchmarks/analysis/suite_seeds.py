@@ -15,7 +15,6 @@ reference, and the policy's aggregate over runs × episodes. Written to --out:
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -132,7 +131,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     from benchmarks.analysis.suite_stats import (
         failure_matrices,
         failure_scores,
-        read_episodes,
+        read_suite,
         score_matrices,
     )
 
@@ -145,12 +144,8 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     with usage_errors(parser):
         if args.suite is None or args.out is None or not args.policy:
             raise ValueError("--suite, --policy and --out are required")
-        for name in ("episodes.csv", "suite.json"):
-            if not (args.suite / name).is_file():
-                raise ValueError(f"--suite {args.suite}: no {name} (run `auv-gym suite` first)")
+        suite, rows = read_suite(args.suite, f"--suite {args.suite}")
         references = [r for r in args.references.split(",") if r]
-        suite = json.loads((args.suite / "suite.json").read_text())
-        rows = read_episodes(args.suite / "episodes.csv")
         sets = [t for t in args.sets.split(",") if t] or list(suite["sets"])
         unknown = sorted(set(sets) - set(suite["sets"]))
         if unknown:

@@ -72,6 +72,7 @@ __all__ = [
     "failure_matrices",
     "learning_curves",
     "read_episodes",
+    "read_suite",
     "score_matrices",
     "target_table",
     "top_speeds",
@@ -116,6 +117,15 @@ def read_episodes(path: Path) -> list[dict[str, Any]]:
             if key in row:
                 row[key] = float(row[key])
     return rows
+
+
+def read_suite(folder: Path, where: str) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """(suite.json, episodes.csv rows) of a test-suite evaluation folder; ValueError starting
+    with ``where`` when either file is missing."""
+    for name in ("episodes.csv", "suite.json"):
+        if not (folder / name).is_file():
+            raise ValueError(f"{where}: no {name} (run `auv-gym suite` first)")
+    return json.loads((folder / "suite.json").read_text()), read_episodes(folder / "episodes.csv")
 
 
 def episode_score(row: Mapping[str, Any], failure_score: float) -> float:
