@@ -144,6 +144,25 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
     assert (
         json.loads((out / "schedule.json").read_text())["selected_seed"] == record["selected_seed"]
     )
+    # The same run selected as shipped (the schedule's stages on): nothing trains, every seed's
+    # agent flies the last phase's validation once, and the export is the seed it picks.
+    shipped_config = _write(tmp_path, {**SCHEDULE, "select_on": "shipped"})
+    assert main(_argv(shipped_config, out, "--resume", "--export", str(agent))) == 0
+    assert {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")} == before
+    shipped = json.loads((out / "schedule.json").read_text())
+    picked = shipped["shipped_selection"]
+    assert (
+        sorted(picked["seeds"]) == ["0", "1"]
+        and shipped["selected_seed"] == picked["selected_seed"]
+    )
+    for entry in picked["seeds"].values():
+        assert entry["eval_seeds"] == [100_200, 100_201]  # the last phase's validation
+        assert [s["name"] for s in entry["stages"]] == ["envelope_guard"]
+        assert entry["score"][0] == entry["summary"]["n_terminated"]
+    scores = {int(s): (*e["score"], int(s)) for s, e in picked["seeds"].items()}
+    assert picked["selected_seed"] == min(scores, key=scores.get)
+    assert json.loads((agent / "metadata.json").read_text())["seed"] == picked["selected_seed"]
+    assert shipped["phases"][-1]["summary"]["selected_seed"] == record["selected_seed"]
 
 
 @pytest.mark.parametrize(
@@ -169,6 +188,14 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
             r"options: unknown keys \['seeds'\]",
         ),
         ({"phases": [{"name": "a"}], "cost": 1}, r"schedule: unknown keys \['cost'\]"),
+        (
+            {"phases": [{"name": "a"}], "select_on": "test"},
+            r"schedule.select_on: unknown value 'test'; valid: \['network', 'shipped'\]",
+        ),
+        (  # without export stages the shipped agent is the network the training chose
+            {"phases": [{"name": "a"}], "select_on": "shipped"},
+            r"schedule.select_on: shipped needs export stages",
+        ),
         (
             {"phases": [{"name": "a", "task_set": "train"}]},
             r"phases\[0\] \(a\): task_set: 'train' is not a validation set",

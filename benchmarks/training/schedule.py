@@ -38,6 +38,12 @@ plants is selected on the 6-DOF plant in its last phase.
 wins); ``stages`` are added to the exported agents only, after training, behind the stages the
 agent trained inside (`controllers.stages`: a file's own ``stages`` trains inside them).
 
+``select_on`` chooses how the shipped seed is picked: ``network`` (the default) by the last
+phase's validation of the bare networks, ``shipped`` by the same validation episodes flown by
+each seed's agent with the export stages on (`benchmarks.training.shipped_selection`), since a
+guard or a low-speed floor can change which seed flies best. The network's pick stays in the
+last phase's summary; schedule.json adds ``shipped_selection`` (every seed's score as shipped).
+
 Layout of OUT: ``phase_<k>_<name>/`` (each phase's multi-seed run; ``selected/agent_seed_<s>``
 is each seed's agent, selected on validation, that the next phase starts from), ``configs/``
 (each phase's hyper-parameter file) and ``schedule.json`` (the plan and every phase's
@@ -74,6 +80,7 @@ from benchmarks.training.seeds import (
     validation_set,
     write_seed_outputs,
 )
+from benchmarks.training.shipped_selection import SELECT_ON, select_shipped
 from benchmarks.training.transitions import TRANSITIONS_FILE
 from benchmarks.training.warm_start import SEED_FIELD
 from controllers.agent import METADATA_FILE
@@ -93,7 +100,7 @@ SCHEDULE_KEY = "schedule"
 SCHEDULE_FILE = "schedule.json"
 CONFIGS = "configs"  # OUT/configs/phase_<k>_<name>.yml: each phase's hyper-parameter file
 SELECTED = "selected"  # OUT/phase_<k>_<name>/selected/agent_seed_<s>: each seed's agent
-SCHEDULE_KEYS = ("phases", "stages", "options")
+SCHEDULE_KEYS = ("phases", "stages", "options", "select_on")
 # The command's options a schedule may set (its defaults: the command line wins).
 OPTION_KEYS = (
     "algo",
@@ -126,6 +133,7 @@ class Schedule:
     phases: tuple[Phase, ...]
     stages: tuple[dict[str, Any], ...]
     options: dict[str, Any]
+    select_on: str = SELECT_ON[0]  # "shipped": the seed chosen with the stages on
 
     def phase_section(self, k: int) -> dict[str, Any]:
         """Phase ``k``'s hyper-parameters: the section with the changes of phases 0..k on top,
@@ -223,7 +231,17 @@ def read_schedule(path: str | Path) -> Schedule | None:
     # once, in the stages' order.
     inside = check_stage_specs(data[env_id].get("stages"), f"{path}: {env_id}.stages")
     check_stage_specs([*inside, *stages], f"{where}.stages after {env_id}.stages")
-    return Schedule(path, env_id, dict(data[env_id]), tuple(checked), stages, options)
+    select_on = spec.get("select_on", SELECT_ON[0])
+    if select_on not in SELECT_ON:
+        raise ValueError(
+            f"{where}.select_on: unknown value {select_on!r}; valid: {list(SELECT_ON)}"
+        )
+    if select_on == "shipped" and not stages:
+        raise ValueError(
+            f"{where}.select_on: shipped needs export stages (without them the agent ships "
+            "as it trained, and the training's validation already chose it)"
+        )
+    return Schedule(path, env_id, dict(data[env_id]), tuple(checked), stages, options, select_on)
 
 
 def _write_phase_config(schedule: Schedule, k: int, out: Path) -> Path:
@@ -350,6 +368,7 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
         ],
         "stages": list(schedule.stages),
         "seeds": list(opts.seeds),
+        **({"select_on": schedule.select_on} if schedule.select_on != SELECT_ON[0] else {}),
     }
     write_json(out / SCHEDULE_FILE, {"plan": plan, "phases": []}, indent=2, sort_keys=True)
     summaries: list[dict[str, Any]] = []
@@ -396,13 +415,19 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
             out / SCHEDULE_FILE, {"plan": plan, "phases": summaries}, indent=2, sort_keys=True
         )
     last = summaries[-1]["summary"]
-    chosen = next(e for e in last["seeds"] if e["seed"] == last["selected_seed"])
+    selected_seed, shipped = last["selected_seed"], None
+    if schedule.select_on == "shipped":
+        report = (lambda line: print(line, flush=True)) if opts.progress else None
+        selected_seed, shipped = select_shipped(out, last["seeds"], schedule.stages, report)
+    chosen = next(e for e in last["seeds"] if e["seed"] == selected_seed)
     if opts.export:
         export_agent(Path(chosen["agent"]), Path(opts.export))
         _with_stages(Path(opts.export), schedule.stages)
         report = json.loads((Path(chosen["agent"]) / HELD_OUT_FILE).read_text())
         write_json(Path(opts.export) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
-    result = {"plan": plan, "phases": summaries, "selected_seed": last["selected_seed"]}
+    result = {"plan": plan, "phases": summaries, "selected_seed": selected_seed}
+    if shipped is not None:  # the network's pick stays in the last phase's summary
+        result["shipped_selection"] = shipped
     write_json(out / SCHEDULE_FILE, result, indent=2, sort_keys=True)
     if opts.results:
         _write_results(Path(opts.results), schedule, out, last, result)

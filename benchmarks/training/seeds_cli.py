@@ -95,8 +95,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     summary_file = Path(opts.out) / SUMMARY_FILE
     try:
         schedule = read_schedule(opts.train.config)
+        how = "validation"
         if schedule is not None:
-            summary = train_schedule(opts, schedule)["phases"][-1]["summary"]
+            record = train_schedule(opts, schedule)
+            summary = {**record["phases"][-1]["summary"], "selected_seed": record["selected_seed"]}
+            if "shipped_selection" in record:
+                how = "validation, as shipped"
             summary_file = Path(opts.out) / SCHEDULE_FILE  # each phase's summary, the selection
         else:
             summary = train_seeds(opts)
@@ -114,7 +118,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             f" test rms distance {test['rms_distance_mean']:.4g} m, {test['n_terminated']} "
             f"terminated, max surge {test['max_surge_max']:.3g} m/s"
         )
-    print(f"selected seed {best['seed']} (validation); summary: {summary_file}")
+    print(f"selected seed {best['seed']} ({how}); summary: {summary_file}")
     return 0
 
 
