@@ -79,3 +79,41 @@ def test_a_nudge_moves_every_command_by_its_size_within_the_bounds():
     assert np.allclose(np.abs(moved[:, 0] - 0.5), 1e-3, atol=1e-7)
     assert set(np.sign(moved[:, 0] - 0.5).tolist()) == {-1.0, 1.0}  # both signs drawn
     assert moved[:, 1].min() >= -1.0 and moved[:, 2].max() <= 1.0  # kept in the box
+
+
+def test_checking_some_agents_keeps_the_other_agents_rows(tmp_path, monkeypatch):
+    """Was: re-checking one agent rewrote parity.json with that agent's row alone."""
+
+    def fake_check(exports, actuator, duration):
+        return {"agent": exports.agent, "actuator": actuator, **VERDICT}
+
+    monkeypatch.setattr(onnx_parity, "check", fake_check)
+    monkeypatch.setattr(onnx_parity, "table", lambda rows: "")
+    monkeypatch.setattr(onnx_parity, "write_results", _write_rows)
+    old = [
+        {"label": "ppo_generalist", "agent": "ppo_generalist", "run": "old", **VERDICT},
+        {"label": "ppo_as_built", "agent": "ppo_as_built", "run": "old", **VERDICT},
+        {"label": "sac_generalist", "agent": "sac_generalist", "run": "old", **VERDICT},
+    ]
+    (tmp_path / "parity.json").write_text(json.dumps({"duration_s": 30.0, "rows": old}))
+    argv = ["--out", str(tmp_path), "--duration", "30", "--agents", "ppo_as_built"]
+    rows = onnx_parity.main(argv)
+    written = json.loads((tmp_path / "parity.json").read_text())["rows"]
+    assert written == rows
+    assert [(r["agent"], r.get("run", "new")) for r in rows] == [
+        ("ppo_generalist", "old"),
+        ("ppo_as_built", "new"),
+        ("sac_generalist", "old"),
+    ]
+    # rows of another episode length are not comparable: not kept
+    onnx_parity.main(["--out", str(tmp_path), "--duration", "60", "--agents", "ppo_as_built"])
+    assert [r["agent"] for r in json.loads((tmp_path / "parity.json").read_text())["rows"]] == [
+        "ppo_as_built"
+    ]
+
+
+VERDICT = {"max_abs_command_error": 1e-7, "rms_target": "met"}
+
+
+def _write_rows(out, duration, rows):
+    (out / "parity.json").write_text(json.dumps({"duration_s": duration, "rows": list(rows)}))

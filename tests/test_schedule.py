@@ -120,6 +120,12 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
     from controllers.loader import load_policy
 
     assert [s.name for s in load_policy(agent).stages] == ["envelope_guard"]
+    from benchmarks.training.evaluation import held_out_evaluation
+
+    shipped_test = json.loads((agent / "held_out_evaluation.json").read_text())
+    # the exported agent's test episodes are flown as it ships, stages on
+    again = held_out_evaluation(agent, 110.0, ENV_ID)["results"]
+    assert json.dumps(shipped_test["results"], sort_keys=True) == json.dumps(again, sort_keys=True)
     # Resumed when everything is done: nothing trains again, the record is rewritten the same;
     # --results then writes every seed's agent, test evaluation and curves, as a one-phase run.
     before = {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")}

@@ -20,7 +20,8 @@ flown, as in the suite, and is listed):
    from rounding; such a set is "sensitive", not "missed".
 
 Writes parity.json and parity.md (atomically, after each export) to --out and prints the
-tables.
+tables. With ``--agents`` naming some of the reference agents, the rows of the others already in
+--out's parity.json (of the same episode length) are kept.
 """
 
 from __future__ import annotations
@@ -291,6 +292,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             raise ValueError(f"--agents: unknown {unknown}; valid: {list(REFERENCE_AGENTS)}")
         finite_number("--duration", args.duration, 10.0, 1000.0, unit="s")
         writable_folder(args.out)
+    kept = kept_rows(args.out, args.duration, agents)  # the other agents' rows stay
     rows = []
     with tempfile.TemporaryDirectory() as scratch:
         for agent in agents:
@@ -301,11 +303,39 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             for label, actuator in runs:
                 print(f"{label}:", flush=True)
                 rows.append({"label": label, **check(exports, actuator, args.duration)})
-                write_results(args.out, args.duration, rows)  # an export's row, kept at once
+                # an export's row, kept at once, beside the rows of the agents not re-run
+                write_results(args.out, args.duration, in_agent_order([*kept, *rows]))
+    rows = in_agent_order([*kept, *rows])
     commands = all(r["max_abs_command_error"] <= COMMAND_TOLERANCE for r in rows)
     verdicts = sorted({r["rms_target"] for r in rows})
     print(table(rows) + f"command target met: {commands}; RMS target: {', '.join(verdicts)}")
     return rows
+
+
+def kept_rows(out: Path, duration: float, agents: Sequence[str]) -> list[dict[str, Any]]:
+    """The rows of OUT/parity.json for the reference agents not in ``agents``, when that file
+    was written for episodes of ``duration`` [s] (re-checking one agent must not lose the
+    others' rows); none otherwise (another duration's rows would not be comparable)."""
+    import json
+
+    try:
+        earlier = json.loads((out / "parity.json").read_text())
+    except (OSError, ValueError):
+        return []
+    if not isinstance(earlier, dict) or earlier.get("duration_s") != duration:
+        return []
+    return [
+        row
+        for row in earlier.get("rows") or []
+        if isinstance(row, dict)
+        and row.get("agent") in REFERENCE_AGENTS
+        and row.get("agent") not in agents
+    ]
+
+
+def in_agent_order(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``rows`` in the order of `REFERENCE_AGENTS` (an agent's rows in their own order)."""
+    return sorted(rows, key=lambda row: REFERENCE_AGENTS.index(row["agent"]))
 
 
 def write_results(out: Path, duration: float, rows: Sequence[dict[str, Any]]) -> None:

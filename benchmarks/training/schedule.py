@@ -64,7 +64,7 @@ from typing import Any
 from auv_gym.support.files import replace_outputs, write_atomic, write_json, write_text
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
-from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE
+from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, write_held_out_evaluation
 from benchmarks.training.jump_start import JUMP_START_KEY
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.plant_share import check_native
@@ -424,7 +424,10 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
         export_agent(Path(chosen["agent"]), Path(opts.export))
         _with_stages(Path(opts.export), schedule.stages)
         report = json.loads((Path(chosen["agent"]) / HELD_OUT_FILE).read_text())
-        write_json(Path(opts.export) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
+        if schedule.stages:  # the test episodes flown again as the agent ships, stages on
+            write_held_out_evaluation(opts.export, report["duration_s"], schedule.env_id)
+        else:
+            write_json(Path(opts.export) / HELD_OUT_FILE, report, indent=2, sort_keys=True)
     result = {"plan": plan, "phases": summaries, "selected_seed": selected_seed}
     if shipped is not None:  # the network's pick stays in the last phase's summary
         result["shipped_selection"] = shipped
