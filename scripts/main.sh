@@ -2,8 +2,8 @@
 # The main job: set-up (once; re-runs skip what is current), then the reference policies on the
 # scenarios that tell them apart, 3 seeds x 150 s each (about 1.5 min on 2 cores once compiled):
 #   classical: the paper's FBSM and backstepping, FBSM with current-observer LOS, PID + LOS;
-#   learned:   the PPO generalist, the residual PPO on FBSM + CO-LOS, the PPO and SAC helix
-#              specialists (benchmarks/agents/README.md);
+#   learned:   the PPO generalist, the residual PPO on FBSM + CO-LOS, the SAC generalist
+#              (benchmarks/agents/README.md);
 #   scenarios: the paper's helix, a cross current, the fin-limited vehicle, a waypoint spline,
 #              a storm (noise, current and 30 % parameter error together), the propeller and
 #              fins as built (benchmarks/scenarios.toml).
