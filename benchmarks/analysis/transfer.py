@@ -5,6 +5,9 @@ both plants, the policies unchanged, side by side.
     python -m benchmarks.analysis.transfer --out benchmarks/results/transfer --workers 2
     python -m benchmarks.analysis.transfer --tables-only --out benchmarks/results/transfer
 
+``--groups`` names the groups to fly; the tables cover those and every other group whose suites
+on both plants are already in OUT (re-flying one group keeps the other's rows).
+
 Two groups of sets and policies (`GROUPS`): the paper's task (the paper scenario, the nominal
 helix, the test distribution and its held-out path families) with the classical controllers of
 the paper and the agents trained for it, and the vehicle as built (propeller and fins, the
@@ -39,12 +42,12 @@ import numpy as np
 
 from auv_gym.sim.trajectory import FAILURE_REASONS
 from auv_gym.support.files import environment, write_json, write_text
-from benchmarks.analysis.stats import mean_interval
+from benchmarks.analysis.stats import MAX_REPS, MIN_REPS, mean_interval
 from benchmarks.analysis.suite_stats import failure_scores, read_episodes, score_matrices
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 
-__all__ = ["GROUPS", "Group", "main", "transfer_rows"]
+__all__ = ["GROUPS", "Group", "main", "table_groups", "transfer_rows"]
 
 PLANTS = ("5dof", "6dof")
 AGGREGATE = "aggregate"
@@ -154,6 +157,18 @@ def run_group(out: Path, name: str, group: Group, workers: int, duration: float)
                 "--no-stats",
             ]
         )
+
+
+def table_groups(out: Path, names: Sequence[str]) -> list[str]:
+    """The groups the tables cover, in `GROUPS` order: ``names`` (the command's), and every
+    other group whose suites on both plants are in OUT, so that re-running one group keeps the
+    other's rows in the tables."""
+    present = [
+        g
+        for g in GROUPS
+        if all((_suite_folder(out, g, plant) / "episodes.csv").is_file() for plant in PLANTS)
+    ]
+    return [g for g in GROUPS if g in names or g in present]
 
 
 def _cells(folder: Path) -> tuple[dict[str, np.ndarray], list[str], list[dict[str, Any]]]:
@@ -309,19 +324,22 @@ def main(argv: Sequence[str] | None = None) -> None:
     unknown = [n for n in names if n not in GROUPS]
     if unknown or not names:
         parser.error(f"--groups: unknown {unknown}; valid: {', '.join(GROUPS)}")
+    if not MIN_REPS <= args.reps <= MAX_REPS:
+        parser.error(f"--reps must be an integer in [{MIN_REPS}, {MAX_REPS}], got {args.reps}")
     if not (math.isfinite(args.max_ratio) and args.max_ratio > 0):
         parser.error(f"--max-ratio must be a finite number > 0, got {args.max_ratio}")
     if not args.tables_only:
         for name in names:
             run_group(args.out, name, GROUPS[name], args.workers, args.duration)
-    rows = [r for name in names for r in transfer_rows(args.out, name, GROUPS[name], args.reps)]
+    tabled = table_groups(args.out, names)
+    rows = [r for name in tabled for r in transfer_rows(args.out, name, GROUPS[name], args.reps)]
     goals = targets(rows, args.max_ratio)
     write_text(args.out / "transfer.csv", _csv(rows))
     text = _markdown(rows, goals, args.max_ratio)
     write_text(args.out / "transfer.md", text)
     write_json(
         args.out / "transfer.json",
-        {"targets": goals, "max_ratio": args.max_ratio, "groups": names, **environment()},
+        {"targets": goals, "max_ratio": args.max_ratio, "groups": tabled, **environment()},
     )
     _figure(rows, args.out / "transfer.png")
     print(text)
