@@ -165,7 +165,8 @@ def held_out_evaluation(
     fixed = agent_env_kwargs(policy.metadata, env_id)  # the env it carries, under ``env_id``
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
-        "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id})",
+        "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id}"
+        + (f", actuator {fixed['actuator']!r})" if "actuator" in fixed else ")"),
         "seeds": list(HELD_OUT_SEEDS),
         "duration_s": float(duration),
         "transient_s": window_start(float(duration)),
