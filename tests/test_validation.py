@@ -813,7 +813,11 @@ def test_a_finished_schedule_names_the_summary_it_wrote(tmp_path, monkeypatch, c
         "test_summary": {"rms_distance_mean": 0.1, "n_terminated": 0, "max_surge_max": 1.0},
     }
     summary = {"seeds": [entry], "selected_seed": 0}
-    monkeypatch.setattr(seeds_cli, "train_schedule", lambda *_: {"phases": [{"summary": summary}]})
+    monkeypatch.setattr(
+        seeds_cli,
+        "train_schedule",
+        lambda *_: {"phases": [{"summary": summary}], "selected_seed": 0},
+    )
     schedule = AGENTS_DIR.parent / "hyperparams" / "ppo_as_built.yml"
     out = tmp_path / "run"
     argv = ["--algo", "ppo", "--config", str(schedule), "--seeds", "1", "--out", str(out)]
