@@ -417,8 +417,8 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
     last = summaries[-1]["summary"]
     selected_seed, shipped = last["selected_seed"], None
     if schedule.select_on == "shipped":
-        report = (lambda line: print(line, flush=True)) if opts.progress else None
-        selected_seed, shipped = select_shipped(out, last["seeds"], schedule.stages, report)
+        progress = (lambda line: print(line, flush=True)) if opts.progress else None
+        selected_seed, shipped = select_shipped(out, last["seeds"], schedule.stages, progress)
     chosen = next(e for e in last["seeds"] if e["seed"] == selected_seed)
     if opts.export:
         export_agent(Path(chosen["agent"]), Path(opts.export))
