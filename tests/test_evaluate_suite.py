@@ -177,6 +177,23 @@ def test_resume_after_a_crash_reruns_only_unfinished_chunks(tiny, tmp_path, monk
     assert calls == []
 
 
+def test_chunks_copied_under_a_new_label_are_reused_and_carry_it(tiny, tmp_path, monkeypatch):
+    """The fingerprint leaves the label out: the agent's episodes, filed under another name, are
+    not flown again, and every row names the policy as this command calls it."""
+    out = tmp_path / "out"
+    (out / "chunks").mkdir(parents=True)
+    shutil.copytree(tiny["out"] / "chunks" / "gen", out / "chunks" / "renamed")
+    shutil.copytree(tiny["out"] / "chunks" / "fbsm", out / "chunks" / "fbsm")
+    argv = [*tiny["argv"][:-5], "--out", str(out), "--no-stats", "--quiet"]
+    argv[argv.index("--policies") + 1] = f"fbsm,renamed={tiny['multi']}"
+    monkeypatch.setattr(chunks_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
+    main(argv)
+    rows = read_rows(out / "episodes.csv")
+    before = read_rows(tiny["out"] / "episodes.csv")
+    assert {r["policy"] for r in rows} == {"fbsm", "renamed"}
+    assert [{**r, "policy": r["policy"].replace("renamed", "gen")} for r in rows] == before
+
+
 def test_a_crashed_run_keeps_its_finished_chunks(tiny, tmp_path, monkeypatch):
     out = tmp_path / "out"
     argv = [

@@ -272,6 +272,9 @@ def run_suite(args: argparse.Namespace, argv: Sequence[str] | None) -> list[dict
         desc="suite episodes",
         sizes=[len(c.task.seeds) for c in args.chunks],
     )
+    # A record is filed under its policy's label, which its fingerprint leaves out: a folder of
+    # chunks copied under a new label is reused, and its rows carry the label of this run.
+    records = [{**r, "policy": c.policy} for c, r in zip(args.chunks, records, strict=True)]
     command = [
         Path(sys.executable).name,
         "-m",
