@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks.analysis.suite_seeds import main, seed_table
+from benchmarks.analysis.suite_seeds import main, pool_suites, seed_table
 from benchmarks.analysis.suite_stats import failure_matrices
 
 SUITE = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "suite"
@@ -66,3 +66,64 @@ def test_the_committed_suite_seed_by_seed(tmp_path: Path) -> None:
         "ppo_cross_track_guard_alloc"
     )
     assert "| 2 | 0.0350" in (tmp_path / "suite_seeds.md").read_text()
+
+
+def _split_suite(tmp_path: Path, policy: str, parts: list[list[int]]) -> list[Path]:
+    """The committed suite cut into one folder per part of ``policy``'s runs, each with the
+    references' episodes too, as seeds flown in pairs would be."""
+    header, *lines = (SUITE / "episodes.csv").read_text().splitlines()
+    column = header.split(",")
+    folders = []
+    for k, runs in enumerate(parts):
+        keep = [
+            line
+            for line in lines
+            if (row := dict(zip(column, line.split(","), strict=True)))["policy"]
+            in ("fbsm", "fbsm_colos")
+            or (row["policy"] == policy and int(row["run"]) in runs)
+        ]
+        folder = tmp_path / f"part_{k}"
+        folder.mkdir()
+        (folder / "episodes.csv").write_text("\n".join([header, *keep]) + "\n")
+        (folder / "suite.json").write_text((SUITE / "suite.json").read_text())
+        folders.append(folder)
+    return folders
+
+
+def test_suites_flown_in_pairs_pool_to_the_whole(tmp_path: Path) -> None:
+    """Five seeds cut into three evaluations, each with FBSM flown again: pooled, the table is
+    the one-folder table (same runs, same aggregate, references counted once)."""
+    policy = "ppo_cross_track_guard_alloc"
+    folders = _split_suite(tmp_path, policy, [[0, 1], [2, 3], [4]])
+    argv = ["--policy", policy, "--reps", "100", "--out"]
+    whole = main(["--suite", str(SUITE), *argv, str(tmp_path / "whole")])
+    pooled = main(["--suite", ",".join(map(str, folders)), *argv, str(tmp_path / "pooled")])
+    assert pooled["suite"] == "part_0,part_1,part_2"
+    assert pooled["runs"] == whole["runs"]
+    assert pooled["aggregate_iqm"] == whole["aggregate_iqm"]
+    assert pooled["references"] == whole["references"]
+    assert pooled["episodes"] == 5 * 130
+
+
+def test_pooling_refuses_an_episode_that_scored_differently(tmp_path: Path) -> None:
+    """The same FBSM episode with another RMS in the second folder (another code version):
+    refused, naming the episode and both folders."""
+    first, second = _split_suite(tmp_path, "ppo_cross_track_guard_alloc", [[0], [1]])
+    text = (second / "episodes.csv").read_text()
+    row = next(line for line in text.splitlines() if line.startswith("fbsm,0,scenario:line,"))
+    fields = row.split(",")
+    fields[5] = str(float(fields[5]) + 1e-9)
+    (second / "episodes.csv").write_text(text.replace(row, ",".join(fields)))
+    with pytest.raises(ValueError, match=r"'fbsm' run 0, set 'scenario:line' seed .* in .*part_1"):
+        pool_suites([first, second])
+
+
+def test_pooling_refuses_a_set_defined_differently(tmp_path: Path) -> None:
+    """The second evaluation flew `scenario:line` with another corridor: refused, naming the set
+    and both folders, before any statistic."""
+    first, second = _split_suite(tmp_path, "ppo_cross_track_guard_alloc", [[0], [1]])
+    suite = json.loads((second / "suite.json").read_text())
+    suite["sets"]["scenario:line"]["env"]["corridor"] = 3.0
+    (second / "suite.json").write_text(json.dumps(suite))
+    with pytest.raises(ValueError, match=r"set 'scenario:line' is defined differently in .*part_0"):
+        pool_suites([first, second])

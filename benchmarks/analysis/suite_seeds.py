@@ -11,6 +11,10 @@ stratified bootstrap interval over episodes, its failed episodes, and whether it
 reference: a lower aggregate IQM and no failed episode. Then how many runs beat each
 reference, and the policy's aggregate over runs × episodes. Written to --out:
 ``suite_seeds.json`` and ``suite_seeds.md``.
+
+``--suite A,B,...`` pools several evaluations, e.g. seeds trained and flown in pairs
+(`pool_suites`): they must define the sets they share alike, and an episode flown in more than
+one (a reference flown again with each pair) must have scored the same in each; it counts once.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import numpy as np
 from benchmarks.arguments import parse_options, program_name, usage_errors
 from benchmarks.options import option
 
-__all__ = ["main", "seed_table"]
+__all__ = ["main", "pool_suites", "seed_table"]
 
 SEEDS_FILE = "suite_seeds.json"
 
@@ -34,7 +38,7 @@ SEEDS_FILE = "suite_seeds.json"
 class SuiteSeedsOptions:
     """The options of ``python -m benchmarks.analysis.suite_seeds``."""
 
-    suite: Path | None = option(None, "a test-suite evaluation folder", parse=Path)  # noqa: RUF009
+    suite: str = option("", "a test-suite evaluation folder, or several comma-separated to pool")
     policy: str = option("", "the multi-seed policy of that evaluation")
     references: str = option("fbsm,fbsm_colos", "comma-separated classical policies to beat")
     sets: str = option("", "comma-separated sets to pool (default: every set evaluated)")
@@ -91,6 +95,45 @@ def seed_table(
     }
 
 
+_EPISODE_KEY = ("policy", "run", "set", "seed")
+_EPISODE_OUTCOME = ("rms_distance", "termination_reason")
+
+
+def pool_suites(folders: Sequence[Path]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """(suite.json, episodes.csv rows) of several test-suite evaluations pooled (module doc);
+    ValueError naming the folders when their sets or a shared episode's outcome disagree."""
+    from benchmarks.analysis.suite_stats import read_suite
+
+    if not folders:
+        raise ValueError("--suite: no evaluation folder")
+    suite, rows = read_suite(folders[0], f"--suite {folders[0]}")
+    suite = {**suite, "sets": dict(suite["sets"])}
+    seen = {tuple(row[k] for k in _EPISODE_KEY): (row, folders[0]) for row in rows}
+    for folder in folders[1:]:
+        other, other_rows = read_suite(folder, f"--suite {folder}")
+        for name, entry in other["sets"].items():
+            if name in suite["sets"] and entry != suite["sets"][name]:
+                raise ValueError(
+                    f"--suite: set {name!r} is defined differently in {folders[0]} and {folder}"
+                )
+            suite["sets"].setdefault(name, entry)
+        for row in other_rows:
+            key = tuple(row[k] for k in _EPISODE_KEY)
+            if key not in seen:
+                seen[key] = (row, folder)
+                rows.append(row)
+                continue
+            first, where = seen[key]
+            if any(str(first[k]) != str(row[k]) for k in _EPISODE_OUTCOME):
+                policy, run, task, seed = key
+                raise ValueError(
+                    f"--suite: policy {policy!r} run {run}, set {task!r} seed {seed} scored "
+                    f"{first['rms_distance']} m ({first['termination_reason']}) in {where} but "
+                    f"{row['rms_distance']} m ({row['termination_reason']}) in {folder}"
+                )
+    return suite, rows
+
+
 def write_markdown(record: Mapping[str, Any], path: Path) -> None:
     """`suite_seeds.md`: the per-run table, the counts and the pooled aggregate."""
     refs = list(record["references"])
@@ -128,12 +171,7 @@ def write_markdown(record: Mapping[str, Any], path: Path) -> None:
 
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     from auv_gym.support.files import write_json
-    from benchmarks.analysis.suite_stats import (
-        failure_matrices,
-        failure_scores,
-        read_suite,
-        score_matrices,
-    )
+    from benchmarks.analysis.suite_stats import failure_matrices, failure_scores, score_matrices
 
     args, parser = parse_options(
         SuiteSeedsOptions,
@@ -142,9 +180,10 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         __doc__.split("\n\n")[0],
     )
     with usage_errors(parser):
-        if args.suite is None or args.out is None or not args.policy:
+        if not args.suite or args.out is None or not args.policy:
             raise ValueError("--suite, --policy and --out are required")
-        suite, rows = read_suite(args.suite, f"--suite {args.suite}")
+        folders = [Path(f) for f in args.suite.split(",") if f]
+        suite, rows = pool_suites(folders)
         references = [r for r in args.references.split(",") if r]
         sets = [t for t in args.sets.split(",") if t] or list(suite["sets"])
         unknown = sorted(set(sets) - set(suite["sets"]))
@@ -157,7 +196,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         failed = failure_matrices(rows, sets)
         record = seed_table(scores, groups, runs, failed, args.policy, references, args.reps)
     record = {
-        "suite": args.suite.name,  # no machine paths in committed results
+        "suite": ",".join(f.name for f in folders),  # no machine paths in committed results
         "sets": sets,
         "episodes_per_run": len(groups),
         **record,
