@@ -127,3 +127,10 @@ def test_pooling_refuses_a_set_defined_differently(tmp_path: Path) -> None:
     (second / "suite.json").write_text(json.dumps(suite))
     with pytest.raises(ValueError, match=r"set 'scenario:line' is defined differently in .*part_0"):
         pool_suites([first, second])
+
+
+def test_a_folder_named_twice_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """`--suite A,A` would count every episode of A once and say nothing: a usage error."""
+    with pytest.raises(SystemExit):
+        main(["--suite", f"{SUITE},{SUITE}", "--policy", "fbsm", "--out", str(tmp_path)])
+    assert "--suite names" in capsys.readouterr().err

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.arguments import parse_options, program_name, usage_errors
+from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
 from benchmarks.options import option
 
 __all__ = ["main", "pool_suites", "seed_table"]
@@ -124,6 +124,7 @@ def pool_suites(folders: Sequence[Path]) -> tuple[dict[str, Any], list[dict[str,
                 rows.append(row)
                 continue
             first, where = seen[key]
+            # as text: a failed episode's RMS is NaN, which never equals itself as a float
             if any(str(first[k]) != str(row[k]) for k in _EPISODE_OUTCOME):
                 policy, run, task, seed = key
                 raise ValueError(
@@ -182,7 +183,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     with usage_errors(parser):
         if not args.suite or args.out is None or not args.policy:
             raise ValueError("--suite, --policy and --out are required")
-        folders = [Path(f) for f in args.suite.split(",") if f]
+        folders = [Path(f) for f in comma_names(args.suite, "--suite")]
         suite, rows = pool_suites(folders)
         references = [r for r in args.references.split(",") if r]
         sets = [t for t in args.sets.split(",") if t] or list(suite["sets"])
