@@ -112,6 +112,30 @@ def test_a_varied_validation_set_flies_every_seed_once_per_value(name, like, key
     assert task_set("validation").eval_env() == task_set("validation").env
 
 
+def test_the_cross_current_validation_set_is_the_paper_start_in_the_current_scenario():
+    cross, base = task_set("validation_cross_current"), task_set("validation_paper_start")
+    assert cross.role == "validation" and set(cross.seeds).isdisjoint(base.seeds)
+    changed = {"current", "random_current"}
+    assert {k: v for k, v in cross.env.items() if k not in changed} == {
+        k: v for k, v in base.env.items() if k not in changed
+    }
+    assert cross.env["current"] == load_scenarios()["current"].env["current"]
+    config = SimConfig.from_kwargs(**cross.env)
+    means = []
+    for seed in cross.seeds:
+        task = task_for_seed(config, seed)
+        means.append(np.add(config.current.mean, task.current))
+        if task.path.family == "helix":  # the current flows along or against its start tangent
+            tangent = task.path.evaluate(0.0)[1]
+            heading = np.degrees(np.arctan2(tangent[1], tangent[0]))
+            assert abs(heading) == pytest.approx(90.0)
+    means = np.array(means)
+    # 0.3 m/s toward +y plus up to 0.2 m/s in any direction: 0.1-0.5 m/s, northward
+    speeds = np.hypot(means[:, 0], means[:, 1])
+    assert speeds.min() >= 0.1 - 1e-12 and speeds.max() <= 0.5 + 1e-12
+    assert means[:, 1].min() >= 0.1 - 1e-12 and abs(means[:, 0]).max() <= 0.2 + 1e-12
+
+
 def _write(tmp_path, text):
     file = tmp_path / "tasks.toml"
     file.write_text(text)

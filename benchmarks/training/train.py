@@ -354,12 +354,17 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         warm = previous.get("warm_start")
         venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
         venv.training = True
+        # A model saved with n-step returns names the NStepReplayBuffer SB3 chose for it, which
+        # SB3 would take for a custom buffer ("n_steps ignored"); without the name it chooses
+        # the same buffer again from the saved n_steps and gamma (the saved buffer is loaded
+        # into it below).
         model = algorithm.load(
             checkpoint / MODEL_FILE,
             env=venv,
             device="cpu",
             tensorboard_log=str(out / "tb"),
             verbose=opts.verbose,
+            custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}},
         )
         if spec.off_policy and (checkpoint / REPLAY_FILE).is_file():
             model.load_replay_buffer(checkpoint / REPLAY_FILE)
