@@ -115,7 +115,7 @@ def test_parse_seeds(text, seeds):
             "task set 'nope' is not a validation set; valid: ['paper', 'validation', "
             "'validation_actuators_start', 'validation_as_built', 'validation_as_built_start', "
             "'validation_as_built_start_6dof', 'validation_as_built_start_plants', "
-            "'validation_fins_start', "
+            "'validation_cross_current', 'validation_fins_start', "
             "'validation_paper_actuator', 'validation_paper_start']",
         ),
         (["--seeds", "2", "--task-set", "test_steep"], "'test_steep' is not a validation set"),
