@@ -134,3 +134,20 @@ def test_a_folder_named_twice_is_refused(tmp_path: Path, capsys: pytest.CaptureF
     with pytest.raises(SystemExit):
         main(["--suite", f"{SUITE},{SUITE}", "--policy", "fbsm", "--out", str(tmp_path)])
     assert "--suite names" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "message"),
+    [
+        ("--sets", "scenario:line,scenario:line", "--sets names"),
+        ("--sets", "scenario:line,", "--sets has an empty name"),
+        ("--references", "fbsm,,fbsm_colos", "--references has an empty name"),
+    ],
+)
+def test_a_set_or_reference_named_twice_or_empty_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture, flag: str, value: str, message: str
+) -> None:
+    """As for --suite: a repeated or empty name is a usage error, not silently dropped."""
+    with pytest.raises(SystemExit):
+        main(["--suite", str(SUITE), "--policy", "fbsm", flag, value, "--out", str(tmp_path)])
+    assert message in capsys.readouterr().err

@@ -185,8 +185,8 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             raise ValueError("--suite, --policy and --out are required")
         folders = [Path(f) for f in comma_names(args.suite, "--suite")]
         suite, rows = pool_suites(folders)
-        references = [r for r in args.references.split(",") if r]
-        sets = [t for t in args.sets.split(",") if t] or list(suite["sets"])
+        references = comma_names(args.references, "--references")
+        sets = comma_names(args.sets, "--sets") if args.sets.strip() else list(suite["sets"])
         unknown = sorted(set(sets) - set(suite["sets"]))
         if unknown:
             raise ValueError(
