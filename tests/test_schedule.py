@@ -12,7 +12,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from benchmarks.training.schedule import read_schedule
+from benchmarks.catalog.tasks import load_task_sets
+from benchmarks.training.config import read_zoo_config
+from benchmarks.training.schedule import check_schedule, read_schedule
 from benchmarks.training.seeds_cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,6 +92,30 @@ def test_the_generalist_schedule_is_its_recipe():
     assert [s["name"] for s in schedule.stages] == ["envelope_guard", "actuator_allocation"]
     assert schedule.options["task_set"] == "validation_paper_start"
     assert schedule.options["eval_episodes"] == 16
+
+
+RECIPES = sorted((ROOT / "benchmarks" / "hyperparams").glob("*.yml"))
+
+
+@pytest.mark.parametrize("recipe", RECIPES, ids=lambda path: path.stem)
+def test_every_committed_recipe_passes_the_checks_made_before_training(recipe, tmp_path):
+    """A recipe whose command would fail at its first check (a bad key, a phase that cannot
+    follow the one before it, an unknown validation set) is caught here, not hours into a run."""
+    algo = recipe.stem.split("_")[0]  # the files are named <algo>_<agent>
+    schedule = read_schedule(recipe)
+    if schedule is None:  # a one-run file of `auv-gym train`: a section per env id
+        for env_id in yaml.safe_load(recipe.read_text()):
+            assert read_zoo_config(recipe, env_id, algo).n_timesteps > 0
+        return
+    assert schedule.options.get("algo", "ppo") == algo
+    configs = check_schedule(schedule, algo, tmp_path)
+    assert [c.name for c in configs] == [
+        f"{schedule.folder(tmp_path, k).name}.yml" for k in range(len(schedule.phases))
+    ]
+    task_sets = load_task_sets()
+    for name in [schedule.options.get("task_set")] + [p.task_set for p in schedule.phases]:
+        if name is not None:
+            assert task_sets[name].role == "validation", name
 
 
 @pytest.mark.integration
