@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from benchmarks.catalog.tasks import load_task_sets
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.schedule import check_schedule, read_schedule
+from benchmarks.training.seeds import validation_set
 from benchmarks.training.seeds_cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -112,10 +112,9 @@ def test_every_committed_recipe_passes_the_checks_made_before_training(recipe, t
     assert [c.name for c in configs] == [
         f"{schedule.folder(tmp_path, k).name}.yml" for k in range(len(schedule.phases))
     ]
-    task_sets = load_task_sets()
     for name in [schedule.options.get("task_set")] + [p.task_set for p in schedule.phases]:
         if name is not None:
-            assert task_sets[name].role == "validation", name
+            validation_set(name)  # the command's own check: a ValueError naming the set
 
 
 @pytest.mark.integration
