@@ -12,6 +12,7 @@ import os
 from typing import Any
 
 from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
+from controllers.mirror import mirrored
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
 from controllers.stages import StagedPolicy, build_stages, check_stage_specs
@@ -53,6 +54,7 @@ def load_policy(
     settings = base_kwargs or {}
     built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
     actor = load_actor(files, device=device, num_threads=num_threads)
+    actor = mirrored(actor, specs, observation_layout(files.metadata), str(files.model))
     if files.residual is not None:
         base = files.residual.make_base(**settings)
         policy = ResidualPolicy(base, actor, files.residual.bound, files.residual)

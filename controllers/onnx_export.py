@@ -48,6 +48,7 @@ from controllers.agent import (
     load_actor,
     observation_layout,
 )
+from controllers.mirror import ACTION_MIRROR, MIRROR_STAGE, MirroredNetwork, mirrored
 from controllers.onnx_contract import (
     ACTUATORS,
     CONTRACT_FORMAT,
@@ -164,7 +165,7 @@ def export_onnx(
     layout = observation_layout(files.metadata)
     settings: dict[str, Any] = {"actuator": actuator, "actuator_params": params}
     stages = build_stages(files.stages, layout, settings, str(files.model))
-    actor = load_actor(files, num_threads=1)
+    actor = mirrored(load_actor(files, num_threads=1), files.stages, layout, str(files.model))
     model, state_size = _build_model(files, actor, stages, layout)
     parity = _parity(model, files, actor, stages, state_size)
     if parity["max_abs_error"] > PARITY_TOLERANCE:
@@ -335,10 +336,18 @@ def _build_model(
                 g.op("Mul", observation, g.const(keep, np.float32)),
                 g.op("MatMul", "state", g.const(place, np.float32)),
             )
-    normed = normalisation_graph(
-        g, seen, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon
-    )
-    commands = action_head(g, network_graph(g, normed, layers), space.low, space.high, squash)
+
+    def network_commands(observed: str) -> str:
+        normed = normalisation_graph(
+            g, observed, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon
+        )
+        return action_head(g, network_graph(g, normed, layers), space.low, space.high, squash)
+
+    commands = network_commands(seen)
+    if isinstance(actor, MirroredNetwork):  # ½·(π(o) + M_a·π(M_o·o)), `controllers.mirror`
+        image = network_commands(g.op("Mul", seen, g.const(actor.signs, np.float32)))
+        image = g.op("Mul", image, g.const(ACTION_MIRROR, np.float32))
+        commands = g.op("Mul", g.const(0.5, np.float32), g.op("Add", commands, image))
     if files.residual is not None:
         settings = files.residual
         commands = residual_graph(
@@ -497,7 +506,10 @@ def _contract(
         },
         "inputs": inputs,
         "outputs": outputs,
-        "stages": [stage.to_dict() for stage in stages],
+        "stages": [
+            *({"name": MIRROR_STAGE} for spec in files.stages if spec["name"] == MIRROR_STAGE),
+            *(stage.to_dict() for stage in stages),
+        ],
         "residual": residual,
         "parity": parity,
         "provenance": _provenance(files),

@@ -5,8 +5,12 @@ outermost last, each a mapping with its ``name`` and settings::
 
     "stages": [
         {"name": "envelope_guard", "pitch_soft_deg": 35.0, ...},   # controllers.envelope_guard
+        {"name": "mirror_symmetry"},                              # controllers.mirror
         {"name": "actuator_allocation", "commands": "paper"},     # controllers.actuator_allocation
     ]
+
+The mirror is the one stage that wraps the network instead of its commands (it evaluates the
+network twice), so it may be listed anywhere and acts first.
 
 One implementation applies them everywhere: `StagedPolicy` around the network at inference
 (`controllers.loader.load_policy`), and `benchmarks.training.stages.StagedActions` around the
@@ -35,6 +39,7 @@ from controllers.actuator_allocation import (
     check_actuator_allocation,
 )
 from controllers.envelope_guard import GUARD_INPUTS, check_envelope_guard, guard_commands
+from controllers.mirror import MIRROR_STAGE, MirroredNetwork
 
 __all__ = [
     "STAGE_ORDER",
@@ -50,7 +55,8 @@ __all__ = [
     "observe_stages",
 ]
 
-STAGE_ORDER = ("envelope_guard", "actuator_allocation")  # the order the commands pass them
+# The order the commands pass them; the mirror wraps the network itself (`controllers.mirror`).
+STAGE_ORDER = (MIRROR_STAGE, "envelope_guard", "actuator_allocation")
 
 
 class Stage:
@@ -201,6 +207,9 @@ def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
         settings = {k: v for k, v in spec.items() if k != "name"}
         if name == "envelope_guard":
             settings = check_envelope_guard(settings, f"{where}: stage {name}").to_dict()
+        elif name == MIRROR_STAGE:
+            if settings:
+                raise ValueError(f"{where}: stage {name} takes no settings, got {sorted(settings)}")
         else:
             unknown = sorted(set(settings) - {"commands"})
             if unknown:
@@ -211,7 +220,10 @@ def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
             settings = {"commands": COMMANDED_ACTUATOR}
         checked.append({"name": name, **settings})
     names = [s["name"] for s in checked]
-    if len(set(names)) != len(names) or names != sorted(names, key=STAGE_ORDER.index):
+    # the mirror wraps the network, wherever it is listed (an export adds it after the stages
+    # the agent trained inside); the command stages keep their order
+    passed = [name for name in names if name != MIRROR_STAGE]
+    if len(set(names)) != len(names) or passed != sorted(passed, key=STAGE_ORDER.index):
         raise ValueError(
             f"{where}: stages {names} must each appear once, in the order {list(STAGE_ORDER)}"
         )
@@ -231,10 +243,13 @@ def build_stages(
     actuator the agent commands (the paper's) and on one drawn per episode ("random"), which
     tells a deployed agent nothing: it is left out there. In training on such an env,
     ``drawn`` names the allocated actuator the episodes may draw ("fins"): the allocation is
-    then a `DrawnAllocationStage` to it, told each episode's draw by the training wrapper."""
+    then a `DrawnAllocationStage` to it, told each episode's draw by the training wrapper.
+    The mirror stage is not among them: it wraps the network (`controllers.mirror.mirrored`)."""
     settings = settings or {}
     stages: list[Stage] = []
     for spec in specs:
+        if spec["name"] == MIRROR_STAGE:
+            continue
         if spec["name"] == "envelope_guard":
             settings_of_guard = {k: v for k, v in spec.items() if k != "name"}
             stages.append(GuardStage(settings_of_guard, obs_names, where))
@@ -324,5 +339,6 @@ class StagedPolicy:
         return (out[0] if single else out), state
 
     def __repr__(self) -> str:
-        names = [stage.name for stage in self.stages]
+        mirror = [MIRROR_STAGE] if isinstance(self.actor, MirroredNetwork) else []
+        names = [*mirror, *(stage.name for stage in self.stages)]
         return f"StagedPolicy(path={self.path!r}, stages={names})"

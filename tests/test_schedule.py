@@ -94,6 +94,23 @@ def test_the_generalist_schedule_is_its_recipe():
     assert schedule.options["eval_episodes"] == 16
 
 
+def test_the_mirror_recipe_trains_what_the_integral_recipe_trains():
+    """sac_generalist_mirror differs from sac_generalist_integral in its exports and selection
+    only: every phase trains the same section, so the integral runs are its runs."""
+    folder = ROOT / "benchmarks" / "hyperparams"
+    mirror = read_schedule(folder / "sac_generalist_mirror.yml")
+    integral = read_schedule(folder / "sac_generalist_integral.yml")
+    assert mirror is not None and integral is not None
+    assert len(mirror.phases) == len(integral.phases) == 2
+    for k in range(2):
+        assert mirror.phase_section(k) == integral.phase_section(k)
+        assert mirror.phases[k] == integral.phases[k]
+    assert mirror.options == integral.options
+    assert [s["name"] for s in mirror.stages] == ["mirror_symmetry", "actuator_allocation"]
+    assert [s["name"] for s in integral.stages] == ["actuator_allocation"]
+    assert (mirror.select_on, integral.select_on) == ("shipped", "network")
+
+
 RECIPES = sorted((ROOT / "benchmarks" / "hyperparams").glob("*.yml"))
 
 

@@ -227,7 +227,10 @@ def test_bad_stage_lists_and_settings_are_named():
         **GUARD.to_dict(),
     }
     cases = [
-        ([{"name": "lowpass"}], r"f: unknown stage 'lowpass'; stages: \['envelope_guard'"),
+        (
+            [{"name": "lowpass"}],
+            r"f: unknown stage 'lowpass'; stages: \['mirror_symmetry', 'envelope_guard'",
+        ),
         ([alloc, guard], "must each appear once, in the order"),
         ([guard, guard], "must each appear once"),
         ("envelope_guard", "stages must be a list"),

@@ -42,7 +42,7 @@ metres of an approach cannot charge it beyond what the path needs).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,6 +69,7 @@ __all__ = [
     "ObservationConfig",
     "build_observation",
     "guidance_row",
+    "mirror_signs",
 ]
 
 ERROR_BOUND = 500.0  # [m] far beyond any corridor; a vehicle outside it is terminated
@@ -222,6 +223,58 @@ EXTRA_HEAD = ("u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_p
 INTEGRAL_NAMES = ("x_e_integral", "y_e_integral", "z_e_integral")
 INTEGRAL_ERRORS = ("yz", "xyz")  # which tracking errors are integrated
 MAX_INTEGRAL_TIME = 1e4  # [s]
+
+
+# The port-starboard reflection y → −y (body and earth frames; docs/design.md §3.19). A
+# laterally symmetric hull in a mirrored ocean flies the mirrored path: the entries below change
+# sign (lateral offsets and velocities, heading errors, yaw rates, the yaw command, torsion: a
+# pseudo-scalar), every other entry keeps it (along-track and vertical quantities, pitch, surge,
+# speeds, curvature ≥ 0).
+MIRROR_ODD = frozenset(
+    {"y_e", "psi_error", "v", "r", "psi_F_dot", "v_ground", "a_N_prev", "y_e_integral"}
+)
+MIRROR_EVEN = frozenset(
+    {
+        "x_e",
+        "z_e",
+        "theta",
+        "theta_F",
+        "u",
+        "w",
+        "q",
+        "u_D",
+        "u_p",
+        "theta_F_dot",
+        "u_ground",
+        "w_ground",
+        "a_X_prev",
+        "a_M_prev",
+        "x_e_integral",
+        "z_e_integral",
+    }
+)
+MIRROR_PREVIEW = {"x": 1.0, "y": -1.0, "z": 1.0, "curvature": 1.0, "torsion": -1.0}
+
+
+def mirror_signs(names: Sequence[str]) -> np.ndarray:
+    """The sign (float32, ±1) each named observation entry takes under the port-starboard
+    reflection (`MIRROR_ODD`, `MIRROR_EVEN`, the preview points' `MIRROR_PREVIEW`). ValueError
+    naming an entry whose reflection is not defined (e.g. a residual agent's base command)."""
+    signs = np.ones(len(names), dtype=np.float32)
+    unknown = []
+    for i, name in enumerate(names):
+        head, _, feature = name.partition("_")
+        if name in MIRROR_ODD:
+            signs[i] = -1.0
+        elif name in MIRROR_EVEN:
+            continue
+        elif head.startswith("preview") and head[7:].isdigit() and feature in MIRROR_PREVIEW:
+            signs[i] = MIRROR_PREVIEW[feature]
+        else:
+            unknown.append(name)
+    if unknown:
+        raise ValueError(f"observation entries {unknown} have no defined port-starboard mirror")
+    return signs
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from auv_gym.sim.randomization import RANDOM_ACTUATORS
 from controllers.actuator_allocation import ALLOCATED_ACTUATORS
 from controllers.env_settings import draws_actuator, env_config, policy_settings
+from controllers.mirror import MIRROR_STAGE
 from controllers.stages import build_stages, check_stage_specs
 
 if TYPE_CHECKING:
@@ -39,6 +40,12 @@ def parse_interface(
         if residual is not None:
             raise ValueError(f"{where}: a residual agent takes no stages (its base is its own)")
         fields["stages"] = check_stage_specs(section["stages"], where)
+        if any(spec["name"] == MIRROR_STAGE for spec in fields["stages"]):
+            raise ValueError(
+                f"{where}: stage {MIRROR_STAGE} averages the trained network with its mirror "
+                "image, and SB3 samples its training actions from the bare network: list it in "
+                "the schedule's stages (added to the exports), not among those trained inside"
+            )
     return fields
 
 

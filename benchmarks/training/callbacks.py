@@ -28,6 +28,7 @@ from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from benchmarks.training.residual import ResidualTraining
 from controllers.agent import AgentPolicy
 from controllers.env_settings import policy_settings
+from controllers.mirror import mirrored
 from controllers.residual import ResidualPolicy, base_kwargs_for_env
 from controllers.stages import StagedPolicy, build_stages
 
@@ -61,6 +62,7 @@ def policy_from_model(
     for the plant of ``env_kwargs`` (`controllers.stages.StagedPolicy`)."""
     policy = _unguarded(model, vec_normalize, residual, env_kwargs)
     specs, obs_names = stages
+    policy = mirrored(policy, specs, obs_names, "stages")
     built = build_stages(specs, obs_names, policy_settings(env_kwargs or {}), "stages")
     return StagedPolicy(policy, built) if built else policy
 
