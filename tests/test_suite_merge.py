@@ -77,3 +77,21 @@ def test_not_the_same_suite_or_nothing_to_check(tmp_path, capsys):
         merge_suites(same, target, ["fbsm"])
     code = main(["--from", str(tmp_path / "missing"), "--into", str(target), "--policies", "x"])
     assert code == 2 and "no such file" in capsys.readouterr().err
+
+
+def test_a_replaced_policy_loses_its_rows_and_the_addition_says_so(tmp_path):
+    old = [
+        ["new", "0", "a", "0", "0.30", "time_limit"],
+        ["new", "0", "a", "1", "0.31", "time_limit"],
+    ]
+    target = _suite(tmp_path / "target", [*FBSM, *old], ["fbsm", "new"])
+    source = _suite(tmp_path / "source", [*FBSM, *NEW], ["fbsm", "new"])
+    with pytest.raises(ValueError, match=r"\['new'\]: already in .*--replace replaces them"):
+        merge_suites(source, target, ["new"])
+    assert (
+        main(["--from", str(source), "--into", str(target), "--policies", "new", "--replace"]) == 0
+    )
+    assert list(csv.reader((target / "episodes.csv").open())) == [HEADER, *FBSM, *NEW]
+    (addition,) = json.loads((target / "suite.json").read_text())["additions"]
+    assert addition["replaced"] == ["new"]
+    assert addition["checked_equal"] == {"policies": ["fbsm"], "episodes": 2, "rtol": 1e-12}

@@ -10,7 +10,9 @@ evaluations are the same experiment:
 - the shared policies' rows are equal cell for cell (the episodes and the code that ran them
   give the same numbers), except cells whose relative difference is below ``--rtol`` (default
   1e-12: the last digits that another machine's BLAS rounds differently on spline paths);
-- no policy to add is already in the target.
+- no policy to add is already in the target, unless ``--replace`` says to replace it (a
+  reference agent retrained or replaced: its rows go, the new ones come, and the addition
+  records which policies it replaced).
 
 Then OUT/episodes.csv gains the rows, OUT/suite.json the policies and an "additions" entry (the
 command, commit and versions of the second evaluation), both written atomically; re-run
@@ -52,6 +54,9 @@ class MergeOptions:
     target: str | None = option(None, "evaluation to add them to", flag="--into", required=True)
     policies: str = option("", "comma-separated policy names to add", required=True)
     rtol: float = option(1e-12, "relative tolerance for the shared policies' cells")
+    replace: bool = option(
+        False, "replace the rows of named policies already in the target (an agent replaced)"
+    )
 
 
 def _read(folder: Path) -> tuple[dict[str, Any], list[str], list[dict[str, str]]]:
@@ -80,9 +85,16 @@ def _differs(a: str, b: str, rtol: float) -> bool:
 
 
 def merge_suites(
-    source: Path, target: Path, policies: Sequence[str], rtol: float = MergeOptions.rtol
+    source: Path,
+    target: Path,
+    policies: Sequence[str],
+    rtol: float = MergeOptions.rtol,
+    replace: bool = False,
 ) -> dict[str, int]:
     """Append ``policies``' rows of ``source`` to ``target`` (module doc); returns rows per policy.
+    With ``replace``, a named policy already in ``target`` loses its rows there first (a
+    reference agent replaced; the addition records it), and is not one of the shared policies
+    the episodes are checked on.
 
     ValueError, naming the difference, when the evaluations are not the same experiment.
     """
@@ -104,9 +116,10 @@ def merge_suites(
             f"--policies {missing}: not in {source} (it has {sorted(source_policies)})"
         )
     present = [p for p in policies if p in target_suite["policies"]]
-    if present:
-        raise ValueError(f"--policies {present}: already in {target}")
-    shared = sorted(source_policies & set(target_suite["policies"]))
+    if present and not replace:
+        raise ValueError(f"--policies {present}: already in {target} (--replace replaces them)")
+    target_rows = [r for r in target_rows if r["policy"] not in present]
+    shared = sorted(source_policies & set(target_suite["policies"]) - set(policies))
     if not shared:
         raise ValueError(
             f"{source} shares no policy with {target}: evaluate a reference policy (e.g. fbsm) "
@@ -145,6 +158,7 @@ def merge_suites(
             "policies": list(policies),
             "command": source_suite.get("command"),
             "checked_equal": {"policies": shared, "episodes": compared, "rtol": rtol},
+            **({"replaced": present} if present else {}),
             **{k: source_suite.get(k) for k in ("git_commit", "versions", "code")},
         },
     ]
@@ -162,7 +176,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     try:
-        added = merge_suites(Path(args.source), Path(args.target), names, args.rtol)
+        added = merge_suites(Path(args.source), Path(args.target), names, args.rtol, args.replace)
     except (ValueError, FileNotFoundError) as exc:
         print(f"suite_merge: error: {exc}", file=sys.stderr)
         return 2
