@@ -95,3 +95,16 @@ def test_a_replaced_policy_loses_its_rows_and_the_addition_says_so(tmp_path):
     (addition,) = json.loads((target / "suite.json").read_text())["additions"]
     assert addition["replaced"] == ["new"]
     assert addition["checked_equal"] == {"policies": ["fbsm"], "episodes": 2, "rtol": 1e-12}
+
+
+def test_a_set_field_added_later_as_none_is_the_same_set(tmp_path):
+    """A record written before a set field existed matches one with the field at None; a real
+    value in it is a different set."""
+    target = _suite(tmp_path / "target", FBSM, ["fbsm"])
+    later = {"a": {"seeds": {"first": 0, "count": 2}, "vary": None}}
+    source = _suite(tmp_path / "source", [*FBSM, *NEW], ["fbsm", "new"], sets=later)
+    assert merge_suites(source, target, ["new"]) == {"new": 2}
+    varied = {"a": {"seeds": {"first": 0, "count": 2}, "vary": {"actuator": ["fins"]}}}
+    other = _suite(tmp_path / "other", [*FBSM, *NEW], ["fbsm", "new"], sets=varied)
+    with pytest.raises(ValueError, match="differ in 'sets'"):
+        merge_suites(other, _suite(tmp_path / "again", FBSM, ["fbsm"]), ["new"])

@@ -72,6 +72,17 @@ def _read(folder: Path) -> tuple[dict[str, Any], list[str], list[dict[str, str]]
     return suite, header, rows
 
 
+def _without_nones(value: Any) -> Any:
+    """``value`` with every mapping entry whose value is None left out, at any depth: a set's
+    field added in a later release with None for "not used" (e.g. ``vary``) is the same set as
+    an earlier record without it."""
+    if isinstance(value, dict):
+        return {k: _without_nones(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list):
+        return [_without_nones(v) for v in value]
+    return value
+
+
 def _differs(a: str, b: str, rtol: float) -> bool:
     if a == b:
         return False
@@ -105,7 +116,7 @@ def merge_suites(
     source_suite, source_header, source_rows = _read(Path(source))
     target_suite, target_header, target_rows = _read(Path(target))
     for key in ("sets", "duration_s", "transient_s"):
-        if source_suite.get(key) != target_suite.get(key):
+        if _without_nones(source_suite.get(key)) != _without_nones(target_suite.get(key)):
             raise ValueError(f"{source} and {target} differ in {key!r}: not the same test suite")
     if source_header != target_header:
         raise ValueError(f"episodes.csv columns differ: {source_header} vs {target_header}")
