@@ -12,7 +12,9 @@ equivariant by construction, with M_o the observation's signs (`auv_gym.sim.obse
 mirror_signs`) and M_a = diag(1, 1, −1) on (X, M, N): an offset the network holds on one side it
 also holds, mirrored, on the other, and the two cancel. It needs the network (two evaluations per
 step, one batched call), so it wraps the network rather than its commands, and it acts after
-training only: SB3 samples its training actions from the bare network.
+training only: SB3 samples its training actions from the bare network. It presumes the plant is
+symmetric too; the 6-DOF plant as built is not (its propeller's torque rolls the hull one way),
+and there it costs the as-built agent (docs/design.md §3.19).
 """
 
 from __future__ import annotations
@@ -84,7 +86,7 @@ class MirroredNetwork:
 
 def mirrored(
     network: Any, specs: Sequence[Mapping[str, Any]], obs_names: Sequence[str], where: str
-):
+) -> Any:
     """``network`` inside the mirror stage when the checked stage ``specs`` list it, else
     ``network`` itself."""
     if any(spec["name"] == MIRROR_STAGE for spec in specs):
