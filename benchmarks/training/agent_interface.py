@@ -56,8 +56,12 @@ def wrap_actions(
     the training env's plant (``env_kwargs``: the id's and the file's), and its action box.
 
     On an env that draws each episode's actuator (``actuator="random"``: the paper's or the
-    fins), the allocation flies the vehicles whose episode drew the fins and passes the others
-    (`controllers.stages.DrawnAllocationStage`), as the exported agent will on each actuator."""
+    fins), or whose vehicles fly both (``actuator_share``), the allocation flies the vehicles
+    on the fins and passes the others (`controllers.stages.DrawnAllocationStage`), as the
+    exported agent will on each actuator."""
+    share = cfg.vehicle_share
+    if share is not None and share.argument == "actuator":
+        env_kwargs = {**env_kwargs, "actuator": "random"}  # per vehicle, as a draw per episode
     settings = policy_settings(env_kwargs)
     drawn = None
     if draws_actuator(env_kwargs):

@@ -41,9 +41,10 @@ space becomes that box (`benchmarks.training.train.ActionBox`), saved with the m
 agent acts inside it too. For off-policy agents, whose squashed-Gaussian exploration covers the
 whole box from the first step (`benchmarks.analysis.action_bounds` measures what that does).
 
-An optional ``plant_share`` mapping puts a share of the ``n_envs`` training vehicles on another
-plant than the section's (``plant_share: {6dof: 0.25}``: round(n_envs × 0.25) vehicles fly the
-6-DOF plant, the others the ``env_kwargs``' plant): `benchmarks.training.plant_share`.
+An optional ``plant_share`` or ``actuator_share`` mapping puts a share of the ``n_envs``
+training vehicles on another plant or actuator than the section's (``plant_share: {6dof: 0.25}``:
+round(n_envs × 0.25) vehicles fly the 6-DOF plant, the others the ``env_kwargs``' plant;
+``actuator_share: {fins: 0.2}`` likewise the fins): `benchmarks.training.vehicle_share`.
 """
 
 from __future__ import annotations
@@ -58,8 +59,8 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym import ENV_ID
-from benchmarks.training.plant_share import PlantShare, parse_plant_share
 from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.vehicle_share import VehicleShare, parse_vehicle_share
 from controllers.algorithms import ALGORITHMS, Algorithm
 
 __all__ = [
@@ -88,7 +89,8 @@ ZOO_KEYS = frozenset(
         "envelope_guard",  # refused with the stage that replaces it
         "jump_start",  # imitation of a classical expert instead of PPO (`jump_start`)
         "demo_regularization",  # SAC kept near the jump start's labels (`demo_regularization`)
-        "plant_share",  # a share of the vehicles on another plant (`plant_share`)
+        "plant_share",  # a share of the vehicles on another plant (`vehicle_share`)
+        "actuator_share",  # a share of the vehicles on another actuator (`vehicle_share`)
     }
 )
 # Keys of removed training features (no kept agent used them; their findings stay in
@@ -126,7 +128,7 @@ class ZooConfig:
     jump_start: Any = None  # `benchmarks.training.jump_start.JumpStart`: imitation, not PPO
     # `benchmarks.training.demo_regularization.DemoRegularization`: SAC near the expert's labels
     demo_regularization: Any = None
-    plant_share: PlantShare | None = None  # a share of the vehicles on another plant
+    vehicle_share: VehicleShare | None = None  # a share of the vehicles on another plant/actuator
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -228,8 +230,8 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     check_normalize(normalize, where)
     _check_policy(section["policy"], policy_kwargs, algo, where)
     _check_env_kwargs(env_id, env_kwargs, where)
-    plant_share = parse_plant_share(
-        section.get("plant_share"), n_envs, env_id, env_kwargs, where, residual is not None
+    vehicle_share = parse_vehicle_share(
+        section, n_envs, env_id, env_kwargs, where, residual is not None
     )
     jump_start = None
     if "jump_start" in section:
@@ -255,7 +257,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         action_bounds=action_bounds,
         jump_start=jump_start,
         demo_regularization=demo_regularization,
-        plant_share=plant_share,
+        vehicle_share=vehicle_share,
         **interface,
     )
     if jump_start is not None:

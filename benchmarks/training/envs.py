@@ -11,8 +11,8 @@ from typing import Any
 
 from auv_gym import ENV_ID, VARIANTS
 from benchmarks.training.evaluation import TRAIN_SEED_BASE
-from benchmarks.training.plant_share import PLANT_SHARE_KEY, PlantShare
 from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.vehicle_share import VehicleShare
 
 __all__ = ["describe_env", "make_training_env", "thread_limit", "zero_correction_layer"]
 
@@ -54,7 +54,7 @@ def make_training_env(
     env_id: str = ENV_ID,
     residual: ResidualTraining | None = None,
     threads: int | None = None,
-    plant_share: PlantShare | None = None,
+    vehicle_share: VehicleShare | None = None,
 ) -> Any:
     """An SB3 VecEnv of `n_envs` training environments.
 
@@ -66,8 +66,8 @@ def make_training_env(
     action and chattering charge; native only).
     ``threads``: numba threads of the native env's kernel (1: the serial kernel at every N;
     None: `AUVPath3DVectorEnv`'s default).
-    ``plant_share`` (native only, not residual): one native env per plant
-    (`PlantShare.vehicles`), the section's own plant first, concatenated
+    ``vehicle_share`` (native only, not residual): one native env per plant or actuator
+    (`VehicleShare.vehicles`), the section's own first, concatenated
     (`benchmarks.training.plant_mix.ConcatVecEnv`); vehicle i keeps the env seed of vehicle i.
     """
     if kind not in ("auto", "native", "dummy"):
@@ -78,11 +78,11 @@ def make_training_env(
             f"a residual agent trains on the native vector env of "
             f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}"
         )
-    if plant_share is not None and residual is not None:
-        raise ValueError(f"{PLANT_SHARE_KEY} is not supported for a residual agent")
-    if plant_share is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
+    if vehicle_share is not None and residual is not None:
+        raise ValueError(f"{vehicle_share.key} is not supported for a residual agent")
+    if vehicle_share is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
         raise ValueError(
-            f"{PLANT_SHARE_KEY} needs the native vector env of {sorted(VARIANTS)}, not "
+            f"{vehicle_share.key} needs the native vector env of {sorted(VARIANTS)}, not "
             f"vec_env={kind!r} / {env_id}"
         )
     if kind in ("auto", "native") and env_id in VARIANTS:
@@ -98,14 +98,17 @@ def make_training_env(
                 make_residual_sb3_env(n_envs, residual, seed=env_seed, threads=threads, **kwargs)
             )
         # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.envs.sb3).
-        if plant_share is not None:
+        if vehicle_share is not None:
             from benchmarks.training.plant_mix import ConcatVecEnv
 
             parts = [
                 make_sb3_vec_env(
-                    count, threads=threads, infos="minimal", **{**kwargs, "plant": plant}
+                    count,
+                    threads=threads,
+                    infos="minimal",
+                    **{**kwargs, vehicle_share.argument: value},
                 )
-                for plant, count in plant_share.vehicles(n_envs)
+                for value, count in vehicle_share.vehicles(n_envs)
             ]
             venv = ConcatVecEnv(parts)
             venv.seed(env_seed)

@@ -207,6 +207,12 @@ def check_jump_start(cfg: Any, env_id: str, where: str) -> None:
         )
     if cfg.residual is not None:
         raise ValueError(f"{at}: a residual agent starts as its base already (no jump start)")
+    share = getattr(cfg, "vehicle_share", None)
+    if share is not None:
+        raise ValueError(
+            f"{at}: the jump start flies the section's own {share.argument} only, not the "
+            f"vehicles of its {share.key}: give the share in a phase after the jump start"
+        )
     from benchmarks.training.demonstrations import DemoSource, check_dataset
 
     source = DemoSource(env_id, dict(cfg.env_kwargs), tuple(cfg.stages), cfg.action_bounds)

@@ -1,8 +1,9 @@
 """One stable-baselines3 `VecEnv` over several, their vehicles in order: `ConcatVecEnv`.
 
-A native vector env (`auv_gym.envs.sb3.SB3VecEnv`) simulates one plant; a training env with a
-share of its vehicles on another plant (``plant_share``, `benchmarks.training.plant_share`) is
-one such env per plant, concatenated.
+A native vector env (`auv_gym.envs.sb3.SB3VecEnv`) simulates one plant and one actuator setting;
+a training env with a share of its vehicles on another plant or actuator (``plant_share``,
+``actuator_share``, `benchmarks.training.vehicle_share`) is one such env per value,
+concatenated.
 """
 
 from __future__ import annotations

@@ -67,7 +67,6 @@ from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, write_held_out_evaluation
 from benchmarks.training.jump_start import JUMP_START_KEY
 from benchmarks.training.learning_curve import EVAL_FILE
-from benchmarks.training.plant_share import check_native
 from benchmarks.training.seed_workers import seed_dir
 from benchmarks.training.seeds import (
     PLAN_FILE,
@@ -82,6 +81,7 @@ from benchmarks.training.seeds import (
 )
 from benchmarks.training.shipped_selection import SELECT_ON, select_shipped
 from benchmarks.training.transitions import TRANSITIONS_FILE
+from benchmarks.training.vehicle_share import check_native
 from benchmarks.training.warm_start import SEED_FIELD
 from controllers.agent import METADATA_FILE
 from controllers.algorithms import ALGORITHMS
@@ -263,7 +263,7 @@ def check_schedule(schedule: Schedule, algo: str, out: Path, vec_env: str = "aut
         try:
             cfg = read_zoo_config(config, schedule.env_id, algo)
             check_obs_scales(cfg, schedule.env_id, str(config))
-            check_native(cfg.plant_share, vec_env, str(config))
+            check_native(cfg.vehicle_share, vec_env, str(config))
         except ValueError as error:
             raise ValueError(
                 f"{schedule.path}: phase {phase.name!r}: {error}".replace(f"{config}: ", "")

@@ -43,7 +43,7 @@ from benchmarks.training.evaluation import (
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
-from benchmarks.training.plant_share import check_native
+from benchmarks.training.vehicle_share import check_native
 from benchmarks.training.warm_start import agent_for_seed, check_warm_start, warm_start
 from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
 from controllers.residual import RESIDUAL_OBS_NAMES
@@ -226,7 +226,7 @@ def check_options(opts: TrainOptions) -> None:
     if not (opts.eval_duration > 0 and opts.eval_duration < float("inf")):
         raise ValueError(f"eval_duration must be a positive time in s, got {opts.eval_duration}")
     cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
-    check_native(cfg.plant_share, opts.vec_env, str(opts.config))
+    check_native(cfg.vehicle_share, opts.vec_env, str(opts.config))
     if opts.init_from:
         check_warm_start(agent_for_seed(opts.init_from, opts.seed), opts.algo)
 
@@ -323,7 +323,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         opts.env_id,
         residual,
         threads=1 if opts.threads == 1 else None,
-        plant_share=cfg.plant_share,
+        vehicle_share=cfg.vehicle_share,
     )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
@@ -428,7 +428,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if residual is None:  # the held-out evaluation and the benchmark build its env from this
         residual_meta["observation"] = layout.to_dict()
     action_dim = 3 if residual is None else residual.action_dim
-    share = cfg.plant_share
+    share = cfg.vehicle_share
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:
         return {
@@ -451,7 +451,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             "action_shape": [action_dim],
             **residual_meta,
             **({"stages": list(cfg.stages)} if cfg.stages else {}),
-            **({} if share is None else {"plant_share": share.to_dict(cfg.n_envs)}),
+            **({} if share is None else {share.key: share.to_dict(cfg.n_envs)}),
             "versions": versions(),
             "sb3_version": stable_baselines3.__version__,
             "git_commit": git_commit(),

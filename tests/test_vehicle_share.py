@@ -1,9 +1,11 @@
-"""A share of the training vehicles on another plant (`benchmarks.training.plant_share`) and the
-VecEnv that concatenates one native vector env per plant (`benchmarks.training.plant_mix`).
+"""A share of the training vehicles on another plant or actuator
+(`benchmarks.training.vehicle_share`) and the VecEnv that concatenates one native vector env per
+plant or actuator (`benchmarks.training.plant_mix`).
 
 Two concatenated 5-DOF envs are one env of all their vehicles bit for bit; the 6-DOF rows of a
 plant share fly the 6-DOF plant (roll) and the 5-DOF rows are a 5-DOF env's; a tiny PPO run with
-a plant share trains, resumes exactly and loads; every bad share is refused in one line."""
+a plant share trains, resumes exactly and loads; the fins rows of an actuator share fly the fins
+and their allocation in training; every bad share is refused in one line."""
 
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from auv_gym.envs.sb3 import make_sb3_vec_env  # noqa: E402
 from benchmarks.training.envs import describe_env, make_training_env  # noqa: E402
 from benchmarks.training.evaluation import TRAIN_SEED_BASE  # noqa: E402
 from benchmarks.training.plant_mix import ConcatVecEnv  # noqa: E402
-from benchmarks.training.plant_share import PlantShare  # noqa: E402
+from benchmarks.training.vehicle_share import VehicleShare  # noqa: E402
 
 ENV_ID = "AUVPath3DSpeedLimit-v0"
 # 2.5 s episodes (50 steps) and an 18 m corridor: in 300 steps every vehicle truncates about six
@@ -40,7 +42,7 @@ SECTION = {
     "env_kwargs": {"randomize_start": True, "max_time": 20.0},
     "plant_share": {"6dof": 0.5},
 }
-HALF = PlantShare("5dof", (("6dof", 0.5),))
+HALF = VehicleShare("5dof", (("6dof", 0.5),))
 
 
 def random_actions(seed: int, steps: int, n: int) -> np.ndarray:
@@ -138,7 +140,7 @@ def test_the_6dof_rows_fly_the_6dof_plant_and_the_5dof_rows_a_5dof_envs():
     training env's, rows 2-3 a 6-DOF env's seeded with the seeds of vehicles 2-3 (not a 5-DOF
     env's rows 2-3), and only they roll."""
     seed, kwargs = 3, dict(SHORT)
-    mixed = make_training_env(4, seed, kwargs, env_id=ENV_ID, threads=1, plant_share=HALF)
+    mixed = make_training_env(4, seed, kwargs, env_id=ENV_ID, threads=1, vehicle_share=HALF)
     base = make_training_env(2, seed, kwargs, env_id=ENV_ID, threads=1)
     five = make_training_env(4, seed, kwargs, env_id=ENV_ID, threads=1)
     env_seed = TRAIN_SEED_BASE + 1000 * seed
@@ -235,19 +237,21 @@ def test_a_schedule_phase_sets_changes_and_drops_the_share(tmp_path):
     path = tmp_path / "schedule.yml"
     path.write_text(yaml.safe_dump({ENV_ID: section, "schedule": {"phases": phases}}))
     configs = check_schedule(read_schedule(path), "ppo", tmp_path / "out")
-    shares = [read_zoo_config(c, ENV_ID).plant_share for c in configs]
+    shares = [read_zoo_config(c, ENV_ID).vehicle_share for c in configs]
     assert shares[0] is None and shares[3] is None
     assert shares[1].vehicles(4) == (("5dof", 3), ("6dof", 1))
     assert shares[2].vehicles(8) == (("5dof", 5), ("6dof", 3))
 
 
 def test_the_section_plant_may_be_the_6dof_one():
-    from benchmarks.training.plant_share import parse_plant_share
+    from benchmarks.training.vehicle_share import parse_vehicle_share
 
-    share = parse_plant_share({"5dof": 0.25}, 8, ENV_ID, {"plant": "6dof"}, "f.yml")
-    assert share == PlantShare("6dof", (("5dof", 0.25),))
+    section = {"plant_share": {"5dof": 0.25}}
+    share = parse_vehicle_share(section, 8, ENV_ID, {"plant": "6dof"}, "f.yml")
+    assert share == VehicleShare("6dof", (("5dof", 0.25),))
     assert share.to_dict(8) == {"shares": {"5dof": 0.25}, "vehicles": {"6dof": 6, "5dof": 2}}
-    assert parse_plant_share(None, 8, ENV_ID, {}, "f.yml") is None
+    assert parse_vehicle_share({"plant_share": None}, 8, ENV_ID, {}, "f.yml") is None
+    assert parse_vehicle_share({}, 8, ENV_ID, {}, "f.yml") is None
 
 
 @pytest.mark.parametrize(
@@ -302,6 +306,36 @@ def test_the_section_plant_may_be_the_6dof_one():
             [],
             "plant_share is not supported with a residual section",
         ),
+        (
+            {"actuator_share": {"fins": 0.25}},
+            [],
+            "mix.yml: AUVPath3DSpeedLimit-v0: give plant_share or actuator_share, not both",
+        ),
+        (
+            {"plant_share": None, "actuator_share": {"realistic": 0.25}},
+            [],
+            "actuator_share: unknown actuator 'realistic'; valid: ['paper', 'fins']",
+        ),
+        (
+            {"plant_share": None, "actuator_share": {"paper": 0.25}},
+            [],
+            "actuator_share: paper is the section's own actuator",
+        ),
+        (
+            {
+                "plant_share": None,
+                "actuator_share": {"fins": 0.25},
+                "env_kwargs": {"actuator": "random"},
+            },
+            [],
+            "actuator_share: the section's actuator is drawn per episode (actuator: random)",
+        ),
+        (
+            {"plant_share": None, "actuator_share": {"fins": 0.9}},
+            [],
+            "actuator_share: the shares take all 4 vehicles ({'fins': 4}) and leave 0 on the "
+            "section's actuator paper",
+        ),
     ],
 )
 def test_a_bad_plant_share_is_one_line_exit_2_before_training(
@@ -347,8 +381,97 @@ def test_a_schedule_phase_with_a_bad_share_is_refused_naming_the_phase(tmp_path,
 def test_the_sum_of_the_shares_must_stay_below_1(monkeypatch):
     """With two plants a single share below 1 is the whole check; a third plant name makes the
     sum its own: refused before any env is built."""
-    from benchmarks.training import plant_share
+    from benchmarks.training import vehicle_share
 
-    monkeypatch.setattr(plant_share, "PLANTS", ("5dof", "6dof", "other"))
+    monkeypatch.setattr(vehicle_share, "PLANTS", ("5dof", "6dof", "other"))
     with pytest.raises(ValueError, match=r"^f.yml: plant_share: the shares sum to 1.1 >= 1;"):
-        plant_share.parse_plant_share({"6dof": 0.6, "other": 0.5}, 8, ENV_ID, {}, "f.yml")
+        section = {"plant_share": {"6dof": 0.6, "other": 0.5}}
+        vehicle_share.parse_vehicle_share(section, 8, ENV_ID, {}, "f.yml")
+
+
+FINS_QUARTER = VehicleShare("paper", (("fins", 0.25),), "actuator")
+
+
+def test_the_fins_rows_of_an_actuator_share_fly_the_fins_and_the_others_the_paper_actuator():
+    """make_training_env with {fins: 0.25} of 8 vehicles: rows 0-5 are a 6-vehicle training
+    env's on the paper's actuator, rows 6-7 a fins env's seeded with vehicles 6-7's seeds; the
+    env reports each vehicle's actuator (what the allocation stage follows)."""
+    seed, kwargs = 5, dict(SHORT)
+    mixed = make_training_env(8, seed, kwargs, env_id=ENV_ID, threads=1, vehicle_share=FINS_QUARTER)
+    paper = make_training_env(6, seed, kwargs, env_id=ENV_ID, threads=1)
+    env_seed = TRAIN_SEED_BASE + 1000 * seed
+    fins = make_sb3_vec_env(
+        2, seed=env_seed + 6, infos="minimal", **{**VARIANTS[ENV_ID], **kwargs, "actuator": "fins"}
+    )
+    assert mixed.get_attr("actuator") == ["paper"] * 6 + ["fins"] * 2
+    obs = mixed.reset()
+    np.testing.assert_array_equal(obs[:6], paper.reset())
+    np.testing.assert_array_equal(obs[6:], fins.reset())
+    all_paper = make_training_env(8, seed, kwargs, env_id=ENV_ID, threads=1)
+    np.testing.assert_array_equal(obs[6:], all_paper.reset()[6:])  # the same starts
+    differs = False
+    for action in random_actions(4, 120, 8):
+        obs, reward, done, _ = mixed.step(action)
+        obs_p, reward_p, done_p, _ = paper.step(action[:6])
+        obs_f, reward_f, done_f, _ = fins.step(action[6:])
+        np.testing.assert_array_equal(obs, np.concatenate([obs_p, obs_f]))
+        np.testing.assert_array_equal(reward, np.concatenate([reward_p, reward_f]))
+        np.testing.assert_array_equal(done, np.concatenate([done_p, done_f]))
+        # the fins' moments are bounded by the flow: the same commands fly another path
+        differs |= not np.array_equal(obs[6:], all_paper.step(action)[0][6:])
+    assert differs
+
+
+def test_an_actuator_share_trains_its_fins_vehicles_inside_the_allocation(tmp_path):
+    """A tiny PPO run on 2 paper + 2 fins vehicles with the allocation stage: its metadata
+    records the share, and the stage allocates the fins rows only (the paper rows' commands are
+    the network's, the fins rows' are not)."""
+    from benchmarks.training.agent_interface import wrap_actions
+    from benchmarks.training.config import read_zoo_config
+    from controllers.loader import load_policy
+
+    config = _config(
+        tmp_path,
+        plant_share=None,
+        actuator_share={"fins": 0.5},
+        env_kwargs={**SECTION["env_kwargs"], "observation": "preview_integral"},
+        stages=[{"name": "actuator_allocation"}],
+    )
+    run = _train(tmp_path, config, "run")
+    meta = json.loads((run / "final" / "metadata.json").read_text())
+    assert meta["actuator_share"] == {
+        "shares": {"fins": 0.5},
+        "vehicles": {"paper": 2, "fins": 2},
+    }
+    assert load_policy(run / "final").predict(
+        make_sb3_vec_env(1, seed=0, **VARIANTS[ENV_ID], observation="preview_integral").reset(),
+        deterministic=True,
+    )[0].shape == (1, 3)
+
+    cfg = read_zoo_config(config, ENV_ID)
+    venv = make_training_env(
+        4, 0, cfg.env_kwargs, env_id=ENV_ID, threads=1, vehicle_share=cfg.vehicle_share
+    )
+    layout_names = json.loads((run / "final" / "metadata.json").read_text())["obs_names"]
+    staged = wrap_actions(venv, cfg, layout_names, {**VARIANTS[ENV_ID], **cfg.env_kwargs})
+    staged.reset()
+    sent = []
+    staged.venv.step_async = lambda actions: sent.append(np.array(actions))  # what the env gets
+    action = np.tile(np.array([[0.5, 0.8, -0.8]], np.float32), (4, 1))
+    staged.step_async(action)
+    np.testing.assert_array_equal(sent[0][:2], action[:2])
+    assert not np.allclose(sent[0][2:], action[2:])
+
+
+def test_a_jump_start_with_a_share_is_refused(tmp_path):
+    """The jump start's rollouts fly one env: a share in its section would be dropped there."""
+    from benchmarks.training.config import read_zoo_config
+
+    config = _config(
+        tmp_path,
+        plant_share=None,
+        actuator_share={"fins": 0.5},
+        jump_start={"expert": "fbsm_colos", "steps": 256},
+    )
+    with pytest.raises(ValueError, match=r"jump_start: the jump start flies the section's own "):
+        read_zoo_config(config, ENV_ID)
