@@ -20,12 +20,12 @@ from benchmarks.training.checkpoints import (
 from benchmarks.training.evaluation import (
     chattering_mean,
     evaluate_policy_on_seeds,
-    score,
     summarize,
     variant_groups,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
 from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.selection_rule import DEFAULT_RULE, SelectionRule
 from controllers.agent import AgentPolicy
 from controllers.env_settings import policy_settings
 from controllers.mirror import mirrored
@@ -89,7 +89,8 @@ def _next_multiple(n: int, every: int) -> int:
 
 class PeriodicEvaluation(BaseCallback):
     """Every `every` env steps (and at step 0 of a fresh run): the policy on `seeds`, a row of
-    the learning curve, and the agent saved to OUT/best when its `score` improves.
+    the learning curve, and the agent saved to OUT/best when its score (``rule``, the config's
+    `SelectionRule`) improves.
 
     `best` (score, num_timesteps, summary) is shared with the run's metadata, which records it.
     A residual agent (``residual``) is evaluated as its `ResidualPolicy`, an agent with stages
@@ -110,9 +111,10 @@ class PeriodicEvaluation(BaseCallback):
         residual: ResidualTraining | None = None,
         next_eval: int | None = None,
         stages: tuple[Sequence[dict[str, Any]], Sequence[str]] = ((), ()),
+        rule: SelectionRule = DEFAULT_RULE,
     ) -> None:
         super().__init__(verbose)
-        self.residual, self.stages = residual, stages
+        self.residual, self.stages, self.rule = residual, stages, rule
         self.out, self.every, self.seeds = out, every, tuple(seeds)
         self.eval_kwargs, self.metadata = eval_kwargs, metadata
         self.start_wall, self.best = start_wall, best
@@ -159,7 +161,7 @@ class PeriodicEvaluation(BaseCallback):
         self.logger.record("eval/rms_distance_mean", summary["rms_distance_mean"])
         self.logger.record("eval/n_terminated", summary["n_terminated"])
         append_row(self.out / EVAL_FILE, self.num_timesteps, wall, summary)
-        current = score(summary, weight)
+        current = self.rule.score(summary, weight)
         if self.best.get("score") is None or current < tuple(self.best["score"]):
             self.best["score"] = list(current)
             self.best["num_timesteps"] = self.num_timesteps

@@ -60,6 +60,7 @@ from typing import Any
 
 from auv_gym import ENV_ID
 from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.selection_rule import DEFAULT_RULE, SelectionRule, parse_selection
 from benchmarks.training.vehicle_share import VehicleShare, parse_vehicle_share
 from controllers.algorithms import ALGORITHMS, Algorithm
 
@@ -91,6 +92,7 @@ ZOO_KEYS = frozenset(
         "demo_regularization",  # SAC kept near the jump start's labels (`demo_regularization`)
         "plant_share",  # a share of the vehicles on another plant (`vehicle_share`)
         "actuator_share",  # a share of the vehicles on another actuator (`vehicle_share`)
+        "selection",  # how evaluations rank to keep the best agent (`selection_rule`)
     }
 )
 # Keys of removed training features (no kept agent used them; their findings stay in
@@ -129,6 +131,7 @@ class ZooConfig:
     # `benchmarks.training.demo_regularization.DemoRegularization`: SAC near the expert's labels
     demo_regularization: Any = None
     vehicle_share: VehicleShare | None = None  # a share of the vehicles on another plant/actuator
+    selection: SelectionRule = DEFAULT_RULE  # how its evaluations rank (`selection_rule`)
 
     def model_kwargs(self) -> dict[str, Any]:
         """`algo_kwargs` with the algorithm's schedule keys turned into SB3 schedules."""
@@ -233,6 +236,9 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     vehicle_share = parse_vehicle_share(
         section, n_envs, env_id, env_kwargs, where, residual is not None
     )
+    selection = DEFAULT_RULE
+    if "selection" in section:
+        selection = parse_selection(section["selection"], where)
     jump_start = None
     if "jump_start" in section:
         from benchmarks.training.jump_start import parse_jump_start
@@ -258,6 +264,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         jump_start=jump_start,
         demo_regularization=demo_regularization,
         vehicle_share=vehicle_share,
+        selection=selection,
         **interface,
     )
     if jump_start is not None:

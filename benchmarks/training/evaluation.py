@@ -21,6 +21,7 @@ from auv_gym.rollout import evaluate
 from auv_gym.sim.trajectory import env_termination_reason
 from auv_gym.support.files import write_json
 from benchmarks.catalog.tasks import VARIED
+from benchmarks.training.selection_rule import DEFAULT_RULE
 from controllers.agent import agent_env_kwargs
 from controllers.loader import load_policy
 from controllers.residual import base_kwargs_for_env
@@ -139,11 +140,9 @@ def check_evaluation_duration(duration: float, control_dt: float = 0.05) -> floa
 def score(summary: dict[str, Any], chattering_weight: float = 0.0) -> tuple[int, float]:
     """Lower is better: first fewer terminated episodes, then lower mean rms distance [m] plus
     ``chattering_weight`` λ [m·s] times the mean chattering [1/s] (``summary["chattering_mean"]``,
-    needed when λ > 0; residual agents, docs/design.md §3.10)."""
-    mean = summary["rms_distance_mean"]
-    if chattering_weight > 0.0:
-        mean = mean + chattering_weight * summary["chattering_mean"]
-    return summary["n_terminated"], (mean if math.isfinite(mean) else math.inf)
+    needed when λ > 0; residual agents, docs/design.md §3.10): the default
+    `benchmarks.training.selection_rule.SelectionRule` (a file's ``selection`` changes it)."""
+    return DEFAULT_RULE.score(summary, chattering_weight)
 
 
 def chattering_mean(results: Sequence[dict[str, Any]]) -> float:

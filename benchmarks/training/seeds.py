@@ -61,6 +61,7 @@ from benchmarks.training.seeds_options import (  # the options, importable from 
     SeedsOptions,
     parse_seeds,
 )
+from benchmarks.training.selection_rule import rule_of
 from benchmarks.training.train import check_options, observation_layout_of, target_timesteps
 from benchmarks.training.warm_start import (
     agent_for_seed,
@@ -423,7 +424,7 @@ def _train_seeds(opts: SeedsOptions, plan: dict[str, Any], out: Path) -> dict[st
         "plan": plan,
         "seeds": entries,
         "selected_seed": chosen["seed"],
-        "selection": "lowest validation score (terminated episodes, then mean rms distance"
+        "selection": f"lowest validation score ({rule_of(plan).describe()}"
         f"{_chattering_clause(plan)}) on eval_seeds; test episodes are never used "
         "to choose",
         "session_wall_time_s": time.monotonic() - t0,

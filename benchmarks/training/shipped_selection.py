@@ -5,9 +5,9 @@ are added after training, so the training's own validation flies the bare networ
 seeds without them. With ``select_on: shipped`` the seed is chosen on the agents as they ship:
 each seed's agent of the last phase, with the export stages, flown on the very validation
 episodes that phase selected on (the agent's recorded ``eval_env_kwargs`` and ``eval_seeds``),
-scored like the training's validation (`benchmarks.training.evaluation.score`: fewer
-terminated episodes, then lower mean RMS distance; ties: the lower seed). Test episodes are
-never flown here.
+scored like the training's validation (the run's `benchmarks.training.selection_rule`; by
+default fewer terminated episodes, then lower mean RMS distance; ties: the lower seed). Test
+episodes are never flown here.
 
 Each seed's result is written to ``OUT/shipped_validation.json`` as soon as it is known
 (atomically), so a resumed command flies only the seeds whose agent or stages changed.
@@ -23,10 +23,10 @@ from typing import Any
 from auv_gym.support.files import write_json
 from benchmarks.training.evaluation import (
     evaluate_policy_on_seeds,
-    score,
     summarize,
     variant_groups,
 )
+from benchmarks.training.selection_rule import rule_of
 from controllers.agent import METADATA_FILE
 from controllers.env_settings import policy_settings
 from controllers.loader import load_policy
@@ -66,7 +66,7 @@ def shipped_validation(agent: Path, stages: Sequence[dict[str, Any]]) -> dict[st
         "stages": specs,
         "eval_seeds": list(seeds),
         "summary": summary,
-        "score": list(score(summary)),
+        "score": list(rule_of(metadata).score(summary)),
     }
 
 
@@ -118,11 +118,12 @@ def select_shipped(
             n_term, mean = earlier["score"]
             report(f"seed {seed} as shipped: {n_term} terminated, mean rms {mean:.4f} m")
     chosen = min(kept, key=lambda s: (*kept[s]["score"], int(s)))
+    rule = rule_of(json.loads((Path(kept[chosen]["agent"]) / METADATA_FILE).read_text()))
     record = {
         "seeds": kept,
         "selected_seed": int(chosen),
         "selection": "lowest validation score of the agents as shipped (export stages on): "
-        "terminated episodes, then mean rms distance, on the last phase's validation "
+        f"{rule.describe()}, on the last phase's validation "
         "episodes; test episodes are never used to choose",
     }
     write_json(path, record, indent=2, sort_keys=True)

@@ -489,6 +489,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
             residual,
             next_eval=schedules.get("next_eval"),
             stages=(cfg.stages, obs_names),
+            rule=cfg.selection,
         )
         callbacks.append(evaluation)
     target = target_timesteps(n_timesteps, opts.stop_at)
