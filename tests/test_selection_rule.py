@@ -109,7 +109,7 @@ def test_a_validation_without_variants_scores_as_pooled_and_nan_scores_last():
     ],
 )
 def test_a_bad_selection_section_is_refused_naming_the_entry(section, message):
-    with pytest.raises(ValueError, match="^here: ") as error:
+    with pytest.raises(ValueError, match=r"^here: ") as error:
         parse_selection(section, "here")
     assert message in str(error.value) and "\n" not in str(error.value)
 
