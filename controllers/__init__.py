@@ -48,6 +48,10 @@ __all__ = [
 # algorithm (`controllers.algorithms`). "ppo" is not one: it was the former name of "agent".
 AGENT_NAMES = ("agent", *(name for name in ALGORITHMS if name != "ppo"))
 RENAMED = {"ppo": "controllers.make('agent', path=...)"}  # former name → what to call instead
+# What an env fixes of the plant (`policy_settings`): given to an agent, they build its stages
+# (the allocation for the fins) or its residual base for that plant.
+PLANT_KEYWORDS = ("control_dt", "params", "actuator", "actuator_params")
+ACTUATOR_NAMES = ("paper", "fins", "realistic")
 
 
 def make(name: str, env: Any = None, **kwargs: Any) -> Any:
@@ -66,9 +70,11 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     `controllers.pid.GUIDANCE_GAINS`. All three take ``actuator="realistic"`` with an optional
     `actuator_params` (`auv_gym.vehicle.actuators.ActuatorParams`; docs/model.md §2.7). "agent"
     takes `path` (a saved agent directory of any algorithm of `controllers.algorithms`, plain or
-    residual; `controllers.loader.load_policy`) and that function's keywords; "sac" (and "tqc",
-    "crossq") does the same for an agent of that algorithm only. A former name (`RENAMED`:
-    "ppo") is a one-line ValueError naming the call that replaces it.
+    residual; `controllers.loader.load_policy`) and that function's keywords, and the plant's
+    `control_dt`, `params`, `actuator` and `actuator_params` as a classical controller does
+    (they build the agent's stages, e.g. the allocation on the fins: ``base_kwargs``); "sac"
+    (and "tqc", "crossq") does the same for an agent of that algorithm only. A former name
+    (`RENAMED`: "ppo") is a one-line ValueError naming the call that replaces it.
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
     Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
@@ -92,7 +98,7 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
         if "path" not in kwargs:
             raise ValueError(f"controllers.make({name!r}) needs path=<saved agent directory>")
         algo = None if name == "agent" else name
-        return load_policy(kwargs.pop("path"), algo=algo, **kwargs)
+        return load_policy(kwargs.pop("path"), algo=algo, **_agent_keywords(name, kwargs))
     if name == "onnx":
         from controllers.onnx_policy import OnnxPolicy
 
@@ -111,6 +117,22 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
         return make_lowpass(**kwargs)
     valid = [*CLASSICAL, *AGENT_NAMES, "onnx", "residual", "lowpass"]
     raise ValueError(f"unknown controller {name!r}; valid: {valid}")
+
+
+def _agent_keywords(name: str, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``load_policy``'s keywords from those of ``make(name, ...)``: the plant's keywords go into
+    ``base_kwargs`` (explicit ones win over the env's); ValueError for any other unknown
+    keyword or an unknown actuator."""
+    valid = ("device", "num_threads", "base_kwargs", "stages", *PLANT_KEYWORDS)
+    unknown = sorted(set(kwargs) - set(valid))
+    if unknown:
+        raise ValueError(f"controllers.make({name!r}): unknown keywords {unknown}; valid: {valid}")
+    plant = {key: kwargs.pop(key) for key in PLANT_KEYWORDS if key in kwargs}
+    if plant.get("actuator", "paper") not in ACTUATOR_NAMES:
+        raise ValueError(f"unknown actuator {plant['actuator']!r}; valid: {sorted(ACTUATOR_NAMES)}")
+    if plant:
+        kwargs["base_kwargs"] = {**(kwargs.get("base_kwargs") or {}), **plant}
+    return kwargs
 
 
 def _with_env_settings(

@@ -75,6 +75,37 @@ def test_the_former_name_ppo_is_refused_in_one_line():
 
 
 @pytest.mark.rl
+def test_an_agent_takes_the_plants_keywords_as_a_classical_controller_does():
+    """``actuator="fins"`` builds the generalist's allocation for the fins, as the fins env
+    does; the same observation then gives other commands than on the paper's actuator."""
+    import gymnasium as gym
+
+    path = str(AGENTS / "ppo_generalist")
+    names = lambda policy: [type(stage).__name__ for stage in policy.stages]  # noqa: E731
+    on_fins = controllers.make("agent", path=path, actuator="fins")
+    assert names(on_fins) == ["GuardStage", "AllocationStage"]
+    assert names(controllers.make("agent", path=path)) == ["GuardStage"]
+    env = gym.make("AUVPath3DPreview-v0", actuator="fins", observation="preview_integral")
+    assert names(controllers.make("agent", env, path=path)) == names(on_fins)
+    # an explicit keyword wins over the env's
+    assert names(controllers.make("agent", env, path=path, actuator="paper")) == ["GuardStage"]
+    obs = env.reset(seed=3)[0]
+    fins_action = on_fins.predict(obs, deterministic=True)[0]
+    paper_action = controllers.make("agent", path=path).predict(obs, deterministic=True)[0]
+    assert not np.allclose(fins_action, paper_action)
+
+
+def test_an_agent_refuses_unknown_keywords_and_actuators_in_one_line():
+    path = str(AGENTS / "ppo_generalist")
+    with pytest.raises(ValueError, match=r"^unknown actuator 'nope'; valid: \['fins'"):
+        controllers.make("agent", path=path, actuator="nope")
+    with pytest.raises(ValueError) as error:
+        controllers.make("agent", path=path, gains=1)
+    assert str(error.value).startswith("controllers.make('agent'): unknown keywords ['gains']")
+    assert "'actuator'" in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.rl
 def test_agent_and_sac_load_the_same_policy_and_sac_checks_the_algorithm():
     obs = np.linspace(-0.5, 0.5, 49, dtype=np.float32)  # its integral preview observation
     path = str(AGENTS / "sac_generalist")
