@@ -192,14 +192,6 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
     assert (
         json.loads((out / "schedule.json").read_text())["selected_seed"] == record["selected_seed"]
     )
-    # keep_earlier on the finished run: nothing trains, and no seed keeps its base agent, since
-    # the fine phase validates on other episodes (its own task set) than the base phase.
-    keep_config = _write(tmp_path, {**SCHEDULE, "keep_earlier": True})
-    assert main(_argv(keep_config, out, "--resume")) == 0
-    kept = json.loads((out / "schedule.json").read_text())
-    assert kept["plan"]["keep_earlier"] is True and kept["selected_seed"] == record["selected_seed"]
-    assert all("kept_from" not in e for e in kept["phases"][-1]["summary"]["seeds"])
-    assert {p: p.stat().st_mtime_ns for p in fine.rglob("model.zip")} == before
     # The same run selected as shipped (the schedule's stages on): nothing trains, every seed's
     # agent flies the last phase's validation once, and the export is the seed it picks.
     shipped_config = _write(tmp_path, {**SCHEDULE, "select_on": "shipped"})
@@ -247,10 +239,6 @@ def test_a_two_phase_schedule_trains_end_to_end_and_resumes(tmp_path):
         (
             {"phases": [{"name": "a"}], "select_on": "test"},
             r"schedule.select_on: unknown value 'test'; valid: \['network', 'shipped'\]",
-        ),
-        (
-            {"phases": [{"name": "a"}], "keep_earlier": "yes"},
-            r"schedule.keep_earlier must be true or false, got 'yes'",
         ),
         (  # without export stages the shipped agent is the network the training chose
             {"phases": [{"name": "a"}], "select_on": "shipped"},

@@ -44,11 +44,6 @@ each seed's agent with the export stages on (`benchmarks.training.shipped_select
 guard or a low-speed floor can change which seed flies best. The network's pick stays in the
 last phase's summary; schedule.json adds ``shipped_selection`` (every seed's score as shipped).
 
-``keep_earlier: true`` lets a seed keep the agent a phase started from when that agent scored
-better on the same validation episodes than any of the phase's own
-(`benchmarks.training.phase_carry`): the phase's entry for that seed is the earlier one's,
-marked ``kept_from``, and its ``selected`` agent, the next phase's start and the export follow.
-
 Layout of OUT: ``phase_<k>_<name>/`` (each phase's multi-seed run; ``selected/agent_seed_<s>``
 is each seed's agent, selected on validation, that the next phase starts from), ``configs/``
 (each phase's hyper-parameter file) and ``schedule.json`` (the plan and every phase's
@@ -72,7 +67,6 @@ from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, write_held_out_evaluation
 from benchmarks.training.jump_start import JUMP_START_KEY
 from benchmarks.training.learning_curve import EVAL_FILE
-from benchmarks.training.phase_carry import keep_earlier
 from benchmarks.training.seed_workers import seed_dir
 from benchmarks.training.seeds import (
     PLAN_FILE,
@@ -89,7 +83,7 @@ from benchmarks.training.shipped_selection import SELECT_ON, select_shipped
 from benchmarks.training.transitions import TRANSITIONS_FILE
 from benchmarks.training.vehicle_share import check_native
 from benchmarks.training.warm_start import SEED_FIELD
-from controllers.agent import METADATA_FILE, MODEL_FILE
+from controllers.agent import METADATA_FILE
 from controllers.algorithms import ALGORITHMS
 from controllers.stages import check_stage_specs
 
@@ -106,7 +100,7 @@ SCHEDULE_KEY = "schedule"
 SCHEDULE_FILE = "schedule.json"
 CONFIGS = "configs"  # OUT/configs/phase_<k>_<name>.yml: each phase's hyper-parameter file
 SELECTED = "selected"  # OUT/phase_<k>_<name>/selected/agent_seed_<s>: each seed's agent
-SCHEDULE_KEYS = ("phases", "stages", "options", "select_on", "keep_earlier")
+SCHEDULE_KEYS = ("phases", "stages", "options", "select_on")
 # The command's options a schedule may set (its defaults: the command line wins).
 OPTION_KEYS = (
     "algo",
@@ -140,7 +134,6 @@ class Schedule:
     stages: tuple[dict[str, Any], ...]
     options: dict[str, Any]
     select_on: str = SELECT_ON[0]  # "shipped": the seed chosen with the stages on
-    keep_earlier: bool = False  # a seed keeps an earlier phase's agent that validated better
 
     def phase_section(self, k: int) -> dict[str, Any]:
         """Phase ``k``'s hyper-parameters: the section with the changes of phases 0..k on top,
@@ -248,12 +241,7 @@ def read_schedule(path: str | Path) -> Schedule | None:
             f"{where}.select_on: shipped needs export stages (without them the agent ships "
             "as it trained, and the training's validation already chose it)"
         )
-    keep = spec.get("keep_earlier", False)
-    if not isinstance(keep, bool):
-        raise ValueError(f"{where}.keep_earlier must be true or false, got {keep!r}")
-    return Schedule(
-        path, env_id, dict(data[env_id]), tuple(checked), stages, options, select_on, keep
-    )
+    return Schedule(path, env_id, dict(data[env_id]), tuple(checked), stages, options, select_on)
 
 
 def _write_phase_config(schedule: Schedule, k: int, out: Path) -> Path:
@@ -295,17 +283,6 @@ def check_schedule(schedule: Schedule, algo: str, out: Path, vec_env: str = "aut
             "exist (an agent folder, or a template with {seed})"
         )
     return configs
-
-
-def _holds(selected: Path, agent: Path) -> bool:
-    """Whether ``selected`` is a copy of ``agent`` (same model file and metadata)."""
-    try:
-        return all(
-            (selected / name).read_bytes() == (agent / name).read_bytes()
-            for name in (METADATA_FILE, MODEL_FILE)
-        )
-    except OSError:
-        return False
 
 
 def _pass_transitions(run: Path, selected: Path) -> None:
@@ -392,7 +369,6 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
         "stages": list(schedule.stages),
         "seeds": list(opts.seeds),
         **({"select_on": schedule.select_on} if schedule.select_on != SELECT_ON[0] else {}),
-        **({"keep_earlier": True} if schedule.keep_earlier else {}),
     }
     write_json(out / SCHEDULE_FILE, {"plan": plan, "phases": []}, indent=2, sort_keys=True)
     summaries: list[dict[str, Any]] = []
@@ -429,11 +405,9 @@ def _train_schedule(opts: SeedsOptions, schedule: Schedule, out: Path) -> dict[s
                 ),
             )
             summary = train_seeds(phase_opts)
-        if schedule.keep_earlier and summaries:
-            summary = keep_earlier(summaries[-1]["summary"], summary, summaries[-1]["name"])
         for entry in summary["seeds"]:  # what the next phase starts from, seed by seed
             selected = folder / SELECTED / f"{SEED_AGENT_PREFIX}{entry['seed']}"
-            if not _holds(selected, Path(entry["agent"])):  # new, or a choice made again
+            if not selected.is_dir():
                 export_agent(Path(entry["agent"]), selected)
             _pass_transitions(seed_dir(folder, entry["seed"]), selected)
         summaries.append({"name": phase.name, "summary": summary})
