@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import auv_gym
+from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.support.numba_cache import register_package
 
 # Before the first kernel is defined: the controllers' kernels inline auv_gym's dynamics and
@@ -51,7 +52,6 @@ RENAMED = {"ppo": "controllers.make('agent', path=...)"}  # former name → what
 # What an env fixes of the plant (`policy_settings`): given to an agent, they build its stages
 # (the allocation for the fins) or its residual base for that plant.
 PLANT_KEYWORDS = ("control_dt", "params", "actuator", "actuator_params")
-ACTUATOR_NAMES = ("paper", "fins", "realistic")
 
 
 def make(name: str, env: Any = None, **kwargs: Any) -> Any:
@@ -128,8 +128,8 @@ def _agent_keywords(name: str, kwargs: dict[str, Any]) -> dict[str, Any]:
     if unknown:
         raise ValueError(f"controllers.make({name!r}): unknown keywords {unknown}; valid: {valid}")
     plant = {key: kwargs.pop(key) for key in PLANT_KEYWORDS if key in kwargs}
-    if plant.get("actuator", "paper") not in ACTUATOR_NAMES:
-        raise ValueError(f"unknown actuator {plant['actuator']!r}; valid: {sorted(ACTUATOR_NAMES)}")
+    if plant.get("actuator", "paper") not in ACTUATORS:  # the integrator's actuator models
+        raise ValueError(f"unknown actuator {plant['actuator']!r}; valid: {sorted(ACTUATORS)}")
     if plant:
         kwargs["base_kwargs"] = {**(kwargs.get("base_kwargs") or {}), **plant}
     return kwargs

@@ -103,6 +103,7 @@ def select_shipped(
     for entry in sorted(entries, key=lambda e: e["seed"]):
         seed, agent = entry["seed"], Path(entry["agent"])
         metadata = json.loads((agent / METADATA_FILE).read_text())
+        rule = rule_of(metadata)  # one recipe's seeds: one rule
         earlier = done.get(str(seed))
         if not (
             isinstance(earlier, dict)
@@ -118,7 +119,6 @@ def select_shipped(
             n_term, mean = earlier["score"]
             report(f"seed {seed} as shipped: {n_term} terminated, mean rms {mean:.4f} m")
     chosen = min(kept, key=lambda s: (*kept[s]["score"], int(s)))
-    rule = rule_of(json.loads((Path(kept[chosen]["agent"]) / METADATA_FILE).read_text()))
     record = {
         "seeds": kept,
         "selected_seed": int(chosen),
