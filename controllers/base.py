@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.rollout import Policy  # the one definition, shared with the rollouts
+from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.sim.observation import OBS_DIM, OBS_INDEX
 from auv_gym.vehicle import AUVParams, remus100
 from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
@@ -40,8 +41,8 @@ def actuator_vector(
     "realistic": the same law with the fins' K·δ_max of ``actuator_params``, its τ then
     allocated to shaft speed and fin angles (`controllers.allocation`, docs/model.md §2.7).
     """
-    if actuator not in ("paper", "fins", "realistic"):
-        raise ValueError(f"unknown actuator {actuator!r}; valid: ['fins', 'paper', 'realistic']")
+    if actuator not in ACTUATORS:
+        raise ValueError(f"unknown actuator {actuator!r}; valid: {sorted(ACTUATORS)}")
     if actuator == "realistic":
         return (1.0, fin_gain(actuator_params or ActuatorParams()), *params.actuator_limits)
     fins = 1.0 if actuator == "fins" else 0.0

@@ -317,7 +317,7 @@ def test_training_on_drawn_actuators_allocates_the_fin_episodes_only(kind):
     kwargs = {"actuator": "random", "disturbance": "none", "max_time": 2.0}
     inner = make_training_env(4, 3, kwargs, kind=kind, env_id="AUVPath3DPreview-v0")
     specs = check_stage_specs(["actuator_allocation"], "test")
-    cfg = SimpleNamespace(stages=specs, action_bounds=None)  # what wrap_actions reads of a file
+    cfg = SimpleNamespace(stages=specs, action_bounds=None, vehicle_share=None)  # what it reads
     venv = wrap_actions(inner, cfg, NAMES, {**kwargs, "observation": "preview"})
     assert isinstance(venv, StagedActions)
     assert [type(stage) for stage in venv.stages] == [DrawnAllocationStage]

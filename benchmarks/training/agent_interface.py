@@ -59,7 +59,7 @@ def wrap_actions(
     fins), or whose vehicles fly both (``actuator_share``), the allocation flies the vehicles
     on the fins and passes the others (`controllers.stages.DrawnAllocationStage`), as the
     exported agent will on each actuator."""
-    share = getattr(cfg, "vehicle_share", None)  # a bare settings object has none
+    share = cfg.vehicle_share
     if share is not None and share.argument == "actuator":
         env_kwargs = {**env_kwargs, "actuator": "random"}  # per vehicle, as a draw per episode
     settings = policy_settings(env_kwargs)
