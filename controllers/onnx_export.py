@@ -329,6 +329,8 @@ def _build_model(
             inputs.append(helper.make_tensor_value_info("state", TensorProto.FLOAT, [n, 3]))
             keep = np.ones(len(layout), np.float32)
             keep[allocation.allocation.previous_index] = 0.0
+            if allocation.factors is not None:  # the entries it scales on this actuator
+                keep[allocation.factors.index] = allocation.factors.values
             place = np.zeros((3, len(layout)), np.float32)
             place[np.arange(3), allocation.allocation.previous_index] = 1.0
             seen = g.op(

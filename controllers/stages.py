@@ -26,6 +26,7 @@ holds them before anything runs. Unknown stage names, settings or an order other
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -35,6 +36,8 @@ import numpy as np
 from controllers.actuator_allocation import (
     ALLOCATED_ACTUATORS,
     COMMANDED_ACTUATOR,
+    PREV_ACTION_NAMES,
+    VELOCITY_INPUTS,
     Allocation,
     check_actuator_allocation,
 )
@@ -46,11 +49,13 @@ __all__ = [
     "AllocationStage",
     "DrawnAllocationStage",
     "GuardStage",
+    "ObservationFactors",
     "PipelineState",
     "Stage",
     "StagedPolicy",
     "apply_stages",
     "build_stages",
+    "check_observation_factors",
     "check_stage_specs",
     "observe_stages",
 ]
@@ -112,15 +117,77 @@ class GuardStage(Stage):
         return {"name": self.name, **self.guard.to_dict()}
 
 
+@dataclass(frozen=True)
+class ObservationFactors:
+    """Entries of the observation the network sees multiplied by fixed factors on an allocated
+    actuator: a gain schedule by actuator. ``index`` their positions in the layout, ``values``
+    the factors (> 0), ``names`` as the metadata lists them."""
+
+    names: tuple[str, ...]
+    index: np.ndarray
+    values: np.ndarray
+
+    @classmethod
+    def of(cls, factors: Mapping[str, float], obs_names: Sequence[str], where: str):
+        """The factors of checked ``factors`` (`check_observation_factors`) for an agent
+        observing ``obs_names``, or a one-line error naming the entries it lacks."""
+        names = list(obs_names)
+        missing = sorted(set(factors) - set(names))
+        if missing:
+            raise ValueError(
+                f"{where}: actuator_allocation's observation_factors name {missing}, which the "
+                "agent's observation lacks"
+            )
+        # the stages read these from what the network sees: scaled, they would fly other states
+        read = sorted(set(factors) & {*VELOCITY_INPUTS, *PREV_ACTION_NAMES, *GUARD_INPUTS})
+        if read:
+            raise ValueError(
+                f"{where}: actuator_allocation's observation_factors cannot scale {read}, which "
+                "the stages read"
+            )
+        keys = tuple(factors)
+        return cls(
+            keys,
+            np.array([names.index(k) for k in keys], dtype=np.intp),
+            np.array([factors[k] for k in keys], dtype=np.float32),
+        )
+
+    def to_dict(self) -> dict[str, float]:
+        return {name: float(v) for name, v in zip(self.names, self.values, strict=True)}
+
+
+def check_observation_factors(value: Any, where: str) -> dict[str, float]:
+    """``observation_factors`` of an ``actuator_allocation`` stage: a non-empty mapping of
+    observation entries to finite factors > 0, or a one-line error naming ``where``."""
+    if not isinstance(value, Mapping) or not value:
+        raise ValueError(
+            f"{where}: observation_factors must be a non-empty mapping {{entry: factor}}, "
+            f"got {value!r}"
+        )
+    checked = {}
+    for name, factor in value.items():
+        ok = isinstance(factor, int | float) and not isinstance(factor, bool)
+        if not isinstance(name, str) or not ok or not math.isfinite(factor) or factor <= 0:
+            raise ValueError(
+                f"{where}: observation_factors[{name!r}] must be a finite number > 0, "
+                f"got {factor!r}"
+            )
+        checked[name] = float(factor)
+    return checked
+
+
 class AllocationStage(Stage):
     """The actuator allocation (`controllers.actuator_allocation`): the agent's normalised τ on
     the paper's actuator flown on the env's fins or propeller and fins; the memory is each
-    vehicle's delivered command, fed back in the previous-action entries."""
+    vehicle's delivered command, fed back in the previous-action entries. With ``factors``
+    the network also sees some entries scaled on this actuator (e.g. the path errors at the
+    coarser scales a fin-limited vehicle can hold: docs/design.md §3.21)."""
 
     name = "actuator_allocation"
 
-    def __init__(self, allocation: Allocation) -> None:
+    def __init__(self, allocation: Allocation, factors: ObservationFactors | None = None) -> None:
         self.allocation = allocation
+        self.factors = factors
 
     def start(self, n: int) -> np.ndarray:
         return np.zeros((n, 3), dtype=np.float32)
@@ -131,6 +198,8 @@ class AllocationStage(Stage):
     def observe(self, observation: np.ndarray, memory: np.ndarray) -> np.ndarray:
         obs = np.array(observation, dtype=np.float32, copy=True)
         obs[:, self.allocation.previous_index] = memory
+        if self.factors is not None:
+            obs[:, self.factors.index] *= self.factors.values
         return obs
 
     def act(
@@ -139,7 +208,8 @@ class AllocationStage(Stage):
         return self.allocation.allocate(commands, observation)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "commands": COMMANDED_ACTUATOR}
+        factors = {} if self.factors is None else {"observation_factors": self.factors.to_dict()}
+        return {"name": self.name, "commands": COMMANDED_ACTUATOR, **factors}
 
 
 class DrawnAllocationStage(AllocationStage):
@@ -173,7 +243,15 @@ class DrawnAllocationStage(AllocationStage):
         obs = np.array(observation, dtype=np.float32, copy=True)
         allocated = memory[:, 3] > 0.5
         obs[np.ix_(allocated, self.allocation.previous_index)] = memory[allocated, :3]
-        return obs
+        return self.scaled(obs, allocated)
+
+    def scaled(self, observation: np.ndarray, allocated: np.ndarray) -> np.ndarray:
+        """``observation`` (float32, (n, d), changed in place) with the factors applied to the
+        ``allocated`` rows (bool, (n,)); unchanged without factors."""
+        if self.factors is not None and allocated.any():
+            rows = np.ix_(allocated, self.factors.index)
+            observation[rows] *= self.factors.values
+        return observation
 
     def act(
         self, commands: np.ndarray, observation: np.ndarray, memory: Any
@@ -211,13 +289,18 @@ def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
             if settings:
                 raise ValueError(f"{where}: stage {name} takes no settings, got {sorted(settings)}")
         else:
-            unknown = sorted(set(settings) - {"commands"})
+            unknown = sorted(set(settings) - {"commands", "observation_factors"})
             if unknown:
                 raise ValueError(f"{where}: stage {name} has unknown keys {unknown}")
             check_actuator_allocation(
                 settings.get("commands", COMMANDED_ACTUATOR), f"{where}: stage {name}"
             )
+            factors = settings.get("observation_factors")
             settings = {"commands": COMMANDED_ACTUATOR}
+            if factors is not None:
+                settings["observation_factors"] = check_observation_factors(
+                    factors, f"{where}: stage {name}"
+                )
         checked.append({"name": name, **settings})
     names = [s["name"] for s in checked]
     # the mirror wraps the network, wherever it is listed (an export adds it after the stages
@@ -253,20 +336,24 @@ def build_stages(
         if spec["name"] == "envelope_guard":
             settings_of_guard = {k: v for k, v in spec.items() if k != "name"}
             stages.append(GuardStage(settings_of_guard, obs_names, where))
-        elif drawn is not None:
-            allocation = Allocation(
-                obs_names, drawn, settings.get("params"), settings.get("actuator_params"), where
-            )
-            stages.append(DrawnAllocationStage(allocation))
-        elif settings.get("actuator") in ALLOCATED_ACTUATORS:
-            allocation = Allocation(
-                obs_names,
-                settings["actuator"],
-                settings.get("params"),
-                settings.get("actuator_params"),
-                where,
-            )
-            stages.append(AllocationStage(allocation))
+        else:
+            factors = spec.get("observation_factors")
+            if factors is not None:
+                factors = ObservationFactors.of(factors, obs_names, where)
+            if drawn is not None:
+                allocation = Allocation(
+                    obs_names, drawn, settings.get("params"), settings.get("actuator_params"), where
+                )
+                stages.append(DrawnAllocationStage(allocation, factors))
+            elif settings.get("actuator") in ALLOCATED_ACTUATORS:
+                allocation = Allocation(
+                    obs_names,
+                    settings["actuator"],
+                    settings.get("params"),
+                    settings.get("actuator_params"),
+                    where,
+                )
+                stages.append(AllocationStage(allocation, factors))
     return stages
 
 

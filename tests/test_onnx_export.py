@@ -454,6 +454,48 @@ def test_an_export_for_the_fins_states_it_and_is_flown_there(exports_for_other_a
 
 
 @pytest.mark.rl
+def test_an_export_carries_the_observation_factors_on_the_fins_only(tmp_path):
+    """The generalist with `observation_factors` on its allocation: exported for the fins its
+    graph flies like the agent (the export's own parity check) and differs from the export
+    without them; for the paper's actuator the factors go with the allocation (the same
+    commands as without them)."""
+    from controllers.onnx_export import export_onnx
+
+    factored = tmp_path / "factored"
+    shutil.copytree(AGENTS_DIR / "ppo_generalist", factored)
+    meta_file = factored / "metadata.json"
+    meta = json.loads(meta_file.read_text())
+    factors = {"x_e": 0.125, "y_e": 0.25, "z_e": 0.25}
+    meta["stages"][-1]["observation_factors"] = factors
+    meta_file.write_text(json.dumps(meta))
+    exports = {}
+    for agent, label in ((AGENTS_DIR / "ppo_generalist", "plain"), (factored, "factored")):
+        for actuator in ("fins", "paper"):
+            onnx_file = tmp_path / f"{label}_{actuator}.onnx"
+            _, _, parity = export_onnx(agent, onnx_file, actuator=actuator)
+            assert parity["max_abs_error"] <= 1e-5
+            exports[label, actuator] = controllers.make("onnx", path=str(onnx_file))
+    contract = read_contract(tmp_path / "factored_fins.onnx").raw
+    assert contract["stages"][-1]["observation_factors"] == factors
+    rng = np.random.default_rng(0)
+    obs = np.zeros((64, len(NAMES)), np.float32)
+    obs[:, NAMES.index("u")] = rng.uniform(0.8, 1.8, 64)  # flow over the fins
+    for name in ("x_e", "y_e", "z_e"):
+        obs[:, NAMES.index(name)] = rng.uniform(-1.0, 1.0, 64)  # [m]
+    start = np.ones(64, dtype=bool)
+    commands = {key: policy.predict(obs, episode_start=start)[0] for key, policy in exports.items()}
+    np.testing.assert_array_equal(commands["factored", "paper"], commands["plain", "paper"])
+    difference = np.abs(commands["factored", "fins"] - commands["plain", "fins"])
+    assert difference.max() > 0.05  # the fins' errors seen at 1/8 and 1/4: other commands
+    # the factored fins export is the plain one fed the scaled errors
+    scaled = obs.copy()
+    for name, factor in factors.items():
+        scaled[:, NAMES.index(name)] *= factor
+    plain_scaled, _ = exports["plain", "fins"].predict(scaled, episode_start=start)
+    np.testing.assert_allclose(commands["factored", "fins"], plain_scaled, atol=1e-6)
+
+
+@pytest.mark.rl
 def test_an_export_for_other_actuator_settings_states_them(exports_for_other_actuators):
     """Was: --actuator-params changed the graph but were not recorded, so the export was
     accepted beside other settings (commands up to 2 apart)."""

@@ -28,6 +28,8 @@ from controllers.stages import (
     check_stage_specs,
 )
 
+FACTORS = {"x_e": 0.125, "y_e": 0.25, "z_e": 0.25}  # the base scales (2 m) on the fins
+
 ROOT = Path(__file__).resolve().parents[1]
 GENERALIST = ROOT / "benchmarks" / "agents" / "ppo_generalist"
 INDEX = (0, 1, 2)  # θ, q, u in the hand-made observations below
@@ -250,6 +252,125 @@ def test_bad_stage_lists_and_settings_are_named():
     for actuator in ("paper", "random", None):
         built = build_stages(check_stage_specs([alloc], "f"), NAMES, {"actuator": actuator})
         assert built == []
+
+
+def test_observation_factors_scale_what_the_network_sees_on_the_allocated_actuator_only():
+    """x_e, y_e, z_e seen at 1/8, 1/4, 1/4 on the fins, the commands allocated as without the
+    factors; on the paper's actuator the allocation, and with it the factors, is left out."""
+    spec = {"name": "actuator_allocation", "observation_factors": FACTORS}
+    specs = check_stage_specs([spec], "f")
+    assert specs == ({"name": "actuator_allocation", "commands": "paper", **spec},)
+    stages = build_stages(specs, NAMES, {"actuator": "fins"})
+    assert stages[0].to_dict() == specs[0]  # what the exported metadata lists
+    plain, factored = Recorder([0.2, 0.1, -0.5]), Recorder([0.2, 0.1, -0.5])
+    obs = np.stack([_obs(1.0), _obs(1.5)])
+    errors = [NAMES.index(n) for n in FACTORS]
+    obs[:, errors] = [[2.0, -0.4, 0.8], [-1.0, 0.3, 0.1]]  # x_e, y_e, z_e [m]
+    expected, _ = StagedPolicy(
+        plain,
+        build_stages(check_stage_specs(["actuator_allocation"], "f"), NAMES, {"actuator": "fins"}),
+    ).predict(obs)
+    commands, _ = StagedPolicy(factored, stages).predict(obs)
+    np.testing.assert_array_equal(commands, expected)
+    seen = factored.seen[0]
+    np.testing.assert_array_equal(seen[:, errors], obs[:, errors] * np.float32([0.125, 0.25, 0.25]))
+    others = [k for k in range(len(NAMES)) if k not in errors]
+    np.testing.assert_array_equal(seen[:, others], plain.seen[0][:, others])
+    assert build_stages(specs, NAMES, {"actuator": "paper"}) == []
+
+
+@pytest.mark.parametrize(
+    ("factors", "message"),
+    [
+        ({}, "observation_factors must be a non-empty mapping"),
+        ([0.5], "observation_factors must be a non-empty mapping"),
+        ({"y_e": 0.0}, r"observation_factors\['y_e'\] must be a finite number > 0, got 0.0"),
+        ({"y_e": -1}, r"observation_factors\['y_e'\] must be a finite number > 0"),
+        ({"y_e": float("nan")}, r"observation_factors\['y_e'\] must be a finite number > 0"),
+        ({"y_e": True}, r"observation_factors\['y_e'\] must be a finite number > 0"),
+        ({"y_e": "0.5"}, r"observation_factors\['y_e'\] must be a finite number > 0"),
+    ],
+)
+def test_bad_observation_factors_are_named(factors, message):
+    spec = {"name": "actuator_allocation", "observation_factors": factors}
+    with pytest.raises(ValueError, match=f"^f: stage actuator_allocation: {message}"):
+        check_stage_specs([spec], "f")
+
+
+@pytest.mark.parametrize(
+    ("factors", "message"),
+    [
+        (
+            {"depth": 0.5},
+            r"observation_factors name \['depth'\], which the agent's observation lacks",
+        ),
+        (
+            {"u": 0.5, "y_e": 0.5},
+            r"observation_factors cannot scale \['u'\], which the stages read",
+        ),
+        (
+            {"a_M_prev": 2.0},
+            r"observation_factors cannot scale \['a_M_prev'\], which the stages read",
+        ),
+        ({"theta": 2.0}, r"observation_factors cannot scale \['theta'\], which the stages read"),
+    ],
+)
+def test_factors_on_entries_the_agent_lacks_or_the_stages_read_are_named(factors, message):
+    specs = check_stage_specs(
+        [{"name": "actuator_allocation", "observation_factors": factors}], "f"
+    )
+    with pytest.raises(ValueError, match=f"^agent: actuator_allocation's {message}"):
+        build_stages(specs, NAMES, {"actuator": "fins"}, "agent")
+
+
+@pytest.mark.parametrize("kind", ["native", "dummy"])
+def test_training_scales_the_fin_episodes_and_their_final_observations_only(kind):
+    """On drawn actuators the factors scale what the network sees of the fin episodes, and the
+    final observation of each fin episode that ends (the value bootstrap of a truncation); the
+    paper episodes, and everything else, are seen as without the factors, step for step."""
+    from benchmarks.training.agent_interface import wrap_actions
+    from benchmarks.training.train import make_training_env
+
+    kwargs = {"actuator": "random", "disturbance": "none", "max_time": 2.0}
+    errors = [NAMES.index(n) for n in FACTORS]
+    values = np.float32([0.125, 0.25, 0.25])
+    runs = []
+    for stage in (
+        "actuator_allocation",
+        {"name": "actuator_allocation", "observation_factors": FACTORS},
+    ):
+        inner = make_training_env(4, 3, kwargs, kind=kind, env_id="AUVPath3DPreview-v0")
+        cfg = SimpleNamespace(
+            stages=check_stage_specs([stage], "t"), action_bounds=None, vehicle_share=None
+        )
+        venv = wrap_actions(inner, cfg, NAMES, {**kwargs, "observation": "preview"})
+        rng = np.random.default_rng(1)
+        seen, finals = [venv.reset()], []
+        drawn = [np.array(venv.venv.get_attr("actuator"))]
+        for _ in range(90):
+            obs, _, dones, infos = venv.step(rng.uniform(-1, 1, size=(4, 3)).astype(np.float32))
+            seen.append(obs)
+            finals.append({i: infos[i]["terminal_observation"] for i in np.flatnonzero(dones)})
+            drawn.append(np.array(venv.venv.get_attr("actuator")))
+        venv.close()
+        runs.append((seen, finals, drawn))
+    (plain, plain_finals, drawn), (scaled, scaled_finals, _) = runs
+    factor = np.ones(len(NAMES), np.float32)
+    factor[errors] = values
+    ended_on = {"fins": 0, "paper": 0}
+    for k in range(len(plain)):
+        on_fins = drawn[k] == "fins"
+        np.testing.assert_array_equal(scaled[k][on_fins], plain[k][on_fins] * factor)
+        np.testing.assert_array_equal(scaled[k][~on_fins], plain[k][~on_fins])
+        if k == 0:
+            continue
+        assert plain_finals[k - 1].keys() == scaled_finals[k - 1].keys()
+        for i, final in plain_finals[k - 1].items():
+            actuator = drawn[k - 1][i]  # the ended episode's
+            want = final * factor if actuator == "fins" else final
+            np.testing.assert_array_equal(scaled_finals[k - 1][i], want)
+            ended_on[actuator] += 1
+    assert ended_on["fins"] > 0 and ended_on["paper"] > 0  # both kinds of episode ended
 
 
 @pytest.mark.rl

@@ -9,6 +9,12 @@ vehicle's last observation (the new episode's first after an autoreset) and ``me
 stages' per-vehicle state; a resumed run restores both (`checkpoints`). A stage that follows
 each episode's drawn actuator (`controllers.stages.DrawnAllocationStage`) is told the draw of
 every vehicle whose episode starts, read from the env (``get_attr("actuator")``).
+
+An allocation with ``observation_factors`` scales entries of what the network sees on its
+actuator; the final observation of an episode that ends (``terminal_observation``, from which
+PPO and SAC bootstrap a truncated episode's value) is scaled alike, so the critic values the
+states it is trained on. The allocation's fed-back command is not put into final observations
+(the recipes trained before the factors bootstrap from the env's own previous action).
 """
 
 from __future__ import annotations
@@ -18,7 +24,13 @@ from collections.abc import Sequence
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
-from controllers.stages import DrawnAllocationStage, Stage, apply_stages, observe_stages
+from controllers.stages import (
+    AllocationStage,
+    DrawnAllocationStage,
+    Stage,
+    apply_stages,
+    observe_stages,
+)
 
 __all__ = ["StagedActions"]
 
@@ -34,6 +46,11 @@ class StagedActions(VecEnvWrapper):
         # the stages told each starting episode's drawn actuator (found once: step is hot)
         self.drawn = [
             k for k, stage in enumerate(self.stages) if isinstance(stage, DrawnAllocationStage)
+        ]
+        self.factored = [
+            k
+            for k, stage in enumerate(self.stages)
+            if isinstance(stage, AllocationStage) and stage.factors is not None
         ]
 
     def _seen(self, obs: np.ndarray) -> np.ndarray:
@@ -60,7 +77,25 @@ class StagedActions(VecEnvWrapper):
     def step_wait(self):  # SB3 VecEnvStepReturn
         obs, rewards, dones, infos = self.venv.step_wait()
         starts = np.asarray(dones, dtype=bool)  # autoreset: these rows begin a new episode
+        if self.factored and starts.any():
+            self._scale_final(starts, infos)
         for stage, memory in zip(self.stages, self.memories, strict=True):
             stage.restart(memory, starts)
         self._tell_drawn(starts)
         return self._seen(obs), rewards, dones, infos
+
+    def _scale_final(self, ended: np.ndarray, infos: Sequence[dict]) -> None:
+        """The observation factors applied to the final observations of the episodes that
+        ended (``ended``: bool, (n,)) on the allocated actuator, in ``infos`` in place; before
+        the memories restart (a drawn stage's memory still holds the ended episode's draw)."""
+        for i in np.flatnonzero(ended):  # once per ended episode, not per step
+            final = infos[i].get("terminal_observation")
+            if final is None:
+                continue
+            for k in self.factored:
+                stage, memory = self.stages[k], self.memories[k]
+                if isinstance(stage, DrawnAllocationStage) and memory[i, 3] <= 0.5:
+                    continue  # the ended episode flew the paper's actuator: nothing to scale
+                final = np.array(final, dtype=np.float32)
+                final[stage.factors.index] *= stage.factors.values
+            infos[i]["terminal_observation"] = final
