@@ -127,6 +127,41 @@ def test_the_expert_on_fins_labels_in_the_paper_units_the_allocation_maps_back()
     assert checked > 100
 
 
+def test_the_expert_labels_the_errors_the_vehicle_has_behind_observation_factors():
+    """Inside an allocation with observation factors the agent sees its errors scaled; the
+    expert labels the state the vehicle is in: on the scaled view, the labels it gives on the
+    unscaled observation (within float32 rounding of the scaled errors)."""
+    from auv_gym import VARIANTS
+    from auv_gym.envs.env import AUVPath3DEnv
+    from benchmarks.training.expert import ExpertLabels
+    from controllers.stages import check_stage_specs, observe_stages
+
+    kwargs = {**VARIANTS[ENV_ID], **ENV_KWARGS, "actuator": "fins", "max_time": 20.0}
+    env = AUVPath3DEnv(**kwargs)
+    names = env.unwrapped.config.observation.names
+    factors = {"x_e": 0.125, "y_e": 0.25, "z_e": 0.25}
+    spec = {"name": "actuator_allocation", "observation_factors": factors}
+    factored = ExpertLabels("fbsm_colos", kwargs, names, check_stage_specs([spec], "test"))
+    plain = ExpertLabels(
+        "fbsm_colos", kwargs, names, check_stage_specs(["actuator_allocation"], "test")
+    )
+    memories = [stage.start(1) for stage in factored.stages]
+    obs, _ = env.reset(seed=3)
+    largest = 0.0
+    for t in range(100):
+        seen = observe_stages(factored.stages, obs[None], memories)
+        errors = [names.index(n) for n in factors]
+        assert not np.allclose(seen[0, errors], obs[errors])  # the agent's view is scaled
+        label = factored.label(seen, np.array([t == 0]))
+        expected = plain.label(
+            observe_stages(plain.stages, obs[None], memories), np.array([t == 0])
+        )
+        np.testing.assert_allclose(label, expected, atol=1e-4)
+        largest = max(largest, float(np.abs(obs[errors]).max()))
+        obs, *_ = env.step(expected[0])
+    assert largest > 0.05  # errors worth scaling [m]
+
+
 def test_behaviour_cloning_brings_the_imitation_loss_below_its_bound(tmp_path, dataset):
     from benchmarks.training.train import TrainOptions, train
     from controllers.agent import METADATA_FILE

@@ -82,6 +82,7 @@ class ExpertLabels:
         self.policy = controllers.make(name, env=dict(env_kwargs))
         self.stages = build_stages(stage_specs, obs_names, settings, f"{where}: stages")
         self.allocation = None
+        self.factors = None  # the allocation's observation factors: undone for the expert
         for stage in self.stages:
             if isinstance(stage, AllocationStage):
                 if stage.allocation.actuator != "fins":
@@ -92,6 +93,7 @@ class ExpertLabels:
                         "agent on that actuator's own commands (no allocation stage) instead"
                     )
                 self.allocation = stage.allocation
+                self.factors = stage.factors
         low, high = (-1.0, 1.0) if action_bounds is None else action_bounds
         self.low = np.broadcast_to(np.asarray(low, dtype=np.float32), (3,)).copy()
         self.high = np.broadcast_to(np.asarray(high, dtype=np.float32), (3,)).copy()
@@ -106,7 +108,11 @@ class ExpertLabels:
         starts = np.asarray(episode_start, dtype=bool).reshape(obs.shape[0])
         if obs.shape[0] != self.rows:  # another batch of vehicles: fresh memory
             self.state, self.rows = None, obs.shape[0]
-        command, self.state = self.policy.predict(obs, self.state, starts, True)
+        flown = obs
+        if self.factors is not None:  # the expert reads the errors the vehicle has, unscaled
+            flown = np.array(obs, dtype=np.float64, copy=True)
+            flown[:, self.factors.index] /= self.factors.values
+        command, self.state = self.policy.predict(flown, self.state, starts, True)
         return self.to_agent(np.atleast_2d(command), obs)
 
     def to_agent(self, command: np.ndarray, observation: np.ndarray) -> np.ndarray:
