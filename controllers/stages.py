@@ -9,6 +9,10 @@ outermost last, each a mapping with its ``name`` and settings::
         {"name": "actuator_allocation", "commands": "paper"},     # controllers.actuator_allocation
     ]
 
+The allocation may carry ``"observation_factors": {"y_e": 0.25, ...}``: on the actuator it
+allocates to, the network sees those entries scaled (a gain schedule by actuator,
+docs/design.md §3.21).
+
 The mirror is the one stage that wraps the network instead of its commands (it evaluates the
 network twice), so it may be listed anywhere and acts first.
 
