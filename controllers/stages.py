@@ -156,6 +156,21 @@ class ObservationFactors:
             np.array([factors[k] for k in keys], dtype=np.float32),
         )
 
+    def apply(self, observation: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        """``observation`` (float32, (d,) or (n, d)) with the entries scaled, in place: every
+        row, or the ``rows`` (bool, (n,)) given."""
+        if rows is None:
+            observation[..., self.index] *= self.values
+        elif rows.any():
+            observation[np.ix_(rows, self.index)] *= self.values
+        return observation
+
+    def removed(self, observation: np.ndarray) -> np.ndarray:
+        """A float64 copy of scaled observations (n, d) with the scaling undone."""
+        unscaled = np.array(observation, dtype=np.float64, copy=True)
+        unscaled[..., self.index] /= self.values
+        return unscaled
+
     def to_dict(self) -> dict[str, float]:
         return {name: float(v) for name, v in zip(self.names, self.values, strict=True)}
 
@@ -202,9 +217,7 @@ class AllocationStage(Stage):
     def observe(self, observation: np.ndarray, memory: np.ndarray) -> np.ndarray:
         obs = np.array(observation, dtype=np.float32, copy=True)
         obs[:, self.allocation.previous_index] = memory
-        if self.factors is not None:
-            obs[:, self.factors.index] *= self.factors.values
-        return obs
+        return obs if self.factors is None else self.factors.apply(obs)
 
     def act(
         self, commands: np.ndarray, observation: np.ndarray, memory: Any
@@ -247,15 +260,7 @@ class DrawnAllocationStage(AllocationStage):
         obs = np.array(observation, dtype=np.float32, copy=True)
         allocated = memory[:, 3] > 0.5
         obs[np.ix_(allocated, self.allocation.previous_index)] = memory[allocated, :3]
-        return self.scaled(obs, allocated)
-
-    def scaled(self, observation: np.ndarray, allocated: np.ndarray) -> np.ndarray:
-        """``observation`` (float32, (n, d), changed in place) with the factors applied to the
-        ``allocated`` rows (bool, (n,)); unchanged without factors."""
-        if self.factors is not None and allocated.any():
-            rows = np.ix_(allocated, self.factors.index)
-            observation[rows] *= self.factors.values
-        return observation
+        return obs if self.factors is None else self.factors.apply(obs, allocated)
 
     def act(
         self, commands: np.ndarray, observation: np.ndarray, memory: Any

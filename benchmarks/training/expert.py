@@ -108,10 +108,8 @@ class ExpertLabels:
         starts = np.asarray(episode_start, dtype=bool).reshape(obs.shape[0])
         if obs.shape[0] != self.rows:  # another batch of vehicles: fresh memory
             self.state, self.rows = None, obs.shape[0]
-        flown = obs
-        if self.factors is not None:  # the expert reads the errors the vehicle has, unscaled
-            flown = np.array(obs, dtype=np.float64, copy=True)
-            flown[:, self.factors.index] /= self.factors.values
+        # the expert reads the errors the vehicle has, unscaled
+        flown = obs if self.factors is None else self.factors.removed(obs)
         command, self.state = self.policy.predict(flown, self.state, starts, True)
         return self.to_agent(np.atleast_2d(command), obs)
 

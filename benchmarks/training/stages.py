@@ -96,6 +96,5 @@ class StagedActions(VecEnvWrapper):
                 stage, memory = self.stages[k], self.memories[k]
                 if isinstance(stage, DrawnAllocationStage) and memory[i, 3] <= 0.5:
                     continue  # the ended episode flew the paper's actuator: nothing to scale
-                final = np.array(final, dtype=np.float32)
-                final[stage.factors.index] *= stage.factors.values
+                final = stage.factors.apply(np.array(final, dtype=np.float32))
             infos[i]["terminal_observation"] = final
