@@ -11,7 +11,9 @@ outermost last, each a mapping with its ``name`` and settings::
 
 The allocation may carry ``"observation_factors": {"y_e": 0.25, ...}``: on the actuator it
 allocates to, the network sees those entries scaled (a gain schedule by actuator,
-docs/design.md §3.21).
+docs/design.md §3.21). It may also carry ``"surge_floor_soft"`` and ``"surge_floor_hard"``
+[m/s]: on that actuator the envelope guard gets this low-speed floor (fins lose their moments
+with u², a directly commanded τ does not; docs/design.md §3.22).
 
 The mirror is the one stage that wraps the network instead of its commands (it evaluates the
 network twice), so it may be listed anywhere and acts first.
@@ -37,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.support.validation import real
 from controllers.actuator_allocation import (
     ALLOCATED_ACTUATORS,
     COMMANDED_ACTUATOR,
@@ -59,6 +62,7 @@ __all__ = [
     "StagedPolicy",
     "apply_stages",
     "build_stages",
+    "check_allocated_floor",
     "check_observation_factors",
     "check_stage_specs",
     "observe_stages",
@@ -66,6 +70,9 @@ __all__ = [
 
 # The order the commands pass them; the mirror wraps the network itself (`controllers.mirror`).
 STAGE_ORDER = (MIRROR_STAGE, "envelope_guard", "actuator_allocation")
+# The guard's low-speed floor an allocation may set on its actuator [m/s] (docs/design.md §3.22).
+FLOOR_KEYS = ("surge_floor_soft", "surge_floor_hard")
+ALLOCATION_KEYS = ("commands", "observation_factors", *FLOOR_KEYS)
 
 
 class Stage:
@@ -204,9 +211,15 @@ class AllocationStage(Stage):
 
     name = "actuator_allocation"
 
-    def __init__(self, allocation: Allocation, factors: ObservationFactors | None = None) -> None:
+    def __init__(
+        self,
+        allocation: Allocation,
+        factors: ObservationFactors | None = None,
+        floor: Mapping[str, float] | None = None,
+    ) -> None:
         self.allocation = allocation
         self.factors = factors
+        self.floor = dict(floor or {})  # recorded here, applied by the guard stage
 
     def start(self, n: int) -> np.ndarray:
         return np.zeros((n, 3), dtype=np.float32)
@@ -226,7 +239,7 @@ class AllocationStage(Stage):
 
     def to_dict(self) -> dict[str, Any]:
         factors = {} if self.factors is None else {"observation_factors": self.factors.to_dict()}
-        return {"name": self.name, "commands": COMMANDED_ACTUATOR, **factors}
+        return {"name": self.name, "commands": COMMANDED_ACTUATOR, **factors, **self.floor}
 
 
 class DrawnAllocationStage(AllocationStage):
@@ -274,6 +287,39 @@ class DrawnAllocationStage(AllocationStage):
         return out, memory
 
 
+def check_allocated_floor(value: Mapping[str, Any], where: str) -> dict[str, float]:
+    """The surge floor an ``actuator_allocation`` stage gives the guard on its actuator: both of
+    ``surge_floor_soft`` > ``surge_floor_hard`` >= 0 [m/s] or neither ({}); a one-line error
+    naming ``where`` otherwise (the guard's own checks follow where the guard is known)."""
+    if not value:
+        return {}
+    missing = [k for k in FLOOR_KEYS if k not in value]
+    if missing:
+        raise ValueError(
+            f"{where}: the surge floor needs both {list(FLOOR_KEYS)}, missing {missing}"
+        )
+    soft = real(
+        f"{where}.surge_floor_soft", value["surge_floor_soft"], 0.0, 10.0, low_open=True, unit="m/s"
+    )
+    hard = real(f"{where}.surge_floor_hard", value["surge_floor_hard"], 0.0, 10.0, unit="m/s")
+    if not hard < soft:
+        raise ValueError(
+            f"{where}: surge_floor_hard must lie below surge_floor_soft, got {hard:g} and "
+            f"{soft:g} m/s"
+        )
+    return {"surge_floor_soft": soft, "surge_floor_hard": hard}
+
+
+def _floored_guard(
+    guard: Mapping[str, Any], allocation: Mapping[str, Any], where: str
+) -> dict[str, Any]:
+    """The guard's settings (a stage spec) with the allocation's surge floor in place of its own
+    (checked as a guard: the floor must lie below the guard's surge_soft)."""
+    settings = {k: v for k, v in guard.items() if k != "name"}
+    settings |= {k: allocation[k] for k in FLOOR_KEYS}
+    return check_envelope_guard(settings, where).to_dict()
+
+
 def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
     """The stage list of an agent's metadata or a training config, checked: a list of mappings
     with a known ``name`` (`STAGE_ORDER`) and valid settings, each at most once, in that order.
@@ -298,18 +344,23 @@ def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
             if settings:
                 raise ValueError(f"{where}: stage {name} takes no settings, got {sorted(settings)}")
         else:
-            unknown = sorted(set(settings) - {"commands", "observation_factors"})
+            unknown = sorted(set(settings) - set(ALLOCATION_KEYS))
             if unknown:
-                raise ValueError(f"{where}: stage {name} has unknown keys {unknown}")
+                raise ValueError(
+                    f"{where}: stage {name} has unknown keys {unknown}; valid: "
+                    f"{list(ALLOCATION_KEYS)}"
+                )
             check_actuator_allocation(
                 settings.get("commands", COMMANDED_ACTUATOR), f"{where}: stage {name}"
             )
             factors = settings.get("observation_factors")
+            floor = {k: settings[k] for k in FLOOR_KEYS if k in settings}
             settings = {"commands": COMMANDED_ACTUATOR}
             if factors is not None:
                 settings["observation_factors"] = check_observation_factors(
                     factors, f"{where}: stage {name}"
                 )
+            settings |= check_allocated_floor(floor, f"{where}: stage {name}")
         checked.append({"name": name, **settings})
     names = [s["name"] for s in checked]
     # the mirror wraps the network, wherever it is listed (an export adds it after the stages
@@ -319,6 +370,16 @@ def check_stage_specs(specs: Any, where: str) -> tuple[dict[str, Any], ...]:
         raise ValueError(
             f"{where}: stages {names} must each appear once, in the order {list(STAGE_ORDER)}"
         )
+    floored = any(FLOOR_KEYS[0] in spec for spec in checked if spec["name"] != "envelope_guard")
+    if floored:
+        guard = next((spec for spec in checked if spec["name"] == "envelope_guard"), None)
+        if guard is None:
+            raise ValueError(
+                f"{where}: actuator_allocation's surge floor is the envelope guard's on its "
+                "actuator; add an envelope_guard stage before it"
+            )
+        allocation = next(spec for spec in checked if spec["name"] == "actuator_allocation")
+        _floored_guard(guard, allocation, f"{where}: stage actuator_allocation")
     return tuple(checked)
 
 
@@ -338,12 +399,24 @@ def build_stages(
     then a `DrawnAllocationStage` to it, told each episode's draw by the training wrapper.
     The mirror stage is not among them: it wraps the network (`controllers.mirror.mirrored`)."""
     settings = settings or {}
+    allocation_spec = next((s for s in specs if s["name"] == "actuator_allocation"), {})
+    floored = FLOOR_KEYS[0] in allocation_spec
+    if floored and drawn is not None:
+        raise ValueError(
+            f"{where}: actuator_allocation's surge floor guards a deployed agent on its actuator; "
+            "in training on a drawn actuator it is not applied (list it in the schedule's export "
+            "stages)"
+        )
+    allocated = drawn is None and settings.get("actuator") in ALLOCATED_ACTUATORS
     stages: list[Stage] = []
     for spec in specs:
         if spec["name"] == MIRROR_STAGE:
             continue
         if spec["name"] == "envelope_guard":
-            settings_of_guard = {k: v for k, v in spec.items() if k != "name"}
+            if floored and allocated:  # the allocated actuator's floor (docs/design.md §3.22)
+                settings_of_guard = _floored_guard(spec, allocation_spec, where)
+            else:
+                settings_of_guard = {k: v for k, v in spec.items() if k != "name"}
             stages.append(GuardStage(settings_of_guard, obs_names, where))
         else:
             factors = spec.get("observation_factors")
@@ -362,7 +435,8 @@ def build_stages(
                     settings.get("actuator_params"),
                     where,
                 )
-                stages.append(AllocationStage(allocation, factors))
+                floor = {k: allocation_spec[k] for k in FLOOR_KEYS if k in allocation_spec}
+                stages.append(AllocationStage(allocation, factors, floor))
     return stages
 
 

@@ -496,6 +496,47 @@ def test_an_export_carries_the_observation_factors_on_the_fins_only(tmp_path):
 
 
 @pytest.mark.rl
+def test_an_export_for_the_fins_carries_the_allocations_surge_floor(tmp_path):
+    """The generalist with a surge floor on its allocation (1.2 / 0.9 m/s): its export for the
+    fins flies like the agent (the export's parity check), lists the floor in the guard it
+    applies, and commands full ahead below 0.9 m/s; its export for the paper's actuator gives
+    the commands of the export without the floor."""
+    from controllers.onnx_export import export_onnx
+
+    floored = tmp_path / "floored"
+    shutil.copytree(AGENTS_DIR / "ppo_generalist", floored)
+    meta_file = floored / "metadata.json"
+    meta = json.loads(meta_file.read_text())
+    floor = {"surge_floor_soft": 1.2, "surge_floor_hard": 0.9}
+    meta["stages"][-1] |= floor
+    meta_file.write_text(json.dumps(meta))
+    exports = {}
+    for agent, label in ((AGENTS_DIR / "ppo_generalist", "plain"), (floored, "floored")):
+        for actuator in ("fins", "paper"):
+            onnx_file = tmp_path / f"{label}_{actuator}.onnx"
+            _, _, parity = export_onnx(agent, onnx_file, actuator=actuator)
+            assert parity["max_abs_error"] <= 1e-5
+            exports[label, actuator] = controllers.make("onnx", path=str(onnx_file))
+    guard, allocation = read_contract(tmp_path / "floored_fins.onnx").raw["stages"]
+    assert (guard["surge_floor_soft"], guard["surge_floor_hard"]) == (1.2, 0.9)
+    assert allocation == {"name": "actuator_allocation", "commands": "paper", **floor}
+    paper_stages = read_contract(tmp_path / "floored_paper.onnx").raw["stages"]
+    assert [s["name"] for s in paper_stages] == ["envelope_guard"]
+    assert "surge_floor_soft" not in paper_stages[0]
+    rng = np.random.default_rng(1)
+    obs = rng.normal(0.0, 1.0, (64, len(NAMES))).astype(np.float32)  # states of every kind
+    obs[:, NAMES.index("u")] = rng.uniform(0.0, 0.9, 64)  # below the hard floor [m/s]
+    start = np.ones(64, dtype=bool)
+    commands = {key: policy.predict(obs, episode_start=start)[0] for key, policy in exports.items()}
+    np.testing.assert_array_equal(commands["floored", "paper"], commands["plain", "paper"])
+    assert np.mean(commands["plain", "fins"][:, 0] < 0.9) > 0.25  # the network would brake
+    np.testing.assert_allclose(commands["floored", "fins"][:, 0], 1.0, atol=1e-6)  # full ahead
+    np.testing.assert_array_equal(
+        commands["floored", "fins"][:, 1:], commands["plain", "fins"][:, 1:]
+    )
+
+
+@pytest.mark.rl
 def test_an_export_for_other_actuator_settings_states_them(exports_for_other_actuators):
     """Was: --actuator-params changed the graph but were not recorded, so the export was
     accepted beside other settings (commands up to 2 apart)."""

@@ -323,6 +323,92 @@ def test_factors_on_entries_the_agent_lacks_or_the_stages_read_are_named(factors
         build_stages(specs, NAMES, {"actuator": "fins"}, "agent")
 
 
+ALLOCATED_FLOOR = {"surge_floor_soft": 1.2, "surge_floor_hard": 0.9}  # [m/s]
+
+
+def test_the_allocations_surge_floor_guards_its_actuator_only():
+    """On the fins the guard floors the surge command (−1 at 1.2 m/s, 0 at 1.05, +1 from
+    0.9 m/s down: the ramp of `test_hand_computed_low_speed_floor`), before the allocation; on
+    the paper's actuator the guard is the one without a floor, command for command."""
+    specs = check_stage_specs(
+        ["envelope_guard", {"name": "actuator_allocation", **ALLOCATED_FLOOR}], "f"
+    )
+    assert specs[1] == {"name": "actuator_allocation", "commands": "paper", **ALLOCATED_FLOOR}
+    assert "surge_floor_soft" not in specs[0]  # the guard's own settings are unchanged
+    fins = build_stages(specs, NAMES, {"actuator": "fins"})
+    assert fins[0].guard.surge_floor_soft == 1.2 and fins[0].guard.surge_floor_hard == 0.9
+    assert fins[1].to_dict() == specs[1]  # what an export for the fins lists
+    paper = build_stages(specs, NAMES, {"actuator": "paper"})
+    assert [s.name for s in paper] == ["envelope_guard"] and not paper[0].guard.has_floor
+    speeds = [1.5, 1.2, 1.05, 0.9, 0.3]  # [m/s]
+    obs = np.stack([_obs(u) for u in speeds])
+    commands = np.float32([[-1.0, 0.0, 0.0]] * len(speeds))
+    floored = fins[0].act(commands, obs, None)[0]
+    np.testing.assert_allclose(floored[:, 0], [-1.0, -1.0, 0.0, 1.0, 1.0], atol=1e-6)
+    plain = build_stages(check_stage_specs(["envelope_guard"], "f"), NAMES, {"actuator": "fins"})
+    np.testing.assert_array_equal(paper[0].act(commands, obs, None)[0], commands)
+    np.testing.assert_array_equal(plain[0].act(commands, obs, None)[0], commands)
+
+
+@pytest.mark.parametrize(
+    ("stages", "message"),
+    [
+        (
+            ["envelope_guard", {"name": "actuator_allocation", "surge_floor_soft": 1.2}],
+            r"the surge floor needs both \['surge_floor_soft', 'surge_floor_hard'\], missing "
+            r"\['surge_floor_hard'\]",
+        ),
+        (
+            [
+                "envelope_guard",
+                {"name": "actuator_allocation", **ALLOCATED_FLOOR, "surge_floor_soft": 0.8},
+            ],
+            "surge_floor_hard must lie below surge_floor_soft, got 0.9 and 0.8 m/s",
+        ),
+        (
+            [
+                "envelope_guard",
+                {
+                    "name": "actuator_allocation",
+                    **ALLOCATED_FLOOR,
+                    "surge_floor_hard": float("nan"),
+                },
+            ],
+            "surge_floor_hard",
+        ),
+        (
+            [{"name": "actuator_allocation", **ALLOCATED_FLOOR}],
+            "actuator_allocation's surge floor is the envelope guard's on its actuator; add an "
+            "envelope_guard stage",
+        ),
+        (
+            [
+                {"name": "envelope_guard", "surge_soft": 1.0, "surge_hard": 1.5},
+                {"name": "actuator_allocation", **ALLOCATED_FLOOR},
+            ],
+            r"surge_floor_hard < surge_floor_soft < surge_soft, got 0.9 < 1.2 < 1 m/s",
+        ),
+        (
+            ["envelope_guard", {"name": "actuator_allocation", "surge_floor": 1.2}],
+            r"unknown keys \['surge_floor'\]; valid: \['commands', 'observation_factors'",
+        ),
+    ],
+)
+def test_bad_allocation_floors_are_named(stages, message):
+    with pytest.raises(ValueError, match=f"^f: .*{message}"):
+        check_stage_specs(stages, "f")
+
+
+def test_the_allocations_floor_is_refused_in_training_on_drawn_actuators():
+    specs = check_stage_specs(
+        ["envelope_guard", {"name": "actuator_allocation", **ALLOCATED_FLOOR}], "f"
+    )
+    with pytest.raises(
+        ValueError, match=r"^cfg: actuator_allocation's surge floor guards a deployed"
+    ):
+        build_stages(specs, NAMES, {"actuator": "random"}, "cfg", drawn="fins")
+
+
 @pytest.mark.parametrize("kind", ["native", "dummy"])
 def test_training_scales_the_fin_episodes_and_their_final_observations_only(kind):
     """On drawn actuators the factors scale what the network sees of the fin episodes, and the
