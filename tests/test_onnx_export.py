@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -453,28 +454,51 @@ def test_an_export_for_the_fins_states_it_and_is_flown_there(exports_for_other_a
         controllers.make("onnx", path=str(fins), env={**own, "params": {"fin_max": 0.4294}})
 
 
+def _generalist_allocating(folder: Path, **settings: Any) -> Path:
+    """A copy of the shipped generalist whose allocation stage has exactly ``settings`` (none:
+    the bare allocation), whatever settings the shipped one carries."""
+    shutil.copytree(AGENTS_DIR / "ppo_generalist", folder)
+    for name in ("policy.onnx", "policy.json"):
+        (folder / name).unlink()
+    meta_file = folder / "metadata.json"
+    meta = json.loads(meta_file.read_text())
+    meta["stages"] = [
+        {"name": "actuator_allocation", "commands": "paper", **settings}
+        if stage["name"] == "actuator_allocation"
+        else stage
+        for stage in meta["stages"]
+    ]
+    meta_file.write_text(json.dumps(meta))
+    return folder
+
+
+def _allocation_exports(tmp_path: Path, variants: dict[str, dict[str, Any]]) -> dict:
+    """{(label, actuator): the exported policy} of the generalist with each variant's allocation
+    settings, exported for the fins and the paper's actuator (each passing its parity check);
+    the files are ``<label>_<actuator>.onnx`` in ``tmp_path``."""
+    from controllers.onnx_export import export_onnx
+
+    exports = {}
+    for label, settings in variants.items():
+        agent = _generalist_allocating(tmp_path / label, **settings)
+        for actuator in ("fins", "paper"):
+            onnx_file = tmp_path / f"{label}_{actuator}.onnx"
+            _, _, parity = export_onnx(agent, onnx_file, actuator=actuator)
+            assert parity["max_abs_error"] <= 1e-5
+            exports[label, actuator] = controllers.make("onnx", path=str(onnx_file))
+    return exports
+
+
 @pytest.mark.rl
 def test_an_export_carries_the_observation_factors_on_the_fins_only(tmp_path):
     """The generalist with `observation_factors` on its allocation: exported for the fins its
     graph flies like the agent (the export's own parity check) and differs from the export
     without them; for the paper's actuator the factors go with the allocation (the same
     commands as without them)."""
-    from controllers.onnx_export import export_onnx
-
-    factored = tmp_path / "factored"
-    shutil.copytree(AGENTS_DIR / "ppo_generalist", factored)
-    meta_file = factored / "metadata.json"
-    meta = json.loads(meta_file.read_text())
     factors = {"x_e": 0.125, "y_e": 0.25, "z_e": 0.25}
-    meta["stages"][-1]["observation_factors"] = factors
-    meta_file.write_text(json.dumps(meta))
-    exports = {}
-    for agent, label in ((AGENTS_DIR / "ppo_generalist", "plain"), (factored, "factored")):
-        for actuator in ("fins", "paper"):
-            onnx_file = tmp_path / f"{label}_{actuator}.onnx"
-            _, _, parity = export_onnx(agent, onnx_file, actuator=actuator)
-            assert parity["max_abs_error"] <= 1e-5
-            exports[label, actuator] = controllers.make("onnx", path=str(onnx_file))
+    exports = _allocation_exports(
+        tmp_path, {"plain": {}, "factored": {"observation_factors": factors}}
+    )
     contract = read_contract(tmp_path / "factored_fins.onnx").raw
     assert contract["stages"][-1]["observation_factors"] == factors
     rng = np.random.default_rng(0)
@@ -501,22 +525,8 @@ def test_an_export_for_the_fins_carries_the_allocations_surge_floor(tmp_path):
     fins flies like the agent (the export's parity check), lists the floor in the guard it
     applies, and commands full ahead below 0.9 m/s; its export for the paper's actuator gives
     the commands of the export without the floor."""
-    from controllers.onnx_export import export_onnx
-
-    floored = tmp_path / "floored"
-    shutil.copytree(AGENTS_DIR / "ppo_generalist", floored)
-    meta_file = floored / "metadata.json"
-    meta = json.loads(meta_file.read_text())
     floor = {"surge_floor_soft": 1.2, "surge_floor_hard": 0.9}
-    meta["stages"][-1] |= floor
-    meta_file.write_text(json.dumps(meta))
-    exports = {}
-    for agent, label in ((AGENTS_DIR / "ppo_generalist", "plain"), (floored, "floored")):
-        for actuator in ("fins", "paper"):
-            onnx_file = tmp_path / f"{label}_{actuator}.onnx"
-            _, _, parity = export_onnx(agent, onnx_file, actuator=actuator)
-            assert parity["max_abs_error"] <= 1e-5
-            exports[label, actuator] = controllers.make("onnx", path=str(onnx_file))
+    exports = _allocation_exports(tmp_path, {"plain": {}, "floored": floor})
     guard, allocation = read_contract(tmp_path / "floored_fins.onnx").raw["stages"]
     assert (guard["surge_floor_soft"], guard["surge_floor_hard"]) == (1.2, 0.9)
     assert allocation == {"name": "actuator_allocation", "commands": "paper", **floor}
