@@ -592,9 +592,11 @@ def test_the_training_wrapper_guards_the_env_commands():
 @pytest.mark.rl
 def test_the_reference_generalist_loads_with_its_stages_for_the_scenario_actuator():
     """Guarded everywhere, allocated on the fins; ``stages=[]`` gives the bare network. On the
-    calm `fins` helix both keep the path within 4 cm (measured 0.015 m unallocated, 0.031 m
-    allocated: the allocation earns its place in noise, where it fails 1 of 6 episodes against
-    3 unallocated, docs/results.md), and the allocation changes what the vehicle does."""
+    calm `fins` helix the allocated agent (its errors at the base scales, its surge floored)
+    keeps the path within 8 cm (measured 0.063 m over 100-200 s), where the same network
+    guarded but unallocated leaves the corridor (measured at 122 s): the shipped seed is one of
+    the recipe's seeds that stall on the fins without the allocation's settings
+    (docs/results.md, "The generalist's recipe, ten seeds")."""
     import controllers
     from auv_gym.metrics import compute_metrics
     from auv_gym.rollout import rollouts
@@ -612,9 +614,8 @@ def test_the_reference_generalist_loads_with_its_stages_for_the_scenario_actuato
     before, after = (
         compute_metrics(rollouts(p, [0], max_time=200.0, **env)[0]) for p in (paper, fins)
     )
-    assert before["termination_reason"] == after["termination_reason"] == "time_limit"
-    assert max(before["rms_distance"], after["rms_distance"]) < 0.04
-    assert abs(after["rms_distance"] - before["rms_distance"]) > 1e-3
+    assert after["termination_reason"] == "time_limit" and after["rms_distance"] < 0.08
+    assert before["termination_reason"] == "corridor"
 
 
 @pytest.mark.rl
