@@ -427,7 +427,7 @@ def build_stages(
                     obs_names, drawn, settings.get("params"), settings.get("actuator_params"), where
                 )
                 stages.append(DrawnAllocationStage(allocation, factors))
-            elif settings.get("actuator") in ALLOCATED_ACTUATORS:
+            elif allocated:
                 allocation = Allocation(
                     obs_names,
                     settings["actuator"],
