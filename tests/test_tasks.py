@@ -94,6 +94,7 @@ def test_task_sets_build_their_envs():
             "plant",
             ["5dof", "6dof"],
         ),
+        ("validation_as_built_plants", "validation_as_built", "plant", ["5dof", "6dof"]),
         ("validation_actuators_start", "validation_paper_start", "actuator", ["paper", "fins"]),
     ],
 )

@@ -1,0 +1,203 @@
+"""How much of a policy's distance to the path its navigation leaves it: the as-built test sets
+flown once, each error split into what the policy sees and what its estimate hides.
+
+    python -m benchmarks.analysis.navigation_floor \\
+        --policies pid_as_built,ppo_as_built=benchmarks/agents/ppo_as_built \\
+        --out benchmarks/results/as_built/navigation_floor
+
+A policy on the vehicle as built steers the error e^ = (x_e, y_e, z_e) [m] of the virtual point,
+in body axes (docs/model.md §3.2), computed from the navigation estimate (the observation's
+entries x_e, y_e, z_e); the benchmark scores the error e computed from the true state
+(`auv_gym.rollout`). Their difference n = e − e^ is the navigation's share: the estimate's
+position and attitude errors seen from the same path point. Per policy and set, over t ≥ 100 s
+of every episode (the metrics window): RMS |e| (the benchmark's RMS distance, as the suite
+computes it), RMS |e^| (the policy's tracking of its own estimate) and RMS |n|.
+
+A policy that held e^ at zero would score RMS |n|, so the ratio RMS |n| / (the reference's
+RMS |e|) says where the as-built target (≤ 0.8x the best classical policy, docs/results.md)
+lies against the navigation. It is not a hard floor: a policy scores below RMS |n| where its
+own error runs against the estimate's, as along the path, where the virtual point advances
+with the true x_e (docs/model.md §14.4). Episodes are the suite's (`auv-gym suite`: the same
+env arguments, seeds and metric).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auv_gym.metrics import compute_metrics
+from auv_gym.rollout import rollouts
+from auv_gym.sim.observation import OBS
+from auv_gym.sim.trajectory import TIME_LIMIT
+from auv_gym.support.files import write_json, write_text
+from benchmarks.arguments import comma_names, parse_options, program_name
+from benchmarks.catalog.policies import build_policy
+from benchmarks.catalog.tasks import task_set
+from benchmarks.options import option
+from benchmarks.runner.suite_chunks import Chunk, resolve_policy
+
+__all__ = ["SETS", "error_split", "main"]
+
+SETS = (
+    "scenario:as_built_helix",
+    "scenario:as_built_survey",
+    "scenario:as_built_coastal",
+    "test_as_built_tight_deep",
+    "test_as_built_strong_current",
+)
+ERRORS = ("x_e", "y_e", "z_e")  # observation entries and trajectory sample fields alike
+SEEN = [getattr(OBS, name) for name in ERRORS]  # their observation columns
+WINDOW_START = 100.0  # [s] as the benchmark metrics
+DURATION = 300.0  # [s] as the as-built evaluation
+
+
+class _SeenErrors:
+    """A policy recording the path-frame errors its observations carry; ``inner`` acts."""
+
+    def __init__(self, inner: Any) -> None:
+        self.inner = inner
+        self.env_kwargs = getattr(inner, "env_kwargs", None)
+        self.seen: list[np.ndarray] = []
+
+    def predict(self, obs: np.ndarray, state: Any = None, episode_start: Any = None, **kw: Any):
+        self.seen.append(np.array(obs[:, SEEN], dtype=np.float64))
+        return self.inner.predict(obs, state=state, episode_start=episode_start, **kw)
+
+
+def error_split(
+    spec: str, set_name: str, duration: float = DURATION, window_start: float = WINDOW_START
+) -> dict[str, Any]:
+    """RMS |e|, |e^| and |n| [m] over t ≥ ``window_start`` [s] of the set's episodes of
+    ``duration`` [s] flown by the suite policy ``spec`` (a name, or NAME=agent directory; its
+    first run), means over episodes; |e| is the suite's metric (`auv_gym.metrics`), |e^| and |n|
+    are taken at the observations' times."""
+    policy = resolve_policy(spec)
+    run = policy.runs[0]
+    task = task_set(set_name)
+    env_kwargs = Chunk(policy.name, run, task, duration, window_start).env_kwargs
+    recorder = _SeenErrors(build_policy(run.spec, env_kwargs, task.controller))
+    flights = rollouts(recorder, list(task.seeds), **env_kwargs)
+    seen = np.stack(recorder.seen, axis=1)  # (episodes, steps of the longest flight, 3)
+    rms: dict[str, list[float]] = {"true": [], "seen": [], "navigation": []}
+    axes: dict[str, list[np.ndarray]] = {"true": [], "seen": [], "navigation": []}
+    for i, flight in enumerate(flights):
+        rms["true"].append(compute_metrics(flight, transient=window_start)["rms_distance"])
+        steps = len(flight.t) - 1  # observations at t_0 … t_{K-1}
+        window = flight.t[:steps] >= window_start
+        e_true = np.stack([flight.samples[f][:steps] for f in ERRORS], axis=1)[window]
+        e_seen = seen[i, :steps][window]
+        if not window.any():  # ended before the window: no sample to score
+            for key in axes:
+                axes[key].append(np.full(len(ERRORS), math.nan))
+            rms["seen"].append(math.nan)
+            rms["navigation"].append(math.nan)
+            continue
+        for key, e in (("true", e_true), ("seen", e_seen), ("navigation", e_true - e_seen)):
+            axes[key].append(np.sqrt(np.mean(e**2, axis=0)))
+            if key != "true":  # the suite's metric stands for |e|
+                rms[key].append(math.sqrt(float(np.mean(np.sum(e**2, axis=1)))))
+    return {
+        "policy": policy.name,
+        "set": set_name,
+        "episodes": len(flights),
+        "failed": sum(flight.termination_reason != TIME_LIMIT for flight in flights),
+        "rms_distance_m": float(np.mean(rms["true"])),
+        "rms_seen_m": float(np.mean(rms["seen"])),
+        "rms_navigation_m": float(np.mean(rms["navigation"])),
+        "rms_by_axis_m": {
+            key: dict(zip(ERRORS, np.mean(values, axis=0).tolist(), strict=True))
+            for key, values in axes.items()
+        },
+    }
+
+
+@dataclass
+class Options:
+    """The command line of `python -m benchmarks.analysis.navigation_floor`."""
+
+    policies: str = option(
+        "pid_as_built,ppo_as_built=benchmarks/agents/ppo_as_built",
+        "suite policies, comma-separated; the first is the reference of the floor ratio",
+    )
+    sets: str = option(",".join(SETS), "task sets, comma-separated")
+    out: str = option("benchmarks/results/as_built/navigation_floor", "folder for .md and .json")
+
+
+def markdown(rows: Sequence[dict[str, Any]], policies: Sequence[str], command: str) -> str:
+    """The split as a table: per set and policy the three RMS values, then the floor ratio."""
+    reference = policies[0]
+    lines = [
+        "# How much of the distance the navigation leaves each policy",
+        "",
+        f"`{command}`: per set, 10 episodes of {DURATION:g} s (the suite's), means over "
+        f"episodes of RMS values over t ≥ {WINDOW_START:g} s [m]. |e|: the benchmark's distance "
+        "(true state); |e^|: the error the policy sees (navigation estimate); |n| = |e − e^|: the "
+        "navigation's share, the distance of a policy that held e^ at zero. "
+        f"Floor / ref.: RMS |n| over {reference}'s RMS |e|.",
+        "",
+        "| set | policy | failed | RMS \\|e\\| | RMS \\|e^\\| | RMS \\|n\\| | floor / ref. |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
+    by_set: dict[str, float] = {
+        r["set"]: r["rms_distance_m"] for r in rows if r["policy"] == reference
+    }
+    for r in rows:
+        ratio = r["rms_navigation_m"] / by_set[r["set"]]
+        lines.append(
+            f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
+            f"{r['failed']}/{r['episodes']} | {r['rms_distance_m']:.3f} | "
+            f"{r['rms_seen_m']:.3f} | {r['rms_navigation_m']:.3f} | {ratio:.2f} |"
+        )
+    lines += [
+        "",
+        "By axis (body axes: x_e along the vehicle, y_e to its side, z_e below it), RMS [m], "
+        "means over episodes:",
+        "",
+        "| set | policy | e: x_e, y_e, z_e | e^: x_e, y_e, z_e | n: x_e, y_e, z_e |",
+        "|---|---|---|---|---|",
+    ]
+    for r in rows:
+        parts = [
+            ", ".join(f"{v:.3f}" for v in r["rms_by_axis_m"][key].values())
+            for key in ("true", "seen", "navigation")
+        ]
+        lines.append(
+            f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
+            + " | ".join(parts)
+            + " |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    name = program_name("benchmarks.analysis.navigation_floor")
+    args, _ = parse_options(Options, argv, name, __doc__)
+    policies = comma_names(args.policies, "--policies")
+    sets = comma_names(args.sets, "--sets")
+    rows = []
+    for set_name in sets:
+        for spec in policies:
+            rows.append(error_split(spec, set_name))
+            r = rows[-1]
+            print(
+                f"{set_name:32s} {r['policy']:16s} |e| {r['rms_distance_m']:.3f} "
+                f"|e^| {r['rms_seen_m']:.3f} |n| {r['rms_navigation_m']:.3f} "
+                f"failed {r['failed']}",
+                flush=True,
+            )
+    labels = [resolve_policy(spec).name for spec in policies]
+    command = f"python -m benchmarks.analysis.navigation_floor --policies {args.policies}"
+    out = Path(args.out)
+    write_text(out / "navigation_floor.md", markdown(rows, labels, command))
+    write_json(out / "navigation_floor.json", {"command": command, "rows": rows}, indent=2)
+    return {"rows": rows}
+
+
+if __name__ == "__main__":
+    main()

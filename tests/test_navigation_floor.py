@@ -1,0 +1,95 @@
+"""The navigation split of the as-built test sets (`benchmarks.analysis.navigation_floor`): its
+distance is the suite's, its parts are what the policy saw and what the estimate hid."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from auv_gym.rollout import evaluate, rollouts
+from benchmarks.analysis import navigation_floor
+from benchmarks.analysis.navigation_floor import error_split, markdown
+from benchmarks.catalog.policies import build_policy
+from benchmarks.catalog.tasks import task_set
+from benchmarks.runner.suite_chunks import Chunk, resolve_policy
+
+SET = "test_as_built_tight_deep"
+KINDS = ("true", "seen", "navigation")
+DURATION, WINDOW = 104.0, 100.0  # [s]: four seconds of window keep the test short
+
+
+def _env(spec: str) -> dict:
+    policy = resolve_policy(spec)
+    return Chunk(policy.name, policy.runs[0], task_set(SET), DURATION, WINDOW).env_kwargs
+
+
+def test_distance_is_the_suites_and_the_navigation_share_is_measured():
+    row = error_split("pid_as_built", SET, DURATION, WINDOW)
+    env = _env("pid_as_built")
+    policy = build_policy("pid_as_built", env, task_set(SET).controller)
+    suite = evaluate(policy, list(task_set(SET).seeds), transient=WINDOW, **env)
+    assert row["episodes"] == 10 and row["failed"] == 0
+    assert row["rms_distance_m"] == np.mean([r["rms_distance"] for r in suite])
+    # The filter's error is decimetres (docs/model.md §14.8): neither zero nor metres.
+    assert 0.05 < row["rms_navigation_m"] < 1.0
+    assert row["rms_seen_m"] != pytest.approx(row["rms_distance_m"], rel=1e-3)
+    # Per episode RMS |n|² is the sum of the axes' RMS²; over episodes the means obey Minkowski.
+    axes = row["rms_by_axis_m"]["navigation"]
+    norm = math.sqrt(sum(v**2 for v in axes.values()))
+    assert 0.8 * row["rms_navigation_m"] <= norm <= row["rms_navigation_m"] + 1e-12
+
+
+def test_seen_errors_are_the_observed_ones_and_e_minus_n_is_them():
+    """Flown again by hand: the recorded e^ are the observation's x_e, y_e, z_e, so e − n = e^."""
+    env = _env("pid_as_built")
+    policy = build_policy("pid_as_built", env, task_set(SET).controller)
+    recorder = navigation_floor._SeenErrors(policy)
+    flight = rollouts(recorder, [0], **env)[0]
+    seen = np.stack(recorder.seen, axis=1)[0]
+    true = np.stack([flight.samples[f][:-1] for f in ("x_e", "y_e", "z_e")], axis=1)
+    assert seen.shape == true.shape
+    # Without navigation error the two would be equal; with the filter they differ by decimetres.
+    gap = np.linalg.norm(true - seen, axis=1)
+    assert 0.01 < float(np.sqrt(np.mean(gap**2))) < 1.0
+
+
+def test_agent_flies_with_its_own_observation():
+    row = error_split("ppo_as_built=benchmarks/agents/ppo_as_built", SET, DURATION, WINDOW)
+    assert row["policy"] == "ppo_as_built" and row["failed"] == 0
+    assert 0.05 < row["rms_distance_m"] < 1.0
+
+
+def test_markdown_ratio_is_navigation_over_the_references_distance():
+    rows = [
+        {
+            "policy": "a",
+            "set": "scenario:s",
+            "episodes": 10,
+            "failed": 0,
+            "rms_distance_m": 0.4,
+            "rms_seen_m": 0.3,
+            "rms_navigation_m": 0.3,
+            "rms_by_axis_m": {k: {"x_e": 0.1, "y_e": 0.2, "z_e": 0.05} for k in KINDS},
+        },
+        {
+            "policy": "b",
+            "set": "scenario:s",
+            "episodes": 10,
+            "failed": 0,
+            "rms_distance_m": 0.2,
+            "rms_seen_m": 0.25,
+            "rms_navigation_m": 0.1,
+            "rms_by_axis_m": {k: {"x_e": 0.01, "y_e": 0.02, "z_e": 0.005} for k in KINDS},
+        },
+    ]
+    table = markdown(rows, ["a", "b"], "cmd")
+    assert "| `s` | a | 0/10 | 0.400 | 0.300 | 0.300 | 0.75 |" in table
+    assert "| `s` | b | 0/10 | 0.200 | 0.250 | 0.100 | 0.25 |" in table
+    assert "| `s` | a | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 |" in table
+
+
+def test_unknown_set_is_refused_by_name():
+    with pytest.raises(ValueError, match="no_such_set"):
+        error_split("pid_as_built", "no_such_set", DURATION, WINDOW)
