@@ -11,10 +11,13 @@ dense `numpy.linalg.solve` of the n × n matrix costs O(n³) on spinning OpenBLA
 1.9 s per reset of a drawn 879-m lawnmower, which solves twenty-one 176-row systems;
 docs/performance.md.)
 
-Systems of up to `DENSE_ROWS_MAX` rows keep the dense LAPACK solve, whose cost is bounded there
-(about 1 ms): every path of the shipped scenarios and task sets has at most 121 knots (a 600-m
-survey at 5 m), and the two solves agree only to rounding (5.7e-14 m on a path), so the dense
-one keeps the committed results reproducible bit for bit. Longer paths take the linear solve.
+Every system takes the linear solve, whatever its size. Its whole-array steps are numpy's
+elementwise IEEE operations, which round alike on every x86-64 CPU; the dense LAPACK solve it
+replaced (kept for up to 128 rows until 0.1.0's last changes) takes the kernels OpenBLAS picks
+for the CPU it runs on, and its bits differed between CPUs (spline systems of 8 to 121 knots
+solved with OpenBLAS's Nehalem kernels and with its Haswell or Zen kernels differ in the last
+digits), so a committed result on a spline path did not reproduce bit for bit on another machine
+(docs/performance.md).
 """
 
 from __future__ import annotations
@@ -22,14 +25,11 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "DENSE_ROWS_MAX",
     "clamped_cubic_coefficients",
     "natural_cubic_coefficients",
     "solve_tridiagonal",
     "spline_second_derivatives",
 ]
-
-DENSE_ROWS_MAX = 128  # the dense solve up to here, cyclic reduction above (module doc)
 
 
 def solve_tridiagonal(
@@ -73,18 +73,9 @@ def solve_tridiagonal(
 def spline_second_derivatives(
     lower: np.ndarray, diag: np.ndarray, upper: np.ndarray, rhs: np.ndarray
 ) -> np.ndarray:
-    """The knots' second derivatives (n, 3) from the tridiagonal system: the dense LAPACK solve
-    up to `DENSE_ROWS_MAX` rows (the matrix and bits of earlier releases), `solve_tridiagonal`
-    above (module doc)."""
-    n = len(diag)
-    if n > DENSE_ROWS_MAX:
-        return solve_tridiagonal(lower, diag, upper, rhs)
-    matrix = np.zeros((n, n))
-    rows = np.arange(n)
-    matrix[rows, rows] = diag
-    matrix[rows[1:], rows[:-1]] = lower[1:]
-    matrix[rows[:-1], rows[1:]] = upper[:-1]
-    return np.linalg.solve(matrix, rhs)
+    """The knots' second derivatives (n, 3) [1/m] from the tridiagonal system, by
+    `solve_tridiagonal` at every size: the same bits on every machine (module doc)."""
+    return solve_tridiagonal(lower, diag, upper, rhs)
 
 
 def natural_cubic_coefficients(knots: np.ndarray, pts: np.ndarray) -> np.ndarray:

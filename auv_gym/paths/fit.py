@@ -90,8 +90,17 @@ def fit_curve(
         ahead = _curve_points(curve, np.array([d, 2 * d, 3 * d, 4 * d]))
         behind = _curve_points(curve, s_end - np.array([d, 2 * d, 3 * d, 4 * d]))
         w = np.array([-25.0, 48.0, -36.0, 16.0, -3.0]) / (12.0 * d)
-        slope0 = w[0] * pts[0] + w[1:] @ ahead
-        slope1 = -(w[0] * pts[-1] + w[1:] @ behind)
+        # Term by term, not `w @ samples`: a BLAS product rounds by the CPU's kernels.
+        slope0 = (
+            w[0] * pts[0] + w[1] * ahead[0] + w[2] * ahead[1] + w[3] * ahead[2] + w[4] * ahead[3]
+        )
+        slope1 = -(
+            w[0] * pts[-1]
+            + w[1] * behind[0]
+            + w[2] * behind[1]
+            + w[3] * behind[2]
+            + w[4] * behind[3]
+        )
         coeffs = clamped_cubic_coefficients(knots, pts, slope0, slope1)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("fit_curve: the curve's samples give non-finite coefficients")
