@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
 from auv_gym.sim.task import REMUS_TOP_SPEED
 from controllers.registry import CLASSICAL, make_classical
@@ -183,12 +184,13 @@ class ResidualSettings:
 
 def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
     """The base controller's env-owned arguments for episodes of ``env_kwargs``: its
-    ``control_dt`` and a fixed ``actuator`` ("random" draws per episode, which a Policy cannot
-    see: the base then keeps its default "paper", like any classical controller)."""
+    ``control_dt`` and a fixed ``actuator`` (`auv_gym.sim.integrator.ACTUATORS`: "paper",
+    "fins" or "realistic"; "random" draws per episode, which a Policy cannot see: the base then
+    keeps its default "paper", like any classical controller)."""
     out: dict[str, Any] = {}
     if "control_dt" in env_kwargs:
         out["control_dt"] = env_kwargs["control_dt"]
-    if env_kwargs.get("actuator") in ("paper", "fins"):
+    if env_kwargs.get("actuator") in ACTUATORS:
         out["actuator"] = env_kwargs["actuator"]
     return out
 

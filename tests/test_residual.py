@@ -22,6 +22,7 @@ from benchmarks.training.residual_env import CHATTERING_KEY, PRECISION_KEY, Resi
 from controllers.residual import (
     RESIDUAL_OBS_DIM,
     ResidualPolicy,
+    base_kwargs_for_env,
     residual_action,
 )
 
@@ -390,3 +391,22 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     broken.write_text(text)
     with pytest.raises(ValueError, match=r"bad.yml: residual: tv_weight must be a number"):
         read_zoo_config(broken, "AUVPath3DSpeedLimit-v0")
+
+
+def test_evaluation_base_flies_the_episodes_actuator_the_realistic_one_included(
+    assert_same_episodes,
+):
+    """Validation builds the base from the episodes' env arguments (`base_kwargs_for_env`): on
+    the vehicle as built (actuator "realistic") a zero correction flies as `pid_as_built`
+    configured for it. It used to pass only "paper" and "fins", so the base commanded the
+    paper's actuator there and failed every validation episode of a residual on `pid_as_built`."""
+    env = {"actuator": "realistic", "sensors": "typical_kalman", "disturbance": "ocean"}
+    env = {**env, "max_time": 4.0}
+    kwargs = base_kwargs_for_env(env)
+    assert kwargs == {"actuator": "realistic"}
+    assert base_kwargs_for_env({"actuator": "random", "control_dt": 0.1}) == {"control_dt": 0.1}
+    base = ResidualTraining(base="pid_as_built").make_base(**kwargs)
+    residual = ResidualPolicy(base, ConstantAgent(0.0), (0.25, 0.5, 0.5))
+    seeds = [0, 1]
+    reference = controllers.make("pid_as_built", actuator="realistic")
+    assert_same_episodes(rollouts(residual, seeds, **env), rollouts(reference, seeds, **env))
