@@ -93,3 +93,19 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
 def test_unknown_set_is_refused_by_name():
     with pytest.raises(ValueError, match="no_such_set"):
         error_split("pid_as_built", "no_such_set", DURATION, WINDOW)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--sets", "test_as_built_tight_deep,nope"], "nope"),
+        (["--policies", "pid_as_built,no_such_policy"], "no_such_policy"),
+        (["--policies", "pid_as_built,pid_as_built"], "pid_as_built"),
+    ],
+)
+def test_bad_names_are_one_line_errors_before_any_episode(argv, message, tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        navigation_floor.main([*argv, "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

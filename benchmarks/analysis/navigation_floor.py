@@ -36,7 +36,7 @@ from auv_gym.rollout import rollouts
 from auv_gym.sim.observation import OBS
 from auv_gym.sim.trajectory import TIME_LIMIT
 from auv_gym.support.files import write_json, write_text
-from benchmarks.arguments import comma_names, parse_options, program_name
+from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
 from benchmarks.catalog.policies import build_policy
 from benchmarks.catalog.tasks import task_set
 from benchmarks.options import option
@@ -177,9 +177,13 @@ def markdown(rows: Sequence[dict[str, Any]], policies: Sequence[str], command: s
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     name = program_name("benchmarks.analysis.navigation_floor")
-    args, _ = parse_options(Options, argv, name, __doc__)
-    policies = comma_names(args.policies, "--policies")
-    sets = comma_names(args.sets, "--sets")
+    args, parser = parse_options(Options, argv, name, __doc__)
+    with usage_errors(parser):  # every name checked before the first episode
+        policies = comma_names(args.policies, "--policies")
+        sets = comma_names(args.sets, "--sets")
+        labels = [resolve_policy(spec).name for spec in policies]
+        for set_name in sets:
+            task_set(set_name)
     rows = []
     for set_name in sets:
         for spec in policies:
@@ -191,7 +195,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 f"failed {r['failed']}",
                 flush=True,
             )
-    labels = [resolve_policy(spec).name for spec in policies]
     command = f"python -m benchmarks.analysis.navigation_floor --policies {args.policies}"
     out = Path(args.out)
     write_text(out / "navigation_floor.md", markdown(rows, labels, command))
