@@ -54,6 +54,14 @@ def _curve_points(curve: Callable[[float], Sequence[float]], s: np.ndarray) -> n
     return out
 
 
+def _one_sided_slope(w: np.ndarray, end: np.ndarray, samples: np.ndarray) -> np.ndarray:
+    """Σ w_k p_k over the end point and its four samples, term by term: a BLAS product
+    (`w @ samples`) would round by the CPU's kernels (`auv_gym.paths.cubic`)."""
+    return (
+        w[0] * end + w[1] * samples[0] + w[2] * samples[1] + w[3] * samples[2] + w[4] * samples[3]
+    )
+
+
 def fit_curve(
     curve: Callable[[float], Sequence[float]],
     s_end: float,
@@ -90,17 +98,8 @@ def fit_curve(
         ahead = _curve_points(curve, np.array([d, 2 * d, 3 * d, 4 * d]))
         behind = _curve_points(curve, s_end - np.array([d, 2 * d, 3 * d, 4 * d]))
         w = np.array([-25.0, 48.0, -36.0, 16.0, -3.0]) / (12.0 * d)
-        # Term by term, not `w @ samples`: a BLAS product rounds by the CPU's kernels.
-        slope0 = (
-            w[0] * pts[0] + w[1] * ahead[0] + w[2] * ahead[1] + w[3] * ahead[2] + w[4] * ahead[3]
-        )
-        slope1 = -(
-            w[0] * pts[-1]
-            + w[1] * behind[0]
-            + w[2] * behind[1]
-            + w[3] * behind[2]
-            + w[4] * behind[3]
-        )
+        slope0 = _one_sided_slope(w, pts[0], ahead)
+        slope1 = -_one_sided_slope(w, pts[-1], behind)
         coeffs = clamped_cubic_coefficients(knots, pts, slope0, slope1)
         if not np.all(np.isfinite(coeffs)):
             raise ValueError("fit_curve: the curve's samples give non-finite coefficients")
