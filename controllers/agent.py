@@ -204,15 +204,15 @@ def agent_env_kwargs(metadata: dict[str, Any], env_id: str | None = None) -> dic
     ``env_id`` (None: the id its metadata records; `auv_gym.VARIANTS`; none recorded: the
     paper's `AUVPath3D-v0`) and
     the observation it was trained on where that id's differs. A residual agent observes
-    through its base."""
+    through its base; trained on the propeller and fins, it (and its base) commands them too."""
     from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 
     recorded = metadata.get("env_id", ENV_ID) if env_id is None else env_id
     fixed = dict(VARIANTS[resolve_env_id(recorded)])
-    if "residual" in metadata:
-        return fixed
     if commands_realistic_actuators(metadata):  # its actions are shaft speed and fin angles
         fixed["actuator"] = REALISTIC_ACTUATOR
+    if "residual" in metadata:
+        return fixed
     trained = ObservationConfig.from_spec(metadata.get("observation"))
     if trained != ObservationConfig.from_spec(fixed.get("observation")):
         fixed["observation"] = trained.to_dict()
@@ -277,7 +277,10 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
     stages = agent_stages(metadata, str(meta))
     if stages and residual is not None:
-        raise ValueError(f"{meta}: a residual agent takes no stages (its base is its own)")
+        raise ValueError(
+            f"{meta}: a residual agent takes no stages (its base is its own; "
+            "its envelope guard is a residual setting: residual: {envelope_guard: ...})"
+        )
     return AgentFiles(
         model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual, algo.name, stages
     )

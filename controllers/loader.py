@@ -50,7 +50,10 @@ def load_policy(
         raise ValueError(f"agent {files.model} was trained with {files.algo!r}, not {algo!r}")
     specs = files.stages if stages is None else check_stage_specs(stages, "stages")
     if specs and files.residual is not None:
-        raise ValueError(f"{files.model}: a residual agent takes no stages (its base is its own)")
+        raise ValueError(
+            f"{files.model}: a residual agent takes no stages (its base is its own; "
+            "its envelope guard is a residual setting: residual: {envelope_guard: ...})"
+        )
     settings = base_kwargs or {}
     built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
     actor = load_actor(files, device=device, num_threads=num_threads)

@@ -69,6 +69,7 @@ from controllers.onnx_graph import (
     residual_graph,
 )
 from controllers.onnx_policy import inference_session
+from controllers.residual import GUARD_INDEX
 from controllers.stages import AllocationStage, GuardStage, build_stages
 
 __all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers", "write_export"]
@@ -355,6 +356,8 @@ def _build_model(
         commands = residual_graph(
             g, "base_action", commands, previous, started, settings.bound, settings.filter_max
         )
+        if settings.envelope_guard is not None:  # before it becomes the previous action
+            commands = guard_graph(g, commands, observation, GUARD_INDEX, settings.envelope_guard)
         ones = g.op("ConstantOfShape", g.op("Shape", started), value=_one_float32())
         state_outputs = [g.op("Concat", commands, ones, axis=1)]  # (applied, started = 1)
     for stage in stages:
@@ -393,9 +396,9 @@ def _parity(
 ) -> dict[str, Any]:
     """The graph against the Python agent on `PARITY_SAMPLES` observations drawn from the
     agent's normalisation statistics (μ ± σ per entry; a residual agent: base commands, previous
-    actions and episode starts drawn too): the largest |difference| of the commands and of the
-    memory it passes on."""
-    from controllers.residual import agent_observation, residual_action
+    actions and episode starts drawn too, its commands through its envelope guard if it has
+    one): the largest |difference| of the commands and of the memory it passes on."""
+    from controllers.residual import agent_observation, guarded_action, residual_action
     from controllers.stages import PipelineState, StagedPolicy
 
     rng = np.random.default_rng(0)
@@ -415,6 +418,7 @@ def _parity(
         want = residual_action(
             base, correction, files.residual.bound, files.residual.filter_max, previous, started
         )
+        want = guarded_action(want, obs, files.residual.envelope_guard)
         want_state = np.column_stack([want, np.ones(k)])
     else:
         obs = draw.astype(np.float32)
@@ -482,6 +486,8 @@ def _contract(
             "bound": list(files.residual.bound),
             "filter_max": files.residual.filter_max,
         }
+        if files.residual.envelope_guard is not None:  # in the graph; stated, not re-applied
+            residual["envelope_guard"] = files.residual.envelope_guard.to_dict()
     return {
         "format": CONTRACT_FORMAT,
         "format_version": CONTRACT_VERSION,

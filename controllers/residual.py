@@ -9,6 +9,11 @@ first step):
     c_k  = agent.predict([o_k, b_k, a_{k−1}])                  21 values, `RESIDUAL_OBS_NAMES`
     a_k  = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)             β = `bound` per input (X, M, N)
 
+With an envelope guard (``envelope_guard``, `controllers.envelope_guard`) the applied action is
+the guard's view of it, a_k ← guard(a_k; θ, q, u of o_k), before it becomes a_{k−1}: the agent
+cannot correct its base past the vehicle's pitch or surge limits, and what it sees as its previous
+action is what the env received.
+
 With a learned filter (``filter_max`` α_max > 0) the agent returns six values (c_k, g_k) and
 also chooses, per input and per step, how much of its previous action to keep:
 
@@ -51,6 +56,12 @@ import numpy as np
 from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
 from auv_gym.sim.task import REMUS_TOP_SPEED
+from controllers.envelope_guard import (
+    GUARD_INPUTS,
+    EnvelopeGuard,
+    check_envelope_guard,
+    guard_commands,
+)
 from controllers.registry import CLASSICAL, make_classical
 
 __all__ = [
@@ -67,6 +78,7 @@ __all__ = [
     "base_kwargs_for_env",
     "check_bound",
     "filter_coefficient",
+    "guarded_action",
     "make_residual",
     "residual_action",
     "residual_observation_bounds",
@@ -80,6 +92,8 @@ DEFAULT_FILTER_MAX = 0.0
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
+# Positions of θ, q, u in the env's observation: what a residual agent's guard reads.
+GUARD_INDEX = tuple(OBS_NAMES.index(name) for name in GUARD_INPUTS)
 # Set by the env (the scenario; `controllers.env_settings`), never by the residual settings.
 ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt", "params", "actuator_params")
 
@@ -108,15 +122,17 @@ def check_number(name: str, value: Any, low: float, high: float, unit: str = "")
 class ResidualSettings:
     """What makes an agent residual at inference: the base controller (a name of
     `controllers.CLASSICAL` and its keyword arguments other than the env-owned
-    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β, and the learned
-    filter's largest coefficient α_max (0: none; docs/design.md §3.10). The reward terms
-    training adds are the training side's (`benchmarks.training.residual.ResidualTraining`, a
-    subclass)."""
+    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β, the learned
+    filter's largest coefficient α_max (0: none; docs/design.md §3.10) and the envelope guard
+    of the applied action (None: none; a mapping of `EnvelopeGuard` fields or True in a file).
+    The reward terms training adds are the training side's
+    (`benchmarks.training.residual.ResidualTraining`, a subclass)."""
 
     base: str = DEFAULT_BASE
     bound: tuple[float, float, float] = DEFAULT_BOUND
     filter_max: float = DEFAULT_FILTER_MAX
     base_kwargs: dict[str, Any] = field(default_factory=dict)
+    envelope_guard: EnvelopeGuard | None = None
 
     def __post_init__(self) -> None:
         if self.base not in CLASSICAL:
@@ -135,6 +151,9 @@ class ResidualSettings:
         if owned:
             raise ValueError(f"base_kwargs must not set {owned}: the env (scenario) sets them")
         object.__setattr__(self, "base_kwargs", dict(self.base_kwargs))
+        if self.envelope_guard is not None:
+            guard = check_envelope_guard(self.envelope_guard, "residual")
+            object.__setattr__(self, "envelope_guard", guard)
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "residual", *, strict: bool = True) -> Any:
@@ -153,23 +172,36 @@ class ResidualSettings:
         if "base" in values:
             values["base"] = str(values["base"])
         values["base_kwargs"] = values.get("base_kwargs") or {}
+        if values.get("envelope_guard") is False:
+            values["envelope_guard"] = None
         try:
             return cls(**values)
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form recorded in an agent's metadata."""
-        return {
-            "base": self.base,
-            "bound": list(self.bound),
-            "filter_max": self.filter_max,
-            "base_kwargs": dict(self.base_kwargs),
-        }
+        """The JSON form recorded in an agent's metadata (the guard only when there is one, so
+        an agent without it records what it always did)."""
+        return self.with_guard(
+            {
+                "base": self.base,
+                "bound": list(self.bound),
+                "filter_max": self.filter_max,
+                "base_kwargs": dict(self.base_kwargs),
+            }
+        )
+
+    def with_guard(self, record: dict[str, Any]) -> dict[str, Any]:
+        """``record`` with the envelope guard's settings under "envelope_guard", if any."""
+        if self.envelope_guard is not None:
+            record["envelope_guard"] = self.envelope_guard.to_dict()
+        return record
 
     def inference(self) -> ResidualSettings:
         """The settings a `ResidualPolicy` needs (these, without any training terms)."""
-        return ResidualSettings(self.base, self.bound, self.filter_max, self.base_kwargs)
+        return ResidualSettings(
+            self.base, self.bound, self.filter_max, self.base_kwargs, self.envelope_guard
+        )
 
     @property
     def action_dim(self) -> int:
@@ -265,6 +297,16 @@ def residual_action(
     return (alpha * previous + (np.float32(1.0) - alpha) * target).astype(np.float32)
 
 
+def guarded_action(
+    applied: np.ndarray, observation: np.ndarray, guard: EnvelopeGuard | None
+) -> np.ndarray:
+    """The applied actions (n, 3) float32 through ``guard`` (None: unchanged), reading θ [rad],
+    q [rad/s] and u [m/s] from the env observations (n, 15) they answer."""
+    if guard is None:
+        return applied
+    return guard_commands(applied, observation, GUARD_INDEX, guard)
+
+
 def filter_coefficient(g: np.ndarray, filter_max: float, started: np.ndarray) -> np.ndarray:
     """α = α_max·clip(g, 0, 1) as float32 (n, 3), 0 on rows not ``started`` (no a_{k−1})."""
     alpha = np.float32(filter_max) * np.clip(np.asarray(g), 0.0, 1.0).astype(np.float32)
@@ -310,6 +352,7 @@ class ResidualPolicy:
         self.bound = check_bound(bound)
         self.settings = settings
         self.filter_max = 0.0 if settings is None else settings.filter_max
+        self.guard = None if settings is None else settings.envelope_guard
         self.action_dim = agent_action_dim(self.filter_max)
         self.metadata = dict(getattr(agent, "metadata", {}) or {})
 
@@ -368,6 +411,7 @@ class ResidualPolicy:
             state["previous"],
             state["started"],
         )
+        applied = guarded_action(applied, batch, self.guard)
         if self.filter_max > 0.0:
             g = np.asarray(correction, np.float64)[:, 3:]
             state["filter"][:] = filter_coefficient(g, self.filter_max, state["started"])
@@ -395,12 +439,14 @@ def make_residual(
     base: str | None = None,
     bound: Any = None,
     filter_max: float | None = None,
+    envelope_guard: Any = None,
     **base_kwargs: Any,
 ) -> ResidualPolicy:
     """A `ResidualPolicy` of the Policy ``agent`` (21-value observations): ``base`` (default
     "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``, gains) build the base
     controller; ``bound`` is β (X, M, N); ``filter_max`` α_max > 0 gives the learned filter (an
-    agent of six outputs). A saved residual agent's directory: `controllers.loader`.
+    agent of six outputs); ``envelope_guard`` (an `EnvelopeGuard`, a mapping of its fields or
+    True) guards the applied action. A saved residual agent's directory: `controllers.loader`.
     """
     owned = {k: base_kwargs.pop(k) for k in ENV_OWNED_BASE_KWARGS if k in base_kwargs}
     settings = ResidualSettings(
@@ -408,5 +454,8 @@ def make_residual(
         bound=DEFAULT_BOUND if bound is None else bound,
         base_kwargs=base_kwargs,
         filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
+        envelope_guard=None
+        if envelope_guard is None or envelope_guard is False
+        else envelope_guard,
     )
     return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)

@@ -39,6 +39,11 @@ def test_distance_is_the_suites_and_the_navigation_share_is_measured():
     axes = row["rms_by_axis_m"]["navigation"]
     norm = math.sqrt(sum(v**2 for v in axes.values()))
     assert 0.8 * row["rms_navigation_m"] <= norm <= row["rms_navigation_m"] + 1e-12
+    # Across the path (y_e, z_e) the share is part of the whole, and most of it on the helices.
+    across = row["rms_navigation_across_m"]
+    assert 0.5 * row["rms_navigation_m"] < across < row["rms_navigation_m"]
+    # per episode it is hypot(RMS y_e, RMS z_e); over episodes the mean lies between these two
+    assert math.hypot(axes["y_e"], axes["z_e"]) - 1e-12 <= across <= axes["y_e"] + axes["z_e"]
 
 
 def test_seen_errors_are_the_observed_ones_and_e_minus_n_is_them():
@@ -71,6 +76,7 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
             "rms_distance_m": 0.4,
             "rms_seen_m": 0.3,
             "rms_navigation_m": 0.3,
+            "rms_navigation_across_m": 0.2,
             "rms_by_axis_m": {k: {"x_e": 0.1, "y_e": 0.2, "z_e": 0.05} for k in KINDS},
         },
         {
@@ -81,12 +87,13 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
             "rms_distance_m": 0.2,
             "rms_seen_m": 0.25,
             "rms_navigation_m": 0.1,
+            "rms_navigation_across_m": 0.06,
             "rms_by_axis_m": {k: {"x_e": 0.01, "y_e": 0.02, "z_e": 0.005} for k in KINDS},
         },
     ]
     table = markdown(rows, ["a", "b"], "cmd")
-    assert "| `s` | a | 0/10 | 0.400 | 0.300 | 0.300 | 0.75 |" in table
-    assert "| `s` | b | 0/10 | 0.200 | 0.250 | 0.100 | 0.25 |" in table
+    assert "| `s` | a | 0/10 | 0.400 | 0.300 | 0.300 | 0.75 | 0.200 | 0.50 |" in table
+    assert "| `s` | b | 0/10 | 0.200 | 0.250 | 0.100 | 0.25 | 0.060 | 0.15 |" in table
     assert "| `s` | a | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 |" in table
 
 

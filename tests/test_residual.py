@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 import controllers
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
-from auv_gym.rollout import rollouts
+from auv_gym.rollout import evaluate, rollouts
 from benchmarks.training.residual import ResidualTraining
 from benchmarks.training.residual_env import CHATTERING_KEY, PRECISION_KEY, ResidualVectorEnv
 from controllers.residual import (
@@ -410,3 +410,33 @@ def test_evaluation_base_flies_the_episodes_actuator_the_realistic_one_included(
     seeds = [0, 1]
     reference = controllers.make("pid_as_built", actuator="realistic")
     assert_same_episodes(rollouts(residual, seeds, **env), rollouts(reference, seeds, **env))
+
+
+@pytest.mark.rl
+def test_held_out_evaluation_flies_a_residual_on_the_actuator_it_trained_on(
+    tmp_path, save_tiny_residual_agent
+):
+    """The end-of-training test episodes of a residual agent trained on the propeller and fins
+    fly that actuator, its base built for it. They used to fly the paper's actuator with the
+    base of the paper's (two residuals on `pid_as_built` ended 9 and 10 of their 10 test
+    episodes there)."""
+    from benchmarks.training.evaluation import HELD_OUT_SEEDS, held_out_evaluation
+    from controllers.agent import agent_env_kwargs
+    from controllers.loader import load_policy
+
+    env = {"actuator": "realistic", "max_time": 2.0}
+    save_tiny_residual_agent(ResidualTraining(base="pid_as_built"), tmp_path / "agent", 2, env)
+    meta_file = tmp_path / "agent" / "metadata.json"
+    meta = json.loads(meta_file.read_text())
+    meta.update(env_id="AUVPath3DSpeedLimit-v0", env_kwargs={"actuator": "realistic"})
+    meta_file.write_text(json.dumps(meta))
+    fixed = agent_env_kwargs(meta)
+    assert fixed == {"surge_limit": "vehicle", "actuator": "realistic"}
+    report = held_out_evaluation(tmp_path / "agent", 20.0, "AUVPath3DSpeedLimit-v0")
+    assert "actuator 'realistic'" in report["scenario"]
+    policy = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
+    seeds, transient = list(HELD_OUT_SEEDS), report["transient_s"]
+    again = evaluate(policy, seeds, transient=transient, max_time=20.0, **fixed)
+    got = [r["rms_distance"] for r in report["results"]]
+    assert got == [r["rms_distance"] for r in again]
+    assert report["summary"]["n_terminated"] == 0

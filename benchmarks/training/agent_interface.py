@@ -33,12 +33,18 @@ def parse_interface(
 
         fields["obs_scales"] = parse_obs_scales(section["obs_scales"], where)
     if "envelope_guard" in section:
-        raise ValueError(
-            f"{where}: envelope_guard is now a stage: stages: [{{name: envelope_guard, ...}}]"
+        place = (
+            "a residual setting: residual: {envelope_guard: ...}"
+            if residual is not None
+            else "a stage: stages: [{name: envelope_guard, ...}]"
         )
+        raise ValueError(f"{where}: envelope_guard is now {place}")
     if "stages" in section:
         if residual is not None:
-            raise ValueError(f"{where}: a residual agent takes no stages (its base is its own)")
+            raise ValueError(
+                f"{where}: a residual agent takes no stages (its base is its own; "
+                "its envelope guard is a residual setting: residual: {envelope_guard: ...})"
+            )
         fields["stages"] = check_stage_specs(section["stages"], where)
         if any(spec["name"] == MIRROR_STAGE for spec in fields["stages"]):
             raise ValueError(

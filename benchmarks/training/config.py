@@ -25,6 +25,7 @@ settings (`benchmarks.training.residual.ResidualTraining`)::
         bound: [0.25, 0.5, 0.5]     # β per X, M, N, normalised actuator units
         tv_weight: 0.25             # chattering charge per unit TV of the applied action
         base_kwargs: {}             # base gains (actuator and control_dt come from the env)
+        envelope_guard: {nose_up_command: -1.0}  # optional: guard the applied action
 
 An optional ``jump_start`` mapping makes the run imitate a classical expert (or a dataset of
 ``auv-gym demos``) instead of running PPO: `benchmarks.training.jump_start`, checked here with

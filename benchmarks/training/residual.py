@@ -57,13 +57,15 @@ class ResidualTraining(ResidualSettings):
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form recorded in an agent's metadata (key order of the shipped agents)."""
-        return {
-            "base": self.base,
-            "bound": list(self.bound),
-            "tv_weight": self.tv_weight,
-            "precision_weight": self.precision_weight,
-            "precision_scale": self.precision_scale,
-            "selection_chattering": self.selection_chattering,
-            "filter_max": self.filter_max,
-            "base_kwargs": dict(self.base_kwargs),
-        }
+        return self.with_guard(
+            {
+                "base": self.base,
+                "bound": list(self.bound),
+                "tv_weight": self.tv_weight,
+                "precision_weight": self.precision_weight,
+                "precision_scale": self.precision_scale,
+                "selection_chattering": self.selection_chattering,
+                "filter_max": self.filter_max,
+                "base_kwargs": dict(self.base_kwargs),
+            }
+        )

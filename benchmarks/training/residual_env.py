@@ -8,7 +8,8 @@ runs the base controller of all vehicles in one batched `predict` per control st
     observation  [o_k, b_k, a_{k−1}]  (21 float32 values, `RESIDUAL_OBS_NAMES`)
     action       c_k ∈ [−1, 1]³, applied as a_k = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1);
                  with ``filter_max`` > 0, (c_k, g_k) ∈ [−1, 1]⁶ and the learned low-pass of
-                 `controllers.residual` (α_k = 0 at an episode's first step)
+                 `controllers.residual` (α_k = 0 at an episode's first step); with an
+                 ``envelope_guard``, a_k through it (θ, q, u of o_k), as at inference
     reward       r_k − w_TV · Σ_j |a_{k,j} − a_{k−1,j}|     (no charge at an episode's first step)
                  + w_P · exp(−(d_{k+1}/d_P)²)               (precision bonus, d [m] after the step)
 
@@ -43,6 +44,7 @@ from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import ResidualTraining
 from controllers.residual import (
     agent_observation,
+    guarded_action,
     residual_action,
     residual_observation_bounds,
 )
@@ -90,6 +92,7 @@ class ResidualVectorEnv(VectorWrapper):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs
         self._base = np.zeros((n, 3), np.float32)  # b_k of the last returned observation
+        self._obs = np.zeros((n, self.env.single_observation_space.shape[0]), np.float32)  # o_k
         self._previous = np.zeros((n, 3), np.float32)  # a_{k−1} (0 at an episode's start)
         self._started = np.zeros(n, dtype=bool)  # a_{k−1} exists (not the first step)
         self._actuators = core.sim.actuators  # each vehicle's actuator when b_k was computed
@@ -160,6 +163,7 @@ class ResidualVectorEnv(VectorWrapper):
             self._base[rows] = self._base_predict_rows(obs, rows, True, actuators, keep=True)
             self._actuators = actuators
         self._ever_reset = True
+        self._obs = np.array(obs, dtype=np.float32)
         self._previous[mask] = 0.0
         self._started[mask] = False
         self._pending[mask] = False
@@ -182,6 +186,7 @@ class ResidualVectorEnv(VectorWrapper):
             self._previous,
             self._started,
         )
+        applied = guarded_action(applied, self._obs, self.settings.envelope_guard)
         obs, reward, terminated, truncated, info = self.env.step(applied)
         stepped = ~self._pending  # NEXT_STEP: vehicles reset by this step did not move
         variation = np.abs(applied.astype(np.float64) - self._previous).sum(axis=1)
@@ -235,6 +240,7 @@ class ResidualVectorEnv(VectorWrapper):
         self._previous[fresh] = 0.0
         self._started[fresh] = False
         self._base = self._base_predict(obs, fresh)
+        self._obs = np.array(obs, dtype=np.float32)
         self._pending = done if mode is AutoresetMode.NEXT_STEP else np.zeros_like(done)
         info["base_action"] = self._base.copy()
         info["_base_action"] = np.ones(self.num_envs, dtype=bool)
