@@ -78,10 +78,13 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
     Policy of the 21-value residual observation, or a saved residual agent's
     directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
-    default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none); every
-    other keyword configures the base controller. "lowpass"
+    default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none),
+    `envelope_guard` (the guard of the applied action, default none); every other keyword
+    configures the base controller. "lowpass"
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
+    "guarded" (`controllers.guarded.GuardedPolicy`) takes `base` (default "pid_as_built") and
+    `envelope_guard` (its settings; default the guard's, the stern plane's sign of the actuator).
     "onnx" (`controllers.onnx_policy.OnnxPolicy`, docs/design.md §3.18) takes `path` (an
     exported agent's .onnx file, `auv-gym export`) and runs it with onnxruntime alone; with
     ``env`` its observation layout, actuator and control period are checked against the env's.
@@ -115,7 +118,11 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
         from controllers.registry import make_lowpass
 
         return make_lowpass(**kwargs)
-    valid = [*CLASSICAL, *AGENT_NAMES, "onnx", "residual", "lowpass"]
+    if name == "guarded":
+        from controllers.registry import make_guarded
+
+        return make_guarded(**kwargs)
+    valid = [*CLASSICAL, *AGENT_NAMES, "onnx", "residual", "lowpass", "guarded"]
     raise ValueError(f"unknown controller {name!r}; valid: {valid}")
 
 

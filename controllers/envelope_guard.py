@@ -41,11 +41,20 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.sim.observation import OBS_INDEX
 from auv_gym.support.validation import real
 
-__all__ = ["GUARD_INPUTS", "EnvelopeGuard", "check_envelope_guard", "guard_commands"]
+__all__ = [
+    "ENV_GUARD_INDEX",
+    "GUARD_INPUTS",
+    "EnvelopeGuard",
+    "check_envelope_guard",
+    "guard_commands",
+]
 
 GUARD_INPUTS = ("theta", "q", "u")  # observation entries the guard reads [rad, rad/s, m/s]
+# Their positions in the env's 15-value observation (what classical and residual policies read).
+ENV_GUARD_INDEX = tuple(OBS_INDEX[name] for name in GUARD_INPUTS)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from auv_gym.vehicle.record import DerivedAUVParams
 from controllers.backstepping import Backstepping
 from controllers.command_filtered import CommandFilteredBackstepping
 from controllers.fbsm import FBSM
+from controllers.guarded import GuardedPolicy, guard_for_actuator
 from controllers.lowpass import DEFAULT_ALPHA, LowPassPolicy
 from controllers.pid import PIDLOS
 
@@ -21,6 +22,7 @@ __all__ = [
     "UNFILTERED",
     "NoFiveDofModelError",
     "make_classical",
+    "make_guarded",
     "make_lowpass",
 ]
 
@@ -53,11 +55,16 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
         {**_COLOS, "alos_y": 0.01, "alos_z": 0.01, "k_z": 0.15, "k2": 1.0},
     ),
     "pid_as_built": ("pid_los", {**_COLOS, "k_z": 0.1}),
+    # The as-built PID inside the envelope guard the as-built agents carry (`controllers.guarded`):
+    # the classical reference under the agents' rule, the 2.0 m/s top speed (docs/results.md
+    # "The vehicle as built").
+    "pid_as_built_guarded": ("guarded", {"base": "pid_as_built"}),
 }
 CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
 # The controllers whose laws are built on the vehicle's 5-DOF model (docs/model.md §4).
 MODEL_BASED = ("fbsm", "backstepping", "command_filtered")
-UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] != "lowpass")
+# The classical controllers a low-pass or a guard may wrap (neither wraps a wrapped one).
+UNFILTERED = tuple(n for n in CLASSICAL if PRESETS.get(n, ("",))[0] not in ("lowpass", "guarded"))
 
 
 class NoFiveDofModelError(ValueError):
@@ -86,6 +93,8 @@ def make_classical(name: str, **kwargs: Any) -> Any:
         return CommandFilteredBackstepping(**kwargs)
     if name == "lowpass":  # a preset's low-pass over an unfiltered classical base
         return make_lowpass(**kwargs)
+    if name == "guarded":  # a preset's envelope guard over an unwrapped classical base
+        return make_guarded(**kwargs)
     raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")
 
 
@@ -94,7 +103,8 @@ def _law(name: str, kwargs: dict[str, Any]) -> str:
     while name in PRESETS:
         base, preset = PRESETS[name]
         name, kwargs = base, {**preset, **kwargs}
-    return _law(kwargs.get("base", "fbsm_colos"), {}) if name == "lowpass" else name
+    wrapped = name in ("lowpass", "guarded")
+    return _law(kwargs.get("base", "fbsm_colos"), {}) if wrapped else name
 
 
 def make_lowpass(
@@ -106,6 +116,21 @@ def make_lowpass(
     if base not in UNFILTERED:
         raise ValueError(
             f"lowpass base {base!r} is not an unfiltered classical controller; "
-            f"valid: {[n for n in CLASSICAL if 'lowpass' not in n]}"
+            f"valid: {list(UNFILTERED)}"
         )
     return LowPassPolicy(make_classical(base, **kwargs), alpha)
+
+
+def make_guarded(
+    base: str = "pid_as_built", envelope_guard: Any = None, **kwargs: Any
+) -> GuardedPolicy:
+    """`controllers.guarded.GuardedPolicy` over the classical controller ``base`` (a name of
+    `UNFILTERED`) built with ``kwargs`` (gains, actuator, control_dt, ...); ``envelope_guard``:
+    the guard's settings (None or True: the defaults, the stern-plane sign of the actuator)."""
+    if base not in UNFILTERED:
+        raise ValueError(
+            f"guarded base {base!r} is not an unwrapped classical controller; "
+            f"valid: {list(UNFILTERED)}"
+        )
+    guard = guard_for_actuator(envelope_guard, kwargs.get("actuator"), "guarded")
+    return GuardedPolicy(make_classical(base, **kwargs), guard)

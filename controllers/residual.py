@@ -57,7 +57,7 @@ from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
 from auv_gym.sim.task import REMUS_TOP_SPEED
 from controllers.envelope_guard import (
-    GUARD_INPUTS,
+    ENV_GUARD_INDEX,
     EnvelopeGuard,
     check_envelope_guard,
     guard_commands,
@@ -93,7 +93,7 @@ RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
 # Positions of θ, q, u in the env's observation: what a residual agent's guard reads.
-GUARD_INDEX = tuple(OBS_NAMES.index(name) for name in GUARD_INPUTS)
+GUARD_INDEX = ENV_GUARD_INDEX
 # Set by the env (the scenario; `controllers.env_settings`), never by the residual settings.
 ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt", "params", "actuator_params")
 

@@ -98,6 +98,7 @@ POLICY_COLOURS: dict[str, str] = {
     "pid_ilos": "#ABABAB",  # light grey (tableau-colorblind10)
     "pid_colos": "#999933",  # olive
     "pid_as_built": "#DDCC77",  # sand
+    "pid_as_built_guarded": "#CC6677",  # rose
 }
 # Paul Tol's bright and vibrant palettes without their greys (each colour-blind-safe in itself),
 # then his light palette, for a figure of more than twelve such names.
