@@ -49,6 +49,7 @@ __all__ = [
     "GUARD_INPUTS",
     "EnvelopeGuard",
     "check_envelope_guard",
+    "check_guard_sign",
     "guard_commands",
 ]
 
@@ -140,6 +141,21 @@ def check_envelope_guard(value: Any, where: str) -> EnvelopeGuard:
         return EnvelopeGuard(**value)
     except (TypeError, ValueError) as error:
         raise ValueError(f"{where}: {error}") from None
+
+
+def check_guard_sign(guard: EnvelopeGuard, actuator: str | None, where: str) -> None:
+    """A one-line ValueError naming ``where`` unless ``guard``'s pitch sign is that of the
+    actuator's M command: the stern-plane angle (positive nose-down) on "realistic", a nose-up
+    command on the others (None: the paper's). A wrong sign would push the pitch further out."""
+    expected = -1.0 if actuator == "realistic" else 1.0
+    if guard.nose_up_command != expected:
+        meaning = (
+            "the stern-plane angle (positive nose-down)" if expected < 0 else "a nose-up command"
+        )
+        raise ValueError(
+            f"{where}: on the {actuator or 'paper'} actuator the M command is {meaning}: the "
+            f"envelope guard needs nose_up_command {expected:g}, got {guard.nose_up_command:g}"
+        )
 
 
 def _authority(x: np.ndarray, soft: float, hard: float) -> np.ndarray:

@@ -21,18 +21,26 @@ from typing import Any
 
 import numpy as np
 
-from controllers.envelope_guard import ENV_GUARD_INDEX, check_envelope_guard, guard_commands
+from controllers.envelope_guard import (
+    ENV_GUARD_INDEX,
+    check_envelope_guard,
+    check_guard_sign,
+    guard_commands,
+)
 
 __all__ = ["GuardedPolicy", "guard_for_actuator"]
 
 
 def guard_for_actuator(settings: Any, actuator: str | None, where: str) -> Any:
     """The `EnvelopeGuard` of ``settings`` (True or None: the defaults; a mapping of its
-    fields), its stern-plane sign set for ``actuator`` where the settings leave it."""
+    fields), its stern-plane sign set for ``actuator`` where the settings leave it; a sign the
+    settings give against the actuator's is a ValueError naming ``where``."""
     fields = {} if settings is None or settings is True else settings
     if isinstance(fields, dict) and "nose_up_command" not in fields and actuator == "realistic":
         fields = {**fields, "nose_up_command": -1.0}
-    return check_envelope_guard(fields if fields else True, where)
+    guard = check_envelope_guard(fields if fields else True, where)
+    check_guard_sign(guard, actuator, where)
+    return guard
 
 
 class GuardedPolicy:

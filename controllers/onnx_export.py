@@ -48,6 +48,7 @@ from controllers.agent import (
     load_actor,
     observation_layout,
 )
+from controllers.envelope_guard import ENV_GUARD_INDEX
 from controllers.mirror import ACTION_MIRROR, MIRROR_STAGE, MirroredNetwork, mirrored
 from controllers.onnx_contract import (
     ACTUATORS,
@@ -69,7 +70,6 @@ from controllers.onnx_graph import (
     residual_graph,
 )
 from controllers.onnx_policy import inference_session
-from controllers.residual import GUARD_INDEX
 from controllers.stages import AllocationStage, GuardStage, build_stages
 
 __all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers", "write_export"]
@@ -357,7 +357,9 @@ def _build_model(
             g, "base_action", commands, previous, started, settings.bound, settings.filter_max
         )
         if settings.envelope_guard is not None:  # before it becomes the previous action
-            commands = guard_graph(g, commands, observation, GUARD_INDEX, settings.envelope_guard)
+            commands = guard_graph(
+                g, commands, observation, ENV_GUARD_INDEX, settings.envelope_guard
+            )
         ones = g.op("ConstantOfShape", g.op("Shape", started), value=_one_float32())
         state_outputs = [g.op("Concat", commands, ones, axis=1)]  # (applied, started = 1)
     for stage in stages:

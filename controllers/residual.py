@@ -60,6 +60,7 @@ from controllers.envelope_guard import (
     ENV_GUARD_INDEX,
     EnvelopeGuard,
     check_envelope_guard,
+    check_guard_sign,
     guard_commands,
 )
 from controllers.registry import CLASSICAL, make_classical
@@ -92,8 +93,6 @@ DEFAULT_FILTER_MAX = 0.0
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
-# Positions of θ, q, u in the env's observation: what a residual agent's guard reads.
-GUARD_INDEX = ENV_GUARD_INDEX
 # Set by the env (the scenario; `controllers.env_settings`), never by the residual settings.
 ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt", "params", "actuator_params")
 
@@ -210,7 +209,10 @@ class ResidualSettings:
 
     def make_base(self, **kwargs: Any) -> Any:
         """The base controller: `base_kwargs`, then ``kwargs`` (the scenario's ``actuator``,
-        ``control_dt``, ...; they win)."""
+        ``control_dt``, ...; they win). The envelope guard's pitch sign is checked against
+        that actuator (`controllers.envelope_guard.check_guard_sign`)."""
+        if self.envelope_guard is not None:
+            check_guard_sign(self.envelope_guard, kwargs.get("actuator"), "residual")
         return make_classical(self.base, **{**self.base_kwargs, **kwargs})
 
 
@@ -304,7 +306,7 @@ def guarded_action(
     q [rad/s] and u [m/s] from the env observations (n, 15) they answer."""
     if guard is None:
         return applied
-    return guard_commands(applied, observation, GUARD_INDEX, guard)
+    return guard_commands(applied, observation, ENV_GUARD_INDEX, guard)
 
 
 def filter_coefficient(g: np.ndarray, filter_max: float, started: np.ndarray) -> np.ndarray:

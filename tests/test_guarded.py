@@ -76,6 +76,8 @@ def test_bad_guarded_settings_are_named():
         make_guarded(envelope_guard={"surge": 1.0})
     with pytest.raises(ValueError, match="lowpass base 'pid_as_built_guarded' is not an"):
         controllers.make("lowpass", base="pid_as_built_guarded")
+    with pytest.raises(ValueError, match=r"guarded: on the realistic actuator .* -1, got 1"):
+        make_guarded(actuator="realistic", envelope_guard={"nose_up_command": 1.0})
     with pytest.raises(ValueError, match="guarded base must have predict"):
         GuardedPolicy(object(), EnvelopeGuard())
 

@@ -18,9 +18,8 @@ from auv_gym.rollout import evaluate, rollouts
 from auv_gym.sim.observation import OBS_INDEX
 from benchmarks.training.residual import ResidualTraining
 from benchmarks.training.residual_env import ResidualVectorEnv
-from controllers.envelope_guard import EnvelopeGuard, guard_commands
+from controllers.envelope_guard import ENV_GUARD_INDEX, EnvelopeGuard, guard_commands
 from controllers.residual import (
-    GUARD_INDEX,
     ResidualPolicy,
     ResidualSettings,
     make_residual,
@@ -146,7 +145,7 @@ def test_the_training_wrapper_applies_the_guard_as_the_policy_does():
     speeds = []
     for _ in range(120):  # 6 s: unguarded, every vehicle passes 2 m/s in under 2 s
         want = residual_action(obs[:, 15:18], full, settings.bound)
-        want = guard_commands(want, obs[:, :15], GUARD_INDEX, settings.envelope_guard)
+        want = guard_commands(want, obs[:, :15], ENV_GUARD_INDEX, settings.envelope_guard)
         obs, _, terminated, truncated, _ = env.step(full)
         assert not (terminated | truncated).any()
         np.testing.assert_array_equal(obs[:, 18:21], want)  # a_{k−1} is the guarded action
@@ -189,3 +188,20 @@ def test_a_guarded_residual_agent_saves_loads_and_exports_with_its_guard(
     (bare / "metadata.json").write_text(json.dumps(meta))
     unguarded, _ = load_policy(bare).predict(obs, episode_start=start)
     assert np.abs(unguarded - want).max() > 0.1
+
+
+def test_a_guard_of_the_wrong_pitch_sign_for_the_actuator_is_refused():
+    """On the realistic actuator M is the stern-plane angle (positive nose-down): the guard's
+    default sign would push the pitch further out there, so it is refused, naming the fix."""
+    settings = ResidualSettings(base="pid_as_built", envelope_guard=True)
+    with pytest.raises(ValueError, match=r"residual: on the realistic actuator .* -1, got 1"):
+        settings.make_base(actuator="realistic")
+    with pytest.raises(ValueError, match=r"on the realistic actuator"):
+        ResidualVectorEnv(
+            AUVPath3DVectorEnv(2, actuator="realistic", max_time=1.0),
+            ResidualTraining(base="pid_as_built", envelope_guard=True),
+        )
+    stern = ResidualSettings(base="pid_as_built", envelope_guard={"nose_up_command": -1.0})
+    stern.make_base(actuator="realistic")
+    with pytest.raises(ValueError, match=r"on the fins actuator the M command is a nose-up"):
+        stern.make_base(actuator="fins")
