@@ -11,7 +11,14 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from controllers.agent import AgentPolicy, check_agent, load_actor, observation_layout
+from controllers.agent import (
+    REALISTIC_ACTUATOR,
+    AgentPolicy,
+    check_agent,
+    commands_realistic_actuators,
+    load_actor,
+    observation_layout,
+)
 from controllers.mirror import mirrored
 from controllers.residual import ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
@@ -34,7 +41,8 @@ def load_policy(
     lists (`controllers.stages.StagedPolicy`, built for the plant of ``base_kwargs``: the
     scenario's ``actuator``, ``params``, ``actuator_params``, ``control_dt``); for a residual
     agent a `ResidualPolicy` of its base controller, built with the recorded settings and
-    ``base_kwargs``, and its network.
+    ``base_kwargs`` (the propeller and fins by default for one trained on them), and its
+    network.
 
     ``stages``: None for the agent's own; a list of stage specs replaces them (``[]``: the bare
     network; ``["envelope_guard"]``: guard an agent trained without it), checked like the
@@ -59,6 +67,8 @@ def load_policy(
     actor = load_actor(files, device=device, num_threads=num_threads)
     actor = mirrored(actor, specs, observation_layout(files.metadata), str(files.model))
     if files.residual is not None:
+        if commands_realistic_actuators(files.metadata):  # its base commands them too
+            settings = {"actuator": REALISTIC_ACTUATOR, **settings}
         base = files.residual.make_base(**settings)
         policy = ResidualPolicy(base, actor, files.residual.bound, files.residual)
         policy.env_kwargs = actor.env_kwargs  # the env it carries (`auv_gym.rollout`)

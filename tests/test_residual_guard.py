@@ -205,3 +205,36 @@ def test_a_guard_of_the_wrong_pitch_sign_for_the_actuator_is_refused():
     stern.make_base(actuator="realistic")
     with pytest.raises(ValueError, match=r"on the fins actuator the M command is a nose-up"):
         stern.make_base(actuator="fins")
+
+
+@pytest.mark.rl
+def test_a_guarded_residual_trains_through_train_seeds_and_ships_its_guard(tmp_path):
+    """The pilot's file (a residual on `pid_as_built` on the vehicle as built, guarded), tiny:
+    its guard reaches the wrapper, the validation and the saved agent."""
+    from benchmarks.training.seeds_cli import main
+    from controllers.loader import load_policy
+
+    pilot = ROOT / "benchmarks/results/seeds/residual_pid_as_built_pilot/pilot_bound_x025_guard.yml"
+    config = yaml.safe_load(pilot.read_text())
+    section = config["AUVPath3DSpeedLimit-v0"]
+    section.update(n_envs=4, n_steps=64, batch_size=128, n_epochs=1)
+    small = tmp_path / "guarded.yml"
+    small.write_text(yaml.safe_dump(config))
+    out = tmp_path / "run"
+    argv = ["--config", str(small), "--seeds", "0-0", "--n-timesteps", "256"]
+    argv += ["--eval-freq", "256", "--checkpoint-freq", "256", "--task-set"]
+    argv += ["validation_as_built", "--eval-episodes", "2", "--eval-duration", "5"]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0
+    meta = json.loads((out / "seed_0" / "final" / "metadata.json").read_text())
+    assert meta["residual"]["envelope_guard"]["nose_up_command"] == -1.0
+    assert meta["residual"]["envelope_guard"]["surge_soft"] == 1.8
+    policy = load_policy(out / "seed_0" / "final", base_kwargs={"actuator": "realistic"})
+    assert isinstance(policy, ResidualPolicy) and policy.guard == EnvelopeGuard(
+        nose_up_command=-1.0
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["seeds"][0]["validation_summary"]["n_episodes"] == 2
+    # trained on the propeller and fins, its base commands them unless told otherwise
+    assert load_policy(out / "seed_0" / "final").base.actuator == "realistic"
+    with pytest.raises(ValueError, match="on the paper actuator the M command is a nose-up"):
+        load_policy(out / "seed_0" / "final", base_kwargs={"actuator": "paper"})
