@@ -39,7 +39,7 @@ from auv_gym import __version__
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, ObservationConfig
 from auv_gym.support.validation import ArgumentTypeError
 from controllers.algorithms import ALGORITHMS, algorithm_of
-from controllers.residual import RESIDUAL_OBS_NAMES, ResidualSettings
+from controllers.residual import NO_STAGES, RESIDUAL_OBS_NAMES, ResidualSettings
 
 ACTION_DIM = 3  # normalised (X, M, N) commands in [-1, 1]
 
@@ -277,10 +277,7 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
     stages = agent_stages(metadata, str(meta))
     if stages and residual is not None:
-        raise ValueError(
-            f"{meta}: a residual agent takes no stages (its base is its own; "
-            "its envelope guard is a residual setting: residual: {envelope_guard: ...})"
-        )
+        raise ValueError(f"{meta}: {NO_STAGES}")
     return AgentFiles(
         model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual, algo.name, stages
     )

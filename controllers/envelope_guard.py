@@ -51,6 +51,7 @@ __all__ = [
     "check_envelope_guard",
     "check_guard_sign",
     "guard_commands",
+    "guard_env_commands",
 ]
 
 GUARD_INPUTS = ("theta", "q", "u")  # observation entries the guard reads [rad, rad/s, m/s]
@@ -185,3 +186,13 @@ def guard_commands(
         rows[:, 0] = np.maximum(rows[:, 0], floor)
     rows[:, 0] = np.minimum(rows[:, 0], _authority(u, guard.surge_soft, guard.surge_hard))
     return out
+
+
+def guard_env_commands(
+    commands: np.ndarray, observation: np.ndarray, guard: EnvelopeGuard | None
+) -> np.ndarray:
+    """``guard_commands`` on commands answering the env's 15-value observations (θ, q, u at
+    `ENV_GUARD_INDEX`); ``guard`` None leaves them unchanged."""
+    if guard is None:
+        return commands
+    return guard_commands(commands, observation, ENV_GUARD_INDEX, guard)

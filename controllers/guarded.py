@@ -21,12 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from controllers.envelope_guard import (
-    ENV_GUARD_INDEX,
-    check_envelope_guard,
-    check_guard_sign,
-    guard_commands,
-)
+from controllers.envelope_guard import check_envelope_guard, check_guard_sign, guard_env_commands
 
 __all__ = ["GuardedPolicy", "guard_for_actuator"]
 
@@ -38,7 +33,7 @@ def guard_for_actuator(settings: Any, actuator: str | None, where: str) -> Any:
     fields = {} if settings is None or settings is True else settings
     if isinstance(fields, dict) and "nose_up_command" not in fields and actuator == "realistic":
         fields = {**fields, "nose_up_command": -1.0}
-    guard = check_envelope_guard(fields if fields else True, where)
+    guard = check_envelope_guard(fields, where)
     check_guard_sign(guard, actuator, where)
     return guard
 
@@ -76,8 +71,7 @@ class GuardedPolicy:
         action, state = self.base.predict(
             observation, state=state, episode_start=episode_start, deterministic=deterministic
         )
-        guarded = guard_commands(action, observation, ENV_GUARD_INDEX, self.guard)
-        return guarded, state
+        return guard_env_commands(action, observation, self.guard), state
 
     def diagnostics(self, state: Any) -> dict[str, np.ndarray]:
         """The base's diagnostics, if it has any."""

@@ -20,7 +20,7 @@ from controllers.agent import (
     observation_layout,
 )
 from controllers.mirror import mirrored
-from controllers.residual import ResidualPolicy, check_bound
+from controllers.residual import NO_STAGES, ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
 from controllers.stages import StagedPolicy, build_stages, check_stage_specs
 
@@ -58,10 +58,7 @@ def load_policy(
         raise ValueError(f"agent {files.model} was trained with {files.algo!r}, not {algo!r}")
     specs = files.stages if stages is None else check_stage_specs(stages, "stages")
     if specs and files.residual is not None:
-        raise ValueError(
-            f"{files.model}: a residual agent takes no stages (its base is its own; "
-            "its envelope guard is a residual setting: residual: {envelope_guard: ...})"
-        )
+        raise ValueError(f"{files.model}: {NO_STAGES}")
     settings = base_kwargs or {}
     built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
     actor = load_actor(files, device=device, num_threads=num_threads)

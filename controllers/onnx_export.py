@@ -48,7 +48,7 @@ from controllers.agent import (
     load_actor,
     observation_layout,
 )
-from controllers.envelope_guard import ENV_GUARD_INDEX
+from controllers.envelope_guard import ENV_GUARD_INDEX, guard_env_commands
 from controllers.mirror import ACTION_MIRROR, MIRROR_STAGE, MirroredNetwork, mirrored
 from controllers.onnx_contract import (
     ACTUATORS,
@@ -400,7 +400,7 @@ def _parity(
     agent's normalisation statistics (μ ± σ per entry; a residual agent: base commands, previous
     actions and episode starts drawn too, its commands through its envelope guard if it has
     one): the largest |difference| of the commands and of the memory it passes on."""
-    from controllers.residual import agent_observation, guarded_action, residual_action
+    from controllers.residual import agent_observation, residual_action
     from controllers.stages import PipelineState, StagedPolicy
 
     rng = np.random.default_rng(0)
@@ -420,7 +420,7 @@ def _parity(
         want = residual_action(
             base, correction, files.residual.bound, files.residual.filter_max, previous, started
         )
-        want = guarded_action(want, obs, files.residual.envelope_guard)
+        want = guard_env_commands(want, obs, files.residual.envelope_guard)
         want_state = np.column_stack([want, np.ones(k)])
     else:
         obs = draw.astype(np.float32)

@@ -57,11 +57,10 @@ from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
 from auv_gym.sim.task import REMUS_TOP_SPEED
 from controllers.envelope_guard import (
-    ENV_GUARD_INDEX,
     EnvelopeGuard,
     check_envelope_guard,
     check_guard_sign,
-    guard_commands,
+    guard_env_commands,
 )
 from controllers.registry import CLASSICAL, make_classical
 
@@ -69,6 +68,7 @@ __all__ = [
     "DEFAULT_BASE",
     "DEFAULT_BOUND",
     "DEFAULT_FILTER_MAX",
+    "NO_STAGES",
     "RESIDUAL_FEATURES",
     "RESIDUAL_OBS_DIM",
     "RESIDUAL_OBS_NAMES",
@@ -79,7 +79,6 @@ __all__ = [
     "base_kwargs_for_env",
     "check_bound",
     "filter_coefficient",
-    "guarded_action",
     "make_residual",
     "residual_action",
     "residual_observation_bounds",
@@ -93,6 +92,11 @@ DEFAULT_FILTER_MAX = 0.0
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
+# Why a residual agent's files or hyper-parameters may list no stages.
+NO_STAGES = (
+    "a residual agent takes no stages (its base is its own; its envelope guard is a residual "
+    "setting: residual: {envelope_guard: ...})"
+)
 # Set by the env (the scenario; `controllers.env_settings`), never by the residual settings.
 ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt", "params", "actuator_params")
 
@@ -150,6 +154,8 @@ class ResidualSettings:
         if owned:
             raise ValueError(f"base_kwargs must not set {owned}: the env (scenario) sets them")
         object.__setattr__(self, "base_kwargs", dict(self.base_kwargs))
+        if self.envelope_guard is False:  # a file's "no guard"
+            object.__setattr__(self, "envelope_guard", None)
         if self.envelope_guard is not None:
             guard = check_envelope_guard(self.envelope_guard, "residual")
             object.__setattr__(self, "envelope_guard", guard)
@@ -171,8 +177,6 @@ class ResidualSettings:
         if "base" in values:
             values["base"] = str(values["base"])
         values["base_kwargs"] = values.get("base_kwargs") or {}
-        if values.get("envelope_guard") is False:
-            values["envelope_guard"] = None
         try:
             return cls(**values)
         except ValueError as exc:
@@ -299,16 +303,6 @@ def residual_action(
     return (alpha * previous + (np.float32(1.0) - alpha) * target).astype(np.float32)
 
 
-def guarded_action(
-    applied: np.ndarray, observation: np.ndarray, guard: EnvelopeGuard | None
-) -> np.ndarray:
-    """The applied actions (n, 3) float32 through ``guard`` (None: unchanged), reading θ [rad],
-    q [rad/s] and u [m/s] from the env observations (n, 15) they answer."""
-    if guard is None:
-        return applied
-    return guard_commands(applied, observation, ENV_GUARD_INDEX, guard)
-
-
 def filter_coefficient(g: np.ndarray, filter_max: float, started: np.ndarray) -> np.ndarray:
     """α = α_max·clip(g, 0, 1) as float32 (n, 3), 0 on rows not ``started`` (no a_{k−1})."""
     alpha = np.float32(filter_max) * np.clip(np.asarray(g), 0.0, 1.0).astype(np.float32)
@@ -413,7 +407,7 @@ class ResidualPolicy:
             state["previous"],
             state["started"],
         )
-        applied = guarded_action(applied, batch, self.guard)
+        applied = guard_env_commands(applied, batch, self.guard)
         if self.filter_max > 0.0:
             g = np.asarray(correction, np.float64)[:, 3:]
             state["filter"][:] = filter_coefficient(g, self.filter_max, state["started"])
@@ -456,8 +450,6 @@ def make_residual(
         bound=DEFAULT_BOUND if bound is None else bound,
         base_kwargs=base_kwargs,
         filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
-        envelope_guard=None
-        if envelope_guard is None or envelope_guard is False
-        else envelope_guard,
+        envelope_guard=envelope_guard,
     )
     return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)

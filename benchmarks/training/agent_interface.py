@@ -13,6 +13,7 @@ from auv_gym.sim.randomization import RANDOM_ACTUATORS
 from controllers.actuator_allocation import ALLOCATED_ACTUATORS
 from controllers.env_settings import draws_actuator, env_config, policy_settings
 from controllers.mirror import MIRROR_STAGE
+from controllers.residual import NO_STAGES
 from controllers.stages import build_stages, check_stage_specs
 
 if TYPE_CHECKING:
@@ -41,10 +42,7 @@ def parse_interface(
         raise ValueError(f"{where}: envelope_guard is now {place}")
     if "stages" in section:
         if residual is not None:
-            raise ValueError(
-                f"{where}: a residual agent takes no stages (its base is its own; "
-                "its envelope guard is a residual setting: residual: {envelope_guard: ...})"
-            )
+            raise ValueError(f"{where}: {NO_STAGES}")
         fields["stages"] = check_stage_specs(section["stages"], where)
         if any(spec["name"] == MIRROR_STAGE for spec in fields["stages"]):
             raise ValueError(

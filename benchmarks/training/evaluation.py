@@ -15,14 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym import ENV_ID
+from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 from auv_gym.metrics import check_window, window_start
 from auv_gym.rollout import evaluate
 from auv_gym.sim.trajectory import env_termination_reason
 from auv_gym.support.files import write_json
 from benchmarks.catalog.tasks import VARIED
 from benchmarks.training.selection_rule import DEFAULT_RULE
-from controllers.agent import agent_env_kwargs, check_agent
+from controllers.agent import agent_env_kwargs
 from controllers.loader import load_policy
 from controllers.residual import base_kwargs_for_env
 
@@ -160,9 +160,9 @@ def held_out_evaluation(
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
-    # the env it carries, under ``env_id``; a residual agent's base is built for its actuator
-    fixed = agent_env_kwargs(check_agent(agent).metadata, env_id)
-    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(fixed))
+    # a residual agent's base takes the actuator it was trained on (`load_policy`'s default)
+    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[resolve_env_id(env_id)]))
+    fixed = agent_env_kwargs(policy.metadata, env_id)  # the env it carries, under ``env_id``
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
     return {
         "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id}"

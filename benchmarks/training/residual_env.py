@@ -42,9 +42,9 @@ from gymnasium.vector.utils import batch_space
 from auv_gym.envs.env import validate_actions
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import ResidualTraining
+from controllers.envelope_guard import guard_env_commands
 from controllers.residual import (
     agent_observation,
-    guarded_action,
     residual_action,
     residual_observation_bounds,
 )
@@ -186,7 +186,7 @@ class ResidualVectorEnv(VectorWrapper):
             self._previous,
             self._started,
         )
-        applied = guarded_action(applied, self._obs, self.settings.envelope_guard)
+        applied = guard_env_commands(applied, self._obs, self.settings.envelope_guard)
         obs, reward, terminated, truncated, info = self.env.step(applied)
         stepped = ~self._pending  # NEXT_STEP: vehicles reset by this step did not move
         variation = np.abs(applied.astype(np.float64) - self._previous).sum(axis=1)
