@@ -129,6 +129,9 @@ def compute_metrics(
       surge_overshoot — max_k (u − u_D) over the episode (negative if u never reaches u_D);
       surge_overshoot_percent — 100·surge_overshoot/u_D;
       rms_speed_error — √mean((u − u_D)²) over the window;
+      mean_path_speed — mean virtual-point speed u_p over the window: the pace at which the
+      path is flown (u_D for a vehicle on the virtual point; one that keeps ahead of it,
+      x_e > 0, drives it faster, u_p = u_D(1 + tanh(x_e/σ)), docs/model.md §3.3);
       max_surge — max_k u over the episode (realistic speed: REMUS 100 tops out near
       2.3-2.5 m/s); overspeed_fraction — fraction of the episode's control intervals
       [t_k, t_{k+1}) whose end sample has u > the vehicle's top speed `Trajectory.top_speed`
@@ -197,6 +200,7 @@ def compute_metrics(
     metrics["surge_overshoot"] = overshoot
     metrics["surge_overshoot_percent"] = 100.0 * overshoot / tr.u_desired
     metrics["rms_speed_error"] = _window_rms(t, speed_error, transient)
+    metrics["mean_path_speed"] = float(tr["u_p"][window].mean()) if window.any() else math.nan
     surge = tr["u"]
     metrics["max_surge"] = float(surge.max())
     overspeed = surge[1:] > tr.top_speed

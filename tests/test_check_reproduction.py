@@ -153,3 +153,27 @@ def test_a_keep_folder_it_could_not_write_is_refused_before_any_rerun(tmp_path: 
         f"--keep '{blocker}' cannot be written as a folder: it is a file, not a folder"
         in capsys.readouterr().err
     )
+
+
+def test_a_metric_added_since_the_results_is_listed_not_an_error(tmp_path: Path, capsys) -> None:
+    """The committed files predate `mean_path_speed`: a re-run holds it, every shared cell must
+    still match, and any other new column is still an error."""
+    old = _csv(tmp_path / "a.csv", ["paper,fbsm,0,0.0640,31.5"])
+    new = tmp_path / "b.csv"
+    new.write_text(HEADER.rstrip("\n") + ",mean_path_speed\n" + "paper,fbsm,0,0.0640,31.5,1.0002\n")
+    report = Report(allow_new=False)
+    compare_episodes(old, new, report)
+    assert report.failures == 0
+    assert "1 of metrics added since the results: ['mean_path_speed']" in capsys.readouterr().out
+    other = tmp_path / "c.csv"
+    other.write_text(HEADER.rstrip("\n") + ",pace\n" + "paper,fbsm,0,0.0640,31.5,1.0\n")
+    compare_episodes(old, other, report)
+    assert report.failures == 1
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    a.write_text(json.dumps({"metrics": {"fbsm": {"rms": 0.1}}}))
+    b.write_text(json.dumps({"metrics": {"fbsm": {"rms": 0.1, "mean_path_speed": 1.0}}}))
+    compare_json("m", a, b, report)
+    assert report.failures == 1  # unchanged
+    b.write_text(json.dumps({"metrics": {"fbsm": {"rms": 0.1, "pace": 1.0}}}))
+    compare_json("m", a, b, report)
+    assert report.failures == 2

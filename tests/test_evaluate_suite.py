@@ -194,6 +194,29 @@ def test_chunks_copied_under_a_new_label_are_reused_and_carry_it(tiny, tmp_path,
     assert [{**r, "policy": r["policy"].replace("renamed", "gen")} for r in rows] == before
 
 
+def test_a_chunk_stored_before_a_metric_existed_is_reused_with_nan(tiny, tmp_path, monkeypatch):
+    """A suite resumed across the release that added `mean_path_speed` (the pace, m/s): its
+    stored chunks are not flown again, and their rows say NaN for it, not KeyError."""
+    out = tmp_path / "out"
+    shutil.copytree(tiny["out"], out)
+    for chunk in (out / "chunks").rglob("*.json"):
+        record = json.loads(chunk.read_text())
+        for episode in record["episodes"]:
+            del episode["mean_path_speed"]
+        chunk.write_text(json.dumps(record))
+    argv = [*tiny["argv"][:-5], "--out", str(out), "--no-stats", "--quiet"]
+    monkeypatch.setattr(chunks_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
+    main(argv)
+    rows = read_rows(out / "episodes.csv")
+    fresh = read_rows(tiny["out"] / "episodes.csv")
+    assert {r["mean_path_speed"] for r in rows} == {"nan"}
+    # u_p = u_D(1 + tanh(x_e/σ)) lies in [0, 2u_D], u_D = 1 m/s; a fresh row has its value
+    paces = [float(r["mean_path_speed"]) for r in fresh if r["rms_distance"] != "nan"]
+    assert paces and all(0.0 <= pace <= 2.0 for pace in paces)
+    strip = [{k: v for k, v in r.items() if k != "mean_path_speed"} for r in rows]
+    assert strip == [{k: v for k, v in r.items() if k != "mean_path_speed"} for r in fresh]
+
+
 def test_a_crashed_run_keeps_its_finished_chunks(tiny, tmp_path, monkeypatch):
     out = tmp_path / "out"
     argv = [

@@ -73,7 +73,8 @@ def synthetic_trajectory(**overrides) -> Trajectory:
     d = np.array([5.0, 4.0, 3.0, 2.0, 0.6, 0.4, 0.3, 0.05, 0.2, 0.08, 0.05])
     u = np.array([0.0, 0.5, 0.9, 1.1, 1.05, 1.0, 1.0, 0.98, 1.02, 1.0, 1.0])
     samples = {name: np.zeros(11) for name in SAMPLE_FIELDS}
-    samples.update(distance=d, x_e=np.zeros(11), y_e=0.6 * d, z_e=0.8 * d, u=u)
+    u_p = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.2, 1.1, 1.0, 1.0, 0.9, 1.2])
+    samples.update(distance=d, x_e=np.zeros(11), y_e=0.6 * d, z_e=0.8 * d, u=u, u_p=u_p)
     x_bar = np.array([1.0, 1.0, 0.5] + [0.2] * 7)
     m_bar = np.array([1.0, -1.0, 0.0, 0.0, 0.0, 0.5, -0.5, 0.5, -0.5, 0.5])
     intervals = {name: np.zeros(10) for name in INTERVAL_FIELDS}
@@ -111,6 +112,7 @@ def test_metrics_match_hand_computed_values():
         "surge_overshoot": 0.1,
         "surge_overshoot_percent": 10.0,
         "rms_speed_error": math.sqrt(0.0008 / 6),  # u − u_D = 0, 0, −.02, .02, 0, 0
+        "mean_path_speed": 6.4 / 6,  # u_p = 1.2, 1.1, 1.0, 1.0, 0.9, 1.2
         # Σ X̄² = 1 + 1 + 0.25 + 7·0.04 = 2.53; Σ M̄² = 2 + 5·0.25 = 3.25; Δt = 1 s.
         "control_effort": 5.78,
         "control_effort_X": 2.53,

@@ -116,8 +116,8 @@ def test_parse_seeds(text, seeds):
             "'validation_actuators_start', 'validation_actuators_start_light', "
             "'validation_as_built', 'validation_as_built_plants', 'validation_as_built_start', "
             "'validation_as_built_start_6dof', 'validation_as_built_start_plants', "
-            "'validation_cross_current', 'validation_fins_start', "
-            "'validation_paper_actuator', 'validation_paper_start']",
+            "'validation_as_built_wide_plants', 'validation_cross_current', "
+            "'validation_fins_start', 'validation_paper_actuator', 'validation_paper_start']",
         ),
         (["--seeds", "2", "--task-set", "test_steep"], "'test_steep' is not a validation set"),
         (

@@ -113,7 +113,8 @@ def read_episodes(path: Path) -> list[dict[str, Any]]:
             "duration",
         ):
             row[key] = float(row[key])
-        for key in ("chattering", "saturation_fraction", "max_roll"):  # absent from older files
+        # absent from older files
+        for key in ("chattering", "saturation_fraction", "max_roll", "mean_path_speed"):
             if key in row:
                 row[key] = float(row[key])
     return rows

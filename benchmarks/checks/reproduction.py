@@ -49,6 +49,10 @@ AGENTS = Path(__file__).resolve().parents[1] / "agents"
 # episodes of the learned policies reproduce to this relative tolerance, the rest bit for bit.
 AGENT_TOLERANCE = 1e-6
 UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # differ by design
+# Metrics `auv_gym.metrics.compute_metrics` gained after the committed results were recorded: a
+# column or value of one of them that only the re-run holds is listed, not an error (the
+# committed files predate it); every cell both sides hold must still match.
+ADDED_METRICS = ("mean_path_speed",)
 
 
 def _run(module: str, args: Sequence[str]) -> None:
@@ -145,13 +149,26 @@ class Report:
             print("  DIFF", line)
         self.failures += len(diffs)
 
-    def one_sided(self, label: str, items: Sequence[Any]) -> None:
+    def one_sided(self, label: str, items: Sequence[Any], new_run: bool = False) -> None:
+        """Rows, columns or values one side holds: errors unless ``--allow-new``, except, on
+        the re-run's side (``new_run``), those of `ADDED_METRICS`."""
+        if new_run:
+            added = [item for item in items if _added_metric(str(item))]
+            if added:
+                print(f"{label}: {len(added)} of metrics added since the results: {added}")
+            items = [item for item in items if not _added_metric(str(item))]
         if not items:
             return
         verdict = "allowed (--allow-new)" if self.allow_new else "ERROR"
         print(f"{label}: {len(items)} {verdict}: {list(items)[: self.shown]}")
         if not self.allow_new:
             self.failures += len(items)
+
+
+def _added_metric(key: str) -> bool:
+    """Whether a column name or a flattened JSON key (``.../metric``) is one of
+    `ADDED_METRICS`."""
+    return key.rsplit("/", 1)[-1] in ADDED_METRICS
 
 
 def _within_rounding(old: str, new: str) -> bool:
@@ -187,7 +204,7 @@ def compare_episodes(
     columns_old = set(next(iter(old.values()), {}))
     columns_new = set(next(iter(new.values()), {}))
     report.one_sided("columns only in the committed file", sorted(columns_old - columns_new))
-    report.one_sided("columns only in the new run", sorted(columns_new - columns_old))
+    report.one_sided("columns only in the new run", sorted(columns_new - columns_old), True)
     rounded = 0
     by_policy: Counter[str] = Counter()  # differing values per policy
     for key in sorted(set(old) & set(new)):
@@ -219,7 +236,7 @@ def compare_json(label: str, reference: Path, fresh: Path, report: Report) -> No
     old = {k: v for k, v in _flatten(json.loads(reference.read_text())) if _compared(k)}
     new = {k: v for k, v in _flatten(json.loads(fresh.read_text())) if _compared(k)}
     report.one_sided(f"{label}: values only in the committed file", sorted(set(old) - set(new)))
-    report.one_sided(f"{label}: values only in the new run", sorted(set(new) - set(old)))
+    report.one_sided(f"{label}: values only in the new run", sorted(set(new) - set(old)), True)
     shared = sorted(set(old) & set(new))
     diffs = [f"{k}: {old[k]!r} -> {new[k]!r}" for k in shared if old[k] != new[k]]
     report.differences(label, diffs, len(shared))

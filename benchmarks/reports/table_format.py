@@ -63,6 +63,8 @@ METRIC_INFO: dict[str, tuple[str, str, str]] = {
     "settling_time_0p1": ("settling time to 0.1 m", "s", "min"),
     "surge_overshoot": ("surge overshoot max(u − u_D)", "m/s", "min"),
     "rms_speed_error": ("RMS(u − u_D), t ≥ transient", "m/s", "min"),
+    # not ranked: the pace is a condition of the comparison (u_D asked), not a score
+    "mean_path_speed": ("pace: mean virtual-point speed u_p, t ≥ transient", "m/s", ""),
     "max_surge": ("max surge u", "m/s", "min"),
     "overspeed_fraction": ("time with u > 2.0 m/s", "-", "min"),
     "control_effort": ("control effort ∫Σ(τ/τ_max)² dt", "s", "min"),

@@ -35,7 +35,13 @@ __all__ = [
 # keep each table's rows within a screen: tracking, speed, effort, safety.
 SUMMARY_GROUPS: dict[str, tuple[str, ...]] = {
     "tracking": ("rms_distance", "rms_y_e", "rms_z_e", "iae_distance", "settling_time_0p5"),
-    "speed": ("surge_overshoot", "rms_speed_error", "max_surge", "overspeed_fraction"),
+    "speed": (
+        "surge_overshoot",
+        "rms_speed_error",
+        "max_surge",
+        "overspeed_fraction",
+        "mean_path_speed",
+    ),
     "effort": ("control_effort", "chattering", "saturation_fraction"),
     "safety": ("episode_cost",),
     # the vehicle as built (propeller and fins): only scenarios with them show this group
@@ -50,6 +56,7 @@ _HEADERS = {
     "iae_distance": "IAE d",
     "settling_time_0p5": "settle 0.5 m",
     "surge_overshoot": "overshoot",
+    "mean_path_speed": "pace u_p",
     "rms_speed_error": "RMS(u − u_D)",
     "max_surge": "max u",
     "overspeed_fraction": "time u > 2 m/s",

@@ -55,6 +55,7 @@ METRICS = {
     "max_distance": "max_distance_window",
     "max_surge": "max_surge",
     "overspeed_fraction": "overspeed_fraction",
+    "mean_path_speed": "mean_path_speed",  # [m/s] the pace u_p at which the path is flown
     "chattering": "chattering",  # [1/s]
     "saturation_fraction": "saturation_fraction",
     "max_roll": "max_roll",  # [rad] the 6-DOF plant's; NaN on the 5-DOF, which has no roll
@@ -201,6 +202,14 @@ def episodes_csv(records: list[dict[str, Any]]) -> str:
     for r in records:
         for e in r["episodes"]:
             writer.writerow(
-                [r["policy"], r["run"], r["set"], e["seed"], r["env_id"], *(e[m] for m in METRICS)]
+                [
+                    r["policy"],
+                    r["run"],
+                    r["set"],
+                    e["seed"],
+                    r["env_id"],
+                    # a chunk stored before a metric existed (a resumed suite) has none: NaN
+                    *(e.get(m, math.nan) for m in METRICS),
+                ]
             )
     return buffer.getvalue()
