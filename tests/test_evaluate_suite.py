@@ -462,6 +462,38 @@ def test_target_table_by_hand(tmp_path):
     assert np.isfinite(stats["mean"]["aggregate"]["x"]["value"])
 
 
+def test_target_table_reports_each_side_pace(tmp_path):
+    """The pace (mean virtual-point speed, m/s) of the policy and of the set's reference, a
+    column of the table when the episodes recorded it; a file from before it has none."""
+    suite = {
+        "command": "by hand",
+        "sets": {"a": {"env": {}, "kind": "distribution"}},
+        "policies": {"fbsm": {"results": None}, "x": {"results": None}},
+    }
+    (tmp_path / "suite.json").write_text(json.dumps(suite))
+    header = (
+        "policy,run,set,seed,env_id,rms_distance,rms_x_e,rms_y_e,rms_z_e,max_distance,"
+        "max_surge,overspeed_fraction,mean_path_speed,termination_reason,window_samples,duration\n"
+    )
+    cells = [("fbsm", 0, 0.2, 1.0), ("fbsm", 1, 0.2, 1.02), ("x", 0, 0.1, 1.2), ("x", 1, 0.1, 1.1)]
+    lines = [
+        f"{p},0,a,{k},AUVPath3D-v0,{d},0,0,0,{d},1.5,0,{pace},time_limit,10,10.0\n"
+        for p, k, d, pace in cells
+    ]
+    (tmp_path / "episodes.csv").write_text(header + "".join(lines))
+    text = write_stats(tmp_path, reps=200, figures=False)
+    (row,) = json.loads((tmp_path / "stats.json").read_text())["target"]
+    assert math.isclose(row["pace_m_s"], 1.15) and math.isclose(row["reference_pace_m_s"], 1.01)
+    assert "pace [m/s], policy / reference" in text
+    assert "| a | x | 0.100 | 0.200 | 0.500 | 0/2 | 1.50 | 1.15 / 1.01 | pass |" in text
+    # the same episodes without the column: no pace, no column
+    old = [",".join(c for i, c in enumerate(line.split(",")) if i != 12) for line in lines]
+    (tmp_path / "episodes.csv").write_text(header.replace("mean_path_speed,", "") + "".join(old))
+    text = write_stats(tmp_path, reps=200, figures=False)
+    assert "pace" not in text
+    assert "| a | x | 0.100 | 0.200 | 0.500 | 0/2 | 1.50 | pass |" in text
+
+
 def test_a_rerun_without_statistics_removes_the_earlier_statistics(tiny, tmp_path):
     """Was: stats.json, stats.md and figures/ of the earlier run stayed beside the new
     episodes.csv they do not describe."""

@@ -3,6 +3,7 @@ interval tables per policy group, probability of improvement, the target table a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -63,8 +64,15 @@ def stats_markdown(
         f"## Target: mean RMS distance within {max_ratio:g}× {best}, no failed episode, max "
         f"surge ≤ {surge}\n",
     ]
+    # the pace column only where the episodes recorded one (files before it have none)
+    paced = any(math.isfinite(t.get("pace_m_s", math.nan)) for t in stats["target"])
     rows = []
     for t in stats["target"]:
+        pace = (
+            [f"{format_number(t['pace_m_s'])} / {format_number(t['reference_pace_m_s'])}"]
+            if paced
+            else []
+        )
         failed = f"{t['failed']}/{t['episodes']}" + (
             f" ({', '.join(t['failures'])})" if t["failures"] else ""
         )
@@ -79,6 +87,7 @@ def stats_markdown(
                 format_number(t["ratio"]),
                 failed,
                 format_number(t["max_surge_m_s"]),
+                *pace,
                 "pass" if t["passed"] else "**FAIL**",
             ]
         )
@@ -93,6 +102,7 @@ def stats_markdown(
         "ratio",
         "failed",
         "max surge [m/s]",
+        *(["pace [m/s], policy / reference"] if paced else []),
         "verdict",
     ]
     lines += [table_format.markdown_table(header, rows, ["l"] * len(header))]

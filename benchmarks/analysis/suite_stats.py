@@ -218,6 +218,16 @@ def failure_matrices(
     return episode_matrices(rows, sets, lambda row: row["termination_reason"] in FAILURE_REASONS)[0]
 
 
+def mean_pace(rows: Sequence[Mapping[str, Any]]) -> float:
+    """Mean of the episodes' pace, the virtual point's mean speed ``mean_path_speed`` [m/s]
+    (docs/design.md §3.3), over those that recorded one; NaN when none did (a file written before
+    the column existed) or the list is empty."""
+    paces = [
+        r["mean_path_speed"] for r in rows if math.isfinite(r.get("mean_path_speed", math.nan))
+    ]
+    return float(np.mean(paces)) if paces else math.nan
+
+
 def target_table(
     rows: Sequence[Mapping[str, Any]],
     scores: Mapping[str, np.ndarray],
@@ -227,7 +237,9 @@ def target_table(
     speeds: Mapping[str, float] | None = None,
 ) -> list[dict[str, Any]]:
     """One entry per (set, policy other than the references): mean scores [m], their ratio to
-    the best reference of the set, failed episodes, largest surge [m/s] and whether the set
+    the best reference of the set, failed episodes, largest surge [m/s], the policy's and that
+    reference's pace (`mean_pace`, m/s: a ratio at unequal paces compares two tasks; reported,
+    not judged) and whether the set
     passes: ratio ≤ ``max_ratio``, no failed episode, surge ≤ the set's top speed in ``speeds``
     [m/s] (`top_speeds`; a set it lacks: REMUS 100's `REMUS_TOP_SPEED`) (module doc).
     ``reference``: a policy, or several (those evaluated count), of which each set takes the
@@ -251,6 +263,7 @@ def target_table(
                 r["termination_reason"] for r in mine if r["termination_reason"] in FAILURE_REASONS
             )
             surge = max(r["max_surge"] for r in mine)
+            theirs = [r for r in rows if r["policy"] == best and r["set"] == name]
             mean = float(x[:, cols].mean())
             ratio = mean / ref_means[best]
             table.append(
@@ -264,6 +277,8 @@ def target_table(
                     "failed": len(failed),
                     "failures": sorted(set(failed)),
                     "max_surge_m_s": surge,
+                    "pace_m_s": mean_pace(mine),
+                    "reference_pace_m_s": mean_pace(theirs),
                     "episodes": len(mine),
                     "passed": ratio <= max_ratio and not failed and surge <= top_speed,
                 }
