@@ -164,7 +164,7 @@ def test_a_metric_added_since_the_results_is_listed_not_an_error(tmp_path: Path,
     report = Report(allow_new=False)
     compare_episodes(old, new, report)
     assert report.failures == 0
-    assert "1 of metrics added since the results: ['mean_path_speed']" in capsys.readouterr().out
+    assert "1 of metrics newer than these results: ['mean_path_speed']" in capsys.readouterr().out
     other = tmp_path / "c.csv"
     other.write_text(HEADER.rstrip("\n") + ",pace\n" + "paper,fbsm,0,0.0640,31.5,1.0\n")
     compare_episodes(old, other, report)

@@ -239,9 +239,9 @@ def target_table(
     """One entry per (set, policy other than the references): mean scores [m], their ratio to
     the best reference of the set, failed episodes, largest surge [m/s], the policy's and that
     reference's pace (`mean_pace`, m/s: a ratio at unequal paces compares two tasks; reported,
-    not judged) and whether the set
-    passes: ratio ≤ ``max_ratio``, no failed episode, surge ≤ the set's top speed in ``speeds``
-    [m/s] (`top_speeds`; a set it lacks: REMUS 100's `REMUS_TOP_SPEED`) (module doc).
+    not judged) and whether the set passes: ratio ≤ ``max_ratio``, no failed episode, surge ≤
+    the set's top speed in ``speeds`` [m/s] (`top_speeds`; a set it lacks: REMUS 100's
+    `REMUS_TOP_SPEED`) (module doc).
     ``reference``: a policy, or several (those evaluated count), of which each set takes the
     one with the lowest mean ("the best classical policy")."""
     names = [reference] if isinstance(reference, str) else list(reference)

@@ -155,7 +155,7 @@ class Report:
         if new_run:
             added = [item for item in items if _added_metric(str(item))]
             if added:
-                print(f"{label}: {len(added)} of metrics added since the results: {added}")
+                print(f"{label}: {len(added)} of metrics newer than these results: {added}")
             items = [item for item in items if not _added_metric(str(item))]
         if not items:
             return
