@@ -255,6 +255,7 @@ def target_table(
         top_speed = (speeds or {}).get(name, REMUS_TOP_SPEED)
         ref_means = {r: float(scores[r][:, cols].mean()) for r in names}
         best = min(ref_means, key=ref_means.__getitem__)
+        reference_pace = mean_pace([r for r in rows if r["policy"] == best and r["set"] == name])
         for policy, x in scores.items():
             if policy in names:
                 continue
@@ -263,7 +264,6 @@ def target_table(
                 r["termination_reason"] for r in mine if r["termination_reason"] in FAILURE_REASONS
             )
             surge = max(r["max_surge"] for r in mine)
-            theirs = [r for r in rows if r["policy"] == best and r["set"] == name]
             mean = float(x[:, cols].mean())
             ratio = mean / ref_means[best]
             table.append(
@@ -278,7 +278,7 @@ def target_table(
                     "failures": sorted(set(failed)),
                     "max_surge_m_s": surge,
                     "pace_m_s": mean_pace(mine),
-                    "reference_pace_m_s": mean_pace(theirs),
+                    "reference_pace_m_s": reference_pace,
                     "episodes": len(mine),
                     "passed": ratio <= max_ratio and not failed and surge <= top_speed,
                 }

@@ -204,7 +204,7 @@ def compare_episodes(
     columns_old = set(next(iter(old.values()), {}))
     columns_new = set(next(iter(new.values()), {}))
     report.one_sided("columns only in the committed file", sorted(columns_old - columns_new))
-    report.one_sided("columns only in the new run", sorted(columns_new - columns_old), True)
+    report.one_sided("columns only in the new run", sorted(columns_new - columns_old), new_run=True)
     rounded = 0
     by_policy: Counter[str] = Counter()  # differing values per policy
     for key in sorted(set(old) & set(new)):
@@ -236,7 +236,9 @@ def compare_json(label: str, reference: Path, fresh: Path, report: Report) -> No
     old = {k: v for k, v in _flatten(json.loads(reference.read_text())) if _compared(k)}
     new = {k: v for k, v in _flatten(json.loads(fresh.read_text())) if _compared(k)}
     report.one_sided(f"{label}: values only in the committed file", sorted(set(old) - set(new)))
-    report.one_sided(f"{label}: values only in the new run", sorted(set(new) - set(old)), True)
+    report.one_sided(
+        f"{label}: values only in the new run", sorted(set(new) - set(old)), new_run=True
+    )
     shared = sorted(set(old) & set(new))
     diffs = [f"{k}: {old[k]!r} -> {new[k]!r}" for k in shared if old[k] != new[k]]
     report.differences(label, diffs, len(shared))
