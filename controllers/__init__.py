@@ -75,12 +75,12 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     (they build the agent's stages, e.g. the allocation on the fins: ``base_kwargs``); "sac"
     (and "tqc", "crossq") does the same for an agent of that algorithm only. A former name
     (`RENAMED`: "ppo") is a one-line ValueError naming the call that replaces it.
-    "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a
-    Policy of the 21-value residual observation, or a saved residual agent's
-    directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X, M, N,
-    default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none),
-    `envelope_guard` (the guard of the applied action, default none); every other keyword
-    configures the base controller. "lowpass"
+    "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a Policy
+    of the residual observation, `controllers.residual.residual_observation_names`, or a saved
+    residual agent's directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X,
+    M, N, default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none),
+    `envelope_guard` (the guard of the applied action, default none); every other keyword configures
+    the base controller. "lowpass"
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
     default "fbsm_colos") and `alpha` (default 0.5); every other keyword configures the base.
     "guarded" (`controllers.guarded.GuardedPolicy`) takes `base` (default "pid_as_built") and

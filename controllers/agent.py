@@ -12,13 +12,14 @@ An agent directory holds::
 
 `check_agent` validates the files without torch; `load_actor` returns an `AgentPolicy`, which
 applies the saved observation normalisation itself and follows the Policy protocol
-(`controllers.base`). An agent whose metadata holds a "residual" section was trained on the
-21-value residual observation; `controllers.loader.load_policy` (``controllers.make("agent",
-path=...)``) wraps its actor in a `controllers.residual.ResidualPolicy`. Training, checkpoints and
-export live on the benchmarks side (`benchmarks.training`). Nothing here changes process-wide
-state: the torch thread count a policy predicts with is set for each `predict` call and restored
-after it. torch and SB3 are imported lazily: `import controllers.agent` works without the rl
-extra.
+(`controllers.base`). An agent whose metadata holds a "residual" section was trained on the residual
+observation (the env's, then its base's and its previous action:
+`controllers.residual.residual_observation_names`); `controllers.loader.load_policy`
+(``controllers.make("agent", path=...)``) wraps its actor in a
+`controllers.residual.ResidualPolicy`. Training, checkpoints and export live on the benchmarks side
+(`benchmarks.training`). Nothing here changes process-wide state: the torch thread count a policy
+predicts with is set for each `predict` call and restored after it. torch and SB3 are imported
+lazily: `import controllers.agent` works without the rl extra.
 """
 
 from __future__ import annotations
@@ -36,10 +37,14 @@ from typing import Any
 import numpy as np
 
 from auv_gym import __version__
-from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, ObservationConfig
+from auv_gym.sim.observation import OBS_NAMES, ObservationConfig
 from auv_gym.support.validation import ArgumentTypeError
 from controllers.algorithms import ALGORITHMS, algorithm_of
-from controllers.residual import NO_STAGES, RESIDUAL_OBS_NAMES, ResidualSettings
+from controllers.residual import (
+    NO_STAGES,
+    ResidualSettings,
+    residual_observation_names,
+)
 
 ACTION_DIM = 3  # normalised (X, M, N) commands in [-1, 1]
 
@@ -95,7 +100,8 @@ class AgentPolicy:
         self.num_threads = num_threads
         self.observation_space = sb3_policy.observation_space
         self.action_space = sb3_policy.action_space
-        self.obs_dim = int(self.obs_mean.shape[0])  # 15, or 21 for a residual agent's actor
+        # 15 (the paper's), more with a preview; a residual agent's actor: 6 more (b, a_{k−1})
+        self.obs_dim = int(self.obs_mean.shape[0])
         # The env the agent carries: `auv_gym.rollout` runs it there unless told otherwise.
         self.env_kwargs = agent_env_kwargs(self.metadata)
         sb3_policy.set_training_mode(False)
@@ -115,8 +121,9 @@ class AgentPolicy:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
-        """Actions in [−1, 1]³ for observations (15,) or (n, 15) (layout `auv_gym.OBS_NAMES`;
-        a residual agent's actor: 21 values, `controllers.residual.RESIDUAL_OBS_NAMES`)."""
+        """Actions in [−1, 1]³ for observations (d,) or (n, d), d = `obs_dim` (the layout of
+        `observation_layout`: `auv_gym.OBS_NAMES` for the paper's; a residual agent's actor:
+        `controllers.residual.residual_observation_names`)."""
         obs = np.asarray(observation, dtype=np.float32)
         dim = self.obs_dim
         if obs.ndim not in (1, 2) or obs.shape[-1] != dim:
@@ -184,8 +191,8 @@ class AgentFiles:
     model: Path
     stats: Path
     metadata_file: Path | None
-    obs_mean: np.ndarray  # (15,) finite; (21,) for a residual agent
-    obs_var: np.ndarray  # (15,) finite, >= 0; (21,) for a residual agent
+    obs_mean: np.ndarray  # (d,) finite, d = len(observation_layout(metadata))
+    obs_var: np.ndarray  # (d,) finite, >= 0
     clip_obs: float  # finite, > 0
     epsilon: float  # finite, > 0
     metadata: dict[str, Any]
@@ -203,16 +210,15 @@ def agent_env_kwargs(metadata: dict[str, Any], env_id: str | None = None) -> dic
     """The env an agent carries, as `AUVPath3DEnv` keyword arguments: the fixed arguments of
     ``env_id`` (None: the id its metadata records; `auv_gym.VARIANTS`; none recorded: the
     paper's `AUVPath3D-v0`) and
-    the observation it was trained on where that id's differs. A residual agent observes
-    through its base; trained on the propeller and fins, it (and its base) commands them too."""
+    the observation it was trained on where that id's differs (a residual agent's env
+    observation; recorded before residual agents had a choice: the paper's). Trained on the
+    propeller and fins, an agent (and a residual agent's base) commands them too."""
     from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 
     recorded = metadata.get("env_id", ENV_ID) if env_id is None else env_id
     fixed = dict(VARIANTS[resolve_env_id(recorded)])
     if commands_realistic_actuators(metadata):  # its actions are shaft speed and fin angles
         fixed["actuator"] = REALISTIC_ACTUATOR
-    if "residual" in metadata:
-        return fixed
     trained = ObservationConfig.from_spec(metadata.get("observation"))
     if trained != ObservationConfig.from_spec(fixed.get("observation")):
         fixed["observation"] = trained.to_dict()
@@ -231,9 +237,10 @@ def commands_realistic_actuators(metadata: dict[str, Any]) -> bool:
 
 def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:
     """The observation names an agent was trained on: the env's 15, the agent observation of
-    its "observation" section (`auv_gym.ObservationConfig`), or the residual 21."""
+    its "observation" section (`auv_gym.ObservationConfig`), or for a residual agent that
+    observation with the base and previous actions after it (21 values on the paper's)."""
     if "residual" in metadata:
-        return RESIDUAL_OBS_NAMES
+        return residual_observation_names(metadata.get("observation"))
     return ObservationConfig.from_spec(metadata.get("observation")).names
 
 
@@ -247,7 +254,8 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     wrong shape, or are not finite with var >= 0, clip_obs > 0, epsilon > 0; metadata.json is not
     a JSON object or names another algorithm, observation layout or shape, action shape, or
     auv-gym major version, or has an invalid "residual" section. The expected observation is
-    the env's 15 values, or the residual 21 when the metadata has a "residual" section.
+    `observation_layout` of the metadata (the env's 15 values by default; a residual agent's
+    6 more).
     """
     if not isinstance(path, (str, os.PathLike)):
         raise ArgumentTypeError(
@@ -273,7 +281,7 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
             f"{meta}: action_shape is {metadata['action_shape']!r}, expected {[action_dim]!r}"
         )
     names = observation_layout(metadata)
-    _check_model_zip(model, len(names), action_dim, f"{algo.class_name} model")
+    _check_model_zip(model, names, action_dim, f"{algo.class_name} model")
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
     stages = agent_stages(metadata, str(meta))
     if stages and residual is not None:
@@ -350,9 +358,12 @@ def _read_metadata(meta: Path) -> dict[str, Any]:
 
 
 def _check_model_zip(
-    model: Path, obs_dim: int = OBS_DIM, action_dim: int = ACTION_DIM, label: str = "PPO model"
+    model: Path,
+    names: tuple[str, ...] = OBS_NAMES,
+    action_dim: int = ACTION_DIM,
+    label: str = "PPO model",
 ) -> None:
-    """SB3's zip: intact (CRC), with its parameters and an (obs_dim,) → (action_dim,) Box
+    """SB3's zip: intact (CRC), with its parameters and a (len(names),) → (action_dim,) Box
     policy (3 actions; a residual agent with a learned filter: 6). Errors begin with ``label``
     (the algorithm's model, e.g. "SAC model")."""
     if not zipfile.is_zipfile(model):
@@ -374,15 +385,14 @@ def _check_model_zip(
             data = json.loads(archive.read("data"))
     except (zipfile.BadZipFile, OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{label} {model} cannot be read (corrupt or truncated): {exc}") from exc
-    for key, expected in (("observation_space", (obs_dim,)), ("action_space", (action_dim,))):
+    for key, expected in (("observation_space", (len(names),)), ("action_space", (action_dim,))):
         space = data.get(key) if isinstance(data, dict) else None
         shape = space.get("_shape") if isinstance(space, dict) else None
         if shape is not None and tuple(shape) != expected:
             what = key.replace("_", " ")
-            layout = RESIDUAL_OBS_NAMES if obs_dim == len(RESIDUAL_OBS_NAMES) else OBS_NAMES
             raise ValueError(
                 f"{label} {model}: {what} shape {tuple(shape)}, expected {expected}"
-                + (f" (layout {list(layout)})" if key == "observation_space" else "")
+                + (f" (layout {list(names)})" if key == "observation_space" else "")
             )
 
 
@@ -469,7 +479,8 @@ def load_actor(
 ) -> AgentPolicy:
     """The actor of checked agent files (`check_agent`) with its normalisation, loaded with the
     algorithm its metadata names (`controllers.algorithms`). A residual agent's actor takes
-    the 21-value residual observation; `controllers.loader.load_policy` adds its base.
+    the residual observation (`observation_layout`); `controllers.loader.load_policy` adds its
+    base.
 
     `num_threads`: torch's intra-op threads while the policy predicts (1 suits these small
     networks, docs/design.md §4; None: torch's setting); loading itself leaves torch's

@@ -82,7 +82,7 @@ def make_residual(
 ) -> ResidualPolicy:
     """``controllers.make("residual", ...)``: a `ResidualPolicy`.
 
-    ``agent`` is a Policy of the 21-value observation (`controllers.residual.make_residual`),
+    ``agent`` is a Policy of the residual observation (`controllers.residual.make_residual`),
     or the directory of a saved residual agent (its recorded base and β are used; a ``base``,
     ``bound`` or ``filter_max`` given here must equal them).
     """

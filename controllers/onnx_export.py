@@ -70,6 +70,7 @@ from controllers.onnx_graph import (
     residual_graph,
 )
 from controllers.onnx_policy import inference_session
+from controllers.residual import RESIDUAL_FEATURES
 from controllers.stages import AllocationStage, GuardStage, build_stages
 
 __all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers", "write_export"]
@@ -77,6 +78,8 @@ __all__ = ["ACTUATORS", "PARITY_TOLERANCE", "export_onnx", "mlp_layers", "write_
 _REPOSITORY = Path(__file__).resolve().parents[1]  # holds controllers/ and benchmarks/
 PARITY_TOLERANCE = 1e-5  # max |ONNX − Python| over the check's commands, normalised units
 PARITY_SAMPLES = 2048  # observations the export checks itself on
+# A residual agent observes the env's observation, then its base's and its previous action.
+RESIDUAL_EXTRA = len(RESIDUAL_FEATURES)
 # The env's command for each actuator (docs/model.md §2.3, §2.6): names and what 1 means.
 ACTION_LAYOUT = {
     "paper": (["X", "M", "N"], "τ / τ_max, τ_max = (50 N, 10 N·m, 10 N·m)"),
@@ -307,7 +310,7 @@ def _build_model(
     g = Graph()
     n = "n"
     inputs = []
-    env_names = layout if files.residual is None else layout[:15]
+    env_names = layout if files.residual is None else layout[:-RESIDUAL_EXTRA]
     observation = "observation"
     inputs.append(
         helper.make_tensor_value_info(observation, TensorProto.FLOAT, [n, len(env_names)])
@@ -408,7 +411,7 @@ def _parity(
     draw = files.obs_mean + np.sqrt(files.obs_var) * rng.standard_normal((k, files.obs_mean.size))
     session = inference_session(model.SerializeToString(), where=files.model)
     if files.residual is not None:
-        obs = draw[:, :15].astype(np.float32)
+        obs = draw[:, :-RESIDUAL_EXTRA].astype(np.float32)  # the env's; then b, a_{k−1}
         base = rng.uniform(-1.0, 1.0, (k, 3)).astype(np.float32)
         previous = rng.uniform(-1.0, 1.0, (k, 3)).astype(np.float32)
         started = rng.integers(0, 2, k).astype(bool)
@@ -475,7 +478,7 @@ def _contract(
         if key in trained and plant != "5dof":
             env_kwargs[key] = trained[key]
     config = SimConfig.from_kwargs(**env_kwargs)
-    names = layout if files.residual is None else layout[:15]
+    names = layout if files.residual is None else layout[:-RESIDUAL_EXTRA]
     units = ObservationConfig.from_spec(env_kwargs.get("observation")).units
     action_names, action_meaning = ACTION_LAYOUT[actuator]
     inputs, outputs = graph_io(len(names), state_size, files.residual is not None)

@@ -6,13 +6,17 @@ controller's normalised action and a_{k−1} the previously applied action (0 at
 first step):
 
     b_k  = base.predict(o_k, episode_start)                    exactly as the base runs alone
-    c_k  = agent.predict([o_k, b_k, a_{k−1}])                  21 values, `RESIDUAL_OBS_NAMES`
+    c_k  = agent.predict([o_k, b_k, a_{k−1}])                  `residual_observation_names`
     a_k  = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)             β = `bound` per input (X, M, N)
 
 With an envelope guard (``envelope_guard``, `controllers.envelope_guard`) the applied action is
 the guard's view of it, a_k ← guard(a_k; θ, q, u of o_k), before it becomes a_{k−1}: the agent
 cannot correct its base past the vehicle's pitch or surge limits, and what it sees as its previous
 action is what the env received.
+
+o_k is the env's observation of whatever kind the agent was trained on (`auv_gym.ObservationConfig`:
+the paper's 15 values, 21 with b_k and a_{k−1}; or the preview of the path ahead and the error
+integrals after them): the base reads the paper's 15 it always reads, the agent sees all of it.
 
 With a learned filter (``filter_max`` α_max > 0) the agent returns six values (c_k, g_k) and
 also chooses, per input and per step, how much of its previous action to keep:
@@ -54,7 +58,12 @@ from typing import Any
 import numpy as np
 
 from auv_gym.sim.integrator import ACTUATORS
-from auv_gym.sim.observation import OBS_DIM, OBS_NAMES, paper_bounds, vehicle_speed_bound
+from auv_gym.sim.observation import (
+    OBS_DIM,
+    OBS_NAMES,
+    ObservationConfig,
+    vehicle_speed_bound,
+)
 from auv_gym.sim.task import REMUS_TOP_SPEED
 from controllers.envelope_guard import (
     EnvelopeGuard,
@@ -82,6 +91,7 @@ __all__ = [
     "make_residual",
     "residual_action",
     "residual_observation_bounds",
+    "residual_observation_names",
 ]
 
 DEFAULT_BASE = "fbsm_colos"  # the current-robust FBSM (controllers.PRESETS)
@@ -90,6 +100,8 @@ MAX_FILTER = 0.99  # α_max ≤ 0.99: a time constant of at most 100 control ste
 # Largest learned filter coefficient α_max; 0: no filter, the agent returns three corrections.
 DEFAULT_FILTER_MAX = 0.0
 RESIDUAL_FEATURES = ("base_X", "base_M", "base_N", "previous_X", "previous_M", "previous_N")
+# The agent observation on the paper's env observation (21 values); other kinds:
+# `residual_observation_names`.
 RESIDUAL_OBS_NAMES: tuple[str, ...] = (*OBS_NAMES, *RESIDUAL_FEATURES)
 RESIDUAL_OBS_DIM = len(RESIDUAL_OBS_NAMES)
 # Why a residual agent's files or hyper-parameters may list no stages.
@@ -233,19 +245,30 @@ def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
+def residual_observation_names(observation: Any = None) -> tuple[str, ...]:
+    """The agent's observation names: the env observation's (``observation``, any spec of
+    `auv_gym.ObservationConfig.from_spec`; None: the paper's 15), then `RESIDUAL_FEATURES`."""
+    return (*ObservationConfig.from_spec(observation).names, *RESIDUAL_FEATURES)
+
+
 def residual_observation_bounds(
     max_surge: float = REMUS_TOP_SPEED,
+    observation: Any = None,
+    current_speed: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(low, high) of the agent's observation: the env's bounds for a vehicle of top speed
-    ``max_surge`` [m/s] (`AUVParams.max_surge`; REMUS 100's: `OBS_LOW`, `OBS_HIGH`), then ±1
-    for b and a_{k−1}."""
-    low, high = paper_bounds(vehicle_speed_bound(max_surge))
+    ``max_surge`` [m/s] (`AUVParams.max_surge`; REMUS 100's: `OBS_LOW`, `OBS_HIGH`), observation
+    ``observation`` (None: the paper's) and currents up to ``current_speed`` [m/s], then ±1 for
+    b and a_{k−1}."""
+    config = ObservationConfig.from_spec(observation)
+    low, high = config.bounds(current_speed, vehicle_speed_bound(max_surge))
     ones = np.ones(len(RESIDUAL_FEATURES), dtype=np.float32)
     return np.concatenate([low, -ones]), np.concatenate([high, ones])
 
 
 def agent_observation(obs: np.ndarray, base_action: np.ndarray, previous: np.ndarray) -> np.ndarray:
-    """The agent's float32 observation (n, 21): env observation, base action, previous action."""
+    """The agent's float32 observation (n, d + 6): env observation (n, d), base action, previous
+    action."""
     return np.concatenate(
         [
             np.asarray(obs, np.float32),
@@ -316,9 +339,10 @@ class ResidualPolicy:
 
     Args:
         base: the base controller (any Policy; `controllers.make(name)` of a classical one).
-        agent: a Policy of 21-value observations (`RESIDUAL_OBS_NAMES`) giving corrections in
-            [−1, 1]³, or (c, g) ∈ [−1, 1]⁶ with a learned filter (e.g. the actor of a saved
-            residual agent, `controllers.agent.AgentPolicy`).
+        agent: a Policy of the residual observation (`residual_observation_names`: 21 values
+            on the paper's env observation; its ``obs_dim``, where it has one, says how many)
+            giving corrections in [−1, 1]³, or (c, g) ∈ [−1, 1]⁶ with a learned filter (e.g. the
+            actor of a saved residual agent, `controllers.agent.AgentPolicy`).
         bound: β per input (X, M, N) in normalised actuator units, each in [0, 2].
         settings: the `ResidualSettings` it was built from (recorded, optional; its
             ``filter_max`` α_max switches the learned filter on).
@@ -351,6 +375,14 @@ class ResidualPolicy:
         self.guard = None if settings is None else settings.envelope_guard
         self.action_dim = agent_action_dim(self.filter_max)
         self.metadata = dict(getattr(agent, "metadata", {}) or {})
+        # The env observation's width [values]: what the agent sees less b_k and a_{k−1}.
+        self.obs_dim = int(getattr(agent, "obs_dim", RESIDUAL_OBS_DIM)) - len(RESIDUAL_FEATURES)
+        if self.obs_dim < OBS_DIM:
+            raise ValueError(
+                f"residual agent observes {self.obs_dim + len(RESIDUAL_FEATURES)} values; it "
+                f"needs the env's {OBS_DIM} or more and the {len(RESIDUAL_FEATURES)} of "
+                f"{list(RESIDUAL_FEATURES)}"
+            )
 
     def init_state(self, n: int) -> dict[str, Any]:
         return {
@@ -368,13 +400,13 @@ class ResidualPolicy:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Actions in [−1, 1] for a batch (n, 15) or one (15,) observation; see the module doc."""
+        """Actions in [−1, 1] for a batch (n, d) or one (d,) env observation (d = `obs_dim`:
+        15 for the paper's); see the module doc."""
         obs = np.asarray(observation)
         single = obs.ndim == 1
-        if obs.ndim not in (1, 2) or obs.shape[-1] != OBS_DIM:
-            raise ValueError(
-                f"observation must have shape (n, {OBS_DIM}) or ({OBS_DIM},), got {obs.shape}"
-            )
+        dim = self.obs_dim
+        if obs.ndim not in (1, 2) or obs.shape[-1] != dim:
+            raise ValueError(f"observation must have shape (n, {dim}) or ({dim},), got {obs.shape}")
         batch = obs[None] if single else obs
         n = batch.shape[0]
         if state is None:
@@ -438,7 +470,7 @@ def make_residual(
     envelope_guard: Any = None,
     **base_kwargs: Any,
 ) -> ResidualPolicy:
-    """A `ResidualPolicy` of the Policy ``agent`` (21-value observations): ``base`` (default
+    """A `ResidualPolicy` of the Policy ``agent`` (`residual_observation_names`): ``base`` (default
     "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``, gains) build the base
     controller; ``bound`` is β (X, M, N); ``filter_max`` α_max > 0 gives the learned filter (an
     agent of six outputs); ``envelope_guard`` (an `EnvelopeGuard`, a mapping of its fields or

@@ -98,9 +98,10 @@ def save_tiny_residual_agent():
         from stable_baselines3 import PPO
         from stable_baselines3.common.vec_env import VecNormalize
 
+        from auv_gym.sim.observation import ObservationConfig
         from benchmarks.training.checkpoints import save_agent
         from benchmarks.training.residual_env import make_residual_sb3_env
-        from controllers.residual import RESIDUAL_OBS_DIM, RESIDUAL_OBS_NAMES
+        from controllers.residual import residual_observation_names
 
         venv = VecNormalize(make_residual_sb3_env(4, settings, seed=seed, **env))
         model = PPO(
@@ -114,13 +115,16 @@ def save_tiny_residual_agent():
             policy_kwargs={"net_arch": [16, 16]},
         )
         model.learn(128)
+        names = residual_observation_names(env.get("observation"))
         meta = {
             "algo": "ppo",
-            "obs_names": list(RESIDUAL_OBS_NAMES),
-            "observation_shape": [RESIDUAL_OBS_DIM],
+            "obs_names": list(names),
+            "observation_shape": [len(names)],
             "action_shape": [settings.action_dim],
             "residual": settings.to_dict(),
         }
+        if "observation" in env:  # recorded as the harness records it (the paper's: not)
+            meta["observation"] = ObservationConfig.from_spec(env["observation"]).to_dict()
         save_agent(model, venv, directory, meta)
         return model, venv
 

@@ -312,6 +312,51 @@ def test_saved_and_reloaded_residual_agent_predicts_identically(
 
 
 @pytest.mark.rl
+def test_a_residual_agent_on_the_preview_observation_loads_flies_and_exports(
+    tmp_path, save_tiny_residual_agent, assert_same_episodes
+):
+    """A residual agent may see the path ahead and its error integrals (preview_integral):
+    its base reads the paper's 15 values of that observation, the agent all 49 and b, a_{k−1};
+    saved, it reloads with its observation, flies as it trained and exports with parity."""
+    from auv_gym.sim.observation import OBS_NAMES, ObservationConfig
+    from benchmarks.training.callbacks import policy_from_model
+    from controllers.agent import agent_env_kwargs, check_agent
+    from controllers.loader import load_policy
+    from controllers.onnx_export import export_onnx
+    from controllers.residual import RESIDUAL_FEATURES
+
+    env = {**ENV, "observation": "preview_integral", "actuator": "realistic"}
+    settings_ = ResidualTraining(base="pid_as_built", bound=(1.0, 0.5, 0.5))
+    model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 3, env)
+    names = ObservationConfig.from_spec("preview_integral").names
+    assert len(names) == 49 and names[:15] == OBS_NAMES
+    assert venv.observation_space.shape == (55,)
+    files = check_agent(tmp_path / "agent")
+    assert files.obs_mean.shape == (55,) and files.metadata["obs_names"][49:] == list(
+        RESIDUAL_FEATURES
+    )
+    fixed = agent_env_kwargs(files.metadata)
+    assert ObservationConfig.from_spec(fixed["observation"]) == ObservationConfig.from_spec(
+        "preview_integral"
+    )
+    loaded = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
+    assert isinstance(loaded, ResidualPolicy) and loaded.obs_dim == 49
+    live = policy_from_model(model, venv, settings_, env)
+    episodes = rollouts(loaded, [0, 1], **env)
+    assert_same_episodes(episodes, rollouts(live, [0, 1], **env))
+    corrections = np.concatenate([t.extras["correction"] for t in episodes])
+    assert np.abs(corrections).max() > 1e-3  # the agent acts on the 49 values
+    with pytest.raises(ValueError, match=r"observation must have shape \(n, 49\) or \(49,\)"):
+        loaded.predict(np.zeros((2, 15), np.float32))
+    onnx_file, _, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
+    assert parity["max_abs_error"] <= 1e-5
+    exported = controllers.make("onnx", path=str(onnx_file), env=env)
+    a = evaluate(loaded, [0], **env)[0]["rms_distance"]
+    b = evaluate(exported, [0], **env)[0]["rms_distance"]
+    assert b == pytest.approx(a, rel=1e-4)
+
+
+@pytest.mark.rl
 def test_smoke_training_through_train_seeds_starts_at_the_base(tmp_path):
     """≤ 60 s: the shipped YAML, one seed, one PPO rollout; the untrained agent (zero last
     layer) scores exactly what its base scores alone on the validation episode."""

@@ -5,7 +5,8 @@ r"""Training side of the residual policy: the native vector env with the base co
 runs the base controller of all vehicles in one batched `predict` per control step, exactly as
 `controllers.residual.ResidualPolicy` and the evaluation run it, and exposes to the agent
 
-    observation  [o_k, b_k, a_{k−1}]  (21 float32 values, `RESIDUAL_OBS_NAMES`)
+    observation  [o_k, b_k, a_{k−1}]  (float32, `residual_observation_names` of the env's
+                 observation: 21 values on the paper's, more with a preview of the path)
     action       c_k ∈ [−1, 1]³, applied as a_k = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1);
                  with ``filter_max`` > 0, (c_k, g_k) ∈ [−1, 1]⁶ and the learned low-pass of
                  `controllers.residual` (α_k = 0 at an episode's first step); with an
@@ -43,11 +44,7 @@ from auv_gym.envs.env import validate_actions
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import ResidualTraining
 from controllers.envelope_guard import guard_env_commands
-from controllers.residual import (
-    agent_observation,
-    residual_action,
-    residual_observation_bounds,
-)
+from controllers.residual import RESIDUAL_FEATURES, agent_observation, residual_action
 
 __all__ = ["CHATTERING_KEY", "PRECISION_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
 
@@ -87,7 +84,11 @@ class ResidualVectorEnv(VectorWrapper):
             for name in names
         }
         self._states: dict[str, Any] = dict.fromkeys(names)
-        low, high = residual_observation_bounds(config.params.max_surge)
+        # The env's own bounds (any observation kind), then ±1 for b_k and a_{k−1}.
+        space = self.env.single_observation_space
+        ones = np.ones(len(RESIDUAL_FEATURES), dtype=np.float32)
+        low = np.concatenate([space.low.astype(np.float32), -ones])
+        high = np.concatenate([space.high.astype(np.float32), ones])
         self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs

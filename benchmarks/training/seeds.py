@@ -69,7 +69,7 @@ from benchmarks.training.warm_start import (
     check_network_size,
 )
 from controllers.agent import ACTION_DIM
-from controllers.residual import RESIDUAL_OBS_NAMES
+from controllers.residual import residual_observation_names
 
 __all__ = [
     "DEFAULT_EVAL_EPISODES",
@@ -138,11 +138,8 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     # The network every seed builds, and each seed's initial agent loaded into it, as the
     # workers will: before any of them starts (a failure there says only "see log").
     residual = cfg.residual
-    obs_names = (
-        observation_layout_of(train.env_id, cfg.env_kwargs).names
-        if residual is None
-        else RESIDUAL_OBS_NAMES
-    )
+    layout = observation_layout_of(train.env_id, cfg.env_kwargs)
+    obs_names = layout.names if residual is None else residual_observation_names(layout)
     action_dim = ACTION_DIM if residual is None else residual.action_dim
     check_network_size(cfg.policy_kwargs, len(obs_names), action_dim, str(train.config))
     agents = [agent_for_seed(train.init_from, s) for s in opts.seeds] if train.init_from else []
@@ -218,9 +215,10 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
 def check_obs_scales(cfg: Any, env_id: str, where: str) -> None:
     """The observation entries a config pins (``obs_scales``) exist in the observation of its
     env (id and env_kwargs): checked before any worker starts; ValueError naming ``where``."""
-    if cfg.obs_scales is None or cfg.residual is not None:
+    if cfg.obs_scales is None:
         return
-    names = observation_layout_of(env_id, cfg.env_kwargs).names
+    layout = observation_layout_of(env_id, cfg.env_kwargs)
+    names = layout.names if cfg.residual is None else residual_observation_names(layout)
     unknown = sorted(set(cfg.obs_scales) - set(names))
     if unknown:
         raise ValueError(

@@ -46,7 +46,7 @@ from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
 from benchmarks.training.vehicle_share import check_native
 from benchmarks.training.warm_start import agent_for_seed, check_warm_start, warm_start
 from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
-from controllers.residual import RESIDUAL_OBS_NAMES
+from controllers.residual import residual_observation_names
 
 __all__ = [
     "TrainOptions",
@@ -326,7 +326,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         vehicle_share=cfg.vehicle_share,
     )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
-    obs_names = layout.names if residual is None else RESIDUAL_OBS_NAMES
+    obs_names = layout.names if residual is None else residual_observation_names(layout)
     venv = wrap_actions(venv, cfg, obs_names, {**VARIANTS.get(opts.env_id, {}), **cfg.env_kwargs})
 
     previous: dict[str, Any] = {}
@@ -425,7 +425,10 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     t0 = time.monotonic()
     jump: dict[str, Any] = {}  # the jump start's record, once it ran (`dagger.run_jump_start`)
     residual_meta = {} if residual is None else {"residual": residual.to_dict()}
-    if residual is None:  # the held-out evaluation and the benchmark build its env from this
+    # The held-out evaluation and the benchmark build the agent's env from this; a residual
+    # agent on the paper's observation records none, as residual agents did before they had a
+    # choice (their metadata, and the check of saved agents, unchanged).
+    if residual is None or layout.kind != "paper":
         residual_meta["observation"] = layout.to_dict()
     action_dim = 3 if residual is None else residual.action_dim
     share = cfg.vehicle_share
