@@ -331,6 +331,12 @@ def test_a_residual_agent_on_the_preview_observation_loads_flies_and_exports(
     names = ObservationConfig.from_spec("preview_integral").names
     assert len(names) == 49 and names[:15] == OBS_NAMES
     assert venv.observation_space.shape == (55,)
+    core = AUVPath3DVectorEnv(2, **env)
+    space = ResidualVectorEnv(core, settings_).single_observation_space
+    np.testing.assert_array_equal(space.low[:49], core.single_observation_space.low)
+    np.testing.assert_array_equal(space.high[:49], core.single_observation_space.high)
+    assert space.high[49:].tolist() == [1.0] * 6
+    core.close()
     files = check_agent(tmp_path / "agent")
     assert files.obs_mean.shape == (55,) and files.metadata["obs_names"][49:] == list(
         RESIDUAL_FEATURES

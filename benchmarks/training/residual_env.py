@@ -44,7 +44,11 @@ from auv_gym.envs.env import validate_actions
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import ResidualTraining
 from controllers.envelope_guard import guard_env_commands
-from controllers.residual import RESIDUAL_FEATURES, agent_observation, residual_action
+from controllers.residual import (
+    agent_observation,
+    residual_action,
+    residual_observation_bounds,
+)
 
 __all__ = ["CHATTERING_KEY", "PRECISION_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
 
@@ -84,11 +88,10 @@ class ResidualVectorEnv(VectorWrapper):
             for name in names
         }
         self._states: dict[str, Any] = dict.fromkeys(names)
-        # The env's own bounds (any observation kind), then ±1 for b_k and a_{k−1}.
-        space = self.env.single_observation_space
-        ones = np.ones(len(RESIDUAL_FEATURES), dtype=np.float32)
-        low = np.concatenate([space.low.astype(np.float32), -ones])
-        high = np.concatenate([space.high.astype(np.float32), ones])
+        # The env's bounds for its vehicle, observation kind and currents, then ±1 for b, a_{k−1}.
+        low, high = residual_observation_bounds(
+            config.params.max_surge, config.observation, config.current_speed_bound
+        )
         self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs
