@@ -62,14 +62,13 @@ from benchmarks.training.seeds_options import (  # the options, importable from 
     parse_seeds,
 )
 from benchmarks.training.selection_rule import rule_of
-from benchmarks.training.train import check_options, observation_layout_of, target_timesteps
+from benchmarks.training.train import agent_observation_names, check_options, target_timesteps
 from benchmarks.training.warm_start import (
     agent_for_seed,
     check_initial_agents,
     check_network_size,
 )
 from controllers.agent import ACTION_DIM
-from controllers.residual import residual_observation_names
 
 __all__ = [
     "DEFAULT_EVAL_EPISODES",
@@ -138,8 +137,7 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
     # The network every seed builds, and each seed's initial agent loaded into it, as the
     # workers will: before any of them starts (a failure there says only "see log").
     residual = cfg.residual
-    layout = observation_layout_of(train.env_id, cfg.env_kwargs)
-    obs_names = layout.names if residual is None else residual_observation_names(layout)
+    obs_names = agent_observation_names(cfg, train.env_id)
     action_dim = ACTION_DIM if residual is None else residual.action_dim
     check_network_size(cfg.policy_kwargs, len(obs_names), action_dim, str(train.config))
     agents = [agent_for_seed(train.init_from, s) for s in opts.seeds] if train.init_from else []
@@ -217,8 +215,7 @@ def check_obs_scales(cfg: Any, env_id: str, where: str) -> None:
     env (id and env_kwargs): checked before any worker starts; ValueError naming ``where``."""
     if cfg.obs_scales is None:
         return
-    layout = observation_layout_of(env_id, cfg.env_kwargs)
-    names = layout.names if cfg.residual is None else residual_observation_names(layout)
+    names = agent_observation_names(cfg, env_id)
     unknown = sorted(set(cfg.obs_scales) - set(names))
     if unknown:
         raise ValueError(

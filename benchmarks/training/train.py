@@ -255,6 +255,14 @@ def observation_layout_of(env_id: str, env_kwargs: dict[str, Any]) -> Observatio
     return ObservationConfig.from_spec(spec)
 
 
+def agent_observation_names(cfg: Any, env_id: str) -> tuple[str, ...]:
+    """The names of what the network of config ``cfg`` sees on ``env_id``: the env's
+    observation (`observation_layout_of`), and for a residual agent its base's and its previous
+    action after it (`controllers.residual.residual_observation_names`)."""
+    layout = observation_layout_of(env_id, cfg.env_kwargs)
+    return layout.names if cfg.residual is None else residual_observation_names(layout)
+
+
 def train(opts: TrainOptions, argv: Sequence[str] | None = None) -> Path:
     """Train (or resume) as configured; returns the run directory (see `benchmarks.training`).
 
@@ -326,7 +334,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         vehicle_share=cfg.vehicle_share,
     )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
-    obs_names = layout.names if residual is None else residual_observation_names(layout)
+    obs_names = agent_observation_names(cfg, opts.env_id)
     venv = wrap_actions(venv, cfg, obs_names, {**VARIANTS.get(opts.env_id, {}), **cfg.env_kwargs})
 
     previous: dict[str, Any] = {}
