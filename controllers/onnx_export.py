@@ -357,7 +357,14 @@ def _build_model(
     if files.residual is not None:
         settings = files.residual
         commands = residual_graph(
-            g, "base_action", commands, previous, started, settings.bound, settings.filter_max
+            g,
+            "base_action",
+            commands,
+            previous,
+            started,
+            settings.bound,
+            settings.filter_max,
+            settings.bound_below,
         )
         if settings.envelope_guard is not None:  # before it becomes the previous action
             commands = guard_graph(
@@ -421,7 +428,13 @@ def _parity(
         )
         correction, _ = actor.predict(agent_observation(obs, base, previous))
         want = residual_action(
-            base, correction, files.residual.bound, files.residual.filter_max, previous, started
+            base,
+            correction,
+            files.residual.bound,
+            files.residual.filter_max,
+            previous,
+            started,
+            files.residual.bound_below,
         )
         want = guard_env_commands(want, obs, files.residual.envelope_guard)
         want_state = np.column_stack([want, np.ones(k)])
@@ -491,6 +504,8 @@ def _contract(
             "bound": list(files.residual.bound),
             "filter_max": files.residual.filter_max,
         }
+        if files.residual.bound_below is not None:
+            residual["bound_below"] = list(files.residual.bound_below)
         if files.residual.envelope_guard is not None:  # in the graph; stated, not re-applied
             residual["envelope_guard"] = files.residual.envelope_guard.to_dict()
     return {

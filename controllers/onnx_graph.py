@@ -255,10 +255,12 @@ def residual_graph(
     started: str,
     bound: Sequence[float],
     filter_max: float,
+    bound_below: Sequence[float] | None = None,
 ) -> str:
     """The applied action of a residual agent (`controllers.residual.residual_action`):
-    clip(b + β ⊙ clip(c, −1, 1), −1, 1), then with α_max > 0 the learned low-pass
-    α ⊙ a_prev + (1 − α) ⊙ a with α = α_max·clip(g, 0, 1), 0 where not ``started``; float32."""
+    clip(b + β ⊙ clip(c, −1, 1), −1, 1) (β⁻ ``bound_below`` in place of β where c < 0), then
+    with α_max > 0 the learned low-pass α ⊙ a_prev + (1 − α) ⊙ a with α = α_max·clip(g, 0, 1),
+    0 where not ``started``; float32."""
     b = g.cast(base_action, np.float64)
     c = g.cast(correction, np.float64)
     c_first = g.op(
@@ -268,7 +270,14 @@ def residual_graph(
         g.const([3], np.int64),
         g.const([1], np.int64),
     )
-    step = g.op("Mul", g.const(np.asarray(bound, np.float64)), g.clip_const(c_first, -1.0, 1.0))
+    reach = g.clip_const(c_first, -1.0, 1.0)
+    above = g.const(np.asarray(bound, np.float64))
+    if bound_below is None:
+        step = g.op("Mul", above, reach)
+    else:
+        below = g.const(np.asarray(bound_below, np.float64))
+        negative = g.op("Less", reach, g.const(0.0, np.float64))
+        step = g.op("Mul", g.op("Where", negative, below, above), reach)
     target = g.cast(g.clip_const(g.op("Add", b, step), -1.0, 1.0), np.float32)
     if filter_max == 0.0:
         return target

@@ -9,6 +9,10 @@ first step):
     c_k  = agent.predict([o_k, b_k, a_{k−1}])                  `residual_observation_names`
     a_k  = clip(b_k + β ⊙ clip(c_k, −1, 1), −1, 1)             β = `bound` per input (X, M, N)
 
+or, with ``bound_below`` β⁻ (how far below its base a negative correction may take an input),
+β ⊙ c where c ≥ 0 and β⁻ ⊙ c where c < 0: c = 0 is still the base, and the agent may push the
+thrust up past the base's command by β but pull it down by β⁻ only (docs/design.md §3.10).
+
 With an envelope guard (``envelope_guard``, `controllers.envelope_guard`) the applied action is
 the guard's view of it, a_k ← guard(a_k; θ, q, u of o_k), before it becomes a_{k−1}: the agent
 cannot correct its base past the vehicle's pitch or surge limits, and what it sees as its previous
@@ -113,16 +117,17 @@ NO_STAGES = (
 ENV_OWNED_BASE_KWARGS = ("actuator", "control_dt", "params", "actuator_params")
 
 
-def check_bound(bound: Any) -> tuple[float, float, float]:
-    """β as three floats in [0, 2] (2: the whole range [−1, 1]); ValueError naming the value."""
+def check_bound(bound: Any, name: str = "bound") -> tuple[float, float, float]:
+    """β (or β⁻, ``name``) as three floats in [0, 2] (2: the whole range [−1, 1]); ValueError
+    naming the value."""
     try:
         values = tuple(float(b) for b in np.broadcast_to(np.asarray(bound, dtype=float), (3,)))
     except (TypeError, ValueError):
         raise ValueError(
-            f"bound must be a number or three numbers (X, M, N) in [0, 2], got {bound!r}"
+            f"{name} must be a number or three numbers (X, M, N) in [0, 2], got {bound!r}"
         ) from None
     if not all(math.isfinite(b) and 0.0 <= b <= 2.0 for b in values):
-        raise ValueError(f"bound must lie in [0, 2] for each of X, M, N, got {list(values)}")
+        raise ValueError(f"{name} must lie in [0, 2] for each of X, M, N, got {list(values)}")
     return values  # type: ignore[return-value]
 
 
@@ -137,7 +142,8 @@ def check_number(name: str, value: Any, low: float, high: float, unit: str = "")
 class ResidualSettings:
     """What makes an agent residual at inference: the base controller (a name of
     `controllers.CLASSICAL` and its keyword arguments other than the env-owned
-    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β, the learned
+    ``ENV_OWNED_BASE_KWARGS``: control period, vehicle, actuator model), β (and β⁻ where the
+    reach below the base differs, ``bound_below``; None: β), the learned
     filter's largest coefficient α_max (0: none; docs/design.md §3.10) and the envelope guard
     of the applied action (None: none; a mapping of `EnvelopeGuard` fields or True in a file).
     The reward terms training adds are the training side's
@@ -148,6 +154,8 @@ class ResidualSettings:
     filter_max: float = DEFAULT_FILTER_MAX
     base_kwargs: dict[str, Any] = field(default_factory=dict)
     envelope_guard: EnvelopeGuard | None = None
+    # β⁻: how far below its base a negative correction may take each input (None: β).
+    bound_below: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         if self.base not in CLASSICAL:
@@ -156,6 +164,9 @@ class ResidualSettings:
                 f"valid: {list(CLASSICAL)}"
             )
         object.__setattr__(self, "bound", check_bound(self.bound))
+        if self.bound_below is not None:
+            below = check_bound(self.bound_below, "bound_below")
+            object.__setattr__(self, "bound_below", below)
         filter_max = check_number(
             "filter_max", self.filter_max, 0.0, MAX_FILTER, " (1 would freeze the action)"
         )
@@ -207,7 +218,10 @@ class ResidualSettings:
         )
 
     def with_guard(self, record: dict[str, Any]) -> dict[str, Any]:
-        """``record`` with the envelope guard's settings under "envelope_guard", if any."""
+        """``record`` with β⁻ under "bound_below" and the envelope guard's settings under
+        "envelope_guard", each only if set (an agent without them records what it always did)."""
+        if self.bound_below is not None:
+            record["bound_below"] = list(self.bound_below)
         if self.envelope_guard is not None:
             record["envelope_guard"] = self.envelope_guard.to_dict()
         return record
@@ -215,7 +229,12 @@ class ResidualSettings:
     def inference(self) -> ResidualSettings:
         """The settings a `ResidualPolicy` needs (these, without any training terms)."""
         return ResidualSettings(
-            self.base, self.bound, self.filter_max, self.base_kwargs, self.envelope_guard
+            self.base,
+            self.bound,
+            self.filter_max,
+            self.base_kwargs,
+            self.envelope_guard,
+            self.bound_below,
         )
 
     @property
@@ -291,10 +310,12 @@ def residual_action(
     filter_max: float = 0.0,
     previous: np.ndarray | None = None,
     started: np.ndarray | None = None,
+    bound_below: Sequence[float] | None = None,
 ) -> np.ndarray:
-    """The applied action as float32 (n, 3) (module doc): a = clip(b + β ⊙ clip(c, −1, 1), −1, 1),
-    then with ``filter_max`` α_max > 0 (``correction`` (n, 6) = (c, g)) the learned low-pass
-    a = α ⊙ a_prev + (1 − α) ⊙ a, α = α_max·clip(g, 0, 1), 0 on rows not ``started``.
+    """The applied action as float32 (n, 3) (module doc): a = clip(b + β ⊙ clip(c, −1, 1), −1, 1)
+    (with ``bound_below`` β⁻ in place of β where c < 0), then with ``filter_max`` α_max > 0
+    (``correction`` (n, 6) = (c, g)) the learned low-pass a = α ⊙ a_prev + (1 − α) ⊙ a,
+    α = α_max·clip(g, 0, 1), 0 on rows not ``started``.
     ValueError for an output of another shape or with NaN/inf (naming the first bad row)."""
     b = np.asarray(base_action, dtype=np.float64)
     try:
@@ -315,7 +336,12 @@ def residual_action(
             f"residual agent returned a non-finite correction {c[row].tolist()} (row {row}): "
             "NaN/inf is an error, not an action"
         )
-    target = np.clip(b + np.asarray(bound) * np.clip(c[:, :3], -1.0, 1.0), -1.0, 1.0)
+    reach = np.clip(c[:, :3], -1.0, 1.0)
+    if bound_below is None:
+        step = np.asarray(bound) * reach
+    else:
+        step = np.where(reach < 0.0, np.asarray(bound_below), np.asarray(bound)) * reach
+    target = np.clip(b + step, -1.0, 1.0)
     target = target.astype(np.float32)
     if filter_max == 0.0:
         return target
@@ -343,7 +369,8 @@ class ResidualPolicy:
             on the paper's env observation; its ``obs_dim``, where it has one, says how many)
             giving corrections in [−1, 1]³, or (c, g) ∈ [−1, 1]⁶ with a learned filter (e.g. the
             actor of a saved residual agent, `controllers.agent.AgentPolicy`).
-        bound: β per input (X, M, N) in normalised actuator units, each in [0, 2].
+        bound: β per input (X, M, N) in normalised actuator units, each in [0, 2]; β⁻, where
+            it differs, comes with the ``settings`` (``bound_below``).
         settings: the `ResidualSettings` it was built from (recorded, optional; its
             ``filter_max`` α_max switches the learned filter on).
 
@@ -373,6 +400,7 @@ class ResidualPolicy:
         self.settings = settings
         self.filter_max = 0.0 if settings is None else settings.filter_max
         self.guard = None if settings is None else settings.envelope_guard
+        self.bound_below = None if settings is None else settings.bound_below
         self.action_dim = agent_action_dim(self.filter_max)
         self.metadata = dict(getattr(agent, "metadata", {}) or {})
         # The env observation's width [values]: what the agent sees less b_k and a_{k−1}.
@@ -438,6 +466,7 @@ class ResidualPolicy:
             self.filter_max,
             state["previous"],
             state["started"],
+            self.bound_below,
         )
         applied = guard_env_commands(applied, batch, self.guard)
         if self.filter_max > 0.0:
@@ -468,13 +497,15 @@ def make_residual(
     bound: Any = None,
     filter_max: float | None = None,
     envelope_guard: Any = None,
+    bound_below: Any = None,
     **base_kwargs: Any,
 ) -> ResidualPolicy:
     """A `ResidualPolicy` of the Policy ``agent`` (`residual_observation_names`): ``base`` (default
     "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``, gains) build the base
-    controller; ``bound`` is β (X, M, N); ``filter_max`` α_max > 0 gives the learned filter (an
-    agent of six outputs); ``envelope_guard`` (an `EnvelopeGuard`, a mapping of its fields or
-    True) guards the applied action. A saved residual agent's directory: `controllers.loader`.
+    controller; ``bound`` is β (X, M, N), ``bound_below`` β⁻ (None: β); ``filter_max`` α_max > 0
+    gives the learned filter (an agent of six outputs); ``envelope_guard`` (an `EnvelopeGuard`,
+    a mapping of its fields or True) guards the applied action. A saved residual agent's
+    directory: `controllers.loader`.
     """
     owned = {k: base_kwargs.pop(k) for k in ENV_OWNED_BASE_KWARGS if k in base_kwargs}
     settings = ResidualSettings(
@@ -483,5 +514,6 @@ def make_residual(
         base_kwargs=base_kwargs,
         filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
         envelope_guard=envelope_guard,
+        bound_below=bound_below,
     )
     return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)

@@ -224,6 +224,35 @@ def test_correction_bound_holds_for_any_agent_output(base, correction, bound):
     assert np.all(np.abs(a.astype(float) - b.astype(float)) <= np.array(bound) + 2.0**-24)
 
 
+@settings(max_examples=300, deadline=None)
+@given(
+    base=st.lists(st.floats(-1.0, 1.0, width=32), min_size=3, max_size=3),
+    correction=st.lists(st.floats(-1e30, 1e30), min_size=3, max_size=3),
+    above=st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
+    below=st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
+)
+def test_an_asymmetric_bound_holds_each_side_for_any_agent_output(base, correction, above, below):
+    b = np.array([base], np.float32)
+    a = residual_action(b, np.array([correction]), above, bound_below=below)
+    step = a.astype(float)[0] - b.astype(float)[0]
+    assert np.all(np.abs(a) <= 1.0)
+    assert np.all(step <= np.array(above) + 2.0**-24)  # up by β at most
+    assert np.all(step >= -np.array(below) - 2.0**-24)  # down by β⁻ at most
+    # c = 0 is the base on either side; equal sides are the symmetric bound, bit for bit
+    np.testing.assert_array_equal(residual_action(b, np.zeros((1, 3)), above, bound_below=below), b)
+    np.testing.assert_array_equal(
+        residual_action(b, np.array([correction]), above, bound_below=above),
+        residual_action(b, np.array([correction]), above),
+    )
+
+
+def test_an_asymmetric_bound_reaches_each_side_exactly():
+    b = np.zeros((2, 3), np.float32)
+    c = np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]])
+    a = residual_action(b, c, (1.0, 0.5, 0.25), bound_below=(0.1, 0.5, 0.75))
+    np.testing.assert_allclose(a, [[-0.1, -0.5, -0.75], [1.0, 0.5, 0.25]], atol=1e-7)
+
+
 def test_wrapper_bound_holds_for_extreme_agent_actions():
     n = 8
     env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), ResidualTraining(bound=0.1))
@@ -234,6 +263,23 @@ def test_wrapper_bound_holds_for_extreme_agent_actions():
         obs, *_ = env.step(rng.choice([-1e30, -5.0, 0.3, 7.0, 1e30], size=(n, 3)))
         applied = obs[:, 18:21].astype(float)
         assert np.all(np.abs(applied - base) <= 0.1 + 2.0**-24) and np.all(np.abs(applied) <= 1)
+
+
+def test_wrapper_holds_an_asymmetric_bound_for_extreme_agent_actions():
+    n = 8
+    settings_ = ResidualTraining(bound=(1.0, 0.5, 0.5), bound_below=(0.1, 0.5, 0.2))
+    env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), settings_)
+    obs, _ = env.reset(seed=0)
+    rng = np.random.default_rng(3)
+    steps = []
+    for _ in range(30):
+        base = obs[:, 15:18].astype(float)
+        obs, *_ = env.step(rng.choice([-1e30, -5.0, -0.3, 0.3, 7.0, 1e30], size=(n, 3)))
+        steps.append(obs[:, 18:21].astype(float) - base)
+    steps = np.concatenate(steps)
+    assert np.all(steps <= np.array([1.0, 0.5, 0.5]) + 2.0**-24)
+    assert np.all(steps >= -np.array([0.1, 0.5, 0.2]) - 2.0**-24)
+    assert steps[:, 0].min() < -0.09 and steps[:, 0].max() > 0.3  # both sides reached
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
@@ -258,6 +304,8 @@ def test_non_finite_agent_output_is_an_error_not_an_action(bad):
         ({"bound": (0.1, -0.2, 0.3)}, r"bound must lie in \[0, 2\]"),
         ({"bound": 2.5}, r"bound must lie in \[0, 2\]"),
         ({"bound": "x"}, "bound must be a number or three numbers"),
+        ({"bound_below": (0.1, 3.0, 0.3)}, r"bound_below must lie in \[0, 2\] for each"),
+        ({"bound_below": float("nan")}, r"bound_below must lie in \[0, 2\]"),
         ({"tv_weight": -1.0}, r"tv_weight must be a number in \[0, 1000\]"),
         ({"precision_weight": float("nan")}, r"precision_weight must be a number in \[0, 1000\]"),
         ({"precision_scale": 0.0}, r"precision_scale must be a number in \[0.001, 10\] m"),
@@ -356,6 +404,47 @@ def test_a_residual_agent_on_the_preview_observation_loads_flies_and_exports(
         loaded.predict(np.zeros((2, 15), np.float32))
     onnx_file, _, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
     assert parity["max_abs_error"] <= 1e-5
+    exported = controllers.make("onnx", path=str(onnx_file), env=env)
+    a = evaluate(loaded, [0], **env)[0]["rms_distance"]
+    b = evaluate(exported, [0], **env)[0]["rms_distance"]
+    assert b == pytest.approx(a, rel=1e-4)
+
+
+@pytest.mark.rl
+def test_a_residual_agent_with_an_asymmetric_bound_saves_flies_and_exports(
+    tmp_path, save_tiny_residual_agent, assert_same_episodes
+):
+    """β⁻ (``bound_below``) is recorded, reloaded, flown as trained and exported: the thrust
+    never falls more than β⁻ below the base's, from Python or from ONNX."""
+    import json
+
+    torch = pytest.importorskip("torch")
+    from benchmarks.training.callbacks import policy_from_model
+    from controllers.agent import check_agent
+    from controllers.loader import load_policy
+    from controllers.onnx_export import export_onnx
+
+    env = {**ENV, "actuator": "realistic"}
+    settings_ = ResidualTraining(base="pid_as_built", bound=(1.0, 0.5, 0.5), bound_below=0.1)
+    model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 5, env)
+    with torch.no_grad():  # an agent that pulls the thrust down and the stern plane up, hard
+        model.policy.action_net.bias[:] = torch.tensor([-2.0, 2.0, 0.0])
+    model.save(tmp_path / "agent" / "model.zip")
+    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    assert meta["residual"]["bound_below"] == [0.1, 0.1, 0.1]
+    assert check_agent(tmp_path / "agent").residual == settings_.inference()
+    loaded = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
+    assert isinstance(loaded, ResidualPolicy) and loaded.bound_below == (0.1, 0.1, 0.1)
+    live = policy_from_model(model, venv, settings_, env)
+    episodes = rollouts(loaded, [0, 1], **env)
+    assert_same_episodes(episodes, rollouts(live, [0, 1], **env))
+    corrections = np.concatenate([t.extras["correction"] for t in episodes])
+    assert corrections[:, 0].min() >= -0.1 - 2.0**-24  # β⁻ = 0.1 below the base's thrust
+    assert np.mean(np.abs(corrections[:, 0] + 0.1) < 1e-6) > 0.5  # and there, mostly
+    assert corrections[:, 1].max() > 0.45  # β = 0.5 above
+    onnx_file, contract, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
+    assert parity["max_abs_error"] <= 1e-5
+    assert json.loads(contract.read_text())["residual"]["bound_below"] == [0.1, 0.1, 0.1]
     exported = controllers.make("onnx", path=str(onnx_file), env=env)
     a = evaluate(loaded, [0], **env)[0]["rms_distance"]
     b = evaluate(exported, [0], **env)[0]["rms_distance"]

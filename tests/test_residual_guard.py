@@ -49,6 +49,7 @@ def test_settings_record_the_guard_only_when_there_is_one():
     plain = ResidualSettings(base="pid_los")
     assert "envelope_guard" not in plain.to_dict()
     assert "envelope_guard" not in ResidualTraining().to_dict()  # the shipped agents' record
+    assert "bound_below" not in ResidualTraining().to_dict()  # symmetric: recorded as before
     guarded = ResidualSettings.from_dict({"base": "pid_los", "envelope_guard": True})
     assert guarded.envelope_guard == EnvelopeGuard()
     record = ResidualTraining.from_dict(

@@ -189,6 +189,7 @@ class ResidualVectorEnv(VectorWrapper):
             self.settings.filter_max,
             self._previous,
             self._started,
+            self.settings.bound_below,
         )
         applied = guard_env_commands(applied, self._obs, self.settings.envelope_guard)
         obs, reward, terminated, truncated, info = self.env.step(applied)
