@@ -78,7 +78,8 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a Policy
     of the residual observation, `controllers.residual.residual_observation_names`, or a saved
     residual agent's directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X,
-    M, N, default (0.25, 0.5, 0.5)), `filter_max` (the learned filter's α_max, default 0: none),
+    M, N, default (0.25, 0.5, 0.5)), `bound_below` (β⁻, the reach below the base, default β),
+    `filter_max` (the learned filter's α_max, default 0: none),
     `envelope_guard` (the guard of the applied action, default none); every other keyword configures
     the base controller. "lowpass"
     (`controllers.lowpass.LowPassPolicy`, docs/design.md §3.11) takes `base` (a classical name,
