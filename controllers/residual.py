@@ -208,7 +208,7 @@ class ResidualSettings:
     def to_dict(self) -> dict[str, Any]:
         """The JSON form recorded in an agent's metadata (the guard only when there is one, so
         an agent without it records what it always did)."""
-        return self.with_guard(
+        return self.with_optional(
             {
                 "base": self.base,
                 "bound": list(self.bound),
@@ -217,7 +217,7 @@ class ResidualSettings:
             }
         )
 
-    def with_guard(self, record: dict[str, Any]) -> dict[str, Any]:
+    def with_optional(self, record: dict[str, Any]) -> dict[str, Any]:
         """``record`` with β⁻ under "bound_below" and the envelope guard's settings under
         "envelope_guard", each only if set (an agent without them records what it always did)."""
         if self.bound_below is not None:

@@ -57,7 +57,7 @@ class ResidualTraining(ResidualSettings):
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form recorded in an agent's metadata (key order of the shipped agents)."""
-        return self.with_guard(
+        return self.with_optional(
             {
                 "base": self.base,
                 "bound": list(self.bound),
