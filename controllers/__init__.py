@@ -79,6 +79,7 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     of the residual observation, `controllers.residual.residual_observation_names`, or a saved
     residual agent's directory), `base` (a classical name, default "fbsm_colos"), `bound` (β per X,
     M, N, default (0.25, 0.5, 0.5)), `bound_below` (β⁻, the reach below the base, default β),
+    `brake_fin_margin` (the base's fin margin that scales the thrust's β⁻, default none),
     `filter_max` (the learned filter's α_max, default 0: none),
     `envelope_guard` (the guard of the applied action, default none); every other keyword configures
     the base controller. "lowpass"

@@ -365,6 +365,7 @@ def _build_model(
             settings.bound,
             settings.filter_max,
             settings.bound_below,
+            settings.brake_fin_margin,
         )
         if settings.envelope_guard is not None:  # before it becomes the previous action
             commands = guard_graph(
@@ -435,6 +436,7 @@ def _parity(
             previous,
             started,
             files.residual.bound_below,
+            brake_fin_margin=files.residual.brake_fin_margin,
         )
         want = guard_env_commands(want, obs, files.residual.envelope_guard)
         want_state = np.column_stack([want, np.ones(k)])
@@ -506,6 +508,8 @@ def _contract(
         }
         if files.residual.bound_below is not None:
             residual["bound_below"] = list(files.residual.bound_below)
+        if files.residual.brake_fin_margin is not None:
+            residual["brake_fin_margin"] = files.residual.brake_fin_margin
         if files.residual.envelope_guard is not None:  # in the graph; stated, not re-applied
             residual["envelope_guard"] = files.residual.envelope_guard.to_dict()
     return {

@@ -247,6 +247,16 @@ def allocation_graph(g: Graph, commands: str, observation: str, allocation: Any)
     return g.cast(out, np.float32), previous
 
 
+def _fin_margin_factor(g: Graph, b: str, margin: float) -> str:
+    """(n, 3) float64 [s, 1, 1] with s = clip((1 − max(|b_M|, |b_N|)) / m, 0, 1): the thrust
+    reach's scale of `controllers.residual.reach_below`."""
+    fins = g.op("Max", g.op("Abs", g.column(b, 1)), g.op("Abs", g.column(b, 2)))
+    room = g.op("Div", g.op("Sub", g.const(1.0, np.float64), fins), g.const(margin, np.float64))
+    scale = g.clip_const(room, 0.0, 1.0)
+    ones = g.op("Expand", g.const([[1.0, 1.0]], np.float64), g.op("Shape", scale))  # (n, 2)
+    return g.columns(scale, ones)
+
+
 def residual_graph(
     g: Graph,
     base_action: str,
@@ -256,9 +266,11 @@ def residual_graph(
     bound: Sequence[float],
     filter_max: float,
     bound_below: Sequence[float] | None = None,
+    brake_fin_margin: float | None = None,
 ) -> str:
     """The applied action of a residual agent (`controllers.residual.residual_action`):
-    clip(b + β ⊙ clip(c, −1, 1), −1, 1) (β⁻ ``bound_below`` in place of β where c < 0), then
+    clip(b + β ⊙ clip(c, −1, 1), −1, 1) (β⁻ ``bound_below`` in place of β where c < 0, its thrust
+    entry scaled by the base's fin margin with ``brake_fin_margin``), then
     with α_max > 0 the learned low-pass α ⊙ a_prev + (1 − α) ⊙ a with α = α_max·clip(g, 0, 1),
     0 where not ``started``; float32."""
     b = g.cast(base_action, np.float64)
@@ -272,10 +284,12 @@ def residual_graph(
     )
     reach = g.clip_const(c_first, -1.0, 1.0)
     above = g.const(np.asarray(bound, np.float64))
-    if bound_below is None:
+    if bound_below is None and brake_fin_margin is None:
         step = g.op("Mul", above, reach)
     else:
-        below = g.const(np.asarray(bound_below, np.float64))
+        below = g.const(np.asarray(bound if bound_below is None else bound_below, np.float64))
+        if brake_fin_margin is not None:
+            below = g.op("Mul", below, _fin_margin_factor(g, b, brake_fin_margin))
         negative = g.op("Less", reach, g.const(0.0, np.float64))
         step = g.op("Mul", g.op("Where", negative, below, above), reach)
     target = g.cast(g.clip_const(g.op("Add", b, step), -1.0, 1.0), np.float32)

@@ -12,6 +12,13 @@ first step):
 or, with ``bound_below`` β⁻ (how far below its base a negative correction may take an input),
 β ⊙ c where c ≥ 0 and β⁻ ⊙ c where c < 0: c = 0 is still the base, and the agent may push the
 thrust up past the base's command by β but pull it down by β⁻ only (docs/design.md §3.10).
+With ``brake_fin_margin`` m the thrust's reach below its base also depends on the situation:
+
+    β⁻_X,k = β⁻_X · clip((1 − max(|b_M,k|, |b_N,k|)) / m, 0, 1)
+
+whole while the base's fins have a margin m or more, none when either fin command is at its
+limit: the agent may brake on a leg, not into a turn the fins can no longer make at a lower
+speed (fin authority falls with u², docs/model.md §2.3).
 
 With an envelope guard (``envelope_guard``, `controllers.envelope_guard`) the applied action is
 the guard's view of it, a_k ← guard(a_k; θ, q, u of o_k), before it becomes a_{k−1}: the agent
@@ -93,6 +100,7 @@ __all__ = [
     "check_bound",
     "filter_coefficient",
     "make_residual",
+    "reach_below",
     "residual_action",
     "residual_observation_bounds",
     "residual_observation_names",
@@ -156,6 +164,9 @@ class ResidualSettings:
     envelope_guard: EnvelopeGuard | None = None
     # β⁻: how far below its base a negative correction may take each input (None: β).
     bound_below: tuple[float, float, float] | None = None
+    # m: the base fins' margin [normalised] below which the thrust's reach below its base
+    # shrinks to none at the fins' limit (None: a constant reach; module doc).
+    brake_fin_margin: float | None = None
 
     def __post_init__(self) -> None:
         if self.base not in CLASSICAL:
@@ -167,6 +178,11 @@ class ResidualSettings:
         if self.bound_below is not None:
             below = check_bound(self.bound_below, "bound_below")
             object.__setattr__(self, "bound_below", below)
+        if self.brake_fin_margin is not None:
+            margin = check_number("brake_fin_margin", self.brake_fin_margin, 0.0, 1.0)
+            if margin == 0.0:
+                raise ValueError("brake_fin_margin must be > 0 (0 would divide by zero)")
+            object.__setattr__(self, "brake_fin_margin", margin)
         filter_max = check_number(
             "filter_max", self.filter_max, 0.0, MAX_FILTER, " (1 would freeze the action)"
         )
@@ -218,10 +234,13 @@ class ResidualSettings:
         )
 
     def with_optional(self, record: dict[str, Any]) -> dict[str, Any]:
-        """``record`` with β⁻ under "bound_below" and the envelope guard's settings under
-        "envelope_guard", each only if set (an agent without them records what it always did)."""
+        """``record`` with β⁻ under "bound_below", m under "brake_fin_margin" and the envelope
+        guard's settings under "envelope_guard", each only if set (an agent without them records
+        what it always did)."""
         if self.bound_below is not None:
             record["bound_below"] = list(self.bound_below)
+        if self.brake_fin_margin is not None:
+            record["brake_fin_margin"] = self.brake_fin_margin
         if self.envelope_guard is not None:
             record["envelope_guard"] = self.envelope_guard.to_dict()
         return record
@@ -235,6 +254,7 @@ class ResidualSettings:
             self.base_kwargs,
             self.envelope_guard,
             self.bound_below,
+            self.brake_fin_margin,
         )
 
     @property
@@ -311,9 +331,12 @@ def residual_action(
     previous: np.ndarray | None = None,
     started: np.ndarray | None = None,
     bound_below: Sequence[float] | None = None,
+    *,
+    brake_fin_margin: float | None = None,
 ) -> np.ndarray:
     """The applied action as float32 (n, 3) (module doc): a = clip(b + β ⊙ clip(c, −1, 1), −1, 1)
-    (with ``bound_below`` β⁻ in place of β where c < 0), then with ``filter_max`` α_max > 0
+    (with ``bound_below`` β⁻ in place of β where c < 0, its thrust entry scaled by the base's
+    fin margin with ``brake_fin_margin``, `reach_below`), then with ``filter_max`` α_max > 0
     (``correction`` (n, 6) = (c, g)) the learned low-pass a = α ⊙ a_prev + (1 − α) ⊙ a,
     α = α_max·clip(g, 0, 1), 0 on rows not ``started``.
     ValueError for an output of another shape or with NaN/inf (naming the first bad row)."""
@@ -337,10 +360,11 @@ def residual_action(
             "NaN/inf is an error, not an action"
         )
     reach = np.clip(c[:, :3], -1.0, 1.0)
-    if bound_below is None:
+    if bound_below is None and brake_fin_margin is None:
         step = np.asarray(bound) * reach
     else:
-        step = np.where(reach < 0.0, np.asarray(bound_below), np.asarray(bound)) * reach
+        below = reach_below(b, bound if bound_below is None else bound_below, brake_fin_margin)
+        step = np.where(reach < 0.0, below, np.asarray(bound)) * reach
     target = np.clip(b + step, -1.0, 1.0)
     target = target.astype(np.float32)
     if filter_max == 0.0:
@@ -350,6 +374,21 @@ def residual_action(
     alpha = filter_coefficient(c[:, 3:], filter_max, started)
     # float32 throughout, as `controllers.lowpass`, so g ≡ 1 reproduces it bit for bit
     return (alpha * previous + (np.float32(1.0) - alpha) * target).astype(np.float32)
+
+
+def reach_below(
+    base_action: np.ndarray, bound_below: Sequence[float], brake_fin_margin: float | None
+) -> np.ndarray:
+    """β⁻ per row: (3,) as given without a fin margin; with ``brake_fin_margin`` m, (n, 3) whose
+    thrust entry is β⁻_X · clip((1 − max(|b_M|, |b_N|)) / m, 0, 1) (module doc)."""
+    below = np.asarray(bound_below, dtype=np.float64)
+    if brake_fin_margin is None:
+        return below
+    fins = np.max(np.abs(base_action[:, 1:3]), axis=1)
+    scale = np.clip((1.0 - fins) / brake_fin_margin, 0.0, 1.0)
+    rows = np.repeat(below[None, :], base_action.shape[0], axis=0)
+    rows[:, 0] *= scale
+    return rows
 
 
 def filter_coefficient(g: np.ndarray, filter_max: float, started: np.ndarray) -> np.ndarray:
@@ -401,6 +440,7 @@ class ResidualPolicy:
         self.filter_max = 0.0 if settings is None else settings.filter_max
         self.guard = None if settings is None else settings.envelope_guard
         self.bound_below = None if settings is None else settings.bound_below
+        self.brake_fin_margin = None if settings is None else settings.brake_fin_margin
         self.action_dim = agent_action_dim(self.filter_max)
         self.metadata = dict(getattr(agent, "metadata", {}) or {})
         # The env observation's width [values]: what the agent sees less b_k and a_{k−1}.
@@ -467,6 +507,7 @@ class ResidualPolicy:
             state["previous"],
             state["started"],
             self.bound_below,
+            brake_fin_margin=self.brake_fin_margin,
         )
         applied = guard_env_commands(applied, batch, self.guard)
         if self.filter_max > 0.0:
@@ -498,11 +539,13 @@ def make_residual(
     filter_max: float | None = None,
     envelope_guard: Any = None,
     bound_below: Any = None,
+    brake_fin_margin: float | None = None,
     **base_kwargs: Any,
 ) -> ResidualPolicy:
     """A `ResidualPolicy` of the Policy ``agent`` (`residual_observation_names`): ``base`` (default
     "fbsm_colos") and ``base_kwargs`` (e.g. ``actuator``, ``control_dt``, gains) build the base
-    controller; ``bound`` is β (X, M, N), ``bound_below`` β⁻ (None: β); ``filter_max`` α_max > 0
+    controller; ``bound`` is β (X, M, N), ``bound_below`` β⁻ (None: β), ``brake_fin_margin`` m
+    the fin margin that scales the thrust's β⁻ (None: constant); ``filter_max`` α_max > 0
     gives the learned filter (an agent of six outputs); ``envelope_guard`` (an `EnvelopeGuard`,
     a mapping of its fields or True) guards the applied action. A saved residual agent's
     directory: `controllers.loader`.
@@ -515,5 +558,6 @@ def make_residual(
         filter_max=DEFAULT_FILTER_MAX if filter_max is None else filter_max,
         envelope_guard=envelope_guard,
         bound_below=bound_below,
+        brake_fin_margin=brake_fin_margin,
     )
     return ResidualPolicy(settings.make_base(**owned), agent, settings.bound, settings)

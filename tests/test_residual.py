@@ -253,6 +253,50 @@ def test_an_asymmetric_bound_reaches_each_side_exactly():
     np.testing.assert_allclose(a, [[-0.1, -0.5, -0.75], [1.0, 0.5, 0.25]], atol=1e-7)
 
 
+def fin_scale(base: np.ndarray, margin: float) -> np.ndarray:
+    """The thrust reach's scale clip((1 − max(|b_M|, |b_N|)) / m, 0, 1), written out."""
+    return np.clip((1.0 - np.max(np.abs(base[:, 1:3]), axis=1)) / margin, 0.0, 1.0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    base=st.lists(st.floats(-1.0, 1.0, width=32), min_size=3, max_size=3),
+    correction=st.lists(st.floats(-1e30, 1e30), min_size=3, max_size=3),
+    above=st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
+    below=st.one_of(st.none(), st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3)),
+    margin=st.floats(1e-3, 1.0),
+)
+def test_a_fin_margin_scales_the_thrust_reach_below_for_any_agent_output(
+    base, correction, above, below, margin
+):
+    b = np.array([base], np.float32)
+    c = np.array([correction])
+    a = residual_action(b, c, above, bound_below=below, brake_fin_margin=margin)
+    step = a.astype(float)[0] - b.astype(float)[0]
+    sides = np.array(above if below is None else below)
+    scale = fin_scale(b.astype(float), margin)[0]
+    assert np.all(np.abs(a) <= 1.0)
+    assert np.all(step <= np.array(above) + 2.0**-24)
+    assert step[0] >= -sides[0] * scale - 2.0**-24  # the thrust: β⁻_X times the fins' margin
+    assert np.all(step[1:] >= -sides[1:] - 2.0**-24)  # the fins: β⁻ as without a margin
+    zero = residual_action(b, np.zeros((1, 3)), above, bound_below=below, brake_fin_margin=margin)
+    np.testing.assert_array_equal(zero, b)  # c = 0 is the base
+    if scale == 1.0:  # fins with a margin of m or more: the constant reach, bit for bit
+        np.testing.assert_array_equal(a, residual_action(b, c, above, bound_below=below))
+
+
+def test_a_fin_margin_reaches_its_scaled_thrust_exactly():
+    # fins at 0.2 (margin 0.8 ≥ m), 0.75 (half of m = 0.5 left), at the limit
+    b = np.array([[0.5, 0.2, -0.1], [0.5, 0.0, -0.75], [0.5, 1.0, 0.0]], np.float32)
+    c = np.array([[-1.0, -1.0, 1.0]] * 3)
+    a = residual_action(b, c, (1.0, 0.5, 0.5), brake_fin_margin=0.5)
+    np.testing.assert_allclose(a[:, 0], [-0.5, 0.0, 0.5], atol=1e-7)  # 0.5 − 1.0 × (1, ½, 0)
+    np.testing.assert_allclose(a[:, 1], b[:, 1] - 0.5, atol=1e-7)  # the stern plane unchanged
+    np.testing.assert_allclose(a[:, 2], np.minimum(b[:, 2] + 0.5, 1.0), atol=1e-7)
+    up = residual_action(b, -c, (1.0, 0.5, 0.5), brake_fin_margin=0.5)  # up: β whatever the fins
+    np.testing.assert_allclose(up[:, 0], [1.0, 1.0, 1.0], atol=1e-7)
+
+
 def test_wrapper_bound_holds_for_extreme_agent_actions():
     n = 8
     env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), ResidualTraining(bound=0.1))
@@ -282,6 +326,28 @@ def test_wrapper_holds_an_asymmetric_bound_for_extreme_agent_actions():
     assert steps[:, 0].min() < -0.09 and steps[:, 0].max() > 0.3  # both sides reached
 
 
+def test_wrapper_scales_the_thrust_reach_below_by_the_base_fin_margin():
+    n = 8
+    settings_ = ResidualTraining(bound=(1.0, 0.5, 0.5), brake_fin_margin=0.5)
+    env = ResidualVectorEnv(AUVPath3DVectorEnv(n, **ENV), settings_)
+    obs, _ = env.reset(seed=0)
+    rng = np.random.default_rng(4)
+    bases, steps = [], []
+    for _ in range(40):
+        base = obs[:, 15:18].astype(float)
+        obs, *_ = env.step(rng.choice([-1e30, -1.0, -0.3, 0.3, 1e30], size=(n, 3)))
+        bases.append(base)
+        steps.append(obs[:, 18:21].astype(float) - base)
+    bases, steps = np.concatenate(bases), np.concatenate(steps)
+    scale = fin_scale(bases, 0.5)
+    assert np.all(steps[:, 0] >= -scale - 2.0**-24)
+    assert np.all(steps <= np.array([1.0, 0.5, 0.5]) + 2.0**-24)
+    # the paper's FBSM swings its fins: both whole and shrunk reaches are flown
+    assert (scale == 1.0).any() and (scale < 0.5).any()
+    shrunk = (scale < 0.5) & (bases[:, 0] - scale > -1.0)
+    assert shrunk.any() and steps[shrunk, 0].min() >= -0.5
+
+
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
 def test_non_finite_agent_output_is_an_error_not_an_action(bad):
     policy = controllers.make("residual", agent=ConstantAgent((0.0, bad, 0.0)))
@@ -306,6 +372,10 @@ def test_non_finite_agent_output_is_an_error_not_an_action(bad):
         ({"bound": "x"}, "bound must be a number or three numbers"),
         ({"bound_below": (0.1, 3.0, 0.3)}, r"bound_below must lie in \[0, 2\] for each"),
         ({"bound_below": float("nan")}, r"bound_below must lie in \[0, 2\]"),
+        ({"brake_fin_margin": 0.0}, r"brake_fin_margin must be > 0"),
+        ({"brake_fin_margin": 1.5}, r"brake_fin_margin must be a number in \[0, 1\]"),
+        ({"brake_fin_margin": float("nan")}, r"brake_fin_margin must be a number in \[0, 1\]"),
+        ({"brake_fin_margin": True}, r"brake_fin_margin must be a number in \[0, 1\]"),
         ({"tv_weight": -1.0}, r"tv_weight must be a number in \[0, 1000\]"),
         ({"precision_weight": float("nan")}, r"precision_weight must be a number in \[0, 1000\]"),
         ({"precision_scale": 0.0}, r"precision_scale must be a number in \[0.001, 10\] m"),
@@ -445,6 +515,53 @@ def test_a_residual_agent_with_an_asymmetric_bound_saves_flies_and_exports(
     onnx_file, contract, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
     assert parity["max_abs_error"] <= 1e-5
     assert json.loads(contract.read_text())["residual"]["bound_below"] == [0.1, 0.1, 0.1]
+    exported = controllers.make("onnx", path=str(onnx_file), env=env)
+    a = evaluate(loaded, [0], **env)[0]["rms_distance"]
+    b = evaluate(exported, [0], **env)[0]["rms_distance"]
+    assert b == pytest.approx(a, rel=1e-4)
+
+
+@pytest.mark.rl
+def test_a_residual_agent_with_a_fin_margin_saves_flies_and_exports(
+    tmp_path, save_tiny_residual_agent, assert_same_episodes
+):
+    """The fin margin (``brake_fin_margin``) is recorded, reloaded, flown as trained and
+    exported: the thrust never falls below its base's by more than β_X times the fins' margin,
+    from Python or from ONNX."""
+    torch = pytest.importorskip("torch")
+    from benchmarks.training.callbacks import policy_from_model
+    from controllers.agent import check_agent
+    from controllers.loader import load_policy
+    from controllers.onnx_export import export_onnx
+
+    env = {**ENV, "actuator": "realistic"}
+    settings_ = ResidualTraining(base="pid_as_built", bound=(1.0, 0.5, 0.5), brake_fin_margin=0.5)
+    model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 5, env)
+    with torch.no_grad():  # an agent that pulls the thrust down and the stern plane up, hard
+        model.policy.action_net.bias[:] = torch.tensor([-2.0, 2.0, 0.0])
+    model.save(tmp_path / "agent" / "model.zip")
+    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    assert meta["residual"]["brake_fin_margin"] == 0.5 and "bound_below" not in meta["residual"]
+    assert check_agent(tmp_path / "agent").residual == settings_.inference()
+    loaded = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
+    assert isinstance(loaded, ResidualPolicy) and loaded.brake_fin_margin == 0.5
+    live = policy_from_model(model, venv, settings_, env)
+    episodes = rollouts(loaded, [0, 1], **env)
+    assert_same_episodes(episodes, rollouts(live, [0, 1], **env))
+    corrections = np.concatenate([t.extras["correction"] for t in episodes])
+    applied = np.concatenate(
+        [
+            np.stack([t.intervals[a] for a in _ACTIONS], 1)[: t.extras["correction"].shape[0]]
+            for t in episodes
+        ]
+    )
+    scale = fin_scale(applied - corrections, 0.5)
+    assert np.all(corrections[:, 0] >= -scale - 1e-6)
+    assert (scale < 1.0).sum() > 10  # the stern plane pushed up leaves the fins no margin
+    assert np.mean(np.abs(corrections[:, 0] + scale) < 1e-5) > 0.5  # at the scaled reach, mostly
+    onnx_file, contract, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
+    assert parity["max_abs_error"] <= 1e-5
+    assert json.loads(contract.read_text())["residual"]["brake_fin_margin"] == 0.5
     exported = controllers.make("onnx", path=str(onnx_file), env=env)
     a = evaluate(loaded, [0], **env)[0]["rms_distance"]
     b = evaluate(exported, [0], **env)[0]["rms_distance"]

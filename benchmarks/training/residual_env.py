@@ -190,6 +190,7 @@ class ResidualVectorEnv(VectorWrapper):
             self._previous,
             self._started,
             self.settings.bound_below,
+            brake_fin_margin=self.settings.brake_fin_margin,
         )
         applied = guard_env_commands(applied, self._obs, self.settings.envelope_guard)
         obs, reward, terminated, truncated, info = self.env.step(applied)
