@@ -176,6 +176,42 @@ def test_the_6dof_rows_fly_the_6dof_plant_and_the_5dof_rows_a_5dof_envs():
     assert differs and rolled > 1e-3 and ends >= 8
 
 
+def test_a_residual_share_is_a_residual_env_per_plant_whose_base_flies_each_hull():
+    """make_training_env with a residual section and {6dof: 0.5} of 4 vehicles: rows 2-3 are a
+    2-vehicle residual env on the 6-DOF plant seeded with vehicles 2-3's seeds; with c = 0 each
+    part's base (the PID on the realistic actuator) flies its own hull, and the 6-DOF rows roll."""
+    from benchmarks.training.residual import ResidualTraining
+    from benchmarks.training.residual_env import make_residual_sb3_env
+
+    seed, kwargs = 3, {**SHORT, "actuator": "realistic"}
+    residual = ResidualTraining(base="pid_as_built", bound=(1.0, 0.5, 0.5))
+    mixed = make_training_env(
+        4, seed, kwargs, env_id=ENV_ID, threads=1, residual=residual, vehicle_share=HALF
+    )
+    env_seed = TRAIN_SEED_BASE + 1000 * seed
+    six = make_residual_sb3_env(2, residual, **{**VARIANTS[ENV_ID], **kwargs, "plant": "6dof"})
+    six.seed(env_seed + 2)
+    five = make_training_env(2, seed, kwargs, env_id=ENV_ID, threads=1, residual=residual)
+    assert [config.plant for config in mixed.get_attr("config")] == ["5dof"] * 2 + ["6dof"] * 2
+    obs = mixed.reset()
+    assert obs.shape == (4, 21)
+    np.testing.assert_array_equal(obs[:2], five.reset())
+    np.testing.assert_array_equal(obs[2:], six.reset())
+    rolled = 0.0
+    for _ in range(120):
+        base = obs[:, 15:18]
+        obs, reward, done, _ = mixed.step(np.zeros((4, 3), np.float32))
+        for rows, part in ((slice(0, 2), five), (slice(2, 4), six)):
+            obs_p, reward_p, done_p, _ = part.step(np.zeros((2, 3), np.float32))
+            np.testing.assert_array_equal(obs[rows], obs_p)
+            np.testing.assert_array_equal(reward[rows], reward_p)
+            np.testing.assert_array_equal(done[rows], done_p)
+        # c = 0: the applied action, the next observation's previous one, is the base's
+        np.testing.assert_array_equal(obs[~done, 18:21], base[~done])
+        rolled = max(rolled, float(np.abs(mixed.get_attr("sim", [2])[0].roll[:, 0]).max()))
+    assert rolled > 1e-3
+
+
 def _config(tmp_path: Path, name: str = "mix.yml", **changes) -> Path:
     section = {**SECTION, **changes}
     path = tmp_path / name
@@ -300,11 +336,6 @@ def test_the_section_plant_may_be_the_6dof_one():
             ["--vec-env", "dummy"],
             "mix.yml: plant_share needs the native vector env (vec_env auto or native), "
             "not vec_env='dummy'",
-        ),
-        (
-            {"residual": {"base": "fbsm_colos", "bound": [0.25, 0.5, 0.5]}},
-            [],
-            "plant_share is not supported with a residual section",
         ),
         (
             {"actuator_share": {"fins": 0.25}},

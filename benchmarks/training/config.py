@@ -234,9 +234,7 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     check_normalize(normalize, where)
     _check_policy(section["policy"], policy_kwargs, algo, where)
     _check_env_kwargs(env_id, env_kwargs, where)
-    vehicle_share = parse_vehicle_share(
-        section, n_envs, env_id, env_kwargs, where, residual is not None
-    )
+    vehicle_share = parse_vehicle_share(section, n_envs, env_id, env_kwargs, where)
     selection = DEFAULT_RULE
     if "selection" in section:
         selection = parse_selection(section["selection"], where)

@@ -66,9 +66,11 @@ def make_training_env(
     action and chattering charge; native only).
     ``threads``: numba threads of the native env's kernel (1: the serial kernel at every N;
     None: `AUVPath3DVectorEnv`'s default).
-    ``vehicle_share`` (native only, not residual): one native env per plant or actuator
+    ``vehicle_share`` (native only): one native env per plant or actuator
     (`VehicleShare.vehicles`), the section's own first, concatenated
     (`benchmarks.training.plant_mix.ConcatVecEnv`); vehicle i keeps the env seed of vehicle i.
+    With ``residual`` each part is its own `ResidualVectorEnv`, whose base flies that part's
+    actuator (a base knows no plant: it flies the 6-DOF hull as it would in evaluation).
     """
     if kind not in ("auto", "native", "dummy"):
         raise ValueError(f"vec_env must be 'auto', 'native' or 'dummy', got {kind!r}")
@@ -78,8 +80,6 @@ def make_training_env(
             f"a residual agent trains on the native vector env of "
             f"{sorted(VARIANTS)}, not vec_env={kind!r} / {env_id}"
         )
-    if vehicle_share is not None and residual is not None:
-        raise ValueError(f"{vehicle_share.key} is not supported for a residual agent")
     if vehicle_share is not None and not (kind in ("auto", "native") and env_id in VARIANTS):
         raise ValueError(
             f"{vehicle_share.key} needs the native vector env of {sorted(VARIANTS)}, not "
@@ -94,28 +94,27 @@ def make_training_env(
         if residual is not None:
             from benchmarks.training.residual_env import make_residual_sb3_env
 
-            return VecMonitor(
-                make_residual_sb3_env(n_envs, residual, seed=env_seed, threads=threads, **kwargs)
-            )
-        # SB3 and VecMonitor read no other info key: skip the per-vehicle copies (auv_gym.envs.sb3).
+            def make_part(count: int, **part_kwargs: Any) -> Any:
+                return make_residual_sb3_env(count, residual, threads=threads, **part_kwargs)
+        else:
+
+            def make_part(count: int, **part_kwargs: Any) -> Any:
+                # SB3 and VecMonitor read no other info key: skip the per-vehicle copies.
+                return make_sb3_vec_env(count, threads=threads, infos="minimal", **part_kwargs)
+
         if vehicle_share is not None:
             from benchmarks.training.plant_mix import ConcatVecEnv
 
             parts = [
-                make_sb3_vec_env(
-                    count,
-                    threads=threads,
-                    infos="minimal",
-                    **{**kwargs, vehicle_share.argument: value},
-                )
+                make_part(count, **{**kwargs, vehicle_share.argument: value})
                 for value, count in vehicle_share.vehicles(n_envs)
             ]
             venv = ConcatVecEnv(parts)
             venv.seed(env_seed)
             return VecMonitor(venv)
-        return VecMonitor(
-            make_sb3_vec_env(n_envs, seed=env_seed, threads=threads, infos="minimal", **kwargs)
-        )
+        venv = make_part(n_envs, **kwargs)
+        venv.seed(env_seed)
+        return VecMonitor(venv)
     if kind == "native":
         raise ValueError(f"the native vector env simulates {sorted(VARIANTS)} only, not {env_id}")
     from stable_baselines3.common.env_util import make_vec_env

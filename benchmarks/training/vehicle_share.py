@@ -19,7 +19,8 @@ per value, concatenated (`benchmarks.training.plant_mix.ConcatVecEnv`): the sect
 vehicles first, then each named value's in the order given; vehicle i keeps the env seed
 env_seed + i (`benchmarks.training.envs.make_training_env`). The concatenation reports each
 vehicle's actuator, so stages that follow it (the allocation, docs/design.md §3.16) act per
-vehicle. Evaluation flies the evaluation env as before.
+vehicle. A residual section's parts are each a residual env whose base flies that part's
+actuator. Evaluation flies the evaluation env as before.
 
 One of the two keys per section: a share of both would need every pair of plant and actuator.
 In a schedule (`benchmarks.training.schedule`) a phase may set or change a share like any
@@ -32,7 +33,7 @@ the section's own
 named, a section whose actuator is drawn per episode (``actuator: random``) with an actuator
 share, a share that is not a finite number in (0, 1), shares summing to 1 or more, a share
 that rounds to 0 vehicles or leaves none on the section's own, env keyword arguments the named
-value refuses, a residual section, an env id without the native vector env; and
+value refuses, an env id without the native vector env; and
 (`check_native`) ``vec_env="dummy"``.
 """
 
@@ -108,7 +109,6 @@ def parse_vehicle_share(
     env_id: str,
     env_kwargs: Mapping[str, Any],
     where: str,
-    residual: bool = False,
 ) -> VehicleShare | None:
     """A `VehicleShare` from a section's ``plant_share`` or ``actuator_share`` mapping (None:
     neither, or null or empty: every vehicle on the section's own); one-line ValueError naming
@@ -131,8 +131,6 @@ def parse_vehicle_share(
             f"{at} must be a mapping of {argument} name to share of n_envs, e.g. {example}, "
             f"got {value!r:.60}"
         )
-    if residual:
-        raise ValueError(f"{at} is not supported with a residual section (one plant per run)")
     if env_id not in VARIANTS:
         raise ValueError(
             f"{at} needs the native vector env, which simulates {sorted(VARIANTS)}, not {env_id}"
