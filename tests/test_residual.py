@@ -480,45 +480,62 @@ def test_a_residual_agent_on_the_preview_observation_loads_flies_and_exports(
     assert b == pytest.approx(a, rel=1e-4)
 
 
+def _pushed_agent(tmp_path, save_tiny, assert_same_episodes, settings_, env):
+    """A tiny saved agent whose network pulls the thrust down and the stern plane up, hard;
+    reloaded (its settings recorded and read back) and checked to fly as the live model:
+    (metadata, the reloaded policy, its episodes of seeds 0-1)."""
+    torch = pytest.importorskip("torch")
+    from benchmarks.training.callbacks import policy_from_model
+    from controllers.agent import check_agent
+    from controllers.loader import load_policy
+
+    model, venv = save_tiny(settings_, tmp_path / "agent", 5, env)
+    with torch.no_grad():
+        model.policy.action_net.bias[:] = torch.tensor([-2.0, 2.0, 0.0])
+    model.save(tmp_path / "agent" / "model.zip")
+    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    assert check_agent(tmp_path / "agent").residual == settings_.inference()
+    loaded = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
+    assert isinstance(loaded, ResidualPolicy)
+    episodes = rollouts(loaded, [0, 1], **env)
+    assert_same_episodes(
+        episodes, rollouts(policy_from_model(model, venv, settings_, env), [0, 1], **env)
+    )
+    return meta, loaded, episodes
+
+
+def _exported_flies_as_loaded(tmp_path, loaded, env) -> dict:
+    """Export the agent (parity ≤ 1e-5), fly the graph as the policy flies; the contract."""
+    from controllers.onnx_export import export_onnx
+
+    onnx_file, contract, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
+    assert parity["max_abs_error"] <= 1e-5
+    exported = controllers.make("onnx", path=str(onnx_file), env=env)
+    a = evaluate(loaded, [0], **env)[0]["rms_distance"]
+    b = evaluate(exported, [0], **env)[0]["rms_distance"]
+    assert b == pytest.approx(a, rel=1e-4)
+    return json.loads(contract.read_text())
+
+
 @pytest.mark.rl
 def test_a_residual_agent_with_an_asymmetric_bound_saves_flies_and_exports(
     tmp_path, save_tiny_residual_agent, assert_same_episodes
 ):
     """β⁻ (``bound_below``) is recorded, reloaded, flown as trained and exported: the thrust
     never falls more than β⁻ below the base's, from Python or from ONNX."""
-    import json
-
-    torch = pytest.importorskip("torch")
-    from benchmarks.training.callbacks import policy_from_model
-    from controllers.agent import check_agent
-    from controllers.loader import load_policy
-    from controllers.onnx_export import export_onnx
-
     env = {**ENV, "actuator": "realistic"}
     settings_ = ResidualTraining(base="pid_as_built", bound=(1.0, 0.5, 0.5), bound_below=0.1)
-    model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 5, env)
-    with torch.no_grad():  # an agent that pulls the thrust down and the stern plane up, hard
-        model.policy.action_net.bias[:] = torch.tensor([-2.0, 2.0, 0.0])
-    model.save(tmp_path / "agent" / "model.zip")
-    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    meta, loaded, episodes = _pushed_agent(
+        tmp_path, save_tiny_residual_agent, assert_same_episodes, settings_, env
+    )
     assert meta["residual"]["bound_below"] == [0.1, 0.1, 0.1]
-    assert check_agent(tmp_path / "agent").residual == settings_.inference()
-    loaded = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
-    assert isinstance(loaded, ResidualPolicy) and loaded.bound_below == (0.1, 0.1, 0.1)
-    live = policy_from_model(model, venv, settings_, env)
-    episodes = rollouts(loaded, [0, 1], **env)
-    assert_same_episodes(episodes, rollouts(live, [0, 1], **env))
+    assert loaded.bound_below == (0.1, 0.1, 0.1)
     corrections = np.concatenate([t.extras["correction"] for t in episodes])
     assert corrections[:, 0].min() >= -0.1 - 2.0**-24  # β⁻ = 0.1 below the base's thrust
     assert np.mean(np.abs(corrections[:, 0] + 0.1) < 1e-6) > 0.5  # and there, mostly
     assert corrections[:, 1].max() > 0.45  # β = 0.5 above
-    onnx_file, contract, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
-    assert parity["max_abs_error"] <= 1e-5
-    assert json.loads(contract.read_text())["residual"]["bound_below"] == [0.1, 0.1, 0.1]
-    exported = controllers.make("onnx", path=str(onnx_file), env=env)
-    a = evaluate(loaded, [0], **env)[0]["rms_distance"]
-    b = evaluate(exported, [0], **env)[0]["rms_distance"]
-    assert b == pytest.approx(a, rel=1e-4)
+    contract = _exported_flies_as_loaded(tmp_path, loaded, env)
+    assert contract["residual"]["bound_below"] == [0.1, 0.1, 0.1]
 
 
 @pytest.mark.rl
@@ -528,26 +545,13 @@ def test_a_residual_agent_with_a_fin_margin_saves_flies_and_exports(
     """The fin margin (``brake_fin_margin``) is recorded, reloaded, flown as trained and
     exported: the thrust never falls below its base's by more than β_X times the fins' margin,
     from Python or from ONNX."""
-    torch = pytest.importorskip("torch")
-    from benchmarks.training.callbacks import policy_from_model
-    from controllers.agent import check_agent
-    from controllers.loader import load_policy
-    from controllers.onnx_export import export_onnx
-
     env = {**ENV, "actuator": "realistic"}
     settings_ = ResidualTraining(base="pid_as_built", bound=(1.0, 0.5, 0.5), brake_fin_margin=0.5)
-    model, venv = save_tiny_residual_agent(settings_, tmp_path / "agent", 5, env)
-    with torch.no_grad():  # an agent that pulls the thrust down and the stern plane up, hard
-        model.policy.action_net.bias[:] = torch.tensor([-2.0, 2.0, 0.0])
-    model.save(tmp_path / "agent" / "model.zip")
-    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    meta, loaded, episodes = _pushed_agent(
+        tmp_path, save_tiny_residual_agent, assert_same_episodes, settings_, env
+    )
     assert meta["residual"]["brake_fin_margin"] == 0.5 and "bound_below" not in meta["residual"]
-    assert check_agent(tmp_path / "agent").residual == settings_.inference()
-    loaded = load_policy(tmp_path / "agent", base_kwargs={"actuator": "realistic"})
-    assert isinstance(loaded, ResidualPolicy) and loaded.brake_fin_margin == 0.5
-    live = policy_from_model(model, venv, settings_, env)
-    episodes = rollouts(loaded, [0, 1], **env)
-    assert_same_episodes(episodes, rollouts(live, [0, 1], **env))
+    assert loaded.brake_fin_margin == 0.5
     corrections = np.concatenate([t.extras["correction"] for t in episodes])
     applied = np.concatenate(
         [
@@ -559,13 +563,8 @@ def test_a_residual_agent_with_a_fin_margin_saves_flies_and_exports(
     assert np.all(corrections[:, 0] >= -scale - 1e-6)
     assert (scale < 1.0).sum() > 10  # the stern plane pushed up leaves the fins no margin
     assert np.mean(np.abs(corrections[:, 0] + scale) < 1e-5) > 0.5  # at the scaled reach, mostly
-    onnx_file, contract, parity = export_onnx(tmp_path / "agent", tmp_path / "agent.onnx")
-    assert parity["max_abs_error"] <= 1e-5
-    assert json.loads(contract.read_text())["residual"]["brake_fin_margin"] == 0.5
-    exported = controllers.make("onnx", path=str(onnx_file), env=env)
-    a = evaluate(loaded, [0], **env)[0]["rms_distance"]
-    b = evaluate(exported, [0], **env)[0]["rms_distance"]
-    assert b == pytest.approx(a, rel=1e-4)
+    contract = _exported_flies_as_loaded(tmp_path, loaded, env)
+    assert contract["residual"]["brake_fin_margin"] == 0.5
 
 
 @pytest.mark.rl
