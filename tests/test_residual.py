@@ -24,6 +24,7 @@ from controllers.residual import (
     ResidualPolicy,
     base_kwargs_for_env,
     residual_action,
+    residual_observation_names,
 )
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -647,6 +648,29 @@ def test_residual_yaml_trains_on_the_generalist_distribution_with_default_settin
     broken.write_text(text)
     with pytest.raises(ValueError, match=r"bad.yml: residual: tv_weight must be a number"):
         read_zoo_config(broken, "AUVPath3DSpeedLimit-v0")
+
+
+def test_the_as_built_residual_recipe_corrects_the_pid_with_a_fin_margin():
+    """benchmarks/hyperparams/ppo_residual_as_built.yml parses into the settings its results
+    were trained with, and its env is the residual env of the preview observation, whose base
+    flies the propeller and fins."""
+    from benchmarks.training.config import read_zoo_config
+    from benchmarks.training.envs import make_training_env
+
+    env_id = "AUVPath3DSpeedLimit-v0"
+    cfg = read_zoo_config(ROOT / "benchmarks/hyperparams/ppo_residual_as_built.yml", env_id)
+    assert cfg.residual.base == "pid_as_built" and cfg.residual.base_kwargs == {"yaw_wn": 1.5}
+    assert cfg.residual.bound == (1.0, 0.5, 1.0) and cfg.residual.bound_below is None
+    assert cfg.residual.brake_fin_margin == 0.5 and cfg.residual.envelope_guard is not None
+    assert cfg.env_kwargs["actuator"] == "realistic" and cfg.n_timesteps == 6_000_000
+    kwargs = {**cfg.env_kwargs, "max_time": 2.0}
+    venv = make_training_env(2, 0, kwargs, env_id=env_id, residual=cfg.residual, threads=1)
+    obs = venv.reset()
+    names = residual_observation_names(cfg.env_kwargs["observation"])
+    assert obs.shape == (2, len(names)) and venv.action_space.shape == (6,)  # c and the filter
+    base = obs[:, len(names) - 6 : len(names) - 3]
+    assert np.all(np.isfinite(base)) and np.abs(base).max() > 0.0
+    venv.close()
 
 
 def test_evaluation_base_flies_the_episodes_actuator_the_realistic_one_included(
