@@ -500,18 +500,15 @@ def _contract(
     allocation = next((s.allocation for s in stages if isinstance(s, AllocationStage)), None)
     residual = None
     if files.residual is not None:
-        residual = {
-            "base": files.residual.base,
-            "base_kwargs": files.residual.base_kwargs,
-            "bound": list(files.residual.bound),
-            "filter_max": files.residual.filter_max,
-        }
-        if files.residual.bound_below is not None:
-            residual["bound_below"] = list(files.residual.bound_below)
-        if files.residual.brake_fin_margin is not None:
-            residual["brake_fin_margin"] = files.residual.brake_fin_margin
-        if files.residual.envelope_guard is not None:  # in the graph; stated, not re-applied
-            residual["envelope_guard"] = files.residual.envelope_guard.to_dict()
+        # β⁻, the fin margin and the guard are in the graph; stated, not re-applied
+        residual = files.residual.with_optional(
+            {
+                "base": files.residual.base,
+                "base_kwargs": files.residual.base_kwargs,
+                "bound": list(files.residual.bound),
+                "filter_max": files.residual.filter_max,
+            }
+        )
     return {
         "format": CONTRACT_FORMAT,
         "format_version": CONTRACT_VERSION,
