@@ -40,6 +40,18 @@ push it further (ẽ τ < 0, since the integral term is −K_i I), and |K_i I| �
 integral term alone never demands more than the actuator gives. With the "fins" actuator τ_max
 is the fin authority at the observed u (zero at rest).
 
+Climb speed (``climb_speed`` > 0, "fins" and "realistic" actuators only; off by default): the
+fins' authority grows as u|u| (docs/model.md §2.3), so a pitch moment the stern plane cannot
+make at u_D it can make faster. The surge reference rises towards the speed at which the
+demanded (unsaturated) M is the fraction ``climb_authority`` of the authority,
+
+    u_M = √(|M| / (climb_authority · K δ_max)),
+    u_c ← u_c + (Δt_c/T_c)(clip(u_M, u_ref, u_max) − u_c),
+
+with u_max = ``climb_speed``, T_c = ``climb_time``, and the loop tracks max(u_ref, u_c) (its rate
+fed forward). On a level leg |M| is small, u_M < u_D and the reference is u_D; on a climb the
+restoring moment z_g W sin θ needs the speed, which the drag then costs (docs/model.md §4.9).
+
 Notes: the loops neglect what the FBSM adapts to and the backstepping comparator inverts — the
 Munk moment M_uw u w, the quadratic damping, the sway and heave coupling, ψ̇ = r/cos θ and the
 noise — and leave them to the integrators. With r and q as the derivative terms there is no
@@ -65,7 +77,7 @@ from auv_gym.vehicle import AUVParams
 from controllers.alos import guidance_diagnostics
 from controllers.base import BatchedController
 from controllers.fbsm import moment_limits
-from controllers.gains import DT, X_MAX, ControllerGains, pack_gains
+from controllers.gains import DT, FIN_GAIN, X_MAX, ControllerGains, pack_gains
 from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
 
 __all__ = ["GUIDANCE_GAINS", "PIDLOS", "PID_GUIDANCE", "PIDGains", "PIDTuning", "pid_tuning"]
@@ -120,6 +132,9 @@ class PIDGains:
     integral_ratio: float = 0.1  # [-] K_i = ratio·ω_n·K_p (Fossen's ω_n/10); 0: P(D) only
     design_speed: float = 1.0  # [m/s] u0 of the linearisation (the paper's u_D)
     anti_windup: bool = True  # conditional integration and |K_i I| ≤ τ_max (module docstring)
+    climb_speed: float = 0.0  # [m/s] u_max of the climb-speed law (module docstring); 0: off
+    climb_authority: float = 0.8  # [-] the share of the fins' pitch authority it aims for
+    climb_time: float = 2.0  # [s] T_c, the time constant of the raised surge reference
 
     def __post_init__(self) -> None:
         positive = {
@@ -134,6 +149,9 @@ class PIDGains:
             real(f"PIDGains.{name}", getattr(self, name), 0.0, low_open=True, unit=unit)
         real("PIDGains.integral_ratio", self.integral_ratio, 0.0)
         flag("PIDGains.anti_windup", self.anti_windup)
+        real("PIDGains.climb_speed", self.climb_speed, 0.0, unit="m/s")
+        real("PIDGains.climb_authority", self.climb_authority, 0.0, 1.0, low_open=True)
+        real("PIDGains.climb_time", self.climb_time, 0.0, low_open=True, unit="s")
 
 
 @dataclass(frozen=True)
@@ -153,14 +171,22 @@ class PIDTuning:
     drag: float
     m11: float
 
-    def vector(self, anti_windup: bool) -> np.ndarray:
-        """The float64 vector of the kernels: the fields in order, then the anti-windup flag."""
+    def vector(self, pid: PIDGains) -> np.ndarray:
+        """The float64 vector of the kernels: the fields in order, then the anti-windup flag and
+        the climb-speed law's u_max [m/s], share [-] and T_c [s] (`PIDGains`)."""
         return np.array(
-            [*(float(getattr(self, f.name)) for f in fields(self)), 1.0 if anti_windup else 0.0]
+            [
+                *(float(getattr(self, f.name)) for f in fields(self)),
+                1.0 if pid.anti_windup else 0.0,
+                pid.climb_speed,
+                pid.climb_authority,
+                pid.climb_time,
+            ]
         )
 
 
 (KP_U, KI_U, KP_TH, KD_TH, KI_TH, KP_PSI, KD_PSI, KI_PSI, DRAG, M11, ANTI_WINDUP) = range(11)
+CLIMB_SPEED, CLIMB_AUTHORITY, CLIMB_TIME = range(11, 14)
 
 
 def _placed(
@@ -250,17 +276,34 @@ def _loop(tau, limit, error, ki, integral, dt, anti_windup):
     return action, integral
 
 
+@njit(cache=True, inline="always")
+def _climb_reference(moment, u_ref, du_ref, g, k, climb, started):
+    """(surge reference [m/s], its rate [m/s²]) of the climb-speed law (module docstring);
+    advances its state ``climb`` = [u_c] by one control period."""
+    if not started:
+        climb[0] = u_ref
+    needed = math.sqrt(abs(moment) / (k[CLIMB_AUTHORITY] * g[FIN_GAIN]))
+    target = min(max(needed, u_ref), k[CLIMB_SPEED])
+    step = g[DT] / k[CLIMB_TIME] * (target - climb[0])
+    climb[0] += step
+    if climb[0] > u_ref:
+        return climb[0], step / g[DT]
+    return u_ref, du_ref
+
+
 @njit(cache=True)
-def _pid_row(o, g, k, filt, integral, started, action, diag, errors):
+def _pid_row(o, g, k, filt, integral, started, action, diag, errors, climb):
     loop_errors(o, g, filt, started, errors)
     dt, aw = g[DT], k[ANTI_WINDUP]
     u, q, r = o[_U], o[_Q], o[_R]
     theta_err, psi_err = errors[0], errors[5]  # θ − θ_d; wrap(ψ − ψ_d)
     u_ref, du_ref = errors[12], errors[13]  # u_D (or the speed-over-ground reference), its rate
-    speed_err = u - u_ref
-    X = k[DRAG] * u_ref * abs(u_ref) + k[M11] * du_ref - k[KP_U] * speed_err - k[KI_U] * integral[0]
     M = -k[KP_TH] * theta_err - k[KD_TH] * q - k[KI_TH] * integral[1]
     N = -k[KP_PSI] * psi_err - k[KD_PSI] * r - k[KI_PSI] * integral[2]
+    if k[CLIMB_SPEED] > 0.0:
+        u_ref, du_ref = _climb_reference(M, u_ref, du_ref, g, k, climb, started)
+    speed_err = u - u_ref
+    X = k[DRAG] * u_ref * abs(u_ref) + k[M11] * du_ref - k[KP_U] * speed_err - k[KI_U] * integral[0]
     m_max, n_max = moment_limits(u, g)
     action[0], integral[0] = _loop(X, g[X_MAX], speed_err, k[KI_U], integral[0], dt, aw)
     action[1], integral[1] = _loop(M, m_max, theta_err, k[KI_TH], integral[1], dt, aw)
@@ -268,10 +311,12 @@ def _pid_row(o, g, k, filt, integral, started, action, diag, errors):
     diag[0], diag[1], diag[2], diag[3], diag[4] = errors[10], errors[11], X, M, N
 
 
-def _pid_rows(obs, g, k, filt, integral, started, actions, diag):
+def _pid_rows(obs, g, k, filt, integral, started, actions, diag, climb):
     for i in prange(obs.shape[0]):
         errors = np.empty(LOOP_DIM)
-        _pid_row(obs[i], g, k, filt[i], integral[i], started[i], actions[i], diag[i], errors)
+        _pid_row(
+            obs[i], g, k, filt[i], integral[i], started[i], actions[i], diag[i], errors, climb[i]
+        )
         started[i] = True
 
 
@@ -333,7 +378,17 @@ class PIDLOS(BatchedController):
         self._g = pack_gains(
             self.gains, self.control_dt, (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66), self._actuator
         )
-        self._k = self.tuning.vector(self.pid.anti_windup)
+        if self.pid.climb_speed > 0.0 and self._actuator[0] <= 0.0:
+            raise ValueError(
+                "pid_los: climb_speed needs the fins' authority (actuator 'fins' or "
+                f"'realistic'), got actuator {actuator!r}"
+            )
+        if self.pid.climb_time < self.control_dt:
+            raise ValueError(
+                f"pid_los: climb_time = {self.pid.climb_time} s must be at least control_dt = "
+                f"{self.control_dt} s"
+            )
+        self._k = self.tuning.vector(self.pid)
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         return {
@@ -341,6 +396,7 @@ class PIDLOS(BatchedController):
             "integral": np.zeros((n, 3)),
             "started": np.zeros(n, dtype=bool),
             "diag": np.zeros((n, DIAG_DIM)),
+            "climb": np.zeros((n, 1)),
         }
 
     def _control(self, obs: np.ndarray, state: dict[str, np.ndarray], actions: np.ndarray) -> None:
@@ -354,14 +410,19 @@ class PIDLOS(BatchedController):
             state["started"],
             actions,
             state["diag"],
+            state["climb"],
         )
 
     def diagnostics(self, state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Desired angles, the integrators (``integral``, (n, 3): I_u [m], I_θ, I_ψ [rad·s]) and
-        the current-guidance states (`controllers.alos.guidance_diagnostics`) (extras)."""
+        """Desired angles, the integrators (``integral``, (n, 3): I_u [m], I_θ, I_ψ [rad·s]),
+        with the climb-speed law its raised reference u_c (``climb_reference`` [m/s]; the loop
+        tracks max(u_ref, u_c)), and the current-guidance states
+        (`controllers.alos.guidance_diagnostics`) (extras)."""
         out = {
             "theta_d": state["diag"][:, 0].copy(),
             "psi_d_rel": state["diag"][:, 1].copy(),
             "integral": state["integral"].copy(),
         }
+        if self.pid.climb_speed > 0.0:
+            out["climb_reference"] = state["climb"][:, 0].copy()
         return {**out, **guidance_diagnostics(self.gains, state["filter"])}

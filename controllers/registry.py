@@ -59,6 +59,10 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     # the classical reference under the agents' rule, the 2.0 m/s top speed (docs/results.md
     # "The vehicle as built").
     "pid_as_built_guarded": ("guarded", {"base": "pid_as_built"}),
+    # The as-built PID that speeds up when its stern plane runs out of authority (the climb-speed
+    # law of `controllers.pid`, docs/model.md §4.9): the 6-DOF hull's climbs need it.
+    "pid_as_built_climb": ("pid_los", {**_COLOS, "k_z": 0.1, "climb_speed": 1.4}),
+    "pid_as_built_climb_guarded": ("guarded", {"base": "pid_as_built_climb"}),
 }
 CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
 # The controllers whose laws are built on the vehicle's 5-DOF model (docs/model.md §4).

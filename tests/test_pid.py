@@ -12,8 +12,10 @@ import controllers
 from auv_gym.metrics import compute_metrics
 from auv_gym.rollout import rollouts
 from auv_gym.vehicle import remus100
+from benchmarks.catalog.scenarios import load_scenarios
 from controllers.base import Policy
-from controllers.pid import PIDGains, pid_tuning
+from controllers.gains import FIN_GAIN
+from controllers.pid import PIDGains, _climb_reference, pid_tuning
 from tests.test_controllers import observations
 
 NAMES = ["pid_los", "pid_ilos", "pid_colos"]
@@ -51,7 +53,8 @@ def test_registered_like_the_other_classical_controllers(name):
     assert name in controllers.CLASSICAL and PolicySpec.parse(name).kind == "classical"
     action, state = policy.predict(observations(1)[0])
     assert action.shape == (3,) and action.dtype == np.float32
-    assert set(state) == {"filter", "integral", "started", "diag"} and state["started"].all()
+    assert set(state) == {"filter", "integral", "started", "diag", "climb"}
+    assert state["started"].all()
 
 
 def test_follows_the_paper_helix_without_noise():
@@ -134,6 +137,60 @@ def test_anti_windup_keeps_the_fin_limited_vehicle_on_the_path():
     assert np.abs(wound["integral"][:, 1]).max() > 20 * np.abs(tr["integral"][:, 1]).max()
 
 
+def test_climb_reference_steps_towards_the_speed_the_pitch_demand_needs():
+    """u_M = √(|M|/(share·Kδ_max)); u_c moves Δt_c/T_c of the way to clip(u_M, u_ref, u_max)
+    each control period; the loop tracks max(u_ref, u_c) and feeds its rate forward."""
+    policy = controllers.make("pid_los", actuator="fins", climb_speed=1.5, climb_time=2.0)
+    g, k = policy._g, policy._k
+    share_of_authority = 0.8 * g[FIN_GAIN]  # [N·m per (m/s)²]
+    climb = np.array([1.0])
+    # the demand at 1.2 m/s: a 1/40 step from 1.0 towards 1.2, the rate 0.005/0.05 fed forward
+    u_ref, du_ref = _climb_reference(1.44 * share_of_authority, 1.0, 0.0, g, k, climb, True)
+    assert (u_ref, du_ref) == pytest.approx((1.005, 0.1), rel=1e-12)
+    assert climb[0] == u_ref
+    # a demand beyond what 1.5 m/s gives is capped there, and the sign of M does not matter
+    climb[0] = 1.0
+    u_ref, _ = _climb_reference(-100.0 * share_of_authority, 1.0, 0.0, g, k, climb, True)
+    assert u_ref == pytest.approx(1.0 + 0.5 / 40.0, rel=1e-12)
+    # no demand: u_c decays towards u_ref and the loop tracks u_ref with its own rate once below
+    climb[0] = 1.01
+    u_ref, du_ref = _climb_reference(0.0, 1.0, 0.0, g, k, climb, True)
+    assert u_ref == pytest.approx(1.01 - 0.01 / 40.0, rel=1e-12) and du_ref < 0.0
+    assert _climb_reference(0.0, 1.2, 0.3, g, k, climb, True) == (1.2, 0.3)
+    # a fresh vehicle starts from u_ref whatever the memory held
+    climb[0] = 7.0
+    assert _climb_reference(0.0, 1.0, 0.0, g, k, climb, False) == (1.0, 0.0)
+
+
+def test_climb_speed_keeps_the_6dof_hull_on_the_as_built_helix():
+    """The guarded as-built PID on the 6-DOF plant (test seed 2, 300 s): its stern plane is at
+    the limit on the climb at u_D and z_e grows to metres; with the climb-speed law the surge
+    reference rises to at most 1.4 m/s and the depth error stays in decimetres."""
+    scenario = load_scenarios()["as_built_helix"]
+    env = {**scenario.env, "max_time": 300.0, "plant": "6dof"}
+    results = {}
+    for name in ("pid_as_built_guarded", "pid_as_built_climb_guarded"):
+        (tr,) = rollouts(controllers.make(name, env=env, **scenario.controller), [2], **env)
+        assert tr.termination_reason == "time_limit"
+        results[name] = (tr, compute_metrics(tr, transient=100.0))
+    plain, climbing = results["pid_as_built_guarded"][1], results["pid_as_built_climb_guarded"][1]
+    assert plain["rms_z_e"] > 2.0  # measured 3.88 m
+    assert climbing["rms_z_e"] < 0.2 and climbing["rms_distance"] < 0.3  # measured 0.091, 0.183 m
+    reference = results["pid_as_built_climb_guarded"][0]["climb_reference"]
+    assert reference.max() <= 1.4 and np.quantile(reference, 0.9) > 1.2
+
+
+def test_climb_speed_returns_to_u_desired_on_a_level_line():
+    """On the approach to a level line (8 m of depth error) the pitch demand raises the surge
+    reference; once on the line the demand is small and the reference is u_D again."""
+    env = {"disturbance": "none", "actuator": "fins", "max_time": 150.0, "path": "line"}
+    (tr,) = rollouts(controllers.make("pid_los", actuator="fins", climb_speed=1.5), [0], **env)
+    reference = tr["climb_reference"]
+    assert reference[:300].max() > 1.3  # measured 1.43 m/s on the approach
+    assert np.abs(reference[len(reference) // 2 :] - 1.0).max() < 1e-9
+    assert compute_metrics(tr, transient=100.0)["rms_distance"] < 0.001  # measured 0.00014 m
+
+
 @pytest.mark.parametrize(
     ("kwargs", "error"),
     [
@@ -159,6 +216,15 @@ def test_anti_windup_keeps_the_fin_limited_vehicle_on_the_path():
         ({"filter_wn": 30.0}, r"filter_wn × control_dt must be below 1, got 30.0 rad/s × 0.05 s"),
         ({"pid": "fast"}, "pid must be a PIDGains, got str"),
         ({"control_dt": 0.0}, "control_dt must be a positive time"),
+        ({"climb_speed": -1.0}, r"PIDGains.climb_speed must be a finite number in \[0, ∞\) m/s"),
+        ({"climb_authority": 0.0}, r"PIDGains.climb_authority must be a finite number in \(0, 1\]"),
+        ({"climb_authority": 1.5}, r"PIDGains.climb_authority must be a finite number in \(0, 1\]"),
+        ({"climb_time": math.nan}, "PIDGains.climb_time must be a finite number"),
+        (
+            {"climb_speed": 1.4, "actuator": "fins", "climb_time": 0.01},
+            "climb_time = 0.01 s must be at least control_dt = 0.05 s",
+        ),
+        ({"climb_speed": 1.4}, "climb_speed needs the fins' authority .* got actuator 'paper'"),
     ],
 )
 def test_bad_gains_raise_one_named_error(kwargs, error):

@@ -99,6 +99,9 @@ POLICY_COLOURS: dict[str, str] = {
     "pid_colos": "#999933",  # olive
     "pid_as_built": "#DDCC77",  # sand
     "pid_as_built_guarded": "#CC6677",  # rose
+    # Tol's vibrant palette
+    "pid_as_built_climb": "#EE7733",  # orange
+    "pid_as_built_climb_guarded": "#EE3377",  # magenta
 }
 # Paul Tol's bright and vibrant palettes without their greys (each colour-blind-safe in itself),
 # then his light palette, for a figure of more than twelve such names.
