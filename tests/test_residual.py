@@ -673,6 +673,46 @@ def test_the_as_built_residual_recipe_corrects_the_pid_with_a_fin_margin():
     venv.close()
 
 
+def test_the_residual_recipe_on_both_plants_flies_the_climb_speed_pid_on_two_hulls():
+    """benchmarks/hyperparams/ppo_residual_as_built_plants.yml is the 5-DOF recipe with the
+    climb-speed PID as its base, half the vehicles on the 6-DOF plant and the hulls drawn; its
+    env (a residual env per plant) builds and steps."""
+    from benchmarks.training.config import read_zoo_config
+    from benchmarks.training.envs import make_training_env
+
+    env_id = "AUVPath3DSpeedLimit-v0"
+    hyperparams = ROOT / "benchmarks/hyperparams"
+    cfg = read_zoo_config(hyperparams / "ppo_residual_as_built_plants.yml", env_id)
+    five_dof = read_zoo_config(hyperparams / "ppo_residual_as_built.yml", env_id)
+    assert cfg.residual.base_kwargs == {"yaw_wn": 1.5, "climb_speed": 1.4}
+    assert cfg.vehicle_share.shares == (("6dof", 0.5),) and cfg.vehicle_share.base == "5dof"
+    assert cfg.env_kwargs.pop("hull_variation") == {
+        "mass": 0.03,
+        "cg_offset": 0.005,
+        "added_mass": 0.2,
+        "damping": 0.2,
+    }
+    assert cfg.env_kwargs == five_dof.env_kwargs and cfg.n_timesteps == five_dof.n_timesteps
+    base = cfg.residual.make_base(actuator="realistic")
+    assert base.pid.climb_speed == 1.4 and base.pid.yaw_wn == 1.5
+    kwargs = {**cfg.env_kwargs, "max_time": 2.0}
+    venv = make_training_env(
+        4,
+        0,
+        kwargs,
+        env_id=env_id,
+        residual=cfg.residual,
+        threads=1,
+        vehicle_share=cfg.vehicle_share,
+    )
+    obs = venv.reset()
+    for _ in range(3):
+        obs, *_ = venv.step(np.zeros((4, 6), dtype=np.float32))
+    assert obs.shape == (4, len(residual_observation_names("preview_integral")))
+    assert np.all(np.isfinite(obs))
+    venv.close()
+
+
 def test_evaluation_base_flies_the_episodes_actuator_the_realistic_one_included(
     assert_same_episodes,
 ):
