@@ -378,7 +378,14 @@ class PIDLOS(BatchedController):
         self._g = pack_gains(
             self.gains, self.control_dt, (1.0 / p.m11, 1.0 / p.I55, 1.0 / p.I66), self._actuator
         )
-        if self.pid.climb_speed > 0.0 and self._actuator[0] <= 0.0:
+        if self.pid.climb_speed > 0.0:
+            self._check_climb_law(actuator)
+        self._k = self.tuning.vector(self.pid)
+
+    def _check_climb_law(self, actuator: str) -> None:
+        """ValueError unless the climb-speed law has the fins' authority to raise and a time
+        constant its Euler step keeps stable (T_c ≥ Δt_c)."""
+        if self._actuator[0] <= 0.0:
             raise ValueError(
                 "pid_los: climb_speed needs the fins' authority (actuator 'fins' or "
                 f"'realistic'), got actuator {actuator!r}"
@@ -388,7 +395,6 @@ class PIDLOS(BatchedController):
                 f"pid_los: climb_time = {self.pid.climb_time} s must be at least control_dt = "
                 f"{self.control_dt} s"
             )
-        self._k = self.tuning.vector(self.pid)
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         return {

@@ -232,6 +232,16 @@ def test_bad_gains_raise_one_named_error(kwargs, error):
         controllers.make("pid_los", **kwargs)
 
 
+def test_the_climb_law_checks_only_bind_when_it_is_on():
+    """A slow control period (3 s > T_c = 2 s) or the paper's actuator is refused only with
+    the law on; without it the PID builds as it did before the law existed."""
+    slow = {"control_dt": 3.0, "filter_wn": 0.1}
+    assert controllers.make("pid_los", **slow).control_dt == 3.0
+    with pytest.raises(ValueError, match=r"climb_time = 2\.0 s must be at least control_dt = 3\.0"):
+        controllers.make("pid_los", actuator="fins", climb_speed=1.4, **slow)
+    assert controllers.make("pid_los", actuator="paper").pid.climb_speed == 0.0
+
+
 def test_runs_inside_sb3_evaluate_policy():
     pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.evaluation import evaluate_policy
