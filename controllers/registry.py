@@ -32,6 +32,8 @@ __all__ = [
 # ground, speed over ground; backstepping adds the gated ALOS trims (γ = 0.01 rad/(m·s)) that
 # remove the bias its fixed nominal model leaves (the FBSM adapts that bias away itself).
 _COLOS = {"current_observer": 3.0, "speed_over_ground": True}
+# The PID for the vehicle as built (its re-tune below); its climb-speed preset shares it.
+_PID_AS_BUILT = {**_COLOS, "k_z": 0.1}
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "fbsm_ilos": ("fbsm", {"ilos_y": 3.0}),
     "backstepping_ilos": ("backstepping", {"ilos_y": 3.0}),
@@ -54,14 +56,14 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
         "command_filtered",
         {**_COLOS, "alos_y": 0.01, "alos_z": 0.01, "k_z": 0.15, "k2": 1.0},
     ),
-    "pid_as_built": ("pid_los", {**_COLOS, "k_z": 0.1}),
+    "pid_as_built": ("pid_los", _PID_AS_BUILT),
     # The as-built PID inside the envelope guard the as-built agents carry (`controllers.guarded`):
     # the classical reference under the agents' rule, the 2.0 m/s top speed (docs/results.md
     # "The vehicle as built").
     "pid_as_built_guarded": ("guarded", {"base": "pid_as_built"}),
     # The as-built PID that speeds up when its stern plane runs out of authority (the climb-speed
     # law of `controllers.pid`, docs/model.md §4.9): the 6-DOF hull's climbs need it.
-    "pid_as_built_climb": ("pid_los", {**_COLOS, "k_z": 0.1, "climb_speed": 1.4}),
+    "pid_as_built_climb": ("pid_los", {**_PID_AS_BUILT, "climb_speed": 1.4}),
     "pid_as_built_climb_guarded": ("guarded", {"base": "pid_as_built_climb"}),
 }
 CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
