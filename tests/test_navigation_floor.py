@@ -10,7 +10,7 @@ import pytest
 
 from auv_gym.rollout import evaluate, rollouts
 from benchmarks.analysis import navigation_floor
-from benchmarks.analysis.navigation_floor import error_split, markdown
+from benchmarks.analysis.navigation_floor import error_split, markdown, target_rest
 from benchmarks.catalog.policies import build_policy
 from benchmarks.catalog.tasks import task_set
 from benchmarks.runner.suite_chunks import Chunk, resolve_policy
@@ -97,6 +97,48 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
     assert "| `s` | a | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 |" in table
 
 
+def _row(policy: str, set_name: str, distance: float, across: float) -> dict:
+    return {
+        "policy": policy,
+        "set": set_name,
+        "episodes": 10,
+        "failed": 0,
+        "rms_distance_m": distance,
+        "rms_seen_m": distance,
+        "rms_navigation_m": across,
+        "rms_navigation_across_m": across,
+        "rms_by_axis_m": {k: {"x_e": 0.0, "y_e": across, "z_e": 0.0} for k in KINDS},
+    }
+
+
+def test_target_rest_is_measured_against_the_best_classical_per_set():
+    rows = [
+        _row("pid", "s", 0.5, 0.3),
+        _row("pid_fast", "s", 0.4, 0.3),  # the best classical on s: T = 0.32 m
+        _row("agent", "s", 0.35, 0.3),
+        _row("pid", "t", 0.3, 0.3),  # the floor alone exceeds T = 0.24 m: nothing allowed
+        _row("pid_fast", "t", 0.6, 0.1),
+        _row("agent", "t", 0.25, 0.3),
+    ]
+    out = {(t["policy"], t["set"]): t for t in target_rest(rows, ["pid", "pid_fast"])}
+    agent = out[("agent", "s")]
+    assert agent["best_classical"] == "pid_fast"
+    assert agent["target_m"] == pytest.approx(0.32)
+    assert agent["rest_m"] == pytest.approx(math.sqrt(0.35**2 - 0.09))  # 0.180 m
+    assert agent["rest_allowed_m"] == pytest.approx(math.sqrt(0.32**2 - 0.09))  # 0.111 m
+    assert agent["rest_ratio"] == pytest.approx(1.62, abs=0.005)
+    assert out[("pid", "t")]["best_classical"] == "pid"
+    assert out[("pid", "t")]["rest_m"] == 0.0
+    assert out[("agent", "t")]["rest_allowed_m"] == 0.0
+    assert out[("agent", "t")]["rest_ratio"] == math.inf
+    # One classical policy: its own target is 0.8 x itself, its rest ratio above 1.
+    alone = {(t["policy"], t["set"]): t for t in target_rest(rows, ["pid"])}
+    assert alone[("pid_fast", "s")]["target_m"] == pytest.approx(0.4)
+    assert alone[("pid", "s")]["rest_ratio"] == pytest.approx(0.4 / math.sqrt(0.07), abs=1e-9)
+    table = markdown(rows, ["pid", "pid_fast", "agent"], "cmd", ["pid", "pid_fast"])
+    assert "| `s` | agent | 0.350 | 0.320 (pid_fast) | 0.180 | 0.111 | 1.62 |" in table
+
+
 def test_unknown_set_is_refused_by_name():
     with pytest.raises(ValueError, match="no_such_set"):
         error_split("pid_as_built", "no_such_set", DURATION, WINDOW)
@@ -108,6 +150,7 @@ def test_unknown_set_is_refused_by_name():
         (["--sets", "test_as_built_tight_deep,nope"], "nope"),
         (["--policies", "pid_as_built,no_such_policy"], "no_such_policy"),
         (["--policies", "pid_as_built,pid_as_built"], "pid_as_built"),
+        (["--policies", "pid_as_built", "--classical", "pid_as_built_climb"], "pid_as_built_climb"),
     ],
 )
 def test_bad_names_are_one_line_errors_before_any_episode(argv, message, tmp_path, capsys):

@@ -23,6 +23,13 @@ x_e near zero whatever the navigation. The floor is the share across the path, R
 estimate is the best one its measurements allow, which its consistency test measures,
 docs/model.md §14.8). Episodes are the suite's (`auv-gym suite`: the same env arguments,
 seeds and metric).
+
+What the target leaves a policy (`--classical`, the policies the target is measured against):
+per set the target T = 0.8 × the best classical RMS |e|. Beyond the floor, a distance holds
+its along-track error and its own tracking of the estimate across the path, the rest
+√(|e|² − |n_yz|²) if those are uncorrelated with the floor's share; the target allows a rest of
+√(T² − |n_yz|²). Their ratio is how much of its rest a policy must shed, a sharper measure of
+the target's reach than |e| / T, whose floor is not zero.
 """
 
 from __future__ import annotations
@@ -46,7 +53,7 @@ from benchmarks.catalog.tasks import task_set
 from benchmarks.options import option
 from benchmarks.runner.suite_chunks import Chunk, resolve_policy
 
-__all__ = ["SETS", "error_split", "main"]
+__all__ = ["SETS", "TARGET_RATIO", "error_split", "main", "target_rest"]
 
 SETS = (
     "scenario:as_built_helix",
@@ -58,6 +65,7 @@ SETS = (
 ERRORS = ("x_e", "y_e", "z_e")  # observation entries and trajectory sample fields alike
 SEEN = [getattr(OBS, name) for name in ERRORS]  # their observation columns
 WINDOW_START = 100.0  # [s] as the benchmark metrics
+TARGET_RATIO = 0.8  # the as-built target: every set at most this × the best classical policy
 DURATION = 300.0  # [s] as the as-built evaluation
 
 
@@ -132,12 +140,53 @@ class Options:
         "pid_as_built,ppo_as_built=benchmarks/agents/ppo_as_built",
         "suite policies, comma-separated; the first is the reference of the floor ratio",
     )
+    classical: str = option(
+        "",
+        "the policies of --policies (names) the as-built target is measured against, "
+        "comma-separated (default: the first)",
+    )
     sets: str = option(",".join(SETS), "task sets, comma-separated")
     out: str = option("benchmarks/results/as_built/navigation_floor", "folder for .md and .json")
 
 
-def markdown(rows: Sequence[dict[str, Any]], policies: Sequence[str], command: str) -> str:
-    """The split as a table: per set and policy the three RMS values, then the floor ratio."""
+def target_rest(rows: Sequence[dict[str, Any]], classical: Sequence[str]) -> list[dict[str, Any]]:
+    """Per row: the set's target T [m] (`TARGET_RATIO` × the best RMS |e| of the ``classical``
+    policies there, and which), the row's rest √(|e|² − |n_yz|²) [m], the rest the target allows,
+    √(T² − |n_yz|²) [m] (0 where the floor alone exceeds T), and rest / allowed."""
+    best: dict[str, dict[str, Any]] = {}
+    for r in rows:
+        if r["policy"] in classical and (
+            r["set"] not in best or r["rms_distance_m"] < best[r["set"]]["rms_distance_m"]
+        ):
+            best[r["set"]] = r
+    out = []
+    for r in rows:
+        target = TARGET_RATIO * best[r["set"]]["rms_distance_m"]
+        floor = r["rms_navigation_across_m"]
+        rest = math.sqrt(max(r["rms_distance_m"] ** 2 - floor**2, 0.0))
+        allowed = math.sqrt(max(target**2 - floor**2, 0.0))
+        out.append(
+            {
+                "policy": r["policy"],
+                "set": r["set"],
+                "best_classical": best[r["set"]]["policy"],
+                "target_m": target,
+                "rest_m": rest,
+                "rest_allowed_m": allowed,
+                "rest_ratio": rest / allowed if allowed > 0.0 else math.inf,
+            }
+        )
+    return out
+
+
+def markdown(
+    rows: Sequence[dict[str, Any]],
+    policies: Sequence[str],
+    command: str,
+    classical: Sequence[str] = (),
+) -> str:
+    """The split as a table: per set and policy the three RMS values, then the floor ratio;
+    the target's rest (`target_rest`) against ``classical`` (default: the first policy)."""
     reference = policies[0]
     lines = [
         "# How much of the distance the navigation leaves each policy",
@@ -183,6 +232,26 @@ def markdown(rows: Sequence[dict[str, Any]], policies: Sequence[str], command: s
             + " | ".join(parts)
             + " |"
         )
+    classical = list(classical) or [reference]
+    lines += [
+        "",
+        f"What the target leaves (T = {TARGET_RATIO:g} × the best RMS |e| of "
+        f"{', '.join(classical)} per set): rest = √(|e|² − |n_yz|²), what a distance holds "
+        "beyond the navigation's share across the path (its along-track error and its own "
+        "tracking of the estimate across it); allowed = √(T² − |n_yz|²), the rest a policy at "
+        "the target keeps; rest / allowed above 1 is the share of its rest a policy must shed "
+        "to meet the target. [m]:",
+        "",
+        "| set | policy | RMS \\|e\\| | target T (best classical) | rest | allowed "
+        "| rest / allowed |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
+    for r, t in zip(rows, target_rest(rows, classical), strict=True):
+        lines.append(
+            f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
+            f"{r['rms_distance_m']:.3f} | {t['target_m']:.3f} ({t['best_classical']}) | "
+            f"{t['rest_m']:.3f} | {t['rest_allowed_m']:.3f} | {t['rest_ratio']:.2f} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -193,6 +262,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         policies = comma_names(args.policies, "--policies")
         sets = comma_names(args.sets, "--sets")
         labels = [resolve_policy(spec).name for spec in policies]
+        classical = comma_names(args.classical, "--classical") if args.classical else labels[:1]
+        unknown = [name for name in classical if name not in labels]
+        if unknown:
+            raise ValueError(f"--classical names {unknown} that --policies does not fly ({labels})")
         for set_name in sets:
             task_set(set_name)
     rows = []
@@ -207,9 +280,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 flush=True,
             )
     command = f"python -m benchmarks.analysis.navigation_floor --policies {args.policies}"
+    if args.classical:
+        command += f" --classical {args.classical}"
     out = Path(args.out)
-    write_text(out / "navigation_floor.md", markdown(rows, labels, command))
-    write_json(out / "navigation_floor.json", {"command": command, "rows": rows}, indent=2)
+    write_text(out / "navigation_floor.md", markdown(rows, labels, command, classical))
+    targets = target_rest(rows, classical)
+    write_json(
+        out / "navigation_floor.json",
+        {"command": command, "classical": classical, "rows": rows, "targets": targets},
+        indent=2,
+    )
     return {"rows": rows}
 
 
