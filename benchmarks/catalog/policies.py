@@ -33,6 +33,7 @@ __all__ = [
     "AGENTS_DIR",
     "AGENT_PREFIX",
     "ONNX_PREFIX",
+    "POLICY_SPEC_FORMS",
     "REFERENCE_AGENTS",
     "REMOVED_POLICIES",
     "MissingExtraError",
@@ -52,6 +53,8 @@ AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
 REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_residual", "sac_generalist")
 AGENT_PREFIX = "agent:"
 ONNX_PREFIX = "onnx:"
+# The spec forms beyond names, for the CLIs' help: every one of them goes through `build_policy`.
+POLICY_SPEC_FORMS = f"{AGENT_PREFIX}PATH, {ONNX_PREFIX}FILE or module:attribute"
 _NOT_SHIPPED = "is no longer shipped (its results stay in docs/results.md); reference agents:"
 # Names of earlier releases → what to type now (None: the agent left the tree).
 REMOVED_POLICIES: dict[str, str | None] = {

@@ -43,7 +43,13 @@ from benchmarks.arguments import (
     usage_errors,
     writable_folder,
 )
-from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env, policy_label
+from benchmarks.catalog.policies import (
+    POLICY_SPEC_FORMS,
+    build_policy,
+    check_policy_spec,
+    policy_env,
+    policy_label,
+)
 from benchmarks.options import option
 
 DEFAULT_POLICIES = ("fbsm", "backstepping")
@@ -67,8 +73,8 @@ class Args:
     seed: int = option(0, "reset seed shared by the policies (same noise)")
     policies: tuple[str, ...] = option(
         DEFAULT_POLICIES,
-        "comma-separated specs: controllers.make names, reference agent names, agent:PATH, "
-        "module:attribute",
+        f"comma-separated specs: controllers.make names, reference agent names, "
+        f"{POLICY_SPEC_FORMS}",
         parse=_policy_specs,
     )
     control_dt: float = option(SimConfig.control_dt, "control period [s]")

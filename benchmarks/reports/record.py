@@ -25,7 +25,12 @@ from typing import Any
 from auv_gym import VARIANTS
 from auv_gym.sim.config import MAX_EPISODE_TIME, SimConfig
 from benchmarks.arguments import ArgumentParser, finite_number, parse_checked, program_name
-from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env
+from benchmarks.catalog.policies import (
+    POLICY_SPEC_FORMS,
+    build_policy,
+    check_policy_spec,
+    policy_env,
+)
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
@@ -39,8 +44,7 @@ class RecordEpisodeOptions:
 
     policy: str = option(
         "fbsm",
-        "policy spec: a controllers.make name, a reference agent name, agent:PATH, onnx:FILE or "
-        "module:attribute",
+        f"policy spec: a controllers.make name, a reference agent name, {POLICY_SPEC_FORMS}",
     )
     scenario: str = option("paper", "scenario name in --scenario-file")
     # A Path is immutable: one shared default is safe.

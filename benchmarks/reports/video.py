@@ -32,7 +32,12 @@ from benchmarks.arguments import (
     program_name,
     writable_location,
 )
-from benchmarks.catalog.policies import build_policy, check_policy_spec, policy_env
+from benchmarks.catalog.policies import (
+    POLICY_SPEC_FORMS,
+    build_policy,
+    check_policy_spec,
+    policy_env,
+)
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
@@ -44,8 +49,7 @@ class VideoOptions:
 
     policy: str = option(
         "fbsm",
-        "policy spec: a controllers.make name, a reference agent name, agent:PATH or "
-        "module:attribute",
+        f"policy spec: a controllers.make name, a reference agent name, {POLICY_SPEC_FORMS}",
     )
     scenario: str = option("paper", "scenario name in --scenario-file")
     # A Path is immutable: one shared default is safe.

@@ -38,6 +38,7 @@ from benchmarks.arguments import (
     writable_folder,
 )
 from benchmarks.catalog.policies import (
+    POLICY_SPEC_FORMS,
     check_policy_for_env,
     check_policy_spec,
     policy_env,
@@ -62,7 +63,7 @@ class CompareOptions(EpisodeOptions):
 
     policies: str = option(
         "fbsm,backstepping,ppo_generalist",
-        f"comma-separated: {', '.join(policy_names())}, agent:PATH, module:attribute",
+        f"comma-separated: {', '.join(policy_names())}, {POLICY_SPEC_FORMS}",
     )
     scenarios: str = option("all", "comma-separated names of --scenario-file or 'all'")
     # A Path is immutable: one shared default is safe.

@@ -65,6 +65,7 @@ from benchmarks.arguments import (
     writable_folder,
 )
 from benchmarks.catalog.policies import (
+    POLICY_SPEC_FORMS,
     PolicySpec,
     check_policy_for_env,
     policy_label,
@@ -109,8 +110,8 @@ class SuiteOptions(EpisodeOptions):
 
     policies: str = option(
         DEFAULT_POLICIES,
-        "comma-separated: controller or reference agent names (as compare), agent:PATH, "
-        "module:attribute, NAME=DIR (an agent or a multi-seed results directory of "
+        f"comma-separated: controller or reference agent names (as compare), "
+        f"{POLICY_SPEC_FORMS}, or NAME=DIR (an agent or a multi-seed results directory of "
         "agent_seed_<k>/ folders)",
     )
     sets: str = option("all", "comma-separated test sets of --tasks-file, or 'all'")
