@@ -47,13 +47,14 @@ from auv_gym.rollout import rollouts
 from auv_gym.sim.observation import OBS
 from auv_gym.sim.trajectory import TIME_LIMIT
 from auv_gym.support.files import write_json, write_text
+from benchmarks.analysis.plant_seeds import PER_SET_TARGET
 from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
 from benchmarks.catalog.policies import build_policy
 from benchmarks.catalog.tasks import task_set
 from benchmarks.options import option
 from benchmarks.runner.suite_chunks import Chunk, resolve_policy
 
-__all__ = ["SETS", "TARGET_RATIO", "error_split", "main", "target_rest"]
+__all__ = ["SETS", "error_split", "main", "target_rest"]
 
 SETS = (
     "scenario:as_built_helix",
@@ -65,7 +66,6 @@ SETS = (
 ERRORS = ("x_e", "y_e", "z_e")  # observation entries and trajectory sample fields alike
 SEEN = [getattr(OBS, name) for name in ERRORS]  # their observation columns
 WINDOW_START = 100.0  # [s] as the benchmark metrics
-TARGET_RATIO = 0.8  # the as-built target: every set at most this × the best classical policy
 DURATION = 300.0  # [s] as the as-built evaluation
 
 
@@ -150,7 +150,7 @@ class Options:
 
 
 def target_rest(rows: Sequence[dict[str, Any]], classical: Sequence[str]) -> list[dict[str, Any]]:
-    """Per row: the set's target T [m] (`TARGET_RATIO` × the best RMS |e| of the ``classical``
+    """Per row: the set's target T [m] (`PER_SET_TARGET` × the best RMS |e| of the ``classical``
     policies there, and which), the row's rest √(|e|² − |n_yz|²) [m], the rest the target allows,
     √(T² − |n_yz|²) [m] (0 where the floor alone exceeds T), and rest / allowed."""
     best: dict[str, dict[str, Any]] = {}
@@ -161,7 +161,7 @@ def target_rest(rows: Sequence[dict[str, Any]], classical: Sequence[str]) -> lis
             best[r["set"]] = r
     out = []
     for r in rows:
-        target = TARGET_RATIO * best[r["set"]]["rms_distance_m"]
+        target = PER_SET_TARGET * best[r["set"]]["rms_distance_m"]
         floor = r["rms_navigation_across_m"]
         rest = math.sqrt(max(r["rms_distance_m"] ** 2 - floor**2, 0.0))
         allowed = math.sqrt(max(target**2 - floor**2, 0.0))
@@ -235,7 +235,7 @@ def markdown(
     classical = list(classical) or [reference]
     lines += [
         "",
-        f"What the target leaves (T = {TARGET_RATIO:g} × the best RMS |e| of "
+        f"What the target leaves (T = {PER_SET_TARGET:g} × the best RMS |e| of "
         f"{', '.join(classical)} per set): rest = √(|e|² − |n_yz|²), what a distance holds "
         "beyond the navigation's share across the path (its along-track error and its own "
         "tracking of the estimate across it); allowed = √(T² − |n_yz|²), the rest a policy at "
