@@ -13,7 +13,9 @@ from benchmarks.analysis.suite_merge import main, merge_suites
 HEADER = ["policy", "run", "set", "seed", "rms_distance", "termination_reason"]
 
 
-def _suite(folder: Path, rows: list[list[str]], policies: list[str], **extra) -> Path:
+def _suite(
+    folder: Path, rows: list[list[str]], policies: list[str], header=HEADER, **extra
+) -> Path:
     folder.mkdir(parents=True)
     suite = {
         "command": f"evaluate {folder.name}",
@@ -28,7 +30,7 @@ def _suite(folder: Path, rows: list[list[str]], policies: list[str], **extra) ->
     (folder / "suite.json").write_text(json.dumps(suite))
     with (folder / "episodes.csv").open("w", newline="") as fh:
         writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(HEADER)
+        writer.writerow(header)
         writer.writerows(rows)
     return folder
 
@@ -108,3 +110,24 @@ def test_a_set_field_added_later_as_none_is_the_same_set(tmp_path):
     other = _suite(tmp_path / "other", [*FBSM, *NEW], ["fbsm", "new"], sets=varied)
     with pytest.raises(ValueError, match="differ in 'sets'"):
         merge_suites(other, _suite(tmp_path / "again", FBSM, ["fbsm"]), ["new"])
+
+
+def test_a_metric_added_since_keeps_the_target_columns(tmp_path):
+    """A source evaluated after the code gained a metric adds its rows without that column
+    (the target's other rows cannot gain it) and says so; a source lacking one is refused."""
+    target = _suite(tmp_path / "target", FBSM, ["fbsm"])
+    wider = [*HEADER[:5], "mean_path_speed", HEADER[5]]
+    rows = [[*r[:5], "1.01", r[5]] for r in [*FBSM, *NEW]]
+    source = _suite(tmp_path / "source", rows, ["fbsm", "new"], header=wider)
+    assert merge_suites(source, target, ["new"]) == {"new": 2}
+    with (target / "episodes.csv").open() as fh:
+        merged = list(csv.DictReader(fh))
+    assert list(merged[0]) == HEADER and len(merged) == 4
+    assert merged[3]["rms_distance"] == "30.0" and merged[3]["termination_reason"] == "corridor"
+    suite = json.loads((target / "suite.json").read_text())
+    assert suite["additions"][-1]["dropped_columns"] == ["mean_path_speed"]
+    narrow = _suite(
+        tmp_path / "narrow", [r[:5] for r in [*FBSM, *NEW]], ["fbsm", "new"], header=HEADER[:5]
+    )
+    with pytest.raises(ValueError, match=r"lacks the columns \['termination_reason'\]"):
+        merge_suites(narrow, _suite(tmp_path / "t2", FBSM, ["fbsm"]), ["new"])

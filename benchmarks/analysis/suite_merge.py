@@ -7,6 +7,9 @@ already in the target* (FBSM, say) and appends the new policies' rows, after che
 evaluations are the same experiment:
 
 - the same test sets (names, seeds and env settings), episode duration and metrics window;
+- every column of the target's episodes.csv (a metric the code gained since the target was
+  evaluated is left out of the added rows, since the target's other rows cannot gain it without
+  re-running them; the addition lists it under ``dropped_columns``);
 - the shared policies' rows are equal cell for cell (the episodes and the code that ran them
   give the same numbers), except cells whose relative difference is below ``--rtol`` (default
   1e-12: the last digits that another machine's BLAS rounds differently on spline paths);
@@ -118,8 +121,14 @@ def merge_suites(
     for key in ("sets", "duration_s", "transient_s"):
         if _without_nones(source_suite.get(key)) != _without_nones(target_suite.get(key)):
             raise ValueError(f"{source} and {target} differ in {key!r}: not the same test suite")
-    if source_header != target_header:
-        raise ValueError(f"episodes.csv columns differ: {source_header} vs {target_header}")
+    lacking = [c for c in target_header if c not in source_header]
+    if lacking:
+        raise ValueError(
+            f"{source}/episodes.csv lacks the columns {lacking} that {target}'s rows have"
+        )
+    # a metric the code added since the target was evaluated: the target's rows cannot gain it
+    # without their agents, so the added rows keep the target's columns (the addition says so)
+    dropped = [c for c in source_header if c not in target_header]
     source_policies = set(source_suite["policies"])
     missing = [p for p in policies if p not in source_policies]
     if missing:
@@ -144,7 +153,7 @@ def merge_suites(
         other = target_index.get(tuple(row[k] for k in _KEY))
         if other is None:
             raise ValueError(f"episode {dict((k, row[k]) for k in _KEY)} is not in {target}")
-        for column in source_header:
+        for column in target_header:
             if _differs(row[column], other[column], rtol):
                 raise ValueError(
                     f"{row['policy']} run {row['run']} set {row['set']} seed {row['seed']}: "
@@ -152,7 +161,7 @@ def merge_suites(
                     f"(relative tolerance {rtol:g}): not the same episodes or code"
                 )
         compared += 1
-    added = [r for r in source_rows if r["policy"] in policies]
+    added = [{c: r[c] for c in target_header} for r in source_rows if r["policy"] in policies]
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, fieldnames=target_header, lineterminator="\n")
     writer.writeheader()
@@ -170,6 +179,7 @@ def merge_suites(
             "command": source_suite.get("command"),
             "checked_equal": {"policies": shared, "episodes": compared, "rtol": rtol},
             **({"replaced": present} if present else {}),
+            **({"dropped_columns": dropped} if dropped else {}),
             **{k: source_suite.get(k) for k in ("git_commit", "versions", "code")},
         },
     ]
