@@ -123,10 +123,13 @@ class OnnxPolicy:
         self.base = None
         if contract.residual is not None:
             from controllers.registry import make_classical
+            from controllers.residual import base_kwargs_for_env
 
             env_owned = {"actuator": actuator, "control_dt": control_dt, "params": params}
             env_owned["actuator_params"] = actuator_params
             kwargs = {k: v for k, v in env_owned.items() if v is not None}
+            if not env_given and actuator is None:  # the env it carries: its base flies there
+                kwargs = {**base_kwargs_for_env(contract.env_kwargs), **kwargs}
             recorded = dict(contract.residual.get("base_kwargs") or {})
             base = contract.residual["base"]
             try:

@@ -31,7 +31,7 @@ from controllers.onnx_graph import (
     residual_graph,
 )
 from controllers.onnx_policy import read_contract, sha256_of
-from controllers.residual import residual_action
+from controllers.residual import RESIDUAL_FEATURES, residual_action
 
 ROOT = Path(__file__).resolve().parents[1]
 # onnxruntime is imported by the project only (`onnxruntime_module`: telemetry off)
@@ -156,7 +156,8 @@ def test_every_reference_agent_ships_a_current_export(agent):
     env_id, _ = policy_env(agent)
     assert contract.env_id == env_id
     metadata = json.loads((folder / "metadata.json").read_text())
-    expected = metadata["obs_names"][:15] if "residual" in metadata else metadata["obs_names"]
+    names = metadata["obs_names"]  # a residual's end with its base's command and its previous one
+    expected = names[: -len(RESIDUAL_FEATURES)] if "residual" in metadata else names
     assert list(contract.obs_names) == expected
     props = {p.key: p.value for p in onnx.load(folder / "policy.onnx").metadata_props}
     assert props["env_id"] == env_id
@@ -578,3 +579,22 @@ def test_a_training_file_in_a_scratch_folder_is_not_provenance(tmp_path, monkeyp
     assert not onnx_export._repository_file("out/a.yml")
     assert onnx_export._repository_file("recipes/a.yml")
     assert not onnx_export._repository_file("recipes/missing.yml")
+
+
+def test_a_residual_export_without_an_env_flies_the_env_it_carries():
+    """Was: `controllers.make("onnx", path=...)` of `ppo_residual_as_built` built its base PID
+    for the paper's actuator, which the climb-speed law refuses; the Python agent, loaded the
+    same way, flies its own (propeller and fins)."""
+    from auv_gym.rollout import evaluate
+
+    folder = AGENTS_DIR / "ppo_residual_as_built"
+    exported = controllers.make("onnx", path=str(folder / "policy.onnx"))
+    python = controllers.make("agent", path=str(folder))
+    assert exported.env_kwargs["actuator"] == python.env_kwargs["actuator"] == "realistic"
+    a = evaluate(python, [0], max_time=60.0, transient=30.0)
+    b = evaluate(exported, [0], max_time=60.0, transient=30.0)
+    assert a[0]["rms_distance"] < 1.0
+    assert b[0]["rms_distance"] == pytest.approx(a[0]["rms_distance"], rel=1e-3)
+    paper = {"actuator": "paper", "observation": "preview_integral"}
+    with pytest.raises(ValueError, match="the env has actuator 'paper': fly it with actuator="):
+        controllers.make("onnx", path=str(folder / "policy.onnx"), env=paper)

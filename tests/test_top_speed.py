@@ -24,7 +24,7 @@ from benchmarks.training.residual import ResidualTraining
 from benchmarks.training.residual_env import ResidualVectorEnv
 from controllers.agent import check_agent, load_actor
 from controllers.pid import PIDLOS
-from controllers.residual import residual_observation_bounds
+from controllers.residual import RESIDUAL_FEATURES, residual_observation_bounds
 
 AGENTS = Path(__file__).resolve().parents[1] / "benchmarks" / "agents"
 
@@ -154,8 +154,9 @@ def test_shipped_agents_load_with_their_envs_observation_space(name: str) -> Non
     env_kwargs = {**files.metadata.get("env_kwargs", {}), **seen}  # the env the agent carries
     env = gym.make(resolve_env_id(files.metadata["env_id"]), **env_kwargs)
     low, high = env.observation_space.low, env.observation_space.high
-    if "residual" in files.metadata:
-        low, high = residual_observation_bounds(env.unwrapped.config.params.max_surge)
+    if "residual" in files.metadata:  # the env's observation, then b and a_{k−1} in ±1
+        ones = np.ones(len(RESIDUAL_FEATURES), np.float32)
+        low, high = np.concatenate([low, -ones]), np.concatenate([high, ones])
     np.testing.assert_array_equal(actor.observation_space.low, low)
     np.testing.assert_array_equal(actor.observation_space.high, high)
     env.close()

@@ -90,7 +90,7 @@ def test_the_default_vehicles_observation_bounds_are_unchanged() -> None:
 def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
     pytest.importorskip("stable_baselines3")
     from benchmarks.catalog.policies import REFERENCE_AGENTS, PolicySpec
-    from controllers.residual import ResidualPolicy, residual_observation_bounds
+    from controllers.residual import RESIDUAL_FEATURES, ResidualPolicy
 
     checked = 0
     for name in REFERENCE_AGENTS:
@@ -99,20 +99,21 @@ def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
             continue
         policy = controllers.make("agent", path=str(folder))
         metadata = json.loads((folder / "metadata.json").read_text())
-        if isinstance(policy, ResidualPolicy):  # its actor reads the residual observation
-            low, high = residual_observation_bounds()
+        seen = {"observation": metadata["observation"]} if "observation" in metadata else {}
+        env_id = auv_gym.resolve_env_id(metadata["env_id"])  # the env the agent carries
+        env = gym.make(env_id, **{**metadata["env_kwargs"], **seen})
+        low, high = env.observation_space.low, env.observation_space.high
+        env.close()
+        if isinstance(policy, ResidualPolicy):  # its actor reads the env's, then b and a_{k−1}
+            ones = np.ones(len(RESIDUAL_FEATURES), np.float32)
+            low, high = np.concatenate([low, -ones]), np.concatenate([high, ones])
             space = policy.agent.observation_space
         else:
-            seen = {"observation": metadata["observation"]} if "observation" in metadata else {}
-            env_id = auv_gym.resolve_env_id(metadata["env_id"])  # the env the agent carries
-            env = gym.make(env_id, **{**metadata["env_kwargs"], **seen})
-            low, high = env.observation_space.low, env.observation_space.high
             space = policy.observation_space
-            env.close()
         np.testing.assert_array_equal(space.low, low, err_msg=name)
         np.testing.assert_array_equal(space.high, high, err_msg=name)
         checked += 1
-    assert checked == len(REFERENCE_AGENTS) == 4
+    assert checked == len(REFERENCE_AGENTS) == 5
 
 
 def test_a_faster_vehicle_is_observed_within_its_own_speed_bound() -> None:

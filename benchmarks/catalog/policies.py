@@ -50,7 +50,13 @@ __all__ = [
 
 AGENTS_DIR = Path(__file__).resolve().parents[1] / "agents"
 # The reference agents: the name is the folder of benchmarks/agents/ (README there).
-REFERENCE_AGENTS = ("ppo_generalist", "ppo_as_built", "ppo_residual", "sac_generalist")
+REFERENCE_AGENTS = (
+    "ppo_generalist",
+    "ppo_as_built",
+    "ppo_residual",
+    "sac_generalist",
+    "ppo_residual_as_built",
+)
 AGENT_PREFIX = "agent:"
 ONNX_PREFIX = "onnx:"
 # The spec forms beyond names, for the CLIs' help: every one of them goes through `build_policy`.

@@ -102,6 +102,8 @@ POLICY_COLOURS: dict[str, str] = {
     # Tol's vibrant palette
     "pid_as_built_climb": "#EE7733",  # orange
     "pid_as_built_climb_guarded": "#EE3377",  # magenta
+    # Tol's dark palette: the as-built residual, beside the PIDs it rides on
+    "ppo_residual_as_built": "#225522",  # dark green
 }
 # Paul Tol's bright and vibrant palettes without their greys (each colour-blind-safe in itself),
 # then his light palette, for a figure of more than twelve such names.

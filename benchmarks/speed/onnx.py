@@ -88,8 +88,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if not 100 <= args.steps <= 1_000_000:
         parser.error(f"--steps must be in [100, 1000000], got {args.steps}")
     print("\nLatency per control step, batch 1, one thread [µs]: ONNX runtime vs torch policy")
+    width = max(len(agent) for agent in REFERENCE_AGENTS)
     print(
-        f"{'agent':<16} {'onnx median':>12} {'onnx p99':>10} {'torch median':>13} "
+        f"{'agent':<{width}} {'onnx median':>12} {'onnx p99':>10} {'torch median':>13} "
         f"{'torch p99':>10} {'speed-up':>9}"
     )
     results = {}
@@ -98,7 +99,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results[agent] = out
         onnx, torch = out["onnx"], out["torch"]
         print(
-            f"{agent:<16} {onnx['median_us']:>12.0f} {onnx['p99_us']:>10.0f} "
+            f"{agent:<{width}} {onnx['median_us']:>12.0f} {onnx['p99_us']:>10.0f} "
             f"{torch['median_us']:>13.0f} {torch['p99_us']:>10.0f} "
             f"{torch['median_us'] / onnx['median_us']:>8.1f}×"
         )
