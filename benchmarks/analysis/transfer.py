@@ -102,6 +102,7 @@ GROUPS = {
             "pid_as_built_climb",
             "command_filtered_colos",
             "ppo_as_built",
+            "ppo_residual_as_built",
         ),
         classical=(
             "fbsm_colos",
