@@ -25,32 +25,17 @@ from typing import Any
 from auv_gym import VARIANTS
 from auv_gym.sim.config import MAX_EPISODE_TIME, SimConfig
 from benchmarks.arguments import ArgumentParser, finite_number, parse_checked, program_name
-from benchmarks.catalog.policies import (
-    POLICY_SPEC_FORMS,
-    build_policy,
-    check_policy_spec,
-    policy_env,
-)
-from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
+from benchmarks.reports.one_episode import OneEpisodeOptions, resolve_episode
 
 __all__ = ["RecordEpisodeOptions", "check_output", "episode_path", "main", "record"]
 
 
 @dataclass
-class RecordEpisodeOptions:
-    """The options of `auv-gym record`."""
+class RecordEpisodeOptions(OneEpisodeOptions):
+    """The options of `auv-gym record`: the episode's (`OneEpisodeOptions`), then the file."""
 
-    policy: str = option(
-        "fbsm",
-        f"policy spec: a controllers.make name, a reference agent name, {POLICY_SPEC_FORMS}",
-    )
-    scenario: str = option("paper", "scenario name in --scenario-file")
-    # A Path is immutable: one shared default is safe.
-    scenario_file: Path = option(SCENARIOS_FILE, "TOML file of named scenarios")  # noqa: RUF009
-    seed: int = option(0, "reset seed of the episode")
-    duration: float = option(300.0, "episode length [s]")
     out: Path = option(Path("run.mcap"), "MCAP file (.mcap) in an existing folder")  # noqa: RUF009
 
 
@@ -102,32 +87,9 @@ def check_args(args: argparse.Namespace) -> None:
     import mcap_ros2.writer  # noqa: F401
 
     finite_number("--duration", args.duration, 0.0, MAX_EPISODE_TIME, low_open=True, unit="s")
-    if args.seed < 0:
-        raise ValueError(f"--seed must be non-negative, got {args.seed}")
     check_output(args.out)
-    try:
-        scenarios = load_scenarios(args.scenario_file)
-    except OSError as error:
-        raise OSError(f"--scenario-file {str(args.scenario_file)!r}: {error.strerror}") from None
-    names = select(args.scenario, list(scenarios), "scenario")
-    if len(names) != 1:
-        raise ValueError(f"--scenario must name one scenario, got {args.scenario!r}")
-    args.scenario = names[0]
-    scenario = scenarios[names[0]]
-    check_policy_spec(args.policy)
-    # An agent runs under the env id it records, as in `compare` and the suite.
-    args.env_id, agent_env = policy_env(args.policy)
-    args.env_kwargs = {
-        **VARIANTS[args.env_id],
-        **agent_env,
-        **scenario.env,
-        "max_time": float(args.duration),
-    }
-    try:
-        args.config = SimConfig.from_kwargs(**args.env_kwargs)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"scenario {names[0]!r}: {error}") from None
-    args.policy_object = build_policy(args.policy, args.config, scenario.controller)
+    added = resolve_episode(args)  # sets args.env_id
+    args.env_kwargs = {**VARIANTS[args.env_id], **added}
 
 
 def episode_path(env_kwargs: dict[str, Any], seed: int) -> Any:

@@ -24,38 +24,21 @@ from pathlib import Path
 
 import numpy as np
 
-from auv_gym import VARIANTS
-from auv_gym.sim.config import SimConfig
 from benchmarks.arguments import (
     ArgumentParser,
     parse_checked,
     program_name,
     writable_location,
 )
-from benchmarks.catalog.policies import (
-    POLICY_SPEC_FORMS,
-    build_policy,
-    check_policy_spec,
-    policy_env,
-)
-from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, select
 from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, option
+from benchmarks.reports.one_episode import OneEpisodeOptions, resolve_episode
 
 
 @dataclass
-class VideoOptions:
-    """The options of `auv-gym video`."""
+class VideoOptions(OneEpisodeOptions):
+    """The options of `auv-gym video`: the episode's (`OneEpisodeOptions`), then the video's."""
 
-    policy: str = option(
-        "fbsm",
-        f"policy spec: a controllers.make name, a reference agent name, {POLICY_SPEC_FORMS}",
-    )
-    scenario: str = option("paper", "scenario name in --scenario-file")
-    # A Path is immutable: one shared default is safe.
-    scenario_file: Path = option(SCENARIOS_FILE, "TOML file of named scenarios")  # noqa: RUF009
-    seed: int = option(0, "reset seed of the episode")
-    duration: float = option(300.0, "episode length [s]")
     every: int = option(5, "control steps between frames")
     fps: int = option(20, "frames per second of the video")
     out: Path = option(Path("out/run.mp4"), "video file (.mp4); its folder is created")  # noqa: RUF009
@@ -88,29 +71,10 @@ def check_args(args: argparse.Namespace) -> None:
         raise ValueError(
             f"--every must be in [1, 10000] and --fps in [1, 240], got {args.every} and {args.fps}"
         )
-    if args.seed < 0:
-        raise ValueError(f"--seed must be non-negative, got {args.seed}")
     if args.out.suffix.lower() != ".mp4":
         raise ValueError(f"--out must name an .mp4 file, got {args.out}")
-    try:
-        scenarios = load_scenarios(args.scenario_file)
-    except OSError as error:
-        raise OSError(f"--scenario-file {str(args.scenario_file)!r}: {error.strerror}") from None
-    names = select(args.scenario, list(scenarios), "scenario")
-    if len(names) != 1:
-        raise ValueError(f"--scenario must name one scenario, got {args.scenario!r}")
-    scenario = scenarios[names[0]]
-    args.env_kwargs = {**scenario.env, "max_time": float(args.duration)}
-    check_policy_spec(args.policy)
-    # An agent runs under the env id it records, as in `compare` and the suite.
-    args.env_id, agent_env = policy_env(args.policy)
-    args.env_kwargs = {**agent_env, **args.env_kwargs}
-    try:
-        config = SimConfig.from_kwargs(**{**VARIANTS[args.env_id], **args.env_kwargs})
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"scenario {names[0]!r}: {error}") from None
-    args.control_dt = config.control_dt
-    args.policy_object = build_policy(args.policy, config, scenario.controller)
+    args.env_kwargs = resolve_episode(args)  # gym.make adds the env id's fixed arguments
+    args.control_dt = args.config.control_dt
     writable_location(args.out, "--out", folder=False)
 
 
