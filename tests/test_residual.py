@@ -189,6 +189,43 @@ def test_precision_bonus_is_a_gaussian_of_the_distance_after_each_step_across_re
     assert ended == n and 0.0 < np.min(seen) and np.max(seen) < weight  # a real, varying term
 
 
+def test_precision_bonus_across_the_path_reads_y_e_and_z_e_alone():
+    """With ``precision_axes="yz"`` d is √(y_e² + z_e²) of the true errors after the step (the
+    ended episode's at an autoreset), below the distance where x_e is not zero; the record
+    names it, and an unknown axis set is refused."""
+    n, steps, weight, scale = 3, 100, 2.5, 5.0
+    rng = np.random.default_rng(4)
+    corrections = rng.uniform(-1.0, 1.0, size=(steps, n, 3))
+
+    def make(settings):
+        core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **ENV)
+        env = ResidualVectorEnv(core, settings)
+        env.reset(seed=12)
+        return env
+
+    plain = make(ResidualTraining())
+    across = ResidualTraining(precision_weight=weight, precision_scale=scale, precision_axes="yz")
+    shaped = make(across)
+    ended, gaps = 0, []
+    for k in range(steps):
+        _, r0, term, trunc, _ = plain.step(corrections[k])
+        _, r1, _, _, info = shaped.step(corrections[k])
+        done = term | trunc
+        now = info["final_info"] if done.any() else info
+        y = np.where(done, now["y_e"], info["y_e"])
+        z = np.where(done, now["z_e"], info["z_e"])
+        d = np.where(done, now["distance"], info["distance"])
+        bonus = weight * np.exp(-((np.hypot(y, z) / scale) ** 2))
+        np.testing.assert_allclose(r1 - r0, bonus, rtol=1e-12, atol=1e-12)
+        gaps.append(bonus - weight * np.exp(-((d / scale) ** 2)))
+        ended += int(done.sum())
+    assert ended == n and np.max(gaps) > 1e-3  # along-track error no longer costs the bonus
+    assert across.to_dict()["precision_axes"] == "yz"
+    assert "precision_axes" not in ResidualTraining().to_dict()  # the shipped records unchanged
+    with pytest.raises(ValueError, match=r"precision_axes must be one of \['xyz', 'yz'\]"):
+        ResidualTraining.from_dict({"precision_axes": "xy"})
+
+
 def test_selection_score_adds_the_weighted_chattering_and_selects_on_the_recorded_score():
     from benchmarks.training.evaluation import chattering_mean, score
     from benchmarks.training.seeds import select

@@ -17,6 +17,7 @@ __all__ = [
     "DEFAULT_PRECISION_WEIGHT",
     "DEFAULT_SELECTION_CHATTERING",
     "DEFAULT_TV_WEIGHT",
+    "PRECISION_AXES",
     "ResidualTraining",
 ]
 
@@ -30,6 +31,10 @@ MAX_TV_WEIGHT = 1e3
 # Weight 0: the reward of the first residual agents.
 DEFAULT_PRECISION_WEIGHT = 0.0
 DEFAULT_PRECISION_SCALE = 0.1  # [m] d_P
+# The error d of the precision bonus: "xyz" the distance to the virtual point; "yz" its part
+# across the path, √(y_e² + z_e²), for a vehicle whose along-track error is cheap to win (the
+# as-built residual's: docs/results.md, "The residual on both plants: ten seeds").
+PRECISION_AXES = ("xyz", "yz")
 # Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.
 DEFAULT_SELECTION_CHATTERING = 0.0
 
@@ -44,6 +49,7 @@ class ResidualTraining(ResidualSettings):
     precision_weight: float = DEFAULT_PRECISION_WEIGHT
     precision_scale: float = DEFAULT_PRECISION_SCALE
     selection_chattering: float = DEFAULT_SELECTION_CHATTERING
+    precision_axes: str = PRECISION_AXES[0]
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -54,10 +60,15 @@ class ResidualTraining(ResidualSettings):
             ("selection_chattering", 0.0, 1.0, " m·s"),
         ):
             object.__setattr__(self, name, check_number(name, getattr(self, name), low, high, unit))
+        if self.precision_axes not in PRECISION_AXES:
+            raise ValueError(
+                f"precision_axes must be one of {list(PRECISION_AXES)}, got {self.precision_axes!r}"
+            )
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form recorded in an agent's metadata (key order of the shipped agents)."""
-        return self.with_optional(
+        """The JSON form recorded in an agent's metadata (key order of the shipped agents;
+        ``precision_axes`` only when not the distance, so they record what they always did)."""
+        record = self.with_optional(
             {
                 "base": self.base,
                 "bound": list(self.bound),
@@ -69,3 +80,6 @@ class ResidualTraining(ResidualSettings):
                 "base_kwargs": dict(self.base_kwargs),
             }
         )
+        if self.precision_axes != PRECISION_AXES[0]:
+            record["precision_axes"] = self.precision_axes
+        return record

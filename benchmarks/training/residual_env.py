@@ -14,6 +14,9 @@ runs the base controller of all vehicles in one batched `predict` per control st
     reward       r_k − w_TV · Σ_j |a_{k,j} − a_{k−1,j}|     (no charge at an episode's first step)
                  + w_P · exp(−(d_{k+1}/d_P)²)               (precision bonus, d [m] after the step)
 
+(d: the distance to the virtual point, or with ``precision_axes="yz"`` its part across the path,
+√(y_e² + z_e²), from the true state the env reports in ``info``)
+
 The chattering charge w_TV (``tv_weight``, default 0.25) is the total variation of the applied
 normalised action per step, the quantity the benchmark's ``chattering`` metric sums per second
 (`auv_gym.metrics`); it is reported per step as ``info["reward_chattering"]`` beside the env's
@@ -121,6 +124,15 @@ class ResidualVectorEnv(VectorWrapper):
         self._actuators = actuators
         return out
 
+    def _precision_error(self, info: dict[str, Any]) -> np.ndarray:
+        """d [m] of the precision bonus per vehicle, from an info dict's true errors: the
+        distance, or with ``precision_axes`` "yz" its part across the path."""
+        if self.settings.precision_axes == "yz":
+            return np.hypot(
+                np.asarray(info["y_e"], np.float64), np.asarray(info["z_e"], np.float64)
+            )
+        return np.asarray(info["distance"], np.float64)
+
     def _base_predict_rows(
         self,
         obs: np.ndarray,
@@ -202,9 +214,9 @@ class ResidualVectorEnv(VectorWrapper):
         mode = self.core.autoreset_mode
         bonus = None
         if self.settings.precision_weight > 0.0:
-            distance = np.asarray(info["distance"], np.float64)
+            distance = self._precision_error(info)
             if mode is AutoresetMode.SAME_STEP and done.any():  # info holds the new episodes'
-                distance = np.where(done, info["final_info"]["distance"], distance)
+                distance = np.where(done, self._precision_error(info["final_info"]), distance)
             scaled = distance / self.settings.precision_scale
             bonus = np.where(
                 stepped, self.settings.precision_weight * np.exp(-scaled * scaled), 0.0
