@@ -149,21 +149,22 @@ def test_chattering_charge_is_the_total_variation_of_the_applied_action():
     assert np.all(np.abs(reward - raw_reward) > 0.0)  # the charge is not zero
 
 
+def _same_step_env(n: int, settings: ResidualTraining, seed: int) -> ResidualVectorEnv:
+    """A residual env of ``n`` vehicles that reports an ended episode in the step's info."""
+    core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **ENV)
+    env = ResidualVectorEnv(core, settings)
+    env.reset(seed=seed)
+    return env
+
+
 def test_precision_bonus_is_a_gaussian_of_the_distance_after_each_step_across_resets():
     """w_P·exp(−(d/d_P)²) with d after the step, the ended episode's d at an autoreset; the
     chattering charge is unchanged by it."""
     n, steps, weight, scale = 3, 100, 2.5, 5.0  # episodes of 80 steps: every vehicle resets
     rng = np.random.default_rng(3)
     corrections = rng.uniform(-1.0, 1.0, size=(steps, n, 3))
-
-    def make(settings):
-        core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **ENV)
-        env = ResidualVectorEnv(core, settings)
-        env.reset(seed=11)
-        return env
-
-    plain = make(ResidualTraining())
-    shaped = make(ResidualTraining(precision_weight=weight, precision_scale=scale))
+    plain = _same_step_env(n, ResidualTraining(), 11)
+    shaped = _same_step_env(n, ResidualTraining(precision_weight=weight, precision_scale=scale), 11)
     ended, seen = 0, []
     for k in range(steps):
         _, r0, term, trunc, info0 = plain.step(corrections[k])
@@ -196,16 +197,9 @@ def test_precision_bonus_across_the_path_reads_y_e_and_z_e_alone():
     n, steps, weight, scale = 3, 100, 2.5, 5.0
     rng = np.random.default_rng(4)
     corrections = rng.uniform(-1.0, 1.0, size=(steps, n, 3))
-
-    def make(settings):
-        core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **ENV)
-        env = ResidualVectorEnv(core, settings)
-        env.reset(seed=12)
-        return env
-
-    plain = make(ResidualTraining())
+    plain = _same_step_env(n, ResidualTraining(), 12)
     across = ResidualTraining(precision_weight=weight, precision_scale=scale, precision_axes="yz")
-    shaped = make(across)
+    shaped = _same_step_env(n, across, 12)
     ended, gaps = 0, []
     for k in range(steps):
         _, r0, term, trunc, _ = plain.step(corrections[k])
