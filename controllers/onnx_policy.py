@@ -122,14 +122,14 @@ class OnnxPolicy:
         self.env_kwargs = dict(contract.env_kwargs)  # the env it was built for (`auv_gym.rollout`)
         self.base = None
         if contract.residual is not None:
+            from controllers.agent import REALISTIC_ACTUATOR
             from controllers.registry import make_classical
-            from controllers.residual import base_kwargs_for_env
 
             env_owned = {"actuator": actuator, "control_dt": control_dt, "params": params}
             env_owned["actuator_params"] = actuator_params
             kwargs = {k: v for k, v in env_owned.items() if v is not None}
-            if not env_given and actuator is None:  # the env it carries: its base flies there
-                kwargs = {**base_kwargs_for_env(contract.env_kwargs), **kwargs}
+            if contract.actuator == REALISTIC_ACTUATOR:  # its base commands them too, as in
+                kwargs = {"actuator": REALISTIC_ACTUATOR, **kwargs}  # `load_policy`
             recorded = dict(contract.residual.get("base_kwargs") or {})
             base = contract.residual["base"]
             try:
