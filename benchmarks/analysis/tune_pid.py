@@ -1,16 +1,20 @@
 """Tune the PID + LOS autopilot for a vehicle on validation seeds: a grid over the design speed
-of the pole placement, the heading loop's natural frequency and the LOS gains, scored on the
-benchmark scenarios of that vehicle, never on their test seeds.
+of the pole placement, the heading loop's natural frequency and the LOS gains (or any grid of
+the PID's gains, ``--grid``), scored on the benchmark scenarios of that vehicle, never on their
+test seeds.
 
     python -m benchmarks.analysis.tune_pid --scenarios torpedo_helix,torpedo_survey,torpedo_as_built
+    python -m benchmarks.analysis.tune_pid --base pid_as_built_climb \
+        --scenarios as_built_helix,as_built_survey,as_built_coastal \
+        --grid "pitch_wn=1.5,2,2.5,3;yaw_wn=1.5,2.5"
 
-Each candidate flies `pid_as_built` (PID + current-observer LOS, docs/model.md §4.9) with the
-scenario's controller settings and the candidate's gains on the validation seeds (100-104 by
-default; the benchmark's test seeds are 0-9). A candidate that fails an episode (corridor,
-pitch, ...) ranks below every one that fails none; among those, the lower mean over the
-scenarios of the mean RMS distance [m] wins. The table of every candidate and the winner's gains
-are printed (docs/vehicles.md §5: on the torpedo, 4 % over the derived gains).
-"""
+Each candidate flies the ``--base`` preset (`pid_as_built` by default: PID + current-observer
+LOS, docs/model.md §4.9) with the scenario's controller settings and the candidate's gains on
+the validation seeds (100-104 by default; the benchmark's test seeds are 0-9). A candidate that
+fails an episode (corridor, pitch, ...) ranks below every one that fails none; among those, the
+lower mean over the scenarios of the mean RMS distance [m] wins. The table of every candidate
+and the winner's gains are printed (docs/vehicles.md §5: on the torpedo, 4 % over the derived
+gains)."""
 
 from __future__ import annotations
 
@@ -18,13 +22,13 @@ import itertools
 import math
 import sys
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
 from benchmarks.options import option
 
-__all__ = ["GRID", "main", "tune"]
+__all__ = ["GRID", "check_base", "main", "parse_grid", "tune"]
 
 # The grid: where the PID's poles are placed (u0 [m/s]), how fast the heading loop is [rad/s],
 # and the LOS gains k_y, k_z [1/m] (docs/model.md §4.9).
@@ -44,10 +48,52 @@ class TuneOptions:
     scenarios: str = option("torpedo_helix,torpedo_survey,torpedo_as_built", "scenarios")
     seeds: str = option("100,101,102,103,104", "validation seeds (not the test seeds 0-9)")
     duration: float = option(300.0, "episode length [s]")
+    base: str = option(BASE, "the PID preset each candidate overrides (controllers.PRESETS)")
+    grid: str = option(
+        "",
+        "the grid as NAME=V1,V2;NAME=V1,... over the PID's gains (default: design_speed, yaw_wn, "
+        "k_y, k_z)",
+    )
 
 
 def _score(rms: Sequence[float], failed: int) -> tuple[int, float]:
     return failed, (sum(rms) / len(rms) if rms else math.inf)
+
+
+def check_base(base: str) -> None:
+    """ValueError unless ``base`` names a PID preset (`controllers.registry.PRESETS`)."""
+    from controllers.registry import PRESETS
+
+    if base not in PRESETS or PRESETS[base][0] != "pid_los":
+        pids = sorted(name for name, (kind, _) in PRESETS.items() if kind == "pid_los")
+        raise ValueError(f"--base: {base!r} is not a PID preset; valid: {pids}")
+
+
+def parse_grid(text: str) -> dict[str, tuple[float, ...]]:
+    """The grid of ``--grid`` (``NAME=V1,V2;NAME=...``): each name a gain of the PID + LOS
+    autopilot (`controllers.pid.PIDGains`, `GUIDANCE_GAINS`), each value a finite number;
+    ValueError naming what is wrong."""
+    from controllers.pid import GUIDANCE_GAINS, PIDGains
+
+    gains = {field.name for field in fields(PIDGains)} | set(GUIDANCE_GAINS)
+    grid: dict[str, tuple[float, ...]] = {}
+    for axis in text.split(";"):
+        name, sep, values = axis.partition("=")
+        name = name.strip()
+        if not sep or not name or not values.strip():
+            raise ValueError(f"--grid: {axis!r} is not NAME=V1,V2,...")
+        if name not in gains:
+            raise ValueError(f"--grid: {name!r} is not a PID gain; valid: {sorted(gains)}")
+        if name in grid:
+            raise ValueError(f"--grid names {name!r} more than once")
+        try:
+            numbers = tuple(float(v) for v in comma_names(values, f"--grid {name}"))
+        except ValueError as error:
+            raise ValueError(f"--grid {name}: {error}") from None
+        if not all(math.isfinite(v) for v in numbers):
+            raise ValueError(f"--grid {name}: values must be finite, got {values!r}")
+        grid[name] = numbers
+    return grid
 
 
 def tune(
@@ -56,9 +102,11 @@ def tune(
     duration: float,
     grid: Mapping[str, Sequence[float]] = GRID,
     progress: bool = True,
+    base: str = BASE,
 ) -> list[dict[str, Any]]:
     """Every candidate of ``grid``'s per-scenario mean RMS distance [m] and failed episodes,
-    best first (fewest failed episodes, then the lowest mean over the scenarios)."""
+    best first (fewest failed episodes, then the lowest mean over the scenarios), each flying
+    the PID preset ``base`` with its gains."""
     import controllers
     from auv_gym.rollout import evaluate
     from auv_gym.sim.trajectory import FAILURE_REASONS
@@ -76,7 +124,7 @@ def tune(
         for name in scenarios:
             scenario = table[name]
             env = {**scenario.env, "max_time": duration}
-            policy = controllers.make(BASE, env=env, **scenario.controller, **gains)
+            policy = controllers.make(base, env=env, **scenario.controller, **gains)
             results = evaluate(policy, list(seeds), **env)
             finished = [r for r in results if r["termination_reason"] not in FAILURE_REASONS]
             row["failed"] += len(results) - len(finished)
@@ -107,12 +155,14 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             raise ValueError("--seeds: 0-9 are the benchmark's test seeds; tune on others")
         if not 0.0 < args.duration <= 3600.0:
             raise ValueError(f"--duration must be in (0, 3600] s, got {args.duration}")
-    rows = tune(scenarios, seeds, args.duration)
+        check_base(args.base)
+        grid = parse_grid(args.grid) if args.grid.strip() else GRID
+    rows = tune(scenarios, seeds, args.duration, grid, base=args.base)
     print(f"{len(rows)} candidates on {len(seeds)} validation seeds, best first:")
     for row in rows:
         print("  " + _line(row))
     best = rows[0]
-    print("\nbest (controllers.make('pid_as_built', env=..., **gains)):")
+    print(f"\nbest (controllers.make({args.base!r}, env=..., **gains)):")
     for name, value in best["gains"].items():
         print(f"{name} = {value!r}")
     return rows

@@ -1,0 +1,56 @@
+"""The PID tuner's grid and base (`benchmarks.analysis.tune_pid`): any PID preset, any of its
+gains, bad grids refused by name before anything flies."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from benchmarks.analysis.tune_pid import GRID, check_base, main, parse_grid, tune
+
+
+def test_a_grid_names_pid_gains_with_finite_values() -> None:
+    assert parse_grid("pitch_wn=1.5,2; k_z=0.1") == {"pitch_wn": (1.5, 2.0), "k_z": (0.1,)}
+    for text, message in [
+        ("pitch_wn", "is not NAME=V1,V2"),
+        ("pitch_wn=", "is not NAME=V1,V2"),
+        ("=1,2", "is not NAME=V1,V2"),
+        ("h=1", "'h' is not a PID gain"),
+        ("pitch_wn=1;pitch_wn=2", "more than once"),
+        ("pitch_wn=1,x", "--grid pitch_wn"),
+        ("pitch_wn=1,inf", "must be finite"),
+        ("pitch_wn=1,,2", "empty name"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            parse_grid(text)
+
+
+def test_the_base_is_a_pid_preset() -> None:
+    check_base("pid_as_built_climb")
+    with pytest.raises(ValueError, match="'fbsm_colos' is not a PID preset"):
+        check_base("fbsm_colos")
+    with pytest.raises(SystemExit):  # before any episode flies
+        main(["--base", "nope"])
+    with pytest.raises(SystemExit):
+        main(["--grid", "pitch_wn=nan"])
+
+
+def test_the_climb_speed_pid_tuned_on_its_pitch_loop() -> None:
+    """Two pitch loops of the climb-speed PID on one validation seed of the as-built helix (60 s):
+    each flown, both finish, ranked by their mean RMS distance; the candidates differ."""
+    rows = tune(
+        ["as_built_helix"],
+        [100],
+        60.0,
+        grid={"pitch_wn": (2.0, 3.0)},
+        progress=False,
+        base="pid_as_built_climb",
+    )
+    assert sorted(r["gains"]["pitch_wn"] for r in rows) == [2.0, 3.0]
+    assert [r["failed"] for r in rows] == [0, 0]
+    distances = [r["rms"]["as_built_helix"] for r in rows]
+    assert distances == sorted(distances)
+    assert all(0.01 < d < 5.0 for d in distances)  # m, converging from the start
+    assert not math.isclose(distances[0], distances[1], rel_tol=1e-6)
+    assert set(GRID) == {"design_speed", "yaw_wn", "k_y", "k_z"}  # the default grid unchanged
