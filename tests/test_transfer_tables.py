@@ -38,7 +38,7 @@ def test_one_group_retabled_keeps_the_other_groups_rows(suites):
             assert float(new[key][column]) == pytest.approx(float(row[column]), rel=1e-12), key
     text = (suites / "transfer.md").read_text()
     assert "| paper | best classical | fbsm_colos |" in text
-    assert "| as_built | best classical | pid_as_built_climb |" in text
+    assert "| as_built | best classical | pid_as_built_climb_soft_pitch |" in text
 
 
 def test_a_group_without_its_suites_is_left_out_unless_named(suites):
