@@ -102,6 +102,9 @@ POLICY_COLOURS: dict[str, str] = {
     # Tol's vibrant palette
     "pid_as_built_climb": "#EE7733",  # orange
     "pid_as_built_climb_guarded": "#EE3377",  # magenta
+    # a bright blue, the farthest from every colour above among the named palettes' (14 ΔE from
+    # its nearest, FBSM's blue, in simulated tritanopia)
+    "pid_as_built_climb_soft_pitch": "#1A85FF",
     # Tol's dark palette: the as-built residual, beside the PIDs it rides on
     "ppo_residual_as_built": "#225522",  # dark green
 }
