@@ -7,7 +7,14 @@ import math
 
 import pytest
 
-from benchmarks.analysis.tune_pid import GRID, check_base, main, parse_grid, tune
+from benchmarks.analysis.tune_pid import (
+    GRID,
+    candidate_policies,
+    check_base,
+    main,
+    parse_grid,
+    tune,
+)
 
 
 def test_a_grid_names_pid_gains_with_finite_values() -> None:
@@ -17,6 +24,7 @@ def test_a_grid_names_pid_gains_with_finite_values() -> None:
         ("pitch_wn=", "is not NAME=V1,V2"),
         ("=1,2", "is not NAME=V1,V2"),
         ("h=1", "'h' is not a PID gain"),
+        ("speed_over_ground=0,1", "'speed_over_ground' is not a PID gain"),
         ("pitch_wn=1;pitch_wn=2", "more than once"),
         ("pitch_wn=1,x", "--grid pitch_wn"),
         ("pitch_wn=1,inf", "must be finite"),
@@ -34,6 +42,10 @@ def test_the_base_is_a_pid_preset() -> None:
         main(["--base", "nope"])
     with pytest.raises(SystemExit):
         main(["--grid", "pitch_wn=nan"])
+    with pytest.raises(SystemExit):  # a gain the controller refuses, before any episode flies
+        main(["--scenarios", "as_built_helix", "--grid", "pitch_wn=0.5,2"])
+    with pytest.raises(ValueError, match=r"PIDGains\.pitch_wn = 0\.5 rad/s"):
+        candidate_policies(["as_built_helix"], 60.0, {"pitch_wn": (0.5,)}, "pid_as_built_climb")
 
 
 def test_the_climb_speed_pid_tuned_on_its_pitch_loop() -> None:

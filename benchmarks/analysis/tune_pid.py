@@ -28,7 +28,7 @@ from typing import Any
 from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
 from benchmarks.options import option
 
-__all__ = ["GRID", "check_base", "main", "parse_grid", "tune"]
+__all__ = ["GRID", "candidate_policies", "check_base", "main", "parse_grid", "tune"]
 
 # The grid: where the PID's poles are placed (u0 [m/s]), how fast the heading loop is [rad/s],
 # and the LOS gains k_y, k_z [1/m] (docs/model.md §4.9).
@@ -70,12 +70,14 @@ def check_base(base: str) -> None:
 
 
 def parse_grid(text: str) -> dict[str, tuple[float, ...]]:
-    """The grid of ``--grid`` (``NAME=V1,V2;NAME=...``): each name a gain of the PID + LOS
-    autopilot (`controllers.pid.PIDGains`, `GUIDANCE_GAINS`), each value a finite number;
-    ValueError naming what is wrong."""
+    """The grid of ``--grid`` (``NAME=V1,V2;NAME=...``): each name a numeric gain of the PID +
+    LOS autopilot (`controllers.pid.PIDGains`, `GUIDANCE_GAINS`; the switches are not a grid's),
+    each value a finite number; ValueError naming what is wrong."""
+    from controllers.gains import ControllerGains
     from controllers.pid import GUIDANCE_GAINS, PIDGains
 
-    gains = {field.name for field in fields(PIDGains)} | set(GUIDANCE_GAINS)
+    guidance = [f for f in fields(ControllerGains) if f.name in GUIDANCE_GAINS]
+    gains = {f.name for f in [*fields(PIDGains), *guidance] if f.type == "float"}
     grid: dict[str, tuple[float, ...]] = {}
     for axis in text.split(";"):
         name, sep, values = axis.partition("=")
@@ -96,6 +98,35 @@ def parse_grid(text: str) -> dict[str, tuple[float, ...]]:
     return grid
 
 
+def candidate_policies(
+    scenarios: Sequence[str],
+    duration: float,
+    grid: Mapping[str, Sequence[float]] = GRID,
+    base: str = BASE,
+) -> list[tuple[dict[str, float], dict[str, tuple[Any, dict[str, Any]]]]]:
+    """Each candidate of ``grid``: its gains and, per scenario, the PID preset ``base`` built
+    with them for the scenario's env (episodes of ``duration`` s). ValueError for an unknown
+    scenario or gains the controller refuses, before anything flies."""
+    import controllers
+    from benchmarks.catalog.scenarios import load_scenarios
+
+    table = load_scenarios()
+    unknown = [name for name in scenarios if name not in table]
+    if unknown:
+        raise ValueError(f"--scenarios: unknown {unknown}; valid: {sorted(table)}")
+    names = list(grid)
+    built = []
+    for values in itertools.product(*grid.values()):
+        gains = dict(zip(names, values, strict=True))
+        flights = {}
+        for name in scenarios:
+            scenario = table[name]
+            env = {**scenario.env, "max_time": duration}
+            flights[name] = (controllers.make(base, env=env, **scenario.controller, **gains), env)
+        built.append((gains, flights))
+    return built
+
+
 def tune(
     scenarios: Sequence[str],
     seeds: Sequence[int],
@@ -107,24 +138,14 @@ def tune(
     """Every candidate of ``grid``'s per-scenario mean RMS distance [m] and failed episodes,
     best first (fewest failed episodes, then the lowest mean over the scenarios), each flying
     the PID preset ``base`` with its gains."""
-    import controllers
     from auv_gym.rollout import evaluate
     from auv_gym.sim.trajectory import FAILURE_REASONS
-    from benchmarks.catalog.scenarios import load_scenarios
 
-    table = load_scenarios()
-    unknown = [name for name in scenarios if name not in table]
-    if unknown:
-        raise ValueError(f"--scenarios: unknown {unknown}; valid: {sorted(table)}")
-    names = list(grid)
-    candidates = [dict(zip(names, v, strict=True)) for v in itertools.product(*grid.values())]
+    candidates = candidate_policies(scenarios, duration, grid, base)
     rows = []
-    for k, gains in enumerate(candidates):
+    for k, (gains, flights) in enumerate(candidates):
         row: dict[str, Any] = {"gains": gains, "failed": 0, "rms": {}}
-        for name in scenarios:
-            scenario = table[name]
-            env = {**scenario.env, "max_time": duration}
-            policy = controllers.make(base, env=env, **scenario.controller, **gains)
+        for name, (policy, env) in flights.items():
             results = evaluate(policy, list(seeds), **env)
             finished = [r for r in results if r["termination_reason"] not in FAILURE_REASONS]
             row["failed"] += len(results) - len(finished)
@@ -157,6 +178,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             raise ValueError(f"--duration must be in (0, 3600] s, got {args.duration}")
         check_base(args.base)
         grid = parse_grid(args.grid) if args.grid.strip() else GRID
+        candidate_policies(scenarios, args.duration, grid, args.base)  # refusals before flying
     rows = tune(scenarios, seeds, args.duration, grid, base=args.base)
     print(f"{len(rows)} candidates on {len(seeds)} validation seeds, best first:")
     for row in rows:
