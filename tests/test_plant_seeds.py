@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks.analysis.plant_seeds import main, plant_table, read_plant
+from benchmarks.analysis.plant_seeds import main, markdown, plant_table, read_plant
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "seeds" / "ppo_as_built_plants"
@@ -107,3 +107,36 @@ def test_bad_arguments_are_one_line_errors(tmp_path, capsys):
             ["--policy=plants", f"--out={tmp_path}", f"--suites-5dof={tmp_path}", "--suites-6dof=x"]
         )
     assert "no episodes.csv" in capsys.readouterr().err
+
+
+def test_several_references_take_the_best_per_set():
+    """The two-plant residual's ten seeds against the guarded PID and the guarded climb-speed
+    PID: per set the better of the two (by hand from the reference's own means), every ratio
+    the single-reference table's for that reference."""
+    seeds = ROOT / "benchmarks" / "results" / "seeds" / "ppo_residual_as_built_plants"
+    folders = {p: [seeds / f"suite_{p}"] for p in ("5dof", "6dof")}
+    both = ("pid_as_built_guarded", "pid_as_built_climb_guarded")
+    plants = {p: read_plant(folders[p], "ppo_residual_as_built_plants", both) for p in folders}
+    record = plant_table(plants, "ppo_residual_as_built_plants", both, reps=200)
+    single = {
+        name: plant_table(
+            {p: read_plant(folders[p], "ppo_residual_as_built_plants", name) for p in folders},
+            "ppo_residual_as_built_plants",
+            name,
+            reps=200,
+        )
+        for name in both
+    }
+    for s in record["sets"]:
+        means = {n: single[n]["reference_summary"]["5dof"]["per_set"][s] for n in both}
+        assert record["per_set_reference"][s] == min(means, key=means.get)
+        for run, entry in record["runs"].items():
+            chosen = single[record["per_set_reference"][s]]["runs"][run]["set_ratios_5dof"][s]
+            assert entry["set_ratios_5dof"][s] == pytest.approx(chosen, rel=1e-12)
+    # the climb-speed PID is the better reference on every set (docs/model.md §4.9)
+    assert set(record["per_set_reference"].values()) == {"pid_as_built_climb_guarded"}
+    assert record["meets_per_set"] == single["pid_as_built_climb_guarded"]["meets_per_set"] == 0
+    assert single["pid_as_built_guarded"]["meets_per_set"] == 4  # docs/results.md
+    text = markdown(record)
+    assert "best of pid_as_built_guarded, pid_as_built_climb_guarded" in text
+    assert "| pid_as_built_climb_guarded | 0.32" in text

@@ -8,17 +8,18 @@
 Reads test-suite evaluations (`auv-gym suite`) of the same sets flown on the 5-DOF plant and on
 the 6-DOF plant (docs/model.md §15), in which ``--policy`` ran several training seeds (runs),
 possibly spread over several folders (one per training pair), each folder also holding
-``--reference``. The folders of a plant must be one experiment: the same sets (names, seeds,
-env settings, duration) and the reference's episodes equal score for score. Per run and plant:
-the mean score [m] over all episodes (a failed episode scores its set's corridor,
-`benchmarks.analysis.suite_stats.episode_score`) with a 95 % bootstrap interval stratified by
-set, and the failed episodes; the ratio of the means 6-DOF / 5-DOF; per set, the 5-DOF mean
-over the reference's. Two targets per run (docs/results.md, "The as-built agent on both
-plants"):
+``--reference`` (one classical policy, or several: the per-set target then takes the best of
+them per set, the one with the lowest 5-DOF mean there). The folders of a plant must be one
+experiment: the same sets (names, seeds, env settings, duration) and the reference's episodes
+equal score for score. Per run and plant: the mean score [m] over all episodes (a failed episode
+scores its set's corridor, `benchmarks.analysis.suite_stats.episode_score`) with a 95 %
+bootstrap interval stratified by set, and the failed episodes; the ratio of the means 6-DOF /
+5-DOF; per set, the 5-DOF mean over the reference's. Two targets per run (docs/results.md, "The
+as-built agent on both plants"):
 
 * plants: the 6-DOF mean ≤ ``--max-ratio`` × the 5-DOF mean, no failed episode on either plant;
-* per set: on the 5-DOF plant, every set's mean ≤ ``--max-per-set`` × the reference's, no
-  failed episode.
+* per set: on the 5-DOF plant, every set's mean ≤ ``--max-per-set`` × the reference's (the
+  best reference's on that set), no failed episode.
 
 Then how many runs meet each target, and the policy's means over all runs. Written to --out:
 ``plant_seeds.json`` and ``plant_seeds.md``.
@@ -64,7 +65,10 @@ class PlantSeedsOptions:
     suites_5dof: str = option("", "comma-separated suite folders flown on the 5-DOF plant")
     suites_6dof: str = option("", "comma-separated suite folders flown on the 6-DOF plant")
     policy: str = option("", "the multi-seed policy of those evaluations")
-    reference: str = option("pid_as_built", "the classical policy of the per-set target")
+    reference: str = option(
+        "pid_as_built",
+        "the per-set target's classical policy, or several (comma-separated): the best per set",
+    )
     max_ratio: float = option(PLANTS_TARGET, "target: 6-DOF mean / 5-DOF mean at most this")
     max_per_set: float = option(
         PER_SET_TARGET, "target: every 5-DOF set at most this × the reference"
@@ -99,9 +103,15 @@ def _read_folder(folder: Path) -> tuple[dict[str, Any], PlantSuite]:
     return suite, PlantSuite(scores, failure_matrices(rows, sets), columns, sets, runs)
 
 
-def read_plant(folders: Sequence[Path], policy: str, reference: str) -> PlantSuite:
-    """The runs of ``policy`` from every folder, with ``reference`` (from the first), after
-    checking the folders are one experiment (module doc); ValueError naming the folder."""
+def _names(reference: str | Sequence[str]) -> list[str]:
+    return [reference] if isinstance(reference, str) else list(reference)
+
+
+def read_plant(folders: Sequence[Path], policy: str, reference: str | Sequence[str]) -> PlantSuite:
+    """The runs of ``policy`` from every folder, with the ``reference`` policy or policies (from
+    the first), after checking the folders are one experiment (module doc); ValueError naming
+    the folder."""
+    references = _names(reference)
     if not folders:
         raise ValueError("no suite folder given")
     loaded = [_read_folder(folder) for folder in folders]
@@ -111,14 +121,15 @@ def read_plant(folders: Sequence[Path], policy: str, reference: str) -> PlantSui
         for key in SAME_EXPERIMENT:
             if suite.get(key) != first_suite.get(key):
                 raise ValueError(f"{folder}: its {key} differ from those of {folders[0]}")
-        for name in (policy, reference):
+        for name in (policy, *references):
             if name not in plant.scores:
                 raise ValueError(f"{folder}: no policy {name!r}; policies: {sorted(plant.scores)}")
-        if not np.array_equal(plant.scores[reference], first.scores[reference]):
-            raise ValueError(
-                f"{folder}: {reference!r} scores differ from those in {folders[0]}: not the "
-                "same experiment"
-            )
+        for name in references:
+            if not np.array_equal(plant.scores[name], first.scores[name]):
+                raise ValueError(
+                    f"{folder}: {name!r} scores differ from those in {folders[0]}: not the "
+                    "same experiment"
+                )
         repeated = sorted(set(runs) & set(plant.runs[policy]))
         if repeated:
             raise ValueError(f"{folder}: runs {repeated} of {policy!r} are in another folder too")
@@ -129,23 +140,24 @@ def read_plant(folders: Sequence[Path], policy: str, reference: str) -> PlantSui
         return np.concatenate([getattr(plant, field)[policy] for _, plant in loaded])[order]
 
     return PlantSuite(
-        {policy: stacked("scores"), reference: first.scores[reference]},
-        {policy: stacked("failed"), reference: first.failed[reference]},
+        {policy: stacked("scores"), **{name: first.scores[name] for name in references}},
+        {policy: stacked("failed"), **{name: first.failed[name] for name in references}},
         first.columns,
         first.sets,
-        {policy: sorted(runs), reference: first.runs[reference]},
+        {policy: sorted(runs), **{name: first.runs[name] for name in references}},
     )
 
 
 def plant_table(
     plants: Mapping[str, PlantSuite],
     policy: str,
-    reference: str,
+    reference: str | Sequence[str],
     max_ratio: float = PLANTS_TARGET,
     max_per_set: float = PER_SET_TARGET,
     reps: int = 2000,
 ) -> dict[str, Any]:
-    """Per run of ``policy`` on both plants, the targets and the counts (module doc)."""
+    """Per run of ``policy`` on both plants, the targets and the counts (module doc); with
+    several references, each set's per-set target is the best of them there."""
     from benchmarks.analysis.stats import mean_interval
 
     five, six = plants["5dof"], plants["6dof"]
@@ -167,12 +179,20 @@ def plant_table(
             "per_set": {s: float(matrix[0, columns == s].mean()) for s in five.sets},
         }
 
-    ref = {plant: summary(plants[plant], reference, 0) for plant in PLANTS}
+    references = _names(reference)
+    summaries = {
+        name: {plant: summary(plants[plant], name, 0) for plant in PLANTS} for name in references
+    }
+    best = {
+        s: min(references, key=lambda name: summaries[name]["5dof"]["per_set"][s])
+        for s in five.sets
+    }
+    bar = {s: summaries[best[s]]["5dof"]["per_set"][s] for s in five.sets}
     per_run = {}
     for k, run in enumerate(five.runs[policy]):
         entry = {plant: summary(plants[plant], policy, k) for plant in PLANTS}
         ratio = entry["6dof"]["mean"][0] / entry["5dof"]["mean"][0]
-        set_ratios = {s: entry["5dof"]["per_set"][s] / ref["5dof"]["per_set"][s] for s in five.sets}
+        set_ratios = {s: entry["5dof"]["per_set"][s] / bar[s] for s in five.sets}
         no_failure = entry["5dof"]["failed"] == 0 and entry["6dof"]["failed"] == 0
         per_run[str(run)] = {
             **entry,
@@ -189,11 +209,13 @@ def plant_table(
     }
     return {
         "policy": policy,
-        "reference": reference,
+        "reference": ", ".join(references),
         "sets": five.sets,
         "max_ratio": max_ratio,
         "max_per_set": max_per_set,
-        "reference_summary": ref,
+        "reference_summary": summaries[references[0]],
+        "reference_summaries": summaries,
+        "per_set_reference": best,
         "runs": per_run,
         "meets_plants": sum(r["meets_plants"] for r in per_run.values()),
         "meets_per_set": sum(r["meets_per_set"] for r in per_run.values()),
@@ -210,6 +232,8 @@ def markdown(record: Mapping[str, Any]) -> str:
 
     sets = record["sets"]
     n_runs = len(record["runs"])
+    several = len(record.get("reference_summaries") or {}) > 1
+    reference_label = f"best of {record['reference']}" if several else record["reference"]
     lines = [
         f"`{record['policy']}` on both plants, per training seed. Mean RMS distance [m] over "
         "every episode with its 95 % bootstrap interval (stratified by set), failed episodes "
@@ -218,7 +242,7 @@ def markdown(record: Mapping[str, Any]) -> str:
         + ".",
         "",
         "| seed | 5-DOF | 6-DOF | 6-DOF / 5-DOF | 5-DOF per set / "
-        f"{record['reference']} | plants target | per-set target |",
+        f"{reference_label} | plants target | per-set target |",
         "|---|---|---|---:|---|---|---|",
     ]
     for run, entry in record["runs"].items():
@@ -228,20 +252,31 @@ def markdown(record: Mapping[str, Any]) -> str:
             f"{ratios} | {'yes' if entry['meets_plants'] else 'no'} | "
             f"{'yes' if entry['meets_per_set'] else 'no'} |"
         )
-    ref = record["reference_summary"]
+    summaries = record.get("reference_summaries") or {
+        record["reference"]: record["reference_summary"]
+    }
     pooled = record["pooled"]
     lines += [
-        f"| {record['reference']} | {cell(ref['5dof'])} | {cell(ref['6dof'])} | "
-        f"{ref['6dof']['mean'][0] / ref['5dof']['mean'][0]:.2f} | — | | |",
+        f"| {name} | {cell(ref['5dof'])} | {cell(ref['6dof'])} | "
+        f"{ref['6dof']['mean'][0] / ref['5dof']['mean'][0]:.2f} | — | | |"
+        for name, ref in summaries.items()
+    ]
+    lines += [
         f"| all {n_runs} seeds | {pooled['5dof'][0]:.3f} [{pooled['5dof'][1]:.3f}, "
         f"{pooled['5dof'][2]:.3f}] | {pooled['6dof'][0]:.3f} [{pooled['6dof'][1]:.3f}, "
         f"{pooled['6dof'][2]:.3f}] | {pooled['6dof'][0] / pooled['5dof'][0]:.2f} | | | |",
         "",
         f"Seeds meeting the plants target (6-DOF ≤ {record['max_ratio']:g}× the 5-DOF mean, no "
         f"failed episode): {record['meets_plants']} of {n_runs}. Seeds meeting the per-set "
-        f"target (every 5-DOF set ≤ {record['max_per_set']:g}× {record['reference']}, no failed "
+        f"target (every 5-DOF set ≤ {record['max_per_set']:g}× {reference_label}, no failed "
         f"episode): {record['meets_per_set']} of {n_runs}.",
     ]
+    if several:
+        lines.append(
+            "The best reference per set: "
+            + ", ".join(f"`{s}` {record['per_set_reference'][s]}" for s in sets)
+            + "."
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -263,11 +298,10 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             "5dof": [Path(p) for p in comma_names(args.suites_5dof, "--suites-5dof")],
             "6dof": [Path(p) for p in comma_names(args.suites_6dof, "--suites-6dof")],
         }
-        plants = {
-            plant: read_plant(folders[plant], args.policy, args.reference) for plant in PLANTS
-        }
+        references = comma_names(args.reference, "--reference")
+        plants = {plant: read_plant(folders[plant], args.policy, references) for plant in PLANTS}
         record = plant_table(
-            plants, args.policy, args.reference, args.max_ratio, args.max_per_set, args.reps
+            plants, args.policy, references, args.max_ratio, args.max_per_set, args.reps
         )
     record = {  # folder names only: no machine paths in committed results
         "suites": {plant: [f.name for f in folders[plant]] for plant in PLANTS},
