@@ -213,7 +213,7 @@ def plant_table(
         "sets": five.sets,
         "max_ratio": max_ratio,
         "max_per_set": max_per_set,
-        "reference_summary": summaries[references[0]],
+        "reference_summary": summaries[references[0]],  # the first's, as one reference's was
         "reference_summaries": summaries,
         "per_set_reference": best,
         "runs": per_run,
@@ -232,7 +232,8 @@ def markdown(record: Mapping[str, Any]) -> str:
 
     sets = record["sets"]
     n_runs = len(record["runs"])
-    several = len(record.get("reference_summaries") or {}) > 1
+    summaries = record["reference_summaries"]
+    several = len(summaries) > 1
     reference_label = f"best of {record['reference']}" if several else record["reference"]
     lines = [
         f"`{record['policy']}` on both plants, per training seed. Mean RMS distance [m] over "
@@ -252,9 +253,6 @@ def markdown(record: Mapping[str, Any]) -> str:
             f"{ratios} | {'yes' if entry['meets_plants'] else 'no'} | "
             f"{'yes' if entry['meets_per_set'] else 'no'} |"
         )
-    summaries = record.get("reference_summaries") or {
-        record["reference"]: record["reference_summary"]
-    }
     pooled = record["pooled"]
     lines += [
         f"| {name} | {cell(ref['5dof'])} | {cell(ref['6dof'])} | "

@@ -28,7 +28,7 @@ from typing import Any
 from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
 from benchmarks.options import option
 
-__all__ = ["GRID", "candidate_policies", "check_base", "main", "parse_grid", "tune"]
+__all__ = ["GRID", "candidate_policies", "check_base", "fly", "main", "parse_grid", "tune"]
 
 # The grid: where the PID's poles are placed (u0 [m/s]), how fast the heading loop is [rad/s],
 # and the LOS gains k_y, k_z [1/m] (docs/model.md §4.9).
@@ -77,7 +77,7 @@ def parse_grid(text: str) -> dict[str, tuple[float, ...]]:
     from controllers.pid import GUIDANCE_GAINS, PIDGains
 
     guidance = [f for f in fields(ControllerGains) if f.name in GUIDANCE_GAINS]
-    gains = {f.name for f in [*fields(PIDGains), *guidance] if f.type == "float"}
+    gains = {f.name for f in [*fields(PIDGains), *guidance] if isinstance(f.default, float)}
     grid: dict[str, tuple[float, ...]] = {}
     for axis in text.split(";"):
         name, sep, values = axis.partition("=")
@@ -138,10 +138,18 @@ def tune(
     """Every candidate of ``grid``'s per-scenario mean RMS distance [m] and failed episodes,
     best first (fewest failed episodes, then the lowest mean over the scenarios), each flying
     the PID preset ``base`` with its gains."""
+    return fly(candidate_policies(scenarios, duration, grid, base), seeds, progress)
+
+
+def fly(
+    candidates: Sequence[tuple[dict[str, float], dict[str, tuple[Any, dict[str, Any]]]]],
+    seeds: Sequence[int],
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """`tune` for candidates already built (`candidate_policies`)."""
     from auv_gym.rollout import evaluate
     from auv_gym.sim.trajectory import FAILURE_REASONS
 
-    candidates = candidate_policies(scenarios, duration, grid, base)
     rows = []
     for k, (gains, flights) in enumerate(candidates):
         row: dict[str, Any] = {"gains": gains, "failed": 0, "rms": {}}
@@ -178,8 +186,8 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             raise ValueError(f"--duration must be in (0, 3600] s, got {args.duration}")
         check_base(args.base)
         grid = parse_grid(args.grid) if args.grid.strip() else GRID
-        candidate_policies(scenarios, args.duration, grid, args.base)  # refusals before flying
-    rows = tune(scenarios, seeds, args.duration, grid, base=args.base)
+        candidates = candidate_policies(scenarios, args.duration, grid, args.base)
+    rows = fly(candidates, seeds)
     print(f"{len(rows)} candidates on {len(seeds)} validation seeds, best first:")
     for row in rows:
         print("  " + _line(row))
