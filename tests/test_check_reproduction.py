@@ -12,8 +12,10 @@ from benchmarks.checks.reproduction import (
     RESULTS,
     Report,
     _rerun_arguments,
+    blas_environment,
     compare_episodes,
     compare_json,
+    cpu_flags,
     retired_policies,
 )
 
@@ -177,3 +179,20 @@ def test_a_metric_added_since_the_results_is_listed_not_an_error(tmp_path: Path,
     b.write_text(json.dumps({"metrics": {"fbsm": {"rms": 0.1, "pace": 1.0}}}))
     compare_json("m", a, b, report)
     assert report.failures == 2
+
+
+def test_re_runs_pin_the_haswell_kernels_only_where_the_cpu_runs_them(
+    tmp_path, capsys, monkeypatch
+) -> None:
+    """The committed results' OpenBLAS kernels where the CPU has AVX2 and FMA; elsewhere, and
+    with an empty kernel, OpenBLAS's own choice (a kernel the CPU lacks would crash the run)."""
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma avx512f\n")
+    flags = cpu_flags(cpuinfo)
+    assert {"avx2", "fma", "avx512f"} <= flags
+    assert blas_environment("Haswell", flags)["OPENBLAS_CORETYPE"] == "Haswell"
+    monkeypatch.delenv("OPENBLAS_CORETYPE", raising=False)
+    assert "OPENBLAS_CORETYPE" not in blas_environment("", flags)
+    assert "OPENBLAS_CORETYPE" not in blas_environment("Haswell", {"fpu", "sse2", "avx"})
+    assert "lacks avx2, fma" in capsys.readouterr().err
+    assert cpu_flags(tmp_path / "missing") == set()

@@ -14,10 +14,19 @@ reproduced to the last bit:
    recorded seed and duration; every metric value is compared (wall times and versions excepted).
 3. With `--agents`, each shipped agent's `held_out_evaluation.json` is re-evaluated and compared
    value by value (bit-identical on the machine that trained it; elsewhere BLAS may round
-   differently, so this check is opt-in).
+   differently, so this check is opt-in; it runs in this process, under the kernels OpenBLAS
+   chose for it: set ``OPENBLAS_CORETYPE`` before the command to pin them).
 
     python -m benchmarks.checks.reproduction                # 1 + 2, about 4 minutes on 2 cores
     python -m benchmarks.checks.reproduction --agents       # 1 + 2 + 3
+
+The re-runs use OpenBLAS's Haswell kernels wherever the CPU runs them (AVX2 and FMA;
+`--blas-kernel ""` leaves OpenBLAS its own choice): the committed results were made on AVX2
+machines, and a drawn survey's or spline's curvature ramps are a moving average by
+`np.convolve`, a BLAS dot product whose AVX-512 kernel fuses its multiply-adds, so on an
+AVX-512 machine the same seed's lawnmower differs in the last digit (docs/design.md §4, the
+bullet on OpenBLAS kernels). The other CPU-chosen roundings the benchmark episodes met (NumPy's
+AVX-512 exp and pow, BLAS norms of 3-vectors) are gone from the code.
 
 Rows or columns present on one side only are listed; they are an error unless
 `--allow-new` is given (a benchmark that gained a policy, scenario or metric on purpose must
@@ -29,6 +38,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import shlex
 import subprocess
 import sys
@@ -55,10 +65,48 @@ UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # d
 ADDED_METRICS = ("mean_path_speed",)
 
 
-def _run(module: str, args: Sequence[str]) -> None:
+# The OpenBLAS kernels the committed results were made with (module docstring).
+RESULTS_BLAS_KERNEL = "Haswell"
+_KERNEL_NEEDS = {"Haswell": ("avx2", "fma")}  # CPU flags (/proc/cpuinfo) a pinned kernel needs
+
+
+def cpu_flags(cpuinfo: Path = Path("/proc/cpuinfo")) -> set[str]:
+    """The CPU's feature flags as Linux lists them (empty where it does not)."""
+    try:
+        text = cpuinfo.read_text()
+    except OSError:
+        return set()
+    for line in text.splitlines():
+        if line.startswith("flags"):
+            return set(line.partition(":")[2].split())
+    return set()
+
+
+def blas_environment(kernel: str, flags: set[str]) -> dict[str, str]:
+    """The environment of a re-run: ``OPENBLAS_CORETYPE=kernel`` where the CPU has the flags
+    the kernel needs (a kernel it cannot run would stop it on an illegal instruction), else
+    OpenBLAS's own choice, said on stderr."""
+    env = dict(os.environ)
+    if not kernel:
+        return env
+    missing = [flag for flag in _KERNEL_NEEDS.get(kernel, ()) if flag not in flags]
+    if missing:
+        print(
+            f"this CPU lacks {', '.join(missing)}: OpenBLAS picks its own kernels, so the "
+            f"spline-family paths may differ in the last digit",
+            file=sys.stderr,
+        )
+        return env
+    env["OPENBLAS_CORETYPE"] = kernel
+    return env
+
+
+def _run(module: str, args: Sequence[str], env: dict[str, str] | None = None) -> None:
     command = [sys.executable, "-m", module, *args]
-    print("$", shlex.join(command[1:]), flush=True)
-    subprocess.run(command, check=True)
+    pinned = env.get("OPENBLAS_CORETYPE") if env else None
+    prefix = f"OPENBLAS_CORETYPE={pinned} " if pinned else ""
+    print("$", prefix + shlex.join(command[1:]), flush=True)
+    subprocess.run(command, check=True, env=env)
 
 
 # The compare module as a recorded command names it: its former flat name (the committed results
@@ -254,6 +302,9 @@ class ReproductionOptions:
     agents: bool = option(False, "also re-evaluate shipped agents")
     allow_new: bool = option(False, "rows/columns on one side only are not errors")
     keep: Path | None = option(None, "write the re-run here (kept)", parse=Path)  # noqa: RUF009
+    blas_kernel: str = option(
+        RESULTS_BLAS_KERNEL, 'OpenBLAS kernels of the re-runs ("": OpenBLAS chooses)'
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -281,13 +332,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         _rerun_arguments(recorded, Path(), args.workers)
 
     report = Report(args.allow_new)
+    env = blas_environment(args.blas_kernel, cpu_flags())
     with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
         out = args.keep if args.keep is not None else Path(scratch)
         running, retired = retired_policies(committed["policies"])
         rerun = _rerun_arguments(
             recorded, out / "full", args.workers, scenarios, running if retired else ()
         )
-        _run(COMPARE, rerun)
+        _run(COMPARE, rerun, env)
         learned = [p for p in running if PolicySpec.parse(p).kind != "classical"]
         compare_episodes(
             args.results / "full" / "episodes.csv",
@@ -310,6 +362,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "--transient",
                 str(paper["transient"]),
             ],
+            env,
         )
         compare_json("paper metrics.json", paper_json, out / "paper/metrics.json", report)
 
