@@ -12,10 +12,11 @@ from benchmarks.checks.reproduction import (
     RESULTS,
     Report,
     _rerun_arguments,
-    blas_environment,
+    avx512_dispatch,
     compare_episodes,
     compare_json,
     cpu_flags,
+    machine_environment,
     retired_policies,
 )
 
@@ -181,18 +182,23 @@ def test_a_metric_added_since_the_results_is_listed_not_an_error(tmp_path: Path,
     assert report.failures == 2
 
 
-def test_re_runs_pin_the_haswell_kernels_only_where_the_cpu_runs_them(
-    tmp_path, capsys, monkeypatch
-) -> None:
-    """The committed results' OpenBLAS kernels where the CPU has AVX2 and FMA; elsewhere, and
-    with an empty kernel, OpenBLAS's own choice (a kernel the CPU lacks would crash the run)."""
+def test_re_runs_run_as_an_avx2_machine_where_the_cpu_can(tmp_path, capsys, monkeypatch) -> None:
+    """As the committed results' machine: NumPy without its AVX-512 loops and OpenBLAS on its
+    Haswell kernels where the CPU has AVX2 and FMA; a CPU without them keeps OpenBLAS's choice
+    (a kernel it lacks would crash the run), and "native" changes nothing."""
+    monkeypatch.delenv("OPENBLAS_CORETYPE", raising=False)
+    monkeypatch.delenv("NPY_DISABLE_CPU_FEATURES", raising=False)
     cpuinfo = tmp_path / "cpuinfo"
     cpuinfo.write_text("processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma avx512f\n")
     flags = cpu_flags(cpuinfo)
     assert {"avx2", "fma", "avx512f"} <= flags
-    assert blas_environment("Haswell", flags)["OPENBLAS_CORETYPE"] == "Haswell"
-    monkeypatch.delenv("OPENBLAS_CORETYPE", raising=False)
-    assert "OPENBLAS_CORETYPE" not in blas_environment("", flags)
-    assert "OPENBLAS_CORETYPE" not in blas_environment("Haswell", {"fpu", "sse2", "avx"})
+    env = machine_environment("avx2", flags, ["X86_V4", "AVX512_ICL"])
+    assert env["OPENBLAS_CORETYPE"] == "Haswell"
+    assert env["NPY_DISABLE_CPU_FEATURES"] == "X86_V4 AVX512_ICL"
+    old_cpu = machine_environment("avx2", {"fpu", "sse2", "avx"}, [])
+    assert "OPENBLAS_CORETYPE" not in old_cpu and "NPY_DISABLE_CPU_FEATURES" not in old_cpu
     assert "lacks avx2, fma" in capsys.readouterr().err
+    native = machine_environment("native", flags, ["X86_V4"])
+    assert "OPENBLAS_CORETYPE" not in native and "NPY_DISABLE_CPU_FEATURES" not in native
     assert cpu_flags(tmp_path / "missing") == set()
+    assert all(name == "X86_V4" or name.startswith("AVX512") for name in avx512_dispatch())

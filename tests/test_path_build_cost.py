@@ -13,7 +13,6 @@ the draw test guards the rest of a draw (track, checks, proven bounds) loosely. 
 
 from __future__ import annotations
 
-import math
 import os
 import subprocess
 import sys
@@ -26,7 +25,6 @@ import pytest
 from auv_gym.paths import cubic
 from auv_gym.paths.shapes import Spline
 from auv_gym.sim.path_generator import PathDistribution
-from auv_gym.support.portable import norm3
 from benchmarks.speed.resets import lawnmower_track
 
 
@@ -163,14 +161,3 @@ def test_drawn_lawnmower_time_per_build_is_linear_in_length(monkeypatch) -> None
 
     ratios = _ratios(lambda: per_build(2000.0) / per_build(250.0), 16.0)
     assert ratios[-1] < 16.0, ratios
-
-
-def test_norm3_rounds_as_numpy_elementwise_and_is_within_an_ulp_of_hypot() -> None:
-    """`norm3` is ((x² + y²) + z²)^½ with each product rounded: NumPy's row-wise norm (no BLAS)
-    bit for bit on 10,000 vectors across twelve decades, and within 2 ulp of the exact hypot."""
-    rng = np.random.default_rng(5)
-    vectors = rng.normal(size=(10_000, 3)) * 10.0 ** rng.uniform(-6, 6, size=(10_000, 1))
-    got = np.array([norm3(v) for v in vectors])
-    np.testing.assert_array_equal(got, np.sqrt(np.sum(vectors * vectors, axis=1)))
-    exact = np.array([math.hypot(*v) for v in vectors])
-    assert np.max(np.abs(got - exact) / np.spacing(exact)) <= 2.0

@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -397,59 +396,3 @@ def test_the_same_sea_over_a_path_below_the_surface_is_accepted():
     env = AUVPath3DEnv(waves="sea_state_4", **DEEP)
     env.reset(seed=0)
     assert env.sim.config.waves is not None
-
-
-# An episode's sea and path set-up, hashed: a spread sea's components and, on drawn helices and
-# lines under a depth envelope in sea state 3, the first 100 observations and the ocean rows.
-# (Drawn surveys and splines smooth their curvature by `np.convolve`, a BLAS dot product that
-# rounds by the OpenBLAS kernel: docs/design.md §4, the bullet on OpenBLAS kernels.)
-_SEA_BITS = """
-import hashlib, numpy as np
-from auv_gym import AUVPath3DEnv
-from auv_gym.ocean.waves import WaveConfig, draw_components
-out = []
-for waves in ("sea_state_3", {"sea_state": 5, "spectrum": "pierson_moskowitz", "spreading": 2.0}):
-    out.append(draw_components(WaveConfig.from_spec(waves), np.random.default_rng(3)).tobytes())
-env = AUVPath3DEnv(
-    path={"families": ["helix", "line"], "radius": [15.0, 40.0], "climb_angle_deg": [0.0, 20.0]},
-    path_offset=[0.0, 0.0, 15.0], depth_envelope={"seabed_depth": 60.0, "margin": 2.0},
-    waves="sea_state_3", max_time=20.0,
-)
-families = set()
-for seed in (0, 4):
-    observations = [env.reset(seed=seed)[0]]
-    families.add(env.unwrapped.sim.paths[0].family)
-    observations += [env.step(np.array([0.5, 0.1, -0.1], np.float32))[0] for _ in range(100)]
-    out += [np.array(observations).tobytes(), env.unwrapped.sim.ocean.tobytes()]
-assert families == {"helix", "line"}, families
-print(hashlib.sha256(b"".join(out)).hexdigest())
-"""
-
-
-def _baseline_only() -> str:
-    """The NPY_DISABLE_CPU_FEATURES value that leaves NumPy its baseline loops only: every
-    dispatched level this CPU has (AVX2, AVX-512...) turned off."""
-    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
-
-    return " ".join(name for name in __cpu_dispatch__ if __cpu_features__.get(name))
-
-
-def test_the_same_seed_draws_the_same_sea_on_every_cpu() -> None:
-    """NumPy's SIMD level and OpenBLAS's kernel are chosen for the CPU at run time; an episode's
-    waves, path and depth envelope have the same bits under each of them (NumPy's AVX-512 exp
-    and pow and the fused dot products of OpenBLAS's AVX-512 kernel moved the last digits of the
-    wave scenarios' results on an AVX-512 machine, docs/design.md §4)."""
-    digests = {}
-    settings = [
-        {},
-        {"NPY_DISABLE_CPU_FEATURES": _baseline_only()},
-        {"OPENBLAS_CORETYPE": "Prescott"},
-    ]
-    for setting in settings:
-        env = {**os.environ, **setting}
-        run = subprocess.run(
-            [sys.executable, "-c", _SEA_BITS], env=env, capture_output=True, text=True
-        )
-        assert run.returncode == 0, run.stderr[-2000:]
-        digests[str(setting)] = run.stdout.strip()
-    assert len(set(digests.values())) == 1, digests

@@ -22,7 +22,6 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from auv_gym.paths.shapes import SPLINE, Path
-from auv_gym.support.portable import norm3
 from auv_gym.support.validation import ArgumentTypeError, keys_within, real
 
 __all__ = ["DepthEnvelope", "check_path_depths", "path_depth_range"]
@@ -128,7 +127,7 @@ def check_path_depths(
     ``randomize_start``) leaves the envelope's safe band. A vehicle that runs ahead of schedule
     can still reach the boundary further on; the episode then ends as "broached" or
     "grounded"."""
-    tangent = norm3(path.evaluate(0.0)[1])
+    tangent = float(np.linalg.norm(path.evaluate(0.0)[1]))
     s_max = u_desired * max_time / tangent  # helix and line: |p'| is constant
     z_min, z_max = path_depth_range(path, s_max)
     rise = RANDOM_START_RISE if randomize_start else 0.0

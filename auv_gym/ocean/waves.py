@@ -80,35 +80,15 @@ def spectral_density(
     Pierson–Moskowitz  S_PM(ω) = 5/16 H_s² ω_p⁴ ω⁻⁵ exp(−5/4 (ω_p/ω)⁴),  ω_p = 2π/T_p
     JONSWAP            S_J(ω) = (1 − 0.287 ln γ) S_PM(ω) γ^exp(−(ω − ω_p)²/(2 σ² ω_p²)),
                        σ = 0.07 for ω ≤ ω_p, 0.09 above.
-
-    Point by point with the C library's exp and pow (`math`), not NumPy's: NumPy's AVX-512
-    loops round exp and pow differently from its AVX2 ones, and this spectrum fixes every
-    episode's wave frequencies, so the same seed would draw another sea on another CPU
-    (docs/model.md §13.2, "The same sea on every CPU"). Not a hot path: the tables it feeds are
-    computed once per spectrum.
     """
     omega = np.asarray(omega, dtype=float)
     wp = 2.0 * math.pi / period
-    scale = 5.0 / 16.0 * height**2 * wp**4
-    peak_scale = 1.0 - 0.287 * math.log(gamma)
-    jonswap = spectrum != "pierson_moskowitz"
-
-    def density(w: float) -> float:
-        pm = scale * math.pow(w, -5.0) * math.exp(-1.25 * math.pow(wp / w, 4.0))
-        if not jonswap:
-            return pm
-        sigma = 0.07 if w <= wp else 0.09
-        shape = math.exp(-((w - wp) * (w - wp)) / (2.0 * (sigma * sigma) * wp**2))
-        return peak_scale * pm * math.pow(gamma, shape)
-
-    values = [density(w) for w in omega.ravel().tolist()]
-    return np.array(values, dtype=float).reshape(omega.shape)
-
-
-def _power(base: float, exponent: float) -> float:
-    """base^exponent by the C library's pow, a square as a product: NumPy's ``x ** 2.0`` is
-    ``x * x``, and the tables below were first computed by NumPy (the committed results)."""
-    return base * base if exponent == 2.0 else math.pow(base, exponent)
+    pm = 5.0 / 16.0 * height**2 * wp**4 * omega**-5.0 * np.exp(-1.25 * (wp / omega) ** 4)
+    if spectrum == "pierson_moskowitz":
+        return pm
+    sigma = np.where(omega <= wp, 0.07, 0.09)
+    peak = gamma ** np.exp(-((omega - wp) ** 2) / (2.0 * sigma**2 * wp**2))
+    return (1.0 - 0.287 * math.log(gamma)) * pm * peak
 
 
 @functools.lru_cache(maxsize=16)
@@ -124,7 +104,7 @@ def _frequency_quantiles(spectrum: str, gamma: float) -> tuple[np.ndarray, np.nd
 def _direction_quantiles(spreading: float) -> tuple[np.ndarray, np.ndarray]:
     """(β − β₀, cumulative fraction) of D(β) ∝ cos^{2s}((β − β₀)/2) on [−π, π]."""
     x = np.linspace(-math.pi, math.pi, 4001)
-    density = np.array([_power(math.cos(0.5 * v), 2.0 * spreading) for v in x.tolist()])
+    density = np.cos(0.5 * x) ** (2.0 * spreading)
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (density[1:] + density[:-1]) * np.diff(x))])
     return x, cdf / cdf[-1]
 

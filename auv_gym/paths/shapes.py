@@ -39,7 +39,6 @@ from auv_gym.paths.kernels import (
     path_third_derivative,
     spline_data,
 )
-from auv_gym.support.portable import norm3
 from auv_gym.support.validation import ArgumentTypeError, choice, is_real, real, vector
 
 # Public names; those defined in `path_base` and `path_fit` are re-exported from here.
@@ -135,7 +134,7 @@ class StraightLine(Path):
     ) -> None:
         p0 = np.array(vector("StraightLine start", start, 3, -POSITION_BOUND, POSITION_BOUND, "m"))
         d = np.array(vector("StraightLine direction", direction, 3, -SCALE_BOUND, SCALE_BOUND))
-        norm = norm3(d)
+        norm = float(np.linalg.norm(d))
         if norm < MIN_TANGENT:
             raise ValueError(
                 f"StraightLine: direction must be non-zero (norm >= {MIN_TANGENT}), got {tuple(d)}"

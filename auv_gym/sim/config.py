@@ -58,7 +58,6 @@ from auv_gym.sim.task import (
     RewardWeights,
     TaskLimits,
 )
-from auv_gym.support.portable import norm3
 from auv_gym.support.validation import ArgumentTypeError, choice, flag, is_real, real, vector
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.params import AUVParams, remus100
@@ -543,7 +542,7 @@ class SimConfig:
         p0 = self.path.evaluate(0.0)[0]
         given = self.start_position is not None
         start = np.asarray(self.start_position) if given else self.path.default_start()[0]
-        distance = norm3(start - p0)
+        distance = float(np.linalg.norm(start - p0))
         allowed = ERROR_BOUND - (START_JITTER if self.randomize_start else 0.0)
         if not distance <= allowed:
             name = "start_position" if given else "the path's default start"

@@ -26,7 +26,6 @@ import numpy as np
 from auv_gym.ocean.depth_envelope import RANDOM_START_RISE, path_depth_range
 from auv_gym.paths.offset import ShiftedPath, shift_path
 from auv_gym.paths.shapes import Path
-from auv_gym.support.portable import norm3
 
 if TYPE_CHECKING:
     from auv_gym.sim.config import SimConfig
@@ -110,7 +109,7 @@ def episode_surface_z(config: SimConfig, path: Path, start_z: float) -> float:
 
 def _episode_top(config: SimConfig, path: Path) -> float:
     """[m] the smallest z of ``path`` over the arc an episode covers."""
-    tangent = norm3(path.evaluate(0.0)[1])
+    tangent = float(np.linalg.norm(path.evaluate(0.0)[1]))
     top, _ = path_depth_range(path, _episode_arc(config) / tangent)
     return top
 

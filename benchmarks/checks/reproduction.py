@@ -14,19 +14,21 @@ reproduced to the last bit:
    recorded seed and duration; every metric value is compared (wall times and versions excepted).
 3. With `--agents`, each shipped agent's `held_out_evaluation.json` is re-evaluated and compared
    value by value (bit-identical on the machine that trained it; elsewhere BLAS may round
-   differently, so this check is opt-in; it runs in this process, under the kernels OpenBLAS
-   chose for it: set ``OPENBLAS_CORETYPE`` before the command to pin them).
+   differently, so this check is opt-in; it runs in this process, as this machine does:
+   `--machine` does not reach it).
 
     python -m benchmarks.checks.reproduction                # 1 + 2, about 4 minutes on 2 cores
     python -m benchmarks.checks.reproduction --agents       # 1 + 2 + 3
 
-The re-runs use OpenBLAS's Haswell kernels wherever the CPU runs them (AVX2 and FMA;
-`--blas-kernel ""` leaves OpenBLAS its own choice): the committed results were made on AVX2
-machines, and a drawn survey's or spline's curvature ramps are a moving average by
-`np.convolve`, a BLAS dot product whose AVX-512 kernel fuses its multiply-adds, so on an
-AVX-512 machine the same seed's lawnmower differs in the last digit (docs/design.md §4, the
-bullet on OpenBLAS kernels). The other CPU-chosen roundings the benchmark episodes met (NumPy's
-AVX-512 exp and pow, BLAS norms of 3-vectors) are gone from the code.
+The committed `full` and `paper` results were made on an AVX2 machine, and a few of the
+numbers an episode is built from round by the CPU: NumPy picks AVX-512 loops for `exp` and
+`pow` where the CPU has them (the wave spectrum's tables, so every wave component's
+frequency), and OpenBLAS picks its kernels by CPU (the norm of a 3-vector, a drawn survey's
+curvature ramp by `np.convolve`: dot products, fused on AVX-512). The re-runs therefore run
+as that machine did wherever the CPU can: NumPy without its AVX-512 loops
+(``NPY_DISABLE_CPU_FEATURES``) and OpenBLAS on its Haswell kernels (``OPENBLAS_CORETYPE``,
+where the CPU has AVX2 and FMA); `--machine native` leaves both their own choice
+(docs/design.md §4, the bullet on OpenBLAS kernels).
 
 Rows or columns present on one side only are listed; they are an error unless
 `--allow-new` is given (a benchmark that gained a policy, scenario or metric on purpose must
@@ -65,9 +67,8 @@ UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # d
 ADDED_METRICS = ("mean_path_speed",)
 
 
-# The OpenBLAS kernels the committed results were made with (module docstring).
-RESULTS_BLAS_KERNEL = "Haswell"
-_KERNEL_NEEDS = {"Haswell": ("avx2", "fma")}  # CPU flags (/proc/cpuinfo) a pinned kernel needs
+MACHINES = ("avx2", "native")  # --machine: as the committed results' machine, or as this one
+_HASWELL_NEEDS = ("avx2", "fma")  # CPU flags (/proc/cpuinfo) OpenBLAS's Haswell kernels need
 
 
 def cpu_flags(cpuinfo: Path = Path("/proc/cpuinfo")) -> set[str]:
@@ -82,30 +83,44 @@ def cpu_flags(cpuinfo: Path = Path("/proc/cpuinfo")) -> set[str]:
     return set()
 
 
-def blas_environment(kernel: str, flags: set[str]) -> dict[str, str]:
-    """The environment of a re-run: ``OPENBLAS_CORETYPE=kernel`` where the CPU has the flags
-    the kernel needs (a kernel it cannot run would stop it on an illegal instruction), else
-    OpenBLAS's own choice, said on stderr."""
+def avx512_dispatch() -> list[str]:
+    """NumPy's dispatched feature names above AVX2 (``X86_V4``, ``AVX512_*``; the names vary by
+    NumPy version), the ones ``NPY_DISABLE_CPU_FEATURES`` turns off to run as an AVX2 CPU."""
+    from numpy._core._multiarray_umath import __cpu_dispatch__
+
+    return [name for name in __cpu_dispatch__ if name == "X86_V4" or name.startswith("AVX512")]
+
+
+def machine_environment(machine: str, flags: set[str], avx512: Sequence[str]) -> dict[str, str]:
+    """The environment of a re-run: for ``machine="avx2"`` NumPy without its ``avx512`` loops
+    and OpenBLAS on its Haswell kernels where the CPU has the ``flags`` they need (a kernel it
+    cannot run would stop on an illegal instruction: then OpenBLAS's own choice, said on
+    stderr); for ``"native"`` this process's environment unchanged."""
     env = dict(os.environ)
-    if not kernel:
+    if machine == "native":
         return env
-    missing = [flag for flag in _KERNEL_NEEDS.get(kernel, ()) if flag not in flags]
+    if avx512:
+        env["NPY_DISABLE_CPU_FEATURES"] = " ".join(avx512)
+    missing = [flag for flag in _HASWELL_NEEDS if flag not in flags]
     if missing:
         print(
-            f"this CPU lacks {', '.join(missing)}: OpenBLAS picks its own kernels, so the "
-            f"spline-family paths may differ in the last digit",
+            f"this CPU lacks {', '.join(missing)}: OpenBLAS picks its own kernels, so results "
+            f"whose paths are drawn surveys or splines may differ in the last digit",
             file=sys.stderr,
         )
-        return env
-    env["OPENBLAS_CORETYPE"] = kernel
+    else:
+        env["OPENBLAS_CORETYPE"] = "Haswell"
     return env
 
 
 def _run(module: str, args: Sequence[str], env: dict[str, str] | None = None) -> None:
     command = [sys.executable, "-m", module, *args]
-    pinned = env.get("OPENBLAS_CORETYPE") if env else None
-    prefix = f"OPENBLAS_CORETYPE={pinned} " if pinned else ""
-    print("$", prefix + shlex.join(command[1:]), flush=True)
+    pinned = [
+        f"{name}={shlex.quote(env[name])}"
+        for name in ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE")
+        if env is not None and env.get(name) and env.get(name) != os.environ.get(name)
+    ]
+    print("$", " ".join([*pinned, shlex.join(command[1:])]), flush=True)
     subprocess.run(command, check=True, env=env)
 
 
@@ -302,9 +317,7 @@ class ReproductionOptions:
     agents: bool = option(False, "also re-evaluate shipped agents")
     allow_new: bool = option(False, "rows/columns on one side only are not errors")
     keep: Path | None = option(None, "write the re-run here (kept)", parse=Path)  # noqa: RUF009
-    blas_kernel: str = option(
-        RESULTS_BLAS_KERNEL, 'OpenBLAS kernels of the re-runs ("": OpenBLAS chooses)'
-    )
+    machine: str = option("avx2", "run as the results' AVX2 machine or as this one (avx2, native)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -332,7 +345,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         _rerun_arguments(recorded, Path(), args.workers)
 
     report = Report(args.allow_new)
-    env = blas_environment(args.blas_kernel, cpu_flags())
+    if args.machine not in MACHINES:
+        parser.error(f"--machine must be one of {', '.join(MACHINES)}, got {args.machine!r}")
+    env = machine_environment(args.machine, cpu_flags(), avx512_dispatch())
     with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
         out = args.keep if args.keep is not None else Path(scratch)
         running, retired = retired_policies(committed["policies"])
