@@ -39,6 +39,7 @@ __all__ = [
     "git_commit",
     "json_default",
     "jsonable",
+    "machine",
     "output_lock",
     "remove_temporaries",
     "replace_outputs",
@@ -202,9 +203,37 @@ def git_commit() -> str | None:
     return commit if done.returncode == 0 and commit else None
 
 
+@functools.cache
+def machine() -> dict[str, Any]:
+    """The CPU choices a result's last digits depend on: {"numpy_simd": NumPy's dispatched SIMD
+    levels in use (e.g. ["X86_V3", "X86_V4", "AVX512_ICL"]), "blas": OpenBLAS's kernel (e.g.
+    "openblas SkylakeX")}; None where they cannot be read. NumPy's AVX-512 exp and pow and
+    OpenBLAS's fused dot products round differently from their AVX2 forms, so the same seed
+    reproduces bit for bit on the machine class that made a result (docs/design.md §4, the
+    bullet on OpenBLAS kernels)."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+    except ImportError:  # NumPy's private layout changed: say so rather than guess
+        simd = None
+    else:
+        simd = [name for name in __cpu_dispatch__ if __cpu_features__.get(name)]
+    blas = None
+    try:
+        from threadpoolctl import threadpool_info
+    except ImportError:
+        pass
+    else:
+        for library in threadpool_info():
+            if library.get("internal_api") == "openblas":
+                blas = f"openblas {library.get('architecture')}"
+                break
+    return {"numpy_simd": simd, "blas": blas}
+
+
 def environment() -> dict[str, Any]:
-    """The record stored with every result: {"versions": `versions()`, "git_commit": ...}."""
-    return {"versions": dict(versions()), "git_commit": git_commit()}
+    """The record stored with every result: {"versions": `versions()`, "git_commit": ...,
+    "machine": `machine()`}."""
+    return {"versions": dict(versions()), "git_commit": git_commit(), "machine": machine()}
 
 
 class FolderInUseError(OSError):

@@ -60,7 +60,8 @@ AGENTS = Path(__file__).resolve().parents[1] / "agents"
 # A torch network's actions round differently by CPU and BLAS build (float32, ~1e-7): the
 # episodes of the learned policies reproduce to this relative tolerance, the rest bit for bit.
 AGENT_TOLERANCE = 1e-6
-UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit")  # differ by design
+# differ by design (the machine record names the CPU the re-run ran on, not the results')
+UNCOMPARED_KEYS = ("wall_time", "version", "agent_wall_time", "git_commit", "machine")
 # Metrics `auv_gym.metrics.compute_metrics` gained after the committed results were recorded: a
 # column or value of one of them that only the re-run holds is listed, not an error (the
 # committed files predate it); every cell both sides hold must still match.
