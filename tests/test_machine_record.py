@@ -7,8 +7,12 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
-from auv_gym.support.files import environment, machine
+import pytest
+
+import auv_gym
+from auv_gym.support.files import environment, git_commit, machine
 
 _RECORD = "import json; from auv_gym.support.files import machine; print(json.dumps(machine()))"
 
@@ -36,3 +40,15 @@ def test_the_machine_record_follows_numpy_and_openblas_choices() -> None:
     held = _machine_under(NPY_DISABLE_CPU_FEATURES=" ".join(available), OPENBLAS_CORETYPE="Nehalem")
     assert held == {"numpy_simd": [], "blas": "openblas Nehalem"}
     assert environment()["machine"] == own
+
+
+def test_a_result_records_the_commit_of_the_checkout_it_ran_from() -> None:
+    """The environment record names the checkout's HEAD (378 committed results recorded null
+    after `files.py` moved one folder down and looked for `.git` inside the package)."""
+    checkout = Path(auv_gym.__file__).resolve().parents[1]
+    if not (checkout / ".git").exists():
+        pytest.skip("an installed copy, not a git checkout")
+    head = subprocess.run(
+        ["git", "-C", str(checkout), "rev-parse", "HEAD"], capture_output=True, text=True
+    ).stdout.strip()
+    assert len(head) == 40 and git_commit() == head == environment()["git_commit"]

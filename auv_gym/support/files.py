@@ -52,7 +52,7 @@ __all__ = [
 
 # Distributions whose versions determine a result (Python is added).
 PACKAGES = ("auv-gym", "numpy", "numba", "gymnasium", "stable-baselines3", "torch")
-_ROOT = Path(__file__).resolve().parent.parent  # the checkout holding the auv_gym package
+_ROOT = Path(__file__).resolve().parents[2]  # the checkout holding the auv_gym package
 LOCK_FILE = ".lock"  # in an output folder: its run's pid, flock-ed while the run lasts
 OUTPUTS_FILE = ".outputs.json"  # in an output folder: the files its last run wrote
 # Temporary names of `write_atomic` / `write_folder_atomic` (mkstemp's 8 random characters) and
