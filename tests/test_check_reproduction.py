@@ -202,3 +202,12 @@ def test_re_runs_run_as_an_avx2_machine_where_the_cpu_can(tmp_path, capsys, monk
     assert "OPENBLAS_CORETYPE" not in native and "NPY_DISABLE_CPU_FEATURES" not in native
     assert cpu_flags(tmp_path / "missing") == set()
     assert all(name == "X86_V4" or name.startswith("AVX512") for name in avx512_dispatch())
+
+
+def test_an_unknown_machine_is_refused_before_any_rerun(capsys) -> None:
+    from benchmarks.checks.reproduction import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--machine", "avx3"])
+    assert stop.value.code == 2
+    assert "--machine must be one of avx2, native, got 'avx3'" in capsys.readouterr().err

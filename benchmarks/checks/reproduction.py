@@ -87,7 +87,10 @@ def cpu_flags(cpuinfo: Path = Path("/proc/cpuinfo")) -> set[str]:
 def avx512_dispatch() -> list[str]:
     """NumPy's dispatched feature names above AVX2 (``X86_V4``, ``AVX512_*``; the names vary by
     NumPy version), the ones ``NPY_DISABLE_CPU_FEATURES`` turns off to run as an AVX2 CPU."""
-    from numpy._core._multiarray_umath import __cpu_dispatch__
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__
+    except ImportError:  # NumPy 1.x kept it under numpy.core
+        from numpy.core._multiarray_umath import __cpu_dispatch__
 
     return [name for name in __cpu_dispatch__ if name == "X86_V4" or name.startswith("AVX512")]
 
@@ -331,6 +334,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     if args.workers < 1:
         parser.error(f"--workers must be ≥ 1, got {args.workers}")
+    if args.machine not in MACHINES:
+        parser.error(f"--machine must be one of {', '.join(MACHINES)}, got {args.machine!r}")
     if args.keep is not None:  # refused now, not after the first re-run has finished
         with usage_errors(parser):
             writable_location(args.keep, "--keep")
@@ -346,8 +351,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         _rerun_arguments(recorded, Path(), args.workers)
 
     report = Report(args.allow_new)
-    if args.machine not in MACHINES:
-        parser.error(f"--machine must be one of {', '.join(MACHINES)}, got {args.machine!r}")
     env = machine_environment(args.machine, cpu_flags(), avx512_dispatch())
     with tempfile.TemporaryDirectory(prefix="auv-gym-repro-") as scratch:
         out = args.keep if args.keep is not None else Path(scratch)
