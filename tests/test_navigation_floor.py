@@ -78,6 +78,8 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
             "rms_navigation_m": 0.3,
             "rms_navigation_across_m": 0.2,
             "rms_by_axis_m": {k: {"x_e": 0.1, "y_e": 0.2, "z_e": 0.05} for k in KINDS},
+            "rms_slow_by_axis_m": {k: {"x_e": 0.0, "y_e": 0.16, "z_e": 0.03} for k in KINDS},
+            "rms_fast_by_axis_m": {k: {"x_e": 0.1, "y_e": 0.12, "z_e": 0.04} for k in KINDS},
         },
         {
             "policy": "b",
@@ -89,12 +91,15 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
             "rms_navigation_m": 0.1,
             "rms_navigation_across_m": 0.06,
             "rms_by_axis_m": {k: {"x_e": 0.01, "y_e": 0.02, "z_e": 0.005} for k in KINDS},
+            "rms_slow_by_axis_m": {k: {"x_e": 0.0, "y_e": 0.0, "z_e": 0.0} for k in KINDS},
+            "rms_fast_by_axis_m": {k: {"x_e": 0.01, "y_e": 0.02, "z_e": 0.005} for k in KINDS},
         },
     ]
     table = markdown(rows, ["a", "b"], "cmd")
     assert "| `s` | a | 0/10 | 0.400 | 0.300 | 0.300 | 0.75 | 0.200 | 0.50 |" in table
     assert "| `s` | b | 0/10 | 0.200 | 0.250 | 0.100 | 0.25 | 0.060 | 0.15 |" in table
     assert "| `s` | a | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 |" in table
+    assert "| `s` | a | 0.160, 0.120 | 0.160, 0.120 | 0.160, 0.120 |" in table
 
 
 def _row(policy: str, set_name: str, distance: float, across: float) -> dict:
@@ -108,6 +113,8 @@ def _row(policy: str, set_name: str, distance: float, across: float) -> dict:
         "rms_navigation_m": across,
         "rms_navigation_across_m": across,
         "rms_by_axis_m": {k: {"x_e": 0.0, "y_e": across, "z_e": 0.0} for k in KINDS},
+        "rms_slow_by_axis_m": {k: {"x_e": 0.0, "y_e": across, "z_e": 0.0} for k in KINDS},
+        "rms_fast_by_axis_m": {k: {"x_e": 0.0, "y_e": 0.0, "z_e": 0.0} for k in KINDS},
     }
 
 
@@ -159,3 +166,30 @@ def test_bad_names_are_one_line_errors_before_any_episode(argv, message, tmp_pat
     assert stop.value.code == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_slow_part_keeps_a_drift_and_drops_the_waves():
+    """A 0.005-Hz drift with an offset plus a 0.13-Hz wave motion (20 ms samples, 200 s): the
+    slow part is the drift and offset to 1e-9 m, the parts add up to the series and their mean
+    squares to its own (Parseval)."""
+    t = np.arange(0.0, 200.0, 0.02)
+    drift = 0.05 + 0.2 * np.sin(2 * np.pi * 0.005 * t)
+    waves = 0.1 * np.sin(2 * np.pi * 0.13 * t)
+    series = np.stack([drift + waves, waves], axis=1)
+    slow = navigation_floor.slow_part(series, 0.02)
+    assert np.max(np.abs(slow[:, 0] - drift)) < 1e-9 and np.max(np.abs(slow[:, 1])) < 1e-9
+    fast = series - slow
+    assert np.mean(series**2) == pytest.approx(np.mean(slow**2) + np.mean(fast**2), rel=1e-12)
+
+
+def test_the_split_by_time_scale_brackets_each_axis():
+    """Per episode RMS² = slow² + fast² (Parseval), so over episodes each axis's mean RMS lies
+    between the larger part and the sum of the parts, for every kind and axis."""
+    row = error_split("pid_as_built", SET, DURATION, WINDOW)
+    for kind in KINDS:
+        for axis in ("x_e", "y_e", "z_e"):
+            total = row["rms_by_axis_m"][kind][axis]
+            slow = row["rms_slow_by_axis_m"][kind][axis]
+            fast = row["rms_fast_by_axis_m"][kind][axis]
+            assert max(slow, fast) <= total * (1 + 1e-12) and total <= (slow + fast) * (1 + 1e-12)
+            assert total > 0.0

@@ -24,6 +24,10 @@ estimate is the best one its measurements allow, which its consistency test meas
 docs/model.md §14.8). Episodes are the suite's (`auv-gym suite`: the same env arguments,
 seeds and metric).
 
+Each error is also split by time scale (`slow_part`): below `SLOW_HZ` (periods over 50 s, the
+mean included) lie the navigation's drift between fixes and a current's steady push, above it
+the waves, the turns and the loops' own motion; the table gives the cross-track parts.
+
 What the target leaves a policy (`--classical`, the policies the target is measured against):
 per set the target T = 0.8 × the best classical RMS |e|. Beyond the floor, a distance holds
 its along-track error and its own tracking of the estimate across the path, the rest
@@ -54,7 +58,7 @@ from benchmarks.catalog.tasks import task_set
 from benchmarks.options import option
 from benchmarks.runner.suite_chunks import Chunk, resolve_policy
 
-__all__ = ["SETS", "error_split", "main", "target_rest"]
+__all__ = ["SETS", "SLOW_HZ", "error_split", "main", "slow_part", "target_rest"]
 
 SETS = (
     "scenario:as_built_helix",
@@ -67,6 +71,9 @@ ERRORS = ("x_e", "y_e", "z_e")  # observation entries and trajectory sample fiel
 SEEN = [getattr(OBS, name) for name in ERRORS]  # their observation columns
 WINDOW_START = 100.0  # [s] as the benchmark metrics
 DURATION = 300.0  # [s] as the as-built evaluation
+# [Hz] the split by time scale: below it (periods over 50 s) the navigation's drift between
+# fixes and a current's steady push, above it the waves, the turns and the loops' own motion
+SLOW_HZ = 0.02
 
 
 class _SeenErrors:
@@ -82,13 +89,23 @@ class _SeenErrors:
         return self.inner.predict(obs, state=state, episode_start=episode_start, **kw)
 
 
+def slow_part(series: np.ndarray, dt: float, slow_hz: float = SLOW_HZ) -> np.ndarray:
+    """The components of ``series`` (samples along axis 0, ``dt`` [s] apart) below ``slow_hz``
+    [Hz], its mean included: an ideal low-pass by the discrete Fourier transform, so the slow
+    and the fast part (the rest) add up to the series and their mean squares to its own."""
+    spectrum = np.fft.rfft(series, axis=0)
+    spectrum[np.fft.rfftfreq(len(series), dt) >= slow_hz] = 0.0
+    return np.fft.irfft(spectrum, n=len(series), axis=0)
+
+
 def error_split(
     spec: str, set_name: str, duration: float = DURATION, window_start: float = WINDOW_START
 ) -> dict[str, Any]:
     """RMS |e|, |e^| and |n| [m] over t ≥ ``window_start`` [s] of the set's episodes of
     ``duration`` [s] flown by the suite policy ``spec`` (a name, or NAME=agent directory; its
     first run), means over episodes; |e| is the suite's metric (`auv_gym.metrics`), |e^| and |n|
-    are taken at the observations' times."""
+    are taken at the observations' times. Per axis also the RMS of the slow and the fast part
+    of each (`slow_part`, below and above `SLOW_HZ`)."""
     policy = resolve_policy(spec)
     run = policy.runs[0]
     task = task_set(set_name)
@@ -98,6 +115,8 @@ def error_split(
     seen = np.stack(recorder.seen, axis=1)  # (episodes, steps of the longest flight, 3)
     rms: dict[str, list[float]] = {"true": [], "seen": [], "navigation": [], "across": []}
     axes: dict[str, list[np.ndarray]] = {"true": [], "seen": [], "navigation": []}
+    slow_axes: dict[str, list[np.ndarray]] = {key: [] for key in axes}
+    fast_axes: dict[str, list[np.ndarray]] = {key: [] for key in axes}
     for i, flight in enumerate(flights):
         rms["true"].append(compute_metrics(flight, transient=window_start)["rms_distance"])
         steps = len(flight.t) - 1  # observations at t_0 … t_{K-1}
@@ -105,13 +124,18 @@ def error_split(
         e_true = np.stack([flight.samples[f][:steps] for f in ERRORS], axis=1)[window]
         e_seen = seen[i, :steps][window]
         if not window.any():  # ended before the window: no sample to score
-            for key in axes:
-                axes[key].append(np.full(len(ERRORS), math.nan))
+            for parts in (axes, slow_axes, fast_axes):
+                for key in parts:
+                    parts[key].append(np.full(len(ERRORS), math.nan))
             for key in ("seen", "navigation", "across"):
                 rms[key].append(math.nan)
             continue
+        dt = float(flight.t[1] - flight.t[0])  # [s] the control step
         for key, e in (("true", e_true), ("seen", e_seen), ("navigation", e_true - e_seen)):
             axes[key].append(np.sqrt(np.mean(e**2, axis=0)))
+            slow = slow_part(e, dt)
+            slow_axes[key].append(np.sqrt(np.mean(slow**2, axis=0)))
+            fast_axes[key].append(np.sqrt(np.mean((e - slow) ** 2, axis=0)))
             if key != "true":  # the suite's metric stands for |e|
                 rms[key].append(math.sqrt(float(np.mean(np.sum(e**2, axis=1)))))
         across = (e_true - e_seen)[:, 1:]  # y_e, z_e: what no steering of the estimate removes
@@ -125,10 +149,17 @@ def error_split(
         "rms_seen_m": float(np.mean(rms["seen"])),
         "rms_navigation_m": float(np.mean(rms["navigation"])),
         "rms_navigation_across_m": float(np.mean(rms["across"])),
-        "rms_by_axis_m": {
-            key: dict(zip(ERRORS, np.mean(values, axis=0).tolist(), strict=True))
-            for key, values in axes.items()
-        },
+        "rms_by_axis_m": _by_axis(axes),
+        "rms_slow_by_axis_m": _by_axis(slow_axes),
+        "rms_fast_by_axis_m": _by_axis(fast_axes),
+    }
+
+
+def _by_axis(parts: dict[str, list[np.ndarray]]) -> dict[str, dict[str, float]]:
+    """Per kind, the mean over episodes of each axis's RMS [m]."""
+    return {
+        key: dict(zip(ERRORS, np.mean(values, axis=0).tolist(), strict=True))
+        for key, values in parts.items()
     }
 
 
@@ -225,6 +256,26 @@ def markdown(
     for r in rows:
         parts = [
             ", ".join(f"{v:.3f}" for v in r["rms_by_axis_m"][key].values())
+            for key in ("true", "seen", "navigation")
+        ]
+        lines.append(
+            f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
+            + " | ".join(parts)
+            + " |"
+        )
+    lines += [
+        "",
+        f"By time scale, across the path (y_e): the slow part (components below {SLOW_HZ:g} Hz, "
+        f"periods over {1 / SLOW_HZ:g} s, the mean included: the navigation's drift between "
+        "fixes, a current's push) and the fast part (the rest: waves, turns, the loops' own "
+        "motion), RMS [m], means over episodes:",
+        "",
+        "| set | policy | e: slow, fast | e^: slow, fast | n: slow, fast |",
+        "|---|---|---|---|---|",
+    ]
+    for r in rows:
+        parts = [
+            f"{r['rms_slow_by_axis_m'][key]['y_e']:.3f}, {r['rms_fast_by_axis_m'][key]['y_e']:.3f}"
             for key in ("true", "seen", "navigation")
         ]
         lines.append(
