@@ -31,6 +31,7 @@ def _machine_under(**settings: str) -> dict:
 def test_the_machine_record_follows_numpy_and_openblas_choices() -> None:
     """Held to its baseline loops, NumPy reports no dispatched level; on the Nehalem kernels
     (SSE4.2, older than any AVX machine) OpenBLAS reports them; every result carries the record."""
+    pytest.importorskip("threadpoolctl")  # the rl extra's: without it "blas" is None
     from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
 
     available = [name for name in __cpu_dispatch__ if __cpu_features__.get(name)]
