@@ -40,6 +40,7 @@ __all__ = [
     "json_default",
     "jsonable",
     "machine",
+    "numpy_dispatch",
     "output_lock",
     "remove_temporaries",
     "replace_outputs",
@@ -203,6 +204,21 @@ def git_commit() -> str | None:
     return commit if done.returncode == 0 and commit else None
 
 
+def numpy_dispatch() -> tuple[list[str], list[str]] | None:
+    """(NumPy's dispatched SIMD levels, those this CPU runs and NUMPY_DISABLE_CPU_FEATURES left
+    on), from NumPy's private tables (`numpy._core` from NumPy 2, `numpy.core` before); None
+    where neither exists."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+    except ImportError:
+        try:
+            from numpy.core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+        except ImportError:  # NumPy's private layout changed: say so rather than guess
+            return None
+    dispatched = list(__cpu_dispatch__)
+    return dispatched, [name for name in dispatched if __cpu_features__.get(name)]
+
+
 @functools.cache
 def machine() -> dict[str, Any]:
     """The CPU choices a result's last digits depend on: {"numpy_simd": NumPy's dispatched SIMD
@@ -211,12 +227,8 @@ def machine() -> dict[str, Any]:
     OpenBLAS's fused dot products round differently from their AVX2 forms, so the same seed
     reproduces bit for bit on the machine class that made a result (docs/design.md §4, the
     bullet on OpenBLAS kernels)."""
-    try:
-        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
-    except ImportError:  # NumPy's private layout changed: say so rather than guess
-        simd = None
-    else:
-        simd = [name for name in __cpu_dispatch__ if __cpu_features__.get(name)]
+    dispatch = numpy_dispatch()
+    simd = dispatch[1] if dispatch is not None else None
     blas = None
     try:
         from threadpoolctl import threadpool_info

@@ -210,6 +210,12 @@ def target_rest(rows: Sequence[dict[str, Any]], classical: Sequence[str]) -> lis
     return out
 
 
+def _kinds_row(row: dict[str, Any], cells: Sequence[str]) -> str:
+    """A table row: the row's set and policy, then one cell per kind (e, e^, n)."""
+    label = row["set"].removeprefix("scenario:")
+    return f"| `{label}` | {row['policy']} | " + " | ".join(cells) + " |"
+
+
 def markdown(
     rows: Sequence[dict[str, Any]],
     policies: Sequence[str],
@@ -258,11 +264,7 @@ def markdown(
             ", ".join(f"{v:.3f}" for v in r["rms_by_axis_m"][key].values())
             for key in ("true", "seen", "navigation")
         ]
-        lines.append(
-            f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
-            + " | ".join(parts)
-            + " |"
-        )
+        lines.append(_kinds_row(r, parts))
     lines += [
         "",
         f"By time scale, across the path (y_e): the slow part (components below {SLOW_HZ:g} Hz, "
@@ -278,11 +280,7 @@ def markdown(
             f"{r['rms_slow_by_axis_m'][key]['y_e']:.3f}, {r['rms_fast_by_axis_m'][key]['y_e']:.3f}"
             for key in ("true", "seen", "navigation")
         ]
-        lines.append(
-            f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
-            + " | ".join(parts)
-            + " |"
-        )
+        lines.append(_kinds_row(r, parts))
     classical = list(classical) or [reference]
     lines += [
         "",

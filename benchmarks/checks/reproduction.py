@@ -51,6 +51,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from auv_gym.support.files import numpy_dispatch
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.catalog.policies import REMOVED_POLICIES, PolicySpec
 from benchmarks.options import option
@@ -87,12 +88,9 @@ def cpu_flags(cpuinfo: Path = Path("/proc/cpuinfo")) -> set[str]:
 def avx512_dispatch() -> list[str]:
     """NumPy's dispatched feature names above AVX2 (``X86_V4``, ``AVX512_*``; the names vary by
     NumPy version), the ones ``NPY_DISABLE_CPU_FEATURES`` turns off to run as an AVX2 CPU."""
-    try:
-        from numpy._core._multiarray_umath import __cpu_dispatch__
-    except ImportError:  # NumPy 1.x kept it under numpy.core
-        from numpy.core._multiarray_umath import __cpu_dispatch__
-
-    return [name for name in __cpu_dispatch__ if name == "X86_V4" or name.startswith("AVX512")]
+    dispatch = numpy_dispatch()
+    dispatched = dispatch[0] if dispatch is not None else []
+    return [name for name in dispatched if name == "X86_V4" or name.startswith("AVX512")]
 
 
 def machine_environment(machine: str, flags: set[str], avx512: Sequence[str]) -> dict[str, str]:
