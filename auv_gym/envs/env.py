@@ -286,7 +286,8 @@ class AUVPath3DEnv(gym.Env):
       integral action is an option of it: ``observation="preview_integral"`` adds leaky
       integrals of x_e, y_e and z_e [m·s] (T = 10 s), each clipped to ±1 m·s (anti-windup).
       ``observation={"kind": "preview", "integral_time": T, "integral_errors": "yz" | "xyz",
-      "integral_limit": L}`` sets them one by one.
+      "integral_limit": L}`` sets them one by one; ``"history_steps": H, "history_interval": Δ``
+      adds the observed x_e, y_e, z_e [m] of Δ, 2Δ … HΔ seconds ago.
 
     Registered ids and their fixed arguments: `auv_gym.VARIANTS` (docs/design.md §3.8).
     """

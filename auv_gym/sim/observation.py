@@ -37,6 +37,12 @@ step (0 after a reset): the memory a controller's integral term keeps, here for 
 With ``integral_errors="xyz"`` three: x_e_integral (the along-track error's) comes first. With
 ``integral_limit`` L > 0 each integral is clipped to [−L, L] after every update (anti-windup: the
 metres of an approach cannot charge it beyond what the path needs).
+
+With ``history_steps`` H > 0 the errors' past follows, last: x_e_past{k}, y_e_past{k},
+z_e_past{k} [m] for k = 1 … H, the observed tracking errors k·``history_interval`` seconds ago
+(a whole number of control steps; the oldest known value, the one at the reset, stands in
+before the episode is that old): a short memory of how the error moved, for a static policy to
+tell a steady push (a current) from a passing one (waves).
 """
 
 from __future__ import annotations
@@ -223,6 +229,19 @@ EXTRA_HEAD = ("u_ground", "v_ground", "w_ground", "a_X_prev", "a_M_prev", "a_N_p
 INTEGRAL_NAMES = ("x_e_integral", "y_e_integral", "z_e_integral")
 INTEGRAL_ERRORS = ("yz", "xyz")  # which tracking errors are integrated
 MAX_INTEGRAL_TIME = 1e4  # [s]
+HISTORY_ERRORS = ("x_e", "y_e", "z_e")  # the errors whose past the history holds, per sample
+MAX_HISTORY_STEPS = 64  # H
+MAX_HISTORY_INTERVAL = 100.0  # [s]
+OBSERVATION_FIELDS = (  # the keys of an observation dict (`ObservationConfig.from_spec`)
+    "kind",
+    "points",
+    "spacing",
+    "integral_time",
+    "integral_errors",
+    "integral_limit",
+    "history_steps",
+    "history_interval",
+)
 
 
 # The port-starboard reflection y → −y (body and earth frames; docs/design.md §3.19). A
@@ -270,11 +289,19 @@ def mirror_signs(names: Sequence[str]) -> np.ndarray:
             continue
         elif head.startswith("preview") and head[7:].isdigit() and feature in MIRROR_PREVIEW:
             signs[i] = MIRROR_PREVIEW[feature]
+        elif _history_error(name) is not None:
+            signs[i] = -1.0 if _history_error(name) in MIRROR_ODD else 1.0
         else:
             unknown.append(name)
     if unknown:
         raise ValueError(f"observation entries {unknown} have no defined port-starboard mirror")
     return signs
+
+
+def _history_error(name: str) -> str | None:
+    """The error a history entry's name holds ("y_e" for "y_e_past3"), else None."""
+    error, _, past = name.rpartition("_past")
+    return error if error in HISTORY_ERRORS and past.isdigit() else None
 
 
 @dataclass(frozen=True)
@@ -289,47 +316,76 @@ class ObservationConfig:
     integral_time: float = 0.0  # [s] T of the error integrals; 0: none
     integral_errors: str = "yz"  # "yz": y_e, z_e; "xyz": x_e too
     integral_limit: float = 0.0  # [m·s] anti-windup clip of each integral; 0: none
+    history_steps: int = 0  # H past samples of (x_e, y_e, z_e); 0: none
+    history_interval: float = 1.0  # [s] between the samples (whole control steps)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
+        def put(name: str, value) -> None:  # a frozen dataclass: fields are set once, checked
+            object.__setattr__(self, name, value)
+
+        put("kind", choice("observation kind", self.kind, OBSERVATION_KINDS))
         points = integer("observation points (preview K)", self.points, 1, MAX_PREVIEW_POINTS)
-        spacing = real(
-            "observation spacing (preview Δs)",
-            self.spacing,
-            0.0,
-            MAX_PREVIEW_LENGTH / points,
-            low_open=True,
-            unit=f"m (K·Δs <= {MAX_PREVIEW_LENGTH:g} m)",
+        put("points", points)
+        put(
+            "spacing",
+            real(
+                "observation spacing (preview Δs)",
+                self.spacing,
+                0.0,
+                MAX_PREVIEW_LENGTH / points,
+                low_open=True,
+                unit=f"m (K·Δs <= {MAX_PREVIEW_LENGTH:g} m)",
+            ),
         )
-        object.__setattr__(self, "points", points)
-        object.__setattr__(self, "spacing", spacing)
-        integral_time = real(
-            "observation integral_time",
-            self.integral_time,
-            0.0,
-            MAX_INTEGRAL_TIME,
-            unit="s (0: no error integrals)",
+        put(
+            "integral_time",
+            real(
+                "observation integral_time",
+                self.integral_time,
+                0.0,
+                MAX_INTEGRAL_TIME,
+                unit="s (0: no error integrals)",
+            ),
         )
-        object.__setattr__(self, "integral_time", integral_time)
-        object.__setattr__(
-            self,
+        put(
             "integral_errors",
             choice("observation integral_errors", self.integral_errors, INTEGRAL_ERRORS),
         )
-        integral_limit = real(
-            "observation integral_limit",
-            self.integral_limit,
-            0.0,
-            ERROR_BOUND * MAX_INTEGRAL_TIME,
-            unit="m·s (0: no clip)",
+        put(
+            "integral_limit",
+            real(
+                "observation integral_limit",
+                self.integral_limit,
+                0.0,
+                ERROR_BOUND * MAX_INTEGRAL_TIME,
+                unit="m·s (0: no clip)",
+            ),
         )
-        object.__setattr__(self, "integral_limit", integral_limit)
+        history_steps = integer(
+            "observation history_steps", self.history_steps, 0, MAX_HISTORY_STEPS
+        )
+        if history_steps and self.kind == "paper":
+            raise ValueError(
+                "observation history_steps needs the agent observation (kind 'preview'); "
+                "the paper's 15 entries have no history"
+            )
+        put("history_steps", history_steps)
+        interval = real(
+            "observation history_interval",
+            self.history_interval,
+            0.0,
+            MAX_HISTORY_INTERVAL,
+            low_open=True,
+            unit="s",
+        )
+        put("history_interval", interval)
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
         """From None or "paper", "preview" (default K and Δs), a name of `OBSERVATION_PRESETS`
         ("preview_integral"), a dict {"kind", "points", "spacing", "integral_time",
-        "integral_errors", "integral_limit"} or an `ObservationConfig`."""
+        "integral_errors", "integral_limit", "history_steps", "history_interval"} or an
+        `ObservationConfig`."""
         if spec is None:
             return cls()
         if isinstance(spec, ObservationConfig):
@@ -342,14 +398,12 @@ class ObservationConfig:
             fields = keys_within(
                 "observation",
                 spec,
-                ("kind", "points", "spacing", "integral_time", "integral_errors", "integral_limit"),
+                OBSERVATION_FIELDS,
             )
             return cls(**{"kind": "preview", **fields})
         raise ArgumentTypeError(
             f"observation must be one of {[*OBSERVATION_KINDS, *OBSERVATION_PRESETS]}, a dict "
-            "with keys kind, "
-            f"points, spacing, integral_time, integral_errors, integral_limit or an "
-            f"ObservationConfig, got {spec!r:.80}"
+            f"with keys {', '.join(OBSERVATION_FIELDS)} or an ObservationConfig, got {spec!r:.80}"
         )
 
     def to_dict(self) -> dict:
@@ -363,6 +417,9 @@ class ObservationConfig:
                 fields["integral_errors"] = self.integral_errors
             if self.integral_limit > 0.0:
                 fields["integral_limit"] = self.integral_limit
+        if self.history_steps:  # none stays out: older metadata matches
+            fields["history_steps"] = self.history_steps
+            fields["history_interval"] = self.history_interval
         return fields
 
     @property
@@ -379,11 +436,28 @@ class ObservationConfig:
         return slice(3 - len(self.integral_errors), 3)
 
     @property
+    def history(self) -> int:
+        """Number of history entries: 3 per past sample (x_e, y_e, z_e)."""
+        return len(HISTORY_ERRORS) * self.history_steps
+
+    def history_stride(self, control_dt: float) -> int:
+        """Control steps between two history samples; ValueError unless ``history_interval``
+        is a whole number of steps of ``control_dt`` [s]."""
+        stride = round(self.history_interval / control_dt)
+        if stride < 1 or abs(stride * control_dt - self.history_interval) > 1e-9 * stride:
+            raise ValueError(
+                f"observation history_interval {self.history_interval:g} s must be a whole "
+                f"number of control steps of {control_dt:g} s"
+            )
+        return stride
+
+    @property
     def extra_dim(self) -> int:
         """Entries after the paper's 15 (0 for "paper")."""
         if self.kind == "paper":
             return 0
-        return len(EXTRA_HEAD) + len(PREVIEW_FEATURES) * self.points + self.integrals
+        preview = len(PREVIEW_FEATURES) * self.points
+        return len(EXTRA_HEAD) + preview + self.integrals + self.history
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -396,7 +470,10 @@ class ObservationConfig:
             for feature in PREVIEW_FEATURES
         )
         integrals = INTEGRAL_NAMES[self.integrated_columns] if self.integrals else ()
-        return (*OBS_NAMES, *EXTRA_HEAD, *preview, *integrals)
+        history = tuple(
+            f"{error}_past{k}" for k in range(1, self.history_steps + 1) for error in HISTORY_ERRORS
+        )
+        return (*OBS_NAMES, *EXTRA_HEAD, *preview, *integrals, *history)
 
     @property
     def units(self) -> dict[str, str]:
@@ -411,7 +488,12 @@ class ObservationConfig:
         }
         units = {"x": "m", "y": "m", "z": "m", "curvature": "1/m", "torsion": "1/m"}
         for name in self.names[OBS_DIM + len(EXTRA_HEAD) :]:
-            extra[name] = "m·s" if name in INTEGRAL_NAMES else units[name.split("_", 1)[1]]
+            if name in INTEGRAL_NAMES:
+                extra[name] = "m·s"
+            elif _history_error(name) is not None:
+                extra[name] = "m"
+            else:
+                extra[name] = units[name.split("_", 1)[1]]
         return {**OBS_UNITS, **(extra if self.kind != "paper" else {})}
 
     def bounds(
@@ -430,7 +512,8 @@ class ObservationConfig:
         if self.integral_limit > 0.0:
             largest = min(largest, self.integral_limit)
         integral = (largest,) * self.integrals
-        extra = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points, *integral])
+        history = (ERROR_BOUND,) * self.history  # past values of bounded entries
+        extra = np.array([*(ground,) * 3, 1.0, 1.0, 1.0, *point * self.points, *integral, *history])
         return (
             np.concatenate([low, -extra.astype(np.float32)]),
             np.concatenate([high, extra.astype(np.float32)]),

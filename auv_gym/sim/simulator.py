@@ -193,6 +193,8 @@ SNAPSHOT_ARRAYS = (
     "actuator_state",
     "roll",
     "hull",
+    "error_history",
+    "history_index",
 )
 
 
@@ -269,12 +271,21 @@ class Simulator:
         self.extra = np.zeros((n, self.layout.extra_dim))
         self.last_action = np.zeros((n, 3))  # saturated, 0 after a reset
         # Leaky error integrals (y_e, z_e; x_e too with "xyz") [m·s] (`ObservationConfig`
-        # integral_time, integral_limit): the last columns of `extra`, which `extend_rows` leaves
-        # alone, updated in place.
-        self.error_integral = self.extra[:, self.extra.shape[1] - self.layout.integrals :]
+        # integral_time, integral_limit), then the errors' history [m]: the last columns of
+        # `extra`, which `extend_rows` leaves alone, updated in place.
+        history_start = self.extra.shape[1] - self.layout.history
+        self.error_integral = self.extra[:, history_start - self.layout.integrals : history_start]
+        self.error_past = self.extra[:, history_start:]
         if self.layout.integrals:
             decay = math.exp(-config.control_dt / self.layout.integral_time)
             self._integral_gain = (decay, self.layout.integral_time * (1.0 - decay))
+        # The observed errors (x_e, y_e, z_e) [m] of the last H·stride + 1 control steps, a ring
+        # written at `history_index` (all rows step together); H past samples read from it.
+        steps = self.layout.history_steps
+        stride = self.layout.history_stride(config.control_dt) if steps else 1
+        self.error_history = np.zeros((n, steps * stride + 1 if steps else 0, 3))
+        self.history_index = np.zeros(1, dtype=np.int64)
+        self._history_lags = stride * np.arange(1, steps + 1, dtype=np.int64)
         self._every_row = np.arange(n, dtype=np.int64)
         assert self.params.shape[1] == N_PARAMS
         # The sensor model (`auv_gym.sim.navigation`): None for ideal sensors, the exact state.
@@ -358,6 +369,8 @@ class Simulator:
             "cost": np.zeros(self.n),
             "roll": np.zeros_like(self.roll),
             "hull": self.hull.copy(),
+            "error_history": np.zeros((self.n, 0, 3)),
+            "history_index": np.zeros(1, dtype=np.int64),
             **snapshot["arrays"],
         }
         targets = self._snapshot_arrays()
@@ -390,6 +403,10 @@ class Simulator:
         if self.extra.shape[1]:
             self.last_action[rows] = 0.0
             self.error_integral[rows] = 0.0
+            if self.layout.history_steps:  # no past yet: the reset's errors stand in for it
+                errors = self._observed_guid[rows, :3]
+                self.error_history[rows] = errors[:, None, :]
+                self.error_past[rows] = np.tile(errors, self.layout.history_steps)
             self._extend(rows)
 
     def observations(self, rows: np.ndarray | None = None) -> np.ndarray:
@@ -530,8 +547,20 @@ class Simulator:
                 if self.layout.integral_limit > 0.0:  # anti-windup: the approach cannot charge it
                     limit = self.layout.integral_limit
                     np.clip(self.error_integral, -limit, limit, out=self.error_integral)
+            if self.layout.history_steps:
+                self._remember_errors()
             self._extend(self._every_row)
             self._end_outside_extra_bounds()
+
+    def _remember_errors(self) -> None:
+        """Write this step's observed errors into the ring and read the H past samples, the
+        k-th `history_interval`·k seconds ago, into the history columns."""
+        length = self.error_history.shape[1]
+        index = (int(self.history_index[0]) + 1) % length
+        self.history_index[0] = index
+        self.error_history[:, index] = self._observed_guid[:, :3]
+        past = self.error_history[:, (index - self._history_lags) % length]
+        self.error_past[:] = past.reshape(self.n, -1)
 
     def _end_outside_extra_bounds(self) -> None:
         """A running vehicle whose extra entries left their bounds ends as "envelope", with the
