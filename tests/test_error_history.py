@@ -104,7 +104,10 @@ def test_snapshot_carries_the_history():
         ({"history_steps": 65}, "observation history_steps"),
         ({"history_steps": 2, "history_interval": 0.0}, "observation history_interval"),
         ({"history_steps": 2, "history_interval": math.nan}, "observation history_interval"),
-        ({"history_steps": 2, "history_interval": 0.12}, "whole number of control steps"),
+        (
+            {"history_steps": 2, "history_interval": 0.12},
+            r"observation history_interval = 0.12 s must be a whole multiple of control_dt = 0.05",
+        ),
         ({"kind": "paper", "history_steps": 2}, "needs the agent observation"),
     ],
 )

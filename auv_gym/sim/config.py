@@ -58,7 +58,15 @@ from auv_gym.sim.task import (
     RewardWeights,
     TaskLimits,
 )
-from auv_gym.support.validation import ArgumentTypeError, choice, flag, is_real, real, vector
+from auv_gym.support.validation import (
+    ArgumentTypeError,
+    choice,
+    flag,
+    is_real,
+    real,
+    vector,
+    whole_steps,
+)
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.params import AUVParams, remus100
 from auv_gym.vehicle.record import (
@@ -431,6 +439,8 @@ class SimConfig:
                 f"{SPEED_BOUND} m/s, or inf, got {surge_limit!r} m/s"
             )
         self.sensors.fix_steps(self.control_dt)  # the fix interval: whole control steps
+        if self.observation.history_steps:  # the history's interval: likewise
+            self.observation.history_stride(self.control_dt)
         put("randomize_start", flag("randomize_start", self.randomize_start))
         put(
             "start_heading_spread",
@@ -459,12 +469,7 @@ class SimConfig:
             ("control_dt", self.control_dt),
             ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)", self.noise.hold),
         ):
-            ratio = value / self.physics_dt
-            if abs(ratio - round(ratio)) > _SUBSTEP_TOL * ratio or round(ratio) < 1:
-                raise ValueError(
-                    f"{name} = {value} s must be a whole multiple of physics_dt = "
-                    f"{self.physics_dt} s"
-                )
+            whole_steps(name, value, self.physics_dt, "physics_dt")
         if isinstance(self.path, PathDistribution):
             # Generated paths start at the origin with a drawn heading: a fixed start would
             # be meaningless (docs/model.md §3.8); their turn rates (≤ 1/8 m) always fit.

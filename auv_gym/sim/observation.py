@@ -57,7 +57,14 @@ from numba import njit
 from auv_gym.paths.guidance import body_errors, path_angles, virtual_point_speed, wrap_angle
 from auv_gym.paths.shapes import path_eval
 from auv_gym.support.records import field_indices
-from auv_gym.support.validation import ArgumentTypeError, choice, integer, keys_within, real
+from auv_gym.support.validation import (
+    ArgumentTypeError,
+    choice,
+    integer,
+    keys_within,
+    real,
+    whole_steps,
+)
 from auv_gym.vehicle.dynamics import STATE
 
 __all__ = [
@@ -289,8 +296,8 @@ def mirror_signs(names: Sequence[str]) -> np.ndarray:
             continue
         elif head.startswith("preview") and head[7:].isdigit() and feature in MIRROR_PREVIEW:
             signs[i] = MIRROR_PREVIEW[feature]
-        elif _history_error(name) is not None:
-            signs[i] = -1.0 if _history_error(name) in MIRROR_ODD else 1.0
+        elif (error := _history_error(name)) is not None:
+            signs[i] = -1.0 if error in MIRROR_ODD else 1.0
         else:
             unknown.append(name)
     if unknown:
@@ -442,14 +449,9 @@ class ObservationConfig:
 
     def history_stride(self, control_dt: float) -> int:
         """Control steps between two history samples; ValueError unless ``history_interval``
-        is a whole number of steps of ``control_dt`` [s]."""
-        stride = round(self.history_interval / control_dt)
-        if stride < 1 or abs(stride * control_dt - self.history_interval) > 1e-9 * stride:
-            raise ValueError(
-                f"observation history_interval {self.history_interval:g} s must be a whole "
-                f"number of control steps of {control_dt:g} s"
-            )
-        return stride
+        is a whole number of steps of ``control_dt`` [s] (`SimConfig` checks it when built)."""
+        interval = self.history_interval
+        return whole_steps("observation history_interval", interval, control_dt, "control_dt")
 
     @property
     def extra_dim(self) -> int:

@@ -25,6 +25,7 @@ from auv_gym.sim.integrator import ACTUATORS, CONFIG_FIELDS, RECORD_DIM, config_
 from auv_gym.sim.navigation import Navigation
 from auv_gym.sim.observation import (
     GUIDANCE_DIM,
+    GUIDE,
     OBS_DIM,
     build_observation,
     guidance_row,
@@ -164,6 +165,7 @@ _NOISE_COLUMNS = [_CONFIG_INDEX[f"noise_f_{c}"] for c in "uvwqr"]
 _CURRENT_COLUMNS = [_CONFIG_INDEX[f"current_{c}"] for c in "xyz"]
 _HULL_STREAM = 6  # the 6-DOF hull's draws: a stream of the episode's keys of its own
 _VARIATION_STREAM = 7  # the hull variation's draw (`auv_gym.vehicle.variation`), both plants'
+_ERRORS = slice(GUIDE.x_e, GUIDE.z_e + 1)  # the tracking errors in a guidance row (the history)
 _ACTUATOR_NAMES = np.array(sorted(ACTUATORS, key=ACTUATORS.__getitem__))  # code → name
 
 
@@ -404,7 +406,7 @@ class Simulator:
             self.last_action[rows] = 0.0
             self.error_integral[rows] = 0.0
             if self.layout.history_steps:  # no past yet: the reset's errors stand in for it
-                errors = self._observed_guid[rows, :3]
+                errors = self._observed_guid[rows, _ERRORS]
                 self.error_history[rows] = errors[:, None, :]
                 self.error_past[rows] = np.tile(errors, self.layout.history_steps)
             self._extend(rows)
@@ -558,7 +560,7 @@ class Simulator:
         length = self.error_history.shape[1]
         index = (int(self.history_index[0]) + 1) % length
         self.history_index[0] = index
-        self.error_history[:, index] = self._observed_guid[:, :3]
+        self.error_history[:, index] = self._observed_guid[:, _ERRORS]
         past = self.error_history[:, (index - self._history_lags) % length]
         self.error_past[:] = past.reshape(self.n, -1)
 

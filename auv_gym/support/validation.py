@@ -25,7 +25,12 @@ __all__ = [
     "keys_within",
     "real",
     "vector",
+    "whole_steps",
 ]
+
+# Relative slack of `whole_steps`: a decimal interval divided by a decimal step is a whole
+# number only up to the rounding of both (0.3 / 0.1 = 2.9999999999999996).
+WHOLE_STEP_TOLERANCE = 1e-9
 
 
 class ArgumentTypeError(TypeError, ValueError):
@@ -146,3 +151,14 @@ def keys_within(name: str, value: Any, allowed: Iterable[str]) -> dict[str, Any]
     if unknown:
         raise ValueError(f"{name} has unknown key(s) {unknown}; valid: {valid}")
     return dict(value)
+
+
+def whole_steps(name: str, interval: float, step: float, step_name: str) -> int:
+    """``interval`` [s] as a whole number (at least 1) of ``step`` [s]; ValueError naming both
+    (``step_name`` is the step's own name, e.g. "control_dt") when it is not one."""
+    ratio = interval / step
+    if abs(ratio - round(ratio)) > WHOLE_STEP_TOLERANCE * ratio or round(ratio) < 1:
+        raise ValueError(
+            f"{name} = {interval} s must be a whole multiple of {step_name} = {step} s"
+        )
+    return round(ratio)

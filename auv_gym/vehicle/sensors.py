@@ -26,7 +26,14 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-from auv_gym.support.validation import ArgumentTypeError, choice, integer, keys_within, real
+from auv_gym.support.validation import (
+    ArgumentTypeError,
+    choice,
+    integer,
+    keys_within,
+    real,
+    whole_steps,
+)
 
 __all__ = ["SENSOR_FIELDS", "SENSOR_PRESETS", "SensorConfig", "sensor_key"]
 
@@ -200,13 +207,7 @@ class SensorConfig:
             return 0
         if self.fix_interval == 0.0:
             return 1
-        ratio = self.fix_interval / control_dt
-        if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
-            raise ValueError(
-                f"sensors fix_interval = {self.fix_interval} s must be a whole "
-                f"multiple of control_dt = {control_dt} s"
-            )
-        return round(ratio)
+        return whole_steps("sensors fix_interval", self.fix_interval, control_dt, "control_dt")
 
     def filter_model(self, speed: float) -> tuple[float, float, float, float]:
         """The navigation filter's (velocity noise σ_v [m/s], bias noise q [1/√s], initial
