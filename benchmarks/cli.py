@@ -10,6 +10,7 @@
     auv-gym video --policy fbsm --scenario paper --out out/run.mp4   # needs the video extra
     auv-gym record --policy fbsm --scenario paper --out out/run.mcap   # ROS 2 MCAP, mcap extra
     auv-gym export ppo_generalist --out out/policy.onnx   # one ONNX graph (rl and onnx extras)
+    auv-gym ensemble --results runs/x/results --best 3 --out runs/x/ensemble   # mean of 3 seeds
 
 Each subcommand is the `main(argv)` of a module that also runs as ``python -m <module>`` (e.g.
 ``python -m benchmarks.runner.compare``; the modules are listed in `COMMANDS` and `SPEED`) and shows
@@ -62,6 +63,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "export": (
         "benchmarks.runner.export",
         "an agent as one ONNX graph with its contract (rl and onnx extras)",
+    ),
+    "ensemble": (
+        "benchmarks.runner.ensemble",
+        "several agents of one recipe as one policy, their mean action",
     ),
     "compile": (
         "benchmarks.runner.compile_kernels",

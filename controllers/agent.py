@@ -30,7 +30,7 @@ import os
 import zipfile
 import zlib
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -40,6 +40,7 @@ from auv_gym import __version__
 from auv_gym.sim.observation import OBS_NAMES, ObservationConfig
 from auv_gym.support.validation import ArgumentTypeError
 from controllers.algorithms import ALGORITHMS, algorithm_of
+from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
 from controllers.residual import (
     NO_STAGES,
     ResidualSettings,
@@ -199,6 +200,10 @@ class AgentFiles:
     residual: ResidualSettings | None = None  # metadata "residual": a residual agent
     algo: str = "ppo"  # the key of `controllers.algorithms.ALGORITHMS` it was trained with
     stages: tuple[dict[str, Any], ...] = ()  # metadata "stages", checked (`controllers.stages`)
+    # An ensemble (`controllers.ensemble`): its ensemble.json and every member's files, the
+    # first of which the fields above are.
+    ensemble: Path | None = None
+    members: tuple[AgentFiles, ...] = ()
 
     @property
     def label(self) -> str:
@@ -262,6 +267,9 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
             f"agent path must be a folder or model zip path (str or os.PathLike), got "
             f"{type(path).__name__} {path!r:.60}"
         )
+    members = ensemble_members(Path(path)) if Path(path).is_dir() else None
+    if members is not None:
+        return _check_ensemble(Path(path) / ENSEMBLE_FILE, [check_agent(m) for m in members])
     model, stats, meta = _locate(Path(path))
     metadata = _read_metadata(meta) if meta is not None else {}
     algo = algorithm_of(metadata, str(meta))
@@ -289,6 +297,32 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     return AgentFiles(
         model, stats, meta, mean, var, clip_obs, epsilon, metadata, residual, algo.name, stages
     )
+
+
+def _check_ensemble(spec: Path, members: list[AgentFiles]) -> AgentFiles:
+    """The first member's files with ``members`` and ``ensemble`` set, after checking that every
+    member flies like the first but for its network: ValueError naming what differs."""
+    first = members[0]
+
+    def flies_as(files: AgentFiles) -> dict[str, Any]:
+        return {
+            "algorithm": files.algo,
+            "observation layout": observation_layout(files.metadata),
+            "residual section": files.residual,
+            "stages": files.stages,
+            "env id": files.metadata.get("env_id"),
+            "env": agent_env_kwargs(files.metadata),
+        }
+
+    reference = flies_as(first)
+    for files in members[1:]:
+        for key, value in flies_as(files).items():
+            if value != reference[key]:
+                raise ValueError(
+                    f"ensemble {spec}: member {files.model.parent} differs from "
+                    f"{first.model.parent} in its {key} ({value!r:.80} vs {reference[key]!r:.80})"
+                )
+    return replace(first, ensemble=spec, members=tuple(members))
 
 
 # Metadata keys of earlier releases: the stages an agent now lists under "stages".
@@ -446,10 +480,16 @@ def _read_stats(
 
 
 def check_weights(files: AgentFiles) -> None:
-    """Every weight of a checked agent's policy (model.zip's policy.pth) finite, as `load_actor`
-    requires, read as tensors only (torch's ``weights_only``: nothing else is unpickled) and
-    without building the model: for the checks before any episode. ValueError naming the file."""
+    """Every weight of a checked agent's policy (model.zip's policy.pth; every member's for an
+    ensemble) finite, as `load_actor` requires, read as tensors only (torch's ``weights_only``:
+    nothing else is unpickled) and without building the model: for the checks before any
+    episode. ValueError naming the file."""
     import io
+
+    if files.members:
+        for member in files.members:
+            check_weights(member)
+        return
 
     import torch
 

@@ -19,6 +19,7 @@ from controllers.agent import (
     load_actor,
     observation_layout,
 )
+from controllers.ensemble import EnsembleActor
 from controllers.mirror import mirrored
 from controllers.residual import NO_STAGES, ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
@@ -36,9 +37,10 @@ def load_policy(
     algo: str | None = None,
     stages: Any = None,
 ) -> AgentPolicy | ResidualPolicy | StagedPolicy:
-    """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip)
-    as a Policy: its network (`controllers.agent.AgentPolicy`), inside the stages its metadata
-    lists (`controllers.stages.StagedPolicy`, built for the plant of ``base_kwargs``: the
+    """A saved agent (a directory with model.zip + vecnormalize.npz + metadata.json, or a zip;
+    or an ensemble's folder, `controllers.ensemble`: its members' mean action in place of one
+    network) as a Policy: its network (`controllers.agent.AgentPolicy`), inside the stages its
+    metadata lists (`controllers.stages.StagedPolicy`, built for the plant of ``base_kwargs``: the
     scenario's ``actuator``, ``params``, ``actuator_params``, ``control_dt``); for a residual
     agent a `ResidualPolicy` of its base controller, built with the recorded settings and
     ``base_kwargs`` (the propeller and fins by default for one trained on them), and its
@@ -61,7 +63,12 @@ def load_policy(
         raise ValueError(f"{files.model}: {NO_STAGES}")
     settings = base_kwargs or {}
     built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
-    actor = load_actor(files, device=device, num_threads=num_threads)
+    if files.members:  # an ensemble flies its members' mean action (`controllers.ensemble`)
+        actor = EnsembleActor(
+            [load_actor(m, device=device, num_threads=num_threads) for m in files.members]
+        )
+    else:
+        actor = load_actor(files, device=device, num_threads=num_threads)
     actor = mirrored(actor, specs, observation_layout(files.metadata), str(files.model))
     if files.residual is not None:
         if commands_realistic_actuators(files.metadata):  # its base commands them too

@@ -165,6 +165,11 @@ def export_onnx(
     file is written (module doc)."""
     target = _check_out(out)
     files = check_agent(agent)
+    if files.members:
+        raise ValueError(
+            f"{files.ensemble}: an ensemble of {len(files.members)} agents has no ONNX export "
+            "(export each member: auv-gym export AGENT)"
+        )
     actuator, params = _export_settings(files, actuator, actuator_params)
     layout = observation_layout(files.metadata)
     settings: dict[str, Any] = {"actuator": actuator, "actuator_params": params}

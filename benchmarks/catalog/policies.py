@@ -306,7 +306,8 @@ def agent_run(
         env_id = resolve_env_id(recorded)
     except ValueError as error:
         raise ValueError(
-            f"{where}: {agent}/metadata.json records env_id {recorded!r}; an agent runs under "
+            f"{where}: {files.metadata_file or agent / 'metadata.json'} records env_id "
+            f"{recorded!r}; an agent runs under "
             f"its training env: {error}"
         ) from None
     from controllers.agent import agent_env_kwargs

@@ -11,8 +11,9 @@ Policies (``--policies``, comma-separated):
 * reference agents by name (`benchmarks.catalog.policies.REFERENCE_AGENTS`), "agent:PATH",
   "module:attribute";
 * NAME=DIR: DIR is one agent directory (one run, named by the training seed its metadata.json
-  records) or a multi-seed results directory (``benchmarks.training.seeds_cli --results``) holding
-  one agent per training seed, ``DIR/agent_seed_<k>/`` (model.zip, vecnormalize.npz,
+  records; an ensemble's folder, `auv-gym ensemble`, by its first member's) or a multi-seed
+  results directory (``benchmarks.training.seeds_cli --results``) holding one agent per training
+  seed, ``DIR/agent_seed_<k>/`` (model.zip, vecnormalize.npz,
   metadata.json): one run per seed; its ``seed_<k>_learning_curve.csv`` files give the learning
   curves of the statistics.
 

@@ -41,6 +41,7 @@ from benchmarks.runner.pool import (
     die_with_parent,
     parallel_map,
 )
+from controllers.ensemble import ensemble_members
 
 __all__ = [
     "RAY_PROBE_TIMEOUT_S",
@@ -124,11 +125,15 @@ def code_digest() -> str:
 
 
 def agent_digest(agent: Path | None) -> str:
-    """Hash of an agent's files (a directory's, sorted by path, one model zip, or an exported
-    .onnx file with its contract); "" for None."""
+    """Hash of an agent's files (a directory's, sorted by path, one model zip, an exported
+    .onnx file with its contract, or an ensemble's list and its members' files); "" for
+    None."""
     if agent is None:
         return ""
     digest = hashlib.sha256()
+    members = ensemble_members(agent) if agent.is_dir() else None
+    for member in members or ():
+        digest.update(agent_digest(member).encode())
     if agent.is_dir():
         files = sorted(p for p in agent.rglob("*") if p.is_file())
     elif agent.suffix == ".onnx":

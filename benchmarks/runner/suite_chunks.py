@@ -29,6 +29,7 @@ from benchmarks.catalog.policies import (
 from benchmarks.catalog.tasks import TaskSet
 from benchmarks.runner.jobs import agent_digest, code_digest
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
+from controllers.ensemble import ENSEMBLE_FILE
 
 __all__ = [
     "CHUNKS",
@@ -155,7 +156,7 @@ def resolve_policy(spec: str) -> SuitePolicy:
     directory = Path(folder)
     if not folder or not directory.is_dir():
         raise FileNotFoundError(f"{where}: agent directory {folder!r} does not exist")
-    if (directory / "model.zip").is_file():
+    if (directory / "model.zip").is_file() or (directory / ENSEMBLE_FILE).is_file():
         seed, env_id, agent_env = agent_run(where, directory)
         return SuitePolicy(name, "agent", (Run(seed, env_id, f"agent:{directory}", agent_env),))
     seeds = sorted(int(m[1]) for p in directory.iterdir() if (m := AGENT_SEED.fullmatch(p.name)))

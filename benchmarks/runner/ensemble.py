@@ -1,0 +1,113 @@
+"""`auv-gym ensemble`: several saved agents of one recipe as one policy, their mean action.
+
+    auv-gym ensemble --out runs/x/ensemble runs/x/results/agent_seed_1 runs/x/results/agent_seed_4
+    auv-gym ensemble --out runs/x/ensemble3 --results runs/x/results --best 3
+
+Writes OUT/ensemble.json (`controllers.ensemble`): the members given, or with ``--results`` the
+``--best`` K seeds of a multi-seed results folder (`auv-gym train-seeds --results`) by their
+validation score in its summary.json, the score the shipped seed is selected by (fewer
+terminated validation episodes, then the lower score; the test episodes are never used). The
+folder then flies wherever an agent does (``agent:OUT``, ``NAME=OUT`` in `auv-gym suite`).
+Every member is checked first (`controllers.agent.check_agent`: the files, and that they agree
+on everything but their network); a problem is one line naming the file, exit code 2, with
+nothing written. Needs no extra to write; flying it needs the rl extra.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from auv_gym.support.files import output_lock
+from benchmarks.arguments import ArgumentParser, program_name, usage_errors
+from benchmarks.cli import HelpFormatter
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
+from benchmarks.training.seeds import SUMMARY_FILE
+from controllers.agent import check_agent
+from controllers.ensemble import ENSEMBLE_FILE, MIN_MEMBERS, write_ensemble
+
+__all__ = ["best_seeds", "build_parser", "main"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = ArgumentParser(
+        prog=program_name("benchmarks.runner.ensemble"),
+        description=__doc__,
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument("members", nargs="*", type=Path, help="agent folders (or model zips)")
+    parser.add_argument("--out", type=Path, required=True, help="the ensemble folder to write")
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        help="a multi-seed results folder (agent_seed_<k>/ and summary.json) to take the members "
+        "from, instead of listing them",
+    )
+    parser.add_argument(
+        "--best",
+        type=int,
+        default=None,
+        help=f"with --results: how many seeds, the best by validation ({MIN_MEMBERS} or more)",
+    )
+    return parser
+
+
+def best_seeds(results: Path, k: int) -> list[int]:
+    """The ``k`` seeds of a multi-seed results folder with the lowest validation score in its
+    summary.json (terminated episodes first, then the score; ties by seed); ValueError naming
+    the file when it is unreadable, lacks a score or holds fewer than ``k`` seeds."""
+    summary_file = results / SUMMARY_FILE
+    try:
+        summary = json.loads(summary_file.read_text(encoding="utf-8"))
+        scored = [(tuple(s["validation_score"]), int(s["seed"])) for s in summary["seeds"]]
+    except FileNotFoundError:
+        raise FileNotFoundError(f"--results: {summary_file} does not exist") from None
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        problem = f"holds no validation scores ({error})"
+        raise ValueError(f"--results: {summary_file} {problem}") from None
+    if len(scored) < k:
+        raise ValueError(f"--best {k}: {summary_file} lists {len(scored)} seeds")
+    return [seed for _, seed in sorted(scored)[:k]]
+
+
+def _members(args: argparse.Namespace) -> list[Path]:
+    if args.results is None:
+        if args.best is not None:
+            raise ValueError("--best needs --results")
+        if len(args.members) < MIN_MEMBERS:
+            raise ValueError(f"an ensemble needs {MIN_MEMBERS} or more members")
+        return list(args.members)
+    if args.members:
+        raise ValueError("give the members or --results with --best, not both")
+    if args.best is None or args.best < MIN_MEMBERS:
+        raise ValueError(f"--results needs --best K with K >= {MIN_MEMBERS}, got {args.best}")
+    return [args.results / f"{SEED_AGENT_PREFIX}{s}" for s in best_seeds(args.results, args.best)]
+
+
+def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    with usage_errors(parser):
+        members = _members(args)
+        files = [check_agent(m) for m in members]
+        if (args.out / "model.zip").is_file():
+            raise ValueError(f"--out {args.out} holds an agent; an ensemble needs its own folder")
+        args.out.mkdir(parents=True, exist_ok=True)
+        with output_lock(args.out):
+            written = write_ensemble(args.out, members)
+            try:
+                check_agent(args.out)  # the members agree: else nothing stays written
+            except (OSError, ValueError):
+                written.unlink()
+                raise
+    seeds = [f.metadata.get("seed") for f in files]
+    print(f"wrote {written}: {len(members)} members (training seeds {seeds})")
+    return {"ensemble": str(args.out / ENSEMBLE_FILE), "members": [str(m) for m in members]}
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,208 @@
+"""Ensembles of saved agents (`controllers.ensemble`, `auv-gym ensemble`): the folder flies its
+members' mean action, plain or residual; every member is checked and must fly like the others but
+for its network; damaged lists, missing or nested members are one-line errors naming the file;
+`--results --best K` takes the K best seeds by validation; an ensemble has no ONNX export."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from benchmarks.training.residual import ResidualTraining
+from controllers.agent import check_agent
+from controllers.ensemble import ENSEMBLE_FILE, EnsembleActor, ensemble_members, write_ensemble
+
+pytestmark = pytest.mark.rl
+
+ENV = {"disturbance": "paper", "max_time": 4.0}
+
+
+@pytest.fixture
+def paper_agents(tmp_path, tiny_paper_model):
+    """Two untrained 16-16 PPO agents on the paper's observation, training seeds 0 and 1."""
+    from auv_gym.sim.observation import OBS_NAMES
+    from benchmarks.training.checkpoints import save_agent
+
+    folders = []
+    for seed in (0, 1):
+        model, venv = tiny_paper_model(seed)
+        folder = tmp_path / "results" / f"agent_seed_{seed}"
+        save_agent(
+            model,
+            venv,
+            folder,
+            {"obs_names": list(OBS_NAMES), "seed": seed, "env_id": "AUVPath3D-v0"},
+        )
+        folders.append(folder)
+    return folders
+
+
+def _observations(n: int = 16, dim: int = 15) -> np.ndarray:
+    return np.random.default_rng(3).normal(0.0, 1.0, (n, dim)).astype(np.float32)
+
+
+def test_an_ensemble_flies_the_mean_of_its_members_actions(tmp_path, paper_agents):
+    from controllers.loader import load_policy
+
+    folder = tmp_path / "ensemble"
+    write_ensemble(folder, paper_agents)
+    listed = json.loads((folder / ENSEMBLE_FILE).read_text())["members"]
+    assert listed == ["../results/agent_seed_0", "../results/agent_seed_1"]  # moves with them
+    files = check_agent(folder)
+    assert [m.metadata["seed"] for m in files.members] == [0, 1]
+    assert files.ensemble == folder / ENSEMBLE_FILE
+
+    obs = _observations()
+    a0, _ = load_policy(paper_agents[0]).predict(obs)
+    a1, _ = load_policy(paper_agents[1]).predict(obs)
+    ensemble = load_policy(folder)
+    assert isinstance(ensemble, EnsembleActor)
+    action, _ = ensemble.predict(obs)
+    assert action.shape == (16, 3) and action.dtype == np.float32
+    np.testing.assert_allclose(action, 0.5 * (a0 + a1), rtol=0, atol=1e-7)
+    assert np.abs(a0 - a1).max() > 1e-3  # two networks: the mean is neither
+    single, _ = ensemble.predict(obs[0])  # one row: torch's rounding of a batch of one
+    np.testing.assert_allclose(single, action[0], rtol=0, atol=1e-7)
+
+
+def test_a_residual_ensemble_keeps_its_base_and_averages_the_corrections(
+    tmp_path, save_tiny_residual_agent
+):
+    from controllers.loader import load_policy
+    from controllers.residual import ResidualPolicy
+
+    settings = ResidualTraining(bound=(0.2, 0.4, 0.4))
+    members = [tmp_path / f"agent_{seed}" for seed in (1, 2)]
+    for seed, folder in zip((1, 2), members, strict=True):
+        save_tiny_residual_agent(settings, folder, seed, ENV)
+    write_ensemble(tmp_path / "ensemble", members)
+    policy = load_policy(tmp_path / "ensemble")
+    assert isinstance(policy, ResidualPolicy) and isinstance(policy.agent, EnsembleActor)
+
+    features = np.random.default_rng(0).normal(0, 1, (8, policy.agent.obs_dim))
+    c0, _ = load_policy(members[0]).agent.predict(features)
+    c1, _ = load_policy(members[1]).agent.predict(features)
+    mean, _ = policy.agent.predict(features)
+    np.testing.assert_allclose(mean, 0.5 * (c0 + c1), rtol=0, atol=1e-7)
+
+    obs = _observations(8)
+    obs[:, :3] *= 0.3  # errors of a few tenths of a metre: the base does not saturate
+    applied, _ = policy.predict(obs)
+    base, _ = policy.base.predict(obs)
+    # the correction is bounded by β = (0.2, 0.4, 0.4) about the base
+    assert np.all(np.abs(applied - base) <= np.array([0.2, 0.4, 0.4]) + 1e-6)
+    assert np.all(np.isfinite(applied))
+
+
+def test_members_must_fly_alike_and_the_list_must_be_sound(
+    tmp_path, paper_agents, save_tiny_residual_agent
+):
+    folder = tmp_path / "ensemble"
+    folder.mkdir()
+    spec = folder / ENSEMBLE_FILE
+
+    def listing(*members) -> None:
+        spec.write_text(json.dumps({"members": [str(m) for m in members]}))
+
+    spec.write_text("{not json")
+    with pytest.raises(ValueError, match=r"^ensemble .*ensemble.json is unreadable"):
+        check_agent(folder)
+    spec.write_text(json.dumps({"members": [str(paper_agents[0])], "weights": [1]}))
+    with pytest.raises(ValueError, match="one key, 'members'"):
+        check_agent(folder)
+    listing(paper_agents[0])
+    with pytest.raises(ValueError, match=r"lists 1 member\(s\); an ensemble needs 2 or more"):
+        check_agent(folder)
+    listing(paper_agents[0], paper_agents[0])
+    with pytest.raises(ValueError, match=r"agent_seed_0.* more than once"):
+        check_agent(folder)
+    listing(paper_agents[0], tmp_path / "missing")
+    with pytest.raises(FileNotFoundError, match=r"member .*missing.* does not exist"):
+        check_agent(folder)
+    write_ensemble(tmp_path / "inner", paper_agents)
+    listing(paper_agents[0], tmp_path / "inner")
+    with pytest.raises(ValueError, match=r"member .*inner.* is an ensemble itself"):
+        check_agent(folder)
+
+    residual = tmp_path / "residual"
+    save_tiny_residual_agent(ResidualTraining(), residual, 0, ENV)
+    listing(paper_agents[0], residual)
+    with pytest.raises(ValueError, match=r"member .*residual differs from .* in its observation"):
+        check_agent(folder)
+    # a damaged member is named by its own file
+    broken = shutil.copytree(paper_agents[1], tmp_path / "broken")
+    (broken / "model.zip").write_bytes(b"not a zip")
+    listing(paper_agents[0], broken)
+    with pytest.raises(ValueError, match=r"^PPO model .*broken/model.zip is not a valid zip"):
+        check_agent(folder)
+    assert ensemble_members(tmp_path) is None  # a folder without the file is not an ensemble
+
+
+def test_the_command_takes_the_best_seeds_by_validation_and_writes_nothing_wrong(
+    tmp_path, paper_agents, auv_gym_command
+):
+    from benchmarks.runner.ensemble import best_seeds, main
+
+    results = paper_agents[0].parent
+    shutil.copytree(paper_agents[0], results / "agent_seed_2")
+    metadata = json.loads((results / "agent_seed_2" / "metadata.json").read_text())
+    (results / "agent_seed_2" / "metadata.json").write_text(json.dumps({**metadata, "seed": 2}))
+    scores = {0: [0, 0.31], 1: [1, 0.20], 2: [0, 0.29]}  # seed 1 ended an episode early
+    summary = {"seeds": [{"seed": s, "validation_score": v} for s, v in scores.items()]}
+    (results / "summary.json").write_text(json.dumps(summary))
+    assert best_seeds(results, 2) == [2, 0]
+    assert best_seeds(results, 3) == [2, 0, 1]
+
+    out = tmp_path / "best2"
+    written = main(["--results", str(results), "--best", "2", "--out", str(out)])
+    assert [m.rsplit("/", 1)[1] for m in written["members"]] == ["agent_seed_2", "agent_seed_0"]
+    assert [m.metadata["seed"] for m in check_agent(out).members] == [2, 0]
+
+    code, err = auv_gym_command("ensemble", "--results", str(results), "--best", "4", "--out", "x")
+    assert code == 2 and err.endswith("summary.json lists 3 seeds")
+    code, err = auv_gym_command("ensemble", "--out", str(tmp_path / "one"), str(paper_agents[0]))
+    assert code == 2 and err.endswith("an ensemble needs 2 or more members")
+    assert not (tmp_path / "one").exists()
+
+
+def test_unlike_members_leave_no_ensemble_and_an_ensemble_has_no_onnx_export(
+    tmp_path, paper_agents, save_tiny_residual_agent
+):
+    pytest.importorskip("onnx")
+    from benchmarks.runner.ensemble import main
+    from controllers.onnx_export import export_onnx
+
+    residual = tmp_path / "residual"
+    save_tiny_residual_agent(ResidualTraining(), residual, 0, ENV)
+    out = tmp_path / "mixed"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--out", str(out), str(paper_agents[0]), str(residual)])
+    assert exit_info.value.code == 2
+    assert not (out / ENSEMBLE_FILE).exists()
+
+    write_ensemble(tmp_path / "pair", paper_agents)
+    with pytest.raises(ValueError, match=r"ensemble of 2 agents has no ONNX export"):
+        export_onnx(tmp_path / "pair", tmp_path / "pair.onnx")
+    assert not (tmp_path / "pair.onnx").exists()
+
+
+def test_the_suite_flies_an_ensemble_as_one_run_and_its_digest_follows_the_members(
+    tmp_path, paper_agents
+):
+    from benchmarks.runner.jobs import agent_digest
+    from benchmarks.runner.suite_chunks import resolve_policy
+
+    folder = tmp_path / "ensemble"
+    write_ensemble(folder, paper_agents)
+    policy = resolve_policy(f"pair={folder}")
+    assert policy.kind == "agent" and len(policy.runs) == 1
+    assert policy.runs[0].spec == f"agent:{folder}" and policy.runs[0].run == 0
+    before = agent_digest(folder)
+    stats = paper_agents[1] / "vecnormalize.npz"
+    data = dict(np.load(stats))
+    data["mean"] = data["mean"] + 1.0
+    np.savez(stats, **data)
+    assert agent_digest(folder) != before  # a changed member is a changed ensemble
