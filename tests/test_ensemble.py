@@ -206,3 +206,36 @@ def test_the_suite_flies_an_ensemble_as_one_run_and_its_digest_follows_the_membe
     data["mean"] = data["mean"] + 1.0
     np.savez(stats, **data)
     assert agent_digest(folder) != before  # a changed member is a changed ensemble
+
+
+def test_validation_scores_rank_agents_as_selection_does(tmp_path, paper_agents):
+    """`benchmarks.analysis.validation_score`: the rule's score on a validation set's first
+    seeds, per agent and for an ensemble of them; test sets are refused."""
+    from benchmarks.analysis.validation_score import main, validation_score
+    from benchmarks.training.evaluation import score
+
+    write_ensemble(tmp_path / "pair", paper_agents)
+    agents = [*paper_agents, tmp_path / "pair"]
+    record = main(
+        [
+            "--agents",
+            ",".join(map(str, agents)),
+            "--task-set",
+            "validation",
+            "--episodes",
+            "2",
+            "--duration",
+            "20",
+            "--out",
+            str(tmp_path / "scores"),
+        ]
+    )
+    entries = record["agents"]
+    assert [e["summary"]["n_episodes"] for e in entries] == [2, 2, 2]
+    for entry in entries:  # the default rule on the summary, no chattering weight
+        assert entry["score"] == list(score(entry["summary"]))
+        assert entry["score"][1] > 0.0
+    assert record["lowest"] == min(entries, key=lambda e: tuple(e["score"]))["agent"]
+    assert json.loads((tmp_path / "scores" / "validation_score.json").read_text()) == record
+    with pytest.raises(ValueError, match="is a test set, not a validation set"):
+        validation_score(paper_agents[0], "test_distribution", 2, 20.0)
