@@ -260,7 +260,9 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     a JSON object or names another algorithm, observation layout or shape, action shape, or
     auv-gym major version, or has an invalid "residual" section. The expected observation is
     `observation_layout` of the metadata (the env's 15 values by default; a residual agent's
-    6 more).
+    6 more). A folder holding ensemble.json (`controllers.ensemble`) is an ensemble: every
+    member is checked so, and must fly like the first but for its network (ValueError naming
+    what differs); the first member's files are returned with ``members`` and ``ensemble`` set.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise ArgumentTypeError(
