@@ -29,7 +29,7 @@ import json
 import os
 import zipfile
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -57,6 +57,7 @@ __all__ = [
     "AgentFiles",
     "AgentPolicy",
     "check_agent",
+    "check_ensemble",
     "check_weights",
     "load_actor",
 ]
@@ -271,7 +272,7 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
         )
     members = ensemble_members(Path(path)) if Path(path).is_dir() else None
     if members is not None:
-        return _check_ensemble(Path(path) / ENSEMBLE_FILE, [check_agent(m) for m in members])
+        return check_ensemble(Path(path) / ENSEMBLE_FILE, members)
     model, stats, meta = _locate(Path(path))
     metadata = _read_metadata(meta) if meta is not None else {}
     algo = algorithm_of(metadata, str(meta))
@@ -301,9 +302,12 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
     )
 
 
-def _check_ensemble(spec: Path, members: list[AgentFiles]) -> AgentFiles:
-    """The first member's files with ``members`` and ``ensemble`` set, after checking that every
-    member flies like the first but for its network: ValueError naming what differs."""
+def check_ensemble(spec: Path, paths: Sequence[Path]) -> AgentFiles:
+    """The checked files of an ensemble ``spec`` (its ensemble.json) of the agents at ``paths``:
+    the first member's with ``members`` and ``ensemble`` set, after checking every member
+    (`check_agent`) and that each flies like the first but for its network (ValueError naming
+    what differs)."""
+    members = [check_agent(path) for path in paths]
     first = members[0]
 
     def flies_as(files: AgentFiles) -> dict[str, Any]:

@@ -32,7 +32,14 @@ import numpy as np
 
 from auv_gym.support.files import write_text
 
-__all__ = ["ENSEMBLE_FILE", "MIN_MEMBERS", "EnsembleActor", "ensemble_members", "write_ensemble"]
+__all__ = [
+    "ENSEMBLE_FILE",
+    "MIN_MEMBERS",
+    "EnsembleActor",
+    "ensemble_members",
+    "ensemble_paths",
+    "write_ensemble",
+]
 
 ENSEMBLE_FILE = "ensemble.json"
 MIN_MEMBERS = 2
@@ -50,7 +57,13 @@ def ensemble_members(folder: Path) -> tuple[Path, ...] | None:
         raise ValueError(f"ensemble {spec} is unreadable: {exc}") from None
     if not isinstance(data, dict) or set(data) != {"members"}:
         raise ValueError(f"ensemble {spec} must be a JSON object with one key, 'members'")
-    members = data["members"]
+    return ensemble_paths(spec, data["members"])
+
+
+def ensemble_paths(spec: Path, members: Any) -> tuple[Path, ...]:
+    """``members`` (paths relative to the folder of ``spec``, or absolute) resolved, after the
+    rules of a member list: strings, at least `MIN_MEMBERS`, none twice, each existing and none
+    an ensemble itself; ValueError (FileNotFoundError for a missing member) naming ``spec``."""
     if not isinstance(members, list) or not all(isinstance(m, str) and m for m in members):
         raise ValueError(f"ensemble {spec}: 'members' must be a list of agent paths (strings)")
     if len(members) < MIN_MEMBERS:
@@ -58,7 +71,7 @@ def ensemble_members(folder: Path) -> tuple[Path, ...] | None:
             f"ensemble {spec} lists {len(members)} member(s); an ensemble needs {MIN_MEMBERS} "
             "or more (fly a single agent as agent:PATH)"
         )
-    paths = tuple((folder / m).resolve() for m in members)
+    paths = tuple((spec.parent / m).resolve() for m in members)
     repeated = sorted({m for m, p in zip(members, paths, strict=True) if paths.count(p) > 1})
     if repeated:
         raise ValueError(f"ensemble {spec} lists {repeated} more than once")
@@ -72,15 +85,16 @@ def ensemble_members(folder: Path) -> tuple[Path, ...] | None:
 
 def write_ensemble(folder: str | os.PathLike, members: Sequence[str | os.PathLike]) -> Path:
     """Write ``folder``/ensemble.json listing ``members`` (stored relative to ``folder``, so the
-    folder and its members move together) atomically; the file's path. Members are checked when
-    the ensemble is loaded (`controllers.agent.check_agent`), not here."""
+    folder and its members move together) atomically, after the list's rules
+    (`ensemble_paths`); the file's path. The members' agent files are checked when the ensemble
+    is loaded (`controllers.agent.check_agent`), or before with
+    `controllers.agent.check_ensemble`."""
     root = Path(folder)
-    root.mkdir(parents=True, exist_ok=True)
     listed = [os.path.relpath(Path(m).resolve(), root.resolve()) for m in members]
+    ensemble_paths(root / ENSEMBLE_FILE, listed)
+    root.mkdir(parents=True, exist_ok=True)
     text = json.dumps({"members": listed}, indent=2) + "\n"
-    path = write_text(root / ENSEMBLE_FILE, text)
-    ensemble_members(root)  # the file written is one the loader takes
-    return path
+    return write_text(root / ENSEMBLE_FILE, text)
 
 
 class EnsembleActor:

@@ -26,8 +26,8 @@ from benchmarks.arguments import ArgumentParser, program_name, usage_errors
 from benchmarks.cli import HelpFormatter
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
 from benchmarks.training.seeds import SUMMARY_FILE
-from controllers.agent import check_agent
-from controllers.ensemble import ENSEMBLE_FILE, MIN_MEMBERS, write_ensemble
+from controllers.agent import check_ensemble
+from controllers.ensemble import ENSEMBLE_FILE, MIN_MEMBERS, ensemble_paths, write_ensemble
 
 __all__ = ["best_seeds", "build_parser", "main"]
 
@@ -93,18 +93,15 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     with usage_errors(parser):
         members = _members(args)
-        files = [check_agent(m) for m in members]
         if (args.out / "model.zip").is_file():
             raise ValueError(f"--out {args.out} holds an agent; an ensemble needs its own folder")
+        # every member checked, and checked to agree, before anything is written
+        spec = args.out / ENSEMBLE_FILE
+        files = check_ensemble(spec, ensemble_paths(spec, [str(m.resolve()) for m in members]))
         args.out.mkdir(parents=True, exist_ok=True)
         with output_lock(args.out):
             written = write_ensemble(args.out, members)
-            try:
-                check_agent(args.out)  # the members agree: else nothing stays written
-            except (OSError, ValueError):
-                written.unlink()
-                raise
-    seeds = [f.metadata.get("seed") for f in files]
+    seeds = [f.metadata.get("seed") for f in files.members]
     print(f"wrote {written}: {len(members)} members (training seeds {seeds})")
     return {"ensemble": str(args.out / ENSEMBLE_FILE), "members": [str(m) for m in members]}
 
