@@ -151,7 +151,12 @@ def test_the_command_takes_the_best_seeds_by_validation_and_writes_nothing_wrong
     metadata = json.loads((results / "agent_seed_2" / "metadata.json").read_text())
     (results / "agent_seed_2" / "metadata.json").write_text(json.dumps({**metadata, "seed": 2}))
     scores = {0: [0, 0.31], 1: [1, 0.20], 2: [0, 0.29]}  # seed 1 ended an episode early
-    summary = {"seeds": [{"seed": s, "validation_score": v} for s, v in scores.items()]}
+    summary = {  # as train-seeds writes it: the score beside the summary it was taken from
+        "seeds": [
+            {"seed": s, "validation_score": v, "validation_summary": {"n_terminated": v[0]}}
+            for s, v in scores.items()
+        ]
+    }
     (results / "summary.json").write_text(json.dumps(summary))
     assert best_seeds(results, 2) == [2, 0]
     assert best_seeds(results, 3) == [2, 0, 1]

@@ -25,7 +25,7 @@ from auv_gym.support.files import output_lock
 from benchmarks.arguments import ArgumentParser, program_name, usage_errors
 from benchmarks.cli import HelpFormatter
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
-from benchmarks.training.seeds import SUMMARY_FILE
+from benchmarks.training.seeds import SUMMARY_FILE, selection_key
 from controllers.agent import check_ensemble
 from controllers.ensemble import ENSEMBLE_FILE, MIN_MEMBERS, ensemble_paths, write_ensemble
 
@@ -57,13 +57,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def best_seeds(results: Path, k: int) -> list[int]:
-    """The ``k`` seeds of a multi-seed results folder with the lowest validation score in its
-    summary.json (terminated episodes first, then the score; ties by seed); ValueError naming
-    the file when it is unreadable, lacks a score or holds fewer than ``k`` seeds."""
+    """The first ``k`` seeds of a multi-seed results folder in the order the run's selection
+    ranks them (`benchmarks.training.seeds.selection_key`: terminated validation episodes, then
+    the score; ties by seed) from its summary.json; ValueError naming the file when it is
+    unreadable, lacks the seeds' entries or holds fewer than ``k`` seeds."""
     summary_file = results / SUMMARY_FILE
     try:
         summary = json.loads(summary_file.read_text(encoding="utf-8"))
-        scored = [(tuple(s["validation_score"]), int(s["seed"])) for s in summary["seeds"]]
+        scored = [(selection_key(entry), int(entry["seed"])) for entry in summary["seeds"]]
     except FileNotFoundError:
         raise FileNotFoundError(f"--results: {summary_file} does not exist") from None
     except (OSError, ValueError, KeyError, TypeError) as error:

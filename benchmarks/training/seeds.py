@@ -84,6 +84,7 @@ __all__ = [
     "parse_seeds",
     "resolve_validation",
     "seed_status",
+    "selection_key",
     "train_seeds",
     "validation_set",
 ]
@@ -323,19 +324,22 @@ def _chattering_clause(plan: dict[str, Any]) -> str:
     return f" + {weight:g} m·s × mean chattering" if weight else ""
 
 
+def selection_key(entry: dict[str, Any]) -> tuple[float, float, int]:
+    """How a summary entry ranks, lowest first: its validation score (`evaluation.score`, as the
+    run recorded it for its best agent, which includes a residual agent's chattering), then its
+    seed; an entry without a validation summary last."""
+    summary = entry.get("validation_summary")
+    if not summary:
+        return (math.inf, math.inf, entry["seed"])
+    recorded = entry.get("validation_score")
+    n_term, value = recorded if recorded else score(summary)
+    return (n_term, value, entry["seed"])
+
+
 def select(entries: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """The entry with the lowest validation score (`evaluation.score`, as the run recorded it
-    for its best agent, which includes a residual agent's chattering; ties: lower seed)."""
-
-    def key(entry: dict[str, Any]) -> tuple[float, float, int]:
-        summary = entry.get("validation_summary")
-        if not summary:
-            return (math.inf, math.inf, entry["seed"])
-        recorded = entry.get("validation_score")
-        n_term, value = recorded if recorded else score(summary)
-        return (n_term, value, entry["seed"])
-
-    return min(entries, key=key)
+    """The entry ranked first by `selection_key`: the lowest validation score, ties to the lower
+    seed."""
+    return min(entries, key=selection_key)
 
 
 def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
