@@ -40,7 +40,7 @@ from auv_gym import __version__
 from auv_gym.sim.observation import OBS_NAMES, ObservationConfig
 from auv_gym.support.validation import ArgumentTypeError
 from controllers.algorithms import ALGORITHMS, algorithm_of
-from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
+from controllers.ensemble import ENSEMBLE_FILE, EnsembleActor, ensemble_members
 from controllers.residual import (
     NO_STAGES,
     ResidualSettings,
@@ -60,6 +60,7 @@ __all__ = [
     "check_ensemble",
     "check_weights",
     "load_actor",
+    "load_network",
 ]
 
 MODEL_FILE = "model.zip"
@@ -518,6 +519,18 @@ def check_weights(files: AgentFiles) -> None:
             + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
             + " (a diverged or damaged model)"
         )
+
+
+def load_network(
+    files: AgentFiles, *, device: str = "cpu", num_threads: int | None = 1
+) -> AgentPolicy | EnsembleActor:
+    """What a checked agent's network stage flies: its actor (`load_actor`), or for an ensemble
+    the mean of its members' actors (`controllers.ensemble.EnsembleActor`)."""
+    if files.members:
+        return EnsembleActor(
+            [load_actor(m, device=device, num_threads=num_threads) for m in files.members]
+        )
+    return load_actor(files, device=device, num_threads=num_threads)
 
 
 def load_actor(

@@ -17,7 +17,7 @@ each entry an agent folder (or model zip), relative to the ensemble folder or ab
 two, no repeats, none an ensemble itself. `controllers.agent.check_agent` checks the members and
 that they agree (algorithm, observation layout, actions, residual section, stages, env);
 `controllers.loader.load_policy` flies it, so ``agent:FOLDER`` works wherever an agent does
-(docs/usage.md "Ensembles of agents"). ONNX export takes single agents only.
+(docs/usage.md "Ensembles of agents"), and `controllers.onnx_export` writes it as one graph.
 """
 
 from __future__ import annotations

@@ -16,10 +16,9 @@ from controllers.agent import (
     AgentPolicy,
     check_agent,
     commands_realistic_actuators,
-    load_actor,
+    load_network,
     observation_layout,
 )
-from controllers.ensemble import EnsembleActor
 from controllers.mirror import mirrored
 from controllers.residual import NO_STAGES, ResidualPolicy, check_bound
 from controllers.residual import make_residual as residual_of_policy
@@ -63,12 +62,7 @@ def load_policy(
         raise ValueError(f"{files.model}: {NO_STAGES}")
     settings = base_kwargs or {}
     built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
-    if files.members:  # an ensemble flies its members' mean action (`controllers.ensemble`)
-        actor = EnsembleActor(
-            [load_actor(m, device=device, num_threads=num_threads) for m in files.members]
-        )
-    else:
-        actor = load_actor(files, device=device, num_threads=num_threads)
+    actor = load_network(files, device=device, num_threads=num_threads)
     actor = mirrored(actor, specs, observation_layout(files.metadata), str(files.model))
     if files.residual is not None:
         if commands_realistic_actuators(files.metadata):  # its base commands them too

@@ -7,6 +7,9 @@ export names (`controllers.stages.build_stages`: the allocation is the identity 
 actuator and left out there). A residual agent's graph ends in its bounded correction and
 learned filter on top of its base controller's command, an input (the base is a classical
 controller with adaptive laws, run beside the graph by `controllers.onnx_policy.OnnxPolicy`).
+An ensemble (`controllers.ensemble`) is one graph too: every member's normalisation and network
+side by side, their actions averaged before the stages or the residual's bound, as the Python
+ensemble flies; its contract's provenance names each member.
 
 The contract and the graph's metadata state everything the graph was built for: the env (id and
 arguments, with the actuator and its settings, so that a run from the contract flies the actuator
@@ -45,7 +48,7 @@ from controllers.agent import (
     AgentFiles,
     check_agent,
     commands_realistic_actuators,
-    load_actor,
+    load_network,
     observation_layout,
 )
 from controllers.envelope_guard import ENV_GUARD_INDEX, guard_env_commands
@@ -165,16 +168,11 @@ def export_onnx(
     file is written (module doc)."""
     target = _check_out(out)
     files = check_agent(agent)
-    if files.members:
-        raise ValueError(
-            f"{files.ensemble}: an ensemble of {len(files.members)} agents has no ONNX export "
-            "(export each member: auv-gym export AGENT)"
-        )
     actuator, params = _export_settings(files, actuator, actuator_params)
     layout = observation_layout(files.metadata)
     settings: dict[str, Any] = {"actuator": actuator, "actuator_params": params}
     stages = build_stages(files.stages, layout, settings, str(files.model))
-    actor = mirrored(load_actor(files, num_threads=1), files.stages, layout, str(files.model))
+    actor = mirrored(load_network(files, num_threads=1), files.stages, layout, str(files.model))
     model, state_size = _build_model(files, actor, stages, layout)
     parity = _parity(model, files, actor, stages, state_size)
     if parity["max_abs_error"] > PARITY_TOLERANCE:
@@ -320,8 +318,10 @@ def _build_model(
     inputs.append(
         helper.make_tensor_value_info(observation, TensorProto.FLOAT, [n, len(env_names)])
     )
-    layers, squash = actor_layers(actor.sb3_policy, where)
-    space = actor.sb3_policy.action_space
+    networks = [
+        (member, *actor_layers(policy, str(member.model)), policy.action_space)
+        for member, policy in _networks(files, actor)
+    ]
     seen = observation
     state_outputs: list[str] = []
     if files.residual is not None:
@@ -349,10 +349,18 @@ def _build_model(
             )
 
     def network_commands(observed: str) -> str:
-        normed = normalisation_graph(
-            g, observed, files.obs_mean, files.obs_var, files.clip_obs, files.epsilon
-        )
-        return action_head(g, network_graph(g, normed, layers), space.low, space.high, squash)
+        """Each network's action on ``observed`` through its own normalisation; their mean."""
+        actions = []
+        for member, layers, squash, space in networks:
+            normed = normalisation_graph(
+                g, observed, member.obs_mean, member.obs_var, member.clip_obs, member.epsilon
+            )
+            net = network_graph(g, normed, layers)
+            actions.append(action_head(g, net, space.low, space.high, squash))
+        if len(actions) == 1:
+            return actions[0]
+        total = g.op("Sum", *actions)  # as `EnsembleActor`: the sum over K, then / K
+        return g.op("Div", total, g.const(np.float32(len(actions)), np.float32))
 
     commands = network_commands(seen)
     if isinstance(actor, MirroredNetwork):  # ½·(π(o) + M_a·π(M_o·o)), `controllers.mirror`
@@ -401,6 +409,18 @@ def _build_model(
     model.ir_version = 8  # onnxruntime ≥ 1.12 reads it
     checker.check_model(model, full_check=True)
     return model, state_size
+
+
+def _networks(files: AgentFiles, actor: Any) -> list[tuple[AgentFiles, Any]]:
+    """(files, SB3 policy) of each network the graph holds: the agent's, or every member's of
+    an ensemble (whose actions the graph averages), inside the mirror stage or not."""
+    network = actor.network if isinstance(actor, MirroredNetwork) else actor
+    if files.members:
+        return [
+            (member, policy.sb3_policy)
+            for member, policy in zip(files.members, network.members, strict=True)
+        ]
+    return [(files, network.sb3_policy)]
 
 
 def _one_float32() -> Any:
@@ -553,7 +573,14 @@ def _contract(
 def _provenance(files: AgentFiles) -> dict[str, Any]:
     """Where the export came from, without the exporting machine's paths: the agent folder's
     name, the model's SHA-256, how it was trained, and its training file only where it is a
-    file of this repository (a path relative to it)."""
+    file of this repository (a path relative to it); for an ensemble its folder's name and
+    that of each member, in the order of its ensemble.json."""
+    if files.ensemble is not None:
+        return {
+            "agent": files.ensemble.parent.name,
+            "members": [_provenance(member) for member in files.members],
+            "exported_with": f"auv-gym {__version__}",
+        }
     metadata = files.metadata
     out: dict[str, Any] = {
         "agent": Path(files.model).parent.name,

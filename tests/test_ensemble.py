@@ -1,7 +1,7 @@
 """Ensembles of saved agents (`controllers.ensemble`, `auv-gym ensemble`): the folder flies its
 members' mean action, plain or residual; every member is checked and must fly like the others but
 for its network; damaged lists, missing or nested members are one-line errors naming the file;
-`--results --best K` takes the K best seeds by validation; an ensemble has no ONNX export."""
+`--results --best K` takes the K best seeds by validation; an ensemble exports to one ONNX graph."""
 
 from __future__ import annotations
 
@@ -173,12 +173,8 @@ def test_the_command_takes_the_best_seeds_by_validation_and_writes_nothing_wrong
     assert not (tmp_path / "one").exists()
 
 
-def test_unlike_members_leave_no_ensemble_and_an_ensemble_has_no_onnx_export(
-    tmp_path, paper_agents, save_tiny_residual_agent
-):
-    pytest.importorskip("onnx")
+def test_unlike_members_leave_no_ensemble(tmp_path, paper_agents, save_tiny_residual_agent):
     from benchmarks.runner.ensemble import main
-    from controllers.onnx_export import export_onnx
 
     residual = tmp_path / "residual"
     save_tiny_residual_agent(ResidualTraining(), residual, 0, ENV)
@@ -188,10 +184,57 @@ def test_unlike_members_leave_no_ensemble_and_an_ensemble_has_no_onnx_export(
     assert exit_info.value.code == 2
     assert not (out / ENSEMBLE_FILE).exists()
 
+
+def test_an_ensemble_exports_to_one_graph_that_flies_its_mean(tmp_path, paper_agents):
+    """One ONNX graph holds every member's normalisation and network and averages their
+    actions: its commands equal the Python ensemble's, not either member's."""
+    pytest.importorskip("onnx")
+    pytest.importorskip("onnxruntime")
+    from controllers.loader import load_policy
+    from controllers.onnx_export import export_onnx
+    from controllers.onnx_policy import inference_session
+
     write_ensemble(tmp_path / "pair", paper_agents)
-    with pytest.raises(ValueError, match=r"ensemble of 2 agents has no ONNX export"):
-        export_onnx(tmp_path / "pair", tmp_path / "pair.onnx")
-    assert not (tmp_path / "pair.onnx").exists()
+    onnx_file, contract_file, parity = export_onnx(tmp_path / "pair", tmp_path / "pair.onnx")
+    assert parity["max_abs_error"] <= 1e-5
+    provenance = json.loads(contract_file.read_text())["provenance"]
+    assert provenance["agent"] == "pair"
+    assert [m["agent"] for m in provenance["members"]] == ["agent_seed_0", "agent_seed_1"]
+    assert [m["seed"] for m in provenance["members"]] == [0, 1]
+
+    obs = _observations(64)
+    session = inference_session(onnx_file.read_bytes(), where=onnx_file)
+    (got,) = session.run(None, {"observation": obs})
+    want, _ = load_policy(tmp_path / "pair").predict(obs)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
+    a0, _ = load_policy(paper_agents[0]).predict(obs)
+    assert np.abs(got - a0).max() > 1e-3  # the mean, not the first member
+
+
+def test_a_residual_ensembles_export_flies_like_the_ensemble(tmp_path, save_tiny_residual_agent):
+    """The residual ensemble's graph (mean correction, then bound and filter on the base's
+    command) flown in closed loop by the ONNX runtime beside its base: the same episode."""
+    pytest.importorskip("onnx")
+    pytest.importorskip("onnxruntime")
+    import controllers
+    from auv_gym.rollout import evaluate
+    from controllers.onnx_export import export_onnx
+
+    settings = ResidualTraining(bound=(0.2, 0.4, 0.4))
+    members = [tmp_path / f"agent_{seed}" for seed in (1, 2)]
+    for seed, folder in zip((1, 2), members, strict=True):
+        save_tiny_residual_agent(settings, folder, seed, ENV)
+    write_ensemble(tmp_path / "ensemble", members)
+    _, _, parity = export_onnx(tmp_path / "ensemble", tmp_path / "ensemble.onnx")
+    assert parity["max_abs_error"] <= 1e-5
+
+    env = {**ENV, "max_time": 20.0}
+    python = controllers.make("agent", env=env, path=str(tmp_path / "ensemble"))
+    exported = controllers.make("onnx", env=env, path=str(tmp_path / "ensemble.onnx"))
+    (a,) = evaluate(python, [0], transient=5.0, **env)
+    (b,) = evaluate(exported, [0], transient=5.0, **env)
+    assert np.isfinite(a["rms_distance"]) and a["rms_distance"] > 0.0
+    assert b["rms_distance"] == pytest.approx(a["rms_distance"], rel=1e-4)
 
 
 def test_the_suite_flies_an_ensemble_as_one_run_and_its_digest_follows_the_members(
