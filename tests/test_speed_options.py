@@ -54,6 +54,12 @@ def test_the_former_flags_and_several_values_stay() -> None:
         ("off_policy", ["--replay-ratio", "0"], "--replay-ratio must be > 0, got 0.0"),
         ("off_policy", ["--algos", "ddpg"], "argument --algos: invalid choice: 'ddpg'"),
         ("vector", ["--actuators", "jet"], "argument --actuators: invalid choice: 'jet'"),
+        ("onnx", ["--agent", "runs/x"], "--agent and --onnx go together"),
+        (
+            "onnx",
+            ["--agent", "no_such_folder", "--onnx", "x.onnx"],
+            "no_such_folder does not exist",
+        ),
     ],
 )
 def test_a_bad_value_is_one_line_exit_2(name: str, argv: list[str], message: str, capsys) -> None:

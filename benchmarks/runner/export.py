@@ -3,6 +3,7 @@
     auv-gym export ppo_generalist --out out/policy.onnx             # the paper's actuator
     auv-gym export ppo_generalist --actuator realistic --out out/p.onnx # propeller and fins
     auv-gym export agent:runs/x/agent --out out/x.onnx
+    auv-gym export runs/x/ensemble3 --out out/x3.onnx  # an ensemble: its members in one graph
 
 Writes FILE.onnx and FILE.json (`controllers.onnx_export`), both or neither; the graph is run
 against the Python agent before anything is written, and the contract states everything the

@@ -2,19 +2,23 @@
 policy.
 
     python -m benchmarks.speed.onnx [--steps 3000]      (auv-gym speed onnx)
+    python -m benchmarks.speed.onnx --agent runs/x/ensemble3 --onnx out/x3.onnx
 
 For each agent, one closed-loop episode of its own env records the observations the vehicle
 gives it; both policies (`controllers.make("onnx")`, onnxruntime on one thread, and
 `controllers.make("agent")`, torch on one thread) then predict them one at a time, interleaved
 call by call so that the machine's load falls on both alike. Printed: the median and the 99th
 percentile of the wall time per call [µs], the whole `predict` (normalisation, network, stages;
-the residual agent's base controller too, which both run in numpy).
+the residual agent's base controller too, which both run in numpy). ``--agent FOLDER --onnx
+FILE`` times one agent (or ensemble, docs/design.md §3.23) and its export instead of the
+reference agents.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -41,21 +45,22 @@ class Recorder:
         return self.policy.predict(observation, state, episode_start, deterministic)
 
 
-def observations(agent: str, steps: int) -> np.ndarray:
-    """(steps, d) observations of one episode of ``agent`` in its own env (seed 0; repeated
-    when the episode is shorter)."""
-    recorder = Recorder(controllers.make("agent", path=str(AGENTS_DIR / agent)))
+def observations(agent: Path, steps: int) -> np.ndarray:
+    """(steps, d) observations of one episode of the agent in folder ``agent`` in its own env
+    (seed 0; repeated when the episode is shorter)."""
+    recorder = Recorder(controllers.make("agent", path=str(agent)))
     rollouts(recorder, [0], max_time=min(steps * 0.05, 600.0))
     obs = np.concatenate([np.atleast_2d(o) for o in recorder.seen])
     return np.resize(obs, (steps, obs.shape[1]))
 
 
-def latencies(agent: str, steps: int) -> dict[str, dict[str, float]]:
-    """Per-call wall times [µs] of both policies over ``steps`` observations: median and p99."""
+def latencies(agent: Path, onnx_file: Path, steps: int) -> dict[str, dict[str, float]]:
+    """Per-call wall times [µs] of the agent in folder ``agent`` and its export ``onnx_file``
+    over ``steps`` observations: median and p99."""
     obs = observations(agent, steps)
     policies = {
-        "onnx": controllers.make("onnx", path=str(AGENTS_DIR / agent / "policy.onnx")),
-        "torch": controllers.make("agent", path=str(AGENTS_DIR / agent), num_threads=1),
+        "onnx": controllers.make("onnx", path=str(onnx_file)),
+        "torch": controllers.make("agent", path=str(agent), num_threads=1),
     }
     times: dict[str, list[float]] = {name: [] for name in policies}
     states: dict[str, Any] = dict.fromkeys(policies)
@@ -81,21 +86,34 @@ class Options:
     """The command line of `auv-gym speed onnx`."""
 
     steps: int = option(3000, "timed calls per policy and agent")
+    agent: str = option("", "an agent or ensemble folder to time instead of the reference agents")
+    onnx: str = option("", "its export (.onnx), with --agent")
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     args, parser = parse_options(Options, argv, program_name("benchmarks.speed.onnx"), __doc__)
     if not 100 <= args.steps <= 1_000_000:
         parser.error(f"--steps must be in [100, 1000000], got {args.steps}")
+    if bool(args.agent) != bool(args.onnx):
+        parser.error("--agent and --onnx go together (an agent folder and its export)")
+    pairs = {
+        agent: (AGENTS_DIR / agent, AGENTS_DIR / agent / "policy.onnx")
+        for agent in REFERENCE_AGENTS
+    }
+    if args.agent:
+        for path in (Path(args.agent), Path(args.onnx)):
+            if not path.exists():
+                parser.error(f"{path} does not exist")
+        pairs = {Path(args.agent).name: (Path(args.agent), Path(args.onnx))}
     print("\nLatency per control step, batch 1, one thread [µs]: ONNX runtime vs torch policy")
-    width = max(len(agent) for agent in REFERENCE_AGENTS)
+    width = max(len(agent) for agent in pairs)
     print(
         f"{'agent':<{width}} {'onnx median':>12} {'onnx p99':>10} {'torch median':>13} "
         f"{'torch p99':>10} {'speed-up':>9}"
     )
     results = {}
-    for agent in REFERENCE_AGENTS:
-        out = latencies(agent, args.steps)
+    for agent, (folder, onnx_file) in pairs.items():
+        out = latencies(folder, onnx_file, args.steps)
         results[agent] = out
         onnx, torch = out["onnx"], out["torch"]
         print(
