@@ -578,7 +578,10 @@ def _provenance(files: AgentFiles) -> dict[str, Any]:
     if files.ensemble is not None:
         return {
             "agent": files.ensemble.parent.name,
-            "members": [_provenance(member) for member in files.members],
+            "members": [
+                {k: v for k, v in _provenance(member).items() if k != "exported_with"}
+                for member in files.members
+            ],
             "exported_with": f"auv-gym {__version__}",
         }
     metadata = files.metadata

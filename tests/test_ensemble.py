@@ -201,6 +201,7 @@ def test_an_ensemble_exports_to_one_graph_that_flies_its_mean(tmp_path, paper_ag
     assert provenance["agent"] == "pair"
     assert [m["agent"] for m in provenance["members"]] == ["agent_seed_0", "agent_seed_1"]
     assert [m["seed"] for m in provenance["members"]] == [0, 1]
+    assert all("model_sha256" in m and "exported_with" not in m for m in provenance["members"])
 
     obs = _observations(64)
     session = inference_session(onnx_file.read_bytes(), where=onnx_file)
