@@ -288,3 +288,41 @@ def test_validation_scores_rank_agents_as_selection_does(tmp_path, paper_agents)
     assert json.loads((tmp_path / "scores" / "validation_score.json").read_text()) == record
     with pytest.raises(ValueError, match="is a test set, not a validation set"):
         validation_score(paper_agents[0], "test_distribution", 2, 20.0)
+
+
+def test_an_ensemble_with_the_mirror_guard_and_allocation_exports_for_the_fins(tmp_path):
+    """Two members with every stage a plain agent can list (the generalist's guard and
+    allocation, plus the mirror; the second member's normalisation shifted, so the two fly
+    differently): the graph mirrors each member's network, averages, then guards and allocates
+    once for the fins, and the export's parity check holds it to the Python ensemble."""
+    pytest.importorskip("onnx")
+    from benchmarks.catalog.policies import AGENTS_DIR
+    from controllers.loader import load_policy
+    from controllers.mirror import MirroredNetwork
+    from controllers.onnx_export import export_onnx
+
+    members = [tmp_path / "first", tmp_path / "second"]
+    for folder in members:
+        shutil.copytree(AGENTS_DIR / "ppo_generalist", folder)
+        meta = json.loads((folder / "metadata.json").read_text())
+        meta["stages"] = [*meta["stages"], {"name": "mirror_symmetry"}]
+        (folder / "metadata.json").write_text(json.dumps(meta))
+    stats = dict(np.load(members[1] / "vecnormalize.npz"))
+    stats["mean"] = stats["mean"] + 0.3 * np.sqrt(stats["var"])
+    np.savez(members[1] / "vecnormalize.npz", **stats)
+    write_ensemble(tmp_path / "pair", members)
+
+    policy = load_policy(tmp_path / "pair")
+    assert isinstance(policy.actor, MirroredNetwork)
+    assert isinstance(policy.actor.network, EnsembleActor)
+    _, contract, parity = export_onnx(tmp_path / "pair", tmp_path / "pair.onnx", actuator="fins")
+    _, _, alone = export_onnx(members[0], tmp_path / "first.onnx", actuator="fins")
+    assert parity["max_abs_error"] <= 1e-5 and alone["max_abs_error"] <= 1e-5
+    raw = json.loads(contract.read_text())
+    assert [s["name"] for s in raw["stages"]] == [
+        "mirror_symmetry",
+        "envelope_guard",
+        "actuator_allocation",
+    ]
+    assert raw["actuator"] == "fins" and len(raw["provenance"]["members"]) == 2
+    assert (tmp_path / "pair.onnx").stat().st_size > 1.8 * (tmp_path / "first.onnx").stat().st_size
