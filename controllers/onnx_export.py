@@ -177,7 +177,7 @@ def export_onnx(
     parity = _parity(model, files, actor, stages, state_size)
     if parity["max_abs_error"] > PARITY_TOLERANCE:
         raise ValueError(
-            f"{files.model}: the exported graph differs from the agent by "
+            f"{files.ensemble or files.model}: the exported graph differs from the agent by "
             f"{parity['max_abs_error']:.3g} > {PARITY_TOLERANCE:g}; nothing written"
         )
     contract = _contract(files, target, layout, state_size, actuator, params, stages, parity)
