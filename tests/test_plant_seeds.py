@@ -70,6 +70,25 @@ def test_the_command_writes_both_tables(tmp_path, capsys):
     assert "| 2 | 0.301" in text and "3 of 4" in text
     assert (tmp_path / "plant_seeds.json").is_file()
     assert "plants target" in capsys.readouterr().out
+    assert (tmp_path / "plant_seeds.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_figure_draws_each_runs_ratios_and_the_targets():
+    from benchmarks.analysis.plant_seeds import figure
+
+    plants = {p: read_plant(_folders(p), "plants", "pid_as_built") for p in ("5dof", "6dof")}
+    record = plant_table(plants, "plants", "pid_as_built", reps=200)
+    per_set, plants = figure(record).axes
+    runs = list(record["runs"].values())
+    markers = [line for line in per_set.lines if line.get_label().startswith("seed")]
+    assert len(markers) == len(runs) == 4
+    for line, entry in zip(markers, runs, strict=True):
+        want = [entry["set_ratios_5dof"][s] for s in record["sets"]]
+        np.testing.assert_allclose(line.get_ydata(), want, rtol=0, atol=0)
+    ratios = [line.get_ydata()[0] for line in plants.lines if len(line.get_xdata()) == 1]
+    assert ratios == [entry["ratio"] for entry in runs]
+    targets = [line.get_ydata()[0] for ax in (per_set, plants) for line in ax.lines[-1:]]
+    assert targets == [record["max_per_set"], record["max_ratio"]]
 
 
 def test_evaluations_that_are_not_one_experiment_are_refused(tmp_path):

@@ -22,7 +22,8 @@ as-built agent on both plants"):
   best reference's on that set), no failed episode.
 
 Then how many runs meet each target, and the policy's means over all runs. Written to --out:
-``plant_seeds.json`` and ``plant_seeds.md``.
+``plant_seeds.json``, ``plant_seeds.md`` and ``plant_seeds.png`` (each run's per-set ratios and
+its 6-DOF / 5-DOF ratio against the two targets).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ __all__ = [
     "PER_SET_TARGET",
     "PLANTS_TARGET",
     "PlantSuite",
+    "figure",
     "main",
     "markdown",
     "plant_table",
@@ -278,6 +280,41 @@ def markdown(record: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def figure(record: Mapping[str, Any]) -> Any:
+    """The targets drawn (a matplotlib Figure): left, each run's 5-DOF mean per set over the best
+    reference's there (one marker per run, the runs side by side within a set) with the per-set
+    target; right, each run's 6-DOF / 5-DOF ratio with the plants target. A run with a failed
+    episode is drawn hollow."""
+    from benchmarks.reports.plotting import new_figure, policy_colours
+
+    sets, runs = list(record["sets"]), record["runs"]
+    labels = [f"seed {run}" for run in runs]
+    colours = policy_colours(labels)
+    fig = new_figure(10.0, 4.0, layout="constrained")
+    per_set, plants = fig.subplots(1, 2, width_ratios=[3, 1])
+    width = 0.7 / max(len(runs), 1)
+    for k, (label, entry) in enumerate(zip(labels, runs.values(), strict=True)):
+        offset = (k - (len(runs) - 1) / 2) * width
+        failed = entry["5dof"]["failed"] + entry["6dof"]["failed"] > 0
+        face = "none" if failed else colours[label]
+        ratios = [entry["set_ratios_5dof"][s] for s in sets]
+        per_set.plot(
+            np.arange(len(sets)) + offset, ratios, "o", color=colours[label], mfc=face, label=label
+        )
+        plants.plot([offset], [entry["ratio"]], "o", color=colours[label], mfc=face)
+    per_set.axhline(record["max_per_set"], color="k", ls="--", lw=1, label="per-set target")
+    per_set.set_xticks(range(len(sets)), [s.split(":")[-1] for s in sets], rotation=15)
+    per_set.set_ylabel("5-DOF mean / best reference's")
+    per_set.set_title("per set, 5-DOF plant", fontsize=10)
+    per_set.legend(fontsize=7, ncols=2)
+    plants.axhline(record["max_ratio"], color="k", ls="--", lw=1)
+    plants.set_xticks([])
+    plants.set_ylabel("6-DOF mean / 5-DOF mean")
+    plants.set_title("both plants", fontsize=10)
+    fig.suptitle(f"{record['policy']} seed by seed; reference: {record['reference']}", fontsize=9)
+    return fig
+
+
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     from auv_gym.support.files import write_json, write_text
 
@@ -309,6 +346,9 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     write_json(args.out / SEEDS_FILE, record, indent=1)
     text = markdown(record)
     write_text(args.out / "plant_seeds.md", text)
+    from benchmarks.reports.plotting import save_figure
+
+    save_figure(figure(record), args.out / "plant_seeds.png")
     print(text)
     return record
 
