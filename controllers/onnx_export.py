@@ -571,19 +571,23 @@ def _contract(
 
 
 def _provenance(files: AgentFiles) -> dict[str, Any]:
-    """Where the export came from, without the exporting machine's paths: the agent folder's
-    name, the model's SHA-256, how it was trained, and its training file only where it is a
-    file of this repository (a path relative to it); for an ensemble its folder's name and
-    that of each member, in the order of its ensemble.json."""
+    """Where the export came from, without the exporting machine's paths: the agent's
+    (`_model_provenance`), or for an ensemble its folder's name and each member's, in the order
+    of its ensemble.json; then the exporting version."""
     if files.ensemble is not None:
-        return {
+        out: dict[str, Any] = {
             "agent": files.ensemble.parent.name,
-            "members": [
-                {k: v for k, v in _provenance(member).items() if k != "exported_with"}
-                for member in files.members
-            ],
-            "exported_with": f"auv-gym {__version__}",
+            "members": [_model_provenance(member) for member in files.members],
         }
+    else:
+        out = _model_provenance(files)
+    out["exported_with"] = f"auv-gym {__version__}"
+    return out
+
+
+def _model_provenance(files: AgentFiles) -> dict[str, Any]:
+    """One saved agent: its folder's name, its model's SHA-256, how it was trained, and its
+    training file only where it is a file of this repository (a path relative to it)."""
     metadata = files.metadata
     out: dict[str, Any] = {
         "agent": Path(files.model).parent.name,
@@ -595,7 +599,6 @@ def _provenance(files: AgentFiles) -> dict[str, Any]:
     config = metadata.get("config_file")
     if isinstance(config, str) and _repository_file(config):
         out["config_file"] = Path(config).as_posix()
-    out["exported_with"] = f"auv-gym {__version__}"
     return out
 
 
