@@ -317,6 +317,7 @@ def figure(record: Mapping[str, Any]) -> Any:
 
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     from auv_gym.support.files import write_json, write_text
+    from benchmarks.reports.plotting import save_figure
 
     args, parser = parse_options(
         PlantSeedsOptions,
@@ -346,8 +347,6 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     write_json(args.out / SEEDS_FILE, record, indent=1)
     text = markdown(record)
     write_text(args.out / "plant_seeds.md", text)
-    from benchmarks.reports.plotting import save_figure
-
     save_figure(figure(record), args.out / "plant_seeds.png")
     print(text)
     return record
