@@ -53,6 +53,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks import cli
+from controllers.ensemble import ENSEMBLE_FILE
 
 ROOT = Path(__file__).resolve().parents[1]
 AGENTS = ROOT / "benchmarks" / "agents"
@@ -332,7 +333,9 @@ def _check_output(value: object, what: str, doc: str) -> None:
 
 def _check_agent(path: Path, written: Written, what: str) -> None:
     _need(
-        written.has(path) or (ROOT / path / "metadata.json").is_file(),
+        written.has(path)
+        or (ROOT / path / "metadata.json").is_file()
+        or (ROOT / path / ENSEMBLE_FILE).is_file(),
         f"{what}: {path} is neither a committed agent nor written earlier in its block",
     )
 
@@ -635,7 +638,11 @@ def test_a_wrong_command_is_named(words, problem, monkeypatch) -> None:
 
 # --- the reference agents ---------------------------------------------------------------------
 
-SHIPPED = sorted(p.name for p in AGENTS.iterdir() if (p / "metadata.json").is_file())
+SHIPPED = sorted(
+    p.name
+    for p in AGENTS.iterdir()
+    if (p / "metadata.json").is_file() or (p / ENSEMBLE_FILE).is_file()
+)
 NUMBERS = "one two three four five six seven eight nine ten".split()
 COUNT = re.compile(rf"\b({'|'.join(NUMBERS)}|\d+)\s+(?:reference|shipped|trained)\s+agents\b", re.I)
 AGENT_NAME = r"`(?:ppo|sac)_[a-z0-9_]+`"

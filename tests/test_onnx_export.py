@@ -21,6 +21,7 @@ from auv_gym.sim.observation import ObservationConfig
 from auv_gym.vehicle.actuators import ActuatorParams
 from benchmarks.catalog.policies import AGENTS_DIR, REFERENCE_AGENTS, policy_env
 from controllers.actuator_allocation import Allocation
+from controllers.agent import check_agent
 from controllers.envelope_guard import EnvelopeGuard, guard_commands
 from controllers.onnx_graph import (
     OPSET,
@@ -151,11 +152,14 @@ def test_every_reference_agent_ships_a_current_export(agent):
     folder = AGENTS_DIR / agent
     contract = read_contract(folder / "policy.onnx")
     raw = contract.raw
-    assert raw["provenance"]["model_sha256"] == sha256_of(folder / "model.zip")
+    files = check_agent(folder)
+    members = files.members or (files,)  # an ensemble's graph holds each member's network
+    provenance = raw["provenance"].get("members", [raw["provenance"]])
+    assert [p["model_sha256"] for p in provenance] == [sha256_of(m.model) for m in members]
     assert raw["parity"]["max_abs_error"] <= 1e-5 and raw["parity"]["observations"] >= 2048
     env_id, _ = policy_env(agent)
     assert contract.env_id == env_id
-    metadata = json.loads((folder / "metadata.json").read_text())
+    metadata = files.metadata
     names = metadata["obs_names"]  # a residual's end with its base's command and its previous one
     expected = names[: -len(RESIDUAL_FEATURES)] if "residual" in metadata else names
     assert list(contract.obs_names) == expected

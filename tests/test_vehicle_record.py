@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -90,6 +88,7 @@ def test_the_default_vehicles_observation_bounds_are_unchanged() -> None:
 def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
     pytest.importorskip("stable_baselines3")
     from benchmarks.catalog.policies import REFERENCE_AGENTS, PolicySpec
+    from controllers.agent import check_agent
     from controllers.residual import RESIDUAL_FEATURES, ResidualPolicy
 
     checked = 0
@@ -98,7 +97,7 @@ def test_the_shipped_agents_observation_spaces_are_the_envs() -> None:
         if folder is None or not folder.exists():
             continue
         policy = controllers.make("agent", path=str(folder))
-        metadata = json.loads((folder / "metadata.json").read_text())
+        metadata = check_agent(folder).metadata  # an ensemble's: its first member's
         seen = {"observation": metadata["observation"]} if "observation" in metadata else {}
         env_id = auv_gym.resolve_env_id(metadata["env_id"])  # the env the agent carries
         env = gym.make(env_id, **{**metadata["env_kwargs"], **seen})
