@@ -385,11 +385,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         if args.agents:
             from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
+            from controllers.agent import check_agent
 
             for recorded_file in sorted(AGENTS.glob(f"*/{HELD_OUT_FILE}")):
                 committed = json.loads(recorded_file.read_text())
-                # under the env id the agent records: its surge limit, its scenario label
-                metadata = json.loads((recorded_file.parent / "metadata.json").read_text())
+                # under the env id the agent records (an ensemble's: its members', which agree):
+                # its surge limit, its scenario label
+                metadata = check_agent(recorded_file.parent).metadata
                 fresh = held_out_evaluation(
                     recorded_file.parent, committed["duration_s"], metadata["env_id"]
                 )
