@@ -211,3 +211,35 @@ def test_an_unknown_machine_is_refused_before_any_rerun(capsys) -> None:
         main(["--machine", "avx3"])
     assert stop.value.code == 2
     assert "--machine must be one of avx2, native, got 'avx3'" in capsys.readouterr().err
+
+
+def test_held_out_re_runs_reach_an_ensemble_under_its_members_env(tmp_path, monkeypatch, capsys):
+    """Was: `--agents` read each agent folder's metadata.json for its env id and stopped at the
+    shipped ensemble, whose folder holds ensemble.json and its members' folders instead."""
+    import shutil
+
+    import benchmarks.training
+    from benchmarks.catalog.policies import AGENTS_DIR
+    from benchmarks.checks.reproduction import compare_held_out
+
+    agents = tmp_path / "agents"
+    shutil.copytree(AGENTS_DIR / "ppo_residual_as_built", agents / "ensemble")
+    assert not (agents / "ensemble" / "metadata.json").exists()
+    recorded = json.loads((agents / "ensemble" / "held_out_evaluation.json").read_text())
+    calls = []
+
+    def evaluation(agent, duration, env_id):  # the recorded run, 10 x 200 s, stands in
+        calls.append((Path(agent).name, duration, env_id))
+        return recorded
+
+    monkeypatch.setattr(benchmarks.training, "held_out_evaluation", evaluation)
+    report = Report(allow_new=False)
+    (tmp_path / "out").mkdir()
+    compare_held_out(agents, tmp_path / "out", report)
+    assert calls == [("ensemble", 200.0, "AUVPath3DSpeedLimit-v0")]
+    assert report.failures == 0
+    assert "ensemble held-out: 133 values compared, 0 differ" in capsys.readouterr().out
+
+    recorded = {**recorded, "summary": {**recorded["summary"], "rms_distance_mean": 0.3}}
+    compare_held_out(agents, tmp_path / "out", report)
+    assert report.failures == 1

@@ -322,6 +322,23 @@ class ReproductionOptions:
     machine: str = option("avx2", "run as the results' AVX2 machine or as this one (avx2, native)")
 
 
+def compare_held_out(agents: Path, out: Path, report: Report) -> None:
+    """Re-evaluate every agent folder under ``agents`` that holds a held-out evaluation (a
+    single agent or an ensemble), write the re-run to ``out`` and compare it value by value."""
+    from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
+    from controllers.agent import check_agent
+
+    for recorded_file in sorted(agents.glob(f"*/{HELD_OUT_FILE}")):
+        committed = json.loads(recorded_file.read_text())
+        # under the env id the agent records (an ensemble's: its members', which agree): its
+        # surge limit, its scenario label
+        env_id = check_agent(recorded_file.parent).metadata["env_id"]
+        fresh = held_out_evaluation(recorded_file.parent, committed["duration_s"], env_id)
+        fresh_file = out / f"{recorded_file.parent.name}_{HELD_OUT_FILE}"
+        fresh_file.write_text(json.dumps(fresh, default=float))
+        compare_json(f"{recorded_file.parent.name} held-out", recorded_file, fresh_file, report)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args, parser = parse_options(
         ReproductionOptions,
@@ -384,22 +401,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         compare_json("paper metrics.json", paper_json, out / "paper/metrics.json", report)
 
         if args.agents:
-            from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
-            from controllers.agent import check_agent
-
-            for recorded_file in sorted(AGENTS.glob(f"*/{HELD_OUT_FILE}")):
-                committed = json.loads(recorded_file.read_text())
-                # under the env id the agent records (an ensemble's: its members', which agree):
-                # its surge limit, its scenario label
-                metadata = check_agent(recorded_file.parent).metadata
-                fresh = held_out_evaluation(
-                    recorded_file.parent, committed["duration_s"], metadata["env_id"]
-                )
-                fresh_file = out / f"{recorded_file.parent.name}_{HELD_OUT_FILE}"
-                fresh_file.write_text(json.dumps(fresh, default=float))
-                compare_json(
-                    f"{recorded_file.parent.name} held-out", recorded_file, fresh_file, report
-                )
+            compare_held_out(AGENTS, out, report)
 
     verdict = "REPRODUCED bit for bit" if report.failures == 0 else f"{report.failures} problems"
     print(verdict)
