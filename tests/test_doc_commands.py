@@ -331,11 +331,14 @@ def _check_output(value: object, what: str, doc: str) -> None:
     )
 
 
+def _agent_folder(folder: Path) -> bool:
+    """A saved agent's folder (its metadata.json) or an ensemble's (its ensemble.json)."""
+    return (folder / "metadata.json").is_file() or (folder / ENSEMBLE_FILE).is_file()
+
+
 def _check_agent(path: Path, written: Written, what: str) -> None:
     _need(
-        written.has(path)
-        or (ROOT / path / "metadata.json").is_file()
-        or (ROOT / path / ENSEMBLE_FILE).is_file(),
+        written.has(path) or _agent_folder(ROOT / path),
         f"{what}: {path} is neither a committed agent nor written earlier in its block",
     )
 
@@ -638,11 +641,7 @@ def test_a_wrong_command_is_named(words, problem, monkeypatch) -> None:
 
 # --- the reference agents ---------------------------------------------------------------------
 
-SHIPPED = sorted(
-    p.name
-    for p in AGENTS.iterdir()
-    if (p / "metadata.json").is_file() or (p / ENSEMBLE_FILE).is_file()
-)
+SHIPPED = sorted(p.name for p in AGENTS.iterdir() if _agent_folder(p))
 NUMBERS = "one two three four five six seven eight nine ten".split()
 COUNT = re.compile(rf"\b({'|'.join(NUMBERS)}|\d+)\s+(?:reference|shipped|trained)\s+agents\b", re.I)
 AGENT_NAME = r"`(?:ppo|sac)_[a-z0-9_]+`"
