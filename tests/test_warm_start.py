@@ -15,6 +15,7 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 from benchmarks.training.warm_start import agent_for_seed, check_warm_start, warm_start
+from controllers.ensemble import write_ensemble
 
 pytestmark = pytest.mark.rl
 
@@ -170,3 +171,18 @@ def test_bad_agents_are_named(agent, tmp_path):
     (copy / "metadata.json").write_text("{not json")
     with pytest.raises(ValueError, match=r"metadata\.json is unreadable"):
         check_warm_start(copy, "ppo")
+
+
+def test_an_ensemble_is_refused_naming_its_members(agent, tmp_path):
+    for seed in (1, 2):
+        shutil.copytree(agent, tmp_path / f"agent_seed_{seed}")
+    members = [tmp_path / "agent_seed_1", tmp_path / "agent_seed_2"]
+    ensemble = write_ensemble(tmp_path / "ensemble", members).parent
+    first = str(members[0].resolve())
+    with pytest.raises(ValueError) as refused:
+        check_warm_start(ensemble, "ppo")
+    message = str(refused.value)
+    assert message.startswith(f"init_from {str(ensemble)!r}: an ensemble of 2 agents")
+    assert message.endswith(f"pass one member's folder, e.g. {first!r}")
+    # the member it names starts a run
+    assert check_warm_start(first, "ppo")["algo"] == "ppo"

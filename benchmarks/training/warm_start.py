@@ -36,6 +36,7 @@ import numpy as np
 from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE
 from controllers.algorithms import ALGORITHMS
+from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
 
 __all__ = [
     "MAX_NETWORK_WEIGHTS",
@@ -132,6 +133,14 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
     """The agent's metadata, checked to start a run of ``algo`` on ``obs_names`` (None: not
     compared); ValueError naming a missing file, another algorithm or another layout."""
     folder = Path(agent)
+    if (folder / ENSEMBLE_FILE).is_file():
+        # an ensemble's mean action is no network a run can continue from; one member is
+        members = [str(member) for member in ensemble_members(folder)]
+        raise ValueError(
+            f"init_from {str(folder)!r}: an ensemble of {len(members)} agents (its "
+            f"{ENSEMBLE_FILE}: {', '.join(members)}) is not one network to start from: pass one "
+            f"member's folder, e.g. {members[0]!r}"
+        )
     for name in (MODEL_FILE, STATS_FILE, METADATA_FILE):
         if not (folder / name).is_file():
             raise ValueError(
