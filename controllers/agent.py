@@ -293,7 +293,7 @@ def check_agent(path: str | os.PathLike) -> AgentFiles:
             f"{meta}: action_shape is {metadata['action_shape']!r}, expected {[action_dim]!r}"
         )
     names = observation_layout(metadata)
-    _check_model_zip(model, names, action_dim, f"{algo.class_name} model")
+    _check_model_zip(model, names, action_dim, f"{algo.class_name} model", meta)
     mean, var, clip_obs, epsilon = _read_stats(stats, names)
     stages = agent_stages(metadata, str(meta))
     if stages and residual is not None:
@@ -310,6 +310,13 @@ def check_ensemble(spec: Path, paths: Sequence[Path]) -> AgentFiles:
     what differs)."""
     members = [check_agent(path) for path in paths]
     first = members[0]
+    models = [files.model.resolve() for files in members]
+    for k, model in enumerate(models):  # a folder and its model.zip are one agent
+        if model in models[:k]:
+            raise ValueError(
+                f"ensemble {spec}: members {str(paths[models.index(model)])!r} and "
+                f"{str(paths[k])!r} are one agent ({model}); list each agent once"
+            )
 
     def flies_as(files: AgentFiles) -> dict[str, Any]:
         return {
@@ -327,9 +334,26 @@ def check_ensemble(spec: Path, paths: Sequence[Path]) -> AgentFiles:
             if value != reference[key]:
                 raise ValueError(
                     f"ensemble {spec}: member {files.model.parent} differs from "
-                    f"{first.model.parent} in its {key} ({value!r:.80} vs {reference[key]!r:.80})"
+                    f"{first.model.parent} in its {key} ({_difference(value, reference[key])})"
                 )
     return replace(first, ensemble=spec, members=tuple(members))
+
+
+def _difference(value: Any, reference: Any) -> str:
+    """Where ``value`` differs from ``reference``, short enough for one line: for two sequences
+    their lengths and the first entry that differs (a long layout's shared head would hide it),
+    else both values."""
+    if isinstance(value, (list, tuple)) and isinstance(reference, (list, tuple)):
+        k = next(
+            (i for i, (a, b) in enumerate(zip(value, reference, strict=False)) if a != b),
+            min(len(value), len(reference)),
+        )
+        first, other = (f"{v[k]!r:.60}" if k < len(v) else "no entry" for v in (value, reference))
+        return (
+            f"{len(value)} entries vs {len(reference)}, first difference at entry {k}: "
+            f"{first} vs {other}"
+        )
+    return f"{value!r:.120} vs {reference!r:.120}"
 
 
 # Metadata keys of earlier releases: the stages an agent now lists under "stages".
@@ -403,10 +427,12 @@ def _check_model_zip(
     names: tuple[str, ...] = OBS_NAMES,
     action_dim: int = ACTION_DIM,
     label: str = "PPO model",
+    metadata_file: Path | None = None,
 ) -> None:
     """SB3's zip: intact (CRC), with its parameters and a (len(names),) → (action_dim,) Box
     policy (3 actions; a residual agent with a learned filter: 6). Errors begin with ``label``
-    (the algorithm's model, e.g. "SAC model")."""
+    (the algorithm's model, e.g. "SAC model"); ``metadata_file`` is where ``names`` came from
+    (None: no metadata, the paper's layout)."""
     if not zipfile.is_zipfile(model):
         raise ValueError(f"{label} {model} is not a valid zip file (corrupt or truncated)")
     try:
@@ -433,8 +459,21 @@ def _check_model_zip(
             what = key.replace("_", " ")
             raise ValueError(
                 f"{label} {model}: {what} shape {tuple(shape)}, expected {expected}"
-                + (f" (layout {list(names)})" if key == "observation_space" else "")
+                + (
+                    f" (layout {list(names)}){_layout_source(metadata_file)}"
+                    if key == "observation_space"
+                    else ""
+                )
             )
+
+
+def _layout_source(metadata_file: Path | None) -> str:
+    """What an observation-shape error adds about where the expected layout came from: without
+    metadata.json an agent is read as the paper's observation, and a lost metadata file is the
+    likelier cause of a mismatch than a wrong network."""
+    if metadata_file is not None:
+        return ""
+    return f"; there is no {METADATA_FILE} beside it, so it is read as the paper's observation"
 
 
 def _read_stats(
@@ -572,7 +611,7 @@ def load_actor(
     if shape != (len(layout),):
         raise ValueError(
             f"{files.label} {files.model}: observation space shape {shape}, expected "
-            f"({len(layout)},) (layout {list(layout)})"
+            f"({len(layout)},) (layout {list(layout)}){_layout_source(files.metadata_file)}"
         )
     return AgentPolicy(
         model.policy,

@@ -6,13 +6,14 @@ for its network; damaged lists, missing or nested members are one-line errors na
 from __future__ import annotations
 
 import json
+import re
 import shutil
 
 import numpy as np
 import pytest
 
 from benchmarks.training.residual import ResidualTraining
-from controllers.agent import check_agent
+from controllers.agent import check_agent, observation_layout
 from controllers.ensemble import ENSEMBLE_FILE, EnsembleActor, ensemble_members, write_ensemble
 
 pytestmark = pytest.mark.rl
@@ -119,6 +120,9 @@ def test_members_must_fly_alike_and_the_list_must_be_sound(
     listing(paper_agents[0], paper_agents[0])
     with pytest.raises(ValueError, match=r"agent_seed_0.* more than once"):
         check_agent(folder)
+    listing(paper_agents[0], paper_agents[0] / "model.zip")  # one agent by two paths
+    with pytest.raises(ValueError, match=r"agent_seed_0' and '.*agent_seed_0/model.zip' are one"):
+        check_agent(folder)
     listing(paper_agents[0], tmp_path / "missing")
     with pytest.raises(FileNotFoundError, match=r"member .*missing.* does not exist"):
         check_agent(folder)
@@ -130,8 +134,21 @@ def test_members_must_fly_alike_and_the_list_must_be_sound(
     residual = tmp_path / "residual"
     save_tiny_residual_agent(ResidualTraining(), residual, 0, ENV)
     listing(paper_agents[0], residual)
-    with pytest.raises(ValueError, match=r"member .*residual differs from .* in its observation"):
+    # the message shows where the layouts part, not their shared head
+    differs = (
+        r"member .*residual differs from .* in its observation layout \((\d+) entries vs (\d+), "
+        r"first difference at entry (\d+): (.+) vs (.+)\)$"
+    )
+    with pytest.raises(ValueError, match=differs) as refused:
         check_agent(folder)
+    theirs, ours, k, theirs_k, ours_k = re.search(differs, str(refused.value)).groups()
+    k = int(k)
+    residual_layout = observation_layout(check_agent(residual).metadata)
+    paper_layout = observation_layout(check_agent(paper_agents[0]).metadata)
+    assert (int(theirs), int(ours)) == (len(residual_layout), len(paper_layout))
+    assert residual_layout[:k] == paper_layout[:k]
+    named = [repr(v[k]) if k < len(v) else "no entry" for v in (residual_layout, paper_layout)]
+    assert [theirs_k, ours_k] == named and named[0] != named[1]
     # a damaged member is named by its own file
     broken = shutil.copytree(paper_agents[1], tmp_path / "broken")
     (broken / "model.zip").write_bytes(b"not a zip")

@@ -269,7 +269,12 @@ def test_other_observation_space_named(saved_agent, tmp_path: Path) -> None:
     PPO("MlpPolicy", gym.make("Pendulum-v1"), n_steps=32, batch_size=32, device="cpu").save(
         agent / "model.zip"
     )
-    with pytest.raises(ValueError, match=r"observation space shape \(3,\), expected \(15,\)"):
+    # without its metadata.json the agent is read as the paper's observation, and the error says so
+    expected = (
+        r"observation space shape \(3,\), expected \(15,\) \(layout .*\); there is no "
+        r"metadata\.json beside it, so it is read as the paper's observation$"
+    )
+    with pytest.raises(ValueError, match=expected):
         load_policy(agent)
 
 

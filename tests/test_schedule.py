@@ -288,3 +288,22 @@ def test_the_exports_carry_the_stages_trained_inside_then_the_schedules(tmp_path
     stages = json.loads((agent / "metadata.json").read_text())["stages"]
     assert [s["name"] for s in stages] == ["envelope_guard", "actuator_allocation"]
     assert stages[0]["pitch_soft_deg"] == 35.0  # checked and filled in, as the schedule's are
+
+
+def test_train_refuses_a_schedule_it_would_not_run(tmp_path, capsys):
+    """Was: `auv-gym train --config SCHEDULE` trained the env section alone and said nothing,
+    a recipe without its jump start or later phases."""
+    from benchmarks.training.train_cli import main as train_main
+
+    config = _write(tmp_path)
+    out = tmp_path / "run"
+    argv = ["--config", str(config), "--env-id", ENV_ID, "--out", str(out), "--eval-freq", "0"]
+    with pytest.raises(SystemExit) as stop:
+        train_main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1, err
+    assert err.rstrip().endswith(
+        f"{config} holds a schedule of 2 phase(s), which `auv-gym train` does not run (it "
+        f"trains one section once): run the recipe with `auv-gym train-seeds --config {config}`"
+    )
+    assert not (out / "model.zip").exists() and not (out / "metadata.json").exists()

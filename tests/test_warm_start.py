@@ -168,6 +168,12 @@ def test_bad_agents_are_named(agent, tmp_path):
         r"difference at entry 1: 'y_e' against 'u'\)",
     ):
         check_warm_start(copy, "ppo", ["x_e", "u"])
+    model = (copy / "model.zip").read_bytes()
+    (copy / "model.zip").write_bytes(model[: len(model) // 2])
+    # named as the damaged file it is, not as weights that do not fit the network
+    with pytest.raises(ValueError, match=r"^init_from '.*copy': PPO model .*model\.zip is not a "):
+        check_warm_start(copy, "ppo")
+    (copy / "model.zip").write_bytes(model)
     (copy / "metadata.json").write_text("{not json")
     with pytest.raises(ValueError, match=r"metadata\.json is unreadable"):
         check_warm_start(copy, "ppo")

@@ -51,6 +51,7 @@ from benchmarks.options import add_options, from_args, option
 from benchmarks.reports.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
 from benchmarks.training.learning_curve import EVAL_FILE
+from benchmarks.training.schedule import read_schedule
 from benchmarks.training.seeds import MAX_SEED
 from benchmarks.training.train import check_options, default_config
 from controllers.agent import METADATA_FILE
@@ -148,6 +149,18 @@ def training_report(out: Path, export: str | None = None) -> str:
     return line
 
 
+def refuse_schedule(config: str | Path) -> None:
+    """ValueError when ``config`` holds a schedule: this command trains its env section once,
+    and leaving the phases out without a word would train another recipe than the file's."""
+    schedule = read_schedule(config)
+    if schedule is not None:
+        raise ValueError(
+            f"{config} holds a schedule of {len(schedule.phases)} phase(s), which `auv-gym "
+            f"train` does not run (it trains one section once): run the recipe with "
+            f"`auv-gym train-seeds --config {config}`"
+        )
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     opts, extra = parse_args(args)
@@ -156,6 +169,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         check_outputs(opts, extra)
         if not extra.plot_only and not extra.evaluate:
             check_options(opts)
+            refuse_schedule(opts.config)
     except (ValueError, OSError) as exc:
         exit_with_usage_error(prog, exc)
     if extra.evaluate:

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
-from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE
+from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, check_agent
 from controllers.algorithms import ALGORITHMS
 from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
 
@@ -161,6 +161,10 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
             f"init_from {str(folder)!r}: the agent was trained with "
             f"{meta.get('algo')!r}, this run uses {algo!r}"
         )
+    try:  # its files intact (a damaged model.zip named as such, not as a network misfit)
+        check_agent(folder)
+    except (ValueError, OSError) as exc:
+        raise ValueError(f"init_from {str(folder)!r}: {exc}") from None
     _statistics(folder)  # readable, with the return statistics, before any work
     saved = meta.get("obs_names")
     if obs_names is not None and list(saved or ()) != list(obs_names):
