@@ -72,7 +72,8 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     takes `path` (a saved agent directory of any algorithm of `controllers.algorithms`, plain or
     residual; `controllers.loader.load_policy`) and that function's keywords, and the plant's
     `control_dt`, `params`, `actuator` and `actuator_params` as a classical controller does
-    (they build the agent's stages, e.g. the allocation on the fins: ``base_kwargs``); "sac"
+    (they build the agent's stages, e.g. the allocation on the fins: ``base_kwargs``; an agent
+    trained on the propeller and fins is refused on another actuator); "sac"
     (and "tqc", "crossq") does the same for an agent of that algorithm only. A former name
     (`RENAMED`: "ppo") is a one-line ValueError naming the call that replaces it.
     "residual" (`controllers.residual.ResidualPolicy`, docs/design.md §3.10) takes `agent` (a Policy

@@ -56,6 +56,7 @@ __all__ = [
     "VECNORM_FILE",
     "AgentFiles",
     "AgentPolicy",
+    "check_actuator",
     "check_agent",
     "check_ensemble",
     "check_weights",
@@ -240,6 +241,19 @@ def commands_realistic_actuators(metadata: dict[str, Any]) -> bool:
     actions are normalised shaft speed and fin angles, which no other actuator interprets, so
     it carries that actuator like its observation (docs/model.md §2.6)."""
     return (metadata.get("env_kwargs") or {}).get("actuator") == REALISTIC_ACTUATOR
+
+
+def check_actuator(files: AgentFiles, actuator: str) -> None:
+    """ValueError naming the agent when it commands the propeller and fins
+    (`commands_realistic_actuators`) and is to fly ``actuator``, another actuator model: its
+    actions mean shaft speed and fin angles nowhere else."""
+    if commands_realistic_actuators(files.metadata) and actuator != REALISTIC_ACTUATOR:
+        agent = files.ensemble.parent if files.ensemble is not None else files.model.parent
+        raise ValueError(
+            f"agent {agent} commands the propeller and fins (shaft speed and fin angles, "
+            f"actuator={REALISTIC_ACTUATOR!r}); this env's actuator is {actuator!r}: fly it on "
+            f"an env with actuator={REALISTIC_ACTUATOR!r}"
+        )
 
 
 def observation_layout(metadata: dict[str, Any]) -> tuple[str, ...]:

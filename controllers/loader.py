@@ -14,6 +14,7 @@ from typing import Any
 from controllers.agent import (
     REALISTIC_ACTUATOR,
     AgentPolicy,
+    check_actuator,
     check_agent,
     commands_realistic_actuators,
     load_network,
@@ -61,6 +62,8 @@ def load_policy(
     if specs and files.residual is not None:
         raise ValueError(f"{files.model}: {NO_STAGES}")
     settings = base_kwargs or {}
+    if "actuator" in settings:  # the plant it is built for: its actions must mean the same there
+        check_actuator(files, settings["actuator"])
     built = build_stages(specs, observation_layout(files.metadata), settings, str(files.model))
     actor = load_network(files, device=device, num_threads=num_threads)
     actor = mirrored(actor, specs, observation_layout(files.metadata), str(files.model))

@@ -283,3 +283,25 @@ def test_an_off_policy_agent_with_n_step_returns_loads_without_warnings() -> Non
     observation = np.zeros((2, len(observation_layout(policy.metadata))), np.float32)
     action, _ = policy.predict(observation, deterministic=True)
     assert action.shape == (2, 3) and np.all(np.isfinite(action))
+
+
+@pytest.mark.parametrize("name", ["ppo_as_built", "ppo_residual_as_built"])
+def test_an_agent_for_the_propeller_and_fins_is_refused_on_another_actuator(name):
+    """Was: controllers.make("agent", env=...) flew `ppo_as_built`'s shaft-speed and fin-angle
+    commands as the paper's forces, silently, and the residual ensemble failed inside its base's
+    envelope guard without naming the agent or the actuator."""
+    import controllers
+    from benchmarks.catalog.policies import check_policy_for_env
+
+    folder = ROOT / "benchmarks" / "agents" / name
+    refused = (
+        rf"^agent {folder} commands the propeller and fins \(shaft speed and fin angles, "
+        r"actuator='realistic'\); this env's actuator is 'paper': fly it on an env with "
+        r"actuator='realistic'$"
+    )
+    with pytest.raises(ValueError, match=refused):
+        controllers.make("agent", path=folder, env={"actuator": "paper"})
+    with pytest.raises(ValueError, match=rf"^policy 'agent:{folder}': " + refused[1:]):
+        check_policy_for_env(f"agent:{folder}", {"actuator": "paper"})
+    policy = controllers.make("agent", path=folder, env={"actuator": "realistic"})
+    assert policy.env_kwargs["actuator"] == "realistic"

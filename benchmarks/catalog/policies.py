@@ -232,18 +232,13 @@ def _check_for_env(parsed: PolicySpec, env: Any, controller_kwargs: dict[str, An
         return
     if parsed.agent is None:
         return
-    from controllers.agent import check_agent, commands_realistic_actuators, observation_layout
+    from controllers.agent import check_actuator, check_agent, observation_layout
     from controllers.env_settings import policy_settings
     from controllers.stages import build_stages
 
     files = check_agent(parsed.agent)
     settings = {**policy_settings(env), **(controller_kwargs or {})}
-    if commands_realistic_actuators(files.metadata) and settings.get("actuator") != "realistic":
-        raise ValueError(
-            f"policy {spec!r} commands the propeller and fins (shaft speed and fin angles, "
-            f"actuator='realistic'); this scenario's actuator is {settings.get('actuator')!r}: "
-            "fly it on scenarios with actuator='realistic'"
-        )
+    check_actuator(files, settings.get("actuator", "paper"))
     build_stages(files.stages, observation_layout(files.metadata), settings, str(files.model))
     if files.residual is not None:
         residual = files.residual
