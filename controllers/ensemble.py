@@ -80,6 +80,10 @@ def ensemble_paths(spec: Path, members: Any) -> tuple[Path, ...]:
             raise FileNotFoundError(f"ensemble {spec}: member {member!r} ({path}) does not exist")
         if path.is_dir() and (path / ENSEMBLE_FILE).is_file():
             raise ValueError(f"ensemble {spec}: member {member!r} is an ensemble itself")
+        if not path.is_dir() and path.suffix != ".zip":
+            raise ValueError(
+                f"ensemble {spec}: member {member!r} is neither an agent folder nor a model zip"
+            )
     return paths
 
 

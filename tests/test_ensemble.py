@@ -123,6 +123,10 @@ def test_members_must_fly_alike_and_the_list_must_be_sound(
     listing(paper_agents[0], paper_agents[0] / "model.zip")  # one agent by two paths
     with pytest.raises(ValueError, match=r"agent_seed_0' and '.*agent_seed_0/model.zip' are one"):
         check_agent(folder)
+    (tmp_path / "README.md").write_text("not an agent")
+    listing(paper_agents[0], tmp_path / "README.md")
+    with pytest.raises(ValueError, match=r"README.md' is neither an agent folder nor a model zip"):
+        check_agent(folder)
     listing(paper_agents[0], tmp_path / "missing")
     with pytest.raises(FileNotFoundError, match=r"member .*missing.* does not exist"):
         check_agent(folder)
@@ -188,6 +192,24 @@ def test_the_command_takes_the_best_seeds_by_validation_and_writes_nothing_wrong
     code, err = auv_gym_command("ensemble", "--out", str(tmp_path / "one"), str(paper_agents[0]))
     assert code == 2 and err.endswith("an ensemble needs 2 or more members")
     assert not (tmp_path / "one").exists()
+
+    # a folder holding an export of another list is not rewritten under it; the same list is
+    (out / "policy.onnx").write_bytes(b"graph of seeds 2 and 0")
+    assert main(["--results", str(results), "--best", "2", "--out", str(out)]) == written
+    code, err = auv_gym_command("ensemble", "--results", str(results), "--best", "3", "--out", out)
+    assert code == 2 and err.endswith(
+        f"--out {out} holds an export (policy.onnx) of another member list, which this list "
+        "would leave beside it: choose a new folder, or remove the export first"
+    )
+    assert [m.metadata["seed"] for m in check_agent(out).members] == [2, 0]
+    (tmp_path / "a_file").write_text("")
+    code, err = auv_gym_command("ensemble", "--out", tmp_path / "a_file", *paper_agents)
+    assert code == 2 and err.endswith(
+        f"--out {tmp_path / 'a_file'} is a file; an ensemble is a folder"
+    )
+    (results / "summary.json").write_text('{"seeds": [')
+    code, err = auv_gym_command("ensemble", "--results", results, "--best", "2", "--out", "x")
+    assert code == 2 and f"--results: {results / 'summary.json'} is unreadable (" in err
 
 
 def test_unlike_members_leave_no_ensemble(tmp_path, paper_agents, save_tiny_residual_agent):

@@ -8,6 +8,7 @@ before any training step."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -245,7 +246,10 @@ def test_a_jump_start_without_an_expert_or_a_dataset_is_refused(tmp_path, capsys
     err = _refused(tmp_path, capsys, {"epochs": 3})
     assert "jump_start: needs an expert" in err and "or a dataset" in err
     err = _refused(tmp_path, capsys, {"dataset": str(tmp_path / "none")})
-    assert "no data/metadata.json" in err and str(tmp_path / "none") in err
+    assert f"dataset {str(tmp_path / 'none')!r} does not exist" in err
+    (tmp_path / "empty").mkdir()
+    err = _refused(tmp_path, capsys, {"dataset": str(tmp_path / "empty")})
+    assert "no data/metadata.json" in err and str(tmp_path / "empty") in err
     err = _refused(tmp_path, capsys, {"expert": "ppo", "steps": 64})
     assert "expert 'ppo' is not a classical controller" in err
 
@@ -279,6 +283,13 @@ def test_a_damaged_dataset_is_refused(tmp_path, capsys, dataset):
     assert f"{data}: damaged or changed since it was recorded" in err
     data.write_bytes(bytes(raw[: len(raw) // 3]))
     assert "damaged" in _refused(tmp_path, capsys, {"dataset": str(copy)})
+    # a truncated copy whose recorded hash was rewritten to match: refused before any training
+    # step too, as the HDF5 file it no longer is (was: in the worker, after the run began)
+    meta_file = copy / "data" / "metadata.json"
+    meta = json.loads(meta_file.read_text())
+    meta["auv_gym"]["data_sha256"] = hashlib.sha256(data.read_bytes()).hexdigest()
+    meta_file.write_text(json.dumps(meta))
+    assert f"{data}: cannot be read as HDF5 (" in _refused(tmp_path, capsys, {"dataset": str(copy)})
     (copy / "data" / "metadata.json").write_text('{"dataset_id": ')
     err = _refused(tmp_path, capsys, {"dataset": str(copy)})
     assert f"{copy / 'data' / 'metadata.json'}: unreadable" in err
@@ -294,6 +305,8 @@ def test_demos_refuses_bad_arguments_in_one_line(tmp_path, capsys):
         (["--config", recipe, "--task", "train"], "give one of --config"),
         (["--config", recipe, "--episodes", "0"], "--episodes must be"),
         (["--config", recipe, "--phase", "x"], "has no schedule"),
+        (["--config", str(tmp_path)], f"--config {str(tmp_path)!r} is a folder, not a hyper"),
+        (["--config", str(tmp_path / "no.yml")], "no.yml' does not exist"),
     ):
         with pytest.raises(SystemExit) as stop:
             main([*argv, "--out", str(tmp_path / "demos")])

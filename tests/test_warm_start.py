@@ -148,7 +148,7 @@ def test_a_missing_seed_agent_is_refused_before_training(agent, tmp_path, capsys
         )
         == 2
     )
-    assert f"init_from '{tmp_path / 'agent_1'}': model.zip is missing" in capsys.readouterr().err
+    assert f"init_from '{tmp_path / 'agent_1'}' does not exist" in capsys.readouterr().err
     assert not (tmp_path / "run" / "seed_0").exists()
 
 

@@ -27,7 +27,13 @@ from benchmarks.cli import HelpFormatter
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
 from benchmarks.training.seeds import SUMMARY_FILE, selection_key
 from controllers.agent import check_ensemble
-from controllers.ensemble import ENSEMBLE_FILE, MIN_MEMBERS, ensemble_paths, write_ensemble
+from controllers.ensemble import (
+    ENSEMBLE_FILE,
+    MIN_MEMBERS,
+    ensemble_members,
+    ensemble_paths,
+    write_ensemble,
+)
 
 __all__ = ["best_seeds", "build_parser", "main"]
 
@@ -67,6 +73,8 @@ def best_seeds(results: Path, k: int) -> list[int]:
         scored = [(selection_key(entry), int(entry["seed"])) for entry in summary["seeds"]]
     except FileNotFoundError:
         raise FileNotFoundError(f"--results: {summary_file} does not exist") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(f"--results: {summary_file} is unreadable ({error})") from None
     except (OSError, ValueError, KeyError, TypeError) as error:
         problem = f"holds no validation scores ({error})"
         raise ValueError(f"--results: {summary_file} {problem}") from None
@@ -89,13 +97,30 @@ def _members(args: argparse.Namespace) -> list[Path]:
     return [args.results / f"{SEED_AGENT_PREFIX}{s}" for s in best_seeds(args.results, args.best)]
 
 
+def _refuse_stale_export(out: Path, members: Sequence[Path]) -> None:
+    """ValueError when ``out`` holds an ONNX export of an ensemble and ``members`` are not the
+    ones it lists now: rewriting the list would leave a graph of other networks beside it."""
+    exports = sorted(out.glob("*.onnx")) if out.is_dir() else []
+    if not exports:
+        return
+    listed = ensemble_members(out) if (out / ENSEMBLE_FILE).is_file() else None
+    if listed is None or sorted(listed) != sorted(Path(m).resolve() for m in members):
+        raise ValueError(
+            f"--out {out} holds an export ({exports[0].name}) of another member list, which "
+            "this list would leave beside it: choose a new folder, or remove the export first"
+        )
+
+
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     parser = build_parser()
     args = parser.parse_args(argv)
     with usage_errors(parser):
         members = _members(args)
+        if args.out.exists() and not args.out.is_dir():
+            raise ValueError(f"--out {args.out} is a file; an ensemble is a folder")
         if (args.out / "model.zip").is_file():
             raise ValueError(f"--out {args.out} holds an agent; an ensemble needs its own folder")
+        _refuse_stale_export(args.out, members)
         # every member checked, and checked to agree, before anything is written
         spec = args.out / ENSEMBLE_FILE
         files = check_ensemble(spec, ensemble_paths(spec, [str(m.resolve()) for m in members]))

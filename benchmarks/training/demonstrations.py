@@ -451,6 +451,8 @@ def read_metadata(path: str | os.PathLike, where: str = "dataset") -> dict[str, 
     folder = _folder(path)
     meta_file = folder / META_FILE
     data_file = folder / DATA_FILE
+    if not Path(path).exists():
+        raise ValueError(f"{where} {str(path)!r} does not exist")
     if not meta_file.is_file():
         raise ValueError(
             f"{where} {str(path)!r}: no {DATA_FOLDER}/{META_FILE} (an auv-gym demos dataset "
@@ -477,8 +479,26 @@ def read_metadata(path: str | os.PathLike, where: str = "dataset") -> dict[str, 
             f"{where} {data_file}: damaged or changed since it was recorded (SHA-256 "
             f"{digest[:12]}…, recorded {str(section.get('data_sha256'))[:12]}…)"
         )
+    if key not in _CHECKED:
+        _check_hdf5(data_file, where)
     _CHECKED[key] = digest
     return section
+
+
+def _check_hdf5(data_file: Path, where: str) -> None:
+    """ValueError naming ``data_file`` when HDF5 cannot open it: a file whose recorded hash was
+    rewritten to match a damaged copy would otherwise fail only when a training worker reads it,
+    after the run has started."""
+    import h5py
+
+    try:
+        with h5py.File(data_file, "r") as data:
+            data.visit(lambda name: None)  # every group's index is read, not only the header
+    except Exception as error:  # h5py raises OSError, KeyError, RuntimeError by the damage
+        problem = " ".join(str(error).split())
+        raise ValueError(
+            f"{where} {data_file}: cannot be read as HDF5 ({type(error).__name__}: {problem})"
+        ) from None
 
 
 def check_dataset(

@@ -84,7 +84,8 @@ def source_of(opts: DemosOptions):  # -> DemoSource
 
     path = Path(opts.config)
     if not path.is_file():
-        raise ValueError(f"--config {str(path)!r} does not exist")
+        problem = "is a folder, not a hyper-parameter file" if path.is_dir() else "does not exist"
+        raise ValueError(f"--config {str(path)!r} {problem}")
     schedule = read_schedule(path)
     recipe = {"config_file": str(path)}
     if schedule is not None:

@@ -133,6 +133,8 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
     """The agent's metadata, checked to start a run of ``algo`` on ``obs_names`` (None: not
     compared); ValueError naming a missing file, another algorithm or another layout."""
     folder = Path(agent)
+    if not folder.exists():
+        raise ValueError(f"init_from {str(folder)!r} does not exist")
     if (folder / ENSEMBLE_FILE).is_file():
         # an ensemble's mean action is no network a run can continue from; one member is
         members = [str(member) for member in ensemble_members(folder)]
