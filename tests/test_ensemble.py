@@ -212,6 +212,30 @@ def test_the_command_takes_the_best_seeds_by_validation_and_writes_nothing_wrong
     assert code == 2 and f"--results: {results / 'summary.json'} is unreadable (" in err
 
 
+def test_a_schedules_results_rank_by_what_the_schedule_selected_on(tmp_path, paper_agents):
+    """Was: a schedule's results folder (schedule.json, no summary.json) was refused."""
+    from benchmarks.runner.ensemble import best_seeds
+
+    results = paper_agents[0].parent
+    shutil.copytree(paper_agents[0], results / "agent_seed_2")
+
+    def entry(seed, score):
+        return {"seed": seed, "validation_score": [0, score], "validation_summary": {"n": 2}}
+
+    last_phase = {"seeds": [entry(0, 0.30), entry(1, 0.20), entry(2, 0.25)]}
+    schedule = {"plan": {}, "phases": [{"name": "base", "summary": last_phase}]}
+    (results / "schedule.json").write_text(json.dumps(schedule))
+    assert best_seeds(results, 2) == [1, 2]  # the last phase's validation
+    shipped = {
+        str(e["seed"]): {"score": [0, 1 - e["validation_score"][1]], "summary": {"n": 2}}
+        for e in last_phase["seeds"]
+    }
+    (results / "schedule.json").write_text(
+        json.dumps({**schedule, "shipped_selection": {"seeds": shipped}})
+    )
+    assert best_seeds(results, 3) == [0, 2, 1]  # select_on: shipped ranks the agents as shipped
+
+
 def test_unlike_members_leave_no_ensemble(tmp_path, paper_agents, save_tiny_residual_agent):
     from benchmarks.runner.ensemble import main
 

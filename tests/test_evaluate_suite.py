@@ -408,6 +408,26 @@ def test_paired_table_by_hand():
     assert low["relative"]["value"] == pytest.approx(0.2) and low["worse"] and not low["win"]
 
 
+def test_chattering_ratios_only_against_a_reference_the_run_flew():
+    """Was: a suite without fbsm headed its chattering table "ratio to fbsm" with a dash in
+    every cell."""
+    from benchmarks.analysis.smoothness_stats import chattering_table, smoothness_markdown
+
+    chattering = {"pid": np.array([[1.0, 1.0, 3.0, 3.0]]), "agent": np.array([[0.5] * 4])}
+    groups = ["a", "a", "b", "b"]
+    with_ref = chattering_table(chattering, groups, reps=200, seed=0, reference="pid")
+    assert with_ref["aggregate"]["agent"]["ratio"] == pytest.approx(0.25)
+    text = smoothness_markdown({}, with_ref, "pid", 0.1)
+    assert "## Chattering [1/s] (ratio to pid), 95 % CI" in text and "(0.250)" in text
+    without = chattering_table(chattering, groups, reps=200, seed=0, reference="fbsm")
+    text = smoothness_markdown({}, without, "fbsm", 0.1)
+    assert (
+        "## Chattering [1/s], 95 % CI (no ratios: fbsm, their reference, was not evaluated)" in text
+    )
+    assert "(—)" not in text and "ratio to" not in text
+    assert "| aggregate | 2.00 [2.00, 2.00] | 0.500 [0.500, 0.500] |" in text
+
+
 def test_target_table_by_hand(tmp_path):
     """Failures score the corridor (30 m); ratio = mean / reference mean; pass rules."""
     sets = {"a": {"env": {}, "kind": "distribution"}, "b": {"env": {"corridor": 20.0}}}

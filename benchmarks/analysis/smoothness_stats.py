@@ -151,21 +151,28 @@ def smoothness_markdown(
             lines += [markdown_table(["set", *names], rows)]
     if chattering:
         policies = list(next(iter(chattering.values())))
-        lines.append(f"## Chattering [1/s] (ratio to {reference}), 95 % CI\n")
+        ratios = reference in policies  # a reference the run did not fly gives no ratios
+        lines.append(
+            f"## Chattering [1/s] (ratio to {reference}), 95 % CI\n"
+            if ratios
+            else f"## Chattering [1/s], 95 % CI (no ratios: {reference}, their reference, was "
+            "not evaluated)\n"
+        )
         for names in column_chunks(policies, 3):
             rows = [
-                [scope, *(_chattering_cell(row[p]) for p in names)]
+                [scope, *(_chattering_cell(row[p], ratios) for p in names)]
                 for scope, row in chattering.items()
             ]
             lines += [markdown_table(["set", *names], rows)]
     return "\n".join(lines) + "\n"
 
 
-def _chattering_cell(entry: Mapping[str, float]) -> str:
+def _chattering_cell(entry: Mapping[str, float], ratio: bool = True) -> str:
     if not np.isfinite(entry["value"]):
         return EMPTY
     value, low, high = (format_number(entry[k]) for k in ("value", "low", "high"))
-    return f"{value} [{low}, {high}] ({format_number(entry['ratio'])})"
+    cell = f"{value} [{low}, {high}]"
+    return f"{cell} ({format_number(entry['ratio'])})" if ratio else cell
 
 
 def column_chunks(names: list[str], most: int) -> list[list[str]]:

@@ -6,7 +6,9 @@
 Writes OUT/ensemble.json (`controllers.ensemble`): the members given, or with ``--results`` the
 ``--best`` K seeds of a multi-seed results folder (`auv-gym train-seeds --results`) by their
 validation score in its summary.json, the score the shipped seed is selected by (fewer
-terminated validation episodes, then the lower score; the test episodes are never used). The
+terminated validation episodes, then the lower score; the test episodes are never used); for a
+schedule's results folder, by the score its schedule.json selected on (the last phase's
+validation, or with ``select_on: shipped`` every seed's score as shipped). The
 folder then flies wherever an agent does (``agent:OUT``, ``NAME=OUT`` in `auv-gym suite`).
 Every member is checked first (`controllers.agent.check_agent`: the files, and that they agree
 on everything but their network); a problem is one line naming the file, exit code 2, with
@@ -25,6 +27,7 @@ from auv_gym.support.files import output_lock
 from benchmarks.arguments import ArgumentParser, program_name, usage_errors
 from benchmarks.cli import HelpFormatter
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
+from benchmarks.training.schedule import SCHEDULE_FILE
 from benchmarks.training.seeds import SUMMARY_FILE, selection_key
 from controllers.agent import check_ensemble
 from controllers.ensemble import (
@@ -50,8 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--results",
         type=Path,
         default=None,
-        help="a multi-seed results folder (agent_seed_<k>/ and summary.json) to take the members "
-        "from, instead of listing them",
+        help="a multi-seed results folder (agent_seed_<k>/ and summary.json, or a schedule's "
+        "schedule.json) to take the members from, instead of listing them",
     )
     parser.add_argument(
         "--best",
@@ -68,8 +71,12 @@ def best_seeds(results: Path, k: int) -> list[int]:
     the score; ties by seed) from its summary.json; ValueError naming the file when it is
     unreadable, lacks the seeds' entries or holds fewer than ``k`` seeds."""
     summary_file = results / SUMMARY_FILE
+    if not summary_file.exists() and (results / SCHEDULE_FILE).exists():
+        summary_file = results / SCHEDULE_FILE
     try:
         summary = json.loads(summary_file.read_text(encoding="utf-8"))
+        if summary_file.name == SCHEDULE_FILE:
+            summary = _schedule_ranking(summary)
         scored = [(selection_key(entry), int(entry["seed"])) for entry in summary["seeds"]]
     except FileNotFoundError:
         raise FileNotFoundError(f"--results: {summary_file} does not exist") from None
@@ -81,6 +88,24 @@ def best_seeds(results: Path, k: int) -> list[int]:
     if len(scored) < k:
         raise ValueError(f"--best {k}: {summary_file} lists {len(scored)} seeds")
     return [seed for _, seed in sorted(scored)[:k]]
+
+
+def _schedule_ranking(schedule: dict[str, Any]) -> dict[str, Any]:
+    """The seeds' entries a schedule selected on, as a summary.json holds them: with
+    ``select_on: shipped`` every seed's score as shipped, else the last phase's summary."""
+    shipped = schedule.get("shipped_selection")
+    if shipped is None:
+        return schedule["phases"][-1]["summary"]
+    return {
+        "seeds": [
+            {
+                "seed": int(seed),
+                "validation_score": entry["score"],
+                "validation_summary": entry["summary"],
+            }
+            for seed, entry in shipped["seeds"].items()
+        ]
+    }
 
 
 def _members(args: argparse.Namespace) -> list[Path]:
