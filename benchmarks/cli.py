@@ -58,7 +58,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "paper-figures": (
         "benchmarks.reports.paper_figures",
-        "the paper's Figs. 3-9, FBSM vs backstepping",
+        "the paper's Figs. 3-9, FBSM vs backstepping, and two more (adaptive weights, distance)",
     ),
     "export": (
         "benchmarks.runner.export",
