@@ -33,7 +33,6 @@ The hook must not change the state.
 
 from __future__ import annotations
 
-import inspect
 import json
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Protocol, runtime_checkable
@@ -43,7 +42,7 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from auv_gym.metrics import FIN_RATE_LIMITED, ROLL_ANGLE, SHAFT_POWER, compute_metrics
-from auv_gym.sim.config import SimConfig
+from auv_gym.sim.config import SimConfig, config_from_kwargs
 from auv_gym.sim.observation import GUIDANCE_FIELDS
 from auv_gym.sim.plants import ROLL
 from auv_gym.sim.simulator import Simulator
@@ -92,16 +91,6 @@ def policy_name(policy: Any) -> str:
     """``policy.name`` if it has one, else its class name."""
     name = getattr(policy, "name", None)
     return name if isinstance(name, str) and name else type(policy).__name__
-
-
-_ENV_KWARGS = frozenset(inspect.signature(SimConfig.from_kwargs).parameters)
-
-
-def _config(env_kwargs: Mapping[str, Any]) -> SimConfig:
-    unknown = sorted(set(env_kwargs) - _ENV_KWARGS)
-    if unknown:
-        raise ValueError(f"unknown env keyword arguments {unknown}; valid: {sorted(_ENV_KWARGS)}")
-    return SimConfig.from_kwargs(**env_kwargs)
 
 
 def _check_policy(policy: Any) -> None:
@@ -170,7 +159,7 @@ def rollouts(
         raise ValueError(f"batch_size must be a positive integer, got {batch_size!r}")
     if threads is not None and not (isinstance(threads, (int, np.integer)) and threads >= 1):
         raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
-    config = _config(env_kwargs)
+    config = config_from_kwargs(env_kwargs)
     label = name if name is not None else policy_name(policy)
     out: list[Trajectory] = []
     previous = numba.get_num_threads()

@@ -49,6 +49,20 @@ def actuator_vector(
     return (fins, params.fin_moment_coeff * params.fin_max, *params.actuator_limits)
 
 
+# What every classical controller takes beside its gains (`BatchedController`, `controllers.make`).
+CONTROLLER_KEYWORDS = ("gains", "params", "control_dt", "actuator", "actuator_params", "threads")
+
+
+def unknown_keywords(name: str, unknown: Any, gains: Any, more: tuple[str, ...] = ()) -> str:
+    """The one-line error for keywords ``unknown`` that controller ``name`` does not take:
+    what it takes, its keywords (``more`` first) and its gains by name (a typo in a scenario's
+    ``controller`` table is found in the list, not guessed)."""
+    return (
+        f"unknown {name} keyword arguments {sorted(unknown)}; valid: "
+        f"{[*more, *CONTROLLER_KEYWORDS]} and its gains {sorted(gains)}"
+    )
+
+
 class BatchedController:
     """Base of the classical controllers: observation checks, state handling, `predict`.
 
@@ -87,7 +101,9 @@ class BatchedController:
         base = gains if gains is not None else ControllerGains()
         unknown = set(gain_overrides) - {f.name for f in dataclasses.fields(base)}
         if unknown:
-            raise ValueError(f"unknown controller gains {sorted(unknown)}")
+            raise ValueError(
+                unknown_keywords(self.name, unknown, [f.name for f in dataclasses.fields(base)])
+            )
         self.gains = dataclasses.replace(base, **gain_overrides) if gain_overrides else base
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:

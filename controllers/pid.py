@@ -75,7 +75,7 @@ from auv_gym.sim.observation import OBS_INDEX
 from auv_gym.support.validation import flag, real
 from auv_gym.vehicle import AUVParams
 from controllers.alos import guidance_diagnostics
-from controllers.base import BatchedController
+from controllers.base import BatchedController, unknown_keywords
 from controllers.fbsm import moment_limits
 from controllers.gains import DT, FIN_GAIN, X_MAX, ControllerGains, pack_gains
 from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
@@ -359,8 +359,7 @@ class PIDLOS(BatchedController):
         unknown = sorted(set(overrides) - pid_names - {*GUIDANCE_GAINS, "actuator_params"})
         if unknown:
             raise ValueError(
-                f"unknown pid_los gains {unknown}; valid: the fields of PIDGains "
-                f"and {list(GUIDANCE_GAINS)}"
+                unknown_keywords(self.name, unknown, [*pid_names, *GUIDANCE_GAINS], ("pid",))
             )
         pid_overrides = {n: v for n, v in overrides.items() if n in pid_names}
         guidance = {n: v for n, v in overrides.items() if n not in pid_names}

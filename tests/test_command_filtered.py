@@ -81,7 +81,11 @@ def test_the_compensation_decays_once_the_limits_release():
         ({"filter_wn": 0.0}, r"filter_wn must be in \(0, 20.0\], got 0.0"),
         ({"filter_zeta": math.nan}, r"filter_zeta must be in"),
         ({"fin_rate_max": -1.0}, r"fin_rate_max must be > 0 rad/s, got -1.0"),
-        ({"k9": 1.0}, r"unknown controller gains \['k9'\]"),
+        (
+            {"k9": 1.0},
+            r"unknown command_filtered keyword arguments \[.k9.\]; valid: .* "
+            r"and its gains \[.*.k2.",
+        ),
     ],
 )
 def test_bad_settings_raise_one_named_line(kwargs, message):

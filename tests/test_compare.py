@@ -313,7 +313,10 @@ def usage_error(capsys, main_function, argv: list[str]) -> str:
         (["--transient", "30"], "--transient must be a finite number in [0, 20) s, got 30.0"),
         (["--workers", "0"], "--workers must be an integer in [1, 1024], got 0"),
         (["--address", "auto"], "--address needs --backend ray"),
-        (["--scenario-file", "/nonexistent.toml"], "--scenario-file '/nonexistent.toml': No such"),
+        (
+            ["--scenario-file", "/nonexistent.toml"],
+            "scenario file /nonexistent.toml: cannot be read (No such",
+        ),
         (["--policies", "lqr"], "unknown policy 'lqr'"),
     ],
 )
@@ -517,7 +520,10 @@ def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys
     assert "scenario 'bad': env must be a table" in err
     scenarios.write_text("not toml [")
     err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
-    assert "not a valid TOML file" in err
+    assert f"scenario file {scenarios}: not valid TOML (" in err
+    scenarios.write_bytes(b"\xff\xfe[bad]\n")  # not UTF-8: the file is named too
+    err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
+    assert f"scenario file {scenarios}: not valid TOML (not UTF-8 text: " in err
 
 
 def test_an_agent_runs_under_the_env_it_was_trained_on(tmp_path):

@@ -253,7 +253,7 @@ def test_fins_actuator_normalises_by_speed_dependent_authority():
         ({"control_dt": -0.05}, "control_dt"),
         ({"actuator": "jets"}, "actuator"),
         ({"k1": -1.0}, "k1"),
-        ({"bogus_gain": 1.0}, "unknown controller gains"),
+        ({"bogus_gain": 1.0}, r"unknown \w+ keyword arguments \[.bogus_gain.\]; valid: \[.gains."),
         ({"params": "remus"}, "AUVParams"),
         ({"threads": 2}, "threads"),
         ({"ilos_y": -1.0}, "ilos_y must be >= 0"),

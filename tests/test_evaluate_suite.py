@@ -309,7 +309,10 @@ def test_bad_input_is_one_line_before_any_episode(tiny, tmp_path, capsys, monkey
         assert message in err, (extra, err)
     assert not (tmp_path / "o").exists()
     err = usage_error(capsys, ["--tasks-file", str(tmp_path / "none.toml"), "--out", str(tmp_path)])
-    assert "--tasks-file" in err and "No such file" in err
+    assert f"task file {tmp_path / 'none.toml'}: cannot be read (No such file" in err
+    (tmp_path / "broken.toml").write_text('[x]\nrole = "test"\nseeds = { first = 0,\n')
+    err = usage_error(capsys, ["--tasks-file", str(tmp_path / "broken.toml"), "--out", "o"])
+    assert f"task file {tmp_path / 'broken.toml'}: not valid TOML (" in err  # was: no file named
 
 
 def test_former_policy_names_say_what_to_type(tmp_path, capsys):

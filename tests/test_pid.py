@@ -234,7 +234,11 @@ def test_climb_speed_returns_to_u_desired_on_a_level_line():
         ),
         ({"yaw_wn": 0.1}, "PIDGains.yaw_wn = 0.1 rad/s gives the yaw loop K_d = 2ζω_n m − d"),
         ({"surge_wn": 0.05}, "PIDGains.surge_wn = 0.05 rad/s gives K_p,u"),
-        ({"k1": 5.0}, r"unknown pid_los gains \['k1'\]"),
+        (
+            {"k1": 5.0},
+            r"unknown pid_los keyword arguments \[.k1.\]; valid: \[.pid., .gains.*"
+            r"its gains \[.*.pitch_wn.",
+        ),
         ({"k_y": -0.1}, "ControllerGains.k_y must be positive"),
         ({"filter_wn": 30.0}, r"filter_wn × control_dt must be below 1, got 30.0 rad/s × 0.05 s"),
         ({"pid": "fast"}, "pid must be a PIDGains, got str"),

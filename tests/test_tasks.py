@@ -187,6 +187,11 @@ TRAIN = '[train]\nrole = "train"\nseeds = { first = 100, count = 50 }\nenv = { p
             '[x]\nrole = "test"\nseeds = { first = 0, count = 5 }\ncontroller = "fins"\n',
             r"task set 'x': controller must be a table, got 'fins'",
         ),
+        (  # a typo in an env key: the valid ones listed, not a Python signature's complaint
+            TEST + 'env = { disturbanc = "none" }\n',
+            r"task set 'x': unknown env keyword arguments \['disturbanc'\]; "
+            r"valid: \[.*'disturbance'",
+        ),
         (
             TEST + 'vary = { plant = ["5dof", "6dof"] }\n',
             r"task set 'x': only a validation set may vary, this one is 'test'",

@@ -29,6 +29,8 @@ def test_derived_inertias_match_model_md():
         ("X_uu", float("nan"), "X_uu must be a finite"),
         ("I_z", float("inf"), "I_z must be a finite"),
         ("X_udot", 40.0, "m11"),
+        ("X_uu", 5.0, r"X_uu must be ≤ 0 \(a drag that opposes the motion\), got 5.0"),
+        ("N_rr", 0.1, r"N_rr must be ≤ 0"),
     ],
 )
 def test_impossible_parameters_raise(field, value, match):

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import inspect
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
@@ -26,14 +25,13 @@ from auv_gym.envs.checks import check_reset_observations, validate_actions
 from auv_gym.envs.info import add_vector_infos, track_point
 from auv_gym.envs.rendering import EpisodeRenderer
 from auv_gym.envs.vector_reset import parse_autoreset_mode, reset_mask, seed_list
-from auv_gym.sim.config import SimConfig
+from auv_gym.sim.config import ENV_KEYWORDS, SimConfig
 from auv_gym.sim.simulator import PARALLEL_MIN_VEHICLES, Simulator
 from auv_gym.sim.task import NON_FINITE
 from auv_gym.support.validation import integer
 
 __all__ = ["PARALLEL_MIN_VEHICLES", "AUVPath3DVectorEnv", "parse_autoreset_mode"]
 
-_ENV_KWARGS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
 MAX_VEHICLES = 2**24  # about 60 GB of state: a bound that names the argument before numpy fails
 
 
@@ -118,10 +116,10 @@ class AUVPath3DVectorEnv(VectorEnv):
         **env_kwargs: Any,
     ) -> None:
         num_envs = integer("num_envs", num_envs, 1, MAX_VEHICLES)
-        unknown = sorted(set(env_kwargs) - set(_ENV_KWARGS))
+        unknown = sorted(set(env_kwargs) - set(ENV_KEYWORDS))
         if unknown:
             raise TypeError(
-                f"unexpected keyword argument(s) {unknown}; valid: {sorted(_ENV_KWARGS)}, "
+                f"unexpected keyword argument(s) {unknown}; valid: {sorted(ENV_KEYWORDS)}, "
                 "num_envs, max_episode_steps, autoreset_mode, render_mode, render_vehicle, threads"
             )
         if max_episode_steps is not None:

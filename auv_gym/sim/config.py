@@ -7,6 +7,7 @@ compiled step reads (`auv_gym.sim.integrator.CONFIG_FIELDS`).
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -83,6 +84,7 @@ from auv_gym.vehicle.variation import HullVariation
 __all__ = [
     "ACTUATOR_LIMITS",
     "DISTURBANCE_PRESETS",
+    "ENV_KEYWORDS",
     "FIVE_DOF_PLANT",
     "MAX_EPISODE_TIME",
     "MAX_SUBSTEPS",
@@ -90,6 +92,7 @@ __all__ = [
     "PLANTS",
     "SIX_DOF_PLANT",
     "SimConfig",
+    "config_from_kwargs",
     "path_is_random",
     "path_turn_rates",
 ]
@@ -594,3 +597,17 @@ class SimConfig:
             values[f"gm_b_{axis}"] = gm_b[c]
         values.update(self.actuator_params.packed(self.physics_dt))
         return np.array([float(values[name]) for name in CONFIG_FIELDS])
+
+
+# The env's keyword arguments: what `gym.make`, a scenario's or task set's ``env`` table and a
+# rollout's ``env_kwargs`` may set.
+ENV_KEYWORDS = tuple(inspect.signature(SimConfig.from_kwargs).parameters)
+
+
+def config_from_kwargs(env_kwargs: Mapping[str, Any]) -> SimConfig:
+    """`SimConfig.from_kwargs` of ``env_kwargs``, an unknown keyword (a typo in a file's ``env``
+    table, say) refused by a ValueError that lists the valid ones."""
+    unknown = sorted(set(env_kwargs) - set(ENV_KEYWORDS))
+    if unknown:
+        raise ValueError(f"unknown env keyword arguments {unknown}; valid: {sorted(ENV_KEYWORDS)}")
+    return SimConfig.from_kwargs(**env_kwargs)

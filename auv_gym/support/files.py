@@ -23,6 +23,7 @@ import re
 import shutil
 import subprocess
 import tempfile
+import tomllib
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import asdict, is_dataclass
 from importlib import metadata
@@ -42,6 +43,7 @@ __all__ = [
     "machine",
     "numpy_dispatch",
     "output_lock",
+    "read_toml",
     "remove_temporaries",
     "replace_outputs",
     "versions",
@@ -337,3 +339,18 @@ def replace_outputs(folder: str | os.PathLike, written: Iterable[str | os.PathLi
                 stale.parent.rmdir()
     write_json(record, {"files": keep}, indent=1)
     return removed
+
+
+def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
+    """The TOML file at ``path`` parsed; ValueError "``what`` PATH: ..." naming the file when it
+    cannot be read, is not UTF-8 or is not valid TOML (a user's scenario, task or report file)."""
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise ValueError(f"{what} {path}: cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{what} {path}: not valid TOML (not UTF-8 text: {exc})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{what} {path}: not valid TOML ({exc})") from None

@@ -34,6 +34,10 @@ __all__ = [
 ]
 
 
+# The quadratic drag of each axis on its own velocity (X_u|u|, Y_v|v|, Z_w|w|, M_q|q|, N_r|r|).
+DISSIPATIVE_DRAG = ("X_uu", "Y_vv", "Z_ww", "M_qq", "N_rr")
+
+
 @dataclass(frozen=True)
 class AUVParams:
     """REMUS 100 (Prestero 2001) mapped onto the paper's 5-DOF form (docs/model.md §2.2).
@@ -121,6 +125,14 @@ class AUVParams:
             raise ValueError(f"AUVParams.fin_max must be in (0, π/2] rad, got {self.fin_max}")
         if self.fin_moment_coeff < 0.0:
             raise ValueError("AUVParams.fin_moment_coeff must be non-negative")
+        # Each axis's own quadratic drag enters with a + (docs/model.md §2.1) and must oppose
+        # its motion: a positive one feeds energy in (a sign lost in a copy, or a scale of −1).
+        for name in DISSIPATIVE_DRAG:
+            if getattr(self, name) > 0.0:
+                raise ValueError(
+                    f"AUVParams.{name} must be ≤ 0 (a drag that opposes the motion), got "
+                    f"{getattr(self, name)}"
+                )
 
     @property
     def m11(self) -> float:

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
+
+from auv_gym.support.files import read_toml
 
 __all__ = ["DEFAULT_REPORT", "ReportSpec"]
 
@@ -42,10 +43,7 @@ class ReportSpec:
     @classmethod
     def read(cls, path: str | os.PathLike = DEFAULT_REPORT) -> ReportSpec:
         """The report table of a TOML file; ValueError naming the file and the problem."""
-        try:
-            data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-            raise ValueError(f"report table {path} is unreadable: {exc}") from None
+        data = read_toml(path, "report table")
         try:
             return cls.from_dict(data)
         except (TypeError, ValueError) as exc:

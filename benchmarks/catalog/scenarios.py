@@ -10,12 +10,12 @@ env's ``vehicle`` argument; the REMUS 100 when absent.
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from auv_gym.support.files import read_toml
 from benchmarks.arguments import comma_names
 
 __all__ = ["SCENARIOS_FILE", "Scenario", "load_scenarios", "select"]
@@ -36,11 +36,7 @@ class Scenario:
 def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
     """Scenarios from a TOML file: one table per scenario with description, vehicle, env and
     controller."""
-    with open(path, "rb") as fh:
-        try:
-            raw = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{path}: not a valid TOML file: {error}") from None
+    raw = read_toml(path, "scenario file")
     scenarios = {}
     if not raw:
         raise ValueError(f"{path}: no scenarios")
@@ -68,10 +64,10 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
 def _check_env(path: Path, name: str, env: dict[str, Any]) -> None:
     """The env arguments build (paths, waypoint lists, `params` by name or scale factor): a bad
     one raises ValueError naming the file, the scenario and the argument."""
-    from auv_gym.sim.config import SimConfig
+    from auv_gym.sim.config import config_from_kwargs
 
     try:
-        SimConfig.from_kwargs(**env)
+        config_from_kwargs(env)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{path}: scenario {name!r}: {exc}") from None
 

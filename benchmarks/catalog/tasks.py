@@ -26,15 +26,15 @@ test set whose paths the training distribution could draw (`auv_gym.sim.path_gen
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from itertools import combinations
 from pathlib import Path
 from typing import Any
 
-from auv_gym.sim.config import PLANTS, SimConfig
+from auv_gym.sim.config import PLANTS, SimConfig, config_from_kwargs
 from auv_gym.sim.path_generator import PathDistribution, overlaps
+from auv_gym.support.files import read_toml
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
 
 __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test_suite"]
@@ -94,7 +94,7 @@ def _seeds(where: str, spec: Any) -> range:
 
 def _check_env(where: str, env: dict[str, Any]) -> SimConfig:
     try:
-        return SimConfig.from_kwargs(**env)
+        return config_from_kwargs(env)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: {exc}") from None
 
@@ -104,8 +104,7 @@ def load_task_sets(
 ) -> dict[str, TaskSet]:
     """Every task set of the file, validated (module docstring); scenario lists are expanded
     into one set per scenario named "scenario:<name>"."""
-    with open(path, "rb") as fh:
-        raw = tomllib.load(fh)
+    raw = read_toml(path, "task file")
     sets: dict[str, TaskSet] = {}
     configs: dict[str, SimConfig] = {}
     scenarios = None
