@@ -261,6 +261,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, FileNotFoundError) as error:
         print(f"auv-gym {command}: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: what is written is whole (atomic writes), one line
+        print(
+            f"auv-gym {command}: interrupted; finished outputs are kept, and the same command "
+            "resumes (with --resume where the command has it)",
+            file=sys.stderr,
+        )
+        return 130
     except SystemExit as stop:  # a command's usage error: its exit code, as for errors above
         if isinstance(stop.code, int) and stop.code != 0:
             return stop.code

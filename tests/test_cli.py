@@ -32,6 +32,19 @@ def test_a_commands_returned_exit_code_is_the_commands(capsys):
     assert "--seeds" in capsys.readouterr().err
 
 
+def test_ctrl_c_ends_a_command_with_one_line_and_exit_code_130(monkeypatch, capsys):
+    """Was: Ctrl-C printed a traceback of 24-90 lines from wherever the command was."""
+
+    def interrupted(module, prog, argv):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_run", interrupted)
+    monkeypatch.setattr(cli, "_compile_notice", lambda: None)
+    assert cli.main(["compare", "--policies", "fbsm"]) == 130
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("auv-gym compare: interrupted; finished ")
+
+
 def test_first_run_says_it_is_compiling_and_remembers_when_done(monkeypatch, capsys):
     marked = []
     monkeypatch.setattr(cli, "kernels_are_cached", lambda *packages: False)

@@ -295,6 +295,39 @@ def test_a_damaged_dataset_is_refused(tmp_path, capsys, dataset):
     assert f"{copy / 'data' / 'metadata.json'}: unreadable" in err
 
 
+def test_demos_removes_a_killed_runs_temporaries_and_refuses_a_live_ones(tmp_path):
+    """Was: a killed run's `.OUT.tmp<pid>` (up to the whole dataset) stayed, one per run, and a
+    second run on the same --out ran to a crash at its end."""
+    import subprocess
+    import sys
+
+    from benchmarks.training.demonstrations import _claim_temporaries
+
+    out = tmp_path / "demos"
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    stale = tmp_path / f".demos.tmp{dead}"
+    (stale / "data").mkdir(parents=True)
+    other = tmp_path / ".other.tmp1"  # another --out's: not ours to touch
+    other.mkdir()
+    _claim_temporaries(out)
+    assert not stale.exists() and other.exists()
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        (tmp_path / f".demos.tmp{live.pid}").mkdir()
+        with pytest.raises(
+            ValueError, match=rf"is being written by another run \(process {live.pid}"
+        ):
+            _claim_temporaries(out)
+    finally:
+        live.kill()
+        live.wait()
+
+
 def test_demos_refuses_bad_arguments_in_one_line(tmp_path, capsys):
     from benchmarks.training.demos_cli import main
 

@@ -334,11 +334,8 @@ class _DatasetWriter:
             raise ValueError(f"--out {str(out)!r} exists and is not an empty folder")
         out.parent.mkdir(parents=True, exist_ok=True)
         self.out = out
+        _claim_temporaries(out)
         self.tmp = out.with_name(f".{out.name}.tmp{os.getpid()}")
-        if self.tmp.exists():
-            import shutil
-
-            shutil.rmtree(self.tmp)
         self.tmp.mkdir()
         spec = gymnasium.spec(source.env_id)
         spec = _replace_kwargs(spec, source.full_kwargs)
@@ -419,6 +416,33 @@ class _DatasetWriter:
         import shutil
 
         shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+def _claim_temporaries(out: Path) -> None:
+    """Before writing ``out``: a temporary folder of a live run for the same ``out``
+    (``.OUT.tmp<pid>``) refuses this one in one line; one a killed run left is removed (they
+    hold up to the whole dataset and would pile up, one per run)."""
+    import shutil
+
+    for tmp in out.parent.glob(f".{out.name}.tmp*"):
+        pid = tmp.name.rpartition(".tmp")[2]
+        if not pid.isdigit():
+            continue
+        if int(pid) != os.getpid() and _alive(int(pid)):
+            raise ValueError(
+                f"--out {str(out)!r} is being written by another run (process {pid}, {tmp})"
+            )
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
 
 
 def _replace_kwargs(spec: Any, kwargs: dict[str, Any]) -> Any:
