@@ -1,5 +1,8 @@
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -254,3 +257,13 @@ def tiny_paper_agent(tmp_path):
     folder = tmp_path / "paper_agent"
     save_agent(model, venv, folder, {"obs_names": list(OBS_NAMES), "seed": 0})
     return folder
+
+
+@pytest.fixture
+def dead_pid() -> int:
+    """The pid of a process that has ended: what a killed run's temporary files are named by."""
+    script = "import os; print(os.getpid())"
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True
+    )
+    return int(done.stdout)

@@ -295,7 +295,7 @@ def test_a_damaged_dataset_is_refused(tmp_path, capsys, dataset):
     assert f"{copy / 'data' / 'metadata.json'}: unreadable" in err
 
 
-def test_demos_removes_a_killed_runs_temporaries_and_refuses_a_live_ones(tmp_path):
+def test_demos_removes_a_killed_runs_temporaries_and_refuses_a_live_ones(tmp_path, dead_pid):
     """Was: a killed run's `.OUT.tmp<pid>` (up to the whole dataset) stayed, one per run, and a
     second run on the same --out ran to a crash at its end."""
     import subprocess
@@ -304,13 +304,7 @@ def test_demos_removes_a_killed_runs_temporaries_and_refuses_a_live_ones(tmp_pat
     from benchmarks.training.demonstrations import _claim_temporaries
 
     out = tmp_path / "demos"
-    dead = subprocess.run(
-        [sys.executable, "-c", "import os; print(os.getpid())"],
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout.strip()
-    stale = tmp_path / f".demos.tmp{dead}"
+    stale = tmp_path / f".demos.tmp{dead_pid}"
     (stale / "data").mkdir(parents=True)
     other = tmp_path / ".other.tmp1"  # another --out's: not ours to touch
     other.mkdir()

@@ -393,16 +393,11 @@ def test_video_refuses_an_unwritable_file_before_rendering(tmp_path, capsys):
     assert time.monotonic() - t0 < 20.0
 
 
-def test_a_killed_recording_leaves_no_temporary_video_behind(tmp_path):
+def test_a_killed_recording_leaves_no_temporary_video_behind(tmp_path, dead_pid):
     from benchmarks.reports.video import remove_stale_videos
 
     out = tmp_path / "run.mp4"
-    dead = subprocess.run(
-        [sys.executable, "-c", "import os; print(os.getpid())"],
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout.strip()
+    dead = dead_pid
     stale = tmp_path / f".run.mp4.{dead}.tmp.mp4"
     live = tmp_path / f".run.mp4.{os.getpid()}.tmp.mp4"
     other = tmp_path / f".other.mp4.{dead}.tmp.mp4"

@@ -43,6 +43,7 @@ __all__ = [
     "machine",
     "numpy_dispatch",
     "output_lock",
+    "process_alive",
     "read_toml",
     "remove_temporaries",
     "replace_outputs",
@@ -354,3 +355,14 @@ def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{what} {path}: not valid TOML ({exc})") from None
+
+
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` still runs (a temporary file named by it may be in use)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    return True

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from auv_gym.support.files import process_alive
 from benchmarks.arguments import (
     ArgumentParser,
     parse_checked,
@@ -85,19 +86,11 @@ def remove_stale_videos(out: Path) -> list[Path]:
     pattern = re.compile(re.escape(f".{out.name}.") + r"(\d+)\.tmp\.mp4")
     for file in out.parent.glob(f".{glob.escape(out.name)}.*.tmp.mp4"):
         match = pattern.fullmatch(file.name)
-        if match and not _alive(int(match.group(1))):
+        if match and not process_alive(int(match.group(1))):
             file.unlink(missing_ok=True)
             removed.append(file)
     return removed
 
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's live process
-        return True
     return True
 
 

@@ -35,6 +35,7 @@ one line naming the file and the mismatch.
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
 import os
@@ -45,6 +46,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from auv_gym.support.files import process_alive
 
 __all__ = [
     "DATA_FILE",
@@ -424,24 +427,16 @@ def _claim_temporaries(out: Path) -> None:
     hold up to the whole dataset and would pile up, one per run)."""
     import shutil
 
-    for tmp in out.parent.glob(f".{out.name}.tmp*"):
+    for tmp in out.parent.glob(f".{glob.escape(out.name)}.tmp*"):
         pid = tmp.name.rpartition(".tmp")[2]
         if not pid.isdigit():
             continue
-        if int(pid) != os.getpid() and _alive(int(pid)):
+        if int(pid) != os.getpid() and process_alive(int(pid)):
             raise ValueError(
                 f"--out {str(out)!r} is being written by another run (process {pid}, {tmp})"
             )
         shutil.rmtree(tmp, ignore_errors=True)
 
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
     return True
 
 
