@@ -60,6 +60,7 @@ __all__ = [
     "check_agent",
     "check_ensemble",
     "check_weights",
+    "first_difference",
     "load_actor",
     "load_network",
 ]
@@ -353,15 +354,20 @@ def check_ensemble(spec: Path, paths: Sequence[Path]) -> AgentFiles:
     return replace(first, ensemble=spec, members=tuple(members))
 
 
+def first_difference(a: Sequence[Any], b: Sequence[Any]) -> int:
+    """The first index where sequences ``a`` and ``b`` differ (the shorter one's length when one
+    is the other's head)."""
+    return next(
+        (i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y), min(len(a), len(b))
+    )
+
+
 def _difference(value: Any, reference: Any) -> str:
     """Where ``value`` differs from ``reference``, short enough for one line: for two sequences
     their lengths and the first entry that differs (a long layout's shared head would hide it),
     else both values."""
     if isinstance(value, (list, tuple)) and isinstance(reference, (list, tuple)):
-        k = next(
-            (i for i, (a, b) in enumerate(zip(value, reference, strict=False)) if a != b),
-            min(len(value), len(reference)),
-        )
+        k = first_difference(value, reference)
         first, other = (f"{v[k]!r:.60}" if k < len(v) else "no entry" for v in (value, reference))
         return (
             f"{len(value)} entries vs {len(reference)}, first difference at entry {k}: "

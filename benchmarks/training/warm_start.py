@@ -34,7 +34,13 @@ from typing import Any
 import numpy as np
 
 from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
-from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, check_agent
+from controllers.agent import (
+    METADATA_FILE,
+    MODEL_FILE,
+    STATS_FILE,
+    check_agent,
+    first_difference,
+)
 from controllers.algorithms import ALGORITHMS
 from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
 
@@ -171,8 +177,7 @@ def check_warm_start(agent: str | Path, algo: str, obs_names: Sequence[str] | No
     saved = meta.get("obs_names")
     if obs_names is not None and list(saved or ()) != list(obs_names):
         theirs, ours = list(saved or ()), list(obs_names)
-        k = next((i for i, (a, b) in enumerate(zip(theirs, ours, strict=False)) if a != b), None)
-        k = min(len(theirs), len(ours)) if k is None else k
+        k = first_difference(theirs, ours)
         differs = (
             f"entry {k}: {theirs[k] if k < len(theirs) else None!r} against "
             f"{ours[k] if k < len(ours) else None!r}"
