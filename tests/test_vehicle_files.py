@@ -102,7 +102,7 @@ def test_a_named_vehicle_flies_the_same_episode_as_the_default() -> None:
 
 def test_params_on_a_vehicle_replace_its_fields() -> None:
     layout = remus_layout()
-    layout["model_5dof"]["m"] = 33.0
+    layout["model_5dof"].update(m=33.0, W=33.0 * 9.81, B=33.0 * 9.81)  # [kg, N, N]
     layout["name"] = "heavier"
     config = SimConfig.from_kwargs(vehicle=layout, params={"I_y": 4.0})
     assert (config.params.m, config.params.I_y, config.vehicle) == (33.0, 4.0, "heavier")
@@ -160,6 +160,22 @@ def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) ->
         (lambda d: d["model_5dof"].update(X_uu=math.nan), "[model_5dof] X_uu: must be finite"),
         (lambda d: d["model_5dof"].update(m=-1.0), "AUVParams.m must be positive"),
         (lambda d: d["model_5dof"].update(I_y="3"), "[model_5dof] I_y: must be a number"),
+        (
+            lambda d: d["model_5dof"].update(B=306.0),  # Prestero's buoyant REMUS [N]
+            "[model_5dof] B: 306 N must equal W = 299 N: the 5-DOF form has no (W − B) force",
+        ),
+        (
+            lambda d: d["model_5dof"].update(m=33.0),  # [kg], W left at 299 N
+            "[model_5dof] W: 299 N is not m·g = 33 kg × 9.81 m/s² ([model_6dof] gravity) = 323.7",
+        ),
+        (
+            lambda d: d["model_5dof"].update(m=1e30, W=9.81e30, B=9.81e30),
+            "[model_5dof] m: 1e+30 kg is 3.22e+28× the 31.03 kg of water the [model_6dof] hull",
+        ),
+        (
+            lambda d: d["model_5dof"].update(m=30480.0, W=299010.0, B=299010.0),  # g, not kg
+            "[model_5dof] m: 30480 kg is 982× the 31.03 kg",
+        ),
         (lambda d: d["limits"].pop("max_surge"), "[limits] max_surge: missing"),
         (lambda d: d["limits"].update(max_surge=0.0), "[limits] max_surge: must be positive"),
         (lambda d: d["model_5dof"].pop("N_max"), "[model_5dof] N_max: missing"),

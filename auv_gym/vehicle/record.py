@@ -331,6 +331,8 @@ def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
             hull_values[key] = number(f"[model_6dof] {key}", value)
     hull_6dof = _built(SixDofVehicle, hull_values, fail, "model_6dof")
     check_mass_matrix(hull_6dof.mass, fail)
+    if hull_5dof is not None:
+        check_rigid_body(hull_5dof, hull_6dof, fail)
 
     return Vehicle(
         name=name,
@@ -356,6 +358,43 @@ def check_mass_matrix(mass: np.ndarray, fail) -> None:
         raise fail(
             "[model_6dof]",
             f"mass matrix M_RB + M_A is not positive definite (smallest eigenvalue {smallest:.3g})",
+        )
+
+
+# W = m·g within local gravity's spread (9.78-9.83 m/s²) and the file's rounding.
+WEIGHT_TOLERANCE = 0.01
+# The 6-DOF hull is the spheroid of the vehicle's length and diameter; a real hull lies between
+# that spheroid and the cylinder around it, 3/2 of its volume, so a neutral vehicle's mass does.
+MASS_RATIO_RANGE = (2.0 / 3.0, 3.0 / 2.0)
+
+
+def check_rigid_body(model: AUVParams, hull: SixDofVehicle, fail) -> None:
+    """Refuse a [model_5dof] whose weight, buoyancy and mass are not one neutrally buoyant
+    vehicle with the [model_6dof] hull: B = W (the 5-DOF form has no (W − B) force, docs/model.md
+    §2.1 f, so a difference would fly as neutral in heave), W = m·g [N] with the hull's gravity,
+    and m [kg] within `MASS_RATIO_RANGE` of the hull's displaced mass (a unit slip, 10³ or 10³⁰
+    kg, otherwise loads and flies)."""
+    if not math.isclose(model.B, model.W, rel_tol=1e-9):
+        raise fail(
+            "[model_5dof] B",
+            f"{model.B:g} N must equal W = {model.W:g} N: the 5-DOF form has no (W − B) force "
+            "(docs/model.md §2.1 f), so a buoyant vehicle would fly as a neutral one",
+        )
+    weight = model.m * hull.gravity
+    if abs(model.W / weight - 1.0) > WEIGHT_TOLERANCE:
+        raise fail(
+            "[model_5dof] W",
+            f"{model.W:g} N is not m·g = {model.m:g} kg × {hull.gravity:g} m/s² "
+            f"([model_6dof] gravity) = {weight:.4g} N (within {WEIGHT_TOLERANCE:.0%})",
+        )
+    low, high = MASS_RATIO_RANGE
+    ratio = model.m / hull.mass_kg
+    if not low <= ratio <= high:
+        raise fail(
+            "[model_5dof] m",
+            f"{model.m:g} kg is {ratio:.3g}× the {hull.mass_kg:.4g} kg of water the [model_6dof] "
+            f"hull displaces ({hull.length:g} m × {hull.diameter:g} m spheroid); a neutrally "
+            f"buoyant vehicle's mass is within {low:.2g}-{high:g}× of it",
         )
 
 
