@@ -164,6 +164,30 @@ def test_unreachable_ray_address_and_occupied_output_are_refused(tmp_path, capsy
     assert "holds no multi-seed run" in capsys.readouterr().err
 
 
+def test_a_seed_folder_held_by_a_separate_train_is_refused_and_kept(tmp_path, capsys):
+    """Was: `auv-gym train --out RUN/seed_0` and `train-seeds --out RUN` both wrote seed 0 (the
+    seeds' run locks RUN only), and the worker's fresh start deleted the other run's files."""
+    from dataclasses import asdict
+
+    from auv_gym.support.files import output_lock
+    from benchmarks.training.seed_workers import train_one_seed
+    from benchmarks.training.train import TrainOptions
+
+    seed_0 = tmp_path / "run" / "seed_0"
+    with output_lock(seed_0):
+        (seed_0 / "progress.csv").write_text("the other run's\n")
+        code = main([*_args(tmp_path, "ppo", "run", "--seeds", "2"), "--workers", "1"])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1
+        assert f"--out '{seed_0}' is in use by another run (pid {os.getpid()})" in err
+        assert not (tmp_path / "run" / "seed_1").exists()  # nothing started
+        # The worker itself (a run started between the check and the spawn): refused, no file lost
+        train_opts = asdict(TrainOptions(out=str(seed_0), config=str(_config(tmp_path, "ppo"))))
+        with pytest.raises(OSError, match=rf"in use by another run \(pid {os.getpid()}\)"):
+            train_one_seed(train_opts, "fresh")
+        assert (seed_0 / "progress.csv").read_text() == "the other run's\n"
+
+
 def _summary(out: Path) -> dict:
     return json.loads((out / "summary.json").read_text())
 

@@ -16,6 +16,7 @@ from multiprocessing.connection import wait
 from pathlib import Path
 from typing import Any
 
+from auv_gym.support.files import LOCK_FILE, output_lock
 from benchmarks.runner.pool import connect_ray, die_with_parent
 from benchmarks.training.checkpoints import latest_checkpoint, list_checkpoints
 from benchmarks.training.evaluation import HELD_OUT_FILE
@@ -74,17 +75,31 @@ def train_one_seed(train_opts: dict[str, Any], status: str) -> dict[str, Any]:
 
     opts = TrainOptions(**train_opts)
     run = Path(opts.out)
-    if status == "fresh" and run.exists():
-        shutil.rmtree(run)  # killed before its first checkpoint: nothing to keep
-    if status in ("fresh", "resume"):
-        train(
-            replace(opts, resume=status == "resume", export=None),
-            argv=["benchmarks.training.seeds_cli", f"--seed={opts.seed}"],
-        )
-    best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
-    if not (best / HELD_OUT_FILE).is_file():
-        write_held_out_evaluation(best, opts.eval_duration, opts.env_id)
-    return seed_entry(run)
+    # Held while the seed trains and tests: an `auv-gym train --out` on this folder is refused
+    # (and this seed fails naming that run) rather than both writing one run.
+    with output_lock(run, "--out"):
+        if status == "fresh":
+            empty_folder(run)  # killed before its first checkpoint: nothing to keep
+        if status in ("fresh", "resume"):
+            train(
+                replace(opts, resume=status == "resume", export=None),
+                argv=["benchmarks.training.seeds_cli", f"--seed={opts.seed}"],
+            )
+        best = run / "best" if (run / "best" / MODEL_FILE).is_file() else run / "final"
+        if not (best / HELD_OUT_FILE).is_file():
+            write_held_out_evaluation(best, opts.eval_duration, opts.env_id)
+        return seed_entry(run)
+
+
+def empty_folder(run: Path) -> None:
+    """Remove everything in ``run`` but its lock file, which the caller holds."""
+    for entry in run.iterdir():
+        if entry.name == LOCK_FILE:
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry)
+        else:
+            entry.unlink()
 
 
 def seed_entry(run: Path) -> dict[str, Any]:

@@ -355,6 +355,10 @@ def train_seeds(opts: SeedsOptions) -> dict[str, Any]:
     with contextlib.ExitStack() as stack:
         try:
             stack.enter_context(output_lock(out, "--out"))
+            for seed in opts.seeds:  # a separate `auv-gym train --out OUT/seed_<k>` still running
+                if seed_dir(out, seed).is_dir():
+                    with output_lock(seed_dir(out, seed), "--out"):
+                        pass
         except OSError as error:
             raise ValueError(str(error)) from None
         return _train_seeds(opts, plan, out)
