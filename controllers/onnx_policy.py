@@ -77,6 +77,46 @@ class OnnxState:
     n: int
 
 
+def check_beside_agent(contract: OnnxContract) -> None:
+    """ValueError, naming both files, when the graph sits in an agent's folder (beside its
+    model.zip, or its ensemble.json) but was exported from other networks: the agent was
+    retrained or replaced after the export, and the graph would fly the old one unnoticed. The
+    contract's provenance records each exported model's SHA-256 (`controllers.onnx_export`). A
+    graph away from any agent folder (deployed alone) is not checked."""
+    from controllers.agent import MODEL_FILE
+    from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
+
+    folder = contract.onnx.parent
+    provenance = contract.raw.get("provenance", {})
+    # an export named ensemble.onnx has its contract in ensemble.json: not a member list
+    members = ensemble_members(folder) if contract.file.name != ENSEMBLE_FILE else None
+    if members is not None:
+        models = [m / MODEL_FILE if m.is_dir() else m for m in members]
+        exported = provenance.get("members") or [provenance]
+    elif (folder / MODEL_FILE).is_file():
+        models, exported = [folder / MODEL_FILE], provenance.get("members") or [provenance]
+    else:
+        return
+    recorded = [
+        entry.get("model_sha256") if isinstance(entry, Mapping) else None for entry in exported
+    ]
+    if len(recorded) != len(models):
+        raise ValueError(
+            f"{contract.onnx} was exported from {len(recorded)} network(s), the agent in its "
+            f"folder has {len(models)}: re-export it (auv-gym export {folder} --out "
+            f"{contract.onnx}) or move it out of the agent's folder"
+        )
+    for model, digest in zip(models, recorded, strict=True):
+        actual = sha256_of(model)
+        if digest != actual:
+            raise ValueError(
+                f"{contract.onnx} is stale: it was exported from a model with SHA-256 "
+                f"{str(digest)[:12]}…, {model} beside it has {actual[:12]}… (retrained or "
+                f"replaced after the export): re-export it (auv-gym export {folder} --out "
+                f"{contract.onnx}) or move it out of the agent's folder"
+            )
+
+
 class OnnxPolicy:
     """An exported agent as a Policy (docs/design.md §3): ``predict`` feeds the ONNX graph and
     keeps its memory, reset at each episode start.
@@ -106,6 +146,7 @@ class OnnxPolicy:
         if isinstance(num_threads, bool) or not (isinstance(num_threads, int) and num_threads >= 1):
             raise ValueError(f"num_threads must be a positive integer, got {num_threads!r}")
         contract = read_contract(path)
+        check_beside_agent(contract)
         where = contract.onnx
         if observation_names is not None and tuple(observation_names) != contract.obs_names:
             raise ValueError(

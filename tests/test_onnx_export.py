@@ -291,6 +291,32 @@ def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem, auv_gy
     assert not out.parent.exists() or list(out.parent.iterdir()) == []
 
 
+def test_an_export_older_than_the_agent_beside_it_is_refused(tmp_path):
+    """Was: retraining (or replacing) an agent left its policy.onnx beside it, which flew the
+    old networks without a word."""
+    from controllers.onnx_contract import sha256_of
+    from controllers.onnx_policy import OnnxPolicy
+
+    agent = _agent_copy(tmp_path)
+    OnnxPolicy(agent / "policy.onnx")  # the shipped export: its model, accepted
+    old = sha256_of(agent / "model.zip")
+    shutil.copy(AGENTS_DIR / "ppo_as_built" / "model.zip", agent / "model.zip")  # "retrained"
+    new = sha256_of(agent / "model.zip")
+    with pytest.raises(ValueError) as error:
+        controllers.make("onnx", path=str(agent / "policy.onnx"))
+    assert str(error.value) == (
+        f"{agent / 'policy.onnx'} is stale: it was exported from a model with SHA-256 "
+        f"{old[:12]}…, {agent / 'model.zip'} beside it has {new[:12]}… (retrained or replaced "
+        f"after the export): re-export it (auv-gym export {agent} --out "
+        f"{agent / 'policy.onnx'}) or move it out of the agent's folder"
+    )
+    deployed = tmp_path / "deployed"  # the graph and its contract alone: nothing to compare
+    deployed.mkdir()
+    for name in ("policy.onnx", "policy.json"):
+        shutil.copy(agent / name, deployed / name)
+    assert OnnxPolicy(deployed / "policy.onnx").obs_dim == 49  # the generalist's observation
+
+
 def test_a_damaged_or_mismatched_export_is_refused_before_any_episode(tmp_path, auv_gym_command):
     for name in ("policy.onnx", "policy.json"):
         shutil.copy(AGENTS_DIR / "ppo_generalist" / name, tmp_path / name)
