@@ -287,6 +287,42 @@ def test_smoke_on_the_agent_observation(tmp_path):
 
 
 @pytest.mark.rl
+def test_an_agent_trained_on_a_users_vehicle_is_validated_and_tested_on_it(tmp_path):
+    """Was: the validation and the held-out test flew the REMUS 100 whatever vehicle the
+    training env named, so `best/` was chosen on another vehicle."""
+    from auv_gym.vehicle.record import VEHICLE_DIRECTORY
+    from benchmarks.training.evaluation import evaluate_policy_on_seeds
+    from controllers.loader import load_policy
+
+    text = (VEHICLE_DIRECTORY / "remus100.toml").read_text()
+    weak = tmp_path / "weak.toml"  # a fifth of the REMUS 100's yaw and pitch moments
+    weak.write_text(
+        text.replace('name = "remus100"', 'name = "weak"')
+        .replace("M_max = 10.0", "M_max = 2.0")
+        .replace("N_max = 10.0", "N_max = 2.0")
+    )
+    section = {**TINY["ppo"], "env_kwargs": {"randomize_start": True, "max_time": 20.0}}
+    section["env_kwargs"]["vehicle"] = str(weak)
+    config = tmp_path / "weak.yml"
+    config.write_text(yaml.safe_dump({"AUVPath3DSpeedLimit-v0": section}))
+    args = _args(tmp_path, "ppo", "run", "--seeds", "0-0", "--workers", "1")
+    args[args.index("--config") + 1] = str(config)
+    assert main([*args, "--export", str(tmp_path / "agent")]) == 0
+    meta = json.loads((tmp_path / "agent" / "metadata.json").read_text())
+    assert meta["eval_env_kwargs"]["vehicle"] == str(weak)
+    held_out = json.loads((tmp_path / "agent" / "held_out_evaluation.json").read_text())
+    assert held_out["scenario"].endswith(f", vehicle '{weak}')")
+    policy = load_policy(tmp_path / "agent")
+    duration = held_out["duration_s"]
+    seeds = held_out["seeds"]  # the same batch: the network's sums are batch-size dependent
+    own = evaluate_policy_on_seeds(policy, seeds, max_time=duration, vehicle=str(weak))
+    remus = evaluate_policy_on_seeds(policy, seeds, max_time=duration)
+    rms = [row["rms_distance"] for row in held_out["results"]]
+    assert rms == [row["rms_distance"] for row in own]
+    assert rms != [row["rms_distance"] for row in remus]
+
+
+@pytest.mark.rl
 def test_validation_on_a_task_set(tmp_path):
     """--task-set validation: the agent is selected on the validation set's env (its path
     distribution, current, noise, actuators) on its first --eval-episodes seeds, recorded in the

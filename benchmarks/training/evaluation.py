@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -152,6 +152,31 @@ def chattering_mean(results: Sequence[dict[str, Any]]) -> float:
     return float(values.mean()) if values.size else math.nan
 
 
+# What a training env may fix about the vehicle an agent flies, in the order labels name them.
+PLATFORM_KEYS = ("vehicle", "plant", "actuator")
+
+
+def trained_platform(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """The vehicle, plant and actuator of a training env's arguments where it names one other
+    than the default (REMUS 100, the 5-DOF plant, the paper's actuator; a shipped name, a path
+    or a mapping for the vehicle, and not the per-episode "random" actuator): the agent's
+    validation and held-out test fly them, around the paper scenario's paths and disturbances,
+    unless the evaluation's own arguments set them."""
+    from auv_gym.sim.config import FIVE_DOF_PLANT, PLANTS
+    from auv_gym.sim.integrator import ACTUATORS
+    from auv_gym.vehicle.record import DEFAULT_VEHICLE
+
+    out: dict[str, Any] = {}
+    if env_kwargs.get("vehicle") not in (None, DEFAULT_VEHICLE):
+        out["vehicle"] = env_kwargs["vehicle"]
+    plant, actuator = env_kwargs.get("plant"), env_kwargs.get("actuator")
+    if isinstance(plant, str) and plant in PLANTS and plant != FIVE_DOF_PLANT:
+        out["plant"] = plant
+    if isinstance(actuator, str) and actuator in ACTUATORS and actuator != "paper":
+        out["actuator"] = actuator
+    return out
+
+
 def held_out_evaluation(
     agent: str | os.PathLike, duration: float = 300.0, env_id: str = ENV_ID
 ) -> dict[str, Any]:
@@ -160,13 +185,18 @@ def held_out_evaluation(
     ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
     AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
     """
+    from controllers.agent import check_agent
+
+    platform = trained_platform(check_agent(agent).metadata.get("env_kwargs") or {})
     # a residual agent's base takes the actuator it was trained on (`load_policy`'s default)
-    policy = load_policy(agent, base_kwargs=base_kwargs_for_env(VARIANTS[resolve_env_id(env_id)]))
-    fixed = agent_env_kwargs(policy.metadata, env_id)  # the env it carries, under ``env_id``
+    base_kwargs = base_kwargs_for_env({**VARIANTS[resolve_env_id(env_id)], **platform})
+    policy = load_policy(agent, base_kwargs=base_kwargs)
+    # the env it carries, under ``env_id``, on the vehicle and plant it was trained on
+    fixed = {**platform, **agent_env_kwargs(policy.metadata, env_id)}
     results = evaluate_policy_on_seeds(policy, HELD_OUT_SEEDS, max_time=float(duration), **fixed)
+    named = "".join(f", {key} {fixed[key]!r}" for key in PLATFORM_KEYS if key in fixed)
     return {
-        "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id}"
-        + (f", actuator {fixed['actuator']!r})" if "actuator" in fixed else ")"),
+        "scenario": f"paper (helix, white noise ±35 N / N·m, defaults of {env_id}{named})",
         "seeds": list(HELD_OUT_SEEDS),
         "duration_s": float(duration),
         "transient_s": window_start(float(duration)),

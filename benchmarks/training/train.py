@@ -40,6 +40,7 @@ from benchmarks.training.evaluation import (
     EVAL_SEEDS,
     HELD_OUT_SEEDS,
     check_evaluation_duration,
+    trained_platform,
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
@@ -239,11 +240,12 @@ def target_timesteps(n_timesteps: int, stop_at: int | None) -> int:
 def _eval_kwargs(opts: TrainOptions, env_kwargs: dict[str, Any]) -> dict[str, Any]:
     """The evaluation episodes: `eval_env` (empty: the paper scenario) under the trained id's
     fixed arguments (the surge limit of AUVPath3DSpeedLimit-v0) and the training env's
-    observation, `eval_duration` long."""
+    observation, vehicle, plant and actuator (`trained_platform`), `eval_duration` long."""
     seen = {"observation": env_kwargs["observation"]} if "observation" in env_kwargs else {}
     return {
         **VARIANTS.get(opts.env_id, {}),
         **seen,
+        **trained_platform(env_kwargs),
         **opts.eval_env,
         "max_time": float(opts.eval_duration),
     }
