@@ -9,6 +9,7 @@ import pytest
 from benchmarks.reports.plotting import metrics_table
 from benchmarks.reports.table_format import (
     EMPTY,
+    METRIC_INFO,
     Cell,
     display_scale,
     format_mean_std,
@@ -185,3 +186,87 @@ def test_metrics_table_never_bolds_a_failed_episode():
     }
     lines = metrics_table(results, ["rms_distance"]).splitlines()
     assert lines[2] == "| RMS distance, t ≥ transient | m | **0.0400** | 0.00400 |"
+
+
+TORPEDO_ENV = {"vehicle": "torpedo", "plant": "6dof", "actuator": "realistic"}
+
+
+def _speed_record(scenario, policy, seed, max_surge, overspeed):
+    metrics = {
+        "rms_distance": 0.5,
+        "termination_reason": "time_limit",
+        "surge_overshoot": 0.07,
+        "rms_speed_error": 0.003,
+        "max_surge": max_surge,
+        "overspeed_fraction": overspeed,
+        "mean_path_speed": 2.0,
+    }
+    return {"scenario": scenario, "policy": policy, "seed": seed, "metrics": metrics}
+
+
+def _speed_header(text, scenario):
+    section = text[text.index(f"## {scenario}") :]
+    return section[section.index("speed:") :].splitlines()[2]  # the speed table's header
+
+
+def test_the_overspeed_column_names_the_vehicles_own_top_speed():
+    """overspeed_fraction counts time above the vehicle's max_surge (2.5 m/s for the torpedo):
+    the header said "time u > 2 m/s" on every vehicle, so a torpedo's max u = 2.08 m/s beside
+    "time u > 2 m/s" = 0 read as a wrong number."""
+    records = [
+        _speed_record("torpedo_helix", "pid_los", 0, 2.08, 0.0),
+        _speed_record("six_dof_helix", "pid_los", 0, 2.06, 0.4),
+    ]
+    config = {
+        "seeds": 1,
+        "duration": 300.0,
+        "transient": 100.0,
+        "scenarios": {
+            "torpedo_helix": {"name": "torpedo_helix", "env": TORPEDO_ENV},
+            "six_dof_helix": {"name": "six_dof_helix", "env": {"plant": "6dof"}},
+        },
+    }
+    text = summarise(records, config)
+    assert _speed_header(text, "torpedo_helix") == (
+        "| policy | failed | overshoot [m/s] | RMS(u − u_D) [mm/s] | max u [m/s] "
+        "| time u > 2.5 m/s | pace u_p [m/s] |"
+    )
+    assert "| time u > 2 m/s |" in _speed_header(text, "six_dof_helix")  # REMUS 100: as before
+    assert "| pid_los | 0/1 | 0.0700 | 3.00 | 2.08 | 0 | 2.00 |" in text
+    # a scenario the config does not describe: the header names the vehicle's field
+    bare = summarise(records, {"seeds": 1, "duration": 300.0, "transient": 100.0})
+    assert "| time u > max_surge |" in _speed_header(bare, "torpedo_helix")
+    assert "2 m/s" not in bare and "2.0 m/s" not in METRIC_INFO["overspeed_fraction"][0]
+
+
+def test_a_scenario_every_policy_is_na_on_keeps_its_overview_column():
+    """docs/usage.md: a policy that cannot fly a scenario's vehicle has an n/a cell. When no
+    policy flew a scenario it had no record, and its column vanished from summary.md."""
+    records = [
+        *(_record("ppo_residual", s, 0.05) for s in range(2)),
+        *(_record("fbsm_colos_lowpass", s, 0.03) for s in range(2)),
+    ]
+    for r in records:
+        r["scenario"] = "my_helix"
+    config = {
+        "seeds": 2,
+        "duration": 100.0,
+        "transient": 50.0,
+        "scenarios": {
+            "my_torp": {"name": "my_torp", "env": TORPEDO_ENV},
+            "my_helix": {"name": "my_helix", "env": {}},
+        },
+        "not_applicable": {"my_torp": ["fbsm_colos_lowpass", "ppo_residual"]},
+    }
+    lines = summarise(records, config).splitlines()
+    assert lines[4:8] == [
+        "| policy | my_torp | my_helix |",
+        "|---|---:|---:|",
+        "| ppo_residual | n/a | 0.05 |",
+        "| fbsm_colos_lowpass | n/a | 0.03 |",
+    ]
+    torp = lines.index("## my_torp")
+    assert lines[torp + 2].startswith("n/a: no policy ran an episode here")
+    assert lines.index("## my_helix") > torp
+    console = overview(records, scenarios=["my_torp", "my_helix"]).splitlines()
+    assert console[1].split() == ["ppo_residual", "n/a", "0.05"]

@@ -66,7 +66,8 @@ METRIC_INFO: dict[str, tuple[str, str, str]] = {
     # not ranked: the pace is a condition of the comparison (u_D asked), not a score
     "mean_path_speed": ("pace: mean virtual-point speed u_p, t ≥ transient", "m/s", ""),
     "max_surge": ("max surge u", "m/s", "min"),
-    "overspeed_fraction": ("time with u > 2.0 m/s", "-", "min"),
+    # above the vehicle's own top speed (`AUVParams.max_surge`: REMUS 100 2.0, torpedo 2.5)
+    "overspeed_fraction": ("time with u > max_surge (the vehicle's top speed)", "-", "min"),
     "control_effort": ("control effort ∫Σ(τ/τ_max)² dt", "s", "min"),
     "chattering": ("chattering TV(τ/τ_max) per s", "1/s", "min"),
     "saturation_fraction": ("saturated control steps", "-", "min"),

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from auv_gym.sim.config import SimConfig
 from auv_gym.sim.trajectory import FAILURE_REASONS
 from auv_gym.support.files import environment, write_json, write_text
 from benchmarks.reports.table_format import (
@@ -59,7 +60,8 @@ _HEADERS = {
     "mean_path_speed": "pace u_p",
     "rms_speed_error": "RMS(u − u_D)",
     "max_surge": "max u",
-    "overspeed_fraction": "time u > 2 m/s",
+    # the share of time above the vehicle's top speed; `_group_table` names that speed
+    "overspeed_fraction": "time u > max_surge",
     "control_effort": "effort",
     "chattering": "chattering",
     "saturation_fraction": "saturated",
@@ -126,14 +128,22 @@ def overview_note(seeds: int, transient: float) -> str:
     )
 
 
-def overview(records: list[dict[str, Any]], markdown: bool = False) -> str:
+def overview(
+    records: list[dict[str, Any]],
+    markdown: bool = False,
+    scenarios: Sequence[str] | None = None,
+) -> str:
     """One screen: a row per policy, a column per scenario, each cell the mean RMS distance [m]
     over the finished episodes with its sample size "(n = k/N)" when some failed, or
-    "all N failed" (the benchmark's headline metric; every other one is in summary.md).
-    ``markdown``: as a markdown table (summary.md's first table) instead of aligned text."""
+    "all N failed" (the benchmark's headline metric; every other one is in summary.md); "n/a"
+    where the policy ran no episode (it cannot fly that scenario's vehicle).
+    ``markdown``: as a markdown table (summary.md's first table) instead of aligned text.
+    ``scenarios``: the columns, in order (the run's chosen scenarios, so one that no policy
+    flies still shows, all "n/a"); None: the scenarios of ``records``."""
     cells = aggregate(records)
     policies = list(dict.fromkeys(r["policy"] for r in records))
-    scenarios = list(dict.fromkeys(r["scenario"] for r in records))
+    if scenarios is None:
+        scenarios = list(dict.fromkeys(r["scenario"] for r in records))
     rows = []
     for policy in policies:
         row = [policy]
@@ -189,13 +199,13 @@ def summarise(
     """
     cells = aggregate(records)
     policies = list(dict.fromkeys(r["policy"] for r in records))
-    scenarios = list(dict.fromkeys(r["scenario"] for r in records))
+    scenarios = _scenarios(records, config)
     lines = [
         "# Benchmark summary",
         "",
         overview_note(config["seeds"], config["transient"]),
         "",
-        overview(records, markdown=True).rstrip(),
+        overview(records, markdown=True, scenarios=scenarios).rstrip(),
         "",
         "## Figures",
         "",
@@ -214,12 +224,41 @@ def summarise(
     ]
     for scenario in scenarios:
         lines += ["", f"## {scenario}"]
+        if not any(r["scenario"] == scenario for r in records):
+            lines += [
+                "",
+                "n/a: no policy ran an episode here (episodes.json lists why: "
+                "config.not_applicable).",
+            ]
+            continue
+        top_speed = _top_speed(config, scenario)
         for group, metrics in SUMMARY_GROUPS.items():
             if not _recorded(records, scenario, metrics):  # e.g. no propeller, no propulsion
                 continue
-            table = _group_table(cells, scenario, policies, metrics).rstrip()
+            table = _group_table(cells, scenario, policies, metrics, top_speed).rstrip()
             lines += ["", f"{group}:", "", table]
     return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _scenarios(records: list[dict[str, Any]], config: dict[str, Any]) -> list[str]:
+    """The run's scenarios in order: those ``config["scenarios"]`` chose (one that every policy
+    is n/a on has no record but keeps its column), then any other the records hold."""
+    chosen = list(config.get("scenarios", {}))
+    return list(dict.fromkeys([*chosen, *(r["scenario"] for r in records)]))
+
+
+def _top_speed(config: dict[str, Any], scenario: str) -> float | None:
+    """The top speed [m/s] of ``scenario``'s vehicle (`AUVParams.max_surge`: 2.0 for REMUS 100,
+    2.5 for the torpedo), the speed its episodes' ``overspeed_fraction`` counts time above
+    (`auv_gym.rollout`); None when ``config`` does not describe the scenario. The vehicle and
+    its ``params`` are the scenario's env arguments (an env id's and an agent's add none)."""
+    described = config.get("scenarios", {}).get(scenario)
+    if described is None:
+        return None
+    try:  # a summary rewritten where its vehicle file no longer is: the generic header
+        return SimConfig.from_kwargs(**described.get("env", {})).params.max_surge
+    except (OSError, ValueError, TypeError):
+        return None
 
 
 def _recorded(records: list[dict[str, Any]], scenario: str, metrics: tuple[str, ...]) -> bool:
@@ -232,7 +271,10 @@ def _group_table(
     scenario: str,
     policies: list[str],
     metrics: tuple[str, ...],
+    top_speed: float | None = None,
 ) -> str:
+    """One group's table of ``scenario``; ``top_speed`` [m/s]: its vehicle's, named in the
+    overspeed column's header ("time u > 2.5 m/s"; None: "time u > max_surge")."""
     present = [p for p in policies if (scenario, p) in cells]
     first = {p: cells[(scenario, p)][metrics[0]] for p in present}
     columns = [["failed", *(f"{first[p].failed}/{first[p].episodes}" for p in present)]]
@@ -244,6 +286,8 @@ def _group_table(
         unit, scale = display_scale(unit, means)
         texts = [c.text(metric, scale) for c in row]
         header = f"{_HEADERS[metric]} [{unit}]" if unit != "-" else _HEADERS[metric]
+        if metric == "overspeed_fraction" and top_speed is not None:
+            header = f"time u > {top_speed:g} m/s"
         columns.append([header, *mark_best(texts, means, eligible, better)])
     header = ["policy", *(c[0] for c in columns)]
     rows = [[p, *(c[i + 1] for c in columns)] for i, p in enumerate(present)]

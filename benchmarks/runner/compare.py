@@ -216,7 +216,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         written = [args.out / name for name in TABLES]
         replace_outputs(args.out, [*written, *figures])  # no figure of an earlier run beside
     print(overview_note(args.seeds, args.transient))
-    print(overview(records))
+    print(overview(records, scenarios=list(scenarios)))
     for spec in args.policy_list:  # one line per policy not flown on some scenarios
         where = [name for name, refused in args.not_applicable.items() if spec in refused]
         if where:
