@@ -176,6 +176,26 @@ def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) ->
             lambda d: d["model_5dof"].update(m=30480.0, W=299010.0, B=299010.0),  # g, not kg
             "[model_5dof] m: 30480 kg is 982× the 31.03 kg",
         ),
+        (
+            lambda d: d["model_5dof"].update(z_g=-0.05),  # [m] above the centre of buoyancy
+            "[model_5dof] z_g: -0.05 m must lie below z_b = 0 m (z_g > z_b, z down)",
+        ),
+        (
+            lambda d: d["model_5dof"].update(fin_moment_coeff=0.0),
+            "[model_5dof] fin_moment_coeff: 0 kg/rad is not the stern planes' |x|·½ρAC_L = 6.15",
+        ),
+        (
+            lambda d: [fin.update(area=0.0133) for fin in d["actuators"]["fins"][2:]],
+            "fin_moment_coeff: 6.15 kg/rad is not the rudders' |x|·½ρAC_L = 12.3 kg/rad",
+        ),
+        (
+            lambda d: d["actuators"].update(water_density=1.2),  # [kg/m³] air
+            "[model_6dof] water_density: 1026 kg/m³ differs from [actuators] water_density = 1.2",
+        ),
+        (
+            lambda d: d["actuators"]["fins"][0].update(x=-50.0),
+            "'stern_starboard' x: -50 m lies off the 1.6-m hull of [model_6dof]",
+        ),
         (lambda d: d["limits"].pop("max_surge"), "[limits] max_surge: missing"),
         (lambda d: d["limits"].update(max_surge=0.0), "[limits] max_surge: must be positive"),
         (lambda d: d["model_5dof"].pop("N_max"), "[model_5dof] N_max: missing"),
@@ -234,6 +254,54 @@ def test_a_bad_vehicle_file_is_one_line_naming_the_file_and_field(
     assert "\n" not in message
     assert message.startswith(f"{path}: ")
     assert field in message
+
+
+def test_fins_whose_roll_moments_do_not_cancel_are_refused_by_the_env(tmp_path: Path) -> None:
+    """Was: one stern plane off the axis flew as a pair without its roll moment."""
+    layout = remus_layout()
+    for fin in layout["actuators"]["fins"]:
+        fin["radius"] = 0.1  # [m] off the axis, as a real fin
+    assert load_vehicle(layout).pairs_problem == ""  # four in a cross: the moments cancel
+    del layout["actuators"]["fins"][1]  # the port stern plane
+    path = write_toml(tmp_path / "three_fins.toml", layout)
+    with pytest.raises(VehicleFileError) as error:
+        gym.make("AUVPath3D-v0", vehicle=path)
+    assert str(error.value) == (
+        f"{path}: [[actuators.fins]] 'stern_starboard': the stern planes' roll moments do not "
+        "cancel (Σ A·r·cos φ = 0.000665 m³): the coupled pairs have no roll moment; give each "
+        "fin an opposite one of equal area, or put them on the axis (radius 0)"
+    )
+
+
+def test_surge_coriolis_without_a_5dof_model_is_refused(tmp_path: Path) -> None:
+    layout = tomllib.loads((VEHICLE_DIRECTORY / "torpedo.toml").read_text())
+    layout["surge_coriolis"] = False
+    with pytest.raises(VehicleFileError, match=r"surge_coriolis: sets a term of \[model_5dof\]"):
+        load_vehicle(layout)
+
+
+def test_a_vehicle_files_sensors_and_top_speed_are_named_with_the_file(tmp_path: Path) -> None:
+    layout = remus_layout()
+    layout["sensors"] = {"fix_interval": 0.07}  # [s] the other fields: SensorConfig's
+    layout["limits"]["max_surge"] = 0.8  # [m/s] below the paper's u_D = 1 m/s
+    path = write_toml(tmp_path / "slow.toml", layout)
+    with pytest.raises(ValueError) as error:
+        SimConfig.from_kwargs(vehicle=path, sensors="vehicle")
+    assert str(error.value).startswith(f"{path}: [sensors] sensors fix_interval = 0.07 s must be")
+    with pytest.raises(ValueError) as error:
+        SimConfig.from_kwargs(vehicle=path, surge_limit="vehicle")
+    assert f"is the vehicle's top speed ({path}: [limits] max_surge = 0.8 m/s)" in str(error.value)
+
+
+def test_plant_params_give_the_derived_5dof_record_of_the_hull_flown() -> None:
+    """Was: the torpedo's derived record (what the PID's gains and the limits come from) kept
+    the file's 1.6-m hull while the 6-DOF plant flew the plant_params' 3-m one."""
+    record = load_vehicle("torpedo").hull_6dof.record()
+    record.update(length=3.0, diameter=0.3)  # [m]
+    kwargs = {"vehicle": "torpedo", "plant": "6dof", "actuator": "realistic"}
+    config = SimConfig.from_kwargs(**kwargs, plant_params=record)
+    assert config.params.m == config.plant_params.mass_kg == pytest.approx(145.047, abs=1e-3)
+    assert SimConfig.from_kwargs(**kwargs).params.m == pytest.approx(31.029, abs=1e-3)
 
 
 def test_a_mass_matrix_that_is_not_positive_definite_is_refused() -> None:

@@ -56,7 +56,8 @@ def test_vehicle_is_the_same_episode_as_the_former_number(assert_same_episodes) 
         (
             {"surge_limit": "vehicle", "params": {"max_surge": 0.9}},
             ValueError,
-            r"^surge_limit must be above u_desired = 1.0 m/s",
+            r"^surge_limit='vehicle' is the vehicle's top speed \(params.max_surge = 0.9 m/s\), "
+            r"which must be above u_desired = 1 m/s and at most 10 m/s",
         ),
     ],
 )

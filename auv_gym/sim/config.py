@@ -7,6 +7,7 @@ compiled step reads (`auv_gym.sim.integrator.CONFIG_FIELDS`).
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import math
 from collections.abc import Mapping, Sequence
@@ -240,6 +241,11 @@ class SimConfig:
         if isinstance(the_path, Path):
             the_path, offset = shift_path(the_path, offset), (0.0, 0.0, 0.0)
         s_end = the_path.s_end if isinstance(the_path, Path) else math.inf
+        if plant_params is not None and plant == SIX_DOF_PLANT and the_vehicle.hull_5dof is None:
+            # the derived 5-DOF record (gains, limits, bounds) is the flown hull's
+            the_vehicle = dataclasses.replace(
+                the_vehicle, hull_6dof=SixDofVehicle.from_record(plant_params)
+            )
         hull = hull_from(the_vehicle, params)
         if isinstance(surge_limit, str):  # the one name: the vehicle record's top speed
             if surge_limit != VEHICLE_TOP_SPEED:
@@ -248,6 +254,16 @@ class SimConfig:
                     f" (params.max_surge), got {surge_limit!r:.80}"
                 )
             surge_limit = hull.max_surge
+            if is_real(u_desired) and not u_desired < surge_limit <= SPEED_BOUND:
+                where = "params.max_surge"  # or the vehicle file's, unless params replace it
+                if surge_limit == the_vehicle.max_surge:
+                    where = f"{the_vehicle.source or the_vehicle.name}: [limits] max_surge"
+                raise ValueError(
+                    f"surge_limit={VEHICLE_TOP_SPEED!r} is the vehicle's top speed ({where} = "
+                    f"{surge_limit:g} m/s), which must be above u_desired = {u_desired:g} m/s "
+                    f"and at most {SPEED_BOUND:g} m/s (the speed arguments' range); give this "
+                    "env a surge_limit in m/s or inf, or a slower u_desired"
+                )
         elif not is_real(surge_limit):
             raise ArgumentTypeError(
                 f"surge_limit must be a speed in m/s, inf or {VEHICLE_TOP_SPEED!r}"
@@ -272,6 +288,12 @@ class SimConfig:
             )
         if isinstance(sensors, str) and sensors == "vehicle":
             sensors = the_vehicle.sensors
+            try:  # the vehicle file's suite against this env's control period: name the file
+                if is_real(control_dt) and control_dt > 0.0:
+                    sensors.fix_steps(control_dt)
+            except (TypeError, ValueError) as error:
+                where = the_vehicle.source or f"vehicle {the_vehicle.name!r}"
+                raise type(error)(f"{where}: [sensors] {error}") from None
         return cls(
             vehicle=the_vehicle.name,
             plant=plant,

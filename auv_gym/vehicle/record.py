@@ -295,6 +295,12 @@ def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
     surge_coriolis = data.get("surge_coriolis", True)
     if not isinstance(surge_coriolis, bool):
         raise fail("surge_coriolis", f"must be true or false, got {surge_coriolis!r:.40}")
+    if "surge_coriolis" in data and "model_5dof" not in data:
+        raise fail(
+            "surge_coriolis",
+            "sets a term of [model_5dof], which this file has none of (its 5-DOF record is "
+            "derived from [model_6dof], without it): drop it or add the section",
+        )
 
     actuator_values = section("actuators", (*PROPULSION_FIELDS, "fins"))
     fins, actuators, pairs_problem = _actuators(actuator_values, number, fail)
@@ -331,8 +337,24 @@ def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
             hull_values[key] = number(f"[model_6dof] {key}", value)
     hull_6dof = _built(SixDofVehicle, hull_values, fail, "model_6dof")
     check_mass_matrix(hull_6dof.mass, fail)
+    for fin in fins:
+        if abs(fin.x) > 0.5 * hull_6dof.length * (1.0 + 1e-9):
+            raise fail(
+                f"[[actuators.fins]] {fin.name!r} x",
+                f"{fin.x:g} m lies off the {hull_6dof.length:g}-m hull of [model_6dof] (a fin "
+                f"is on the hull: |x| ≤ length/2 = {0.5 * hull_6dof.length:g} m)",
+            )
+    if not math.isclose(propeller.water_density, hull_6dof.water_density, rel_tol=1e-9):
+        raise fail(
+            "[model_6dof] water_density",
+            f"{hull_6dof.water_density:g} kg/m³ differs from [actuators] water_density = "
+            f"{propeller.water_density:g} kg/m³: the hull, its propeller and its fins are in "
+            "one sea",
+        )
     if hull_5dof is not None:
         check_rigid_body(hull_5dof, hull_6dof, fail)
+        if actuators is not None:
+            check_fin_authority(hull_5dof, actuators, fail)
 
     return Vehicle(
         name=name,
@@ -374,6 +396,12 @@ def check_rigid_body(model: AUVParams, hull: SixDofVehicle, fail) -> None:
     §2.1 f, so a difference would fly as neutral in heave), W = m·g [N] with the hull's gravity,
     and m [kg] within `MASS_RATIO_RANGE` of the hull's displaced mass (a unit slip, 10³ or 10³⁰
     kg, otherwise loads and flies)."""
+    if not model.z_g > model.z_b:
+        raise fail(
+            "[model_5dof] z_g",
+            f"{model.z_g:g} m must lie below z_b = {model.z_b:g} m (z_g > z_b, z down): the "
+            "restoring moment −(z_g W − z_b B) sin θ would capsize the vehicle in pitch",
+        )
     if not math.isclose(model.B, model.W, rel_tol=1e-9):
         raise fail(
             "[model_5dof] B",
@@ -396,6 +424,27 @@ def check_rigid_body(model: AUVParams, hull: SixDofVehicle, fail) -> None:
             f"hull displaces ({hull.length:g} m × {hull.diameter:g} m spheroid); a neutrally "
             f"buoyant vehicle's mass is within {low:.2g}-{high:g}× of it",
         )
+
+
+# The paper's form has one fin coefficient for pitch and yaw; the fins' own, to the file's rounding.
+FIN_AUTHORITY_TOLERANCE = 0.01
+
+
+def check_fin_authority(model: AUVParams, actuators: ActuatorParams, fail) -> None:
+    """Refuse a [model_5dof] ``fin_moment_coeff`` [kg/rad] that is not the fins' moment per u²
+    per radian, |x|·½ρAC_L of the stern planes and of the rudders (`ActuatorParams.
+    fin_moment_coeff`, docs/model.md §2.6): actuator="fins" flies the coefficient and
+    actuator="realistic" the fins, and they would be two different vehicles."""
+    stern, rudder = actuators.fin_moment_coeff()
+    for pair, value in (("stern planes", stern), ("rudders", rudder)):
+        if abs(model.fin_moment_coeff / value - 1.0) > FIN_AUTHORITY_TOLERANCE:
+            raise fail(
+                "[model_5dof] fin_moment_coeff",
+                f"{model.fin_moment_coeff:g} kg/rad is not the {pair}' |x|·½ρAC_L = {value:.4g} "
+                f"kg/rad (stern planes {stern:.4g}, rudders {rudder:.4g}; within "
+                f"{FIN_AUTHORITY_TOLERANCE:.0%}): the paper's 5-DOF form has one fin coefficient, "
+                "so a [model_5dof] needs stern planes and rudders of equal authority and it",
+            )
 
 
 def _built(kind: type, values: dict[str, Any], fail, section_name: str):
@@ -546,6 +595,19 @@ def fin_pairs(fins: tuple[FinSpec, ...], fail=None):
                         f"{getattr(fin, key):g} differs from {lead.name!r}'s "
                         f"{getattr(lead, key):g}; the {group} are driven as one coupled pair",
                     )
+        # Fin i's roll moment is −r_i f_i, its lift f_i ∝ A_i δ_i with δ_i = cos φ_i δ_s (stern
+        # planes) or −sin φ_i δ_r (rudders): the pair has none only if Σ A_i r_i cos φ_i (or
+        # sin φ_i) vanishes, fins of equal area opposite each other or on the axis (r = 0).
+        side = math.cos if group == "stern planes" else math.sin
+        arm = sum(fin.area * fin.radius * side(fin.axis_roll) for fin in groups[group])
+        scale = sum(fin.area * fin.radius for fin in groups[group])
+        if abs(arm) > 1e-9 * scale:
+            raise fail(
+                f"[[actuators.fins]] {groups[group][-1].name!r}",
+                f"the {group}' roll moments do not cancel (Σ A·r·{side.__name__} φ = {arm:.3g} "
+                "m³): the coupled pairs have no roll moment; give each fin an opposite one of "
+                "equal area, or put them on the axis (radius 0)",
+            )
         area = 0.0
         for fin in groups[group]:
             area += fin.area
