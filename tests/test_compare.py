@@ -257,6 +257,134 @@ def test_scenario_file_documents_every_scenario():
         assert {k: v for k, v in s.env.items() if k != "vehicle"} == twin.env
 
 
+# ------------------------------------------------ the vehicle file in the episode cache
+REMUS_FILE = ROOT / "auv_gym" / "vehicle" / "data" / "remus100.toml"
+WEAK = {"X_max = 50.0": "X_max = 5.0", "M_max = 10.0": "M_max = 1.0", "N_max = 10.0": "N_max = 1.0"}
+
+
+def vehicle_scenario(folder: Path) -> Path:
+    """A scenario file naming a copy of the REMUS 100 file beside it by a relative path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    shutil.copy(REMUS_FILE, folder / "cache_auv.toml")
+    scenarios = folder / "scenarios.toml"
+    scenarios.write_text('[own]\ndescription = "x"\nvehicle = "cache_auv.toml"\n')
+    return scenarios
+
+
+def edit(file: Path, replacements: dict[str, str]) -> None:
+    text = file.read_text()
+    for old, new in replacements.items():
+        assert old in text
+        text = text.replace(old, new)
+    file.write_text(text)
+
+
+def test_an_edited_vehicle_file_reruns_its_cached_episodes(tmp_path, monkeypatch):
+    """Was: the fingerprint held the vehicle's path, so a rerun into the same --out after
+    weakening the vehicle file's actuators reused the old episode (10.109 m, silently; a fresh
+    --out gave 10.671 m). Now the vehicle's values enter: an edit reruns, a comment or another
+    folder does not, and the record names the values' digest, never the path."""
+    scenarios = vehicle_scenario(tmp_path / "study")
+    monkeypatch.chdir(tmp_path / "study")
+    argv = ["--policies", "pid_los", "--scenario-file", "scenarios.toml", "--seeds", "1"]
+    argv += ["--duration", "20", "--workers", "1", "--quiet", "--no-figures"]
+    argv += ["--out", str(tmp_path / "out")]  # in this process: one code digest throughout
+    record_file = tmp_path / "out" / "episodes" / "own" / "pid_los" / "seed_0.json"
+
+    def rms() -> float:
+        (record,) = main(argv)
+        return record["metrics"]["rms_distance"]
+
+    assert rms() == pytest.approx(10.109, abs=1e-3)
+    first = json.loads(record_file.read_text())
+    edit(tmp_path / "study" / "cache_auv.toml", WEAK)
+    assert rms() == pytest.approx(10.671, abs=1e-3)  # rerun, as into a fresh --out
+    second = json.loads(record_file.read_text())
+    assert second["fingerprint"] != first["fingerprint"]
+    assert second["vehicle_digest"] != first["vehicle_digest"]
+    assert re.fullmatch(r"[0-9a-f]{16}", second["vehicle_digest"])
+    assert "cache_auv" not in json.dumps(second)  # no path in the record
+    mtime = record_file.stat().st_mtime_ns
+    edit(tmp_path / "study" / "cache_auv.toml", {"# REMUS 100": "# my REMUS 100"})
+    monkeypatch.chdir(tmp_path)  # another folder, the same file: the cache holds
+    argv[argv.index("scenarios.toml")] = str(scenarios.relative_to(tmp_path))
+    assert rms() == pytest.approx(10.671, abs=1e-3)
+    assert record_file.stat().st_mtime_ns == mtime
+
+
+def test_the_suites_chunk_fingerprint_follows_the_vehicle_files_values(tmp_path, monkeypatch):
+    """evaluate-suite's cache (`Chunk.fingerprint`) had the same gap: the default vehicle's file
+    edited, its chunks were reused."""
+    from auv_gym.vehicle import record
+    from benchmarks.catalog.tasks import task_set
+    from benchmarks.runner import jobs
+    from benchmarks.runner.suite_chunks import Chunk, resolve_policy
+
+    shipped = tmp_path / "data"
+    shutil.copytree(record.VEHICLE_DIRECTORY, shipped)
+    monkeypatch.setattr(record, "VEHICLE_DIRECTORY", shipped)
+    monkeypatch.setattr(jobs, "VEHICLE_DIRECTORY", shipped, raising=False)
+    policy = resolve_policy("pid_los")
+    chunk = Chunk(policy.name, policy.runs[0], task_set("test_tight_helix"), 20.0, 10.0)
+    before = chunk.fingerprint()
+    edit(shipped / "remus100.toml", {"# [kg] W/g": "# [kg] the weight over g"})  # a comment
+    assert chunk.fingerprint() == before
+    edit(shipped / "remus100.toml", WEAK)
+    assert chunk.fingerprint() != before
+
+
+def test_the_shipped_vehicle_files_enter_the_fingerprint(tmp_path, monkeypatch):
+    """The shipped .toml files are data, not the .py sources the code digest holds: an edit of
+    torpedo.toml (or of remus100.toml, the default's) changes the fingerprints of the episodes
+    that fly it, and of no other."""
+    from auv_gym.vehicle import record
+    from benchmarks.runner import jobs
+
+    shipped = tmp_path / "data"
+    shutil.copytree(record.VEHICLE_DIRECTORY, shipped)
+    monkeypatch.setattr(record, "VEHICLE_DIRECTORY", shipped)
+    monkeypatch.setattr(jobs, "VEHICLE_DIRECTORY", shipped, raising=False)
+    scenarios = load_scenarios()
+    torpedo = jobs.Job("pid_los", scenarios["torpedo_helix"], 0, 10.0, 5.0)
+    remus = jobs.Job("pid_los", scenarios["six_dof_helix"], 0, 10.0, 5.0)
+    before = torpedo.fingerprint(), remus.fingerprint()
+    edit(shipped / "torpedo.toml", {"rpm_max = 1525.0": "rpm_max = 1400.0"})
+    assert torpedo.fingerprint() != before[0] and remus.fingerprint() == before[1]
+    edit(shipped / "remus100.toml", WEAK)
+    assert remus.fingerprint() != before[1]
+    # A name and a copy of its file elsewhere are the same vehicle: the same digest.
+    copy = shutil.copy(shipped / "torpedo.toml", tmp_path / "copy.toml")
+    assert jobs.vehicle_digest(copy) == jobs.vehicle_digest("torpedo")
+    assert jobs.vehicle_digest(None) == jobs.vehicle_digest("remus100")
+
+
+def test_a_relative_vehicle_file_lies_beside_the_scenario_file(tmp_path, monkeypatch):
+    """Was: resolved against the current folder, so a scenario file that worked from its own
+    folder failed from any other ("vehicle file cache_auv.toml: cannot be read")."""
+    from auv_gym.sim.config import config_from_kwargs
+
+    scenarios = vehicle_scenario(tmp_path / "study")
+    with open(scenarios, "a") as f:
+        f.write('\n[in_env]\nenv = { vehicle = "cache_auv.toml" }\n')
+        f.write(f'\n[absolute]\nvehicle = "{tmp_path / "study" / "cache_auv.toml"}"\n')
+        f.write(
+            '\n[named]\nvehicle = "torpedo"\nenv = { plant = "6dof", actuator = "realistic" }\n'
+        )
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    loaded = load_scenarios(Path("..") / "study" / "scenarios.toml")
+    beside = str(Path("..") / "study" / "cache_auv.toml")
+    assert loaded["own"].env == {"vehicle": beside}
+    assert loaded["in_env"].env == {"vehicle": beside}
+    assert loaded["absolute"].env["vehicle"] == str(tmp_path / "study" / "cache_auv.toml")
+    assert loaded["named"].env["vehicle"] == "torpedo"
+    assert config_from_kwargs(loaded["own"].env).vehicle == "remus100"
+    # A file that is not beside the scenario file is named as it would be opened.
+    (tmp_path / "study" / "cache_auv.toml").unlink()
+    with pytest.raises(ValueError, match=r"scenario 'own': vehicle file \.\./study/cache_auv"):
+        load_scenarios(Path("..") / "study" / "scenarios.toml")
+
+
 @pytest.mark.integration
 def test_ray_backend_matches_local_processes(tmp_path, monkeypatch):
     pytest.importorskip("ray")

@@ -233,6 +233,20 @@ def test_bad_task_files_raise_one_line_errors(tmp_path, text, match):
     assert "\n" not in str(caught.value)
 
 
+def test_a_relative_vehicle_file_lies_beside_the_task_file(tmp_path, monkeypatch):
+    """Was: resolved against the current folder, so a task file worked from one folder only."""
+    import shutil
+
+    from auv_gym.vehicle.record import VEHICLE_DIRECTORY
+
+    folder = tmp_path / "tasks"
+    folder.mkdir()
+    shutil.copy(VEHICLE_DIRECTORY / "remus100.toml", folder / "mine.toml")
+    file = _write(folder, VALIDATION + 'env = { vehicle = "mine.toml" }\n')
+    monkeypatch.chdir(tmp_path)  # not the task file's folder
+    assert load_task_sets(file)["x"].env["vehicle"] == str(folder / "mine.toml")
+
+
 def test_unknown_task_set_names_are_refused():
     with pytest.raises(ValueError, match=r"unknown task set 'trian'; valid: \[.*'train'"):
         task_set("trian")

@@ -5,7 +5,9 @@ An env table takes every `AUVPath3D-v0` argument, including a waypoint path
 ["helix"], radius = [10, 13] }``) and vehicle parameters by name or scale factor
 (``params = { m = 32.0, scale = { X_uu = 1.2 } }``); each is validated when the file is loaded.
 A scenario's ``vehicle`` (a shipped vehicle's name or a vehicle file, docs/vehicles.md) is the
-env's ``vehicle`` argument; the REMUS 100 when absent.
+env's ``vehicle`` argument; the REMUS 100 when absent. A relative vehicle file (``vehicle =
+"my_auv.toml"``, or in the env table) lies beside the scenario file, as an ensemble's members lie
+beside its ensemble.json: the file works from any folder.
 """
 
 from __future__ import annotations
@@ -54,6 +56,9 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
             if "vehicle" in env:
                 raise ValueError(f"{path}: scenario {name!r}: vehicle given twice (and in env)")
             env["vehicle"] = table["vehicle"]
+        vehicle = env.get("vehicle")
+        if isinstance(vehicle, str) and vehicle.endswith(".toml"):  # a file (`load_vehicle`)
+            env["vehicle"] = str(Path(path).parent / vehicle)  # beside this file; absolute kept
         scenarios[name] = Scenario(
             name, table.get("description", ""), env, dict(table.get("controller", {}))
         )

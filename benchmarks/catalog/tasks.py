@@ -142,6 +142,9 @@ def load_task_sets(
                 )
             continue
         env = dict(table.get("env", {}))
+        vehicle = env.get("vehicle")
+        if isinstance(vehicle, str) and vehicle.endswith(".toml"):  # a file (`load_vehicle`)
+            env["vehicle"] = str(Path(path).parent / vehicle)  # beside this file; absolute kept
         controller = table.get("controller", {})
         if not isinstance(controller, Mapping):
             raise ValueError(f"{where}: controller must be a table, got {controller!r}")

@@ -6,11 +6,13 @@ AUVPath3D-v0; the record says which (``env_id``).
 
 Each finished episode is written atomically to ``OUT/episodes/<scenario>/<policy>/seed_<k>.json``
 (metrics) with a fingerprint of everything that determines it, so a run restarted with the same
-arguments reuses finished episodes; a job that keeps its time series (``keep_trajectory``) also
-writes ``seed_<k>.npz``, 0.7–0.9 MB for 150 s of a helix, already deflate-compressed (float64
-samples of a noisy ocean: LZMA saves 16 %, byte shuffling and deltas 29 %), so `compare` keeps
-the series its figures draw, the first seed's, unless asked for all. Results do not depend on the
-number of workers or the backend: every episode is a pure function of the job.
+arguments reuses finished episodes (the vehicle enters by the values its file holds, not its path,
+so an edited vehicle file reruns its episodes: `vehicle_digest`); a job that keeps its time
+series (``keep_trajectory``) also writes ``seed_<k>.npz``, 0.7–0.9 MB for 150 s of a helix,
+already deflate-compressed (float64 samples of a noisy ocean: LZMA saves 16 %, byte shuffling and
+deltas 29 %), so `compare` keeps the series its figures draw, the first seed's, unless asked for
+all. Results do not depend on the number of workers or the backend: every episode is a pure
+function of the job.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import functools
 import hashlib
 import json
 import time
+import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,6 +33,15 @@ from auv_gym.metrics import compute_metrics
 from auv_gym.rollout import rollout
 from auv_gym.support.files import jsonable, write_json
 from auv_gym.support.numba_cache import sources_digest
+from auv_gym.vehicle.record import (
+    DEFAULT_VEHICLE,
+    VEHICLE_DIRECTORY,
+    Vehicle,
+    VehicleFileError,
+    load_vehicle,
+    shipped_vehicles,
+    vehicle_from_mapping,
+)
 from benchmarks.catalog.policies import PolicySpec, build_policy, policy_label
 from benchmarks.catalog.scenarios import Scenario
 from benchmarks.runner.cache import run_resumable, stored_record
@@ -54,6 +66,7 @@ __all__ = [
     "parallel_map",
     "run_job",
     "run_jobs",
+    "vehicle_digest",
 ]
 
 
@@ -84,11 +97,16 @@ class Job:
         }
 
     def fingerprint(self) -> str:
-        """Hash of everything that determines the episode: the job, the agent file if any, and
-        the source code of `auv_gym` and `controllers`."""
+        """Hash of everything that determines the episode: the job, the agent file if any, the
+        values of the vehicle flown (`vehicle_digest`: a shipped file's or a user's, read now;
+        not its path) and the source code of `auv_gym` and `controllers`."""
+        scenario = asdict(self.scenario)
+        if isinstance(scenario["env"].get("vehicle"), (str, Path)):  # a name or a file's path
+            del scenario["env"]["vehicle"]  # its values are "vehicle": not where the file lies
         payload = {
             "policy": self.policy,
-            "scenario": asdict(self.scenario),
+            "scenario": scenario,
+            "vehicle": self.vehicle_digest(),
             "seed": self.seed,
             "duration": self.duration,
             "transient": self.transient,
@@ -100,6 +118,10 @@ class Job:
         if self.agent_env:
             payload["agent_env"] = self.agent_env
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+    def vehicle_digest(self) -> str:
+        """Hash of the values of the vehicle the episode flies (`vehicle_digest`)."""
+        return vehicle_digest(self.env_kwargs.get("vehicle"))
 
     def path(self, out: Path) -> Path:
         return (
@@ -145,6 +167,62 @@ def agent_digest(agent: Path | None) -> str:
     return digest.hexdigest()[:16]
 
 
+# What a `Vehicle` says about itself but the simulator never reads: the file it came from, its
+# description and literature. Every other field (name, limits, models, fins, sensors) enters.
+_VEHICLE_PROSE = ("source", "description", "sources")
+
+
+def vehicle_digest(vehicle: Any) -> str:
+    """Hash of the values of the vehicle an env's ``vehicle`` argument names (None: the REMUS 100;
+    a shipped vehicle's name, a ``.toml`` file, a mapping or a `Vehicle`) as `load_vehicle`
+    builds it from the file's content now: an edited value changes it, the file's path, comments,
+    description and layout do not. The shipped files are data, not the sources `code_digest`
+    hashes, so an edit of ``auv_gym/vehicle/data/torpedo.toml`` shows here. Raises as
+    `load_vehicle` does for a file that cannot be read or describes no vehicle."""
+    file = _vehicle_file(vehicle)
+    try:
+        text = None if file is None else file.read_bytes()
+    except OSError:
+        text = None
+    if text is None:  # a mapping, a `Vehicle`, or a name or file `load_vehicle` refuses (raises)
+        return _values_digest(load_vehicle(vehicle))
+    return _file_digest(text, str(file))
+
+
+def _vehicle_file(vehicle: Any) -> Path | None:
+    """The file `load_vehicle` reads for ``vehicle``, or None (a mapping, a `Vehicle`, an unknown
+    name)."""
+    if vehicle is None:
+        vehicle = DEFAULT_VEHICLE
+    if isinstance(vehicle, Path) or (isinstance(vehicle, str) and vehicle.endswith(".toml")):
+        return Path(vehicle)
+    if isinstance(vehicle, str) and vehicle in shipped_vehicles():
+        return VEHICLE_DIRECTORY / f"{vehicle}.toml"
+    return None
+
+
+@functools.lru_cache(maxsize=32)
+def _file_digest(text: bytes, where: str) -> str:
+    """`vehicle_digest` of a vehicle file's content (read and checked once per process)."""
+    try:
+        data = tomllib.loads(text.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise VehicleFileError(f"vehicle file {where}: not valid TOML ({exc})") from None
+    return _values_digest(vehicle_from_mapping(data, where))
+
+
+def _values_digest(vehicle: Vehicle) -> str:
+    values = {k: v for k, v in asdict(vehicle).items() if k not in _VEHICLE_PROSE}
+    text = json.dumps(jsonable(values, non_finite="text"), sort_keys=True, default=_array)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _array(value: Any) -> Any:
+    if hasattr(value, "tolist"):  # a numpy array of a record
+        return value.tolist()
+    raise TypeError(f"a vehicle's field of type {type(value).__name__} cannot be hashed")
+
+
 def finished(job: Job, out: Path) -> dict[str, Any] | None:
     """The stored record of a finished episode with a matching fingerprint, else None."""
     return stored_record(job, out)
@@ -158,6 +236,8 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
     null.
     """
     start = time.perf_counter()
+    # Before the episode reads its vehicle file: an edit while it runs leaves a stale fingerprint.
+    fingerprint, vehicle = job.fingerprint(), job.vehicle_digest()
     policy = build_policy(job.policy, job.env_kwargs, job.scenario.controller)
     trajectory = rollout(policy, job.seed, **job.env_kwargs)
     metrics = compute_metrics(trajectory, transient=job.transient)
@@ -168,7 +248,8 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
         "seed": job.seed,
         "duration": job.duration,
         "transient": job.transient,
-        "fingerprint": job.fingerprint(),
+        "fingerprint": fingerprint,
+        "vehicle_digest": vehicle,  # the values of the vehicle flown (not its path)
         "wall_time_s": time.perf_counter() - start,
         "metrics": jsonable(metrics),
         "trajectory": (

@@ -27,7 +27,7 @@ from benchmarks.catalog.policies import (
     policy_label,
 )
 from benchmarks.catalog.tasks import TaskSet
-from benchmarks.runner.jobs import agent_digest, code_digest
+from benchmarks.runner.jobs import agent_digest, code_digest, vehicle_digest
 from benchmarks.training.checkpoints import SEED_AGENT_PREFIX
 from controllers.ensemble import ENSEMBLE_FILE
 
@@ -114,6 +114,7 @@ class Chunk:
             "policy": "agent" if parsed.agent is not None else self.run.spec,
             "agent": agent_digest(parsed.files),
             "env": self.env_kwargs,
+            "vehicle": vehicle_digest(self.env_kwargs.get("vehicle")),  # its values, not its path
             "controller": self.task.controller if parsed.agent is None else {},
             "seeds": [self.task.seeds.start, self.task.seeds.stop],
             "transient": self.transient,
