@@ -135,7 +135,11 @@ def rollouts(
     Args:
         policy: an object with SB3's ``predict`` (see `Policy`), optionally ``diagnostics``.
         seeds: reset seeds; seed k reproduces ``AUVPath3DEnv(**env_kwargs).reset(seed=k)``.
-        batch_size: rows simulated together (bounds memory; results do not depend on it).
+        batch_size: rows simulated together (bounds memory). The simulator's and the
+            classical controllers' (and an ONNX export's) results do not depend on it; a torch
+            agent's do, at float rounding (about 1e-6 of a command): torch's matrix products
+            sum a row alone and a row in a batch in different orders, so the same seeds in the
+            same batches are bit-identical, seed 40 alone and beside seed 41 are not.
         name: policy label for the metadata (default `policy_name`).
         threads: numba threads for the simulator kernel during the call (None: leave numba's
             setting). The default 1 is deliberate: a control step of a few dozen rows is far

@@ -275,9 +275,7 @@ class Simulator:
         # Leaky error integrals (y_e, z_e; x_e too with "xyz") [m·s] (`ObservationConfig`
         # integral_time, integral_limit), then the errors' history [m]: the last columns of
         # `extra`, which `extend_rows` leaves alone, updated in place.
-        history_start = self.extra.shape[1] - self.layout.history
-        self.error_integral = self.extra[:, history_start - self.layout.integrals : history_start]
-        self.error_past = self.extra[:, history_start:]
+        self._bind_error_views()
         if self.layout.integrals:
             decay = math.exp(-config.control_dt / self.layout.integral_time)
             self._integral_gain = (decay, self.layout.integral_time * (1.0 - decay))
@@ -352,6 +350,18 @@ class Simulator:
             for name in self.navigation.ARRAYS:
                 arrays[f"navigation.{name}"] = getattr(self.navigation, name)
         return arrays
+
+    def _bind_error_views(self) -> None:
+        """`error_integral` and `error_past`: views of `extra`'s last columns, written in place."""
+        history_start = self.extra.shape[1] - self.layout.history
+        self.error_integral = self.extra[:, history_start - self.layout.integrals : history_start]
+        self.error_past = self.extra[:, history_start:]
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Unpickled or deep-copied: pickle stores a view as an array of its own, which the
+        steps would then update while the observation reads `extra`; the views are rebuilt."""
+        self.__dict__.update(state)
+        self._bind_error_views()
 
     def snapshot(self) -> dict[str, Any]:
         """Copies of the arrays that change while stepping or at a reset (`SNAPSHOT_ARRAYS`)
