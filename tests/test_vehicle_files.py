@@ -208,6 +208,10 @@ def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) ->
             "'stern_starboard' radius: must be non-negative",
         ),
         (lambda d: d["actuators"].update(kt_0=-1.0), "[actuators]"),
+        (
+            lambda d: d["actuators"].update(kt_max=-5.0),
+            "[actuators]: ActuatorParams.kt_max = -5 must be in (0, kt_0 = 0.4566]",
+        ),
         (lambda d: d["model_6dof"].update(diameter=-0.2), "[model_6dof]"),
         (lambda d: d["model_6dof"].update(r_bg=[0.0, 0.0]), "[model_6dof] r_bg: must be a list"),
         (lambda d: d.update(format=2), "format: must be 1"),

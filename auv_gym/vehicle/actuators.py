@@ -114,6 +114,16 @@ class ActuatorParams:
                 )
             else:
                 object.__setattr__(self, f.name, real(name, value, 0.0, low_open=True))
+        # K_T and K_Q fall linearly in the advance ratio J from kt_0, kq_0 at J = 0 to kt_max,
+        # kq_max at advance_max, the top speed's J, where the propeller still drives the hull.
+        for coefficient in ("kt", "kq"):
+            at_rest, at_top = getattr(self, f"{coefficient}_0"), getattr(self, f"{coefficient}_max")
+            if not 0.0 < at_top <= at_rest:
+                raise ValueError(
+                    f"ActuatorParams.{coefficient}_max = {at_top:g} must be in (0, "
+                    f"{coefficient}_0 = {at_rest:g}]: the propeller's coefficient at the top "
+                    "speed's advance ratio is positive and at most its value at rest"
+                )
 
     @classmethod
     def pvs_remus100(cls) -> ActuatorParams:
