@@ -204,6 +204,13 @@ def _speed_record(scenario, policy, seed, max_surge, overspeed):
     return {"scenario": scenario, "policy": policy, "seed": seed, "metrics": metrics}
 
 
+def _run_config(seeds: int, duration: float, **scenarios: dict) -> dict:
+    """A compare run's config: ``seeds`` per scenario, ``duration`` [s] long (its transient
+    half of it), the scenarios' env arguments by name."""
+    described = {name: {"name": name, "env": env} for name, env in scenarios.items()}
+    return {"seeds": seeds, "duration": duration, "transient": duration / 2, "scenarios": described}
+
+
 def _speed_header(text, scenario):
     section = text[text.index(f"## {scenario}") :]
     return section[section.index("speed:") :].splitlines()[2]  # the speed table's header
@@ -217,15 +224,7 @@ def test_the_overspeed_column_names_the_vehicles_own_top_speed():
         _speed_record("torpedo_helix", "pid_los", 0, 2.08, 0.0),
         _speed_record("six_dof_helix", "pid_los", 0, 2.06, 0.4),
     ]
-    config = {
-        "seeds": 1,
-        "duration": 300.0,
-        "transient": 100.0,
-        "scenarios": {
-            "torpedo_helix": {"name": "torpedo_helix", "env": TORPEDO_ENV},
-            "six_dof_helix": {"name": "six_dof_helix", "env": {"plant": "6dof"}},
-        },
-    }
+    config = _run_config(1, 300.0, torpedo_helix=TORPEDO_ENV, six_dof_helix={"plant": "6dof"})
     text = summarise(records, config)
     assert _speed_header(text, "torpedo_helix") == (
         "| policy | failed | overshoot [m/s] | RMS(u − u_D) [mm/s] | max u [m/s] "
@@ -248,16 +247,8 @@ def test_a_scenario_every_policy_is_na_on_keeps_its_overview_column():
     ]
     for r in records:
         r["scenario"] = "my_helix"
-    config = {
-        "seeds": 2,
-        "duration": 100.0,
-        "transient": 50.0,
-        "scenarios": {
-            "my_torp": {"name": "my_torp", "env": TORPEDO_ENV},
-            "my_helix": {"name": "my_helix", "env": {}},
-        },
-        "not_applicable": {"my_torp": ["fbsm_colos_lowpass", "ppo_residual"]},
-    }
+    config = _run_config(2, 100.0, my_torp=TORPEDO_ENV, my_helix={})
+    config["not_applicable"] = {"my_torp": ["fbsm_colos_lowpass", "ppo_residual"]}
     lines = summarise(records, config).splitlines()
     assert lines[4:8] == [
         "| policy | my_torp | my_helix |",
