@@ -49,6 +49,7 @@ ALLOCATION_FIELDS = (
     "x_rudder",
     "delta_max_stern",
     "delta_max_rudder",
+    "fin_induced_drag",
 )
 
 
@@ -88,7 +89,9 @@ def allocate(tau: np.ndarray, nu: np.ndarray, params: ActuatorParams) -> np.ndar
     rudder_gain = -p.x_rudder * k_r  # N = −x_r k_r δ_r
     delta_s = fin_angle(tau[:, 1], stern_gain, np.sign(p.x_stern), p.delta_max_stern)
     delta_r = fin_angle(tau[:, 2], rudder_gain, -np.sign(p.x_rudder), p.delta_max_rudder)
-    fin_drag = -k_r * delta_r * delta_r - k_s * delta_s * delta_s
+    # the fins' induced drag −κ·k·δ² (docs/model.md §2.6); κ = 1 multiplies exactly
+    kappa = p.fin_induced_drag
+    fin_drag = -kappa * k_r * delta_r * delta_r - kappa * k_s * delta_s * delta_s
     thrust = (tau[:, 0] - fin_drag) / (1.0 - p.thrust_deduction)
     d = p.prop_diameter
     t_coeff = thrust / (p.water_density * d**4)  # [rps²]

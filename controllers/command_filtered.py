@@ -13,7 +13,8 @@ filter's effect from the tracking errors it feeds back:
     law         M_c = I₅₅ (−f₅ + α̇₁ − z̄₁ − k_q z₂),   z̄₁ = z₁ − ξ₁
 
 with S_M, S_R the saturations at the fins' moment authority and moment rate
-(K/δ_max)·u|u|·δ̇_max, and the same in yaw (ξ̇₄ = −k_r ξ₄ + (N − N_c)/I₆₆,
+K·δ_max·u|u|·(δ̇_max/δ_max) = K·u|u|·δ̇_max (K [kg/rad] the fin moment per u² per radian,
+docs/model.md §4.10), and the same in yaw (ξ̇₄ = −k_r ξ₄ + (N − N_c)/I₆₆,
 ξ̇₃ = −k₂ ξ₃ + ξ₄/cosθ, N_c = I₆₆ (−f₆ + α̇₂ − z̄₃/cosθ − k_r z₄)). With the nominal model the
 compensated errors z̄ᵢ = zᵢ − ξᵢ obey the unconstrained closed loop of backstepping
 (V = ½ Σ z̄ᵢ², V̇ = −k₁z̄₁² − k_q z̄₂² − k₂z̄₃² − k_r z̄₄²) whatever the limits do; ξ is

@@ -187,6 +187,8 @@ def _propeller_and_fins(g: Graph, tau: Sequence[str], velocity: Sequence[str], p
     rudder_gain = g.op("Mul", g.const(-p.x_rudder), k_r)
     delta_s = _fin_angle(g, m_d, stern_gain, float(np.sign(p.x_stern)), p.delta_max_stern)
     delta_r = _fin_angle(g, n_d, rudder_gain, float(-np.sign(p.x_rudder)), p.delta_max_rudder)
+    if p.fin_induced_drag != 1.0:  # κ (docs/model.md §2.6); the graphs of κ = 1 stay as they were
+        k_s, k_r = (g.op("Mul", g.const(p.fin_induced_drag), k) for k in (k_s, k_r))
     drag_r = g.op("Mul", g.op("Mul", g.op("Neg", k_r), delta_r), delta_r)
     fin_drag = g.op("Sub", drag_r, g.op("Mul", g.op("Mul", k_s, delta_s), delta_s))
     thrust = g.op("Div", g.op("Sub", x_d, fin_drag), g.const(1.0 - p.thrust_deduction))

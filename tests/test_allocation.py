@@ -64,6 +64,22 @@ def test_round_trip_covers_ahead_astern_and_both_fins() -> None:
     assert commands[2, 0] * P.rpm_max == pytest.approx(449.85, abs=0.01)
 
 
+@pytest.mark.parametrize("kappa", [0.0, 0.5, 2.0])
+def test_the_allocation_takes_the_fins_induced_drag_factor(kappa) -> None:
+    """Was: the allocation subtracted the fins' drag at κ = 1 whatever the actuator's κ (the
+    torpedo's is 0): 0.56 N of surplus thrust at 10 N, u = 2 m/s, half the fins' authority."""
+    params = P.replace(fin_induced_drag=kappa)
+    limits = np.array([params.rpm_max, params.delta_max_stern, params.delta_max_rudder])
+    stern, rudder = params.fin_moment_coeff()
+    u = 2.0  # [m/s]
+    tau = np.array([10.0, 0.5 * stern * params.delta_max_stern * u * u, 0.0])
+    tau[2] = 0.5 * rudder * params.delta_max_rudder * u * u
+    commands = allocate(tau, (u, 0.0, 0.0), params)[0]
+    n_rpm, d_s, d_r = commands * limits
+    got = np.array(actuator_forces(n_rpm, d_s, d_r, u, 0.0, 0.0, actuator_record(params)))
+    np.testing.assert_allclose(got[[0, 3, 4]], tau, rtol=1e-9, atol=1e-9)
+
+
 def test_unreachable_tau_saturates_towards_it() -> None:
     commands = allocate(
         np.array([[500.0, 50.0, -50.0], [-500.0, -50.0, 50.0]]),

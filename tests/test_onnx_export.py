@@ -102,12 +102,16 @@ def test_the_guard_graph_is_guard_commands(nose_up_command, floor):
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
 
 
-@pytest.mark.parametrize("actuator", ["fins", "realistic"])
-def test_the_allocation_graph_is_the_allocation(actuator):
+@pytest.mark.parametrize(
+    ("actuator", "induced_drag"), [("fins", 1.0), ("realistic", 1.0), ("realistic", 0.0)]
+)
+def test_the_allocation_graph_is_the_allocation(actuator, induced_drag):
+    """Also with the torpedo's fins (no induced drag, κ = 0): the graph's allocation takes κ."""
     rng = np.random.default_rng(2)
     obs = operating_observations(4000, rng)
     commands = rng.uniform(-1.2, 1.2, (4000, 3)).astype(np.float32)
-    allocation = Allocation(NAMES, actuator, actuator_params=ActuatorParams())
+    params = ActuatorParams(fin_induced_drag=induced_drag)
+    allocation = Allocation(NAMES, actuator, actuator_params=params)
     g = Graph()
     out, delivered = allocation_graph(g, "commands", "observation", allocation)
     g.op("Identity", out, output="out")

@@ -119,8 +119,9 @@ class AUVPath3DEnv(gym.Env):
     episodes start within ±2 m of that start with a heading error of up to
     ±`start_heading_spread` (0.2 rad; the paper's own start is π/2 off the path), the rest
     anywhere on the first turn of the path with up to 8 m offset, ±60° heading error and
-    0–1.5 m/s surge, whatever start was given (the training distribution's recovery half). `start_rotation` turns the start about p(0) (−π/2: the paper helix's
-    90°-across start on any path, docs/model.md §3.5).
+    0–1.5 m/s surge, whatever start was given (the training distribution's recovery half).
+    `start_rotation` turns the start about p(0) (−π/2: the paper helix's 90°-across start on any
+    path, docs/model.md §3.5).
     The arguments' ranges (below) keep every reset observation inside the observation space;
     `reset` raises ValueError, naming the component, if a start still falls outside it.
     `reset` takes no `options` (None or an empty dict).

@@ -12,7 +12,7 @@ The 6-DOF state is split between the fleet's 5-DOF row (x, y, z, θ, ψ, u, v, w
 the guidance, the observation, the navigation and the task read, so they are one code for both
 plants) and its roll row (`ROLL`: φ [rad], p [rad/s]).
 
-How the 5-DOF actuator modes act on the 6-DOF hull (docs/model.md §15.2): "paper" applies
+How the 5-DOF actuator modes act on the 6-DOF hull (docs/model.md §15.1): "paper" applies
 τ = (X, 0, 0, 0, M, N); "fins" the same with the fin authority of the 5-DOF record; "realistic"
 the propeller and fins with their lift, side and heave forces and the propeller's torque in
 roll, at the velocity through the water.

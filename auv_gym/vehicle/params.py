@@ -180,7 +180,7 @@ class AUVParams:
 
         The perturbed set is `HYDRODYNAMIC_FIELDS` (added mass, damping, lift, Munk and
         cross-flow terms, and z_g for the restoring moment z_g W); rigid-body mass and
-        inertia are not uncertain (docs/model.md §10 item 7).
+        inertia are not uncertain (docs/model.md §2.5).
         """
         if not (math.isfinite(epsilon) and 0.0 <= epsilon < 1.0):
             raise ValueError(f"parameter uncertainty epsilon must be in [0, 1), got {epsilon}")
