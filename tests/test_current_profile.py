@@ -144,3 +144,64 @@ def test_the_drift_phase_is_drawn_per_episode_and_the_track_follows_it(make_sim)
 def test_bad_profile_arguments_name_the_argument(profile, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(current_profile=profile, path_offset=(0.0, 0.0, 110.0))
+
+
+@pytest.mark.parametrize(
+    ("profile", "message"),
+    [
+        (
+            {"surface_speed": 0.3, "reference_depth": 50.0, "drift_period": 5.0},
+            "current_profile drift_period = 5.0 s does nothing without a heading drift "
+            "(drift_amplitude = 0): give a drift_amplitude > 0 or leave drift_period out",
+        ),
+        (
+            {"surface_speed": 0.3, "reference_depth": 50.0, "drift_period": 3600.0},
+            "current_profile drift_period = 3600.0 s does nothing without a heading drift "
+            "(drift_amplitude = 0): give a drift_amplitude > 0 or leave drift_period out",
+        ),
+        (
+            {
+                "surface_speed": 0.3,
+                "reference_depth": 50.0,
+                "drift_amplitude": 0.2,
+                "drift_period": 1e-9,
+            },
+            "current_profile drift_period = 1e-09 s is below 1 s: the kernels sample the drift "
+            "once per physics step (up to 0.1 s), too seldom for a faster turn",
+        ),
+    ],
+)
+def test_a_drift_period_without_drift_or_too_short_to_sample_is_refused(profile, message):
+    """Was: accepted; without an amplitude the period does nothing, and 1e-9 s aliased."""
+    with pytest.raises(ValueError) as caught:
+        CurrentProfile.from_spec(profile)
+    assert str(caught.value) == message
+    if profile["drift_period"] != 3600.0:  # built directly: a period other than the default
+        with pytest.raises(ValueError) as caught:
+            CurrentProfile(**profile)
+        assert str(caught.value) == message
+
+
+def test_the_drift_period_floor_samples_every_accepted_physics_step_ten_times():
+    from auv_gym.ocean.current_profile import MIN_DRIFT_PERIOD
+    from auv_gym.sim.config import PHYSICS_DT_RANGE
+
+    assert MIN_DRIFT_PERIOD >= 10 * PHYSICS_DT_RANGE[1]
+    drift = {"surface_speed": 0.3, "reference_depth": 50.0, "drift_amplitude": 0.2}
+    assert CurrentProfile.from_spec({**drift, "drift_period": 1.0}).drift_period == 1.0
+
+
+def test_a_gauss_markov_time_constant_without_its_std_is_refused():
+    """Was: current={"time_constant": 5} accepted with std 0, where τ does nothing."""
+    from auv_gym.ocean.disturbances import CurrentConfig
+
+    with pytest.raises(ValueError) as caught:
+        CurrentConfig.from_spec({"time_constant": 5})
+    assert str(caught.value) == (
+        "current time_constant = 5 s does nothing without a Gauss–Markov current (std = 0 on "
+        "every axis): give a std > 0 or leave time_constant out"
+    )
+    # the default τ stays accepted (tests/test_mirror.py gives it with std 0), so does any τ
+    # with a std
+    assert CurrentConfig.from_spec({"std": [0, 0, 0], "time_constant": 60.0}) == CurrentConfig()
+    assert CurrentConfig.from_spec({"std": [0, 0, 0.01], "time_constant": 5}).time_constant == 5

@@ -62,6 +62,18 @@ def test_a_wide_spread_scales_only_the_near_start_heading_error() -> None:
     assert np.mean(np.array(errors) > math.radians(60.0)) > 0.2  # the paper's 90° now reachable
 
 
+def test_a_spread_without_random_starts_is_refused() -> None:
+    """Was: accepted, and without randomize_start it changes nothing."""
+    with pytest.raises(ValueError) as caught:
+        gym.make("AUVPath3D-v0", start_heading_spread=1.0)
+    assert str(caught.value) == (
+        "start_heading_spread = 1 rad sets the heading error of randomize_start's draws; with "
+        "randomize_start=False it would do nothing: drop it or give randomize_start=True"
+    )
+    gym.make("AUVPath3D-v0", start_heading_spread=0.2)  # the default, as the env passes it
+    gym.make("AUVPath3D-v0", start_heading_spread=1.0, randomize_start=True)
+
+
 @pytest.mark.parametrize("bad", [-0.1, 3.2, math.nan, math.inf])
 def test_bad_spread_is_named(bad: float) -> None:
     with pytest.raises(ValueError, match="start_heading_spread"):

@@ -114,3 +114,31 @@ def test_snapshot_carries_the_history():
 def test_bad_history_arguments_name_the_argument(bad, message):
     with pytest.raises(ValueError, match=message):
         AUVPath3DEnv(observation=bad)
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        (
+            {"history_interval": 0.5},
+            "observation history_interval = 0.5 does nothing without a history "
+            "(history_steps = 0): give history_steps > 0 or leave history_interval out",
+        ),
+        (
+            {"history_steps": 0, "history_interval": 1.0},  # given, even at the default
+            "observation history_interval = 1.0 does nothing without a history "
+            "(history_steps = 0): give history_steps > 0 or leave history_interval out",
+        ),
+        (
+            {"kind": "paper", "history_steps": 2},
+            "observation history_steps = 2 needs the agent observation (kind 'preview'); the "
+            "paper's 15 entries have no preview, error integrals or history",
+        ),
+    ],
+)
+def test_a_history_interval_without_a_history_is_refused(spec, message):
+    """Was: accepted, and the observation identical to the one without it."""
+    with pytest.raises(ValueError) as caught:
+        ObservationConfig.from_spec(spec)
+    assert str(caught.value) == message
+    assert ObservationConfig.from_spec({"history_steps": 0}) == ObservationConfig("preview")

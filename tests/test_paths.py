@@ -417,3 +417,94 @@ def test_spline_radius_bends_the_splines_alone():
     tight_helices = PathDistribution(families=("helix",), radius=(10.0, 13.0))
     tight_splines = PathDistribution(families=("spline",), radius=(8.5, 13.0))
     assert overlaps(tight_helices, tight) == [] and overlaps(tight_splines, tight) == ["spline"]
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        (
+            {"families": ["helix"], "leg_length": (50, 60)},
+            "path leg_length = (50, 60) shapes only the lawnmower family, and families "
+            "['helix'] does not draw it: leave leg_length out or add 'lawnmower' to families",
+        ),
+        (
+            {"families": ["helix", "lawnmower"], "piece_length": [30, 40]},
+            "path piece_length = (30, 40) shapes only the spline family, and families "
+            "['helix', 'lawnmower'] does not draw it: leave piece_length out or add 'spline' "
+            "to families",
+        ),
+        (
+            {"families": ["helix", "line"], "length": 300.0},
+            "path length = 300.0 shapes only the spline and lawnmower families, and families "
+            "['helix', 'line'] draws none of them: leave length out or add one of them to "
+            "families",
+        ),
+        (
+            {"families": ["line"], "radius": [20, 30]},
+            "path radius = (20, 30) shapes only the helix, spline and lawnmower families, and "
+            "families ['line'] draws none of them: leave radius out or add one of them to "
+            "families",
+        ),
+        (
+            {"families": ["helix"], "spline_radius": [20, 30]},
+            "path spline_radius = (20, 30) shapes only the spline and lawnmower families, and "
+            "families ['helix'] draws none of them: leave spline_radius out or add one of them "
+            "to families",
+        ),
+    ],
+)
+def test_a_range_of_a_family_not_drawn_is_refused(spec, message):
+    """Was: accepted and ignored (e.g. lawnmower legs for a distribution of helices)."""
+    with pytest.raises(ValueError) as caught:
+        SimConfig.from_kwargs(path=spec)
+    assert str(caught.value) == message
+
+
+def test_ranges_of_drawn_families_still_build():
+    # spline_radius sets the waypoint spacing of lawnmowers too (docs/model.md §3.8)
+    mower = PathDistribution.from_spec({"families": ["lawnmower"], "spline_radius": [9, 12]})
+    assert mower.spacing == 3.0
+    helices = PathDistribution.from_spec({"families": ["helix"], "radius": [10, 13]})
+    assert helices.radius == (10.0, 13.0)
+    assert PathDistribution.from_spec({"climb_angle_deg": [0, 5], "length": 300.0}).length == 300
+
+
+_SHAPE = "(n, 3) with 2 <= n <= 1000, coordinates in [-1e+06, 1e+06] m"
+
+
+@pytest.mark.parametrize(
+    ("path", "error", "message"),
+    [
+        (
+            [(0, 0, True), (40, 10, 8)],
+            ArgumentTypeError,
+            "path as a list of (x, y, z) waypoints: Spline waypoints must be real numbers of "
+            f"shape {_SHAPE}, got [(0, 0, True), (40, 10, 8)] (a bool)",
+        ),
+        (
+            np.array([[0, 0, 0], [40, 10, 8]], dtype=object),
+            ArgumentTypeError,
+            "path as a list of (x, y, z) waypoints: Spline waypoints must be real numbers of "
+            f"shape {_SHAPE}, got an array of dtype object and shape (2, 3)",
+        ),
+        (
+            {"kind": "waypoints", "waypoints": [(0, 0, 0), (40, 10, 8)]},
+            ValueError,
+            "path kind 'waypoints' got an unexpected keyword argument 'waypoints'; it takes no "
+            "other key (a spline through other waypoints is the list of them, "
+            "path=[(x, y, z), ...])",
+        ),
+        (
+            {"kind": "helix", "centre": [0, 0, 0]},
+            ValueError,
+            "path kind 'helix' got an unexpected keyword argument 'centre'; valid keys: "
+            "['center', 'climb', 'omega', 'radius', 's_end']",
+        ),
+    ],
+)
+def test_bad_waypoints_and_keys_raise_one_named_line(path, error, message):
+    """Was: a bool taken as 0 or 1; a multi-line array repr; "<lambda>() got an unexpected
+    keyword argument 'waypoints'"."""
+    with pytest.raises(error) as caught:
+        SimConfig.from_kwargs(path=path)
+    assert str(caught.value) == message

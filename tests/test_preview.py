@@ -421,3 +421,61 @@ def test_ground_speed_bound_covers_every_current_the_config_can_draw():
     # Configurations whose current stays within 10 m/s keep the 30 m/s bound.
     calm = gym.make("AUVPath3DPreview-v0", current={"mean": (0.3, 0, 0), "std": (0.1, 0.1, 0.03)})
     assert calm.observation_space.high[15] == 30.0
+
+
+_PAPER_HAS_NONE = (
+    "needs the agent observation (kind 'preview'); the paper's 15 entries have no preview, "
+    "error integrals or history"
+)
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        (
+            {"kind": "paper", "integral_time": 10},
+            f"observation integral_time = 10.0 {_PAPER_HAS_NONE}",
+        ),
+        ({"kind": "paper", "points": 8}, f"observation points = 8 {_PAPER_HAS_NONE}"),
+        ({"kind": "paper", "points": 5}, f"observation points = 5 {_PAPER_HAS_NONE}"),  # default
+        (
+            {"kind": "paper", "integral_limit": 1},
+            f"observation integral_limit = 1.0 {_PAPER_HAS_NONE}",
+        ),
+        (
+            {"integral_limit": 1.0},
+            "observation integral_limit = 1.0 does nothing without error integrals "
+            "(integral_time = 0): give an integral_time > 0 or leave integral_limit out",
+        ),
+        (
+            {"integral_time": 0.0, "integral_limit": 0.0},  # given, even at the default
+            "observation integral_limit = 0.0 does nothing without error integrals "
+            "(integral_time = 0): give an integral_time > 0 or leave integral_limit out",
+        ),
+        (
+            {"integral_errors": "xyz"},
+            "observation integral_errors = 'xyz' does nothing without error integrals "
+            "(integral_time = 0): give an integral_time > 0 or leave integral_errors out",
+        ),
+    ],
+)
+def test_settings_the_observation_ignores_are_refused(spec, message):
+    """Was: accepted, and the observation identical to the one without them."""
+    with pytest.raises(ValueError) as caught:
+        ObservationConfig.from_spec(spec)
+    assert str(caught.value) == message
+    fields = {"kind": "preview", **spec}
+    if any(v != getattr(ObservationConfig(), k) for k, v in fields.items() if k != "kind"):
+        with pytest.raises(ValueError) as caught:  # built directly: the non-default values
+            ObservationConfig(**fields)
+        assert str(caught.value) == message
+
+
+def test_the_defaults_and_presets_with_integrals_still_build():
+    assert ObservationConfig.from_spec("preview_integral").integral_limit == 1.0
+    assert ObservationConfig.from_spec({"kind": "paper"}) == ObservationConfig()
+    assert ObservationConfig.from_spec({"integral_time": 0.0}) == ObservationConfig("preview")
+    with_limit = {"integral_time": 10.0, "integral_errors": "xyz", "integral_limit": 1.0}
+    assert ObservationConfig.from_spec(with_limit) == ObservationConfig.from_spec(
+        "preview_integral"
+    )

@@ -18,6 +18,7 @@ from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.ocean.disturbances import CurrentConfig, NoiseConfig
 from auv_gym.paths import Helix, Spline, StraightLine
 from auv_gym.sim.config import SimConfig
+from auv_gym.sim.integrator import CONFIG_FIELDS
 from auv_gym.sim.observation import OBS_HIGH, OBS_INDEX, OBS_LOW
 from auv_gym.sim.task import REWARD_TERMS, TERMINATION_REASONS, RewardWeights, TaskLimits, task_row
 from auv_gym.support.validation import ArgumentTypeError, choice, flag, integer, real, vector
@@ -117,6 +118,33 @@ def test_substeps_are_bounded_at_ten_thousand():
     assert SimConfig.from_kwargs(physics_dt=1e-5, control_dt=0.1, max_time=0.1).substeps == 10_000
     with pytest.raises(ValueError, match="10000 physics steps"):
         SimConfig.from_kwargs(physics_dt=1e-5, control_dt=0.10001, max_time=1.0)
+
+
+@pytest.mark.parametrize("physics_dt", [0.02, 0.03, 0.1])
+def test_physics_dt_over_the_documented_range_needs_no_noise_hold_without_noise(physics_dt):
+    """Was: "noise hold (noise_hold, a NoiseConfig's hold or 0.01) = 0.01 s must be a whole
+    multiple of physics_dt" for every physics_dt above 0.01 s, even with no noise to hold."""
+    for disturbance in ("none", 0.0, NoiseConfig(0.0)):
+        config = SimConfig.from_kwargs(
+            disturbance=disturbance, physics_dt=physics_dt, control_dt=physics_dt
+        )
+        assert config.packed()[list(CONFIG_FIELDS).index("hold_steps")] == 1.0
+    env = AUVPath3DEnv(disturbance="none", physics_dt=physics_dt, control_dt=physics_dt)
+    env.reset(seed=0)
+    for _ in range(5):
+        _, _, terminated, _, info = env.step(STILL)
+        assert not terminated and not np.any(info["disturbance"])
+
+
+def test_a_noise_hold_off_the_physics_step_names_one_to_give():
+    with pytest.raises(ValueError) as caught:
+        SimConfig.from_kwargs(physics_dt=0.02, control_dt=0.04)
+    assert str(caught.value) == (
+        "noise hold = 0.01 s (noise_hold, else the hold of the NoiseConfig or of disturbance's "
+        "preset: 0.01 s, 'ocean' 1 s) must be a whole multiple of physics_dt = 0.02 s: give "
+        "noise_hold = 0.02 s, say (with a NoiseConfig or a disturbance dict: that hold)"
+    )
+    assert SimConfig.from_kwargs(physics_dt=0.02, control_dt=0.04, noise_hold=0.02).substeps == 2
 
 
 def test_noise_config_hold_is_honoured_not_overridden():
@@ -615,6 +643,20 @@ def test_a_stiff_hull_runs_at_the_bound_and_with_a_shorter_step():
     for uncertainty in (0.0, 0.5, 0.9):
         REMUS6DOF.check_step(0.1, uncertainty)
     REMUS6DOF.check_step(0.01, 0.99)
+
+
+def test_parameter_uncertainty_too_wide_for_the_vehicles_hull_is_named():
+    """Was: "plant_params yaw_time_constant = 1 must be at least 4 s" with no plant_params given:
+    REMUS 100's hull steps at 0.01 s, only ε = 0.999's stiffest draws do not."""
+    with pytest.raises(ValueError) as caught:
+        AUVPath3DEnv(plant="6dof", param_uncertainty=0.999)
+    assert str(caught.value) == (
+        "param_uncertainty = 0.999 draws 6-DOF hulls too stiff for RK4 at physics_dt = 0.01 s "
+        "(the vehicle's damping time constants × (1 − 0.999) at the stiff end; |λ|·dt <= 2.5, "
+        "docs/model.md §15.1): give param_uncertainty <= 0.996 or physics_dt <= 0.0025 s"
+    )
+    SimConfig.from_kwargs(plant="6dof", param_uncertainty=0.996)  # the bounds named fit
+    SimConfig.from_kwargs(plant="6dof", param_uncertainty=0.999, physics_dt=0.0025)
 
 
 def test_parameter_uncertainty_is_bounded_at_its_stiff_end():

@@ -396,3 +396,52 @@ def test_the_same_sea_over_a_path_below_the_surface_is_accepted():
     env = AUVPath3DEnv(waves="sea_state_4", **DEEP)
     env.reset(seed=0)
     assert env.sim.config.waves is not None
+
+
+@pytest.mark.parametrize(
+    ("waves", "message"),
+    [
+        (
+            {"sea_state": 4, "spectrum": "pierson_moskowitz", "gamma": 7.0},
+            "waves gamma = 7.0 does nothing with spectrum 'pierson_moskowitz' (γ is JONSWAP's "
+            "peak enhancement): leave gamma out or give spectrum 'jonswap'",
+        ),
+        (
+            {"spectrum": "pierson_moskowitz", "gamma": 3.3},  # given, even at the default
+            "waves gamma = 3.3 does nothing with spectrum 'pierson_moskowitz' (γ is JONSWAP's "
+            "peak enhancement): leave gamma out or give spectrum 'jonswap'",
+        ),
+        (
+            {"sea_state": 4.0},  # as waves=4.0 is: a sea state's code is an integer
+            "waves sea_state must be a sea state ['sea_state_3', 'sea_state_4', 'sea_state_5'] "
+            "or its integer code [3, 4, 5], got 4.0 (float)",
+        ),
+        (
+            {"sea_state": True},
+            "waves sea_state must be a sea state ['sea_state_3', 'sea_state_4', 'sea_state_5'] "
+            "or its integer code [3, 4, 5], got True (bool)",
+        ),
+    ],
+)
+def test_wave_settings_that_do_nothing_or_are_no_sea_state_are_refused(waves, message):
+    """Was: gamma was ignored by the Pierson–Moskowitz spectrum; sea_state 4.0 was taken as 4
+    in a dict while waves=4.0 was refused."""
+    with pytest.raises(ValueError) as caught:
+        WaveConfig.from_spec(waves)
+    assert str(caught.value) == message
+    if waves.get("gamma", 3.3) != 3.3:  # built directly: a gamma other than the default
+        with pytest.raises(ValueError) as caught:
+            WaveConfig(spectrum="pierson_moskowitz", gamma=waves["gamma"])
+        assert str(caught.value) == message
+
+
+def test_a_sea_state_is_an_integer_code_everywhere_and_its_fields_replace_it():
+    with pytest.raises(TypeError, match="waves must be None, a sea state"):
+        WaveConfig.from_spec(4.0)
+    assert WaveConfig.from_spec(np.int64(4)) == WaveConfig.from_spec({"sea_state": np.int64(4)})
+    assert WaveConfig.from_spec(4) == WaveConfig()
+    # documented precedence (docs/model.md §13.2): a height or period given replaces the state's
+    low = WaveConfig.from_spec({"sea_state": 3, "significant_height": 0.1})
+    assert (low.significant_height, low.peak_period) == (0.1, SEA_STATES[3][1])
+    pm = WaveConfig.from_spec({"sea_state": 4, "spectrum": "pierson_moskowitz"})
+    assert pm.gamma == 3.3  # the default stays, unread

@@ -158,7 +158,7 @@ class AUVPath3DEnv(gym.Env):
     | argument | default | meaning |
     |---|---|---|
     | `path` | "helix" | "helix", "line", "waypoints", "random", a `Path`, waypoints (below) |
-    | `disturbance` | "paper" | "paper" (±35), "none", "ocean" (below), amplitude, `NoiseConfig` |
+    | `disturbance` | "paper" | "paper" (±35), "none", "ocean", amplitude, `NoiseConfig`, dict |
     | `current` | None | earth-frame mean [m/s] 3-vector, dict or `CurrentConfig` (Gauss–Markov) |
     | `param_uncertainty` | None | ε: coefficients × (1 + U[−ε, ε]) per episode (None: 0) |
     | `hull_variation` | None | {mass, cg_offset, added_mass, damping}: drawn per episode (§15.3) |
@@ -168,7 +168,7 @@ class AUVPath3DEnv(gym.Env):
     | `random_noise` | 0.0 | ε: white-noise amplitudes × (1 + U[−ε, ε]) per episode |
     | `control_dt` | 0.05 | control period [s], a multiple of `physics_dt` |
     | `physics_dt` | 0.01 | RK4 step [s] |
-    | `noise_hold` | None | white-noise hold [s]; None: the `NoiseConfig`'s, else 0.01 s |
+    | `noise_hold` | None | white-noise hold [s]; None: the `NoiseConfig`'s, ocean's 1 s or 0.01 s |
     | `max_time` | 300.0 | truncation time [s] |
     | `randomize_start` | False | random initial offset (training) |
     | `start_heading_spread` | 0.2 | heading error [rad] of `randomize_start`'s near-start half |
@@ -185,10 +185,10 @@ class AUVPath3DEnv(gym.Env):
     | `path_offset` | None | (dx, dy, dz) [m] moving the path and its default start (real depth) |
     | `depth_envelope` | None | True, {seabed_depth, margin} or `DepthEnvelope`: surface z = 0 |
     | `safety_cost` | defaults | {depth, speed, pitch, speed_limit, pitch_limit}: `info["cost"]` |
-    | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (docs/model.md §13) |
-    | `current_profile` | None | dict or `CurrentProfile`: current vs depth, heading drift (§13.5) |
+    | `waves` | None | "sea_state_3" … "sea_state_5", dict or `WaveConfig` (§13); False: none |
+    | `current_profile` | None | dict, `CurrentProfile`: current vs depth (§13.5); False: none |
     | `sensors` | "ideal" | "ideal" (exact state), "typical", dict, `SensorConfig`: model.md §14 |
-    | `surface_above_path` | None | [m] sea surface above the path's shallowest point (§13.8) |
+    | `surface_above_path` | None | [m] surface above the path's top (§13.8); False: z = 0 |
     | `plant` | "5dof" | "5dof" (the paper's model) or "6dof" (with roll, model.md §15) |
     | `plant_params` | REMUS 100 | "6dof" only: `SixDofVehicle` or a complete dict of its fields |
     | `vehicle` | "remus100" | a shipped name, a `.toml` vehicle file, a dict or a `Vehicle` |
@@ -202,14 +202,20 @@ class AUVPath3DEnv(gym.Env):
     (`auv_gym.ocean.preset`, docs/model.md §16): unmodelled-dynamics noise sized to the fins,
     a random, Gauss–Markov and depth-sheared current, sea state 3 and ±20 % coefficients. It
     fills `current`, `random_current`, `param_uncertainty`, `waves`, `current_profile` and,
-    without a `depth_envelope`, `surface_above_path` (10 m) where they are left at None.
+    without a `depth_envelope`, `surface_above_path` (10 m, while waves or a profile are on) where
+    they are left at None; False switches off `waves`, `current_profile` or `surface_above_path`.
+    `noise_hold` replaces the hold of its noise (1 s), and a dict of `NoiseConfig` fields over a
+    preset its noise, e.g. ``disturbance={"preset": "ocean", "amplitude": 0.0}`` (no noise); a
+    `NoiseConfig` alone is that noise without the ocean.
 
     Allowed values (`auv_gym.support.validation`; the constants live in `simulator`, `disturbances`,
     `task` and `paths`):
     - `physics_dt` in [1e-6, 0.1] s; `control_dt` a whole multiple of it, at most 10 000 physics
       steps per control step (bounds the cost of one `step`); `max_time` in [control_dt, 1e6] s.
-    - `noise_hold` a whole multiple of `physics_dt`, ≤ 1e6 s; given together with a `NoiseConfig`
-      it must equal that config's `hold` (no silent override). Amplitudes in [0, 1e4] N or N·m.
+    - `noise_hold` ≤ 1e6 s; the hold (also the 0.01 s default and "ocean"'s 1 s) a whole multiple
+      of `physics_dt` unless there is no noise ("none" or amplitude 0); given together with a
+      `NoiseConfig` or a dict's `hold` it must equal it (no silent override). Amplitudes in
+      [0, 1e4] N or N·m.
     - `current`: mean and std per axis within ±10 m/s (std ≥ 0), time constant in (0, 1e6] s.
     - `surge_limit` in (u_desired, 10] m/s, inf or "vehicle" (`params.max_surge`); a random
       start's surge stays below 0.75 `surge_limit` (0-1.5 m/s otherwise).
@@ -219,7 +225,8 @@ class AUVPath3DEnv(gym.Env):
       in (0, π/2) rad; reward weights in [0, 1e6] (the formula gives each term its sign).
     - `start_position` within 500 m of the path's start p(0) (496.5 m with `randomize_start`),
       so that the reset errors are observable; `start_heading` in [−2π, 2π] rad;
-      `start_heading_spread` in [0, π] rad; `start_rotation` in [−π, π] rad (a range: low ≤ high).
+      `start_heading_spread` in [0, π] rad, other than 0.2 only with `randomize_start`;
+      `start_rotation` in [−π, π] rad (a range: low ≤ high).
     - `randomize_start` a bool; `params` an `AUVParams` (finite fields, positive inertias) or a
       dict of its field values and an optional `scale` dict of factors, e.g. ``{"m": 32.0,
       "scale": {"X_uu": 1.2}}`` (an unknown name is an error naming it).
@@ -234,8 +241,10 @@ class AUVPath3DEnv(gym.Env):
       `water_density` in [1, 1e4] kg/m³, `gravity` in (0, 100] m/s², damping time constants
       > 0 and ratios in [0, 100]; and every mode of the hull steppable by RK4 at
       `physics_dt`: |λ|·physics_dt <= 2.5, at the stiff end of `param_uncertainty`'s draws
-      (REMUS 100 at 0.01 s: time constants >= 0.004 s, roll damping ratio <= 19.3; the error
-      names the coefficient and its bound, docs/model.md §15.1).
+      (REMUS 100 at 0.01 s: time constants >= 0.004 s, roll damping ratio <= 19.3,
+      `param_uncertainty` <= 0.996; the error names the coefficient and its bound, or, for the
+      vehicle's own hull, `param_uncertainty` when only its draws are too stiff, docs/model.md
+      §15.1).
 
     Paths (`auv_gym.paths`): coordinates (centre, start, waypoints) within ±1e6 m; `Helix` radius
     in (0, 1e5] m, ω in [−1e3, 0) ∪ (0, 1e3] rad per unit s (ω > 0 a starboard, ω < 0 a port
@@ -299,7 +308,7 @@ class AUVPath3DEnv(gym.Env):
     def __init__(
         self,
         path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
-        disturbance: str | float | NoiseConfig = "paper",
+        disturbance: str | float | NoiseConfig | Mapping = "paper",
         current: CurrentConfig | Sequence[float] | dict | None = None,
         param_uncertainty: float | None = None,
         actuator: str = "paper",
@@ -327,11 +336,11 @@ class AUVPath3DEnv(gym.Env):
         path_offset: Sequence[float] | None = None,
         depth_envelope: DepthEnvelope | Mapping | bool | None = None,
         safety_cost: SafetyCost | Mapping | None = None,
-        waves: WaveConfig | str | int | Mapping | None = None,
-        current_profile: CurrentProfile | Mapping | None = None,
+        waves: WaveConfig | str | int | Mapping | bool | None = None,
+        current_profile: CurrentProfile | Mapping | bool | None = None,
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
         sensors: str | Mapping | SensorConfig | None = None,
-        surface_above_path: float | None = None,
+        surface_above_path: float | bool | None = None,
         plant: str = "5dof",
         plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
         vehicle: str | PathLike | Mapping[str, Any] | Vehicle | None = None,

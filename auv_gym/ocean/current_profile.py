@@ -29,6 +29,11 @@ __all__ = ["CurrentProfile", "profile_velocity"]
 
 MAX_REFERENCE_DEPTH = 11_000.0  # [m] the deepest ocean
 MAX_DRIFT_PERIOD = 1e6  # [s]
+# [s] The kernels evaluate the profile once per physics step (`forcing.ocean_forcing`), at most
+# 0.1 s apart (`config.PHYSICS_DT_RANGE`): a drift period of 1 s or more is sampled at least 10
+# times per period at every physics step the env accepts; a shorter one would alias.
+MIN_DRIFT_PERIOD = 1.0
+DEFAULT_DRIFT_PERIOD = 3600.0  # [s]
 
 
 @dataclass(frozen=True)
@@ -41,7 +46,7 @@ class CurrentProfile:
     exponent: float = 1.0 / 7.0  # p: 1 linear shear, 1/7 power law
     direction: float = 0.0  # [rad] χ₀, direction the water flows toward
     drift_amplitude: float = 0.0  # [rad] A
-    drift_period: float = 3600.0  # [s] T
+    drift_period: float = DEFAULT_DRIFT_PERIOD  # [s] T
 
     def __post_init__(self) -> None:
         def put(name: str, low: float, high: float, unit: str = "", **kw: bool) -> None:
@@ -55,6 +60,14 @@ class CurrentProfile:
         put("direction", -2 * math.pi, 2 * math.pi, "rad")
         put("drift_amplitude", 0.0, math.pi, "rad")
         put("drift_period", 0.0, MAX_DRIFT_PERIOD, "s", low_open=True)
+        if self.drift_period < MIN_DRIFT_PERIOD:
+            raise ValueError(
+                f"current_profile drift_period = {self.drift_period!r} s is below "
+                f"{MIN_DRIFT_PERIOD:g} s: the kernels sample the drift once per physics step "
+                "(up to 0.1 s), too seldom for a faster turn"
+            )
+        if self.drift_amplitude == 0.0 and self.drift_period != DEFAULT_DRIFT_PERIOD:
+            _period_without_drift(self.drift_period)
 
     @property
     def max_speed(self) -> float:
@@ -63,7 +76,8 @@ class CurrentProfile:
 
     @classmethod
     def from_spec(cls, spec: CurrentProfile | Mapping | None) -> CurrentProfile | None:
-        """None (no profile), a dict of fields, or itself."""
+        """None (no profile), a dict of fields, or itself. A dict's drift_period is refused
+        without a drift_amplitude > 0, where it does nothing, even at its default."""
         if spec is None or isinstance(spec, CurrentProfile):
             return spec
         if isinstance(spec, Mapping):
@@ -71,11 +85,21 @@ class CurrentProfile:
             for name in ("surface_speed", "reference_depth"):
                 if name not in given:
                     raise ValueError(f"current_profile needs {name}, got keys {sorted(given)}")
-            return cls(**given)
+            profile = cls(**given)
+            if "drift_period" in given and profile.drift_amplitude == 0.0:
+                _period_without_drift(given["drift_period"])
+            return profile
         raise ArgumentTypeError(
             f"current_profile must be None, a dict of CurrentProfile "
             f"fields or a CurrentProfile, got {spec!r:.80}"
         )
+
+
+def _period_without_drift(period: object) -> None:
+    raise ValueError(
+        f"current_profile drift_period = {period!r} s does nothing without a heading drift "
+        "(drift_amplitude = 0): give a drift_amplitude > 0 or leave drift_period out"
+    )
 
 
 @njit(cache=True, inline="always")

@@ -39,6 +39,7 @@ MAX_NOISE_AMPLITUDE = 1e4  # [N, N·m] 200× the thrust limit
 MAX_NOISE_HOLD = 1e6  # [s]
 MAX_CURRENT_SPEED = 10.0  # [m/s] per axis, mean and std; ocean currents stay below 3 m/s
 MAX_CURRENT_TIME_CONSTANT = 1e6  # [s]
+DEFAULT_CURRENT_TIME_CONSTANT = 60.0  # [s]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -143,7 +144,7 @@ class CurrentConfig:
 
     mean: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m/s] NED
     std: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m/s] stationary std of δ per axis
-    time_constant: float = 60.0  # [s] τ of the Gauss–Markov process
+    time_constant: float = DEFAULT_CURRENT_TIME_CONSTANT  # [s] τ of the Gauss–Markov process
 
     def __post_init__(self) -> None:
         limit = MAX_CURRENT_SPEED
@@ -161,13 +162,24 @@ class CurrentConfig:
 
     @classmethod
     def from_spec(cls, spec: CurrentConfig | Sequence[float] | dict | None) -> CurrentConfig:
-        """Build from None (no current), a 3-vector mean [m/s], a dict of fields, or itself."""
+        """Build from None (no current), a 3-vector mean [m/s], a dict of fields, or itself.
+        A dict's time_constant other than the default 60 s is refused without a Gauss–Markov
+        part (std 0 on every axis), where it does nothing."""
         if spec is None:
             return cls()
         if isinstance(spec, CurrentConfig):
             return spec
         if isinstance(spec, Mapping):
-            return cls(**keys_within("current", spec, [f.name for f in fields(cls)]))
+            given = keys_within("current", spec, [f.name for f in fields(cls)])
+            config = cls(**given)
+            default = DEFAULT_CURRENT_TIME_CONSTANT
+            if not any(config.std) and config.time_constant != default:
+                raise ValueError(
+                    f"current time_constant = {given['time_constant']!r} s does nothing without "
+                    "a Gauss–Markov current (std = 0 on every axis): give a std > 0 or leave "
+                    "time_constant out"
+                )
+            return config
         if isinstance(spec, (str, bytes)) or not isinstance(spec, Iterable):
             raise ArgumentTypeError(
                 f"current must be None, a 3-vector mean [m/s], a dict of CurrentConfig fields or "

@@ -17,8 +17,11 @@ It serves any path. With a `depth_envelope` z is a true depth and the surface is
 path must lie below it, `path_depths.check_below_the_surface`). Without one the origin is a
 reference point (docs/model.md §2.0): the preset then places the sea surface
 `SURFACE_ABOVE_PATH` above the shallowest point an episode's path and start reach
-(``surface_above_path``), so the waves act at the operating depth of every path. An argument
-given explicitly replaces its part of the preset.
+(``surface_above_path``), so the waves act at the operating depth of every path. The parts are
+defaults (`auv_gym.sim.config.SimConfig.from_kwargs`): an argument given explicitly replaces its
+part only; False switches off ``waves``, ``current_profile`` or ``surface_above_path``;
+``noise_hold`` replaces the noise's hold and ``disturbance={"preset": "ocean", ...}`` with
+`NoiseConfig` fields the noise.
 """
 
 from __future__ import annotations

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
@@ -49,6 +50,7 @@ SPECTRA = ("jonswap", "pierson_moskowitz")
 SEA_STATES = {3: (0.88, 7.5), 4: (1.88, 8.8), 5: (3.25, 9.7)}
 DEFAULT_COMPONENTS = 32  # docs/model.md §13.2: Hs, Tp within 5 %, ≥ 50 % of the no-wave speed
 MAX_COMPONENTS = 1024
+DEFAULT_GAMMA = 3.3  # JONSWAP's peak enhancement; Pierson–Moskowitz has none
 MAX_HEIGHT = 30.0  # [m] beyond any recorded sea
 # Miche's limit for a deep-water wave, H/L ≤ 1/7, held by the significant height at the peak
 # wavelength: steeper seas break (docs/model.md §13); every sea state of `SEA_STATES` is far below.
@@ -123,7 +125,7 @@ class WaveConfig:
     significant_height: float = SEA_STATES[4][0]  # [m] H_s = 4 √m₀
     peak_period: float = SEA_STATES[4][1]  # [s] T_p
     spectrum: str = "jonswap"  # "jonswap" or "pierson_moskowitz"
-    gamma: float = 3.3  # JONSWAP peak enhancement factor γ (DNV-RP-C205: 1 to 7)
+    gamma: float = DEFAULT_GAMMA  # JONSWAP peak enhancement factor γ (DNV-RP-C205: 1 to 7)
     components: int = DEFAULT_COMPONENTS  # N
     spreading: float = 10.0  # s of cos-2s spreading
     direction: float = 0.0  # [rad] mean direction of travel β₀
@@ -147,6 +149,8 @@ class WaveConfig:
         put("peak_period", real("waves peak_period", self.peak_period, *PERIOD_RANGE, unit="s"))
         put("spectrum", choice("waves spectrum", self.spectrum, SPECTRA))
         put("gamma", real("waves gamma", self.gamma, 1.0, 7.0))
+        if self.spectrum == "pierson_moskowitz" and self.gamma != DEFAULT_GAMMA:
+            _gamma_without_jonswap(self.gamma)
         put("components", integer("waves components", self.components, 1, MAX_COMPONENTS))
         put("spreading", real("waves spreading", self.spreading, 0.0, MAX_SPREADING))
         put(
@@ -170,7 +174,9 @@ class WaveConfig:
     @classmethod
     def from_spec(cls, spec: WaveConfig | str | int | Mapping | None) -> WaveConfig | None:
         """None (no waves), a sea state ("sea_state_4" or 4: `SEA_STATES`), a dict of fields
-        (with an optional "sea_state" key for the height and period), or itself."""
+        (with an optional "sea_state" key for the height and period; a significant_height or
+        peak_period given with it replaces the sea state's), or itself. A "gamma" key with
+        spectrum "pierson_moskowitz" is refused (it shapes JONSWAP only), even at 3.3."""
         if spec is None or isinstance(spec, WaveConfig):
             return spec
         if isinstance(spec, Mapping):
@@ -179,8 +185,11 @@ class WaveConfig:
             if "sea_state" in given:
                 height, period = _sea_state(given.pop("sea_state"))
                 given = {"significant_height": height, "peak_period": period, **given}
-            return cls(**given)
-        if isinstance(spec, (str, int)) and not isinstance(spec, bool):
+            config = cls(**given)
+            if "gamma" in given and config.spectrum == "pierson_moskowitz":
+                _gamma_without_jonswap(given["gamma"])
+            return config
+        if isinstance(spec, (str, numbers.Integral)) and not isinstance(spec, bool):
             height, period = _sea_state(spec)
             return cls(significant_height=height, peak_period=period)
         raise ArgumentTypeError(
@@ -192,11 +201,26 @@ class WaveConfig:
 _PRESETS = sorted(f"sea_state_{code}" for code in SEA_STATES)
 
 
+def _gamma_without_jonswap(gamma: object) -> None:
+    raise ValueError(
+        f"waves gamma = {gamma!r} does nothing with spectrum 'pierson_moskowitz' (γ is "
+        "JONSWAP's peak enhancement): leave gamma out or give spectrum 'jonswap'"
+    )
+
+
 def _sea_state(name: object) -> tuple[float, float]:
-    code = name
+    """(H_s [m], T_p [s]) of a sea state's name or integer code; a float such as 4.0 is
+    refused, as everywhere an integer belongs (`support.validation.integer`)."""
     if isinstance(name, str):
         code = int(name[10:]) if name.startswith("sea_state_") and name[10:].isdigit() else -1
-    if isinstance(code, bool) or code not in SEA_STATES:
+    elif isinstance(name, numbers.Integral) and not isinstance(name, bool):
+        code = int(name)
+    else:
+        raise ArgumentTypeError(
+            f"waves sea_state must be a sea state {_PRESETS} or its integer code "
+            f"{sorted(SEA_STATES)}, got {name!r:.80} ({type(name).__name__})"
+        )
+    if code not in SEA_STATES:
         raise ValueError(
             f"unknown waves sea state {name!r}; valid: {_PRESETS} or {sorted(SEA_STATES)}"
         )

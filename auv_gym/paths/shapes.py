@@ -8,6 +8,7 @@ helix it is not arc length: |p'(s)| = sqrt(R²ω² + c²)).
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -206,9 +207,13 @@ def _waypoint_array(waypoints: object) -> np.ndarray:
         pts = np.asarray(waypoints)
     except (TypeError, ValueError):  # ragged nesting
         pts = np.asarray(None)
-    if pts.dtype.kind not in "iuf":
+    if pts.dtype.kind not in "iuf" or _holds_bool(waypoints):  # True would pass as 1
+        if isinstance(waypoints, np.ndarray):
+            got = f"an array of dtype {waypoints.dtype} and shape {waypoints.shape}"
+        else:
+            got = _one_line(waypoints) + (" (a bool)" if _holds_bool(waypoints) else "")
         raise ArgumentTypeError(
-            f"Spline waypoints must be real numbers of shape {shape}, got {waypoints!r:.80}"
+            f"Spline waypoints must be real numbers of shape {shape}, got {got}"
         )
     pts = pts.astype(np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3 or not 2 <= pts.shape[0] <= MAX_WAYPOINTS:
@@ -218,6 +223,19 @@ def _waypoint_array(waypoints: object) -> np.ndarray:
             f"Spline: waypoints must be finite, in [-{POSITION_BOUND:g}, {POSITION_BOUND:g}] m"
         )
     return pts
+
+
+def _holds_bool(value: object) -> bool:
+    """True if a (nested) list or tuple holds a bool, which numpy would turn into 0 or 1."""
+    if isinstance(value, (bool, np.bool_)):
+        return True
+    return isinstance(value, (list, tuple)) and any(map(_holds_bool, value))
+
+
+def _one_line(value: object, width: int = 80) -> str:
+    """repr(value) on one line (an array's repr spans several), cut to ``width`` characters."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 DEFAULT_WAYPOINTS = (
@@ -238,6 +256,11 @@ PATHS = {
     "line": StraightLine,
     "waypoints": lambda: Spline(DEFAULT_WAYPOINTS),
 }
+# The keys a mapping {"kind": name, **arguments} may give each kind (`make_path`): its
+# constructor's arguments; none for "waypoints", the default spline.
+PATH_ARGUMENTS = {
+    name: tuple(inspect.signature(factory).parameters) for name, factory in PATHS.items()
+}
 
 
 def make_path(path: str | Path | Mapping[str, Any] | Sequence[Sequence[float]]) -> Path:
@@ -257,12 +280,20 @@ def make_path(path: str | Path | Mapping[str, Any] | Sequence[Sequence[float]]) 
     if isinstance(path, Mapping):
         arguments = dict(path)
         kind = choice("path kind", arguments.pop("kind", None), PATHS)
-        try:
-            return PATHS[kind](**arguments)
-        except ArgumentTypeError:
-            raise
-        except TypeError as exc:  # an argument the path does not take
-            raise ValueError(f"path {path!r:.80}: {exc}") from exc
+        valid = PATH_ARGUMENTS[kind]
+        unknown = [key for key in arguments if key not in valid]
+        if unknown:
+            takes = f"valid keys: {sorted(valid)}" if valid else "it takes no other key"
+            hint = (
+                " (a spline through other waypoints is the list of them, path=[(x, y, z), ...])"
+                if kind == "waypoints"
+                else ""
+            )
+            raise ValueError(
+                f"path kind {kind!r} got an unexpected keyword argument {unknown[0]!r}; "
+                f"{takes}{hint}"
+            )
+        return PATHS[kind](**arguments)
     if isinstance(path, (Sequence, np.ndarray)) and not isinstance(path, bytes):
         try:
             return Spline(path)

@@ -35,6 +35,7 @@ from auv_gym.paths.shapes import (
 )
 from auv_gym.sim.config_args import (
     DISTURBANCE_PRESETS,
+    disturbance_preset,
     noise_from,
     path_from,
     path_is_random,
@@ -78,7 +79,7 @@ from auv_gym.vehicle.record import (
     hull_from,
     load_vehicle,
 )
-from auv_gym.vehicle.remus6dof import REMUS6DOF, SixDofVehicle
+from auv_gym.vehicle.remus6dof import REMUS6DOF, RK4_STEP_LIMIT, SixDofVehicle
 from auv_gym.vehicle.sensors import SENSOR_PRESETS, SensorConfig
 from auv_gym.vehicle.variation import HullVariation
 
@@ -112,6 +113,7 @@ MAX_SURFACE_ABOVE_PATH = 11_000.0  # [m] the deepest ocean
 HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
 START_OFFSET = 2.0  # [m] per axis: a random start near the start point (`Simulator`) moves
 START_JITTER = START_OFFSET * math.sqrt(3.0)  # [m] so far at most from the start point
+START_HEADING_SPREAD = 0.2  # [rad] default half-width of randomize_start's near-start heading error
 
 
 @dataclass(frozen=True)
@@ -143,7 +145,7 @@ class SimConfig:
     randomize_start: bool = False
     # [rad] half-width of the heading error of `randomize_start`'s near-start draws (its other
     # half draws ±π/3 anywhere on the first turn); π/2 covers the paper's start, 90° off the path
-    start_heading_spread: float = 0.2
+    start_heading_spread: float = START_HEADING_SPREAD
     # [rad] turns the start (its position about p(0), and its heading) about the vertical before
     # any random draw: −π/2 gives every path the paper helix's start geometry (docs/model.md §3.5)
     start_rotation: float | tuple[float, float] = 0.0  # or (low, high): drawn per episode
@@ -174,7 +176,7 @@ class SimConfig:
     def from_kwargs(
         cls,
         path: str | Path | PathDistribution | Sequence[Sequence[float]] | Mapping = "helix",
-        disturbance: str | float | NoiseConfig = "paper",
+        disturbance: str | float | NoiseConfig | Mapping = "paper",
         current: CurrentConfig | Sequence[float] | dict | None = None,
         param_uncertainty: float | None = None,
         actuator: str = "paper",
@@ -194,18 +196,18 @@ class SimConfig:
         start_heading: float | None = None,
         reward_weights: RewardWeights | dict | None = None,
         random_current: float | None = None,
-        start_heading_spread: float = 0.2,
+        start_heading_spread: float = START_HEADING_SPREAD,
         start_rotation: float | Sequence[float] = 0.0,
         random_noise: float = 0.0,
         observation: str | Mapping | ObservationConfig | None = None,
         path_offset: Sequence[float] | None = None,
         depth_envelope: DepthEnvelope | Mapping | bool | None = None,
         safety_cost: SafetyCost | Mapping | None = None,
-        waves: WaveConfig | str | int | Mapping | None = None,
-        current_profile: CurrentProfile | Mapping | None = None,
+        waves: WaveConfig | str | int | Mapping | bool | None = None,
+        current_profile: CurrentProfile | Mapping | bool | None = None,
         actuator_params: ActuatorParams | Mapping[str, Any] | None = None,
         sensors: str | Mapping | SensorConfig | None = None,
-        surface_above_path: float | None = None,
+        surface_above_path: float | bool | None = None,
         plant: str = "5dof",
         plant_params: SixDofVehicle | Mapping[str, Any] | None = None,
         vehicle: str | PathLike | Mapping[str, Any] | Vehicle | None = None,
@@ -213,27 +215,36 @@ class SimConfig:
     ) -> SimConfig:
         """Build from the environments' keyword arguments; see `AUVPath3DEnv` for their meaning
         and ranges. Bad input raises `ArgumentTypeError` (a TypeError) or ValueError, naming the
-        argument, its value and the allowed range. ``disturbance="ocean"`` fills the ocean's
-        arguments left at None from `auv_gym.ocean.preset.OCEAN_PRESET`. ``vehicle`` (a shipped
+        argument, its value and the allowed range. ``disturbance="ocean"`` (or a dict with
+        "preset": "ocean") fills the ocean's arguments left at None from
+        `auv_gym.ocean.preset.OCEAN_PRESET`; ``noise_hold`` or the dict's NoiseConfig fields
+        replace its noise only, and False switches off ``waves``, ``current_profile`` or
+        ``surface_above_path`` (the surface at z = 0). ``vehicle`` (a shipped
         name, a ``.toml`` file, a mapping or a `Vehicle`; None: REMUS 100) gives the records that
         ``params``, ``actuator_params``, ``plant_params`` and ``sensors="vehicle"`` start from."""
         the_vehicle = load_vehicle(vehicle)
-        if isinstance(disturbance, str) and disturbance == OCEAN_PRESET_NAME:
-            ocean = OCEAN_PRESET
-            if noise_hold is not None:
-                raise ValueError(
-                    "noise_hold cannot be given with disturbance='ocean' (its unmodelled-"
-                    f"dynamics noise is held {ocean.noise.hold} s); give a NoiseConfig instead"
-                )
-            disturbance = ocean.noise
+        ocean = OCEAN_PRESET if disturbance_preset(disturbance) == OCEAN_PRESET_NAME else None
+        if ocean is not None:  # its parts left at None (its noise: `noise_from`)
             current = ocean.current if current is None else current
             random_current = ocean.random_current if random_current is None else random_current
             if param_uncertainty is None:
                 param_uncertainty = ocean.param_uncertainty
             waves = ocean.waves if waves is None else waves
             current_profile = ocean.current_profile if current_profile is None else current_profile
-            if surface_above_path is None and depth_envelope in (None, False):
-                surface_above_path = ocean.surface_above_path
+        # False switches a part off, the ocean preset's too: no waves, no current profile, the
+        # sea surface at z = 0
+        surface_off = surface_above_path is False
+        waves, current_profile, surface_above_path = (
+            None if part is False else part for part in (waves, current_profile, surface_above_path)
+        )
+        if (
+            ocean is not None
+            and surface_above_path is None
+            and not surface_off
+            and depth_envelope in (None, False)
+            and (waves is not None or current_profile is not None)  # what reads the surface
+        ):
+            surface_above_path = ocean.surface_above_path
         the_path = path_from(path)
         offset = (0.0, 0.0, 0.0)
         if path_offset is not None:
@@ -294,6 +305,8 @@ class SimConfig:
             except (TypeError, ValueError) as error:
                 where = the_vehicle.source or f"vehicle {the_vehicle.name!r}"
                 raise type(error)(f"{where}: [sensors] {error}") from None
+        if plant == SIX_DOF_PLANT and plant_params is None:  # the vehicle's hull, not given
+            _check_uncertainty_steps(the_vehicle.hull_6dof, physics_dt, param_uncertainty)
         return cls(
             vehicle=the_vehicle.name,
             plant=plant,
@@ -471,6 +484,12 @@ class SimConfig:
             "start_heading_spread",
             real("start_heading_spread", self.start_heading_spread, 0.0, math.pi, unit="rad"),
         )
+        if not self.randomize_start and self.start_heading_spread != START_HEADING_SPREAD:
+            raise ValueError(
+                f"start_heading_spread = {self.start_heading_spread:g} rad sets the heading "
+                "error of randomize_start's draws; with randomize_start=False it would do "
+                "nothing: drop it or give randomize_start=True"
+            )
         put("start_rotation", start_rotation_from(self.start_rotation))
         if self.start_position is not None:
             put(
@@ -490,11 +509,9 @@ class SimConfig:
                     unit="rad (±2π)",
                 ),
             )
-        for name, value in (
-            ("control_dt", self.control_dt),
-            ("noise hold (noise_hold, a NoiseConfig's hold or 0.01)", self.noise.hold),
-        ):
-            whole_steps(name, value, self.physics_dt, "physics_dt")
+        whole_steps("control_dt", self.control_dt, self.physics_dt, "physics_dt")
+        if any(self.noise.amplitude):  # a noise to hold (none: its hold is never read)
+            self._check_noise_hold()
         if isinstance(self.path, PathDistribution):
             # Generated paths start at the origin with a drawn heading: a fixed start would
             # be meaningless (docs/model.md §3.8); their turn rates (≤ 1/8 m) always fit.
@@ -511,6 +528,21 @@ class SimConfig:
             self.check_depths(self.path)
         check_below_the_surface(self)  # waves and a current profile act below it
         check_drawn_paths_fit(self)  # so that no reset is refused (`path_depths.draw_path`)
+
+    def _check_noise_hold(self) -> None:
+        """The white noise is held a whole number of physics steps; else a one-line error
+        naming a hold that is one."""
+        hold, dt = self.noise.hold, self.physics_dt
+        try:
+            whole_steps("noise hold", hold, dt, "physics_dt")
+        except ValueError:
+            fit = f"{max(1, round(hold / dt)) * dt:.12g}"
+            raise ValueError(
+                f"noise hold = {hold} s (noise_hold, else the hold of the NoiseConfig or of "
+                f"disturbance's preset: 0.01 s, 'ocean' 1 s) must be a whole multiple of "
+                f"physics_dt = {dt} s: give noise_hold = {fit} s, say (with a NoiseConfig or "
+                "a disturbance dict: that hold)"
+            ) from None
 
     def check_depths(self, path: Path, drawn: bool = False) -> None:
         """The path (a drawn one at its reset) and the start lie inside the depth envelope's
@@ -604,7 +636,8 @@ class SimConfig:
         values = {
             "n_sub": self.substeps,
             "physics_dt": self.physics_dt,
-            "hold_steps": round(self.noise.hold / self.physics_dt),
+            # at least 1: a config without noise need not hold it a whole number of steps
+            "hold_steps": max(1, round(self.noise.hold / self.physics_dt)),
             "u_d": self.u_desired,
             "sigma": self.kernel_sigma,
             "actuator": ACTUATORS.get(self.actuator, 0),  # "random": set per episode
@@ -619,6 +652,55 @@ class SimConfig:
             values[f"gm_b_{axis}"] = gm_b[c]
         values.update(self.actuator_params.packed(self.physics_dt))
         return np.array([float(values[name]) for name in CONFIG_FIELDS])
+
+
+def _check_uncertainty_steps(hull: object, physics_dt: object, uncertainty: object) -> None:
+    """A 6-DOF hull the env was not given (``plant_params`` None: the vehicle's) that RK4 at
+    ``physics_dt`` steps as it is but not at the stiff end of ``uncertainty``'s draws
+    (`SixDofVehicle.check_step`): a one-line error naming param_uncertainty, the largest that
+    fits and the physics_dt that would step it. Anything else is left to `SimConfig`'s checks."""
+    low, high = PHYSICS_DT_RANGE
+    if not (
+        isinstance(hull, SixDofVehicle)
+        and is_real(physics_dt)
+        and low <= physics_dt <= high
+        and is_real(uncertainty)
+        and 0.0 < uncertainty < 1.0
+    ):
+        return
+    spread, dt = float(uncertainty), float(physics_dt)
+
+    def steps(step: float, epsilon: float) -> bool:
+        try:
+            hull.check_step(step, epsilon)
+        except ValueError:
+            return False
+        return True
+
+    if steps(dt, spread) or not steps(dt, 0.0):  # fine, or the hull itself: its own error
+        return
+    fits, too_wide = 0.0, spread  # the widest spread RK4 can step (stiffer as it grows)
+    short, long = low, dt  # the longest step that steps this spread
+    for _ in range(60):
+        middle = 0.5 * (fits + too_wide)
+        fits, too_wide = (middle, too_wide) if steps(dt, middle) else (fits, middle)
+        middle = math.sqrt(short * long)
+        short, long = (middle, long) if steps(middle, spread) else (short, middle)
+    shorter = f" or physics_dt <= {_round_down(short)} s" if steps(short, spread) else ""
+    raise ValueError(
+        f"param_uncertainty = {spread:.12g} draws 6-DOF hulls too stiff for RK4 at physics_dt = "
+        f"{dt:g} s (the vehicle's damping time constants × (1 − {spread:.12g}) at the stiff end; "
+        f"|λ|·dt <= {RK4_STEP_LIMIT:g}, docs/model.md §15.1): give param_uncertainty <= "
+        f"{_round_down(fits)}{shorter}"
+    )
+
+
+def _round_down(value: float, digits: int = 3) -> str:
+    """``value`` > 0 rounded down to ``digits`` significant digits, as typed."""
+    if value <= 0.0:
+        return "0"
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(value)))
+    return f"{math.floor(value * scale) / scale:.{digits}g}"
 
 
 # The env's keyword arguments: what `gym.make`, a scenario's or task set's ``env`` table and a

@@ -1,5 +1,6 @@
 """The environments' arguments that become one `SimConfig` setting each: the white noise from
-`disturbance` and `noise_hold`, the reward weights and the path (a fixed `Path` or a
+`disturbance` and `noise_hold` (a preset name, an amplitude, a `NoiseConfig` or a dict of its
+fields over a preset), the reward weights and the path (a fixed `Path` or a
 `PathDistribution`); each bad value a one-line error naming it (docs/design.md §3).
 """
 
@@ -7,16 +8,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import fields, replace
 
 from auv_gym.ocean.disturbances import MAX_NOISE_AMPLITUDE, MAX_NOISE_HOLD, NoiseConfig
+from auv_gym.ocean.preset import OCEAN_PRESET, OCEAN_PRESET_NAME
 from auv_gym.paths.shapes import PATHS, Path, make_path
 from auv_gym.sim.path_generator import PathDistribution
 from auv_gym.sim.task import REWARD_TERMS, RewardWeights
-from auv_gym.support.validation import ArgumentTypeError, is_real, keys_within, real, vector
+from auv_gym.support.validation import (
+    ArgumentTypeError,
+    choice,
+    is_real,
+    keys_within,
+    real,
+    vector,
+)
 
 __all__ = [
     "DEFAULT_NOISE_HOLD",
     "DISTURBANCE_PRESETS",
+    "NOISE_FIELDS",
+    "NOISE_PRESETS",
+    "disturbance_preset",
     "noise_from",
     "path_from",
     "path_is_random",
@@ -26,10 +39,37 @@ __all__ = [
 
 DISTURBANCE_PRESETS = {"paper": 35.0, "none": 0.0}
 DEFAULT_NOISE_HOLD = 0.01  # [s]
+# The white noise of each named disturbance: "ocean"'s is that of the ocean preset, which
+# `SimConfig.from_kwargs` also fills the ocean's other arguments from.
+NOISE_PRESETS = {
+    **{
+        name: NoiseConfig((amplitude,) * 5, DEFAULT_NOISE_HOLD)
+        for name, amplitude in DISTURBANCE_PRESETS.items()
+    },
+    OCEAN_PRESET_NAME: OCEAN_PRESET.noise,
+}
+NOISE_FIELDS = tuple(f.name for f in fields(NoiseConfig))  # a disturbance dict's other keys
 
 
-def noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None) -> NoiseConfig:
-    """The white noise of the `disturbance` and `noise_hold` arguments; a conflict is an error."""
+def disturbance_preset(disturbance: object) -> str | None:
+    """The preset a `disturbance` argument names: itself if a string, a dict's "preset"
+    ("paper" when absent); None for an amplitude or a `NoiseConfig`."""
+    if isinstance(disturbance, str):
+        return disturbance
+    if isinstance(disturbance, Mapping):
+        preset = disturbance.get("preset", "paper")
+        return preset if isinstance(preset, str) else None
+    return None
+
+
+def noise_from(
+    disturbance: str | float | NoiseConfig | Mapping, noise_hold: float | None
+) -> NoiseConfig:
+    """The white noise of the `disturbance` and `noise_hold` arguments; a conflict is an error.
+
+    ``disturbance`` is a preset name (`NOISE_PRESETS`), an amplitude, a `NoiseConfig` or a dict
+    of its fields with an optional "preset" (default "paper") whose noise they replace;
+    ``noise_hold`` replaces the hold of a name's, an amplitude's or a dict's noise."""
     hold = DEFAULT_NOISE_HOLD
     if noise_hold is not None:
         hold = real("noise_hold", noise_hold, 0.0, MAX_NOISE_HOLD, low_open=True, unit="s")
@@ -40,18 +80,32 @@ def noise_from(disturbance: str | float | NoiseConfig, noise_hold: float | None)
                 "give the hold once (NoiseConfig.hold or noise_hold)"
             )
         return disturbance
-    if isinstance(disturbance, str) and disturbance in DISTURBANCE_PRESETS:
-        return NoiseConfig((DISTURBANCE_PRESETS[disturbance],) * 5, hold)
+    if isinstance(disturbance, Mapping):
+        given = keys_within("disturbance", disturbance, ["preset", *NOISE_FIELDS])
+        name = choice("disturbance preset", given.pop("preset", "paper"), NOISE_PRESETS)
+        try:  # validated as a NoiseConfig
+            noise = replace(NOISE_PRESETS[name], **given)
+        except (TypeError, ValueError) as error:
+            raise type(error)(f"disturbance: {error}") from None
+        if noise_hold is not None and "hold" in given and hold != noise.hold:
+            raise ValueError(
+                f"noise_hold = {noise_hold!r} s conflicts with disturbance = "
+                f"{dict(disturbance)!r:.120}: give the hold once (its 'hold' or noise_hold)"
+            )
+        return noise if noise_hold is None else replace(noise, hold=hold)
+    if isinstance(disturbance, str) and disturbance in NOISE_PRESETS:
+        noise = NOISE_PRESETS[disturbance]
+        return noise if noise_hold is None else replace(noise, hold=hold)
     if is_real(disturbance):
         amplitude = real(
             "disturbance (noise amplitude)", disturbance, 0.0, MAX_NOISE_AMPLITUDE, unit="N or N·m"
         )
         return NoiseConfig((amplitude,) * 5, hold)
     error = ValueError if isinstance(disturbance, str) else ArgumentTypeError
-    names = sorted([*DISTURBANCE_PRESETS, "ocean"])
     raise error(
-        f"unknown disturbance {disturbance!r:.80}; valid: {names}, "
-        f"a NoiseConfig or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
+        f"unknown disturbance {disturbance!r:.80}; valid: {sorted(NOISE_PRESETS)}, "
+        f"a NoiseConfig, a dict of its fields {list(NOISE_FIELDS)} with an optional 'preset', "
+        f"or an amplitude in [0, {MAX_NOISE_AMPLITUDE:g}] N / N·m"
     )
 
 

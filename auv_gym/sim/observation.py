@@ -47,6 +47,7 @@ tell a steady push (a current) from a passing one (waves).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -368,15 +369,10 @@ class ObservationConfig:
                 unit="m·s (0: no clip)",
             ),
         )
-        history_steps = integer(
-            "observation history_steps", self.history_steps, 0, MAX_HISTORY_STEPS
+        put(
+            "history_steps",
+            integer("observation history_steps", self.history_steps, 0, MAX_HISTORY_STEPS),
         )
-        if history_steps and self.kind == "paper":
-            raise ValueError(
-                "observation history_steps needs the agent observation (kind 'preview'); "
-                "the paper's 15 entries have no history"
-            )
-        put("history_steps", history_steps)
         interval = real(
             "observation history_interval",
             self.history_interval,
@@ -386,13 +382,46 @@ class ObservationConfig:
             unit="s",
         )
         put("history_interval", interval)
+        # A field that differs from its default is one the caller set: refused where it does
+        # nothing (`from_spec` refuses a dict's keys so even at their default values).
+        values = {f.name: (getattr(self, f.name), f.default) for f in dataclasses.fields(self)}
+        self._check_effective({name: v for name, (v, default) in values.items() if v != default})
+
+    def _check_effective(self, given: Mapping[str, object]) -> None:
+        """ValueError naming the first of the ``given`` fields (name: value as given) that this
+        observation ignores: any but the kind on the paper's 15 entries, the integrals' error
+        set and limit without an integral time, the history's interval without a history."""
+        if self.kind == "paper":
+            for name in OBSERVATION_FIELDS[1:]:
+                if name in given:
+                    raise ValueError(
+                        f"observation {name} = {given[name]!r} needs the agent observation "
+                        "(kind 'preview'); the paper's 15 entries have no preview, error "
+                        "integrals or history"
+                    )
+        if self.integral_time == 0.0:
+            for name in ("integral_errors", "integral_limit"):
+                if name in given:
+                    raise ValueError(
+                        f"observation {name} = {given[name]!r} does nothing without error "
+                        "integrals (integral_time = 0): give an integral_time > 0 or leave "
+                        f"{name} out"
+                    )
+        if self.history_steps == 0 and "history_interval" in given:
+            raise ValueError(
+                f"observation history_interval = {given['history_interval']!r} does nothing "
+                "without a history (history_steps = 0): give history_steps > 0 or leave "
+                "history_interval out"
+            )
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | ObservationConfig | None) -> ObservationConfig:
         """From None or "paper", "preview" (default K and Δs), a name of `OBSERVATION_PRESETS`
         ("preview_integral"), a dict {"kind", "points", "spacing", "integral_time",
         "integral_errors", "integral_limit", "history_steps", "history_interval"} or an
-        `ObservationConfig`."""
+        `ObservationConfig`. A dict key the observation would ignore is refused, even at its
+        default value: any but "kind" with kind "paper", "integral_errors" and
+        "integral_limit" without an integral_time, "history_interval" without history_steps."""
         if spec is None:
             return cls()
         if isinstance(spec, ObservationConfig):
@@ -402,12 +431,10 @@ class ObservationConfig:
         if isinstance(spec, str):
             return cls(kind=spec)
         if isinstance(spec, Mapping):
-            fields = keys_within(
-                "observation",
-                spec,
-                OBSERVATION_FIELDS,
-            )
-            return cls(**{"kind": "preview", **fields})
+            given = keys_within("observation", spec, OBSERVATION_FIELDS)
+            config = cls(**{"kind": "preview", **given})
+            config._check_effective(given)  # a key given at its default value does nothing too
+            return config
         raise ArgumentTypeError(
             f"observation must be one of {[*OBSERVATION_KINDS, *OBSERVATION_PRESETS]}, a dict "
             f"with keys {', '.join(OBSERVATION_FIELDS)} or an ObservationConfig, got {spec!r:.80}"

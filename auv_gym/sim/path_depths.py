@@ -58,8 +58,16 @@ def _episode_arc(config: SimConfig) -> float:
 
 def check_below_the_surface(config: SimConfig) -> None:
     """ValueError naming ``path_offset`` when waves or a current profile are on and the path or
-    its start can reach the surface z = 0 in an episode (module doc)."""
+    its start can reach the surface z = 0 in an episode (module doc); ValueError naming
+    ``surface_above_path`` when it is given with neither, the only parts that read the surface.
+    """
     users = _surface_users(config)
+    if not users and config.surface_above_path is not None:
+        raise ValueError(
+            f"surface_above_path = {config.surface_above_path:g} m places the sea surface for "
+            "waves and a current profile, and neither is on: give waves or current_profile, or "
+            "leave surface_above_path out"
+        )
     if not users or config.surface_above_path is not None:  # the surface follows the path
         return
     rise = RANDOM_START_RISE if config.randomize_start else 0.0

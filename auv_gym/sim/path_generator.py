@@ -57,6 +57,16 @@ FAMILY_RANGES = {
     "spline": ("spline_radius", "climb_angle_deg", "piece_length"),
     "lawnmower": ("radius", "climb_angle_deg", "leg_length"),
 }
+# The families whose paths each setting changes (climb_angle_deg: all): besides FAMILY_RANGES,
+# `radius` and `spline_radius` set the waypoint spacing of splines and lawnmowers (`spacing`),
+# and `length` is the arc length of both (helices and lines are endless).
+RANGE_USERS = {
+    "radius": ("helix", "spline", "lawnmower"),
+    "spline_radius": ("spline", "lawnmower"),
+    "piece_length": ("spline",),
+    "leg_length": ("lawnmower",),
+    "length": ("spline", "lawnmower"),
+}
 # Vehicle limits (docs/model.md §3.8). At u = 1 m/s full yaw authority turns the REMUS 100 on a
 # 4.0-m radius ("paper" and "fins" alike); generated paths keep twice that. Full fin authority
 # holds a steady climb of γ = 25.6° at 1 m/s (θ = 25.0°); "paper" actuators hold any pitch.
@@ -166,18 +176,33 @@ class PathDistribution:
 
     @classmethod
     def from_spec(cls, spec: PathDistribution | Mapping[str, Any] | str) -> PathDistribution:
-        """From itself, "random" (the defaults) or a dict of fields (e.g. a TOML table)."""
+        """From itself, "random" (the defaults) or a dict of fields (e.g. a TOML table). A
+        dict's range that no family of its ``families`` uses (`RANGE_USERS`) is refused."""
         if isinstance(spec, PathDistribution):
             return spec
         if spec == "random":
             return cls()
         names = [f.name for f in fields(cls)]
-        return cls(
-            **{
-                k: (tuple(v) if isinstance(v, list) else v)
-                for k, v in keys_within("path", spec, names).items()
-            }
-        )
+        given = {
+            k: (tuple(v) if isinstance(v, list) else v)
+            for k, v in keys_within("path", spec, names).items()
+        }
+        distribution = cls(**given)
+        for name, users in RANGE_USERS.items():
+            if name in given and not set(users) & set(distribution.families):
+                drawn = list(distribution.families)
+                if len(users) == 1:
+                    what = f"the {users[0]} family, and families {drawn} does not draw it"
+                    remedy = f"add {users[0]!r} to families"
+                else:
+                    names = f"{', '.join(users[:-1])} and {users[-1]}"
+                    what = f"the {names} families, and families {drawn} draws none of them"
+                    remedy = "add one of them to families"
+                raise ValueError(
+                    f"path {name} = {given[name]!r} shapes only {what}: leave {name} out or "
+                    f"{remedy}"
+                )
+        return distribution
 
     @property
     def spacing(self) -> float:
