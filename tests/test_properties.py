@@ -112,7 +112,10 @@ def env_kwargs(draw):
         {"disturbance": NoiseConfig((amplitude,) * 5, hold)},
     ]
     kw.update(draw(st.sampled_from(noises)))
-    if "noise_hold" not in kw and not isinstance(kw["disturbance"], NoiseConfig):
+    silent = kw["disturbance"] == "none" or kw["disturbance"] == 0.0
+    if silent:  # no noise: a hold would hold nothing (refused)
+        kw.pop("noise_hold", None)
+    elif "noise_hold" not in kw and not isinstance(kw["disturbance"], NoiseConfig):
         whole = abs(0.01 / physics_dt - round(0.01 / physics_dt)) < 1e-9 * (0.01 / physics_dt)
         if not whole or 0.01 < physics_dt:  # the default hold 0.01 s does not fit
             kw["noise_hold"] = hold

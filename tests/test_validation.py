@@ -136,6 +136,20 @@ def test_physics_dt_over_the_documented_range_needs_no_noise_hold_without_noise(
         assert not terminated and not np.any(info["disturbance"])
 
 
+@pytest.mark.parametrize("disturbance", ["none", 0.0])
+def test_a_hold_or_an_amplitude_draw_without_noise_is_refused(disturbance):
+    """Was: accepted and ignored (random_noise still took a task draw per episode)."""
+    with pytest.raises(ValueError) as caught:
+        SimConfig.from_kwargs(disturbance=disturbance, noise_hold=0.5)
+    assert str(caught.value) == (
+        f"noise_hold = 0.5 s would hold nothing: disturbance = {disturbance!r} has no noise "
+        "(every amplitude 0); drop it or give the noise an amplitude"
+    )
+    with pytest.raises(ValueError, match=r"^random_noise = 0.5 scales the noise's amplitude"):
+        SimConfig.from_kwargs(disturbance=disturbance, random_noise=0.5)
+    assert SimConfig.from_kwargs(disturbance="paper", noise_hold=0.5, random_noise=0.5)
+
+
 def test_a_noise_hold_off_the_physics_step_names_one_to_give():
     with pytest.raises(ValueError) as caught:
         SimConfig.from_kwargs(physics_dt=0.02, control_dt=0.04)

@@ -213,9 +213,9 @@ class AUVPath3DEnv(gym.Env):
     - `physics_dt` in [1e-6, 0.1] s; `control_dt` a whole multiple of it, at most 10 000 physics
       steps per control step (bounds the cost of one `step`); `max_time` in [control_dt, 1e6] s.
     - `noise_hold` ≤ 1e6 s; the hold (also the 0.01 s default and "ocean"'s 1 s) a whole multiple
-      of `physics_dt` unless there is no noise ("none" or amplitude 0); given together with a
-      `NoiseConfig` or a dict's `hold` it must equal it (no silent override). Amplitudes in
-      [0, 1e4] N or N·m.
+      of `physics_dt` unless there is no noise ("none" or amplitude 0), where `noise_hold` and
+      `random_noise` are refused (they would do nothing); given together with a `NoiseConfig`
+      or a dict's `hold` it must equal it (no silent override). Amplitudes in [0, 1e4] N or N·m.
     - `current`: mean and std per axis within ±10 m/s (std ≥ 0), time constant in (0, 1e6] s.
     - `surge_limit` in (u_desired, 10] m/s, inf or "vehicle" (`params.max_surge`); a random
       start's surge stays below 0.75 `surge_limit` (0-1.5 m/s otherwise).

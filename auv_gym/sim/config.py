@@ -307,6 +307,19 @@ class SimConfig:
                 raise type(error)(f"{where}: [sensors] {error}") from None
         if plant == SIX_DOF_PLANT and plant_params is None:  # the vehicle's hull, not given
             _check_uncertainty_steps(the_vehicle.hull_6dof, physics_dt, param_uncertainty)
+        noise = noise_from(disturbance, noise_hold)
+        if not any(noise.amplitude):  # no noise: its hold and its amplitude's draw do nothing
+            given = f"disturbance = {disturbance!r:.60} has no noise (every amplitude 0)"
+            if noise_hold is not None:
+                raise ValueError(
+                    f"noise_hold = {noise_hold!r} s would hold nothing: {given}; drop it or "
+                    "give the noise an amplitude"
+                )
+            if is_real(random_noise) and random_noise > 0.0:
+                raise ValueError(
+                    f"random_noise = {random_noise!r} scales the noise's amplitude per episode, "
+                    f"and {given}; drop it or give the noise an amplitude"
+                )
         return cls(
             vehicle=the_vehicle.name,
             plant=plant,
@@ -315,7 +328,7 @@ class SimConfig:
             else SixDofVehicle.from_record(plant_params),
             path=the_path,
             params=hull,
-            noise=noise_from(disturbance, noise_hold),
+            noise=noise,
             current=CurrentConfig.from_spec(current),
             param_uncertainty=0.0 if param_uncertainty is None else param_uncertainty,
             hull_variation=HullVariation.from_spec(hull_variation),

@@ -13,7 +13,7 @@ LOS, docs/model.md §4.9) with the scenario's controller settings and the candid
 the validation seeds (100-104 by default; the benchmark's test seeds are 0-9). A candidate that
 fails an episode (corridor, pitch, ...) ranks below every one that fails none; among those, the
 lower mean over the scenarios of the mean RMS distance [m] wins. The table of every candidate
-and the winner's gains are printed (docs/vehicles.md §5: on the torpedo, 4 % over the derived
+and the winner's gains are printed (docs/vehicles.md §5: on the torpedo, 3 % over the derived
 gains)."""
 
 from __future__ import annotations

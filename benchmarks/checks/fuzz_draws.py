@@ -206,10 +206,13 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
     elif noise == 1:
         kw["disturbance"] = "none"
     elif noise == 2:
-        kw.update(disturbance=amplitude, noise_hold=hold)
+        kw["disturbance"] = amplitude
+        if amplitude > 0.0:  # a hold without noise is refused: it would hold nothing
+            kw["noise_hold"] = hold
     else:
         kw["disturbance"] = NoiseConfig((amplitude,) * 5, hold)
-    if "noise_hold" not in kw and not isinstance(kw["disturbance"], NoiseConfig):
+    silent = kw["disturbance"] == "none" or kw["disturbance"] == 0.0
+    if "noise_hold" not in kw and not isinstance(kw["disturbance"], NoiseConfig) and not silent:
         ratio = 0.01 / physics_dt
         if abs(ratio - round(ratio)) >= 1e-9 * ratio or physics_dt > 0.01:
             kw["noise_hold"] = hold  # the default hold 0.01 s is no whole number of RK4 steps
@@ -225,7 +228,10 @@ def draw_config(rng: np.random.Generator, max_episode_steps: int) -> tuple[dict[
     if rng.random() < 0.25:
         kw["random_current"] = float(rng.uniform(0.0, MAX_RANDOM_CURRENT))
     if rng.random() < 0.25:
-        kw["random_noise"] = float(rng.uniform(0.0, MAX_RANDOM_NOISE))
+        scale = float(rng.uniform(0.0, MAX_RANDOM_NOISE))
+        silent = silent or (isinstance(kw["disturbance"], NoiseConfig) and amplitude == 0.0)
+        if not silent:  # the amplitude's per-episode scale: refused without noise
+            kw["random_noise"] = scale
     variant = str(rng.choice(list(VARIANT_IDS)))
     kw.update(VARIANTS[variant])
     random_path = isinstance(kw["path"], PathDistribution) or kw["path"] == "random"
