@@ -245,7 +245,7 @@ def test_the_generator_is_a_function_of_the_seed():
     # The path of a seed does not depend on the other randomised parts.
     plain = SimConfig.from_kwargs(path="random")
     busy = SimConfig.from_kwargs(
-        path="random", random_current=0.5, random_noise=0.5, actuator="random", disturbance="none"
+        path="random", random_current=0.5, random_noise=0.5, actuator="random"
     )
     for seed in range(5):
         assert np.array_equal(
