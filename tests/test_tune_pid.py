@@ -66,3 +66,27 @@ def test_the_climb_speed_pid_tuned_on_its_pitch_loop() -> None:
     assert all(0.01 < d < 5.0 for d in distances)  # m, converging from the start
     assert not math.isclose(distances[0], distances[1], rel_tol=1e-6)
     assert set(GRID) == {"design_speed", "yaw_wn", "k_y", "k_z"}  # the default grid unchanged
+
+
+def test_a_users_scenario_file_is_tuned_on(tmp_path, capsys) -> None:
+    """--scenario-file: the tuner flies the scenarios of a user's file, their vehicle file beside
+    it (docs/vehicles.md §4); a missing file or an unknown name is one line before any flight."""
+    import shutil
+
+    from auv_gym.vehicle.record import VEHICLE_DIRECTORY
+
+    shutil.copy(VEHICLE_DIRECTORY / "remus100.toml", tmp_path / "mine.toml")
+    scenarios = tmp_path / "mine_scenarios.toml"
+    scenarios.write_text('[mine_helix]\nvehicle = "mine.toml"\nenv = { disturbance = "none" }\n')
+    argv = ["--scenario-file", str(scenarios), "--scenarios", "mine_helix", "--seeds", "100"]
+    rows = main([*argv, "--duration", "20", "--grid", "k_y=0.1,0.2"])
+    assert [r["failed"] for r in rows] == [0, 0]
+    assert all(0.0 < r["rms"]["mine_helix"] < 20.0 for r in rows)  # m, from the paper's start
+    assert "best (controllers.make('pid_as_built'" in capsys.readouterr().out
+    for bad, message in [
+        ([*argv[:1], str(tmp_path / "absent.toml"), *argv[2:]], "absent.toml"),
+        ([*argv[:3], "helix_9", *argv[4:]], "--scenarios: unknown ['helix_9'] in mine_scenarios"),
+    ]:
+        with pytest.raises(SystemExit):
+            main(bad)
+        assert message in capsys.readouterr().err

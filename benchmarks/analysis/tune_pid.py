@@ -1,12 +1,13 @@
 """Tune the PID + LOS autopilot for a vehicle on validation seeds: a grid over the design speed
 of the pole placement, the heading loop's natural frequency and the LOS gains (or any grid of
-the PID's gains, ``--grid``), scored on the benchmark scenarios of that vehicle, never on their
-test seeds.
+the PID's gains, ``--grid``), scored on the benchmark scenarios of that vehicle (or those of a
+``--scenario-file``, e.g. your own vehicle's), never on their test seeds.
 
     python -m benchmarks.analysis.tune_pid --scenarios torpedo_helix,torpedo_survey,torpedo_as_built
     python -m benchmarks.analysis.tune_pid --base pid_as_built_climb \
         --scenarios as_built_helix,as_built_survey,as_built_coastal \
         --grid "pitch_wn=1.5,2,2.5,3;yaw_wn=1.5,2.5"
+    python -m benchmarks.analysis.tune_pid --scenario-file my_scenarios.toml --scenarios my_helix
 
 Each candidate flies the ``--base`` preset (`pid_as_built` by default: PID + current-observer
 LOS, docs/model.md §4.9) with the scenario's controller settings and the candidate's gains on
@@ -20,9 +21,11 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Any
 
 from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
@@ -46,6 +49,9 @@ class TuneOptions:
     """The options of ``python -m benchmarks.analysis.tune_pid``."""
 
     scenarios: str = option("torpedo_helix,torpedo_survey,torpedo_as_built", "scenarios")
+    scenario_file: str = option(
+        "", "TOML file of named scenarios (default: the benchmark's, benchmarks/scenarios.toml)"
+    )
     seeds: str = option("100,101,102,103,104", "validation seeds (not the test seeds 0-9)")
     duration: float = option(300.0, "episode length [s]")
     base: str = option(BASE, "the PID preset each candidate overrides (controllers.PRESETS)")
@@ -103,17 +109,23 @@ def candidate_policies(
     duration: float,
     grid: Mapping[str, Sequence[float]] = GRID,
     base: str = BASE,
+    scenario_file: str | os.PathLike | None = None,
 ) -> list[tuple[dict[str, float], dict[str, tuple[Any, dict[str, Any]]]]]:
-    """Each candidate of ``grid``: its gains and, per scenario, the PID preset ``base`` built
-    with them for the scenario's env (episodes of ``duration`` s). ValueError for an unknown
-    scenario or gains the controller refuses, before anything flies."""
+    """Each candidate of ``grid``: its gains and, per scenario of ``scenario_file`` (None: the
+    benchmark's), the PID preset ``base`` built with them for the scenario's env (episodes of
+    ``duration`` s). ValueError for an unknown scenario or gains the controller refuses, and
+    OSError for an unreadable file, before anything flies."""
     import controllers
-    from benchmarks.catalog.scenarios import load_scenarios
+    from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
 
-    table = load_scenarios()
+    file = Path(scenario_file) if scenario_file else SCENARIOS_FILE
+    try:
+        table = load_scenarios(file)
+    except OSError as error:
+        raise OSError(f"--scenario-file {str(file)!r}: {error.strerror or error}") from None
     unknown = [name for name in scenarios if name not in table]
     if unknown:
-        raise ValueError(f"--scenarios: unknown {unknown}; valid: {sorted(table)}")
+        raise ValueError(f"--scenarios: unknown {unknown} in {file.name}; valid: {sorted(table)}")
     names = list(grid)
     built = []
     for values in itertools.product(*grid.values()):
@@ -186,7 +198,9 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             raise ValueError(f"--duration must be in (0, 3600] s, got {args.duration}")
         check_base(args.base)
         grid = parse_grid(args.grid) if args.grid.strip() else GRID
-        candidates = candidate_policies(scenarios, args.duration, grid, args.base)
+        candidates = candidate_policies(
+            scenarios, args.duration, grid, args.base, args.scenario_file
+        )
     rows = fly(candidates, seeds)
     print(f"{len(rows)} candidates on {len(seeds)} validation seeds, best first:")
     for row in rows:
