@@ -52,6 +52,9 @@ __all__ = [
     "hull_from",
     "load_vehicle",
     "shipped_vehicles",
+    "vehicle_file",
+    "vehicle_from_bytes",
+    "vehicle_from_mapping",
 ]
 
 FORMAT_VERSION = 1
@@ -214,25 +217,44 @@ def load_vehicle(spec: str | Path | Mapping[str, Any] | Vehicle | None = None) -
     Raises `VehicleFileError` naming the file and the field for a missing, unknown, non-finite
     or physically impossible value, and ValueError listing the shipped names for an unknown one.
     """
-    if spec is None:
-        spec = DEFAULT_VEHICLE
     if isinstance(spec, Vehicle):
         return spec
     if isinstance(spec, Mapping):
         return vehicle_from_mapping(spec, "vehicle mapping")
-    if isinstance(spec, Path) or (isinstance(spec, str) and spec.endswith(".toml")):
-        return _read_file(Path(spec))
+    file = vehicle_file(spec)
+    if file is not None:
+        return _read_file(file)
     if isinstance(spec, str):
-        if spec not in shipped_vehicles():
-            raise ValueError(
-                f"vehicle {spec!r:.80} is not a shipped vehicle {list(shipped_vehicles())} "
-                "nor a path to a .toml vehicle file"
-            )
-        return _read_file(VEHICLE_DIRECTORY / f"{spec}.toml")
+        raise ValueError(
+            f"vehicle {spec!r:.80} is not a shipped vehicle {list(shipped_vehicles())} "
+            "nor a path to a .toml vehicle file"
+        )
     raise TypeError(
         "vehicle must be a shipped vehicle's name, a path to a .toml file, a mapping or a "
         f"Vehicle, got {spec!r:.80}"
     )
+
+
+def vehicle_file(spec: Any) -> Path | None:
+    """The file `load_vehicle` reads for ``spec`` (None: the default vehicle's; a shipped
+    vehicle's name: its file; a path to a ``.toml`` file), or None (a mapping, a `Vehicle`, or a
+    name that is no shipped vehicle, which `load_vehicle` refuses)."""
+    if spec is None:
+        spec = DEFAULT_VEHICLE
+    if isinstance(spec, Path) or (isinstance(spec, str) and spec.endswith(".toml")):
+        return Path(spec)
+    if isinstance(spec, str) and spec in shipped_vehicles():
+        return VEHICLE_DIRECTORY / f"{spec}.toml"
+    return None
+
+
+def vehicle_from_bytes(text: bytes, where: str) -> Vehicle:
+    """A `Vehicle` from a vehicle file's bytes; ``where`` names the file in errors."""
+    try:
+        data = tomllib.loads(text.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise VehicleFileError(f"vehicle file {where}: not valid TOML ({exc})") from None
+    return vehicle_from_mapping(data, where)
 
 
 def _read_file(path: Path) -> Vehicle:
@@ -240,11 +262,7 @@ def _read_file(path: Path) -> Vehicle:
         text = path.read_bytes()
     except OSError as exc:
         raise VehicleFileError(f"vehicle file {path}: cannot be read ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(text.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise VehicleFileError(f"vehicle file {path}: not valid TOML ({exc})") from None
-    return vehicle_from_mapping(data, str(path))
+    return vehicle_from_bytes(text, str(path))
 
 
 def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:

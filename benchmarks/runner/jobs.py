@@ -21,7 +21,6 @@ import functools
 import hashlib
 import json
 import time
-import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,15 +32,7 @@ from auv_gym.metrics import compute_metrics
 from auv_gym.rollout import rollout
 from auv_gym.support.files import jsonable, write_json
 from auv_gym.support.numba_cache import sources_digest
-from auv_gym.vehicle.record import (
-    DEFAULT_VEHICLE,
-    VEHICLE_DIRECTORY,
-    Vehicle,
-    VehicleFileError,
-    load_vehicle,
-    shipped_vehicles,
-    vehicle_from_mapping,
-)
+from auv_gym.vehicle.record import Vehicle, load_vehicle, vehicle_file, vehicle_from_bytes
 from benchmarks.catalog.policies import PolicySpec, build_policy, policy_label
 from benchmarks.catalog.scenarios import Scenario
 from benchmarks.runner.cache import run_resumable, stored_record
@@ -179,7 +170,7 @@ def vehicle_digest(vehicle: Any) -> str:
     description and layout do not. The shipped files are data, not the sources `code_digest`
     hashes, so an edit of ``auv_gym/vehicle/data/torpedo.toml`` shows here. Raises as
     `load_vehicle` does for a file that cannot be read or describes no vehicle."""
-    file = _vehicle_file(vehicle)
+    file = vehicle_file(vehicle)
     try:
         text = None if file is None else file.read_bytes()
     except OSError:
@@ -189,26 +180,10 @@ def vehicle_digest(vehicle: Any) -> str:
     return _file_digest(text, str(file))
 
 
-def _vehicle_file(vehicle: Any) -> Path | None:
-    """The file `load_vehicle` reads for ``vehicle``, or None (a mapping, a `Vehicle`, an unknown
-    name)."""
-    if vehicle is None:
-        vehicle = DEFAULT_VEHICLE
-    if isinstance(vehicle, Path) or (isinstance(vehicle, str) and vehicle.endswith(".toml")):
-        return Path(vehicle)
-    if isinstance(vehicle, str) and vehicle in shipped_vehicles():
-        return VEHICLE_DIRECTORY / f"{vehicle}.toml"
-    return None
-
-
 @functools.lru_cache(maxsize=32)
 def _file_digest(text: bytes, where: str) -> str:
     """`vehicle_digest` of a vehicle file's content (read and checked once per process)."""
-    try:
-        data = tomllib.loads(text.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise VehicleFileError(f"vehicle file {where}: not valid TOML ({exc})") from None
-    return _values_digest(vehicle_from_mapping(data, where))
+    return _values_digest(vehicle_from_bytes(text, where))
 
 
 def _values_digest(vehicle: Vehicle) -> str:
