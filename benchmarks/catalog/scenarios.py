@@ -20,7 +20,7 @@ from typing import Any
 from auv_gym.support.files import read_toml
 from benchmarks.arguments import comma_names
 
-__all__ = ["SCENARIOS_FILE", "Scenario", "load_scenarios", "select"]
+__all__ = ["SCENARIOS_FILE", "Scenario", "load_scenarios", "select", "vehicle_beside"]
 
 SCENARIOS_FILE = Path(__file__).resolve().parents[1] / "scenarios.toml"
 
@@ -33,6 +33,15 @@ class Scenario:
     description: str
     env: dict[str, Any] = field(default_factory=dict)
     controller: dict[str, Any] = field(default_factory=dict)
+
+
+def vehicle_beside(env: dict[str, Any], file: str | Path) -> None:
+    """A relative vehicle file of an ``env`` table (``vehicle = "my_auv.toml"``) read from the
+    TOML ``file`` that holds it lies beside that file, so it works from any folder; an absolute
+    path and a shipped name are kept."""
+    vehicle = env.get("vehicle")
+    if isinstance(vehicle, str) and vehicle.endswith(".toml"):  # a file (`load_vehicle`)
+        env["vehicle"] = str(Path(file).parent / vehicle)
 
 
 def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
@@ -56,9 +65,7 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
             if "vehicle" in env:
                 raise ValueError(f"{path}: scenario {name!r}: vehicle given twice (and in env)")
             env["vehicle"] = table["vehicle"]
-        vehicle = env.get("vehicle")
-        if isinstance(vehicle, str) and vehicle.endswith(".toml"):  # a file (`load_vehicle`)
-            env["vehicle"] = str(Path(path).parent / vehicle)  # beside this file; absolute kept
+        vehicle_beside(env, path)
         scenarios[name] = Scenario(
             name, table.get("description", ""), env, dict(table.get("controller", {}))
         )

@@ -35,7 +35,7 @@ from typing import Any
 from auv_gym.sim.config import PLANTS, SimConfig, config_from_kwargs
 from auv_gym.sim.path_generator import PathDistribution, overlaps
 from auv_gym.support.files import read_toml
-from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
+from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, vehicle_beside
 
 __all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test_suite"]
 
@@ -142,9 +142,7 @@ def load_task_sets(
                 )
             continue
         env = dict(table.get("env", {}))
-        vehicle = env.get("vehicle")
-        if isinstance(vehicle, str) and vehicle.endswith(".toml"):  # a file (`load_vehicle`)
-            env["vehicle"] = str(Path(path).parent / vehicle)  # beside this file; absolute kept
+        vehicle_beside(env, path)
         controller = table.get("controller", {})
         if not isinstance(controller, Mapping):
             raise ValueError(f"{where}: controller must be a table, got {controller!r}")
