@@ -92,11 +92,11 @@ def check_beside_agent(contract: OnnxContract) -> None:
     members = ensemble_members(folder) if contract.file.name != ENSEMBLE_FILE else None
     if members is not None:
         models = [m / MODEL_FILE if m.is_dir() else m for m in members]
-        exported = provenance.get("members") or [provenance]
     elif (folder / MODEL_FILE).is_file():
-        models, exported = [folder / MODEL_FILE], provenance.get("members") or [provenance]
+        models = [folder / MODEL_FILE]
     else:
         return
+    exported = provenance.get("members") or [provenance]
     recorded = [
         entry.get("model_sha256") if isinstance(entry, Mapping) else None for entry in exported
     ]
