@@ -43,6 +43,7 @@ __all__ = [
     "machine",
     "numpy_dispatch",
     "output_lock",
+    "parse_toml",
     "process_alive",
     "read_toml",
     "remove_temporaries",
@@ -346,15 +347,21 @@ def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
     """The TOML file at ``path`` parsed; ValueError "``what`` PATH: ..." naming the file when it
     cannot be read, is not UTF-8 or is not valid TOML (a user's scenario, task or report file)."""
     try:
-        text = Path(path).read_bytes().decode("utf-8")
+        data = Path(path).read_bytes()
     except OSError as exc:
         raise ValueError(f"{what} {path}: cannot be read ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{what} {path}: not valid TOML (not UTF-8 text: {exc})") from None
+    return parse_toml(data, f"{what} {path}")
+
+
+def parse_toml(data: bytes, where: str) -> dict[str, Any]:
+    """A TOML file's bytes parsed; ValueError "``where``: not valid TOML (...)" when they are not
+    UTF-8 or not valid TOML."""
     try:
-        return tomllib.loads(text)
+        return tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{where}: not valid TOML (not UTF-8 text: {exc})") from None
     except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{what} {path}: not valid TOML ({exc})") from None
+        raise ValueError(f"{where}: not valid TOML ({exc})") from None
 
 
 def process_alive(pid: int) -> bool:

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -27,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.support.files import parse_toml
 from auv_gym.support.validation import ArgumentTypeError, keys_within, real
 from auv_gym.vehicle.actuators import ActuatorParams
 from auv_gym.vehicle.fins import FinLayout
@@ -251,9 +251,9 @@ def vehicle_file(spec: Any) -> Path | None:
 def vehicle_from_bytes(text: bytes, where: str) -> Vehicle:
     """A `Vehicle` from a vehicle file's bytes; ``where`` names the file in errors."""
     try:
-        data = tomllib.loads(text.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise VehicleFileError(f"vehicle file {where}: not valid TOML ({exc})") from None
+        data = parse_toml(text, f"vehicle file {where}")
+    except ValueError as error:
+        raise VehicleFileError(str(error)) from None
     return vehicle_from_mapping(data, where)
 
 
