@@ -19,6 +19,7 @@ from auv_gym.sim.trajectory import FAILURE_REASONS
 from benchmarks.analysis.suite_stats import write_stats
 from benchmarks.catalog.policies import AGENTS_DIR, check_policy_spec
 from benchmarks.catalog.scenarios import load_scenarios
+from benchmarks.reports.table_format import format_number
 from benchmarks.runner.evaluate_suite import main
 from benchmarks.runner.jobs import Job, run_job
 
@@ -356,6 +357,7 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
         )
         assert t["max_surge_m_s"] == surge
         assert t["passed"] == (t["ratio"] <= 2 and t["failed"] == 0 and surge <= 2.0)
+        assert t["ratio_low"] <= t["ratio"] <= t["ratio_high"]
     chattering = [float(r["chattering"]) for r in rows if r["policy"] == "fbsm"]
     aggregate = stats["chattering"]["aggregate"]
     assert aggregate["fbsm"]["value"] == pytest.approx(np.mean(chattering), rel=1e-12)
@@ -374,6 +376,9 @@ def test_statistics_of_the_tiny_suite(tiny, monkeypatch):
         assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
     md = (out / "stats.md").read_text()
     assert "| scenario:fins | gen |" in md and "## IQM RMS distance [m]" in md
+    fins = next(t for t in stats["target"] if t["set"] == "scenario:fins")
+    assert "| ratio [95 % CI] |" in md
+    assert f"| {format_number(fins['ratio'])} [{format_number(fins['ratio_low'])}, " in md
     # --stats-only: regenerated without simulating, bit-identical.
     before = (out / "stats.json").read_bytes()
     monkeypatch.setattr(chunks_module, "evaluate", lambda *a, **k: pytest.fail("simulated"))
@@ -476,7 +481,11 @@ def test_target_table_by_hand(tmp_path):
     assert b["failures"] == ["overspeed"] and not b["passed"]
     assert stats["verdicts"]["x"] == {"sets": 2, "passed": 1, "failing_sets": ["b"]}
     assert stats["failure_score_m"] == {"a": 30.0, "b": 20.0}
-    assert "| b | x | 5.10 | 0.200 | 25.5 | 1/4 (overspeed) | 2.50 | **FAIL** |" in text
+    b_ratio = f"25.5 [{format_number(b['ratio_low'])}, {format_number(b['ratio_high'])}]"
+    assert f"| b | x | 5.10 | 0.200 | {b_ratio} | 1/4 (overspeed) | 2.50 | **FAIL** |" in text
+    # Runs and episodes resampled: a quarter of the replicates draw run 2 twice (0.1 m on both
+    # episodes, 0.5×); the worst draws run 1's 20-m episode alone (100×).
+    assert b["ratio_low"] == 0.5 and 25.5 < b["ratio_high"] <= 100.0
     # IQM of set a for x: 4 scores [0.1, 0.2, 0.3, 0.5] → the middle two, 0.25.
     assert math.isclose(stats["iqm"]["a"]["x"]["value"], 0.25)
     # fbsm beats x in set a on 1 of 4 (run, episode) pairs per episode, ties ½:
@@ -508,13 +517,15 @@ def test_target_table_reports_each_side_pace(tmp_path):
     (row,) = json.loads((tmp_path / "stats.json").read_text())["target"]
     assert math.isclose(row["pace_m_s"], 1.15) and math.isclose(row["reference_pace_m_s"], 1.01)
     assert "pace [m/s], policy / reference" in text
-    assert "| a | x | 0.100 | 0.200 | 0.500 | 0/2 | 1.50 | 1.15 / 1.01 | pass |" in text
+    assert (
+        "| a | x | 0.100 | 0.200 | 0.500 [0.500, 0.500] | 0/2 | 1.50 | 1.15 / 1.01 | pass |" in text
+    )
     # the same episodes without the column: no pace, no column
     old = [",".join(c for i, c in enumerate(line.split(",")) if i != 12) for line in lines]
     (tmp_path / "episodes.csv").write_text(header.replace("mean_path_speed,", "") + "".join(old))
     text = write_stats(tmp_path, reps=200, figures=False)
     assert "pace" not in text
-    assert "| a | x | 0.100 | 0.200 | 0.500 | 0/2 | 1.50 | pass |" in text
+    assert "| a | x | 0.100 | 0.200 | 0.500 [0.500, 0.500] | 0/2 | 1.50 | pass |" in text
 
 
 def test_a_rerun_without_statistics_removes_the_earlier_statistics(tiny, tmp_path):

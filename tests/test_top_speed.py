@@ -100,6 +100,29 @@ def test_the_target_takes_each_sets_best_reference() -> None:
         target_table(rows, scores, ["calm", "current"], ["x"], 1.5)
 
 
+def test_the_target_ratio_has_a_paired_interval() -> None:
+    """A policy at exactly 0.7× the reference on every episode has the CI [0.7, 0.7] whatever
+    the episodes' spread (paired: each replicate resamples the same episodes for both); a noisy
+    one's CI brackets its ratio and narrows with more episodes."""
+    rng = np.random.default_rng(3)
+    reference = rng.uniform(0.2, 0.6, size=(1, 40))
+    scores = {"ref": reference, "scaled": 0.7 * reference}
+    scores["noisy"] = 0.8 * reference * rng.lognormal(0.0, 0.2, size=(3, 40))
+    rows = [{"policy": p, "set": "s", "termination_reason": "", "max_surge": 1.5} for p in scores]
+    table = {t["policy"]: t for t in target_table(rows, scores, ["s"] * 40, "ref", 0.8, reps=500)}
+    assert table["scaled"]["ratio_low"] == pytest.approx(0.7, abs=1e-12)
+    assert table["scaled"]["ratio_high"] == pytest.approx(0.7, abs=1e-12)
+    noisy = table["noisy"]
+    assert noisy["ratio_low"] < noisy["ratio"] < noisy["ratio_high"]
+    assert 0.02 < noisy["ratio_high"] - noisy["ratio_low"] < 0.3
+    few = {p: x[:, :10] for p, x in scores.items()}
+    narrow = noisy["ratio_high"] - noisy["ratio_low"]
+    wide = target_table(rows, few, ["s"] * 10, "ref", 0.8, reps=500)[1]
+    assert wide["ratio_high"] - wide["ratio_low"] > narrow
+    again = target_table(rows, scores, ["s"] * 40, "ref", 0.8, reps=500)
+    assert [t["ratio_low"] for t in again] == [t["ratio_low"] for t in table.values()]
+
+
 def _markdown_target_line(speeds) -> str:
     stats = {
         "reference": "ref",

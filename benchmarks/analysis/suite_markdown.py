@@ -84,7 +84,8 @@ def stats_markdown(
                 format_number(t["mean_m"]),
                 *reference,
                 format_number(t["reference_mean_m"]),
-                format_number(t["ratio"]),
+                f"{format_number(t['ratio'])} [{format_number(t['ratio_low'])}, "
+                f"{format_number(t['ratio_high'])}]",
                 failed,
                 format_number(t["max_surge_m_s"]),
                 *pace,
@@ -99,7 +100,7 @@ def stats_markdown(
         "policy",
         "mean [m]",
         *ref_columns,
-        "ratio",
+        "ratio [95 % CI]",
         "failed",
         "max surge [m/s]",
         *(["pace [m/s], policy / reference"] if paced else []),

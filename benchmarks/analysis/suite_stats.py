@@ -12,8 +12,11 @@ and figures from OUT/episodes.csv and OUT/suite.json, with `benchmarks.analysis.
   score is below the reference's on the same episode (the report table's reference, or
   ``--reference``; also against its extra references that were evaluated); performance profiles
   (fraction of scores below τ [m]).
-* **Target table**: per set, the ratio of a policy's mean score to the reference's;
-  a set passes when the ratio is ≤ the report's ``max_ratio``, no episode failed and the largest
+* **Target table**: per set, the ratio of a policy's mean score to the reference's, with a
+  paired 95 % bootstrap CI (the same episodes resampled for both, each one's runs separately;
+  the reference is the set's best by its point estimate, held fixed in every replicate). A set
+  passes when the ratio's point estimate is ≤ the report's ``max_ratio`` (the target as stated;
+  the CI says how far the verdict stands from chance), no episode failed and the largest
   surge speed of any episode is ≤ the top speed of the set's vehicle (`AUVParams.max_surge`,
   2.0 m/s for REMUS 100).
 * **Smoothness** (`benchmarks.analysis.smoothness_stats`): paired RMS-distance differences of the
@@ -60,6 +63,7 @@ from benchmarks.analysis.stats import (
     MIN_REPS,
     Interval,
     learning_curve,
+    paired_difference,
     probability_of_improvement,
     summarize,
 )
@@ -235,9 +239,13 @@ def target_table(
     reference: str | Sequence[str],
     max_ratio: float,
     speeds: Mapping[str, float] | None = None,
+    *,
+    reps: int = 2000,
+    seed: int = 0,
 ) -> list[dict[str, Any]]:
     """One entry per (set, policy other than the references): mean scores [m], their ratio to
-    the best reference of the set, failed episodes, largest surge [m/s], the policy's and that
+    the best reference of the set with its paired bootstrap CI ("ratio_low", "ratio_high";
+    ``reps`` replicates, ``seed``), failed episodes, largest surge [m/s], the policy's and that
     reference's pace (`mean_pace`, m/s: a ratio at unequal paces compares two tasks; reported,
     not judged) and whether the set passes: ratio ≤ ``max_ratio``, no failed episode, surge ≤
     the set's top speed in ``speeds`` [m/s] (`top_speeds`; a set it lacks: REMUS 100's
@@ -266,6 +274,14 @@ def target_table(
             surge = max(r["max_surge"] for r in mine)
             mean = float(x[:, cols].mean())
             ratio = mean / ref_means[best]
+            relative = paired_difference(
+                x[:, cols],
+                scores[best][:, cols],
+                labels[cols],
+                key=f"target|{policy}|{best}|{name}",
+                reps=reps,
+                seed=seed,
+            )["relative"]
             table.append(
                 {
                     "set": name,
@@ -274,6 +290,8 @@ def target_table(
                     "reference": best,
                     "reference_mean_m": ref_means[best],
                     "ratio": ratio,
+                    "ratio_low": 1.0 + relative.low,
+                    "ratio_high": 1.0 + relative.high,
                     "failed": len(failed),
                     "failures": sorted(set(failed)),
                     "max_surge_m_s": surge,
@@ -360,7 +378,9 @@ def write_stats(
             )
     speeds = top_speeds(suite)
     target_refs = report.target_references or (reference,)
-    target = target_table(rows, scores, groups, target_refs, report.max_ratio, speeds)
+    target = target_table(
+        rows, scores, groups, target_refs, report.max_ratio, speeds, reps=reps, seed=seed
+    )
     verdicts = {}
     for policy in scores:
         mine = [t for t in target if t["policy"] == policy]
