@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym import __version__
-from auv_gym.support.files import json_default
+from auv_gym.support.files import json_default, temporary_prefix
 from controllers.agent import (
     AgentFiles,
     check_agent,
@@ -147,8 +147,12 @@ def _check_out(out: str | os.PathLike) -> Path:
     target = Path(out)
     if target.suffix != ".onnx":
         raise ValueError(f"--out {target}: the file name must end in .onnx")
+    if target.parent.exists() and not target.parent.is_dir():
+        raise FileNotFoundError(f"--out {target}: {target.parent} is a file, not a folder")
     if not target.parent.is_dir():
         raise FileNotFoundError(f"--out {target}: folder {target.parent} does not exist")
+    if target.is_dir():
+        raise IsADirectoryError(f"--out {target} is a folder, not a file")
     return target
 
 
@@ -274,7 +278,9 @@ def write_export(target: Path, data: bytes, contract: Mapping[str, Any]) -> Path
     temporaries: list[str] = []
     try:
         for path, payload in ((target, data), (contract_file, text)):
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            fd, tmp = tempfile.mkstemp(
+                prefix=temporary_prefix(path), suffix=".tmp", dir=path.parent
+            )
             temporaries.append(tmp)
             with os.fdopen(fd, "wb") as fh:
                 fh.write(payload)
@@ -282,7 +288,7 @@ def write_export(target: Path, data: bytes, contract: Mapping[str, Any]) -> Path
         backup = None
         if target.exists():  # kept until the contract is in place
             fd, backup = tempfile.mkstemp(
-                prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+                prefix=temporary_prefix(target), suffix=".tmp", dir=target.parent
             )
             os.close(fd)
             temporaries.append(backup)

@@ -68,7 +68,6 @@ from typing import Any
 
 import numpy as np
 
-from auv_gym.sim.integrator import ACTUATORS
 from auv_gym.sim.observation import (
     OBS_DIM,
     OBS_NAMES,
@@ -76,6 +75,7 @@ from auv_gym.sim.observation import (
     vehicle_speed_bound,
 )
 from auv_gym.sim.task import REMUS_TOP_SPEED
+from controllers.env_settings import policy_settings
 from controllers.envelope_guard import (
     EnvelopeGuard,
     check_envelope_guard,
@@ -271,17 +271,15 @@ class ResidualSettings:
         return make_classical(self.base, **{**self.base_kwargs, **kwargs})
 
 
-def base_kwargs_for_env(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
-    """The base controller's env-owned arguments for episodes of ``env_kwargs``: its
-    ``control_dt`` and a fixed ``actuator`` (`auv_gym.sim.integrator.ACTUATORS`: "paper",
-    "fins" or "realistic"; "random" draws per episode, which a Policy cannot see: the base then
-    keeps its default "paper", like any classical controller)."""
-    out: dict[str, Any] = {}
-    if "control_dt" in env_kwargs:
-        out["control_dt"] = env_kwargs["control_dt"]
-    if env_kwargs.get("actuator") in ACTUATORS:
-        out["actuator"] = env_kwargs["actuator"]
-    return out
+def base_kwargs_for_env(env_kwargs: Any) -> dict[str, Any]:
+    """The base controller's env-owned arguments for episodes of ``env_kwargs`` (keyword
+    arguments, a `SimConfig` or an env: `controllers.env_settings.env_config`), those of any
+    classical controller on that env (`controllers.env_settings.policy_settings`): its
+    ``control_dt``, the vehicle record ``params`` and a fixed ``actuator`` with its
+    ``actuator_params`` ("random" draws per episode, which a Policy cannot see: the base then
+    keeps its default "paper", like any classical controller). Training, validation and the
+    benchmark thus fly one base on the vehicle a recipe names."""
+    return policy_settings(env_kwargs)
 
 
 def residual_observation_names(observation: Any = None) -> tuple[str, ...]:

@@ -142,6 +142,23 @@ def test_interrupted_run_resumes_without_recomputing(tmp_path):
     assert not list(tmp_path.rglob("*.tmp*"))
 
 
+def test_a_damaged_time_series_is_flown_again_not_a_traceback(tmp_path, monkeypatch):
+    """Was: a cut-short seed_0.npz passed the cache (its record was whole) and every later run
+    of the command ended in zipfile.BadZipFile while drawing the figures."""
+    monkeypatch.syspath_prepend(str(ROOT / "tests"))
+    argv = ["--policies", USER, "--scenarios", "paper", "--seeds", "2", "--duration", "10"]
+    argv += ["--workers", "1", "--quiet", "--out", str(tmp_path)]
+    main(argv)
+    series = tmp_path / "episodes" / "paper" / "user_policy-policy" / "seed_0.npz"
+    whole = series.read_bytes()
+    series.write_bytes(whole[: len(whole) // 2])
+    untouched = series.with_name("seed_1.json").stat().st_mtime_ns  # seed 1 keeps no series
+    main(argv)
+    assert series.read_bytes() == whole  # flown again, bit for bit
+    assert series.with_name("seed_1.json").stat().st_mtime_ns == untouched
+    assert (tmp_path / "figures").is_dir()
+
+
 def test_the_summary_opens_with_the_overview_and_lists_every_figure(tmp_path, monkeypatch):
     """Was: summary.md had neither the console's overview nor a word on the figures."""
     monkeypatch.syspath_prepend(str(ROOT / "tests"))
@@ -646,6 +663,9 @@ def test_a_scenario_the_env_refuses_is_named_before_any_episode(tmp_path, capsys
     scenarios.write_text("[bad]\nenv = 3\n")
     err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
     assert "scenario 'bad': env must be a table" in err
+    scenarios.write_text("[bad]\ndescription = 3\n")  # was accepted
+    err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
+    assert "scenario 'bad': description must be text, got 3" in err
     scenarios.write_text("not toml [")
     err = usage_error(capsys, main, ["--scenario-file", str(scenarios), "--out", str(out)])
     assert f"scenario file {scenarios}: not valid TOML (" in err

@@ -158,7 +158,7 @@ def test_resume_after_a_crash_reruns_only_unfinished_chunks(tiny, tmp_path, monk
     lost = out / "chunks" / "gen" / "run_5" / "test_mixed.json"
     lost.unlink()
     (out / "episodes.csv").unlink()
-    (lost.parent / ".test_mixed.json.k1ll3d00.tmp").write_text("{")  # a write killed half-way
+    (lost.parent / ".test_mixed.json.auv-gym.k1ll3d00.tmp").write_text("{")  # a killed write
     stamps = {p: p.stat().st_mtime_ns for p in chunk_files if p != lost}
     calls = []
     real = chunks_module.evaluate
@@ -492,6 +492,34 @@ def test_target_table_by_hand(tmp_path):
     # episode 0: fbsm 0.1 vs x 0.2, 0.5 → x better on none; episode 1: 0.3 vs 0.3 (½), 0.1 (1).
     assert math.isclose(stats["improvement"]["fbsm"]["a"]["x"]["value"], (0 + 0.75) / 2)
     assert np.isfinite(stats["mean"]["aggregate"]["x"]["value"])
+
+
+def test_stats_only_names_a_damaged_record_in_one_line(tmp_path, capsys):
+    """Was: a cut-short episodes.csv ended in a TypeError traceback; a bad cell or suite.json
+    gave a bare parser message naming no file."""
+    suite = {"command": "by hand", "sets": {"a": {"env": {}}}, "policies": {"fbsm": {}}}
+    header = (
+        "policy,run,set,seed,env_id,rms_distance,rms_x_e,rms_y_e,rms_z_e,max_distance,"
+        "max_surge,overspeed_fraction,termination_reason,window_samples,duration\n"
+    )
+    row = "fbsm,0,a,{seed},AUVPath3D-v0,{d},0,0,0,{d},1.0,0,time_limit,10,10.0\n"
+    whole = header + row.format(seed=0, d=0.1) + row.format(seed=1, d=0.2)
+    episodes = tmp_path / "episodes.csv"
+    (tmp_path / "suite.json").write_text(json.dumps(suite))
+    for text, message in (
+        (whole[: len(whole) - 30], f"{episodes}: line 3 has another number of cells"),
+        (whole.replace(",0.2,", ",abc,", 1), f"{episodes}: line 3: rms_distance = 'abc' is not"),
+        (whole.replace(",0.2,", ",-1000,", 1), f"{episodes}: line 3: rms_distance = '-1000' is"),
+        (header.replace("run,", "") + "fbsm,a\n", f"{episodes}: no column run (not an episodes"),
+    ):
+        episodes.write_text(text)
+        err = usage_error(capsys, ["--stats-only", "--out", str(tmp_path)])
+        assert message in err, (message, err)
+    episodes.write_text(whole)
+    (tmp_path / "suite.json").write_text("{broken")
+    err = usage_error(capsys, ["--stats-only", "--out", str(tmp_path)])
+    assert f"{tmp_path / 'suite.json'}: not a suite record (" in err
+    assert not (tmp_path / "stats.md").exists()
 
 
 def test_target_table_reports_each_side_pace(tmp_path):

@@ -334,6 +334,10 @@ def test_demos_refuses_bad_arguments_in_one_line(tmp_path, capsys):
         (["--config", recipe, "--phase", "x"], "has no schedule"),
         (["--config", str(tmp_path)], f"--config {str(tmp_path)!r} is a folder, not a hyper"),
         (["--config", str(tmp_path / "no.yml")], "no.yml' does not exist"),
+        (
+            ["--task", "train", "--observation", "nosuch"],
+            "--observation: unknown observation 'nosuch'; valid: ['paper', 'preview', 'preview_i",
+        ),
     ):
         with pytest.raises(SystemExit) as stop:
             main([*argv, "--out", str(tmp_path / "demos")])

@@ -272,7 +272,9 @@ def _agent_copy(tmp_path: Path, agent: str = "ppo_generalist") -> Path:
     return copy
 
 
-@pytest.mark.parametrize("problem", ["unknown stage", "no statistics", "missing folder"])
+@pytest.mark.parametrize(
+    "problem", ["unknown stage", "no statistics", "missing folder", "file as folder", "folder"]
+)
 def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem, auv_gym_command):
     agent = _agent_copy(tmp_path)
     out = tmp_path / "out" / "agent.onnx"
@@ -286,13 +288,25 @@ def test_bad_exports_are_one_line_with_nothing_written(tmp_path, problem, auv_gy
         (agent / "vecnormalize.npz").unlink()
         (agent / "vecnormalize.pkl").unlink()
         expected = "normalisation statistics missing"
-    else:
+    elif problem == "missing folder":
         out = tmp_path / "nowhere" / "agent.onnx"
         expected = f"folder {out.parent} does not exist"
+    elif problem == "file as folder":  # was: "folder ... does not exist"
+        (tmp_path / "afile").write_text("mine")
+        out = tmp_path / "afile" / "agent.onnx"
+        expected = f"--out {out}: {out.parent} is a file, not a folder"
+    else:
+        out.mkdir()
+        expected = f"--out {out} is a folder, not a file"
     code, err = auv_gym_command("export", str(agent), "--out", str(out))
     assert code == 2
     assert len(err.splitlines()) == 1 and expected in err, err
-    assert not out.parent.exists() or list(out.parent.iterdir()) == []
+    if problem == "file as folder":
+        assert (tmp_path / "afile").read_text() == "mine"
+    elif problem == "folder":
+        assert list(out.iterdir()) == [] and list(out.parent.iterdir()) == [out]
+    else:
+        assert not out.parent.exists() or list(out.parent.iterdir()) == []
 
 
 def test_an_export_older_than_the_agent_beside_it_is_refused(tmp_path):

@@ -140,6 +140,41 @@ def test_resume_continues_step_counter(tiny_run: Path) -> None:
     assert ckpt["num_timesteps"] == 512
 
 
+def test_resume_refuses_other_settings_than_the_run_started_with(tiny_run: Path, tmp_path: Path):
+    """Was: --resume with another seed or another config's content trained on, recorded the
+    new values in metadata.json as if the whole run had them, and called the resume exact."""
+    before = (tiny_run / "metadata.json").read_text()
+    (tmp_path / "tiny.yml").write_text(TINY_YAML)
+    (tmp_path / "other.yml").write_text(TINY_YAML.replace("n_epochs: 1", "n_epochs: 2"))
+    resume = ("--out", str(tiny_run), *TINY_ARGS[2:], "--n-timesteps", "640", "--resume")
+    seed = run_cli("--config", "tiny.yml", "--seed", "5", *resume, cwd=tmp_path)
+    assert seed.returncode == 2 and seed.stderr.count("\n") == 1, seed.stderr
+    assert "--resume: seed was 3 in " in seed.stderr and "now 5; resume with" in seed.stderr
+    config = run_cli("--config", "other.yml", "--seed", "3", *resume, cwd=tmp_path)
+    assert config.returncode == 2 and config.stderr.count("\n") == 1, config.stderr
+    assert "--resume: the settings of --config other.yml differ from the run's" in config.stderr
+    assert (tiny_run / "metadata.json").read_text() == before
+    assert not (tiny_run / "checkpoints" / "step_0000000640").exists()
+
+
+def test_a_damaged_checkpoint_is_named_or_passed_over(tiny_run: Path, tmp_path: Path) -> None:
+    """A model.zip cut short is no complete checkpoint (--resume takes the one before); a
+    damaged training state or VecNormalize pickle is named. Was: a bare "invalid literal for
+    int()" naming no file."""
+    from benchmarks.training.checkpoints import latest_checkpoint, read_training_state
+
+    run = shutil.copytree(tiny_run, tmp_path / "run")
+    newest = run / "checkpoints" / "step_0000000512"
+    assert latest_checkpoint(run) == newest
+    whole = (newest / "model.zip").read_bytes()
+    (newest / "model.zip").write_bytes(whole[: len(whole) // 2])
+    assert latest_checkpoint(run) == run / "checkpoints" / "step_0000000384"
+    state = run / "checkpoints" / "step_0000000384" / "training_state.pkl"
+    state.write_text("garbage\n")
+    with pytest.raises(ValueError, match=rf"{state} cannot be read .*: a damaged checkpoint"):
+        read_training_state(state.parent)
+
+
 @pytest.mark.integration
 def test_cli_refuses_to_overwrite_and_to_resume_nothing(tiny_run: Path, tmp_path: Path) -> None:
     (tmp_path / "tiny.yml").write_text(TINY_YAML)

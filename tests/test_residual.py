@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 import controllers
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.rollout import evaluate, rollouts
+from auv_gym.vehicle import remus100
 from benchmarks.training.residual import ResidualTraining
 from benchmarks.training.residual_env import CHATTERING_KEY, PRECISION_KEY, ResidualVectorEnv
 from controllers.residual import (
@@ -754,13 +755,39 @@ def test_evaluation_base_flies_the_episodes_actuator_the_realistic_one_included(
     env = {"actuator": "realistic", "sensors": "typical_kalman", "disturbance": "ocean"}
     env = {**env, "max_time": 4.0}
     kwargs = base_kwargs_for_env(env)
-    assert kwargs == {"actuator": "realistic"}
-    assert base_kwargs_for_env({"actuator": "random", "control_dt": 0.1}) == {"control_dt": 0.1}
+    assert kwargs["actuator"] == "realistic" and kwargs["params"] == remus100()
+    drawn = base_kwargs_for_env({"actuator": "random", "control_dt": 0.1})
+    assert sorted(drawn) == ["control_dt", "params"] and drawn["control_dt"] == 0.1
     base = ResidualTraining(base="pid_as_built").make_base(**kwargs)
     residual = ResidualPolicy(base, ConstantAgent(0.0), (0.25, 0.5, 0.5))
     seeds = [0, 1]
     reference = controllers.make("pid_as_built", actuator="realistic")
     assert_same_episodes(rollouts(residual, seeds, **env), rollouts(reference, seeds, **env))
+
+
+def test_the_training_base_flies_the_vehicle_of_its_episodes():
+    """A residual trained on another vehicle corrects a base configured for that vehicle (its
+    record, its fins), the base validation and the benchmark build (`policy_settings`): with a
+    zero correction the training env flies the torpedo exactly as `pid_as_built` does on it. The
+    training env used to build the REMUS 100's base whatever the vehicle (31.03-kg record
+    against the torpedo's 30.48 kg, the REMUS 100's fins), so an agent learned to correct
+    another base than the one it is flown on."""
+    env = {"vehicle": "torpedo", "plant": "6dof", "actuator": "realistic", "max_time": 4.0}
+    n, steps = 2, 79
+    core = AUVPath3DVectorEnv(n, autoreset_mode=AutoresetMode.SAME_STEP, **env)
+    wrapper = ResidualVectorEnv(core, ResidualTraining(base="pid_as_built"))
+    base = wrapper.controllers["realistic"]
+    assert base.params == core.config.params != remus100()
+    assert base.actuator_params == core.config.actuator_params
+    states, observations, _, _ = _drive_wrapper(wrapper, lambda k: np.zeros((n, 3)), 5, steps)
+    for i in range(n):
+        alone = controllers.make("pid_as_built", env=env)
+        ref = rollouts(alone, [5 + i], **env)[0]
+        np.testing.assert_array_equal(
+            np.stack([ref.intervals[a] for a in _ACTIONS], 1)[:steps], observations[:, i, -6:-3]
+        )
+        ref_state = np.stack([ref.samples[f] for f in ("x", "y", "z", "theta", "psi")], 1)
+        np.testing.assert_array_equal(ref_state[:steps], states[:, i, :5])
 
 
 @pytest.mark.rl

@@ -240,6 +240,9 @@ def test_a_huge_seed_count_is_refused_at_once_without_memory():
         ),
         ({"env_kwargs": {"max_time": -1.0}}, "env_kwargs: "),
         ({"n_steps": 1, "n_envs": 1}, "n_steps × n_envs must be at least 2"),
+        # was: trained on batches of 256 after an SB3 warning
+        ({"batch_size": 1000}, "batch_size 1000 exceeds the rollout n_steps × n_envs = 64 × 4"),
+        ({"learning_rate": "3e-4"}, "(YAML reads 3e-4 as text: write 3.0e-4)"),
     ],
 )
 def test_config_values_are_refused_before_any_training(tmp_path, capsys, overrides, message):
@@ -311,6 +314,61 @@ def test_train_seeds_refuses_output_folders_it_could_not_write_before_training(
         )
         assert f"{flag} '{where}' cannot be written as a folder: {reason}" in err
         assert not (out / "train_seeds.json").exists()
+
+
+@pytest.mark.parametrize("command", ["train", "train-seeds"])
+def test_an_export_that_would_delete_other_files_is_refused_before_training(
+    tmp_path, capsys, command
+):
+    """Was: --export DIR replaced DIR whole after the training, and with it the run's own folder
+    inside it (checkpoints, best/, final/), a sibling run and a user's notes."""
+    pytest.importorskip("stable_baselines3")
+    parent = tmp_path / "par"
+    (parent / "other_run").mkdir(parents=True)
+    (parent / "other_run" / "notes.txt").write_text("mine")
+    out = parent / "run"
+    argv = ["--config", str(_seeds_config(tmp_path)), "--out", str(out)]
+    if command == "train":
+        main, argv = _train_main, [*argv, "--env-id", "AUVPath3DSpeedLimit-v0", "--no-progress-bar"]
+    else:
+        main, argv = _seeds_main, [*argv, "--seeds", "1", "--quiet"]
+    for export, message in (
+        (parent, f"--export '{parent}' holds the run's own folder --out '{out}'"),
+        (out, f"--export '{out}' holds the run's own folder --out '{out}'"),
+        (parent / "other_run", f"--export '{parent / 'other_run'}' holds notes.txt, which are not"),
+    ):
+        err = one_line_exit_2(capsys, main, [*argv, "--export", str(export)])
+        assert message in err
+    assert (parent / "other_run" / "notes.txt").read_text() == "mine"
+    assert not (out / "final").exists() and not (out / "seed_1" / "final").exists()
+
+
+def test_an_agent_folder_is_replaced_and_any_other_refused(tmp_path):
+    """An export replaces a folder holding an agent, its test and its ONNX export (stale once
+    the agent changes); anything else there stops it before a file is written."""
+    from benchmarks.training.checkpoints import EXPORTED_FILES, check_export_folder, export_agent
+
+    source = tmp_path / "source"
+    source.mkdir()
+    for name in ("model.zip", "vecnormalize.npz", "metadata.json"):
+        (source / name).write_text(f"new {name}")
+    agent = tmp_path / "agent"
+    agent.mkdir()
+    for name in (*EXPORTED_FILES, "policy.onnx", "policy.json", "fins.onnx", "fins.json"):
+        (agent / name).write_text("old")
+    check_export_folder(agent, "--export", tmp_path / "run")
+    export_agent(source, agent)
+    assert sorted(p.name for p in agent.iterdir()) == [
+        "metadata.json",
+        "model.zip",
+        "vecnormalize.npz",
+    ]
+    assert (agent / "model.zip").read_text() == "new model.zip"
+    for name in ("README.md", "notes.json", ".hidden"):
+        (agent / name).write_text("mine")
+    with pytest.raises(ValueError, match=r"export '.+agent' holds \.hidden, README\.md, notes"):
+        export_agent(source, agent)
+    assert (agent / "README.md").read_text() == "mine"
 
 
 def test_a_failed_start_does_not_block_the_corrected_command(tmp_path):
@@ -467,28 +525,56 @@ def test_the_lock_is_released_when_its_holder_is_killed(tmp_path):
 
 
 def test_temporaries_of_killed_runs_are_removed_and_others_kept(tmp_path):
+    """The atomic writers' tagged temporaries go; a user's look-alikes stay. Was: any
+    ".NAME.XXXXXXXX.tmp" or ".NAME.old<digits>" four levels down an output folder was deleted,
+    a user's ".bashrc.old1" and ".config.old2/" with `--out ~`."""
     out = tmp_path / "out"
     stale = [
-        out / ".episodes.csv.a1b2c3d4.tmp",
-        out / "figures" / ".x.png.zz_9Yq0k.tmp",
-        out / "episodes" / "paper" / "fbsm" / ".seed_0.npz.abcdefgh.tmp",
+        out / ".episodes.csv.auv-gym.a1b2c3d4.tmp",
+        out / "figures" / ".x.png.auv-gym.zz_9Yq0k.tmp",
+        out / "episodes" / "paper" / "fbsm" / ".seed_0.npz.auv-gym.abcdefgh.tmp",
     ]
     kept = [
         out / "summary.md",
         out / "figures" / "x.png",
         out / ".hidden.tmp",
         out / "mine.abcdefgh.tmp",
+        out / ".bashrc.old1",
+        out / "proj" / ".notes.abcdefgh.tmp",
+        out / ".config.old2" / "settings",
     ]
     for file in stale + kept:
         file.parent.mkdir(parents=True, exist_ok=True)
         file.write_text("")
-    (out / ".checkpoint.old4242").mkdir()
-    (out / ".checkpoint.old4242" / "model.zip").write_text("")
+    (out / ".checkpoint.auv-gym-old4242").mkdir()
+    (out / ".checkpoint.auv-gym-old4242" / "model.zip").write_text("")
     with output_lock(out):
         pass
     assert all(f.exists() for f in kept)
-    assert not any(f.exists() for f in stale) and not (out / ".checkpoint.old4242").exists()
+    assert not any(f.exists() for f in stale)
+    assert not (out / ".checkpoint.auv-gym-old4242").exists()
     assert remove_temporaries(out) == []
+
+
+def test_a_write_killed_half_way_leaves_what_remove_temporaries_removes(tmp_path, monkeypatch):
+    """The atomic writers tag their temporaries so that the next run's clean-up knows them."""
+    import auv_gym.support.files as files
+
+    def killed(source, target):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(files.os, "replace", killed)
+    monkeypatch.setattr(files.os, "unlink", lambda path: None)  # a kill skips the clean-up
+    monkeypatch.setattr(files.shutil, "rmtree", lambda path, **kwargs: None)
+    with pytest.raises(KeyboardInterrupt):
+        files.write_text(tmp_path / "a.txt", "x")
+    with pytest.raises(KeyboardInterrupt):
+        files.write_folder_atomic(tmp_path / "folder", lambda tmp: (tmp / "f").write_text(""))
+    monkeypatch.undo()
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert len(left) == 2 and all(files.TEMPORARY.fullmatch(name) for name in left), left
+    assert sorted(p.name for p in remove_temporaries(tmp_path)) == left
+    assert not any(tmp_path.iterdir())
 
 
 def test_replace_outputs_removes_only_what_the_last_run_recorded(tmp_path):
@@ -516,7 +602,7 @@ def test_compare_rerun_with_other_arguments_leaves_no_stale_figure(tmp_path):
     main([*TINY, "--scenarios", "nominal,paper", "--out", str(out)])
     figures = {p.name for p in (out / "figures").iterdir()}
     assert any("paper" in name for name in figures) and any("nominal" in n for n in figures)
-    (out / "figures" / ".trajectory_nominal.png.k1ll3d00.tmp").write_text("")
+    (out / "figures" / ".trajectory_nominal.png.auv-gym.k1ll3d00.tmp").write_text("")
     main([*TINY, "--scenarios", "nominal", "--out", str(out)])
     left = {p.name for p in (out / "figures").iterdir()}
     assert left and not any("paper" in name for name in left), left

@@ -46,7 +46,7 @@ def test_finished_units_are_reused_and_changed_or_damaged_ones_rerun(tmp_path):
     first = run_resumable(units, tmp_path, tmp_path / "cache", square, workers=1, progress=False)
     assert [r["square"] for r in first] == [9, 1, 4] and CALLS == [3, 1, 2]
     (tmp_path / "cache" / "2.json").write_text("{truncated")  # a damaged record
-    (tmp_path / "cache" / ".2.json.a1b2c3d4.tmp").write_text("")  # a killed write
+    (tmp_path / "cache" / ".2.json.auv-gym.a1b2c3d4.tmp").write_text("")  # a killed write
     again = run_resumable(
         [*units[:2], Square(2), Square(1, "2")],
         tmp_path,
@@ -57,7 +57,7 @@ def test_finished_units_are_reused_and_changed_or_damaged_ones_rerun(tmp_path):
     )
     assert [r["square"] for r in again] == [9, 1, 4, 1]
     assert CALLS == [3, 1, 2, 2, 1]  # the damaged one and the one whose code changed
-    assert not (tmp_path / "cache" / ".2.json.a1b2c3d4.tmp").exists()
+    assert not (tmp_path / "cache" / ".2.json.auv-gym.a1b2c3d4.tmp").exists()
     assert stored_record(Square(1, "2"), tmp_path) == {"fingerprint": "1-2", "square": 1}
     assert stored_record(Square(5), tmp_path) is None
     assert json.loads((tmp_path / "cache" / "1.json").read_text())["fingerprint"] == "1-2"

@@ -39,7 +39,7 @@ FBSM = [
     ["fbsm", "0", "a", "0", "0.0641", "time_limit"],
     ["fbsm", "0", "a", "1", "0.0702", "time_limit"],
 ]
-NEW = [["new", "0", "a", "0", "0.15", "time_limit"], ["new", "1", "a", "0", "30.0", "corridor"]]
+NEW = [["new", "0", "a", "0", "0.15", "time_limit"], ["new", "0", "a", "1", "30.0", "corridor"]]
 
 
 def test_rows_and_provenance_are_added(tmp_path):
@@ -131,3 +131,22 @@ def test_a_metric_added_since_keeps_the_target_columns(tmp_path):
     )
     with pytest.raises(ValueError, match=r"lacks the columns \['termination_reason'\]"):
         merge_suites(narrow, _suite(tmp_path / "t2", FBSM, ["fbsm"]), ["new"])
+
+
+def test_a_partial_or_damaged_source_is_refused_before_the_target_changes(tmp_path):
+    """Was: 14 of a set's 20 rows, the last one cut short, were added and the target broke
+    (`auv-gym suite --stats-only` then failed on it); cells of -1000 or "abc" went in too."""
+    target = _suite(tmp_path / "target", FBSM, ["fbsm"])
+    before = (target / "episodes.csv").read_bytes()
+    partial = _suite(tmp_path / "partial", [*FBSM, NEW[0]], ["fbsm", "new"])
+    with pytest.raises(ValueError, match=r"new run 0 has 1 of the 2 episodes fbsm has in .+target"):
+        merge_suites(partial, target, ["new"])
+    cut = _suite(tmp_path / "cut", [*FBSM, NEW[0], NEW[1][:4]], ["fbsm", "new"])
+    with pytest.raises(ValueError, match=r"cut/episodes.csv: line 5 has another number of cells"):
+        merge_suites(cut, target, ["new"])
+    for bad, message in (("abc", "'abc' is not a number"), ("-1000", "'-1000' is negative")):
+        row = [*NEW[1][:4], bad, NEW[1][5]]
+        source = _suite(tmp_path / f"bad{bad}", [*FBSM, NEW[0], row], ["fbsm", "new"])
+        with pytest.raises(ValueError, match=rf"line 5: rms_distance = {message}"):
+            merge_suites(source, target, ["new"])
+    assert (target / "episodes.csv").read_bytes() == before

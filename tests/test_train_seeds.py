@@ -128,6 +128,8 @@ def test_parse_seeds(text, seeds):
             ["--seeds", "2", "--task-set", "validation", "--eval-episodes", "101"],
             "eval_episodes must be 1-100 (the size of task set 'validation'), got 101",
         ),
+        # was: accepted where the task set (the paper's default) does not draw episodes
+        (["--seeds", "2", "--eval-episodes", "-5"], "eval_episodes must be >= 1, got -5"),
         (["--seeds", "2", "--eval-duration", "0.04"], "evaluation duration 0.04"),
         (["--seeds", "2", "--workers", "0"], "workers must be a positive integer, got 0"),
         (["--seeds", "2", "--checkpoint-freq", "0"], "checkpoint_freq must be a positive"),

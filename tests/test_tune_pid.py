@@ -34,7 +34,7 @@ def test_a_grid_names_pid_gains_with_finite_values() -> None:
             parse_grid(text)
 
 
-def test_the_base_is_a_pid_preset() -> None:
+def test_the_base_is_a_pid_preset(capsys) -> None:
     check_base("pid_as_built_climb")
     with pytest.raises(ValueError, match="'fbsm_colos' is not a PID preset"):
         check_base("fbsm_colos")
@@ -44,6 +44,13 @@ def test_the_base_is_a_pid_preset() -> None:
         main(["--grid", "pitch_wn=nan"])
     with pytest.raises(SystemExit):  # a gain the controller refuses, before any episode flies
         main(["--scenarios", "as_built_helix", "--grid", "pitch_wn=0.5,2"])
+    for seeds, message in (
+        ("-100", "--seeds must be integers >= 0, got '-100'"),  # was a traceback
+        ("abc", "--seeds must be comma-separated integers, got 'abc'"),  # was a bare int() error
+    ):
+        with pytest.raises(SystemExit):
+            main(["--seeds", seeds])
+        assert message in capsys.readouterr().err
     with pytest.raises(ValueError, match=r"PIDGains\.pitch_wn = 0\.5 rad/s"):
         candidate_policies(["as_built_helix"], 60.0, {"pitch_wn": (0.5,)}, "pid_as_built_climb")
 

@@ -196,6 +196,10 @@ def test_a_users_vehicle_file_flies_with_pid_los_without_code(tmp_path: Path) ->
             lambda d: d["actuators"]["fins"][0].update(x=-50.0),
             "'stern_starboard' x: -50 m lies off the 1.6-m hull of [model_6dof]",
         ),
+        (
+            lambda d: d["model_5dof"].update(M_qdot=3.449),  # [kg m²/rad] a sign lost
+            "[model_5dof] M_qdot: 3.449 must be ≤ 0: a submerged hull's added mass adds",
+        ),
         (lambda d: d["limits"].pop("max_surge"), "[limits] max_surge: missing"),
         (lambda d: d["limits"].update(max_surge=0.0), "[limits] max_surge: must be positive"),
         (lambda d: d["model_5dof"].pop("N_max"), "[model_5dof] N_max: missing"),

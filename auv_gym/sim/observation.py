@@ -428,8 +428,8 @@ class ObservationConfig:
             return spec
         if isinstance(spec, str) and spec in OBSERVATION_PRESETS:
             return cls(**OBSERVATION_PRESETS[spec])
-        if isinstance(spec, str):
-            return cls(kind=spec)
+        if isinstance(spec, str):  # a kind, or neither: every valid name listed
+            return cls(kind=choice("observation", spec, [*OBSERVATION_KINDS, *OBSERVATION_PRESETS]))
         if isinstance(spec, Mapping):
             given = keys_within("observation", spec, OBSERVATION_FIELDS)
             config = cls(**{"kind": "preview", **given})

@@ -24,6 +24,7 @@ import shutil
 import subprocess
 import tempfile
 import tomllib
+import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import asdict, is_dataclass
 from importlib import metadata
@@ -48,11 +49,13 @@ __all__ = [
     "read_toml",
     "remove_temporaries",
     "replace_outputs",
+    "temporary_prefix",
     "versions",
     "write_atomic",
     "write_folder_atomic",
     "write_json",
     "write_text",
+    "zip_is_whole",
 ]
 
 # Distributions whose versions determine a result (Python is added).
@@ -60,10 +63,20 @@ PACKAGES = ("auv-gym", "numpy", "numba", "gymnasium", "stable-baselines3", "torc
 _ROOT = Path(__file__).resolve().parents[2]  # the checkout holding the auv_gym package
 LOCK_FILE = ".lock"  # in an output folder: its run's pid, flock-ed while the run lasts
 OUTPUTS_FILE = ".outputs.json"  # in an output folder: the files its last run wrote
-# Temporary names of `write_atomic` / `write_folder_atomic` (mkstemp's 8 random characters) and
-# the folder they set aside while swapping.
-TEMPORARY = re.compile(r"\..+\.[A-Za-z0-9_]{8}\.tmp|\..+\.old\d+")
+# Temporary names of the atomic writers (`temporary_prefix`, then mkstemp's 8 random characters
+# and ".tmp") and of the folder `write_folder_atomic` sets aside while swapping: tagged, so that
+# cleaning a killed run's leftovers can never take a user's ".notes.abcdefgh.tmp" or ".x.old2".
+TEMPORARY_TAG = "auv-gym"
+TEMPORARY = re.compile(
+    rf"\..+\.{TEMPORARY_TAG}\.[A-Za-z0-9_]{{8}}\.tmp|\..+\.{TEMPORARY_TAG}-old\d+"
+)
 TEMPORARY_DEPTH = 4  # folder levels searched: OUT/episodes/<scenario>/<policy>/ is 3
+
+
+def temporary_prefix(target: str | os.PathLike) -> str:
+    """The ``prefix`` of ``tempfile.mkstemp(prefix=..., suffix=".tmp", dir=target's folder)``
+    for a temporary that becomes ``target``: `remove_temporaries` knows it by its tag."""
+    return f".{Path(target).name}.{TEMPORARY_TAG}."
 
 
 def write_atomic(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> Path:
@@ -74,7 +87,7 @@ def write_atomic(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> 
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temporary_prefix(target), suffix=".tmp", dir=target.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
             write(fh)
@@ -92,6 +105,18 @@ def _umask() -> int:
     return mask
 
 
+def zip_is_whole(path: str | os.PathLike, members: Iterable[str] = ()) -> bool:
+    """Whether ``path`` is a zip archive holding ``members`` whose every member reads back
+    with its checksum. A file cut short by a full disk or a copy is not, though its tail may
+    be a whole zip stored inside it (torch's .pth files in an SB3 model.zip): name a member
+    of the outer archive in ``members``."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return set(members) <= set(archive.namelist()) and archive.testzip() is None
+    except (OSError, EOFError, zipfile.BadZipFile, ValueError):
+        return False
+
+
 def write_text(path: str | os.PathLike, text: str) -> Path:
     """Write UTF-8 text atomically (`write_atomic`)."""
     return write_atomic(path, lambda fh: fh.write(text.encode("utf-8")))
@@ -106,11 +131,11 @@ def write_folder_atomic(path: str | os.PathLike, fill: Callable[[Path], Any]) ->
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), suffix=".tmp", dir=target.parent))
     try:
         os.chmod(tmp, 0o777 & ~_umask())  # as `mkdir` would (mkdtemp makes it private)
         fill(tmp)
-        old = target.with_name(f".{target.name}.old{os.getpid()}")
+        old = target.with_name(f".{target.name}.{TEMPORARY_TAG}-old{os.getpid()}")
         if target.exists():
             os.replace(target, old)
         os.replace(tmp, target)
@@ -290,9 +315,10 @@ def output_lock(folder: str | os.PathLike, flag: str = "--out") -> Iterator[Path
 
 
 def remove_temporaries(folder: str | os.PathLike, depth: int = TEMPORARY_DEPTH) -> list[Path]:
-    """Remove the temporary files and folders `write_atomic` and `write_folder_atomic` leave
-    when killed (``.NAME.XXXXXXXX.tmp``, ``.NAME.old<pid>``) in ``folder`` and its subfolders
-    down to ``depth`` levels; returns them. Call it only while holding `output_lock`."""
+    """Remove the temporary files and folders the atomic writers leave when killed
+    (``.NAME.auv-gym.XXXXXXXX.tmp``, ``.NAME.auv-gym-old<pid>``; nothing else) in ``folder``
+    and its subfolders down to ``depth`` levels; returns them. Call it only while holding
+    `output_lock`."""
     removed = []
     level = [Path(folder)]
     for _ in range(depth):

@@ -339,6 +339,7 @@ def vehicle_from_mapping(data: Mapping[str, Any], where: str) -> Vehicle:
         hull_5dof = _built(
             AUVParams, {**limits, **values, "surge_coriolis": surge_coriolis}, fail, "model_5dof"
         )
+        check_added_mass(hull_5dof, fail)
 
     hull = section("model_6dof", HULL_6DOF_FIELDS)
     hull_values = {}
@@ -399,6 +400,24 @@ def check_mass_matrix(mass: np.ndarray, fail) -> None:
             "[model_6dof]",
             f"mass matrix M_RB + M_A is not positive definite (smallest eigenvalue {smallest:.3g})",
         )
+
+
+ADDED_MASS_FIELDS = ("X_udot", "Y_vdot", "Z_wdot", "M_qdot", "N_rdot")
+
+
+def check_added_mass(model: AUVParams, fail) -> None:
+    """Refuse a [model_5dof] added-mass derivative X_u̇ … N_ṙ [kg, kg m²/rad] above 0: a
+    submerged hull carries water along, so each is ≤ 0 in this sign convention (docs/model.md
+    §2.1); a positive one lowers the vehicle's inertia instead (M_q̇ = 3.449 against I_y = 3.45
+    left 0.001 kg m², and the first step went non-finite)."""
+    for name in ADDED_MASS_FIELDS:
+        value = getattr(model, name)
+        if value > 0.0:
+            raise fail(
+                f"[model_5dof] {name}",
+                f"{value:g} must be ≤ 0: a submerged hull's added mass adds to its inertia "
+                "(docs/model.md §2.1; a sign lost in a copy?)",
+            )
 
 
 # W = m·g within local gravity's spread (9.78-9.83 m/s²) and the file's rounding.

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import sys
 from collections.abc import Sequence
@@ -40,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.support.files import write_json, write_text
+from benchmarks.analysis.suite_stats import check_episode_rows, read_suite_json
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 
@@ -67,11 +67,12 @@ def _read(folder: Path) -> tuple[dict[str, Any], list[str], list[dict[str, str]]
     for file in (suite_file, rows_file):
         if not file.is_file():
             raise FileNotFoundError(f"{file}: no such file (not a suite evaluation folder)")
-    suite = json.loads(suite_file.read_text())
+    suite = read_suite_json(suite_file)
     with rows_file.open(newline="") as fh:
         reader = csv.DictReader(fh)
         rows = list(reader)
         header = list(reader.fieldnames or [])
+    check_episode_rows(rows_file, header, rows)  # every row whole, every number a number
     return suite, header, rows
 
 
@@ -161,6 +162,20 @@ def merge_suites(
                     f"(relative tolerance {rtol:g}): not the same episodes or code"
                 )
         compared += 1
+    episodes = {(r["set"], r["seed"]) for r in target_rows if r["policy"] == shared[0]}
+    for policy in policies:
+        runs: dict[str, set[tuple[str, str]]] = {}
+        for r in source_rows:
+            if r["policy"] == policy:
+                runs.setdefault(r["run"], set()).add((r["set"], r["seed"]))
+        for run, cells in runs.items():
+            if cells != episodes:
+                raise ValueError(
+                    f"{source}/episodes.csv: {policy} run {run} has {len(cells & episodes)} of "
+                    f"the {len(episodes)} episodes {shared[0]} has in {target}"
+                    + (f" and {len(cells - episodes)} others" if cells - episodes else "")
+                    + " (a partial or damaged evaluation)"
+                )
     added = [{c: r[c] for c in target_header} for r in source_rows if r["policy"] in policies]
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, fieldnames=target_header, lineterminator="\n")

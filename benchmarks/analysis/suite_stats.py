@@ -99,38 +99,92 @@ def check_stats_options(reps: int, seed: int) -> None:
         raise ValueError(f"--bootstrap-seed must be an integer >= 0, got {seed}")
 
 
+_INTEGER_COLUMNS = ("run", "seed", "window_samples")
+_METRIC_COLUMNS = (
+    "rms_distance",
+    "rms_x_e",
+    "rms_y_e",
+    "rms_z_e",
+    "max_distance",
+    "max_surge",
+    "overspeed_fraction",
+    "duration",
+)
+_LATER_COLUMNS = ("chattering", "saturation_fraction", "max_roll", "mean_path_speed")  # optional
+
+
+def _cell(path: Path, line: int, key: str, value: Any, parse: Callable[[str], Any]) -> Any:
+    """``parse(value)``: ValueError naming the file, line and column when it is not a number or
+    a negative one (every column is a count, distance, speed, fraction or duration; NaN
+    stands for an empty metrics window)."""
+    try:
+        number = parse(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{path}: line {line}: {key} = {value!r} is not a number") from None
+    if number < 0:
+        raise ValueError(f"{path}: line {line}: {key} = {value!r} is negative")
+    return number
+
+
+def check_episode_rows(
+    path: Path, header: Sequence[str], rows: Sequence[Mapping[str, Any]]
+) -> None:
+    """ValueError naming ``path`` and the line for a row of `csv.DictReader` ``rows`` with
+    another width than ``header`` (a truncated file) or a cell of a numeric column that is not a
+    number, or is a negative one. The rows are left as they are."""
+    numeric = [
+        (key, int if key in _INTEGER_COLUMNS else float)
+        for key in (*_INTEGER_COLUMNS, *_METRIC_COLUMNS, *_LATER_COLUMNS)
+        if key in header
+    ]
+    for line, row in enumerate(rows, start=2):
+        if None in row or None in row.values():
+            raise ValueError(
+                f"{path}: line {line} has another number of cells than the header's "
+                f"{len(header)} (a truncated or damaged file)"
+            )
+        for key, parse in numeric:
+            _cell(path, line, key, row[key], parse)
+
+
 def read_episodes(path: Path) -> list[dict[str, Any]]:
-    """The rows of an episodes.csv, numbers parsed (run, seed, window_samples as int)."""
+    """The rows of an episodes.csv, numbers parsed (run, seed, window_samples as int).
+    ValueError naming the file for a missing column and (`check_episode_rows`) the line of a
+    damaged row."""
     with path.open(newline="") as f:
-        rows = list(csv.DictReader(f))
+        reader = csv.DictReader(f)
+        rows = list(reader)
+        header = reader.fieldnames or []
+    missing = [k for k in (*_INTEGER_COLUMNS, *_METRIC_COLUMNS) if k not in header]
+    if missing:
+        raise ValueError(f"{path}: no column {', '.join(missing)} (not an episodes.csv?)")
+    check_episode_rows(path, header, rows)
     for row in rows:
-        for key in ("run", "seed", "window_samples"):
+        for key in _INTEGER_COLUMNS:
             row[key] = int(row[key])
-        for key in (
-            "rms_distance",
-            "rms_x_e",
-            "rms_y_e",
-            "rms_z_e",
-            "max_distance",
-            "max_surge",
-            "overspeed_fraction",
-            "duration",
-        ):
+        for key in (*_METRIC_COLUMNS, *(k for k in _LATER_COLUMNS if k in row)):
             row[key] = float(row[key])
-        # absent from older files
-        for key in ("chattering", "saturation_fraction", "max_roll", "mean_path_speed"):
-            if key in row:
-                row[key] = float(row[key])
     return rows
+
+
+def read_suite_json(path: Path) -> dict[str, Any]:
+    """A suite.json; ValueError naming the file when it is not a JSON object."""
+    try:
+        suite = json.loads(path.read_text())
+    except (UnicodeDecodeError, ValueError) as error:
+        raise ValueError(f"{path}: not a suite record ({error})") from None
+    if not isinstance(suite, dict) or not isinstance(suite.get("sets"), dict):
+        raise ValueError(f"{path}: not a suite record (no sets)")
+    return suite
 
 
 def read_suite(folder: Path, where: str) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """(suite.json, episodes.csv rows) of a test-suite evaluation folder; ValueError starting
-    with ``where`` when either file is missing."""
+    with ``where`` when either file is missing, naming it when it is damaged."""
     for name in ("episodes.csv", "suite.json"):
         if not (folder / name).is_file():
             raise ValueError(f"{where}: no {name} (run `auv-gym suite` first)")
-    return json.loads((folder / "suite.json").read_text()), read_episodes(folder / "episodes.csv")
+    return read_suite_json(folder / "suite.json"), read_episodes(folder / "episodes.csv")
 
 
 def episode_score(row: Mapping[str, Any], failure_score: float) -> float:
@@ -357,7 +411,7 @@ def write_stats(
     report = (report or ReportSpec.read()).with_reference(reference)
     reference = report.reference
     out = Path(out)
-    suite = json.loads((out / "suite.json").read_text())
+    suite = read_suite_json(out / "suite.json")
     rows = read_episodes(out / "episodes.csv")
     failure = failure_scores(suite)
     scores, groups, runs = score_matrices(rows, list(suite["sets"]), failure)

@@ -191,7 +191,15 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
     )
     with usage_errors(parser):
         scenarios = comma_names(args.scenarios, "--scenarios")
-        seeds = [int(s) for s in comma_names(args.seeds, "--seeds")]
+        names = comma_names(args.seeds, "--seeds")
+        try:
+            seeds = [int(s) for s in names]
+        except ValueError:
+            raise ValueError(
+                f"--seeds must be comma-separated integers, got {args.seeds!r}"
+            ) from None
+        if any(s < 0 for s in seeds):
+            raise ValueError(f"--seeds must be integers >= 0, got {args.seeds!r}")
         if any(0 <= s <= 9 for s in seeds):
             raise ValueError("--seeds: 0-9 are the benchmark's test seeds; tune on others")
         if not 0.0 < args.duration <= 3600.0:

@@ -60,6 +60,11 @@ def load_scenarios(path: Path = SCENARIOS_FILE) -> dict[str, Scenario]:
         for key in ("env", "controller"):
             if not isinstance(table.get(key, {}), dict):
                 raise ValueError(f"{path}: scenario {name!r}: {key} must be a table")
+        if not isinstance(table.get("description", ""), str):
+            raise ValueError(
+                f"{path}: scenario {name!r}: description must be text, got "
+                f"{table['description']!r:.40}"
+            )
         env = dict(table.get("env", {}))
         if "vehicle" in table:  # the vehicle flown: a shipped name or a vehicle file
             if "vehicle" in env:

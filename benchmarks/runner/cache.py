@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
-from auv_gym.support.files import remove_temporaries
+from auv_gym.support.files import remove_temporaries, zip_is_whole
 from benchmarks.runner.pool import execute
 
 __all__ = ["Work", "run_resumable", "stored_record"]
@@ -36,8 +36,11 @@ class Work(Protocol):
 
 def stored_record(work: Work, out: Path) -> dict[str, Any] | None:
     """The stored record of finished ``work`` with a matching fingerprint, else None (missing
-    or unreadable files count as unfinished)."""
-    if not all(f.exists() for f in work.files(out)):
+    or unreadable files count as unfinished, a time series whose zip is cut short too)."""
+    files = work.files(out)
+    if not all(f.exists() for f in files):
+        return None
+    if any(f.suffix == ".npz" and not zip_is_whole(f) for f in files):
         return None
     try:
         record = json.loads(work.record_file(out).read_text())

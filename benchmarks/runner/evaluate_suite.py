@@ -185,6 +185,10 @@ def check_args(args: argparse.Namespace) -> None:
                 raise FileNotFoundError(
                     f"--stats-only: {args.out / name} does not exist; run the evaluation first"
                 )
+        from benchmarks.analysis.suite_stats import read_episodes, read_suite_json
+
+        read_suite_json(args.out / SUITE_FILE)  # a damaged record: its file and line named
+        read_episodes(args.out / EPISODES_FILE)
         writable_folder(args.out)
         return
     try:

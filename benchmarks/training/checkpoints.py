@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from auv_gym.sim.observation import OBS_NAMES
-from auv_gym.support.files import write_atomic, write_folder_atomic, write_json
+from auv_gym.support.files import write_atomic, write_folder_atomic, write_json, zip_is_whole
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 __all__ = [
@@ -131,15 +131,66 @@ def save_agent(
     write_folder_atomic(folder, fill)
 
 
+# What an exported agent's folder holds besides ONNX exports (NAME.onnx, its NAME.json
+# contract): replacing the folder replaces these, and a folder holding anything else is refused.
+EXPORTED_FILES = frozenset(
+    {
+        MODEL_FILE,
+        STATS_FILE,
+        VECNORM_FILE,
+        METADATA_FILE,
+        "held_out_evaluation.json",  # `benchmarks.training.evaluation.HELD_OUT_FILE`
+        "replay_transitions.npz",  # `benchmarks.training.transitions.TRANSITIONS_FILE`
+    }
+)
+
+
+def check_export_folder(
+    target: str | os.PathLike, flag: str, out: str | os.PathLike | None
+) -> None:
+    """ValueError naming ``flag`` when exporting an agent to ``target`` would delete what is not
+    an exported agent: the run's own folder ``out`` (target is it or holds it; a folder inside
+    it is fine), or entries other than `EXPORTED_FILES` and ONNX exports. An export replaces the
+    folder whole (`export_agent`)."""
+    path = Path(target)
+    if out is not None:
+        run = Path(out).resolve()
+        if run == path.resolve() or run.is_relative_to(path.resolve()):
+            raise ValueError(
+                f"{flag} {str(target)!r} holds the run's own folder --out {str(out)!r}, which "
+                "exporting would delete (the export replaces its folder whole): choose a "
+                "folder outside --out, or one inside it"
+            )
+    if not path.is_dir():
+        return
+    names = os.listdir(path)
+    onnx = {n[: -len(".onnx")] for n in names if n.endswith(".onnx")}
+    foreign = sorted(
+        n
+        for n in names
+        if n not in EXPORTED_FILES and not n.endswith(".onnx") and n[: -len(".json")] not in onnx
+    )
+    if foreign:
+        more = f" and {len(foreign) - 5} more" if len(foreign) > 5 else ""
+        raise ValueError(
+            f"{flag} {str(target)!r} holds {', '.join(foreign[:5])}{more}, which are not an "
+            "exported agent's files: the export replaces the folder whole; choose an empty "
+            "folder (or an agent's) or move them"
+        )
+
+
 def export_agent(source: Path, target: Path, metadata: dict[str, Any] | None = None) -> None:
     """Copy an agent directory (model.zip, vecnormalize.npz, metadata.json and, when the run
     wrote it, vecnormalize.pkl) atomically; with ``metadata``, that is written as the copy's
-    metadata.json instead of the source's (e.g. an agent given an envelope guard).
+    metadata.json instead of the source's (e.g. an agent given an envelope guard). The copy
+    replaces ``target`` whole; ValueError, before anything is written, when that folder holds
+    more than an exported agent (`check_export_folder`).
 
     `controllers.loader.load_policy` needs only the .npz statistics; the pickled VecNormalize is
     what SB3's `VecNormalize.load` and RL Zoo's `enjoy` read, so the exported folder works with
     them as it is.
     """
+    check_export_folder(target, "export", None)
 
     def fill(tmp: Path) -> None:
         for name in (MODEL_FILE, STATS_FILE):
@@ -194,7 +245,8 @@ def list_checkpoints(out: Path) -> list[tuple[int, Path]]:
     if folder.is_dir():
         for p in folder.iterdir():
             m = re.fullmatch(r"step_(\d+)", p.name)
-            if m and (p / MODEL_FILE).is_file() and (p / VECNORM_FILE).is_file():
+            # whole: its model an SB3 zip to the last byte (cut short: the checkpoint before)
+            if m and (p / VECNORM_FILE).is_file() and zip_is_whole(p / MODEL_FILE, ["data"]):
                 found.append((int(m.group(1)), p))
     return sorted(found)
 
@@ -304,8 +356,14 @@ def read_training_state(folder: Path) -> dict[str, Any] | None:
     path = folder / TRAINING_STATE_FILE
     if not path.is_file():
         return None
-    with path.open("rb") as f:
-        return pickle.load(f)
+    try:
+        with path.open("rb") as f:
+            state = pickle.load(f)
+    except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError) as error:
+        raise ValueError(f"{path} cannot be read ({error}): a damaged checkpoint") from None
+    if not isinstance(state, dict):
+        raise ValueError(f"{path} holds {type(state).__name__}, not a training state")
+    return state
 
 
 def restore_env_state(model: Any, state: dict[str, Any]) -> None:

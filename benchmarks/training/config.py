@@ -315,6 +315,19 @@ def _is_int(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
+def _text_hint(value: Any) -> str:
+    """For a number YAML 1.1 read as text ("3e-4": no dot before the exponent), how to write it."""
+    if isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            return ""
+        if math.isfinite(number) and "e" in value.lower() and "." not in value:
+            mantissa, exponent = value.lower().split("e")
+            return f" (YAML reads {value} as text: write {mantissa}.0e{exponent})"
+    return ""
+
+
 def _number(key: str, value: Any, where: str) -> None:
     """A finite number inside the key's range (`_RANGES`); ValueError naming key and range."""
     low, high, low_open, high_open = _RANGES[key]
@@ -328,6 +341,7 @@ def _number(key: str, value: Any, where: str) -> None:
         top = "inf" if high == math.inf else f"{high:g}"
         raise ValueError(
             f"{where}: {key} must be a number in {left}{low:g}, {top}{right}, got {value!r}"
+            + _text_hint(value)
         )
 
 
@@ -347,6 +361,7 @@ def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: 
             if not (math.isfinite(start) and start > 0):
                 raise ValueError(
                     f"{where}: {key} {value!r} must be a positive number or 'lin_<x>' with x > 0"
+                    + _text_hint(value)
                 )
         elif key == "ent_coef" and ALGORITHMS[algo].off_policy and isinstance(value, str):
             match = re.fullmatch(r"auto(?:_([0-9.eE+-]+))?", value)
@@ -399,10 +414,17 @@ def check_algo_kwargs(algo: str, kwargs: Mapping[str, Any], n_envs: int, where: 
                 raise ValueError(
                     f"{where}: target_entropy must be 'auto' or a finite number, got {value!r}"
                 )
-    if algo == "ppo" and kwargs.get("n_steps", 2048) * n_envs < 2:
+    rollout = kwargs.get("n_steps", 2048) * n_envs
+    if algo == "ppo" and rollout < 2:
         raise ValueError(
             f"{where}: n_steps × n_envs must be at least 2 (PPO's rollout), got "
             f"{kwargs.get('n_steps', 2048)} × {n_envs}"
+        )
+    if algo == "ppo" and kwargs.get("batch_size", 64) > rollout:
+        raise ValueError(
+            f"{where}: batch_size {kwargs['batch_size']} exceeds the rollout n_steps × n_envs = "
+            f"{kwargs.get('n_steps', 2048)} × {n_envs} = {rollout}: PPO would train on batches "
+            f"of {rollout}; use batch_size <= {rollout}"
         )
 
 

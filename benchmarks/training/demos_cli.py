@@ -75,6 +75,12 @@ def source_of(opts: DemosOptions):  # -> DemoSource
             raise ValueError(f"--env-id {env_id!r} is not one of {list(VARIANTS)}")
         kwargs = {**sets[opts.task].env, "observation": opts.observation}
         from auv_gym.sim.config import SimConfig
+        from auv_gym.sim.observation import ObservationConfig
+
+        try:
+            ObservationConfig.from_spec(opts.observation)
+        except ValueError as error:
+            raise ValueError(f"--observation: {error}") from None
 
         SimConfig.from_kwargs(**{**VARIANTS[env_id], **kwargs})
         return DemoSource(env_id, kwargs, recipe={"task_set": opts.task})

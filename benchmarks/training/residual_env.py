@@ -49,6 +49,7 @@ from benchmarks.training.residual import ResidualTraining
 from controllers.envelope_guard import guard_env_commands
 from controllers.residual import (
     agent_observation,
+    base_kwargs_for_env,
     residual_action,
     residual_observation_bounds,
 )
@@ -85,10 +86,12 @@ class ResidualVectorEnv(VectorWrapper):
         self.single_action_space = spaces.Box(-1.0, 1.0, (dim,), dtype=np.float32)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         config = core.config
+        # the base of a classical controller on this env (its vehicle record, actuator model),
+        # as validation and the benchmark build it; with "random", one per actuator drawn
+        settings = base_kwargs_for_env(config)
         names = ("paper", "fins") if config.actuator == "random" else (config.actuator,)
         self.controllers = {
-            name: self.settings.make_base(actuator=name, control_dt=config.control_dt)
-            for name in names
+            name: self.settings.make_base(**{**settings, "actuator": name}) for name in names
         }
         self._states: dict[str, Any] = dict.fromkeys(names)
         # The env's bounds for its vehicle, observation kind and currents, then ±1 for b, a_{k−1}.

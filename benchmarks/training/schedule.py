@@ -62,7 +62,7 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.support.files import replace_outputs, write_atomic, write_json, write_text
-from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, check_export_folder, export_agent
 from benchmarks.training.config import ZOO_KEYS, read_zoo_config
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, write_held_out_evaluation
 from benchmarks.training.jump_start import JUMP_START_KEY
@@ -324,6 +324,8 @@ def train_schedule(opts: SeedsOptions, schedule: Schedule) -> dict[str, Any]:
     summary written to OUT/schedule.json. ``opts.train.config`` is the schedule's file."""
     check_out_folder(opts.out)
     out = Path(opts.out)
+    if opts.export is not None:  # written at the end: refused now, not after the training
+        check_export_folder(opts.export, "--export", out)
     if not opts.resume and out.exists() and any(out.iterdir()):
         raise ValueError(f"output folder {out} is not empty; pass --resume or another --out")
     if opts.train.init_from is not None:

@@ -39,7 +39,7 @@ from typing import Any
 from auv_gym.support.files import LOCK_FILE, output_lock, replace_outputs, write_json, write_text
 from benchmarks.arguments import writable_location
 from benchmarks.runner.pool import check_pool_options, check_ray_address
-from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, export_agent
+from benchmarks.training.checkpoints import SEED_AGENT_PREFIX, check_export_folder, export_agent
 from benchmarks.training.config import read_zoo_config
 from benchmarks.training.demo_regularization import check_demonstrations
 from benchmarks.training.evaluation import EVAL_SEEDS, HELD_OUT_FILE, score
@@ -208,6 +208,8 @@ def check_seeds_options(opts: SeedsOptions) -> dict[str, Any]:
                 writable_location(folder, flag)
             except OSError as error:
                 raise ValueError(str(error)) from None
+    if opts.export is not None:
+        check_export_folder(opts.export, "--export", out)
     return plan
 
 
@@ -272,6 +274,8 @@ def resolve_validation(opts: SeedsOptions) -> SeedsOptions:
     and `eval_seeds`); ValueError (one line) for an unknown set, a set that is not a validation
     set, or evaluation seeds outside the set's range."""
     chosen = validation_set(opts.task_set)
+    if opts.eval_episodes < 1:  # refused whichever set: was accepted when the set ignores it
+        raise ValueError(f"eval_episodes must be >= 1, got {opts.eval_episodes}")
     if chosen is None:
         return opts
     seeds = tuple(opts.train.eval_seeds)

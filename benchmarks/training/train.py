@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import os
+import pickle
 import sys
 import time
 from collections.abc import Sequence
@@ -15,7 +16,7 @@ from typing import Any
 import auv_gym
 from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.sim.observation import ObservationConfig
-from auv_gym.support.files import LOCK_FILE, git_commit, versions
+from auv_gym.support.files import LOCK_FILE, git_commit, json_default, versions
 from benchmarks.options import comma_integers, option, whole_number
 from benchmarks.training.agent_interface import pin_scales, wrap_actions
 from benchmarks.training.checkpoints import (
@@ -290,6 +291,66 @@ def _keep_demonstrations(agent: Path, out: Path) -> None:
         write_atomic(out / TRANSITIONS_FILE, lambda fh: shutil.copyfileobj(data, fh))
 
 
+# What a resumed run must share with the run it continues (`TrainOptions` fields); the rest
+# (stop_at, threads, progress, verbosity, checkpoints kept) may change between sessions.
+RESUME_OPTIONS = (
+    "algo",
+    "env_id",
+    "seed",
+    "eval_seeds",
+    "eval_duration",
+    "eval_freq",
+    "checkpoint_freq",
+    "eval_env",
+    "init_from",
+    "vec_env",
+)
+
+
+def _as_json(value: Any) -> Any:
+    return json.loads(json.dumps(value, default=json_default))
+
+
+def check_resume(checkpoint: Path, opts: TrainOptions, config: Any) -> None:
+    """ValueError naming the setting when ``--resume`` would continue the run of ``checkpoint``
+    with other settings than it started with (`RESUME_OPTIONS`, the config file's content): the
+    weights of one run under the record of another. A larger ``--n-timesteps`` may extend a
+    run (its learning-rate schedule is then the new budget's). A checkpoint whose metadata.json
+    cannot be read is named."""
+    meta_file = checkpoint / METADATA_FILE
+    try:
+        previous = json.loads(meta_file.read_text())
+        before = previous["options"]
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise ValueError(f"--resume: {meta_file} cannot be read ({error})") from None
+    now = asdict(opts)
+    for key in RESUME_OPTIONS:
+        if key in before and _as_json(before[key]) != _as_json(now[key]):
+            raise ValueError(
+                f"--resume: {key} was {before[key]!r:.80} in {meta_file}, now {now[key]!r:.80}; "
+                "resume with the same settings (or start another --out)"
+            )
+    if "config" in previous and _as_json(previous["config"]) != _as_json(config):
+        raise ValueError(
+            f"--resume: the settings of --config {opts.config} differ from the run's in "
+            f"{meta_file}; resume with the same settings (or start another --out)"
+        )
+
+
+def check_run_folder(opts: TrainOptions) -> None:
+    """What `train` refuses about its run folder, checked before anything is built: a folder
+    holding work without ``--resume``; with it, no complete checkpoint to continue or other
+    settings than the run's (`check_resume`). ValueError / FileNotFoundError naming it."""
+    out = Path(opts.out)
+    if out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()) and not opts.resume:
+        raise ValueError(f"run directory {out} is not empty; pass --resume or another --out")
+    if opts.resume:
+        checkpoint = latest_checkpoint(out)
+        if checkpoint is None:
+            raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
+        check_resume(checkpoint, opts, read_zoo_config(opts.config, opts.env_id, opts.algo).raw)
+
+
 def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     import stable_baselines3
     import torch
@@ -318,8 +379,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         algorithm = DemoSAC
     n_timesteps = int(cfg.n_timesteps if opts.n_timesteps is None else opts.n_timesteps)
     out = Path(opts.out)
-    if out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()) and not opts.resume:
-        raise ValueError(f"run directory {out} is not empty; pass --resume or another --out")
+    check_run_folder(opts)  # before any env is built
     out.mkdir(parents=True, exist_ok=True)
     eval_kwargs = _eval_kwargs(opts, cfg.env_kwargs)
     set_random_seed(opts.seed)
@@ -342,8 +402,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     previous: dict[str, Any] = {}
     warm: dict[str, Any] | None = None
     checkpoint = latest_checkpoint(out) if opts.resume else None
-    if opts.resume and checkpoint is None:
-        raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
     state: dict[str, Any] | None = None
     demos: dict[str, Any] | None = None  # the labelled transitions, read before any work
     if demo is not None:
@@ -362,7 +420,12 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     if checkpoint is not None:
         previous = json.loads((checkpoint / METADATA_FILE).read_text())
         warm = previous.get("warm_start")
-        venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
+        try:
+            venv = VecNormalize.load(str(checkpoint / VECNORM_FILE), venv)
+        except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError) as error:
+            raise ValueError(
+                f"{checkpoint / VECNORM_FILE} cannot be read ({error}): a damaged checkpoint"
+            ) from None
         venv.training = True
         # A model saved with n-step returns names the NStepReplayBuffer SB3 chose for it, which
         # SB3 would take for a custom buffer ("n_steps ignored"); without the name it chooses

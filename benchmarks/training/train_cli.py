@@ -50,10 +50,11 @@ from benchmarks.cli import HelpFormatter
 from benchmarks.options import add_options, from_args, option
 from benchmarks.reports.figures import plot_learning_curve
 from benchmarks.training import TrainOptions, train, write_held_out_evaluation
+from benchmarks.training.checkpoints import check_export_folder
 from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.schedule import read_schedule
 from benchmarks.training.seeds import MAX_SEED
-from benchmarks.training.train import check_options, default_config
+from benchmarks.training.train import check_options, check_run_folder, default_config
 from controllers.agent import METADATA_FILE
 
 FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
@@ -115,6 +116,7 @@ def check_outputs(opts: TrainOptions, extra: CommandOptions) -> None:
         writable_location(opts.out, "--out")
         if opts.export:
             writable_location(opts.export, "--export")
+            check_export_folder(opts.export, "--export", opts.out)
         if extra.curve and opts.eval_freq == 0:
             raise ValueError("--curve plots the evaluations, and --eval-freq 0 makes none")
     if extra.curve:
@@ -170,6 +172,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         if not extra.plot_only and not extra.evaluate:
             check_options(opts)
             refuse_schedule(opts.config)
+            check_run_folder(opts)
     except (ValueError, OSError) as exc:
         exit_with_usage_error(prog, exc)
     if extra.evaluate:
