@@ -163,6 +163,30 @@ def test_the_benchmark_flies_the_torpedo_and_reports_model_based_control_as_not_
     assert config["not_applicable"] == {"torpedo_as_built": ["fbsm"]}
 
 
+def test_an_agent_under_its_top_speed_is_not_applicable_at_that_speed(tmp_path, capsys) -> None:
+    """Was: `auv-gym compare` on its defaults (FBSM, backstepping and `ppo_generalist` on every
+    scenario) refused to start: the agent runs under the REMUS 100's 2-m/s limit, and the
+    six_dof twins ask for 2 m/s. The pair is now n/a, as FBSM on the torpedo is."""
+    from benchmarks.runner.compare import main
+
+    out = tmp_path / "run"
+    argv = ["--policies", "pid_los,ppo_generalist", "--scenarios", "six_dof_helix,paper"]
+    argv += ["--seeds", "1", "--duration", "3", "--transient", "0", "--quiet", "--no-figures"]
+    records = main([*argv, "--out", str(out)])
+    assert {(r["scenario"], r["policy"]) for r in records} == {
+        ("six_dof_helix", "pid_los"),
+        ("paper", "pid_los"),
+        ("paper", "ppo_generalist"),
+    }
+    printed = capsys.readouterr().out
+    assert (
+        "n/a: ppo_generalist on six_dof_helix: policy 'ppo_generalist' runs under its vehicle's "
+        "top speed (2 m/s), which the scenario's desired speed (2 m/s) reaches"
+    ) in printed
+    config = json.loads((out / "episodes.json").read_text())["config"]
+    assert config["not_applicable"] == {"six_dof_helix": ["ppo_generalist"]}
+
+
 def test_a_policy_that_flies_none_of_the_scenarios_is_refused_in_one_line(tmp_path) -> None:
     from benchmarks.runner.compare import main
 
@@ -202,5 +226,6 @@ def test_pid_tuning_ranks_candidates_by_failures_then_rms() -> None:
     assert [r["failed"] for r in rows] == [0, 1]
     assert 1.0 < rows[0]["rms"]["torpedo_helix"] < 30.0  # m, converging from the start
     assert rows[1]["rms"]["torpedo_helix"] == math.inf
-    with pytest.raises(SystemExit):
-        main(["--seeds", "3,100"])
+    for seeds in ("3,100", "100,15", "300"):  # test seeds: the paper's, the suite's, fresh ones
+        with pytest.raises(SystemExit):
+            main(["--seeds", seeds])

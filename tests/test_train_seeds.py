@@ -110,6 +110,9 @@ def test_parse_seeds(text, seeds):
         (["--seeds", "2", "--n-timesteps", "0"], "n_timesteps must be a positive number"),
         (["--seeds", "2", "--n-timesteps", "-5"], "n_timesteps must be a positive number"),
         (["--seeds", "2", "--eval-seeds", "3,100"], "eval_seeds [3] overlap the held-out"),
+        # was accepted: test_distribution flies seeds 0-19, the fresh as-built sets 300-309
+        (["--seeds", "2", "--eval-seeds", "15,100"], "eval_seeds [15] overlap the held-out"),
+        (["--seeds", "2", "--eval-seeds", "100,305"], "eval_seeds [305] overlap the held-out"),
         (
             ["--seeds", "2", "--task-set", "nope"],
             "task set 'nope' is not a validation set; valid: ['paper', 'validation', "
@@ -133,7 +136,10 @@ def test_parse_seeds(text, seeds):
         (["--seeds", "2", "--eval-duration", "0.04"], "evaluation duration 0.04"),
         (["--seeds", "2", "--workers", "0"], "workers must be a positive integer, got 0"),
         (["--seeds", "2", "--checkpoint-freq", "0"], "checkpoint_freq must be a positive"),
-        (["--seeds", "2", "--env-id", "Nope-v0"], "no top-level key 'Nope-v0'"),
+        (
+            ["--seeds", "2", "--env-id", "Nope-v0"],
+            "no top-level key 'Nope-v0' (its env ids: ['AUVPath3DSpeedLimit-v0']; pass --env-id",
+        ),
     ],
 )
 def test_bad_input_is_one_line_exit_2_before_training(tmp_path, capsys, argv, message):

@@ -94,6 +94,7 @@ __all__ = [
     "PLANTS",
     "SIX_DOF_PLANT",
     "SimConfig",
+    "TopSpeedError",
     "config_from_kwargs",
     "path_is_random",
     "path_turn_rates",
@@ -114,6 +115,17 @@ HEADING_BOUND = 2.0 * math.pi  # [rad] |start_heading|
 START_OFFSET = 2.0  # [m] per axis: a random start near the start point (`Simulator`) moves
 START_JITTER = START_OFFSET * math.sqrt(3.0)  # [m] so far at most from the start point
 START_HEADING_SPREAD = 0.2  # [rad] default half-width of randomize_start's near-start heading error
+
+
+class TopSpeedError(ValueError):
+    """``surge_limit="vehicle"`` (an agent's env id, `AUVPath3DSpeedLimit-v0`) on a vehicle
+    whose top speed ``top_speed`` [m/s] is not above the desired speed ``u_desired`` [m/s]: a
+    policy trained under that limit cannot fly such a task (the benchmark reports the pair as
+    not applicable, a direct call is refused)."""
+
+    def __init__(self, message: str, top_speed: float = math.nan, u_desired: float = math.nan):
+        super().__init__(message)
+        self.top_speed, self.u_desired = float(top_speed), float(u_desired)
 
 
 @dataclass(frozen=True)
@@ -269,11 +281,13 @@ class SimConfig:
                 where = "params.max_surge"  # or the vehicle file's, unless params replace it
                 if surge_limit == the_vehicle.max_surge:
                     where = f"{the_vehicle.source or the_vehicle.name}: [limits] max_surge"
-                raise ValueError(
+                raise TopSpeedError(
                     f"surge_limit={VEHICLE_TOP_SPEED!r} is the vehicle's top speed ({where} = "
                     f"{surge_limit:g} m/s), which must be above u_desired = {u_desired:g} m/s "
                     f"and at most {SPEED_BOUND:g} m/s (the speed arguments' range); give this "
-                    "env a surge_limit in m/s or inf, or a slower u_desired"
+                    "env a surge_limit in m/s or inf, or a slower u_desired",
+                    surge_limit,
+                    u_desired,
                 )
         elif not is_real(surge_limit):
             raise ArgumentTypeError(

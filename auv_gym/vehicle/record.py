@@ -450,7 +450,8 @@ def check_rigid_body(model: AUVParams, hull: SixDofVehicle, fail) -> None:
         raise fail(
             "[model_5dof] W",
             f"{model.W:g} N is not m·g = {model.m:g} kg × {hull.gravity:g} m/s² "
-            f"([model_6dof] gravity) = {weight:.4g} N (within {WEIGHT_TOLERANCE:.0%})",
+            f"([model_6dof] gravity) = {weight:.4g} N (within {WEIGHT_TOLERANCE:.0%}): a mass "
+            "changes W and B with it",
         )
     low, high = MASS_RATIO_RANGE
     ratio = model.m / hull.mass_kg
@@ -480,7 +481,8 @@ def check_fin_authority(model: AUVParams, actuators: ActuatorParams, fail) -> No
                 f"{model.fin_moment_coeff:g} kg/rad is not the {pair}' |x|·½ρAC_L = {value:.4g} "
                 f"kg/rad (stern planes {stern:.4g}, rudders {rudder:.4g}; within "
                 f"{FIN_AUTHORITY_TOLERANCE:.0%}): the paper's 5-DOF form has one fin coefficient, "
-                "so a [model_5dof] needs stern planes and rudders of equal authority and it",
+                "so a [model_5dof] needs stern planes and rudders of equal authority and this "
+                f"coefficient their value (fin_moment_coeff = {value:.4g})",
             )
 
 

@@ -11,9 +11,10 @@ the PID's gains, ``--grid``), scored on the benchmark scenarios of that vehicle 
 
 Each candidate flies the ``--base`` preset (`pid_as_built` by default: PID + current-observer
 LOS, docs/model.md §4.9) with the scenario's controller settings and the candidate's gains on
-the validation seeds (100-104 by default; the benchmark's test seeds are 0-9). A candidate that
-fails an episode (corridor, pitch, ...) ranks below every one that fails none; among those, the
-lower mean over the scenarios of the mean RMS distance [m] wins. The table of every candidate
+the validation seeds (100-104 by default; never a test seed,
+`benchmarks.catalog.tasks.test_seeds`). A candidate that fails an episode (corridor, pitch,
+...) ranks below every one that fails none; among those, the lower mean over the scenarios of
+the mean RMS distance [m] wins. The table of every candidate
 and the winner's gains are printed (docs/vehicles.md §5: on the torpedo, 3 % over the derived
 gains)."""
 
@@ -29,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.arguments import comma_names, parse_options, program_name, usage_errors
+from benchmarks.catalog.tasks import test_seeds
 from benchmarks.options import option
 
 __all__ = ["GRID", "candidate_policies", "check_base", "fly", "main", "parse_grid", "tune"]
@@ -52,7 +54,7 @@ class TuneOptions:
     scenario_file: str = option(
         "", "TOML file of named scenarios (default: the benchmark's, benchmarks/scenarios.toml)"
     )
-    seeds: str = option("100,101,102,103,104", "validation seeds (not the test seeds 0-9)")
+    seeds: str = option("100,101,102,103,104", "validation seeds (not the test seeds)")
     duration: float = option(300.0, "episode length [s]")
     base: str = option(BASE, "the PID preset each candidate overrides (controllers.PRESETS)")
     grid: str = option(
@@ -200,8 +202,12 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
             ) from None
         if any(s < 0 for s in seeds):
             raise ValueError(f"--seeds must be integers >= 0, got {args.seeds!r}")
-        if any(0 <= s <= 9 for s in seeds):
-            raise ValueError("--seeds: 0-9 are the benchmark's test seeds; tune on others")
+        reserved = sorted(set(seeds) & test_seeds())
+        if reserved:
+            raise ValueError(
+                f"--seeds {reserved[:5]} are test seeds of the benchmark "
+                "(`benchmarks.catalog.tasks.test_seeds`); tune on others"
+            )
         if not 0.0 < args.duration <= 3600.0:
             raise ValueError(f"--duration must be in (0, 3600] s, got {args.duration}")
         check_base(args.base)

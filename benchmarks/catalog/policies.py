@@ -211,10 +211,9 @@ def check_policy_for_env(
     try:
         _check_for_env(parsed, env, controller_kwargs)
     except (TypeError, ValueError) as error:
-        message = str(error)
-        if not message.startswith(f"policy {spec!r}"):
-            message = f"policy {spec!r}: {message}"
-        raise type(error)(message) from None
+        if not str(error).startswith(f"policy {spec!r}"):
+            error.args = (f"policy {spec!r}: {error}",)  # its type and fields kept
+        raise error.with_traceback(None) from None
 
 
 def _check_for_env(parsed: PolicySpec, env: Any, controller_kwargs: dict[str, Any] | None) -> None:

@@ -26,6 +26,7 @@ test set whose paths the training distribution could draw (`auv_gym.sim.path_gen
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from itertools import combinations
@@ -37,9 +38,20 @@ from auv_gym.sim.path_generator import PathDistribution, overlaps
 from auv_gym.support.files import read_toml
 from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios, vehicle_beside
 
-__all__ = ["ROLES", "TASKS_FILE", "TaskSet", "load_task_sets", "task_set", "test_suite"]
+__all__ = [
+    "FRESH_TASKS_FILE",
+    "ROLES",
+    "TASKS_FILE",
+    "TaskSet",
+    "load_task_sets",
+    "task_set",
+    "test_seeds",
+    "test_suite",
+]
 
 TASKS_FILE = Path(__file__).resolve().parents[1] / "tasks.toml"
+# Fresh held-out as-built episodes, flown once after the agents were frozen (its README).
+FRESH_TASKS_FILE = TASKS_FILE.parent / "results" / "as_built" / "fresh_test" / "tasks.toml"
 ROLES = ("train", "validation", "test")
 _KEYS = {"role", "description", "seeds", "env", "controller", "scenarios", "held_out", "vary"}
 VARIED = {"plant": PLANTS, "actuator": ("paper", "fins", "realistic")}  # what `vary` may vary
@@ -234,3 +246,17 @@ def test_suite(path: Path = TASKS_FILE) -> list[TaskSet]:
 
 
 test_suite.__test__ = False  # type: ignore[attr-defined]  # not a pytest test
+
+
+@functools.cache
+def test_seeds() -> frozenset[int]:
+    """Every reset seed a test set of the catalog (`TASKS_FILE`) or of the fresh held-out
+    episodes (`FRESH_TASKS_FILE`) flies: what validation, tuning and selection must not use."""
+    seeds: set[int] = set()
+    for path in (TASKS_FILE, FRESH_TASKS_FILE):
+        if path.is_file():
+            seeds.update(s for t in test_suite(path) for s in t.seeds)
+    return frozenset(seeds)
+
+
+test_seeds.__test__ = False  # type: ignore[attr-defined]  # not a pytest test

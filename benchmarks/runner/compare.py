@@ -25,7 +25,7 @@ from typing import Any
 
 from auv_gym import VARIANTS
 from auv_gym.metrics import check_window
-from auv_gym.sim.config import SimConfig
+from auv_gym.sim.config import SimConfig, TopSpeedError
 from auv_gym.support.files import replace_outputs
 from benchmarks.arguments import (
     ArgumentParser,
@@ -144,6 +144,12 @@ def check_args(args: argparse.Namespace) -> None:
                     check_policy_for_env(spec, env, scenario.controller)
                 except NoFiveDofModelError as error:  # FBSM on the torpedo: an n/a cell
                     not_applicable.setdefault(name, {})[spec] = str(error)
+                except TopSpeedError as error:  # an agent trained under 2 m/s at 2 m/s: n/a
+                    not_applicable.setdefault(name, {})[spec] = (
+                        f"policy {spec!r} runs under its vehicle's top speed "
+                        f"({error.top_speed:g} m/s), which the scenario's desired speed "
+                        f"({error.u_desired:g} m/s) reaches"
+                    )
         except (TypeError, ValueError) as error:
             raise ValueError(f"scenario {name!r}: {error}") from None
     for spec in policies:

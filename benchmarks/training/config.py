@@ -161,7 +161,10 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
         problem = " ".join(str(error).split())
         raise ValueError(f"{path}: cannot be read as YAML: {problem}") from None
     if not isinstance(data, dict) or env_id not in data:
-        raise ValueError(f"{path}: no top-level key {env_id!r}")
+        found = data if isinstance(data, dict) else {}
+        keys = [k for k in found if re.fullmatch(r"\w+-v\d+", str(k))]
+        hint = f" (its env ids: {keys}; pass --env-id {keys[0]})" if keys else ""
+        raise ValueError(f"{path}: no top-level key {env_id!r}{hint}")
     if not isinstance(data[env_id], dict):
         raise ValueError(
             f"{path}: {env_id} must be a mapping of hyper-parameters, got "

@@ -17,6 +17,7 @@ import auv_gym
 from auv_gym import SPEED_LIMIT_ENV_ID, VARIANTS
 from auv_gym.sim.observation import ObservationConfig
 from auv_gym.support.files import LOCK_FILE, git_commit, json_default, versions
+from benchmarks.catalog.tasks import test_seeds
 from benchmarks.options import comma_integers, option, whole_number
 from benchmarks.training.agent_interface import pin_scales, wrap_actions
 from benchmarks.training.checkpoints import (
@@ -139,7 +140,7 @@ class TrainOptions:
     eval_freq: int = option(100_000, "env steps between evaluations (0: none)", parse=whole_number)
     eval_seeds: tuple[int, ...] = option(
         EVAL_SEEDS,
-        "comma-separated evaluation seeds (disjoint from the held-out seeds 0-9)",
+        "comma-separated evaluation seeds (disjoint from the test seeds)",
         parse=comma_integers,
     )
     eval_duration: float = option(300.0, "evaluation episode length [s]")
@@ -218,12 +219,13 @@ def check_options(opts: TrainOptions) -> None:
     seeds = tuple(opts.eval_seeds)
     if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
         raise ValueError(f"eval_seeds must be distinct non-negative integers, got {list(seeds)}")
-    overlap = sorted(set(seeds) & set(HELD_OUT_SEEDS))
+    overlap = sorted(set(seeds) & (set(HELD_OUT_SEEDS) | test_seeds()))
     if overlap:
         raise ValueError(
-            f"eval_seeds {overlap} overlap the held-out seeds {HELD_OUT_SEEDS[0]}-"
-            f"{HELD_OUT_SEEDS[-1]} of the reported results: choose evaluation (validation) "
-            "seeds outside them, e.g. 100-104"
+            f"eval_seeds {overlap[:5]} overlap the held-out test seeds of the reported results "
+            f"({HELD_OUT_SEEDS[0]}-{HELD_OUT_SEEDS[-1]} and every test set's, "
+            "`benchmarks.catalog.tasks.test_seeds`): choose evaluation (validation) seeds "
+            "outside them, e.g. 100-104"
         )
     if not (opts.eval_duration > 0 and opts.eval_duration < float("inf")):
         raise ValueError(f"eval_duration must be a positive time in s, got {opts.eval_duration}")
