@@ -34,7 +34,12 @@ __all__ = ["COMMANDS", "SPEED", "HelpFormatter", "main"]
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Help that shows every option's default and keeps the description's line breaks."""
+    """Help that shows every option's default and keeps the description's line breaks; an
+    option whose help states its default already ("(default: ...)") shows it once."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        return text if "(default:" in text else super()._get_help_string(action)
 
 
 # Subcommand → (module whose main(argv) runs it, one-line description).

@@ -1,4 +1,4 @@
-"""FBSM vs backstepping vs PPO (and any Policy) on the same seeded scenarios.
+"""Classical controllers and agents (any Policy) on the same seeded scenarios.
 
     python -m benchmarks.runner.compare \\
         --policies fbsm,backstepping,ppo_generalist,fbsm_ilos,backstepping_ilos \\

@@ -54,14 +54,15 @@ def build_parser() -> argparse.ArgumentParser:
         choices=ACTUATORS,
         default=None,
         help="the env actuator the commands are for (the allocation stage is built for it; "
-        "default: paper, or realistic for an agent trained on the propeller and fins; another "
-        "is refused for an agent without an allocation stage)",
+        "another is refused for an agent without an allocation stage) (default: paper, or "
+        "realistic for an agent trained on the propeller and fins)",
     )
     parser.add_argument(
         "--actuator-params",
         default=None,
         help="JSON of the realistic actuators' settings the allocation is built for "
-        "(auv_gym.vehicle.actuators; only those it reads, with --actuator realistic)",
+        "(auv_gym.vehicle.actuators; only those it reads, with --actuator realistic) "
+        "(default: the REMUS 100's)",
     )
     return parser
 
