@@ -126,7 +126,10 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
 
         return make_guarded(**kwargs)
     valid = [*CLASSICAL, *AGENT_NAMES, "onnx", "residual", "lowpass", "guarded"]
-    raise ValueError(f"unknown controller {name!r}; valid: {valid}")
+    raise ValueError(
+        f"unknown controller {name!r}; valid: {valid} (a saved agent, a reference agent of "
+        "benchmarks/agents/ included, loads by its folder: controllers.make('agent', path=...))"
+    )
 
 
 def _agent_keywords(name: str, kwargs: dict[str, Any]) -> dict[str, Any]:

@@ -288,6 +288,9 @@ def test_bad_observations_and_names_raise():
         policy.predict(observations(3), state)
     with pytest.raises(ValueError, match="unknown controller 'lqr'"):
         controllers.make("lqr")
+    # a reference agent's name is the benchmark's: the message says how Python loads it
+    with pytest.raises(ValueError, match=r"benchmarks/agents/ included, loads by its folder"):
+        controllers.make("ppo_generalist")
 
 
 def test_speed_benchmark_runs_in_closed_loop():
