@@ -172,6 +172,12 @@ def _locate(path: Path) -> tuple[Path, Path | None, Path | None]:
         if not model.is_file():
             raise FileNotFoundError(f"agent directory {path} has no {MODEL_FILE}")
     elif path.is_file():
+        if path.suffix != ".zip":  # an ONNX export, a metadata file, ...: not a model
+            kind = "an ONNX export (fly it as onnx:FILE)" if path.suffix == ".onnx" else "a file"
+            raise ValueError(
+                f"agent {path} is {kind}, not a saved agent: give its folder (model.zip, "
+                f"{STATS_FILE}, {METADATA_FILE}) or its model .zip"
+            )
         model = path
     else:
         raise FileNotFoundError(f"agent {path} does not exist")

@@ -55,6 +55,11 @@ def test_check_agent_reports_the_algorithm_and_names_it_in_errors(tmp_path):
         check_agent(agent)
     with pytest.raises(FileNotFoundError, match=r"^agent .*missing does not exist"):
         check_agent(tmp_path / "missing")
+    # was: "normalisation statistics missing", as if the file were a model without them
+    with pytest.raises(ValueError, match=r"policy\.onnx is an ONNX export \(fly it as onnx:FI"):
+        check_agent(AGENTS / "ppo_generalist" / "policy.onnx")
+    with pytest.raises(ValueError, match=r"metadata\.json is a file, not a saved agent: give"):
+        check_agent(AGENTS / "ppo_generalist" / "metadata.json")
 
 
 def test_make_needs_a_path_and_knows_the_names():
