@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from auv_gym.support.files import write_json, write_text
-from benchmarks.analysis.suite_stats import check_episode_rows, read_suite_json
+from benchmarks.analysis.suite_stats import parsed_episode_rows, read_suite_json
 from benchmarks.arguments import parse_options, program_name
 from benchmarks.options import option
 
@@ -72,7 +72,7 @@ def _read(folder: Path) -> tuple[dict[str, Any], list[str], list[dict[str, str]]
         reader = csv.DictReader(fh)
         rows = list(reader)
         header = list(reader.fieldnames or [])
-    check_episode_rows(rows_file, header, rows)  # every row whole, every number a number
+    parsed_episode_rows(rows_file, header, rows)  # every row whole, every number a number
     return suite, header, rows
 
 

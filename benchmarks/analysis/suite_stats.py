@@ -126,31 +126,32 @@ def _cell(path: Path, line: int, key: str, value: Any, parse: Callable[[str], An
     return number
 
 
-def check_episode_rows(
+def parsed_episode_rows(
     path: Path, header: Sequence[str], rows: Sequence[Mapping[str, Any]]
-) -> None:
-    """ValueError naming ``path`` and the line for a row of `csv.DictReader` ``rows`` with
-    another width than ``header`` (a truncated file) or a cell of a numeric column that is not a
-    number, or is a negative one. The rows are left as they are."""
+) -> list[dict[str, Any]]:
+    """The numeric cells of `csv.DictReader` ``rows`` parsed ({column: number} per row; run,
+    seed, window_samples as int); ValueError naming ``path`` and the line for a row of another
+    width than ``header`` (a truncated file) or a cell that is not a number, or is a negative
+    one. The rows themselves are left as they are."""
     numeric = [
         (key, int if key in _INTEGER_COLUMNS else float)
         for key in (*_INTEGER_COLUMNS, *_METRIC_COLUMNS, *_LATER_COLUMNS)
         if key in header
     ]
+    parsed = []
     for line, row in enumerate(rows, start=2):
         if None in row or None in row.values():
             raise ValueError(
                 f"{path}: line {line} has another number of cells than the header's "
                 f"{len(header)} (a truncated or damaged file)"
             )
-        for key, parse in numeric:
-            _cell(path, line, key, row[key], parse)
+        parsed.append({key: _cell(path, line, key, row[key], parse) for key, parse in numeric})
+    return parsed
 
 
 def read_episodes(path: Path) -> list[dict[str, Any]]:
-    """The rows of an episodes.csv, numbers parsed (run, seed, window_samples as int).
-    ValueError naming the file for a missing column and (`check_episode_rows`) the line of a
-    damaged row."""
+    """The rows of an episodes.csv, numbers parsed (`parsed_episode_rows`). ValueError naming
+    the file for a missing column and the line of a damaged row."""
     with path.open(newline="") as f:
         reader = csv.DictReader(f)
         rows = list(reader)
@@ -158,12 +159,8 @@ def read_episodes(path: Path) -> list[dict[str, Any]]:
     missing = [k for k in (*_INTEGER_COLUMNS, *_METRIC_COLUMNS) if k not in header]
     if missing:
         raise ValueError(f"{path}: no column {', '.join(missing)} (not an episodes.csv?)")
-    check_episode_rows(path, header, rows)
-    for row in rows:
-        for key in _INTEGER_COLUMNS:
-            row[key] = int(row[key])
-        for key in (*_METRIC_COLUMNS, *(k for k in _LATER_COLUMNS if k in row)):
-            row[key] = float(row[key])
+    for row, numbers in zip(rows, parsed_episode_rows(path, header, rows), strict=True):
+        row.update(numbers)
     return rows
 
 

@@ -31,6 +31,8 @@ import numpy as np
 
 from auv_gym.sim.observation import OBS_NAMES
 from auv_gym.support.files import write_atomic, write_folder_atomic, write_json, zip_is_whole
+from benchmarks.training.evaluation import HELD_OUT_FILE
+from benchmarks.training.transitions import TRANSITIONS_FILE
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
 __all__ = [
@@ -139,8 +141,8 @@ EXPORTED_FILES = frozenset(
         STATS_FILE,
         VECNORM_FILE,
         METADATA_FILE,
-        "held_out_evaluation.json",  # `benchmarks.training.evaluation.HELD_OUT_FILE`
-        "replay_transitions.npz",  # `benchmarks.training.transitions.TRANSITIONS_FILE`
+        HELD_OUT_FILE,
+        TRANSITIONS_FILE,
     }
 )
 
