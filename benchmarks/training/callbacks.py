@@ -24,6 +24,7 @@ from benchmarks.training.evaluation import (
     variant_groups,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, append_row
+from benchmarks.training.privileged import deployable
 from benchmarks.training.residual import ResidualTraining
 from benchmarks.training.selection_rule import DEFAULT_RULE, SelectionRule
 from controllers.agent import AgentPolicy
@@ -60,6 +61,7 @@ def policy_from_model(
     controller configured for the episodes' ``env_kwargs`` (`base_kwargs_for_env`); with
     ``stages`` (the agent's stage specs, its observation names), that policy inside them, built
     for the plant of ``env_kwargs`` (`controllers.stages.StagedPolicy`)."""
+    model, vec_normalize = deployable(model, vec_normalize)  # what the saved agent flies
     policy = _unguarded(model, vec_normalize, residual, env_kwargs)
     specs, obs_names = stages
     policy = mirrored(policy, specs, obs_names, "stages")
@@ -167,7 +169,7 @@ class PeriodicEvaluation(BaseCallback):
             self.best["num_timesteps"] = self.num_timesteps
             self.best["summary"] = summary
             meta = self.metadata({"evaluation": summary, "eval_results": results})
-            save_agent(self.model, vec_normalize, self.out / "best", meta)
+            save_agent(*deployable(self.model, vec_normalize), self.out / "best", meta)
         if self.verbose:
             print(f"[eval] steps={self.num_timesteps} wall={wall:.0f}s {summary}", flush=True)
 

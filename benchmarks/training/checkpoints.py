@@ -32,6 +32,7 @@ import numpy as np
 from auv_gym.sim.observation import OBS_NAMES
 from auv_gym.support.files import write_atomic, write_folder_atomic, write_json, zip_is_whole
 from benchmarks.training.evaluation import HELD_OUT_FILE
+from benchmarks.training.residual import PRIVILEGED_NAMES
 from benchmarks.training.transitions import TRANSITIONS_FILE
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
@@ -122,7 +123,10 @@ def save_agent(
     def fill(tmp: Path) -> None:
         model.save(tmp / MODEL_FILE)
         vec_normalize.save(str(tmp / VECNORM_FILE))
-        write_stats(tmp / STATS_FILE, vec_normalize, metadata.get("obs_names", OBS_NAMES))
+        names = list(metadata.get("obs_names", OBS_NAMES))
+        if len(names) < vec_normalize.obs_rms.mean.shape[0]:  # a privileged critic's checkpoint
+            names += PRIVILEGED_NAMES
+        write_stats(tmp / STATS_FILE, vec_normalize, names)
         write_metadata(tmp / METADATA_FILE, metadata)
         if replay_buffer:
             model.save_replay_buffer(tmp / REPLAY_FILE)

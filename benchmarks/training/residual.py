@@ -18,6 +18,8 @@ __all__ = [
     "DEFAULT_SELECTION_CHATTERING",
     "DEFAULT_TV_WEIGHT",
     "PRECISION_AXES",
+    "PRIVILEGED_INFO_KEYS",
+    "PRIVILEGED_NAMES",
     "ResidualTraining",
 ]
 
@@ -35,6 +37,10 @@ DEFAULT_PRECISION_SCALE = 0.1  # [m] d_P
 # across the path, √(y_e² + z_e²), for a vehicle whose along-track error is cheap to win (the
 # as-built residual's: docs/results.md, "The residual on both plants: ten seeds").
 PRECISION_AXES = ("xyz", "yz")
+# A privileged critic's extra inputs (`benchmarks.training.privileged`): the true path errors
+# the reward is charged on [m], and the keys of the env's info that report them.
+PRIVILEGED_NAMES = ("true_x_e", "true_y_e", "true_z_e")
+PRIVILEGED_INFO_KEYS = ("x_e", "y_e", "z_e")
 # Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.
 DEFAULT_SELECTION_CHATTERING = 0.0
 
@@ -50,6 +56,8 @@ class ResidualTraining(ResidualSettings):
     precision_scale: float = DEFAULT_PRECISION_SCALE
     selection_chattering: float = DEFAULT_SELECTION_CHATTERING
     precision_axes: str = PRECISION_AXES[0]
+    # the critic also reads the true path errors (`benchmarks.training.privileged`)
+    privileged_critic: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -60,6 +68,10 @@ class ResidualTraining(ResidualSettings):
             ("selection_chattering", 0.0, 1.0, " m·s"),
         ):
             object.__setattr__(self, name, check_number(name, getattr(self, name), low, high, unit))
+        if not isinstance(self.privileged_critic, bool):
+            raise ValueError(
+                f"privileged_critic must be true or false, got {self.privileged_critic!r}"
+            )
         if self.precision_axes not in PRECISION_AXES:
             raise ValueError(
                 f"precision_axes must be one of {list(PRECISION_AXES)}, got {self.precision_axes!r}"
@@ -82,4 +94,6 @@ class ResidualTraining(ResidualSettings):
         )
         if self.precision_axes != PRECISION_AXES[0]:
             record["precision_axes"] = self.precision_axes
+        if self.privileged_critic:
+            record["privileged_critic"] = True
         return record

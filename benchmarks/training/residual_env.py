@@ -45,13 +45,14 @@ from gymnasium.vector.utils import batch_space
 
 from auv_gym.envs.env import validate_actions
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
-from benchmarks.training.residual import ResidualTraining
+from benchmarks.training.residual import PRIVILEGED_INFO_KEYS, ResidualTraining
 from controllers.envelope_guard import guard_env_commands
 from controllers.residual import (
     agent_observation,
     base_kwargs_for_env,
     residual_action,
     residual_observation_bounds,
+    residual_observation_names,
 )
 
 __all__ = ["CHATTERING_KEY", "PRECISION_KEY", "ResidualVectorEnv", "make_residual_sb3_env"]
@@ -98,6 +99,11 @@ class ResidualVectorEnv(VectorWrapper):
         low, high = residual_observation_bounds(
             config.params.max_surge, config.observation, config.current_speed_bound
         )
+        self._privileged = self.settings.privileged_critic
+        if self._privileged:  # the critic's true errors, within the observed errors' bounds
+            names = residual_observation_names(config.observation)
+            errors = [names.index(key) for key in PRIVILEGED_INFO_KEYS]
+            low, high = np.concatenate([low, low[errors]]), np.concatenate([high, high[errors]])
         self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs
@@ -187,7 +193,18 @@ class ResidualVectorEnv(VectorWrapper):
         self._started[mask] = False
         self._pending[mask] = False
         info["base_action"], info["_base_action"] = self._base.copy(), mask.copy()
-        return agent_observation(obs, self._base, self._previous), info
+        return self._features(obs, self._base, self._previous, info), info
+
+    def _features(
+        self, obs: np.ndarray, base: np.ndarray, previous: np.ndarray, info: dict[str, Any]
+    ) -> np.ndarray:
+        """The agent's observation, followed with a privileged critic by the true errors of
+        ``info`` (`benchmarks.training.privileged`)."""
+        features = agent_observation(obs, base, previous)
+        if not self._privileged:
+            return features
+        truth = np.stack([np.asarray(info[key], np.float32) for key in PRIVILEGED_INFO_KEYS], 1)
+        return np.concatenate([features, truth], axis=1)
 
     def step(
         self, actions: Any
@@ -235,12 +252,13 @@ class ResidualVectorEnv(VectorWrapper):
             # b at the last observation, from copies of the ended episodes' controller states
             final_base = self._base_predict_rows(final, rows, False, self._actuators, keep=False)
             boxed = info["final_obs"].copy()
+            final_info = info["final_info"]
             for j, i in enumerate(rows):
-                boxed[i] = agent_observation(
-                    final_obs[j : j + 1], final_base[j : j + 1], applied[i : i + 1]
+                ended = {key: final_info[key][i : i + 1] for key in PRIVILEGED_INFO_KEYS}
+                boxed[i] = self._features(
+                    final_obs[j : j + 1], final_base[j : j + 1], applied[i : i + 1], ended
                 )[0]
             info["final_obs"] = boxed
-            final_info = info["final_info"]
             final_info[CHATTERING_KEY] = np.where(done, charge, 0.0)
             final_info[f"_{CHATTERING_KEY}"] = done.copy()
             info[CHATTERING_KEY] = np.where(done, 0.0, charge)
@@ -265,7 +283,7 @@ class ResidualVectorEnv(VectorWrapper):
         self._pending = done if mode is AutoresetMode.NEXT_STEP else np.zeros_like(done)
         info["base_action"] = self._base.copy()
         info["_base_action"] = np.ones(self.num_envs, dtype=bool)
-        features = agent_observation(obs, self._base, self._previous)
+        features = self._features(obs, self._base, self._previous, info)
         return features, reward, terminated, truncated, info
 
     def __repr__(self) -> str:

@@ -459,10 +459,16 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     else:
         venv = VecNormalize(venv, **cfg.normalize)
         pin_scales(venv, cfg, obs_names)
+        policy, policy_kwargs = cfg.policy, cfg.policy_kwargs
+        if residual is not None and residual.privileged_critic:  # the actor reads obs_names
+            from benchmarks.training.privileged import PrivilegedCriticPolicy
+
+            policy = PrivilegedCriticPolicy
+            policy_kwargs = {**policy_kwargs, "public_dim": len(obs_names)}
         model = algorithm(
-            cfg.policy,
+            policy,
             venv,
-            policy_kwargs=cfg.policy_kwargs,
+            policy_kwargs=policy_kwargs,
             seed=opts.seed,
             device="cpu",
             tensorboard_log=str(out / "tb"),
@@ -643,7 +649,9 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
 
         write_transitions(out / TRANSITIONS_FILE, model.replay_buffer, obs_names)
     final_meta = metadata({})
-    save_agent(model, venv, out / "final", final_meta)
+    from benchmarks.training.privileged import deployable
+
+    save_agent(*deployable(model, venv), out / "final", final_meta)
     write_metadata(out / METADATA_FILE, final_meta)
     venv.close()
     if opts.export:
