@@ -192,3 +192,48 @@ def test_a_run_saves_the_actor_alone_flies_it_and_resumes_bit_for_bit(tmp_path):
 
     (result,) = evaluate(policy, [3], **{**ENV, "max_time": 5.0})
     assert np.isfinite(result["rms_distance"])
+
+    # A later run with a privileged critic starts from the saved agent: the same actor, the
+    # critic widened (valuing every state as the saved one at the true errors' mean), the true
+    # errors' statistics those of the observed ones.
+    import torch
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from benchmarks.training.envs import make_training_env
+    from benchmarks.training.privileged import PrivilegedCriticPolicy
+    from benchmarks.training.warm_start import warm_start
+
+    settings = ResidualTraining(base="fbsm_colos", privileged_critic=True)
+    venv = VecNormalize(make_training_env(4, 0, ENV, env_id="AUVPath3D-v0", residual=settings))
+    arch = {"net_arch": [16, 16], "log_std_init": -1.0, "public_dim": d}
+    model = PPO(PrivilegedCriticPolicy, venv, policy_kwargs=arch, n_steps=32, device="cpu")
+    record = warm_start(model, venv, tmp_path / "agent", "ppo", NAMES)
+    assert record["optimizer"].startswith("restarted")
+    saved = PPO.load(tmp_path / "agent" / "model.zip", device="cpu")
+    a_model, _ = model.policy.predict(obs, deterministic=True)
+    a_saved, _ = saved.policy.predict(obs[:, :d], deterministic=True)
+    np.testing.assert_array_equal(a_model, a_saved)
+    at_mean = torch.as_tensor(obs).clone()
+    at_mean[:, d:] = 0.0
+    with torch.no_grad():
+        values = model.policy.predict_values(at_mean)
+        torch.testing.assert_close(values, saved.policy.predict_values(at_mean[:, :d]))
+    agent_stats = np.load(tmp_path / "agent" / "vecnormalize.npz")
+    np.testing.assert_array_equal(venv.obs_rms.mean[:d], agent_stats["mean"])
+    np.testing.assert_array_equal(venv.obs_rms.mean[d:], agent_stats["mean"][ERRORS])
+
+
+def test_an_off_policy_learner_with_a_privileged_critic_is_refused(tmp_path):
+    from benchmarks.training.config import read_zoo_config
+
+    section = {
+        "policy": "MlpPolicy",
+        "n_envs": 4,
+        "n_timesteps": 512,
+        "normalize": "dict(norm_obs=True, norm_reward=True)",
+        "residual": {"base": "fbsm_colos", "privileged_critic": True},
+    }
+    config = tmp_path / "sac.yml"
+    config.write_text(yaml.safe_dump({"AUVPath3D-v0": section}))
+    with pytest.raises(ValueError, match=r"privileged_critic gives PPO.s value network .* sac"):
+        read_zoo_config(config, "AUVPath3D-v0", "sac")

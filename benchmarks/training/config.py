@@ -220,6 +220,11 @@ def read_zoo_config(path: str | os.PathLike, env_id: str = ENV_ID, algo: str = "
     residual = None
     if "residual" in section:
         residual = ResidualTraining.from_dict(section["residual"], f"{path}: residual")
+        if residual.privileged_critic and ALGORITHMS[algo].off_policy:
+            raise ValueError(
+                f"{path}: residual privileged_critic gives PPO's value network the true errors; "
+                f"{algo} has no such critic here: train it with --algo ppo or leave it out"
+            )
     action_bounds = None
     if "action_bounds" in section:
         if residual is not None:

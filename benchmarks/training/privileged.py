@@ -37,6 +37,7 @@ __all__ = [
     "PrivilegedMlpExtractor",
     "deployable",
     "is_privileged",
+    "widen_for_privileged_critic",
 ]
 
 
@@ -152,3 +153,28 @@ def deployable(model: Any, vec_normalize: Any) -> tuple[Any, Any]:
     public.observation_space = public.policy.observation_space
     public._last_obs = None  # a learn() would start from a reset, not a privileged observation
     return public, _public_normalization(vec_normalize, dim)
+
+
+def widen_for_privileged_critic(model: Any, saved: Any) -> None:
+    """Load a saved agent's policy (``saved``: its model.zip, an `ActorCriticPolicy` over the
+    public observation) into ``model``'s `PrivilegedCriticPolicy`: every weight as saved, the
+    critic's first layer widened by zero columns for the privileged inputs. The optimiser's
+    state is not loaded (the widened layer's moments have no saved counterpart)."""
+    import io
+    import zipfile
+
+    with zipfile.ZipFile(saved) as archive:
+        data = archive.read("policy.pth")
+    state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+    first = "mlp_extractor.value_net.0.weight"
+    target = model.policy.state_dict()
+    if first in state and first in target:
+        weight = state[first]
+        extra = target[first].shape[1] - weight.shape[1]
+        if extra != len(PRIVILEGED_NAMES):
+            raise ValueError(
+                f"the saved critic reads {weight.shape[1]} entries, this run's "
+                f"{target[first].shape[1]} with {len(PRIVILEGED_NAMES)} privileged"
+            )
+        state[first] = torch.cat([weight, weight.new_zeros(weight.shape[0], extra)], dim=1)
+    model.policy.load_state_dict(state, strict=True)

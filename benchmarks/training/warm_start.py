@@ -17,6 +17,11 @@ into a freshly built model and `VecNormalize`:
                        jump start of at least ``learning_starts`` steps), so it neither flies
                        a warm-up nor delays its updates when it already has the data
 
+A run whose critic reads the true errors (`benchmarks.training.privileged`) starts from a saved
+agent's actor and critic, the critic widened by zero weights on the true errors (so it values
+every state as the saved one did) and their statistics those of the observed errors; its
+optimiser restarts, as the moments of the widened layer have no saved counterpart.
+
 The agent's stages (an envelope guard, an actuator allocation: `metadata.json`) are not training
 state and are not carried over: a schedule's export stages add them to the new run's agents
 (`benchmarks.training.schedule`). The agent must have been trained with the same algorithm on the
@@ -33,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.training.residual import PRIVILEGED_INFO_KEYS
 from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
 from controllers.agent import (
     METADATA_FILE,
@@ -195,15 +201,25 @@ def warm_start(
 ) -> dict[str, Any]:
     """Load ``agent``'s weights into ``model`` and its statistics into ``vec_normalize`` (module
     doc); returns the record for the new run's metadata."""
+    from benchmarks.training.privileged import is_privileged, widen_for_privileged_critic
+
     folder = Path(agent)
     meta = check_warm_start(folder, algo, obs_names)
+    privileged = is_privileged(model)
     try:
-        model.set_parameters(str(folder / MODEL_FILE), exact_match=True, device="cpu")
+        if privileged:
+            widen_for_privileged_critic(model, folder / MODEL_FILE)
+        else:
+            model.set_parameters(str(folder / MODEL_FILE), exact_match=True, device="cpu")
     except (RuntimeError, ValueError, KeyError) as exc:  # torch: size mismatch, missing keys
         raise ValueError(
             f"init_from {str(folder)!r}: its weights do not fit this run's network ({exc})"
         ) from None
     obs_mean, obs_var, obs_count, ret_mean, ret_var, ret_count = _statistics(folder)
+    if privileged:  # the true errors start from the statistics of the observed ones
+        errors = [list(obs_names).index(key) for key in PRIVILEGED_INFO_KEYS]
+        obs_mean = np.concatenate([obs_mean, obs_mean[errors]])
+        obs_var = np.concatenate([obs_var, obs_var[errors]])
     target = vec_normalize.obs_rms
     if np.shape(obs_mean) != np.shape(target.mean):
         raise ValueError(
@@ -225,6 +241,8 @@ def warm_start(
         "git_commit": meta.get("git_commit"),
         "config_file": meta.get("config_file"),
     }
+    if privileged:
+        record["optimizer"] = "restarted (the critic widened for the true errors)"
     transitions = folder / TRANSITIONS_FILE
     if getattr(model, "replay_buffer", None) is not None and transitions.is_file():
         record["replay_buffer"] = _load_transitions(model, transitions, obs_names, folder)
