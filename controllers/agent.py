@@ -63,6 +63,7 @@ __all__ = [
     "first_difference",
     "load_actor",
     "load_network",
+    "read_policy_state",
 ]
 
 MODEL_FILE = "model.zip"
@@ -551,13 +552,23 @@ def _read_stats(
     return mean, var, clip_obs, epsilon
 
 
+def read_policy_state(model: str | os.PathLike) -> Any:
+    """The state dict of a model.zip's policy (its policy.pth), read as tensors only (torch's
+    ``weights_only``: nothing else is unpickled); the zip's and torch's own errors propagate."""
+    import io
+
+    import torch
+
+    with zipfile.ZipFile(model) as archive:
+        data = archive.read("policy.pth")
+    return torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+
+
 def check_weights(files: AgentFiles) -> None:
     """Every weight of a checked agent's policy (model.zip's policy.pth; every member's for an
     ensemble) finite, as `load_actor` requires, read as tensors only (torch's ``weights_only``:
     nothing else is unpickled) and without building the model: for the checks before any
     episode. ValueError naming the file."""
-    import io
-
     if files.members:
         for member in files.members:
             check_weights(member)
@@ -566,9 +577,7 @@ def check_weights(files: AgentFiles) -> None:
     import torch
 
     try:
-        with zipfile.ZipFile(files.model) as archive:
-            data = archive.read("policy.pth")
-        state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+        state = read_policy_state(files.model)
     except Exception as exc:
         raise ValueError(f"{files.label} {files.model}: policy.pth cannot be read: {exc}") from None
     if not isinstance(state, dict):

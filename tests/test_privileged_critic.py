@@ -130,21 +130,9 @@ def _config(tmp_path: Path, n_timesteps: int = 512) -> Path:
 
 
 def _options(tmp_path: Path, out: str, **extra):
-    from benchmarks.training.train import TrainOptions
+    from tests.test_resume_exact import small_run_options
 
-    return TrainOptions(
-        algo="ppo",
-        config=str(_config(tmp_path)),
-        env_id="AUVPath3D-v0",
-        out=str(tmp_path / out),
-        seed=4,
-        eval_freq=256,
-        checkpoint_freq=256,
-        eval_seeds=(100, 101),
-        eval_duration=2.0,
-        progress_bar=False,
-        **extra,
-    )
+    return small_run_options(_config(tmp_path), "AUVPath3D-v0", tmp_path / out, seed=4, **extra)
 
 
 def test_a_run_saves_the_actor_alone_flies_it_and_resumes_bit_for_bit(tmp_path):

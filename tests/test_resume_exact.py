@@ -73,25 +73,30 @@ CASES = {
 }
 
 
-def _options(tmp_path: Path, algo: str, out: str, **extra: Any):
+def small_run_options(config: Path, env_id: str, out: Path, seed: int = 3, **extra: Any):
+    """`TrainOptions` of a tiny run of ``config``: evaluations and checkpoints every 256 env
+    steps on two 2-s validation episodes, no progress bar (PPO unless ``algo`` is given)."""
     from benchmarks.training.train import TrainOptions
 
-    env_id, section, n_timesteps, _ = CASES[algo]
-    config = tmp_path / f"{algo}.yml"
-    config.write_text(yaml.safe_dump({env_id: {**section, "n_timesteps": n_timesteps}}))
     return TrainOptions(
-        algo=algo.split("_")[0],
+        **{"algo": "ppo", **extra},
         config=str(config),
         env_id=env_id,
-        out=str(tmp_path / out),
-        seed=3,
+        out=str(out),
+        seed=seed,
         eval_freq=256,
         checkpoint_freq=256,
         eval_seeds=(100, 101),
         eval_duration=2.0,
         progress_bar=False,
-        **extra,
     )
+
+
+def _options(tmp_path: Path, algo: str, out: str, **extra: Any):
+    env_id, section, n_timesteps, _ = CASES[algo]
+    config = tmp_path / f"{algo}.yml"
+    config.write_text(yaml.safe_dump({env_id: {**section, "n_timesteps": n_timesteps}}))
+    return small_run_options(config, env_id, tmp_path / out, algo=algo.split("_")[0], **extra)
 
 
 def _model_tensors(folder: Path) -> dict[str, Any]:

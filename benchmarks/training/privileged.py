@@ -40,6 +40,9 @@ __all__ = [
     "widen_for_privileged_critic",
 ]
 
+# The critic's first layer: the only weights whose shape the privileged inputs change.
+_CRITIC_INPUT = "mlp_extractor.value_net.0.weight"
+
 
 class PrivilegedMlpExtractor(MlpExtractor):
     """`MlpExtractor` whose policy network reads the first ``public_dim`` features and whose
@@ -115,9 +118,8 @@ def _public_policy(model: Any) -> ActorCriticPolicy:
         **kwargs,
     )
     state = source.state_dict()
-    first = "mlp_extractor.value_net.0.weight"
-    if first in state:  # the privileged columns dropped: their normalised inputs at 0
-        state[first] = state[first][:, :dim].clone()
+    if _CRITIC_INPUT in state:  # the privileged columns dropped: their normalised inputs at 0
+        state[_CRITIC_INPUT] = state[_CRITIC_INPUT][:, :dim].clone()
     policy.load_state_dict(state)
     policy.set_training_mode(False)
     return policy
@@ -155,26 +157,21 @@ def deployable(model: Any, vec_normalize: Any) -> tuple[Any, Any]:
     return public, _public_normalization(vec_normalize, dim)
 
 
-def widen_for_privileged_critic(model: Any, saved: Any) -> None:
-    """Load a saved agent's policy (``saved``: its model.zip, an `ActorCriticPolicy` over the
-    public observation) into ``model``'s `PrivilegedCriticPolicy`: every weight as saved, the
-    critic's first layer widened by zero columns for the privileged inputs. The optimiser's
-    state is not loaded (the widened layer's moments have no saved counterpart)."""
-    import io
-    import zipfile
-
-    with zipfile.ZipFile(saved) as archive:
-        data = archive.read("policy.pth")
-    state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
-    first = "mlp_extractor.value_net.0.weight"
+def widen_for_privileged_critic(model: Any, state: dict[str, Any]) -> None:
+    """Load a saved agent's policy ``state`` (`controllers.agent.read_policy_state` of its
+    model.zip: an `ActorCriticPolicy` over the public observation) into ``model``'s
+    `PrivilegedCriticPolicy`: every weight as saved, the critic's first layer widened by zero
+    columns for the privileged inputs. The optimiser's state is not loaded (the widened layer's
+    moments have no saved counterpart)."""
+    state = dict(state)
     target = model.policy.state_dict()
-    if first in state and first in target:
-        weight = state[first]
-        extra = target[first].shape[1] - weight.shape[1]
+    if _CRITIC_INPUT in state and _CRITIC_INPUT in target:
+        weight = state[_CRITIC_INPUT]
+        extra = target[_CRITIC_INPUT].shape[1] - weight.shape[1]
         if extra != len(PRIVILEGED_NAMES):
             raise ValueError(
                 f"the saved critic reads {weight.shape[1]} entries, this run's "
-                f"{target[first].shape[1]} with {len(PRIVILEGED_NAMES)} privileged"
+                f"{target[_CRITIC_INPUT].shape[1]} with {len(PRIVILEGED_NAMES)} privileged"
             )
-        state[first] = torch.cat([weight, weight.new_zeros(weight.shape[0], extra)], dim=1)
+        state[_CRITIC_INPUT] = torch.cat([weight, weight.new_zeros(weight.shape[0], extra)], 1)
     model.policy.load_state_dict(state, strict=True)

@@ -7,6 +7,7 @@ the saved agent's metadata records its `to_dict`, from which the loader takes wh
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,6 +22,7 @@ __all__ = [
     "PRIVILEGED_INFO_KEYS",
     "PRIVILEGED_NAMES",
     "ResidualTraining",
+    "observed_error_columns",
 ]
 
 # Chattering charge per unit of total variation of the applied normalised action per step
@@ -41,6 +43,15 @@ PRECISION_AXES = ("xyz", "yz")
 # the reward is charged on [m], and the keys of the env's info that report them.
 PRIVILEGED_NAMES = ("true_x_e", "true_y_e", "true_z_e")
 PRIVILEGED_INFO_KEYS = ("x_e", "y_e", "z_e")
+
+
+def observed_error_columns(obs_names: Sequence[str]) -> list[int]:
+    """The columns of the observed x_e, y_e, z_e among ``obs_names``: the entries whose bounds
+    and initial statistics a privileged critic's true errors take."""
+    names = list(obs_names)
+    return [names.index(key) for key in PRIVILEGED_INFO_KEYS]
+
+
 # Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.
 DEFAULT_SELECTION_CHATTERING = 0.0
 

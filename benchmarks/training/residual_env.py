@@ -45,7 +45,11 @@ from gymnasium.vector.utils import batch_space
 
 from auv_gym.envs.env import validate_actions
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
-from benchmarks.training.residual import PRIVILEGED_INFO_KEYS, ResidualTraining
+from benchmarks.training.residual import (
+    PRIVILEGED_INFO_KEYS,
+    ResidualTraining,
+    observed_error_columns,
+)
 from controllers.envelope_guard import guard_env_commands
 from controllers.residual import (
     agent_observation,
@@ -101,8 +105,7 @@ class ResidualVectorEnv(VectorWrapper):
         )
         self._privileged = self.settings.privileged_critic
         if self._privileged:  # the critic's true errors, within the observed errors' bounds
-            names = residual_observation_names(config.observation)
-            errors = [names.index(key) for key in PRIVILEGED_INFO_KEYS]
+            errors = observed_error_columns(residual_observation_names(config.observation))
             low, high = np.concatenate([low, low[errors]]), np.concatenate([high, high[errors]])
         self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)

@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.training.residual import PRIVILEGED_INFO_KEYS
+from benchmarks.training.residual import observed_error_columns
 from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
 from controllers.agent import (
     METADATA_FILE,
@@ -46,6 +46,7 @@ from controllers.agent import (
     STATS_FILE,
     check_agent,
     first_difference,
+    read_policy_state,
 )
 from controllers.algorithms import ALGORITHMS
 from controllers.ensemble import ENSEMBLE_FILE, ensemble_members
@@ -110,10 +111,8 @@ def check_initial_agents(
         transitions = Path(agent) / TRANSITIONS_FILE
         if ALGORITHMS[algo].off_policy and transitions.is_file():
             read_transitions(transitions, obs_names, action_dim, f"init_from {str(agent)!r}")
-    import io
     import zipfile
 
-    import torch
     from gymnasium import spaces
 
     policy_class = ALGORITHMS[algo].sb3_class().policy_aliases["MlpPolicy"]
@@ -124,10 +123,7 @@ def check_initial_agents(
     for agent in agents:
         model = Path(agent) / MODEL_FILE
         try:
-            with zipfile.ZipFile(model) as archive:
-                data = archive.read("policy.pth")
-            state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
-            network.load_state_dict(state, strict=True)
+            network.load_state_dict(read_policy_state(model), strict=True)
         except (RuntimeError, ValueError, KeyError, OSError, zipfile.BadZipFile) as exc:
             problem = " ".join(str(exc).split())
             raise ValueError(
@@ -208,7 +204,7 @@ def warm_start(
     privileged = is_privileged(model)
     try:
         if privileged:
-            widen_for_privileged_critic(model, folder / MODEL_FILE)
+            widen_for_privileged_critic(model, read_policy_state(folder / MODEL_FILE))
         else:
             model.set_parameters(str(folder / MODEL_FILE), exact_match=True, device="cpu")
     except (RuntimeError, ValueError, KeyError) as exc:  # torch: size mismatch, missing keys
@@ -217,7 +213,7 @@ def warm_start(
         ) from None
     obs_mean, obs_var, obs_count, ret_mean, ret_var, ret_count = _statistics(folder)
     if privileged:  # the true errors start from the statistics of the observed ones
-        errors = [list(obs_names).index(key) for key in PRIVILEGED_INFO_KEYS]
+        errors = observed_error_columns(obs_names)
         obs_mean = np.concatenate([obs_mean, obs_mean[errors]])
         obs_var = np.concatenate([obs_var, obs_var[errors]])
     target = vec_normalize.obs_rms
