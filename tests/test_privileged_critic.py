@@ -211,6 +211,36 @@ def test_a_run_saves_the_actor_alone_flies_it_and_resumes_bit_for_bit(tmp_path):
     np.testing.assert_array_equal(venv.obs_rms.mean[d:], agent_stats["mean"][ERRORS])
 
 
+def test_an_evaluation_converts_once_per_flight_and_once_per_save(tmp_path, monkeypatch):
+    """Each conversion of a privileged model to its saved form draws a new policy's initial
+    weights from torch's global generator, which the training shares: how many an evaluation
+    makes is part of every seed's trajectory. The recipe's seeds were trained with one per
+    flight (plant) and one more for each new best agent; one per evaluation (tried in a
+    refactor) trained other agents from the same command."""
+    import benchmarks.training.callbacks as callbacks
+    from benchmarks.training.train import train
+
+    conversions: list[int] = []
+    per_evaluation: list[tuple[int, bool]] = []
+    convert, evaluate = callbacks.deployable, callbacks.PeriodicEvaluation.evaluate
+
+    def counted(model, vec_normalize):
+        conversions.append(1)
+        return convert(model, vec_normalize)
+
+    def recorded(self):
+        before, best = len(conversions), dict(self.best).get("score")
+        evaluate(self)
+        per_evaluation.append((len(conversions) - before, self.best.get("score") != best))
+
+    monkeypatch.setattr(callbacks, "deployable", counted)
+    monkeypatch.setattr(callbacks.PeriodicEvaluation, "evaluate", recorded)
+    train(_options(tmp_path, "a"))
+    assert len(per_evaluation) == 3  # at 0, 256 and 512 env steps, one plant each
+    assert per_evaluation[0] == (2, True)  # the first evaluation always saves best/
+    assert all(count == 1 + saved for count, saved in per_evaluation)
+
+
 def test_an_off_policy_learner_with_a_privileged_critic_is_refused(tmp_path):
     from benchmarks.training.config import read_zoo_config
 

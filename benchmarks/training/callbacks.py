@@ -141,13 +141,14 @@ class PeriodicEvaluation(BaseCallback):
 
     def evaluate(self) -> None:
         """Evaluate now: learning-curve row, TensorBoard scalars, best agent."""
-        # the agent as it is saved, once for every flight and the save below
-        model, vec_normalize = deployable(self.model, self.model.get_vec_normalize_env())
+        vec_normalize = self.model.get_vec_normalize_env()
         extra = () if self.residual is None else ("chattering",)
         results = []
         for label, env_kwargs in variant_groups(self.eval_kwargs):
             # one batch per plant or actuator, the stages built from its env arguments
-            policy = policy_from_model(model, vec_normalize, self.residual, env_kwargs, self.stages)
+            policy = policy_from_model(
+                self.model, vec_normalize, self.residual, env_kwargs, self.stages
+            )
             rows = evaluate_policy_on_seeds(policy, self.seeds, extra_metrics=extra, **env_kwargs)
             if label is not None:
                 rows = [{**row, "variant": label} for row in rows]
@@ -168,7 +169,11 @@ class PeriodicEvaluation(BaseCallback):
             self.best["num_timesteps"] = self.num_timesteps
             self.best["summary"] = summary
             meta = self.metadata({"evaluation": summary, "eval_results": results})
-            save_agent(model, vec_normalize, self.out / "best", meta)
+            # A privileged model is converted for each flight above and again here: each
+            # conversion draws the new policy's initial weights from torch's global generator,
+            # which the training shares, so their number is part of a seed's trajectory (one
+            # conversion per evaluation trained other agents than the recipe's seeds).
+            save_agent(*deployable(self.model, vec_normalize), self.out / "best", meta)
         if self.verbose:
             print(f"[eval] steps={self.num_timesteps} wall={wall:.0f}s {summary}", flush=True)
 
