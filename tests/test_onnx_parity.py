@@ -84,7 +84,7 @@ def test_a_nudge_moves_every_command_by_its_size_within_the_bounds():
 def test_checking_some_agents_keeps_the_other_agents_rows(tmp_path, monkeypatch):
     """Was: re-checking one agent rewrote parity.json with that agent's row alone."""
 
-    def fake_check(exports, actuator, duration):
+    def fake_check(exports, actuator, duration, nudges):
         return {"agent": exports.agent, "actuator": actuator, **VERDICT}
 
     monkeypatch.setattr(onnx_parity, "check", fake_check)
@@ -117,3 +117,33 @@ VERDICT = {"max_abs_command_error": 1e-7, "rms_target": "met"}
 
 def _write_rows(out, duration, rows):
     (out / "parity.json").write_text(json.dumps({"duration_s": duration, "rows": list(rows)}))
+
+
+def test_several_nudges_keep_the_largest_difference(two_sets, tmp_path, monkeypatch):
+    """``nudges=K`` flies the nudged agent with sign seeds 0..K-1 on every set beyond the
+    tolerance (here every set: the tolerance set below 0) and keeps the largest difference,
+    never less than the first draw's alone."""
+    seeds: list[int] = []
+
+    class Recorded(onnx_parity.NudgedPolicy):
+        def __init__(self, python, size, seed=0):
+            seeds.append(seed)
+            super().__init__(python, size, seed)
+
+    monkeypatch.setattr(onnx_parity, "NudgedPolicy", Recorded)
+    monkeypatch.setattr(onnx_parity, "RMS_TOLERANCE", -1.0)
+    exports = onnx_parity.Exports("ppo_as_built", tmp_path)
+    one = onnx_parity.check(exports, None, 20.0)
+    three = onnx_parity.check(exports, None, 20.0, nudges=3)
+    assert seeds == [0, 0, 1, 2]
+    assert (one["nudges"], three["nudges"]) == (1, 3)
+    first = one["nudged_relative_rms_difference_by_set"]["scenario:as_built_helix"]
+    largest = three["nudged_relative_rms_difference_by_set"]["scenario:as_built_helix"]
+    assert 0.0 < first <= largest
+
+
+def test_a_nudge_count_out_of_range_is_refused(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        onnx_parity.main(["--nudges", "0", "--agents", "ppo_as_built"])
+    assert exit_info.value.code == 2
+    assert "--nudges: 0 nudged flights" in capsys.readouterr().err

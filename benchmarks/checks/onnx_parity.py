@@ -17,7 +17,8 @@ flown, as in the suite, and is listed):
    relative difference measures how far the closed loop itself carries a difference that
    size. Where it passes 0.1 % too (an agent flying a vehicle it was not trained for, whose
    RMS a 1e-6 nudge moves by tens of per cent), the per-episode target cannot tell the export
-   from rounding; such a set is "sensitive", not "missed".
+   from rounding; such a set is "sensitive", not "missed". One nudge is one draw of the signs;
+   ``--nudges K`` flies K draws and keeps the largest difference (each row records its K).
 
 Writes parity.json and parity.md (atomically, after each export) to --out and prints the
 tables. With ``--agents`` naming some of the reference agents, the rows of the others already in
@@ -116,6 +117,7 @@ class ParityOptions:
     out: Path = option(Path("out/onnx_parity"), "folder of parity.json, parity.md")  # noqa: RUF009
     duration: float = option(300.0, "episode length [s]")
     agents: str = option(",".join(REFERENCE_AGENTS), "reference agents, comma-separated")
+    nudges: int = option(1, "nudged flights per set beyond the RMS tolerance (seeds 0..K-1)")
 
 
 class Exports:
@@ -143,9 +145,12 @@ class Exports:
         return self.files[actuator]
 
 
-def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, Any]:
-    """Both flights of an agent's exports over the whole test suite (module doc); ``actuator``
-    overrides every task's (None: each task's own)."""
+def check(
+    exports: Exports, actuator: str | None, duration: float, nudges: int = 1
+) -> dict[str, Any]:
+    """Both flights of an agent's exports over the whole test suite (module doc), and
+    ``nudges`` nudged flights (sign seeds 0..nudges-1) of each set beyond the RMS tolerance;
+    ``actuator`` overrides every task's (None: each task's own)."""
     agent = exports.agent
     env_id, agent_env = policy_env(agent)
     episodes, count, worst, worst_surge = 0, 0, 0.0, float("nan")
@@ -176,9 +181,12 @@ def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, 
         rms_by_set[task.name] = max_relative_difference(flown, alone)
         nudge = max(twin.worst, NUDGE_FLOOR)
         if rms_by_set[task.name] > RMS_TOLERANCE:  # only there is the loop's own spread asked
-            nudged = NudgedPolicy(build_policy(agent, env, controller), nudge)
-            sensitivity_by_set[task.name] = max_relative_difference(
-                flown, evaluate(nudged, seeds, **env)
+            nudged = [
+                NudgedPolicy(build_policy(agent, env, controller), nudge, seed)
+                for seed in range(nudges)
+            ]
+            sensitivity_by_set[task.name] = max(
+                max_relative_difference(flown, evaluate(policy, seeds, **env)) for policy in nudged
             )
         episodes += len(seeds)
         count += twin.count
@@ -207,6 +215,7 @@ def check(exports: Exports, actuator: str | None, duration: float) -> dict[str, 
         "max_relative_rms_error": max(rms_by_set.values()),
         "max_relative_rms_error_by_set": rms_by_set,
         "nudged_relative_rms_difference_by_set": sensitivity_by_set,
+        "nudges": nudges,
         "rms_target": rms_verdict(rms_by_set, sensitivity_by_set),
         "not_flown": sorted(not_flown),
         "wall_s": time.perf_counter() - start,
@@ -265,7 +274,8 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
             f"{r['rms_target']} |"
         )
         beyond += [
-            f"| {r['label']} | {name} | {difference:.2g} | {nudged[name]:.2g} |"
+            f"| {r['label']} | {name} | {difference:.2g} | {nudged[name]:.2g} "
+            f"| {r.get('nudges', 1)} |"
             for name, difference in r["max_relative_rms_error_by_set"].items()
             if difference > RMS_TOLERANCE
         ]
@@ -274,7 +284,8 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
         text += (
             f"\nSets beyond the RMS tolerance ({RMS_TOLERANCE:.1%}), with the Python agent's own "
             "difference when every command is nudged by ± the export's largest difference on "
-            "the set:\n\n| export | set | export | agent nudged |\n|---|---|---:|---:|\n"
+            "the set (the largest over that many draws of the nudges' signs):\n\n"
+            "| export | set | export | agent nudged | draws |\n|---|---|---:|---:|---:|\n"
             + "\n".join(beyond)
             + "\n"
         )
@@ -291,6 +302,8 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
         if unknown:
             raise ValueError(f"--agents: unknown {unknown}; valid: {list(REFERENCE_AGENTS)}")
         finite_number("--duration", args.duration, 10.0, 1000.0, unit="s")
+        if not 1 <= args.nudges <= 100:
+            raise ValueError(f"--nudges: {args.nudges} nudged flights; use 1 to 100")
         writable_folder(args.out)
     kept = kept_rows(args.out, args.duration, agents)  # the other agents' rows stay
     rows = []
@@ -302,7 +315,9 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
                 runs.append((f"{agent} on propeller and fins", "realistic"))
             for label, actuator in runs:
                 print(f"{label}:", flush=True)
-                rows.append({"label": label, **check(exports, actuator, args.duration)})
+                rows.append(
+                    {"label": label, **check(exports, actuator, args.duration, args.nudges)}
+                )
                 # an export's row, kept at once, beside the rows of the agents not re-run
                 write_results(args.out, args.duration, in_agent_order([*kept, *rows]))
     rows = in_agent_order([*kept, *rows])
