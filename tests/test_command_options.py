@@ -5,6 +5,7 @@ dataclass), and a bad value is one line on stderr with exit code 2."""
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import pytest
@@ -143,3 +144,24 @@ def test_train_command_options(capsys) -> None:
     _usage_error(
         capsys, train_cli.parse_args, ["--no-plot-only"], "unrecognized arguments: --no-plot-only"
     )
+
+
+@pytest.mark.rl
+def test_evaluate_flies_an_agent_under_the_env_id_it_records(tmp_path):
+    """`auv-gym train --evaluate AGENT` evaluates under AGENT's own env id, as the reproduction
+    check re-evaluates it: the residual agent records AUVPath3DSpeedLimit-v0, and its held-out
+    file says so (it said AUVPath3D-v0, the held-out default, whatever the agent)."""
+    import shutil
+
+    from benchmarks.catalog.policies import AGENTS_DIR
+    from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
+
+    agent = tmp_path / "ppo_residual"
+    shutil.copytree(AGENTS_DIR / "ppo_residual", agent)
+    (agent / HELD_OUT_FILE).unlink()
+    train_cli.main(["--evaluate", str(agent), "--eval-duration", "20"])
+    written = json.loads((agent / HELD_OUT_FILE).read_text())
+    assert "defaults of AUVPath3DSpeedLimit-v0" in written["scenario"]
+    expected = held_out_evaluation(agent, 20.0, "AUVPath3DSpeedLimit-v0")
+    assert written["summary"]["rms_distance_mean"] == expected["summary"]["rms_distance_mean"]
+    assert written["summary"]["n_episodes"] == 10

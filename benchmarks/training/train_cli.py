@@ -55,7 +55,7 @@ from benchmarks.training.learning_curve import EVAL_FILE
 from benchmarks.training.schedule import read_schedule
 from benchmarks.training.seeds import MAX_SEED
 from benchmarks.training.train import check_options, check_run_folder, default_config
-from controllers.agent import METADATA_FILE
+from controllers.agent import METADATA_FILE, check_agent
 
 FIXED = {"eval_env": {}}  # TrainOptions this CLI does not offer (paper eval)
 
@@ -71,7 +71,7 @@ class CommandOptions:
     evaluate: str | None = option(
         None,
         "only evaluate AGENT on the held-out seeds 0-9 (paper "
-        "scenario) and write AGENT/held_out_evaluation.json",
+        "scenario, under the env id AGENT records) and write AGENT/held_out_evaluation.json",
         metavar="AGENT",
     )
 
@@ -102,8 +102,6 @@ def check_outputs(opts: TrainOptions, extra: CommandOptions) -> None:
     step: the run folder, the export folder, the learning-curve files (which need
     evaluations), the agent to evaluate. OSError / ValueError naming the option otherwise."""
     if extra.evaluate:
-        from controllers.agent import check_agent
-
         check_agent(Path(extra.evaluate))
         writable_location(extra.evaluate, "--evaluate")  # AGENT/held_out_evaluation.json
         return
@@ -176,7 +174,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     except (ValueError, OSError) as exc:
         exit_with_usage_error(prog, exc)
     if extra.evaluate:
-        report = write_held_out_evaluation(extra.evaluate, opts.eval_duration)
+        # under the env id the agent records, as the reproduction check re-evaluates it (its
+        # surge limit, its scenario label), never this command's --env-id default
+        env_id = check_agent(Path(extra.evaluate)).metadata["env_id"]
+        report = write_held_out_evaluation(extra.evaluate, opts.eval_duration, env_id)
         print(json.dumps(report["summary"], indent=2))
         return
     if not extra.plot_only:
