@@ -178,16 +178,19 @@ def trained_platform(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def held_out_evaluation(
-    agent: str | os.PathLike, duration: float = 300.0, env_id: str = ENV_ID
+    agent: str | os.PathLike, duration: float = 300.0, env_id: str | None = None
 ) -> dict[str, Any]:
     """An agent on the paper scenario over the held-out seeds 0-9: summary and per-seed results.
 
-    ``env_id`` (a key of `auv_gym.VARIANTS`) adds its fixed arguments, e.g. the surge limit of
-    AUVPath3DSpeedLimit-v0, under which an agent faster than 2.0 m/s terminates as "overspeed".
+    ``env_id`` (a key of `auv_gym.VARIANTS`; None: the one the agent records, an ensemble's its
+    members') adds its fixed arguments, e.g. the surge limit of AUVPath3DSpeedLimit-v0, under
+    which an agent faster than 2.0 m/s terminates as "overspeed".
     """
     from controllers.agent import check_agent
 
-    platform = trained_platform(check_agent(agent).metadata.get("env_kwargs") or {})
+    metadata = check_agent(agent).metadata
+    env_id = env_id or metadata.get("env_id", ENV_ID)
+    platform = trained_platform(metadata.get("env_kwargs") or {})
     # a residual agent's base takes the actuator it was trained on (`load_policy`'s default)
     base_kwargs = base_kwargs_for_env({**VARIANTS[resolve_env_id(env_id)], **platform})
     policy = load_policy(agent, base_kwargs=base_kwargs)
@@ -208,7 +211,7 @@ def held_out_evaluation(
 
 
 def write_held_out_evaluation(
-    agent: str | os.PathLike, duration: float = 300.0, env_id: str = ENV_ID
+    agent: str | os.PathLike, duration: float = 300.0, env_id: str | None = None
 ) -> dict[str, Any]:
     """`held_out_evaluation` of an agent directory, written to AGENT/held_out_evaluation.json."""
     report = held_out_evaluation(agent, duration, env_id)

@@ -174,10 +174,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     except (ValueError, OSError) as exc:
         exit_with_usage_error(prog, exc)
     if extra.evaluate:
-        # under the env id the agent records, as the reproduction check re-evaluates it (its
-        # surge limit, its scenario label), never this command's --env-id default
-        env_id = check_agent(Path(extra.evaluate)).metadata["env_id"]
-        report = write_held_out_evaluation(extra.evaluate, opts.eval_duration, env_id)
+        # under the env id the agent records (its surge limit, its scenario label), as the
+        # reproduction check re-evaluates it, never this command's --env-id default
+        report = write_held_out_evaluation(extra.evaluate, opts.eval_duration)
         print(json.dumps(report["summary"], indent=2))
         return
     if not extra.plot_only:
