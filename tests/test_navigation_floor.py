@@ -60,6 +60,31 @@ def test_seen_errors_are_the_observed_ones_and_e_minus_n_is_them():
     assert 0.01 < float(np.sqrt(np.mean(gap**2))) < 1.0
 
 
+def test_correlation_across_is_pooled_over_the_windows_and_completes_the_square():
+    """ρ recomputed by hand from the set's flights: Σ e^·n / √(Σ|e^|² Σ|n|²) over y_e, z_e of
+    every sample in the window, and with it |e_yz|² = |e^_yz|² + |n_yz|² + 2ρ|e^_yz||n_yz|."""
+    row = error_split("pid_as_built", SET, DURATION, WINDOW)
+    env = _env("pid_as_built")
+    recorder = navigation_floor._SeenErrors(
+        build_policy("pid_as_built", env, task_set(SET).controller)
+    )
+    flights = rollouts(recorder, list(task_set(SET).seeds), **env)
+    seen_all = np.stack(recorder.seen, axis=1)
+    true, seen = [], []
+    for i, flight in enumerate(flights):
+        steps = len(flight.t) - 1
+        window = flight.t[:steps] >= WINDOW
+        true.append(np.stack([flight.samples[f][:steps] for f in ("y_e", "z_e")], 1)[window])
+        seen.append(seen_all[i, :steps, 1:][window])
+    e, e_hat = np.concatenate(true), np.concatenate(seen)
+    n = e - e_hat
+    rho = np.sum(e_hat * n) / math.sqrt(np.sum(e_hat**2) * np.sum(n**2))
+    assert row["corr_seen_navigation_across"] == pytest.approx(rho, rel=1e-12)
+    assert -1.0 < rho < 1.0 and rho != 0.0
+    square = np.sum(e_hat**2) + np.sum(n**2) + 2 * rho * math.sqrt(np.sum(e_hat**2) * np.sum(n**2))
+    assert np.sum(e**2) == pytest.approx(square, rel=1e-9)
+
+
 def test_agent_flies_with_its_own_observation():
     row = error_split("ppo_as_built=benchmarks/agents/ppo_as_built", SET, DURATION, WINDOW)
     assert row["policy"] == "ppo_as_built" and row["failed"] == 0
@@ -77,6 +102,7 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
             "rms_seen_m": 0.3,
             "rms_navigation_m": 0.3,
             "rms_navigation_across_m": 0.2,
+            "corr_seen_navigation_across": -0.031,
             "rms_by_axis_m": {k: {"x_e": 0.1, "y_e": 0.2, "z_e": 0.05} for k in KINDS},
             "rms_slow_by_axis_m": {k: {"x_e": 0.0, "y_e": 0.16, "z_e": 0.03} for k in KINDS},
             "rms_fast_by_axis_m": {k: {"x_e": 0.1, "y_e": 0.12, "z_e": 0.04} for k in KINDS},
@@ -90,14 +116,15 @@ def test_markdown_ratio_is_navigation_over_the_references_distance():
             "rms_seen_m": 0.25,
             "rms_navigation_m": 0.1,
             "rms_navigation_across_m": 0.06,
+            "corr_seen_navigation_across": 0.2,
             "rms_by_axis_m": {k: {"x_e": 0.01, "y_e": 0.02, "z_e": 0.005} for k in KINDS},
             "rms_slow_by_axis_m": {k: {"x_e": 0.0, "y_e": 0.0, "z_e": 0.0} for k in KINDS},
             "rms_fast_by_axis_m": {k: {"x_e": 0.01, "y_e": 0.02, "z_e": 0.005} for k in KINDS},
         },
     ]
     table = markdown(rows, ["a", "b"], "cmd")
-    assert "| `s` | a | 0/10 | 0.400 | 0.300 | 0.300 | 0.75 | 0.200 | 0.50 |" in table
-    assert "| `s` | b | 0/10 | 0.200 | 0.250 | 0.100 | 0.25 | 0.060 | 0.15 |" in table
+    assert "| `s` | a | 0/10 | 0.400 | 0.300 | 0.300 | 0.75 | 0.200 | 0.50 | -0.03 |" in table
+    assert "| `s` | b | 0/10 | 0.200 | 0.250 | 0.100 | 0.25 | 0.060 | 0.15 | +0.20 |" in table
     assert "| `s` | a | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 | 0.100, 0.200, 0.050 |" in table
     assert "| `s` | a | 0.160, 0.120 | 0.160, 0.120 | 0.160, 0.120 |" in table
 
@@ -112,6 +139,7 @@ def _row(policy: str, set_name: str, distance: float, across: float) -> dict:
         "rms_seen_m": distance,
         "rms_navigation_m": across,
         "rms_navigation_across_m": across,
+        "corr_seen_navigation_across": 0.0,
         "rms_by_axis_m": {k: {"x_e": 0.0, "y_e": across, "z_e": 0.0} for k in KINDS},
         "rms_slow_by_axis_m": {k: {"x_e": 0.0, "y_e": across, "z_e": 0.0} for k in KINDS},
         "rms_fast_by_axis_m": {k: {"x_e": 0.0, "y_e": 0.0, "z_e": 0.0} for k in KINDS},

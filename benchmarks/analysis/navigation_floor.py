@@ -31,9 +31,11 @@ the waves, the turns and the loops' own motion; the table gives the cross-track 
 What the target leaves a policy (`--classical`, the policies the target is measured against):
 per set the target T = 0.8 × the best classical RMS |e|. Beyond the floor, a distance holds
 its along-track error and its own tracking of the estimate across the path, the rest
-√(|e|² − |n_yz|²) if those are uncorrelated with the floor's share; the target allows a rest of
-√(T² − |n_yz|²). Their ratio is how much of its rest a policy must shed, a sharper measure of
-the target's reach than |e| / T, whose floor is not zero.
+√(|e|² − |n_yz|²) if those are uncorrelated with the floor's share (the correlation ρ of e^ and
+n across the path, pooled over the set's windows, measures it: |e_yz|² = |e^_yz|² + |n_yz|² +
+2ρ|e^_yz||n_yz|); the target allows a rest of √(T² − |n_yz|²). Their ratio is how much of
+its rest a policy must shed, a sharper measure of the target's reach than |e| / T, whose floor
+is not zero.
 """
 
 from __future__ import annotations
@@ -114,6 +116,8 @@ def error_split(
     flights = rollouts(recorder, list(task.seeds), **env_kwargs)
     seen = np.stack(recorder.seen, axis=1)  # (episodes, steps of the longest flight, 3)
     rms: dict[str, list[float]] = {"true": [], "seen": [], "navigation": [], "across": []}
+    # Σ e^_yz·n_yz, Σ |e^_yz|², Σ |n_yz|² over every episode's window: their correlation
+    across_sums = np.zeros(3)
     axes: dict[str, list[np.ndarray]] = {"true": [], "seen": [], "navigation": []}
     slow_axes: dict[str, list[np.ndarray]] = {key: [] for key in axes}
     fast_axes: dict[str, list[np.ndarray]] = {key: [] for key in axes}
@@ -140,6 +144,12 @@ def error_split(
                 rms[key].append(math.sqrt(float(np.mean(np.sum(e**2, axis=1)))))
         across = (e_true - e_seen)[:, 1:]  # y_e, z_e: what no steering of the estimate removes
         rms["across"].append(math.sqrt(float(np.mean(np.sum(across**2, axis=1)))))
+        seen_across = e_seen[:, 1:]
+        across_sums += (
+            np.sum(seen_across * across),
+            np.sum(seen_across**2),
+            np.sum(across**2),
+        )
     return {
         "policy": policy.name,
         "set": set_name,
@@ -149,10 +159,17 @@ def error_split(
         "rms_seen_m": float(np.mean(rms["seen"])),
         "rms_navigation_m": float(np.mean(rms["navigation"])),
         "rms_navigation_across_m": float(np.mean(rms["across"])),
+        "corr_seen_navigation_across": _correlation(*across_sums),
         "rms_by_axis_m": _by_axis(axes),
         "rms_slow_by_axis_m": _by_axis(slow_axes),
         "rms_fast_by_axis_m": _by_axis(fast_axes),
     }
+
+
+def _correlation(product: float, seen: float, navigation: float) -> float:
+    """Σ e^·n / √(Σ |e^|² Σ |n|²) [–] from the three sums (NaN where either is all zero)."""
+    scale = math.sqrt(seen * navigation)
+    return product / scale if scale > 0.0 else math.nan
 
 
 def _by_axis(parts: dict[str, list[np.ndarray]]) -> dict[str, dict[str, float]]:
@@ -233,11 +250,13 @@ def markdown(
         "(true state); |e^|: the error the policy sees (navigation estimate); |n| = |e − e^|: the "
         "navigation's share, the distance of a policy that held e^ at zero; |n_yz|: its share "
         "across the path (y_e, z_e), the floor (along the path the virtual point follows the true "
-        f"x_e). Ratios over {reference}'s RMS |e|.",
+        f"x_e). Ratios over {reference}'s RMS |e|. ρ: the correlation of e^ and n across the "
+        "path (y_e, z_e), pooled over the set's windows; near 0 the rest below is what the "
+        "policy keeps beyond the floor.",
         "",
         "| set | policy | failed | RMS \\|e\\| | RMS \\|e^\\| | RMS \\|n\\| | \\|n\\| / ref. "
-        "| RMS \\|n_yz\\| | floor / ref. |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| RMS \\|n_yz\\| | floor / ref. | ρ(e^, n) across |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     by_set: dict[str, float] = {
         r["set"]: r["rms_distance_m"] for r in rows if r["policy"] == reference
@@ -249,7 +268,8 @@ def markdown(
             f"| `{r['set'].removeprefix('scenario:')}` | {r['policy']} | "
             f"{r['failed']}/{r['episodes']} | {r['rms_distance_m']:.3f} | "
             f"{r['rms_seen_m']:.3f} | {r['rms_navigation_m']:.3f} | {ratio:.2f} | "
-            f"{r['rms_navigation_across_m']:.3f} | {floor:.2f} |"
+            f"{r['rms_navigation_across_m']:.3f} | {floor:.2f} | "
+            f"{r['corr_seen_navigation_across']:+.2f} |"
         )
     lines += [
         "",
