@@ -221,6 +221,7 @@ def test_held_out_re_runs_reach_an_ensemble_under_its_members_env(tmp_path, monk
     import benchmarks.training
     from benchmarks.catalog.policies import AGENTS_DIR
     from benchmarks.checks.reproduction import compare_held_out
+    from controllers.agent import check_agent
 
     agents = tmp_path / "agents"
     shutil.copytree(AGENTS_DIR / "ppo_residual_as_built", agents / "ensemble")
@@ -228,7 +229,7 @@ def test_held_out_re_runs_reach_an_ensemble_under_its_members_env(tmp_path, monk
     recorded = json.loads((agents / "ensemble" / "held_out_evaluation.json").read_text())
     calls = []
 
-    def evaluation(agent, duration, env_id):  # the recorded run, 10 x 200 s, stands in
+    def evaluation(agent, duration, env_id=None):  # the recorded run, 10 x 200 s, stands in
         calls.append((Path(agent).name, duration, env_id))
         return recorded
 
@@ -236,7 +237,9 @@ def test_held_out_re_runs_reach_an_ensemble_under_its_members_env(tmp_path, monk
     report = Report(allow_new=False)
     (tmp_path / "out").mkdir()
     compare_held_out(agents, tmp_path / "out", report)
-    assert calls == [("ensemble", 200.0, "AUVPath3DSpeedLimit-v0")]
+    # no env id given: held_out_evaluation takes the one the ensemble's members record
+    assert calls == [("ensemble", 200.0, None)]
+    assert check_agent(agents / "ensemble").metadata["env_id"] == "AUVPath3DSpeedLimit-v0"
     assert report.failures == 0
     assert "ensemble held-out: 133 values compared, 0 differ" in capsys.readouterr().out
 

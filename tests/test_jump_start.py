@@ -382,3 +382,21 @@ def test_the_progress_bar_of_a_jump_start_counts_the_steps_it_flies_and_reads(tm
     assert steps_of(flown) == 640  # two rounds of 320, not the section's 256
     assert steps_of({"dataset": str(dataset)}) == recorded
     assert steps_of({**flown, "dataset": str(dataset)}) == recorded + 640  # round 0 is the data
+
+
+@pytest.mark.parametrize("option", [["--stop-at", "320"], ["--resume"]])
+def test_a_jump_start_paused_or_resumed_is_refused_before_anything_is_built(
+    tmp_path, capsys, option
+):
+    """Was: refused only after the env, the model and the warm start were built, as a traceback."""
+    from benchmarks.training.train_cli import main
+
+    section = {**SECTION, "jump_start": {"expert": "fbsm_colos", "steps": 640, "iterations": 1}}
+    out = tmp_path / "run"
+    argv = ["--env-id", ENV_ID, "--config", str(_recipe(tmp_path, section)), "--out", str(out)]
+    with pytest.raises(SystemExit) as stop:
+        main([*argv, *option])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1, err
+    assert "a jump start runs whole, in one go (no --resume, no --stop-at)" in err
+    assert not out.exists()

@@ -98,9 +98,49 @@ def test_the_actor_reads_no_privileged_entry_and_the_critic_does():
 
 @pytest.mark.parametrize(("public", "private"), [(0, 8), (8, 0)])
 def test_an_actor_reading_nothing_or_everything_is_refused(public, private):
-    message = f"between 1 and the observation's 7 entries, got {public}"
+    message = rf"between 1 and 7 \(the observation has 8 entries, .*\), got {public}"
     with pytest.raises(ValueError, match=message):
         _policy(public, private)
+
+
+@pytest.mark.parametrize("critic", [[16], []])
+def test_the_saved_form_values_states_as_the_critic_at_the_privileged_mean(critic):
+    """Was: with no hidden layer for the critic (net_arch vf: []) its first layer, then the value
+    head, was not found by name, and converting the model failed on a size mismatch."""
+    import gymnasium as gym
+    import torch
+    from gymnasium import spaces
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from benchmarks.training.privileged import PrivilegedCriticPolicy, deployable
+
+    class _Box(gym.Env):
+        observation_space = spaces.Box(-10.0, 10.0, (8,), np.float32)
+        action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+
+    venv = VecNormalize(DummyVecEnv([_Box]))
+    arch = {"net_arch": {"pi": [16], "vf": critic}, "public_dim": 5}
+    model = PPO(PrivilegedCriticPolicy, venv, policy_kwargs=arch, n_steps=32, device="cpu", seed=0)
+    with torch.no_grad():  # weights on the privileged columns that matter
+        for parameter in model.policy.parameters():
+            parameter.normal_()
+    public, stats = deployable(model, venv)
+    obs = torch.as_tensor(np.random.default_rng(1).standard_normal((6, 8)), dtype=torch.float32)
+    at_mean = obs.clone()
+    at_mean[:, 5:] = 0.0
+    with torch.no_grad():
+        torch.testing.assert_close(
+            public.policy.predict_values(obs[:, :5]), model.policy.predict_values(at_mean)
+        )
+        assert (
+            model.policy.predict_values(obs) - model.policy.predict_values(at_mean)
+        ).abs().min() > 0
+        torch.testing.assert_close(
+            public.policy.get_distribution(obs[:, :5]).distribution.mean,
+            model.policy.get_distribution(obs).distribution.mean,
+        )
+    assert stats.obs_rms.mean.shape == (5,)
 
 
 def test_privileged_critic_must_be_a_yes_or_no():

@@ -51,7 +51,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from auv_gym.support.files import numpy_dispatch
+from auv_gym.support.files import numpy_dispatch, write_json
 from benchmarks.arguments import parse_options, program_name, usage_errors, writable_location
 from benchmarks.catalog.policies import REMOVED_POLICIES, PolicySpec
 from benchmarks.options import option
@@ -326,16 +326,14 @@ def compare_held_out(agents: Path, out: Path, report: Report) -> None:
     """Re-evaluate every agent folder under ``agents`` that holds a held-out evaluation (a
     single agent or an ensemble), write the re-run to ``out`` and compare it value by value."""
     from benchmarks.training import HELD_OUT_FILE, held_out_evaluation
-    from controllers.agent import check_agent
 
     for recorded_file in sorted(agents.glob(f"*/{HELD_OUT_FILE}")):
         committed = json.loads(recorded_file.read_text())
         # under the env id the agent records (an ensemble's: its members', which agree): its
         # surge limit, its scenario label
-        env_id = check_agent(recorded_file.parent).metadata["env_id"]
-        fresh = held_out_evaluation(recorded_file.parent, committed["duration_s"], env_id)
+        fresh = held_out_evaluation(recorded_file.parent, committed["duration_s"])
         fresh_file = out / f"{recorded_file.parent.name}_{HELD_OUT_FILE}"
-        fresh_file.write_text(json.dumps(fresh, default=float))
+        write_json(fresh_file, fresh)
         compare_json(f"{recorded_file.parent.name} held-out", recorded_file, fresh_file, report)
 
 

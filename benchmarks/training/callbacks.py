@@ -193,7 +193,9 @@ class PeriodicCheckpoint(BaseCallback):
       pauses at the first rollout start at or after ``stop_at``, before collecting anything;
     - when `learn` returns (the end of this invocation's budget), unless just written.
 
-    ``next_checkpoint``: the schedule of a resumed run (its checkpoint's).
+    ``next_checkpoint``: the schedule of a resumed run (its checkpoint's); ``obs_names``: the
+    names of the model's input entries (`save_agent`; a privileged critic's are longer than its
+    agent's observation).
     """
 
     def __init__(
@@ -206,9 +208,11 @@ class PeriodicCheckpoint(BaseCallback):
         state: StateFn | None = None,
         stop_at: int | None = None,
         next_checkpoint: int | None = None,
+        obs_names: Sequence[str] | None = None,
     ) -> None:
         super().__init__()
         self.out, self.every, self.keep, self.metadata = out, every, keep, metadata
+        self.obs_names = obs_names
         self.replay_buffer, self.state, self.stop_at = replay_buffer, state, stop_at
         self.next_checkpoint = 0
         self._resumed_next = next_checkpoint
@@ -250,6 +254,7 @@ class PeriodicCheckpoint(BaseCallback):
             self.metadata({}),
             replay_buffer=self.replay_buffer,
             training_state=state,
+            obs_names=self.obs_names,
         )
         prune_checkpoints(self.out, self.keep)
         self.last_saved = n

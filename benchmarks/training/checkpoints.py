@@ -24,6 +24,7 @@ import random
 import re
 import shutil
 from collections import deque
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +33,6 @@ import numpy as np
 from auv_gym.sim.observation import OBS_NAMES
 from auv_gym.support.files import write_atomic, write_folder_atomic, write_json, zip_is_whole
 from benchmarks.training.evaluation import HELD_OUT_FILE
-from benchmarks.training.residual import PRIVILEGED_NAMES
 from benchmarks.training.transitions import TRANSITIONS_FILE
 from controllers.agent import METADATA_FILE, MODEL_FILE, STATS_FILE, VECNORM_FILE
 
@@ -69,8 +69,13 @@ def write_stats(path: Any, vec_normalize: Any, obs_names: Any) -> None:
     """vecnormalize.npz of a `VecNormalize`: the observation statistics a loaded agent needs
     (mean, var, count, clip_obs, epsilon, obs_names) and the return statistics a warm start
     continues from (ret_mean, ret_var, ret_count, clip_reward, gamma), plain arrays that load
-    without unpickling anything."""
+    without unpickling anything; ``obs_names`` names each observation entry."""
     obs, ret = vec_normalize.obs_rms, vec_normalize.ret_rms
+    if len(obs_names) != obs.mean.shape[0]:
+        raise ValueError(
+            f"{len(obs_names)} observation names for statistics of {obs.mean.shape[0]} "
+            f"entries: {list(obs_names)}"
+        )
     np.savez(
         path,
         mean=obs.mean,
@@ -110,11 +115,13 @@ def save_agent(
     metadata: dict[str, Any],
     replay_buffer: bool = False,
     training_state: dict[str, Any] | None = None,
+    obs_names: Sequence[str] | None = None,
 ) -> None:
     """Write model.zip, vecnormalize.pkl/.npz and metadata.json as the folder ``folder``
     (and, with ``replay_buffer``, the off-policy replay buffer as replay_buffer.pkl; with
-    ``training_state``, `TRAINING_STATE_FILE`). The .npz names the observation layout
-    ``metadata["obs_names"]`` (default: the env's).
+    ``training_state``, `TRAINING_STATE_FILE`). The .npz names the model's input entries
+    ``obs_names`` (default: the agent's observation, ``metadata["obs_names"]``, else the
+    paper's; a privileged critic's checkpoint passes its longer list, `privileged_names`).
 
     The folder is filled beside its place and then swapped in (`write_folder_atomic`), so
     readers see either the previous complete agent or the new one.
@@ -123,9 +130,7 @@ def save_agent(
     def fill(tmp: Path) -> None:
         model.save(tmp / MODEL_FILE)
         vec_normalize.save(str(tmp / VECNORM_FILE))
-        names = list(metadata.get("obs_names", OBS_NAMES))
-        if len(names) < vec_normalize.obs_rms.mean.shape[0]:  # a privileged critic's checkpoint
-            names += PRIVILEGED_NAMES
+        names = list(metadata.get("obs_names", OBS_NAMES) if obs_names is None else obs_names)
         write_stats(tmp / STATS_FILE, vec_normalize, names)
         write_metadata(tmp / METADATA_FILE, metadata)
         if replay_buffer:
@@ -220,8 +225,9 @@ def write_vecnormalize_from_stats(agent: Path, gamma: float = 0.99) -> Path:
     from stable_baselines3.common.running_mean_std import RunningMeanStd
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    stats = np.load(Path(agent) / STATS_FILE, allow_pickle=False)
-    mean, var = stats["mean"], stats["var"]
+    with np.load(Path(agent) / STATS_FILE, allow_pickle=False) as stats:
+        mean, var = stats["mean"], stats["var"]
+        clip_obs, epsilon, count = (float(stats[key]) for key in ("clip_obs", "epsilon", "count"))
 
     class _Shape(gym.Env):  # only the observation shape matters to VecNormalize
         observation_space = gym.spaces.Box(-np.inf, np.inf, mean.shape, np.float32)
@@ -232,15 +238,17 @@ def write_vecnormalize_from_stats(agent: Path, gamma: float = 0.99) -> Path:
         training=False,
         norm_obs=True,
         norm_reward=False,
-        clip_obs=float(stats["clip_obs"]),
+        clip_obs=clip_obs,
         gamma=gamma,
-        epsilon=float(stats["epsilon"]),
+        epsilon=epsilon,
     )
     venv.obs_rms = RunningMeanStd(shape=mean.shape)
     venv.obs_rms.mean, venv.obs_rms.var = mean.astype(np.float64), var.astype(np.float64)
-    venv.obs_rms.count = float(stats["count"])
+    venv.obs_rms.count = count
     target = Path(agent) / VECNORM_FILE
-    venv.save(str(target))
+    # VecNormalize.save is this pickle.dump, written in place; here the file appears whole
+    write_atomic(target, lambda fh: pickle.dump(venv, fh))
+    venv.close()
     return target
 
 

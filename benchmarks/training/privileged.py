@@ -40,8 +40,14 @@ __all__ = [
     "widen_for_privileged_critic",
 ]
 
-# The critic's first layer: the only weights whose shape the privileged inputs change.
-_CRITIC_INPUT = "mlp_extractor.value_net.0.weight"
+# The critic's first layer, the only weights whose shape the privileged inputs change: its
+# network's first layer, or with no hidden layers for the critic (net_arch's vf: []) its output.
+_CRITIC_INPUTS = ("mlp_extractor.value_net.0.weight", "value_net.weight")
+
+
+def _critic_input(state: dict[str, Any]) -> str:
+    """The key of the critic's first layer in a policy's ``state``."""
+    return next(key for key in _CRITIC_INPUTS if key in state)
 
 
 class PrivilegedMlpExtractor(MlpExtractor):
@@ -80,8 +86,8 @@ class PrivilegedCriticPolicy(ActorCriticPolicy):
         full = int(self.features_dim)
         if not 0 < self.public_dim < full:
             raise ValueError(
-                f"public_dim must lie between 1 and the observation's {full - 1} entries, got "
-                f"{self.public_dim}"
+                f"public_dim must lie between 1 and {full - 1} (the observation has {full} "
+                f"entries, the privileged ones among them), got {self.public_dim}"
             )
         self.mlp_extractor = PrivilegedMlpExtractor(
             self.features_dim,
@@ -118,8 +124,8 @@ def _public_policy(model: Any) -> ActorCriticPolicy:
         **kwargs,
     )
     state = source.state_dict()
-    if _CRITIC_INPUT in state:  # the privileged columns dropped: their normalised inputs at 0
-        state[_CRITIC_INPUT] = state[_CRITIC_INPUT][:, :dim].clone()
+    critic = _critic_input(state)  # the privileged columns dropped: their normalised inputs at 0
+    state[critic] = state[critic][:, :dim].clone()
     policy.load_state_dict(state)
     policy.set_training_mode(False)
     return policy
@@ -165,13 +171,14 @@ def widen_for_privileged_critic(model: Any, state: dict[str, Any]) -> None:
     moments have no saved counterpart)."""
     state = dict(state)
     target = model.policy.state_dict()
-    if _CRITIC_INPUT in state and _CRITIC_INPUT in target:
-        weight = state[_CRITIC_INPUT]
-        extra = target[_CRITIC_INPUT].shape[1] - weight.shape[1]
+    critic = _critic_input(target)
+    if critic in state:  # else load_state_dict names what is missing
+        weight = state[critic]
+        extra = target[critic].shape[1] - weight.shape[1]
         if extra != len(PRIVILEGED_NAMES):
             raise ValueError(
                 f"the saved critic reads {weight.shape[1]} entries, this run's "
-                f"{target[_CRITIC_INPUT].shape[1]} with {len(PRIVILEGED_NAMES)} privileged"
+                f"{target[critic].shape[1]} with {len(PRIVILEGED_NAMES)} privileged"
             )
-        state[_CRITIC_INPUT] = torch.cat([weight, weight.new_zeros(weight.shape[0], extra)], 1)
+        state[critic] = torch.cat([weight, weight.new_zeros(weight.shape[0], extra)], 1)
     model.policy.load_state_dict(state, strict=True)

@@ -11,6 +11,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from controllers.residual import ResidualSettings, check_number
 
 __all__ = [
@@ -23,6 +25,8 @@ __all__ = [
     "PRIVILEGED_NAMES",
     "ResidualTraining",
     "observed_error_columns",
+    "privileged_extension",
+    "privileged_names",
 ]
 
 # Chattering charge per unit of total variation of the applied normalised action per step
@@ -50,6 +54,18 @@ def observed_error_columns(obs_names: Sequence[str]) -> list[int]:
     and initial statistics a privileged critic's true errors take."""
     names = list(obs_names)
     return [names.index(key) for key in PRIVILEGED_INFO_KEYS]
+
+
+def privileged_names(obs_names: Sequence[str]) -> list[str]:
+    """A privileged critic's input names: ``obs_names`` followed by `PRIVILEGED_NAMES`."""
+    return [*obs_names, *PRIVILEGED_NAMES]
+
+
+def privileged_extension(values: np.ndarray, obs_names: Sequence[str]) -> np.ndarray:
+    """``values`` per observation entry (along the last axis: bounds, means, variances) followed
+    by those of the observed x_e, y_e, z_e again: where a privileged critic's true errors start."""
+    values = np.asarray(values)
+    return np.concatenate([values, values[..., observed_error_columns(obs_names)]], axis=-1)
 
 
 # Selection score rms_distance + λ·chattering [m]; λ [m·s] = 0: rms distance alone.

@@ -48,7 +48,7 @@ from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from benchmarks.training.residual import (
     PRIVILEGED_INFO_KEYS,
     ResidualTraining,
-    observed_error_columns,
+    privileged_extension,
 )
 from controllers.envelope_guard import guard_env_commands
 from controllers.residual import (
@@ -105,8 +105,8 @@ class ResidualVectorEnv(VectorWrapper):
         )
         self._privileged = self.settings.privileged_critic
         if self._privileged:  # the critic's true errors, within the observed errors' bounds
-            errors = observed_error_columns(residual_observation_names(config.observation))
-            low, high = np.concatenate([low, low[errors]]), np.concatenate([high, high[errors]])
+            names = residual_observation_names(config.observation)
+            low, high = privileged_extension(low, names), privileged_extension(high, names)
         self.single_observation_space = spaces.Box(low, high, dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs

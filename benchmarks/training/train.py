@@ -46,6 +46,7 @@ from benchmarks.training.evaluation import (
     write_held_out_evaluation,
 )
 from benchmarks.training.learning_curve import EVAL_FILE, truncate_rows
+from benchmarks.training.residual import privileged_names
 from benchmarks.training.vehicle_share import check_native
 from benchmarks.training.warm_start import agent_for_seed, check_warm_start, warm_start
 from controllers.agent import METADATA_FILE, MODEL_FILE, VECNORM_FILE
@@ -231,6 +232,10 @@ def check_options(opts: TrainOptions) -> None:
         raise ValueError(f"eval_duration must be a positive time in s, got {opts.eval_duration}")
     cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
     check_native(cfg.vehicle_share, opts.vec_env, str(opts.config))
+    if cfg.jump_start is not None and (opts.resume or opts.stop_at is not None):
+        raise ValueError(
+            f"{opts.config}: a jump start runs whole, in one go (no --resume, no --stop-at)"
+        )
     if opts.init_from:
         check_warm_start(agent_for_seed(opts.init_from, opts.seed), opts.algo)
 
@@ -399,6 +404,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     )
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = agent_observation_names(cfg, opts.env_id)
+    privileged = residual is not None and residual.privileged_critic  # the actor reads obs_names
     venv = wrap_actions(venv, cfg, obs_names, {**VARIANTS.get(opts.env_id, {}), **cfg.env_kwargs})
 
     previous: dict[str, Any] = {}
@@ -460,7 +466,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         venv = VecNormalize(venv, **cfg.normalize)
         pin_scales(venv, cfg, obs_names)
         policy, policy_kwargs = cfg.policy, cfg.policy_kwargs
-        if residual is not None and residual.privileged_critic:  # the actor reads obs_names
+        if privileged:
             from benchmarks.training.privileged import PrivilegedCriticPolicy
 
             policy = PrivilegedCriticPolicy
@@ -487,10 +493,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         demo_record = {**demo.to_dict(), "transitions": len(demos["rewards"])}
         if checkpoint is None:  # the run's own copy: for a resume and the next phase
             _keep_demonstrations(source, out)
-    if cfg.jump_start is not None and (checkpoint is not None or opts.stop_at is not None):
-        raise ValueError(
-            f"{opts.config}: a jump start runs whole, in one go (no --resume, no --stop-at)"
-        )
     start_wall = float(previous.get("wall_time_s", 0.0))
     best: dict[str, Any] = dict(previous.get("best", {}))
     sessions = [
@@ -597,63 +599,70 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         state=training_state,
         stop_at=target if target < n_timesteps else None,
         next_checkpoint=schedules.get("next_checkpoint"),
+        obs_names=privileged_names(obs_names) if privileged else None,
     )
     callbacks.append(checkpoints)
     if opts.progress_bar:  # ours, to close it at a pause too
         callbacks.append(ProgressBarCallback())
-    remaining = n_timesteps - int(model.num_timesteps)
-    if cfg.jump_start is not None:  # imitation instead of RL (`benchmarks.training.jump_start`)
-        from stable_baselines3.common.utils import configure_logger
+    try:
+        remaining = n_timesteps - int(model.num_timesteps)
+        if cfg.jump_start is not None:  # imitation instead of RL (`benchmarks.training.jump_start`)
+            from stable_baselines3.common.utils import configure_logger
 
-        if spec.off_policy:  # SAC, TQC: their own fitting, the flights kept for the next phase
-            from benchmarks.training.dagger_sac import run_off_policy_jump_start as run_jump_start
-        else:
-            from benchmarks.training.dagger import run_jump_start
+            if spec.off_policy:  # SAC, TQC: their own fitting, the flights kept for the next phase
+                from benchmarks.training.dagger_sac import (
+                    run_off_policy_jump_start as run_jump_start,
+                )
+            else:
+                from benchmarks.training.dagger import run_jump_start
 
-        model.set_logger(configure_logger(opts.verbose, str(out / "tb"), "jump_start"))
+            model.set_logger(configure_logger(opts.verbose, str(out / "tb"), "jump_start"))
 
-        def evaluate() -> None:
+            def evaluate() -> None:
+                if evaluation is not None:
+                    evaluation.num_timesteps = int(model.num_timesteps)
+                    evaluation.evaluate()
+
             if evaluation is not None:
-                evaluation.num_timesteps = int(model.num_timesteps)
-                evaluation.evaluate()
-
-        if evaluation is not None:
-            evaluation.init_callback(model)
-        jump.update(
-            run_jump_start(
-                model,
-                venv,
-                cfg,
-                opts.env_id,
-                opts.seed,
-                evaluate,
-                print if opts.verbose or opts.progress_bar else None,
+                evaluation.init_callback(model)
+            jump.update(
+                run_jump_start(
+                    model,
+                    venv,
+                    cfg,
+                    opts.env_id,
+                    opts.seed,
+                    evaluate,
+                    print if opts.verbose or opts.progress_bar else None,
+                )
             )
-        )
-    elif int(model.num_timesteps) < target:
-        try:
-            model.learn(
-                remaining,
-                callback=CallbackList(callbacks),
-                progress_bar=False,
-                reset_num_timesteps=checkpoint is None,
-                tb_log_name=algorithm.__name__,
-            )
-        except PauseTraining:  # the checkpoint of the pause is written; the model is as in it
-            for callback in callbacks:
-                if isinstance(callback, ProgressBarCallback | UpdateThreads):
-                    callback.on_training_end()
-            model.logger.close()
-    if jump and spec.off_policy:  # before final/: a finished jump start has its transitions
-        from benchmarks.training.transitions import TRANSITIONS_FILE, write_transitions
+        elif int(model.num_timesteps) < target:
+            try:
+                model.learn(
+                    remaining,
+                    callback=CallbackList(callbacks),
+                    progress_bar=False,
+                    reset_num_timesteps=checkpoint is None,
+                    tb_log_name=algorithm.__name__,
+                )
+            except PauseTraining:  # the checkpoint of the pause is written; the model is as in it
+                for callback in callbacks:
+                    if isinstance(callback, ProgressBarCallback | UpdateThreads):
+                        callback.on_training_end()
+        if jump and spec.off_policy:  # before final/: a finished jump start has its transitions
+            from benchmarks.training.transitions import TRANSITIONS_FILE, write_transitions
 
-        write_transitions(out / TRANSITIONS_FILE, model.replay_buffer, obs_names)
-    final_meta = metadata({})
-    from benchmarks.training.privileged import deployable
+            write_transitions(out / TRANSITIONS_FILE, model.replay_buffer, obs_names)
+        final_meta = metadata({})
+        from benchmarks.training.privileged import deployable
 
-    save_agent(*deployable(model, venv), out / "final", final_meta)
-    write_metadata(out / METADATA_FILE, final_meta)
-    venv.close()
+        save_agent(*deployable(model, venv), out / "final", final_meta)
+        write_metadata(out / METADATA_FILE, final_meta)
+    finally:  # SB3's learn leaves its logger (the TensorBoard writer's thread) open
+        logger = getattr(model, "_logger", None)  # set once learning or a jump start began
+        if logger is not None:
+            logger.close()
+        venv.close()
     if opts.export:
         source = out / "best" if (out / "best" / MODEL_FILE).is_file() else out / "final"
         export_agent(source, Path(opts.export))

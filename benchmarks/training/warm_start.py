@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.training.residual import observed_error_columns
+from benchmarks.training.residual import privileged_extension
 from benchmarks.training.transitions import TRANSITIONS_FILE, fill_buffer, read_transitions
 from controllers.agent import (
     METADATA_FILE,
@@ -213,9 +213,8 @@ def warm_start(
         ) from None
     obs_mean, obs_var, obs_count, ret_mean, ret_var, ret_count = _statistics(folder)
     if privileged:  # the true errors start from the statistics of the observed ones
-        errors = observed_error_columns(obs_names)
-        obs_mean = np.concatenate([obs_mean, obs_mean[errors]])
-        obs_var = np.concatenate([obs_var, obs_var[errors]])
+        obs_mean = privileged_extension(obs_mean, obs_names)
+        obs_var = privileged_extension(obs_var, obs_names)
     target = vec_normalize.obs_rms
     if np.shape(obs_mean) != np.shape(target.mean):
         raise ValueError(
