@@ -157,6 +157,34 @@ def test_resume_refuses_other_settings_than_the_run_started_with(tiny_run: Path,
     assert not (tiny_run / "checkpoints" / "step_0000000640").exists()
 
 
+def test_a_larger_budget_is_refused_when_the_best_agent_is_newer_than_the_checkpoint(
+    tiny_run: Path, tmp_path: Path
+) -> None:
+    """Was: a killed run resumed with another --n-timesteps kept best/ from beyond its
+    checkpoint (the stopped run's agent) unless a later evaluation beat the checkpoint's score."""
+    import shutil
+
+    from benchmarks.training.train import TrainOptions, check_resume
+
+    run = tmp_path / "run"
+    checkpoint = run / "checkpoints" / "step_0000000256"
+    shutil.copytree(tiny_run / "checkpoints" / "step_0000000256", checkpoint)
+    recorded = json.loads((checkpoint / "metadata.json").read_text())
+    assert recorded["n_timesteps"] == 512 and recorded["num_timesteps"] == 256
+    opts = TrainOptions(**recorded["options"])
+    (run / "best").mkdir()
+    for best_steps in (128, 256, 384):  # the stopped run saved its best agent at best_steps
+        (run / "best" / "metadata.json").write_text(json.dumps({"num_timesteps": best_steps}))
+        check_resume(checkpoint, opts, recorded["config"], 512)  # the same budget re-makes it
+        if best_steps <= 256:
+            check_resume(checkpoint, opts, recorded["config"], 640)
+    with pytest.raises(
+        ValueError, match=r"holds the agent of step 384, saved after the checkpoint"
+    ):
+        check_resume(checkpoint, opts, recorded["config"], 640)
+    check_resume(checkpoint, opts, recorded["config"])  # no budget given: nothing to compare
+
+
 def test_a_damaged_checkpoint_is_named_or_passed_over(tiny_run: Path, tmp_path: Path) -> None:
     """A model.zip cut short is no complete checkpoint (--resume takes the one before); a
     damaged training state or VecNormalize pickle is named. Was: a bare "invalid literal for

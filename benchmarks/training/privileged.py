@@ -110,18 +110,22 @@ def _public_space(space: spaces.Box, dim: int) -> spaces.Box:
     return spaces.Box(space.low[:dim], space.high[:dim], dtype=space.dtype)
 
 
+def _public_kwargs(model: Any) -> dict[str, Any]:
+    """``model``'s policy keywords as an ordinary `ActorCriticPolicy` takes them."""
+    return {k: v for k, v in model.policy_kwargs.items() if k != "public_dim"}
+
+
 def _public_policy(model: Any) -> ActorCriticPolicy:
     """The plain `ActorCriticPolicy` over the public observation with the actor's weights (and
     the critic's at privileged inputs normalised to 0)."""
     source = model.policy
     dim = source.public_dim
-    kwargs = {k: v for k, v in model.policy_kwargs.items() if k != "public_dim"}
     policy = ActorCriticPolicy(
         _public_space(source.observation_space, dim),
         source.action_space,
         model.lr_schedule,
         use_sde=model.use_sde,
-        **kwargs,
+        **_public_kwargs(model),
     )
     state = source.state_dict()
     critic = _critic_input(state)  # the privileged columns dropped: their normalised inputs at 0
@@ -157,7 +161,7 @@ def deployable(model: Any, vec_normalize: Any) -> tuple[Any, Any]:
     public = copy.copy(model)
     public.policy = _public_policy(model)
     public.policy_class = ActorCriticPolicy
-    public.policy_kwargs = {k: v for k, v in model.policy_kwargs.items() if k != "public_dim"}
+    public.policy_kwargs = _public_kwargs(model)
     public.observation_space = public.policy.observation_space
     public._last_obs = None  # a learn() would start from a reset, not a privileged observation
     return public, _public_normalization(vec_normalize, dim)

@@ -72,9 +72,9 @@ class ResidualVectorEnv(VectorWrapper):
         env: the vector env (its ``unwrapped`` must be an `AUVPath3DVectorEnv`).
         settings: `ResidualTraining` (base controller, β, w_TV, w_P); default: their defaults.
 
-    Info: the env's, plus ``reward_chattering`` (with its ``_`` mask; in ``final_info`` for the
-    vehicles whose episode ended in SAME_STEP mode), ``base_action`` (n, 3), the base action of
-    the returned observation.
+    Info: the env's, plus ``reward_chattering`` and, with w_P > 0, ``reward_residual_precision``
+    (each with its ``_`` mask; in ``final_info`` for the vehicles whose episode ended in
+    SAME_STEP mode), ``base_action`` (n, 3), the base action of the returned observation.
     """
 
     def __init__(self, env: Any, settings: ResidualTraining | None = None) -> None:

@@ -39,6 +39,7 @@ LOGS = "logs"  # OUT/logs/seed_<k>.log: the output of each local worker
 
 
 def seed_dir(out: str | os.PathLike, seed: int) -> Path:
+    """The run folder of training seed ``seed`` under the multi-seed run ``out``."""
     return Path(out) / f"seed_{seed}"
 
 
@@ -190,6 +191,9 @@ def run_ray(
     bar: Any,
     poll_s: float,
 ) -> dict[int, str]:
+    """Train the (seed, train options, status) ``jobs`` as Ray tasks of one CPU each, on a new
+    local instance of ``workers`` CPUs or the cluster at ``address``, polling every ``poll_s``
+    [s] to advance ``bar``; returns the failed seeds' messages."""
     # a new local instance gets ``workers`` CPUs; a cluster has its own
     local = {"num_cpus": workers, "include_dashboard": False} if address is None else {}
     ray = connect_ray(address, **local)

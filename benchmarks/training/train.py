@@ -186,7 +186,9 @@ class TrainOptions:
     )
     progress_bar: bool = option(True, "show the progress bar (tqdm + rich)")
     export: str | None = option(
-        None, "copy the best agent (model, statistics, metadata) to this directory at the end"
+        None,
+        "copy the best agent (model, statistics, metadata) to this directory at the end "
+        "(of a run paused by --stop-at too: the best so far)",
     )
     verbose: int = option(0, "SB3 verbosity; 1 also prints every evaluation")
 
@@ -318,12 +320,17 @@ def _as_json(value: Any) -> Any:
     return json.loads(json.dumps(value, default=json_default))
 
 
-def check_resume(checkpoint: Path, opts: TrainOptions, config: Any) -> None:
+def check_resume(
+    checkpoint: Path, opts: TrainOptions, config: Any, budget: int | None = None
+) -> None:
     """ValueError naming the setting when ``--resume`` would continue the run of ``checkpoint``
     with other settings than it started with (`RESUME_OPTIONS`, the config file's content): the
     weights of one run under the record of another. A larger ``--n-timesteps`` may extend a
-    run (its learning-rate schedule is then the new budget's). A checkpoint whose metadata.json
-    cannot be read is named."""
+    run (its learning-rate schedule is then the new budget's), unless the run's best agent was
+    saved after the checkpoint (a killed run's): the new budget would not make that agent again,
+    and it would stay as the best under a record that never saw it. ``budget``: the resumed
+    run's env steps (None: not checked). A checkpoint whose metadata.json cannot be read is
+    named."""
     meta_file = checkpoint / METADATA_FILE
     try:
         previous = json.loads(meta_file.read_text())
@@ -342,6 +349,25 @@ def check_resume(checkpoint: Path, opts: TrainOptions, config: Any) -> None:
             f"--resume: the settings of --config {opts.config} differ from the run's in "
             f"{meta_file}; resume with the same settings (or start another --out)"
         )
+    best_file = checkpoint.parent.parent / "best" / METADATA_FILE  # OUT/checkpoints/step_<n>/
+    before_budget = previous.get("n_timesteps")
+    if budget is not None and before_budget is not None and budget != before_budget:
+        best_steps = _num_timesteps(best_file)
+        if best_steps > int(previous.get("num_timesteps", 0)):
+            raise ValueError(
+                f"--resume: {best_file.parent} holds the agent of step {best_steps}, saved "
+                f"after the checkpoint {checkpoint.name}; with {budget} env steps instead of "
+                f"{before_budget} the run would not make it again: resume with "
+                f"--n-timesteps {before_budget} first, then extend"
+            )
+
+
+def _num_timesteps(meta_file: Path) -> int:
+    """The env steps an agent's metadata.json records (0 where there is none)."""
+    try:
+        return int(json.loads(meta_file.read_text()).get("num_timesteps", 0))
+    except (OSError, ValueError, TypeError, AttributeError):
+        return 0
 
 
 def check_run_folder(opts: TrainOptions) -> None:
@@ -355,7 +381,9 @@ def check_run_folder(opts: TrainOptions) -> None:
         checkpoint = latest_checkpoint(out)
         if checkpoint is None:
             raise FileNotFoundError(f"--resume: no complete checkpoint under {out / 'checkpoints'}")
-        check_resume(checkpoint, opts, read_zoo_config(opts.config, opts.env_id, opts.algo).raw)
+        cfg = read_zoo_config(opts.config, opts.env_id, opts.algo)
+        budget = int(cfg.n_timesteps if opts.n_timesteps is None else opts.n_timesteps)
+        check_resume(checkpoint, opts, cfg.raw, budget)
 
 
 def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
@@ -405,6 +433,7 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     layout = observation_layout_of(opts.env_id, cfg.env_kwargs)
     obs_names = agent_observation_names(cfg, opts.env_id)
     privileged = residual is not None and residual.privileged_critic  # the actor reads obs_names
+    action_dim = 3 if residual is None else residual.action_dim  # (X, M, N) or the residual's
     venv = wrap_actions(venv, cfg, obs_names, {**VARIANTS.get(opts.env_id, {}), **cfg.env_kwargs})
 
     previous: dict[str, Any] = {}
@@ -421,10 +450,9 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
         source = out if checkpoint is not None else None  # a resumed run's own copy
         if source is None and opts.init_from:
             source = Path(agent_for_seed(opts.init_from, opts.seed))
-        action_count = 3 if residual is None else residual.action_dim
         if source is None:  # refused: no initial agent to carry them
-            check_demonstrations(cfg, [], obs_names, action_count, str(opts.config))
-        demos = read_demonstrations(source, obs_names, action_count, str(opts.config))
+            check_demonstrations(cfg, [], obs_names, action_dim, str(opts.config))
+        demos = read_demonstrations(source, obs_names, action_dim, str(opts.config))
     if checkpoint is not None:
         previous = json.loads((checkpoint / METADATA_FILE).read_text())
         warm = previous.get("warm_start")
@@ -513,7 +541,6 @@ def _train(opts: TrainOptions, argv: Sequence[str] | None) -> Path:
     # choice (their metadata, and the check of saved agents, unchanged).
     if residual is None or layout.kind != "paper":
         residual_meta["observation"] = layout.to_dict()
-    action_dim = 3 if residual is None else residual.action_dim
     share = cfg.vehicle_share
 
     def metadata(extra: dict[str, Any]) -> dict[str, Any]:
