@@ -228,6 +228,7 @@ def test_speed_benchmark_runs_with_a_tiny_budget(tmp_path):
         assert r["autoresets"] >= r["n"]  # every vehicle went through a NEXT_STEP autoreset
     assert results["memory"]["n"] == 1024 and results["memory"]["peak_bytes"] > 0
     assert [r["waves"]["n"] for r in results["waves"]] == [64]  # waves beside no waves
+    assert [r["computer"]["n"] for r in results["guidance"]] == [64]  # beside the plant's law
     # The ratio is the row's own two rates (how fast waves are is a benchmark figure, not a
     # unit test's: a 0.2-s budget on shared cores put it at 2.6 once)
     row = results["waves"][0]

@@ -117,7 +117,8 @@ def test_parse_seeds(text, seeds):
             ["--seeds", "2", "--task-set", "nope"],
             "task set 'nope' is not a validation set; valid: ['paper', 'validation', "
             "'validation_actuators_start', 'validation_actuators_start_light', "
-            "'validation_as_built', 'validation_as_built_plants', 'validation_as_built_start', "
+            "'validation_as_built', 'validation_as_built_plants', "
+            "'validation_as_built_plants_computer', 'validation_as_built_start', "
             "'validation_as_built_start_6dof', 'validation_as_built_start_plants', "
             "'validation_as_built_wide_plants', 'validation_cross_current', "
             "'validation_fins_start', 'validation_paper_actuator', 'validation_paper_start']",

@@ -13,18 +13,22 @@ positional arrays:
 
 A record member that is None is compiled out: a kernel is compiled for the types it is given,
 so it holds no code for it. That is how the plant is chosen (the 6-DOF plant's ``roll`` and
-``hull``, None on the 5-DOF: `plants`) and how a safety cost with zero weights is skipped
-(``cost``). The realistic actuators' state and the ocean rows are always passed; their per-row
-flags decide at run time (compiling them out bought little speed for a minute of compiling per
-combination, docs/performance.md).
+``hull``, None on the 5-DOF: `plants`), how a safety cost with zero weights is skipped
+(``cost``) and how the virtual point moves (``guidance``: None, the plant's law at the true
+along-track error; an array, the speeds a guidance computer holds, `virtual_point_law`). The
+realistic actuators' state and the ocean rows are always passed; their per-row flags decide at
+run time (compiling them out bought little speed for a minute of compiling per combination,
+docs/performance.md).
 """
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from auv_gym.ocean.forcing import OCEAN, ocean_velocity
 from auv_gym.sim.integrator import REALISTIC_ACTUATOR, RECORD
@@ -40,6 +44,7 @@ __all__ = [
     "ocean_over_ground",
     "realistic_actuators",
     "store_actuator_state",
+    "virtual_point_law",
 ]
 
 
@@ -55,6 +60,9 @@ class Fleet(NamedTuple):
     hull: np.ndarray | None  # 6-DOF plant: hull rows (`SixDofVehicle.kernel_vector`)
     actuators: np.ndarray  # realistic actuators: `actuators.ACTUATOR_STATE` rows (else zero)
     ocean: np.ndarray  # waves or profiled current: `ocean.ocean_row` rows (else inactive)
+    # the virtual-point speed u_p [m/s] a guidance computer holds over the control period
+    # (sensors virtual_point="estimate", `navigation`); None: the plant's law at the true x_e
+    guidance: np.ndarray | None
 
 
 class EpisodeTable(NamedTuple):
@@ -121,3 +129,25 @@ def store_actuator_state(actuators, i, shaft, d_s, d_r, rate_limited):
     actuators[i, ACTUATOR_STATE.delta_s] = d_s
     actuators[i, ACTUATOR_STATE.delta_r] = d_r
     actuators[i, ACTUATOR_STATE.rate_limited] = rate_limited
+
+
+# virtual_point_law: the (u_D [m/s], σ [m]) of u_p = u_D(1 + tanh(x_e/σ)) (docs/model.md §3.3)
+# the RK4 stages of vehicle i's physics step use. A held speed enters the same law as u_D = the
+# speed and σ = ∞: tanh(x_e/∞) = tanh(±0) = ±0 exactly, so u_p is the held speed whatever x_e,
+# and the plants' state equations need no second form.
+def _plant_law(guidance, i, u_d, sigma):
+    return u_d, sigma
+
+
+def _held_law(guidance, i, u_d, sigma):
+    return guidance[i], math.inf
+
+
+def virtual_point_law(guidance, i, u_d, sigma):
+    """(u_D, σ) for vehicle i: the configured law (``guidance`` None) or its held speed."""
+    return (_plant_law if guidance is None else _held_law)(guidance, i, u_d, sigma)
+
+
+@overload(virtual_point_law, inline="always")
+def _virtual_point_law(guidance, i, u_d, sigma):
+    return _plant_law if isinstance(guidance, types.NoneType) else _held_law

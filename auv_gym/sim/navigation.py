@@ -6,7 +6,11 @@ on the DVL's velocity over ground rotated by the AHRS attitude), store the measu
 ring of k + 1 slots and build the observation from those of step t − k: the guidance row is
 recomputed from the estimated pose (x_e, y_e, z_e, ψ_e), velocities and rates come from the
 DVL and AHRS. The path parameter s stays the plant's. The reward, termination and metrics read
-the true state and the true guidance row (`Simulator.guid`), which this module never writes.
+the true state and the true guidance row (`Simulator.guid`), which this module writes only with
+a guidance computer (``virtual_point="estimate"``, docs/model.md §14.9): then it keeps the
+virtual-point speed u_p of the estimated x_e for the next control period (`SensorArrays`
+``held_speed``, which the physics reads through `fleet.Fleet`) and gives the true row that
+speed.
 
 Randomness is counter-based like the disturbances (`disturbances.uniform01`): sample errors
 from the episode's sensor key at counter ``STRIDE·t + channel``, per-episode biases from its
@@ -25,7 +29,13 @@ from auv_gym.ocean.disturbances import KEY, standard_normal, uniform01
 from auv_gym.paths.guidance import body_errors_trig, wrap_angle
 from auv_gym.sim.fleet import ocean_over_ground
 from auv_gym.sim.integrator import config_record
-from auv_gym.sim.observation import GUIDANCE_DIM, OBS_DIM, build_observation, guidance_row
+from auv_gym.sim.observation import (
+    GUIDANCE_DIM,
+    GUIDE,
+    OBS_DIM,
+    build_observation,
+    guidance_row,
+)
 from auv_gym.sim.task import ENVELOPE, NON_FINITE
 from auv_gym.support.records import field_indices, fixed_tuple, record_type
 from auv_gym.vehicle.dynamics import STATE, STATE_DIM, eta_dot
@@ -256,7 +266,13 @@ def _sense_row(i, reset, fleet, episodes, outputs, s, sensors):
     for j in range(MEAS_DIM):
         est[_MEAS_STATE[j]] = delayed[j]
     nav_guid = sensors.guid[i]
-    guidance_row(est, episodes.kinds[r], episodes.pdata[r], cfg.u_d, cfg.sigma, nav_guid)
+    kind, pdata = episodes.kinds[r], episodes.pdata[r]
+    guidance_row(est, kind, pdata, cfg.u_d, cfg.sigma, nav_guid)
+    if s.guidance_estimate != 0.0:  # the guidance computer's u_p, held until the next step
+        held = nav_guid[GUIDE.u_p]
+        sensors.held_speed[i] = held
+        # the true row at the speed the point now moves at (u_D = held, σ = ∞: u_p = held)
+        guidance_row(st, kind, pdata, held, math.inf, outputs.guid[i])
     o = outputs.obs[i]
     build_observation(est, nav_guid, cfg.u_d, o)
     # The readings saturate at the observation bounds, except where the true observation left
@@ -285,6 +301,7 @@ class SensorArrays(NamedTuple):
     buffer: np.ndarray  # delay ring of measurements (`MEAS`)
     estimate: np.ndarray  # the state with the measured entries
     guid: np.ndarray  # guidance row of the estimated pose
+    held_speed: np.ndarray  # [m/s] the guidance computer's u_p (virtual_point="estimate")
 
 
 class Navigation:
@@ -293,6 +310,7 @@ class Navigation:
     the estimated observation, run after every physics step and reset."""
 
     ARRAYS = ("keys", "nav", "buffer", "estimate", "guid")
+    GUIDANCE_ARRAYS = ("held_speed",)  # saved too with virtual_point="estimate"
 
     def __init__(self, config: SensorConfig, control_dt: float, n: int, speed: float = 1.0) -> None:
         self.config = config
@@ -302,6 +320,21 @@ class Navigation:
         self.buffer = np.zeros((n, config.delay + 1, MEAS_DIM))
         self.estimate = np.zeros((n, STATE_DIM))  # the state with the measured entries
         self.guid = np.zeros((n, GUIDANCE_DIM))  # guidance row of the estimated pose
+        # [m/s] the virtual-point speed a guidance computer holds over the next control period
+        # (virtual_point="estimate"; the physics reads it through `Fleet.guidance`)
+        self.held_speed = np.zeros(n)
+
+    @property
+    def arrays(self) -> tuple[str, ...]:
+        """The names of the per-vehicle arrays a snapshot saves."""
+        extra = self.GUIDANCE_ARRAYS if self.config.guidance_from_estimate else ()
+        return (*self.ARRAYS, *extra)
+
+    @property
+    def guidance(self) -> np.ndarray | None:
+        """The held virtual-point speeds the physics reads (`fleet.Fleet.guidance`), or None
+        when the plant's law moves the virtual point."""
+        return self.held_speed if self.config.guidance_from_estimate else None
 
     def ground_velocity(self, rows: np.ndarray) -> np.ndarray:
         """The last valid DVL sample over ground (u, v, w) of ``rows``, body frame [m/s]: what
@@ -315,5 +348,7 @@ class Navigation:
             noise_keys = sim.keys[rows, KEY.noise]
             self.keys[rows, 0] = sensor_key(noise_keys, 0)
             self.keys[rows, 1] = sensor_key(noise_keys, 1)
-        sensors = SensorArrays(self.keys, self.nav, self.buffer, self.estimate, self.guid)
+        sensors = SensorArrays(
+            self.keys, self.nav, self.buffer, self.estimate, self.guid, self.held_speed
+        )
         _sense(rows, reset, sim.fleet, sim.episodes, sim.outputs, self._packed, sensors)

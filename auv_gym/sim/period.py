@@ -22,6 +22,7 @@ from auv_gym.sim.fleet import (
     ocean_active,
     realistic_actuators,
     store_actuator_state,
+    virtual_point_law,
 )
 from auv_gym.sim.integrator import (
     CONFIG_DIM,
@@ -88,6 +89,9 @@ def period_body(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
     shaft, d_s, d_r = actuator_state(act, i)
     rate_limited = 0
     added = (0.0, 0.0, 0.0)
+    # the virtual point's law: the plant's at the true x_e, or a guidance computer's held u_p
+    u_law, sigma_law = virtual_point_law(fleet.guidance, i, cfg.u_d, cfg.sigma)
+    dt = cfg.physics_dt
     for k in range(n_sub):
         n = step_index + k
         f, current, wave, added = physics_step_forcing(
@@ -113,9 +117,7 @@ def period_body(fleet, i, a_X, a_M, a_N, kind, pdata, cfg_array, out):
         else:
             X, M, N = actuation(a_X, a_M, a_N, cfg, fin_gain, surge(hull, x))
             tau, f_in = commanded_forces(hull, X, M, N, f)
-        nxt = plant_rk4(
-            hull, i, x, tau, f_in, current, p, kind, pdata, cfg.u_d, cfg.sigma, cfg.physics_dt
-        )
+        nxt = plant_rk4(hull, i, x, tau, f_in, current, p, kind, pdata, u_law, sigma_law, dt)
         dc = gauss_markov_step(dc, cfg.gm_a, gm_b, current_key, n)
         sum_X += X
         sum_M += M

@@ -310,6 +310,7 @@ class Simulator:
             hull=self.hull if self.six_dof else None,
             actuators=self.actuator_state,
             ocean=self.ocean,
+            guidance=None if self.navigation is None else self.navigation.guidance,
         )
         self.episodes = EpisodeTable(
             self._row, self._kind, self._pdata, self._cfg, self._task, *self._paper_bounds
@@ -344,10 +345,10 @@ class Simulator:
         return _ACTUATOR_NAMES[codes]
 
     def _snapshot_arrays(self) -> dict[str, np.ndarray]:
-        """`SNAPSHOT_ARRAYS` by name, then the sensor model's (`Navigation.ARRAYS`) if any."""
+        """`SNAPSHOT_ARRAYS` by name, then the sensor model's (`Navigation.arrays`) if any."""
         arrays = {name: getattr(self, name) for name in SNAPSHOT_ARRAYS}
         if self.navigation is not None:
-            for name in self.navigation.ARRAYS:
+            for name in self.navigation.arrays:
                 arrays[f"navigation.{name}"] = getattr(self.navigation, name)
         return arrays
 

@@ -12,6 +12,10 @@ The horizontal position is dead reckoning reset by each fix (``navigation="dead_
 or a Kalman filter over the same measurements (``navigation="kalman"``, docs/model.md §14.8)
 that blends each fix into the dead-reckoned track and estimates the track's velocity error.
 
+The virtual point (the path point the errors are measured from) moves with the true along-track
+error by default, as part of the plant (``virtual_point="true"``); ``virtual_point="estimate"``
+advances it as a vehicle's guidance computer would, from the estimated one (docs/model.md §14.9).
+
 Presets (`SENSOR_PRESETS`): "ideal" (no sensor model: the observation is the exact state, the
 default), "typical" (values and their sources in docs/model.md §14.3) and "typical_kalman"
 (the same suite with the navigation filter). A dict of fields, or {"preset": name,
@@ -35,7 +39,13 @@ from auv_gym.support.validation import (
     whole_steps,
 )
 
-__all__ = ["SENSOR_FIELDS", "SENSOR_PRESETS", "SensorConfig", "sensor_key"]
+__all__ = [
+    "SENSOR_FIELDS",
+    "SENSOR_PRESETS",
+    "VIRTUAL_POINT_SOURCES",
+    "SensorConfig",
+    "sensor_key",
+]
 
 # Documented ranges: far beyond any real sensor, so only nonsense is refused.
 MAX_SPEED_ERROR = 1.0  # [m/s] DVL noise and bias σ
@@ -49,6 +59,9 @@ MAX_DELAY = 1000  # [control steps]
 MAX_DROPOUT = 0.99  # [-] probability that a DVL sample is lost
 PRESET_NAMES = ("ideal", "typical", "typical_kalman")
 NAVIGATION_MODES = ("dead_reckoning", "kalman")
+# What moves the virtual point (docs/model.md §14.9): the plant's law at the true along-track
+# error, or a guidance computer's at the estimated one, held over each control period.
+VIRTUAL_POINT_SOURCES = ("true", "estimate")
 MAX_FILTER_NOISE = 10.0  # [m/s, 1/√s, -, rad] the filter's assumed errors
 # The smallest filter setting and, with the filter, position-fix σ [m/s, 1/√s, -, rad, m]: the
 # filter's covariance holds their squares and the fix update divides by a product of two, so
@@ -91,6 +104,7 @@ class SensorConfig:
     fix_interval: float | None = 0.0  # [s] between fixes; 0: every step; None: start fix only
     delay: int = 0  # [control steps] k: the observation uses the measurements of step t − k
     navigation: str = "dead_reckoning"  # or "kalman": the position filter of §14.8
+    virtual_point: str = "true"  # or "estimate": advanced from the estimated x_e (§14.9)
     # The filter's model (None: derived from the errors above, docs/model.md §14.8): σ of the
     # measured horizontal velocity per sample [m/s], the random-walk density of the scale and
     # heading errors it estimates [1/√s, rad/√s] and their initial σ [-], [rad].
@@ -128,6 +142,7 @@ class SensorConfig:
         object.__setattr__(self, "delay", integer("sensors delay", self.delay, 0, MAX_DELAY))
         choice("sensors preset", self.preset, [*PRESET_NAMES, "custom"])
         choice("sensors navigation", self.navigation, NAVIGATION_MODES)
+        choice("sensors virtual_point", self.virtual_point, VIRTUAL_POINT_SOURCES)
         for name, unit in (
             ("filter_velocity_noise", "m/s"),
             ("filter_bias_noise", "1/√s"),
@@ -173,6 +188,11 @@ class SensorConfig:
     def ideal(self) -> bool:
         """True for the "ideal" preset: the observation is the exact state (no sensor kernel)."""
         return self.preset == "ideal"
+
+    @property
+    def guidance_from_estimate(self) -> bool:
+        """Whether a guidance computer advances the virtual point from the estimated x_e."""
+        return self.virtual_point == "estimate"
 
     @classmethod
     def from_spec(cls, spec: str | Mapping | SensorConfig | None) -> SensorConfig:
@@ -235,6 +255,7 @@ class SensorConfig:
         values["control_dt"] = control_dt
         velocity, bias, scale, heading = self.filter_model(speed)
         values["kalman"] = 1.0 if self.navigation == "kalman" else 0.0
+        values["guidance_estimate"] = 1.0 if self.guidance_from_estimate else 0.0
         values["q_position"] = (velocity * control_dt) ** 2  # [m²] per control step
         values["q_bias"] = bias * bias * control_dt  # [-, rad²] per control step
         values["p0_scale"] = scale * scale
@@ -265,6 +286,7 @@ SENSOR_FIELDS = (
     "q_bias",
     "p0_scale",
     "p0_heading",
+    "guidance_estimate",
 )
 
 _DEG = math.pi / 180.0

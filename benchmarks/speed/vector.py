@@ -7,7 +7,8 @@
    simulated seconds of all vehicles per wall-clock second. Each size runs once per actuator
    model of ``--actuators``, side by side ("realistic": propeller and fin dynamics,
    docs/model.md §2.6). Beside them, side by side: waves, the sensor model, the whole
-   vehicle as built (`AS_BUILT`) and the 6-DOF plant (docs/model.md §15).
+   vehicle as built (`AS_BUILT`), the as-built vehicle with its guidance computer
+   (docs/model.md §14.9) and the 6-DOF plant (docs/model.md §15).
 2. Peak resident memory of N = 65,536 vehicles (reset, then stepped), in a fresh subprocess:
    growth of `ru_maxrss` over the same process after imports and compilation.
 3. SB3 PPO rollout collection (`collect_rollouts`, MlpPolicy, torch on one thread) through the
@@ -278,6 +279,17 @@ def _as_built_rows(args: Options) -> list[dict[str, Any]]:
     return _side_by_side(args, [args.as_built_n], AS_BUILT, ("paper", "as_built"))
 
 
+def _guidance_rows(args: Options) -> list[dict[str, Any]]:
+    """Physics rate of the as-built configuration with the virtual point moved by the plant's
+    law and by the guidance computer (docs/model.md §14.9), side by side."""
+    print(
+        "\nThe vehicle as built with its guidance computer (virtual_point='estimate') beside "
+        "the plant's law"
+    )
+    computer = {"sensors": {"preset": "typical_kalman", "virtual_point": "estimate"}}
+    return _side_by_side(args, [args.guidance_n], computer, ("plant_law", "computer"), AS_BUILT)
+
+
 def _plant_rows(args: Options) -> list[dict[str, Any]]:
     """Physics rate of the 5-DOF plant and the 6-DOF one (docs/model.md §15), side by side."""
     print("\nThe 6-DOF plant (roll, Fossen's REMUS 100 hull) beside the 5-DOF, paper configuration")
@@ -300,6 +312,11 @@ class Options:
     )
     plant_n: int = option(
         4096, "vehicles of the side-by-side run of the 5-DOF and 6-DOF plants; 0 skips it"
+    )
+    guidance_n: int = option(
+        4096,
+        "vehicles of the side-by-side run of the as-built configuration with and without its "
+        "guidance computer; 0 skips it",
     )
     memory_n: int = option(MEMORY_N, "vehicles of the peak-memory run; 0 skips it")
     ppo_envs: tuple[int, ...] = option(
@@ -335,7 +352,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             writable_location(args.json, "--json", folder=False)
     if args.quick:
         args.sizes, args.seconds, args.memory_n, args.max_time = (1, 64), 0.05, 1024, 0.5
-        args.waves_n = args.as_built_n = args.plant_n = 64
+        args.waves_n = args.as_built_n = args.plant_n = args.guidance_n = 64
         args.threads, args.sensor_sizes = (1,), (64,)
         args.ppo_envs, args.ppo_steps, args.ppo_repeats = (4,), 8, 1
 
@@ -372,6 +389,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results["sensors"] = _sensor_rows(args)
     if args.as_built_n > 0:
         results["as_built"] = _as_built_rows(args)
+    if args.guidance_n > 0:
+        results["guidance"] = _guidance_rows(args)
     if args.plant_n > 0:
         results["plant"] = _plant_rows(args)
 
