@@ -131,7 +131,8 @@ def compute_metrics(
       rms_speed_error — √mean((u − u_D)²) over the window;
       mean_path_speed — mean virtual-point speed u_p over the window: the pace at which the
       path is flown (u_D for a vehicle on the virtual point; one that keeps ahead of it,
-      x_e > 0, drives it faster, u_p = u_D(1 + tanh(x_e/σ)), docs/model.md §3.3);
+      x_e > 0, drives it faster, u_p = u_D(1 + tanh(x_e/σ)), docs/model.md §3.3; with a
+      guidance computer the speed it held, from the estimated x_e, §14.9);
       max_surge — max_k u over the episode (realistic speed: REMUS 100 tops out near
       2.3-2.5 m/s); overspeed_fraction — fraction of the episode's control intervals
       [t_k, t_{k+1}) whose end sample has u > the vehicle's top speed `Trajectory.top_speed`

@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 import controllers
+from auv_gym import AUVPath3DEnv
+from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.rollout import rollouts
 from auv_gym.sim.config import SimConfig
 from auv_gym.sim.observation import GUIDE, OBS
@@ -106,6 +108,53 @@ def test_the_point_closes_the_error_its_law_reads_the_other_carries_the_navigati
     assert plant_true < 0.25 * plant_seen  # measured 0.023 against 0.211 m
     assert held_seen < 0.25 * held_true  # measured 0.034 against 0.211 m
     assert held_true > 5.0 * plant_true
+
+
+def _mean_along_track(sensors: dict) -> float:
+    """Mean true x_e [m] over t ≥ 40 s of two 80-s episodes of the PID on the paper helix."""
+    flights = rollouts(controllers.make("pid_los"), [0, 1], sensors=sensors, max_time=80.0)
+    return float(np.mean([f.samples["x_e"][f.t >= 40.0].mean() for f in flights]))
+
+
+def test_a_delayed_estimate_puts_the_vehicle_its_delay_ahead_of_the_computers_point():
+    """With exact sensors delayed k steps the estimate is k·Δt old against the point's present
+    s, so the computer settles the vehicle about k·Δt·u_D ahead of its point (0.25 m for k = 5
+    at 1 m/s, measured 0.244); the plant's law keeps it on the point."""
+    delayed = {"fix_interval": 0.0, "delay": 5}
+    assert abs(_mean_along_track(delayed)) < 0.02
+    ahead = _mean_along_track({**delayed, "virtual_point": "estimate"})
+    assert ahead == pytest.approx(5 * 0.05 * 1.0, rel=0.1)
+
+
+# Two threads compile the threaded kernel with the guidance computer: the integration tier's.
+@pytest.mark.parametrize("threads", [1, pytest.param(2, marks=pytest.mark.integration)])
+def test_batched_equals_single_through_autoresets_and_snapshots(threads):
+    """Three vehicles of 3-s episodes (autoresets throughout) equal three single envs bit for
+    bit, and a snapshot taken mid-way resumes exactly: every reset path sets the held speed."""
+    sensors = {"preset": "typical", "virtual_point": "estimate"}
+    actions = np.random.default_rng(1).uniform(-0.6, 0.6, size=(120, 3, 3))
+    vec = AUVPath3DVectorEnv(3, sensors=sensors, threads=threads, max_time=3.0)
+    obs = [vec.reset(seed=7)[0]]
+    for a in actions[:60]:
+        obs.append(vec.step(a)[0])
+    snap = vec.snapshot()
+    tail = [vec.step(a)[0] for a in actions[60:]]
+    vec.restore(snap)
+    np.testing.assert_array_equal([vec.step(a)[0] for a in actions[60:]], tail)
+    obs += tail
+    for i in range(3):
+        env = AUVPath3DEnv(sensors=sensors, max_time=3.0)
+        single, ended, resets = [env.reset(seed=7 + i)[0]], False, 0
+        for a in actions:  # NEXT_STEP: the step after an episode's end resets, its action unused
+            if ended:
+                single.append(env.reset()[0])
+                ended, resets = False, resets + 1
+            else:
+                o, _, terminated, truncated, _ = env.step(a[i])
+                single.append(o)
+                ended = terminated or truncated
+        assert resets >= 1  # an autoreset was compared, not only the first episode
+        np.testing.assert_array_equal(np.array(obs)[:, i], single)
 
 
 def test_a_snapshot_keeps_the_held_speed_and_resumes_bit_for_bit():
