@@ -17,6 +17,7 @@ from auv_gym.sim.observation import GUIDE, OBS
 from auv_gym.sim.simulator import Simulator
 from auv_gym.vehicle.dynamics import STATE
 from auv_gym.vehicle.sensors import SensorConfig
+from tests.test_sensors import flown_through_a_snapshot
 
 TYPICAL = {"preset": "typical_kalman"}
 ESTIMATE = {**TYPICAL, "virtual_point": "estimate"}
@@ -134,14 +135,7 @@ def test_batched_equals_single_through_autoresets_and_snapshots(threads):
     sensors = {"preset": "typical", "virtual_point": "estimate"}
     actions = np.random.default_rng(1).uniform(-0.6, 0.6, size=(120, 3, 3))
     vec = AUVPath3DVectorEnv(3, sensors=sensors, threads=threads, max_time=3.0)
-    obs = [vec.reset(seed=7)[0]]
-    for a in actions[:60]:
-        obs.append(vec.step(a)[0])
-    snap = vec.snapshot()
-    tail = [vec.step(a)[0] for a in actions[60:]]
-    vec.restore(snap)
-    np.testing.assert_array_equal([vec.step(a)[0] for a in actions[60:]], tail)
-    obs += tail
+    obs = flown_through_a_snapshot(vec, actions)
     for i in range(3):
         env = AUVPath3DEnv(sensors=sensors, max_time=3.0)
         single, ended, resets = [env.reset(seed=7 + i)[0]], False, 0
@@ -154,7 +148,7 @@ def test_batched_equals_single_through_autoresets_and_snapshots(threads):
                 single.append(o)
                 ended = terminated or truncated
         assert resets >= 1  # an autoreset was compared, not only the first episode
-        np.testing.assert_array_equal(np.array(obs)[:, i], single)
+        np.testing.assert_array_equal(obs[:, i], single)
 
 
 def test_a_snapshot_keeps_the_held_speed_and_resumes_bit_for_bit():

@@ -207,24 +207,33 @@ def test_position_fixes_reset_dead_reckoning_at_their_interval():
     assert np.abs(estimates[..., :2] - states[..., :2]).max() < 2e-3
 
 
+def flown_through_a_snapshot(vec: AUVPath3DVectorEnv, actions: np.ndarray) -> np.ndarray:
+    """The observations of ``vec`` reset with seed 7 and stepped through ``actions`` (steps,
+    n, 3), with a snapshot taken half-way: the second half is flown twice, from the snapshot
+    the second time, and must repeat bit for bit."""
+    half = len(actions) // 2
+    obs = [vec.reset(seed=7)[0]]
+    for a in actions[:half]:
+        obs.append(vec.step(a)[0])
+    snap = vec.snapshot()
+    tail = [vec.step(a)[0] for a in actions[half:]]
+    vec.restore(snap)
+    np.testing.assert_array_equal([vec.step(a)[0] for a in actions[half:]], tail)
+    return np.array(obs + tail)
+
+
 # Two threads compile the threaded kernel with the sensor model (about 2.5 min on 2 cores): the
 # integration tier's; the serial kernel is the set-up's.
 @pytest.mark.parametrize("threads", [1, pytest.param(2, marks=pytest.mark.integration)])
 def test_batched_equals_single_and_snapshots_resume_exactly(threads):
     actions = np.random.default_rng(1).uniform(-0.6, 0.6, size=(120, 3, 3))
-    vec = AUVPath3DVectorEnv(3, sensors="typical", threads=threads)
-    obs = [vec.reset(seed=7)[0]]
-    for a in actions[:60]:
-        obs.append(vec.step(a)[0])
-    snap = vec.snapshot()
-    tail = [vec.step(a)[0] for a in actions[60:]]
-    vec.restore(snap)
-    np.testing.assert_array_equal([vec.step(a)[0] for a in actions[60:]], tail)
-    obs += tail
+    obs = flown_through_a_snapshot(
+        AUVPath3DVectorEnv(3, sensors="typical", threads=threads), actions
+    )
     for i in range(3):
         env = AUVPath3DEnv(sensors="typical")
         single = [env.reset(seed=7 + i)[0]] + [env.step(a[i])[0] for a in actions]
-        np.testing.assert_array_equal(np.array(obs)[:, i], single)
+        np.testing.assert_array_equal(obs[:, i], single)
 
 
 def test_heading_estimate_stays_wrapped():
