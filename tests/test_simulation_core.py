@@ -34,11 +34,14 @@ def _off(sim: Simulator) -> set[str]:
 @pytest.mark.parametrize(
     ("kwargs", "expected_off"),
     [
-        ({}, {"roll", "hull"}),
-        ({"actuator": "realistic", "disturbance": "ocean"}, {"roll", "hull"}),
-        ({"safety_cost": _NO_COST}, {"roll", "hull", "cost"}),
-        ({"plant": "6dof"}, set()),
-        ({"plant": "6dof", "safety_cost": _NO_COST}, {"cost"}),
+        ({}, {"roll", "hull", "guidance"}),
+        ({"actuator": "realistic", "disturbance": "ocean"}, {"roll", "hull", "guidance"}),
+        ({"safety_cost": _NO_COST}, {"roll", "hull", "cost", "guidance"}),
+        ({"plant": "6dof"}, {"guidance"}),
+        ({"plant": "6dof", "safety_cost": _NO_COST}, {"cost", "guidance"}),
+        # the sensor model alone keeps the plant's law; the guidance computer is an array
+        ({"sensors": "typical_kalman"}, {"roll", "hull", "guidance"}),
+        ({"sensors": {"preset": "typical", "virtual_point": "estimate"}}, {"roll", "hull"}),
     ],
 )
 def test_the_plant_and_an_unused_safety_cost_are_chosen_by_type(kwargs, expected_off) -> None:
@@ -51,7 +54,10 @@ def test_the_records_are_the_simulators_own_arrays() -> None:
     """The kernels write through the records into the arrays `snapshot` and the envs read."""
     sim = _sim(actuator="realistic", plant="6dof")
     for name, array in sim.fleet._asdict().items():
-        own = {"actuators": sim.actuator_state}.get(name, getattr(sim, name))
+        # no sensor model: no guidance computer (`tests/test_guidance_computer.py` has one)
+        own = {"actuators": sim.actuator_state, "guidance": None}.get(
+            name, getattr(sim, name, None)
+        )
         assert array is own, name
     assert sim.outputs.obs is sim.obs and sim.episodes.cfgs is sim._cfg
     sim.reset_rows([0, 1], [np.random.default_rng(s) for s in (0, 1)])
