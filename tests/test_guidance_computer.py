@@ -13,15 +13,15 @@ from auv_gym import AUVPath3DEnv
 from auv_gym.envs.vector_env import AUVPath3DVectorEnv
 from auv_gym.rollout import rollouts
 from auv_gym.sim.config import SimConfig
-from auv_gym.sim.observation import GUIDE, OBS
+from auv_gym.sim.observation import GUIDE
 from auv_gym.sim.simulator import Simulator
 from auv_gym.vehicle.dynamics import STATE
 from auv_gym.vehicle.sensors import SensorConfig
-from tests.test_sensors import flown_through_a_snapshot
+from benchmarks.analysis.navigation_floor import _SeenErrors
+from tests.test_sensors import CRUISE, flown_through_a_snapshot
 
 TYPICAL = {"preset": "typical_kalman"}
 ESTIMATE = {**TYPICAL, "virtual_point": "estimate"}
-CRUISE = np.array([[0.4, 0.0, 0.05]])  # a steady, slowly turning vehicle
 
 
 def _sim(sensors: dict, n: int = 2, seed: int = 0) -> Simulator:
@@ -71,21 +71,10 @@ def test_exact_sensors_differ_from_the_plants_law_only_by_the_hold():
     assert np.all(lag > 0.0) and np.all(lag < 0.005 * progress)
 
 
-class _Seen:
-    """A policy recording the along-track error its observations carry; ``inner`` acts."""
-
-    def __init__(self, inner):
-        self.inner, self.env_kwargs, self.seen = inner, getattr(inner, "env_kwargs", None), []
-
-    def predict(self, obs, state=None, episode_start=None, **kw):
-        self.seen.append(np.array(obs[:, OBS.x_e], dtype=np.float64))
-        return self.inner.predict(obs, state=state, episode_start=episode_start, **kw)
-
-
 def _along_track(sensors: dict) -> tuple[float, float]:
     """RMS [m] of the true and of the estimated x_e over t ≥ 50 s of three 150-s episodes of
     the PID through the navigation filter on the paper helix."""
-    recorder = _Seen(controllers.make("pid_los"))
+    recorder = _SeenErrors(controllers.make("pid_los"))  # x_e, y_e, z_e as observed
     flights = rollouts(recorder, [0, 1, 2], sensors=sensors, max_time=150.0)
     seen = np.stack(recorder.seen, axis=1)
     true, estimated = [], []
@@ -94,7 +83,7 @@ def _along_track(sensors: dict) -> tuple[float, float]:
         steps = len(flight.t) - 1
         window = flight.t[:steps] >= 50.0
         true.append(flight.samples["x_e"][:steps][window])
-        estimated.append(seen[i, :steps][window])
+        estimated.append(seen[i, :steps, 0][window])
     return (
         math.sqrt(np.mean(np.concatenate(true) ** 2)),
         math.sqrt(np.mean(np.concatenate(estimated) ** 2)),
