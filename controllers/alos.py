@@ -1,13 +1,15 @@
 r"""Guidance against ocean currents: a current observer, crab angles over ground, gated ALOS.
 
-Not in the paper; an option of the paper's LOS (`controllers.los`) for FBSM and backstepping,
-switched on by the gains ``current_observer``, ``alos_y``, ``alos_z`` and ``speed_over_ground``
-(presets ``fbsm_colos``, ``backstepping_colos``; manual: docs/model.md §3.7). Every quantity comes
-from the observation (docs/model.md §11.2): the errors ε = (x_e, y_e, z_e), ``psi_error``
-ψ − ψ_F, θ, θ_F, the velocities through the water ν = (u, v, w), the rates q, r, u_D and u_p —
-what a real AUV has from its navigation (position, attitude), its velocity sensors and its own
-guidance. No velocity over ground and no knowledge of the current is used, so the observation
-is unchanged. Notation as docs/model.md §3.2 and §3.4.
+Not in the paper; an option of the paper's LOS (`controllers.los`) for FBSM, backstepping and
+the PID, switched on by the gains ``current_observer``, ``alos_y``, ``alos_z``,
+``speed_over_ground`` and ``dvl_current`` (presets ``fbsm_colos``, ``backstepping_colos``; manual:
+docs/model.md §3.7). Every quantity comes from the observation (docs/model.md §11.2): the errors
+ε = (x_e, y_e, z_e), ``psi_error`` ψ − ψ_F, θ, θ_F, the velocities through the water
+ν = (u, v, w), the rates q, r, u_D and u_p — what a real AUV has from its navigation (position,
+attitude), its velocity sensors and its own guidance. Without ``dvl_current`` no velocity over
+ground and no knowledge of the current is used, so the paper's observation suffices; with it
+(5) the current is read from the DVL's velocity over ground, an entry of the agents'
+observation. Notation as docs/model.md §3.2 and §3.4.
 
 1. Current observer (``current_observer`` = ω_o > 0). With a current v_c that is constant in
    the earth frame, the error kinematics of docs/model.md §3.2 read
@@ -105,6 +107,21 @@ is unchanged. Notation as docs/model.md §3.2 and §3.4.
    e.g. U_r > V_max in Caharija et al. 2016); it costs an along-track lead x_e = σ artanh(·)
    of the surplus speed instead. In still water ĉ = 0 and u_ref = u_D exactly.
 
+5. The current from the DVL (``dvl_current`` = ω_c > 0, in place of the observer). A DVL in
+   bottom lock measures the velocity over ground ν_g = ν + c (docs/model.md §14.1), and the
+   agents' observation (``observation="preview"``) carries it beside ν, so the current is
+   measured, m = ν̂_g − ν̂, not inferred from the position errors. The simulated DVL gives both
+   with one ping's error, so m = (1 + k)c exactly, with k the DVL's scale-factor error, and
+   it holds the waves' orbital velocity at the vehicle. ĉ follows m through a first-order
+   low-pass at ω_c that turns with the body like the observer's estimate,
+
+       ĉ̇ = −ω_b × ĉ + ω_c (m − ĉ),    ĉ(0) = m,
+
+   Euler for the rotation and the exact step 1 − e^{−ω_c Δt_c} for the low-pass (stable at any
+   ω_c). It reads no position error and no u_p, so neither the navigation's along-track error
+   nor a virtual point that moves with the true x_e (docs/model.md §14.9) enters the estimate.
+   The crab angles (2) and the speed over ground (4) use this ĉ as they use the observer's.
+
 References: A. P. Aguiar, A. M. Pascoal (2007), Dynamic positioning and way-point tracking of
 underactuated AUVs in the presence of ocean currents, Int. J. Control 80(7). S. Moe, W.
 Caharija, K. Y. Pettersen, I. Schjølberg (2014), Path following of underactuated marine surface
@@ -134,6 +151,7 @@ __all__ = [
     "adapt_trims",
     "crab_angles",
     "guidance_diagnostics",
+    "measure_current",
     "observe_current",
     "path_tangent",
     "speed_reference",
@@ -188,6 +206,27 @@ def observe_current(x_e, y_e, z_e, u, v, w, q, r, theta, t0, t1, t2, u_p, wn, dt
 
 
 @njit(cache=True, inline="always")
+def measure_current(u, v, w, u_g, v_g, w_g, q, r, theta, wn, dt, started, filt):
+    """One step of the DVL current filter (module doc, 5) on ĉ in ``filt``: the measured
+    current m = ν_g − ν [m/s] (velocities over ground and through the water, body axes)
+    low-passed at ``wn`` [rad/s], turned with the body rates q, r [rad/s]."""
+    mx, my, mz = u_g - u, v_g - v, w_g - w
+    if not started:  # ĉ(0) = m
+        filt[C_HAT], filt[C_HAT + 1], filt[C_HAT + 2] = mx, my, mz
+        return
+    tth = math.tan(theta)
+    cx, cy, cz = filt[C_HAT], filt[C_HAT + 1], filt[C_HAT + 2]
+    gain = 1.0 - math.exp(-wn * dt)
+    # the rotation as in `observe_current`: −ω_b × ĉ with ω_b = (−r tanθ, q, r)
+    cx += dt * (r * cy - q * cz)
+    cy += dt * (-r * cx - r * tth * cz)
+    cz += dt * (q * cx + r * tth * cy)
+    filt[C_HAT] = cx + gain * (mx - cx)
+    filt[C_HAT + 1] = cy + gain * (my - cy)
+    filt[C_HAT + 2] = cz + gain * (mz - cz)
+
+
+@njit(cache=True, inline="always")
 def crab_angles(u_g, v_g, w_g, theta):
     """(β_c, α_c) [rad] of the velocity over ground (u_g, v_g, w_g) [m/s] (module doc, 2)."""
     cth, sth = math.cos(theta), math.sin(theta)
@@ -223,7 +262,7 @@ def guidance_diagnostics(gains, filt: np.ndarray) -> dict[str, np.ndarray]:
     on: ``current_hat`` (n, 3), the body-axis estimate ĉ [m/s]; ``beta_hat``, ``alpha_hat``
     (n,), the ALOS trims [rad]; ``u_ref`` (n,), the surge reference [m/s]."""
     out = {}
-    if gains.current_observer > 0.0:
+    if gains.current_observer > 0.0 or gains.dvl_current > 0.0:
         out["current_hat"] = filt[:, C_HAT : C_HAT + 3].copy()
     if gains.alos_y > 0.0 or gains.alos_z > 0.0:
         out["beta_hat"] = filt[:, BETA_HAT].copy()

@@ -24,6 +24,7 @@ from auv_gym.vehicle import AUVParams, remus100
 from auv_gym.vehicle.actuators import ActuatorParams, actuator_params_from_spec
 from controllers.allocation import allocate, fin_authority, fin_gain
 from controllers.gains import ControllerGains
+from controllers.los import observation_width
 
 __all__ = ["BatchedController", "Policy", "actuator_vector"]
 
@@ -105,6 +106,8 @@ class BatchedController:
                 unknown_keywords(self.name, unknown, [f.name for f in dataclasses.fields(base)])
             )
         self.gains = dataclasses.replace(base, **gain_overrides) if gain_overrides else base
+        # the paper's 15 entries, or with the DVL's current the agents' layout up to w_ground
+        self.observation_width = observation_width(self.gains)
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         raise NotImplementedError
@@ -129,7 +132,8 @@ class BatchedController:
         """Actions in [−1, 1] for a batch (n, d) or one (d,) observation, d ≥ 15; see module doc.
 
         The law reads the paper's 15 entries (`auv_gym.OBS_NAMES`); the agent observation's
-        further entries (``observation="preview"``) follow them and are ignored. The returned
+        further entries (``observation="preview"``) follow them and are ignored, except the
+        velocity over ground with the gain ``dvl_current`` (then d ≥ 18). The returned
         ``state`` is the one passed in, updated in place (copying the FBSM's 150 kB of adaptive
         weights per vehicle every step would cost more than the control law); ``state=None``
         starts fresh memory for every row.
@@ -142,7 +146,13 @@ class BatchedController:
                 f"observation must have shape (n, d) or (d,) with d >= {OBS_DIM} "
                 f"(layout auv_gym.OBS_NAMES first), got {np.shape(observation)}"
             )
-        obs = np.ascontiguousarray(obs[:, :OBS_DIM])
+        if obs.shape[1] < self.observation_width:
+            raise ValueError(
+                f"{self.name} with dvl_current reads the velocity over ground: the observation "
+                f"must have d >= {self.observation_width} (the env's observation='preview'), "
+                f"got {np.shape(observation)}"
+            )
+        obs = np.ascontiguousarray(obs[:, : self.observation_width])
         if not np.isfinite(obs).all():
             raise ValueError("observation must be finite")
         n = obs.shape[0]

@@ -39,6 +39,7 @@ OBSERVER_STEP_LIMIT = 2.0 * math.sqrt(2.0) - 2.0
 # name -> (low, high, low_open, high_open, unit); 0 switches the observer and the trims off.
 GUIDANCE_RANGES = {
     "current_observer": (0.0, math.inf, False, False, "rad/s"),
+    "dvl_current": (0.0, math.inf, False, False, "rad/s"),
     "alos_y": (0.0, math.inf, False, False, "rad/(m·s)"),
     "alos_z": (0.0, math.inf, False, False, "rad/(m·s)"),
     "alos_radius": (0.0, math.inf, True, False, "m"),
@@ -64,8 +65,11 @@ class ControllerGains:
     from the estimated velocity over ground; ``alos_y``, ``alos_z`` > 0 (γ_h, γ_v [rad/(m·s)])
     the adaptive LOS trims β̂, α̂, gated to within ``alos_radius`` of the virtual point and
     projected to ±``alos_max``; ``speed_over_ground`` makes the surge reference the speed
-    through the water that gives u_D over ground along the path (needs the observer). All of
-    it is `controllers.alos`; none of it is in the paper (0 / False = the paper's guidance).
+    through the water that gives u_D over ground along the path (needs a current estimate).
+    ``dvl_current`` > 0 (ω_c [rad/s]) takes that estimate from the DVL instead of the observer:
+    the difference of its velocities over ground and through the water, low-passed at ω_c; it
+    needs the observation's velocity over ground (``observation="preview"``). All of it is
+    `controllers.alos`; none of it is in the paper (0 / False = the paper's guidance).
     """
 
     h1: float = 1.0
@@ -97,7 +101,8 @@ class ControllerGains:
     alos_z: float = 0.0  # [rad/(m·s)] ALOS adaptation gain γ_v; 0 = off
     alos_radius: float = 1.0  # [m] capture radius R of the ALOS gate
     alos_max: float = 0.5  # [rad] projection bound M of β̂, α̂
-    speed_over_ground: bool = False  # surge reference for u_D over ground (needs the observer)
+    speed_over_ground: bool = False  # surge reference for u_D over ground (needs a current source)
+    dvl_current: float = 0.0  # [rad/s] bandwidth ω_c of the current read from the DVL; 0 = off
     separate_b_basis: bool = False  # False: b̂ shares f̂'s basis (σ_b = σ), as the prototype
     surge_mf: MembershipSet = MembershipSet(1.0, 0.5, 1.0, 0.1, 1.0)
     pitch_mf: MembershipSet = MembershipSet(
@@ -117,10 +122,16 @@ class ControllerGains:
                 unit=unit,
             )
         flag("ControllerGains.speed_over_ground", self.speed_over_ground)
-        if self.speed_over_ground and self.current_observer == 0.0:
+        if self.speed_over_ground and self.current_observer == 0.0 and self.dvl_current == 0.0:
             raise ValueError(
-                "ControllerGains.speed_over_ground=True needs current_observer > 0 "
-                "(the speed over ground comes from the current estimate)"
+                "ControllerGains.speed_over_ground=True needs current_observer > 0 or "
+                "dvl_current > 0 (the speed over ground comes from the current estimate)"
+            )
+        if self.current_observer > 0.0 and self.dvl_current > 0.0:
+            raise ValueError(
+                "ControllerGains.current_observer and dvl_current are two sources of the same "
+                f"current estimate; switch one off (got {self.current_observer} and "
+                f"{self.dvl_current} rad/s)"
             )
         for f in fields(self):
             value = getattr(self, f.name)
@@ -170,6 +181,7 @@ GAIN_LAYOUT = (
     "alos_radius",
     "alos_max",
     "speed_over_ground",
+    "dvl_current",
     "mf1_c0",
     "mf1_dc",
     "mf1_s",
@@ -227,6 +239,7 @@ GAIN_LAYOUT = (
     ALOS_RADIUS,
     ALOS_MAX,
     SPEED_OVER_GROUND,
+    DVL_CURRENT,
     MF1,
     _m1b,
     _m1c,

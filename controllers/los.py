@@ -1,11 +1,11 @@
 """LOS guidance with command-filtered corrections and the backstepping error variables.
 
-Shared by FBSM and backstepping (docs/model.md §3.4, §4.3, §4.4, §10.4). All functions are numba
-kernels on one vehicle; ``o`` is one observation row (layout `auv_gym.OBS_NAMES`), ``g`` the
-packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the `FILTER_DIM`-entry memory
-(x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F, integral-LOS states y_int, z_int [m], then the
-current-guidance memory of `controllers.alos`: ε̂ [m], ĉ [m/s], last g [m/s], β̂, α̂ [rad],
-previous u_ref [m/s]).
+Shared by FBSM, backstepping and the PID (docs/model.md §3.4, §4.3, §4.4, §10.4). All
+functions are numba kernels on one vehicle; ``o`` is one observation row (layout
+`auv_gym.OBS_NAMES`), ``g`` the packed gains (`controllers.gains.GAIN_LAYOUT`), ``filt`` the
+`FILTER_DIM`-entry memory (x_z, ẋ_z, x_y, ẋ_y, previous ψ̇_F, previous θ̇_F, integral-LOS
+states y_int, z_int [m], then the current-guidance memory of `controllers.alos`: ε̂ [m], ĉ
+[m/s], last g [m/s], β̂, α̂ [rad], previous u_ref [m/s]).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 from numba import njit
 
 from auv_gym.paths.guidance import wrap_angle
-from auv_gym.sim.observation import OBS_INDEX
+from auv_gym.sim.observation import EXTRA_HEAD, OBS_DIM, OBS_INDEX
 from controllers.alos import (
     ALPHA_HAT,
     BETA_HAT,
@@ -23,6 +23,7 @@ from controllers.alos import (
     U_REF,
     adapt_trims,
     crab_angles,
+    measure_current,
     observe_current,
     path_tangent,
     speed_reference,
@@ -36,6 +37,7 @@ from controllers.gains import (
     C1,
     C2,
     DT,
+    DVL_CURRENT,
     ILOS_Y,
     ILOS_Z,
     K1,
@@ -49,18 +51,28 @@ from controllers.gains import (
     U_GUARD,
     WN,
     ZETA,
+    ControllerGains,
 )
 
-__all__ = ["FILTER_DIM", "LOOP_DIM", "loop_errors"]
+__all__ = ["FILTER_DIM", "LOOP_DIM", "loop_errors", "observation_width"]
 
 _XE, _YE, _ZE = OBS_INDEX["x_e"], OBS_INDEX["y_e"], OBS_INDEX["z_e"]
 _PSIE, _TH, _THF = OBS_INDEX["psi_error"], OBS_INDEX["theta"], OBS_INDEX["theta_F"]
 _U, _V, _W, _Q, _R = (OBS_INDEX[k] for k in ("u", "v", "w", "q", "r"))
 _UD, _UP = OBS_INDEX["u_D"], OBS_INDEX["u_p"]
 _DPSIF, _DTHF = OBS_INDEX["psi_F_dot"], OBS_INDEX["theta_F_dot"]
+# The velocity over ground in the agents' observation (``observation="preview"``), which
+# ``dvl_current`` reads: the entries after the paper's 15.
+_UG, _VG, _WG = (OBS_DIM + EXTRA_HEAD.index(k) for k in ("u_ground", "v_ground", "w_ground"))
 FILTER_DIM = U_REF + 1
 # loop_errors output: z1, z2, S2, ż1, α̇1, z3, z4, S3, ż3, α̇2, θ_d, ψ_d − ψ_F, u_ref, u̇_ref
 LOOP_DIM = 14
+
+
+def observation_width(gains: ControllerGains) -> int:
+    """How many observation entries the guidance reads: the paper's 15, or with ``dvl_current``
+    up to the velocity over ground of the agents' observation (``observation="preview"``)."""
+    return _WG + 1 if gains.dvl_current > 0.0 else OBS_DIM
 
 
 @njit(cache=True)
@@ -73,7 +85,8 @@ def loop_errors(o, g, filt, started, out):
     through ẍ = ω_n²(c − x) − 2ζω_n ẋ (initialised at c with zero rate). θ̇_d, θ̈_d add the
     analytic θ̇_F and its finite difference over one control step (likewise for ψ).
     With `controllers.alos` switched on, α and β are the crab angles over ground (α_c, β_c)
-    from the current observer, the ALOS trims α̂, β̂ are added, and the surge reference u_ref
+    from the current observer (or, with ``dvl_current``, the DVL's current: ``o`` then has the
+    agents' layout up to w_ground), the ALOS trims α̂, β̂ are added, and the surge reference u_ref
     (out[12], u_D unless ``speed_over_ground``) and its rate (out[13]) account for the current.
     Pitch (35)–(36): z1 = θ − θ_d, α1 = −k1 z1 + θ̇_d, z2 = q − α1, S2 = c1 z1 + z2,
     ż1 = q − θ̇_d, α̇1 = −k1 ż1 + θ̈_d. Yaw (40) with the 1/cosθ correction (docs/model.md §4.4):
@@ -94,7 +107,8 @@ def loop_errors(o, g, filt, started, out):
     if g[BETA_3D] > 0.0:
         beta /= math.cos(theta_f)
     k_y, k_z, x_e, y_e, z_e = g[KY], g[KZ], o[_XE], o[_YE], o[_ZE]
-    observer, trims = g[OBSERVER_WN] > 0.0, g[ALOS_Y] > 0.0 or g[ALOS_Z] > 0.0
+    observer = g[OBSERVER_WN] > 0.0 or g[DVL_CURRENT] > 0.0  # a current estimate ĉ
+    trims = g[ALOS_Y] > 0.0 or g[ALOS_Z] > 0.0
     if not started:  # β̂(0) = α̂(0) = 0, u_ref = u_D (the observer initialises itself)
         filt[BETA_HAT], filt[ALPHA_HAT], filt[U_REF] = 0.0, 0.0, o[_UD]
     t0, t1, t2 = 0.0, 0.0, 0.0
@@ -102,25 +116,30 @@ def loop_errors(o, g, filt, started, out):
     if observer:
         t0, t1, t2 = path_tangent(o[_PSIE], theta, theta_f)
         cx, cy, cz = filt[C_HAT], filt[C_HAT + 1], filt[C_HAT + 2]
-        observe_current(
-            x_e,
-            y_e,
-            z_e,
-            u,
-            v,
-            w,
-            q,
-            r,
-            theta,
-            t0,
-            t1,
-            t2,
-            o[_UP],
-            g[OBSERVER_WN],
-            dt,
-            started,
-            filt,
-        )
+        if g[DVL_CURRENT] > 0.0:
+            measure_current(
+                u, v, w, o[_UG], o[_VG], o[_WG], q, r, theta, g[DVL_CURRENT], dt, started, filt
+            )
+        else:
+            observe_current(
+                x_e,
+                y_e,
+                z_e,
+                u,
+                v,
+                w,
+                q,
+                r,
+                theta,
+                t0,
+                t1,
+                t2,
+                o[_UP],
+                g[OBSERVER_WN],
+                dt,
+                started,
+                filt,
+            )
         if u >= g[U_GUARD]:
             beta, alpha = crab_angles(
                 u + filt[C_HAT], v + filt[C_HAT + 1], w + filt[C_HAT + 2], theta

@@ -102,6 +102,7 @@ GUIDANCE_GAINS = (
     "alos_radius",
     "alos_max",
     "speed_over_ground",
+    "dvl_current",
 )
 # The guidance defaults: the paper's LOS, with a faster command filter. The PID needs no θ̇_d, ψ̇_d,
 # so the filter only smooths, and at the paper's ω_n = 2 rad/s its 2ζ/ω_n = 1 s lag inside the

@@ -24,6 +24,7 @@ __all__ = [
     "make_classical",
     "make_guarded",
     "make_lowpass",
+    "reads_ground_velocity",
 ]
 
 # Named variants of the classical controllers (not in the paper), against ocean currents; see
@@ -74,6 +75,21 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
         "pid_los",
         {**_PID_AS_BUILT, "climb_speed": 1.4, "pitch_wn": 2.0, "pitch_zeta": 1.4},
     ),
+    # The soft-pitch PID with the current read from the DVL (`controllers.alos`, 5) in place of
+    # the observer: the velocity over ground the as-built agents see, given to the classical
+    # reference too (it flies the agents' observation, `reads_ground_velocity`). ω_c chosen on
+    # validation seeds 100-104 of the 3 as-built scenarios (`benchmarks.analysis.tune_pid`).
+    "pid_as_built_dvl": (
+        "pid_los",
+        {
+            **_PID_AS_BUILT,
+            "current_observer": 0.0,
+            "dvl_current": 0.3,
+            "climb_speed": 1.4,
+            "pitch_wn": 2.0,
+            "pitch_zeta": 1.4,
+        },
+    ),
 }
 CLASSICAL = ("fbsm", "backstepping", "pid_los", "command_filtered", *PRESETS)
 # The controllers whose laws are built on the vehicle's 5-DOF model (docs/model.md §4).
@@ -111,6 +127,21 @@ def make_classical(name: str, **kwargs: Any) -> Any:
     if name == "guarded":  # a preset's envelope guard over an unwrapped classical base
         return make_guarded(**kwargs)
     raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")
+
+
+def reads_ground_velocity(name: str, **kwargs: Any) -> bool:
+    """Whether the classical controller ``name`` (with these keyword arguments) reads the
+    velocity over ground, which only the agents' observation carries (``observation=
+    "preview"``): its guidance takes the current from the DVL (the gain ``dvl_current``)."""
+    while name in PRESETS:
+        base, preset = PRESETS[name]
+        name, kwargs = base, {**preset, **kwargs}
+    if name in ("lowpass", "guarded"):
+        inner = kwargs.pop("base", "fbsm_colos" if name == "lowpass" else "pid_as_built")
+        own = ("alpha", "envelope_guard")
+        return reads_ground_velocity(inner, **{k: v for k, v in kwargs.items() if k not in own})
+    gains = kwargs.get("gains")
+    return float(kwargs.get("dvl_current", gains.dvl_current if gains is not None else 0.0)) > 0
 
 
 def _law(name: str, kwargs: dict[str, Any]) -> str:

@@ -119,6 +119,7 @@ def candidate_policies(
     OSError for an unreadable file, before anything flies."""
     import controllers
     from benchmarks.catalog.scenarios import SCENARIOS_FILE, load_scenarios
+    from controllers.registry import reads_ground_velocity
 
     file = Path(scenario_file) if scenario_file else SCENARIOS_FILE
     try:
@@ -136,6 +137,8 @@ def candidate_policies(
         for name in scenarios:
             scenario = table[name]
             env = {**scenario.env, "max_time": duration}
+            if reads_ground_velocity(base, **scenario.controller, **gains):
+                env["observation"] = "preview"  # the DVL's velocity over ground
             flights[name] = (controllers.make(base, env=env, **scenario.controller, **gains), env)
         built.append((gains, flights))
     return built

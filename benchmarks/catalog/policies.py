@@ -27,7 +27,7 @@ from typing import Any, Literal
 import controllers
 from auv_gym import ENV_ID, VARIANTS, resolve_env_id
 from controllers import CLASSICAL
-from controllers.registry import NoFiveDofModelError
+from controllers.registry import NoFiveDofModelError, reads_ground_velocity
 
 __all__ = [
     "AGENTS_DIR",
@@ -318,10 +318,14 @@ def agent_run(
 def policy_env(spec: str) -> tuple[str, dict[str, Any]]:
     """(env id, env arguments) a policy runs under: an agent's training env (`agent_run`), else
     the benchmark's `auv_gym.ENV_ID` with no arguments (the classical controllers, imported
-    policies and agents whose files record no env id, e.g. an RL Zoo model zip)."""
+    policies and agents whose files record no env id, e.g. an RL Zoo model zip), or with the
+    agents' observation for a classical controller that reads the DVL's velocity over ground
+    (`controllers.registry.reads_ground_velocity`)."""
     parsed = PolicySpec.parse(spec)
     if parsed.onnx is not None:
         return onnx_env(spec, parsed.onnx)
+    if parsed.kind == "classical" and reads_ground_velocity(spec):
+        return ENV_ID, {"observation": "preview"}  # the DVL's velocity over ground, same env
     if parsed.kind != "agent" or parsed.agent is None:
         return ENV_ID, {}
     _, env_id, env_kwargs = agent_run(f"policy {spec!r}", parsed.agent, default_env_id=ENV_ID)

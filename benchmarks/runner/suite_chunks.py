@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from auv_gym import ENV_ID, VARIANTS
+from auv_gym import VARIANTS
 from auv_gym.rollout import evaluate
 from auv_gym.support.files import json_default, write_json
 from benchmarks.catalog.policies import (
@@ -146,7 +146,8 @@ def resolve_policy(spec: str) -> SuitePolicy:
             env_id, env_kwargs = policy_env(spec)
             return SuitePolicy(spec, "onnx", (Run(0, env_id, spec, env_kwargs),))
         if parsed.agent is None:
-            return SuitePolicy(spec, parsed.kind, (Run(0, ENV_ID, spec),))
+            env_id, env_kwargs = policy_env(spec)
+            return SuitePolicy(spec, parsed.kind, (Run(0, env_id, spec, env_kwargs),))
         seed, env_id, agent_env = agent_run(f"policy {spec!r}", parsed.agent)
         run = Run(seed, env_id, f"agent:{parsed.agent}", agent_env)
         return SuitePolicy(spec, "agent", (run,))
