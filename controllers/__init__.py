@@ -97,7 +97,10 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
     if env is not None:
         kwargs = _with_env_settings(name, policy_settings(env), kwargs)
     if name in CLASSICAL:
-        return make_classical(name, **kwargs)
+        policy = make_classical(name, **kwargs)
+        if env is not None:
+            _check_width(name, policy, env)
+        return policy
     if name in AGENT_NAMES:
         from controllers.loader import load_policy
 
@@ -130,6 +133,18 @@ def make(name: str, env: Any = None, **kwargs: Any) -> Any:
         f"unknown controller {name!r}; valid: {valid} (a saved agent, a reference agent of "
         "benchmarks/agents/ included, loads by its folder: controllers.make('agent', path=...))"
     )
+
+
+def _check_width(name: str, policy: Any, env: Any) -> None:
+    """ValueError if ``env``'s observation is narrower than what ``policy`` reads (a controller
+    that takes the current from the DVL needs the agents' velocity over ground)."""
+    width = getattr(policy, "observation_width", 0)
+    given = len(env_config(env).observation.names)
+    if given < width:
+        raise ValueError(
+            f"{name} reads {width} observation values (the DVL's velocity over ground), the "
+            f"env gives {given}: make the env with observation='preview'"
+        )
 
 
 def _agent_keywords(name: str, kwargs: dict[str, Any]) -> dict[str, Any]:

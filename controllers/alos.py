@@ -112,7 +112,10 @@ observation. Notation as docs/model.md §3.2 and §3.4.
    agents' observation (``observation="preview"``) carries it beside ν, so the current is
    measured, m = ν̂_g − ν̂, not inferred from the position errors. The simulated DVL gives both
    with one ping's error, so m = (1 + k)c exactly, with k the DVL's scale-factor error, and
-   it holds the waves' orbital velocity at the vehicle. ĉ follows m through a first-order
+   it holds the waves' orbital velocity at the vehicle (with a navigation ``delay`` ν is the
+   delayed ping's and the velocity over ground the latest: m then mixes two pings,
+   docs/model.md §3.7). The first step only initialises ĉ, so its jump feeds no crab-angle rate
+   forward. ĉ follows m through a first-order
    low-pass at ω_c that turns with the body like the observer's estimate,
 
        ĉ̇ = −ω_b × ĉ + ω_c (m − ĉ),    ĉ(0) = m,

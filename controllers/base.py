@@ -108,6 +108,8 @@ class BatchedController:
         self.gains = dataclasses.replace(base, **gain_overrides) if gain_overrides else base
         # the paper's 15 entries, or with the DVL's current the agents' layout up to w_ground
         self.observation_width = observation_width(self.gains)
+        # the env it needs beyond the default, which `auv_gym.rollout` merges under the caller's
+        self.env_kwargs = {"observation": "preview"} if self.observation_width > OBS_DIM else None
 
     def init_state(self, n: int) -> dict[str, np.ndarray]:
         raise NotImplementedError

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.sim.observation import OBS_DIM
 from controllers.envelope_guard import check_envelope_guard, check_guard_sign, guard_env_commands
 
 __all__ = ["GuardedPolicy", "guard_for_actuator"]
@@ -52,6 +53,9 @@ class GuardedPolicy:
         if not callable(getattr(base, "predict", None)):
             raise ValueError(f"guarded base must have predict(...), got {type(base).__name__}")
         self.base = base
+        # what the base reads and the env it needs (the current from the DVL: `controllers.base`)
+        self.observation_width = getattr(base, "observation_width", OBS_DIM)
+        self.env_kwargs = getattr(base, "env_kwargs", None)
         self.guard = check_envelope_guard(guard, "guarded")
         self.name = f"{getattr(base, 'name', 'base')}_guarded"
 

@@ -144,9 +144,11 @@ def loop_errors(o, g, filt, started, out):
             beta, alpha = crab_angles(
                 u + filt[C_HAT], v + filt[C_HAT + 1], w + filt[C_HAT + 2], theta
             )
-            # the part of their rate that the turning estimate ĉ causes (ν, θ held)
-            beta0, alpha0 = crab_angles(u + cx, v + cy, w + cz, theta)
-            dc_y, dc_z = -(beta - beta0) / dt, (alpha - alpha0) / dt
+            if started:  # the part of their rate that the turning estimate ĉ causes (ν, θ held)
+                # (at the first step ĉ is initialised, not turned: the observer's ĉ(0) = 0
+                # gives no rate either way, the DVL's ĉ(0) = m would be a jump read as a rate)
+                beta0, alpha0 = crab_angles(u + cx, v + cy, w + cz, theta)
+                dc_y, dc_z = -(beta - beta0) / dt, (alpha - alpha0) / dt
     y_int, z_int = (filt[6], filt[7]) if started else (0.0, 0.0)
     y_los = y_e + g[ILOS_Y] * y_int  # = y_e unless integral LOS is on
     z_los = z_e + g[ILOS_Z] * z_int

@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from auv_gym.sim.observation import OBS_DIM
+
 __all__ = ["DEFAULT_ALPHA", "PREVIOUS_KEY", "LowPassPolicy", "check_alpha"]
 
 PREVIOUS_KEY = "lowpass_previous"  # the filter's a_{k−1} in the policy state
@@ -55,6 +57,9 @@ class LowPassPolicy:
         if not callable(getattr(base, "predict", None)):
             raise ValueError(f"lowpass base must have predict(...), got {type(base).__name__}")
         self.base = base
+        # what the base reads and the env it needs (the current from the DVL: `controllers.base`)
+        self.observation_width = getattr(base, "observation_width", OBS_DIM)
+        self.env_kwargs = getattr(base, "env_kwargs", None)
         self.alpha = check_alpha(alpha)
         self.name = f"{getattr(base, 'name', 'base')}_lowpass"
 

@@ -449,6 +449,13 @@ class ResidualPolicy:
                 f"needs the env's {OBS_DIM} or more and the {len(RESIDUAL_FEATURES)} of "
                 f"{list(RESIDUAL_FEATURES)}"
             )
+        base_width = getattr(base, "observation_width", OBS_DIM)
+        if self.obs_dim < base_width:
+            raise ValueError(
+                f"residual base {getattr(base, 'name', 'base')!r} reads {base_width} observation "
+                f"values (the DVL's velocity over ground), the agent's env gives {self.obs_dim}: "
+                "train and fly it on observation='preview'"
+            )
 
     def init_state(self, n: int) -> dict[str, Any]:
         return {

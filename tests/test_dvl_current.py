@@ -90,3 +90,47 @@ def test_it_holds_the_true_along_track_error_that_the_observer_cannot():
     late = observer.t >= 50.0
     rms = [float(np.sqrt(np.mean(tr["x_e"][late] ** 2))) for tr in (observer, dvl)]
     assert rms[1] < 0.5 * rms[0], rms
+
+
+def test_a_fresh_state_at_speed_starts_the_filter_at_rest():
+    """ĉ(0) = m is an initialisation, not a turn of the estimate: its jump from the zeroed
+    memory must not enter the command filter as a rate of the crab angle (at 1.5 m/s in a
+    0.3 m/s cross current it read as 6 rad/s and doubled the first heading correction)."""
+    from auv_gym.sim.observation import OBS_INDEX
+    from controllers.los import FILTER_DIM, LOOP_DIM, loop_errors
+
+    pid = controllers.make("pid_as_built_dvl", actuator="realistic")
+    o = np.zeros(18)
+    o[OBS_INDEX["u"]], o[OBS_INDEX["u_D"]], o[OBS_INDEX["u_p"]] = 1.5, 1.0, 1.0
+    # on the path (y_e = 0): the ALOS trims, which adapt on y_e, add no rate of their own
+    o[15], o[16] = 1.5, 0.3  # over ground: the cross current on top of the surge
+    filt, out = np.zeros(FILTER_DIM), np.zeros(LOOP_DIM)
+    loop_errors(o, pid._g, filt, False, out)
+    assert filt[3] == 0.0  # the heading correction's rate: the filter starts at rest
+    first = filt[2]
+    loop_errors(o, pid._g, filt, True, out)
+    assert abs(filt[2] - first) < 1e-3  # and stays near c_y while nothing changes
+
+
+def test_a_narrow_env_or_residual_is_refused_before_it_flies():
+    with pytest.raises(ValueError, match=r"pid_as_built_dvl reads 18 .* env gives 15"):
+        controllers.make("pid_as_built_dvl", env={"actuator": "realistic"})
+    pid = controllers.make(
+        "pid_as_built_dvl", env={"actuator": "realistic", "observation": "preview"}
+    )
+    assert pid.env_kwargs == {"observation": "preview"}  # `rollouts` flies it on that observation
+    guarded = controllers.make("guarded", base="pid_as_built_dvl", actuator="realistic")
+    assert (guarded.observation_width, guarded.env_kwargs) == (18, {"observation": "preview"})
+    (tr,) = rollouts(pid, [0], max_time=5.0, **AS_BUILT)  # no observation given: it carries one
+    assert tr["current_hat"].shape == (100, 3)  # 5 s at the control period of 0.05 s
+    with pytest.raises(ValueError, match=r"residual base .* reads 18 .* gives 15"):
+        controllers.make(
+            "residual", agent=_ZeroAgent(), base="pid_as_built_dvl", actuator="realistic"
+        )
+
+
+class _ZeroAgent:
+    """A residual agent of the paper's observation that never corrects."""
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        return np.zeros((np.atleast_2d(obs).shape[0], 3), np.float32), state

@@ -341,8 +341,11 @@ def target_table(
                     "reference": best,
                     "reference_mean_m": ref_means[best],
                     "ratio": ratio,
-                    "ratio_low": 1.0 + relative.low,
-                    "ratio_high": 1.0 + relative.high,
+                    # 1 + (mean − ref)/ref is mean/ref to a rounding: where the interval has
+                    # collapsed onto the estimate (episodes that draw nothing), it must not
+                    # exclude the ratio by that last bit
+                    "ratio_low": min(1.0 + relative.low, ratio),
+                    "ratio_high": max(1.0 + relative.high, ratio),
                     "failed": len(failed),
                     "failures": sorted(set(failed)),
                     "max_surge_m_s": surge,

@@ -105,6 +105,8 @@ POLICY_COLOURS: dict[str, str] = {
     # a bright blue, the farthest from every colour above among the named palettes' (14 ΔE from
     # its nearest, FBSM's blue, in simulated tritanopia)
     "pid_as_built_climb_soft_pitch": "#1A85FF",
+    # Tol's dark palette's blue: the soft-pitch PID given the DVL's current, beside its bright blue
+    "pid_as_built_dvl": "#222255",
     # Tol's dark palette: the as-built residual, beside the PIDs it rides on
     "ppo_residual_as_built": "#225522",  # dark green
 }
