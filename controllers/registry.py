@@ -134,28 +134,39 @@ def make_classical(name: str, **kwargs: Any) -> Any:
     raise ValueError(f"unknown classical controller {name!r}; valid: {list(CLASSICAL)}")
 
 
+# The wrappers a preset may name: their base when none is named (`make_lowpass`,
+# `make_guarded`) and the keywords that are theirs, not the base's.
+_WRAPPERS = {
+    "lowpass": ("fbsm_colos", ("alpha",)),
+    "guarded": ("pid_as_built", ("envelope_guard",)),
+}
+
+
+def _resolve(name: str, kwargs: dict[str, Any]) -> tuple[str, dict[str, Any]]:
+    """(control law, its keyword arguments) under the classical name ``name``, through presets
+    and the low-pass and guard wrappers, as `make_classical` would build it."""
+    while name in PRESETS:
+        base, preset = PRESETS[name]
+        name, kwargs = base, {**preset, **kwargs}
+    if name in _WRAPPERS:
+        default, own = _WRAPPERS[name]
+        rest = {k: v for k, v in kwargs.items() if k != "base" and k not in own}
+        return _resolve(kwargs.get("base", default), rest)
+    return name, kwargs
+
+
 def reads_ground_velocity(name: str, **kwargs: Any) -> bool:
     """Whether the classical controller ``name`` (with these keyword arguments) reads the
     velocity over ground, which only the agents' observation carries (``observation=
     "preview"``): its guidance takes the current from the DVL (the gain ``dvl_current``)."""
-    while name in PRESETS:
-        base, preset = PRESETS[name]
-        name, kwargs = base, {**preset, **kwargs}
-    if name in ("lowpass", "guarded"):
-        inner = kwargs.pop("base", "fbsm_colos" if name == "lowpass" else "pid_as_built")
-        own = ("alpha", "envelope_guard")
-        return reads_ground_velocity(inner, **{k: v for k, v in kwargs.items() if k not in own})
+    _, kwargs = _resolve(name, kwargs)
     gains = kwargs.get("gains")
     return float(kwargs.get("dvl_current", gains.dvl_current if gains is not None else 0.0)) > 0
 
 
 def _law(name: str, kwargs: dict[str, Any]) -> str:
-    """The control law under the classical name ``name`` (through presets and low-pass)."""
-    while name in PRESETS:
-        base, preset = PRESETS[name]
-        name, kwargs = base, {**preset, **kwargs}
-    wrapped = name in ("lowpass", "guarded")
-    return _law(kwargs.get("base", "fbsm_colos"), {}) if wrapped else name
+    """The control law under the classical name ``name`` (`_resolve`)."""
+    return _resolve(name, kwargs)[0]
 
 
 def make_lowpass(

@@ -13,6 +13,7 @@ from benchmarks.catalog.policies import policy_env
 from controllers.gains import ControllerGains
 from controllers.registry import reads_ground_velocity
 from tests.test_current_guidance import body_current
+from tests.test_env_settings import _ZeroAgent
 
 DVL_PID = {"current_observer": 0.0, "dvl_current": 0.3, "speed_over_ground": True}
 AS_BUILT = {"disturbance": "ocean", "actuator": "realistic", "sensors": "typical_kalman"}
@@ -127,10 +128,3 @@ def test_a_narrow_env_or_residual_is_refused_before_it_flies():
         controllers.make(
             "residual", agent=_ZeroAgent(), base="pid_as_built_dvl", actuator="realistic"
         )
-
-
-class _ZeroAgent:
-    """A residual agent of the paper's observation that never corrects."""
-
-    def predict(self, obs, state=None, episode_start=None, deterministic=True):
-        return np.zeros((np.atleast_2d(obs).shape[0], 3), np.float32), state
